@@ -1,0 +1,11 @@
+//! Finite-element modal models and modal matching.
+//!
+//! The pipeline follows Sclaroff & Pentland's modal matching as improved by Tavares & Bastos (2005):
+//! a [`Shape`] is modelled by finite elements, its vibration modes are computed from the generalized
+//! eigenproblem `K φ = ω² M φ`, and nodes of two shapes are put in correspondence in modal space.
+
+mod error;
+pub mod shape;
+
+pub use error::ModalError;
+pub use shape::{Shape, Topology};

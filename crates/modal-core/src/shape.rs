@@ -1,0 +1,108 @@
+//! Objects to be matched: 2-D or 3-D point sets with optional topology.
+
+use crate::ModalError;
+
+/// How the nodes of a [`Shape`] are connected.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum Topology {
+    /// Unordered point set (the Gaussian element needs no order).
+    #[default]
+    None,
+    /// The nodes, in order, form one closed contour (node `n-1` joins node `0`).
+    ClosedContour,
+    /// A triangle mesh over the nodes (indices into the point list).
+    Mesh { triangles: Vec<[usize; 3]> },
+}
+
+/// A 2-D or 3-D object: `n` nodes of dimension `dim`, stored row-major (`coords[i*dim + a]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Shape {
+    dim: usize,
+    coords: Vec<f64>,
+    topology: Topology,
+}
+
+impl Shape {
+    /// Builds a shape from row-major coordinates, checking that every coordinate is finite and
+    /// every triangle index is in range.
+    pub fn new(dim: usize, coords: Vec<f64>, topology: Topology) -> Result<Self, ModalError> {
+        if dim != 2 && dim != 3 {
+            return Err(ModalError::InvalidShape(format!("dimension must be 2 or 3, got {dim}")));
+        }
+        if coords.len() % dim != 0 {
+            return Err(ModalError::InvalidShape(format!(
+                "{} coordinates is not a multiple of the dimension {dim}",
+                coords.len()
+            )));
+        }
+        if let Some(k) = coords.iter().position(|v| !v.is_finite()) {
+            return Err(ModalError::InvalidShape(format!(
+                "coordinate {} of node {} is not finite ({})",
+                k % dim,
+                k / dim,
+                coords[k]
+            )));
+        }
+        let n = coords.len() / dim;
+        if let Topology::Mesh { triangles } = &topology {
+            if let Some(t) = triangles.iter().find(|t| t.iter().any(|&v| v >= n)) {
+                return Err(ModalError::InvalidShape(format!(
+                    "triangle {t:?} refers to a node beyond the {n} nodes"
+                )));
+            }
+        }
+        Ok(Self { dim, coords, topology })
+    }
+
+    /// A 2-D point set from `(x, y)` pairs.
+    pub fn from_points_2d(points: &[[f64; 2]], topology: Topology) -> Result<Self, ModalError> {
+        Self::new(2, points.iter().flatten().copied().collect(), topology)
+    }
+
+    /// A 3-D point set from `(x, y, z)` triples.
+    pub fn from_points_3d(points: &[[f64; 3]], topology: Topology) -> Result<Self, ModalError> {
+        Self::new(3, points.iter().flatten().copied().collect(), topology)
+    }
+
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    pub fn len(&self) -> usize {
+        self.coords.len() / self.dim
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.coords.is_empty()
+    }
+
+    /// Row-major coordinates, `len() * dim()` values.
+    pub fn coords(&self) -> &[f64] {
+        &self.coords
+    }
+
+    /// Coordinates of node `i`.
+    pub fn point(&self, i: usize) -> &[f64] {
+        &self.coords[i * self.dim..(i + 1) * self.dim]
+    }
+
+    pub fn topology(&self) -> &Topology {
+        &self.topology
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_non_finite_and_bad_triangles() {
+        assert!(Shape::new(2, vec![0.0, f64::NAN], Topology::None).is_err());
+        assert!(Shape::new(4, vec![0.0; 4], Topology::None).is_err());
+        let err = Shape::new(2, vec![0.0; 6], Topology::Mesh { triangles: vec![[0, 1, 3]] });
+        assert!(err.is_err());
+        let ok = Shape::from_points_2d(&[[0.0, 0.0], [1.0, 0.0]], Topology::ClosedContour).unwrap();
+        assert_eq!((ok.len(), ok.dim()), (2, 2));
+        assert_eq!(ok.point(1), &[1.0, 0.0]);
+    }
+}

@@ -1,0 +1,1 @@
+//! Plantar-pressure recordings in; contours, brightness surfaces and isobaric contours out.

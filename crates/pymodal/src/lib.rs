@@ -1,0 +1,14 @@
+//! Python bindings of pedomatch: numpy arrays in and out, Rust errors mapped to Python exceptions
+//! in one place ([`errors`]), the GIL released around heavy work.
+
+use pyo3::prelude::*;
+
+mod assign_py;
+mod errors;
+
+#[pymodule]
+fn _pymodal(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    assign_py::register(m)?;
+    Ok(())
+}
