@@ -5,7 +5,11 @@
 //! eigenproblem `K φ = ω² M φ`, and nodes of two shapes are put in correspondence in modal space.
 
 mod error;
+pub mod material;
+pub mod model;
 pub mod shape;
 
 pub use error::ModalError;
+pub use material::{Material, PlaneModel};
+pub use model::{modal_basis, ElementKind, ModalBasis, ModelOptions};
 pub use shape::{Shape, Topology};
