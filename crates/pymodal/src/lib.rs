@@ -6,13 +6,15 @@ use pyo3::prelude::*;
 mod assign_py;
 mod errors;
 mod io_py;
-mod modal_py;
+mod match_py;
+mod model_py;
 
 #[pymodule]
 fn _pymodal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     assign_py::register(m)?;
-    modal_py::register(m)?;
+    model_py::register(m)?;
+    match_py::register(m)?;
     io_py::register(m)?;
     Ok(())
 }

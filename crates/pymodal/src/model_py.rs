@@ -1,4 +1,4 @@
-//! Bindings of the modal functions.
+//! Bindings of ModalModel.
 
 use pyo3::prelude::*;
 
