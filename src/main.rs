@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod cmd_assign;
+mod output;
 
 #[derive(Parser)]
 #[command(name = "pedomatch", version, about = "Modal matching of objects in dynamic pedobarography")]
