@@ -3,8 +3,27 @@
 //! Three independent solvers of the same problem — [`Method::JonkerVolgenant`],
 //! [`Method::Hungarian`] and [`Method::NetworkSimplex`] — that always agree on the optimal cost.
 //! Costs are dense `f64`, row-major; `+inf` marks a forbidden pair.
+//!
+//! ```
+//! use assign::{solve, Options};
+//! let cost = [4.0, 1.0, 3.0,
+//!             2.0, 0.0, 5.0,
+//!             3.0, 2.0, 2.0];
+//! let a = solve(&cost, 3, 3, &Options::default()).unwrap();
+//! assert_eq!(a.cost, 5.0);
+//! assert_eq!(a.row_to_col, vec![Some(1), Some(0), Some(2)]);
+//! ```
+//!
+//! Rectangular matrices are solved like `scipy.optimize.linear_sum_assignment`: every row of the
+//! smaller side is assigned, `min(rows, cols)` pairs in total, without padding the matrix.
+//! [`solve_with_threshold`] lets rows and columns stay unassigned instead, which is what a matching
+//! with a rejection threshold needs.
 
 mod error;
+mod hungarian;
+mod jv;
+mod network_simplex;
+
 pub use error::AssignError;
 
 /// Which algorithm solves the assignment.
@@ -37,5 +56,245 @@ pub struct Assignment {
     /// Sum of the costs of the assigned pairs (in the caller's sense: not negated when maximising).
     pub cost: f64,
     /// Row and column dual variables, where the method produces them.
+    ///
+    /// For a minimisation `u[i] + v[j] <= cost[i][j]` for every allowed pair, with equality on
+    /// assigned pairs, and `sum(u) + sum(v)` equals the optimal cost. On a rectangular matrix the
+    /// duals of the longer side are `<= 0` and zero on its unassigned entries. For a maximisation
+    /// every inequality is reversed (`>=`, and `>= 0` on the longer side).
+    /// [`solve_with_threshold`] does not report duals.
     pub duals: Option<(Vec<f64>, Vec<f64>)>,
+}
+
+impl Assignment {
+    /// The assigned `(row, col)` pairs, sorted by row.
+    pub fn pairs(&self) -> Vec<(usize, usize)> {
+        self.row_to_col
+            .iter()
+            .enumerate()
+            .filter_map(|(i, c)| c.map(|j| (i, j)))
+            .collect()
+    }
+}
+
+/// Result of a solver on the normalised problem: `n <= m`, minimisation, entries finite or `+inf`.
+pub(crate) struct Solution {
+    /// Column of every row (all rows are assigned).
+    pub row_to_col: Vec<usize>,
+    /// Row duals.
+    pub u: Vec<f64>,
+    /// Column duals (`<= 0`, and `0` on unassigned columns when `m > n`).
+    pub v: Vec<f64>,
+}
+
+fn run_method(method: Method, c: &[f64], n: usize, m: usize) -> Result<Solution, AssignError> {
+    debug_assert!(n <= m && c.len() == n * m);
+    match method {
+        Method::JonkerVolgenant => jv::solve(c, n, m),
+        Method::Hungarian => hungarian::solve(c, n, m),
+        Method::NetworkSimplex => network_simplex::solve(c, n, m),
+    }
+}
+
+/// Copies `cost` into the normalised form the solvers expect: a minimisation with at most as many
+/// rows as columns (transposing if needed), every entry finite or `+inf`.
+///
+/// Returns the matrix and whether it was transposed.
+fn normalise(
+    cost: &[f64],
+    rows: usize,
+    cols: usize,
+    maximize: bool,
+) -> Result<(Vec<f64>, bool), AssignError> {
+    let sign = if maximize { -1.0 } else { 1.0 };
+    let check = |k: usize, x: f64| -> Result<f64, AssignError> {
+        let y = sign * x;
+        // NaN fails both comparisons; -inf (after the sign flip) is unbounded.
+        if y > f64::NEG_INFINITY {
+            Ok(y)
+        } else {
+            Err(AssignError::InvalidEntry {
+                row: k / cols,
+                col: k % cols,
+            })
+        }
+    };
+    if rows <= cols {
+        let mut c = Vec::with_capacity(cost.len());
+        for (k, &x) in cost.iter().enumerate() {
+            c.push(check(k, x)?);
+        }
+        Ok((c, false))
+    } else {
+        for (k, &x) in cost.iter().enumerate() {
+            check(k, x)?;
+        }
+        let mut c = vec![0.0; cost.len()];
+        // Blocked transpose: keeps both sides cache friendly on large matrices.
+        const B: usize = 32;
+        for i0 in (0..rows).step_by(B) {
+            for j0 in (0..cols).step_by(B) {
+                for i in i0..(i0 + B).min(rows) {
+                    for j in j0..(j0 + B).min(cols) {
+                        c[j * rows + i] = sign * cost[i * cols + j];
+                    }
+                }
+            }
+        }
+        Ok((c, true))
+    }
+}
+
+fn check_shape(cost: &[f64], rows: usize, cols: usize) -> Result<(), AssignError> {
+    let expected = rows.checked_mul(cols);
+    if expected != Some(cost.len()) {
+        return Err(AssignError::ShapeMismatch {
+            rows,
+            cols,
+            len: cost.len(),
+            expected: expected.unwrap_or(usize::MAX),
+        });
+    }
+    Ok(())
+}
+
+/// Solves the linear assignment problem on a dense row-major `rows × cols` cost matrix.
+///
+/// Assigns `min(rows, cols)` pairs, each row and column at most once, minimising (or with
+/// [`Options::maximize`], maximising) the total cost. `+inf` (`-inf` when maximising) marks a
+/// forbidden pair.
+///
+/// # Errors
+/// - [`AssignError::ShapeMismatch`] if `cost.len() != rows * cols`;
+/// - [`AssignError::InvalidEntry`] on NaN, or on `-inf` (`+inf` when maximising);
+/// - [`AssignError::Infeasible`] if the forbidden pairs leave no complete assignment.
+///
+/// An empty matrix (`rows == 0` or `cols == 0`) gives an empty assignment of cost 0.
+pub fn solve(
+    cost: &[f64],
+    rows: usize,
+    cols: usize,
+    options: &Options,
+) -> Result<Assignment, AssignError> {
+    check_shape(cost, rows, cols)?;
+    let (c, transposed) = normalise(cost, rows, cols, options.maximize)?;
+    let (n, m) = if transposed {
+        (cols, rows)
+    } else {
+        (rows, cols)
+    };
+    let sol = if n == 0 {
+        Solution {
+            row_to_col: Vec::new(),
+            u: Vec::new(),
+            v: vec![0.0; m],
+        }
+    } else {
+        run_method(options.method, &c, n, m)?
+    };
+    drop(c);
+
+    let mut row_to_col = vec![None; rows];
+    let mut col_to_row = vec![None; cols];
+    for (a, &b) in sol.row_to_col.iter().enumerate() {
+        let (i, j) = if transposed { (b, a) } else { (a, b) };
+        row_to_col[i] = Some(j);
+        col_to_row[j] = Some(i);
+    }
+    let total = row_to_col
+        .iter()
+        .enumerate()
+        .filter_map(|(i, j)| j.map(|j| cost[i * cols + j]))
+        .sum();
+    let sign = if options.maximize { -1.0 } else { 1.0 };
+    let flip = |v: Vec<f64>| -> Vec<f64> { v.into_iter().map(|x| sign * x + 0.0).collect() };
+    let (u, v) = if transposed {
+        (sol.v, sol.u)
+    } else {
+        (sol.u, sol.v)
+    };
+    Ok(Assignment {
+        row_to_col,
+        col_to_row,
+        cost: total,
+        duals: Some((flip(u), flip(v))),
+    })
+}
+
+/// Solves an assignment in which any row or column may stay unassigned.
+///
+/// Finds the matching (of any size) that minimises `Σ cost[i][j] + τ/2 · (unassigned rows +
+/// unassigned columns)`, which is the same as maximising the total saving `Σ (τ − cost[i][j])`
+/// over the matched pairs. So no pair costing more than `τ` is ever kept (dropping it would
+/// save money), and a pair is matched whenever that lowers the total. Pairs costing exactly `τ`
+/// are indifferent and may or may not be kept. With `options.maximize` the sense flips: the
+/// saving is `Σ (cost[i][j] − τ)` and no pair below `τ` is kept.
+///
+/// This is the `(n + m) × (n + m)` padding with dummy cost `τ` of SPEC §6.2 (dummy rows and
+/// columns at `τ/2` each), solved without building the padded matrix: the smaller side gets one
+/// private dummy partner each, `min(n, m) × (n + m)` entries in total.
+///
+/// # Errors
+/// As [`solve`], plus [`AssignError::InvalidThreshold`] if `tau` is not finite. The problem is
+/// never infeasible. [`Assignment::duals`] is `None`.
+pub fn solve_with_threshold(
+    cost: &[f64],
+    rows: usize,
+    cols: usize,
+    tau: f64,
+    options: &Options,
+) -> Result<Assignment, AssignError> {
+    check_shape(cost, rows, cols)?;
+    if !tau.is_finite() {
+        return Err(AssignError::InvalidThreshold { tau });
+    }
+    let (c, transposed) = normalise(cost, rows, cols, options.maximize)?;
+    let (n, m) = if transposed {
+        (cols, rows)
+    } else {
+        (rows, cols)
+    };
+    let t = if options.maximize { -tau } else { tau };
+    let w = m + n;
+    let mut aug = vec![f64::INFINITY; n * w];
+    for i in 0..n {
+        let src = &c[i * m..(i + 1) * m];
+        let dst = &mut aug[i * w..i * w + m];
+        for (d, &s) in dst.iter_mut().zip(src) {
+            // Pairs that can never pay off are forbidden outright: it prunes the search and
+            // keeps `s - t` from turning a huge `s` into a spurious preference.
+            *d = if s <= t { s - t } else { f64::INFINITY };
+        }
+        aug[i * w + m + i] = 0.0;
+    }
+    drop(c);
+    let sol = if n == 0 {
+        Solution {
+            row_to_col: Vec::new(),
+            u: Vec::new(),
+            v: Vec::new(),
+        }
+    } else {
+        run_method(options.method, &aug, n, w)?
+    };
+    let mut row_to_col = vec![None; rows];
+    let mut col_to_row = vec![None; cols];
+    for (a, &b) in sol.row_to_col.iter().enumerate() {
+        if b >= m {
+            continue;
+        }
+        let (i, j) = if transposed { (b, a) } else { (a, b) };
+        row_to_col[i] = Some(j);
+        col_to_row[j] = Some(i);
+    }
+    let total = row_to_col
+        .iter()
+        .enumerate()
+        .filter_map(|(i, j)| j.map(|j| cost[i * cols + j]))
+        .sum();
+    Ok(Assignment {
+        row_to_col,
+        col_to_row,
+        cost: total,
+        duals: None,
+    })
 }
