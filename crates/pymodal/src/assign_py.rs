@@ -1,7 +1,127 @@
-//! `pymodal.linear_sum_assignment`.
+//! `pymodal.linear_sum_assignment`: a drop-in for `scipy.optimize.linear_sum_assignment`.
 
+use numpy::{PyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-pub fn register(_m: &Bound<'_, PyModule>) -> PyResult<()> {
+use crate::errors::to_py;
+
+fn parse_method(method: &str) -> PyResult<assign::Method> {
+    match method {
+        "jv" => Ok(assign::Method::JonkerVolgenant),
+        "hungarian" => Ok(assign::Method::Hungarian),
+        "simplex" => Ok(assign::Method::NetworkSimplex),
+        other => Err(PyValueError::new_err(format!(
+            "unknown method {other:?}; expected \"jv\", \"hungarian\" or \"simplex\""
+        ))),
+    }
+}
+
+/// Converts any 2-D array-like of numbers or bools to a C-contiguous float64 array, raising the
+/// same exceptions as scipy 1.17 (`ValueError` if not 2-D, numpy's `TypeError` if the entries
+/// cannot be cast safely to float64). Float64 C-contiguous input is used without a copy.
+fn as_f64_matrix<'py>(
+    py: Python<'py>,
+    cost_matrix: &Bound<'py, PyAny>,
+) -> PyResult<PyReadonlyArray2<'py, f64>> {
+    let np = py.import("numpy")?;
+    let arr = np.call_method1("asarray", (cost_matrix,))?;
+    let ndim: usize = arr.getattr("ndim")?.extract()?;
+    if ndim != 2 {
+        return Err(PyValueError::new_err(format!(
+            "expected a matrix (2-D array), got a {ndim} array"
+        )));
+    }
+    let kwargs = pyo3::types::PyDict::new(py);
+    kwargs.set_item("casting", "safe")?;
+    kwargs.set_item("order", "C")?;
+    kwargs.set_item("copy", false)?;
+    let arr = arr.call_method("astype", (np.getattr("float64")?,), Some(&kwargs))?;
+    Ok(arr.extract()?)
+}
+
+/// Solve the linear sum assignment problem.
+///
+/// A drop-in for ``scipy.optimize.linear_sum_assignment``: returns ``(row_ind, col_ind)``, int64
+/// arrays with ``row_ind`` sorted, such that ``cost[row_ind, col_ind].sum()`` is optimal over all
+/// assignments of ``min(n, m)`` pairs. ``inf`` (``-inf`` when maximising) forbids a pair.
+///
+/// Parameters
+/// ----------
+/// cost_matrix : array_like, 2-D, numbers or bools
+/// maximize : bool, default False
+/// method : {"jv", "hungarian", "simplex"}, keyword-only, default "jv"
+///     Jonker–Volgenant shortest augmenting paths, Kuhn–Munkres, or network simplex. All give
+///     the same optimal total.
+///
+/// Raises
+/// ------
+/// ValueError
+///     if the input is not 2-D, contains NaN or ``-inf`` (``+inf`` when
+///     maximising), or admits no complete assignment.
+#[pyfunction]
+#[pyo3(signature = (cost_matrix, maximize=false, *, method="jv"))]
+fn linear_sum_assignment<'py>(
+    py: Python<'py>,
+    cost_matrix: &Bound<'py, PyAny>,
+    maximize: bool,
+    method: &str,
+) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>)> {
+    let options = assign::Options {
+        method: parse_method(method)?,
+        maximize,
+    };
+    let arr = as_f64_matrix(py, cost_matrix)?;
+    let shape = arr.shape();
+    let (rows, cols) = (shape[0], shape[1]);
+    let cost = arr.as_slice().map_err(to_py)?;
+    let result = py
+        .detach(|| assign::solve(cost, rows, cols, &options))
+        .map_err(to_py)?;
+    let (r, c): (Vec<i64>, Vec<i64>) = result
+        .pairs()
+        .into_iter()
+        .map(|(i, j)| (i as i64, j as i64))
+        .unzip();
+    Ok((PyArray1::from_vec(py, r), PyArray1::from_vec(py, c)))
+}
+
+/// Assignment in which rows and columns may stay unmatched, rejecting expensive pairs.
+///
+/// Finds the matching of any size that minimises ``sum(cost[i, j] - tau)`` over its pairs (with
+/// ``maximize``: maximises ``sum(cost[i, j] - tau)``), so no pair worse than ``tau`` is kept.
+/// Returns ``(row_ind, col_ind)`` like :func:`linear_sum_assignment`, possibly with fewer than
+/// ``min(n, m)`` pairs.
+#[pyfunction]
+#[pyo3(signature = (cost_matrix, tau, maximize=false, *, method="jv"))]
+fn linear_sum_assignment_threshold<'py>(
+    py: Python<'py>,
+    cost_matrix: &Bound<'py, PyAny>,
+    tau: f64,
+    maximize: bool,
+    method: &str,
+) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>)> {
+    let options = assign::Options {
+        method: parse_method(method)?,
+        maximize,
+    };
+    let arr = as_f64_matrix(py, cost_matrix)?;
+    let shape = arr.shape();
+    let (rows, cols) = (shape[0], shape[1]);
+    let cost = arr.as_slice().map_err(to_py)?;
+    let result = py
+        .detach(|| assign::solve_with_threshold(cost, rows, cols, tau, &options))
+        .map_err(to_py)?;
+    let (r, c): (Vec<i64>, Vec<i64>) = result
+        .pairs()
+        .into_iter()
+        .map(|(i, j)| (i as i64, j as i64))
+        .unzip();
+    Ok((PyArray1::from_vec(py, r), PyArray1::from_vec(py, c)))
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(linear_sum_assignment, m)?)?;
+    m.add_function(wrap_pyfunction!(linear_sum_assignment_threshold, m)?)?;
     Ok(())
 }
