@@ -4,12 +4,16 @@
 //! a [`Shape`] is modelled by finite elements, its vibration modes are computed from the generalized
 //! eigenproblem `K φ = ω² M φ`, and nodes of two shapes are put in correspondence in modal space.
 
+pub mod axial;
+pub mod eigen;
 mod error;
+pub mod gaussian;
 pub mod material;
 pub mod model;
+pub mod rigid;
 pub mod shape;
 
 pub use error::ModalError;
 pub use material::{Material, PlaneModel};
-pub use model::{modal_basis, ElementKind, ModalBasis, ModelOptions};
+pub use model::{modal_basis, model_matrices, ElementKind, ModalBasis, ModelOptions};
 pub use shape::{Shape, Topology};

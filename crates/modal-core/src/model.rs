@@ -1,5 +1,11 @@
 //! The finite-element model of one object and its vibration modes.
 
+use faer::linalg::solvers::Solve;
+use faer::reborrow::ReborrowMut;
+use faer::Mat;
+
+use crate::eigen::{self, EigenPairs};
+use crate::gaussian::{nearest_neighbour_stats, GaussianIntegrals};
 use crate::{Material, ModalError, PlaneModel, Shape};
 
 /// Which finite elements model the object.
@@ -56,8 +62,320 @@ pub struct ModalBasis {
     pub sigma: Option<f64>,
 }
 
+impl ModalBasis {
+    /// Natural angular frequencies ω = √ω² (rad/s in the material's units); tiny negative ω²
+    /// from round-off map to 0.
+    pub fn frequencies(&self) -> Vec<f64> {
+        self.eigenvalues
+            .iter()
+            .map(|&l| l.max(0.0).sqrt())
+            .collect()
+    }
+
+    /// Per-node modal features of the first `k` modes: an `n × (dim·k)` matrix whose row `i`
+    /// is `[u_i(0..k), v_i(0..k), (w_i(0..k))]` (seed eqs 1–2).
+    pub fn features(&self, k: usize) -> Result<Mat<f64>, ModalError> {
+        if k > self.modes.ncols() {
+            return Err(ModalError::InvalidParameter(format!(
+                "{k} modes requested but only {} were computed",
+                self.modes.ncols()
+            )));
+        }
+        let n = self.n_nodes;
+        Ok(Mat::from_fn(n, self.dim * k, |i, c| {
+            self.modes[((c / k) * n + i, c % k)]
+        }))
+    }
+}
+
+/// Relative eigenvalue below which a mode counts as zero-energy (SPEC §4.3).
+pub const ZERO_MODE_TOL: f64 = 1e-9;
+
+/// Largest accepted `max(L_ii)/min(L_ii)` of the Cholesky factor of Γ (cond(Γ) ≲ 10¹²; §2.8).
+pub const CONDITION_GUARD: f64 = 1e6;
+
+/// How many times the conditioning guard shrinks σ by 0.8 before giving up.
+const GUARD_RETRIES: usize = 30;
+
 /// Builds the finite-element model of `shape` and solves `K φ = ω² M φ`.
 pub fn modal_basis(shape: &Shape, options: &ModelOptions) -> Result<ModalBasis, ModalError> {
-    let _ = (shape, options);
-    Err(ModalError::Numerical("modal_basis is not implemented yet".into()))
+    let model = build_model(shape, options)?;
+    let dim = shape.dim();
+    let n = shape.len();
+    let total = dim * n;
+    let k = options.n_modes.unwrap_or(total);
+    if k == 0 || k > total {
+        return Err(ModalError::InvalidParameter(format!(
+            "n_modes must be in 1..={total}, got {k}"
+        )));
+    }
+
+    let mut c = eigen::block_congruence(model.stiffness.as_ref(), model.mass_factor.as_ref(), dim);
+    let rigid = if options.exact_rigid {
+        Some(rigid_reduced_basis(shape, &model)?)
+    } else {
+        None
+    };
+    let r = rigid.as_ref().map_or(0, |u| u.ncols());
+    if options.exact_rigid {
+        let u = rigid.as_ref().expect("rigid basis built above");
+        deflate_rigid(&mut c, u);
+    }
+    let mut pairs = eigen::symmetric_eigen(c, Some(k))?;
+    if options.exact_rigid {
+        // The deflated rigid space sits at eigenvalue −s; replace the solver's arbitrary basis
+        // of it by the canonical M-orthonormal one (SPEC §2.7).
+        let u = rigid.as_ref().expect("rigid basis built above");
+        for j in 0..r.min(k) {
+            pairs.values[j] = 0.0;
+            pairs.vectors.col_mut(j).copy_from(u.col(j));
+        }
+        for v in pairs.all_values.iter_mut().take(r) {
+            *v = 0.0;
+        }
+    }
+    if options.element == ElementKind::Axial && !options.exact_rigid {
+        check_zero_modes(&pairs, dim)?;
+    }
+
+    eigen::block_solve_lower_transpose(model.mass_factor.as_ref(), pairs.vectors.as_mut(), dim);
+    let mut modes = match &model.interpolation {
+        Some(g) => {
+            let mut phi = Mat::<f64>::zeros(total, k);
+            for a in 0..dim {
+                let psi = pairs.vectors.as_ref().subrows(a * n, n);
+                phi.as_mut().subrows_mut(a * n, n).copy_from(g * psi);
+            }
+            phi
+        }
+        None => pairs.vectors,
+    };
+    if options.exact_rigid {
+        // Canonical rigid modes keep the sign of T_x, T_y, … rather than the largest-entry rule.
+        let mut flexible = modes.as_mut().subcols_mut(r.min(k), k - r.min(k));
+        eigen::canonical_signs(flexible.rb_mut());
+    } else {
+        eigen::canonical_signs(modes.as_mut());
+    }
+    if modes.col_iter().any(|c| c.iter().any(|v| !v.is_finite())) {
+        return Err(ModalError::Numerical("modes are not finite".into()));
+    }
+    Ok(ModalBasis {
+        dim,
+        n_nodes: n,
+        eigenvalues: pairs.values,
+        modes,
+        sigma: model.sigma,
+    })
+}
+
+/// The assembled model in the form the solver uses: `K_s φ_s = ω² (I_d ⊗ L Lᵀ) φ_s`, with the
+/// nodal modes `φ = (I_d ⊗ T) φ_s` (`T = G` for the Gaussian element's ψ-form, identity for bars).
+#[derive(Debug, Clone)]
+pub struct SolverModel {
+    /// `K̃` (Gaussian, ψ-form) or `K` (bars): `d·n × d·n`, full symmetric storage.
+    pub stiffness: Mat<f64>,
+    /// Lower Cholesky factor of the `n × n` mass block (`ρΓ`, or the bars' consistent `M_s`).
+    pub mass_factor: Mat<f64>,
+    /// `G` for the Gaussian element.
+    pub interpolation: Option<Mat<f64>>,
+    /// Gaussian width after the conditioning guard.
+    pub sigma: Option<f64>,
+}
+
+/// Validates the input and assembles the solver form of the model.
+pub fn build_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, ModalError> {
+    options.material.validate()?;
+    validate_nodes(shape)?;
+    match options.element {
+        ElementKind::Gaussian => gaussian_model(shape, options),
+        ElementKind::Axial => crate::axial::axial_model(shape, options),
+    }
+}
+
+/// Explicit nodal `(K, M)` of the model (`d·n × d·n`, component-major) and the σ used. For
+/// inspection and external solvers (e.g. a scipy oracle); [`modal_basis`] never forms them for
+/// the Gaussian element, whose explicit form needs `G⁻¹`.
+pub fn model_matrices(
+    shape: &Shape,
+    options: &ModelOptions,
+) -> Result<(Mat<f64>, Mat<f64>, Option<f64>), ModalError> {
+    let model = build_model(shape, options)?;
+    let dim = shape.dim();
+    let n = shape.len();
+    match options.element {
+        ElementKind::Gaussian => {
+            let sigma = model.sigma.expect("Gaussian model has σ");
+            let ints = GaussianIntegrals::new(shape, sigma);
+            let (k, m) = ints.explicit_matrices(&options.material, options.plane)?;
+            Ok((k, m, Some(sigma)))
+        }
+        ElementKind::Axial => {
+            let l = model.mass_factor.as_ref();
+            let mut ms = Mat::<f64>::zeros(n, n);
+            for j in 0..n {
+                for i in 0..n {
+                    let mut s = 0.0;
+                    for p in 0..=i.min(j) {
+                        s += l[(i, p)] * l[(j, p)];
+                    }
+                    ms[(i, j)] = s;
+                }
+            }
+            let mut m = Mat::<f64>::zeros(dim * n, dim * n);
+            for a in 0..dim {
+                m.as_mut().submatrix_mut(a * n, a * n, n, n).copy_from(&ms);
+            }
+            Ok((model.stiffness, m, None))
+        }
+    }
+}
+
+/// Too few nodes and coincident nodes make every model singular.
+fn validate_nodes(shape: &Shape) -> Result<(), ModalError> {
+    let dim = shape.dim();
+    let n = shape.len();
+    if n < dim + 1 {
+        return Err(ModalError::InvalidShape(format!(
+            "a {dim}-D model needs at least {} nodes, got {n}",
+            dim + 1
+        )));
+    }
+    let c = shape.coords();
+    let mut extent = 0.0f64;
+    for a in 0..dim {
+        let (lo, hi) = (0..n)
+            .map(|i| c[i * dim + a])
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                (l.min(v), h.max(v))
+            });
+        extent = extent.max(hi - lo);
+    }
+    let (_, min_nn, (i, j)) = nearest_neighbour_stats(shape);
+    if !(min_nn > 1e-10 * extent) {
+        return Err(ModalError::InvalidShape(format!(
+            "nodes {i} and {j} coincide (distance {min_nn:e}); remove duplicate points"
+        )));
+    }
+    Ok(())
+}
+
+fn gaussian_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, ModalError> {
+    let dim = shape.dim();
+    let n = shape.len();
+    let mut sigma = match options.sigma {
+        Some(s) => {
+            if !(s.is_finite() && s > 0.0) {
+                return Err(ModalError::InvalidParameter(format!(
+                    "sigma must be positive and finite, got {s}"
+                )));
+            }
+            s
+        }
+        None => {
+            if !(options.kappa.is_finite() && options.kappa > 0.0) {
+                return Err(ModalError::InvalidParameter(format!(
+                    "kappa must be positive and finite, got {}",
+                    options.kappa
+                )));
+            }
+            options.kappa * nearest_neighbour_stats(shape).0
+        }
+    };
+    let rho = options.material.density;
+    let (lambda, mu) = options.material.lame(dim, options.plane);
+    for _ in 0..GUARD_RETRIES {
+        let ints = GaussianIntegrals::new(shape, sigma);
+        let mut l = &ints.gamma * faer::Scale(rho);
+        if eigen::cholesky_in_place(l.as_mut()).is_ok() {
+            let diag: Vec<f64> = (0..n).map(|i| l[(i, i)]).collect();
+            let lo = diag.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = diag.iter().copied().fold(0.0, f64::max);
+            if lo > 0.0 && hi / lo <= CONDITION_GUARD {
+                for j in 0..n {
+                    for i in 0..j {
+                        l[(i, j)] = 0.0;
+                    }
+                }
+                let stiffness = ints.k_tilde(lambda, mu);
+                let _ = dim;
+                return Ok(SolverModel {
+                    stiffness,
+                    mass_factor: l,
+                    interpolation: Some(ints.g),
+                    sigma: Some(sigma),
+                });
+            }
+        }
+        sigma *= 0.8;
+    }
+    Err(ModalError::Numerical(format!(
+        "Γ stays ill-conditioned after shrinking σ to {sigma:e}"
+    )))
+}
+
+/// The rigid basis mapped to the reduced (standard-problem) coordinates `y = (I⊗Lᵀ) T⁻¹ R` and
+/// orthonormalised in order: its columns are the canonical M-orthonormal rigid modes.
+fn rigid_reduced_basis(shape: &Shape, model: &SolverModel) -> Result<Mat<f64>, ModalError> {
+    let dim = shape.dim();
+    let n = shape.len();
+    let mut y = crate::rigid::rigid_basis(shape);
+    if let Some(g) = &model.interpolation {
+        let llt = g
+            .llt(faer::Side::Lower)
+            .map_err(|_| ModalError::Numerical("G is not positive definite".into()))?;
+        for a in 0..dim {
+            let blk = y.as_ref().subrows(a * n, n).to_owned();
+            let solved = llt.solve(&blk);
+            y.as_mut().subrows_mut(a * n, n).copy_from(&solved);
+        }
+    }
+    let lt = model.mass_factor.transpose();
+    for a in 0..dim {
+        let blk = y.as_ref().subrows(a * n, n).to_owned();
+        y.as_mut().subrows_mut(a * n, n).copy_from(lt * &blk);
+    }
+    crate::rigid::orthonormalise(&mut y)?;
+    Ok(y)
+}
+
+/// `C ← Q C Q − s U Uᵀ` with `Q = I − U Uᵀ`: the flexible spectrum is that of the M-orthogonal
+/// projection (SPEC §2.7) and the rigid space is moved to `−s < 0` so that it sorts first.
+fn deflate_rigid(c: &mut Mat<f64>, u: &Mat<f64>) {
+    let v = &*c * u; // C U
+    let h = u.transpose() * &v; // Uᵀ C U
+    let s = (0..c.nrows())
+        .map(|i| c[(i, i)].abs())
+        .fold(0.0, f64::max)
+        .max(1.0);
+    let uh = u * &h;
+    // C − U Vᵀ − V Uᵀ + U H Uᵀ − s U Uᵀ = C − U (V − ½ U H + ½ s U)ᵀ − (V − ½ U H + ½ s U) Uᵀ
+    let w = &v - (&uh * faer::Scale(0.5)) + (u * faer::Scale(0.5 * s));
+    *c -= u * w.transpose() + &w * u.transpose();
+    eigen::symmetrise(c.as_mut());
+}
+
+fn check_zero_modes(pairs: &EigenPairs, dim: usize) -> Result<(), ModalError> {
+    let expected = if dim == 2 { 3 } else { 6 };
+    let zeros = count_zero_modes(&pairs.all_values);
+    if zeros != expected {
+        return Err(ModalError::InvalidShape(format!(
+            "the bar model has {zeros} zero-energy modes, a {dim}-D body has {expected}: \
+             the structure is a mechanism (collinear/coplanar nodes, unconnected nodes or \
+             missing bracing)"
+        )));
+    }
+    Ok(())
+}
+
+/// Number of eigenvalues below `ZERO_MODE_TOL × max` (SPEC §4.3).
+pub fn count_zero_modes(eigenvalues: &[f64]) -> usize {
+    let max = eigenvalues
+        .iter()
+        .copied()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    eigenvalues
+        .iter()
+        .filter(|&&v| v < ZERO_MODE_TOL * max)
+        .count()
 }

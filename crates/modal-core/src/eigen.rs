@@ -1,0 +1,579 @@
+//! Symmetric and generalized symmetric-definite eigensolvers (SPEC §4).
+//!
+//! `K x = λ B x` with `B` positive definite is reduced to a standard problem by `B = L Lᵀ`,
+//! `C = L⁻¹ K L⁻ᵀ`, `C y = λ y`, `x = L⁻ᵀ y` (so `xᵀ B x = I`). The standard problem is
+//! tridiagonalised with faer's blocked Householder reduction; then
+//! - all pairs: faer's divide-and-conquer tridiagonal solver and the full back-transform;
+//! - the `k` lowest pairs only: the tridiagonal eigenvalues without vectors (implicit QR, O(n²)),
+//!   inverse iteration on the tridiagonal matrix for the `k` wanted vectors (O(n k), with
+//!   re-orthogonalisation inside clusters as LAPACK's `dstein` does), and the Householder
+//!   back-transform applied to an `n × k` block only (2n²k flops instead of 2n³).
+
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::evd::{self, ComputeEigenvectors};
+use faer::linalg::{cholesky, householder, triangular_solve};
+use faer::reborrow::{Reborrow, ReborrowMut};
+use faer::{Conj, Mat, MatMut, MatRef, Par};
+
+use crate::ModalError;
+
+/// Eigenvalues (ascending) and the matching eigenvectors (columns).
+#[derive(Debug, Clone)]
+pub struct EigenPairs {
+    /// The computed eigenvalues, ascending.
+    pub values: Vec<f64>,
+    /// One column per computed eigenvalue.
+    pub vectors: Mat<f64>,
+    /// Every eigenvalue of the problem (ascending), also those whose vectors were not computed.
+    pub all_values: Vec<f64>,
+}
+
+/// Above this fraction of wanted pairs the full divide-and-conquer path is cheaper.
+const PARTIAL_FRACTION: f64 = 0.5;
+
+/// Cholesky factorisation in place; the lower triangle of `a` becomes `L` with `a = L Lᵀ`.
+/// Only the lower triangle of `a` is read. Returns the index of the first non-positive pivot.
+pub fn cholesky_in_place(a: MatMut<'_, f64>) -> Result<(), usize> {
+    let n = a.nrows();
+    let par = Par::Seq;
+    let req = cholesky::llt::factor::cholesky_in_place_scratch::<f64>(n, par, Default::default());
+    let mut mem = MemBuffer::new(req);
+    let stack = MemStack::new(&mut mem);
+    cholesky::llt::factor::cholesky_in_place(a, Default::default(), par, stack, Default::default())
+        .map(|_| ())
+        .map_err(|e| match e {
+            cholesky::llt::factor::LltError::NonPositivePivot { index } => index,
+        })
+}
+
+/// `X ← L⁻¹ X` with `L` the lower triangle of `l`.
+pub fn solve_lower(l: MatRef<'_, f64>, x: MatMut<'_, f64>) {
+    triangular_solve::solve_lower_triangular_in_place(l, x, Par::Seq);
+}
+
+/// `X ← L⁻ᵀ X` with `L` the lower triangle of `l`.
+pub fn solve_lower_transpose(l: MatRef<'_, f64>, x: MatMut<'_, f64>) {
+    triangular_solve::solve_upper_triangular_in_place(l.transpose(), x, Par::Seq);
+}
+
+/// `S ← L⁻¹ S L⁻ᵀ` for a symmetric `S` (full storage in, full storage out, symmetrised).
+pub fn congruence_inverse(l: MatRef<'_, f64>, mut s: MatMut<'_, f64>) {
+    // L⁻¹ S L⁻ᵀ = L⁻¹ (L⁻¹ S)ᵀ because S is symmetric: two triangular solves, no transposed copy
+    // of S is needed other than the in-place transpose view.
+    solve_lower(l, s.rb_mut());
+    let n = s.nrows();
+    for j in 0..n {
+        for i in (j + 1)..n {
+            let (a, b) = (s[(i, j)], s[(j, i)]);
+            s[(i, j)] = b;
+            s[(j, i)] = a;
+        }
+    }
+    solve_lower(l, s.rb_mut());
+    symmetrise(s);
+}
+
+/// `S ← (S + Sᵀ)/2`.
+pub fn symmetrise(mut s: MatMut<'_, f64>) {
+    let n = s.nrows();
+    for j in 0..n {
+        for i in (j + 1)..n {
+            let v = 0.5 * (s[(i, j)] + s[(j, i)]);
+            s[(i, j)] = v;
+            s[(j, i)] = v;
+        }
+    }
+}
+
+/// Eigenpairs of the symmetric matrix `c` (only its lower triangle is read; it is overwritten),
+/// ascending; the `n_modes` lowest if given, all otherwise. Eigenvectors are orthonormal.
+pub fn symmetric_eigen(mut c: Mat<f64>, n_modes: Option<usize>) -> Result<EigenPairs, ModalError> {
+    let n = c.nrows();
+    let k = n_modes.unwrap_or(n).min(n);
+    if n == 0 || k == 0 {
+        let all_values = if n == 0 {
+            Vec::new()
+        } else {
+            full_eigen_values(c.as_ref())?
+        };
+        return Ok(EigenPairs {
+            values: Vec::new(),
+            vectors: Mat::zeros(n, 0),
+            all_values,
+        });
+    }
+    if c.col_iter().any(|col| col.iter().any(|v| !v.is_finite())) {
+        return Err(ModalError::Numerical(
+            "matrix has non-finite entries".into(),
+        ));
+    }
+    if (k as f64) > PARTIAL_FRACTION * n as f64 || n < 8 {
+        return full_eigen(c.as_ref(), k);
+    }
+    partial_eigen(c.as_mut(), k)
+}
+
+fn full_eigen(c: MatRef<'_, f64>, k: usize) -> Result<EigenPairs, ModalError> {
+    let n = c.nrows();
+    let par = Par::Seq;
+    let req =
+        evd::self_adjoint_evd_scratch::<f64>(n, ComputeEigenvectors::Yes, par, Default::default());
+    let mut mem = MemBuffer::new(req);
+    let stack = MemStack::new(&mut mem);
+    let mut s = faer::diag::Diag::<f64>::zeros(n);
+    let mut u = Mat::<f64>::zeros(n, n);
+    evd::self_adjoint_evd(
+        c,
+        s.as_mut(),
+        Some(u.as_mut()),
+        par,
+        stack,
+        Default::default(),
+    )
+    .map_err(|_| ModalError::Numerical("symmetric eigensolver did not converge".into()))?;
+    let raw: Vec<f64> = (0..n).map(|i| s[i]).collect();
+    let order = ascending_order(&raw);
+    let mut vectors = Mat::<f64>::zeros(n, k);
+    for (dst, &src) in order.iter().take(k).enumerate() {
+        vectors.col_mut(dst).copy_from(u.col(src));
+    }
+    let all_values: Vec<f64> = order.iter().map(|&i| raw[i]).collect();
+    let values = all_values[..k].to_vec();
+    Ok(EigenPairs {
+        values,
+        vectors,
+        all_values,
+    })
+}
+
+fn full_eigen_values(c: MatRef<'_, f64>) -> Result<Vec<f64>, ModalError> {
+    let n = c.nrows();
+    let par = Par::Seq;
+    let req =
+        evd::self_adjoint_evd_scratch::<f64>(n, ComputeEigenvectors::No, par, Default::default());
+    let mut mem = MemBuffer::new(req);
+    let stack = MemStack::new(&mut mem);
+    let mut s = faer::diag::Diag::<f64>::zeros(n);
+    evd::self_adjoint_evd(c, s.as_mut(), None, par, stack, Default::default())
+        .map_err(|_| ModalError::Numerical("symmetric eigensolver did not converge".into()))?;
+    let mut v: Vec<f64> = (0..n).map(|i| s[i]).collect();
+    v.sort_by(f64::total_cmp);
+    Ok(v)
+}
+
+fn ascending_order(values: &[f64]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..values.len()).collect();
+    order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
+    order
+}
+
+fn partial_eigen(mut c: MatMut<'_, f64>, k: usize) -> Result<EigenPairs, ModalError> {
+    let n = c.nrows();
+    let par = Par::Seq;
+    let bs = faer::linalg::qr::no_pivoting::factor::recommended_block_size::<f64>(n, n);
+    let mut hh = Mat::<f64>::zeros(bs, n - 1);
+    let req = StackReq::any_of(&[
+        evd::tridiag::tridiag_in_place_scratch::<f64>(n, par, Default::default()),
+        householder::apply_block_householder_sequence_on_the_left_in_place_scratch::<f64>(
+            n - 1,
+            bs,
+            k,
+        ),
+        evd::self_adjoint_evd_scratch::<f64>(n, ComputeEigenvectors::No, par, Default::default()),
+    ]);
+    let mut mem = MemBuffer::new(req);
+    let stack = MemStack::new(&mut mem);
+    evd::tridiag::tridiag_in_place(c.rb_mut(), hh.as_mut(), par, stack, Default::default());
+    let diag: Vec<f64> = (0..n).map(|i| c[(i, i)]).collect();
+    let off: Vec<f64> = (0..n - 1).map(|i| c[(i + 1, i)]).collect();
+
+    let mut s = faer::diag::Diag::<f64>::zeros(n);
+    {
+        let d = faer::Col::<f64>::from_fn(n, |i| diag[i]);
+        let e = faer::Col::<f64>::from_fn(n, |i| if i + 1 < n { off[i] } else { 0.0 });
+        evd::tridiagonal_self_adjoint_evd(
+            d.as_diagonal(),
+            e.as_diagonal(),
+            s.as_mut(),
+            None,
+            par,
+            stack,
+            Default::default(),
+        )
+        .map_err(|_| ModalError::Numerical("tridiagonal eigensolver did not converge".into()))?;
+    }
+    let mut all_values: Vec<f64> = (0..n).map(|i| s[i]).collect();
+    all_values.sort_by(f64::total_cmp);
+    let values = all_values[..k].to_vec();
+
+    let mut u = Mat::<f64>::zeros(n, k);
+    tridiagonal_inverse_iteration(&diag, &off, &values, u.as_mut())?;
+
+    householder::apply_block_householder_sequence_on_the_left_in_place_with_conj(
+        c.rb().submatrix(1, 0, n - 1, n - 1),
+        hh.as_ref(),
+        Conj::No,
+        u.as_mut().subrows_mut(1, n - 1),
+        par,
+        stack,
+    );
+    Ok(EigenPairs {
+        values,
+        vectors: u,
+        all_values,
+    })
+}
+
+/// Eigenvectors of the symmetric tridiagonal matrix (`diag`, `off`) for the given ascending
+/// eigenvalues, by inverse iteration with Gram–Schmidt inside clusters (after LAPACK `dstein`).
+fn tridiagonal_inverse_iteration(
+    diag: &[f64],
+    off: &[f64],
+    values: &[f64],
+    mut out: MatMut<'_, f64>,
+) -> Result<(), ModalError> {
+    let n = diag.len();
+    let eps = f64::EPSILON;
+    let mut norm1 = 0.0f64;
+    for i in 0..n {
+        let mut r = diag[i].abs();
+        if i > 0 {
+            r += off[i - 1].abs();
+        }
+        if i + 1 < n {
+            r += off[i].abs();
+        }
+        norm1 = norm1.max(r);
+    }
+    if norm1 == 0.0 {
+        for (j, _) in values.iter().enumerate() {
+            out[(j, j)] = 1.0;
+        }
+        return Ok(());
+    }
+    let ortol = 1e-3 * norm1;
+    let pertol = 10.0 * eps * norm1;
+    let tiny = eps * norm1;
+
+    let mut dd = vec![0.0; n];
+    let mut du = vec![0.0; n];
+    let mut du2 = vec![0.0; n];
+    let mut dl = vec![0.0; n];
+    let mut piv = vec![false; n];
+    let mut x = vec![0.0; n];
+    let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut cluster_start = 0usize;
+    let mut prev_shift = f64::NEG_INFINITY;
+
+    for (j, &lam) in values.iter().enumerate() {
+        if j > 0 && (lam - values[j - 1]).abs() > ortol {
+            cluster_start = j;
+        }
+        // Distinct shifts for equal eigenvalues give independent start directions.
+        let mut shift = lam;
+        if j > cluster_start && shift - prev_shift < pertol {
+            shift = prev_shift + pertol;
+        }
+        prev_shift = shift;
+
+        // LU with partial pivoting of T - shift I (LAPACK dgttrf).
+        for i in 0..n {
+            dd[i] = diag[i] - shift;
+        }
+        du[..n - 1].copy_from_slice(off);
+        dl[..n - 1].copy_from_slice(off);
+        for i in 0..n.saturating_sub(1) {
+            du2[i] = 0.0;
+            if dd[i].abs() >= dl[i].abs() {
+                piv[i] = false;
+                if dd[i] == 0.0 {
+                    dd[i] = tiny;
+                }
+                let f = dl[i] / dd[i];
+                dl[i] = f;
+                dd[i + 1] -= f * du[i];
+            } else {
+                piv[i] = true;
+                let f = dd[i] / dl[i];
+                dd[i] = dl[i];
+                dl[i] = f;
+                let t = du[i];
+                du[i] = dd[i + 1];
+                dd[i + 1] = t - f * dd[i + 1];
+                if i + 2 < n {
+                    du2[i] = du[i + 1];
+                    du[i + 1] = -f * du[i + 1];
+                }
+            }
+        }
+        for v in dd.iter_mut() {
+            if v.abs() < tiny {
+                *v = if *v < 0.0 { -tiny } else { tiny };
+            }
+        }
+
+        for v in x.iter_mut() {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            *v = ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5;
+        }
+        let mut converged = false;
+        for _ in 0..6 {
+            // Gram–Schmidt against the cluster's previous vectors, then one solve.
+            for p in cluster_start..j {
+                let col = out.rb().col(p);
+                let dot: f64 = (0..n).map(|i| col[i] * x[i]).sum();
+                for i in 0..n {
+                    x[i] -= dot * col[i];
+                }
+            }
+            let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if scale == 0.0 {
+                break;
+            }
+            for v in x.iter_mut() {
+                *v /= scale;
+            }
+            for i in 0..n - 1 {
+                if !piv[i] {
+                    x[i + 1] -= dl[i] * x[i];
+                } else {
+                    let t = x[i];
+                    x[i] = x[i + 1];
+                    x[i + 1] = t - dl[i] * x[i];
+                }
+            }
+            x[n - 1] /= dd[n - 1];
+            if n > 1 {
+                x[n - 2] = (x[n - 2] - du[n - 2] * x[n - 1]) / dd[n - 2];
+            }
+            for i in (0..n.saturating_sub(2)).rev() {
+                x[i] = (x[i] - du[i] * x[i + 1] - du2[i] * x[i + 2]) / dd[i];
+            }
+            let growth = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if !growth.is_finite() {
+                return Err(ModalError::Numerical("inverse iteration overflowed".into()));
+            }
+            // dstein's acceptance test: a growth of 1/(√n·eps·‖T‖) means the residual is at
+            // round-off level; one extra step after acceptance polishes it.
+            if converged {
+                break;
+            }
+            if growth * (n as f64).sqrt() * eps * norm1 >= 1.0 / (n as f64).sqrt() {
+                converged = true;
+            }
+        }
+        for p in cluster_start..j {
+            let col = out.rb().col(p);
+            let dot: f64 = (0..n).map(|i| col[i] * x[i]).sum();
+            for i in 0..n {
+                x[i] -= dot * col[i];
+            }
+        }
+        let nrm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if !(nrm > 0.0 && nrm.is_finite()) {
+            return Err(ModalError::Numerical("inverse iteration failed".into()));
+        }
+        for i in 0..n {
+            out[(i, j)] = x[i] / nrm;
+        }
+    }
+    Ok(())
+}
+
+/// Generalized symmetric-definite eigenpairs `K x = λ B x`, ascending, `xᵀ B x = I`.
+/// Only the lower triangles of `k` and `b` are read. `n_modes` limits the number of pairs.
+pub fn generalized_eigen(
+    k: MatRef<'_, f64>,
+    b: MatRef<'_, f64>,
+    n_modes: Option<usize>,
+) -> Result<EigenPairs, ModalError> {
+    let n = k.nrows();
+    if k.ncols() != n || b.nrows() != n || b.ncols() != n {
+        return Err(ModalError::InvalidParameter(format!(
+            "K is {}×{} and B is {}×{}; both must be square of the same size",
+            k.nrows(),
+            k.ncols(),
+            b.nrows(),
+            b.ncols()
+        )));
+    }
+    let mut l = Mat::<f64>::zeros(n, n);
+    l.copy_from_triangular_lower(b);
+    cholesky_in_place(l.as_mut())
+        .map_err(|i| ModalError::Numerical(format!("B is not positive definite (pivot {i})")))?;
+    let mut c = Mat::<f64>::zeros(n, n);
+    c.copy_from_triangular_lower(k);
+    for j in 0..n {
+        for i in (j + 1)..n {
+            c[(j, i)] = c[(i, j)];
+        }
+    }
+    congruence_inverse(l.as_ref(), c.as_mut());
+    let mut pairs = symmetric_eigen(c, n_modes)?;
+    solve_lower_transpose(l.as_ref(), pairs.vectors.as_mut());
+    Ok(pairs)
+}
+
+/// `C = (I_d ⊗ L)⁻¹ K (I_d ⊗ L)⁻ᵀ` for a `d·n × d·n` matrix `K` (full storage, symmetric) and the
+/// Cholesky factor `L` of the `n × n` diagonal block of a block-diagonal `B = I_d ⊗ L Lᵀ`.
+/// Only `d(d+1)/2` block congruences with the `n × n` factor are needed instead of one with the
+/// `dn × dn` factor (SPEC §4.1, block form). `C` is returned with full symmetric storage.
+pub fn block_congruence(k: MatRef<'_, f64>, l: MatRef<'_, f64>, dim: usize) -> Mat<f64> {
+    let n = l.nrows();
+    let mut c = k.to_owned();
+    for a in 0..dim {
+        congruence_inverse(l, c.as_mut().submatrix_mut(a * n, a * n, n, n));
+        for b in (a + 1)..dim {
+            // C_ba = L⁻¹ K_ba L⁻ᵀ = L⁻¹ (L⁻¹ K_ab)ᵀ; C_ab = C_baᵀ.
+            solve_lower(l, c.as_mut().submatrix_mut(a * n, b * n, n, n));
+            for j in 0..n {
+                for i in 0..n {
+                    c[(b * n + i, a * n + j)] = c[(a * n + j, b * n + i)];
+                }
+            }
+            solve_lower(l, c.as_mut().submatrix_mut(b * n, a * n, n, n));
+            for j in 0..n {
+                for i in 0..n {
+                    c[(a * n + j, b * n + i)] = c[(b * n + i, a * n + j)];
+                }
+            }
+        }
+    }
+    c
+}
+
+/// `X ← (I_d ⊗ L)⁻ᵀ X` for a `d·n × k` matrix `X`.
+pub fn block_solve_lower_transpose(l: MatRef<'_, f64>, mut x: MatMut<'_, f64>, dim: usize) {
+    let n = l.nrows();
+    for a in 0..dim {
+        solve_lower_transpose(l, x.rb_mut().subrows_mut(a * n, n));
+    }
+}
+
+/// Flips every column so that its largest-|·| entry (the first one on ties) is positive.
+pub fn canonical_signs(mut v: MatMut<'_, f64>) {
+    for j in 0..v.ncols() {
+        let mut best = 0.0f64;
+        let mut sign = 1.0;
+        for i in 0..v.nrows() {
+            let a = v[(i, j)];
+            if a.abs() > best {
+                best = a.abs();
+                sign = a.signum();
+            }
+        }
+        if sign < 0.0 {
+            for i in 0..v.nrows() {
+                v[(i, j)] = -v[(i, j)];
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn random_spd(n: usize, seed: u64, shift: f64) -> Mat<f64> {
+        let mut s = seed;
+        let mut next = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let a = Mat::<f64>::from_fn(n, n, |_, _| next());
+        let mut m = &a * a.transpose();
+        for i in 0..n {
+            m[(i, i)] += shift;
+        }
+        m
+    }
+
+    fn check_pairs(c: &Mat<f64>, p: &EigenPairs, tol: f64) {
+        let n = c.nrows();
+        let k = p.values.len();
+        let r = c * &p.vectors
+            - &p.vectors * faer::Mat::from_fn(k, k, |i, j| if i == j { p.values[i] } else { 0.0 });
+        let scale = (0..n).map(|i| c[(i, i)].abs()).fold(0.0, f64::max);
+        assert!(
+            r.norm_max() < tol * scale * n as f64,
+            "residual {}",
+            r.norm_max()
+        );
+        let g = p.vectors.transpose() * &p.vectors;
+        for i in 0..k {
+            for j in 0..k {
+                let e = if i == j { 1.0 } else { 0.0 };
+                assert!(
+                    (g[(i, j)] - e).abs() < 1e-10,
+                    "orthogonality {i} {j} {}",
+                    g[(i, j)]
+                );
+            }
+        }
+        for w in p.values.windows(2) {
+            assert!(w[0] <= w[1]);
+        }
+    }
+
+    #[test]
+    fn partial_matches_full() {
+        for &(n, seed) in &[(40usize, 1u64), (97, 2), (150, 3)] {
+            let c = random_spd(n, seed, 0.0);
+            let full = symmetric_eigen(c.clone(), None).unwrap();
+            check_pairs(&c, &full, 1e-13);
+            let k = n / 4;
+            let part = symmetric_eigen(c.clone(), Some(k)).unwrap();
+            check_pairs(&c, &part, 1e-13);
+            for i in 0..k {
+                assert!((full.values[i] - part.values[i]).abs() < 1e-11 * full.values[n - 1]);
+            }
+        }
+    }
+
+    #[test]
+    fn partial_handles_degenerate_clusters() {
+        // Block diagonal with repeated eigenvalues: a diagonal of repeated values, rotated.
+        let n = 60;
+        let q = {
+            let a = random_spd(n, 7, 1.0);
+            let qr = a.qr();
+            qr.compute_Q()
+        };
+        let d = Mat::<f64>::from_fn(n, n, |i, j| if i == j { (i / 4) as f64 } else { 0.0 });
+        let c = &q * &d * q.transpose();
+        let mut c = c.clone();
+        symmetrise(c.as_mut());
+        let part = symmetric_eigen(c.clone(), Some(12)).unwrap();
+        check_pairs(&c, &part, 1e-13);
+        for i in 0..12 {
+            assert!((part.values[i] - (i / 4) as f64).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn generalized_is_mass_normalised() {
+        let n = 30;
+        let k = random_spd(n, 11, 0.0);
+        let b = random_spd(n, 12, 1.0);
+        for modes in [None, Some(7)] {
+            let p = generalized_eigen(k.as_ref(), b.as_ref(), modes).unwrap();
+            let x = &p.vectors;
+            let xbx = x.transpose() * &b * x;
+            let xkx = x.transpose() * &k * x;
+            for i in 0..x.ncols() {
+                for j in 0..x.ncols() {
+                    let e = if i == j { 1.0 } else { 0.0 };
+                    assert!((xbx[(i, j)] - e).abs() < 1e-10);
+                    let l = if i == j { p.values[i] } else { 0.0 };
+                    assert!((xkx[(i, j)] - l).abs() < 1e-9 * p.values.last().unwrap().abs());
+                }
+            }
+        }
+        let not_pd = Mat::<f64>::from_fn(n, n, |i, j| if i == j { -1.0 } else { 0.0 });
+        assert!(generalized_eigen(k.as_ref(), not_pd.as_ref(), None).is_err());
+    }
+}

@@ -1,0 +1,178 @@
+//! Sclaroff's isoparametric Gaussian element in 2-D and 3-D (SPEC §2).
+//!
+//! Interpolants `h = A g` with `g_k(x) = exp(−|x−X_k|²/2σ²)` and `A = G⁻¹`. All integrals are over
+//! ℝ^d and closed-form (§2.2). The stiffness and mass are `K = Â K̃ Â`, `M = Â Γ̃ Â` with
+//! `Â = I_d ⊗ A`; the eigenproblem is solved in the ψ-form `K̃ ψ = ω² Γ̃ ψ`, `φ = (I_d ⊗ G) ψ`
+//! (§2.6), so `G⁻¹` is never formed on the solve path.
+
+use faer::linalg::solvers::DenseSolveCore;
+use faer::Mat;
+
+use crate::{Material, ModalError, PlaneModel, Shape};
+
+/// The closed-form integrals of one Gaussian element (without material constants).
+#[derive(Debug, Clone)]
+pub struct GaussianIntegrals {
+    pub dim: usize,
+    pub n: usize,
+    pub sigma: f64,
+    /// `G_ij = exp(−r²/2σ²)`.
+    pub g: Mat<f64>,
+    /// `Γ_ij = ∫ g_i g_j`.
+    pub gamma: Mat<f64>,
+    /// `Γ^{ab}_ij = ∫ ∂_a g_i ∂_b g_j`, stored for `a ≤ b` in the order of [`pair_index`].
+    pub gamma_d: Vec<Mat<f64>>,
+}
+
+/// Index of the unordered component pair `(a, b)` in [`GaussianIntegrals::gamma_d`]:
+/// 2-D `xx, xy, yy`; 3-D `xx, xy, xz, yy, yz, zz`.
+pub fn pair_index(dim: usize, a: usize, b: usize) -> usize {
+    let (a, b) = if a <= b { (a, b) } else { (b, a) };
+    // Row-major upper triangle.
+    a * dim - a * a.saturating_sub(1) / 2 + (b - a)
+}
+
+/// Mean and minimum nearest-neighbour distance, with the pair realising the minimum.
+pub fn nearest_neighbour_stats(shape: &Shape) -> (f64, f64, (usize, usize)) {
+    let n = shape.len();
+    let dim = shape.dim();
+    let c = shape.coords();
+    let mut total = 0.0;
+    let mut min = f64::INFINITY;
+    let mut pair = (0, 0);
+    for i in 0..n {
+        let mut best = f64::INFINITY;
+        let mut bj = i;
+        for j in 0..n {
+            if j == i {
+                continue;
+            }
+            let mut r2 = 0.0;
+            for a in 0..dim {
+                let d = c[i * dim + a] - c[j * dim + a];
+                r2 += d * d;
+            }
+            if r2 < best {
+                best = r2;
+                bj = j;
+            }
+        }
+        let r = best.sqrt();
+        total += r;
+        if r < min {
+            min = r;
+            pair = (i.min(bj), i.max(bj));
+        }
+    }
+    (total / n as f64, min, pair)
+}
+
+impl GaussianIntegrals {
+    /// Closed forms of SPEC §2.2 for the nodes of `shape` and width `sigma`.
+    pub fn new(shape: &Shape, sigma: f64) -> Self {
+        let dim = shape.dim();
+        let n = shape.len();
+        let c = shape.coords();
+        let s2 = sigma * sigma;
+        let v = (std::f64::consts::PI * s2).powf(dim as f64 / 2.0);
+        let npairs = dim * (dim + 1) / 2;
+        let mut g = Mat::<f64>::zeros(n, n);
+        let mut gamma = Mat::<f64>::zeros(n, n);
+        let mut gamma_d: Vec<Mat<f64>> = (0..npairs).map(|_| Mat::zeros(n, n)).collect();
+        let inv4s4 = 1.0 / (4.0 * s2 * s2);
+        let mut d = [0.0f64; 3];
+        for j in 0..n {
+            for i in j..n {
+                let mut r2 = 0.0;
+                for a in 0..dim {
+                    d[a] = c[j * dim + a] - c[i * dim + a];
+                    r2 += d[a] * d[a];
+                }
+                let e = (-r2 / (4.0 * s2)).exp();
+                let gij = e * e;
+                let gm = v * e;
+                g[(i, j)] = gij;
+                g[(j, i)] = gij;
+                gamma[(i, j)] = gm;
+                gamma[(j, i)] = gm;
+                let mut p = 0;
+                for a in 0..dim {
+                    for b in a..dim {
+                        let delta = if a == b { 2.0 * s2 } else { 0.0 };
+                        let val = gm * (delta - d[a] * d[b]) * inv4s4;
+                        gamma_d[p][(i, j)] = val;
+                        gamma_d[p][(j, i)] = val;
+                        p += 1;
+                    }
+                }
+            }
+        }
+        Self {
+            dim,
+            n,
+            sigma,
+            g,
+            gamma,
+            gamma_d,
+        }
+    }
+
+    /// `Γ^{ab}` for any ordered pair.
+    pub fn gamma_ab(&self, a: usize, b: usize) -> &Mat<f64> {
+        &self.gamma_d[pair_index(self.dim, a, b)]
+    }
+
+    /// The (a, b) block of `K̃`: `(λ+μ) Γ^{ab} + μ δ_ab Σ_c Γ^{cc}` (SPEC §2.4 without the `A`s).
+    pub fn k_tilde_block(&self, a: usize, b: usize, lambda: f64, mu: f64) -> Mat<f64> {
+        let mut out = self.gamma_ab(a, b) * faer::Scale(lambda + mu);
+        if a == b {
+            for c in 0..self.dim {
+                out += self.gamma_ab(c, c) * faer::Scale(mu);
+            }
+        }
+        out
+    }
+
+    /// Full `K̃` (d·n × d·n, component-major).
+    pub fn k_tilde(&self, lambda: f64, mu: f64) -> Mat<f64> {
+        let n = self.n;
+        let mut k = Mat::<f64>::zeros(self.dim * n, self.dim * n);
+        for a in 0..self.dim {
+            for b in 0..self.dim {
+                let blk = self.k_tilde_block(a, b, lambda, mu);
+                k.as_mut().submatrix_mut(a * n, b * n, n, n).copy_from(&blk);
+            }
+        }
+        k
+    }
+
+    /// Explicit `K = Â K̃ Â` and `M = Â Γ̃ Â` with `A = G⁻¹` (SPEC §2.3–2.4). For tests, exports and
+    /// oracles only; the modal solve never forms `G⁻¹`.
+    pub fn explicit_matrices(
+        &self,
+        material: &Material,
+        plane: PlaneModel,
+    ) -> Result<(Mat<f64>, Mat<f64>), ModalError> {
+        let n = self.n;
+        let dim = self.dim;
+        let (lambda, mu) = material.lame(dim, plane);
+        let llt = self
+            .g
+            .llt(faer::Side::Lower)
+            .map_err(|_| ModalError::Numerical("G is not positive definite".into()))?;
+        let a = llt.inverse();
+        let ms = &a * (&self.gamma * faer::Scale(material.density)) * &a;
+        let mut m = Mat::<f64>::zeros(dim * n, dim * n);
+        let mut k = Mat::<f64>::zeros(dim * n, dim * n);
+        for p in 0..dim {
+            m.as_mut().submatrix_mut(p * n, p * n, n, n).copy_from(&ms);
+            for q in 0..dim {
+                let blk = &a * self.k_tilde_block(p, q, lambda, mu) * &a;
+                k.as_mut().submatrix_mut(p * n, q * n, n, n).copy_from(&blk);
+            }
+        }
+        crate::eigen::symmetrise(m.as_mut());
+        crate::eigen::symmetrise(k.as_mut());
+        Ok((k, m))
+    }
+}
