@@ -4,16 +4,24 @@
 //! a [`Shape`] is modelled by finite elements, its vibration modes are computed from the generalized
 //! eigenproblem `K φ = ω² M φ`, and nodes of two shapes are put in correspondence in modal space.
 
+pub mod align;
 pub mod axial;
 pub mod eigen;
 mod error;
+pub mod excess;
+pub mod features;
 pub mod gaussian;
+pub mod matching;
 pub mod material;
 pub mod model;
 pub mod rigid;
+pub mod search;
 pub mod shape;
 
 pub use error::ModalError;
+pub use features::{AffinityMatrix, ModalFeatures};
+pub use matching::{match_shapes, MatchOptions, MatchPair, MatchResult, Prealign, Search};
 pub use material::{Material, PlaneModel};
 pub use model::{modal_basis, model_matrices, ElementKind, ModalBasis, ModelOptions};
+pub use search::ThresholdMode;
 pub use shape::{Shape, Topology};

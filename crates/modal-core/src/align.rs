@@ -1,0 +1,477 @@
+//! Pre-alignment of two objects (SPEC §5.3 and the robust recipe of §10): normalisation,
+//! principal-axis rotation candidates, symmetric affine ICP scored by chamfer distance, and
+//! least-squares affine fits from correspondences.
+
+use crate::ModalError;
+
+/// A `dim`-dimensional affine map `x ↦ M x + t` (only the leading `dim × dim` block is used).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Affine {
+    pub dim: usize,
+    pub m: [[f64; 3]; 3],
+    pub t: [f64; 3],
+}
+
+impl Affine {
+    pub fn identity(dim: usize) -> Self {
+        let mut m = [[0.0; 3]; 3];
+        for (a, row) in m.iter_mut().enumerate() {
+            row[a] = 1.0;
+        }
+        Self {
+            dim,
+            m,
+            t: [0.0; 3],
+        }
+    }
+
+    pub fn linear(dim: usize, m: [[f64; 3]; 3]) -> Self {
+        Self {
+            dim,
+            m,
+            t: [0.0; 3],
+        }
+    }
+
+    /// Applies the map to row-major points.
+    pub fn apply(&self, pts: &[f64]) -> Vec<f64> {
+        let d = self.dim;
+        let mut out = vec![0.0; pts.len()];
+        for (p, o) in pts.chunks_exact(d).zip(out.chunks_exact_mut(d)) {
+            for a in 0..d {
+                o[a] = self.t[a] + (0..d).map(|b| self.m[a][b] * p[b]).sum::<f64>();
+            }
+        }
+        out
+    }
+
+    /// `self ∘ other` (apply `other` first).
+    pub fn compose(&self, other: &Affine) -> Affine {
+        let d = self.dim;
+        let mut r = Affine::identity(d);
+        for a in 0..d {
+            for b in 0..d {
+                r.m[a][b] = (0..d).map(|c| self.m[a][c] * other.m[c][b]).sum();
+            }
+            r.t[a] = self.t[a] + (0..d).map(|c| self.m[a][c] * other.t[c]).sum::<f64>();
+        }
+        r
+    }
+
+    pub fn det(&self) -> f64 {
+        let m = &self.m;
+        if self.dim == 2 {
+            m[0][0] * m[1][1] - m[0][1] * m[1][0]
+        } else {
+            m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+                - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+                + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+        }
+    }
+}
+
+/// Centres points on their centroid and scales them to RMS radius 1 (SPEC §5.3).
+/// Returns the normalised points, the centroid and the scale factor applied.
+pub fn normalize(pts: &[f64], dim: usize) -> Result<(Vec<f64>, [f64; 3], f64), ModalError> {
+    let n = pts.len() / dim;
+    if n == 0 {
+        return Err(ModalError::InvalidShape("no nodes".into()));
+    }
+    let mut c = [0.0; 3];
+    for p in pts.chunks_exact(dim) {
+        for a in 0..dim {
+            c[a] += p[a] / n as f64;
+        }
+    }
+    let ms: f64 = pts
+        .chunks_exact(dim)
+        .map(|p| (0..dim).map(|a| (p[a] - c[a]).powi(2)).sum::<f64>())
+        .sum::<f64>()
+        / n as f64;
+    let rms = ms.sqrt();
+    let extent = pts.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
+    if !(rms.is_finite() && rms > 1e-12 * extent) {
+        return Err(ModalError::InvalidShape(
+            "all nodes coincide (zero spread)".into(),
+        ));
+    }
+    let s = 1.0 / rms;
+    let out = pts
+        .chunks_exact(dim)
+        .flat_map(|p| (0..dim).map(move |a| (p[a] - c[a]) * s))
+        .collect();
+    Ok((out, c, s))
+}
+
+/// Signed area of a closed 2-D polygon (positive when counter-clockwise).
+pub fn signed_area(pts: &[f64]) -> f64 {
+    let n = pts.len() / 2;
+    (0..n)
+        .map(|i| {
+            let j = (i + 1) % n;
+            pts[2 * i] * pts[2 * j + 1] - pts[2 * j] * pts[2 * i + 1]
+        })
+        .sum::<f64>()
+        * 0.5
+}
+
+/// Eigen-decomposition of a symmetric 3×3 matrix by cyclic Jacobi rotations.
+/// Returns eigenvalues and eigenvectors as columns (`vecs[row][k]` for eigenvalue `k`), unsorted.
+pub fn sym_eigen3(mut a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    for _ in 0..50 {
+        let off = a[0][1].powi(2) + a[0][2].powi(2) + a[1][2].powi(2);
+        let scale = a[0][0].powi(2) + a[1][1].powi(2) + a[2][2].powi(2);
+        if off <= 1e-30 * scale.max(1e-300) {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            if a[p][q].abs() < 1e-300 {
+                continue;
+            }
+            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+            let t = if theta == 0.0 { 1.0 } else { t };
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            for k in 0..3 {
+                let (akp, akq) = (a[k][p], a[k][q]);
+                a[k][p] = c * akp - s * akq;
+                a[k][q] = s * akp + c * akq;
+            }
+            for k in 0..3 {
+                let (apk, aqk) = (a[p][k], a[q][k]);
+                a[p][k] = c * apk - s * aqk;
+                a[q][k] = s * apk + c * aqk;
+            }
+            for row in v.iter_mut() {
+                let (vp, vq) = (row[p], row[q]);
+                row[p] = c * vp - s * vq;
+                row[q] = s * vp + c * vq;
+            }
+        }
+    }
+    ([a[0][0], a[1][1], a[2][2]], v)
+}
+
+/// Principal axes of centred points: columns sorted by descending variance, determinant +1,
+/// together with the variances.
+pub fn principal_axes(pts: &[f64], dim: usize) -> ([[f64; 3]; 3], [f64; 3]) {
+    let mut cov = [[0.0; 3]; 3];
+    for p in pts.chunks_exact(dim) {
+        for a in 0..dim {
+            for b in 0..dim {
+                cov[a][b] += p[a] * p[b];
+            }
+        }
+    }
+    if dim == 2 {
+        cov[2][2] = -1.0; // keep the padding axis last
+    }
+    let (vals, vecs) = sym_eigen3(cov);
+    let mut idx = [0usize, 1, 2];
+    idx.sort_by(|&x, &y| vals[y].total_cmp(&vals[x]));
+    let mut out = [[0.0; 3]; 3];
+    let mut var = [0.0; 3];
+    for (col, &k) in idx.iter().enumerate() {
+        for row in 0..3 {
+            out[row][col] = vecs[row][k];
+        }
+        var[col] = vals[k];
+    }
+    let aff = Affine::linear(dim, out);
+    if aff.det() < 0.0 {
+        for row in out.iter_mut() {
+            row[dim - 1] = -row[dim - 1];
+        }
+    }
+    (out, var)
+}
+
+/// Index and squared distance of the nearest point of `to` for every point of `from`.
+pub fn nearest(from: &[f64], to: &[f64], dim: usize) -> Vec<(usize, f64)> {
+    from.chunks_exact(dim)
+        .map(|p| {
+            let mut best = (0, f64::INFINITY);
+            for (j, q) in to.chunks_exact(dim).enumerate() {
+                let d: f64 = (0..dim).map(|a| (p[a] - q[a]).powi(2)).sum();
+                if d < best.1 {
+                    best = (j, d);
+                }
+            }
+            best
+        })
+        .collect()
+}
+
+/// Symmetric chamfer distance: mean nearest-neighbour distance, averaged over both directions.
+pub fn chamfer(a: &[f64], b: &[f64], dim: usize) -> f64 {
+    let ab = nearest(a, b, dim);
+    let ba = nearest(b, a, dim);
+    let m1 = ab.iter().map(|x| x.1.sqrt()).sum::<f64>() / ab.len() as f64;
+    let m2 = ba.iter().map(|x| x.1.sqrt()).sum::<f64>() / ba.len() as f64;
+    0.5 * (m1 + m2)
+}
+
+/// Least-squares affine map sending `src[i]` to `dst[j]` over the given `(i, j)` pairs.
+/// `None` when the pairs do not determine an affine map (fewer than `dim + 1` points in general
+/// position).
+pub fn fit_affine(
+    src: &[f64],
+    dst: &[f64],
+    dim: usize,
+    pairs: &[(usize, usize)],
+) -> Option<Affine> {
+    let d1 = dim + 1;
+    if pairs.len() < d1 {
+        return None;
+    }
+    // Normal equations in homogeneous coordinates: (Σ x̃ x̃ᵀ) W = Σ x̃ yᵀ.
+    let mut ata = [[0.0; 4]; 4];
+    let mut atb = [[0.0; 3]; 4];
+    for &(i, j) in pairs {
+        let mut x = [0.0; 4];
+        x[..dim].copy_from_slice(&src[i * dim..(i + 1) * dim]);
+        x[dim] = 1.0;
+        let y = &dst[j * dim..(j + 1) * dim];
+        for r in 0..d1 {
+            for c in 0..d1 {
+                ata[r][c] += x[r] * x[c];
+            }
+            for c in 0..dim {
+                atb[r][c] += x[r] * y[c];
+            }
+        }
+    }
+    let w = solve_spd(&ata, &atb, d1, dim)?;
+    let mut aff = Affine::identity(dim);
+    for a in 0..dim {
+        for b in 0..dim {
+            aff.m[a][b] = w[b][a];
+        }
+        aff.t[a] = w[dim][a];
+    }
+    let ok = aff
+        .m
+        .iter()
+        .flatten()
+        .chain(aff.t.iter())
+        .all(|v| v.is_finite());
+    ok.then_some(aff)
+}
+
+/// Gaussian elimination with partial pivoting on a tiny system; `None` if (near-)singular.
+fn solve_spd(a: &[[f64; 4]; 4], b: &[[f64; 3]; 4], n: usize, nrhs: usize) -> Option<[[f64; 3]; 4]> {
+    let mut a = *a;
+    let mut b = *b;
+    let scale = (0..n).map(|i| a[i][i].abs()).fold(0.0, f64::max);
+    for col in 0..n {
+        let piv = (col..n).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs()))?;
+        if a[piv][col].abs() <= 1e-10 * scale {
+            return None;
+        }
+        a.swap(col, piv);
+        b.swap(col, piv);
+        for r in 0..n {
+            if r != col {
+                let f = a[r][col] / a[col][col];
+                for c in col..n {
+                    a[r][c] -= f * a[col][c];
+                }
+                for c in 0..nrhs {
+                    b[r][c] -= f * b[col][c];
+                }
+            }
+        }
+    }
+    for r in 0..n {
+        for c in 0..nrhs {
+            b[r][c] /= a[r][r];
+        }
+    }
+    Some(b)
+}
+
+/// Symmetric affine ICP from `start`: nearest neighbours in both directions, least-squares affine
+/// fit, `iters` times. Returns the final map and the chamfer distance it reaches. Maps that reflect
+/// (negative determinant) are refused when `keep_orientation` is set, so contours stay
+/// counter-clockwise.
+pub fn icp_affine(
+    a: &[f64],
+    b: &[f64],
+    dim: usize,
+    start: Affine,
+    iters: usize,
+    keep_orientation: bool,
+) -> (Affine, f64) {
+    let mut cur = start;
+    let mut moved = cur.apply(a);
+    for _ in 0..iters {
+        let ab = nearest(&moved, b, dim);
+        let ba = nearest(b, &moved, dim);
+        let mut pairs: Vec<(usize, usize)> = ab.iter().enumerate().map(|(i, x)| (i, x.0)).collect();
+        pairs.extend(ba.iter().enumerate().map(|(j, x)| (x.0, j)));
+        let Some(step) = fit_affine(&moved, b, dim, &pairs) else {
+            break;
+        };
+        let next = step.compose(&cur);
+        if keep_orientation && next.det() <= 0.0 {
+            break;
+        }
+        cur = next;
+        moved = cur.apply(a);
+    }
+    (cur, chamfer(&moved, b, dim))
+}
+
+/// Rotation candidates mapping A's normalised frame into B's (SPEC §10 step 2): the identity,
+/// `V_b · diag(s) · V_aᵀ` for every proper sign pattern `s`, and each of those turned by 90° about
+/// B's last principal axis.
+pub fn rotation_candidates(a: &[f64], b: &[f64], dim: usize) -> Vec<Affine> {
+    let (va, _) = principal_axes(a, dim);
+    let (vb, _) = principal_axes(b, dim);
+    let signs: Vec<[f64; 3]> = if dim == 2 {
+        vec![[1.0, 1.0, 1.0], [-1.0, -1.0, 1.0]]
+    } else {
+        vec![
+            [1.0, 1.0, 1.0],
+            [1.0, -1.0, -1.0],
+            [-1.0, 1.0, -1.0],
+            [-1.0, -1.0, 1.0],
+        ]
+    };
+    // 90° turn in the plane of the first two principal axes.
+    let turn = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+    let mut out = vec![Affine::identity(dim)];
+    for quarter in [false, true] {
+        for s in &signs {
+            // R = V_b · T · diag(s) · V_aᵀ
+            let mut inner = [[0.0; 3]; 3];
+            for r in 0..3 {
+                for c in 0..3 {
+                    let t = if quarter {
+                        turn[r][c]
+                    } else if r == c {
+                        1.0
+                    } else {
+                        0.0
+                    };
+                    inner[r][c] = t * s[c];
+                }
+            }
+            let mut m = [[0.0; 3]; 3];
+            for r in 0..dim {
+                for c in 0..dim {
+                    m[r][c] = (0..dim)
+                        .map(|p| {
+                            (0..dim)
+                                .map(|q| vb[r][p] * inner[p][q] * va[c][q])
+                                .sum::<f64>()
+                        })
+                        .sum();
+                }
+            }
+            out.push(Affine::linear(dim, m));
+        }
+    }
+    out
+}
+
+/// The robust pre-alignment of SPEC §10 step 2: every rotation candidate is refined by `iters`
+/// iterations of symmetric affine ICP and scored by chamfer distance; the identity wins ties
+/// (within `tie` relative), because principal axes are arbitrary on nearly round outlines.
+pub fn robust_prealign(
+    a: &[f64],
+    b: &[f64],
+    dim: usize,
+    iters: usize,
+    keep_orientation: bool,
+) -> Affine {
+    const TIE: f64 = 1e-3;
+    let mut best: Option<(Affine, f64)> = None;
+    for (k, cand) in rotation_candidates(a, b, dim).into_iter().enumerate() {
+        let (aff, score) = icp_affine(a, b, dim, cand, iters, keep_orientation);
+        let take = match &best {
+            None => true,
+            Some((_, s)) => score < s * (1.0 - TIE) || (k == 0 && score <= *s),
+        };
+        if take {
+            best = Some((aff, score));
+        }
+    }
+    best.map(|b| b.0).unwrap_or_else(|| Affine::identity(dim))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ellipse(n: usize, rot: f64) -> Vec<f64> {
+        (0..n)
+            .flat_map(|i| {
+                let t = i as f64 / n as f64 * std::f64::consts::TAU;
+                let (x, y) = (2.0 * t.cos() + 0.3 * (2.0 * t).cos(), 0.8 * t.sin());
+                [rot.cos() * x - rot.sin() * y, rot.sin() * x + rot.cos() * y]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn normalize_centres_and_scales() {
+        let p = [1.0, 1.0, 3.0, 1.0, 3.0, 5.0];
+        let (q, c, _) = normalize(&p, 2).unwrap();
+        assert!((c[0] - 7.0 / 3.0).abs() < 1e-12);
+        let rms: f64 = (q.iter().map(|v| v * v).sum::<f64>() / 3.0).sqrt();
+        assert!((rms - 1.0).abs() < 1e-12);
+        assert!(normalize(&[2.0, 2.0, 2.0, 2.0], 2).is_err());
+    }
+
+    #[test]
+    fn jacobi_eigen_reconstructs() {
+        let a = [[4.0, 1.0, 0.5], [1.0, 3.0, -0.2], [0.5, -0.2, 1.0]];
+        let (vals, v) = sym_eigen3(a);
+        for r in 0..3 {
+            for c in 0..3 {
+                let s: f64 = (0..3).map(|k| v[r][k] * vals[k] * v[c][k]).sum();
+                assert!((s - a[r][c]).abs() < 1e-10);
+            }
+        }
+    }
+
+    #[test]
+    fn affine_fit_recovers_map() {
+        let src = [0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 2.0, -1.0, 0.5];
+        let truth = Affine {
+            dim: 2,
+            m: [[1.2, 0.3, 0.0], [-0.1, 0.9, 0.0], [0.0; 3]],
+            t: [0.5, -2.0, 0.0],
+        };
+        let dst = truth.apply(&src);
+        let pairs: Vec<_> = (0..5).map(|i| (i, i)).collect();
+        let fit = fit_affine(&src, &dst, 2, &pairs).unwrap();
+        for a in 0..2 {
+            assert!((fit.t[a] - truth.t[a]).abs() < 1e-10);
+            for b in 0..2 {
+                assert!((fit.m[a][b] - truth.m[a][b]).abs() < 1e-10);
+            }
+        }
+        // Collinear sources do not determine an affine map.
+        let col = [0.0, 0.0, 1.0, 1.0, 2.0, 2.0, 3.0, 3.0];
+        assert!(fit_affine(&col, &col, 2, &[(0, 0), (1, 1), (2, 2), (3, 3)]).is_none());
+    }
+
+    #[test]
+    fn prealign_recovers_large_rotation() {
+        let a = normalize(&ellipse(60, 0.0), 2).unwrap().0;
+        for rot in [0.6f64, 2.0, -2.5] {
+            let b = normalize(&ellipse(53, rot), 2).unwrap().0;
+            let aff = robust_prealign(&a, &b, 2, 5, true);
+            assert!(chamfer(&aff.apply(&a), &b, 2) < 0.06, "rot {rot}");
+            // The linear part is close to the true rotation.
+            assert!(
+                (aff.m[0][0] - rot.cos()).abs() < 0.1 && (aff.m[1][0] - rot.sin()).abs() < 0.1,
+                "rot {rot}"
+            );
+        }
+    }
+}

@@ -1,0 +1,450 @@
+//! Matching the nodes left over by the one-to-one search (SPEC §6.3 contours, §6.4 surfaces).
+
+use crate::AffinityMatrix;
+
+/// SPEC §6.3 on two counter-clockwise closed contours. `z` has the *smaller* contour (A, `n_a`
+/// nodes) on its rows and the larger (B) on its columns; `pairs` are one-to-one `(a, b)`.
+/// Every unmatched B node lying between two matched B nodes `p, q` is given an A node from the arc
+/// `a(p) … a(q)`, non-decreasing along the run, so neighbours stay neighbours and no two matches
+/// cross; several B nodes may share one A node. Returns the new `(a, b)` pairs with `Z ≤ threshold`.
+pub fn contour_excess(
+    z: &AffinityMatrix,
+    pairs: &[(usize, usize)],
+    threshold: f64,
+) -> Vec<(usize, usize)> {
+    let (na, nb) = (z.rows(), z.cols());
+    let mut mb = vec![usize::MAX; nb];
+    for &(a, b) in pairs {
+        mb[b] = a;
+    }
+    let matched: Vec<usize> = (0..nb).filter(|&b| mb[b] != usize::MAX).collect();
+    let mut out = Vec::new();
+    if matched.is_empty() {
+        return out;
+    }
+    for (idx, &p) in matched.iter().enumerate() {
+        let q = matched[(idx + 1) % matched.len()];
+        // Excess run p+1 … q−1 (cyclic); with a single matched node it is the whole rest.
+        let len = (q + nb - p - 1) % nb;
+        let len = if matched.len() == 1 { nb - 1 } else { len };
+        if len == 0 {
+            continue;
+        }
+        let run: Vec<usize> = (1..=len).map(|t| (p + t) % nb).collect();
+        let (ap, aq) = (mb[p], mb[q]);
+        let s = (aq + na - ap) % na;
+        let (cand, monotone): (Vec<usize>, bool) = if 2 * s <= na {
+            ((0..=s).map(|c| (ap + c) % na).collect(), true)
+        } else {
+            (vec![ap, aq], false)
+        };
+        let r = run.len();
+        let nc = cand.len();
+        let cost = |t: usize, c: usize| z.get(cand[c], run[t]);
+        let mut pick = vec![0usize; r];
+        if monotone {
+            // d[t][c]: best cost of the first t+1 run nodes with node t on candidate c and all
+            // earlier ones on candidates ≤ c. `best[t][c]` = argmin over c' ≤ c of d[t][c'].
+            let mut d = vec![0.0; r * nc];
+            let mut best = vec![0usize; r * nc];
+            for t in 0..r {
+                for c in 0..nc {
+                    let prev = if t == 0 {
+                        0.0
+                    } else {
+                        d[(t - 1) * nc + best[(t - 1) * nc + c]]
+                    };
+                    d[t * nc + c] = cost(t, c) + prev;
+                }
+                for c in 0..nc {
+                    let bc = if c == 0 {
+                        0
+                    } else {
+                        let b = best[t * nc + c - 1];
+                        if d[t * nc + c] < d[t * nc + b] {
+                            c
+                        } else {
+                            b
+                        }
+                    };
+                    best[t * nc + c] = bc;
+                }
+            }
+            pick[r - 1] = best[(r - 1) * nc + nc - 1];
+            for t in (1..r).rev() {
+                pick[t - 1] = best[(t - 1) * nc + pick[t]];
+            }
+        } else {
+            for (t, pk) in pick.iter_mut().enumerate() {
+                *pk = if cost(t, 1) < cost(t, 0) { 1 } else { 0 };
+            }
+        }
+        for t in 0..r {
+            if cost(t, pick[t]) <= threshold {
+                out.push((cand[pick[t]], run[t]));
+            }
+        }
+    }
+    out
+}
+
+/// SPEC §6.4, generalised to unordered point sets and meshes in 2-D or 3-D.
+///
+/// `z` has object A on its rows and B on its columns; each unmatched B node `e` (B is the larger
+/// object, the one whose nodes are left over) gets an A node from the candidates formed by the
+/// matches of its matched neighbours and their own neighbours in A. A candidate is admissible when
+/// it keeps the angular order of those neighbours around it (no fold-over, i.e. no crossing),
+/// measured in the local tangent plane; among the admissible (or, failing any, the least violating)
+/// candidates the lowest `Z` wins, subject to the threshold. Nodes are processed in order of
+/// decreasing number of matched neighbours, and each new match becomes usable by later ones.
+///
+/// `nbr_a`/`nbr_b` are neighbour lists (a mesh's 1-ring or k nearest neighbours), `pos_a`/`pos_b`
+/// the aligned coordinates (row-major, `dim` per node) and `normal` the common "up" direction
+/// used for the in-plane orientation (for 2-D pass `None`).
+#[allow(clippy::too_many_arguments)]
+pub fn point_set_excess(
+    z: &AffinityMatrix,
+    pairs: &[(usize, usize)],
+    threshold: f64,
+    dim: usize,
+    pos_a: &[f64],
+    pos_b: &[f64],
+    nbr_a: &[Vec<usize>],
+    nbr_b: &[Vec<usize>],
+) -> Vec<(usize, usize)> {
+    let nb = z.cols();
+    let mut mb: Vec<Option<usize>> = vec![None; nb];
+    for &(a, b) in pairs {
+        mb[b] = Some(a);
+    }
+    let mut out = Vec::new();
+    let mut pending: Vec<usize> = (0..nb).filter(|&b| mb[b].is_none()).collect();
+    // Local normals for 3-D (least-variance direction of each node's neighbourhood), oriented
+    // consistently with the global least-variance axis so both objects agree on "up".
+    let normals_a = if dim == 3 {
+        normals(pos_a, nbr_a)
+    } else {
+        Vec::new()
+    };
+    let normals_b = if dim == 3 {
+        normals(pos_b, nbr_b)
+    } else {
+        Vec::new()
+    };
+    let pt = |pos: &[f64], i: usize| -> [f64; 3] {
+        let mut p = [0.0; 3];
+        p[..dim].copy_from_slice(&pos[i * dim..(i + 1) * dim]);
+        p
+    };
+    while !pending.is_empty() {
+        // Pick the pending node with the most matched neighbours (ring grown to 2 if < 2).
+        let mut best_idx = 0;
+        let mut best_cnt = 0usize;
+        let mut best_nb: Vec<usize> = Vec::new();
+        for (idx, &e) in pending.iter().enumerate() {
+            let nbs = matched_neighbours(e, nbr_b, &mb);
+            if nbs.len() > best_cnt || idx == 0 {
+                best_cnt = nbs.len();
+                best_idx = idx;
+                best_nb = nbs;
+            }
+        }
+        let e = pending.swap_remove(best_idx);
+        if best_nb.is_empty() {
+            // Isolated from every match: the only evidence left is Z.
+            let a = (0..z.rows()).min_by(|&x, &y| z.get(x, e).total_cmp(&z.get(y, e)));
+            if let Some(a) = a {
+                if z.get(a, e) <= threshold {
+                    out.push((a, e));
+                    mb[e] = Some(a);
+                }
+            }
+            continue;
+        }
+        let pe = pt(pos_b, e);
+        let ne = if dim == 3 {
+            normals_b[e]
+        } else {
+            [0.0, 0.0, 1.0]
+        };
+        // Neighbours in angular order around e in its tangent plane.
+        let (u, v) = tangent_basis(ne);
+        let mut ring: Vec<(f64, usize)> = best_nb
+            .iter()
+            .map(|&nbh| {
+                let d = sub(pt(pos_b, nbh), pe);
+                (dot(d, v).atan2(dot(d, u)), nbh)
+            })
+            .collect();
+        ring.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let mut cand: Vec<usize> = Vec::new();
+        for &(_, nbh) in &ring {
+            let a = mb[nbh].expect("matched neighbour");
+            cand.push(a);
+            cand.extend(nbr_a[a].iter().copied());
+        }
+        cand.sort_unstable();
+        cand.dedup();
+        let mut best: Option<(usize, f64, usize)> = None; // (violations, z, a)
+        for &c in &cand {
+            let pc = pt(pos_a, c);
+            let nc = if dim == 3 {
+                normals_a[c]
+            } else {
+                [0.0, 0.0, 1.0]
+            };
+            let mut viol = 0;
+            if ring.len() >= 2 {
+                for k in 0..ring.len() {
+                    if ring.len() == 2 && k == 1 {
+                        break;
+                    }
+                    let (n1, n2) = (ring[k].1, ring[(k + 1) % ring.len()].1);
+                    let sb = dot(cross(sub(pt(pos_b, n1), pe), sub(pt(pos_b, n2), pe)), ne);
+                    let (a1, a2) = (mb[n1].unwrap(), mb[n2].unwrap());
+                    let sa = dot(cross(sub(pt(pos_a, a1), pc), sub(pt(pos_a, a2), pc)), nc);
+                    if sa * sb < 0.0 {
+                        viol += 1;
+                    }
+                }
+            }
+            let zc = z.get(c, e);
+            let better = match best {
+                None => true,
+                Some((bv, bz, _)) => viol < bv || (viol == bv && zc < bz),
+            };
+            if better {
+                best = Some((viol, zc, c));
+            }
+        }
+        if let Some((_, zc, c)) = best {
+            if zc <= threshold {
+                out.push((c, e));
+                mb[e] = Some(c);
+            }
+        }
+    }
+    out
+}
+
+fn matched_neighbours(e: usize, nbr: &[Vec<usize>], mb: &[Option<usize>]) -> Vec<usize> {
+    let mut nbs: Vec<usize> = nbr[e]
+        .iter()
+        .copied()
+        .filter(|&x| mb[x].is_some())
+        .collect();
+    if nbs.len() < 2 {
+        for &x in &nbr[e] {
+            for &y in &nbr[x] {
+                if y != e && mb[y].is_some() && !nbs.contains(&y) {
+                    nbs.push(y);
+                }
+            }
+        }
+    }
+    nbs
+}
+
+/// k nearest neighbours of every node (brute force; objects have at most a few hundred nodes).
+pub fn knn(pos: &[f64], dim: usize, k: usize) -> Vec<Vec<usize>> {
+    let n = pos.len() / dim;
+    (0..n)
+        .map(|i| {
+            let mut d: Vec<(f64, usize)> = (0..n)
+                .filter(|&j| j != i)
+                .map(|j| {
+                    (
+                        (0..dim)
+                            .map(|c| (pos[i * dim + c] - pos[j * dim + c]).powi(2))
+                            .sum::<f64>(),
+                        j,
+                    )
+                })
+                .collect();
+            d.sort_by(|x, y| x.0.total_cmp(&y.0));
+            d.into_iter().take(k).map(|x| x.1).collect()
+        })
+        .collect()
+}
+
+/// 1-ring neighbours from triangles.
+pub fn mesh_rings(n: usize, triangles: &[[usize; 3]]) -> Vec<Vec<usize>> {
+    let mut r: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for t in triangles {
+        for (x, y) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            if !r[x].contains(&y) {
+                r[x].push(y);
+            }
+            if !r[y].contains(&x) {
+                r[y].push(x);
+            }
+        }
+    }
+    r
+}
+
+fn normals(pos: &[f64], nbr: &[Vec<usize>]) -> Vec<[f64; 3]> {
+    let n = pos.len() / 3;
+    let p = |i: usize| [pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]];
+    let global = least_variance_axis(&(0..n).collect::<Vec<_>>(), &p);
+    (0..n)
+        .map(|i| {
+            let mut idx = nbr[i].clone();
+            idx.push(i);
+            let mut nv = if idx.len() >= 3 {
+                least_variance_axis(&idx, &p)
+            } else {
+                global
+            };
+            if dot(nv, global) < 0.0 {
+                nv = [-nv[0], -nv[1], -nv[2]];
+            }
+            nv
+        })
+        .collect()
+}
+
+fn least_variance_axis(idx: &[usize], p: &dyn Fn(usize) -> [f64; 3]) -> [f64; 3] {
+    let mut c = [0.0; 3];
+    for &i in idx {
+        let q = p(i);
+        for a in 0..3 {
+            c[a] += q[a] / idx.len() as f64;
+        }
+    }
+    let mut cov = [[0.0; 3]; 3];
+    for &i in idx {
+        let q = sub(p(i), c);
+        for a in 0..3 {
+            for b in 0..3 {
+                cov[a][b] += q[a] * q[b];
+            }
+        }
+    }
+    let (vals, vecs) = crate::align::sym_eigen3(cov);
+    let k = (0..3)
+        .min_by(|&x, &y| vals[x].total_cmp(&vals[y]))
+        .unwrap_or(2);
+    [vecs[0][k], vecs[1][k], vecs[2][k]]
+}
+
+fn tangent_basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let helper = if n[0].abs() < 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let u = normalize(cross(helper, n));
+    let v = cross(n, u);
+    (u, v)
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn normalize(a: [f64; 3]) -> [f64; 3] {
+    let l = dot(a, a).sqrt();
+    if l > 0.0 {
+        [a[0] / l, a[1] / l, a[2] / l]
+    } else {
+        a
+    }
+}
+
+/// True if two matches cross on cyclically ordered contours: with `a`-positions and `b`-positions
+/// read along both contours starting from the first pair, the order must never decrease.
+/// Returns the number of order inversions of B's sequence when sorted along A (0 = no crossings),
+/// treating several B nodes on one A node as ordered.
+pub fn contour_crossings(pairs: &[(usize, usize)], na: usize, nb: usize) -> usize {
+    if pairs.len() < 3 {
+        return 0;
+    }
+    let mut p: Vec<(usize, usize)> = pairs.to_vec();
+    let (a0, b0) = p[0];
+    p.sort_by_key(|&(a, b)| ((a + na - a0) % na, (b + nb - b0) % nb));
+    let seq: Vec<usize> = p.iter().map(|&(_, b)| (b + nb - b0) % nb).collect();
+    // Cyclic sequences: count descents; a perfectly order-keeping matching has exactly one
+    // wrap-around at most, which we have removed by rotating to start at the first pair.
+    seq.windows(2).filter(|w| w[1] < w[0]).count()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn contour_excess_fills_gaps_in_order() {
+        // A: 4 nodes, B: 6 nodes; one-to-one matches b0→a0, b2→a1, b3→a2, b5→a3.
+        // Excess b1 (between a0,a1) and b4 (between a2,a3).
+        let na = 4;
+        let nb = 6;
+        let mut z = vec![1.0; na * nb];
+        let set = |z: &mut Vec<f64>, a: usize, b: usize, v: f64| z[a * nb + b] = v;
+        for (a, b) in [(0, 0), (1, 2), (2, 3), (3, 5)] {
+            set(&mut z, a, b, 0.0);
+        }
+        set(&mut z, 1, 1, 0.2);
+        set(&mut z, 0, 1, 0.3);
+        set(&mut z, 3, 4, 0.1);
+        // A tempting but out-of-arc candidate for b4 must not be taken.
+        set(&mut z, 0, 4, 0.0);
+        let zm = AffinityMatrix::new(na, nb, z).unwrap();
+        let pairs = [(0, 0), (1, 2), (2, 3), (3, 5)];
+        let mut ex = contour_excess(&zm, &pairs, 1.0);
+        ex.sort();
+        assert_eq!(ex, vec![(1, 1), (3, 4)]);
+        let mut all = pairs.to_vec();
+        all.extend(&ex);
+        assert_eq!(contour_crossings(&all, na, nb), 0);
+        // Threshold below 0.1 drops both.
+        assert!(contour_excess(&zm, &pairs, 0.05).is_empty());
+    }
+
+    #[test]
+    fn contour_excess_run_is_monotone() {
+        // A run of 3 excess nodes between a0 and a2: costs favour 2, 0, 1 unconstrained, but the
+        // order-keeping optimum must be non-decreasing.
+        let na = 6;
+        let nb = 9;
+        let mut z = vec![1.0; na * nb];
+        let pairs = [(0usize, 0usize), (2, 4), (3, 5), (4, 6), (5, 8)];
+        for &(a, b) in &pairs {
+            z[a * nb + b] = 0.0;
+        }
+        let run = [1usize, 2, 3];
+        let costs = [[0.5, 0.4, 0.1], [0.1, 0.4, 0.5], [0.5, 0.1, 0.4]]; // [t][c]
+        for (t, &b) in run.iter().enumerate() {
+            for c in 0..3 {
+                z[c * nb + b] = costs[t][c];
+            }
+        }
+        let zm = AffinityMatrix::new(na, nb, z).unwrap();
+        let ex = contour_excess(&zm, &pairs, 1.0);
+        let picks: Vec<usize> = run
+            .iter()
+            .map(|b| ex.iter().find(|p| p.1 == *b).unwrap().0)
+            .collect();
+        assert!(picks.windows(2).all(|w| w[0] <= w[1]), "{picks:?}");
+        // Brute force over non-decreasing triples.
+        let mut best = f64::INFINITY;
+        for x in 0..3 {
+            for y in x..3 {
+                for w in y..3 {
+                    best = best.min(costs[0][x] + costs[1][y] + costs[2][w]);
+                }
+            }
+        }
+        let got: f64 = (0..3).map(|t| costs[t][picks[t]]).sum();
+        assert!((got - best).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,432 @@
+//! Modal feature vectors, the cross-object mode alignment of SPEC §5.5 and the affinity matrix Z.
+
+use crate::ModalError;
+
+/// The retained modes of one object, ready for comparison with another object's.
+///
+/// Stored `(dim·n) × k`, column-major (`data[p * dim * n + a * n + i]` is component `a` of node `i`
+/// in mode `p`), matching the component-major row layout of [`crate::ModalBasis::modes`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModalFeatures {
+    pub dim: usize,
+    pub n_nodes: usize,
+    pub n_modes: usize,
+    data: Vec<f64>,
+}
+
+impl ModalFeatures {
+    /// Takes modes `skip .. skip + k` of a `(dim·n) × K` mode matrix given column by column
+    /// (`column(p)` returns mode `p`). Each column is scaled to norm `√n` (independent of ρ, σ and
+    /// node count, SPEC §5.3) and signed so that its largest-|·| entry is positive (SPEC §4.3).
+    pub fn from_columns<'a, F>(
+        dim: usize,
+        n_nodes: usize,
+        available: usize,
+        skip: usize,
+        k: usize,
+        column: F,
+    ) -> Result<Self, ModalError>
+    where
+        F: Fn(usize) -> &'a [f64],
+    {
+        if skip + k > available {
+            return Err(ModalError::InvalidParameter(format!(
+                "{k} modes after skipping {skip} requested but only {available} are available"
+            )));
+        }
+        if k == 0 {
+            return Err(ModalError::InvalidParameter(
+                "at least one mode must be kept".into(),
+            ));
+        }
+        let len = dim * n_nodes;
+        let mut data = Vec::with_capacity(len * k);
+        for p in skip..skip + k {
+            let col = column(p);
+            if col.len() != len {
+                return Err(ModalError::InvalidParameter(format!(
+                    "mode {p} has {} entries, expected {len}",
+                    col.len()
+                )));
+            }
+            let norm = col.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if !(norm.is_finite() && norm > 0.0) {
+                return Err(ModalError::Numerical(format!(
+                    "mode {p} is zero or not finite"
+                )));
+            }
+            let big = col
+                .iter()
+                .copied()
+                .fold(0.0f64, |acc, v| if v.abs() > acc.abs() { v } else { acc });
+            let s = (n_nodes as f64).sqrt() / norm * if big < 0.0 { -1.0 } else { 1.0 };
+            data.extend(col.iter().map(|v| v * s));
+        }
+        Ok(Self {
+            dim,
+            n_nodes,
+            n_modes: k,
+            data,
+        })
+    }
+
+    /// Builds features from a [`crate::ModalBasis`].
+    pub fn from_basis(
+        basis: &crate::ModalBasis,
+        skip: usize,
+        k: usize,
+    ) -> Result<Self, ModalError> {
+        let modes = &basis.modes;
+        let rows = modes.nrows();
+        let cols: Vec<Vec<f64>> = (0..modes.ncols().min(skip + k))
+            .map(|p| (0..rows).map(|r| modes[(r, p)]).collect())
+            .collect();
+        Self::from_columns(basis.dim, basis.n_nodes, cols.len(), skip, k, |p| &cols[p])
+    }
+
+    /// Mode `p` as a `(dim·n)` component-major vector.
+    pub fn mode(&self, p: usize) -> &[f64] {
+        let len = self.dim * self.n_nodes;
+        &self.data[p * len..(p + 1) * len]
+    }
+
+    /// Keeps the first `k` modes.
+    pub fn truncated(&self, k: usize) -> Self {
+        let k = k.min(self.n_modes);
+        let len = self.dim * self.n_nodes;
+        Self {
+            dim: self.dim,
+            n_nodes: self.n_nodes,
+            n_modes: k,
+            data: self.data[..k * len].to_vec(),
+        }
+    }
+
+    /// Re-indexes and re-signs the modes: new mode `p` is `signs[p] · old mode order[p]`.
+    pub fn permuted(&self, order: &[usize], signs: &[f64]) -> Self {
+        let len = self.dim * self.n_nodes;
+        let mut data = Vec::with_capacity(order.len() * len);
+        for (&q, &s) in order.iter().zip(signs) {
+            data.extend(self.mode(q).iter().map(|v| v * s));
+        }
+        Self {
+            dim: self.dim,
+            n_nodes: self.n_nodes,
+            n_modes: order.len(),
+            data,
+        }
+    }
+}
+
+/// Outcome of the cross-object mode alignment.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModeAlignment {
+    /// Mode of object B assigned to each of A's modes.
+    pub order: Vec<usize>,
+    /// Sign applied to that mode of B.
+    pub signs: Vec<f64>,
+    /// |cosine similarity| of each aligned pair (SPEC §5.5 flags < 0.3 as unreliable).
+    pub similarity: Vec<f64>,
+}
+
+/// SPEC §5.5: aligns the sign and order of B's modes to A's by the spatial correlation of their
+/// displacement fields, sampled at each A node's nearest B node (`nn[i]`). Mode `p` of A may be
+/// paired with B's modes `q` with `|p − q| ≤ band` (one-to-one, rectangular assignment).
+pub fn align_modes(
+    a: &ModalFeatures,
+    b: &ModalFeatures,
+    nn: &[usize],
+    band: usize,
+    method: assign::Method,
+) -> Result<ModeAlignment, ModalError> {
+    if a.dim != b.dim || nn.len() != a.n_nodes {
+        return Err(ModalError::InvalidParameter(
+            "mode alignment: inconsistent inputs".into(),
+        ));
+    }
+    let (n, m, d) = (a.n_nodes, b.n_nodes, a.dim);
+    let ka = a.n_modes;
+    let kb = b.n_modes;
+    if kb < ka {
+        return Err(ModalError::InvalidParameter(format!(
+            "mode alignment: B has {kb} modes, fewer than A's {ka}"
+        )));
+    }
+    // B's modes resampled at A's nodes through the nearest-neighbour map.
+    let mut bs = vec![0.0; kb * d * n];
+    let mut bnorm = vec![0.0; kb];
+    for q in 0..kb {
+        let mode = b.mode(q);
+        let dst = &mut bs[q * d * n..(q + 1) * d * n];
+        for c in 0..d {
+            for i in 0..n {
+                dst[c * n + i] = mode[c * m + nn[i]];
+            }
+        }
+        bnorm[q] = dst.iter().map(|v| v * v).sum::<f64>().sqrt();
+    }
+    let mut corr = vec![0.0; ka * kb];
+    let mut cost = vec![0.0; ka * kb];
+    const FORBIDDEN: f64 = 1e3;
+    for p in 0..ka {
+        let ap = a.mode(p);
+        let an = ap.iter().map(|v| v * v).sum::<f64>().sqrt();
+        for q in 0..kb {
+            let bq = &bs[q * d * n..(q + 1) * d * n];
+            let dot: f64 = ap.iter().zip(bq).map(|(x, y)| x * y).sum();
+            let den = an * bnorm[q];
+            let c = if den > 0.0 { dot / den } else { 0.0 };
+            corr[p * kb + q] = c;
+            cost[p * kb + q] = if p.abs_diff(q) > band {
+                FORBIDDEN
+            } else {
+                -c.abs()
+            };
+        }
+    }
+    let sol = assign::solve(
+        &cost,
+        ka,
+        kb,
+        &assign::Options {
+            method,
+            ..Default::default()
+        },
+    )?;
+    let mut order = Vec::with_capacity(ka);
+    let mut signs = Vec::with_capacity(ka);
+    let mut similarity = Vec::with_capacity(ka);
+    for (p, q) in sol.row_to_col.iter().enumerate() {
+        let q =
+            q.ok_or_else(|| ModalError::Numerical("mode alignment left a mode unassigned".into()))?;
+        let c = corr[p * kb + q];
+        order.push(q);
+        signs.push(if c < 0.0 { -1.0 } else { 1.0 });
+        similarity.push(c.abs());
+    }
+    Ok(ModeAlignment {
+        order,
+        signs,
+        similarity,
+    })
+}
+
+/// Dense `rows × cols` matrix of modal distances between the nodes of two objects (SPEC §5.1):
+/// `Z[i, j] = ‖f_i − f_j‖²`, row `i` a node of A, column `j` a node of B.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AffinityMatrix {
+    rows: usize,
+    cols: usize,
+    data: Vec<f64>,
+}
+
+impl AffinityMatrix {
+    /// Wraps a row-major matrix, rejecting wrong sizes and non-finite or negative entries.
+    pub fn new(rows: usize, cols: usize, data: Vec<f64>) -> Result<Self, ModalError> {
+        if data.len() != rows * cols {
+            return Err(ModalError::InvalidParameter(format!(
+                "affinity matrix: {} values for {rows} × {cols}",
+                data.len()
+            )));
+        }
+        if let Some(v) = data.iter().find(|v| !v.is_finite() || **v < 0.0) {
+            return Err(ModalError::InvalidParameter(format!(
+                "affinity matrix: entries must be finite and non-negative, found {v}"
+            )));
+        }
+        Ok(Self { rows, cols, data })
+    }
+
+    /// `Z` of two feature sets, both with the same number of modes.
+    pub fn from_features(a: &ModalFeatures, b: &ModalFeatures) -> Result<Self, ModalError> {
+        if a.dim != b.dim || a.n_modes != b.n_modes {
+            return Err(ModalError::InvalidParameter(
+                "affinity: the two objects have different dimensions or mode counts".into(),
+            ));
+        }
+        let (n, m, d, k) = (a.n_nodes, b.n_nodes, a.dim, a.n_modes);
+        // Row-major per-node feature vectors, so the inner loop runs over contiguous memory.
+        let fa = node_major(a);
+        let fb = node_major(b);
+        let len = d * k;
+        let sq = |f: &[f64]| f.iter().map(|v| v * v).sum::<f64>();
+        let na: Vec<f64> = (0..n).map(|i| sq(&fa[i * len..(i + 1) * len])).collect();
+        let nb: Vec<f64> = (0..m).map(|j| sq(&fb[j * len..(j + 1) * len])).collect();
+        let mut data = vec![0.0; n * m];
+        for i in 0..n {
+            let fi = &fa[i * len..(i + 1) * len];
+            for j in 0..m {
+                let fj = &fb[j * len..(j + 1) * len];
+                let dot: f64 = fi.iter().zip(fj).map(|(x, y)| x * y).sum();
+                data[i * m + j] = (na[i] + nb[j] - 2.0 * dot).max(0.0);
+            }
+        }
+        Self::new(n, m, data)
+    }
+
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    pub fn cols(&self) -> usize {
+        self.cols
+    }
+
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        self.data[i * self.cols + j]
+    }
+
+    /// Row-major values.
+    pub fn as_slice(&self) -> &[f64] {
+        &self.data
+    }
+
+    pub fn max(&self) -> f64 {
+        self.data.iter().copied().fold(0.0, f64::max)
+    }
+
+    /// Divides by the largest entry, so thresholds are fractions in [0, 1] (SPEC §5.1). An all-zero
+    /// matrix (identical objects with identical sampling) is left as is.
+    pub fn normalized(mut self) -> Self {
+        let mx = self.max();
+        if mx > 0.0 {
+            self.data.iter_mut().for_each(|v| *v /= mx);
+        }
+        self
+    }
+
+    /// Re-indexes rows and columns: new `(i, j)` is old `(row_of[i], col_of[j])`.
+    pub fn reindexed(&self, row_of: &[usize], col_of: &[usize]) -> Self {
+        let mut data = Vec::with_capacity(row_of.len() * col_of.len());
+        for &r in row_of {
+            data.extend(col_of.iter().map(|&c| self.data[r * self.cols + c]));
+        }
+        Self {
+            rows: row_of.len(),
+            cols: col_of.len(),
+            data,
+        }
+    }
+
+    pub fn transposed(&self) -> Self {
+        let mut data = vec![0.0; self.data.len()];
+        for i in 0..self.rows {
+            for j in 0..self.cols {
+                data[j * self.rows + i] = self.data[i * self.cols + j];
+            }
+        }
+        Self {
+            rows: self.cols,
+            cols: self.rows,
+            data,
+        }
+    }
+}
+
+fn node_major(f: &ModalFeatures) -> Vec<f64> {
+    let (n, d, k) = (f.n_nodes, f.dim, f.n_modes);
+    let len = d * k;
+    let mut out = vec![0.0; n * len];
+    for p in 0..k {
+        let mode = f.mode(p);
+        for c in 0..d {
+            for i in 0..n {
+                out[i * len + c * k + p] = mode[c * n + i];
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn feats(dim: usize, n: usize, cols: &[Vec<f64>]) -> ModalFeatures {
+        ModalFeatures::from_columns(dim, n, cols.len(), 0, cols.len(), |p| &cols[p]).unwrap()
+    }
+
+    #[test]
+    fn columns_are_scaled_and_signed() {
+        let cols = vec![
+            vec![0.0, -3.0, 0.0, 4.0 * 0.0 + 1.0],
+            vec![2.0, 0.0, 0.0, 0.0],
+        ];
+        let f = feats(2, 2, &cols);
+        let m0 = f.mode(0);
+        let norm: f64 = m0.iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert!((norm - 2f64.sqrt()).abs() < 1e-12);
+        // largest-|·| entry was -3 → flipped positive
+        assert!(m0[1] > 0.0 && m0[3] < 0.0);
+        assert!(ModalFeatures::from_columns(2, 2, 2, 1, 2, |p| &cols[p]).is_err());
+        let zero = [vec![0.0; 4]];
+        assert!(ModalFeatures::from_columns(2, 2, 1, 0, 1, |p| &zero[p]).is_err());
+    }
+
+    #[test]
+    fn affinity_is_squared_feature_distance() {
+        let a = feats(
+            2,
+            3,
+            &[
+                vec![1.0, 2.0, 3.0, 0.5, 0.0, -1.0],
+                vec![0.0, 1.0, 0.0, 2.0, 1.0, 1.0],
+            ],
+        );
+        let b = feats(2, 2, &[vec![3.0, 1.0, 1.0, 0.0], vec![1.0, 1.0, 0.0, 2.0]]);
+        let z = AffinityMatrix::from_features(&a, &b).unwrap();
+        for i in 0..3 {
+            for j in 0..2 {
+                let mut s = 0.0;
+                for p in 0..2 {
+                    for c in 0..2 {
+                        let d = a.mode(p)[c * 3 + i] - b.mode(p)[c * 2 + j];
+                        s += d * d;
+                    }
+                }
+                assert!((z.get(i, j) - s).abs() < 1e-12);
+            }
+        }
+        let zn = z.clone().normalized();
+        assert!((zn.max() - 1.0).abs() < 1e-15);
+        let t = z.transposed();
+        assert_eq!(t.get(1, 2), z.get(2, 1));
+    }
+
+    #[test]
+    fn alignment_recovers_swaps_and_signs() {
+        // Five smooth "modes" on 8 nodes; B = A with modes 1,2 swapped and mode 3 negated,
+        // plus two extra band modes; identical node sets (nn = identity).
+        let n = 8;
+        let base: Vec<Vec<f64>> = (0..7)
+            .map(|p| {
+                (0..2 * n)
+                    .map(|r| ((r as f64 + 1.0) * (p as f64 + 1.0) * 0.37).sin() + 0.1 * p as f64)
+                    .collect()
+            })
+            .collect();
+        let a = feats(2, n, &base[..5]);
+        let order_b = [0usize, 2, 1, 3, 4, 5, 6];
+        let cols_b: Vec<Vec<f64>> = order_b
+            .iter()
+            .enumerate()
+            .map(|(k, &p)| {
+                base[p]
+                    .iter()
+                    .map(|v| if k == 3 { -v } else { *v })
+                    .collect()
+            })
+            .collect();
+        let b = ModalFeatures::from_columns(2, n, 7, 0, 7, |p| &cols_b[p]).unwrap();
+        let nn: Vec<usize> = (0..n).collect();
+        let al = align_modes(&a, &b, &nn, 3, assign::Method::default()).unwrap();
+        assert_eq!(al.order, vec![0, 2, 1, 3, 4]);
+        let bb = b.permuted(&al.order, &al.signs);
+        for p in 0..5 {
+            for (x, y) in a.mode(p).iter().zip(bb.mode(p)) {
+                assert!((x - y).abs() < 1e-12, "mode {p}");
+            }
+        }
+        assert!(al.similarity.iter().all(|s| (s - 1.0).abs() < 1e-12));
+    }
+}

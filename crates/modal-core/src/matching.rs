@@ -1,0 +1,494 @@
+//! The modal matching pipeline: pre-alignment, modal features, mode alignment, affinity,
+//! search, excess nodes and iterative affine re-fits (SPEC §5, §6 and the recipe of §10).
+
+use crate::align::{self, Affine};
+use crate::excess;
+use crate::features::{align_modes, AffinityMatrix, ModalFeatures};
+use crate::search::{global_matches, local_matches, ThresholdMode};
+use crate::{modal_basis, ModalError, ModelOptions, Shape, Topology};
+
+/// Which one-to-one search produces the primary matches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Search {
+    /// Mutual best matches under the threshold (the original modal matching, SPEC §6.1).
+    Local,
+    /// Optimal assignment saturating the smaller object (the seed's optimisation, SPEC §6.2).
+    #[default]
+    Global,
+}
+
+/// How the two objects are brought into a common frame before their modes are compared.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Prealign {
+    /// Centroid and RMS scale only (the paper's setting; enough for consecutive frames).
+    Normalize,
+    /// Centroid, scale, rotation candidates scored by chamfer after symmetric affine ICP (§10).
+    #[default]
+    Robust,
+}
+
+/// Parameters of [`match_shapes`]. The defaults are the measured recipe of SPEC §10.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MatchOptions {
+    /// Element, material (only ν matters, E and ρ do not change matches), σ rule, exact-rigid
+    /// option. `n_modes` is ignored: the pipeline requests exactly the modes it needs.
+    pub model: ModelOptions,
+    /// Fraction of the `dim · min(n, m)` modes kept: `k = ⌊fraction · dim · min(n, m)⌋`.
+    pub mode_fraction: f64,
+    /// Skip the first 3 (2-D) or 6 (3-D) quasi-rigid modes.
+    pub skip_rigid: bool,
+    /// Band of the cross-object mode reordering (SPEC §5.5); 0 fixes signs only.
+    pub band: usize,
+    pub search: Search,
+    /// Assignment algorithm of the global search and of the mode alignment.
+    pub method: assign::Method,
+    /// Reject pairs with normalised `Z` above this (in [0, 1]); `None` keeps everything.
+    pub threshold: Option<f64>,
+    pub threshold_mode: ThresholdMode,
+    /// Match the nodes the one-to-one search leaves over (global search only).
+    pub excess: bool,
+    /// Treat both objects as ordered closed contours; `None`: when both shapes say so.
+    pub ordered: Option<bool>,
+    pub prealign: Prealign,
+    /// Iterations of symmetric affine ICP per rotation candidate.
+    pub icp_iterations: usize,
+    /// Maximum modal affine re-fits; stops earlier when the pairs stop changing.
+    pub refits: usize,
+}
+
+impl Default for MatchOptions {
+    fn default() -> Self {
+        let model = ModelOptions {
+            material: crate::Material {
+                young: 1.0,
+                poisson: 0.49,
+                density: 1.0,
+            },
+            ..ModelOptions::default()
+        };
+        Self {
+            model,
+            mode_fraction: 0.25,
+            skip_rigid: false,
+            band: 3,
+            search: Search::Global,
+            method: assign::Method::JonkerVolgenant,
+            threshold: None,
+            threshold_mode: ThresholdMode::AfterAssignment,
+            excess: true,
+            ordered: None,
+            prealign: Prealign::Robust,
+            icp_iterations: 5,
+            refits: 3,
+        }
+    }
+}
+
+impl MatchOptions {
+    /// The paper's literal setting: no rotation pre-alignment, no re-fits.
+    pub fn paper() -> Self {
+        Self {
+            prealign: Prealign::Normalize,
+            refits: 0,
+            ..Self::default()
+        }
+    }
+}
+
+/// One correspondence: node `a` of the first object, node `b` of the second.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MatchPair {
+    pub a: usize,
+    pub b: usize,
+    /// Normalised modal distance `Z[a, b]`.
+    pub cost: f64,
+    /// Found by the excess-node step (one-to-many) rather than by the one-to-one search.
+    pub excess: bool,
+}
+
+/// Outcome of [`match_shapes`].
+#[derive(Debug, Clone)]
+pub struct MatchResult {
+    /// One-to-one pairs sorted by `a`, followed by excess pairs sorted by `b` (or by `a` when the
+    /// first object is the larger).
+    pub pairs: Vec<MatchPair>,
+    /// The final affinity matrix (max-normalised), rows = nodes of the first object, original order.
+    pub affinity: AffinityMatrix,
+    /// Mutual-best (local) matches on the final affinity, under the threshold, whatever `search`.
+    pub local_pairs: Vec<(usize, usize)>,
+    /// Nodes of the first / second object in no pair.
+    pub unmatched_a: Vec<usize>,
+    pub unmatched_b: Vec<usize>,
+    /// Modes per object used in the features.
+    pub n_modes: usize,
+    /// Modal affine re-fits actually performed.
+    pub refits: usize,
+    /// Modal solves of the first object (the second is solved once).
+    pub solves: usize,
+}
+
+impl MatchResult {
+    /// Number of local (mutual-best) matches.
+    pub fn local_count(&self) -> usize {
+        self.local_pairs.len()
+    }
+    /// Number of one-to-one matches from the primary search (the seed's "optimisation" column).
+    pub fn one_to_one_count(&self) -> usize {
+        self.pairs.iter().filter(|p| !p.excess).count()
+    }
+    /// Number of matches added by the excess-node step.
+    pub fn excess_count(&self) -> usize {
+        self.pairs.iter().filter(|p| p.excess).count()
+    }
+}
+
+fn validate(s: &Shape, name: &str) -> Result<(), ModalError> {
+    let (n, d) = (s.len(), s.dim());
+    if n < 3 {
+        return Err(ModalError::InvalidShape(format!(
+            "{name} has {n} nodes; at least 3 are needed"
+        )));
+    }
+    let (pts, _, _) = align::normalize(s.coords(), d)
+        .map_err(|e| ModalError::InvalidShape(format!("{name}: {}", e_msg(&e))))?;
+    // After normalisation the RMS radius is 1, so absolute tolerances are meaningful.
+    for i in 0..n {
+        for j in i + 1..n {
+            let dd: f64 = (0..d)
+                .map(|c| (pts[i * d + c] - pts[j * d + c]).powi(2))
+                .sum();
+            if dd < 1e-18 {
+                return Err(ModalError::InvalidShape(format!(
+                    "{name}: nodes {i} and {j} coincide"
+                )));
+            }
+        }
+    }
+    let (_, var) = align::principal_axes(&pts, d);
+    if var[1] <= 1e-10 * var[0] {
+        return Err(ModalError::InvalidShape(format!(
+            "{name}: all nodes are collinear"
+        )));
+    }
+    Ok(())
+}
+
+fn e_msg(e: &ModalError) -> String {
+    match e {
+        ModalError::InvalidShape(s)
+        | ModalError::InvalidParameter(s)
+        | ModalError::Numerical(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// Prepared second object: its normalised coordinates and its modes, solved once and reused across
+/// every re-fit (and, through [`Matcher`], across several first objects).
+struct Side {
+    pts: Vec<f64>,
+    perm: Vec<usize>,
+    topology: Topology,
+}
+
+fn prepare(s: &Shape, ordered: bool) -> Result<Side, ModalError> {
+    let d = s.dim();
+    let n = s.len();
+    let (mut pts, _, _) = align::normalize(s.coords(), d)?;
+    let mut perm: Vec<usize> = (0..n).collect();
+    if ordered {
+        let xy: Vec<f64> = pts.chunks_exact(d).flat_map(|p| [p[0], p[1]]).collect();
+        if align::signed_area(&xy) < 0.0 {
+            perm.reverse();
+            pts = perm
+                .iter()
+                .flat_map(|&i| pts[i * d..(i + 1) * d].to_vec())
+                .collect();
+        }
+    }
+    let topology = match s.topology() {
+        Topology::ClosedContour if ordered => Topology::ClosedContour,
+        Topology::Mesh { triangles } => {
+            // perm is the identity unless ordered; remap anyway for safety.
+            let mut inv = vec![0; n];
+            for (t, &o) in perm.iter().enumerate() {
+                inv[o] = t;
+            }
+            Topology::Mesh {
+                triangles: triangles
+                    .iter()
+                    .map(|t| [inv[t[0]], inv[t[1]], inv[t[2]]])
+                    .collect(),
+            }
+        }
+        other => other.clone(),
+    };
+    Ok(Side {
+        pts,
+        perm,
+        topology,
+    })
+}
+
+fn features_of(
+    pts: &[f64],
+    dim: usize,
+    topology: &Topology,
+    model: &ModelOptions,
+    skip: usize,
+    k: usize,
+) -> Result<ModalFeatures, ModalError> {
+    let shape = Shape::new(dim, pts.to_vec(), topology.clone())?;
+    let opts = ModelOptions {
+        n_modes: Some(skip + k),
+        ..model.clone()
+    };
+    let basis = modal_basis(&shape, &opts)?;
+    let avail = basis.modes.ncols();
+    if avail < skip + 1 {
+        return Err(ModalError::Numerical(format!(
+            "the model returned only {avail} modes"
+        )));
+    }
+    ModalFeatures::from_basis(&basis, skip, k.min(avail - skip))
+}
+
+/// Matches the nodes of `a` to the nodes of `b` by modal matching.
+///
+/// # Errors
+/// [`ModalError::InvalidShape`] for objects of different dimensions, fewer than 3 nodes,
+/// coincident or collinear nodes; [`ModalError::InvalidParameter`] for a mode fraction outside
+/// (0, 1], a negative or NaN threshold, or `ordered` on shapes that cannot be contours;
+/// model and assignment failures are passed through.
+pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchResult, ModalError> {
+    if a.dim() != b.dim() {
+        return Err(ModalError::InvalidShape(format!(
+            "the objects have different dimensions ({} and {})",
+            a.dim(),
+            b.dim()
+        )));
+    }
+    validate(a, "first object")?;
+    validate(b, "second object")?;
+    if !(opts.mode_fraction > 0.0 && opts.mode_fraction <= 1.0) {
+        return Err(ModalError::InvalidParameter(format!(
+            "mode fraction must be in (0, 1], got {}",
+            opts.mode_fraction
+        )));
+    }
+    let threshold = opts.threshold.unwrap_or(f64::INFINITY);
+    if threshold.is_nan() || threshold < 0.0 {
+        return Err(ModalError::InvalidParameter(format!(
+            "threshold must be ≥ 0, got {threshold}"
+        )));
+    }
+    let both_contours = matches!(a.topology(), Topology::ClosedContour)
+        && matches!(b.topology(), Topology::ClosedContour);
+    let ordered = opts.ordered.unwrap_or(both_contours);
+    if ordered
+        && (matches!(a.topology(), Topology::Mesh { .. })
+            || matches!(b.topology(), Topology::Mesh { .. }))
+    {
+        return Err(ModalError::InvalidParameter(
+            "meshes cannot be treated as ordered contours".into(),
+        ));
+    }
+    let d = a.dim();
+    let (n, m) = (a.len(), b.len());
+    let skip = if opts.skip_rigid {
+        if d == 2 {
+            3
+        } else {
+            6
+        }
+    } else {
+        0
+    };
+    let total = d * n.min(m);
+    if skip >= total {
+        return Err(ModalError::InvalidParameter(format!(
+            "skipping {skip} rigid modes leaves none of the {total} available"
+        )));
+    }
+    let k = ((opts.mode_fraction * total as f64).floor() as usize).clamp(1, total - skip);
+    let band = opts.band.min(d * m - skip - k);
+
+    let sa = prepare(a, ordered)?;
+    let sb = prepare(b, ordered)?;
+    let fb = features_of(&sb.pts, d, &sb.topology, &opts.model, skip, k + band)?;
+    let band = fb.n_modes.saturating_sub(k);
+
+    let mut cur = match opts.prealign {
+        Prealign::Normalize => sa.pts.clone(),
+        Prealign::Robust => {
+            let t = align::robust_prealign(&sa.pts, &sb.pts, d, opts.icp_iterations, ordered);
+            align::normalize(&t.apply(&sa.pts), d)?.0
+        }
+    };
+
+    let nbr = if !ordered && opts.excess && opts.search == Search::Global {
+        let nb = |s: &Side| match &s.topology {
+            Topology::Mesh { triangles } => excess::mesh_rings(s.pts.len() / d, triangles),
+            _ => excess::knn(&s.pts, d, 6),
+        };
+        Some((nb(&sa), nb(&sb)))
+    } else {
+        None
+    };
+
+    let mut prev: Option<Vec<MatchPair>> = None;
+    let mut refits = 0;
+    let mut solves = 0;
+    let (z, pairs) = loop {
+        let fa = features_of(&cur, d, &sa.topology, &opts.model, skip, k)?;
+        solves += 1;
+        let nn: Vec<usize> = align::nearest(&cur, &sb.pts, d)
+            .into_iter()
+            .map(|x| x.0)
+            .collect();
+        let al = align_modes(&fa, &fb, &nn, band, opts.method)?;
+        let fb_al = fb.permuted(&al.order, &al.signs);
+        let z = AffinityMatrix::from_features(&fa, &fb_al)?.normalized();
+        let one = match opts.search {
+            Search::Global => global_matches(&z, opts.method, threshold, opts.threshold_mode)?,
+            Search::Local => local_matches(&z, threshold),
+        };
+        let mut pairs: Vec<MatchPair> = one
+            .iter()
+            .map(|&(i, j)| MatchPair {
+                a: i,
+                b: j,
+                cost: z.get(i, j),
+                excess: false,
+            })
+            .collect();
+        if opts.excess && opts.search == Search::Global {
+            let ex = if ordered {
+                if n <= m {
+                    excess::contour_excess(&z, &one, threshold)
+                } else {
+                    let sw: Vec<_> = one.iter().map(|&(i, j)| (j, i)).collect();
+                    excess::contour_excess(&z.transposed(), &sw, threshold)
+                        .into_iter()
+                        .map(|(j, i)| (i, j))
+                        .collect()
+                }
+            } else {
+                let (na, nb) = nbr.as_ref().expect("neighbours built for unordered excess");
+                if n <= m {
+                    excess::point_set_excess(&z, &one, threshold, d, &cur, &sb.pts, na, nb)
+                } else {
+                    let sw: Vec<_> = one.iter().map(|&(i, j)| (j, i)).collect();
+                    excess::point_set_excess(
+                        &z.transposed(),
+                        &sw,
+                        threshold,
+                        d,
+                        &sb.pts,
+                        &cur,
+                        nb,
+                        na,
+                    )
+                    .into_iter()
+                    .map(|(j, i)| (i, j))
+                    .collect()
+                }
+            };
+            pairs.extend(ex.into_iter().map(|(i, j)| MatchPair {
+                a: i,
+                b: j,
+                cost: z.get(i, j),
+                excess: true,
+            }));
+        }
+        let stable = prev.as_ref().is_some_and(|p| same_pairs(p, &pairs));
+        if stable || refits >= opts.refits {
+            break (z, pairs);
+        }
+        let idx: Vec<(usize, usize)> = pairs.iter().map(|p| (p.a, p.b)).collect();
+        let Some(t) = align::fit_affine(&cur, &sb.pts, d, &idx) else {
+            break (z, pairs);
+        };
+        if ordered && t.det() <= 0.0 {
+            break (z, pairs);
+        }
+        let Ok((next, _, _)) = align::normalize(&t.apply(&cur), d) else {
+            break (z, pairs);
+        };
+        cur = next;
+        prev = Some(pairs);
+        refits += 1;
+    };
+
+    // Back to the callers' node numbering.
+    let inv = |perm: &[usize]| {
+        let mut v = vec![0; perm.len()];
+        for (t, &o) in perm.iter().enumerate() {
+            v[o] = t;
+        }
+        v
+    };
+    let (ia, ib) = (inv(&sa.perm), inv(&sb.perm));
+    let affinity = z.reindexed(&ia, &ib);
+    let mut out: Vec<MatchPair> = pairs
+        .iter()
+        .map(|p| MatchPair {
+            a: sa.perm[p.a],
+            b: sb.perm[p.b],
+            ..*p
+        })
+        .collect();
+    out.sort_by_key(|p| (p.excess, if n <= m { (p.b, p.a) } else { (p.a, p.b) }));
+    let first_excess = out.iter().position(|p| p.excess).unwrap_or(out.len());
+    out[..first_excess].sort_by_key(|p| p.a);
+    let local_pairs = {
+        let mut l = local_matches(&affinity, threshold);
+        l.sort();
+        l
+    };
+    let mut used_a = vec![false; n];
+    let mut used_b = vec![false; m];
+    for p in &out {
+        used_a[p.a] = true;
+        used_b[p.b] = true;
+    }
+    Ok(MatchResult {
+        pairs: out,
+        affinity,
+        local_pairs,
+        unmatched_a: (0..n).filter(|&i| !used_a[i]).collect(),
+        unmatched_b: (0..m).filter(|&j| !used_b[j]).collect(),
+        n_modes: k,
+        refits,
+        solves,
+    })
+}
+
+fn same_pairs(x: &[MatchPair], y: &[MatchPair]) -> bool {
+    x.len() == y.len() && x.iter().zip(y).all(|(p, q)| p.a == q.a && p.b == q.b)
+}
+
+/// The affine map the robust pre-alignment finds from `a` to `b`, both normalised (centroid 0,
+/// RMS radius 1). Exposed for diagnostics and for position-only baselines.
+pub fn prealign_normalized(
+    a: &Shape,
+    b: &Shape,
+    opts: &MatchOptions,
+) -> Result<(Vec<f64>, Vec<f64>), ModalError> {
+    if a.dim() != b.dim() {
+        return Err(ModalError::InvalidShape(
+            "the objects have different dimensions".into(),
+        ));
+    }
+    let ordered = opts.ordered.unwrap_or(
+        matches!(a.topology(), Topology::ClosedContour)
+            && matches!(b.topology(), Topology::ClosedContour),
+    );
+    let d = a.dim();
+    let (pa, _, _) = align::normalize(a.coords(), d)?;
+    let (pb, _, _) = align::normalize(b.coords(), d)?;
+    let t = match opts.prealign {
+        Prealign::Normalize => Affine::identity(d),
+        Prealign::Robust => align::robust_prealign(&pa, &pb, d, opts.icp_iterations, ordered),
+    };
+    Ok((align::normalize(&t.apply(&pa), d)?.0, pb))
+}

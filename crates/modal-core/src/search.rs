@@ -1,0 +1,152 @@
+//! Searching the affinity matrix for one-to-one correspondences (SPEC §6.1–6.2).
+
+use crate::{AffinityMatrix, ModalError};
+
+/// How a threshold interacts with the optimal assignment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ThresholdMode {
+    /// Solve the assignment first, then delete pairs whose cost exceeds the threshold (the seed).
+    #[default]
+    AfterAssignment,
+    /// Let the optimiser reject pairs: every node may instead pay half the threshold to stay
+    /// unmatched, so a pair is kept only where it beats leaving both of its nodes out.
+    InOptimizer,
+}
+
+/// Local search (SPEC §6.1): `(i, j)` is a match iff `j` is the row minimum of `i`, `i` the column
+/// minimum of `j` (ties to the lowest index) and `Z[i, j] ≤ threshold`. Sorted by `i`.
+pub fn local_matches(z: &AffinityMatrix, threshold: f64) -> Vec<(usize, usize)> {
+    let (n, m) = (z.rows(), z.cols());
+    if n == 0 || m == 0 {
+        return Vec::new();
+    }
+    let mut col_best = vec![0usize; m];
+    for j in 0..m {
+        for i in 1..n {
+            if z.get(i, j) < z.get(col_best[j], j) {
+                col_best[j] = i;
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for i in 0..n {
+        let mut best = 0;
+        for j in 1..m {
+            if z.get(i, j) < z.get(i, best) {
+                best = j;
+            }
+        }
+        if col_best[best] == i && z.get(i, best) <= threshold {
+            out.push((i, best));
+        }
+    }
+    out
+}
+
+/// Global search (SPEC §6.2): the minimum-cost one-to-one matching that saturates the smaller
+/// object (equivalent to padding with constant-cost dummy nodes), then the threshold. Sorted by `i`.
+pub fn global_matches(
+    z: &AffinityMatrix,
+    method: assign::Method,
+    threshold: f64,
+    mode: ThresholdMode,
+) -> Result<Vec<(usize, usize)>, ModalError> {
+    let (n, m) = (z.rows(), z.cols());
+    if n == 0 || m == 0 {
+        return Ok(Vec::new());
+    }
+    let opts = assign::Options {
+        method,
+        ..Default::default()
+    };
+    let sol = match mode {
+        ThresholdMode::AfterAssignment => assign::solve(z.as_slice(), n, m, &opts)?,
+        // The (n+m)² padding with dummy cost τ of SPEC §6.2, solved without building it.
+        ThresholdMode::InOptimizer if threshold.is_finite() => {
+            assign::solve_with_threshold(z.as_slice(), n, m, threshold, &opts)?
+        }
+        ThresholdMode::InOptimizer => assign::solve(z.as_slice(), n, m, &opts)?,
+    };
+    let out = sol
+        .pairs()
+        .into_iter()
+        .filter(|&(i, j)| z.get(i, j) <= threshold)
+        .collect();
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn zm(rows: usize, cols: usize, v: &[f64]) -> AffinityMatrix {
+        AffinityMatrix::new(rows, cols, v.to_vec()).unwrap()
+    }
+
+    #[test]
+    fn local_is_mutual_best_with_threshold() {
+        // Row 0 prefers col 0, col 0 prefers row 1 → no match for row 0.
+        let z = zm(3, 3, &[0.2, 0.5, 0.9, 0.1, 0.4, 0.8, 0.7, 0.6, 0.3]);
+        assert_eq!(local_matches(&z, 1.0), vec![(1, 0), (2, 2)]);
+        assert_eq!(local_matches(&z, 0.2), vec![(1, 0)]);
+        // Ties go to the lowest index.
+        let t = zm(2, 2, &[0.5, 0.5, 0.5, 0.5]);
+        assert_eq!(local_matches(&t, 1.0), vec![(0, 0)]);
+    }
+
+    #[test]
+    fn global_is_optimal_and_rectangular() {
+        // Greedy would take (0,0)=0.1 and then pay 0.9; optimum is (0,1)+(1,0) = 0.4.
+        let z = zm(2, 2, &[0.1, 0.2, 0.2, 0.9]);
+        for method in [
+            assign::Method::JonkerVolgenant,
+            assign::Method::Hungarian,
+            assign::Method::NetworkSimplex,
+        ] {
+            let g = global_matches(&z, method, 1.0, ThresholdMode::AfterAssignment).unwrap();
+            assert_eq!(g, vec![(0, 1), (1, 0)]);
+        }
+        // 3 × 2 and its transpose: one row stays unmatched.
+        let z = zm(3, 2, &[0.0, 0.5, 0.4, 0.45, 0.5, 0.0]);
+        let g = global_matches(
+            &z,
+            assign::Method::default(),
+            1.0,
+            ThresholdMode::AfterAssignment,
+        )
+        .unwrap();
+        assert_eq!(g, vec![(0, 0), (2, 1)]);
+        let gt = global_matches(
+            &z.transposed(),
+            assign::Method::default(),
+            1.0,
+            ThresholdMode::AfterAssignment,
+        )
+        .unwrap();
+        assert_eq!(gt, vec![(0, 0), (1, 2)]);
+    }
+
+    #[test]
+    fn thresholds_after_and_inside_the_optimizer() {
+        let z = zm(2, 2, &[0.1, 0.6, 0.3, 0.95]);
+        // Optimum: (0,1)+(1,0) = 0.9 < 0.1+0.95. After-threshold 0.5 drops (0,1).
+        let after = global_matches(
+            &z,
+            assign::Method::default(),
+            0.5,
+            ThresholdMode::AfterAssignment,
+        )
+        .unwrap();
+        assert_eq!(after, vec![(1, 0)]);
+        // Inside the optimizer with τ = 0.5: keeping (0,0) alone costs 0.1 + 2·0.25 = 0.6, better
+        // than (1,0) alone (0.3 + 0.5) → (0,0).
+        let inside = global_matches(
+            &z,
+            assign::Method::default(),
+            0.5,
+            ThresholdMode::InOptimizer,
+        )
+        .unwrap();
+        assert_eq!(inside, vec![(0, 0)]);
+    }
+}
