@@ -452,19 +452,16 @@ pub fn block_solve_lower_transpose(l: MatRef<'_, f64>, mut x: MatMut<'_, f64>, d
     }
 }
 
-/// Flips every column so that its largest-|·| entry (the first one on ties) is positive.
+/// Flips every column so that its largest-|·| entry is positive. Entries within a relative
+/// 10⁻⁶ of the largest count as ties (symmetric shapes produce exact ties up to round-off),
+/// and the first of them decides: the rule is then stable under round-off.
 pub fn canonical_signs(mut v: MatMut<'_, f64>) {
     for j in 0..v.ncols() {
-        let mut best = 0.0f64;
-        let mut sign = 1.0;
-        for i in 0..v.nrows() {
-            let a = v[(i, j)];
-            if a.abs() > best {
-                best = a.abs();
-                sign = a.signum();
-            }
-        }
-        if sign < 0.0 {
+        let best = (0..v.nrows()).fold(0.0f64, |m, i| m.max(v[(i, j)].abs()));
+        let Some(first) = (0..v.nrows()).find(|&i| v[(i, j)].abs() >= best * (1.0 - 1e-6)) else {
+            continue;
+        };
+        if v[(first, j)] < 0.0 {
             for i in 0..v.nrows() {
                 v[(i, j)] = -v[(i, j)];
             }
