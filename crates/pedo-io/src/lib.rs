@@ -1,1 +1,25 @@
 //! Plantar-pressure recordings in; contours, brightness surfaces and isobaric contours out.
+//!
+//! - [`read_recording`] reads Tekscan `.asf`, novel emed `.lst`, CSV grids, NumPy `.npy`, and PNG/TIFF
+//!   images (single, folder, numbered sequence) into a [`Recording`];
+//! - [`preprocess`] thresholds, smooths and upsamples frames;
+//! - [`contour`] extracts closed, counter-clockwise contours (sub-pixel marching squares or the
+//!   seed's edge chain) and [`track`] pairs them across frames;
+//! - [`surface`] builds the seed's brightness surfaces and [`isobar`] its isobaric contours.
+//!
+//! Coordinates follow the convention documented in [`grid`]: x = column, y = row, pixel units
+//! (sensel centres at integers), or millimetres via [`CoordUnits::Millimetres`].
+
+pub mod contour;
+mod error;
+pub mod formats;
+pub mod grid;
+
+pub mod preprocess;
+pub mod recording;
+
+pub use contour::{contour_shapes, contours, Contour, ContourMethod, ContourOptions, Resample};
+pub use error::{IoError, Result};
+pub use formats::{detect_format, parse_bytes, read_recording};
+pub use grid::{CoordUnits, Grid};
+pub use recording::{Format, FrameMeasures, Recording};

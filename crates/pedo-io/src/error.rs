@@ -1,0 +1,56 @@
+//! The error type of pedo-io.
+
+use modal_core::ModalError;
+
+/// Everything that can go wrong reading, writing or processing a recording.
+///
+/// Parse errors always name the file (or the name given to an in-memory parser) and, for text
+/// formats, the 1-based line, so a user can open the file at the offending place.
+#[derive(Debug, thiserror::Error)]
+pub enum IoError {
+    /// The operating system refused to read or write the file.
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A text file is malformed at a given line.
+    #[error("{path}:{line}: {msg}")]
+    Parse {
+        path: String,
+        line: usize,
+        msg: String,
+    },
+    /// A file is malformed as a whole (binary header, missing frames, unknown format).
+    #[error("{path}: {msg}")]
+    Format { path: String, msg: String },
+    /// An argument is out of range or inconsistent.
+    #[error("invalid input: {0}")]
+    InvalidInput(String),
+    /// A produced object could not be turned into a modal-core shape.
+    #[error(transparent)]
+    Shape(#[from] ModalError),
+}
+
+impl IoError {
+    pub(crate) fn parse(path: &str, line: usize, msg: impl Into<String>) -> Self {
+        IoError::Parse {
+            path: path.to_string(),
+            line,
+            msg: msg.into(),
+        }
+    }
+    pub(crate) fn format(path: &str, msg: impl Into<String>) -> Self {
+        IoError::Format {
+            path: path.to_string(),
+            msg: msg.into(),
+        }
+    }
+    pub(crate) fn invalid(msg: impl Into<String>) -> Self {
+        IoError::InvalidInput(msg.into())
+    }
+}
+
+/// Result alias of the crate.
+pub type Result<T> = std::result::Result<T, IoError>;

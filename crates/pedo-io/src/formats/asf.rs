@@ -1,0 +1,261 @@
+//! Tekscan ASCII movie (`.asf`): `KEY value` header up to `ASCII_DATA @@`, then `Frame N` blocks of
+//! ROWS lines of COLS comma-separated values; `B` marks a sensel outside the sensor outline.
+
+use super::{latin1_lines, parse_num};
+use crate::error::{IoError, Result};
+use crate::recording::{Format, Recording};
+
+/// A length with its unit (`5.08 mm`, `0.2 in`) in mm.
+fn length_mm(v: &str) -> Option<f64> {
+    let mut it = v.split_whitespace();
+    let x = parse_num(it.next()?)?;
+    let f = match it.next().map(|u| u.to_ascii_lowercase()).as_deref() {
+        None | Some("mm") => 1.0,
+        Some("cm") => 10.0,
+        Some("in") | Some("inch") | Some("inches") => 25.4,
+        Some("m") => 1000.0,
+        _ => return None,
+    };
+    Some(x * f)
+}
+
+fn area_mm2(v: &str) -> Option<f64> {
+    let mut it = v.split_whitespace();
+    let x = parse_num(it.next()?)?;
+    let f = match it.next().map(|u| u.to_ascii_lowercase()).as_deref() {
+        None | Some("mm2") | Some("mm^2") | Some("mm²") => 1.0,
+        Some("cm2") | Some("cm^2") | Some("cm²") => 100.0,
+        Some("in2") | Some("in^2") | Some("sq.in") => 645.16,
+        _ => return None,
+    };
+    Some(x * f)
+}
+
+/// Parses a Tekscan `.asf` file held in memory; `name` appears in error messages.
+pub fn parse_asf(bytes: &[u8], name: &str) -> Result<Recording> {
+    let err = |line: usize, msg: String| IoError::parse(name, line, msg);
+    let mut lines = latin1_lines(bytes);
+    let (mut rows, mut cols) = (None::<usize>, None::<usize>);
+    let (mut dy, mut dx, mut area, mut dt, mut noise) = (None, None, None, None, None);
+    let (mut start, mut end) = (None::<i64>, None::<i64>);
+    let mut units = String::new();
+    let mut data_line = None;
+    for (ln, line) in lines.by_ref() {
+        let t = line.trim();
+        if t.starts_with("ASCII_DATA") {
+            data_line = Some(ln);
+            break;
+        }
+        let (key, val) = match t.split_once(char::is_whitespace) {
+            Some((k, v)) => (k, v.trim()),
+            None => (t, ""),
+        };
+        let num = || parse_num(val.split_whitespace().next().unwrap_or(""));
+        let bad = |what: &str| err(ln, format!("cannot read {what} from {val:?}"));
+        match key {
+            "ROWS" | "COLS" => {
+                let n = val
+                    .parse::<usize>()
+                    .ok()
+                    .filter(|&n| n > 0 && n <= 100_000)
+                    .ok_or_else(|| bad(key))?;
+                if key == "ROWS" {
+                    rows = Some(n)
+                } else {
+                    cols = Some(n)
+                }
+            }
+            "ROW_SPACING" => {
+                dy = Some(
+                    length_mm(val)
+                        .filter(|&v| v > 0.0)
+                        .ok_or_else(|| bad(key))?,
+                )
+            }
+            "COL_SPACING" => {
+                dx = Some(
+                    length_mm(val)
+                        .filter(|&v| v > 0.0)
+                        .ok_or_else(|| bad(key))?,
+                )
+            }
+            "SENSEL_AREA" => {
+                area = Some(area_mm2(val).filter(|&v| v > 0.0).ok_or_else(|| bad(key))?)
+            }
+            "SECONDS_PER_FRAME" => dt = Some(num().filter(|&v| v > 0.0).ok_or_else(|| bad(key))?),
+            "NOISE_THRESHOLD" => noise = Some(num().ok_or_else(|| bad(key))?),
+            "START_FRAME" => start = Some(val.parse::<i64>().map_err(|_| bad(key))?),
+            "END_FRAME" => end = Some(val.parse::<i64>().map_err(|_| bad(key))?),
+            "UNITS" => units = normalise_units(val),
+            _ => {}
+        }
+    }
+    let data_line = data_line.ok_or_else(|| {
+        IoError::format(
+            name,
+            "no ASCII_DATA line: not a Tekscan ASCII file or truncated header",
+        )
+    })?;
+    let rows = rows.ok_or_else(|| err(data_line, "header has no ROWS".into()))?;
+    let cols = cols.ok_or_else(|| err(data_line, "header has no COLS".into()))?;
+    let per = rows
+        .checked_mul(cols)
+        .filter(|&p| p <= 100_000_000)
+        .ok_or_else(|| err(data_line, "ROWS x COLS too large".into()))?;
+    let expected = match (start, end) {
+        (Some(s), Some(e)) if e >= s => Some((e - s + 1) as usize),
+        (Some(s), Some(e)) => {
+            return Err(err(
+                data_line,
+                format!("END_FRAME {e} before START_FRAME {s}"),
+            ))
+        }
+        _ => None,
+    };
+
+    let mut data: Vec<f32> = Vec::new();
+    let mut mask: Vec<Option<bool>> = vec![None; per];
+    let mut n_frames = 0usize;
+    let mut row_in_frame = rows; // `rows` = not inside a frame
+    let mut last_ln = data_line;
+    let mut frame_ln = data_line;
+    let mut ended = false;
+    for (ln, line) in lines {
+        last_ln = ln;
+        let t = line.trim();
+        if ended {
+            if t.is_empty() {
+                continue;
+            }
+            return Err(err(ln, "data after the closing @@".into()));
+        }
+        if row_in_frame == rows {
+            if t.is_empty() {
+                continue;
+            }
+            if t == "@@" {
+                ended = true;
+                continue;
+            }
+            let rest = t
+                .strip_prefix("Frame")
+                .ok_or_else(|| err(ln, format!("expected `Frame N`, found {:?}", trunc(t))))?;
+            rest.trim()
+                .parse::<i64>()
+                .map_err(|_| err(ln, format!("bad frame number in {:?}", trunc(t))))?;
+            if expected.is_some_and(|e| n_frames >= e) {
+                return Err(err(
+                    ln,
+                    format!(
+                        "more frames than END_FRAME - START_FRAME + 1 = {}",
+                        expected.unwrap_or(0)
+                    ),
+                ));
+            }
+            frame_ln = ln;
+            row_in_frame = 0;
+            continue;
+        }
+        let mut k = 0usize;
+        for tok in t.split(',') {
+            let tok = tok.trim();
+            if k == cols {
+                if tok.is_empty() {
+                    continue; // tolerate a trailing comma
+                }
+                return Err(err(ln, format!("more than COLS = {cols} values")));
+            }
+            let idx = row_in_frame * cols + k;
+            let (v, present) = if tok.eq_ignore_ascii_case("B") {
+                (0.0f32, false)
+            } else {
+                let v = parse_num(tok).ok_or_else(|| {
+                    err(
+                        ln,
+                        format!("value {} is not a number: {:?}", k + 1, trunc(tok)),
+                    )
+                })?;
+                (v as f32, true)
+            };
+            match mask[idx] {
+                None => mask[idx] = Some(present),
+                Some(m) if m != present => {
+                    return Err(err(
+                        ln,
+                        format!(
+                            "sensel (row {}, column {}) is {} here but was {} in an earlier frame",
+                            row_in_frame + 1,
+                            k + 1,
+                            if present { "a value" } else { "B" },
+                            if m { "a value" } else { "B" }
+                        ),
+                    ))
+                }
+                _ => {}
+            }
+            data.push(v);
+            k += 1;
+        }
+        if k != cols {
+            return Err(err(ln, format!("{k} values, expected COLS = {cols}")));
+        }
+        row_in_frame += 1;
+        if row_in_frame == rows {
+            n_frames += 1;
+        }
+    }
+    if row_in_frame != rows {
+        return Err(err(
+            last_ln,
+            format!(
+                "truncated: frame starting at line {frame_ln} has {row_in_frame} of {rows} rows"
+            ),
+        ));
+    }
+    if n_frames == 0 {
+        return Err(err(last_ln, "no frames".into()));
+    }
+    if !ended {
+        // The export closes its data with `@@`; without it the file was cut, possibly inside a
+        // number of the last row, which would otherwise pass unnoticed.
+        return Err(err(
+            last_ln,
+            "truncated: no closing @@ after the last frame".into(),
+        ));
+    }
+    if let Some(e) = expected {
+        if n_frames != e {
+            return Err(err(
+                last_ln,
+                format!("truncated: {n_frames} frames, header promises {e}"),
+            ));
+        }
+    }
+    let mask: Vec<bool> = mask.into_iter().map(|m| m.unwrap_or(true)).collect();
+    let mut rec = Recording::new(n_frames, rows, cols, data, mask)?;
+    rec.pitch_mm = match (dx, dy) {
+        (Some(x), Some(y)) => Some([x, y]),
+        (Some(x), None) => Some([x, x]),
+        (None, Some(y)) => Some([y, y]),
+        _ => None,
+    };
+    rec.sensel_area_mm2 = area;
+    rec.dt_s = dt;
+    rec.units = units;
+    rec.noise_threshold = noise;
+    rec.format = Some(Format::Asf);
+    Ok(rec)
+}
+
+fn normalise_units(v: &str) -> String {
+    let v = v.trim();
+    if v.eq_ignore_ascii_case("kpa") {
+        "kPa".to_string()
+    } else {
+        v.to_string()
+    }
+}
+
+pub(crate) fn trunc(s: &str) -> String {
+    s.chars().take(40).collect()
+}

@@ -1,0 +1,149 @@
+//! A single frame as a delimited text grid (comma, semicolon, tab or spaces; no header, or one
+//! non-numeric header line). `-1`, `B` and `NaN` mark a missing sensor.
+
+use super::asf::trunc;
+use super::{latin1_lines, parse_num};
+use crate::error::{IoError, Result};
+use crate::grid::Grid;
+use crate::recording::{Format, Recording};
+use std::fmt::Write as _;
+use std::path::Path;
+
+fn split_fields(line: &str, sep: Option<char>) -> Vec<&str> {
+    match sep {
+        Some(c) => line.split(c).map(str::trim).collect(),
+        None => line.split_whitespace().collect(),
+    }
+}
+
+/// Parses a CSV grid held in memory into a one-frame recording.
+pub fn parse_csv(bytes: &[u8], name: &str) -> Result<Recording> {
+    let err = |line: usize, msg: String| IoError::parse(name, line, msg);
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
+    let mut sep: Option<Option<char>> = None;
+    let mut cols = 0usize;
+    let mut values: Vec<f32> = Vec::new();
+    let mut present: Vec<bool> = Vec::new();
+    let mut rows = 0usize;
+    let mut first_content = true;
+    for (ln, line) in latin1_lines(bytes) {
+        let t = line.trim();
+        if t.is_empty() {
+            continue;
+        }
+        let s = *sep.get_or_insert_with(|| {
+            if t.contains(',') {
+                Some(',')
+            } else if t.contains(';') {
+                Some(';')
+            } else if t.contains('\t') {
+                Some('\t')
+            } else {
+                None
+            }
+        });
+        let mut fields = split_fields(t, s);
+        if s.is_some() && fields.len() > 1 && fields.last() == Some(&"") {
+            fields.pop(); // trailing separator
+        }
+        if first_content {
+            first_content = false;
+            let numeric = fields
+                .iter()
+                .any(|f| parse_num(f).is_some() || is_missing(f));
+            if !numeric {
+                continue; // a header line
+            }
+        }
+        if cols == 0 {
+            cols = fields.len();
+        } else if fields.len() != cols {
+            return Err(err(
+                ln,
+                format!("{} values, the first row has {cols}", fields.len()),
+            ));
+        }
+        for (k, f) in fields.iter().enumerate() {
+            if is_missing(f) {
+                values.push(0.0);
+                present.push(false);
+            } else {
+                let v = parse_num(f).ok_or_else(|| {
+                    err(
+                        ln,
+                        format!("value {} is not a number: {:?}", k + 1, trunc(f)),
+                    )
+                })?;
+                values.push(v as f32);
+                present.push(true);
+            }
+        }
+        rows += 1;
+    }
+    if rows == 0 {
+        return Err(IoError::format(name, "no data rows"));
+    }
+    let mut rec = Recording::new(1, rows, cols, values, present)?;
+    rec.format = Some(Format::Csv);
+    Ok(rec)
+}
+
+fn is_missing(f: &str) -> bool {
+    f == "-1" || f == "-1.0" || f.eq_ignore_ascii_case("b") || f.eq_ignore_ascii_case("nan")
+}
+
+/// Formats one frame of a recording as CSV: comma separated, `-1` at missing sensors, values with
+/// the shortest representation that reads back to the same `f32`.
+pub fn frame_to_csv(rec: &Recording, t: usize) -> Result<String> {
+    let f = rec.frame_slice(t).ok_or_else(|| {
+        IoError::invalid(format!(
+            "frame {t} out of range ({} frames)",
+            rec.n_frames()
+        ))
+    })?;
+    let mask = rec.sensor_mask();
+    if f.iter().zip(mask).any(|(&v, &m)| m && v == -1.0) {
+        return Err(IoError::invalid(
+            "a sensor holds -1, which CSV reserves for no sensor".to_string(),
+        ));
+    }
+    let mut s = String::with_capacity(f.len() * 4);
+    for r in 0..rec.rows() {
+        for c in 0..rec.cols() {
+            if c > 0 {
+                s.push(',');
+            }
+            let i = r * rec.cols() + c;
+            if mask[i] {
+                let _ = write!(s, "{}", f[i]);
+            } else {
+                s.push_str("-1");
+            }
+        }
+        s.push('\n');
+    }
+    Ok(s)
+}
+
+/// Writes one frame of a recording as CSV (see [`frame_to_csv`]).
+pub fn write_csv(rec: &Recording, t: usize, path: impl AsRef<Path>) -> Result<()> {
+    let path = path.as_ref();
+    let s = frame_to_csv(rec, t)?;
+    std::fs::write(path, s).map_err(|source| IoError::Io {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
+/// Writes a grid as CSV (all sensors present).
+pub fn write_grid_csv(grid: &Grid, path: impl AsRef<Path>) -> Result<()> {
+    let data: Vec<f32> = grid.data().iter().map(|&v| v as f32).collect();
+    let rec = Recording::new(
+        1,
+        grid.rows(),
+        grid.cols(),
+        data,
+        vec![true; grid.rows() * grid.cols()],
+    )?;
+    write_csv(&rec, 0, path)
+}

@@ -1,0 +1,200 @@
+//! NumPy `.npy` (format versions 1–3): 2-D (one frame) or 3-D (T × rows × cols) arrays of
+//! `f4 f8 i1 i2 i4 i8 u1 u2 u4` in either byte order and C or Fortran layout. NaN marks a missing
+//! sensor (it must then be NaN in every frame).
+
+use crate::error::{IoError, Result};
+use crate::recording::{Format, Recording};
+use std::path::Path;
+
+#[derive(Clone, Copy)]
+enum Kind {
+    F,
+    I,
+    U,
+}
+
+fn header_value<'a>(h: &'a str, key: &str) -> Option<&'a str> {
+    let i = h
+        .find(&format!("'{key}'"))
+        .or_else(|| h.find(&format!("\"{key}\"")))?;
+    let rest = &h[i + key.len() + 2..];
+    let rest = rest.trim_start().strip_prefix(':')?;
+    Some(rest.trim_start())
+}
+
+/// Parses a `.npy` file held in memory into a recording.
+pub fn parse_npy(bytes: &[u8], name: &str) -> Result<Recording> {
+    let fail = |msg: String| IoError::format(name, msg);
+    if bytes.len() < 10 || !bytes.starts_with(b"\x93NUMPY") {
+        return Err(fail("not a .npy file (bad magic)".into()));
+    }
+    let major = bytes[6];
+    let (hlen, start) = match major {
+        1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10usize),
+        2 | 3 => {
+            if bytes.len() < 12 {
+                return Err(fail("truncated header".into()));
+            }
+            (
+                u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+                12usize,
+            )
+        }
+        v => return Err(fail(format!("unsupported .npy version {v}"))),
+    };
+    let end = start
+        .checked_add(hlen)
+        .filter(|&e| e <= bytes.len())
+        .ok_or_else(|| fail("truncated header".into()))?;
+    let header =
+        std::str::from_utf8(&bytes[start..end]).map_err(|_| fail("header is not text".into()))?;
+
+    let descr =
+        header_value(header, "descr").ok_or_else(|| fail("header has no 'descr'".into()))?;
+    let q = descr
+        .chars()
+        .next()
+        .filter(|&c| c == '\'' || c == '"')
+        .ok_or_else(|| fail("bad 'descr'".into()))?;
+    let descr = descr[1..].split(q).next().unwrap_or("");
+    let (order, code) = descr.split_at(descr.len().min(1));
+    let big = match order {
+        "<" | "|" | "=" => false,
+        ">" => true,
+        _ => return Err(fail(format!("unsupported dtype {descr:?}"))),
+    };
+    let (kind, size) = match code {
+        "f4" => (Kind::F, 4),
+        "f8" => (Kind::F, 8),
+        "i1" => (Kind::I, 1),
+        "i2" => (Kind::I, 2),
+        "i4" => (Kind::I, 4),
+        "i8" => (Kind::I, 8),
+        "u1" | "b1" => (Kind::U, 1),
+        "u2" => (Kind::U, 2),
+        "u4" => (Kind::U, 4),
+        _ => return Err(fail(format!("unsupported dtype {descr:?}"))),
+    };
+    let fortran = match header_value(header, "fortran_order") {
+        Some(v) if v.starts_with("True") => true,
+        Some(v) if v.starts_with("False") => false,
+        _ => return Err(fail("header has no valid 'fortran_order'".into())),
+    };
+    let shape_s =
+        header_value(header, "shape").ok_or_else(|| fail("header has no 'shape'".into()))?;
+    let shape_s = shape_s
+        .strip_prefix('(')
+        .ok_or_else(|| fail("bad 'shape'".into()))?;
+    let shape_s = shape_s
+        .split(')')
+        .next()
+        .ok_or_else(|| fail("bad 'shape'".into()))?;
+    let mut shape = Vec::new();
+    for tok in shape_s.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        shape.push(
+            tok.trim_end_matches('L')
+                .parse::<usize>()
+                .map_err(|_| fail(format!("bad 'shape' entry {tok:?}")))?,
+        );
+    }
+    let (t, r, c) = match shape[..] {
+        [r, c] => (1, r, c),
+        [t, r, c] => (t, r, c),
+        _ => {
+            return Err(fail(format!(
+                "expected a 2-D or 3-D array, got shape {shape:?}"
+            )))
+        }
+    };
+    let n = t
+        .checked_mul(r)
+        .and_then(|x| x.checked_mul(c))
+        .filter(|&n| n > 0 && n <= 1 << 31)
+        .ok_or_else(|| fail(format!("unusable shape {shape:?}")))?;
+    let body = &bytes[end..];
+    let need = n * size;
+    if body.len() != need {
+        return Err(fail(format!(
+            "data holds {} bytes, shape {shape:?} of {descr} needs {need}{}",
+            body.len(),
+            if body.len() < need {
+                " (truncated)"
+            } else {
+                ""
+            }
+        )));
+    }
+    let mut vals = Vec::with_capacity(n);
+    for chunk in body.chunks_exact(size) {
+        let mut b = [0u8; 8];
+        b[..size].copy_from_slice(chunk);
+        if big {
+            b[..size].reverse();
+        }
+        let v: f64 = match (kind, size) {
+            (Kind::F, 4) => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            (Kind::F, _) => f64::from_le_bytes(b),
+            (Kind::I, 1) => b[0] as i8 as f64,
+            (Kind::I, 2) => i16::from_le_bytes([b[0], b[1]]) as f64,
+            (Kind::I, 4) => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            (Kind::I, _) => i64::from_le_bytes(b) as f64,
+            (Kind::U, 1) => b[0] as f64,
+            (Kind::U, 2) => u16::from_le_bytes([b[0], b[1]]) as f64,
+            (Kind::U, _) => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        };
+        if v.is_infinite() {
+            return Err(fail("array holds an infinite value".into()));
+        }
+        vals.push(v as f32);
+    }
+    let data = if fortran {
+        // Fortran layout: index (i, j, k) of shape (t, r, c) sits at i + t * (j + r * k).
+        let mut out = vec![0.0f32; n];
+        for i in 0..t {
+            for j in 0..r {
+                for k in 0..c {
+                    out[(i * r + j) * c + k] = vals[i + t * (j + r * k)];
+                }
+            }
+        }
+        out
+    } else {
+        vals
+    };
+    let mut rec = Recording::from_nan_frames(t, r, c, data).map_err(|e| fail(e.to_string()))?;
+    rec.format = Some(Format::Npy);
+    Ok(rec)
+}
+
+/// Encodes a recording as a 3-D little-endian `f4` array (T, rows, cols) in C order, NaN at
+/// missing sensors.
+pub fn recording_to_npy(rec: &Recording) -> Vec<u8> {
+    let dict = format!(
+        "{{'descr': '<f4', 'fortran_order': False, 'shape': ({}, {}, {}), }}",
+        rec.n_frames(),
+        rec.rows(),
+        rec.cols()
+    );
+    // Magic (6) + version (2) + length (2) + dict + padding + '\n' must be a multiple of 64.
+    let total = (10 + dict.len() + 1).div_ceil(64) * 64;
+    let mut header = dict.into_bytes();
+    header.resize(total - 10 - 1, b' ');
+    header.push(b'\n');
+    let mut out = Vec::with_capacity(total + rec.data().len() * 4);
+    out.extend_from_slice(b"\x93NUMPY\x01\x00");
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(&header);
+    for v in rec.frames_with_nan() {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out
+}
+
+/// Writes a recording as `.npy` (see [`recording_to_npy`]).
+pub fn write_npy(rec: &Recording, path: impl AsRef<Path>) -> Result<()> {
+    let path = path.as_ref();
+    std::fs::write(path, recording_to_npy(rec)).map_err(|source| IoError::Io {
+        path: path.display().to_string(),
+        source,
+    })
+}

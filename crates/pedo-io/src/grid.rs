@@ -1,0 +1,132 @@
+//! A single 2-D scalar image in `f64`, row-major, and the coordinate convention of the crate.
+//!
+//! # Coordinates
+//!
+//! Every point this crate returns is `(x, y)` with **x = column index** and **y = row index**, in
+//! pixel (sensel) units, the centre of sensel `(row r, column c)` being at `(c, r)`. Row 0 is the
+//! first row stored in the file. This is scikit-image's `(row, col)` swapped into `(x, y)` order.
+//! Because y grows downwards in the file's picture, a contour that is counter-clockwise in `(x, y)`
+//! (positive shoelace area, as returned here) looks clockwise when the image is drawn with row 0 at
+//! the top. Millimetres are available through [`CoordUnits::Millimetres`], which multiplies x by
+//! the column pitch and y by the row pitch (the origin stays at the centre of sensel (0, 0)).
+
+use crate::error::{IoError, Result};
+
+/// Pixel or physical coordinates of produced objects.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum CoordUnits {
+    /// x = column index, y = row index (sensel centres at integers).
+    #[default]
+    Pixels,
+    /// x = column index × column pitch, y = row index × row pitch, in mm.
+    Millimetres { dx_mm: f64, dy_mm: f64 },
+}
+
+impl CoordUnits {
+    /// Converts a pixel-unit point into these units.
+    pub fn apply(&self, p: [f64; 2]) -> [f64; 2] {
+        match *self {
+            CoordUnits::Pixels => p,
+            CoordUnits::Millimetres { dx_mm, dy_mm } => [p[0] * dx_mm, p[1] * dy_mm],
+        }
+    }
+    pub(crate) fn check(&self) -> Result<()> {
+        if let CoordUnits::Millimetres { dx_mm, dy_mm } = *self {
+            if !(dx_mm.is_finite() && dy_mm.is_finite() && dx_mm > 0.0 && dy_mm > 0.0) {
+                return Err(IoError::invalid(format!(
+                    "pitch must be positive and finite, got ({dx_mm}, {dy_mm})"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A rows × cols image of finite `f64` values, row-major (`data[r * cols + c]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grid {
+    rows: usize,
+    cols: usize,
+    data: Vec<f64>,
+}
+
+impl Grid {
+    /// Builds a grid; every value must be finite (map "no sensor" to 0 before, see
+    /// [`crate::Recording::frame`]).
+    pub fn new(rows: usize, cols: usize, data: Vec<f64>) -> Result<Self> {
+        if rows == 0 || cols == 0 {
+            return Err(IoError::invalid(format!("empty grid {rows}x{cols}")));
+        }
+        if rows.checked_mul(cols) != Some(data.len()) {
+            return Err(IoError::invalid(format!(
+                "grid {rows}x{cols} needs {} values, got {}",
+                rows.saturating_mul(cols),
+                data.len()
+            )));
+        }
+        if let Some(i) = data.iter().position(|v| !v.is_finite()) {
+            return Err(IoError::invalid(format!(
+                "value at row {}, column {} is not finite ({})",
+                i / cols,
+                i % cols,
+                data[i]
+            )));
+        }
+        Ok(Self { rows, cols, data })
+    }
+
+    /// A grid of zeros.
+    pub fn zeros(rows: usize, cols: usize) -> Self {
+        Self {
+            rows,
+            cols,
+            data: vec![0.0; rows * cols],
+        }
+    }
+
+    /// Builds a grid from `f32` values, mapping NaN (no sensor) to 0 and rejecting infinities.
+    pub fn from_f32_nan_as_zero(rows: usize, cols: usize, data: &[f32]) -> Result<Self> {
+        Self::new(
+            rows,
+            cols,
+            data.iter()
+                .map(|&v| if v.is_nan() { 0.0 } else { v as f64 })
+                .collect(),
+        )
+    }
+
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+    pub fn cols(&self) -> usize {
+        self.cols
+    }
+    /// Row-major values.
+    pub fn data(&self) -> &[f64] {
+        &self.data
+    }
+    pub(crate) fn data_mut(&mut self) -> &mut [f64] {
+        &mut self.data
+    }
+    /// Value at (row, column); panics out of range like slice indexing.
+    #[inline]
+    pub fn get(&self, r: usize, c: usize) -> f64 {
+        self.data[r * self.cols + c]
+    }
+    /// Largest value.
+    pub fn max(&self) -> f64 {
+        self.data.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+    }
+    /// Smallest value.
+    pub fn min(&self) -> f64 {
+        self.data.iter().copied().fold(f64::INFINITY, f64::min)
+    }
+    /// Smallest strictly positive value, if any.
+    pub fn min_positive(&self) -> Option<f64> {
+        self.data
+            .iter()
+            .copied()
+            .filter(|&v| v > 0.0)
+            .reduce(f64::min)
+    }
+}

@@ -1,0 +1,258 @@
+//! Contours on synthetic images with known answers and on the real F-Scan recording.
+
+use pedo_io::contour::{point_in_polygon, signed_area, Saddle};
+use pedo_io::preprocess::{Interpolation, Preprocess};
+use pedo_io::{
+    contours, read_recording, ContourMethod, ContourOptions, CoordUnits, Grid, Resample,
+};
+use std::f64::consts::PI;
+
+fn cone(rows: usize, cols: usize, centres: &[(f64, f64)], radius: f64) -> Grid {
+    // Sum of cones of height `radius` (value = radius - distance, clipped at 0): level sets are circles.
+    let mut d = vec![0.0; rows * cols];
+    for r in 0..rows {
+        for c in 0..cols {
+            for &(cx, cy) in centres {
+                let dist = ((c as f64 - cx).powi(2) + (r as f64 - cy).powi(2)).sqrt();
+                d[r * cols + c] += (radius - dist).max(0.0);
+            }
+        }
+    }
+    Grid::new(rows, cols, d).unwrap()
+}
+
+#[test]
+fn circle_is_recovered_sub_pixel() {
+    let g = cone(40, 50, &[(24.3, 19.6)], 15.0);
+    // The level-5 set of a cone of height 15 is a circle of radius 10.
+    let opts = ContourOptions {
+        level: Some(5.0),
+        ..Default::default()
+    };
+    let cs = contours(&g, &opts).unwrap();
+    assert_eq!(cs.len(), 1);
+    let c = &cs[0];
+    assert!(!c.hole);
+    assert!(signed_area(&c.points) > 0.0, "counter-clockwise");
+    for p in &c.points {
+        let r = ((p[0] - 24.3).powi(2) + (p[1] - 19.6).powi(2)).sqrt();
+        // Linear interpolation of a cone along grid edges is exact for radial profiles only up to
+        // the curvature of the circle across one cell.
+        assert!((r - 10.0).abs() < 0.05, "radius {r}");
+    }
+    assert!((c.area() - PI * 100.0).abs() < 0.01 * PI * 100.0);
+    let ctr = c.centroid();
+    assert!((ctr[0] - 24.3).abs() < 0.02 && (ctr[1] - 19.6).abs() < 0.02);
+}
+
+#[test]
+fn several_contours_holes_and_filters() {
+    let g = cone(30, 60, &[(15.0, 15.0), (45.0, 15.0)], 8.0);
+    let cs = contours(
+        &g,
+        &ContourOptions {
+            level: Some(1.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(cs.len(), 2);
+    // A ring: 1 inside an annulus of radii 5..10, 0 elsewhere -> outer contour and a hole.
+    let mut d = vec![0.0; 31 * 31];
+    for r in 0..31 {
+        for c in 0..31 {
+            let q = ((r as f64 - 15.0).powi(2) + (c as f64 - 15.0).powi(2)).sqrt();
+            if (5.0..=10.0).contains(&q) {
+                d[r * 31 + c] = 1.0;
+            }
+        }
+    }
+    let ring = Grid::new(31, 31, d).unwrap();
+    let cs = contours(&ring, &ContourOptions::default()).unwrap();
+    assert_eq!(cs.len(), 2);
+    let hole = cs.iter().find(|c| c.hole).unwrap();
+    let outer = cs.iter().find(|c| !c.hole).unwrap();
+    assert!(signed_area(&hole.points) > 0.0 && signed_area(&outer.points) > 0.0);
+    assert!(hole
+        .points
+        .iter()
+        .all(|&p| point_in_polygon(p, &outer.points)));
+    let no_holes = contours(
+        &ring,
+        &ContourOptions {
+            include_holes: false,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(no_holes.len(), 1);
+    let big_only = contours(
+        &ring,
+        &ContourOptions {
+            min_area: outer.area() + 1.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(big_only.is_empty());
+    // Empty frame: no contours, no error.
+    assert!(contours(&Grid::zeros(5, 5), &ContourOptions::default())
+        .unwrap()
+        .is_empty());
+}
+
+#[test]
+fn saddle_rules() {
+    // Two diagonal pixels: separate with low-connected, joined with high-connected.
+    let g = Grid::new(2, 2, vec![1.0, 0.0, 0.0, 1.0]).unwrap();
+    let low = contours(
+        &g,
+        &ContourOptions {
+            level: Some(0.5),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let opts = ContourOptions {
+        level: Some(0.5),
+        method: ContourMethod::MarchingSquares {
+            saddle: Saddle::HighConnected,
+        },
+        ..Default::default()
+    };
+    let high = contours(&g, &opts).unwrap();
+    assert_eq!((low.len(), high.len()), (2, 1));
+}
+
+#[test]
+fn resampling_and_units() {
+    let g = cone(40, 40, &[(20.0, 20.0)], 15.0);
+    let base = ContourOptions {
+        level: Some(5.0),
+        ..Default::default()
+    };
+    let c = &contours(
+        &g,
+        &ContourOptions {
+            resample: Resample::Points(64),
+            ..base
+        },
+    )
+    .unwrap()[0];
+    assert_eq!(c.points.len(), 64);
+    let n = c.points.len();
+    let seg: Vec<f64> = (0..n)
+        .map(|i| {
+            let (a, b) = (c.points[i], c.points[(i + 1) % n]);
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
+        })
+        .collect();
+    let mean = seg.iter().sum::<f64>() / n as f64;
+    assert!(seg.iter().all(|s| (s - mean).abs() < 0.02 * mean));
+    let c2 = &contours(
+        &g,
+        &ContourOptions {
+            resample: Resample::Spacing(2.0),
+            ..base
+        },
+    )
+    .unwrap()[0];
+    // Perimeter 2 pi 10 ~ 62.8 -> 31 points.
+    assert_eq!(c2.points.len(), 31);
+    let mm = ContourOptions {
+        units: CoordUnits::Millimetres {
+            dx_mm: 5.08,
+            dy_mm: 5.08,
+        },
+        ..base
+    };
+    let cm = &contours(&g, &mm).unwrap()[0];
+    let cp = &contours(&g, &base).unwrap()[0];
+    assert!((cm.area() - cp.area() * 5.08 * 5.08).abs() < 1e-6 * cm.area());
+}
+
+#[test]
+fn upsampling_and_smoothing_keep_original_pixel_coordinates() {
+    let g = cone(40, 40, &[(20.0, 20.0)], 15.0);
+    for interp in [Interpolation::Bilinear, Interpolation::Bicubic] {
+        let opts = ContourOptions {
+            level: Some(5.0),
+            preprocess: Preprocess {
+                upsample: Some((4, interp)),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let c = &contours(&g, &opts).unwrap()[0];
+        assert!(
+            (c.area() - PI * 100.0).abs() < 0.01 * PI * 100.0,
+            "{interp:?} {}",
+            c.area()
+        );
+        assert!(c.points.len() > 200);
+    }
+}
+
+#[test]
+fn chain_method_finds_the_same_objects() {
+    let g = cone(30, 60, &[(15.0, 15.0), (45.0, 15.0)], 10.0);
+    for refine in [false, true] {
+        let opts = ContourOptions {
+            level: Some(4.0),
+            method: ContourMethod::Chain {
+                high: Some(6.0),
+                refine,
+            },
+            ..Default::default()
+        };
+        let cs = contours(&g, &opts).unwrap();
+        assert_eq!(cs.len(), 2);
+        for c in &cs {
+            assert!(signed_area(&c.points) > 0.0);
+            // Boundary pixels of a disc of radius 6 lie between radius 5 and 6 (+1 px refinement).
+            let ctr = c.centroid();
+            for p in &c.points {
+                let r = ((p[0] - ctr[0]).powi(2) + (p[1] - ctr[1]).powi(2)).sqrt();
+                assert!((4.5..=7.01).contains(&r), "r {r}");
+            }
+        }
+    }
+    // Hysteresis: a weak blob (max below `high`) is dropped.
+    let weak = cone(20, 20, &[(10.0, 10.0)], 5.0);
+    let opts = ContourOptions {
+        level: Some(1.0),
+        method: ContourMethod::Chain {
+            high: Some(6.0),
+            refine: false,
+        },
+        ..Default::default()
+    };
+    assert!(contours(&weak, &opts).unwrap().is_empty());
+}
+
+#[test]
+fn real_frames_give_closed_ccw_contours() {
+    let rec = read_recording(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/FrasP01L.asf"
+    ))
+    .unwrap();
+    let mut total = 0;
+    for t in 0..rec.n_frames() {
+        let g = rec.frame(t).unwrap();
+        let cs = contours(&g, &ContourOptions::default()).unwrap();
+        let loaded = g.max() > 0.0;
+        assert_eq!(cs.is_empty(), !loaded, "frame {t}");
+        for c in &cs {
+            assert!(c.points.len() >= 3);
+            assert!(signed_area(&c.points) > 0.0);
+            assert!(c
+                .points
+                .iter()
+                .all(|p| p[0] >= -1.0 && p[0] <= 21.0 && p[1] >= -1.0 && p[1] <= 60.0));
+            c.to_shape().unwrap();
+        }
+        total += cs.len();
+    }
+    assert!(total > 100);
+}
