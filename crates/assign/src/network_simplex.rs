@@ -1,9 +1,11 @@
 //! Primal network simplex for the assignment as a min-cost flow on the bipartite graph.
 //!
-//! Nodes: `n` rows (supply 1), `m` columns (demand 1), and when `m > n` one slack node with
-//! supply `m - n` joined to every column at cost 0, so that surplus columns are served by it.
-//! The arcs row→column are implicit (arc `i*m + j`, cost read from the matrix), which keeps the
-//! memory at one byte of state and four of flow per pair.
+//! Nodes: `n` rows (supply 1) and `m` columns (demand 1). The `m - n` surplus columns are served
+//! by the root itself, through zero-cost root→column arcs (LEMON's `GEQ` form of the initial
+//! tree): a separate slack node would collect the surplus columns as one huge subtree whose
+//! potentials every pivot moving it must update. The arcs row→column are implicit (arc `i*m + j`,
+//! cost read from the matrix), which keeps the memory at one byte of state and four of flow per
+//! pair.
 //!
 //! The tree representation and the pivot follow LEMON's `NetworkSimplex` (Kovács, "Minimum-cost
 //! flow algorithms: an experimental evaluation", 2015): parent / thread / reverse-thread /
@@ -28,17 +30,15 @@ struct Simplex<'a> {
     m: usize,
     /// Number of real (row→column) arcs.
     nm: usize,
-    /// First artificial arc; arcs `nm..search_arcs` are slack→column.
+    /// Arcs `nm..search_arcs` are root→column (cost 0); arcs `search_arcs + i` are the
+    /// artificial row→root arcs (cost `art_cost`), never entering.
     search_arcs: usize,
-    node_num: usize,
     root: usize,
     art_cost: f64,
 
     // Per arc.
     state: Vec<i8>,
     flow: Vec<i32>,
-    // Artificial arcs: direction (source is the node when true).
-    art_up: Vec<bool>,
 
     // Per node (+ root).
     parent: Vec<usize>,
@@ -68,14 +68,9 @@ impl Simplex<'_> {
         if a < self.nm {
             a / self.m
         } else if a < self.search_arcs {
-            self.n + self.m
+            self.root
         } else {
-            let u = a - self.search_arcs;
-            if self.art_up[u] {
-                u
-            } else {
-                self.root
-            }
+            a - self.search_arcs
         }
     }
 
@@ -86,12 +81,7 @@ impl Simplex<'_> {
         } else if a < self.search_arcs {
             self.n + (a - self.nm)
         } else {
-            let u = a - self.search_arcs;
-            if self.art_up[u] {
-                self.root
-            } else {
-                u
-            }
+            self.root
         }
     }
 
@@ -99,7 +89,7 @@ impl Simplex<'_> {
     fn cost(&self, a: usize) -> f64 {
         if a < self.nm {
             self.c[a]
-        } else if a < self.search_arcs || self.art_up[a - self.search_arcs] {
+        } else if a < self.search_arcs {
             0.0
         } else {
             self.art_cost
@@ -118,7 +108,7 @@ impl Simplex<'_> {
         let n = self.n;
         let m = self.m;
         while scanned < total {
-            // Scan a run [e, end) that stays inside one row (or the slack arcs).
+            // Scan a run [e, end) that stays inside one row (or the root→column arcs).
             let end = if e < self.nm {
                 ((e / m) + 1) * m
             } else {
@@ -141,7 +131,7 @@ impl Simplex<'_> {
                     }
                 }
             } else {
-                let pi_s = self.pi[n + m];
+                let pi_s = self.pi[self.root];
                 for a in e..end {
                     let j = a - self.nm;
                     let r = pi_s - self.pi[n + j];
@@ -424,9 +414,8 @@ pub(crate) fn solve(c: &[f64], n: usize, m: usize) -> Result<Solution, AssignErr
     }
     let shifted: Vec<f64> = c.iter().map(|&x| x - cmin).collect();
     let range = cmax - cmin;
-    let slack = m > n;
-    let node_num = n + m + usize::from(slack);
-    // Any path through the root costs more than any assignment of real arcs.
+    let node_num = n + m;
+    // Any path through an artificial arc costs more than any assignment of real arcs.
     let unit = if range > 0.0 { range } else { 1.0 };
     let art_cost = 2.0 * unit * (node_num as f64 + 1.0);
     if !art_cost.is_finite() {
@@ -434,8 +423,8 @@ pub(crate) fn solve(c: &[f64], n: usize, m: usize) -> Result<Solution, AssignErr
     }
 
     let nm = n * m;
-    let search_arcs = nm + if slack { m } else { 0 };
-    let total_arcs = search_arcs + node_num;
+    let search_arcs = nm + m;
+    let total_arcs = search_arcs + n;
     let root = node_num;
     let mut s = Simplex {
         c: &shifted,
@@ -443,12 +432,10 @@ pub(crate) fn solve(c: &[f64], n: usize, m: usize) -> Result<Solution, AssignErr
         m,
         nm,
         search_arcs,
-        node_num,
         root,
         art_cost,
         state: vec![STATE_LOWER; total_arcs],
         flow: vec![0; total_arcs],
-        art_up: vec![false; node_num],
         parent: vec![NIL; node_num + 1],
         pred: vec![NIL; node_num + 1],
         thread: vec![0; node_num + 1],
@@ -467,7 +454,8 @@ pub(crate) fn solve(c: &[f64], n: usize, m: usize) -> Result<Solution, AssignErr
         next_arc: 0,
         block_size: ((search_arcs as f64).sqrt().ceil() as usize).max(10),
     };
-    // Initial strongly feasible tree: every node hangs off the root by an artificial arc.
+    // Initial strongly feasible tree (LEMON, GEQ form): every column is served by the root
+    // through its zero-cost arc, every row sends its unit to the root at the big-M cost.
     s.parent[root] = NIL;
     s.pred[root] = NIL;
     s.thread[root] = 0;
@@ -476,32 +464,23 @@ pub(crate) fn solve(c: &[f64], n: usize, m: usize) -> Result<Solution, AssignErr
     s.last_succ[root] = root - 1;
     s.pi[root] = 0.0;
     for u in 0..node_num {
-        let supply: i64 = if u < n {
-            1
-        } else if u < n + m {
-            -1
-        } else {
-            (m - n) as i64
-        };
-        let e = search_arcs + u;
         s.parent[u] = root;
-        s.pred[u] = e;
         s.thread[u] = u + 1;
         s.rev_thread[u + 1] = u;
         s.succ_num[u] = 1;
         s.last_succ[u] = u;
-        s.state[e] = STATE_TREE;
-        if supply >= 0 {
+        let e = if u < n {
             s.pred_dir[u] = DIR_UP;
-            s.pi[u] = 0.0;
-            s.art_up[u] = true;
-            s.flow[e] = supply as i32;
+            s.pi[u] = -art_cost;
+            search_arcs + u
         } else {
             s.pred_dir[u] = DIR_DOWN;
-            s.pi[u] = art_cost;
-            s.art_up[u] = false;
-            s.flow[e] = (-supply) as i32;
-        }
+            s.pi[u] = 0.0;
+            nm + (u - n)
+        };
+        s.pred[u] = e;
+        s.state[e] = STATE_TREE;
+        s.flow[e] = 1;
     }
 
     while s.find_entering_arc() {
@@ -515,8 +494,8 @@ pub(crate) fn solve(c: &[f64], n: usize, m: usize) -> Result<Solution, AssignErr
         s.update_potential();
     }
 
-    for u in 0..node_num {
-        if s.flow[search_arcs + u] != 0 {
+    for i in 0..n {
+        if s.flow[search_arcs + i] != 0 {
             return Err(AssignError::Infeasible);
         }
     }
@@ -530,19 +509,9 @@ pub(crate) fn solve(c: &[f64], n: usize, m: usize) -> Result<Solution, AssignErr
     if row_to_col.contains(&NIL) {
         return Err(AssignError::Infeasible);
     }
-    // Reduced cost c + pi_i - pi_j >= 0 gives duals u_i = -pi_i + K (+ the shift), v_j = pi_j - K.
-    // K = pi of the slack node makes v_j <= 0 with equality on the surplus columns; on a square
-    // problem K puts the largest column dual at 0.
-    let k = if slack {
-        s.pi[n + m]
-    } else {
-        s.pi[n..n + m]
-            .iter()
-            .cloned()
-            .fold(f64::NEG_INFINITY, f64::max)
-    };
-    let u = (0..n).map(|i| -s.pi[i] + k + cmin).collect();
-    let v = (0..m).map(|j| s.pi[n + j] - k).collect();
-    let _ = s.node_num;
+    // Reduced costs c + pi_i - pi_j >= 0 and, on the root→column arcs, -pi_j >= 0 (the root's
+    // potential is 0): u_i = -pi_i (+ the shift), v_j = pi_j <= 0, zero on unassigned columns.
+    let u = (0..n).map(|i| -s.pi[i] + cmin).collect();
+    let v = (0..m).map(|j| s.pi[n + j]).collect();
     Ok(Solution { row_to_col, u, v })
 }
