@@ -14,9 +14,11 @@ pub mod contour;
 mod error;
 pub mod formats;
 pub mod grid;
-
+pub mod isobar;
 pub mod preprocess;
 pub mod recording;
+pub mod surface;
+pub mod track;
 
 pub use contour::{contour_shapes, contours, Contour, ContourMethod, ContourOptions, Resample};
 pub use error::{IoError, Result};

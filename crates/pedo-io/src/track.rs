@@ -1,0 +1,194 @@
+//! Pairing contours across consecutive frames, with splits and merges reported (seed §3: the
+//! contours of one object must be followed through the sequence).
+//!
+//! Two links are offered: area overlap of the regions the contours enclose, and centroid
+//! distance. Pairs are the one-to-one continuations; an object linked to several in the next
+//! frame has split, several linked to one have merged. Only outer contours (not holes) take part;
+//! indices refer to the slices given.
+
+use crate::contour::{point_in_polygon, Contour};
+use crate::error::{IoError, Result};
+
+/// How contours of consecutive frames are linked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PairingMethod {
+    /// Linked when the overlap of the enclosed regions is at least `min_fraction` of the smaller
+    /// region (estimated on a sub-pixel raster of `resolution` samples per unit, e.g. 4).
+    Overlap { min_fraction: f64, resolution: f64 },
+    /// Linked when the centroids are at most `max_distance` apart (same units as the points).
+    Centroid { max_distance: f64 },
+}
+
+impl Default for PairingMethod {
+    fn default() -> Self {
+        PairingMethod::Overlap {
+            min_fraction: 0.05,
+            resolution: 4.0,
+        }
+    }
+}
+
+/// Correspondence between the contours of two consecutive frames.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Pairing {
+    /// `(i, j)`: contour `i` of the first frame continues as contour `j` of the second
+    /// (mutually strongest links, one-to-one).
+    pub pairs: Vec<(usize, usize)>,
+    /// `(i, [j, …])`: contour `i` is linked to several contours of the second frame.
+    pub splits: Vec<(usize, Vec<usize>)>,
+    /// `([i, …], j)`: several contours of the first frame are linked to contour `j`.
+    pub merges: Vec<(Vec<usize>, usize)>,
+    /// Contours of the second frame linked to nothing.
+    pub appeared: Vec<usize>,
+    /// Contours of the first frame linked to nothing.
+    pub vanished: Vec<usize>,
+    /// Every link `(i, j, strength)`: overlap fraction, or minus the centroid distance.
+    pub links: Vec<(usize, usize, f64)>,
+}
+
+fn bbox(p: &[[f64; 2]]) -> [f64; 4] {
+    p.iter().fold(
+        [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ],
+        |b, q| {
+            [
+                b[0].min(q[0]),
+                b[1].min(q[1]),
+                b[2].max(q[0]),
+                b[3].max(q[1]),
+            ]
+        },
+    )
+}
+
+fn overlap_fraction(a: &Contour, b: &Contour, res: f64) -> f64 {
+    let (ba, bb) = (bbox(&a.points), bbox(&b.points));
+    let (x0, y0, x1, y1) = (
+        ba[0].max(bb[0]),
+        ba[1].max(bb[1]),
+        ba[2].min(bb[2]),
+        ba[3].min(bb[3]),
+    );
+    if x0 >= x1 || y0 >= y1 {
+        return 0.0;
+    }
+    let h = 1.0 / res;
+    let mut inter = 0usize;
+    let mut y = y0 + 0.5 * h;
+    while y < y1 {
+        let mut x = x0 + 0.5 * h;
+        while x < x1 {
+            if point_in_polygon([x, y], &a.points) && point_in_polygon([x, y], &b.points) {
+                inter += 1;
+            }
+            x += h;
+        }
+        y += h;
+    }
+    let smaller = a.area().min(b.area());
+    if smaller <= 0.0 {
+        return 0.0;
+    }
+    (inter as f64 * h * h / smaller).min(1.0)
+}
+
+/// Links the contours of two consecutive frames (see [`Pairing`]).
+pub fn pair_contours(a: &[Contour], b: &[Contour], method: PairingMethod) -> Result<Pairing> {
+    match method {
+        PairingMethod::Overlap {
+            min_fraction,
+            resolution,
+        } => {
+            let ok = min_fraction > 0.0
+                && min_fraction <= 1.0
+                && resolution.is_finite()
+                && (0.1..=64.0).contains(&resolution);
+            if !ok {
+                return Err(IoError::invalid(
+                    "overlap pairing needs min_fraction in (0, 1] and resolution in [0.1, 64]",
+                ));
+            }
+        }
+        PairingMethod::Centroid { max_distance } => {
+            if !(max_distance.is_finite() && max_distance > 0.0) {
+                return Err(IoError::invalid(
+                    "centroid pairing needs a positive max_distance",
+                ));
+            }
+        }
+    }
+    let mut links = Vec::new();
+    for (i, ca) in a.iter().enumerate().filter(|(_, c)| !c.hole) {
+        for (j, cb) in b.iter().enumerate().filter(|(_, c)| !c.hole) {
+            match method {
+                PairingMethod::Overlap {
+                    min_fraction,
+                    resolution,
+                } => {
+                    let f = overlap_fraction(ca, cb, resolution);
+                    if f >= min_fraction {
+                        links.push((i, j, f));
+                    }
+                }
+                PairingMethod::Centroid { max_distance } => {
+                    let (p, q) = (ca.centroid(), cb.centroid());
+                    let d = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+                    if d <= max_distance {
+                        links.push((i, j, -d));
+                    }
+                }
+            }
+        }
+    }
+    let best = |from_a: bool, k: usize| {
+        links
+            .iter()
+            .filter(|l| if from_a { l.0 == k } else { l.1 == k })
+            .max_by(|x, y| x.2.total_cmp(&y.2))
+            .map(|l| if from_a { l.1 } else { l.0 })
+    };
+    let mut out = Pairing {
+        links: links.clone(),
+        ..Default::default()
+    };
+    for (i, c) in a.iter().enumerate() {
+        if c.hole {
+            continue;
+        }
+        let js: Vec<usize> = links.iter().filter(|l| l.0 == i).map(|l| l.1).collect();
+        match js.len() {
+            0 => out.vanished.push(i),
+            1 => {}
+            _ => out.splits.push((i, js)),
+        }
+        if let Some(j) = best(true, i) {
+            if best(false, j) == Some(i) {
+                out.pairs.push((i, j));
+            }
+        }
+    }
+    for (j, c) in b.iter().enumerate() {
+        if c.hole {
+            continue;
+        }
+        let is: Vec<usize> = links.iter().filter(|l| l.1 == j).map(|l| l.0).collect();
+        match is.len() {
+            0 => out.appeared.push(j),
+            1 => {}
+            _ => out.merges.push((is, j)),
+        }
+    }
+    Ok(out)
+}
+
+/// Pairs each frame's contours with the next frame's: `result[t]` links frame `t` to `t + 1`.
+pub fn track(frames: &[Vec<Contour>], method: PairingMethod) -> Result<Vec<Pairing>> {
+    frames
+        .windows(2)
+        .map(|w| pair_contours(&w[0], &w[1], method))
+        .collect()
+}
