@@ -54,6 +54,13 @@ pub struct MatchOptions {
     pub icp_iterations: usize,
     /// Maximum modal affine re-fits; stops earlier when the pairs stop changing.
     pub refits: usize,
+    /// Weight `w` of aligned positions in the cost: `Z = (1 − w)·Z_modal + w·D`, both
+    /// max-normalised, `D` the squared distance of the aligned coordinates. 0 is pure modal
+    /// matching; 1 skips the modal solves and matches aligned positions (a baseline).
+    pub position_weight: f64,
+    /// Use one Gaussian width for both objects, `kappa ×` the mean of their mean nearest-neighbour
+    /// distances, instead of one per object (for independently sampled point sets).
+    pub common_sigma: bool,
 }
 
 impl Default for MatchOptions {
@@ -80,6 +87,8 @@ impl Default for MatchOptions {
             prealign: Prealign::Robust,
             icp_iterations: 5,
             refits: 3,
+            position_weight: 0.0,
+            common_sigma: false,
         }
     }
 }
@@ -281,6 +290,12 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
             "threshold must be ≥ 0, got {threshold}"
         )));
     }
+    if !(0.0..=1.0).contains(&opts.position_weight) {
+        return Err(ModalError::InvalidParameter(format!(
+            "position weight must be in [0, 1], got {}",
+            opts.position_weight
+        )));
+    }
     let both_contours = matches!(a.topology(), Topology::ClosedContour)
         && matches!(b.topology(), Topology::ClosedContour);
     let ordered = opts.ordered.unwrap_or(both_contours);
@@ -314,8 +329,28 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
 
     let sa = prepare(a, ordered)?;
     let sb = prepare(b, ordered)?;
-    let fb = features_of(&sb.pts, d, &sb.topology, &opts.model, skip, k + band)?;
-    let band = fb.n_modes.saturating_sub(k);
+    let mut model = opts.model.clone();
+    if opts.common_sigma && model.sigma.is_none() {
+        let mnn = |p: &[f64]| {
+            let nn = align::nearest_other(p, d);
+            nn.iter().map(|x| x.sqrt()).sum::<f64>() / nn.len() as f64
+        };
+        model.sigma = Some(opts.model.kappa * 0.5 * (mnn(&sa.pts) + mnn(&sb.pts)));
+    }
+    let modal = opts.position_weight < 1.0;
+    let fb = if modal {
+        Some(features_of(
+            &sb.pts,
+            d,
+            &sb.topology,
+            &model,
+            skip,
+            k + band,
+        )?)
+    } else {
+        None
+    };
+    let band = fb.as_ref().map_or(0, |f| f.n_modes.saturating_sub(k));
 
     let mut cur = match opts.prealign {
         Prealign::Normalize => sa.pts.clone(),
@@ -339,15 +374,33 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
     let mut refits = 0;
     let mut solves = 0;
     let (z, pairs) = loop {
-        let fa = features_of(&cur, d, &sa.topology, &opts.model, skip, k)?;
-        solves += 1;
-        let nn: Vec<usize> = align::nearest(&cur, &sb.pts, d)
-            .into_iter()
-            .map(|x| x.0)
-            .collect();
-        let al = align_modes(&fa, &fb, &nn, band, opts.method)?;
-        let fb_al = fb.permuted(&al.order, &al.signs);
-        let z = AffinityMatrix::from_features(&fa, &fb_al)?.normalized();
+        let z = match &fb {
+            Some(fb) => {
+                let fa = features_of(&cur, d, &sa.topology, &model, skip, k)?;
+                solves += 1;
+                let nn: Vec<usize> = align::nearest(&cur, &sb.pts, d)
+                    .into_iter()
+                    .map(|x| x.0)
+                    .collect();
+                let al = align_modes(&fa, fb, &nn, band, opts.method)?;
+                let fb_al = fb.permuted(&al.order, &al.signs);
+                AffinityMatrix::from_features(&fa, &fb_al)?.normalized()
+            }
+            None => position_costs(&cur, &sb.pts, d)?,
+        };
+        let z = if modal && opts.position_weight > 0.0 {
+            let w = opts.position_weight;
+            let p = position_costs(&cur, &sb.pts, d)?;
+            let mixed = z
+                .as_slice()
+                .iter()
+                .zip(p.as_slice())
+                .map(|(x, y)| (1.0 - w) * x + w * y)
+                .collect();
+            AffinityMatrix::new(z.rows(), z.cols(), mixed)?.normalized()
+        } else {
+            z
+        };
         let one = match opts.search {
             Search::Global => global_matches(&z, opts.method, threshold, opts.threshold_mode)?,
             Search::Local => local_matches(&z, threshold),
@@ -461,6 +514,18 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         refits,
         solves,
     })
+}
+
+/// Max-normalised squared distances between aligned coordinates.
+fn position_costs(a: &[f64], b: &[f64], d: usize) -> Result<AffinityMatrix, ModalError> {
+    let data = a
+        .chunks_exact(d)
+        .flat_map(|p| {
+            b.chunks_exact(d)
+                .map(move |q| (0..d).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>())
+        })
+        .collect();
+    Ok(AffinityMatrix::new(a.len() / d, b.len() / d, data)?.normalized())
 }
 
 fn same_pairs(x: &[MatchPair], y: &[MatchPair]) -> bool {

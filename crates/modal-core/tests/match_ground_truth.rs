@@ -24,7 +24,11 @@ fn run(sev: Severity, seeds: std::ops::Range<u64>, opts: &MatchOptions) -> (f64,
 #[test]
 fn contours_all_severities() {
     let opts = MatchOptions::default();
-    for (sev, target) in [(Severity::Mild, 0.97), (Severity::Moderate, 0.95), (Severity::Severe, 0.9)] {
+    for (sev, target) in [
+        (Severity::Mild, 0.97),
+        (Severity::Moderate, 0.95),
+        (Severity::Severe, 0.9),
+    ] {
         let (mean, accs) = run(sev, 0..18, &opts);
         eprintln!("{sev:?}: mean {mean:.4} {accs:.3?}");
         assert!(mean >= target, "{sev:?}: {mean} < {target}");

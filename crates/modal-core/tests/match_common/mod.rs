@@ -19,7 +19,10 @@ pub fn outlines() -> Vec<(String, Vec<[f64; 2]>)> {
                 out.push((name.to_string(), Vec::new()));
             }
         } else if !line.trim().is_empty() {
-            let v: Vec<f64> = line.split_whitespace().map(|s| s.parse().unwrap()).collect();
+            let v: Vec<f64> = line
+                .split_whitespace()
+                .map(|s| s.parse().unwrap())
+                .collect();
             out.last_mut().unwrap().1.push([v[0], v[1]]);
         }
     }
@@ -65,8 +68,16 @@ impl Warp {
             Severity::Severe => (35.0, 0.25, 0.15, 0.12),
         };
         let n = pts.len() as f64;
-        let c = [pts.iter().map(|p| p[0]).sum::<f64>() / n, pts.iter().map(|p| p[1]).sum::<f64>() / n];
-        let r = (pts.iter().map(|p| (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2)).sum::<f64>() / n).sqrt();
+        let c = [
+            pts.iter().map(|p| p[0]).sum::<f64>() / n,
+            pts.iter().map(|p| p[1]).sum::<f64>() / n,
+        ];
+        let r = (pts
+            .iter()
+            .map(|p| (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2))
+            .sum::<f64>()
+            / n)
+            .sqrt();
         let mut u = |a: f64| rng.random_range(-a..=a);
         Warp {
             centre: c,
@@ -82,7 +93,10 @@ impl Warp {
     }
 
     pub fn apply(&self, p: [f64; 2]) -> [f64; 2] {
-        let (x, y) = ((p[0] - self.centre[0]) / self.radius, (p[1] - self.centre[1]) / self.radius);
+        let (x, y) = (
+            (p[0] - self.centre[0]) / self.radius,
+            (p[1] - self.centre[1]) / self.radius,
+        );
         // bend about a random axis direction
         let (ca, sa) = (self.axis.cos(), self.axis.sin());
         let (s, t) = (ca * x + sa * y, -sa * x + ca * y);
@@ -92,7 +106,10 @@ impl Warp {
         let (x, y) = (self.sx * x, self.sy * y);
         let (cr, sr) = (self.rot.cos(), self.rot.sin());
         let (x, y) = (cr * x - sr * y, sr * x + cr * y);
-        [self.centre[0] + self.shift[0] + self.radius * x, self.centre[1] + self.shift[1] + self.radius * y]
+        [
+            self.centre[0] + self.shift[0] + self.radius * x,
+            self.centre[1] + self.shift[1] + self.radius * y,
+        ]
     }
 }
 
@@ -114,7 +131,10 @@ pub fn resample(c: &[[f64; 2]], n: usize, start: f64) -> Vec<[f64; 2]> {
     (0..n)
         .map(|k| {
             let s = ((start + k as f64 / n as f64) % 1.0) * len;
-            let i = cum.partition_point(|&v| v <= s).saturating_sub(1).min(c.len() - 1);
+            let i = cum
+                .partition_point(|&v| v <= s)
+                .saturating_sub(1)
+                .min(c.len() - 1);
             let f = (s - cum[i]) / (cum[i + 1] - cum[i]).max(1e-300);
             let (p, q) = (c[i], c[(i + 1) % c.len()]);
             [p[0] + f * (q[0] - p[0]), p[1] + f * (q[1] - p[1])]
@@ -140,12 +160,22 @@ pub fn contour_case(outline: &[[f64; 2]], sev: Severity, seed: u64) -> ContourCa
     let warped: Vec<[f64; 2]> = outline.iter().map(|&p| w.apply(p)).collect();
     let b = resample(&warped, nb, rng.random_range(0.0..1.0));
     let truth = a.iter().map(|&p| w.apply(p)).collect();
-    ContourCase { a, b, truth, spacing_b: perimeter(&warped) / nb as f64 }
+    ContourCase {
+        a,
+        b,
+        truth,
+        spacing_b: perimeter(&warped) / nb as f64,
+    }
 }
 
 /// Fraction of A's nodes whose match (the one-to-one one if any, else an excess one) lies within
 /// one B spacing of the true position.
-pub fn accuracy_2d(res: &modal_core::MatchResult, b: &[[f64; 2]], truth: &[[f64; 2]], tol: f64) -> f64 {
+pub fn accuracy_2d(
+    res: &modal_core::MatchResult,
+    b: &[[f64; 2]],
+    truth: &[[f64; 2]],
+    tol: f64,
+) -> f64 {
     let mut best: Vec<Option<(bool, usize)>> = vec![None; truth.len()];
     for p in &res.pairs {
         let e = &mut best[p.a];
@@ -153,7 +183,10 @@ pub fn accuracy_2d(res: &modal_core::MatchResult, b: &[[f64; 2]], truth: &[[f64;
             *e = Some((p.excess, p.b));
         }
     }
-    best.iter().enumerate().filter(|(i, m)| m.is_some_and(|(_, j)| dist(b[j], truth[*i]) <= tol)).count() as f64
+    best.iter()
+        .enumerate()
+        .filter(|(i, m)| m.is_some_and(|(_, j)| dist(b[j], truth[*i]) <= tol))
+        .count() as f64
         / truth.len() as f64
 }
 
@@ -164,7 +197,10 @@ pub fn bilinear(g: &[Vec<f64>], x: f64, y: f64) -> f64 {
     let y = y.clamp(0.0, (r - 1) as f64 - 1e-9);
     let (i, j) = (y.floor() as usize, x.floor() as usize);
     let (fy, fx) = (y - i as f64, x - j as f64);
-    g[i][j] * (1.0 - fx) * (1.0 - fy) + g[i][j + 1] * fx * (1.0 - fy) + g[i + 1][j] * (1.0 - fx) * fy + g[i + 1][j + 1] * fx * fy
+    g[i][j] * (1.0 - fx) * (1.0 - fy)
+        + g[i][j + 1] * fx * (1.0 - fy)
+        + g[i + 1][j] * (1.0 - fx) * fy
+        + g[i + 1][j + 1] * fx * fy
 }
 
 /// One surface case: two independent random samplings of the loaded region of a pressure image,
@@ -184,7 +220,10 @@ pub fn surface_case(g: &[Vec<f64>], sev: Severity, seed: u64, na: usize, nb: usi
     let mut sample = |n: usize, rng: &mut StdRng| -> Vec<[f64; 2]> {
         let mut v = Vec::new();
         while v.len() < n {
-            let (x, y) = (rng.random_range(0.0..cols - 1.0), rng.random_range(0.0..rows - 1.0));
+            let (x, y) = (
+                rng.random_range(0.0..cols - 1.0),
+                rng.random_range(0.0..rows - 1.0),
+            );
             if bilinear(g, x, y) > level {
                 v.push([x, y]);
             }
@@ -222,19 +261,31 @@ pub fn surface_case(g: &[Vec<f64>], sev: Severity, seed: u64, na: usize, nb: usi
             b.iter()
                 .enumerate()
                 .filter(|(j, _)| *j != i)
-                .map(|(_, q)| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt())
+                .map(|(_, q)| {
+                    ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+                })
                 .fold(f64::INFINITY, f64::min)
         })
         .sum::<f64>()
         / b.len() as f64;
-    SurfaceCase { a, b, truth, spacing_b }
+    SurfaceCase {
+        a,
+        b,
+        truth,
+        spacing_b,
+    }
 }
 
 pub fn dist3(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
-pub fn accuracy_3d(res: &modal_core::MatchResult, b: &[[f64; 3]], truth: &[[f64; 3]], tol: f64) -> f64 {
+pub fn accuracy_3d(
+    res: &modal_core::MatchResult,
+    b: &[[f64; 3]],
+    truth: &[[f64; 3]],
+    tol: f64,
+) -> f64 {
     let mut best: Vec<Option<(bool, usize)>> = vec![None; truth.len()];
     for p in &res.pairs {
         let e = &mut best[p.a];
@@ -242,6 +293,9 @@ pub fn accuracy_3d(res: &modal_core::MatchResult, b: &[[f64; 3]], truth: &[[f64;
             *e = Some((p.excess, p.b));
         }
     }
-    best.iter().enumerate().filter(|(i, m)| m.is_some_and(|(_, j)| dist3(b[j], truth[*i]) <= tol)).count() as f64
+    best.iter()
+        .enumerate()
+        .filter(|(i, m)| m.is_some_and(|(_, j)| dist3(b[j], truth[*i]) <= tol))
+        .count() as f64
         / truth.len() as f64
 }

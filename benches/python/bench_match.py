@@ -1,0 +1,241 @@
+"""Accuracy and time per pair of pymodal.match against coherent point drift (pycpd) and optimal
+assignment on normalised positions, on ground-truth cases built from real foot outlines and a real
+pressure image (crates/modal-core/tests/data, extracted from /work/shared/data by make_fixtures.py).
+
+Contours: A sampled on an outline (48-72 points, random start), B on the same outline warped by a
+known smooth deformation (rotation, anisotropic scale, shear, bending, translation) with
+n_b = n_a +- 6 points. Score: fraction of A's points whose match (its one-to-one match if any, else
+an excess one; none = wrong) lies within one B spacing of the warped true position.
+Surfaces: two independent random samplings (~110 / ~120 points) of the loaded region of the
+MUN104 pressure template as (x, y, pressure * scale) points, B's xy warped as above and its pressure
+scaled by 0.9-1.1; tolerance = B's mean nearest-neighbour distance.
+
+Run:  python benches/python/bench_match.py [--cases 30] [--surface-cases 12] [--markdown]
+"""
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.spatial import cKDTree
+
+import pymodal
+
+DATA = Path(__file__).resolve().parents[2] / "crates" / "modal-core" / "tests" / "data"
+SEVERITY = {  # rotation deg, per-axis scale, shear, bending
+    "mild": (5.0, 0.05, 0.02, 0.02),
+    "moderate": (15.0, 0.12, 0.05, 0.06),
+    "severe": (35.0, 0.25, 0.15, 0.12),
+}
+
+
+def outlines():
+    out, cur = [], None
+    for line in (DATA / "contours.txt").read_text().splitlines():
+        if line.startswith("# "):
+            if not line.startswith("# closed outlines"):
+                cur = []
+                out.append(cur)
+        elif line.strip():
+            cur.append([float(v) for v in line.split()])
+    return [np.array(c) for c in out]
+
+
+def make_warp(rng, sev, pts):
+    deg, sc, sh, be = SEVERITY[sev]
+    c = pts.mean(0)
+    r = np.sqrt(((pts - c) ** 2).sum(1).mean())
+    axis = rng.uniform(-np.pi, np.pi)
+    bend, shear = rng.uniform(-be, be), rng.uniform(-sh, sh)
+    sx, sy = 1 + rng.uniform(-sc, sc), 1 + rng.uniform(-sc, sc)
+    rot = np.deg2rad(rng.uniform(-deg, deg))
+    shift = rng.uniform(-3, 3, 2)
+
+    def w(p):
+        q = (np.atleast_2d(p) - c) / r
+        ca, sa = np.cos(axis), np.sin(axis)
+        s, t = ca * q[:, 0] + sa * q[:, 1], -sa * q[:, 0] + ca * q[:, 1]
+        t = t + bend * s * s
+        x, y = ca * s - sa * t, sa * s + ca * t
+        x = x + shear * y
+        x, y = sx * x, sy * y
+        cr, sr = np.cos(rot), np.sin(rot)
+        x, y = cr * x - sr * y, sr * x + cr * y
+        return c + shift + r * np.stack([x, y], 1)
+
+    return w
+
+
+def resample(c, n, start):
+    seg = np.linalg.norm(np.roll(c, -1, 0) - c, axis=1)
+    cum = np.concatenate([[0], np.cumsum(seg)])
+    s = ((start + np.arange(n) / n) % 1.0) * cum[-1]
+    i = np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(c) - 1)
+    f = (s - cum[i]) / np.maximum(seg[i], 1e-300)
+    return c[i] + f[:, None] * (np.roll(c, -1, 0)[i] - c[i])
+
+
+def contour_case(outline, sev, rng):
+    w = make_warp(rng, sev, outline)
+    na = int(rng.integers(48, 73))
+    nb = na + int(rng.integers(-6, 7))
+    a = resample(outline, na, rng.uniform())
+    warped = w(outline)
+    b = resample(warped, nb, rng.uniform())
+    per = np.linalg.norm(np.roll(warped, -1, 0) - warped, axis=1).sum()
+    return a, b, w(a), per / nb
+
+
+def bilinear(g, x, y):
+    r, c = g.shape
+    x = np.clip(x, 0, c - 1 - 1e-9)
+    y = np.clip(y, 0, r - 1 - 1e-9)
+    i, j = np.floor(y).astype(int), np.floor(x).astype(int)
+    fy, fx = y - i, x - j
+    return (g[i, j] * (1 - fx) * (1 - fy) + g[i, j + 1] * fx * (1 - fy) + g[i + 1, j] * (1 - fx) * fy
+            + g[i + 1, j + 1] * fx * fy)
+
+
+def surface_case(g, sev, rng, na, nb, level=30.0):
+    def sample(n):
+        pts = []
+        while len(pts) < n:
+            p = rng.uniform([0, 0], [g.shape[1] - 1, g.shape[0] - 1], (4 * n, 2))
+            pts.extend(p[bilinear(g, p[:, 0], p[:, 1]) > level])
+        return np.array(pts[:n])
+
+    pa, pb = sample(na), sample(nb)
+    w = make_warp(rng, sev, np.vstack([pa, pb]))
+    gain = 1 + rng.uniform(-0.1, 0.1)
+    zs = 20.0 / 350.0
+    a = np.column_stack([pa, bilinear(g, pa[:, 0], pa[:, 1]) * zs])
+    b = np.column_stack([w(pb), bilinear(g, pb[:, 0], pb[:, 1]) * zs * gain])
+    truth = np.column_stack([w(pa), bilinear(g, pa[:, 0], pa[:, 1]) * zs * gain])
+    d, _ = cKDTree(b).query(b, 2)
+    return a, b, truth, d[:, 1].mean()
+
+
+def score(pairs, excess, b, truth, tol):
+    """Fraction of A's points whose (one-to-one, else excess) match is within tol of the truth."""
+    best = {}
+    for (i, j), e in zip(pairs, excess):
+        if i not in best or (best[i][0] and not e):
+            best[i] = (e, j)
+    ok = sum(np.linalg.norm(b[j] - truth[i]) <= tol for i, (_, j) in best.items())
+    return ok / len(truth)
+
+
+def normalise(p):
+    q = p - p.mean(0)
+    return q / np.sqrt((q ** 2).sum(1).mean())
+
+
+def assign_positions(a, b):
+    na, nb = normalise(a), normalise(b)
+    cost = ((na[:, None, :] - nb[None, :, :]) ** 2).sum(2)
+    r, c = linear_sum_assignment(cost)
+    return np.stack([r, c], 1), np.zeros(len(r), bool)
+
+
+def cpd(a, b):
+    from pycpd import DeformableRegistration
+
+    na, nb = normalise(a), normalise(b)
+    reg = DeformableRegistration(X=nb, Y=na)
+    reg.register()
+    j = reg.P.argmax(1)  # P is (M = len(Y), N = len(X))
+    return np.stack([np.arange(len(a)), j], 1), np.zeros(len(a), bool)
+
+
+def modal(**kw):
+    def run(a, b):
+        m = pymodal.match(a, b, **kw)
+        return m.pairs, m.excess
+
+    return run
+
+
+def evaluate(methods, cases):
+    rows = {}
+    for name, fn in methods.items():
+        accs, times = [], []
+        for a, b, truth, tol in cases:
+            t0 = time.perf_counter()
+            pairs, excess = fn(a, b)
+            times.append(time.perf_counter() - t0)
+            accs.append(score(pairs, excess, b, truth, tol))
+        rows[name] = (np.mean(accs), np.median(times) * 1e3)
+    return rows
+
+
+def table(title, sevs, results, md):
+    names = list(next(iter(results.values())).keys())
+    print(f"\n{title}")
+    if md:
+        print("| method | " + " | ".join(f"{s} acc" for s in sevs) + " | ms/pair (median) |")
+        print("|---|" + "---|" * (len(sevs) + 1))
+    for n in names:
+        accs = " | ".join(f"{results[s][n][0]:.3f}" for s in sevs)
+        ms = np.mean([results[s][n][1] for s in sevs])
+        print(f"| {n} | {accs} | {ms:.2f} |" if md else f"{n:45s} {accs}   {ms:8.2f} ms")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--cases", type=int, default=30)
+    ap.add_argument("--surface-cases", type=int, default=12)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--markdown", action="store_true")
+    ap.add_argument("--skip-surfaces", action="store_true")
+    ap.add_argument("--skip-contours", action="store_true")
+    args = ap.parse_args()
+    outs = outlines()
+    sevs = list(SEVERITY)
+    if not args.skip_contours:
+        methods = {
+            "pymodal.match (defaults: global, recipe)": modal(),
+            "pymodal.match search='local'": modal(search="local"),
+            "pymodal.match excess=False": modal(excess=False),
+            "pymodal.match refits=0": modal(refits=0),
+            "pymodal.match paper (normalize, no re-fit)": modal(prealign="normalize", refits=0),
+            "same pipeline, positions only (no modes)": modal(position_weight=1.0),
+            "pycpd deformable + argmax P": cpd,
+            "assignment on normalised positions": assign_positions,
+        }
+        results = {}
+        for s in sevs:
+            rng = np.random.default_rng(args.seed)
+            cases = [contour_case(outs[k % len(outs)], s, rng) for k in range(args.cases)]
+            # warm-up (first call loads numpy / allocs)
+            pymodal.match(cases[0][0], cases[0][1])
+            results[s] = evaluate(methods, cases)
+        table(f"Contours ({args.cases} cases per severity, {len(outs)} real outlines)", sevs, results,
+              args.markdown)
+    if not args.skip_surfaces:
+        g = np.loadtxt(DATA / "mun104l.txt")
+        methods = {
+            "pymodal.match 3-D (defaults)": modal(),
+            "pymodal.match 3-D common_sigma": modal(common_sigma=True),
+            "pymodal.match 3-D no re-fit": modal(refits=0),
+            "pymodal.match 3-D position_weight=0.5": modal(position_weight=0.5),
+            "pymodal.match 3-D position_weight=0.9": modal(position_weight=0.9),
+            "same pipeline, aligned positions only": modal(position_weight=1.0),
+            "pymodal.match on xy only (2-D modes)": lambda a, b: modal(ordered=False)(a[:, :2], b[:, :2]),
+            "pycpd deformable + argmax P": cpd,
+            "assignment on normalised positions": assign_positions,
+        }
+        results = {}
+        for s in sevs:
+            rng = np.random.default_rng(args.seed + 100)
+            cases = []
+            for _ in range(args.surface_cases):
+                na = int(rng.integers(100, 121))
+                cases.append(surface_case(g, s, rng, na, na + int(rng.integers(-10, 11))))
+            results[s] = evaluate(methods, cases)
+        table(f"Surfaces ({args.surface_cases} cases per severity, ~110 vs ~110±10 points)", sevs, results,
+              args.markdown)
+
+
+if __name__ == "__main__":
+    main()
