@@ -14,6 +14,9 @@
 //!   positive stiffness. Bending is weighted `BENDING_WEIGHT` relative to the bars so that the
 //!   membrane (bar) modes still dominate the stiff end of the spectrum.
 
+// Index loops over several matrices at once read better than zipped iterators here.
+#![allow(clippy::needless_range_loop)]
+
 use std::collections::BTreeMap;
 
 use faer::Mat;
@@ -165,7 +168,7 @@ pub fn assemble_bars(
             len2 += c[a] * c[a];
         }
         let len = len2.sqrt();
-        if !(len > 0.0) {
+        if len.is_nan() || len <= 0.0 {
             return Err(ModalError::InvalidShape(format!(
                 "bar ({i}, {j}) has zero length"
             )));
@@ -316,15 +319,48 @@ pub fn model_edges(shape: &Shape) -> Result<(Vec<[usize; 2]>, Vec<Hinge>), Modal
 /// Assembles the bar model of `shape` in solver form (`B = I_d ⊗ M_s`, `L = chol(M_s)`).
 pub fn axial_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, ModalError> {
     let (edges, hinge_list) = model_edges(shape)?;
+    axial_model_with_edges(shape, &edges, &hinge_list, options)
+}
+
+/// Bar model on the given edges (and bending hinges, 3-D only).
+pub fn axial_model_with_edges(
+    shape: &Shape,
+    edges: &[[usize; 2]],
+    hinge_list: &[Hinge],
+    options: &ModelOptions,
+) -> Result<SolverModel, ModalError> {
+    let n = shape.len();
+    let mut used = vec![false; n];
+    for &[a, b] in edges {
+        if a >= n || b >= n || a == b {
+            return Err(ModalError::InvalidShape(format!(
+                "invalid edge ({a}, {b}) for {n} nodes"
+            )));
+        }
+        used[a] = true;
+        used[b] = true;
+    }
+    if let Some(i) = used.iter().position(|u| !u) {
+        return Err(ModalError::InvalidShape(format!(
+            "node {i} belongs to no edge; an unconnected node is a mechanism"
+        )));
+    }
+    let mut edges: Vec<[usize; 2]> = edges.iter().map(|&[a, b]| [a.min(b), a.max(b)]).collect();
+    edges.sort_unstable();
+    edges.dedup();
     let (mut k, ms) = assemble_bars(shape, &edges, &options.material)?;
     if !hinge_list.is_empty() {
-        add_hinge_bending(shape, &hinge_list, &options.material, &mut k)?;
+        if shape.dim() != 3 {
+            return Err(ModalError::InvalidParameter(
+                "bending hinges need 3-D nodes".into(),
+            ));
+        }
+        add_hinge_bending(shape, hinge_list, &options.material, &mut k)?;
     }
     eigen::symmetrise(k.as_mut());
     let mut l = ms;
     eigen::cholesky_in_place(l.as_mut())
         .map_err(|i| ModalError::Numerical(format!("bar mass matrix is singular at node {i}")))?;
-    let n = shape.len();
     for j in 0..n {
         for i in 0..j {
             l[(i, j)] = 0.0;

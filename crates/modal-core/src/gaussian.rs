@@ -5,6 +5,9 @@
 //! `Â = I_d ⊗ A`; the eigenproblem is solved in the ψ-form `K̃ ψ = ω² Γ̃ ψ`, `φ = (I_d ⊗ G) ψ`
 //! (§2.6), so `G⁻¹` is never formed on the solve path.
 
+// Index loops over several matrices at once read better than zipped iterators here.
+#![allow(clippy::needless_range_loop)]
+
 use faer::linalg::solvers::DenseSolveCore;
 use faer::Mat;
 

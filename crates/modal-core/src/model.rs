@@ -1,5 +1,8 @@
 //! The finite-element model of one object and its vibration modes.
 
+// Index loops over several matrices at once read better than zipped iterators here.
+#![allow(clippy::needless_range_loop)]
+
 use faer::linalg::solvers::Solve;
 use faer::reborrow::ReborrowMut;
 use faer::Mat;
@@ -100,6 +103,32 @@ const GUARD_RETRIES: usize = 30;
 /// Builds the finite-element model of `shape` and solves `K φ = ω² M φ`.
 pub fn modal_basis(shape: &Shape, options: &ModelOptions) -> Result<ModalBasis, ModalError> {
     let model = build_model(shape, options)?;
+    solve_model(shape, &model, options)
+}
+
+/// Bar model on explicitly given edges (no mechanism remedy is added: the edges must brace the
+/// structure, or the zero-mode check fails). `options.element` is ignored.
+pub fn modal_basis_with_edges(
+    shape: &Shape,
+    edges: &[[usize; 2]],
+    options: &ModelOptions,
+) -> Result<ModalBasis, ModalError> {
+    options.material.validate()?;
+    validate_nodes(shape)?;
+    let model = crate::axial::axial_model_with_edges(shape, edges, &[], options)?;
+    let opts = ModelOptions {
+        element: ElementKind::Axial,
+        ..options.clone()
+    };
+    solve_model(shape, &model, &opts)
+}
+
+/// Solves an assembled model; `options.element` selects the Axial zero-mode check.
+pub fn solve_model(
+    shape: &Shape,
+    model: &SolverModel,
+    options: &ModelOptions,
+) -> Result<ModalBasis, ModalError> {
     let dim = shape.dim();
     let n = shape.len();
     let total = dim * n;
@@ -112,7 +141,7 @@ pub fn modal_basis(shape: &Shape, options: &ModelOptions) -> Result<ModalBasis, 
 
     let mut c = eigen::block_congruence(model.stiffness.as_ref(), model.mass_factor.as_ref(), dim);
     let rigid = if options.exact_rigid {
-        Some(rigid_reduced_basis(shape, &model)?)
+        Some(rigid_reduced_basis(shape, model)?)
     } else {
         None
     };
@@ -196,37 +225,51 @@ pub fn build_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel,
 /// Explicit nodal `(K, M)` of the model (`d·n × d·n`, component-major) and the σ used. For
 /// inspection and external solvers (e.g. a scipy oracle); [`modal_basis`] never forms them for
 /// the Gaussian element, whose explicit form needs `G⁻¹`.
-pub fn model_matrices(
-    shape: &Shape,
-    options: &ModelOptions,
-) -> Result<(Mat<f64>, Mat<f64>, Option<f64>), ModalError> {
+pub fn model_matrices(shape: &Shape, options: &ModelOptions) -> Result<ExplicitModel, ModalError> {
     let model = build_model(shape, options)?;
+    explicit_matrices(shape, &model, options)
+}
+
+/// `(K, M, σ)`: explicit stiffness and mass (`d·n × d·n`) and the Gaussian width used.
+pub type ExplicitModel = (Mat<f64>, Mat<f64>, Option<f64>);
+
+/// [`model_matrices`] for a bar model on explicitly given edges.
+pub fn model_matrices_with_edges(
+    shape: &Shape,
+    edges: &[[usize; 2]],
+    options: &ModelOptions,
+) -> Result<ExplicitModel, ModalError> {
+    options.material.validate()?;
+    validate_nodes(shape)?;
+    let model = crate::axial::axial_model_with_edges(shape, edges, &[], options)?;
+    let opts = ModelOptions {
+        element: ElementKind::Axial,
+        ..options.clone()
+    };
+    explicit_matrices(shape, &model, &opts)
+}
+
+fn explicit_matrices(
+    shape: &Shape,
+    model: &SolverModel,
+    options: &ModelOptions,
+) -> Result<ExplicitModel, ModalError> {
     let dim = shape.dim();
     let n = shape.len();
-    match options.element {
-        ElementKind::Gaussian => {
-            let sigma = model.sigma.expect("Gaussian model has σ");
+    match (&model.interpolation, model.sigma) {
+        (Some(_), Some(sigma)) => {
             let ints = GaussianIntegrals::new(shape, sigma);
             let (k, m) = ints.explicit_matrices(&options.material, options.plane)?;
             Ok((k, m, Some(sigma)))
         }
-        ElementKind::Axial => {
+        _ => {
             let l = model.mass_factor.as_ref();
-            let mut ms = Mat::<f64>::zeros(n, n);
-            for j in 0..n {
-                for i in 0..n {
-                    let mut s = 0.0;
-                    for p in 0..=i.min(j) {
-                        s += l[(i, p)] * l[(j, p)];
-                    }
-                    ms[(i, j)] = s;
-                }
-            }
+            let ms = l * l.transpose();
             let mut m = Mat::<f64>::zeros(dim * n, dim * n);
             for a in 0..dim {
                 m.as_mut().submatrix_mut(a * n, a * n, n, n).copy_from(&ms);
             }
-            Ok((model.stiffness, m, None))
+            Ok((model.stiffness.clone(), m, None))
         }
     }
 }
@@ -252,7 +295,7 @@ fn validate_nodes(shape: &Shape) -> Result<(), ModalError> {
         extent = extent.max(hi - lo);
     }
     let (_, min_nn, (i, j)) = nearest_neighbour_stats(shape);
-    if !(min_nn > 1e-10 * extent) {
+    if min_nn.is_nan() || min_nn <= 1e-10 * extent {
         return Err(ModalError::InvalidShape(format!(
             "nodes {i} and {j} coincide (distance {min_nn:e}); remove duplicate points"
         )));

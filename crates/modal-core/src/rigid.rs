@@ -1,5 +1,8 @@
 //! Exact rigid-body motions of a node set (SPEC §2.7).
 
+// Index loops over several matrices at once read better than zipped iterators here.
+#![allow(clippy::needless_range_loop)]
+
 use faer::Mat;
 
 use crate::{ModalError, Shape};

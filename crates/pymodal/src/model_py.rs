@@ -1,7 +1,383 @@
-//! Bindings of ModalModel.
+//! `pymodal.ModalModel`: the finite-element model of one object and its vibration modes, and
+//! `pymodal.eigh`: the generalized symmetric-definite eigensolver on user matrices.
 
+use faer::Mat;
+use modal_core::model::{modal_basis_with_edges, model_matrices_with_edges};
+use modal_core::{
+    modal_basis, model_matrices, ElementKind, Material, ModalBasis, ModelOptions, PlaneModel,
+    Shape, Topology,
+};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
 
-pub fn register(_m: &Bound<'_, PyModule>) -> PyResult<()> {
+use crate::errors::to_py;
+
+fn float_matrix<'py>(
+    py: Python<'py>,
+    obj: &Bound<'py, PyAny>,
+    name: &str,
+) -> PyResult<PyReadonlyArray2<'py, f64>> {
+    let np = py.import("numpy")?;
+    let arr = np
+        .call_method1("asarray", (obj,))
+        .map_err(|_| PyValueError::new_err(format!("{name} must be array-like")))?;
+    let ndim: usize = arr.getattr("ndim")?.extract()?;
+    if ndim != 2 {
+        return Err(PyValueError::new_err(format!(
+            "{name} must be a 2-D array, got {ndim}-D"
+        )));
+    }
+    let arr = np
+        .call_method1("ascontiguousarray", (arr, np.getattr("float64")?))
+        .map_err(|_| PyValueError::new_err(format!("{name} must hold numbers")))?;
+    Ok(arr.extract()?)
+}
+
+fn index_rows(
+    py: Python<'_>,
+    obj: Option<&Bound<'_, PyAny>>,
+    cols: usize,
+    name: &str,
+) -> PyResult<Option<Vec<usize>>> {
+    let Some(obj) = obj else { return Ok(None) };
+    if obj.is_none() {
+        return Ok(None);
+    }
+    let np = py.import("numpy")?;
+    let arr = np
+        .call_method1("asarray", (obj, np.getattr("int64")?))
+        .map_err(|_| PyValueError::new_err(format!("{name} must be an integer array")))?;
+    let arr: PyReadonlyArray2<i64> = arr.extract().map_err(|_| {
+        PyValueError::new_err(format!("{name} must be a (k, {cols}) integer array"))
+    })?;
+    if arr.shape()[1] != cols {
+        return Err(PyValueError::new_err(format!(
+            "{name} must have {cols} columns, got shape {:?}",
+            arr.shape()
+        )));
+    }
+    let v = arr.as_slice().map_err(to_py)?;
+    if let Some(bad) = v.iter().find(|&&x| x < 0) {
+        return Err(PyValueError::new_err(format!(
+            "{name} holds a negative index {bad}"
+        )));
+    }
+    Ok(Some(v.iter().map(|&x| x as usize).collect()))
+}
+
+fn parse_material(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Material> {
+    let Some(obj) = obj else {
+        return Ok(Material::RUBBER);
+    };
+    if obj.is_none() {
+        return Ok(Material::RUBBER);
+    }
+    if let Ok(name) = obj.extract::<String>() {
+        return Material::preset(&name).map_err(to_py);
+    }
+    if let Ok(d) = obj.cast::<PyDict>() {
+        for key in d.keys() {
+            let k: String = key.extract()?;
+            if !["young", "poisson", "density"].contains(&k.as_str()) {
+                return Err(PyValueError::new_err(format!(
+                    "unknown material key {k:?}; expected young, poisson, density"
+                )));
+            }
+        }
+        let get = |k: &str, default: f64| -> PyResult<f64> {
+            match d.get_item(k)? {
+                Some(v) => v.extract(),
+                None => Ok(default),
+            }
+        };
+        let r = Material::RUBBER;
+        return Material::new(
+            get("young", r.young)?,
+            get("poisson", r.poisson)?,
+            get("density", r.density)?,
+        )
+        .map_err(to_py);
+    }
+    if let Ok(t) = obj.cast::<PyTuple>() {
+        let (e, nu, rho): (f64, f64, f64) = t.extract()?;
+        return Material::new(e, nu, rho).map_err(to_py);
+    }
+    Err(PyValueError::new_err(
+        "material must be None, a preset name (rubber, steel, aluminium, cork, unit), a dict \
+         {young, poisson, density} or an (E, nu, rho) tuple",
+    ))
+}
+
+fn mat_to_numpy<'py>(py: Python<'py>, m: &Mat<f64>) -> Bound<'py, PyArray2<f64>> {
+    let (r, c) = (m.nrows(), m.ncols());
+    let mut flat = Vec::with_capacity(r * c);
+    for i in 0..r {
+        for j in 0..c {
+            flat.push(m[(i, j)]);
+        }
+    }
+    PyArray1::from_vec(py, flat)
+        .reshape([r, c])
+        .expect("r × c reshape")
+}
+
+/// Finite-element model of one 2-D or 3-D object and its vibration modes.
+///
+/// Parameters
+/// ----------
+/// points : (n, 2) or (n, 3) array_like
+/// element : {"gaussian", "axial"}, default "gaussian"
+///     Sclaroff's Gaussian element (no connectivity needed) or linear bars. Bars need ``edges``,
+///     ``triangles`` or (2-D) the points in contour order: a closed contour is braced by the
+///     triangulated interior so that exactly the 3 rigid modes have zero frequency.
+/// material : None, preset name, dict {young, poisson, density} or (E, nu, rho); default rubber.
+/// sigma : float, optional — Gaussian width; default ``kappa`` × mean nearest-neighbour distance.
+/// edges : (e, 2) int array, optional — bars on exactly these edges (implies ``element="axial"``).
+/// triangles : (t, 3) int array, optional — bars on the mesh edges (plus hinge bending in 3-D).
+/// kappa : float, default 1 — σ rule factor.
+/// n_modes : int, optional — compute only the lowest modes (faster); default all ``d·n``.
+/// exact_rigid : bool, default False — project out the exact rigid motions (Gaussian element).
+/// plane : {"stress", "strain"}, default "stress" — 2-D assumption.
+///
+/// Attributes
+/// ----------
+/// eigenvalues : (k,) ω², ascending (rad²/s² in the material's SI units).
+/// frequencies : (k,) ω = √ω² in rad/s (divide by 2π for Hz).
+/// modes : (d·n, k) mass-normalised modes, component-major rows (``a*n + i`` = component a of
+///     node i), largest-|·| entry of each column positive.
+/// sigma : the Gaussian width used after the conditioning guard (None for bars).
+#[pyclass(name = "ModalModel", module = "pymodal", frozen)]
+pub struct PyModalModel {
+    shape: Shape,
+    options: ModelOptions,
+    edges: Option<Vec<[usize; 2]>>,
+    basis: ModalBasis,
+}
+
+#[pymethods]
+impl PyModalModel {
+    #[new]
+    #[pyo3(signature = (points, *, element="gaussian", material=None, sigma=None, edges=None,
+        triangles=None, kappa=1.0, n_modes=None, exact_rigid=false, plane="stress"))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        points: &Bound<'_, PyAny>,
+        element: &str,
+        material: Option<&Bound<'_, PyAny>>,
+        sigma: Option<f64>,
+        edges: Option<&Bound<'_, PyAny>>,
+        triangles: Option<&Bound<'_, PyAny>>,
+        kappa: f64,
+        n_modes: Option<usize>,
+        exact_rigid: bool,
+        plane: &str,
+    ) -> PyResult<Self> {
+        let pts = float_matrix(py, points, "points")?;
+        let dim = pts.shape()[1];
+        if dim != 2 && dim != 3 {
+            return Err(PyValueError::new_err(format!(
+                "points must have 2 or 3 columns, got shape {:?}",
+                pts.shape()
+            )));
+        }
+        let coords = pts.as_slice().map_err(to_py)?.to_vec();
+        let edges: Option<Vec<[usize; 2]>> = index_rows(py, edges, 2, "edges")?
+            .map(|v| v.chunks_exact(2).map(|e| [e[0], e[1]]).collect());
+        let tris: Option<Vec<[usize; 3]>> = index_rows(py, triangles, 3, "triangles")?
+            .map(|v| v.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect());
+        if edges.is_some() && tris.is_some() {
+            return Err(PyValueError::new_err("give edges or triangles, not both"));
+        }
+        let mut element = match element {
+            "gaussian" => ElementKind::Gaussian,
+            "axial" | "bar" => ElementKind::Axial,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "unknown element {other:?}; expected \"gaussian\" or \"axial\""
+                )))
+            }
+        };
+        if edges.is_some() {
+            element = ElementKind::Axial;
+        }
+        let plane = match plane {
+            "stress" => PlaneModel::Stress,
+            "strain" => PlaneModel::Strain,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "unknown plane model {other:?}; expected \"stress\" or \"strain\""
+                )))
+            }
+        };
+        let topology = match (&tris, element) {
+            (Some(t), _) => Topology::Mesh {
+                triangles: t.clone(),
+            },
+            (None, ElementKind::Axial) if edges.is_none() => Topology::ClosedContour,
+            _ => Topology::None,
+        };
+        let options = ModelOptions {
+            element,
+            material: parse_material(material)?,
+            plane,
+            sigma,
+            kappa,
+            exact_rigid,
+            n_modes,
+        };
+        let shape = Shape::new(dim, coords, topology).map_err(to_py)?;
+        let basis = {
+            let (shape, options, edges) = (&shape, &options, &edges);
+            py.detach(move || match edges {
+                Some(e) => modal_basis_with_edges(shape, e, options),
+                None => modal_basis(shape, options),
+            })
+            .map_err(to_py)?
+        };
+        Ok(Self {
+            shape,
+            options,
+            edges,
+            basis,
+        })
+    }
+
+    /// ω², ascending.
+    #[getter]
+    fn eigenvalues<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.basis.eigenvalues)
+    }
+
+    /// Natural angular frequencies ω (rad/s), ascending.
+    #[getter]
+    fn frequencies<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_vec(py, self.basis.frequencies())
+    }
+
+    /// (d·n, k) mass-normalised modes, component-major rows.
+    #[getter]
+    fn modes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        mat_to_numpy(py, &self.basis.modes)
+    }
+
+    #[getter]
+    fn sigma(&self) -> Option<f64> {
+        self.basis.sigma
+    }
+
+    #[getter]
+    fn dim(&self) -> usize {
+        self.basis.dim
+    }
+
+    #[getter]
+    fn n_nodes(&self) -> usize {
+        self.basis.n_nodes
+    }
+
+    #[getter]
+    fn element(&self) -> &'static str {
+        match self.options.element {
+            ElementKind::Gaussian => "gaussian",
+            ElementKind::Axial => "axial",
+        }
+    }
+
+    /// (n, d·k) modal features: row i = [u_i(0..k), v_i(0..k), (w_i(0..k))].
+    fn features<'py>(&self, py: Python<'py>, k: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let f = self.basis.features(k).map_err(to_py)?;
+        Ok(mat_to_numpy(py, &f))
+    }
+
+    /// Explicit (d·n × d·n) stiffness K (Gaussian: K = Â K̃ Â with A = G⁻¹; for inspection and
+    /// oracles, the modal solve never forms it).
+    fn stiffness<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        Ok(mat_to_numpy(py, &self.matrices(py)?.0))
+    }
+
+    /// Explicit (d·n × d·n) mass M, so that ``modes.T @ M @ modes == I``.
+    fn mass<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        Ok(mat_to_numpy(py, &self.matrices(py)?.1))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "ModalModel(dim={}, n_nodes={}, element={:?}, modes={}, sigma={:?})",
+            self.basis.dim,
+            self.basis.n_nodes,
+            self.element(),
+            self.basis.modes.ncols(),
+            self.basis.sigma
+        )
+    }
+}
+
+impl PyModalModel {
+    fn matrices(&self, py: Python<'_>) -> PyResult<(Mat<f64>, Mat<f64>)> {
+        let (shape, options, edges) = (&self.shape, &self.options, &self.edges);
+        let (k, m, _) = py
+            .detach(move || match edges {
+                Some(e) => model_matrices_with_edges(shape, e, options),
+                None => model_matrices(shape, options),
+            })
+            .map_err(to_py)?;
+        Ok((k, m))
+    }
+}
+
+/// Generalized symmetric-definite eigenproblem ``K x = λ M x`` (like ``scipy.linalg.eigh(K, M)``).
+///
+/// Returns ``(w, v)``: eigenvalues ascending and M-normalised eigenvectors as columns. Only the
+/// lower triangles are read. ``n_modes`` computes only the lowest ones (much faster).
+#[pyfunction]
+#[pyo3(signature = (k, m, *, n_modes=None))]
+fn eigh<'py>(
+    py: Python<'py>,
+    k: &Bound<'py, PyAny>,
+    m: &Bound<'py, PyAny>,
+    n_modes: Option<usize>,
+) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>)> {
+    let ka = float_matrix(py, k, "k")?;
+    let ma = float_matrix(py, m, "m")?;
+    let (kr, kc) = (ka.shape()[0], ka.shape()[1]);
+    let (mr, mc) = (ma.shape()[0], ma.shape()[1]);
+    if kr != kc || mr != mc || kr != mr {
+        return Err(PyValueError::new_err(format!(
+            "k and m must be square and of the same size, got {:?} and {:?}",
+            ka.shape(),
+            ma.shape()
+        )));
+    }
+    if n_modes == Some(0) || n_modes.is_some_and(|k| k > kr) {
+        return Err(PyValueError::new_err(format!(
+            "n_modes must be in 1..={kr}"
+        )));
+    }
+    let ks = ka.as_slice().map_err(to_py)?;
+    let ms = ma.as_slice().map_err(to_py)?;
+    if ks.iter().chain(ms).any(|v| !v.is_finite()) {
+        return Err(PyValueError::new_err("array must not contain infs or NaNs"));
+    }
+    let pairs = py
+        .detach(|| {
+            // Row-major input read as column-major is the transpose: for the symmetric inputs
+            // this solver assumes, reading the upper triangle as the lower one is the same.
+            let kmat = faer::MatRef::from_column_major_slice(ks, kr, kr);
+            let mmat = faer::MatRef::from_column_major_slice(ms, kr, kr);
+            modal_core::eigen::generalized_eigen(kmat, mmat, n_modes)
+        })
+        .map_err(to_py)?;
+    Ok((
+        PyArray1::from_slice(py, &pairs.values),
+        mat_to_numpy(py, &pairs.vectors),
+    ))
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyModalModel>()?;
+    m.add_function(wrap_pyfunction!(eigh, m)?)?;
     Ok(())
 }
