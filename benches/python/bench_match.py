@@ -215,13 +215,15 @@ def main():
     if not args.skip_surfaces:
         g = np.loadtxt(DATA / "mun104l.txt")
         methods = {
-            "pymodal.match 3-D (defaults)": modal(),
-            "pymodal.match 3-D common_sigma": modal(common_sigma=True),
-            "pymodal.match 3-D no re-fit": modal(refits=0),
-            "pymodal.match 3-D position_weight=0.5": modal(position_weight=0.5),
-            "pymodal.match 3-D position_weight=0.9": modal(position_weight=0.9),
+            "pymodal.match 3-D (defaults: kappa=3, common sigma, no re-fit)": modal(),
+            "  same + excess=False": modal(excess=False),
+            "  same + 3 modal re-fits": modal(refits=3),
+            "  same, kappa=2": modal(kappa=2.0),
+            "  same, per-object sigma": modal(common_sigma=False),
+            "  same, position_weight=0.3": modal(position_weight=0.3),
+            "contour setting (kappa=1, per-object sigma, 3 re-fits)": modal(kappa=1.0, common_sigma=False, refits=3),
             "same pipeline, aligned positions only": modal(position_weight=1.0),
-            "pymodal.match on xy only (2-D modes)": lambda a, b: modal(ordered=False)(a[:, :2], b[:, :2]),
+            "pymodal.match on xy only (2-D modes, kappa=3)": lambda a, b: modal(ordered=False, kappa=3.0, common_sigma=True, refits=0)(a[:, :2], b[:, :2]),
             "pycpd deformable + argmax P": cpd,
             "assignment on normalised positions": assign_positions,
         }

@@ -94,6 +94,16 @@ impl Default for MatchOptions {
 }
 
 impl MatchOptions {
+    /// Measured best for independently sampled 3-D point sets (brightness surfaces): a wider,
+    /// common Gaussian (σ = 3 × mean nearest-neighbour distance of both objects), because per-node
+    /// modal features of different samplings only agree on smooth modes, and no affine re-fits
+    /// (the surface's pairs are too noisy to improve the fit). See docs/modal-matching.md.
+    pub fn for_surfaces() -> Self {
+        let mut o = Self { refits: 0, common_sigma: true, ..Self::default() };
+        o.model.kappa = 3.0;
+        o
+    }
+
     /// The paper's literal setting: no rotation pre-alignment, no re-fits.
     pub fn paper() -> Self {
         Self {
@@ -461,6 +471,13 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         let Some(t) = align::fit_affine(&cur, &sb.pts, d, &idx) else {
             break (z, pairs);
         };
+        // A fit this close to the identity cannot change the pairs: skip the solve.
+        let moved = (0..d).any(|r| {
+            t.t[r].abs() > 1e-4 || (0..d).any(|c| (t.m[r][c] - if r == c { 1.0 } else { 0.0 }).abs() > 1e-4)
+        });
+        if !moved {
+            break (z, pairs);
+        }
         if ordered && t.det() <= 0.0 {
             break (z, pairs);
         }

@@ -34,3 +34,234 @@ fn contours_all_severities() {
         assert!(mean >= target, "{sev:?}: {mean} < {target}");
     }
 }
+
+fn shapes(case: &ContourCase) -> (Shape, Shape) {
+    (
+        Shape::from_points_2d(&case.a, Topology::ClosedContour).unwrap(),
+        Shape::from_points_2d(&case.b, Topology::ClosedContour).unwrap(),
+    )
+}
+
+#[test]
+fn local_matches_are_a_precise_subset() {
+    let outlines = outlines();
+    let (mut good, mut total) = (0usize, 0usize);
+    for seed in 0..9u64 {
+        let case = contour_case(&outlines[seed as usize].1, Severity::Moderate, 100 + seed);
+        let (a, b) = shapes(&case);
+        let res = match_shapes(&a, &b, &MatchOptions::default()).unwrap();
+        // Local matches are mutual best: one-to-one, and never more than min(n, m).
+        let mut seen_a = std::collections::HashSet::new();
+        let mut seen_b = std::collections::HashSet::new();
+        for &(i, j) in &res.local_pairs {
+            assert!(seen_a.insert(i) && seen_b.insert(j));
+            total += 1;
+            good += (dist(case.b[j], case.truth[i]) <= case.spacing_b) as usize;
+        }
+        assert!(
+            res.local_count() >= case.a.len().min(case.b.len()) / 2,
+            "too few local matches"
+        );
+    }
+    let precision = good as f64 / total as f64;
+    eprintln!("local precision {precision:.4} over {total} matches");
+    assert!(precision >= 0.95, "local precision {precision}");
+}
+
+#[test]
+fn excess_completes_to_max_without_crossings() {
+    let outlines = outlines();
+    for seed in 0..9u64 {
+        let case = contour_case(&outlines[seed as usize].1, Severity::Mild, 200 + seed);
+        let (n, m) = (case.a.len(), case.b.len());
+        let (a, b) = shapes(&case);
+        let res = match_shapes(&a, &b, &MatchOptions::default()).unwrap();
+        assert_eq!(res.pairs.len(), n.max(m), "seed {seed}");
+        assert_eq!(res.one_to_one_count(), n.min(m));
+        assert_eq!(res.excess_count(), n.max(m) - n.min(m));
+        // Every node of the larger object is matched exactly once; the smaller one fully covered.
+        let (big, small) = if n >= m { (n, m) } else { (m, n) };
+        let mut cnt_big = vec![0; big];
+        let mut cnt_small = vec![0; small];
+        for p in &res.pairs {
+            let (x, y) = if n >= m { (p.a, p.b) } else { (p.b, p.a) };
+            cnt_big[x] += 1;
+            cnt_small[y] += 1;
+        }
+        assert!(cnt_big.iter().all(|&c| c == 1) && cnt_small.iter().all(|&c| c >= 1));
+        assert!(res.unmatched_a.is_empty() && res.unmatched_b.is_empty());
+        // No crossing: each excess node's partner lies on the arc between its matched neighbours'
+        // partners (both contours are counter-clockwise here, so indices increase along them).
+        let ccw = |p: &[[f64; 2]]| {
+            (0..p.len())
+                .map(|i| {
+                    let (u, v) = (p[i], p[(i + 1) % p.len()]);
+                    u[0] * v[1] - v[0] * u[1]
+                })
+                .sum::<f64>()
+                > 0.0
+        };
+        if !(ccw(&case.a) && ccw(&case.b)) {
+            continue;
+        }
+        let partner_of_big = |x: usize| -> Option<usize> {
+            res.pairs
+                .iter()
+                .find(|p| !p.excess && (if n >= m { p.a } else { p.b }) == x)
+                .map(|p| if n >= m { p.b } else { p.a })
+        };
+        for p in res.pairs.iter().filter(|p| p.excess) {
+            let (x, y) = if n >= m { (p.a, p.b) } else { (p.b, p.a) };
+            let prev = (1..big)
+                .map(|t| (x + big - t) % big)
+                .find_map(partner_of_big)
+                .unwrap();
+            let next = (1..big)
+                .map(|t| (x + t) % big)
+                .find_map(partner_of_big)
+                .unwrap();
+            let arc = (next + small - prev) % small;
+            if 2 * arc <= small {
+                assert!(
+                    (y + small - prev) % small <= arc,
+                    "seed {seed}: excess node crosses"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn matches_do_not_depend_on_young_modulus_or_density() {
+    let outlines = outlines();
+    for seed in 0..4u64 {
+        let case = contour_case(
+            &outlines[seed as usize * 2].1,
+            Severity::Moderate,
+            300 + seed,
+        );
+        let (a, b) = shapes(&case);
+        let mut o1 = MatchOptions::default();
+        o1.model.material = modal_core::Material {
+            young: 1.0,
+            poisson: 0.49,
+            density: 1.0,
+        };
+        let mut o2 = o1.clone();
+        o2.model.material = modal_core::Material {
+            young: 7.0e6,
+            poisson: 0.49,
+            density: 1100.0,
+        };
+        let r1 = match_shapes(&a, &b, &o1).unwrap();
+        let r2 = match_shapes(&a, &b, &o2).unwrap();
+        let pairs = |r: &modal_core::MatchResult| {
+            r.pairs
+                .iter()
+                .map(|p| (p.a, p.b, p.excess))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(pairs(&r1), pairs(&r2));
+        assert_eq!(r1.local_pairs, r2.local_pairs);
+        // The normalised affinity is invariant too (up to rounding).
+        let d = r1
+            .affinity
+            .as_slice()
+            .iter()
+            .zip(r2.affinity.as_slice())
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        assert!(d < 1e-6, "affinity changed by {d}");
+    }
+}
+
+#[test]
+fn assignment_methods_agree_and_threshold_rejects() {
+    let outlines = outlines();
+    let case = contour_case(&outlines[0].1, Severity::Moderate, 400);
+    let (a, b) = shapes(&case);
+    let base = match_shapes(&a, &b, &MatchOptions::default()).unwrap();
+    for method in [assign::Method::Hungarian, assign::Method::NetworkSimplex] {
+        let r = match_shapes(
+            &a,
+            &b,
+            &MatchOptions {
+                method,
+                ..MatchOptions::default()
+            },
+        )
+        .unwrap();
+        let cost = |r: &modal_core::MatchResult| {
+            r.pairs
+                .iter()
+                .filter(|p| !p.excess)
+                .map(|p| p.cost)
+                .sum::<f64>()
+        };
+        assert!((cost(&r) - cost(&base)).abs() < 1e-9, "{method:?}");
+    }
+    // A threshold at the median pair cost drops about half the one-to-one pairs and no kept
+    // pair exceeds it; the optimiser-side threshold never keeps a pair above it either.
+    let mut costs: Vec<f64> = base
+        .pairs
+        .iter()
+        .filter(|p| !p.excess)
+        .map(|p| p.cost)
+        .collect();
+    costs.sort_by(f64::total_cmp);
+    let tau = costs[costs.len() / 2];
+    for mode in [
+        modal_core::ThresholdMode::AfterAssignment,
+        modal_core::ThresholdMode::InOptimizer,
+    ] {
+        let o = MatchOptions {
+            threshold: Some(tau),
+            threshold_mode: mode,
+            refits: 0,
+            ..MatchOptions::default()
+        };
+        let r = match_shapes(&a, &b, &o).unwrap();
+        assert!(r.pairs.iter().all(|p| p.cost <= tau));
+        assert!(r.one_to_one_count() < case.a.len().min(case.b.len()));
+        assert!(!r.unmatched_a.is_empty() || !r.unmatched_b.is_empty());
+    }
+}
+
+#[test]
+fn local_search_returns_only_mutual_best() {
+    let outlines = outlines();
+    let case = contour_case(&outlines[3].1, Severity::Mild, 500);
+    let (a, b) = shapes(&case);
+    let r = match_shapes(
+        &a,
+        &b,
+        &MatchOptions {
+            search: modal_core::Search::Local,
+            ..MatchOptions::default()
+        },
+    )
+    .unwrap();
+    let z = &r.affinity;
+    assert_eq!(r.excess_count(), 0);
+    for p in &r.pairs {
+        let row_min = (0..z.cols())
+            .map(|j| z.get(p.a, j))
+            .fold(f64::INFINITY, f64::min);
+        let col_min = (0..z.rows())
+            .map(|i| z.get(i, p.b))
+            .fold(f64::INFINITY, f64::min);
+        assert_eq!(z.get(p.a, p.b), row_min);
+        assert_eq!(z.get(p.a, p.b), col_min);
+    }
+    let acc = accuracy_2d(&r, &case.b, &case.truth, case.spacing_b);
+    let prec = r
+        .pairs
+        .iter()
+        .filter(|p| dist(case.b[p.b], case.truth[p.a]) <= case.spacing_b)
+        .count() as f64
+        / r.pairs.len() as f64;
+    assert!(
+        prec >= 0.95 && acc > 0.5,
+        "precision {prec}, coverage {acc}"
+    );
+}

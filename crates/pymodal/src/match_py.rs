@@ -249,11 +249,14 @@ fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
 /// ordered : bool or None — treat the inputs as ordered closed contours; None decides from the
 ///     data (2-D arrays whose consecutive points are nearest-neighbour close).
 /// material : None, preset name, dict or (E, nu, rho) — only ν changes the matches.
-/// prealign : {"robust", "normalize"}; refits : int; skip_rigid : bool; band : int;
-/// kappa : float (σ = kappa × mean nearest-neighbour distance);
+/// prealign : {"robust", "normalize"}; skip_rigid : bool; band : int;
+/// refits : int or None — modal affine re-fits (None: 3, or 0 for 3-D point sets);
+/// kappa : float or None — σ = kappa × mean nearest-neighbour distance (None: 1, or 3 for 3-D
+///     point sets, where independent samplings need smoother modes);
 /// threshold_in_optimizer : bool — let the assignment itself reject pairs above the threshold;
 /// position_weight : float in [0, 1] — mix of aligned-position distance into the cost (1 = positions
-///     only, a baseline); common_sigma : bool — one σ for both objects (independent samplings);
+///     only, a baseline); common_sigma : bool or None — one σ for both objects (None: on for 3-D
+///     point sets);
 /// triangles_a, triangles_b : (t, 3) int arrays — meshes (for ``element="axial"`` and §6.4).
 ///
 /// Raises
@@ -262,8 +265,8 @@ fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
 ///     unknown option values.
 #[pyfunction]
 #[pyo3(name = "match", signature = (a, b, *, element="gaussian", modes=0.25, search="global", solver="jv",
-    threshold=None, excess=true, ordered=None, material=None, prealign="robust", refits=3,
-    skip_rigid=false, band=3, kappa=1.0, threshold_in_optimizer=false, position_weight=0.0, common_sigma=false, triangles_a=None,
+    threshold=None, excess=true, ordered=None, material=None, prealign="robust", refits=None,
+    skip_rigid=false, band=3, kappa=None, threshold_in_optimizer=false, position_weight=0.0, common_sigma=None, triangles_a=None,
     triangles_b=None))]
 #[allow(clippy::too_many_arguments)]
 fn match_py(
@@ -279,13 +282,13 @@ fn match_py(
     ordered: Option<bool>,
     material: Option<&Bound<'_, PyAny>>,
     prealign: &str,
-    refits: usize,
+    refits: Option<usize>,
     skip_rigid: bool,
     band: usize,
-    kappa: f64,
+    kappa: Option<f64>,
     threshold_in_optimizer: bool,
     position_weight: f64,
-    common_sigma: bool,
+    common_sigma: Option<bool>,
     triangles_a: Option<&Bound<'_, PyAny>>,
     triangles_b: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyMatch> {
@@ -298,7 +301,21 @@ fn match_py(
     }
     let ta = triangles(py, triangles_a, "triangles_a")?;
     let tb = triangles(py, triangles_b, "triangles_b")?;
-    let mut opts = MatchOptions::default();
+    let ordered = match ordered {
+        Some(o) => o,
+        None => {
+            ta.is_none()
+                && tb.is_none()
+                && looks_like_contour(da, &ca)
+                && looks_like_contour(db, &cb)
+        }
+    };
+    // Contours get the §10 recipe; unordered 3-D point sets the measured surface setting.
+    let mut opts = if !ordered && da == 3 {
+        MatchOptions::for_surfaces()
+    } else {
+        MatchOptions::default()
+    };
     opts.model.element = match element {
         "gaussian" => ElementKind::Gaussian,
         "axial" => ElementKind::Axial,
@@ -311,7 +328,9 @@ fn match_py(
     if let Some(m) = self::material(material)? {
         opts.model.material = m;
     }
-    opts.model.kappa = kappa;
+    if let Some(kappa) = kappa {
+        opts.model.kappa = kappa;
+    }
     opts.mode_fraction = modes;
     opts.search = match search {
         "global" => Search::Global,
@@ -348,20 +367,15 @@ fn match_py(
         ThresholdMode::AfterAssignment
     };
     opts.excess = excess;
-    opts.refits = refits;
+    if let Some(r) = refits {
+        opts.refits = r;
+    }
     opts.skip_rigid = skip_rigid;
     opts.band = band;
     opts.position_weight = position_weight;
-    opts.common_sigma = common_sigma;
-    let ordered = match ordered {
-        Some(o) => o,
-        None => {
-            ta.is_none()
-                && tb.is_none()
-                && looks_like_contour(da, &ca)
-                && looks_like_contour(db, &cb)
-        }
-    };
+    if let Some(c) = common_sigma {
+        opts.common_sigma = c;
+    }
     opts.ordered = Some(ordered);
     let topo = |t: Option<Vec<[usize; 3]>>| match t {
         Some(triangles) => Topology::Mesh { triangles },

@@ -217,7 +217,7 @@ pub fn surface_case(g: &[Vec<f64>], sev: Severity, seed: u64, na: usize, nb: usi
     let mut rng = StdRng::seed_from_u64(seed);
     let level = 30.0;
     let (rows, cols) = (g.len() as f64, g[0].len() as f64);
-    let mut sample = |n: usize, rng: &mut StdRng| -> Vec<[f64; 2]> {
+    let sample = |n: usize, rng: &mut StdRng| -> Vec<[f64; 2]> {
         let mut v = Vec::new();
         while v.len() < n {
             let (x, y) = (
