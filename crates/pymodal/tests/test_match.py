@@ -1,0 +1,142 @@
+"""pymodal.match: ground truth on a warped real outline, result layout, options and errors."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pymodal
+
+DATA = Path(__file__).resolve().parents[2] / "modal-core" / "tests" / "data"
+
+
+def outline():
+    pts, started = [], False
+    for line in (DATA / "contours.txt").read_text().splitlines():
+        if line.startswith("# MUN104L-level15"):
+            started = True
+        elif line.startswith("#") and started:
+            break
+        elif started and line.strip():
+            pts.append([float(v) for v in line.split()])
+    return np.array(pts)
+
+
+def resample(c, n, start):
+    seg = np.linalg.norm(np.roll(c, -1, 0) - c, axis=1)
+    cum = np.concatenate([[0], np.cumsum(seg)])
+    s = ((start + np.arange(n) / n) % 1.0) * cum[-1]
+    i = np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(c) - 1)
+    f = (s - cum[i]) / seg[i]
+    return c[i] + f[:, None] * (np.roll(c, -1, 0)[i] - c[i])
+
+
+def warp(p, deg=12.0):
+    c = np.array([12.0, 30.0])
+    t = np.deg2rad(deg)
+    r = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+    q = (p - c) @ np.diag([1.08, 0.93]) @ r.T
+    q[:, 0] += 0.004 * q[:, 1] ** 2  # bending
+    return q + c + [5.0, -3.0]
+
+
+@pytest.fixture(scope="module")
+def case():
+    o = outline()
+    a = resample(o, 60, 0.13)
+    wo = warp(o)
+    b = resample(wo, 65, 0.71)
+    spacing = np.linalg.norm(np.roll(wo, -1, 0) - wo, axis=1).sum() / len(b)
+    return a, b, warp(a), spacing
+
+
+def test_ground_truth_and_layout(case):
+    a, b, truth, spacing = case
+    m = pymodal.match(a, b)
+    assert m.pairs.shape == (65, 2) and m.pairs.dtype == np.int64
+    assert m.costs.shape == (65,) and m.excess.dtype == np.bool_
+    assert m.affinity.shape == (60, 65)
+    assert np.isclose(m.affinity.max(), 1.0) and m.affinity.min() >= 0
+    assert np.allclose(m.costs, m.affinity[m.pairs[:, 0], m.pairs[:, 1]])
+    assert m.optimisation_count == 60 and m.excess_count == 5 and m.excess.sum() == 5
+    assert len(m.unmatched_a) == 0 and len(m.unmatched_b) == 0
+    one = m.pairs[~m.excess]
+    err = np.linalg.norm(b[one[:, 1]] - truth[one[:, 0]], axis=1)
+    assert (err <= spacing).mean() >= 0.97
+    # Local matches: mutual best on the returned affinity.
+    z = m.affinity
+    for i, j in m.local_pairs:
+        assert z[i].argmin() == j and z[:, j].argmin() == i
+    assert m.local_count == len(m.local_pairs) > 30
+
+
+def test_swapping_objects_and_searches(case):
+    a, b, truth, spacing = case
+    m = pymodal.match(b, a)
+    assert m.affinity.shape == (65, 60) and len(m.pairs) == 65
+    loc = pymodal.match(a, b, search="local")
+    assert not loc.excess.any() and len(loc.pairs) == loc.local_count
+    for solver in ("hungarian", "simplex"):
+        s = pymodal.match(a, b, solver=solver)
+        assert np.isclose(s.costs[~s.excess].sum(), pymodal.match(a, b).costs[~pymodal.match(a, b).excess].sum())
+    t = pymodal.match(a, b, threshold=0.05, excess=False)
+    assert (t.costs <= 0.05).all() and len(t.unmatched_a) > 0
+
+
+def test_material_invariance(case):
+    a, b, _, _ = case
+    m1 = pymodal.match(a, b, material=(1.0, 0.49, 1.0))
+    m2 = pymodal.match(a, b, material={"young": 7e6, "poisson": 0.49, "density": 1100.0})
+    np.testing.assert_array_equal(m1.pairs, m2.pairs)
+    m3 = pymodal.match(a, b, material="rubber")
+    assert len(m3.pairs) == 65
+
+
+def test_surfaces_3d():
+    rng = np.random.default_rng(0)
+    a = rng.uniform(-1, 1, (80, 3)) * [3.0, 6.0, 1.0]
+    a[:, 2] = np.exp(-(a[:, 0] ** 2 + (a[:, 1] / 2) ** 2) / 4)
+    perm = rng.permutation(80)
+    t = np.deg2rad(20)
+    r = np.array([[np.cos(t), -np.sin(t), 0], [np.sin(t), np.cos(t), 0], [0, 0, 1]])
+    b = (a @ r.T)[perm] * 1.1 + 2.0
+    m = pymodal.match(a, b)
+    assert (perm[m.pairs[:, 1]] == m.pairs[:, 0]).mean() >= 0.95
+
+
+@pytest.mark.parametrize(
+    "kwargs, text",
+    [
+        (dict(search="nearest"), "unknown search"),
+        (dict(solver="lapjv"), "unknown solver"),
+        (dict(element="spline"), "unknown element"),
+        (dict(modes=0.0), "mode fraction"),
+        (dict(threshold=-1.0), "threshold"),
+        (dict(material="jelly"), "jelly|material|preset"),
+    ],
+)
+def test_bad_options(case, kwargs, text):
+    a, b, _, _ = case
+    with pytest.raises(ValueError, match=text):
+        pymodal.match(a, b, **kwargs)
+
+
+def test_bad_inputs(case):
+    a, b, _, _ = case
+    with pytest.raises(ValueError, match="columns"):
+        pymodal.match(a[:, :1], b)
+    with pytest.raises(ValueError):
+        pymodal.match(a, np.column_stack([b, b[:, :1]]))
+    bad = a.copy()
+    bad[3, 0] = np.nan
+    with pytest.raises(ValueError, match="not finite"):
+        pymodal.match(bad, b)
+    with pytest.raises(ValueError, match="at least 3"):
+        pymodal.match(a[:2], b)
+    dup = a.copy()
+    dup[4] = dup[5]
+    with pytest.raises(ValueError, match="coincide"):
+        pymodal.match(dup, b)
+    with pytest.raises(ValueError, match="collinear"):
+        pymodal.match(np.column_stack([np.arange(10.0), 2 * np.arange(10.0)]), b)
+    with pytest.raises(ValueError):
+        pymodal.match("abc", b)
