@@ -38,7 +38,10 @@ pub struct AssignArgs {
 
 pub fn run(args: AssignArgs) -> Result<(), String> {
     let (cost, rows, cols) = output::read_cost_csv(&args.cost)?;
-    let options = assign::Options { method: args.method.into(), maximize: args.maximize };
+    let options = assign::Options {
+        method: args.method.into(),
+        maximize: args.maximize,
+    };
     let result = assign::solve(&cost, rows, cols, &options)
         .map_err(|e| format!("{}: {e}", args.cost.display()))?;
     let pairs: Vec<(usize, usize)> = result
@@ -56,7 +59,10 @@ pub fn run(args: AssignArgs) -> Result<(), String> {
             "pairs": pairs,
             "total_cost": result.cost,
         });
-        println!("{}", serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?
+        );
     } else {
         println!("row\tcol\tcost");
         for &(i, j) in &pairs {

@@ -4,10 +4,16 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod cmd_assign;
+mod cmd_match;
+mod cmd_run;
 mod output;
 
 #[derive(Parser)]
-#[command(name = "pedomatch", version, about = "Modal matching of objects in dynamic pedobarography")]
+#[command(
+    name = "pedomatch",
+    version,
+    about = "Modal matching of objects in dynamic pedobarography"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -15,6 +21,12 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Match the objects of a whole recording frame by frame; write tables, figures and tracks.
+    Run(cmd_run::RunArgs),
+    /// `run` on the bundled F-Scan recording, writing ./pedomatch-out/.
+    Demo(cmd_run::DemoArgs),
+    /// Match two objects given as point files or pressure images.
+    Match(cmd_match::MatchArgs),
     /// Solve a linear assignment problem read from a CSV cost matrix.
     Assign(cmd_assign::AssignArgs),
 }
@@ -22,6 +34,9 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Run(args) => cmd_run::run(args),
+        Command::Demo(args) => cmd_run::demo(args),
+        Command::Match(args) => cmd_match::run(args),
         Command::Assign(args) => cmd_assign::run(args),
     };
     match result {

@@ -1,5 +1,7 @@
 //! File input and output shared by the subcommands: small CSV readers and atomic writes.
 
+use pedo_io::figure::{self, Figure};
+use pedo_io::sequence::{PairRow, SequenceOptions, SequenceResult};
 use std::io::Write;
 use std::path::Path;
 
@@ -46,9 +48,18 @@ pub fn read_cost_csv(path: &Path) -> Result<(Vec<f64>, usize, usize), String> {
 /// Writes `contents` to `path` through a temporary file in the same folder and a rename, so a
 /// reader never sees a half-written file.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), String> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().ok_or_else(|| format!("{}: not a file path", path.display()))?;
-    let tmp = dir.join(format!(".{}.tmp{}", name.to_string_lossy(), std::process::id()));
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .ok_or_else(|| format!("{}: not a file path", path.display()))?;
+    let tmp = dir.join(format!(
+        ".{}.tmp{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(contents)?;
@@ -59,4 +70,217 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), String> {
         let _ = std::fs::remove_file(&tmp);
         format!("{}: {e}", path.display())
     })
+}
+
+/// An output folder, created on demand; every file in it is written atomically.
+pub struct OutDir {
+    root: std::path::PathBuf,
+}
+
+impl OutDir {
+    pub fn create(root: &Path) -> Result<Self, String> {
+        std::fs::create_dir_all(root).map_err(|e| format!("{}: {e}", root.display()))?;
+        Ok(Self {
+            root: root.to_path_buf(),
+        })
+    }
+
+    /// Writes `rel` (which may include one sub-folder) under the root.
+    pub fn write(&self, rel: &str, contents: &[u8]) -> Result<(), String> {
+        let path = self.root.join(rel);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
+        }
+        write_atomic(&path, contents)
+    }
+}
+
+/// Formats a CSV table; fields are numbers or identifiers, so no quoting is needed.
+pub fn csv_table(header: &[&str], rows: impl IntoIterator<Item = Vec<String>>) -> String {
+    let mut s = header.join(",");
+    s.push('\n');
+    for r in rows {
+        s.push_str(&r.join(","));
+        s.push('\n');
+    }
+    s
+}
+
+fn pair_row_json(r: &PairRow) -> serde_json::Value {
+    serde_json::json!({
+        "id_a": r.id_a, "id_b": r.id_b, "frame_a": r.frame_a + 1, "frame_b": r.frame_b + 1,
+        "nodes_a": r.nodes_a, "nodes_b": r.nodes_b,
+        "local_matches": r.local_matches, "local_percent": r.local_percent,
+        "optimisation_matches": r.optimisation_matches, "optimisation_percent": r.optimisation_percent,
+        "excess_matches": r.excess_matches, "mean_cost": r.mean_cost,
+    })
+}
+
+const PAIR_HEADER: [&str; 12] = [
+    "id_a",
+    "id_b",
+    "frame_a",
+    "frame_b",
+    "nodes_a",
+    "nodes_b",
+    "local_matches",
+    "local_percent",
+    "optimisation_matches",
+    "optimisation_percent",
+    "excess_matches",
+    "mean_cost",
+];
+
+fn pair_row_csv(r: &PairRow) -> Vec<String> {
+    vec![
+        r.id_a.to_string(),
+        r.id_b.to_string(),
+        (r.frame_a + 1).to_string(),
+        (r.frame_b + 1).to_string(),
+        r.nodes_a.to_string(),
+        r.nodes_b.to_string(),
+        r.local_matches.to_string(),
+        format!("{:.1}", r.local_percent),
+        r.optimisation_matches.to_string(),
+        format!("{:.1}", r.optimisation_percent),
+        r.excess_matches.to_string(),
+        format!("{:.6}", r.mean_cost),
+    ]
+}
+
+/// Writes every result of a sequence run: tables, per-pair matches, tracks, figures, summary.
+pub fn write_sequence(
+    dir: &OutDir,
+    name: &str,
+    recording: &pedo_io::Recording,
+    options: &SequenceOptions,
+    r: &SequenceResult,
+    (png, svg): (bool, bool),
+) -> Result<(), String> {
+    use rayon::prelude::*;
+    dir.write(
+        "pairs.csv",
+        csv_table(&PAIR_HEADER, r.pairs.iter().map(|p| pair_row_csv(&p.row))).as_bytes(),
+    )?;
+    let rows: Vec<_> = r.pairs.iter().map(|p| pair_row_json(&p.row)).collect();
+    dir.write("pairs.json", pretty(&rows)?.as_bytes())?;
+
+    let objects = r.objects.iter().map(|o| {
+        vec![
+            o.id.to_string(),
+            (o.frame + 1).to_string(),
+            o.index.to_string(),
+            o.shape.len().to_string(),
+            o.level.map(|l| format!("{l:.3}")).unwrap_or_default(),
+        ]
+    });
+    dir.write(
+        "objects.csv",
+        csv_table(&["id", "frame", "index", "nodes", "level"], objects).as_bytes(),
+    )?;
+
+    let matches = r.pairs.iter().flat_map(|p| {
+        let (ia, ib) = (r.objects[p.a].id, r.objects[p.b].id);
+        p.result.pairs.iter().map(move |m| {
+            vec![
+                ia.to_string(),
+                ib.to_string(),
+                m.a.to_string(),
+                m.b.to_string(),
+                format!("{:.6}", m.cost),
+                (m.excess as u8).to_string(),
+            ]
+        })
+    });
+    dir.write(
+        "matches.csv",
+        csv_table(
+            &["id_a", "id_b", "node_a", "node_b", "cost", "excess"],
+            matches,
+        )
+        .as_bytes(),
+    )?;
+
+    let dim = r.objects.first().map_or(2, |o| o.shape.dim());
+    let mut header = vec!["track", "step", "frame", "object_id", "node", "x", "y"];
+    if dim == 3 {
+        header.push("z");
+    }
+    let track_rows = r.tracks.iter().enumerate().flat_map(|(t, tr)| {
+        tr.steps.iter().enumerate().map(move |(s, &(o, n))| {
+            let obj = &r.objects[o];
+            let mut row = vec![
+                t.to_string(),
+                s.to_string(),
+                (obj.frame + 1).to_string(),
+                obj.id.to_string(),
+                n.to_string(),
+            ];
+            row.extend(obj.shape.point(n).iter().map(|v| format!("{v:.4}")));
+            row
+        })
+    });
+    dir.write("tracks.csv", csv_table(&header, track_rows).as_bytes())?;
+
+    if png || svg {
+        let figures: Vec<(String, Figure)> = r
+            .pairs
+            .par_iter()
+            .map(|p| {
+                let (oa, ob) = (&r.objects[p.a], &r.objects[p.b]);
+                (
+                    format!("figures/pair_{:04}_{:04}", oa.id, ob.id),
+                    figure::match_figure(&oa.shape, &ob.shape, &p.result.pairs),
+                )
+            })
+            .collect();
+        figures
+            .par_iter()
+            .try_for_each(|(stem, f)| -> Result<(), String> {
+                if png {
+                    dir.write(&format!("{stem}.png"), &f.to_png())?;
+                }
+                if svg {
+                    dir.write(&format!("{stem}.svg"), f.to_svg().as_bytes())?;
+                }
+                Ok(())
+            })?;
+        let tracks = figure::tracks_figure(r, &recording.peak_image(), 3, 40);
+        if png {
+            dir.write("tracks.png", &tracks.to_png())?;
+        }
+        if svg {
+            dir.write("tracks.svg", tracks.to_svg().as_bytes())?;
+        }
+    }
+
+    let n = r.pairs.len().max(1) as f64;
+    let mean = |f: fn(&PairRow) -> f64| r.pairs.iter().map(|p| f(&p.row)).sum::<f64>() / n;
+    let summary = serde_json::json!({
+        "recording": name,
+        "frames": recording.n_frames(),
+        "model": format!("{:?}", options.model).to_lowercase(),
+        "objects": r.objects.len(),
+        "pairs": r.pairs.len(),
+        "tracks": r.tracks.len(),
+        "tracks_3_or_more": r.tracks.iter().filter(|t| t.steps.len() >= 3).count(),
+        "mean_local_percent": mean(|p| p.local_percent),
+        "mean_optimisation_percent": mean(|p| p.optimisation_percent),
+        "mean_cost": mean(|p| p.mean_cost),
+        "timings_s": {
+            "objects": r.timings.objects.as_secs_f64(),
+            "matching": r.timings.matching.as_secs_f64(),
+            "tracks": r.timings.tracks.as_secs_f64(),
+        },
+    });
+    dir.write("summary.json", pretty(&summary)?.as_bytes())
+}
+
+fn pretty<T: serde::Serialize>(v: &T) -> Result<String, String> {
+    serde_json::to_string_pretty(v)
+        .map(|mut s| {
+            s.push('\n');
+            s
+        })
+        .map_err(|e| e.to_string())
 }

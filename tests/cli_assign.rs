@@ -3,7 +3,10 @@
 use std::process::Command;
 
 fn pedomatch(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_pedomatch")).args(args).output().expect("run pedomatch")
+    Command::new(env!("CARGO_BIN_EXE_pedomatch"))
+        .args(args)
+        .output()
+        .expect("run pedomatch")
 }
 
 fn write_temp(name: &str, contents: &str) -> std::path::PathBuf {
@@ -19,7 +22,11 @@ fn bundled_example_has_known_optimum_for_every_method() {
     let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/cost.csv");
     for method in ["jv", "hungarian", "simplex"] {
         let out = pedomatch(&["assign", example, "--method", method, "--json"]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         assert_eq!(v["total_cost"].as_f64().unwrap(), 6.0, "method {method}");
         let pairs: Vec<(usize, usize)> = serde_json::from_value(v["pairs"].clone()).unwrap();
@@ -42,12 +49,17 @@ fn bad_input_gives_one_clear_line_and_failure() {
     let out = pedomatch(&["assign", ragged.to_str().unwrap()]);
     assert!(!out.status.success());
     let err = String::from_utf8(out.stderr).unwrap();
-    assert!(err.contains("ragged.csv:2") && err.lines().count() == 1, "{err}");
+    assert!(
+        err.contains("ragged.csv:2") && err.lines().count() == 1,
+        "{err}"
+    );
 
     let infeasible = write_temp("inf.csv", "inf,inf\n1,2\n");
     let out = pedomatch(&["assign", infeasible.to_str().unwrap()]);
     assert!(!out.status.success());
-    assert!(String::from_utf8(out.stderr).unwrap().contains("infeasible"));
+    assert!(String::from_utf8(out.stderr)
+        .unwrap()
+        .contains("infeasible"));
 
     let missing = pedomatch(&["assign", "/nonexistent/cost.csv"]);
     assert!(!missing.status.success());

@@ -42,13 +42,38 @@ impl Rgb {
 
 #[derive(Debug, Clone)]
 enum Primitive {
-    Line { a: [f64; 2], b: [f64; 2], color: Rgb, width: f64, dashed: bool },
-    Polyline { points: Vec<[f64; 2]>, closed: bool, color: Rgb, width: f64 },
-    Dot { at: [f64; 2], radius: f64, color: Rgb },
-    Text { at: [f64; 2], text: String, color: Rgb },
+    Line {
+        a: [f64; 2],
+        b: [f64; 2],
+        color: Rgb,
+        width: f64,
+        dashed: bool,
+    },
+    Polyline {
+        points: Vec<[f64; 2]>,
+        closed: bool,
+        color: Rgb,
+        width: f64,
+    },
+    Dot {
+        at: [f64; 2],
+        radius: f64,
+        color: Rgb,
+    },
+    Text {
+        at: [f64; 2],
+        text: String,
+        color: Rgb,
+    },
     /// A grey-level image (values in [0, 1], NaN drawn as background) covering
     /// `[x0, x0 + cols·pitch] × [y0, y0 + rows·pitch]`.
-    Image { values: Vec<f32>, rows: usize, cols: usize, origin: [f64; 2], pitch: f64 },
+    Image {
+        values: Vec<f32>,
+        rows: usize,
+        cols: usize,
+        origin: [f64; 2],
+        pitch: f64,
+    },
 }
 
 /// A figure in data coordinates, rendered to SVG or PNG with a fixed pixel scale.
@@ -63,21 +88,48 @@ pub struct Figure {
 impl Figure {
     /// A new, empty figure; `scale` is the number of output pixels per data unit.
     pub fn new(scale: f64) -> Self {
-        Self { items: Vec::new(), scale: scale.max(1e-6), margin: 12.0 }
+        Self {
+            items: Vec::new(),
+            scale: scale.max(1e-6),
+            margin: 12.0,
+        }
     }
 
     pub fn line(&mut self, a: [f64; 2], b: [f64; 2], color: Rgb, width: f64) -> &mut Self {
-        self.items.push(Primitive::Line { a, b, color, width, dashed: false });
+        self.items.push(Primitive::Line {
+            a,
+            b,
+            color,
+            width,
+            dashed: false,
+        });
         self
     }
 
     pub fn dashed_line(&mut self, a: [f64; 2], b: [f64; 2], color: Rgb, width: f64) -> &mut Self {
-        self.items.push(Primitive::Line { a, b, color, width, dashed: true });
+        self.items.push(Primitive::Line {
+            a,
+            b,
+            color,
+            width,
+            dashed: true,
+        });
         self
     }
 
-    pub fn polyline(&mut self, points: &[[f64; 2]], closed: bool, color: Rgb, width: f64) -> &mut Self {
-        self.items.push(Primitive::Polyline { points: points.to_vec(), closed, color, width });
+    pub fn polyline(
+        &mut self,
+        points: &[[f64; 2]],
+        closed: bool,
+        color: Rgb,
+        width: f64,
+    ) -> &mut Self {
+        self.items.push(Primitive::Polyline {
+            points: points.to_vec(),
+            closed,
+            color,
+            width,
+        });
         self
     }
 
@@ -88,21 +140,43 @@ impl Figure {
 
     /// A label; drawn in the SVG only (the PNG raster carries no font).
     pub fn text(&mut self, at: [f64; 2], text: impl Into<String>, color: Rgb) -> &mut Self {
-        self.items.push(Primitive::Text { at, text: text.into(), color });
+        self.items.push(Primitive::Text {
+            at,
+            text: text.into(),
+            color,
+        });
         self
     }
 
     /// A grey-level background image, `values` row-major and scaled to [0, 1] by the caller.
-    pub fn image(&mut self, values: &[f32], rows: usize, cols: usize, origin: [f64; 2], pitch: f64) -> &mut Self {
+    pub fn image(
+        &mut self,
+        values: &[f32],
+        rows: usize,
+        cols: usize,
+        origin: [f64; 2],
+        pitch: f64,
+    ) -> &mut Self {
         if values.len() == rows * cols {
-            self.items.push(Primitive::Image { values: values.to_vec(), rows, cols, origin, pitch });
+            self.items.push(Primitive::Image {
+                values: values.to_vec(),
+                rows,
+                cols,
+                origin,
+                pitch,
+            });
         }
         self
     }
 
     /// Bounding box `[xmin, ymin, xmax, ymax]` of everything drawn (a unit box when empty).
     fn bounds(&self) -> [f64; 4] {
-        let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+        let mut b = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
         let mut add = |p: [f64; 2]| {
             if p[0].is_finite() && p[1].is_finite() {
                 b[0] = b[0].min(p[0]);
@@ -119,9 +193,18 @@ impl Figure {
                 }
                 Primitive::Polyline { points, .. } => points.iter().for_each(|&p| add(p)),
                 Primitive::Dot { at, .. } | Primitive::Text { at, .. } => add(*at),
-                Primitive::Image { rows, cols, origin, pitch, .. } => {
+                Primitive::Image {
+                    rows,
+                    cols,
+                    origin,
+                    pitch,
+                    ..
+                } => {
                     add(*origin);
-                    add([origin[0] + *cols as f64 * pitch, origin[1] + *rows as f64 * pitch]);
+                    add([
+                        origin[0] + *cols as f64 * pitch,
+                        origin[1] + *rows as f64 * pitch,
+                    ]);
                 }
             }
         }
@@ -137,7 +220,9 @@ impl Figure {
         let (s, m) = (self.scale, self.margin);
         let w = ((x1 - x0) * s + 2.0 * m).ceil().clamp(16.0, 8192.0) as u32;
         let h = ((y1 - y0) * s + 2.0 * m).ceil().clamp(16.0, 8192.0) as u32;
-        (w, h, move |p: [f64; 2]| [(p[0] - x0) * s + m, (p[1] - y0) * s + m])
+        (w, h, move |p: [f64; 2]| {
+            [(p[0] - x0) * s + m, (p[1] - y0) * s + m]
+        })
     }
 
     /// The figure as a standalone SVG document.
@@ -149,15 +234,30 @@ impl Figure {
         );
         for item in &self.items {
             match item {
-                Primitive::Line { a, b, color, width, dashed } => {
+                Primitive::Line {
+                    a,
+                    b,
+                    color,
+                    width,
+                    dashed,
+                } => {
                     let (p, q) = (tx(*a), tx(*b));
-                    let dash = if *dashed { " stroke-dasharray=\"4 3\"" } else { "" };
+                    let dash = if *dashed {
+                        " stroke-dasharray=\"4 3\""
+                    } else {
+                        ""
+                    };
                     out += &format!(
                         "<line x1=\"{:.2}\" y1=\"{:.2}\" x2=\"{:.2}\" y2=\"{:.2}\" stroke=\"{}\" stroke-width=\"{width}\"{dash}/>\n",
                         p[0], p[1], q[0], q[1], color.hex()
                     );
                 }
-                Primitive::Polyline { points, closed, color, width } => {
+                Primitive::Polyline {
+                    points,
+                    closed,
+                    color,
+                    width,
+                } => {
                     let pts: Vec<String> = points
                         .iter()
                         .map(|&p| {
@@ -191,7 +291,13 @@ impl Figure {
                         xml_escape(text)
                     );
                 }
-                Primitive::Image { values, rows, cols, origin, pitch } => {
+                Primitive::Image {
+                    values,
+                    rows,
+                    cols,
+                    origin,
+                    pitch,
+                } => {
                     for r in 0..*rows {
                         for c in 0..*cols {
                             let v = values[r * cols + c];
@@ -199,7 +305,8 @@ impl Figure {
                                 continue;
                             }
                             let g = grey(v);
-                            let p = tx([origin[0] + c as f64 * pitch, origin[1] + r as f64 * pitch]);
+                            let p =
+                                tx([origin[0] + c as f64 * pitch, origin[1] + r as f64 * pitch]);
                             let s = pitch * self.scale;
                             out += &format!(
                                 "<rect x=\"{:.2}\" y=\"{:.2}\" width=\"{s:.2}\" height=\"{s:.2}\" fill=\"{}\"/>\n",
@@ -222,7 +329,13 @@ impl Figure {
         let mut canvas = Canvas::new(w, h);
         for item in &self.items {
             match item {
-                Primitive::Line { a, b, color, width, dashed } => {
+                Primitive::Line {
+                    a,
+                    b,
+                    color,
+                    width,
+                    dashed,
+                } => {
                     let (p, q) = (tx(*a), tx(*b));
                     if *dashed {
                         canvas.dashed(p, q, *color, *width);
@@ -230,7 +343,12 @@ impl Figure {
                         canvas.segment(p, q, *color, *width);
                     }
                 }
-                Primitive::Polyline { points, closed, color, width } => {
+                Primitive::Polyline {
+                    points,
+                    closed,
+                    color,
+                    width,
+                } => {
                     let pts: Vec<[f64; 2]> = points.iter().map(|&p| tx(p)).collect();
                     for win in pts.windows(2) {
                         canvas.segment(win[0], win[1], *color, *width);
@@ -241,14 +359,26 @@ impl Figure {
                 }
                 Primitive::Dot { at, radius, color } => canvas.disc(tx(*at), *radius, *color),
                 Primitive::Text { .. } => {}
-                Primitive::Image { values, rows, cols, origin, pitch } => {
+                Primitive::Image {
+                    values,
+                    rows,
+                    cols,
+                    origin,
+                    pitch,
+                } => {
                     for r in 0..*rows {
                         for c in 0..*cols {
                             let v = values[r * cols + c];
                             if v.is_finite() {
                                 let g = grey(v);
-                                let p = tx([origin[0] + c as f64 * pitch, origin[1] + r as f64 * pitch]);
-                                let q = tx([origin[0] + (c + 1) as f64 * pitch, origin[1] + (r + 1) as f64 * pitch]);
+                                let p = tx([
+                                    origin[0] + c as f64 * pitch,
+                                    origin[1] + r as f64 * pitch,
+                                ]);
+                                let q = tx([
+                                    origin[0] + (c + 1) as f64 * pitch,
+                                    origin[1] + (r + 1) as f64 * pitch,
+                                ]);
                                 canvas.rect(p, q, Rgb(g, g, g));
                             }
                         }
@@ -266,7 +396,10 @@ fn grey(v: f32) -> u8 {
 }
 
 fn xml_escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 /// A white RGB raster with coverage-based anti-aliasing.
@@ -278,7 +411,11 @@ struct Canvas {
 
 impl Canvas {
     fn new(w: u32, h: u32) -> Self {
-        Self { w, h, px: vec![[1.0; 3]; (w * h) as usize] }
+        Self {
+            w,
+            h,
+            px: vec![[1.0; 3]; (w * h) as usize],
+        }
     }
 
     fn blend(&mut self, x: i64, y: i64, color: Rgb, alpha: f64) {
@@ -321,7 +458,12 @@ impl Canvas {
         let mut s = 0.0;
         while s < len {
             let e = (s + on).min(len);
-            let at = |t: f64| [p[0] + (q[0] - p[0]) * t / len, p[1] + (q[1] - p[1]) * t / len];
+            let at = |t: f64| {
+                [
+                    p[0] + (q[0] - p[0]) * t / len,
+                    p[1] + (q[1] - p[1]) * t / len,
+                ]
+            };
             self.segment(at(s), at(e), color, width);
             s += period;
         }
@@ -345,8 +487,11 @@ impl Canvas {
     }
 
     fn encode_png(&self) -> Vec<u8> {
-        let bytes: Vec<u8> =
-            self.px.iter().flat_map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)).collect();
+        let bytes: Vec<u8> = self
+            .px
+            .iter()
+            .flat_map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+            .collect();
         let img = image::RgbImage::from_raw(self.w, self.h, bytes).expect("buffer sized w*h*3");
         let mut out = Vec::new();
         img.write_to(&mut Cursor::new(&mut out), image::ImageFormat::Png)
@@ -376,4 +521,135 @@ mod tests {
         assert_eq!(img.get_pixel(52, 42).0, [214, 39, 40]);
         assert_eq!(img.get_pixel(0, 0).0, [255, 255, 255]);
     }
+}
+
+/// Pixels per data unit that make the larger side of `shapes` about `target` pixels.
+fn fit_scale(shapes: &[&modal_core::Shape], dims: [usize; 2], target: f64) -> f64 {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for s in shapes {
+        for i in 0..s.len() {
+            let p = s.point(i);
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[dims[k]]);
+                hi[k] = hi[k].max(p[dims[k]]);
+            }
+        }
+    }
+    let range = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    if range.is_finite() && range > 0.0 {
+        target / range
+    } else {
+        1.0
+    }
+}
+
+/// The projection of a shape on coordinates `dims`, shifted by `offset`.
+fn project(s: &modal_core::Shape, dims: [usize; 2], offset: [f64; 2]) -> Vec<[f64; 2]> {
+    (0..s.len())
+        .map(|i| {
+            let p = s.point(i);
+            [p[dims[0]] + offset[0], p[dims[1]] + offset[1]]
+        })
+        .collect()
+}
+
+/// Two objects and their correspondences: the first object in blue, the second in red, a grey
+/// line per one-to-one match and a dashed orange line per excess match. 3-D objects are shown in
+/// two views side by side, from above (x, y) and from the side (x, z).
+pub fn match_figure(
+    a: &modal_core::Shape,
+    b: &modal_core::Shape,
+    pairs: &[modal_core::MatchPair],
+) -> Figure {
+    let views: Vec<[usize; 2]> = if a.dim() == 3 && b.dim() == 3 {
+        vec![[0, 1], [0, 2]]
+    } else {
+        vec![[0, 1]]
+    };
+    let scale = fit_scale(&[a, b], [0, 1], 560.0);
+    let mut fig = Figure::new(scale);
+    let mut x_offset = 0.0;
+    for dims in views {
+        let pa = project(a, dims, [x_offset, 0.0]);
+        let pb = project(b, dims, [x_offset, 0.0]);
+        let closed =
+            |s: &modal_core::Shape| matches!(s.topology(), modal_core::Topology::ClosedContour);
+        if closed(a) && dims == [0, 1] {
+            fig.polyline(&pa, true, Rgb::BLUE, 1.0);
+        }
+        if closed(b) && dims == [0, 1] {
+            fig.polyline(&pb, true, Rgb::RED, 1.0);
+        }
+        for m in pairs {
+            if m.a < pa.len() && m.b < pb.len() {
+                if m.excess {
+                    fig.dashed_line(pa[m.a], pb[m.b], Rgb::ORANGE, 1.0);
+                } else {
+                    fig.line(pa[m.a], pb[m.b], Rgb::GREY, 1.0);
+                }
+            }
+        }
+        pa.iter().for_each(|&p| {
+            fig.dot(p, 2.5, Rgb::BLUE);
+        });
+        pb.iter().for_each(|&p| {
+            fig.dot(p, 2.0, Rgb::RED);
+        });
+        let width = pa
+            .iter()
+            .chain(&pb)
+            .map(|p| p[0])
+            .fold(f64::NEG_INFINITY, f64::max)
+            - pa.iter()
+                .chain(&pb)
+                .map(|p| p[0])
+                .fold(f64::INFINITY, f64::min);
+        x_offset += width + 40.0 / scale;
+    }
+    fig
+}
+
+/// Node tracks over the recording's peak-pressure image: one coloured polyline per track, with a
+/// dot where it starts, for the `max_tracks` longest tracks spanning at least `min_steps` objects
+/// (thousands of overlapping tracks would hide each other). 2-D coordinates in sensels.
+pub fn tracks_figure(
+    r: &crate::sequence::SequenceResult,
+    peak: &crate::Grid,
+    min_steps: usize,
+    max_tracks: usize,
+) -> Figure {
+    let mut fig = Figure::new(14.0);
+    let max = peak.max();
+    if max > 0.0 {
+        // Square-root scaling keeps the low-pressure outline of the foot visible.
+        let values: Vec<f32> = peak
+            .data()
+            .iter()
+            .map(|&v| (v.max(0.0) / max).sqrt() as f32)
+            .collect();
+        fig.image(&values, peak.rows(), peak.cols(), [-0.5, -0.5], 1.0);
+    }
+    let mut chosen: Vec<&crate::sequence::Track> = r
+        .tracks
+        .iter()
+        .filter(|t| t.steps.len() >= min_steps.max(2))
+        .collect();
+    // Longest first; ties by first object so the choice is deterministic.
+    chosen.sort_by_key(|t| (std::cmp::Reverse(t.steps.len()), t.steps[0]));
+    chosen.truncate(max_tracks);
+    for (k, t) in chosen.iter().enumerate() {
+        let pts: Vec<[f64; 2]> = t
+            .steps
+            .iter()
+            .map(|&(o, n)| {
+                let p = r.objects[o].shape.point(n);
+                [p[0], p[1]]
+            })
+            .collect();
+        let c = Rgb::palette(k);
+        fig.polyline(&pts, false, c, 1.0);
+        fig.dot(pts[0], 2.0, c);
+    }
+    fig
 }

@@ -12,11 +12,15 @@
 
 pub mod contour;
 mod error;
+pub mod figure;
 pub mod formats;
 pub mod grid;
 pub mod isobar;
+pub mod points;
+
 pub mod preprocess;
 pub mod recording;
+pub mod sequence;
 pub mod surface;
 pub mod track;
 

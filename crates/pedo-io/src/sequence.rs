@@ -5,10 +5,11 @@
 //! isobaric contours of one frame are matched level after level (seed §5.3). Each matched pair
 //! yields one [`PairRow`] with the seed's columns, and the matches are chained into [`Track`]s.
 
-use crate::contour::{contours, ContourOptions, Resample};
+use crate::contour::{contours, Contour, ContourOptions, Resample};
 use crate::error::{IoError, Result};
 use crate::recording::Recording;
-use modal_core::{match_shapes, MatchOptions, MatchResult, Search, Shape};
+use crate::track::PairingMethod;
+use modal_core::{match_shapes, ElementKind, MatchOptions, MatchResult, Search, Shape};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
@@ -57,7 +58,10 @@ impl Default for SequenceOptions {
                 min_area: 4.0,
                 ..ContourOptions::default()
             },
-            surface: crate::surface::SurfaceOptions::default(),
+            surface: crate::surface::SurfaceOptions {
+                max_nodes: Some(120),
+                ..Default::default()
+            },
             iso_frame: None,
             iso_levels: None,
             iso_count: 10,
@@ -66,6 +70,151 @@ impl Default for SequenceOptions {
             matching: MatchOptions::default(),
             local_column: true,
         }
+    }
+}
+
+/// Which searches fill the table's match columns.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SearchMode {
+    /// Optimisation (global) search only.
+    Global,
+    /// Local (mutual-best) search only.
+    Local,
+    /// Both columns, as in the seed's tables; the matches themselves come from the global search.
+    #[default]
+    Both,
+}
+
+/// The user-facing parameters of a sequence run, shared by the CLI and the Python bindings;
+/// [`RunParams::to_options`] validates them against a recording.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunParams {
+    pub model: ObjectModel,
+    pub element: ElementKind,
+    /// Fraction of the modes used as features, in (0, 1].
+    pub modes: f64,
+    pub search: SearchMode,
+    pub method: assign::Method,
+    /// Threshold on the max-normalised modal cost, in [0, 1].
+    pub threshold: Option<f64>,
+    pub excess: bool,
+    /// The paper's literal setting (no rotation pre-alignment, no re-fits).
+    pub paper: bool,
+    /// Frames `first..=last`, 1-based.
+    pub frames: Option<(usize, usize)>,
+    /// Noise threshold in the recording's units (`None`: the file's own, else 0).
+    pub noise: Option<f64>,
+    /// Gaussian smoothing σ in sensels (0: none).
+    pub smooth: f64,
+    /// Contour node spacing in sensels.
+    pub spacing: f64,
+    /// Node budget of each brightness surface.
+    pub surface_nodes: usize,
+    /// Isocontour model: the frame (1-based; `None`: the frame of largest load) and level count.
+    pub iso_frame: Option<usize>,
+    pub iso_levels: usize,
+}
+
+impl Default for RunParams {
+    fn default() -> Self {
+        Self {
+            model: ObjectModel::Contour,
+            element: ElementKind::Gaussian,
+            modes: 0.25,
+            search: SearchMode::Both,
+            method: assign::Method::JonkerVolgenant,
+            threshold: None,
+            excess: true,
+            paper: false,
+            frames: None,
+            noise: None,
+            smooth: 0.0,
+            spacing: 1.0,
+            surface_nodes: 120,
+            iso_frame: None,
+            iso_levels: 10,
+        }
+    }
+}
+
+impl RunParams {
+    /// Checks every parameter and turns them into [`SequenceOptions`] for `recording`.
+    pub fn to_options(&self, recording: &Recording) -> Result<SequenceOptions> {
+        let bad = |msg: String| Err(IoError::invalid(msg));
+        if !(self.modes > 0.0 && self.modes <= 1.0) {
+            return bad(format!("modes must be in (0, 1], got {}", self.modes));
+        }
+        if let Some(t) = self.threshold {
+            if !(t.is_finite() && t >= 0.0) {
+                return bad(format!("threshold must be a non-negative number, got {t}"));
+            }
+        }
+        if !(self.spacing.is_finite() && self.spacing > 0.0) {
+            return bad(format!("spacing must be positive, got {}", self.spacing));
+        }
+        if !(self.smooth.is_finite() && self.smooth >= 0.0) {
+            return bad(format!("smooth must be >= 0, got {}", self.smooth));
+        }
+        if self.iso_levels < 2 {
+            return bad(format!(
+                "iso_levels must be at least 2, got {}",
+                self.iso_levels
+            ));
+        }
+        if self.surface_nodes < 8 {
+            return bad(format!(
+                "surface_nodes must be at least 8, got {}",
+                self.surface_nodes
+            ));
+        }
+        let n = recording.n_frames();
+        let frames = match self.frames {
+            None => None,
+            Some((a, b)) if a >= 1 && a <= b && b <= n => Some((a - 1, b)),
+            Some((a, b)) => {
+                return bad(format!(
+                    "frames {a}..{b} are not within 1..{n} (1-based, inclusive)"
+                ))
+            }
+        };
+        let iso_frame = match self.iso_frame {
+            None => None,
+            Some(f) if f >= 1 && f <= n => Some(f - 1),
+            Some(f) => return bad(format!("iso_frame {f} is not within 1..{n} (1-based)")),
+        };
+        let mut matching = if self.paper {
+            MatchOptions::paper()
+        } else {
+            MatchOptions::default()
+        };
+        matching.model.element = self.element;
+        matching.mode_fraction = self.modes;
+        matching.search = if self.search == SearchMode::Local {
+            Search::Local
+        } else {
+            Search::Global
+        };
+        matching.method = self.method;
+        matching.threshold = self.threshold;
+        matching.excess = self.excess;
+        let noise = self.noise.or(recording.noise_threshold).unwrap_or(0.0);
+        let sigma = (self.smooth > 0.0).then_some(self.smooth);
+        let mut o = SequenceOptions {
+            model: self.model,
+            matching,
+            frames,
+            iso_frame,
+            iso_count: self.iso_levels,
+            ..Default::default()
+        };
+        o.local_column = self.search != SearchMode::Global;
+        o.contour.preprocess.threshold = Some(noise);
+        o.contour.preprocess.sigma = sigma;
+        o.contour.resample = Resample::Spacing(self.spacing);
+        o.surface.preprocess.threshold = Some(noise);
+        o.surface.preprocess.sigma = sigma;
+        o.surface.max_nodes = Some(self.surface_nodes);
+        Ok(o)
     }
 }
 
@@ -133,6 +282,10 @@ pub struct SequenceResult {
     pub objects: Vec<SequenceObject>,
     pub pairs: Vec<PairMatch>,
     pub tracks: Vec<Track>,
+    /// Contour model: object `i` continues as several objects of the next frame.
+    pub splits: Vec<(usize, Vec<usize>)>,
+    /// Contour model: several objects continue as one object of the next frame.
+    pub merges: Vec<(Vec<usize>, usize)>,
     pub timings: StageTimings,
 }
 
@@ -173,8 +326,12 @@ pub fn run_sequence(
         )));
     }
     let t0 = Instant::now();
-    let objects = build_objects(recording, options, start, end, progress)?;
-    let candidate_pairs = pair_objects(&objects, options)?;
+    let Built {
+        objects,
+        pairs: candidate_pairs,
+        splits,
+        merges,
+    } = build_objects(recording, options, start, end, progress)?;
     let t1 = Instant::now();
 
     let done = AtomicUsize::new(0);
@@ -183,20 +340,43 @@ pub fn run_sequence(
         .par_iter()
         .map(|&(a, b)| {
             let r = match_pair(&objects, a, b, options);
-            progress(Stage::Matching, done.fetch_add(1, Ordering::Relaxed) + 1, total);
+            progress(
+                Stage::Matching,
+                done.fetch_add(1, Ordering::Relaxed) + 1,
+                total,
+            );
             r
         })
         .collect::<Result<_>>()?;
     let t2 = Instant::now();
     let tracks = chain_tracks(&objects, &pairs);
-    let timings = StageTimings { objects: t1 - t0, matching: t2 - t1, tracks: t2.elapsed() };
-    Ok(SequenceResult { objects, pairs, tracks, timings })
+    let timings = StageTimings {
+        objects: t1 - t0,
+        matching: t2 - t1,
+        tracks: t2.elapsed(),
+    };
+    Ok(SequenceResult {
+        objects,
+        pairs,
+        tracks,
+        splits,
+        merges,
+        timings,
+    })
 }
 
-fn match_pair(objects: &[SequenceObject], a: usize, b: usize, options: &SequenceOptions) -> Result<PairMatch> {
+fn match_pair(
+    objects: &[SequenceObject],
+    a: usize,
+    b: usize,
+    options: &SequenceOptions,
+) -> Result<PairMatch> {
     let (oa, ob) = (&objects[a], &objects[b]);
     let result = match_shapes(&oa.shape, &ob.shape, &options.matching).map_err(|e| {
-        IoError::invalid(format!("matching object {} (frame {}) with object {} (frame {}): {e}", oa.id, oa.frame, ob.id, ob.frame))
+        IoError::invalid(format!(
+            "matching object {} (frame {}) with object {} (frame {}): {e}",
+            oa.id, oa.frame, ob.id, ob.frame
+        ))
     })?;
     let (n, m) = (oa.shape.len(), ob.shape.len());
     let min = n.min(m).max(1) as f64;
@@ -206,7 +386,11 @@ fn match_pair(objects: &[SequenceObject], a: usize, b: usize, options: &Sequence
     } else {
         0
     };
-    let optimisation = if options.matching.search == Search::Global { one_to_one.len() } else { 0 };
+    let optimisation = if options.matching.search == Search::Global {
+        one_to_one.len()
+    } else {
+        0
+    };
     let mean_cost = if one_to_one.is_empty() {
         0.0
     } else {
@@ -233,7 +417,8 @@ fn match_pair(objects: &[SequenceObject], a: usize, b: usize, options: &Sequence
 /// in the previous object; excess (one-to-many) matches never extend a track, since a track must
 /// stay a single path. Nodes with no one-to-one predecessor start a new track.
 pub fn chain_tracks(objects: &[SequenceObject], pairs: &[PairMatch]) -> Vec<Track> {
-    let mut track_of: Vec<Vec<Option<usize>>> = objects.iter().map(|o| vec![None; o.shape.len()]).collect();
+    let mut track_of: Vec<Vec<Option<usize>>> =
+        objects.iter().map(|o| vec![None; o.shape.len()]).collect();
     let mut tracks: Vec<Track> = Vec::new();
     // Objects are in sequence order and every pair goes forward, so visiting the objects in order
     // sees each predecessor before its successors.
@@ -260,9 +445,196 @@ pub fn chain_tracks(objects: &[SequenceObject], pairs: &[PairMatch]) -> Vec<Trac
         for node in 0..obj.shape.len() {
             if track_of[o][node].is_none() {
                 track_of[o][node] = Some(tracks.len());
-                tracks.push(Track { steps: vec![(o, node)] });
+                tracks.push(Track {
+                    steps: vec![(o, node)],
+                });
             }
         }
     }
     tracks
+}
+
+/// Objects in sequence order (numbered from 1), the pairs to match (indices into the objects)
+/// and, for contours, the splits and merges between consecutive frames.
+struct Built {
+    objects: Vec<SequenceObject>,
+    pairs: Vec<(usize, usize)>,
+    splits: Vec<(usize, Vec<usize>)>,
+    merges: Vec<(Vec<usize>, usize)>,
+}
+
+/// The outer contours of a frame worth modelling, largest first (so object 0 of a frame is its
+/// main region).
+fn frame_contours(
+    recording: &Recording,
+    t: usize,
+    options: &SequenceOptions,
+) -> Result<Vec<Contour>> {
+    let mut cs = contours(&recording.frame(t)?, &options.contour)?;
+    cs.retain(|c| !c.hole && c.points.len() >= options.min_nodes.max(3));
+    cs.sort_by(|a, b| b.area().total_cmp(&a.area()));
+    Ok(cs)
+}
+
+fn build_objects(
+    recording: &Recording,
+    options: &SequenceOptions,
+    start: usize,
+    end: usize,
+    progress: &(dyn Fn(Stage, usize, usize) + Sync),
+) -> Result<Built> {
+    let keep = |s: &Shape| s.len() >= options.min_nodes.max(3);
+    let mut built = Built {
+        objects: Vec::new(),
+        pairs: Vec::new(),
+        splits: Vec::new(),
+        merges: Vec::new(),
+    };
+    let done = AtomicUsize::new(0);
+    let tick = |total: usize| {
+        progress(
+            Stage::Objects,
+            done.fetch_add(1, Ordering::Relaxed) + 1,
+            total,
+        )
+    };
+    match options.model {
+        ObjectModel::Contour => {
+            let per_frame: Vec<Vec<Contour>> = (start..end)
+                .into_par_iter()
+                .map(|t| {
+                    let cs = frame_contours(recording, t, options);
+                    tick(end - start);
+                    cs
+                })
+                .collect::<Result<_>>()?;
+            let pairings = crate::track::track(&per_frame, PairingMethod::default())?;
+            let mut first = Vec::with_capacity(per_frame.len());
+            for (k, cs) in per_frame.iter().enumerate() {
+                first.push(built.objects.len());
+                for (index, c) in cs.iter().enumerate() {
+                    let id = built.objects.len() + 1;
+                    built.objects.push(SequenceObject {
+                        id,
+                        frame: start + k,
+                        index,
+                        level: None,
+                        shape: c.to_shape()?,
+                    });
+                }
+            }
+            for (k, p) in pairings.iter().enumerate() {
+                let (fa, fb) = (first[k], first[k + 1]);
+                built
+                    .pairs
+                    .extend(p.pairs.iter().map(|&(i, j)| (fa + i, fb + j)));
+                built.splits.extend(
+                    p.splits
+                        .iter()
+                        .map(|(i, js)| (fa + i, js.iter().map(|j| fb + j).collect())),
+                );
+                built.merges.extend(
+                    p.merges
+                        .iter()
+                        .map(|(is, j)| (is.iter().map(|i| fa + i).collect(), fb + j)),
+                );
+            }
+        }
+        ObjectModel::Surface => {
+            let threshold = options.surface.preprocess.threshold.unwrap_or(0.0);
+            let per_frame: Vec<Option<Shape>> = (start..end)
+                .into_par_iter()
+                .map(|t| {
+                    let frame = recording.frame(t)?;
+                    let shape = if frame.max() > threshold {
+                        match crate::surface::surface(&frame, &options.surface) {
+                            Ok(s) => Some(s.to_shape()?).filter(|s| keep(s)),
+                            // A frame whose few loaded sensels cannot be triangulated has no
+                            // surface object, like a frame with no contact.
+                            Err(IoError::InvalidInput(_)) => None,
+                            Err(e) => return Err(e),
+                        }
+                    } else {
+                        None
+                    };
+                    tick(end - start);
+                    Ok(shape)
+                })
+                .collect::<Result<_>>()?;
+            let mut previous: Option<usize> = None;
+            for (k, shape) in per_frame.into_iter().enumerate() {
+                match shape {
+                    Some(shape) => {
+                        let o = built.objects.len();
+                        if let Some(p) = previous {
+                            if built.objects[p].frame + 1 == start + k {
+                                built.pairs.push((p, o));
+                            }
+                        }
+                        built.objects.push(SequenceObject {
+                            id: o + 1,
+                            frame: start + k,
+                            index: 0,
+                            level: None,
+                            shape,
+                        });
+                        previous = Some(o);
+                    }
+                    None => previous = None,
+                }
+            }
+        }
+        ObjectModel::Isocontour => {
+            let t = match options.iso_frame {
+                Some(t) => t,
+                None => (start..end)
+                    .max_by(|&a, &b| frame_load(recording, a).total_cmp(&frame_load(recording, b)))
+                    .unwrap_or(start),
+            };
+            let frame = recording.frame(t)?;
+            let base = match options.contour.preprocess.threshold {
+                Some(th) => crate::preprocess::threshold(&frame, th)?,
+                None => frame.clone(),
+            };
+            let levels = match &options.iso_levels {
+                Some(l) => l.clone(),
+                None => crate::isobar::even_levels(&base, options.iso_count),
+            };
+            let iso = crate::isobar::IsoOptions {
+                preprocess: options.contour.preprocess,
+                resample: options.contour.resample,
+                include_holes: false,
+                ..Default::default()
+            };
+            for (index, &level) in levels.iter().enumerate() {
+                let cs = crate::isobar::isocontours(&frame, &[level], &iso)?;
+                // The seed models one isobaric contour per level: the largest region's outline.
+                if let Some(c) = cs.iter().max_by(|a, b| a.area().total_cmp(&b.area())) {
+                    let shape = c.to_shape()?;
+                    if keep(&shape) {
+                        let o = built.objects.len();
+                        if o > 0 {
+                            built.pairs.push((o - 1, o));
+                        }
+                        built.objects.push(SequenceObject {
+                            id: o + 1,
+                            frame: t,
+                            index,
+                            level: Some(level),
+                            shape,
+                        });
+                    }
+                }
+                tick(levels.len());
+            }
+        }
+    }
+    Ok(built)
+}
+
+/// Sum of the frame's values: the load the isocontour model picks its frame by.
+fn frame_load(recording: &Recording, t: usize) -> f64 {
+    recording
+        .frame_slice(t)
+        .map_or(0.0, |f| f.iter().map(|&v| v as f64).sum())
 }

@@ -1,0 +1,161 @@
+//! `pedomatch match A B`: correspondences between two objects given as images or point files.
+
+use crate::cmd_assign::SolverArg;
+use crate::cmd_run::{ElementArg, SearchArg};
+use crate::output::{self, OutDir};
+use clap::Args;
+use modal_core::{ElementKind, MatchOptions, Search, Shape, Topology};
+use pedo_io::figure;
+use std::path::{Path, PathBuf};
+
+#[derive(Args)]
+pub struct MatchArgs {
+    /// First object: a point file (`x,y[,z]` per line) or a pressure image/recording.
+    pub a: PathBuf,
+    /// Second object, as the first.
+    pub b: PathBuf,
+    /// Read both inputs as point files even if their extension suggests an image.
+    #[arg(long)]
+    pub points: bool,
+    /// Point files are ordered closed contours (enables the order-keeping excess step).
+    #[arg(long)]
+    pub closed: bool,
+    /// Frame (1-based) to take from a multi-frame recording.
+    #[arg(long, default_value_t = 1)]
+    pub frame: usize,
+    #[arg(long, value_enum, default_value = "gaussian")]
+    pub element: ElementArg,
+    #[arg(long, default_value_t = 0.25)]
+    pub modes: f64,
+    #[arg(long, value_enum, default_value = "global")]
+    pub search: SearchArg,
+    #[arg(long, value_enum, default_value = "jv")]
+    pub solver: SolverArg,
+    #[arg(long)]
+    pub threshold: Option<f64>,
+    #[arg(long)]
+    pub no_excess: bool,
+    /// The paper's literal setting (no rotation pre-alignment, no re-fits).
+    #[arg(long)]
+    pub paper: bool,
+    /// Write matches.csv, match.json and match.png/svg into this folder instead of printing.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+const POINT_EXTENSIONS: [&str; 4] = ["xy", "xyz", "pts", "txt"];
+
+/// An object from a file: a point file as it is, or the largest contour of a pressure frame.
+fn load_object(path: &Path, args: &MatchArgs) -> Result<Shape, String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let topology = if args.closed {
+        Topology::ClosedContour
+    } else {
+        Topology::None
+    };
+    let as_points = args.points || POINT_EXTENSIONS.contains(&ext.as_str());
+    if as_points {
+        return pedo_io::points::read_points(path, topology).map_err(|e| e.to_string());
+    }
+    // A CSV is a point file when it has 2 or 3 columns, a pressure grid otherwise.
+    if ext == "csv" {
+        if let Ok(shape) = pedo_io::points::read_points(path, topology.clone()) {
+            return Ok(shape);
+        }
+    }
+    let rec = pedo_io::read_recording(path).map_err(|e| e.to_string())?;
+    if args.frame == 0 || args.frame > rec.n_frames() {
+        return Err(format!(
+            "{}: --frame {} is not in 1..={}",
+            path.display(),
+            args.frame,
+            rec.n_frames()
+        ));
+    }
+    let frame = rec.frame(args.frame - 1).map_err(|e| e.to_string())?;
+    let opts = pedo_io::ContourOptions {
+        resample: pedo_io::Resample::Spacing(1.0),
+        include_holes: false,
+        ..Default::default()
+    };
+    let contours =
+        pedo_io::contours(&frame, &opts).map_err(|e| format!("{}: {e}", path.display()))?;
+    let largest = contours
+        .iter()
+        .max_by(|x, y| x.area().total_cmp(&y.area()))
+        .ok_or_else(|| {
+            format!(
+                "{}: frame {} has no loaded region",
+                path.display(),
+                args.frame
+            )
+        })?;
+    largest.to_shape().map_err(|e| e.to_string())
+}
+
+pub fn run(args: MatchArgs) -> Result<(), String> {
+    let a = load_object(&args.a, &args)?;
+    let b = load_object(&args.b, &args)?;
+    let mut o = if args.paper {
+        MatchOptions::paper()
+    } else {
+        MatchOptions::default()
+    };
+    o.model.element = match args.element {
+        ElementArg::Gaussian => ElementKind::Gaussian,
+        ElementArg::Axial => ElementKind::Axial,
+    };
+    o.mode_fraction = args.modes;
+    o.search = if args.search == SearchArg::Local {
+        Search::Local
+    } else {
+        Search::Global
+    };
+    o.method = args.solver.into();
+    o.threshold = args.threshold;
+    o.excess = !args.no_excess;
+    let r = modal_core::match_shapes(&a, &b, &o).map_err(|e| e.to_string())?;
+    let rows = r.pairs.iter().map(|p| {
+        vec![
+            p.a.to_string(),
+            p.b.to_string(),
+            format!("{:.6}", p.cost),
+            (p.excess as u8).to_string(),
+        ]
+    });
+    let table = output::csv_table(&["node_a", "node_b", "cost", "excess"], rows);
+    let summary = serde_json::json!({
+        "a": args.a.display().to_string(), "b": args.b.display().to_string(),
+        "nodes_a": a.len(), "nodes_b": b.len(),
+        "local_matches": r.local_count(), "one_to_one_matches": r.one_to_one_count(),
+        "excess_matches": r.excess_count(), "modes": r.n_modes, "refits": r.refits,
+        "unmatched_a": r.unmatched_a, "unmatched_b": r.unmatched_b,
+    });
+    match &args.out {
+        None => {
+            print!("{table}");
+            eprintln!(
+                "{} × {} nodes: {} local, {} one-to-one, {} excess matches",
+                a.len(),
+                b.len(),
+                r.local_count(),
+                r.one_to_one_count(),
+                r.excess_count()
+            );
+        }
+        Some(dir) => {
+            let dir = OutDir::create(dir)?;
+            dir.write("matches.csv", table.as_bytes())?;
+            dir.write("match.json", format!("{summary:#}\n").as_bytes())?;
+            let fig = figure::match_figure(&a, &b, &r.pairs);
+            dir.write("match.png", &fig.to_png())?;
+            dir.write("match.svg", fig.to_svg().as_bytes())?;
+            println!("{summary:#}");
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,298 @@
+//! End-to-end tests of `pedomatch run`, `demo` and `match`.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn pedomatch(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_pedomatch"))
+        .args(args)
+        .output()
+        .expect("run pedomatch")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("pedomatch-e2e-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_slice(
+        &std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
+    )
+    .unwrap()
+}
+
+/// Reads a CSV with a header into rows of (column name → field).
+fn read_csv(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+fn num(row: &std::collections::HashMap<String, String>, k: &str) -> f64 {
+    row[k]
+        .parse()
+        .unwrap_or_else(|_| panic!("{k} = {:?}", row[k]))
+}
+
+fn assert_png(path: &Path) {
+    let bytes = std::fs::read(path).unwrap();
+    assert!(
+        bytes.starts_with(b"\x89PNG\r\n\x1a\n"),
+        "{} is not a PNG",
+        path.display()
+    );
+    let img = image::load_from_memory(&bytes).unwrap();
+    assert!(img.width() > 16 && img.height() > 16);
+}
+
+/// An elliptical pressure blob (semi-axes 5 × 8 sensels) moving by `VELOCITY` sensels per frame.
+const VELOCITY: [f64; 2] = [0.5, 1.0];
+
+fn synthetic_recording(dir: &Path) -> PathBuf {
+    let (t, rows, cols) = (10, 40, 26);
+    let mut data = Vec::with_capacity(t * rows * cols);
+    for f in 0..t {
+        let (cx, cy) = (12.0 + VELOCITY[0] * f as f64, 12.0 + VELOCITY[1] * f as f64);
+        for r in 0..rows {
+            for c in 0..cols {
+                let q = ((c as f64 - cx) / 5.0).powi(2) + ((r as f64 - cy) / 8.0).powi(2);
+                data.push((200.0 * (1.0 - q)).max(0.0) as f32);
+            }
+        }
+    }
+    let rec = pedo_io::Recording::new(t, rows, cols, data, vec![true; rows * cols]).unwrap();
+    let path = dir.join("blob.npy");
+    pedo_io::formats::npy::write_npy(&rec, &path).unwrap();
+    path
+}
+
+#[test]
+fn run_on_synthetic_motion_gives_complete_matches_and_true_tracks() {
+    let dir = temp_dir("synthetic");
+    let rec = synthetic_recording(&dir);
+    let out = dir.join("out");
+    let o = pedomatch(&[
+        "run",
+        rec.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--figures",
+        "both",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    let rows = read_csv(&out.join("pairs.csv"));
+    assert_eq!(rows.len(), 9, "one pair per consecutive frame");
+    let objects = read_csv(&out.join("objects.csv"));
+    assert_eq!(objects.len(), 10);
+    for row in &rows {
+        let (n, m) = (num(row, "nodes_a"), num(row, "nodes_b"));
+        let id_a = row["id_a"].clone();
+        let nodes_a = objects.iter().find(|o| o["id"] == id_a).unwrap();
+        assert_eq!(num(nodes_a, "nodes"), n);
+        // Without a threshold the optimisation saturates the smaller object and the excess step
+        // brings the total to the larger one.
+        assert_eq!(num(row, "optimisation_matches"), n.min(m));
+        assert_eq!(num(row, "optimisation_percent"), 100.0);
+        assert_eq!(num(row, "excess_matches"), n.max(m));
+        assert!(num(row, "local_matches") <= n.min(m));
+    }
+    let json = read_json(&out.join("pairs.json"));
+    assert_eq!(json.as_array().unwrap().len(), 9);
+
+    // Tracks follow the known motion: each step moves by VELOCITY (contour nodes slide along the
+    // outline, so compare the median over all steps).
+    let tracks = read_csv(&out.join("tracks.csv"));
+    let mut steps = Vec::new();
+    for w in tracks.windows(2) {
+        if w[0]["track"] == w[1]["track"] {
+            assert_eq!(num(&w[1], "frame") - num(&w[0], "frame"), 1.0);
+            steps.push([
+                num(&w[1], "x") - num(&w[0], "x"),
+                num(&w[1], "y") - num(&w[0], "y"),
+            ]);
+        }
+    }
+    assert!(
+        steps.len() > 200,
+        "tracks should chain most nodes, got {} steps",
+        steps.len()
+    );
+    for k in 0..2 {
+        let mut v: Vec<f64> = steps.iter().map(|s| s[k]).collect();
+        v.sort_by(f64::total_cmp);
+        let median = v[v.len() / 2];
+        assert!(
+            (median - VELOCITY[k]).abs() < 0.25,
+            "median step {k} = {median}"
+        );
+    }
+    let longest = tracks.iter().map(|r| num(r, "step")).fold(0.0, f64::max);
+    assert!(longest >= 9.0, "some node is tracked through all 10 frames");
+
+    for name in ["tracks.png", "figures/pair_0001_0002.png"] {
+        assert_png(&out.join(name));
+    }
+    let svg = std::fs::read_to_string(out.join("figures/pair_0001_0002.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    let summary = read_json(&out.join("summary.json"));
+    assert_eq!(summary["pairs"], 9);
+}
+
+#[test]
+fn demo_on_bundled_recording() {
+    let dir = temp_dir("demo");
+    let out = dir.join("out");
+    let o = pedomatch(&[
+        "demo",
+        "--out",
+        out.to_str().unwrap(),
+        "--frames",
+        "1..70",
+        "--timings",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("timings:"));
+    let rows = read_csv(&out.join("pairs.csv"));
+    assert!(
+        rows.len() >= 10,
+        "the first 70 frames hold at least one stance phase"
+    );
+    for row in &rows {
+        let (n, m) = (num(row, "nodes_a"), num(row, "nodes_b"));
+        assert!(n >= 8.0 && m >= 8.0);
+        assert_eq!(num(row, "optimisation_matches"), n.min(m));
+        assert_eq!(num(row, "excess_matches"), n.max(m));
+        assert!(num(row, "frame_b") > num(row, "frame_a"));
+    }
+    assert_png(&out.join("tracks.png"));
+}
+
+#[test]
+fn isocontour_and_surface_models_run() {
+    let dir = temp_dir("models");
+    let rec = synthetic_recording(&dir);
+    let out = dir.join("iso");
+    let o = pedomatch(&[
+        "run",
+        rec.to_str().unwrap(),
+        "--model",
+        "isocontour",
+        "--iso-levels",
+        "5",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = read_csv(&out.join("pairs.csv"));
+    assert_eq!(rows.len(), 4, "5 nested levels give 4 consecutive pairs");
+    for w in rows.windows(2) {
+        assert!(
+            num(&w[0], "nodes_a") >= num(&w[1], "nodes_a"),
+            "higher levels are smaller"
+        );
+    }
+    let out = dir.join("surface");
+    let o = pedomatch(&[
+        "run",
+        rec.to_str().unwrap(),
+        "--model",
+        "surface",
+        "--surface-nodes",
+        "40",
+        "--frames",
+        "1..4",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = read_csv(&out.join("pairs.csv"));
+    assert_eq!(rows.len(), 3);
+    for row in &rows {
+        assert!(num(row, "nodes_a") <= 40.0 && num(row, "nodes_a") >= 8.0);
+        assert_eq!(
+            num(row, "optimisation_matches"),
+            num(row, "nodes_a").min(num(row, "nodes_b"))
+        );
+    }
+    assert!(read_csv(&out.join("tracks.csv"))[0].contains_key("z"));
+}
+
+#[test]
+fn match_two_point_files() {
+    let dir = temp_dir("match");
+    let n = 40;
+    let ring = |scale: f64, shift: usize| -> String {
+        let mut s = String::from("x,y\n");
+        for k in 0..n {
+            let t = 2.0 * std::f64::consts::PI * ((k + shift) % n) as f64 / n as f64;
+            s += &format!(
+                "{},{}\n",
+                scale * 3.0 * t.cos(),
+                scale * (2.0 * t.sin() + 0.5 * (2.0 * t).sin())
+            );
+        }
+        s
+    };
+    std::fs::write(dir.join("a.csv"), ring(1.0, 0)).unwrap();
+    std::fs::write(dir.join("b.csv"), ring(1.1, 5)).unwrap();
+    let out = dir.join("out");
+    let o = pedomatch(&[
+        "match",
+        dir.join("a.csv").to_str().unwrap(),
+        dir.join("b.csv").to_str().unwrap(),
+        "--closed",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // b's node k is a's node k + 5: the true match of a's node i is b's node (i - 5) mod n.
+    let rows = read_csv(&out.join("matches.csv"));
+    assert_eq!(rows.len(), n);
+    let correct = rows
+        .iter()
+        .filter(|r| (num(r, "node_a") as usize + n - 5) % n == num(r, "node_b") as usize)
+        .count();
+    assert!(correct >= n - 2, "{correct}/{n} correct");
+    assert_png(&out.join("match.png"));
+}
+
+#[test]
+fn run_errors_are_one_line() {
+    let dir = temp_dir("errors");
+    let bad = dir.join("bad.asf");
+    std::fs::write(&bad, "ROWS 2\nCOLS 2\nASCII_DATA @@\nFrame 1\n1,2\n3\n").unwrap();
+    let o = pedomatch(&[
+        "run",
+        bad.to_str().unwrap(),
+        "--out",
+        dir.join("o").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8(o.stderr).unwrap();
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("bad.asf"), "{err}");
+    assert!(
+        !dir.join("o").join("pairs.csv").exists(),
+        "nothing written on failure"
+    );
+
+    let rec = synthetic_recording(&dir);
+    let o = pedomatch(&["run", rec.to_str().unwrap(), "--frames", "5..3"]);
+    assert!(!o.status.success());
+    let o = pedomatch(&["run", rec.to_str().unwrap(), "--modes", "1.5"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8(o.stderr).unwrap().contains("modes"));
+}
