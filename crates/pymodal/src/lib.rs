@@ -8,6 +8,7 @@ mod errors;
 mod io_py;
 mod match_py;
 mod model_py;
+mod run_py;
 
 #[pymodule]
 fn _pymodal(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -16,5 +17,6 @@ fn _pymodal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     model_py::register(m)?;
     match_py::register(m)?;
     io_py::register(m)?;
+    run_py::register(m)?;
     Ok(())
 }

@@ -1,0 +1,105 @@
+"""pymodal.run on a synthetic recording with known motion and on the bundled F-Scan recording,
+and the pymodal.plot helpers."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pymodal
+
+ROOT = Path(__file__).resolve().parents[3]
+BUNDLED = ROOT / "examples" / "data" / "FrasP01L.asf"
+VELOCITY = np.array([0.5, 1.0])
+
+
+def moving_blob(frames=8, rows=40, cols=26):
+    r, c = np.mgrid[0:rows, 0:cols]
+    out = np.empty((frames, rows, cols), np.float32)
+    for t in range(frames):
+        cx, cy = 12 + VELOCITY[0] * t, 12 + VELOCITY[1] * t
+        q = ((c - cx) / 5.0) ** 2 + ((r - cy) / 8.0) ** 2
+        out[t] = np.maximum(0.0, 200.0 * (1.0 - q))
+    return out
+
+
+def test_run_on_known_motion():
+    frames = moving_blob()
+    res = pymodal.run(frames)
+    table = res["table"]
+    assert len(table) == len(frames) - 1
+    assert len(res["matches"]) == len(table)
+    for row, m in zip(table, res["matches"]):
+        n, k = row["nodes_a"], row["nodes_b"]
+        assert row["frame_b"] == row["frame_a"] + 1
+        assert row["optimisation_matches"] == min(n, k)
+        assert row["excess_matches"] == max(n, k) == len(m.pairs)
+        assert 0 <= row["local_matches"] <= min(n, k)
+    objects = res["objects"]
+    assert [o["points"].shape[0] for o in objects[:2]] == [table[0]["nodes_a"], table[0]["nodes_b"]]
+    steps = np.concatenate([np.diff(t, axis=0) for t in res["tracks"] if len(t) > 1])
+    assert np.all(steps[:, 0] == 1), "tracks advance one frame per step"
+    median = np.median(steps[:, 1:3], axis=0)
+    np.testing.assert_allclose(median, VELOCITY, atol=0.25)
+    assert max(len(t) for t in res["tracks"]) == len(frames)
+
+
+def test_run_models_and_options():
+    frames = moving_blob(frames=4)
+    iso = pymodal.run(frames, model="isocontour", iso_levels=5)
+    assert len(iso["table"]) == 4
+    levels = [o["level"] for o in iso["objects"]]
+    assert levels == sorted(levels)
+    surf = pymodal.run(frames, model="surface", surface_nodes=40)
+    assert len(surf["table"]) == 3
+    assert all(o["points"].shape[1] == 3 and o["points"].shape[0] <= 40 for o in surf["objects"])
+    local = pymodal.run(frames, search="local")
+    assert all(r["optimisation_matches"] == 0 for r in local["table"])
+    for solver in ("hungarian", "simplex"):
+        other = pymodal.run(frames, solver=solver)
+        assert [r["optimisation_matches"] for r in other["table"]] == [
+            r["optimisation_matches"] for r in pymodal.run(frames)["table"]
+        ]
+
+
+def test_run_bundled_recording_from_path_and_recording():
+    res = pymodal.run(str(BUNDLED), frames=(1, 40))
+    assert len(res["table"]) >= 10
+    rec = pymodal.read_recording(BUNDLED)
+    again = pymodal.run(rec, frames=(1, 40))
+    assert [r["nodes_a"] for r in again["table"]] == [r["nodes_a"] for r in res["table"]]
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [dict(model="mesh"), dict(search="best"), dict(modes=0.0), dict(frames=(5, 2)), dict(frames=(1, 999))],
+)
+def test_run_bad_options_raise_value_error(kwargs):
+    with pytest.raises(ValueError):
+        pymodal.run(moving_blob(frames=3), **kwargs)
+
+
+def test_run_bad_input():
+    with pytest.raises(ValueError):
+        pymodal.run(np.zeros((2, 2, 2, 2)))
+    with pytest.raises(ValueError):
+        pymodal.run("/nonexistent/recording.asf")
+
+
+def test_plot_helpers_draw():
+    mpl = pytest.importorskip("matplotlib")
+    mpl.use("Agg")
+    from pymodal.plot import plot_match, plot_tracks
+
+    t = np.linspace(0, 2 * np.pi, 30, endpoint=False)
+    a = np.c_[3 * np.cos(t), 2 * np.sin(t)]
+    b = a * 1.05 + 0.2
+    m = pymodal.match(a, b)
+    ax = plot_match(a, b, m)
+    # Two outlines plus one line per match.
+    assert len(ax.lines) == 2 + len(m.pairs)
+    res = pymodal.run(moving_blob(frames=4))
+    ax = plot_tracks(res["tracks"], min_length=4)
+    assert len(ax.lines) == 2 * sum(len(tr) >= 4 for tr in res["tracks"])
+    with pytest.raises(ValueError):
+        plot_match(a, np.zeros((5, 3)), m)
