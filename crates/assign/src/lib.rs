@@ -19,6 +19,8 @@
 //! [`solve_with_threshold`] lets rows and columns stay unassigned instead, which is what a matching
 //! with a rejection threshold needs.
 
+use std::borrow::Cow;
+
 mod error;
 mod hungarian;
 mod jv;
@@ -95,8 +97,10 @@ fn run_method(method: Method, c: &[f64], n: usize, m: usize) -> Result<Solution,
     }
 }
 
-/// Copies `cost` into the normalised form the solvers expect: a minimisation with at most as many
-/// rows as columns (transposing if needed), every entry finite or `+inf`.
+/// Brings `cost` into the normalised form the solvers expect: a minimisation with at most as
+/// many rows as columns, every entry finite or `+inf`. A wide (or square) minimisation is only
+/// validated and used in place: copying a large matrix costs as much as solving an easy one.
+/// Otherwise the matrix is copied, negated when maximising and transposed when tall.
 ///
 /// Returns the matrix and whether it was transposed.
 fn normalise(
@@ -104,30 +108,28 @@ fn normalise(
     rows: usize,
     cols: usize,
     maximize: bool,
-) -> Result<(Vec<f64>, bool), AssignError> {
+) -> Result<(Cow<'_, [f64]>, bool), AssignError> {
     let sign = if maximize { -1.0 } else { 1.0 };
-    let check = |k: usize, x: f64| -> Result<f64, AssignError> {
-        let y = sign * x;
-        // NaN fails both comparisons; -inf (after the sign flip) is unbounded.
-        if y > f64::NEG_INFINITY {
-            Ok(y)
-        } else {
-            Err(AssignError::InvalidEntry {
-                row: k / cols,
-                col: k % cols,
-            })
-        }
-    };
+    // NaN fails the comparison; so does the infinity that would make the objective unbounded.
+    let valid = |x: f64| sign * x > f64::NEG_INFINITY;
+    // A branch-free scan (vectorised) first; the slow path only locates the culprit.
+    let all_valid = cost
+        .chunks(1024)
+        .all(|ch| ch.iter().fold(true, |ok, &x| ok & valid(x)));
+    if !all_valid {
+        let k = cost.iter().position(|&x| !valid(x)).unwrap_or(0);
+        return Err(AssignError::InvalidEntry {
+            row: k / cols,
+            col: k % cols,
+        });
+    }
     if rows <= cols {
-        let mut c = Vec::with_capacity(cost.len());
-        for (k, &x) in cost.iter().enumerate() {
-            c.push(check(k, x)?);
+        if maximize {
+            Ok((Cow::Owned(cost.iter().map(|&x| -x).collect()), false))
+        } else {
+            Ok((Cow::Borrowed(cost), false))
         }
-        Ok((c, false))
     } else {
-        for (k, &x) in cost.iter().enumerate() {
-            check(k, x)?;
-        }
         let mut c = vec![0.0; cost.len()];
         // Blocked transpose: keeps both sides cache friendly on large matrices.
         const B: usize = 32;
@@ -140,7 +142,7 @@ fn normalise(
                 }
             }
         }
-        Ok((c, true))
+        Ok((Cow::Owned(c), true))
     }
 }
 
@@ -257,7 +259,7 @@ pub fn solve_with_threshold(
     let w = m + n;
     let mut aug = vec![f64::INFINITY; n * w];
     for i in 0..n {
-        let src = &c[i * m..(i + 1) * m];
+        let src: &[f64] = &c[i * m..(i + 1) * m];
         let dst = &mut aug[i * w..i * w + m];
         for (d, &s) in dst.iter_mut().zip(src) {
             // Pairs that can never pay off are forbidden outright: it prunes the search and
