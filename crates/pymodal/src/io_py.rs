@@ -1,7 +1,456 @@
-//! Bindings of the io functions.
+//! Bindings of pedo-io: `read_recording`, `contours`, `surface`, `isocontours`.
 
+use numpy::ndarray::{Array2, Array3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
 
-pub fn register(_m: &Bound<'_, PyModule>) -> PyResult<()> {
+use pedo_io::contour::Saddle;
+use pedo_io::isobar::{isocontours as iso_rs, IsoOptions};
+use pedo_io::preprocess::{Interpolation, Preprocess};
+use pedo_io::surface::{surface as surface_rs, Laplacian, SurfaceOptions, ZScale};
+use pedo_io::{contours as contours_rs, ContourMethod, ContourOptions, Grid, Recording, Resample};
+
+use crate::errors::to_py;
+
+/// A plantar-pressure recording read by :func:`read_recording`.
+///
+/// Attributes: ``frames`` (T, H, W) float32 with NaN where there is no sensor, ``pitch_mm``
+/// ``(dx, dy)`` = (column spacing, row spacing) or None, ``dt_s`` (seconds per frame or None),
+/// ``units`` (e.g. "kPa", "" if unknown), ``sensel_area_mm2``, ``noise_threshold``, ``format``,
+/// ``sensor_mask`` (H, W) bool, and the per-frame measures ``contact_area`` (mm², or sensels when
+/// the pitch is unknown), ``total_force`` (N when units and pitch are known), ``peak_pressure``,
+/// ``cop`` (T, 2) centre of pressure (x = column, y = row; NaN without contact), and
+/// ``peak_image`` (H, W). Measures count every sensor above 0; ``measures(threshold)`` recomputes
+/// them above another threshold.
+#[pyclass(name = "Recording", module = "pymodal", frozen)]
+pub struct PyRecording {
+    inner: Recording,
+}
+
+fn measures_dict<'py>(
+    py: Python<'py>,
+    rec: &Recording,
+    threshold: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let ms = rec.measures(threshold);
+    let d = PyDict::new(py);
+    d.set_item(
+        "contact_area",
+        PyArray1::from_vec(py, ms.iter().map(|m| m.contact_area).collect()),
+    )?;
+    d.set_item(
+        "total_force",
+        PyArray1::from_vec(py, ms.iter().map(|m| m.total_force).collect()),
+    )?;
+    d.set_item(
+        "peak_pressure",
+        PyArray1::from_vec(py, ms.iter().map(|m| m.peak_pressure).collect()),
+    )?;
+    d.set_item(
+        "contact_sensors",
+        PyArray1::from_vec(py, ms.iter().map(|m| m.contact_sensors as i64).collect()),
+    )?;
+    let cop: Vec<f64> = ms
+        .iter()
+        .flat_map(|m| m.cop.unwrap_or([f64::NAN, f64::NAN]))
+        .collect();
+    let cop = Array2::from_shape_vec((ms.len(), 2), cop).map_err(to_py)?;
+    d.set_item("cop", cop.into_pyarray(py))?;
+    Ok(d)
+}
+
+impl PyRecording {
+    /// The wrapped Rust recording (for other bindings that accept a `Recording`).
+    pub fn recording(&self) -> &Recording {
+        &self.inner
+    }
+}
+
+#[pymethods]
+impl PyRecording {
+    #[getter]
+    fn frames<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
+        let r = &self.inner;
+        let a = Array3::from_shape_vec((r.n_frames(), r.rows(), r.cols()), r.frames_with_nan())
+            .map_err(to_py)?;
+        Ok(a.into_pyarray(py))
+    }
+    #[getter]
+    fn sensor_mask<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<bool>>> {
+        let r = &self.inner;
+        let a = Array2::from_shape_vec((r.rows(), r.cols()), r.sensor_mask().to_vec())
+            .map_err(to_py)?;
+        Ok(a.into_pyarray(py))
+    }
+    #[getter]
+    fn pitch_mm(&self) -> Option<(f64, f64)> {
+        self.inner.pitch_mm.map(|p| (p[0], p[1]))
+    }
+    #[getter]
+    fn dt_s(&self) -> Option<f64> {
+        self.inner.dt_s
+    }
+    #[getter]
+    fn units(&self) -> String {
+        self.inner.units.clone()
+    }
+    #[getter]
+    fn sensel_area_mm2(&self) -> Option<f64> {
+        self.inner.sensel_area()
+    }
+    #[getter]
+    fn noise_threshold(&self) -> Option<f64> {
+        self.inner.noise_threshold
+    }
+    #[getter]
+    fn format(&self) -> Option<String> {
+        self.inner.format.map(|f| format!("{f:?}").to_lowercase())
+    }
+    #[getter]
+    fn n_frames(&self) -> usize {
+        self.inner.n_frames()
+    }
+    #[getter]
+    fn shape(&self) -> (usize, usize, usize) {
+        (self.inner.n_frames(), self.inner.rows(), self.inner.cols())
+    }
+    #[getter]
+    fn peak_image<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let g = self.inner.peak_image();
+        let a = Array2::from_shape_vec((g.rows(), g.cols()), g.data().to_vec()).map_err(to_py)?;
+        Ok(a.into_pyarray(py))
+    }
+    #[getter]
+    fn contact_area<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        measures_dict(py, &self.inner, 0.0)?
+            .as_any()
+            .get_item("contact_area")
+    }
+    #[getter]
+    fn total_force<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        measures_dict(py, &self.inner, 0.0)?
+            .as_any()
+            .get_item("total_force")
+    }
+    #[getter]
+    fn peak_pressure<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        measures_dict(py, &self.inner, 0.0)?
+            .as_any()
+            .get_item("peak_pressure")
+    }
+    #[getter]
+    fn cop<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        measures_dict(py, &self.inner, 0.0)?
+            .as_any()
+            .get_item("cop")
+    }
+    /// Per-frame measures counting sensors strictly above ``threshold``: a dict of arrays
+    /// ``contact_area``, ``total_force``, ``peak_pressure``, ``contact_sensors``, ``cop``.
+    #[pyo3(signature = (threshold=0.0))]
+    fn measures<'py>(&self, py: Python<'py>, threshold: f64) -> PyResult<Bound<'py, PyDict>> {
+        measures_dict(py, &self.inner, threshold)
+    }
+    fn __len__(&self) -> usize {
+        self.inner.n_frames()
+    }
+    fn __repr__(&self) -> String {
+        let r = &self.inner;
+        format!(
+            "Recording(frames={}x{}x{}, pitch_mm={:?}, dt_s={:?}, units={:?})",
+            r.n_frames(),
+            r.rows(),
+            r.cols(),
+            r.pitch_mm,
+            r.dt_s,
+            r.units
+        )
+    }
+}
+
+/// Read a pressure recording: Tekscan ``.asf``, novel emed ``.lst``, CSV grid, NumPy ``.npy``
+/// (2-D or 3-D), PNG/TIFF (8/16-bit grayscale), a folder of images, or a numbered sequence
+/// (``"walk_%03d.png"``). The format is detected from the content and the extension.
+///
+/// Raises ValueError naming the file (and line, for text formats) if it is corrupt or truncated.
+#[pyfunction]
+fn read_recording(py: Python<'_>, path: PathBuf) -> PyResult<PyRecording> {
+    let rec = py
+        .detach(|| pedo_io::read_recording(&path))
+        .map_err(to_py)?;
+    Ok(PyRecording { inner: rec })
+}
+
+/// A 2-D array-like as a grid; NaN (no sensor) reads as 0, infinities are rejected.
+fn grid_of(py: Python<'_>, frame: &Bound<'_, PyAny>) -> PyResult<Grid> {
+    let np = py.import("numpy")?;
+    let kw = PyDict::new(py);
+    kw.set_item("dtype", np.getattr("float64")?)?;
+    let arr = np.call_method("ascontiguousarray", (frame,), Some(&kw))?;
+    let ndim: usize = arr.getattr("ndim")?.extract()?;
+    if ndim != 2 {
+        return Err(PyValueError::new_err(format!(
+            "expected a 2-D frame, got a {ndim}-D array"
+        )));
+    }
+    let arr: PyReadonlyArray2<'_, f64> = arr.extract()?;
+    let (rows, cols) = (arr.shape()[0], arr.shape()[1]);
+    let data: Vec<f64> = arr
+        .as_slice()
+        .map_err(to_py)?
+        .iter()
+        .map(|&v| if v.is_nan() { 0.0 } else { v })
+        .collect();
+    Grid::new(rows, cols, data).map_err(to_py)
+}
+
+fn preprocess_of(
+    threshold: Option<f64>,
+    smooth: Option<f64>,
+    upsample: Option<usize>,
+    interpolation: &str,
+) -> PyResult<Preprocess> {
+    let interp = match interpolation {
+        "bilinear" => Interpolation::Bilinear,
+        "bicubic" => Interpolation::Bicubic,
+        o => {
+            return Err(PyValueError::new_err(format!(
+                "interpolation must be \"bilinear\" or \"bicubic\", got {o:?}"
+            )))
+        }
+    };
+    Ok(Preprocess {
+        threshold,
+        sigma: smooth,
+        upsample: upsample.map(|k| (k, interp)),
+    })
+}
+
+fn resample_of(n_points: Option<usize>, spacing: Option<f64>) -> PyResult<Resample> {
+    match (n_points, spacing) {
+        (Some(_), Some(_)) => Err(PyValueError::new_err("give n_points or spacing, not both")),
+        (Some(n), None) => Ok(Resample::Points(n)),
+        (None, Some(s)) => Ok(Resample::Spacing(s)),
+        (None, None) => Ok(Resample::None),
+    }
+}
+
+fn saddle_of(s: &str) -> PyResult<Saddle> {
+    match s {
+        "low" => Ok(Saddle::LowConnected),
+        "high" => Ok(Saddle::HighConnected),
+        "average" => Ok(Saddle::Average),
+        o => Err(PyValueError::new_err(format!(
+            "fully_connected must be \"low\", \"high\" or \"average\", got {o:?}"
+        ))),
+    }
+}
+
+fn points_array<'py, const D: usize>(
+    py: Python<'py>,
+    pts: &[[f64; D]],
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let flat: Vec<f64> = pts.iter().flatten().copied().collect();
+    Ok(Array2::from_shape_vec((pts.len(), D), flat)
+        .map_err(to_py)?
+        .into_pyarray(py))
+}
+
+/// Closed contours of a pressure frame as a list of (k, 2) float64 arrays of ``(x, y)`` =
+/// (column, row) in pixels, counter-clockwise in (x, y), the first point not repeated.
+///
+/// ``level``: contour level (default: half the smallest positive value, the contact boundary).
+/// ``n_points`` / ``spacing``: resample uniformly in arc length. ``smooth``: Gaussian σ in pixels.
+/// ``threshold``: values below are set to 0 first. ``upsample``: integer factor (coordinates stay
+/// in input pixels), ``interpolation`` "bilinear" or "bicubic". ``method``: "marching" (sub-pixel
+/// marching squares) or "chain" (the seed's hysteresis + boundary tracking; ``high`` is its upper
+/// threshold). ``fully_connected``: saddle rule as in ``skimage.measure.find_contours``.
+/// ``include_holes``: keep contours around holes. ``min_area``: drop smaller contours (px²).
+/// NaN in the frame means no sensor (read as 0); the frame is surrounded by zeros so every
+/// contour closes.
+#[pyfunction]
+#[pyo3(signature = (frame, *, level=None, n_points=None, spacing=None, smooth=None, threshold=None,
+    upsample=None, interpolation="bilinear", method="marching", high=None, fully_connected="low",
+    include_holes=true, min_area=0.0))]
+#[allow(clippy::too_many_arguments)]
+fn contours<'py>(
+    py: Python<'py>,
+    frame: &Bound<'py, PyAny>,
+    level: Option<f64>,
+    n_points: Option<usize>,
+    spacing: Option<f64>,
+    smooth: Option<f64>,
+    threshold: Option<f64>,
+    upsample: Option<usize>,
+    interpolation: &str,
+    method: &str,
+    high: Option<f64>,
+    fully_connected: &str,
+    include_holes: bool,
+    min_area: f64,
+) -> PyResult<Vec<Bound<'py, PyArray2<f64>>>> {
+    let grid = grid_of(py, frame)?;
+    let method = match method {
+        "marching" => ContourMethod::MarchingSquares {
+            saddle: saddle_of(fully_connected)?,
+        },
+        "chain" => ContourMethod::Chain { high, refine: true },
+        o => {
+            return Err(PyValueError::new_err(format!(
+                "method must be \"marching\" or \"chain\", got {o:?}"
+            )))
+        }
+    };
+    let opts = ContourOptions {
+        level,
+        preprocess: preprocess_of(threshold, smooth, upsample, interpolation)?,
+        method,
+        resample: resample_of(n_points, spacing)?,
+        min_area,
+        include_holes,
+        ..Default::default()
+    };
+    let cs = py.detach(|| contours_rs(&grid, &opts)).map_err(to_py)?;
+    cs.iter().map(|c| points_array(py, &c.points)).collect()
+}
+
+/// A brightness surface: ``points`` (n, 3) float64 and ``triangles`` (t, 3) int64 (indices into
+/// ``points``, counter-clockwise in x-y).
+#[pyclass(name = "Surface", module = "pymodal", frozen)]
+pub struct PySurface {
+    inner: pedo_io::surface::Surface,
+}
+
+#[pymethods]
+impl PySurface {
+    #[getter]
+    fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        points_array(py, &self.inner.points)
+    }
+    #[getter]
+    fn triangles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let t = &self.inner.triangles;
+        let flat: Vec<i64> = t.iter().flatten().map(|&i| i as i64).collect();
+        Ok(Array2::from_shape_vec((t.len(), 3), flat)
+            .map_err(to_py)?
+            .into_pyarray(py))
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "Surface(points={}, triangles={})",
+            self.inner.points.len(),
+            self.inner.triangles.len()
+        )
+    }
+}
+
+/// The seed's brightness surface of a frame (§3.2): values below ``threshold`` removed, Gaussian
+/// smoothing ``smooth`` (σ px), samples above the threshold in the object's bounding rectangle
+/// (every ``step`` px), Delaunay triangulation with pressure as z, decimation to ``max_nodes``
+/// (hull corners kept unless ``keep_hull=False``), Laplacian smoothing (VTK semantics:
+/// ``laplacian_iterations`` = 20, ``relaxation`` = 0.01; 0 iterations = none), and z rescaled to
+/// the x-y range (``z_scale="xy"``, or "keep").
+#[pyfunction]
+#[pyo3(signature = (frame, *, threshold=None, max_nodes=None, smooth=None, step=1, keep_hull=true,
+    laplacian_iterations=20, relaxation=0.01, z_scale="xy"))]
+#[allow(clippy::too_many_arguments)]
+fn surface(
+    py: Python<'_>,
+    frame: &Bound<'_, PyAny>,
+    threshold: Option<f64>,
+    max_nodes: Option<usize>,
+    smooth: Option<f64>,
+    step: usize,
+    keep_hull: bool,
+    laplacian_iterations: usize,
+    relaxation: f64,
+    z_scale: &str,
+) -> PyResult<PySurface> {
+    let grid = grid_of(py, frame)?;
+    let z_scale = match z_scale {
+        "xy" => ZScale::MatchXY,
+        "keep" => ZScale::Keep,
+        o => {
+            return Err(PyValueError::new_err(format!(
+                "z_scale must be \"xy\" or \"keep\", got {o:?}"
+            )))
+        }
+    };
+    let opts = SurfaceOptions {
+        preprocess: Preprocess {
+            threshold,
+            sigma: smooth,
+            upsample: None,
+        },
+        sample_level: threshold.unwrap_or(0.0),
+        step,
+        max_nodes,
+        keep_hull,
+        laplacian: (laplacian_iterations > 0).then_some(Laplacian {
+            iterations: laplacian_iterations,
+            relaxation,
+            ..Default::default()
+        }),
+        z_scale,
+        ..Default::default()
+    };
+    let s = py.detach(|| surface_rs(&grid, &opts)).map_err(to_py)?;
+    Ok(PySurface { inner: s })
+}
+
+/// Isobaric contours: for each level, the closed level lines of the (thresholded, smoothed)
+/// frame, as a list of ``(level, points)`` with points (k, 2) ``(x, y)`` or, with
+/// ``three_d=True``, (k, 3) ``(x, y, level)``. Levels are visited in the order given.
+#[pyfunction]
+#[pyo3(signature = (frame, levels, *, smooth=None, threshold=None, three_d=false, n_points=None,
+    spacing=None, include_holes=true, fully_connected="low"))]
+#[allow(clippy::too_many_arguments)]
+fn isocontours<'py>(
+    py: Python<'py>,
+    frame: &Bound<'py, PyAny>,
+    levels: Vec<f64>,
+    smooth: Option<f64>,
+    threshold: Option<f64>,
+    three_d: bool,
+    n_points: Option<usize>,
+    spacing: Option<f64>,
+    include_holes: bool,
+    fully_connected: &str,
+) -> PyResult<Vec<(f64, Bound<'py, PyArray2<f64>>)>> {
+    let grid = grid_of(py, frame)?;
+    let opts = IsoOptions {
+        preprocess: Preprocess {
+            threshold,
+            sigma: smooth,
+            upsample: None,
+        },
+        saddle: saddle_of(fully_connected)?,
+        resample: resample_of(n_points, spacing)?,
+        include_holes,
+        ..Default::default()
+    };
+    let cs = py.detach(|| iso_rs(&grid, &levels, &opts)).map_err(to_py)?;
+    cs.iter()
+        .map(|c| {
+            let arr = if three_d {
+                let p: Vec<[f64; 3]> = c.points.iter().map(|q| [q[0], q[1], c.level]).collect();
+                points_array(py, &p)?
+            } else {
+                points_array(py, &c.points)?
+            };
+            Ok((c.level, arr))
+        })
+        .collect()
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyRecording>()?;
+    m.add_class::<PySurface>()?;
+    m.add_function(wrap_pyfunction!(read_recording, m)?)?;
+    m.add_function(wrap_pyfunction!(contours, m)?)?;
+    m.add_function(wrap_pyfunction!(surface, m)?)?;
+    m.add_function(wrap_pyfunction!(isocontours, m)?)?;
     Ok(())
 }
