@@ -1,6 +1,98 @@
-use criterion::{criterion_group, criterion_main, Criterion};
+//! Modal matching per contour pair (~60 nodes), split into its stages, and per surface pair.
+//!
+//! Run: `CARGO_TARGET_DIR=target-match cargo bench --bench matching`
+//! (compare with `python benches/python/bench_match.py`, which times pycpd on the same cases).
 
-fn bench(_c: &mut Criterion) {}
+use std::hint::black_box;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use modal_core::{align, match_shapes, modal_basis, MatchOptions, ModelOptions, Shape, Topology};
+
+/// A real foot outline (MUN104 left, level 15) resampled at `n` points, and a warped copy with
+/// `m` points: rotation 12°, anisotropic scale, shear and bending.
+fn pair(n: usize, m: usize) -> (Shape, Shape) {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/crates/modal-core/tests/data/contours.txt"
+    );
+    let text = std::fs::read_to_string(path).expect("contour fixture");
+    let mut pts: Vec<[f64; 2]> = Vec::new();
+    let mut on = false;
+    for l in text.lines() {
+        if l.starts_with("# ") {
+            if on {
+                break;
+            }
+            on = l.contains("MUN104L-level15");
+        } else if on && !l.trim().is_empty() {
+            let v: Vec<f64> = l.split_whitespace().map(|s| s.parse().unwrap()).collect();
+            pts.push([v[0], v[1]]);
+        }
+    }
+    let sample = |c: &[[f64; 2]], k: usize, start: usize| -> Vec<[f64; 2]> {
+        (0..k)
+            .map(|i| c[(start + i * c.len() / k) % c.len()])
+            .collect()
+    };
+    let (t, sx, sy) = (12f64.to_radians(), 1.08, 0.93);
+    let warped: Vec<[f64; 2]> = pts
+        .iter()
+        .map(|p| {
+            let (x, y) = ((p[0] - 12.0) * sx, (p[1] - 30.0) * sy);
+            let x = x + 0.1 * y + 0.004 * y * y;
+            [t.cos() * x - t.sin() * y, t.sin() * x + t.cos() * y]
+        })
+        .collect();
+    (
+        Shape::from_points_2d(&sample(&pts, n, 0), Topology::ClosedContour).unwrap(),
+        Shape::from_points_2d(&sample(&warped, m, 17), Topology::ClosedContour).unwrap(),
+    )
+}
+
+fn bench(c: &mut Criterion) {
+    let (a, b) = pair(60, 64);
+    let mut g = c.benchmark_group("match_contour_60x64");
+    g.sample_size(30);
+    g.bench_function("recipe_default", |x| {
+        x.iter(|| match_shapes(black_box(&a), black_box(&b), &MatchOptions::default()).unwrap())
+    });
+    g.bench_function("recipe_no_refit", |x| {
+        let o = MatchOptions {
+            refits: 0,
+            ..MatchOptions::default()
+        };
+        x.iter(|| match_shapes(black_box(&a), black_box(&b), &o).unwrap())
+    });
+    g.bench_function("paper_setting", |x| {
+        x.iter(|| match_shapes(black_box(&a), black_box(&b), &MatchOptions::paper()).unwrap())
+    });
+    g.bench_function("positions_only", |x| {
+        let o = MatchOptions {
+            position_weight: 1.0,
+            ..MatchOptions::default()
+        };
+        x.iter(|| match_shapes(black_box(&a), black_box(&b), &o).unwrap())
+    });
+    let (pa, _, _) = align::normalize(a.coords(), 2).unwrap();
+    let (pb, _, _) = align::normalize(b.coords(), 2).unwrap();
+    g.bench_function("robust_prealign", |x| {
+        x.iter(|| align::robust_prealign(black_box(&pa), black_box(&pb), 2, 5, true))
+    });
+    let sa = Shape::new(2, pa.clone(), Topology::ClosedContour).unwrap();
+    let opts = ModelOptions {
+        n_modes: Some(30),
+        material: modal_core::Material {
+            young: 1.0,
+            poisson: 0.49,
+            density: 1.0,
+        },
+        ..ModelOptions::default()
+    };
+    g.bench_function("modal_basis_30_modes", |x| {
+        x.iter(|| modal_basis(black_box(&sa), &opts).unwrap())
+    });
+    g.finish();
+}
 
 criterion_group!(benches, bench);
 criterion_main!(benches);

@@ -58,6 +58,9 @@ pub struct MatchOptions {
     /// max-normalised, `D` the squared distance of the aligned coordinates. 0 is pure modal
     /// matching; 1 skips the modal solves and matches aligned positions (a baseline).
     pub position_weight: f64,
+    /// Return the iteration whose pairs are best explained by one affine map (least-squares
+    /// residual in B's frame) instead of the last one: a re-fit can lock onto a wrong pairing.
+    pub keep_best_fit: bool,
     /// Use one Gaussian width for both objects, `kappa ×` the mean of their mean nearest-neighbour
     /// distances, instead of one per object (for independently sampled point sets).
     pub common_sigma: bool,
@@ -86,9 +89,10 @@ impl Default for MatchOptions {
             ordered: None,
             prealign: Prealign::Robust,
             icp_iterations: 5,
-            refits: 3,
+            refits: 2,
             position_weight: 0.0,
             common_sigma: false,
+            keep_best_fit: true,
         }
     }
 }
@@ -99,7 +103,11 @@ impl MatchOptions {
     /// modal features of different samplings only agree on smooth modes, and no affine re-fits
     /// (the surface's pairs are too noisy to improve the fit). See docs/modal-matching.md.
     pub fn for_surfaces() -> Self {
-        let mut o = Self { refits: 0, common_sigma: true, ..Self::default() };
+        let mut o = Self {
+            refits: 0,
+            common_sigma: true,
+            ..Self::default()
+        };
         o.model.kappa = 3.0;
         o
     }
@@ -383,7 +391,8 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
     let mut prev: Option<Vec<MatchPair>> = None;
     let mut refits = 0;
     let mut solves = 0;
-    let (z, pairs) = loop {
+    let mut best: Option<(AffinityMatrix, Vec<MatchPair>, f64)> = None;
+    loop {
         let z = match &fb {
             Some(fb) => {
                 let fa = features_of(&cur, d, &sa.topology, &model, skip, k)?;
@@ -463,31 +472,49 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
                 excess: true,
             }));
         }
-        let stable = prev.as_ref().is_some_and(|p| same_pairs(p, &pairs));
-        if stable || refits >= opts.refits {
-            break (z, pairs);
-        }
         let idx: Vec<(usize, usize)> = pairs.iter().map(|p| (p.a, p.b)).collect();
-        let Some(t) = align::fit_affine(&cur, &sb.pts, d, &idx) else {
-            break (z, pairs);
-        };
+        let fit = align::fit_affine(&cur, &sb.pts, d, &idx);
+        // How well one affine map explains the pairs, measured in B's fixed frame, so the
+        // iterations are comparable: wrong pairs do not fit a smooth map.
+        let resid = fit.map_or(f64::INFINITY, |t| {
+            let moved = t.apply(&cur);
+            idx.iter()
+                .map(|&(i, j)| {
+                    (0..d)
+                        .map(|c| (moved[i * d + c] - sb.pts[j * d + c]).powi(2))
+                        .sum::<f64>()
+                })
+                .sum::<f64>()
+                / idx.len().max(1) as f64
+        });
+        let stable = prev.as_ref().is_some_and(|p| same_pairs(p, &pairs));
+        let better = !opts.keep_best_fit
+            || best
+                .as_ref()
+                .is_none_or(|b: &(AffinityMatrix, Vec<MatchPair>, f64)| resid < b.2);
+        if better {
+            best = Some((z, pairs.clone(), resid));
+        }
+        if stable || refits >= opts.refits {
+            break;
+        }
+        let Some(t) = fit else { break };
         // A fit this close to the identity cannot change the pairs: skip the solve.
         let moved = (0..d).any(|r| {
-            t.t[r].abs() > 1e-4 || (0..d).any(|c| (t.m[r][c] - if r == c { 1.0 } else { 0.0 }).abs() > 1e-4)
+            t.t[r].abs() > 1e-4
+                || (0..d).any(|c| (t.m[r][c] - if r == c { 1.0 } else { 0.0 }).abs() > 1e-4)
         });
-        if !moved {
-            break (z, pairs);
-        }
-        if ordered && t.det() <= 0.0 {
-            break (z, pairs);
+        if !moved || (ordered && t.det() <= 0.0) {
+            break;
         }
         let Ok((next, _, _)) = align::normalize(&t.apply(&cur), d) else {
-            break (z, pairs);
+            break;
         };
         cur = next;
         prev = Some(pairs);
         refits += 1;
-    };
+    }
+    let (z, pairs, _) = best.expect("at least one iteration ran");
 
     // Back to the callers' node numbering.
     let inv = |perm: &[usize]| {

@@ -250,7 +250,7 @@ fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
 ///     data (2-D arrays whose consecutive points are nearest-neighbour close).
 /// material : None, preset name, dict or (E, nu, rho) — only ν changes the matches.
 /// prealign : {"robust", "normalize"}; skip_rigid : bool; band : int;
-/// refits : int or None — modal affine re-fits (None: 3, or 0 for 3-D point sets);
+/// refits : int or None — modal affine re-fits (None: 2, or 0 for 3-D point sets);
 /// kappa : float or None — σ = kappa × mean nearest-neighbour distance (None: 1, or 3 for 3-D
 ///     point sets, where independent samplings need smoother modes);
 /// threshold_in_optimizer : bool — let the assignment itself reject pairs above the threshold;
