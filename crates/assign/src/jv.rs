@@ -79,16 +79,8 @@ fn column_reduction(
         } else if matches[i] == 1 {
             // Reduction transfer: move the row's slack onto its column's price.
             let j1 = x[i];
-            let row = &c[i * m..(i + 1) * m];
-            let mut min = f64::INFINITY;
-            for j in 0..m {
-                if j != j1 {
-                    let h = row[j] - v[j];
-                    if h < min {
-                        min = h;
-                    }
-                }
-            }
+            let t = top2(&c[i * m..(i + 1) * m], v);
+            let min = if t.j1 == j1 { t.min2 } else { t.min1 };
             if min.is_finite() {
                 v[j1] -= min;
             }
@@ -143,25 +135,8 @@ fn arr(
             processed += 1;
             let i = free[k];
             k += 1;
-            let row = &c[i * m..(i + 1) * m];
-            let mut umin = row[0] - v[0];
-            let mut j1 = 0;
-            let mut usubmin = f64::INFINITY;
-            let mut j2 = NONE;
-            for j in 1..m {
-                let h = row[j] - v[j];
-                if h < usubmin {
-                    if h >= umin {
-                        usubmin = h;
-                        j2 = j;
-                    } else {
-                        usubmin = umin;
-                        umin = h;
-                        j2 = j1;
-                        j1 = j;
-                    }
-                }
-            }
+            let t = top2(&c[i * m..(i + 1) * m], v);
+            let (umin, mut j1, usubmin, j2) = (t.min1, t.j1, t.min2, t.j2);
             if umin == f64::INFINITY {
                 return Err(AssignError::Infeasible);
             }
@@ -201,6 +176,118 @@ fn arr(
     }
     free.extend(deferred);
     Ok(free)
+}
+
+/// The two smallest reduced costs `row[j] - v[j]` of a row, ordered by (value, column): ties go
+/// to the lower column, which makes the portable and the AVX2 versions agree exactly.
+#[derive(Debug, PartialEq)]
+struct Top2 {
+    min1: f64,
+    j1: usize,
+    min2: f64,
+    /// `NONE` when the row has fewer than two finite entries (`j1` likewise with none).
+    j2: usize,
+}
+
+impl Top2 {
+    const EMPTY: Top2 = Top2 {
+        min1: f64::INFINITY,
+        j1: NONE,
+        min2: f64::INFINITY,
+        j2: NONE,
+    };
+
+    /// Offers the candidate `(h, j)`; `j` need not come in increasing order.
+    #[inline]
+    fn offer(&mut self, h: f64, j: usize) {
+        let before = |a: f64, ja: usize, b: f64, jb: usize| a < b || (a == b && ja < jb);
+        if before(h, j, self.min2, self.j2) {
+            if before(h, j, self.min1, self.j1) {
+                self.min2 = self.min1;
+                self.j2 = self.j1;
+                self.min1 = h;
+                self.j1 = j;
+            } else {
+                self.min2 = h;
+                self.j2 = j;
+            }
+        }
+    }
+}
+
+fn top2(row: &[f64], v: &[f64]) -> Top2 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if row.len() >= 8 && std::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 was just detected.
+            return unsafe { top2_avx2(row, v) };
+        }
+    }
+    top2_portable(row, v)
+}
+
+fn top2_portable(row: &[f64], v: &[f64]) -> Top2 {
+    let mut t = Top2::EMPTY;
+    for (j, (&r, &vj)) in row.iter().zip(v).enumerate() {
+        let h = r - vj;
+        // In index order a strict comparison already breaks ties towards the lower column.
+        // Infinite entries are never offered: they leave the index at `NONE`.
+        if h < t.min2 {
+            t.offer(h, j);
+        }
+    }
+    t
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn top2_avx2(row: &[f64], v: &[f64]) -> Top2 {
+    use std::arch::x86_64::*;
+    let m = row.len();
+    assert!(v.len() >= m);
+    let m4 = m - m % 4;
+    let inf = _mm256_set1_pd(f64::INFINITY);
+    let (mut m1, mut m2) = (inf, inf);
+    let mut i1 = _mm256_set1_pd(-1.0);
+    let mut i2 = _mm256_set1_pd(-1.0);
+    let mut jv = _mm256_set_pd(3.0, 2.0, 1.0, 0.0);
+    let four = _mm256_set1_pd(4.0);
+    let (rp, vp) = (row.as_ptr(), v.as_ptr());
+    let mut k = 0;
+    while k < m4 {
+        let h = _mm256_sub_pd(_mm256_loadu_pd(rp.add(k)), _mm256_loadu_pd(vp.add(k)));
+        // Per lane the indices increase, so strict comparisons keep the lower column on ties.
+        let lt1 = _mm256_cmp_pd::<_CMP_LT_OQ>(h, m1);
+        let lt2 = _mm256_cmp_pd::<_CMP_LT_OQ>(h, m2);
+        m2 = _mm256_blendv_pd(_mm256_blendv_pd(m2, h, lt2), m1, lt1);
+        i2 = _mm256_blendv_pd(_mm256_blendv_pd(i2, jv, lt2), i1, lt1);
+        m1 = _mm256_blendv_pd(m1, h, lt1);
+        i1 = _mm256_blendv_pd(i1, jv, lt1);
+        jv = _mm256_add_pd(jv, four);
+        k += 4;
+    }
+    let mut a = [[0.0f64; 4]; 4];
+    _mm256_storeu_pd(a[0].as_mut_ptr(), m1);
+    _mm256_storeu_pd(a[1].as_mut_ptr(), i1);
+    _mm256_storeu_pd(a[2].as_mut_ptr(), m2);
+    _mm256_storeu_pd(a[3].as_mut_ptr(), i2);
+    let mut t = Top2::EMPTY;
+    for l in 0..4 {
+        // Lanes that saw fewer than two columns keep index -1: nothing to offer.
+        if a[1][l] >= 0.0 {
+            t.offer(a[0][l], a[1][l] as usize);
+        }
+        if a[3][l] >= 0.0 {
+            t.offer(a[2][l], a[3][l] as usize);
+        }
+    }
+    for j in m4..m {
+        let h = row[j] - v[j];
+        if h < t.min2 {
+            t.offer(h, j);
+        }
+    }
+    t
 }
 
 /// Shortest augmenting paths from every free row.
@@ -456,6 +543,39 @@ unsafe fn relax_avx2(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn top2_kernels_agree() {
+        let mut state = 99u64;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % 5) as f64
+        };
+        for m in [1usize, 2, 3, 7, 8, 9, 16, 33, 100] {
+            for t in 0..200 {
+                // Every other row mostly forbidden, to exercise rows with 0 or 1 finite entries.
+                let p = if t % 2 == 0 { 4.0 } else { 1.0 };
+                let row: Vec<f64> = (0..m)
+                    .map(|_| if rnd() >= p { f64::INFINITY } else { rnd() })
+                    .collect();
+                let v: Vec<f64> = (0..m).map(|_| -rnd()).collect();
+                let a = top2_portable(&row, &v);
+                let b = top2(&row, &v);
+                assert_eq!(a, b, "{row:?} {v:?}");
+                // Reference: sort (value, index).
+                let mut all: Vec<(f64, usize)> = (0..m).map(|j| (row[j] - v[j], j)).collect();
+                all.sort_by(|x, y| x.partial_cmp(y).unwrap());
+                let want = |k: usize| match all.get(k) {
+                    Some(&(h, j)) if h.is_finite() => (h, j),
+                    _ => (f64::INFINITY, NONE),
+                };
+                assert_eq!((a.min1, a.j1), want(0));
+                assert_eq!((a.min2, a.j2), want(1));
+            }
+        }
+    }
 
     /// The AVX2 kernel must agree exactly with the portable one, ties and tails included.
     #[test]
