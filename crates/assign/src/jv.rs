@@ -272,13 +272,14 @@ unsafe fn top2_avx2(row: &[f64], v: &[f64]) -> Top2 {
     _mm256_storeu_pd(a[2].as_mut_ptr(), m2);
     _mm256_storeu_pd(a[3].as_mut_ptr(), i2);
     let mut t = Top2::EMPTY;
+    let [mins1, idx1, mins2, idx2] = a;
     for l in 0..4 {
-        // Lanes that saw fewer than two columns keep index -1: nothing to offer.
-        if a[1][l] >= 0.0 {
-            t.offer(a[0][l], a[1][l] as usize);
+        // Lanes that saw fewer than two finite entries keep index -1: nothing to offer.
+        if idx1[l] >= 0.0 {
+            t.offer(mins1[l], idx1[l] as usize);
         }
-        if a[3][l] >= 0.0 {
-            t.offer(a[2][l], a[3][l] as usize);
+        if idx2[l] >= 0.0 {
+            t.offer(mins2[l], idx2[l] as usize);
         }
     }
     for j in m4..m {
