@@ -17,6 +17,12 @@ pub enum PairingMethod {
     Overlap { min_fraction: f64, resolution: f64 },
     /// Linked when the centroids are at most `max_distance` apart (same units as the points).
     Centroid { max_distance: f64 },
+    /// Centroid tracking with a constant-velocity prediction (the noise-free limit of the seed's
+    /// Kalman tracking of centroids): in [`track`], a contour that continued an object from the
+    /// frame before is expected at `centroid + (centroid − previous centroid)`, and linked when
+    /// the next frame's centroid is at most `max_distance` from that prediction. In
+    /// [`pair_contours`] (no history) it equals [`PairingMethod::Centroid`].
+    PredictedCentroid { max_distance: f64 },
 }
 
 impl Default for PairingMethod {
@@ -98,6 +104,15 @@ fn overlap_fraction(a: &Contour, b: &Contour, res: f64) -> f64 {
 
 /// Links the contours of two consecutive frames (see [`Pairing`]).
 pub fn pair_contours(a: &[Contour], b: &[Contour], method: PairingMethod) -> Result<Pairing> {
+    pair_with_velocity(a, b, method, &vec![[0.0, 0.0]; a.len()])
+}
+
+fn pair_with_velocity(
+    a: &[Contour],
+    b: &[Contour],
+    method: PairingMethod,
+    vel: &[[f64; 2]],
+) -> Result<Pairing> {
     match method {
         PairingMethod::Overlap {
             min_fraction,
@@ -113,7 +128,8 @@ pub fn pair_contours(a: &[Contour], b: &[Contour], method: PairingMethod) -> Res
                 ));
             }
         }
-        PairingMethod::Centroid { max_distance } => {
+        PairingMethod::Centroid { max_distance }
+        | PairingMethod::PredictedCentroid { max_distance } => {
             if !(max_distance.is_finite() && max_distance > 0.0) {
                 return Err(IoError::invalid(
                     "centroid pairing needs a positive max_distance",
@@ -134,8 +150,10 @@ pub fn pair_contours(a: &[Contour], b: &[Contour], method: PairingMethod) -> Res
                         links.push((i, j, f));
                     }
                 }
-                PairingMethod::Centroid { max_distance } => {
-                    let (p, q) = (ca.centroid(), cb.centroid());
+                PairingMethod::Centroid { max_distance }
+                | PairingMethod::PredictedCentroid { max_distance } => {
+                    let (c, q) = (ca.centroid(), cb.centroid());
+                    let p = [c[0] + vel[i][0], c[1] + vel[i][1]];
                     let d = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
                     if d <= max_distance {
                         links.push((i, j, -d));
@@ -187,8 +205,16 @@ pub fn pair_contours(a: &[Contour], b: &[Contour], method: PairingMethod) -> Res
 
 /// Pairs each frame's contours with the next frame's: `result[t]` links frame `t` to `t + 1`.
 pub fn track(frames: &[Vec<Contour>], method: PairingMethod) -> Result<Vec<Pairing>> {
-    frames
-        .windows(2)
-        .map(|w| pair_contours(&w[0], &w[1], method))
-        .collect()
+    let mut out: Vec<Pairing> = Vec::with_capacity(frames.len().saturating_sub(1));
+    for (t, w) in frames.windows(2).enumerate() {
+        let mut vel = vec![[0.0, 0.0]; w[0].len()];
+        if let (PairingMethod::PredictedCentroid { .. }, Some(prev)) = (method, out.last()) {
+            for &(i, j) in &prev.pairs {
+                let (c0, c1) = (frames[t - 1][i].centroid(), w[0][j].centroid());
+                vel[j] = [c1[0] - c0[0], c1[1] - c0[1]];
+            }
+        }
+        out.push(pair_with_velocity(&w[0], &w[1], method, &vel)?);
+    }
+    Ok(out)
 }

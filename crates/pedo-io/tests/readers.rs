@@ -347,10 +347,14 @@ fn eight_bit_png_and_sixteen_bit_tiff() {
     img8.write_to(&mut png, ImageFormat::Png).unwrap();
     let r = parse_bytes(png.get_ref(), Format::Png, "a.png").unwrap();
     assert_eq!((r.rows(), r.cols()), (5, 6));
-    assert_eq!(r.data(), &px8.iter().map(|&v| v as f32).collect::<Vec<_>>()[..]);
+    assert_eq!(
+        r.data(),
+        &px8.iter().map(|&v| v as f32).collect::<Vec<_>>()[..]
+    );
 
     let px16: Vec<u16> = (0..4 * 3).map(|i| (i * 5000) as u16).collect();
-    let img16: ImageBuffer<Luma<u16>, Vec<u16>> = ImageBuffer::from_raw(4, 3, px16.clone()).unwrap();
+    let img16: ImageBuffer<Luma<u16>, Vec<u16>> =
+        ImageBuffer::from_raw(4, 3, px16.clone()).unwrap();
     let mut tif = std::io::Cursor::new(Vec::new());
     img16.write_to(&mut tif, ImageFormat::Tiff).unwrap();
     let dir = std::env::temp_dir().join(format!("pedo-io-tif-{}", std::process::id()));
@@ -359,10 +363,14 @@ fn eight_bit_png_and_sixteen_bit_tiff() {
     std::fs::write(&p, tif.get_ref()).unwrap();
     let r = read_recording(&p).unwrap();
     assert_eq!(r.format, Some(Format::Tiff));
-    assert_eq!(r.data(), &px16.iter().map(|&v| v as f32).collect::<Vec<_>>()[..]);
+    assert_eq!(
+        r.data(),
+        &px16.iter().map(|&v| v as f32).collect::<Vec<_>>()[..]
+    );
     std::fs::remove_dir_all(&dir).unwrap();
     // Colour images are refused, not silently converted.
-    let rgb: ImageBuffer<image::Rgb<u8>, Vec<u8>> = ImageBuffer::from_raw(2, 2, vec![0; 12]).unwrap();
+    let rgb: ImageBuffer<image::Rgb<u8>, Vec<u8>> =
+        ImageBuffer::from_raw(2, 2, vec![0; 12]).unwrap();
     let mut c = std::io::Cursor::new(Vec::new());
     rgb.write_to(&mut c, ImageFormat::Png).unwrap();
     assert!(parse_bytes(c.get_ref(), Format::Png, "rgb.png").is_err());

@@ -411,3 +411,56 @@ fn pairing_reports_pairs_splits_and_merges() {
         "{pairs} pairs for {objects} objects"
     );
 }
+
+#[test]
+fn predicted_centroid_tracking_follows_a_fast_object() {
+    // A blob accelerating to the right (steps of 2, 4, 6, 8, 10 px) and a static blob: plain
+    // centroid linking with a 4.5 px gate loses the moving one from the third step, the
+    // constant-velocity prediction (error 2 px per step) keeps it.
+    let frames: Vec<Vec<Contour>> = (0..6)
+        .map(|t| {
+            let mut d = vec![0.0; 20 * 80];
+            for r in 0..20 {
+                for c in 0..80 {
+                    let moving = ((c as f64 - (5.0 + (t * (t + 1)) as f64)).powi(2)
+                        + (r as f64 - 6.0).powi(2))
+                    .sqrt();
+                    let fixed = ((c as f64 - 40.0).powi(2) + (r as f64 - 15.0).powi(2)).sqrt();
+                    d[r * 80 + c] = (3.0 - moving).max(0.0) + (3.0 - fixed).max(0.0);
+                }
+            }
+            let g = Grid::new(20, 80, d).unwrap();
+            let mut cs = contours(
+                &g,
+                &ContourOptions {
+                    level: Some(0.5),
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            cs.sort_by(|a, b| a.centroid()[1].total_cmp(&b.centroid()[1])); // 0 = moving, 1 = fixed
+            cs
+        })
+        .collect();
+    let plain = track(&frames, PairingMethod::Centroid { max_distance: 4.5 }).unwrap();
+    let pred = track(
+        &frames,
+        PairingMethod::PredictedCentroid { max_distance: 4.5 },
+    )
+    .unwrap();
+    for t in 0..5 {
+        assert_eq!(
+            plain[t].pairs.contains(&(0, 0)),
+            t < 2,
+            "step {t}: {:?}",
+            plain[t].pairs
+        );
+        assert!(plain[t].pairs.contains(&(1, 1)));
+        assert!(
+            pred[t].pairs.contains(&(0, 0)),
+            "step {t}: {:?}",
+            pred[t].pairs
+        );
+        assert!(pred[t].pairs.contains(&(1, 1)));
+    }
+}
