@@ -148,6 +148,15 @@ def cpd(a, b):
     return np.stack([np.arange(len(a)), j], 1), np.zeros(len(a), bool)
 
 
+def cpd_nn(a, b):
+    from pycpd import DeformableRegistration
+
+    na, nb = normalise(a), normalise(b)
+    ty, _ = DeformableRegistration(X=nb, Y=na).register()
+    _, j = cKDTree(nb).query(ty)
+    return np.stack([np.arange(len(a)), j], 1), np.zeros(len(a), bool)
+
+
 def modal(**kw):
     def run(a, b):
         m = pymodal.match(a, b, **kw)
@@ -198,9 +207,11 @@ def main():
             "pymodal.match search='local'": modal(search="local"),
             "pymodal.match excess=False": modal(excess=False),
             "pymodal.match refits=0": modal(refits=0),
+            "pymodal.match refits=3": modal(refits=3),
             "pymodal.match paper (normalize, no re-fit)": modal(prealign="normalize", refits=0),
             "same pipeline, positions only (no modes)": modal(position_weight=1.0),
             "pycpd deformable + argmax P": cpd,
+            "pycpd deformable + nearest of moved A": cpd_nn,
             "assignment on normalised positions": assign_positions,
         }
         results = {}

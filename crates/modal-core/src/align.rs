@@ -2,6 +2,9 @@
 //! principal-axis rotation candidates, symmetric affine ICP scored by chamfer distance, and
 //! least-squares affine fits from correspondences.
 
+// Small fixed-size matrix code reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
 use crate::ModalError;
 
 /// A `dim`-dimensional affine map `x ↦ M x + t` (only the leading `dim × dim` block is used).
@@ -323,22 +326,40 @@ pub fn icp_affine(
 ) -> (Affine, f64) {
     let mut cur = start;
     let mut moved = cur.apply(a);
-    for _ in 0..iters {
+    let score = |ab: &[(usize, f64)], ba: &[(usize, f64)]| {
+        let m1 = ab.iter().map(|x| x.1.sqrt()).sum::<f64>() / ab.len() as f64;
+        let m2 = ba.iter().map(|x| x.1.sqrt()).sum::<f64>() / ba.len() as f64;
+        0.5 * (m1 + m2)
+    };
+    let mut it = 0;
+    loop {
+        // The neighbours of the current position serve both the next fit and the final score.
         let ab = nearest(&moved, b, dim);
         let ba = nearest(b, &moved, dim);
+        if it == iters {
+            return (cur, score(&ab, &ba));
+        }
+        it += 1;
         let mut pairs: Vec<(usize, usize)> = ab.iter().enumerate().map(|(i, x)| (i, x.0)).collect();
         pairs.extend(ba.iter().enumerate().map(|(j, x)| (x.0, j)));
         let Some(step) = fit_affine(&moved, b, dim, &pairs) else {
-            break;
+            return (cur, score(&ab, &ba));
         };
         let next = step.compose(&cur);
         if keep_orientation && next.det() <= 0.0 {
-            break;
+            return (cur, score(&ab, &ba));
         }
+        // Converged: the pairs would not change any more.
+        let still = (0..dim).all(|r| {
+            step.t[r].abs() < 1e-9
+                && (0..dim).all(|c| (step.m[r][c] - if r == c { 1.0 } else { 0.0 }).abs() < 1e-9)
+        });
         cur = next;
         moved = cur.apply(a);
+        if still {
+            it = iters;
+        }
     }
-    (cur, chamfer(&moved, b, dim))
 }
 
 /// Rotation candidates mapping A's normalised frame into B's (SPEC §10 step 2): the identity,

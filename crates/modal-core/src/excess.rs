@@ -1,5 +1,8 @@
 //! Matching the nodes left over by the one-to-one search (SPEC §6.3 contours, §6.4 surfaces).
 
+// Small fixed-size matrix code reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
 use crate::AffinityMatrix;
 
 /// SPEC §6.3 on two counter-clockwise closed contours. `z` has the *smaller* contour (A, `n_a`

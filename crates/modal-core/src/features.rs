@@ -1,5 +1,8 @@
 //! Modal feature vectors, the cross-object mode alignment of SPEC §5.5 and the affinity matrix Z.
 
+// Small fixed-size matrix code reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
 use crate::ModalError;
 
 /// The retained modes of one object, ready for comparison with another object's.

@@ -1,6 +1,9 @@
 //! The modal matching pipeline: pre-alignment, modal features, mode alignment, affinity,
 //! search, excess nodes and iterative affine re-fits (SPEC §5, §6 and the recipe of §10).
 
+// Small fixed-size matrix code reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
 use crate::align::{self, Affine};
 use crate::excess;
 use crate::features::{align_modes, AffinityMatrix, ModalFeatures};

@@ -1,5 +1,8 @@
 //! Searching the affinity matrix for one-to-one correspondences (SPEC §6.1–6.2).
 
+// Small fixed-size matrix code reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
 use crate::{AffinityMatrix, ModalError};
 
 /// How a threshold interacts with the optimal assignment.
