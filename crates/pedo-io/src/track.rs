@@ -162,6 +162,11 @@ fn pair_with_velocity(
             }
         }
     }
+    Ok(classify(a, b, links))
+}
+
+/// Pairs, splits, merges, appearances and disappearances from the links `(i, j, strength)`.
+fn classify(a: &[Contour], b: &[Contour], links: Vec<(usize, usize, f64)>) -> Pairing {
     let best = |from_a: bool, k: usize| {
         links
             .iter()
@@ -200,7 +205,31 @@ fn pair_with_velocity(
             _ => out.merges.push((is, j)),
         }
     }
-    Ok(out)
+    out
+}
+
+/// Links contours by a caller-supplied cost — for instance the modal deformation energy needed
+/// to align two contours, the seed's third option — where `cost(a_i, b_j)` is `None` for "not
+/// linked" and lower is better. Holes are skipped as in [`pair_contours`]; non-finite costs are an
+/// error.
+pub fn pair_contours_by<F>(a: &[Contour], b: &[Contour], mut cost: F) -> Result<Pairing>
+where
+    F: FnMut(&Contour, &Contour) -> Option<f64>,
+{
+    let mut links = Vec::new();
+    for (i, ca) in a.iter().enumerate().filter(|(_, c)| !c.hole) {
+        for (j, cb) in b.iter().enumerate().filter(|(_, c)| !c.hole) {
+            if let Some(c) = cost(ca, cb) {
+                if !c.is_finite() {
+                    return Err(IoError::invalid(format!(
+                        "pairing cost of ({i}, {j}) is not finite: {c}"
+                    )));
+                }
+                links.push((i, j, -c));
+            }
+        }
+    }
+    Ok(classify(a, b, links))
 }
 
 /// Pairs each frame's contours with the next frame's: `result[t]` links frame `t` to `t + 1`.

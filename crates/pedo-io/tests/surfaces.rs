@@ -4,7 +4,7 @@ use pedo_io::contour::{point_in_polygon, Contour};
 use pedo_io::isobar::{isocontours, IsoOptions};
 use pedo_io::preprocess::Preprocess;
 use pedo_io::surface::{surface, Laplacian, Surface, SurfaceOptions, ZScale};
-use pedo_io::track::{pair_contours, track, PairingMethod};
+use pedo_io::track::{pair_contours, pair_contours_by, track, PairingMethod};
 use pedo_io::{contours, read_recording, ContourOptions, Grid, Recording};
 use std::collections::HashMap;
 
@@ -463,4 +463,41 @@ fn predicted_centroid_tracking_follows_a_fast_object() {
         );
         assert!(pred[t].pairs.contains(&(1, 1)));
     }
+}
+
+#[test]
+fn pairing_by_a_custom_cost_takes_the_cheapest() {
+    // Two blobs of different sizes swap places: by position they would cross-link, by an
+    // area-difference cost (a stand-in for a deformation energy) each keeps its identity.
+    let blobs = |swap: bool| {
+        let (a, b) = if swap {
+            ((45.0, 10.0), (15.0, 10.0))
+        } else {
+            ((15.0, 10.0), (45.0, 10.0))
+        };
+        let mut d = vec![0.0; 20 * 60];
+        for r in 0..20 {
+            for c in 0..60 {
+                let da = ((c as f64 - a.0).powi(2) + (r as f64 - a.1).powi(2)).sqrt();
+                let db = ((c as f64 - b.0).powi(2) + (r as f64 - b.1).powi(2)).sqrt();
+                d[r * 60 + c] = (3.0 - da).max(0.0) + (7.0 - db).max(0.0);
+            }
+        }
+        let mut cs = contours(
+            &Grid::new(20, 60, d).unwrap(),
+            &ContourOptions {
+                level: Some(0.5),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        cs.sort_by(|x, y| x.area().total_cmp(&y.area())); // 0 = small, 1 = large
+        cs
+    };
+    let (a, b) = (blobs(false), blobs(true));
+    let p = pair_contours_by(&a, &b, |x, y| Some((x.area() - y.area()).abs())).unwrap();
+    assert_eq!(p.pairs, vec![(0, 0), (1, 1)]);
+    let near = pair_contours(&a, &b, PairingMethod::Centroid { max_distance: 5.0 }).unwrap();
+    assert_eq!(near.pairs, vec![(0, 1), (1, 0)]);
+    assert!(pair_contours_by(&a, &b, |_, _| Some(f64::NAN)).is_err());
 }
