@@ -128,10 +128,12 @@ fn mat_to_numpy<'py>(py: Python<'py>, m: &Mat<f64>) -> Bound<'py, PyArray2<f64>>
 /// Parameters
 /// ----------
 /// points : (n, 2) or (n, 3) array_like
-/// element : {"gaussian", "axial"}, default "gaussian"
-///     Sclaroff's Gaussian element (no connectivity needed) or linear bars. Bars need ``edges``,
-///     ``triangles`` or (2-D) the points in contour order: a closed contour is braced by the
-///     triangulated interior so that exactly the 3 rigid modes have zero frequency.
+/// element : {"gaussian", "axial"}, optional
+///     Sclaroff's Gaussian element (no connectivity needed; the default) or linear bars (the
+///     default when ``edges`` or ``triangles`` are given). Bars need ``edges``, ``triangles`` or
+///     (2-D) the points in contour order: a closed contour is braced by its triangulated interior
+///     so that exactly the 3 rigid modes have zero frequency. A 3-D mesh gets a hinge-bending
+///     regularisation so that exactly the 6 rigid modes do.
 /// material : None, preset name, dict {young, poisson, density} or (E, nu, rho); default rubber.
 /// sigma : float, optional — Gaussian width; default ``kappa`` × mean nearest-neighbour distance.
 /// edges : (e, 2) int array, optional — bars on exactly these edges (implies ``element="axial"``).
@@ -159,13 +161,13 @@ pub struct PyModalModel {
 #[pymethods]
 impl PyModalModel {
     #[new]
-    #[pyo3(signature = (points, *, element="gaussian", material=None, sigma=None, edges=None,
+    #[pyo3(signature = (points, *, element=None, material=None, sigma=None, edges=None,
         triangles=None, kappa=1.0, n_modes=None, exact_rigid=false, plane="stress"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         points: &Bound<'_, PyAny>,
-        element: &str,
+        element: Option<&str>,
         material: Option<&Bound<'_, PyAny>>,
         sigma: Option<f64>,
         edges: Option<&Bound<'_, PyAny>>,
@@ -191,17 +193,20 @@ impl PyModalModel {
         if edges.is_some() && tris.is_some() {
             return Err(PyValueError::new_err("give edges or triangles, not both"));
         }
-        let mut element = match element {
-            "gaussian" => ElementKind::Gaussian,
-            "axial" | "bar" => ElementKind::Axial,
-            other => {
+        let element = match element {
+            None if edges.is_some() || tris.is_some() => ElementKind::Axial,
+            None | Some("gaussian") => ElementKind::Gaussian,
+            Some("axial" | "bar") => ElementKind::Axial,
+            Some(other) => {
                 return Err(PyValueError::new_err(format!(
                     "unknown element {other:?}; expected \"gaussian\" or \"axial\""
                 )))
             }
         };
-        if edges.is_some() {
-            element = ElementKind::Axial;
+        if edges.is_some() && element == ElementKind::Gaussian {
+            return Err(PyValueError::new_err(
+                "edges define bar elements; they cannot be used with element=\"gaussian\"",
+            ));
         }
         let plane = match plane {
             "stress" => PlaneModel::Stress,
