@@ -62,8 +62,10 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), String> {
     ));
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
+        // No fsync: the rename already guarantees that readers see either the old file or the
+        // whole new one, and hundreds of fsyncs would dominate a run's wall time.
         f.write_all(contents)?;
-        f.sync_all()?;
+        drop(f);
         std::fs::rename(&tmp, path)
     })();
     result.map_err(|e| {
@@ -264,6 +266,12 @@ pub fn write_sequence(
         "pairs": r.pairs.len(),
         "tracks": r.tracks.len(),
         "tracks_3_or_more": r.tracks.iter().filter(|t| t.steps.len() >= 3).count(),
+        "splits": r.splits.iter().map(|(i, js)| serde_json::json!({
+            "id": r.objects[*i].id, "into": js.iter().map(|&j| r.objects[j].id).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+        "merges": r.merges.iter().map(|(is, j)| serde_json::json!({
+            "ids": is.iter().map(|&i| r.objects[i].id).collect::<Vec<_>>(), "into": r.objects[*j].id,
+        })).collect::<Vec<_>>(),
         "mean_local_percent": mean(|p| p.local_percent),
         "mean_optimisation_percent": mean(|p| p.optimisation_percent),
         "mean_cost": mean(|p| p.mean_cost),

@@ -432,6 +432,27 @@ impl Canvas {
 
     /// A thick segment: every pixel within `width/2` of the segment, with a 1-pixel soft edge.
     fn segment(&mut self, p: [f64; 2], q: [f64; 2], color: Rgb, width: f64) {
+        // Long diagonal segments have large bounding boxes: cover them piecewise so the work
+        // stays proportional to the length. Pieces share end points; blending twice there is
+        // invisible at these widths.
+        let len = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
+        if len > 16.0 {
+            let pieces = (len / 8.0).ceil() as usize;
+            let at = |t: f64| [p[0] + (q[0] - p[0]) * t, p[1] + (q[1] - p[1]) * t];
+            for k in 0..pieces {
+                self.segment_piece(
+                    at(k as f64 / pieces as f64),
+                    at((k + 1) as f64 / pieces as f64),
+                    color,
+                    width,
+                );
+            }
+        } else {
+            self.segment_piece(p, q, color, width);
+        }
+    }
+
+    fn segment_piece(&mut self, p: [f64; 2], q: [f64; 2], color: Rgb, width: f64) {
         let half = (width * 0.5).max(0.5);
         let (x0, x1) = (p[0].min(q[0]) - half - 1.0, p[0].max(q[0]) + half + 1.0);
         let (y0, y1) = (p[1].min(q[1]) - half - 1.0, p[1].max(q[1]) + half + 1.0);
@@ -494,7 +515,13 @@ impl Canvas {
             .collect();
         let img = image::RgbImage::from_raw(self.w, self.h, bytes).expect("buffer sized w*h*3");
         let mut out = Vec::new();
-        img.write_to(&mut Cursor::new(&mut out), image::ImageFormat::Png)
+        // Fast compression: figures are written by the hundred and stay small anyway.
+        let encoder = image::codecs::png::PngEncoder::new_with_quality(
+            Cursor::new(&mut out),
+            image::codecs::png::CompressionType::Fast,
+            image::codecs::png::FilterType::Adaptive,
+        );
+        img.write_with_encoder(encoder)
             .expect("PNG encoding into memory does not fail");
         out
     }
