@@ -359,27 +359,28 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         model.sigma = Some(opts.model.kappa * 0.5 * (mnn(&sa.pts) + mnn(&sb.pts)));
     }
     let modal = opts.position_weight < 1.0;
-    let fb = if modal {
-        Some(features_of(
-            &sb.pts,
-            d,
-            &sb.topology,
-            &model,
-            skip,
-            k + band,
-        )?)
-    } else {
-        None
-    };
+    // B's modes (solved once) and A's pre-alignment are independent: overlap them.
+    let (fb, cur) = std::thread::scope(|scope| {
+        let fb_job = modal
+            .then(|| scope.spawn(|| features_of(&sb.pts, d, &sb.topology, &model, skip, k + band)));
+        let cur = match opts.prealign {
+            Prealign::Normalize => Ok(sa.pts.clone()),
+            Prealign::Robust => {
+                let t = align::robust_prealign(&sa.pts, &sb.pts, d, opts.icp_iterations, ordered);
+                align::normalize(&t.apply(&sa.pts), d).map(|x| x.0)
+            }
+        };
+        let fb = match fb_job {
+            Some(h) => Some(
+                h.join()
+                    .map_err(|_| ModalError::Numerical("modal solve of B panicked".into()))??,
+            ),
+            None => None,
+        };
+        Ok::<_, ModalError>((fb, cur?))
+    })?;
+    let mut cur = cur;
     let band = fb.as_ref().map_or(0, |f| f.n_modes.saturating_sub(k));
-
-    let mut cur = match opts.prealign {
-        Prealign::Normalize => sa.pts.clone(),
-        Prealign::Robust => {
-            let t = align::robust_prealign(&sa.pts, &sb.pts, d, opts.icp_iterations, ordered);
-            align::normalize(&t.apply(&sa.pts), d)?.0
-        }
-    };
 
     let nbr = if !ordered && opts.excess && opts.search == Search::Global {
         let nb = |s: &Side| match &s.topology {
