@@ -137,6 +137,7 @@ def main():
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--max-slow", type=float, default=20.0, help="skip larger n for a solver slower than this (s)")
     ap.add_argument("--other-python", default=None, help="interpreter of a second venv (e.g. with lapx)")
+    ap.add_argument("--other-peers", nargs="+", default=None, help="solver names to run in --other-python (default: all)")
     ap.add_argument("--json", action="store_true", help="print raw results as JSON (used for merging)")
     args = ap.parse_args()
 
@@ -145,6 +146,8 @@ def main():
     if args.other_python:
         cmd = [args.other_python, __file__, "--json", "--sizes", *map(str, args.sizes), "--classes", *args.classes,
                "--repeat", str(args.repeat), "--max-slow", str(args.max_slow)]
+        if args.other_peers:
+            cmd += ["--peers", *args.other_peers]
         have = {r["solver"] for r in results} | set(names)
         out = subprocess.run(cmd, check=True, stdout=subprocess.PIPE, text=True)
         other = [r for r in json.loads(out.stdout) if r["solver"] not in have]

@@ -15,16 +15,30 @@ use crate::{AssignError, Solution};
 const NONE: usize = usize::MAX;
 
 /// Solves the normalised problem (`n <= m`, minimise, entries finite or `+inf`).
+///
+/// The entries need not have been validated: every row is checked for NaN and `-inf` in the
+/// first pass that reads it (column reduction, or the first scan in augmenting row reduction),
+/// before anything depends on it, and such an entry gives an [`AssignError::InvalidEntry`]
+/// whose position the caller recomputes (see `crate::solve`).
 pub(crate) fn solve(c: &[f64], n: usize, m: usize) -> Result<Solution, AssignError> {
     let mut v = vec![0.0f64; m];
     let mut x = vec![NONE; n];
     let mut y = vec![NONE; m];
+    // Rows whose entries were checked; column reduction checks them all.
+    let mut seen: Vec<bool>;
     let mut free: Vec<usize> = if n == m {
+        seen = Vec::new();
         column_reduction(c, n, &mut v, &mut x, &mut y)?
     } else {
+        seen = vec![false; n];
         (0..n).collect()
     };
-    free = arr(c, m, &mut v, &mut x, &mut y, free)?;
+    free = arr(c, m, &mut v, &mut x, &mut y, free, &mut seen)?;
+    for (i, _) in seen.iter().enumerate().filter(|(_, &s)| !s) {
+        if !row_valid(&c[i * m..(i + 1) * m]) {
+            return Err(AssignError::InvalidEntry { row: i, col: 0 });
+        }
+    }
     sap(c, m, &mut v, &mut x, &mut y, &free)?;
     let u = (0..n).map(|i| c[i * m + x[i]] - v[x[i]]).collect();
     Ok(Solution {
@@ -32,6 +46,11 @@ pub(crate) fn solve(c: &[f64], n: usize, m: usize) -> Result<Solution, AssignErr
         u,
         v,
     })
+}
+
+/// No NaN and no `-inf` in the row (branch-free, vectorised).
+fn row_valid(row: &[f64]) -> bool {
+    row.iter().fold(true, |ok, &r| ok & (r > f64::NEG_INFINITY))
 }
 
 /// Column reduction and reduction transfer (square case). Returns the free rows.
@@ -44,16 +63,23 @@ fn column_reduction(
 ) -> Result<Vec<usize>, AssignError> {
     let m = n;
     // Column minima, scanning rows to stay cache friendly on the row-major matrix.
+    // The same pass checks every entry for NaN and -inf (see `solve`).
     let mut imin = vec![0usize; m];
     v.copy_from_slice(&c[..m]);
+    let mut ok = row_valid(&c[..m]);
     for i in 1..n {
         let row = &c[i * m..(i + 1) * m];
+        let (v, imin) = (&mut v[..m], &mut imin[..m]);
         for j in 0..m {
-            if row[j] < v[j] {
-                v[j] = row[j];
-                imin[j] = i;
-            }
+            let r = row[j];
+            ok &= r > f64::NEG_INFINITY;
+            let lt = r < v[j];
+            v[j] = if lt { r } else { v[j] };
+            imin[j] = if lt { i } else { imin[j] };
         }
+    }
+    if !ok {
+        return Err(AssignError::InvalidEntry { row: 0, col: 0 });
     }
     if v.contains(&f64::INFINITY) {
         return Err(AssignError::Infeasible);
@@ -102,6 +128,12 @@ fn column_reduction(
 /// in such a tie; the remaining free rows go to the shortest-path phase. Measured on the four
 /// benchmark classes (docs/assign.md), this keeps ARR's large gain on uniform and rectangular
 /// costs and costs nothing on Euclidean and tied ones.
+///
+/// A row whose cheapest reduced cost is shared by a free column takes that column at no price
+/// change (LAPJV's tie rule applied before evicting anyone): on tied integer costs this settles
+/// most rows in one scan instead of bouncing them to the shortest-path phase.
+///
+/// `seen[i]` (when not empty) records the rows already checked for invalid entries.
 fn arr(
     c: &[f64],
     m: usize,
@@ -109,12 +141,18 @@ fn arr(
     x: &mut [usize],
     y: &mut [usize],
     mut free: Vec<usize>,
+    seen: &mut [bool],
 ) -> Result<Vec<usize>, AssignError> {
     let n = x.len();
     let mut budget = 4 * n + 16;
     let mut deferred: Vec<usize> = Vec::new();
     let mut processed = 0usize;
     let mut ties = 0usize;
+    // 0 on free columns, +inf on assigned ones (columns never become free again here).
+    let mut freepen: Vec<f64> = y
+        .iter()
+        .map(|&r| if r == NONE { 0.0 } else { f64::INFINITY })
+        .collect();
     for _pass in 0..2 {
         let mut k = 0;
         let prev = free.len();
@@ -135,10 +173,24 @@ fn arr(
             processed += 1;
             let i = free[k];
             k += 1;
-            let t = top2(&c[i * m..(i + 1) * m], v);
+            let s = scan(&c[i * m..(i + 1) * m], v, &freepen);
+            if !s.valid {
+                return Err(AssignError::InvalidEntry { row: i, col: 0 });
+            }
+            if let Some(flag) = seen.get_mut(i) {
+                *flag = true;
+            }
+            let t = s.top;
             let (umin, mut j1, usubmin, j2) = (t.min1, t.j1, t.min2, t.j2);
             if umin == f64::INFINITY {
                 return Err(AssignError::Infeasible);
+            }
+            if y[j1] != NONE && s.min_free == umin {
+                let jf = s.arg_free;
+                x[i] = jf;
+                y[jf] = i;
+                freepen[jf] = f64::INFINITY;
+                continue;
             }
             if usubmin == f64::INFINITY {
                 // A single allowed column: no finite price drop; leave it to the exact phase.
@@ -159,6 +211,7 @@ fn arr(
             }
             x[i] = j1;
             y[j1] = i;
+            freepen[j1] = f64::INFINITY;
             if i0 != NONE {
                 if strict {
                     k -= 1;
@@ -176,6 +229,130 @@ fn arr(
     }
     free.extend(deferred);
     Ok(free)
+}
+
+/// One row scan of augmenting row reduction: the two smallest reduced costs, the smallest on a
+/// free column (lowest index on ties, `+inf` if none) and whether the row is free of NaN and
+/// `-inf`.
+#[derive(Debug, PartialEq)]
+struct Scan {
+    top: Top2,
+    min_free: f64,
+    arg_free: usize,
+    valid: bool,
+}
+
+fn scan(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if row.len() >= 8 && std::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 was just detected.
+            return unsafe { scan_avx2(row, v, freepen) };
+        }
+    }
+    scan_portable(row, v, freepen)
+}
+
+fn scan_portable(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
+    let mut s = Scan {
+        top: Top2::EMPTY,
+        min_free: f64::INFINITY,
+        arg_free: NONE,
+        valid: true,
+    };
+    for (j, ((&r, &vj), &fp)) in row.iter().zip(v).zip(freepen).enumerate() {
+        s.valid &= r > f64::NEG_INFINITY;
+        let h = r - vj;
+        if h < s.top.min2 {
+            s.top.offer(h, j);
+        }
+        if h + fp < s.min_free {
+            s.min_free = h + fp;
+            s.arg_free = j;
+        }
+    }
+    s
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn scan_avx2(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
+    use std::arch::x86_64::*;
+    let m = row.len();
+    assert!(v.len() >= m && freepen.len() >= m);
+    let m4 = m - m % 4;
+    let inf = _mm256_set1_pd(f64::INFINITY);
+    let ninf = _mm256_set1_pd(f64::NEG_INFINITY);
+    let (mut m1, mut m2, mut mf) = (inf, inf, inf);
+    let mut i1 = _mm256_set1_pd(-1.0);
+    let mut i2 = _mm256_set1_pd(-1.0);
+    let mut jf = _mm256_set1_pd(-1.0);
+    let mut ok = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+    let mut jv = _mm256_set_pd(3.0, 2.0, 1.0, 0.0);
+    let four = _mm256_set1_pd(4.0);
+    let (rp, vp, fp) = (row.as_ptr(), v.as_ptr(), freepen.as_ptr());
+    let mut k = 0;
+    while k < m4 {
+        let r = _mm256_loadu_pd(rp.add(k));
+        ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GT_OQ>(r, ninf));
+        let h = _mm256_sub_pd(r, _mm256_loadu_pd(vp.add(k)));
+        // Per lane the indices increase, so strict comparisons keep the lower column on ties.
+        let lt1 = _mm256_cmp_pd::<_CMP_LT_OQ>(h, m1);
+        let lt2 = _mm256_cmp_pd::<_CMP_LT_OQ>(h, m2);
+        m2 = _mm256_blendv_pd(_mm256_blendv_pd(m2, h, lt2), m1, lt1);
+        i2 = _mm256_blendv_pd(_mm256_blendv_pd(i2, jv, lt2), i1, lt1);
+        m1 = _mm256_blendv_pd(m1, h, lt1);
+        i1 = _mm256_blendv_pd(i1, jv, lt1);
+        let hf = _mm256_add_pd(h, _mm256_loadu_pd(fp.add(k)));
+        let ltf = _mm256_cmp_pd::<_CMP_LT_OQ>(hf, mf);
+        mf = _mm256_blendv_pd(mf, hf, ltf);
+        jf = _mm256_blendv_pd(jf, jv, ltf);
+        jv = _mm256_add_pd(jv, four);
+        k += 4;
+    }
+    let mut a = [[0.0f64; 4]; 7];
+    _mm256_storeu_pd(a[0].as_mut_ptr(), m1);
+    _mm256_storeu_pd(a[1].as_mut_ptr(), i1);
+    _mm256_storeu_pd(a[2].as_mut_ptr(), m2);
+    _mm256_storeu_pd(a[3].as_mut_ptr(), i2);
+    _mm256_storeu_pd(a[4].as_mut_ptr(), mf);
+    _mm256_storeu_pd(a[5].as_mut_ptr(), jf);
+    let mut s = Scan {
+        top: Top2::EMPTY,
+        min_free: f64::INFINITY,
+        arg_free: NONE,
+        valid: _mm256_movemask_pd(ok) == 0b1111,
+    };
+    let [mins1, idx1, mins2, idx2, minf, idxf, _] = a;
+    for l in 0..4 {
+        // Lanes that saw fewer than two finite entries keep index -1: nothing to offer.
+        if idx1[l] >= 0.0 {
+            s.top.offer(mins1[l], idx1[l] as usize);
+        }
+        if idx2[l] >= 0.0 {
+            s.top.offer(mins2[l], idx2[l] as usize);
+        }
+        if idxf[l] >= 0.0 {
+            let j = idxf[l] as usize;
+            if minf[l] < s.min_free || (minf[l] == s.min_free && j < s.arg_free) {
+                s.min_free = minf[l];
+                s.arg_free = j;
+            }
+        }
+    }
+    for j in m4..m {
+        let r = row[j];
+        s.valid &= r > f64::NEG_INFINITY;
+        let h = r - v[j];
+        if h < s.top.min2 {
+            s.top.offer(h, j);
+        }
+        if h + freepen[j] < s.min_free {
+            s.min_free = h + freepen[j];
+            s.arg_free = j;
+        }
+    }
+    s
 }
 
 /// The two smallest reduced costs `row[j] - v[j]` of a row, ordered by (value, column): ties go
@@ -574,6 +751,53 @@ mod tests {
                 };
                 assert_eq!((a.min1, a.j1), want(0));
                 assert_eq!((a.min2, a.j2), want(1));
+            }
+        }
+    }
+
+    #[test]
+    fn scan_kernels_agree() {
+        let mut state = 7u64;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % 6) as f64
+        };
+        for m in [1usize, 2, 3, 7, 8, 9, 16, 33, 100] {
+            for t in 0..300 {
+                let p = if t % 2 == 0 { 5.0 } else { 1.0 };
+                let row: Vec<f64> = (0..m)
+                    .map(|_| match rnd() {
+                        r if r >= p => f64::INFINITY,
+                        _ if t % 7 == 3 && rnd() == 0.0 => f64::NAN,
+                        _ if t % 7 == 5 && rnd() == 0.0 => f64::NEG_INFINITY,
+                        _ => rnd(),
+                    })
+                    .collect();
+                let v: Vec<f64> = (0..m).map(|_| -rnd()).collect();
+                let fp: Vec<f64> = (0..m)
+                    .map(|_| if rnd() > 2.0 { f64::INFINITY } else { 0.0 })
+                    .collect();
+                let a = scan_portable(&row, &v, &fp);
+                let b = scan(&row, &v, &fp);
+                let valid = row.iter().all(|r| !r.is_nan() && *r != f64::NEG_INFINITY);
+                assert_eq!(a.valid, valid, "{row:?}");
+                assert_eq!(b.valid, valid, "{row:?}");
+                if !valid {
+                    continue;
+                }
+                assert_eq!(a, b, "{row:?} {v:?} {fp:?}");
+                assert_eq!(a.top, top2_portable(&row, &v));
+                // Reference for the free minimum: first index of the smallest finite h on a free column.
+                let mut want = (f64::INFINITY, NONE);
+                for j in 0..m {
+                    let h = row[j] - v[j];
+                    if fp[j] == 0.0 && h < want.0 {
+                        want = (h, j);
+                    }
+                }
+                assert_eq!((a.min_free, a.arg_free), want);
             }
         }
     }

@@ -97,20 +97,11 @@ fn run_method(method: Method, c: &[f64], n: usize, m: usize) -> Result<Solution,
     }
 }
 
-/// Brings `cost` into the normalised form the solvers expect: a minimisation with at most as
-/// many rows as columns, every entry finite or `+inf`. A wide (or square) minimisation is only
-/// validated and used in place: copying a large matrix costs as much as solving an easy one.
-/// Otherwise the matrix is copied, negated when maximising and transposed when tall.
-///
-/// Returns the matrix and whether it was transposed.
-fn normalise(
-    cost: &[f64],
-    rows: usize,
-    cols: usize,
-    maximize: bool,
-) -> Result<(Cow<'_, [f64]>, bool), AssignError> {
+/// Checks that every entry is allowed: NaN fails, and so does the infinity that would make the
+/// objective unbounded (`-inf` when minimising, `+inf` when maximising). The error names the
+/// first offending entry in row-major order.
+pub(crate) fn validate(cost: &[f64], cols: usize, maximize: bool) -> Result<(), AssignError> {
     let sign = if maximize { -1.0 } else { 1.0 };
-    // NaN fails the comparison; so does the infinity that would make the objective unbounded.
     let valid = |x: f64| sign * x > f64::NEG_INFINITY;
     // A branch-free scan (vectorised) first; the slow path only locates the culprit.
     let all_valid = cost
@@ -119,9 +110,32 @@ fn normalise(
     if !all_valid {
         let k = cost.iter().position(|&x| !valid(x)).unwrap_or(0);
         return Err(AssignError::InvalidEntry {
-            row: k / cols,
-            col: k % cols,
+            row: k / cols.max(1),
+            col: k % cols.max(1),
         });
+    }
+    Ok(())
+}
+
+/// Brings `cost` into the normalised form the solvers expect: a minimisation with at most as
+/// many rows as columns, every entry finite or `+inf`. A wide (or square) minimisation is used
+/// in place: copying a large matrix costs as much as solving an easy one. Otherwise the matrix
+/// is copied, negated when maximising and transposed when tall.
+///
+/// With `check == false` the entries are not validated: the caller's solver does it in its own
+/// first pass over the matrix (only JV on a wide minimisation, see [`solve`]).
+///
+/// Returns the matrix and whether it was transposed.
+fn normalise(
+    cost: &[f64],
+    rows: usize,
+    cols: usize,
+    maximize: bool,
+    check: bool,
+) -> Result<(Cow<'_, [f64]>, bool), AssignError> {
+    let sign = if maximize { -1.0 } else { 1.0 };
+    if check {
+        validate(cost, cols, maximize)?;
     }
     if rows <= cols {
         if maximize {
@@ -178,7 +192,12 @@ pub fn solve(
     options: &Options,
 ) -> Result<Assignment, AssignError> {
     check_shape(cost, rows, cols)?;
-    let (c, transposed) = normalise(cost, rows, cols, options.maximize)?;
+    // JV on a matrix used in place validates it during its first pass (column reduction or the
+    // first row scans) instead of in a separate pass: on easy inputs that pass is a large share
+    // of the whole solve. Any error it reports is re-checked here, so that an invalid entry
+    // takes precedence over infeasibility and is located exactly, as with the separate pass.
+    let fused = options.method == Method::JonkerVolgenant && !options.maximize && rows <= cols;
+    let (c, transposed) = normalise(cost, rows, cols, options.maximize, !fused)?;
     let (n, m) = if transposed {
         (cols, rows)
     } else {
@@ -189,6 +208,14 @@ pub fn solve(
             row_to_col: Vec::new(),
             u: Vec::new(),
             v: vec![0.0; m],
+        }
+    } else if fused {
+        match jv::solve(&c, n, m) {
+            Ok(s) => s,
+            Err(e) => {
+                validate(cost, cols, false)?;
+                return Err(e);
+            }
         }
     } else {
         run_method(options.method, &c, n, m)?
@@ -249,7 +276,7 @@ pub fn solve_with_threshold(
     if !tau.is_finite() {
         return Err(AssignError::InvalidThreshold { tau });
     }
-    let (c, transposed) = normalise(cost, rows, cols, options.maximize)?;
+    let (c, transposed) = normalise(cost, rows, cols, options.maximize, true)?;
     let (n, m) = if transposed {
         (cols, rows)
     } else {

@@ -276,6 +276,67 @@ fn inf_entries_and_infeasible() {
     }
 }
 
+/// JV checks the entries during its own first pass on wide minimisations; the error must be the
+/// one of a separate full check: the first bad entry in row-major order, taking precedence over
+/// infeasibility, wherever it sits (early, late, in a row no heuristic phase reads).
+#[test]
+fn invalid_entries_found_anywhere() {
+    let mut state = 2024u64;
+    let mut rnd = move |k: u64| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state % k
+    };
+    for (rows, cols) in [(1, 1), (3, 3), (9, 9), (40, 40), (5, 12), (30, 70), (12, 5)] {
+        for trial in 0..60 {
+            let mut c: Vec<f64> = (0..rows * cols)
+                .map(|_| {
+                    if trial % 3 == 0 {
+                        rnd(4) as f64
+                    } else {
+                        rnd(1000) as f64 / 7.0
+                    }
+                })
+                .collect();
+            if trial % 4 == 1 {
+                // A row with no allowed pair: infeasible as well as invalid.
+                let i = rnd(rows as u64) as usize;
+                c[i * cols..(i + 1) * cols].fill(INF);
+            }
+            let bad = if trial % 2 == 0 {
+                f64::NAN
+            } else {
+                f64::NEG_INFINITY
+            };
+            let nbad = 1 + rnd(3) as usize;
+            let mut first = usize::MAX;
+            for _ in 0..nbad {
+                let k = rnd((rows * cols) as u64) as usize;
+                c[k] = bad;
+                first = first.min(k);
+            }
+            let want = Err(AssignError::InvalidEntry {
+                row: first / cols,
+                col: first % cols,
+            });
+            for m in METHODS {
+                assert_eq!(solve(&c, rows, cols, &opts(m, false)), want, "{m:?}");
+                assert_eq!(
+                    solve_with_threshold(&c, rows, cols, 3.0, &opts(m, false)),
+                    want,
+                    "{m:?}"
+                );
+            }
+            // Maximising: NaN and +inf are the invalid ones.
+            let flipped: Vec<f64> = c.iter().map(|&x| -x).collect();
+            for m in METHODS {
+                assert_eq!(solve(&flipped, rows, cols, &opts(m, true)), want, "{m:?}");
+            }
+        }
+    }
+}
+
 #[test]
 fn invalid_entries() {
     for m in METHODS {
