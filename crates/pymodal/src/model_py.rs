@@ -32,7 +32,7 @@ fn float_matrix<'py>(
     let arr = np
         .call_method1("ascontiguousarray", (arr, np.getattr("float64")?))
         .map_err(|_| PyValueError::new_err(format!("{name} must hold numbers")))?;
-    Ok(arr.extract()?)
+    arr.extract()
 }
 
 fn index_rows(
@@ -333,6 +333,9 @@ impl PyModalModel {
     }
 }
 
+/// Eigenvalues and eigenvectors returned by [`eigh`].
+type EighResult<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>);
+
 /// Generalized symmetric-definite eigenproblem ``K x = λ M x`` (like ``scipy.linalg.eigh(K, M)``).
 ///
 /// Returns ``(w, v)``: eigenvalues ascending and M-normalised eigenvectors as columns. Only the
@@ -344,7 +347,7 @@ fn eigh<'py>(
     k: &Bound<'py, PyAny>,
     m: &Bound<'py, PyAny>,
     n_modes: Option<usize>,
-) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>)> {
+) -> PyResult<EighResult<'py>> {
     let ka = float_matrix(py, k, "k")?;
     let ma = float_matrix(py, m, "m")?;
     let (kr, kc) = (ka.shape()[0], ka.shape()[1]);
