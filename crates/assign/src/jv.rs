@@ -153,6 +153,11 @@ fn arr(
         .iter()
         .map(|&r| if r == NONE { 0.0 } else { f64::INFINITY })
         .collect();
+    // Per row, its second-best column and reduced cost at the last scan that assigned it. Prices
+    // only fall during this phase, so if that column's price has not moved since, it is still the
+    // row's cheapest column once the row is evicted: an evicted row takes it, if free, without a
+    // new scan of its (long, uncached) row.
+    let mut second: Vec<(f64, usize)> = vec![(f64::INFINITY, NONE); n];
     for _pass in 0..2 {
         let mut k = 0;
         let prev = free.len();
@@ -173,9 +178,15 @@ fn arr(
             processed += 1;
             let i = free[k];
             k += 1;
-            let s = scan(&c[i * m..(i + 1) * m], v, &freepen);
+            let row = &c[i * m..(i + 1) * m];
+            let mut s = scan::<false>(row, v, &freepen);
             if !s.valid {
                 return Err(AssignError::InvalidEntry { row: i, col: 0 });
+            }
+            if s.top.min1 == s.top.min2 && s.top.j1 != NONE && y[s.top.j1] != NONE {
+                // Tied cheapest columns, the first one taken: look for a free one among them
+                // (the row was just read, so this second scan hits the cache).
+                s = scan::<true>(row, v, &freepen);
             }
             if let Some(flag) = seen.get_mut(i) {
                 *flag = true;
@@ -190,6 +201,7 @@ fn arr(
                 x[i] = jf;
                 y[jf] = i;
                 freepen[jf] = f64::INFINITY;
+                second[i] = (f64::INFINITY, NONE);
                 continue;
             }
             if usubmin == f64::INFINITY {
@@ -212,8 +224,19 @@ fn arr(
             x[i] = j1;
             y[j1] = i;
             freepen[j1] = f64::INFINITY;
+            second[i] = if strict {
+                (usubmin, j2)
+            } else {
+                (f64::INFINITY, NONE)
+            };
             if i0 != NONE {
-                if strict {
+                let (h2, jb) = second[i0];
+                if jb != NONE && y[jb] == NONE && c[i0 * m + jb] - v[jb] == h2 {
+                    x[i0] = jb;
+                    y[jb] = i0;
+                    freepen[jb] = f64::INFINITY;
+                    second[i0] = (f64::INFINITY, NONE);
+                } else if strict {
                     k -= 1;
                     free[k] = i0;
                 } else {
@@ -242,18 +265,22 @@ struct Scan {
     valid: bool,
 }
 
-fn scan(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
+///
+/// With `FREE == false` the free minimum is not computed (`min_free` stays `+inf`): it is only
+/// needed when the row's cheapest columns are tied, and skipping it saves a third of the
+/// memory traffic of the common case.
+fn scan<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
     #[cfg(target_arch = "x86_64")]
     {
         if row.len() >= 8 && std::is_x86_feature_detected!("avx2") {
             // SAFETY: AVX2 was just detected.
-            return unsafe { scan_avx2(row, v, freepen) };
+            return unsafe { scan_avx2::<FREE>(row, v, freepen) };
         }
     }
-    scan_portable(row, v, freepen)
+    scan_portable::<FREE>(row, v, freepen)
 }
 
-fn scan_portable(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
+fn scan_portable<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
     let mut s = Scan {
         top: Top2::EMPTY,
         min_free: f64::INFINITY,
@@ -266,7 +293,7 @@ fn scan_portable(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
         if h < s.top.min2 {
             s.top.offer(h, j);
         }
-        if h + fp < s.min_free {
+        if FREE && h + fp < s.min_free {
             s.min_free = h + fp;
             s.arg_free = j;
         }
@@ -274,84 +301,71 @@ fn scan_portable(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
     s
 }
 
+/// AVX2 row scan. On most rows the two smallest values are found early and later entries
+/// rarely beat them, so each block of 16 entries is first reduced with plain minima (cheap,
+/// vectorised) and only a block holding a candidate below the current second minimum or free
+/// minimum is replayed entry by entry, in index order: exactly the portable semantics, at
+/// close to memory speed instead of a dozen blends per vector.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn scan_avx2(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
+unsafe fn scan_avx2<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
     use std::arch::x86_64::*;
+    const B: usize = 16;
     let m = row.len();
     assert!(v.len() >= m && freepen.len() >= m);
-    let m4 = m - m % 4;
-    let inf = _mm256_set1_pd(f64::INFINITY);
+    let mb = m - m % B;
     let ninf = _mm256_set1_pd(f64::NEG_INFINITY);
-    let (mut m1, mut m2, mut mf) = (inf, inf, inf);
-    let mut i1 = _mm256_set1_pd(-1.0);
-    let mut i2 = _mm256_set1_pd(-1.0);
-    let mut jf = _mm256_set1_pd(-1.0);
     let mut ok = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-    let mut jv = _mm256_set_pd(3.0, 2.0, 1.0, 0.0);
-    let four = _mm256_set1_pd(4.0);
-    let (rp, vp, fp) = (row.as_ptr(), v.as_ptr(), freepen.as_ptr());
-    let mut k = 0;
-    while k < m4 {
-        let r = _mm256_loadu_pd(rp.add(k));
-        ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GT_OQ>(r, ninf));
-        let h = _mm256_sub_pd(r, _mm256_loadu_pd(vp.add(k)));
-        // Per lane the indices increase, so strict comparisons keep the lower column on ties.
-        let lt1 = _mm256_cmp_pd::<_CMP_LT_OQ>(h, m1);
-        let lt2 = _mm256_cmp_pd::<_CMP_LT_OQ>(h, m2);
-        m2 = _mm256_blendv_pd(_mm256_blendv_pd(m2, h, lt2), m1, lt1);
-        i2 = _mm256_blendv_pd(_mm256_blendv_pd(i2, jv, lt2), i1, lt1);
-        m1 = _mm256_blendv_pd(m1, h, lt1);
-        i1 = _mm256_blendv_pd(i1, jv, lt1);
-        let hf = _mm256_add_pd(h, _mm256_loadu_pd(fp.add(k)));
-        let ltf = _mm256_cmp_pd::<_CMP_LT_OQ>(hf, mf);
-        mf = _mm256_blendv_pd(mf, hf, ltf);
-        jf = _mm256_blendv_pd(jf, jv, ltf);
-        jv = _mm256_add_pd(jv, four);
-        k += 4;
-    }
-    let mut a = [[0.0f64; 4]; 7];
-    _mm256_storeu_pd(a[0].as_mut_ptr(), m1);
-    _mm256_storeu_pd(a[1].as_mut_ptr(), i1);
-    _mm256_storeu_pd(a[2].as_mut_ptr(), m2);
-    _mm256_storeu_pd(a[3].as_mut_ptr(), i2);
-    _mm256_storeu_pd(a[4].as_mut_ptr(), mf);
-    _mm256_storeu_pd(a[5].as_mut_ptr(), jf);
     let mut s = Scan {
         top: Top2::EMPTY,
         min_free: f64::INFINITY,
         arg_free: NONE,
-        valid: _mm256_movemask_pd(ok) == 0b1111,
+        valid: true,
     };
-    let [mins1, idx1, mins2, idx2, minf, idxf, _] = a;
-    for l in 0..4 {
-        // Lanes that saw fewer than two finite entries keep index -1: nothing to offer.
-        if idx1[l] >= 0.0 {
-            s.top.offer(mins1[l], idx1[l] as usize);
-        }
-        if idx2[l] >= 0.0 {
-            s.top.offer(mins2[l], idx2[l] as usize);
-        }
-        if idxf[l] >= 0.0 {
-            let j = idxf[l] as usize;
-            if minf[l] < s.min_free || (minf[l] == s.min_free && j < s.arg_free) {
-                s.min_free = minf[l];
+    let (rp, vp, fp) = (row.as_ptr(), v.as_ptr(), freepen.as_ptr());
+    let replay = |s: &mut Scan, lo: usize, hi: usize| {
+        for j in lo..hi {
+            let h = row[j] - v[j];
+            if h < s.top.min2 {
+                s.top.offer(h, j);
+            }
+            let hf = h + freepen[j];
+            if FREE && hf < s.min_free {
+                s.min_free = hf;
                 s.arg_free = j;
             }
         }
+    };
+    let mut k = 0;
+    while k < mb {
+        let mut bmin = _mm256_set1_pd(f64::INFINITY);
+        let mut bminf = bmin;
+        for q in 0..B / 4 {
+            let o = k + 4 * q;
+            let r = _mm256_loadu_pd(rp.add(o));
+            ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GT_OQ>(r, ninf));
+            let h = _mm256_sub_pd(r, _mm256_loadu_pd(vp.add(o)));
+            bmin = _mm256_min_pd(bmin, h);
+            if FREE {
+                bminf = _mm256_min_pd(bminf, _mm256_add_pd(h, _mm256_loadu_pd(fp.add(o))));
+            }
+        }
+        let t2 = _mm256_set1_pd(s.top.min2);
+        let tf = _mm256_set1_pd(s.min_free);
+        let hit = _mm256_or_pd(
+            _mm256_cmp_pd::<_CMP_LT_OQ>(bmin, t2),
+            _mm256_cmp_pd::<_CMP_LT_OQ>(bminf, tf),
+        );
+        if _mm256_movemask_pd(hit) != 0 {
+            replay(&mut s, k, k + B);
+        }
+        k += B;
     }
-    for j in m4..m {
-        let r = row[j];
+    s.valid = _mm256_movemask_pd(ok) == 0b1111;
+    for &r in &row[mb..] {
         s.valid &= r > f64::NEG_INFINITY;
-        let h = r - v[j];
-        if h < s.top.min2 {
-            s.top.offer(h, j);
-        }
-        if h + freepen[j] < s.min_free {
-            s.min_free = h + freepen[j];
-            s.arg_free = j;
-        }
     }
+    replay(&mut s, mb, m);
     s
 }
 
@@ -779,14 +793,21 @@ mod tests {
                 let fp: Vec<f64> = (0..m)
                     .map(|_| if rnd() > 2.0 { f64::INFINITY } else { 0.0 })
                     .collect();
-                let a = scan_portable(&row, &v, &fp);
-                let b = scan(&row, &v, &fp);
+                let a = scan_portable::<true>(&row, &v, &fp);
+                let b = scan::<true>(&row, &v, &fp);
+                let a0 = scan_portable::<false>(&row, &v, &fp);
+                let b0 = scan::<false>(&row, &v, &fp);
                 let valid = row.iter().all(|r| !r.is_nan() && *r != f64::NEG_INFINITY);
-                assert_eq!(a.valid, valid, "{row:?}");
-                assert_eq!(b.valid, valid, "{row:?}");
+                for s in [&a, &b, &a0, &b0] {
+                    assert_eq!(s.valid, valid, "{row:?}");
+                }
                 if !valid {
+                    // The other fields are meaningless then: the solver stops at once.
                     continue;
                 }
+                assert_eq!(a0.top, a.top);
+                assert_eq!(b0.top, a.top);
+                assert_eq!((a0.min_free, b0.min_free), (f64::INFINITY, f64::INFINITY));
                 assert_eq!(a, b, "{row:?} {v:?} {fp:?}");
                 assert_eq!(a.top, top2_portable(&row, &v));
                 // Reference for the free minimum: first index of the smallest finite h on a free column.
