@@ -142,16 +142,23 @@ def main():
     args = ap.parse_args()
 
     names = args.peers or list(peers())
-    results = run(names, args.sizes, args.classes, args.repeat, args.max_slow)
-    if args.other_python:
-        cmd = [args.other_python, __file__, "--json", "--sizes", *map(str, args.sizes), "--classes", *args.classes,
-               "--repeat", str(args.repeat), "--max-slow", str(args.max_slow)]
-        if args.other_peers:
-            cmd += ["--peers", *args.other_peers]
-        have = {r["solver"] for r in results} | set(names)
-        out = subprocess.run(cmd, check=True, stdout=subprocess.PIPE, text=True)
-        other = [r for r in json.loads(out.stdout) if r["solver"] not in have]
-        results += other
+    results = []
+    # One (class, size) at a time, the other interpreter's peers right after ours on the same
+    # matrix: on a shared machine the load drifts, and interleaving keeps the comparison fair.
+    for kind in args.classes:
+        for n in args.sizes:
+            # --max-slow across sizes: skip a solver already too slow on a smaller size.
+            now = [s for s in names if not any(
+                p["solver"] == s and p["class"] == kind and p["sec"] > args.max_slow for p in results)]
+            results += run(now, [n], [kind], args.repeat, args.max_slow)
+            if args.other_python:
+                cmd = [args.other_python, __file__, "--json", "--sizes", str(n), "--classes", kind,
+                       "--repeat", str(args.repeat), "--max-slow", str(args.max_slow)]
+                if args.other_peers:
+                    cmd += ["--peers", *args.other_peers]
+                have = set(names)
+                out = subprocess.run(cmd, check=True, stdout=subprocess.PIPE, text=True)
+                results += [r for r in json.loads(out.stdout) if r["solver"] not in have]
     if args.json:
         print(json.dumps(results))
         return
