@@ -630,6 +630,10 @@ fn relax_avx2_entry(
     unsafe { relax_avx2(row, v, dk, pred, freepen, h, i) }
 }
 
+/// AVX2 relaxation. The distance update is a plain vectorised min (`pred` by masked store);
+/// the two arg-minima, the costly part, are found like in [`scan_avx2`]: per block of 16 columns
+/// a vector minimum is compared with the running minima, and only a block holding a smaller
+/// value is replayed entry by entry in index order, which gives exactly [`relax`]'s answer.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn relax_avx2(
@@ -642,19 +646,18 @@ unsafe fn relax_avx2(
     i: u64,
 ) -> Relaxed {
     use std::arch::x86_64::*;
+    const B: usize = 16;
     let m = row.len();
     assert!(v.len() >= m && dk.len() >= m && pred.len() >= m && freepen.len() >= m);
-    let m4 = m - m % 4;
+    let mb = m - m % B;
     let hv = _mm256_set1_pd(h);
-    let iv = _mm256_castsi256_pd(_mm256_set1_epi64x(i as i64));
-    let inf = _mm256_set1_pd(f64::INFINITY);
-    let mut min_a = inf;
-    let mut min_f = inf;
-    let mut idx_a = _mm256_setzero_pd();
-    let mut idx_f = _mm256_setzero_pd();
-    // Lane indices kept as f64: exact up to 2^53 and blendable with the f64 masks.
-    let mut jv = _mm256_set_pd(3.0, 2.0, 1.0, 0.0);
-    let four = _mm256_set1_pd(4.0);
+    let iv = _mm256_set1_epi64x(i as i64);
+    let mut out = Relaxed {
+        min_all: f64::INFINITY,
+        arg_all: 0,
+        min_free: f64::INFINITY,
+        arg_free: 0,
+    };
     let (rp, vp, dp, pp, fp) = (
         row.as_ptr(),
         v.as_ptr(),
@@ -663,70 +666,61 @@ unsafe fn relax_avx2(
         freepen.as_ptr(),
     );
     let mut k = 0;
-    while k < m4 {
-        let cand = _mm256_add_pd(
-            _mm256_sub_pd(_mm256_loadu_pd(rp.add(k)), _mm256_loadu_pd(vp.add(k))),
-            hv,
+    while k < mb {
+        let mut bmin = _mm256_set1_pd(f64::INFINITY);
+        let mut bminf = bmin;
+        for q in 0..B / 4 {
+            let o = k + 4 * q;
+            let cand = _mm256_add_pd(
+                _mm256_sub_pd(_mm256_loadu_pd(rp.add(o)), _mm256_loadu_pd(vp.add(o))),
+                hv,
+            );
+            let d0 = _mm256_loadu_pd(dp.add(o));
+            let lt = _mm256_cmp_pd::<_CMP_LT_OQ>(cand, d0);
+            // min_pd(a, b) is `a < b ? a : b`: the same update as the portable kernel.
+            let d = _mm256_min_pd(cand, d0);
+            _mm256_storeu_pd(dp.add(o), d);
+            _mm256_maskstore_epi64(pp.add(o) as *mut i64, _mm256_castpd_si256(lt), iv);
+            bmin = _mm256_min_pd(bmin, d);
+            bminf = _mm256_min_pd(bminf, _mm256_add_pd(d, _mm256_loadu_pd(fp.add(o))));
+        }
+        let hit = _mm256_or_pd(
+            _mm256_cmp_pd::<_CMP_LT_OQ>(bmin, _mm256_set1_pd(out.min_all)),
+            _mm256_cmp_pd::<_CMP_LT_OQ>(bminf, _mm256_set1_pd(out.min_free)),
         );
-        let d0 = _mm256_loadu_pd(dp.add(k));
-        let lt = _mm256_cmp_pd::<_CMP_LT_OQ>(cand, d0);
-        let d = _mm256_blendv_pd(d0, cand, lt);
-        _mm256_storeu_pd(dp.add(k), d);
-        let p0 = _mm256_loadu_pd(pp.add(k) as *const f64);
-        _mm256_storeu_pd(pp.add(k) as *mut f64, _mm256_blendv_pd(p0, iv, lt));
-        let lta = _mm256_cmp_pd::<_CMP_LT_OQ>(d, min_a);
-        min_a = _mm256_blendv_pd(min_a, d, lta);
-        idx_a = _mm256_blendv_pd(idx_a, jv, lta);
-        let df = _mm256_add_pd(d, _mm256_loadu_pd(fp.add(k)));
-        let ltf = _mm256_cmp_pd::<_CMP_LT_OQ>(df, min_f);
-        min_f = _mm256_blendv_pd(min_f, df, ltf);
-        idx_f = _mm256_blendv_pd(idx_f, jv, ltf);
-        jv = _mm256_add_pd(jv, four);
-        k += 4;
-    }
-    let mut ma = [0.0f64; 4];
-    let mut ia = [0.0f64; 4];
-    let mut mf = [0.0f64; 4];
-    let mut jf = [0.0f64; 4];
-    _mm256_storeu_pd(ma.as_mut_ptr(), min_a);
-    _mm256_storeu_pd(ia.as_mut_ptr(), idx_a);
-    _mm256_storeu_pd(mf.as_mut_ptr(), min_f);
-    _mm256_storeu_pd(jf.as_mut_ptr(), idx_f);
-    let mut out = Relaxed {
-        min_all: f64::INFINITY,
-        arg_all: 0,
-        min_free: f64::INFINITY,
-        arg_free: 0,
-    };
-    for l in 0..4 {
-        let (a, ja) = (ma[l], ia[l] as usize);
-        if a < out.min_all || (a == out.min_all && a < f64::INFINITY && ja < out.arg_all) {
-            out.min_all = a;
-            out.arg_all = ja;
+        if _mm256_movemask_pd(hit) != 0 {
+            for j in k..k + B {
+                let d = *dp.add(j);
+                if d < out.min_all {
+                    out.min_all = d;
+                    out.arg_all = j;
+                }
+                let df = d + *fp.add(j);
+                if df < out.min_free {
+                    out.min_free = df;
+                    out.arg_free = j;
+                }
+            }
         }
-        let (f, jf) = (mf[l], jf[l] as usize);
-        if f < out.min_free || (f == out.min_free && f < f64::INFINITY && jf < out.arg_free) {
-            out.min_free = f;
-            out.arg_free = jf;
-        }
+        k += B;
     }
-    if m4 < m {
+    if mb < m {
         let t = relax(
-            &row[m4..],
-            &v[m4..m],
-            &mut dk[m4..m],
-            &mut pred[m4..m],
-            &freepen[m4..m],
+            &row[mb..],
+            &v[mb..m],
+            &mut dk[mb..m],
+            &mut pred[mb..m],
+            &freepen[mb..m],
             h,
             i,
         );
         if t.min_all < out.min_all {
             out.min_all = t.min_all;
-            out.arg_all = m4 + t.arg_all;
+            out.arg_all = mb + t.arg_all;
         }
         if t.min_free < out.min_free {
             out.min_free = t.min_free;
-            out.arg_free = m4 + t.arg_free;
+            out.arg_free = mb + t.arg_free;
         }
     }
     out
