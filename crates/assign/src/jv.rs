@@ -26,14 +26,15 @@ pub(crate) fn solve(c: &[f64], n: usize, m: usize) -> Result<Solution, AssignErr
     let mut y = vec![NONE; m];
     // Rows whose entries were checked; column reduction checks them all.
     let mut seen: Vec<bool>;
-    let mut free: Vec<usize> = if n == m {
+    let tied = mostly_tied(c, n, m, &v);
+    let mut free: Vec<usize> = if n == m && !tied {
         seen = Vec::new();
         column_reduction(c, n, &mut v, &mut x, &mut y)?
     } else {
         seen = vec![false; n];
         (0..n).collect()
     };
-    free = arr(c, m, &mut v, &mut x, &mut y, free, &mut seen)?;
+    free = arr(c, m, &mut v, &mut x, &mut y, free, &mut seen, tied)?;
     for (i, _) in seen.iter().enumerate().filter(|(_, &s)| !s) {
         if !row_valid(&c[i * m..(i + 1) * m]) {
             return Err(AssignError::InvalidEntry { row: i, col: 0 });
@@ -46,6 +47,26 @@ pub(crate) fn solve(c: &[f64], n: usize, m: usize) -> Result<Solution, AssignErr
         u,
         v,
     })
+}
+
+/// Whether the cheapest entries of sampled rows are mostly tied (as on small integer costs).
+///
+/// Column reduction then gives most columns to the few rows that come first among the tied
+/// minima, leaving most rows free with all their cheapest columns taken; starting from zero
+/// prices instead, augmenting row reduction hands each row a free column among its tied
+/// cheapest ones (measured: 11 ms against 7 ms on 2000×2000 integers in 1..=100). On untied
+/// costs column reduction and reduction transfer remain much the better start (uniform
+/// 2000×2000: 64 against 123 ms). Sixteen row scans decide; they also warm the cache.
+fn mostly_tied(c: &[f64], n: usize, m: usize, zeros: &[f64]) -> bool {
+    let k = n.min(16);
+    let tied = (0..k)
+        .map(|s| s * n / k)
+        .filter(|&i| {
+            let t = scan::<false>(&c[i * m..(i + 1) * m], zeros, zeros).top;
+            t.j2 != NONE && t.min1 == t.min2
+        })
+        .count();
+    2 * tied > k
 }
 
 /// No NaN and no `-inf` in the row (branch-free, vectorised).
@@ -133,7 +154,9 @@ fn column_reduction(
 /// change (LAPJV's tie rule applied before evicting anyone): on tied integer costs this settles
 /// most rows in one scan instead of bouncing them to the shortest-path phase.
 ///
-/// `seen[i]` (when not empty) records the rows already checked for invalid entries.
+/// `seen[i]` (when not empty) records the rows already checked for invalid entries; `tied` says
+/// that cheapest entries are expected to be tied (see [`mostly_tied`]).
+#[allow(clippy::too_many_arguments)] // the solver state, passed apart for the borrow checker
 fn arr(
     c: &[f64],
     m: usize,
@@ -142,6 +165,7 @@ fn arr(
     y: &mut [usize],
     mut free: Vec<usize>,
     seen: &mut [bool],
+    tied: bool,
 ) -> Result<Vec<usize>, AssignError> {
     let n = x.len();
     let mut budget = 4 * n + 16;
@@ -179,11 +203,16 @@ fn arr(
             let i = free[k];
             k += 1;
             let row = &c[i * m..(i + 1) * m];
-            let mut s = scan::<false>(row, v, &freepen);
+            // When ties are the rule, compute the free minimum in the same pass.
+            let mut s = if tied {
+                scan::<true>(row, v, &freepen)
+            } else {
+                scan::<false>(row, v, &freepen)
+            };
             if !s.valid {
                 return Err(AssignError::InvalidEntry { row: i, col: 0 });
             }
-            if s.top.min1 == s.top.min2 && s.top.j1 != NONE && y[s.top.j1] != NONE {
+            if !tied && s.top.min1 == s.top.min2 && s.top.j1 != NONE && y[s.top.j1] != NONE {
                 // Tied cheapest columns, the first one taken: look for a free one among them
                 // (the row was just read, so this second scan hits the cache).
                 s = scan::<true>(row, v, &freepen);
