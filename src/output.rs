@@ -18,7 +18,7 @@ pub fn read_cost_csv(path: &Path) -> Result<(Vec<f64>, usize, usize), String> {
             continue;
         }
         let start = values.len();
-        for field in line.split(|c: char| c == ',' || c == ';' || c == '\t' || c == ' ') {
+        for field in line.split([',', ';', '\t', ' ']) {
             let field = field.trim();
             if field.is_empty() {
                 continue;

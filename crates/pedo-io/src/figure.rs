@@ -527,29 +527,6 @@ impl Canvas {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn svg_and_png_render_the_same_primitives() {
-        let mut f = Figure::new(10.0);
-        f.polyline(&[[0.0, 0.0], [4.0, 0.0], [4.0, 3.0]], true, Rgb::BLUE, 1.5)
-            .line([0.0, 0.0], [4.0, 3.0], Rgb::GREY, 1.0)
-            .dot([4.0, 3.0], 2.0, Rgb::RED)
-            .text([0.0, 3.0], "a < b", Rgb::BLACK);
-        let svg = f.to_svg();
-        assert!(svg.starts_with("<svg") && svg.contains("<polygon") && svg.contains("a &lt; b"));
-        let png = f.to_png();
-        let img = image::load_from_memory(&png).unwrap().to_rgb8();
-        // 4 × 3 data units at 10 px each plus a 12 px margin on every side.
-        assert_eq!((img.width(), img.height()), (64, 54));
-        // The red dot is drawn at (4, 3) → pixel (52, 42); the top-left corner stays white.
-        assert_eq!(img.get_pixel(52, 42).0, [214, 39, 40]);
-        assert_eq!(img.get_pixel(0, 0).0, [255, 255, 255]);
-    }
-}
-
 /// Pixels per data unit that make the larger side of `shapes` about `target` pixels.
 fn fit_scale(shapes: &[&modal_core::Shape], dims: [usize; 2], target: f64) -> f64 {
     let mut lo = [f64::INFINITY; 2];
@@ -571,12 +548,14 @@ fn fit_scale(shapes: &[&modal_core::Shape], dims: [usize; 2], target: f64) -> f6
     }
 }
 
-/// The projection of a shape on coordinates `dims`, shifted by `offset`.
+/// The projection of a shape on coordinates `dims`, shifted by `offset`. Screen y grows
+/// downwards, which suits image rows; a z (height) axis is flipped so that pressure points up.
 fn project(s: &modal_core::Shape, dims: [usize; 2], offset: [f64; 2]) -> Vec<[f64; 2]> {
+    let flip = if dims[1] == 2 { -1.0 } else { 1.0 };
     (0..s.len())
         .map(|i| {
             let p = s.point(i);
-            [p[dims[0]] + offset[0], p[dims[1]] + offset[1]]
+            [p[dims[0]] + offset[0], flip * p[dims[1]] + offset[1]]
         })
         .collect()
 }
@@ -679,4 +658,27 @@ pub fn tracks_figure(
         fig.dot(pts[0], 2.0, c);
     }
     fig
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn svg_and_png_render_the_same_primitives() {
+        let mut f = Figure::new(10.0);
+        f.polyline(&[[0.0, 0.0], [4.0, 0.0], [4.0, 3.0]], true, Rgb::BLUE, 1.5)
+            .line([0.0, 0.0], [4.0, 3.0], Rgb::GREY, 1.0)
+            .dot([4.0, 3.0], 2.0, Rgb::RED)
+            .text([0.0, 3.0], "a < b", Rgb::BLACK);
+        let svg = f.to_svg();
+        assert!(svg.starts_with("<svg") && svg.contains("<polygon") && svg.contains("a &lt; b"));
+        let png = f.to_png();
+        let img = image::load_from_memory(&png).unwrap().to_rgb8();
+        // 4 × 3 data units at 10 px each plus a 12 px margin on every side.
+        assert_eq!((img.width(), img.height()), (64, 54));
+        // The red dot is drawn at (4, 3) → pixel (52, 42); the top-left corner stays white.
+        assert_eq!(img.get_pixel(52, 42).0, [214, 39, 40]);
+        assert_eq!(img.get_pixel(0, 0).0, [255, 255, 255]);
+    }
 }

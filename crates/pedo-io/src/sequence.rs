@@ -426,7 +426,7 @@ pub fn chain_tracks(objects: &[SequenceObject], pairs: &[PairMatch]) -> Vec<Trac
     for p in pairs {
         incoming[p.b].push(p);
     }
-    for (o, obj) in objects.iter().enumerate() {
+    for o in 0..objects.len() {
         for p in &incoming[o] {
             for mp in p.result.pairs.iter().filter(|mp| !mp.excess) {
                 if track_of[o][mp.b].is_some() {
@@ -442,9 +442,9 @@ pub fn chain_tracks(objects: &[SequenceObject], pairs: &[PairMatch]) -> Vec<Trac
                 }
             }
         }
-        for node in 0..obj.shape.len() {
-            if track_of[o][node].is_none() {
-                track_of[o][node] = Some(tracks.len());
+        for (node, slot) in track_of[o].iter_mut().enumerate() {
+            if slot.is_none() {
+                *slot = Some(tracks.len());
                 tracks.push(Track {
                     steps: vec![(o, node)],
                 });
