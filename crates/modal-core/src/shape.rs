@@ -27,9 +27,11 @@ impl Shape {
     /// every triangle index is in range.
     pub fn new(dim: usize, coords: Vec<f64>, topology: Topology) -> Result<Self, ModalError> {
         if dim != 2 && dim != 3 {
-            return Err(ModalError::InvalidShape(format!("dimension must be 2 or 3, got {dim}")));
+            return Err(ModalError::InvalidShape(format!(
+                "dimension must be 2 or 3, got {dim}"
+            )));
         }
-        if coords.len() % dim != 0 {
+        if !coords.len().is_multiple_of(dim) {
             return Err(ModalError::InvalidShape(format!(
                 "{} coordinates is not a multiple of the dimension {dim}",
                 coords.len()
@@ -51,7 +53,11 @@ impl Shape {
                 )));
             }
         }
-        Ok(Self { dim, coords, topology })
+        Ok(Self {
+            dim,
+            coords,
+            topology,
+        })
     }
 
     /// A 2-D point set from `(x, y)` pairs.
@@ -99,7 +105,13 @@ mod tests {
     fn rejects_non_finite_and_bad_triangles() {
         assert!(Shape::new(2, vec![0.0, f64::NAN], Topology::None).is_err());
         assert!(Shape::new(4, vec![0.0; 4], Topology::None).is_err());
-        let err = Shape::new(2, vec![0.0; 6], Topology::Mesh { triangles: vec![[0, 1, 3]] });
+        let err = Shape::new(
+            2,
+            vec![0.0; 6],
+            Topology::Mesh {
+                triangles: vec![[0, 1, 3]],
+            },
+        );
         assert!(err.is_err());
         let ok = Shape::from_points_2d(&[[0.0, 0.0], [1.0, 0.0]], Topology::ClosedContour).unwrap();
         assert_eq!((ok.len(), ok.dim()), (2, 2));
