@@ -37,7 +37,7 @@ fn as_f64_matrix<'py>(
     kwargs.set_item("order", "C")?;
     kwargs.set_item("copy", false)?;
     let arr = arr.call_method("astype", (np.getattr("float64")?,), Some(&kwargs))?;
-    Ok(arr.extract()?)
+    arr.extract()
 }
 
 /// Solve the linear sum assignment problem.
@@ -59,6 +59,9 @@ fn as_f64_matrix<'py>(
 /// ValueError
 ///     if the input is not 2-D, contains NaN or ``-inf`` (``+inf`` when
 ///     maximising), or admits no complete assignment.
+/// `(row_ind, col_ind)` as returned by scipy.
+type IndexArrays<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>);
+
 #[pyfunction]
 #[pyo3(signature = (cost_matrix, maximize=false, *, method="jv"))]
 fn linear_sum_assignment<'py>(
@@ -66,7 +69,7 @@ fn linear_sum_assignment<'py>(
     cost_matrix: &Bound<'py, PyAny>,
     maximize: bool,
     method: &str,
-) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>)> {
+) -> PyResult<IndexArrays<'py>> {
     let options = assign::Options {
         method: parse_method(method)?,
         maximize,
@@ -100,7 +103,7 @@ fn linear_sum_assignment_threshold<'py>(
     tau: f64,
     maximize: bool,
     method: &str,
-) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>)> {
+) -> PyResult<IndexArrays<'py>> {
     let options = assign::Options {
         method: parse_method(method)?,
         maximize,

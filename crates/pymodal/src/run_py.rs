@@ -21,22 +21,37 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Recording>
     let arr: PyReadonlyArrayDyn<'_, f32> = obj
         .call_method1("astype", ("float32",))
         .and_then(|a| a.extract())
-        .map_err(|_| PyValueError::new_err("recording must be a path, a Recording or a (T, H, W) / (H, W) array"))?;
+        .map_err(|_| {
+            PyValueError::new_err(
+                "recording must be a path, a Recording or a (T, H, W) / (H, W) array",
+            )
+        })?;
     let shape = arr.shape().to_vec();
     let (t, h, w) = match shape.as_slice() {
         [h, w] => (1, *h, *w),
         [t, h, w] => (*t, *h, *w),
-        _ => return Err(PyValueError::new_err(format!("recording array must be 2-D or 3-D, got shape {shape:?}"))),
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "recording array must be 2-D or 3-D, got shape {shape:?}"
+            )))
+        }
     };
     let data = arr.as_array().iter().copied().collect();
     Recording::from_nan_frames(t, h, w, data).map_err(to_py)
 }
 
 fn parse<T: Copy>(what: &str, value: &str, options: &[(&str, T)]) -> PyResult<T> {
-    options.iter().find(|(k, _)| *k == value).map(|&(_, v)| v).ok_or_else(|| {
-        let names: Vec<String> = options.iter().map(|(k, _)| format!("{k:?}")).collect();
-        PyValueError::new_err(format!("unknown {what} {value:?}; expected one of {}", names.join(", ")))
-    })
+    options
+        .iter()
+        .find(|(k, _)| *k == value)
+        .map(|&(_, v)| v)
+        .ok_or_else(|| {
+            let names: Vec<String> = options.iter().map(|(k, _)| format!("{k:?}")).collect();
+            PyValueError::new_err(format!(
+                "unknown {what} {value:?}; expected one of {}",
+                names.join(", ")
+            ))
+        })
 }
 
 fn table<'py>(py: Python<'py>, r: &SequenceResult) -> PyResult<Bound<'py, PyList>> {
@@ -106,11 +121,30 @@ fn run<'py>(
         model: parse(
             "model",
             model,
-            &[("contour", ObjectModel::Contour), ("surface", ObjectModel::Surface), ("isocontour", ObjectModel::Isocontour)],
+            &[
+                ("contour", ObjectModel::Contour),
+                ("surface", ObjectModel::Surface),
+                ("isocontour", ObjectModel::Isocontour),
+            ],
         )?,
-        element: parse("element", element, &[("gaussian", modal_core::ElementKind::Gaussian), ("axial", modal_core::ElementKind::Axial)])?,
+        element: parse(
+            "element",
+            element,
+            &[
+                ("gaussian", modal_core::ElementKind::Gaussian),
+                ("axial", modal_core::ElementKind::Axial),
+            ],
+        )?,
         modes,
-        search: parse("search", search, &[("global", SearchMode::Global), ("local", SearchMode::Local), ("both", SearchMode::Both)])?,
+        search: parse(
+            "search",
+            search,
+            &[
+                ("global", SearchMode::Global),
+                ("local", SearchMode::Local),
+                ("both", SearchMode::Both),
+            ],
+        )?,
         method: parse(
             "solver",
             solver,
@@ -132,7 +166,9 @@ fn run<'py>(
         iso_levels,
     };
     let options = params.to_options(&rec).map_err(to_py)?;
-    let result = py.detach(|| run_sequence(&rec, &options, &|_, _, _| {})).map_err(to_py)?;
+    let result = py
+        .detach(|| run_sequence(&rec, &options, &|_, _, _| {}))
+        .map_err(to_py)?;
 
     let out = PyDict::new(py);
     out.set_item("table", table(py, &result)?)?;
@@ -148,7 +184,8 @@ fn run<'py>(
         d.set_item("frame", o.frame + 1)?;
         d.set_item("index", o.index)?;
         d.set_item("level", o.level)?;
-        let pts = PyArray1::from_slice(py, o.shape.coords()).reshape([o.shape.len(), o.shape.dim()])?;
+        let pts =
+            PyArray1::from_slice(py, o.shape.coords()).reshape([o.shape.len(), o.shape.dim()])?;
         d.set_item("points", pts)?;
         objects.append(d)?;
     }
@@ -157,7 +194,10 @@ fn run<'py>(
     for t in &result.tracks {
         let pts = result.track_points(t);
         let width = 1 + pts.first().map_or(2, |(_, p)| p.len());
-        let flat: Vec<f64> = pts.iter().flat_map(|(f, p)| std::iter::once((*f + 1) as f64).chain(p.iter().copied())).collect();
+        let flat: Vec<f64> = pts
+            .iter()
+            .flat_map(|(f, p)| std::iter::once((*f + 1) as f64).chain(p.iter().copied()))
+            .collect();
         tracks.append(PyArray1::from_vec(py, flat).reshape([pts.len(), width])?)?;
     }
     out.set_item("tracks", tracks)?;
