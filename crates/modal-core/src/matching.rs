@@ -359,26 +359,24 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         model.sigma = Some(opts.model.kappa * 0.5 * (mnn(&sa.pts) + mnn(&sb.pts)));
     }
     let modal = opts.position_weight < 1.0;
-    // B's modes (solved once) and A's pre-alignment are independent: overlap them.
-    let (fb, cur) = std::thread::scope(|scope| {
-        let fb_job = modal
-            .then(|| scope.spawn(|| features_of(&sb.pts, d, &sb.topology, &model, skip, k + band)));
-        let cur = match opts.prealign {
+    // B's modes (solved once) and A's pre-alignment are independent: overlap them. rayon::join,
+    // not a plain thread: faer's kernels run on the rayon pool, and a plain thread joined from
+    // inside a rayon worker (a whole sequence matches its pairs on the pool) can deadlock it.
+    let (fb, cur) = rayon::join(
+        || {
+            modal
+                .then(|| features_of(&sb.pts, d, &sb.topology, &model, skip, k + band))
+                .transpose()
+        },
+        || match opts.prealign {
             Prealign::Normalize => Ok(sa.pts.clone()),
             Prealign::Robust => {
                 let t = align::robust_prealign(&sa.pts, &sb.pts, d, opts.icp_iterations, ordered);
                 align::normalize(&t.apply(&sa.pts), d).map(|x| x.0)
             }
-        };
-        let fb = match fb_job {
-            Some(h) => Some(
-                h.join()
-                    .map_err(|_| ModalError::Numerical("modal solve of B panicked".into()))??,
-            ),
-            None => None,
-        };
-        Ok::<_, ModalError>((fb, cur?))
-    })?;
+        },
+    );
+    let (fb, cur) = (fb?, cur?);
     let mut cur = cur;
     let band = fb.as_ref().map_or(0, |f| f.n_modes.saturating_sub(k));
 
