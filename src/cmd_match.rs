@@ -154,6 +154,7 @@ pub fn run(args: MatchArgs) -> Result<(), String> {
             let fig = figure::match_figure(&a, &b, &r.pairs);
             dir.write("match.png", &fig.to_png())?;
             dir.write("match.svg", fig.to_svg().as_bytes())?;
+            dir.commit()?;
             println!("{summary:#}");
         }
     }

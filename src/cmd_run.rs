@@ -235,6 +235,7 @@ fn execute(
         &result,
         figure_kinds(o.figures),
     )?;
+    dir.commit()?;
     let write_time = t_out.elapsed();
     print_summary(name, out, &result);
     if o.timings {

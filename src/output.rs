@@ -2,7 +2,6 @@
 
 use pedo_io::figure::{self, Figure};
 use pedo_io::sequence::{PairRow, SequenceOptions, SequenceResult};
-use std::io::Write;
 use std::path::Path;
 
 /// Reads a dense CSV matrix of f64 (comma, semicolon, tab or space separated; `inf`, `-inf` and
@@ -45,55 +44,55 @@ pub fn read_cost_csv(path: &Path) -> Result<(Vec<f64>, usize, usize), String> {
     Ok((values, rows, cols.unwrap_or(0)))
 }
 
-/// Writes `contents` to `path` through a temporary file in the same folder and a rename, so a
-/// reader never sees a half-written file.
-pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), String> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .ok_or_else(|| format!("{}: not a file path", path.display()))?;
-    let tmp = dir.join(format!(
-        ".{}.tmp{}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        // No fsync: the rename already guarantees that readers see either the old file or the
-        // whole new one, and hundreds of fsyncs would dominate a run's wall time.
-        f.write_all(contents)?;
-        drop(f);
-        std::fs::rename(&tmp, path)
-    })();
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("{}: {e}", path.display())
-    })
-}
-
-/// An output folder, created on demand; every file in it is written atomically.
+/// An output folder whose files appear all together or not at all: everything is written into a
+/// hidden staging folder inside it and moved into place by [`OutDir::commit`]; a run that fails
+/// half-way leaves the folder as it was.
 pub struct OutDir {
     root: std::path::PathBuf,
+    staging: std::path::PathBuf,
+    written: std::sync::Mutex<Vec<String>>,
+    committed: bool,
 }
 
 impl OutDir {
     pub fn create(root: &Path) -> Result<Self, String> {
-        std::fs::create_dir_all(root).map_err(|e| format!("{}: {e}", root.display()))?;
-        Ok(Self {
-            root: root.to_path_buf(),
-        })
+        let staging = root.join(format!(".pedomatch-staging-{}", std::process::id()));
+        std::fs::create_dir_all(&staging).map_err(|e| format!("{}: {e}", root.display()))?;
+        Ok(Self { root: root.to_path_buf(), staging, written: Default::default(), committed: false })
     }
 
-    /// Writes `rel` (which may include one sub-folder) under the root.
+    /// Writes `rel` (which may include sub-folders) into the staging folder.
     pub fn write(&self, rel: &str, contents: &[u8]) -> Result<(), String> {
-        let path = self.root.join(rel);
+        let path = self.staging.join(rel);
         if let Some(parent) = path.parent() {
             std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
         }
-        write_atomic(&path, contents)
+        std::fs::write(&path, contents).map_err(|e| format!("{}: {e}", self.root.join(rel).display()))?;
+        self.written.lock().expect("no panics while holding the lock").push(rel.to_string());
+        Ok(())
+    }
+
+    /// Moves every written file into place (each by an atomic rename).
+    pub fn commit(mut self) -> Result<(), String> {
+        let written = std::mem::take(&mut *self.written.lock().expect("no panics while holding the lock"));
+        for rel in &written {
+            let dest = self.root.join(rel);
+            if let Some(parent) = dest.parent() {
+                std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
+            }
+            std::fs::rename(self.staging.join(rel), &dest).map_err(|e| format!("{}: {e}", dest.display()))?;
+        }
+        self.committed = true;
+        let _ = std::fs::remove_dir_all(&self.staging);
+        Ok(())
+    }
+}
+
+impl Drop for OutDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.staging);
+        }
     }
 }
 
