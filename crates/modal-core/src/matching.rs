@@ -104,7 +104,7 @@ impl MatchOptions {
     /// Measured best for independently sampled 3-D point sets (brightness surfaces): a wider,
     /// common Gaussian (σ = 3 × mean nearest-neighbour distance of both objects), because per-node
     /// modal features of different samplings only agree on smooth modes, and no affine re-fits
-    /// (the surface's pairs are too noisy to improve the fit). See docs/modal-matching.md.
+    /// (the surface's pairs are too noisy to improve the fit). See the README, "Modal matching".
     pub fn for_surfaces() -> Self {
         let mut o = Self {
             refits: 0,
