@@ -1,13 +1,12 @@
 //! `pymodal.match`: modal matching of two point sets, contours or meshes.
 
 use modal_core::{
-    match_shapes, ElementKind, MatchOptions, MatchResult, Material, Prealign, Search, Shape,
-    ThresholdMode, Topology,
+    match_shapes, ElementKind, MatchOptions, MatchResult, Prealign, Search, Shape, ThresholdMode,
+    Topology,
 };
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
 
 use crate::errors::to_py;
 
@@ -174,39 +173,6 @@ fn triangles(
     ))
 }
 
-fn material(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Material>> {
-    let Some(obj) = obj else { return Ok(None) };
-    if obj.is_none() {
-        return Ok(None);
-    }
-    if let Ok(name) = obj.extract::<String>() {
-        return Material::preset(&name).map(Some).map_err(to_py);
-    }
-    if let Ok(d) = obj.cast::<PyDict>() {
-        let get = |k: &str, default: f64| -> PyResult<f64> {
-            match d.get_item(k)? {
-                Some(v) => v.extract(),
-                None => Ok(default),
-            }
-        };
-        let r = Material::RUBBER;
-        return Material::new(
-            get("young", r.young)?,
-            get("poisson", r.poisson)?,
-            get("density", r.density)?,
-        )
-        .map(Some)
-        .map_err(to_py);
-    }
-    if let Ok(t) = obj.cast::<PyTuple>() {
-        let (e, nu, rho): (f64, f64, f64) = t.extract()?;
-        return Material::new(e, nu, rho).map(Some).map_err(to_py);
-    }
-    Err(PyValueError::new_err(
-        "material must be None, a preset name, a dict with young/poisson/density or a (E, nu, rho) tuple",
-    ))
-}
-
 /// True when consecutive points (with wrap-around) are about as close as nearest neighbours:
 /// the array reads as an ordered closed contour.
 fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
@@ -325,7 +291,9 @@ fn match_py(
             )))
         }
     };
-    if let Some(m) = self::material(material)? {
+    // None keeps the matching default; anything else is parsed as for ModalModel.
+    if let Some(m) = material.filter(|o| !o.is_none()) {
+        let m = crate::model_py::parse_material(Some(m))?;
         opts.model.material = m;
     }
     if let Some(kappa) = kappa {

@@ -67,7 +67,9 @@ fn index_rows(
     Ok(Some(v.iter().map(|&x| x as usize).collect()))
 }
 
-fn parse_material(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Material> {
+/// A material from `None` (rubber), a preset name, a dict `{young, poisson, density}` or an
+/// `(E, nu, rho)` tuple; shared by every binding that takes `material=`.
+pub(crate) fn parse_material(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Material> {
     let Some(obj) = obj else {
         return Ok(Material::RUBBER);
     };
