@@ -58,7 +58,12 @@ impl OutDir {
     pub fn create(root: &Path) -> Result<Self, String> {
         let staging = root.join(format!(".pedomatch-staging-{}", std::process::id()));
         std::fs::create_dir_all(&staging).map_err(|e| format!("{}: {e}", root.display()))?;
-        Ok(Self { root: root.to_path_buf(), staging, written: Default::default(), committed: false })
+        Ok(Self {
+            root: root.to_path_buf(),
+            staging,
+            written: Default::default(),
+            committed: false,
+        })
     }
 
     /// Writes `rel` (which may include sub-folders) into the staging folder.
@@ -67,20 +72,31 @@ impl OutDir {
         if let Some(parent) = path.parent() {
             std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
         }
-        std::fs::write(&path, contents).map_err(|e| format!("{}: {e}", self.root.join(rel).display()))?;
-        self.written.lock().expect("no panics while holding the lock").push(rel.to_string());
+        std::fs::write(&path, contents)
+            .map_err(|e| format!("{}: {e}", self.root.join(rel).display()))?;
+        self.written
+            .lock()
+            .expect("no panics while holding the lock")
+            .push(rel.to_string());
         Ok(())
     }
 
     /// Moves every written file into place (each by an atomic rename).
     pub fn commit(mut self) -> Result<(), String> {
-        let written = std::mem::take(&mut *self.written.lock().expect("no panics while holding the lock"));
+        let written = std::mem::take(
+            &mut *self
+                .written
+                .lock()
+                .expect("no panics while holding the lock"),
+        );
         for rel in &written {
             let dest = self.root.join(rel);
             if let Some(parent) = dest.parent() {
-                std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
+                std::fs::create_dir_all(parent)
+                    .map_err(|e| format!("{}: {e}", parent.display()))?;
             }
-            std::fs::rename(self.staging.join(rel), &dest).map_err(|e| format!("{}: {e}", dest.display()))?;
+            std::fs::rename(self.staging.join(rel), &dest)
+                .map_err(|e| format!("{}: {e}", dest.display()))?;
         }
         self.committed = true;
         let _ = std::fs::remove_dir_all(&self.staging);
