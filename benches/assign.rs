@@ -14,7 +14,6 @@ use rand::{Rng, SeedableRng};
 
 /// A cost matrix of one of the benchmark classes, row-major, `rows × cols`.
 struct Case {
-    class: &'static str,
     rows: usize,
     cols: usize,
     cost: Vec<f64>,
@@ -49,12 +48,7 @@ fn case(class: &'static str, n: usize) -> Case {
         ),
         _ => unreachable!(),
     };
-    Case {
-        class,
-        rows,
-        cols,
-        cost,
-    }
+    Case { rows, cols, cost }
 }
 
 fn bench(c: &mut Criterion) {
