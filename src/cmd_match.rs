@@ -4,8 +4,9 @@ use crate::cmd_assign::SolverArg;
 use crate::cmd_run::{ElementArg, SearchArg};
 use crate::output::{self, OutDir};
 use clap::Args;
-use modal_core::{ElementKind, MatchOptions, Search, Shape, Topology};
+use modal_core::{ElementKind, Shape, Topology};
 use pedo_io::figure;
+use pedo_io::sequence::{RunParams, SearchMode};
 use std::path::{Path, PathBuf};
 
 #[derive(Args)]
@@ -100,24 +101,24 @@ fn load_object(path: &Path, args: &MatchArgs) -> Result<Shape, String> {
 pub fn run(args: MatchArgs) -> Result<(), String> {
     let a = load_object(&args.a, &args)?;
     let b = load_object(&args.b, &args)?;
-    let mut o = if args.paper {
-        MatchOptions::paper()
-    } else {
-        MatchOptions::default()
+    let params = RunParams {
+        element: match args.element {
+            ElementArg::Gaussian => ElementKind::Gaussian,
+            ElementArg::Axial => ElementKind::Axial,
+        },
+        modes: args.modes,
+        search: if args.search == SearchArg::Local {
+            SearchMode::Local
+        } else {
+            SearchMode::Global
+        },
+        method: args.solver.into(),
+        threshold: args.threshold,
+        excess: !args.no_excess,
+        paper: args.paper,
+        ..RunParams::default()
     };
-    o.model.element = match args.element {
-        ElementArg::Gaussian => ElementKind::Gaussian,
-        ElementArg::Axial => ElementKind::Axial,
-    };
-    o.mode_fraction = args.modes;
-    o.search = if args.search == SearchArg::Local {
-        Search::Local
-    } else {
-        Search::Global
-    };
-    o.method = args.solver.into();
-    o.threshold = args.threshold;
-    o.excess = !args.no_excess;
+    let o = params.match_options().map_err(|e| e.to_string())?;
     let r = modal_core::match_shapes(&a, &b, &o).map_err(|e| e.to_string())?;
     let rows = r.pairs.iter().map(|p| {
         vec![

@@ -138,17 +138,44 @@ impl Default for RunParams {
 }
 
 impl RunParams {
-    /// Checks every parameter and turns them into [`SequenceOptions`] for `recording`.
-    pub fn to_options(&self, recording: &Recording) -> Result<SequenceOptions> {
-        let bad = |msg: String| Err(IoError::invalid(msg));
+    /// The matching part of the parameters (element, modes, search, solver, threshold, excess,
+    /// paper setting), checked; what `pedomatch match` uses for a single pair.
+    pub fn match_options(&self) -> Result<MatchOptions> {
         if !(self.modes > 0.0 && self.modes <= 1.0) {
-            return bad(format!("modes must be in (0, 1], got {}", self.modes));
+            return Err(IoError::invalid(format!(
+                "modes must be in (0, 1], got {}",
+                self.modes
+            )));
         }
         if let Some(t) = self.threshold {
             if !(t.is_finite() && t >= 0.0) {
-                return bad(format!("threshold must be a non-negative number, got {t}"));
+                return Err(IoError::invalid(format!(
+                    "threshold must be a non-negative number, got {t}"
+                )));
             }
         }
+        let mut matching = if self.paper {
+            MatchOptions::paper()
+        } else {
+            MatchOptions::default()
+        };
+        matching.model.element = self.element;
+        matching.mode_fraction = self.modes;
+        matching.search = if self.search == SearchMode::Local {
+            Search::Local
+        } else {
+            Search::Global
+        };
+        matching.method = self.method;
+        matching.threshold = self.threshold;
+        matching.excess = self.excess;
+        Ok(matching)
+    }
+
+    /// Checks every parameter and turns them into [`SequenceOptions`] for `recording`.
+    pub fn to_options(&self, recording: &Recording) -> Result<SequenceOptions> {
+        let bad = |msg: String| Err(IoError::invalid(msg));
+        let matching = self.match_options()?;
         if !(self.spacing.is_finite() && self.spacing > 0.0) {
             return bad(format!("spacing must be positive, got {}", self.spacing));
         }
@@ -182,21 +209,6 @@ impl RunParams {
             Some(f) if f >= 1 && f <= n => Some(f - 1),
             Some(f) => return bad(format!("iso_frame {f} is not within 1..{n} (1-based)")),
         };
-        let mut matching = if self.paper {
-            MatchOptions::paper()
-        } else {
-            MatchOptions::default()
-        };
-        matching.model.element = self.element;
-        matching.mode_fraction = self.modes;
-        matching.search = if self.search == SearchMode::Local {
-            Search::Local
-        } else {
-            Search::Global
-        };
-        matching.method = self.method;
-        matching.threshold = self.threshold;
-        matching.excess = self.excess;
         let noise = self.noise.or(recording.noise_threshold).unwrap_or(0.0);
         let sigma = (self.smooth > 0.0).then_some(self.smooth);
         let mut o = SequenceOptions {
