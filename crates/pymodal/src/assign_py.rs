@@ -6,13 +6,15 @@ use pyo3::prelude::*;
 
 use crate::errors::to_py;
 
-fn parse_method(method: &str) -> PyResult<assign::Method> {
+/// An assignment method from its Python name; `what` names the parameter in the error
+/// (`method` here, `solver` in `match` and `run`).
+pub(crate) fn parse_method(what: &str, method: &str) -> PyResult<assign::Method> {
     match method {
         "jv" => Ok(assign::Method::JonkerVolgenant),
         "hungarian" => Ok(assign::Method::Hungarian),
         "simplex" => Ok(assign::Method::NetworkSimplex),
         other => Err(PyValueError::new_err(format!(
-            "unknown method {other:?}; expected \"jv\", \"hungarian\" or \"simplex\""
+            "unknown {what} {other:?}; expected \"jv\", \"hungarian\" or \"simplex\""
         ))),
     }
 }
@@ -62,6 +64,40 @@ fn as_f64_matrix<'py>(
 /// `(row_ind, col_ind)` as returned by scipy.
 type IndexArrays<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>);
 
+/// The body shared by the assignment bindings: validate and convert the matrix, solve without
+/// the GIL, return scipy's `(row_ind, col_ind)`.
+fn solve_to_arrays<'py>(
+    py: Python<'py>,
+    cost_matrix: &Bound<'py, PyAny>,
+    maximize: bool,
+    method: &str,
+    solve: impl FnOnce(
+            &[f64],
+            usize,
+            usize,
+            &assign::Options,
+        ) -> Result<assign::Assignment, assign::AssignError>
+        + Send,
+) -> PyResult<IndexArrays<'py>> {
+    let options = assign::Options {
+        method: parse_method("method", method)?,
+        maximize,
+    };
+    let arr = as_f64_matrix(py, cost_matrix)?;
+    let shape = arr.shape();
+    let (rows, cols) = (shape[0], shape[1]);
+    let cost = arr.as_slice().map_err(to_py)?;
+    let result = py
+        .detach(|| solve(cost, rows, cols, &options))
+        .map_err(to_py)?;
+    let (r, c): (Vec<i64>, Vec<i64>) = result
+        .pairs()
+        .into_iter()
+        .map(|(i, j)| (i as i64, j as i64))
+        .unzip();
+    Ok((PyArray1::from_vec(py, r), PyArray1::from_vec(py, c)))
+}
+
 #[pyfunction]
 #[pyo3(signature = (cost_matrix, maximize=false, *, method="jv"))]
 fn linear_sum_assignment<'py>(
@@ -70,23 +106,7 @@ fn linear_sum_assignment<'py>(
     maximize: bool,
     method: &str,
 ) -> PyResult<IndexArrays<'py>> {
-    let options = assign::Options {
-        method: parse_method(method)?,
-        maximize,
-    };
-    let arr = as_f64_matrix(py, cost_matrix)?;
-    let shape = arr.shape();
-    let (rows, cols) = (shape[0], shape[1]);
-    let cost = arr.as_slice().map_err(to_py)?;
-    let result = py
-        .detach(|| assign::solve(cost, rows, cols, &options))
-        .map_err(to_py)?;
-    let (r, c): (Vec<i64>, Vec<i64>) = result
-        .pairs()
-        .into_iter()
-        .map(|(i, j)| (i as i64, j as i64))
-        .unzip();
-    Ok((PyArray1::from_vec(py, r), PyArray1::from_vec(py, c)))
+    solve_to_arrays(py, cost_matrix, maximize, method, assign::solve)
 }
 
 /// Assignment in which rows and columns may stay unmatched, rejecting expensive pairs.
@@ -104,23 +124,13 @@ fn linear_sum_assignment_threshold<'py>(
     maximize: bool,
     method: &str,
 ) -> PyResult<IndexArrays<'py>> {
-    let options = assign::Options {
-        method: parse_method(method)?,
+    solve_to_arrays(
+        py,
+        cost_matrix,
         maximize,
-    };
-    let arr = as_f64_matrix(py, cost_matrix)?;
-    let shape = arr.shape();
-    let (rows, cols) = (shape[0], shape[1]);
-    let cost = arr.as_slice().map_err(to_py)?;
-    let result = py
-        .detach(|| assign::solve_with_threshold(cost, rows, cols, tau, &options))
-        .map_err(to_py)?;
-    let (r, c): (Vec<i64>, Vec<i64>) = result
-        .pairs()
-        .into_iter()
-        .map(|(i, j)| (i as i64, j as i64))
-        .unzip();
-    Ok((PyArray1::from_vec(py, r), PyArray1::from_vec(py, c)))
+        method,
+        |cost, rows, cols, options| assign::solve_with_threshold(cost, rows, cols, tau, options),
+    )
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

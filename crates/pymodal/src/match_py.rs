@@ -309,16 +309,7 @@ fn match_py(
             )))
         }
     };
-    opts.method = match solver {
-        "jv" => assign::Method::JonkerVolgenant,
-        "hungarian" => assign::Method::Hungarian,
-        "simplex" => assign::Method::NetworkSimplex,
-        o => {
-            return Err(PyValueError::new_err(format!(
-                "unknown solver {o:?}; expected \"jv\", \"hungarian\" or \"simplex\""
-            )))
-        }
-    };
+    opts.method = crate::assign_py::parse_method("solver", solver)?;
     opts.prealign = match prealign {
         "robust" => Prealign::Robust,
         "normalize" => Prealign::Normalize,

@@ -145,15 +145,7 @@ fn run<'py>(
                 ("both", SearchMode::Both),
             ],
         )?,
-        method: parse(
-            "solver",
-            solver,
-            &[
-                ("jv", assign::Method::JonkerVolgenant),
-                ("hungarian", assign::Method::Hungarian),
-                ("simplex", assign::Method::NetworkSimplex),
-            ],
-        )?,
+        method: crate::assign_py::parse_method("solver", solver)?,
         threshold,
         excess,
         paper,
