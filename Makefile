@@ -30,7 +30,9 @@ test-python: wheel
 bench:
 	cargo bench
 
+# The Python peers (pycpd, POT) are only needed here, not by the tests.
 bench-python: wheel
+	$(PY) -m pip install -q pycpd pot
 	for s in benches/python/bench_*.py; do $(PY) $$s || exit 1; done
 
 lint:

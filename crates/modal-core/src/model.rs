@@ -173,7 +173,16 @@ pub fn solve_model(
             let mut phi = Mat::<f64>::zeros(total, k);
             for a in 0..dim {
                 let psi = pairs.vectors.as_ref().subrows(a * n, n);
-                phi.as_mut().subrows_mut(a * n, n).copy_from(g * psi);
+                // Explicitly sequential: faer's `*` runs on the global (rayon) pool, whose
+                // start-up and spinning cost more than this 60 × 30 product itself.
+                faer::linalg::matmul::matmul(
+                    phi.as_mut().subrows_mut(a * n, n),
+                    faer::Accum::Replace,
+                    g.as_ref(),
+                    psi,
+                    1.0,
+                    faer::Par::Seq,
+                );
             }
             phi
         }

@@ -25,9 +25,11 @@ fn run(sev: Severity, seeds: std::ops::Range<u64>, opts: &MatchOptions) -> (f64,
 fn contours_all_severities() {
     let opts = MatchOptions::default();
     for (sev, target) in [
-        (Severity::Mild, 0.97),
-        (Severity::Moderate, 0.95),
-        (Severity::Severe, 0.9),
+        // Regression floors under the measured 1.000 / 1.000 / 0.948 on these 18 cases (the
+        // issue's targets are 0.99 / 0.98 / 0.95; see the README for the 90-case benchmark).
+        (Severity::Mild, 0.99),
+        (Severity::Moderate, 0.98),
+        (Severity::Severe, 0.93),
     ] {
         let (mean, accs) = run(sev, 0..18, &opts);
         eprintln!("{sev:?}: mean {mean:.4} {accs:.3?}");

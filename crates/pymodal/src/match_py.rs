@@ -200,7 +200,7 @@ fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
 ///
 /// Builds a finite-element model of each object, computes its vibration modes and matches the
 /// nodes in modal space. The defaults are the most accurate setting measured (robust rotation
-/// pre-alignment, three modal affine re-fits, cross-object mode alignment, excess nodes on
+/// pre-alignment, up to two modal affine re-fits, cross-object mode alignment, excess nodes on
 /// contours); ``prealign="normalize", refits=0`` is the paper's literal setting.
 ///
 /// Parameters
@@ -217,7 +217,7 @@ fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
 /// material : None, preset name, dict or (E, nu, rho) — only ν changes the matches.
 /// prealign : {"robust", "normalize"}; skip_rigid : bool; band : int;
 /// refits : int or None — modal affine re-fits (None: 2, or 0 for 3-D point sets);
-/// kappa : float or None — σ = kappa × mean nearest-neighbour distance (None: 1, or 3 for 3-D
+/// kappa : float or None — σ = kappa × mean nearest-neighbour distance (None: 0.8, or 3 for 3-D
 ///     point sets, where independent samplings need smoother modes);
 /// threshold_in_optimizer : bool — let the assignment itself reject pairs above the threshold;
 /// position_weight : float in [0, 1] — mix of aligned-position distance into the cost (1 = positions
