@@ -5,7 +5,7 @@ The matrices are the explicit K and M of the Gaussian-element model of a foot-li
 Rows:
   scipy eigh(K, M)                    LAPACK (driver gvd), all pairs
   scipy eigh(K, M, subset_by_index)   LAPACK (driver gvx), lowest 25 %
-  pymodal.eigh(K, M)                  faer Cholesky reduction + tridiagonal D&C, all pairs
+  pymodal.eigh(K, M)                  blocked Cholesky reduction + tridiagonal QL / inverse iteration, all pairs
   pymodal.eigh(K, M, n_modes)         same reduction, lowest 25 % by tridiagonal inverse iteration
   pymodal.ModalModel(points)          whole model build + ψ-form solve (block-diagonal Γ̃), all
   pymodal.ModalModel(points, n_modes) the same, lowest 25 %
