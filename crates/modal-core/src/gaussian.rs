@@ -37,29 +37,70 @@ pub fn pair_index(dim: usize, a: usize, b: usize) -> usize {
 
 /// Mean and minimum nearest-neighbour distance, with the pair realising the minimum.
 pub fn nearest_neighbour_stats(shape: &Shape) -> (f64, f64, (usize, usize)) {
-    let n = shape.len();
-    let dim = shape.dim();
-    let c = shape.coords();
-    let mut total = 0.0;
-    let mut min = f64::INFINITY;
-    let mut pair = (0, 0);
-    for i in 0..n {
+    // Every model build (each modal solve) calls this O(n²) scan: 2-D and 3-D get a
+    // fixed-dimension loop the compiler can unroll.
+    match shape.dim() {
+        2 => nn_stats::<2>(shape.coords()),
+        3 => nn_stats::<3>(shape.coords()),
+        d => nn_stats_dyn(shape.coords(), d),
+    }
+}
+
+fn nn_stats<const D: usize>(c: &[f64]) -> (f64, f64, (usize, usize)) {
+    let pts: Vec<[f64; D]> = c
+        .chunks_exact(D)
+        .map(|p| std::array::from_fn(|a| p[a]))
+        .collect();
+    finish_nn_stats(pts.len(), |i| {
+        let p = pts[i];
+        let mut best = f64::INFINITY;
+        let mut bj = i;
+        for (j, q) in pts.iter().enumerate() {
+            let mut r2 = 0.0;
+            for a in 0..D {
+                let d = p[a] - q[a];
+                r2 += d * d;
+            }
+            if j != i && r2 < best {
+                best = r2;
+                bj = j;
+            }
+        }
+        (best, bj)
+    })
+}
+
+fn nn_stats_dyn(c: &[f64], dim: usize) -> (f64, f64, (usize, usize)) {
+    let n = c.len() / dim;
+    finish_nn_stats(n, |i| {
         let mut best = f64::INFINITY;
         let mut bj = i;
         for j in 0..n {
             if j == i {
                 continue;
             }
-            let mut r2 = 0.0;
-            for a in 0..dim {
-                let d = c[i * dim + a] - c[j * dim + a];
-                r2 += d * d;
-            }
+            let r2: f64 = (0..dim)
+                .map(|a| (c[i * dim + a] - c[j * dim + a]).powi(2))
+                .sum();
             if r2 < best {
                 best = r2;
                 bj = j;
             }
         }
+        (best, bj)
+    })
+}
+
+/// Reduces per-node (squared nearest distance, neighbour) into (mean, min, pair).
+fn finish_nn_stats(
+    n: usize,
+    nearest: impl Fn(usize) -> (f64, usize),
+) -> (f64, f64, (usize, usize)) {
+    let mut total = 0.0;
+    let mut min = f64::INFINITY;
+    let mut pair = (0, 0);
+    for i in 0..n {
+        let (best, bj) = nearest(i);
         let r = best.sqrt();
         total += r;
         if r < min {
