@@ -198,7 +198,7 @@ pub fn symmetric_eigen(mut c: Mat<f64>, n_modes: Option<usize>) -> Result<EigenP
     if n < TRIDIAGONAL_MIN_ORDER {
         return full_eigen(c.as_ref(), k);
     }
-    tridiagonal_route(c.as_mut(), k, TridiagVectors::InverseIteration)
+    tridiagonal_route(c.as_mut(), k)
 }
 
 fn full_eigen(c: MatRef<'_, f64>, k: usize) -> Result<EigenPairs, ModalError> {
@@ -255,45 +255,11 @@ fn ascending_order(values: &[f64]) -> Vec<usize> {
     order
 }
 
-/// How the eigenvectors of the tridiagonal matrix are obtained.
-#[doc(hidden)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TridiagVectors {
-    /// All vectors by divide and conquer (QR below `recursion_threshold`); only the wanted
-    /// columns are back-transformed.
-    DivideConquer { recursion_threshold: usize },
-    /// Eigenvalues only by implicit QR, then inverse iteration for the wanted vectors.
-    InverseIteration,
-}
-
-/// The tridiagonal route with an explicit choice of the tridiagonal vector method (for
-/// benchmarking; [`symmetric_eigen`] picks the method).
-#[doc(hidden)]
-pub fn symmetric_eigen_with(
-    mut c: Mat<f64>,
-    k: usize,
-    method: TridiagVectors,
-) -> Result<EigenPairs, ModalError> {
-    let k = k.min(c.nrows());
-    tridiagonal_route(c.as_mut(), k, method)
-}
-
-fn tridiagonal_route(
-    mut c: MatMut<'_, f64>,
-    k: usize,
-    method: TridiagVectors,
-) -> Result<EigenPairs, ModalError> {
+fn tridiagonal_route(mut c: MatMut<'_, f64>, k: usize) -> Result<EigenPairs, ModalError> {
     let n = c.nrows();
     let par = Par::Seq;
     let bs = faer::linalg::qr::no_pivoting::factor::recommended_block_size::<f64>(n, n);
     let mut hh = Mat::<f64>::zeros(bs, n - 1);
-    let mut params: faer::Spec<evd::SelfAdjointEvdParams, f64> = Default::default();
-    if let TridiagVectors::DivideConquer {
-        recursion_threshold,
-    } = method
-    {
-        params.recursion_threshold = recursion_threshold.max(2);
-    }
     let req = StackReq::any_of(&[
         evd::tridiag::tridiag_in_place_scratch::<f64>(n, par, Default::default()),
         householder::apply_block_householder_sequence_on_the_left_in_place_scratch::<f64>(
@@ -301,46 +267,15 @@ fn tridiagonal_route(
             bs,
             k,
         ),
-        evd::self_adjoint_evd_scratch::<f64>(n, ComputeEigenvectors::Yes, par, params),
     ]);
     let mut mem = MemBuffer::new(req);
     let stack = MemStack::new(&mut mem);
     evd::tridiag::tridiag_in_place(c.rb_mut(), hh.as_mut(), par, stack, Default::default());
     let diag: Vec<f64> = (0..n).map(|i| c[(i, i)]).collect();
     let off: Vec<f64> = (0..n - 1).map(|i| c[(i + 1, i)]).collect();
-    let d = faer::Col::<f64>::from_fn(n, |i| diag[i]);
-    let e = faer::Col::<f64>::from_fn(n, |i| if i + 1 < n { off[i] } else { 0.0 });
-    let mut s = faer::diag::Diag::<f64>::zeros(n);
-    let no_conv = |_| ModalError::Numerical("tridiagonal eigensolver did not converge".into());
-
-    let (all_values, mut u) = match method {
-        TridiagVectors::DivideConquer { .. } => {
-            let mut full = Mat::<f64>::zeros(n, n);
-            evd::tridiagonal_self_adjoint_evd(
-                d.as_diagonal(),
-                e.as_diagonal(),
-                s.as_mut(),
-                Some(full.as_mut()),
-                par,
-                stack,
-                params,
-            )
-            .map_err(no_conv)?;
-            let raw: Vec<f64> = (0..n).map(|i| s[i]).collect();
-            let order = ascending_order(&raw);
-            let mut u = Mat::<f64>::zeros(n, k);
-            for (dst, &src) in order.iter().take(k).enumerate() {
-                u.col_mut(dst).copy_from(full.col(src));
-            }
-            (order.iter().map(|&i| raw[i]).collect::<Vec<f64>>(), u)
-        }
-        TridiagVectors::InverseIteration => {
-            let all = tridiagonal_eigenvalues(&diag, &off)?;
-            let mut u = Mat::<f64>::zeros(n, k);
-            tridiagonal_inverse_iteration(&diag, &off, &all[..k], u.as_mut())?;
-            (all, u)
-        }
-    };
+    let all_values = tridiagonal_eigenvalues(&diag, &off)?;
+    let mut u = Mat::<f64>::zeros(n, k);
+    tridiagonal_inverse_iteration(&diag, &off, &all_values[..k], u.as_mut())?;
     let values = all_values[..k].to_vec();
     householder::apply_block_householder_sequence_on_the_left_in_place_with_conj(
         c.rb().submatrix(1, 0, n - 1, n - 1),
