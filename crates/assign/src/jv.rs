@@ -435,80 +435,10 @@ impl Top2 {
     }
 }
 
+/// The two smallest reduced costs of a row: the row scan of augmenting row reduction without
+/// its free minimum. With `FREE == false` the penalty slice is never read, so `v` stands in.
 fn top2(row: &[f64], v: &[f64]) -> Top2 {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if row.len() >= 8 && std::is_x86_feature_detected!("avx2") {
-            // SAFETY: AVX2 was just detected.
-            return unsafe { top2_avx2(row, v) };
-        }
-    }
-    top2_portable(row, v)
-}
-
-fn top2_portable(row: &[f64], v: &[f64]) -> Top2 {
-    let mut t = Top2::EMPTY;
-    for (j, (&r, &vj)) in row.iter().zip(v).enumerate() {
-        let h = r - vj;
-        // In index order a strict comparison already breaks ties towards the lower column.
-        // Infinite entries are never offered: they leave the index at `NONE`.
-        if h < t.min2 {
-            t.offer(h, j);
-        }
-    }
-    t
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn top2_avx2(row: &[f64], v: &[f64]) -> Top2 {
-    use std::arch::x86_64::*;
-    let m = row.len();
-    assert!(v.len() >= m);
-    let m4 = m - m % 4;
-    let inf = _mm256_set1_pd(f64::INFINITY);
-    let (mut m1, mut m2) = (inf, inf);
-    let mut i1 = _mm256_set1_pd(-1.0);
-    let mut i2 = _mm256_set1_pd(-1.0);
-    let mut jv = _mm256_set_pd(3.0, 2.0, 1.0, 0.0);
-    let four = _mm256_set1_pd(4.0);
-    let (rp, vp) = (row.as_ptr(), v.as_ptr());
-    let mut k = 0;
-    while k < m4 {
-        let h = _mm256_sub_pd(_mm256_loadu_pd(rp.add(k)), _mm256_loadu_pd(vp.add(k)));
-        // Per lane the indices increase, so strict comparisons keep the lower column on ties.
-        let lt1 = _mm256_cmp_pd::<_CMP_LT_OQ>(h, m1);
-        let lt2 = _mm256_cmp_pd::<_CMP_LT_OQ>(h, m2);
-        m2 = _mm256_blendv_pd(_mm256_blendv_pd(m2, h, lt2), m1, lt1);
-        i2 = _mm256_blendv_pd(_mm256_blendv_pd(i2, jv, lt2), i1, lt1);
-        m1 = _mm256_blendv_pd(m1, h, lt1);
-        i1 = _mm256_blendv_pd(i1, jv, lt1);
-        jv = _mm256_add_pd(jv, four);
-        k += 4;
-    }
-    let mut a = [[0.0f64; 4]; 4];
-    _mm256_storeu_pd(a[0].as_mut_ptr(), m1);
-    _mm256_storeu_pd(a[1].as_mut_ptr(), i1);
-    _mm256_storeu_pd(a[2].as_mut_ptr(), m2);
-    _mm256_storeu_pd(a[3].as_mut_ptr(), i2);
-    let mut t = Top2::EMPTY;
-    let [mins1, idx1, mins2, idx2] = a;
-    for l in 0..4 {
-        // Lanes that saw fewer than two finite entries keep index -1: nothing to offer.
-        if idx1[l] >= 0.0 {
-            t.offer(mins1[l], idx1[l] as usize);
-        }
-        if idx2[l] >= 0.0 {
-            t.offer(mins2[l], idx2[l] as usize);
-        }
-    }
-    for j in m4..m {
-        let h = row[j] - v[j];
-        if h < t.min2 {
-            t.offer(h, j);
-        }
-    }
-    t
+    scan::<false>(row, v, v).top
 }
 
 /// Shortest augmenting paths from every free row.
@@ -759,15 +689,32 @@ unsafe fn relax_avx2(
 mod tests {
     use super::*;
 
-    #[test]
-    fn top2_kernels_agree() {
-        let mut state = 99u64;
-        let mut rnd = move || {
+    /// Xorshift stream of integers in `0..k` as `f64`: small ranges make ties common.
+    fn small_ints(seed: u64, k: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
-            (state % 5) as f64
+            (state % k) as f64
+        }
+    }
+
+    /// The two smallest finite `row[j] - v[j]` by (value, index), by sorting.
+    fn top2_reference(row: &[f64], v: &[f64]) -> Top2 {
+        let mut all: Vec<(f64, usize)> = (0..row.len()).map(|j| (row[j] - v[j], j)).collect();
+        all.sort_by(|x, y| x.partial_cmp(y).unwrap());
+        let want = |k: usize| match all.get(k) {
+            Some(&(h, j)) if h.is_finite() => (h, j),
+            _ => (f64::INFINITY, NONE),
         };
+        let ((min1, j1), (min2, j2)) = (want(0), want(1));
+        Top2 { min1, j1, min2, j2 }
+    }
+
+    #[test]
+    fn top2_kernels_agree() {
+        let mut rnd = small_ints(99, 5);
         for m in [1usize, 2, 3, 7, 8, 9, 16, 33, 100] {
             for t in 0..200 {
                 // Every other row mostly forbidden, to exercise rows with 0 or 1 finite entries.
@@ -776,31 +723,17 @@ mod tests {
                     .map(|_| if rnd() >= p { f64::INFINITY } else { rnd() })
                     .collect();
                 let v: Vec<f64> = (0..m).map(|_| -rnd()).collect();
-                let a = top2_portable(&row, &v);
+                let a = scan_portable::<false>(&row, &v, &v).top;
                 let b = top2(&row, &v);
                 assert_eq!(a, b, "{row:?} {v:?}");
-                // Reference: sort (value, index).
-                let mut all: Vec<(f64, usize)> = (0..m).map(|j| (row[j] - v[j], j)).collect();
-                all.sort_by(|x, y| x.partial_cmp(y).unwrap());
-                let want = |k: usize| match all.get(k) {
-                    Some(&(h, j)) if h.is_finite() => (h, j),
-                    _ => (f64::INFINITY, NONE),
-                };
-                assert_eq!((a.min1, a.j1), want(0));
-                assert_eq!((a.min2, a.j2), want(1));
+                assert_eq!(a, top2_reference(&row, &v));
             }
         }
     }
 
     #[test]
     fn scan_kernels_agree() {
-        let mut state = 7u64;
-        let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % 6) as f64
-        };
+        let mut rnd = small_ints(7, 6);
         for m in [1usize, 2, 3, 7, 8, 9, 16, 33, 100] {
             for t in 0..300 {
                 let p = if t % 2 == 0 { 5.0 } else { 1.0 };
@@ -832,7 +765,7 @@ mod tests {
                 assert_eq!(b0.top, a.top);
                 assert_eq!((a0.min_free, b0.min_free), (f64::INFINITY, f64::INFINITY));
                 assert_eq!(a, b, "{row:?} {v:?} {fp:?}");
-                assert_eq!(a.top, top2_portable(&row, &v));
+                assert_eq!(a.top, top2_reference(&row, &v));
                 // Reference for the free minimum: first index of the smallest finite h on a free column.
                 let mut want = (f64::INFINITY, NONE);
                 for j in 0..m {
@@ -849,13 +782,7 @@ mod tests {
     /// The AVX2 kernel must agree exactly with the portable one, ties and tails included.
     #[test]
     fn kernels_agree() {
-        let mut state = 12345u64;
-        let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % 7) as f64
-        };
+        let mut rnd = small_ints(12345, 7);
         for m in [1usize, 3, 4, 5, 8, 13, 64, 67] {
             for _ in 0..50 {
                 let row: Vec<f64> = (0..m)
