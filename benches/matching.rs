@@ -76,7 +76,15 @@ fn bench(c: &mut Criterion) {
     let (pa, _, _) = align::normalize(a.coords(), 2).unwrap();
     let (pb, _, _) = align::normalize(b.coords(), 2).unwrap();
     g.bench_function("robust_prealign", |x| {
-        x.iter(|| align::robust_prealign(black_box(&pa), black_box(&pb), 2, 5, true))
+        x.iter(|| {
+            align::robust_prealign(
+                black_box(&pa),
+                black_box(&pb),
+                2,
+                &align::RotationSearch::default(),
+                true,
+            )
+        })
     });
     let sa = Shape::new(2, pa.clone(), Topology::ClosedContour).unwrap();
     let opts = ModelOptions {

@@ -18,6 +18,7 @@ pub mod rigid;
 pub mod search;
 pub mod shape;
 
+pub use align::RotationSearch;
 pub use error::ModalError;
 pub use features::{AffinityMatrix, ModalFeatures};
 pub use matching::{match_shapes, MatchOptions, MatchPair, MatchResult, Prealign, Search};

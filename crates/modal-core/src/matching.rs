@@ -53,8 +53,8 @@ pub struct MatchOptions {
     /// Treat both objects as ordered closed contours; `None`: when both shapes say so.
     pub ordered: Option<bool>,
     pub prealign: Prealign,
-    /// Iterations of symmetric affine ICP per rotation candidate.
-    pub icp_iterations: usize,
+    /// How the robust pre-alignment searches the rotation (starts, ICP iterations).
+    pub rotation_search: align::RotationSearch,
     /// Maximum modal affine re-fits; stops earlier when the pairs stop changing.
     pub refits: usize,
     /// Weight `w` of aligned positions in the cost: `Z = (1 − w)·Z_modal + w·D`, both
@@ -95,7 +95,7 @@ impl Default for MatchOptions {
             excess: true,
             ordered: None,
             prealign: Prealign::Robust,
-            icp_iterations: 5,
+            rotation_search: align::RotationSearch::default(),
             refits: 2,
             position_weight: 0.0,
             common_sigma: false,
@@ -377,7 +377,7 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
                 Prealign::Normalize => sa.pts.clone(),
                 Prealign::Robust => {
                     let t =
-                        align::robust_prealign(&sa.pts, &sb.pts, d, opts.icp_iterations, ordered);
+                        align::robust_prealign(&sa.pts, &sb.pts, d, &opts.rotation_search, ordered);
                     align::normalize(&t.apply(&sa.pts), d)?.0
                 }
             };
@@ -612,7 +612,7 @@ pub fn prealign_normalized(
     let (pb, _, _) = align::normalize(b.coords(), d)?;
     let t = match opts.prealign {
         Prealign::Normalize => Affine::identity(d),
-        Prealign::Robust => align::robust_prealign(&pa, &pb, d, opts.icp_iterations, ordered),
+        Prealign::Robust => align::robust_prealign(&pa, &pb, d, &opts.rotation_search, ordered),
     };
     Ok((align::normalize(&t.apply(&pa), d)?.0, pb))
 }

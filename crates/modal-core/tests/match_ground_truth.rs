@@ -5,7 +5,7 @@
 mod match_common;
 
 use match_common::*;
-use modal_core::{match_shapes, MatchOptions, Shape, Topology};
+use modal_core::{match_shapes, MatchOptions, RotationSearch, Shape, Topology};
 
 fn run(sev: Severity, seeds: std::ops::Range<u64>, opts: &MatchOptions) -> (f64, Vec<f64>) {
     let outlines = outlines();
@@ -25,16 +25,31 @@ fn run(sev: Severity, seeds: std::ops::Range<u64>, opts: &MatchOptions) -> (f64,
 fn contours_all_severities() {
     let opts = MatchOptions::default();
     for (sev, target) in [
-        // Regression floors under the measured 1.000 / 1.000 / 0.948 on these 18 cases (the
-        // issue's targets are 0.99 / 0.98 / 0.95; see the README for the 90-case benchmark).
+        // The targets; measured 1.000 / 1.000 / 0.964 on these 36 cases (0.9998 /
+        // 0.9995 / 0.966 on 90; see the README for the Python benchmark).
         (Severity::Mild, 0.99),
         (Severity::Moderate, 0.98),
-        (Severity::Severe, 0.93),
+        (Severity::Severe, 0.95),
     ] {
-        let (mean, accs) = run(sev, 0..18, &opts);
+        let (mean, accs) = run(sev, 0..36, &opts);
         eprintln!("{sev:?}: mean {mean:.4} {accs:.3?}");
         assert!(mean >= target, "{sev:?}: {mean} < {target}");
     }
+}
+
+#[test]
+fn dense_rotation_search_beats_the_five_spec_candidates() {
+    // Rounded outlines under ±35° turns: affine ICP from the spec's five starts (identity and
+    // principal axes) stops in a neighbouring minimum a few degrees off; the evenly spaced
+    // starts find the true one (measured 0.966 vs 0.921 on these 90 cases).
+    let spec = MatchOptions {
+        rotation_search: RotationSearch::spec(5),
+        ..MatchOptions::default()
+    };
+    let (dense, _) = run(Severity::Severe, 0..90, &MatchOptions::default());
+    let (five, _) = run(Severity::Severe, 0..90, &spec);
+    eprintln!("severe: dense {dense:.4}, spec {five:.4}");
+    assert!(dense >= five + 0.03, "dense {dense} vs spec {five}");
 }
 
 fn shapes(case: &ContourCase) -> (Shape, Shape) {
