@@ -576,19 +576,7 @@ pub fn rotation_candidates(a: &[f64], b: &[f64], dim: usize, turns: usize) -> Ve
                     inner[r][c] = t * s[c];
                 }
             }
-            let mut m = [[0.0; 3]; 3];
-            for r in 0..dim {
-                for c in 0..dim {
-                    m[r][c] = (0..dim)
-                        .map(|p| {
-                            (0..dim)
-                                .map(|q| vb[r][p] * inner[p][q] * va[c][q])
-                                .sum::<f64>()
-                        })
-                        .sum();
-                }
-            }
-            out.push(Affine::linear(dim, m));
+            out.push(Affine::linear(dim, sandwich(dim, &vb, &inner, &va)));
         }
     }
     for k in 1..turns {
@@ -596,21 +584,22 @@ pub fn rotation_candidates(a: &[f64], b: &[f64], dim: usize, turns: usize) -> Ve
         // R = V_b · Rz(θ) · V_bᵀ: a turn in the plane of B's first two principal axes (in 2-D
         // simply the rotation by θ).
         let rz = [[cos, -sin, 0.0], [sin, cos, 0.0], [0.0, 0.0, 1.0]];
-        let mut m = [[0.0; 3]; 3];
-        for r in 0..dim {
-            for c in 0..dim {
-                m[r][c] = (0..dim)
-                    .map(|p| {
-                        (0..dim)
-                            .map(|q| vb[r][p] * rz[p][q] * vb[c][q])
-                            .sum::<f64>()
-                    })
-                    .sum();
-            }
-        }
-        out.push(Affine::linear(dim, m));
+        out.push(Affine::linear(dim, sandwich(dim, &vb, &rz, &vb)));
     }
     out
+}
+
+/// `U · T · Vᵀ` on the leading `dim × dim` blocks.
+fn sandwich(dim: usize, u: &[[f64; 3]; 3], t: &[[f64; 3]; 3], v: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let mut m = [[0.0; 3]; 3];
+    for r in 0..dim {
+        for c in 0..dim {
+            m[r][c] = (0..dim)
+                .map(|p| (0..dim).map(|q| u[r][p] * t[p][q] * v[c][q]).sum::<f64>())
+                .sum();
+        }
+    }
+    m
 }
 
 /// How [`robust_prealign`] searches the rotation between two objects.
@@ -722,7 +711,7 @@ mod tests {
     }
 
     #[test]
-    fn nearest_matches_a_plain_scan_with_ties() {
+    fn nearest_one_and_both_ways_match_a_plain_scan_with_ties() {
         let mut seed = 7u64;
         let mut rnd = || {
             seed = seed
@@ -732,46 +721,40 @@ mod tests {
             ((seed >> 40) % 7) as f64 - 3.0
         };
         for dim in 1..=4 {
-            for (n, m) in [(1, 1), (5, 3), (9, 17), (20, 8), (3, 40)] {
-                let a: Vec<f64> = (0..n * dim).map(|_| rnd()).collect();
-                let b: Vec<f64> = (0..m * dim).map(|_| rnd()).collect();
-                let plain: Vec<(usize, f64)> = a
-                    .chunks_exact(dim)
-                    .map(|p| {
-                        let mut best = (0, f64::INFINITY);
-                        for (j, q) in b.chunks_exact(dim).enumerate() {
-                            let d: f64 = (0..dim).map(|c| (p[c] - q[c]).powi(2)).sum();
-                            if d < best.1 {
-                                best = (j, d);
-                            }
-                        }
-                        best
-                    })
-                    .collect();
-                assert_eq!(nearest(&a, &b, dim), plain, "dim {dim}, {n}×{m}");
-            }
-        }
-        assert_eq!(nearest(&[0.0, 0.0], &[], 2), vec![(0, f64::INFINITY)]);
-    }
-
-    #[test]
-    fn nearest_both_is_nearest_each_way_with_ties() {
-        let mut seed = 11u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 40) % 5) as f64 - 2.0
-        };
-        for dim in 1..=4 {
             for (n, m) in [(1, 1), (5, 3), (9, 17), (20, 8), (3, 40), (0, 4)] {
                 let a: Vec<f64> = (0..n * dim).map(|_| rnd()).collect();
                 let b: Vec<f64> = (0..m * dim).map(|_| rnd()).collect();
+                let plain = |from: &[f64], to: &[f64]| -> Vec<(usize, f64)> {
+                    from.chunks_exact(dim)
+                        .map(|p| {
+                            let mut best = (0, f64::INFINITY);
+                            for (j, q) in to.chunks_exact(dim).enumerate() {
+                                let d: f64 = (0..dim).map(|c| (p[c] - q[c]).powi(2)).sum();
+                                if d < best.1 {
+                                    best = (j, d);
+                                }
+                            }
+                            best
+                        })
+                        .collect()
+                };
+                assert_eq!(nearest(&a, &b, dim), plain(&a, &b), "dim {dim}, {n}×{m}");
                 let (ab, ba) = nearest_both(&a, &b, dim);
-                assert_eq!(ab, nearest(&a, &b, dim), "dim {dim}, {n}×{m}");
-                assert_eq!(ba, nearest(&b, &a, dim), "dim {dim}, {n}×{m}");
+                assert_eq!(ab, plain(&a, &b), "both, dim {dim}, {n}×{m}");
+                assert_eq!(ba, plain(&b, &a), "both, dim {dim}, {n}×{m}");
+                // The portable scan too, whatever this machine dispatches to.
+                let portable = match dim {
+                    2 => Some(nearest_soa_body::<2, true>(&a, &b)),
+                    3 => Some(nearest_soa_body::<3, true>(&a, &b)),
+                    _ => None,
+                };
+                if let Some((ab, ba)) = portable {
+                    assert_eq!(ab, plain(&a, &b), "portable, dim {dim}, {n}×{m}");
+                    assert_eq!(ba, plain(&b, &a), "portable, dim {dim}, {n}×{m}");
+                }
             }
         }
+        assert_eq!(nearest(&[0.0, 0.0], &[], 2), vec![(0, f64::INFINITY)]);
     }
 
     #[test]
