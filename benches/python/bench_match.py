@@ -208,6 +208,7 @@ def main():
             "pymodal.match excess=False": modal(excess=False),
             "pymodal.match refits=0": modal(refits=0),
             "pymodal.match refits=3": modal(refits=3),
+            "pymodal.match prealign='spec' (SPEC §10's five starts)": modal(prealign="spec"),
             "pymodal.match paper (normalize, no re-fit)": modal(prealign="normalize", refits=0),
             "same pipeline, positions only (no modes)": modal(position_weight=1.0),
             "pycpd deformable + argmax P": cpd,

@@ -440,13 +440,8 @@ fn tridiagonal_inverse_iteration(
     let pertol = 10.0 * eps * norm1;
     let tiny = eps * norm1;
 
-    let mut dd = vec![0.0; n];
-    let mut rd = vec![0.0; n];
-    let mut du = vec![0.0; n];
-    let mut du2 = vec![0.0; n];
-    let mut dl = vec![0.0; n];
-    let mut piv = vec![false; n];
-    let mut x = vec![0.0; n];
+    let mut lu = TridiagLu::<1>::new(n);
+    let mut xl = vec![[0.0]; n];
     let mut vecs = vec![0.0; n * values.len()];
     let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut cluster_start = 0usize;
@@ -489,84 +484,26 @@ fn tridiagonal_inverse_iteration(
         }
         prev_shift = shift;
 
-        // LU with partial pivoting of T - shift I (LAPACK dgttrf).
-        for i in 0..n {
-            dd[i] = diag[i] - shift;
-        }
-        du[..n - 1].copy_from_slice(off);
-        dl[..n - 1].copy_from_slice(off);
-        for i in 0..n.saturating_sub(1) {
-            du2[i] = 0.0;
-            if dd[i].abs() >= dl[i].abs() {
-                piv[i] = false;
-                if dd[i] == 0.0 {
-                    dd[i] = tiny;
-                }
-                let f = dl[i] / dd[i];
-                dl[i] = f;
-                dd[i + 1] -= f * du[i];
-            } else {
-                piv[i] = true;
-                let f = dd[i] / dl[i];
-                dd[i] = dl[i];
-                dl[i] = f;
-                let t = du[i];
-                du[i] = dd[i + 1];
-                dd[i + 1] = t - f * dd[i + 1];
-                if i + 2 < n {
-                    du2[i] = du[i + 1];
-                    du[i + 1] *= -f;
-                }
-            }
-        }
-        for (v, r) in dd.iter_mut().zip(rd.iter_mut()) {
-            if v.abs() < tiny {
-                *v = if *v < 0.0 { -tiny } else { tiny };
-            }
-            // The back substitution below runs up to six times per vector: multiply, not divide.
-            *r = 1.0 / *v;
-        }
-
-        for v in x.iter_mut() {
+        lu.factor(diag, off, [shift], tiny);
+        for v in xl.iter_mut() {
             seed = seed
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
-            *v = ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5;
+            v[0] = ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5;
         }
         let mut converged = false;
         for _ in 0..6 {
             // Gram–Schmidt against the cluster's previous vectors, then one solve.
-            for p in cluster_start..j {
-                let col = &vecs[p * n..(p + 1) * n];
-                let dot: f64 = col.iter().zip(&x).map(|(a, b)| a * b).sum();
-                for (xi, ci) in x.iter_mut().zip(col) {
-                    *xi -= dot * ci;
-                }
-            }
-            let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            orthogonalise(&mut xl, &vecs[cluster_start * n..j * n]);
+            let scale = xl.iter().fold(0.0f64, |m, v| m.max(v[0].abs()));
             if scale == 0.0 {
                 break;
             }
-            for v in x.iter_mut() {
-                *v /= scale;
+            for v in xl.iter_mut() {
+                v[0] /= scale;
             }
-            for i in 0..n - 1 {
-                if !piv[i] {
-                    x[i + 1] -= dl[i] * x[i];
-                } else {
-                    let t = x[i];
-                    x[i] = x[i + 1];
-                    x[i + 1] = t - dl[i] * x[i];
-                }
-            }
-            x[n - 1] *= rd[n - 1];
-            if n > 1 {
-                x[n - 2] = (x[n - 2] - du[n - 2] * x[n - 1]) * rd[n - 2];
-            }
-            for i in (0..n.saturating_sub(2)).rev() {
-                x[i] = (x[i] - du[i] * x[i + 1] - du2[i] * x[i + 2]) * rd[i];
-            }
-            let growth = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            lu.solve(&mut xl);
+            let growth = xl.iter().fold(0.0f64, |m, v| m.max(v[0].abs()));
             if !growth.is_finite() {
                 return Err(ModalError::Numerical("inverse iteration overflowed".into()));
             }
@@ -579,19 +516,13 @@ fn tridiagonal_inverse_iteration(
                 converged = true;
             }
         }
-        for p in cluster_start..j {
-            let col = &vecs[p * n..(p + 1) * n];
-            let dot: f64 = col.iter().zip(&x).map(|(a, b)| a * b).sum();
-            for (xi, ci) in x.iter_mut().zip(col) {
-                *xi -= dot * ci;
-            }
-        }
-        let nrm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        orthogonalise(&mut xl, &vecs[cluster_start * n..j * n]);
+        let nrm = xl.iter().map(|v| v[0] * v[0]).sum::<f64>().sqrt();
         if !(nrm > 0.0 && nrm.is_finite()) {
             return Err(ModalError::Numerical("inverse iteration failed".into()));
         }
         for i in 0..n {
-            vecs[j * n + i] = x[i] / nrm;
+            vecs[j * n + i] = xl[i][0] / nrm;
         }
         j += 1;
     }
@@ -601,6 +532,140 @@ fn tridiagonal_inverse_iteration(
         }
     }
     Ok(())
+}
+
+/// Removes from `x` its components along the orthonormal columns stored one after another in
+/// `cols` (classical Gram–Schmidt, as `dstein` does inside a cluster).
+fn orthogonalise(x: &mut [[f64; 1]], cols: &[f64]) {
+    let n = x.len();
+    for col in cols.chunks_exact(n) {
+        let dot: f64 = col.iter().zip(x.iter()).map(|(a, b)| a * b[0]).sum();
+        for (xi, ci) in x.iter_mut().zip(col) {
+            xi[0] -= dot * ci;
+        }
+    }
+}
+
+/// LU factorisations with partial pivoting of `T − shift_l I` for `L` shifts at once (LAPACK
+/// `dgttrf` / `dgttrs`), interleaved lane by lane: with `L > 1` the dependent chains of several
+/// shifts overlap; `L = 1` is the plain one-vector factorisation.
+struct TridiagLu<const L: usize> {
+    dd: Vec<[f64; L]>,
+    /// `1 / dd`: the substitutions run up to six times per vector, so multiply, not divide.
+    rd: Vec<[f64; L]>,
+    du: Vec<[f64; L]>,
+    du2: Vec<[f64; L]>,
+    dl: Vec<[f64; L]>,
+    piv: Vec<[bool; L]>,
+}
+
+impl<const L: usize> TridiagLu<L> {
+    fn new(n: usize) -> Self {
+        Self {
+            dd: vec![[0.0; L]; n],
+            rd: vec![[0.0; L]; n],
+            du: vec![[0.0; L]; n],
+            du2: vec![[0.0; L]; n],
+            dl: vec![[0.0; L]; n],
+            piv: vec![[false; L]; n],
+        }
+    }
+
+    /// Factors `T − shift I` (T = `diag`, `off`) in place of any previous factorisation; pivots
+    /// smaller than `tiny` are replaced by `±tiny` (a shift on an eigenvalue is singular).
+    #[inline(always)]
+    fn factor(&mut self, diag: &[f64], off: &[f64], shift: [f64; L], tiny: f64) {
+        let n = diag.len();
+        let (dd, rd, du, du2, dl, piv) = (
+            &mut self.dd[..n],
+            &mut self.rd[..n],
+            &mut self.du[..n],
+            &mut self.du2[..n],
+            &mut self.dl[..n],
+            &mut self.piv[..n],
+        );
+        for i in 0..n {
+            for l in 0..L {
+                dd[i][l] = diag[i] - shift[l];
+            }
+            du2[i] = [0.0; L];
+            piv[i] = [false; L];
+        }
+        for i in 0..n.saturating_sub(1) {
+            du[i] = [off[i]; L];
+            dl[i] = [off[i]; L];
+        }
+        for i in 0..n.saturating_sub(1) {
+            for l in 0..L {
+                if dd[i][l].abs() >= dl[i][l].abs() {
+                    if dd[i][l] == 0.0 {
+                        dd[i][l] = tiny;
+                    }
+                    let f = dl[i][l] / dd[i][l];
+                    dl[i][l] = f;
+                    dd[i + 1][l] -= f * du[i][l];
+                } else {
+                    piv[i][l] = true;
+                    let f = dd[i][l] / dl[i][l];
+                    dd[i][l] = dl[i][l];
+                    dl[i][l] = f;
+                    let t = du[i][l];
+                    du[i][l] = dd[i + 1][l];
+                    dd[i + 1][l] = t - f * dd[i + 1][l];
+                    if i + 2 < n {
+                        du2[i][l] = du[i + 1][l];
+                        du[i + 1][l] *= -f;
+                    }
+                }
+            }
+        }
+        for i in 0..n {
+            for l in 0..L {
+                let v = &mut dd[i][l];
+                if v.abs() < tiny {
+                    *v = if *v < 0.0 { -tiny } else { tiny };
+                }
+                rd[i][l] = 1.0 / *v;
+            }
+        }
+    }
+
+    /// Overwrites `x` (one column per lane) with `(T − shift I)⁻¹ x`.
+    #[inline(always)]
+    fn solve(&self, x: &mut [[f64; L]]) {
+        let n = x.len();
+        // Views of the length of `x`: lets the compiler drop the bounds checks in the chains.
+        let (rd, du, du2, dl, piv) = (
+            &self.rd[..n],
+            &self.du[..n],
+            &self.du2[..n],
+            &self.dl[..n],
+            &self.piv[..n],
+        );
+        for i in 0..n.saturating_sub(1) {
+            for l in 0..L {
+                let (a, c) = (x[i][l], x[i + 1][l]);
+                let p = piv[i][l];
+                x[i][l] = if p { c } else { a };
+                x[i + 1][l] = if p {
+                    a - dl[i][l] * c
+                } else {
+                    c - dl[i][l] * a
+                };
+            }
+        }
+        for l in 0..L {
+            x[n - 1][l] *= rd[n - 1][l];
+            if n > 1 {
+                x[n - 2][l] = (x[n - 2][l] - du[n - 2][l] * x[n - 1][l]) * rd[n - 2][l];
+            }
+        }
+        for i in (0..n.saturating_sub(2)).rev() {
+            for l in 0..L {
+                x[i][l] = (x[i][l] - du[i][l] * x[i + 1][l] - du2[i][l] * x[i + 2][l]) * rd[i][l];
+            }
+        }
+    }
 }
 
 /// Interleaved inverse-iteration lanes of [`tridiagonal_inverse_iteration`].
@@ -626,54 +691,8 @@ fn inverse_iteration_lanes(
     for (l, s) in shift.iter_mut().enumerate() {
         *s = values[l.min(b - 1)];
     }
-    let mut dd = vec![[0.0; L]; n];
-    let mut rd = vec![[0.0; L]; n];
-    let mut du = vec![[0.0; L]; n];
-    let mut du2 = vec![[0.0; L]; n];
-    let mut dl = vec![[0.0; L]; n];
-    let mut piv = vec![[false; L]; n];
-    for i in 0..n {
-        for l in 0..L {
-            dd[i][l] = diag[i] - shift[l];
-        }
-    }
-    for i in 0..n - 1 {
-        du[i] = [off[i]; L];
-        dl[i] = [off[i]; L];
-    }
-    for i in 0..n - 1 {
-        for l in 0..L {
-            if dd[i][l].abs() >= dl[i][l].abs() {
-                if dd[i][l] == 0.0 {
-                    dd[i][l] = tiny;
-                }
-                let f = dl[i][l] / dd[i][l];
-                dl[i][l] = f;
-                dd[i + 1][l] -= f * du[i][l];
-            } else {
-                piv[i][l] = true;
-                let f = dd[i][l] / dl[i][l];
-                dd[i][l] = dl[i][l];
-                dl[i][l] = f;
-                let t = du[i][l];
-                du[i][l] = dd[i + 1][l];
-                dd[i + 1][l] = t - f * dd[i + 1][l];
-                if i + 2 < n {
-                    du2[i][l] = du[i + 1][l];
-                    du[i + 1][l] *= -f;
-                }
-            }
-        }
-    }
-    for i in 0..n {
-        for l in 0..L {
-            let v = &mut dd[i][l];
-            if v.abs() < tiny {
-                *v = if *v < 0.0 { -tiny } else { tiny };
-            }
-            rd[i][l] = 1.0 / *v;
-        }
-    }
+    let mut lu = TridiagLu::<L>::new(n);
+    lu.factor(diag, off, shift, tiny);
     let mut x = vec![[0.0; L]; n];
     for l in 0..b {
         for xi in x.iter_mut() {
@@ -707,27 +726,7 @@ fn inverse_iteration_lanes(
                 xi[l] *= inv[l];
             }
         }
-        for i in 0..n - 1 {
-            for l in 0..L {
-                let (a, c) = (x[i][l], x[i + 1][l]);
-                let p = piv[i][l];
-                x[i][l] = if p { c } else { a };
-                x[i + 1][l] = if p {
-                    a - dl[i][l] * c
-                } else {
-                    c - dl[i][l] * a
-                };
-            }
-        }
-        for l in 0..L {
-            x[n - 1][l] *= rd[n - 1][l];
-            x[n - 2][l] = (x[n - 2][l] - du[n - 2][l] * x[n - 1][l]) * rd[n - 2][l];
-        }
-        for i in (0..n - 2).rev() {
-            for l in 0..L {
-                x[i][l] = (x[i][l] - du[i][l] * x[i + 1][l] - du2[i][l] * x[i + 2][l]) * rd[i][l];
-            }
-        }
+        lu.solve(&mut x);
         let mut growth = [0.0f64; L];
         for xi in &x {
             for l in 0..L {

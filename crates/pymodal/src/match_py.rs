@@ -1,8 +1,8 @@
 //! `pymodal.match`: modal matching of two point sets, contours or meshes.
 
 use modal_core::{
-    match_shapes, ElementKind, MatchOptions, MatchResult, Prealign, Search, Shape, ThresholdMode,
-    Topology,
+    match_shapes, ElementKind, MatchOptions, MatchResult, Prealign, RotationSearch, Search, Shape,
+    ThresholdMode, Topology,
 };
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
@@ -215,7 +215,9 @@ fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
 /// ordered : bool or None — treat the inputs as ordered closed contours; None decides from the
 ///     data (2-D arrays whose consecutive points are nearest-neighbour close).
 /// material : None, preset name, dict or (E, nu, rho) — only ν changes the matches.
-/// prealign : {"robust", "normalize"}; skip_rigid : bool; band : int;
+/// prealign : {"robust", "spec", "normalize"} — rotation search over 36 turns plus the principal
+///     axes (default), SPEC §10's five starts only, or centroid and scale only;
+/// skip_rigid : bool; band : int;
 /// refits : int or None — modal affine re-fits (None: 2, or 0 for 3-D point sets);
 /// kappa : float or None — σ = kappa × mean nearest-neighbour distance (None: 0.8, or 3 for 3-D
 ///     point sets, where independent samplings need smoother modes);
@@ -312,10 +314,14 @@ fn match_py(
     opts.method = crate::assign_py::parse_method("solver", solver)?;
     opts.prealign = match prealign {
         "robust" => Prealign::Robust,
+        "spec" => {
+            opts.rotation_search = RotationSearch::spec(5);
+            Prealign::Robust
+        }
         "normalize" => Prealign::Normalize,
         o => {
             return Err(PyValueError::new_err(format!(
-                "unknown prealign {o:?}; expected \"robust\" or \"normalize\""
+                "unknown prealign {o:?}; expected \"robust\", \"spec\" or \"normalize\""
             )))
         }
     };

@@ -9,10 +9,10 @@ import pymodal
 DATA = Path(__file__).resolve().parents[2] / "modal-core" / "tests" / "data"
 
 
-def outline():
+def outline(name="MUN104L-level15"):
     pts, started = [], False
     for line in (DATA / "contours.txt").read_text().splitlines():
-        if line.startswith("# MUN104L-level15"):
+        if line.startswith("# " + name):
             started = True
         elif line.startswith("#") and started:
             break
@@ -82,6 +82,35 @@ def test_swapping_objects_and_searches(case):
     assert (t.costs <= 0.05).all() and len(t.unmatched_a) > 0
 
 
+def test_rotation_search_on_a_rounded_heel():
+    # The nearly round heel blob of a late F-Scan frame, turned 15-35 degrees and stretched:
+    # affine ICP from SPEC 10's five starts stops in a wrong minimum, the dense search does not.
+    o = outline("FrasP01L-frame67-late")
+    c = o.mean(0)
+
+    def turn(p, deg, sx, sy):
+        t = np.deg2rad(deg)
+        r = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+        return ((p - c) @ np.diag([sx, sy])) @ r.T + c + [2.0, -1.0]
+
+    acc = {"robust": [], "spec": []}
+    for deg in (-35, -25, -15, 15, 25, 35):
+        for sx, sy in ((1.2, 0.85), (0.85, 1.15)):
+            a = resample(o, 50, 0.3)
+            wo = turn(o, deg, sx, sy)
+            b = resample(wo, 54, 0.8)
+            truth = turn(a, deg, sx, sy)
+            spacing = np.linalg.norm(np.roll(wo, -1, 0) - wo, axis=1).sum() / len(b)
+            for k in acc:
+                m = pymodal.match(a, b, prealign=k)
+                one = m.pairs[~m.excess]
+                err = np.linalg.norm(b[one[:, 1]] - truth[one[:, 0]], axis=1)
+                acc[k].append((err <= spacing).mean())
+    # Measured 1.00 in all 12 cases with the default, 0.08 on average with the five starts.
+    assert min(acc["robust"]) >= 0.95
+    assert np.mean(acc["robust"]) >= np.mean(acc["spec"]) + 0.5
+
+
 def test_material_invariance(case):
     a, b, _, _ = case
     m1 = pymodal.match(a, b, material=(1.0, 0.49, 1.0))
@@ -112,6 +141,7 @@ def test_surfaces_3d():
         (dict(modes=0.0), "mode fraction"),
         (dict(threshold=-1.0), "threshold"),
         (dict(material="jelly"), "jelly|material|preset"),
+        (dict(prealign="pca"), "unknown prealign"),
     ],
 )
 def test_bad_options(case, kwargs, text):
