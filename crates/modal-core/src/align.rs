@@ -407,6 +407,11 @@ pub fn nearest_other(pts: &[f64], dim: usize) -> Vec<f64> {
 /// Symmetric chamfer distance: mean nearest-neighbour distance, averaged over both directions.
 pub fn chamfer(a: &[f64], b: &[f64], dim: usize) -> f64 {
     let (ab, ba) = nearest_both(a, b, dim);
+    chamfer_of(&ab, &ba)
+}
+
+/// The chamfer distance from the nearest neighbours both ways (squared distances).
+fn chamfer_of(ab: &[(usize, f64)], ba: &[(usize, f64)]) -> f64 {
     let m1 = ab.iter().map(|x| x.1.sqrt()).sum::<f64>() / ab.len() as f64;
     let m2 = ba.iter().map(|x| x.1.sqrt()).sum::<f64>() / ba.len() as f64;
     0.5 * (m1 + m2)
@@ -505,27 +510,22 @@ pub fn icp_affine(
 ) -> (Affine, f64) {
     let mut cur = start;
     let mut moved = cur.apply(a);
-    let score = |ab: &[(usize, f64)], ba: &[(usize, f64)]| {
-        let m1 = ab.iter().map(|x| x.1.sqrt()).sum::<f64>() / ab.len() as f64;
-        let m2 = ba.iter().map(|x| x.1.sqrt()).sum::<f64>() / ba.len() as f64;
-        0.5 * (m1 + m2)
-    };
     let mut it = 0;
     loop {
         // The neighbours of the current position serve both the next fit and the final score.
         let (ab, ba) = nearest_both(&moved, b, dim);
         if it == iters {
-            return (cur, score(&ab, &ba));
+            return (cur, chamfer_of(&ab, &ba));
         }
         it += 1;
         let mut pairs: Vec<(usize, usize)> = ab.iter().enumerate().map(|(i, x)| (i, x.0)).collect();
         pairs.extend(ba.iter().enumerate().map(|(j, x)| (x.0, j)));
         let Some(step) = fit_affine(&moved, b, dim, &pairs) else {
-            return (cur, score(&ab, &ba));
+            return (cur, chamfer_of(&ab, &ba));
         };
         let next = step.compose(&cur);
         if keep_orientation && next.det() <= 0.0 {
-            return (cur, score(&ab, &ba));
+            return (cur, chamfer_of(&ab, &ba));
         }
         // Converged: the pairs would not change any more.
         let still = (0..dim).all(|r| {

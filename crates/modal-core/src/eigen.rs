@@ -442,6 +442,9 @@ fn tridiagonal_inverse_iteration(
 
     let mut lu = TridiagLu::<1>::new(n);
     let mut xl = vec![[0.0]; n];
+    // Scratch of the interleaved lanes, reused by every run of singletons.
+    let mut lanes_lu = TridiagLu::<LANES>::new(n);
+    let mut lanes_x = vec![[0.0; LANES]; n];
     let mut vecs = vec![0.0; n * values.len()];
     let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut cluster_start = 0usize;
@@ -468,6 +471,7 @@ fn tridiagonal_inverse_iteration(
                 &values[j..j + b],
                 norm1,
                 &mut seed,
+                (&mut lanes_lu, &mut lanes_x),
                 &mut vecs[j * n..(j + b) * n],
             )?;
             j += b;
@@ -486,10 +490,7 @@ fn tridiagonal_inverse_iteration(
 
         lu.factor(diag, off, [shift], tiny);
         for v in xl.iter_mut() {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            v[0] = ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5;
+            v[0] = random_start(&mut seed);
         }
         let mut converged = false;
         for _ in 0..6 {
@@ -532,6 +533,15 @@ fn tridiagonal_inverse_iteration(
         }
     }
     Ok(())
+}
+
+/// Next entry of an inverse-iteration start vector, uniform in [−0.5, 0.5) (a 64-bit LCG, so the
+/// eigenvectors are reproducible run to run).
+fn random_start(seed: &mut u64) -> f64 {
+    *seed = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    ((*seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
 }
 
 /// Removes from `x` its components along the orthonormal columns stored one after another in
@@ -673,13 +683,15 @@ const LANES: usize = 4;
 
 /// Eigenvectors for up to [`LANES`] well-separated eigenvalues at once (no Gram–Schmidt needed):
 /// the same LU with partial pivoting, substitutions and acceptance test as the one-vector path,
-/// with the lanes interleaved in every loop. Unused lanes repeat the last shift.
+/// with the lanes interleaved in every loop. Unused lanes repeat the last shift. `scratch` is
+/// overwritten.
 fn inverse_iteration_lanes(
     diag: &[f64],
     off: &[f64],
     values: &[f64],
     norm1: f64,
     seed: &mut u64,
+    scratch: (&mut TridiagLu<LANES>, &mut [[f64; LANES]]),
     out: &mut [f64],
 ) -> Result<(), ModalError> {
     const L: usize = LANES;
@@ -691,15 +703,11 @@ fn inverse_iteration_lanes(
     for (l, s) in shift.iter_mut().enumerate() {
         *s = values[l.min(b - 1)];
     }
-    let mut lu = TridiagLu::<L>::new(n);
+    let (lu, x) = scratch;
     lu.factor(diag, off, shift, tiny);
-    let mut x = vec![[0.0; L]; n];
     for l in 0..b {
         for xi in x.iter_mut() {
-            *seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            xi[l] = ((*seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5;
+            xi[l] = random_start(seed);
         }
     }
     for l in b..L {
@@ -712,7 +720,7 @@ fn inverse_iteration_lanes(
     let mut polished = [false; L];
     for _ in 0..6 {
         let mut scale = [0.0f64; L];
-        for xi in &x {
+        for xi in x.iter() {
             for l in 0..L {
                 scale[l] = scale[l].max(xi[l].abs());
             }
@@ -726,9 +734,9 @@ fn inverse_iteration_lanes(
                 xi[l] *= inv[l];
             }
         }
-        lu.solve(&mut x);
+        lu.solve(x);
         let mut growth = [0.0f64; L];
-        for xi in &x {
+        for xi in x.iter() {
             for l in 0..L {
                 growth[l] = growth[l].max(xi[l].abs());
             }
