@@ -5,6 +5,8 @@
 // Small fixed-size matrix code reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
+use rayon::prelude::*;
+
 use crate::ModalError;
 
 /// A `dim`-dimensional affine map `x ↦ M x + t` (only the leading `dim × dim` block is used).
@@ -647,6 +649,10 @@ impl RotationSearch {
     }
 }
 
+/// Starts screened per rayon task: one start's two ICP iterations take ~10 µs, too little to be
+/// a task of its own.
+const SCREEN_CHUNK: usize = 8;
+
 /// The robust pre-alignment of SPEC §10 step 2: rotation candidates refined by symmetric affine
 /// ICP and scored by chamfer distance, searched as `search` says; the identity wins ties (within
 /// 0.1 %), because every turn of a nearly round outline scores about the same.
@@ -659,8 +665,12 @@ pub fn robust_prealign(
 ) -> Affine {
     const TIE: f64 = 1e-3;
     let screen = search.screen_iterations.min(search.iterations);
+    // The starts are independent: screen them on the rayon pool, where the other object's modal
+    // solve runs at the same time inside `match_shapes` — whichever finishes first helps here.
+    // `collect` keeps the candidates' order, so the result does not depend on the scheduling.
     let mut cands: Vec<(Affine, f64)> = rotation_candidates(a, b, dim, search.turns)
-        .into_iter()
+        .into_par_iter()
+        .with_min_len(SCREEN_CHUNK)
         .map(|c| icp_affine(a, b, dim, c, screen, keep_orientation))
         .collect();
     if search.iterations > screen {
@@ -670,7 +680,7 @@ pub fn robust_prealign(
         order.truncate(search.survivors.saturating_sub(1));
         order.insert(0, 0);
         cands = order
-            .into_iter()
+            .into_par_iter()
             .map(|i| {
                 icp_affine(
                     a,

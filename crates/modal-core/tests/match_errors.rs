@@ -66,6 +66,13 @@ fn degenerate_inputs_are_rejected_with_reasons() {
         ..MatchOptions::default()
     };
     assert!(err_text(&good, &good, &o).contains("position weight"));
+    for t in [-0.1, f64::NAN, f64::INFINITY] {
+        let o = MatchOptions {
+            refit_tolerance: t,
+            ..MatchOptions::default()
+        };
+        assert!(err_text(&good, &good, &o).contains("refit tolerance"));
+    }
 }
 
 #[test]

@@ -52,6 +52,60 @@ fn dense_rotation_search_beats_the_five_spec_candidates() {
     assert!(dense >= five + 0.03, "dense {dense} vs spec {five}");
 }
 
+#[test]
+fn refit_tolerance_skips_only_refits_the_pairs_do_not_need() {
+    // The re-fits stop once one affine map explains the pairs to within the tolerance (in B
+    // spacings). Every re-fit (0) and the default (0.3) must agree in accuracy while the default
+    // solves fewer; an unreachable tolerance is the same as no re-fit at all.
+    let outlines = outlines();
+    let every = MatchOptions {
+        refit_tolerance: 0.0,
+        ..MatchOptions::default()
+    };
+    let never = MatchOptions {
+        refit_tolerance: 1e9,
+        ..MatchOptions::default()
+    };
+    let no_refit = MatchOptions {
+        refits: 0,
+        ..MatchOptions::default()
+    };
+    let (mut acc, mut refits) = ([0.0; 2], [0usize; 2]);
+    let mut cases = 0.0;
+    for sev in [Severity::Moderate, Severity::Severe] {
+        for seed in 0..24u64 {
+            let (_, o) = &outlines[seed as usize % outlines.len()];
+            let case = contour_case(o, sev, seed);
+            let (a, b) = shapes(&case);
+            for (t, opts) in [&every, &MatchOptions::default()].into_iter().enumerate() {
+                let r = match_shapes(&a, &b, opts).unwrap();
+                acc[t] += accuracy_2d(&r, &case.b, &case.truth, case.spacing_b);
+                refits[t] += r.refits;
+            }
+            let skipped = match_shapes(&a, &b, &never).unwrap();
+            let plain = match_shapes(&a, &b, &no_refit).unwrap();
+            assert_eq!(skipped.refits, 0);
+            assert_eq!(skipped.pairs, plain.pairs, "seed {seed}");
+            cases += 1.0;
+        }
+    }
+    let (every_acc, default_acc) = (acc[0] / cases, acc[1] / cases);
+    eprintln!(
+        "every re-fit: {every_acc:.4} ({} re-fits); default: {default_acc:.4} ({} re-fits)",
+        refits[0], refits[1]
+    );
+    assert!(
+        default_acc >= every_acc - 0.003,
+        "{default_acc} vs {every_acc}"
+    );
+    assert!(
+        (refits[1] as f64) < 0.85 * refits[0] as f64,
+        "{} vs {} re-fits",
+        refits[1],
+        refits[0]
+    );
+}
+
 fn shapes(case: &ContourCase) -> (Shape, Shape) {
     (
         Shape::from_points_2d(&case.a, Topology::ClosedContour).unwrap(),

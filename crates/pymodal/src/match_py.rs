@@ -219,6 +219,8 @@ fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
 ///     axes (default), SPEC §10's five starts only, or centroid and scale only;
 /// skip_rigid : bool; band : int;
 /// refits : int or None — modal affine re-fits (None: 2, or 0 for 3-D point sets);
+/// refit_tolerance : float ≥ 0 or None — no (further) re-fit once one affine map explains the
+///     pairs to within this fraction of b's node spacing (None: 0.3; 0 re-fits ``refits`` times);
 /// kappa : float or None — σ = kappa × mean nearest-neighbour distance (None: 0.8, or 3 for 3-D
 ///     point sets, where independent samplings need smoother modes);
 /// threshold_in_optimizer : bool — let the assignment itself reject pairs above the threshold;
@@ -234,7 +236,7 @@ fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
 #[pyfunction]
 #[pyo3(name = "match", signature = (a, b, *, element="gaussian", modes=0.25, search="global", solver="jv",
     threshold=None, excess=true, ordered=None, material=None, prealign="robust", refits=None,
-    skip_rigid=false, band=3, kappa=None, threshold_in_optimizer=false, position_weight=0.0, common_sigma=None, triangles_a=None,
+    refit_tolerance=None, skip_rigid=false, band=3, kappa=None, threshold_in_optimizer=false, position_weight=0.0, common_sigma=None, triangles_a=None,
     triangles_b=None))]
 #[allow(clippy::too_many_arguments)]
 fn match_py(
@@ -251,6 +253,7 @@ fn match_py(
     material: Option<&Bound<'_, PyAny>>,
     prealign: &str,
     refits: Option<usize>,
+    refit_tolerance: Option<f64>,
     skip_rigid: bool,
     band: usize,
     kappa: Option<f64>,
@@ -334,6 +337,9 @@ fn match_py(
     opts.excess = excess;
     if let Some(r) = refits {
         opts.refits = r;
+    }
+    if let Some(t) = refit_tolerance {
+        opts.refit_tolerance = t;
     }
     opts.skip_rigid = skip_rigid;
     opts.band = band;

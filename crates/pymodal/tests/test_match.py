@@ -82,6 +82,18 @@ def test_swapping_objects_and_searches(case):
     assert (t.costs <= 0.05).all() and len(t.unmatched_a) > 0
 
 
+def test_refit_tolerance(case):
+    a, b, truth, spacing = case
+    every = pymodal.match(a, b, refit_tolerance=0.0, refits=3)
+    assert every.refits >= 1  # this pair's first pass is not one affine map's worth of pairs
+    # A tolerance no residual reaches stops before the first re-fit: the refits=0 result.
+    never = pymodal.match(a, b, refit_tolerance=1e9)
+    plain = pymodal.match(a, b, refits=0)
+    assert never.refits == 0
+    assert np.array_equal(never.pairs, plain.pairs) and np.array_equal(never.affinity, plain.affinity)
+    assert pymodal.match(a, b).refits <= every.refits
+
+
 def test_rotation_search_on_a_rounded_heel():
     # The nearly round heel blob of a late F-Scan frame, turned 15-35 degrees and stretched:
     # affine ICP from SPEC 10's five starts stops in a wrong minimum, the dense search does not.
@@ -142,6 +154,8 @@ def test_surfaces_3d():
         (dict(threshold=-1.0), "threshold"),
         (dict(material="jelly"), "jelly|material|preset"),
         (dict(prealign="pca"), "unknown prealign"),
+        (dict(refit_tolerance=-0.5), "refit tolerance"),
+        (dict(refit_tolerance=float("nan")), "refit tolerance"),
     ],
 )
 def test_bad_options(case, kwargs, text):
