@@ -63,6 +63,11 @@ fn bench(c: &mut Criterion) {
         };
         x.iter(|| match_shapes(black_box(&a), black_box(&b), &o).unwrap())
     });
+    g.bench_function("recipe_center_stride_2", |x| {
+        let mut o = MatchOptions::default();
+        o.model.center_stride = 2;
+        x.iter(|| match_shapes(black_box(&a), black_box(&b), &o).unwrap())
+    });
     g.bench_function("paper_setting", |x| {
         x.iter(|| match_shapes(black_box(&a), black_box(&b), &MatchOptions::paper()).unwrap())
     });
@@ -98,6 +103,13 @@ fn bench(c: &mut Criterion) {
     };
     g.bench_function("modal_basis_30_modes", |x| {
         x.iter(|| modal_basis(black_box(&sa), &opts).unwrap())
+    });
+    let reduced = ModelOptions {
+        center_stride: 2,
+        ..opts.clone()
+    };
+    g.bench_function("modal_basis_30_modes_center_stride_2", |x| {
+        x.iter(|| modal_basis(black_box(&sa), &reduced).unwrap())
     });
     g.finish();
 }

@@ -39,6 +39,10 @@ pub struct MatchArgs {
     /// The paper's literal setting (no rotation pre-alignment, no re-fits).
     #[arg(long)]
     pub paper: bool,
+    /// Gaussian element: a Gaussian on every N-th node only (faster, less accurate under
+    /// severe warps).
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub center_stride: usize,
     /// Write matches.csv, match.json and match.png/svg into this folder instead of printing.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -116,6 +120,7 @@ pub fn run(args: MatchArgs) -> Result<(), String> {
         threshold: args.threshold,
         excess: !args.no_excess,
         paper: args.paper,
+        center_stride: args.center_stride,
         ..RunParams::default()
     };
     let o = params.match_options().map_err(|e| e.to_string())?;

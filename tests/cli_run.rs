@@ -78,6 +78,35 @@ fn synthetic_recording(dir: &Path) -> PathBuf {
     path
 }
 
+/// Every step of a track is one frame, most nodes are chained, and the median step is the
+/// synthetic recording's known velocity.
+fn assert_tracks_follow_the_motion(tracks: &[std::collections::HashMap<String, String>]) {
+    let mut steps = Vec::new();
+    for w in tracks.windows(2) {
+        if w[0]["track"] == w[1]["track"] {
+            assert_eq!(num(&w[1], "frame") - num(&w[0], "frame"), 1.0);
+            steps.push([
+                num(&w[1], "x") - num(&w[0], "x"),
+                num(&w[1], "y") - num(&w[0], "y"),
+            ]);
+        }
+    }
+    assert!(
+        steps.len() > 200,
+        "tracks should chain most nodes, got {} steps",
+        steps.len()
+    );
+    for k in 0..2 {
+        let mut v: Vec<f64> = steps.iter().map(|s| s[k]).collect();
+        v.sort_by(f64::total_cmp);
+        let median = v[v.len() / 2];
+        assert!(
+            (median - VELOCITY[k]).abs() < 0.25,
+            "median step {k} = {median}"
+        );
+    }
+}
+
 #[test]
 fn run_on_synthetic_motion_gives_complete_matches_and_true_tracks() {
     let dir = temp_dir("synthetic");
@@ -115,30 +144,7 @@ fn run_on_synthetic_motion_gives_complete_matches_and_true_tracks() {
     // Tracks follow the known motion: each step moves by VELOCITY (contour nodes slide along the
     // outline, so compare the median over all steps).
     let tracks = read_csv(&out.join("tracks.csv"));
-    let mut steps = Vec::new();
-    for w in tracks.windows(2) {
-        if w[0]["track"] == w[1]["track"] {
-            assert_eq!(num(&w[1], "frame") - num(&w[0], "frame"), 1.0);
-            steps.push([
-                num(&w[1], "x") - num(&w[0], "x"),
-                num(&w[1], "y") - num(&w[0], "y"),
-            ]);
-        }
-    }
-    assert!(
-        steps.len() > 200,
-        "tracks should chain most nodes, got {} steps",
-        steps.len()
-    );
-    for k in 0..2 {
-        let mut v: Vec<f64> = steps.iter().map(|s| s[k]).collect();
-        v.sort_by(f64::total_cmp);
-        let median = v[v.len() / 2];
-        assert!(
-            (median - VELOCITY[k]).abs() < 0.25,
-            "median step {k} = {median}"
-        );
-    }
+    assert_tracks_follow_the_motion(&tracks);
     let longest = tracks.iter().map(|r| num(r, "step")).fold(0.0, f64::max);
     assert!(longest >= 9.0, "some node is tracked through all 10 frames");
 
@@ -149,6 +155,25 @@ fn run_on_synthetic_motion_gives_complete_matches_and_true_tracks() {
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
     let summary = read_json(&out.join("summary.json"));
     assert_eq!(summary["pairs"], 9);
+}
+
+#[test]
+fn run_with_a_reduced_gaussian_basis_still_tracks_the_motion() {
+    let dir = temp_dir("stride");
+    let rec = synthetic_recording(&dir);
+    let out = dir.join("out");
+    let o = pedomatch(&[
+        "run",
+        rec.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--center-stride",
+        "2",
+        "--figures",
+        "none",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_tracks_follow_the_motion(&read_csv(&out.join("tracks.csv")));
 }
 
 #[test]
@@ -295,4 +320,9 @@ fn run_errors_are_one_line() {
     let o = pedomatch(&["run", rec.to_str().unwrap(), "--modes", "1.5"]);
     assert!(!o.status.success());
     assert!(String::from_utf8(o.stderr).unwrap().contains("modes"));
+    let o = pedomatch(&["run", rec.to_str().unwrap(), "--center-stride", "0"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8(o.stderr)
+        .unwrap()
+        .contains("center stride"));
 }

@@ -8,7 +8,7 @@ use crate::align::{self, Affine};
 use crate::excess;
 use crate::features::{align_modes, AffinityMatrix, ModalFeatures};
 use crate::search::{global_matches, local_matches, ThresholdMode};
-use crate::{modal_basis, ModalError, ModelOptions, Shape, Topology};
+use crate::{modal_basis, ElementKind, ModalError, ModelOptions, Shape, Topology};
 
 /// Which one-to-one search produces the primary matches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -226,8 +226,8 @@ fn e_msg(e: &ModalError) -> String {
     }
 }
 
-/// Prepared second object: its normalised coordinates and its modes, solved once and reused across
-/// every re-fit (and, through [`Matcher`], across several first objects).
+/// One object prepared for matching: normalised coordinates, counter-clockwise when ordered
+/// (`perm` maps back to the caller's numbering), and its topology renumbered to match.
 struct Side {
     pts: Vec<f64>,
     perm: Vec<usize>,
@@ -360,13 +360,20 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         0
     };
     let total = d * n.min(m);
-    if skip >= total {
+    // Modes each model has: a reduced Gaussian basis has fewer than its nodes' degrees of freedom.
+    let dof = |len: usize| match opts.model.element {
+        ElementKind::Gaussian => d * len.div_ceil(opts.model.center_stride.max(1)),
+        ElementKind::Axial => d * len,
+    };
+    let (dof_a, dof_b) = (dof(n), dof(m));
+    let avail = total.min(dof_a).min(dof_b);
+    if skip >= avail {
         return Err(ModalError::InvalidParameter(format!(
-            "skipping {skip} rigid modes leaves none of the {total} available"
+            "skipping {skip} rigid modes leaves none of the {avail} available"
         )));
     }
-    let k = ((opts.mode_fraction * total as f64).floor() as usize).clamp(1, total - skip);
-    let band = opts.band.min(d * m - skip - k);
+    let k = ((opts.mode_fraction * total as f64).floor() as usize).clamp(1, avail - skip);
+    let band = opts.band.min(dof_b - skip - k);
 
     let sa = prepare(a, ordered)?;
     let sb = prepare(b, ordered)?;

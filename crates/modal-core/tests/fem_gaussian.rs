@@ -558,3 +558,68 @@ fn degenerate_input_is_rejected() {
     // … while the faithful element still has a well-defined (if degenerate-looking) spectrum.
     assert!(modal_basis(&line, &o).is_ok());
 }
+
+#[test]
+fn reduced_basis_is_a_rayleigh_ritz_subspace_of_the_full_element() {
+    // With the same σ, Gaussians on every second node span a subspace of the full element's
+    // displacement fields, so by the min–max principle every reduced eigenvalue bounds the full
+    // one from above; the smoothest modes, well resolved by the coarser basis, nearly agree.
+    let shape = ellipse(60, 1.2, 0.7);
+    let full = modal_basis(&shape, &unit(None)).unwrap();
+    let sigma = full.sigma.unwrap() * 2.0;
+    let same_sigma = |stride| ModelOptions {
+        center_stride: stride,
+        ..unit(Some(sigma))
+    };
+    let full = modal_basis(&shape, &same_sigma(1)).unwrap();
+    let reduced = modal_basis(&shape, &same_sigma(2)).unwrap();
+    assert_eq!(reduced.modes.nrows(), 120);
+    assert_eq!(reduced.modes.ncols(), 60); // 2 · 30 centres
+    let scale = full.eigenvalues[119];
+    for j in 0..60 {
+        assert!(
+            reduced.eigenvalues[j] >= full.eigenvalues[j] - 1e-9 * scale,
+            "mode {j}: reduced {} < full {}",
+            reduced.eigenvalues[j],
+            full.eigenvalues[j]
+        );
+    }
+    // The ten lowest modes (the Gaussian element's quasi-rigid ones among them, SPEC §2.7)
+    // within 1 % of the full element's, with the same shapes at the nodes.
+    for j in 0..10 {
+        let rel = reduced.eigenvalues[j] / full.eigenvalues[j] - 1.0;
+        assert!(rel < 0.01, "mode {j}: {rel}");
+        let (a, b) = (reduced.modes.col(j), full.modes.col(j));
+        let cos = (a.transpose() * b) / (a.norm_l2() * b.norm_l2());
+        assert!(cos.abs() > 0.99, "mode {j}: |cos| {cos}");
+    }
+}
+
+#[test]
+fn reduced_basis_rejects_what_it_cannot_do() {
+    let shape = ellipse(12, 1.2, 0.7);
+    let with = |stride, exact_rigid, n_modes| ModelOptions {
+        center_stride: stride,
+        exact_rigid,
+        n_modes,
+        ..unit(None)
+    };
+    let msg = |o: &ModelOptions| modal_basis(&shape, o).unwrap_err().to_string();
+    assert!(msg(&with(0, false, None)).contains("center_stride"));
+    // 12 nodes with stride 6 leave two centres: too few for a 2-D model.
+    assert!(msg(&with(6, false, None)).contains("centres"));
+    assert!(msg(&with(2, true, None)).contains("exact_rigid"));
+    // Six centres have 12 modes, not the nodes' 24.
+    assert!(msg(&with(2, false, Some(13))).contains("1..=12"));
+    assert_eq!(
+        modal_basis(&shape, &with(2, false, None))
+            .unwrap()
+            .modes
+            .ncols(),
+        12
+    );
+    assert!(model_matrices(&shape, &with(2, false, None))
+        .unwrap_err()
+        .to_string()
+        .contains("reduced"));
+}

@@ -38,6 +38,24 @@ fn contours_all_severities() {
 }
 
 #[test]
+fn reduced_gaussian_basis_trades_severe_accuracy_for_speed() {
+    // Gaussians on every second node only (a third of the solve time). Measured on these 90
+    // cases: 1.000 / 0.995 / 0.939 against 0.9998 / 0.9995 / 0.966 for the full element — the
+    // issue's targets hold at mild and moderate warps (consecutive frames), not at severe ones.
+    let mut opts = MatchOptions::default();
+    opts.model.center_stride = 2;
+    for (sev, floor) in [
+        (Severity::Mild, 0.99),
+        (Severity::Moderate, 0.98),
+        (Severity::Severe, 0.92),
+    ] {
+        let (mean, _) = run(sev, 0..90, &opts);
+        eprintln!("{sev:?}: center_stride 2 mean {mean:.4}");
+        assert!(mean >= floor, "{sev:?}: {mean} < {floor}");
+    }
+}
+
+#[test]
 fn dense_rotation_search_beats_the_five_spec_candidates() {
     // Rounded outlines under ±35° turns: affine ICP from the spec's five starts (identity and
     // principal axes) stops in a neighbouring minimum a few degrees off; the evenly spaced

@@ -100,6 +100,8 @@ pub struct RunParams {
     pub excess: bool,
     /// The paper's literal setting (no rotation pre-alignment, no re-fits).
     pub paper: bool,
+    /// Gaussian element: a Gaussian on every `center_stride`-th node only (1: every node).
+    pub center_stride: usize,
     /// Frames `first..=last`, 1-based.
     pub frames: Option<(usize, usize)>,
     /// Noise threshold in the recording's units (`None`: the file's own, else 0).
@@ -126,6 +128,7 @@ impl Default for RunParams {
             threshold: None,
             excess: true,
             paper: false,
+            center_stride: 1,
             frames: None,
             noise: None,
             smooth: 0.0,
@@ -169,6 +172,10 @@ impl RunParams {
         matching.method = self.method;
         matching.threshold = self.threshold;
         matching.excess = self.excess;
+        if self.center_stride == 0 {
+            return Err(IoError::invalid("center stride must be ≥ 1, got 0"));
+        }
+        matching.model.center_stride = self.center_stride;
         Ok(matching)
     }
 

@@ -143,6 +143,8 @@ fn mat_to_numpy<'py>(py: Python<'py>, m: &Mat<f64>) -> Bound<'py, PyArray2<f64>>
 /// kappa : float, default 1 — σ rule factor.
 /// n_modes : int, optional — compute only the lowest modes (faster); default all ``d·n``.
 /// exact_rigid : bool, default False — project out the exact rigid motions (Gaussian element).
+/// center_stride : int, default 1 — Gaussians on every ``center_stride``-th node only: a reduced
+///     basis with ``d·⌈n/stride⌉`` modes, evaluated at all nodes; σ follows the centres' spacing.
 /// plane : {"stress", "strain"}, default "stress" — 2-D assumption.
 ///
 /// Attributes
@@ -164,7 +166,7 @@ pub struct PyModalModel {
 impl PyModalModel {
     #[new]
     #[pyo3(signature = (points, *, element=None, material=None, sigma=None, edges=None,
-        triangles=None, kappa=1.0, n_modes=None, exact_rigid=false, plane="stress"))]
+        triangles=None, kappa=1.0, n_modes=None, exact_rigid=false, plane="stress", center_stride=1))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -178,6 +180,7 @@ impl PyModalModel {
         n_modes: Option<usize>,
         exact_rigid: bool,
         plane: &str,
+        center_stride: usize,
     ) -> PyResult<Self> {
         let pts = float_matrix(py, points, "points")?;
         let dim = pts.shape()[1];
@@ -234,6 +237,7 @@ impl PyModalModel {
             kappa,
             exact_rigid,
             n_modes,
+            center_stride,
         };
         let shape = Shape::new(dim, coords, topology).map_err(to_py)?;
         let basis = {

@@ -81,7 +81,7 @@ fn table<'py>(py: Python<'py>, r: &SequenceResult) -> PyResult<Bound<'py, PyList
 /// Parameters are those of ``pedomatch run``: ``model`` ("contour", "surface", "isocontour"),
 /// ``element`` ("gaussian", "axial"), ``modes``, ``search`` ("global", "local", "both"), ``solver``
 /// ("jv", "hungarian", "simplex"), ``threshold``, ``excess``, ``paper`` (the paper's literal
-/// setting), ``frames`` ((first, last), 1-based inclusive), ``noise``, ``smooth``, ``spacing``,
+/// setting), ``center_stride`` (Gaussians on every n-th node only: faster), ``frames`` ((first, last), 1-based inclusive), ``noise``, ``smooth``, ``spacing``,
 /// ``surface_nodes``, ``iso_frame`` (1-based), ``iso_levels``.
 ///
 /// Returns a dict with
@@ -94,7 +94,7 @@ fn table<'py>(py: Python<'py>, r: &SequenceResult) -> PyResult<Bound<'py, PyList
 /// - ``timings``: seconds per stage.
 #[pyfunction]
 #[pyo3(signature = (recording, *, model="contour", element="gaussian", modes=0.25, search="both", solver="jv",
-    threshold=None, excess=true, paper=false, frames=None, noise=None, smooth=0.0, spacing=1.0,
+    threshold=None, excess=true, paper=false, center_stride=1, frames=None, noise=None, smooth=0.0, spacing=1.0,
     surface_nodes=120, iso_frame=None, iso_levels=10))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
@@ -108,6 +108,7 @@ fn run<'py>(
     threshold: Option<f64>,
     excess: bool,
     paper: bool,
+    center_stride: usize,
     frames: Option<(usize, usize)>,
     noise: Option<f64>,
     smooth: f64,
@@ -149,6 +150,7 @@ fn run<'py>(
         threshold,
         excess,
         paper,
+        center_stride,
         frames,
         noise,
         smooth,

@@ -94,6 +94,22 @@ def test_refit_tolerance(case):
     assert pymodal.match(a, b).refits <= every.refits
 
 
+def test_reduced_gaussian_basis(case):
+    a, b, truth, spacing = case
+    m = pymodal.match(a, b, center_stride=2)
+    assert m.n_modes == 30 and m.pairs.shape == (65, 2)
+    one = m.pairs[~m.excess]
+    err = np.linalg.norm(b[one[:, 1]] - truth[one[:, 0]], axis=1)
+    assert (err <= spacing).mean() >= 0.95
+    # Same σ: Gaussians on every second node span a subspace of the full element's fields, so
+    # every eigenvalue of the reduced model bounds the full one from above (min-max principle).
+    full = pymodal.ModalModel(a, kappa=1.6)
+    reduced = pymodal.ModalModel(a, sigma=full.sigma, center_stride=2)
+    assert reduced.modes.shape == (120, 60) and full.modes.shape == (120, 120)
+    assert np.all(reduced.eigenvalues >= full.eigenvalues[:60] * (1 - 1e-9))
+    assert np.allclose(reduced.eigenvalues[:4], full.eigenvalues[:4], rtol=0.1)  # smooth modes agree
+
+
 def test_rotation_search_on_a_rounded_heel():
     # The nearly round heel blob of a late F-Scan frame, turned 15-35 degrees and stretched:
     # affine ICP from SPEC 10's five starts stops in a wrong minimum, the dense search does not.
@@ -155,6 +171,7 @@ def test_surfaces_3d():
         (dict(material="jelly"), "jelly|material|preset"),
         (dict(prealign="pca"), "unknown prealign"),
         (dict(refit_tolerance=-0.5), "refit tolerance"),
+        (dict(center_stride=0), "center_stride"),
         (dict(refit_tolerance=float("nan")), "refit tolerance"),
     ],
 )
