@@ -78,6 +78,18 @@ fn synthetic_recording(dir: &Path) -> PathBuf {
     path
 }
 
+/// `pedomatch run` on a fresh synthetic recording with `extra` options; the output folder.
+fn run_synthetic(name: &str, extra: &[&str]) -> PathBuf {
+    let dir = temp_dir(name);
+    let rec = synthetic_recording(&dir);
+    let out = dir.join("out");
+    let mut args = vec!["run", rec.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let o = pedomatch(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out
+}
+
 /// Every step of a track is one frame, most nodes are chained, and the median step is the
 /// synthetic recording's known velocity.
 fn assert_tracks_follow_the_motion(tracks: &[std::collections::HashMap<String, String>]) {
@@ -109,18 +121,7 @@ fn assert_tracks_follow_the_motion(tracks: &[std::collections::HashMap<String, S
 
 #[test]
 fn run_on_synthetic_motion_gives_complete_matches_and_true_tracks() {
-    let dir = temp_dir("synthetic");
-    let rec = synthetic_recording(&dir);
-    let out = dir.join("out");
-    let o = pedomatch(&[
-        "run",
-        rec.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--figures",
-        "both",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = run_synthetic("synthetic", &["--figures", "both"]);
 
     let rows = read_csv(&out.join("pairs.csv"));
     assert_eq!(rows.len(), 9, "one pair per consecutive frame");
@@ -159,20 +160,7 @@ fn run_on_synthetic_motion_gives_complete_matches_and_true_tracks() {
 
 #[test]
 fn run_with_a_reduced_gaussian_basis_still_tracks_the_motion() {
-    let dir = temp_dir("stride");
-    let rec = synthetic_recording(&dir);
-    let out = dir.join("out");
-    let o = pedomatch(&[
-        "run",
-        rec.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--center-stride",
-        "2",
-        "--figures",
-        "none",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = run_synthetic("stride", &["--center-stride", "2", "--figures", "none"]);
     assert_tracks_follow_the_motion(&read_csv(&out.join("tracks.csv")));
 }
 
