@@ -421,7 +421,7 @@ fn chamfer_of(ab: &[(usize, f64)], ba: &[(usize, f64)]) -> f64 {
 
 /// Least-squares affine map sending `src[i]` to `dst[j]` over the given `(i, j)` pairs.
 /// `None` when the pairs do not determine an affine map (fewer than `dim + 1` points in general
-/// position).
+/// position) or `dim` is not 2 or 3.
 pub fn fit_affine(
     src: &[f64],
     dst: &[f64],
@@ -432,23 +432,12 @@ pub fn fit_affine(
     if pairs.len() < d1 {
         return None;
     }
-    // Normal equations in homogeneous coordinates: (Σ x̃ x̃ᵀ) W = Σ x̃ yᵀ.
-    let mut ata = [[0.0; 4]; 4];
-    let mut atb = [[0.0; 3]; 4];
-    for &(i, j) in pairs {
-        let mut x = [0.0; 4];
-        x[..dim].copy_from_slice(&src[i * dim..(i + 1) * dim]);
-        x[dim] = 1.0;
-        let y = &dst[j * dim..(j + 1) * dim];
-        for r in 0..d1 {
-            for c in 0..d1 {
-                ata[r][c] += x[r] * x[c];
-            }
-            for c in 0..dim {
-                atb[r][c] += x[r] * y[c];
-            }
-        }
-    }
+    let (ata, atb) = match dim {
+        // Fixed sizes unroll: this runs for every pass of every ICP start.
+        2 => normal_equations::<2>(src, dst, pairs),
+        3 => normal_equations::<3>(src, dst, pairs),
+        _ => return None,
+    };
     let w = solve_spd(&ata, &atb, d1, dim)?;
     let mut aff = Affine::identity(dim);
     for a in 0..dim {
@@ -464,6 +453,31 @@ pub fn fit_affine(
         .chain(aff.t.iter())
         .all(|v| v.is_finite());
     ok.then_some(aff)
+}
+
+/// Normal equations of the affine least-squares fit in homogeneous coordinates:
+/// `(Σ x̃ x̃ᵀ) W = Σ x̃ yᵀ`, `x̃ = (x, 1)`.
+fn normal_equations<const D: usize>(
+    src: &[f64],
+    dst: &[f64],
+    pairs: &[(usize, usize)],
+) -> ([[f64; 4]; 4], [[f64; 3]; 4]) {
+    let mut ata = [[0.0; 4]; 4];
+    let mut atb = [[0.0; 3]; 4];
+    for &(i, j) in pairs {
+        let mut x = [1.0; 4];
+        x[..D].copy_from_slice(&src[i * D..(i + 1) * D]);
+        let y = &dst[j * D..(j + 1) * D];
+        for r in 0..=D {
+            for c in 0..=D {
+                ata[r][c] += x[r] * x[c];
+            }
+            for c in 0..D {
+                atb[r][c] += x[r] * y[c];
+            }
+        }
+    }
+    (ata, atb)
 }
 
 /// Gaussian elimination with partial pivoting on a tiny system; `None` if (near-)singular.
@@ -809,6 +823,25 @@ mod tests {
         // Collinear sources do not determine an affine map.
         let col = [0.0, 0.0, 1.0, 1.0, 2.0, 2.0, 3.0, 3.0];
         assert!(fit_affine(&col, &col, 2, &[(0, 0), (1, 1), (2, 2), (3, 3)]).is_none());
+        // 3-D, with pairs in a shuffled order and one destination used twice.
+        let src3 = [
+            0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 2.0, -1.0,
+        ];
+        let truth3 = Affine {
+            dim: 3,
+            m: [[1.1, 0.2, -0.3], [0.0, 0.8, 0.1], [0.4, -0.2, 1.3]],
+            t: [0.5, -1.0, 2.0],
+        };
+        let mut dst3 = truth3.apply(&src3);
+        dst3.extend_from_within(3..6);
+        let pairs3 = [(4, 4), (1, 5), (0, 0), (3, 3), (2, 2), (1, 1)];
+        let fit3 = fit_affine(&src3, &dst3, 3, &pairs3).unwrap();
+        for a in 0..3 {
+            assert!((fit3.t[a] - truth3.t[a]).abs() < 1e-10);
+            for b in 0..3 {
+                assert!((fit3.m[a][b] - truth3.m[a][b]).abs() < 1e-10);
+            }
+        }
     }
 
     #[test]

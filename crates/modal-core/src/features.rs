@@ -3,6 +3,9 @@
 // Small fixed-size matrix code reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef, Par};
+
 use crate::ModalError;
 
 /// The retained modes of one object, ready for comparison with another object's.
@@ -244,19 +247,39 @@ impl AffinityMatrix {
             ));
         }
         let (n, m, d, k) = (a.n_nodes, b.n_nodes, a.dim, a.n_modes);
-        // Row-major per-node feature vectors, so the inner loop runs over contiguous memory.
-        let fa = node_major(a);
-        let fb = node_major(b);
-        let len = d * k;
-        let sq = |f: &[f64]| f.iter().map(|v| v * v).sum::<f64>();
-        let na: Vec<f64> = (0..n).map(|i| sq(&fa[i * len..(i + 1) * len])).collect();
-        let nb: Vec<f64> = (0..m).map(|j| sq(&fb[j * len..(j + 1) * len])).collect();
+        // ‖f_i − f_j‖² = ‖f_i‖² + ‖f_j‖² − 2 f_i·f_j, the cross terms one product per component
+        // (A_c B_cᵀ with A_c the n × k block of component c): a cache-blocked SIMD kernel instead
+        // of n·m separate dot products.
+        let fa = MatRef::from_column_major_slice(&a.data, d * n, k);
+        let fb = MatRef::from_column_major_slice(&b.data, d * m, k);
+        let mut cross = Mat::<f64>::zeros(n, m);
+        for c in 0..d {
+            matmul(
+                cross.as_mut(),
+                if c == 0 { Accum::Replace } else { Accum::Add },
+                fa.subrows(c * n, n),
+                fb.subrows(c * m, m).transpose(),
+                1.0,
+                Par::Seq,
+            );
+        }
+        let sq_norms = |f: MatRef<'_, f64>, len: usize| -> Vec<f64> {
+            let mut out = vec![0.0; len];
+            for p in 0..k {
+                for c in 0..d {
+                    for (i, o) in out.iter_mut().enumerate() {
+                        let v = f[(c * len + i, p)];
+                        *o += v * v;
+                    }
+                }
+            }
+            out
+        };
+        let (na, nb) = (sq_norms(fa, n), sq_norms(fb, m));
         let mut data = vec![0.0; n * m];
         for i in 0..n {
-            let fi = &fa[i * len..(i + 1) * len];
             for j in 0..m {
-                let fj = &fb[j * len..(j + 1) * len];
-                data[i * m + j] = (na[i] + nb[j] - 2.0 * dot(fi, fj)).max(0.0);
+                data[i * m + j] = (na[i] + nb[j] - 2.0 * cross[(i, j)]).max(0.0);
             }
         }
         Self::new(n, m, data)
@@ -322,8 +345,7 @@ impl AffinityMatrix {
 }
 
 /// Dot product with eight independent partial sums: a plain `zip().sum()` is one sequential
-/// chain the compiler may not reorder, which made the affinity and mode-alignment loops
-/// latency-bound.
+/// chain the compiler may not reorder, which made the mode-alignment loop latency-bound.
 fn dot(x: &[f64], y: &[f64]) -> f64 {
     const W: usize = 8;
     let mut acc = [0.0f64; W];
@@ -336,21 +358,6 @@ fn dot(x: &[f64], y: &[f64]) -> f64 {
     }
     let tail: f64 = xr.iter().zip(yr).map(|(a, b)| a * b).sum();
     acc.iter().sum::<f64>() + tail
-}
-
-fn node_major(f: &ModalFeatures) -> Vec<f64> {
-    let (n, d, k) = (f.n_nodes, f.dim, f.n_modes);
-    let len = d * k;
-    let mut out = vec![0.0; n * len];
-    for p in 0..k {
-        let mode = f.mode(p);
-        for c in 0..d {
-            for i in 0..n {
-                out[i * len + c * k + p] = mode[c * n + i];
-            }
-        }
-    }
-    out
 }
 
 #[cfg(test)]

@@ -57,9 +57,9 @@ pub struct MatchOptions {
     pub rotation_search: align::RotationSearch,
     /// Maximum modal affine re-fits; stops earlier when the pairs stop changing.
     pub refits: usize,
-    /// No (further) re-fit once one affine map explains the pairs to within this fraction of B's
-    /// mean node spacing (RMS residual): a re-fit then only moves A by a map its pairs already
-    /// agree with. 0 re-fits up to `refits` times.
+    /// No (further) re-fit once one affine map explains the pairs: RMS residual below this
+    /// fraction of B's mean node spacing and no pair farther than twice it. A re-fit then only
+    /// moves A by a map its pairs already agree with. 0 re-fits up to `refits` times.
     pub refit_tolerance: f64,
     /// Weight `w` of aligned positions in the cost: `Z = (1 − w)·Z_modal + w·D`, both
     /// max-normalised, `D` the squared distance of the aligned coordinates. 0 is pure modal
@@ -102,10 +102,11 @@ impl Default for MatchOptions {
             rotation_search: align::RotationSearch::default(),
             refits: 2,
             // Measured on 630 ground-truth contour pairs (bench_match.py cases, seeds 1–7,
-            // mild / moderate / severe): re-fits per pair 1.65 / 1.63 / 1.72 → 0.80 / 0.84 /
-            // 1.15, time 2.75 / 2.83 / 2.97 → 1.88 / 2.13 / 2.49 ms, accuracy 0.9993 / 0.9967 /
-            // 0.9756 → 0.9993 / 0.9967 / 0.9753 (identical pairs but for 5 severe cases, 1 better
-            // and 4 worse); 0.2 saved little, 0.4 cost 0.002 at severe. 0 restores every re-fit.
+            // mild / moderate / severe): re-fits per pair 1.65 / 1.63 / 1.72 → 1.11 / 1.08 /
+            // 1.34 with the same accuracy (0.9993 / 0.9967 / 0.9756 → 0.9755; one severe case
+            // better, one worse). The RMS bound alone skipped more (0.80 / 0.84 / 1.15) but lost 4
+            // severe cases; 0.35 skipped most re-fits (0.23 / 0.43 / 0.82) but changed 16 cases
+            // (8 better, 8 worse). 0 restores every re-fit.
             refit_tolerance: 0.3,
             position_weight: 0.0,
             common_sigma: false,
@@ -517,16 +518,16 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         let fit = align::fit_affine(&cur, &sb.pts, d, &idx);
         // How well one affine map explains the pairs, measured in B's fixed frame, so the
         // iterations are comparable: wrong pairs do not fit a smooth map.
-        let resid = fit.map_or(f64::INFINITY, |t| {
+        // Mean and largest squared residual of the pairs under the fit.
+        let (resid, worst) = fit.map_or((f64::INFINITY, f64::INFINITY), |t| {
             let moved = t.apply(&cur);
-            idx.iter()
-                .map(|&(i, j)| {
-                    (0..d)
-                        .map(|c| (moved[i * d + c] - sb.pts[j * d + c]).powi(2))
-                        .sum::<f64>()
-                })
-                .sum::<f64>()
-                / idx.len().max(1) as f64
+            let (sum, max) = idx.iter().fold((0.0, 0.0f64), |(sum, max), &(i, j)| {
+                let r2 = (0..d)
+                    .map(|c| (moved[i * d + c] - sb.pts[j * d + c]).powi(2))
+                    .sum::<f64>();
+                (sum + r2, max.max(r2))
+            });
+            (sum / idx.len().max(1) as f64, max)
         });
         let stable = prev.as_ref().is_some_and(|p| same_pairs(p, &pairs));
         let better = !opts.keep_best_fit
@@ -536,7 +537,8 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         if better {
             best = Some((z, pairs.clone(), resid));
         }
-        let explained = resid.sqrt() < opts.refit_tolerance * spacing_b;
+        let tol = opts.refit_tolerance * spacing_b;
+        let explained = resid.sqrt() < tol && worst.sqrt() < 2.0 * tol;
         if stable || explained || refits >= opts.refits {
             break;
         }

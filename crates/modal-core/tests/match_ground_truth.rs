@@ -74,7 +74,8 @@ fn dense_rotation_search_beats_the_five_spec_candidates() {
 fn refit_tolerance_skips_only_refits_the_pairs_do_not_need() {
     // The re-fits stop once one affine map explains the pairs to within the tolerance (in B
     // spacings). Every re-fit (0) and the default (0.3) must agree in accuracy while the default
-    // solves fewer; an unreachable tolerance is the same as no re-fit at all.
+    // solves fewer (measured 0.9745 with 81 and with 59 re-fits on these 48 cases); an
+    // unreachable tolerance is the same as no re-fit at all.
     let outlines = outlines();
     let every = MatchOptions {
         refit_tolerance: 0.0,
