@@ -144,7 +144,8 @@ fn mat_to_numpy<'py>(py: Python<'py>, m: &Mat<f64>) -> Bound<'py, PyArray2<f64>>
 /// n_modes : int, optional — compute only the lowest modes (faster); default all ``d·n``.
 /// exact_rigid : bool, default False — project out the exact rigid motions (Gaussian element).
 /// center_stride : int, default 1 — Gaussians on every ``center_stride``-th node only: a reduced
-///     basis with ``d·⌈n/stride⌉`` modes, evaluated at all nodes; σ follows the centres' spacing.
+///     basis with ``d·⌈n/stride⌉`` modes, evaluated at all nodes and mass-normalised in the
+///     reduced model; σ follows the centres' spacing; ``stiffness()``/``mass()`` raise ValueError.
 /// plane : {"stress", "strain"}, default "stress" — 2-D assumption.
 ///
 /// Attributes

@@ -108,6 +108,8 @@ def test_reduced_gaussian_basis(case):
     assert reduced.modes.shape == (120, 60) and full.modes.shape == (120, 120)
     assert np.all(reduced.eigenvalues >= full.eigenvalues[:60] * (1 - 1e-9))
     assert np.allclose(reduced.eigenvalues[:4], full.eigenvalues[:4], rtol=0.1)  # smooth modes agree
+    with pytest.raises(ValueError, match="reduced"):
+        reduced.stiffness()  # no nodal K, M for a reduced basis
 
 
 def test_rotation_search_on_a_rounded_heel():
