@@ -389,23 +389,6 @@ fn nearest_soa_body<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) 
     (rows, back)
 }
 
-/// Squared distance from every point to its nearest other point of the same set.
-pub fn nearest_other(pts: &[f64], dim: usize) -> Vec<f64> {
-    let n = pts.len() / dim;
-    (0..n)
-        .map(|i| {
-            (0..n)
-                .filter(|&j| j != i)
-                .map(|j| {
-                    (0..dim)
-                        .map(|a| (pts[i * dim + a] - pts[j * dim + a]).powi(2))
-                        .sum::<f64>()
-                })
-                .fold(f64::INFINITY, f64::min)
-        })
-        .collect()
-}
-
 /// Symmetric chamfer distance: mean nearest-neighbour distance, averaged over both directions.
 pub fn chamfer(a: &[f64], b: &[f64], dim: usize) -> f64 {
     let (ab, ba) = nearest_both(a, b, dim);

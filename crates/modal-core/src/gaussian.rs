@@ -37,12 +37,17 @@ pub fn pair_index(dim: usize, a: usize, b: usize) -> usize {
 
 /// Mean and minimum nearest-neighbour distance, with the pair realising the minimum.
 pub fn nearest_neighbour_stats(shape: &Shape) -> (f64, f64, (usize, usize)) {
+    nearest_neighbour_stats_of(shape.coords(), shape.dim())
+}
+
+/// [`nearest_neighbour_stats`] of row-major `dim`-D points.
+pub fn nearest_neighbour_stats_of(coords: &[f64], dim: usize) -> (f64, f64, (usize, usize)) {
     // Every model build (each modal solve) calls this O(n²) scan: 2-D and 3-D get a
     // fixed-dimension loop the compiler can unroll.
-    match shape.dim() {
-        2 => nn_stats::<2>(shape.coords()),
-        3 => nn_stats::<3>(shape.coords()),
-        d => nn_stats_dyn(shape.coords(), d),
+    match dim {
+        2 => nn_stats::<2>(coords),
+        3 => nn_stats::<3>(coords),
+        d => nn_stats_dyn(coords, d),
     }
 }
 

@@ -7,8 +7,9 @@
 use crate::align::{self, Affine};
 use crate::excess;
 use crate::features::{align_modes, AffinityMatrix, ModalFeatures};
+use crate::gaussian::nearest_neighbour_stats_of;
 use crate::search::{global_matches, local_matches, ThresholdMode};
-use crate::{modal_basis, ElementKind, ModalError, ModelOptions, Shape, Topology};
+use crate::{modal_basis, ModalError, ModelOptions, Shape, Topology};
 
 /// Which one-to-one search produces the primary matches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -362,11 +363,10 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
     };
     let total = d * n.min(m);
     // Modes each model has: a reduced Gaussian basis has fewer than its nodes' degrees of freedom.
-    let dof = |len: usize| match opts.model.element {
-        ElementKind::Gaussian => d * len.div_ceil(opts.model.center_stride.max(1)),
-        ElementKind::Axial => d * len,
-    };
-    let (dof_a, dof_b) = (dof(n), dof(m));
+    let (dof_a, dof_b) = (
+        opts.model.degrees_of_freedom(d, n),
+        opts.model.degrees_of_freedom(d, m),
+    );
     let avail = total.min(dof_a).min(dof_b);
     if skip >= avail {
         return Err(ModalError::InvalidParameter(format!(
@@ -380,8 +380,12 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
     let sb = prepare(b, ordered)?;
     let mut model = opts.model.clone();
     if opts.common_sigma && model.sigma.is_none() {
-        model.sigma =
-            Some(opts.model.kappa * 0.5 * (mean_spacing(&sa.pts, d) + mean_spacing(&sb.pts, d)));
+        model.sigma = Some(
+            opts.model.kappa
+                * 0.5
+                * (nearest_neighbour_stats_of(&sa.pts, d).0
+                    + nearest_neighbour_stats_of(&sb.pts, d).0),
+        );
     }
     let modal = opts.position_weight < 1.0;
     // B's modes (solved once) and A's pre-alignment followed by A's first solve are independent:
@@ -423,7 +427,7 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
 
     // B's mean node spacing in its normalised frame, the unit of `refit_tolerance`.
     let spacing_b = if opts.refits > 0 && opts.refit_tolerance > 0.0 {
-        mean_spacing(&sb.pts, d)
+        nearest_neighbour_stats_of(&sb.pts, d).0
     } else {
         0.0
     };
@@ -602,12 +606,6 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         refits,
         solves,
     })
-}
-
-/// Mean distance from a node to its nearest neighbour.
-fn mean_spacing(pts: &[f64], dim: usize) -> f64 {
-    let nn = align::nearest_other(pts, dim);
-    nn.iter().map(|x| x.sqrt()).sum::<f64>() / nn.len() as f64
 }
 
 /// Max-normalised squared distances between aligned coordinates.

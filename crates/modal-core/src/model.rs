@@ -45,6 +45,17 @@ pub struct ModelOptions {
     pub center_stride: usize,
 }
 
+impl ModelOptions {
+    /// Degrees of freedom — the number of modes — of the model of `n` nodes in `dim`-D: fewer
+    /// than the nodes' `dim · n` with a reduced Gaussian basis.
+    pub fn degrees_of_freedom(&self, dim: usize, n: usize) -> usize {
+        match self.element {
+            ElementKind::Gaussian => dim * n.div_ceil(self.center_stride.max(1)),
+            ElementKind::Axial => dim * n,
+        }
+    }
+}
+
 impl Default for ModelOptions {
     fn default() -> Self {
         Self {
@@ -399,6 +410,7 @@ fn reduced_centers(shape: &Shape, stride: usize) -> Result<Option<Shape>, ModalE
         return Ok(None);
     }
     let dim = shape.dim();
+    // ⌈n / stride⌉ centres, as `ModelOptions::degrees_of_freedom` counts them.
     let coords: Vec<f64> = (0..shape.len())
         .step_by(stride)
         .flat_map(|i| shape.coords()[i * dim..(i + 1) * dim].iter().copied())
