@@ -244,6 +244,57 @@ fn isocontour_and_surface_models_run() {
 }
 
 #[test]
+fn surface_model_matches_the_moving_blob() {
+    // The blob translates by VELOCITY, so a node of frame t at (x, y, z) truly corresponds to
+    // (x, y, z) + VELOCITY in frame t + 1; each frame's 60 surface nodes are sampled afresh.
+    let out = run_synthetic(
+        "surface-truth",
+        &["--model", "surface", "--surface-nodes", "60"],
+    );
+    let mut pos = std::collections::HashMap::new();
+    for r in read_csv(&out.join("tracks.csv")) {
+        let key = (num(&r, "object_id") as usize, num(&r, "node") as usize);
+        pos.insert(key, [num(&r, "x"), num(&r, "y"), num(&r, "z")]);
+    }
+    let dist = |p: [f64; 3], q: [f64; 3]| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
+    // Mean nearest-neighbour distance of each object's nodes: the tolerance of a hit.
+    let spacing = |object: usize| {
+        let nodes: Vec<[f64; 3]> = pos
+            .iter()
+            .filter(|(k, _)| k.0 == object)
+            .map(|(_, p)| *p)
+            .collect();
+        let nn = |p: &[f64; 3]| {
+            nodes
+                .iter()
+                .map(|q| dist(*p, *q))
+                .filter(|d| *d > 0.0)
+                .fold(f64::INFINITY, f64::min)
+        };
+        nodes.iter().map(nn).sum::<f64>() / nodes.len() as f64
+    };
+    let (mut hits, mut total) = (0, 0);
+    for r in read_csv(&out.join("matches.csv")) {
+        if r["excess"] == "1" {
+            continue;
+        }
+        let (ia, ib) = (num(&r, "id_a") as usize, num(&r, "id_b") as usize);
+        let pa = pos[&(ia, num(&r, "node_a") as usize)];
+        let pb = pos[&(ib, num(&r, "node_b") as usize)];
+        let truth = [pa[0] + VELOCITY[0], pa[1] + VELOCITY[1], pa[2]];
+        total += 1;
+        hits += usize::from(dist(pb, truth) <= spacing(ib));
+    }
+    let acc = hits as f64 / total as f64;
+    // Measured: 0.435 with the surface setting, 0.306 with the contour recipe on these meshes.
+    assert!(total == 9 * 60, "{total} one-to-one matches");
+    assert!(
+        acc >= 0.38,
+        "{hits}/{total} within one spacing of the true position"
+    );
+}
+
+#[test]
 fn match_two_point_files() {
     let dir = temp_dir("match");
     let n = 40;

@@ -73,6 +73,13 @@ fn degenerate_inputs_are_rejected_with_reasons() {
         };
         assert!(err_text(&good, &good, &o).contains("refit tolerance"));
     }
+    for p in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let o = MatchOptions {
+            cost_power: p,
+            ..MatchOptions::default()
+        };
+        assert!(err_text(&good, &good, &o).contains("cost power"));
+    }
 }
 
 #[test]

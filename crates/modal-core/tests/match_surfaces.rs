@@ -3,6 +3,8 @@
 mod match_common;
 
 use match_common::*;
+use modal_core::align::normalize;
+use modal_core::matching::prealign_normalized;
 use modal_core::{match_shapes, MatchOptions, Shape, Topology};
 
 #[test]
@@ -59,24 +61,105 @@ fn mean_accuracy(opts: &MatchOptions, sev: Severity, seeds: std::ops::Range<u64>
 }
 
 #[test]
-fn independent_samplings_beat_aligned_positions() {
-    let modal = mean_accuracy(&MatchOptions::for_surfaces(), Severity::Mild, 0..8);
-    let positions = mean_accuracy(
-        &MatchOptions {
-            position_weight: 1.0,
-            ..MatchOptions::for_surfaces()
-        },
-        Severity::Mild,
-        0..8,
+fn the_surface_setting_beats_squared_costs_and_ties_aligned_positions() {
+    let surf = MatchOptions::for_surfaces();
+    let acc = |o: MatchOptions| mean_accuracy(&o, Severity::Mild, 0..8);
+    let setting = acc(surf.clone());
+    let positions = acc(MatchOptions {
+        position_weight: 1.0,
+        ..surf.clone()
+    });
+    let squared = acc(MatchOptions {
+        cost_power: 1.0,
+        ..surf.clone()
+    });
+    let modal_only = acc(MatchOptions {
+        position_weight: 0.0,
+        ..surf.clone()
+    });
+    let contour_setting = acc(MatchOptions::default());
+    eprintln!(
+        "surfaces mild: setting {setting:.3}, aligned positions {positions:.3}, squared costs \
+         {squared:.3}, modal only {modal_only:.3}, contour setting {contour_setting:.3}"
     );
-    let contour_setting = mean_accuracy(&MatchOptions::default(), Severity::Mild, 0..8);
-    eprintln!("surfaces mild: modal {modal:.3}, aligned positions {positions:.3}, contour setting {contour_setting:.3}");
+    // An assignment of squared distances spreads its error over all pairs: between independent
+    // samplings it cannot put much more than a quarter of them within one spacing.
     assert!(
-        modal > contour_setting,
-        "the surface setting must improve on the contour setting"
+        setting > squared + 0.05,
+        "powered costs {setting} vs squared {squared}"
     );
     assert!(
-        modal >= positions - 0.01,
-        "modal {modal} vs positions {positions}"
+        setting >= positions - 0.01,
+        "setting {setting} vs positions {positions}"
+    );
+    assert!(
+        modal_only > contour_setting,
+        "the surface model must improve on the contour setting: {modal_only} vs {contour_setting}"
+    );
+}
+
+#[test]
+fn aligned_point_sets_keep_the_frame_of_the_fit() {
+    // A random sampling's centroid and RMS radius wander with the sample; normalising the
+    // aligned points again would move them off B's frame by about radius / √n.
+    let g = pressure_grid();
+    let (mut kept, mut renormalised) = (0.0, 0.0);
+    for seed in 0..8u64 {
+        let case = surface_case(&g, Severity::Moderate, seed, 110, 115);
+        let sa = Shape::from_points_3d(&case.a, Topology::None).unwrap();
+        let sb = Shape::from_points_3d(&case.b, Topology::None).unwrap();
+        let (pa, _) = prealign_normalized(&sa, &sb, &MatchOptions::for_surfaces()).unwrap();
+        let flat_b: Vec<f64> = case.b.iter().flatten().copied().collect();
+        let (_, c, s) = normalize(&flat_b, 3).unwrap();
+        let truth: Vec<f64> = case
+            .truth
+            .iter()
+            .flat_map(|p| (0..3).map(move |k| (p[k] - c[k]) * s))
+            .collect();
+        let rms = |x: &[f64]| {
+            (x.iter()
+                .zip(&truth)
+                .map(|(u, v)| (u - v).powi(2))
+                .sum::<f64>()
+                / case.a.len() as f64)
+                .sqrt()
+        };
+        kept += rms(&pa) / 8.0;
+        renormalised += rms(&normalize(&pa, 3).unwrap().0) / 8.0;
+    }
+    eprintln!("RMS error of aligned A: kept {kept:.4}, re-normalised {renormalised:.4}");
+    assert!(
+        kept < 0.8 * renormalised,
+        "kept {kept} vs re-normalised {renormalised}"
+    );
+}
+
+#[test]
+fn cost_power_reshapes_the_sum_not_the_order() {
+    let g = pressure_grid();
+    let case = surface_case(&g, Severity::Mild, 3, 100, 108);
+    let sa = Shape::from_points_3d(&case.a, Topology::None).unwrap();
+    let sb = Shape::from_points_3d(&case.b, Topology::None).unwrap();
+    let with = |p: f64| MatchOptions {
+        position_weight: 0.0,
+        cost_power: p,
+        ..MatchOptions::for_surfaces()
+    };
+    let squared = match_shapes(&sa, &sb, &with(1.0)).unwrap();
+    let powered = match_shapes(&sa, &sb, &with(0.125)).unwrap();
+    for (x, y) in squared
+        .affinity
+        .as_slice()
+        .iter()
+        .zip(powered.affinity.as_slice())
+    {
+        assert!((x.powf(0.125) - y).abs() < 1e-12, "{x}^0.125 vs {y}");
+    }
+    // Mutual-best matches depend only on each row's and column's order.
+    assert_eq!(squared.local_pairs, powered.local_pairs);
+    // The assignment does change: it adds the costs up.
+    assert_ne!(
+        squared.pairs.iter().map(|p| (p.a, p.b)).collect::<Vec<_>>(),
+        powered.pairs.iter().map(|p| (p.a, p.b)).collect::<Vec<_>>()
     );
 }

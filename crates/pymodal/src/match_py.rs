@@ -201,7 +201,9 @@ fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
 /// Builds a finite-element model of each object, computes its vibration modes and matches the
 /// nodes in modal space. The defaults are the most accurate setting measured (robust rotation
 /// pre-alignment, up to two modal affine re-fits, cross-object mode alignment, excess nodes on
-/// contours); ``prealign="normalize", refits=0`` is the paper's literal setting.
+/// contours; for unordered 3-D point sets the surface setting: wide common σ, no re-fits, aligned
+/// positions mixed in, powered costs); ``prealign="normalize", refits=0`` is the paper's literal
+/// setting.
 ///
 /// Parameters
 /// ----------
@@ -227,9 +229,13 @@ fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
 /// center_stride : int ≥ 1 — Gaussians on every ``center_stride``-th node only (Gaussian element):
 ///     2 solves in a third of the time, at the cost of accuracy under severe warps (README);
 /// threshold_in_optimizer : bool — let the assignment itself reject pairs above the threshold;
-/// position_weight : float in [0, 1] — mix of aligned-position distance into the cost (1 = positions
-///     only, a baseline); common_sigma : bool or None — one σ for both objects (None: on for 3-D
-///     point sets);
+/// position_weight : float in [0, 1] or None — mix of aligned-position distance into the cost
+///     (1 = positions only, a baseline; None: 0, or 0.7 for 3-D point sets);
+/// cost_power : float > 0 or None — the assignment minimises the sum of costs to this power
+///     (None: 1, the squared modal distance; 0.125 for 3-D point sets, whose independent
+///     samplings need many near-exact pairs rather than evenly spread errors); costs, affinity
+///     and threshold are in powered units;
+/// common_sigma : bool or None — one σ for both objects (None: on for 3-D point sets);
 /// triangles_a, triangles_b : (t, 3) int arrays — meshes (for ``element="axial"`` and §6.4).
 ///
 /// Raises
@@ -239,7 +245,7 @@ fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
 #[pyfunction]
 #[pyo3(name = "match", signature = (a, b, *, element="gaussian", modes=0.25, search="global", solver="jv",
     threshold=None, excess=true, ordered=None, material=None, prealign="robust", refits=None,
-    refit_tolerance=None, skip_rigid=false, band=3, kappa=None, center_stride=1, threshold_in_optimizer=false, position_weight=0.0, common_sigma=None, triangles_a=None,
+    refit_tolerance=None, skip_rigid=false, band=3, kappa=None, center_stride=1, threshold_in_optimizer=false, position_weight=None, cost_power=None, common_sigma=None, triangles_a=None,
     triangles_b=None))]
 #[allow(clippy::too_many_arguments)]
 fn match_py(
@@ -262,7 +268,8 @@ fn match_py(
     kappa: Option<f64>,
     center_stride: usize,
     threshold_in_optimizer: bool,
-    position_weight: f64,
+    position_weight: Option<f64>,
+    cost_power: Option<f64>,
     common_sigma: Option<bool>,
     triangles_a: Option<&Bound<'_, PyAny>>,
     triangles_b: Option<&Bound<'_, PyAny>>,
@@ -286,11 +293,7 @@ fn match_py(
         }
     };
     // Contours get the §10 recipe; unordered 3-D point sets the measured surface setting.
-    let mut opts = if !ordered && da == 3 {
-        MatchOptions::for_surfaces()
-    } else {
-        MatchOptions::default()
-    };
+    let mut opts = MatchOptions::for_input(da, ordered);
     opts.model.element = match element {
         "gaussian" => ElementKind::Gaussian,
         "axial" => ElementKind::Axial,
@@ -348,7 +351,12 @@ fn match_py(
     }
     opts.skip_rigid = skip_rigid;
     opts.band = band;
-    opts.position_weight = position_weight;
+    if let Some(w) = position_weight {
+        opts.position_weight = w;
+    }
+    if let Some(p) = cost_power {
+        opts.cost_power = p;
+    }
     if let Some(c) = common_sigma {
         opts.common_sigma = c;
     }

@@ -162,6 +162,63 @@ def test_surfaces_3d():
     assert (perm[m.pairs[:, 1]] == m.pairs[:, 0]).mean() >= 0.95
 
 
+def _pressure(g, p):
+    x = np.clip(p[:, 0], 0, g.shape[1] - 1.001)
+    y = np.clip(p[:, 1], 0, g.shape[0] - 1.001)
+    i, j = y.astype(int), x.astype(int)
+    fy, fx = y - i, x - j
+    return (g[i, j] * (1 - fx) * (1 - fy) + g[i, j + 1] * fx * (1 - fy)
+            + g[i + 1, j] * (1 - fx) * fy + g[i + 1, j + 1] * fx * fy)
+
+
+def test_independent_surface_samplings_against_the_squared_cost_oracle():
+    # Two independent samplings of a real pressure image (x, y, pressure) — no point of b sits
+    # where a point of a lands. An assignment of squared distances, even on the TRUE positions
+    # (scipy), puts only about a quarter of a's points within one spacing; the surface defaults
+    # (powered costs) must do clearly better from the data alone.
+    from scipy.optimize import linear_sum_assignment
+    from scipy.spatial import cKDTree
+
+    g = np.loadtxt(DATA / "mun104l.txt")
+    zs = 20.0 / 350.0
+    got, squared, oracle = [], [], []
+    for seed in range(6):
+        rng = np.random.default_rng(seed)
+
+        def sample(n):
+            out = np.empty((0, 2))
+            while len(out) < n:
+                p = rng.uniform([0, 0], [g.shape[1] - 1, g.shape[0] - 1], (4 * n, 2))
+                out = np.vstack([out, p[_pressure(g, p) > 30.0]])
+            return out[:n]
+
+        pa, pb = sample(110), sample(118)
+        t = np.deg2rad(12)
+        r = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+        c = pa.mean(0)
+
+        def w(p):
+            return ((p - c) @ np.diag([1.1, 0.92])) @ r.T + c + [2.0, -1.0]
+
+        a = np.column_stack([pa, zs * _pressure(g, pa)])
+        b = np.column_stack([w(pb), 1.05 * zs * _pressure(g, pb)])
+        truth = np.column_stack([w(pa), 1.05 * zs * _pressure(g, pa)])
+        tol = cKDTree(b).query(b, 2)[0][:, 1].mean()
+
+        def hits(m):
+            one = ~m.excess  # a has fewer points: every one of them is in a one-to-one pair
+            i, j = m.pairs[one, 0], m.pairs[one, 1]
+            return (np.linalg.norm(b[j] - truth[i], axis=1) <= tol).sum() / len(a)
+
+        got.append(hits(pymodal.match(a, b)))
+        squared.append(hits(pymodal.match(a, b, cost_power=1.0)))
+        ri, ci = linear_sum_assignment(((truth[:, None] - b[None]) ** 2).sum(2))
+        oracle.append((np.linalg.norm(b[ci] - truth[ri], axis=1) <= tol).mean())
+    got, squared, oracle = np.mean(got), np.mean(squared), np.mean(oracle)
+    assert got > oracle + 0.05, (got, oracle)
+    assert got > squared + 0.05, (got, squared)
+
+
 @pytest.mark.parametrize(
     "kwargs, text",
     [
@@ -175,6 +232,8 @@ def test_surfaces_3d():
         (dict(refit_tolerance=-0.5), "refit tolerance"),
         (dict(center_stride=0), "center_stride"),
         (dict(refit_tolerance=float("nan")), "refit tolerance"),
+        (dict(cost_power=0.0), "cost power"),
+        (dict(cost_power=float("inf")), "cost power"),
     ],
 )
 def test_bad_options(case, kwargs, text):
