@@ -182,7 +182,9 @@ impl MatchOptions {
 pub struct MatchPair {
     pub a: usize,
     pub b: usize,
-    /// Normalised modal distance `Z[a, b]`.
+    /// The search's cost `Z[a, b]`: the max-normalised modal distance, with positions mixed in
+    /// and raised to the power as [`MatchOptions::position_weight`] and
+    /// [`MatchOptions::cost_power`] say.
     pub cost: f64,
     /// Found by the excess-node step (one-to-many) rather than by the one-to-one search.
     pub excess: bool,
@@ -194,7 +196,8 @@ pub struct MatchResult {
     /// One-to-one pairs sorted by `a`, followed by excess pairs sorted by `b` (or by `a` when the
     /// first object is the larger).
     pub pairs: Vec<MatchPair>,
-    /// The final affinity matrix (max-normalised), rows = nodes of the first object, original order.
+    /// The final affinity matrix the search used (entries in [0, 1]), rows = nodes of the first
+    /// object, original order.
     pub affinity: AffinityMatrix,
     /// Mutual-best (local) matches on the final affinity, under the threshold, whatever `search`.
     pub local_pairs: Vec<(usize, usize)>,
@@ -680,8 +683,10 @@ fn same_pairs(x: &[MatchPair], y: &[MatchPair]) -> bool {
     x.len() == y.len() && x.iter().zip(y).all(|(p, q)| p.a == q.a && p.b == q.b)
 }
 
-/// The affine map the robust pre-alignment finds from `a` to `b`, both normalised (centroid 0,
-/// RMS radius 1). Exposed for diagnostics and for position-only baselines.
+/// `a` after the pre-alignment, in `b`'s normalised frame (centroid 0, RMS radius 1), and that
+/// normalised `b`: the coordinates [`match_shapes`] starts from. A contour is normalised again
+/// after the affine map, a point set keeps the map's frame (see `into_b_frame`). Exposed for
+/// diagnostics and for position-only baselines.
 pub fn prealign_normalized(
     a: &Shape,
     b: &Shape,

@@ -16,9 +16,10 @@ use crate::errors::to_py;
 /// ----------
 /// pairs : (k, 2) int64 — (index in a, index in b); one-to-one pairs first (sorted by a), then the
 ///     pairs added by the excess-node step.
-/// costs : (k,) float64 — normalised modal distance Z[a, b] of each pair.
+/// costs : (k,) float64 — the search's cost Z[a, b] of each pair: the normalised modal distance,
+///     with positions mixed in and raised to ``cost_power`` when those options say so.
 /// excess : (k,) bool — True for pairs from the excess-node step (one-to-many).
-/// affinity : (n, m) float64 — the final affinity matrix Z, divided by its maximum.
+/// affinity : (n, m) float64 — the final affinity matrix Z the search used, in [0, 1].
 /// unmatched_a, unmatched_b : int64 arrays of nodes in no pair.
 /// local_pairs : (l, 2) int64 — mutual-best matches on the final Z (under the threshold).
 /// local_count, optimisation_count, excess_count : int — the three counts of the seed's tables.
