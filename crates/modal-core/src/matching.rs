@@ -424,13 +424,18 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
     let sa = prepare(a, ordered)?;
     let sb = prepare(b, ordered)?;
     let mut model = opts.model.clone();
-    if opts.common_sigma && model.sigma.is_none() {
-        model.sigma = Some(
-            opts.model.kappa
-                * 0.5
-                * (nearest_neighbour_stats_of(&sa.pts, d).0
-                    + nearest_neighbour_stats_of(&sb.pts, d).0),
-        );
+    let common_sigma = opts.common_sigma && model.sigma.is_none();
+    let refit_bound = opts.refits > 0 && opts.refit_tolerance > 0.0;
+    // B's mean node spacing in its normalised frame: half of the common σ, and the unit of
+    // `refit_tolerance`. One O(m²) scan serves both.
+    let spacing_b = if common_sigma || refit_bound {
+        nearest_neighbour_stats_of(&sb.pts, d).0
+    } else {
+        0.0
+    };
+    if common_sigma {
+        model.sigma =
+            Some(opts.model.kappa * 0.5 * (nearest_neighbour_stats_of(&sa.pts, d).0 + spacing_b));
     }
     let modal = opts.position_weight < 1.0;
     // B's modes (solved once) and A's pre-alignment followed by A's first solve are independent:
@@ -470,12 +475,6 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         None
     };
 
-    // B's mean node spacing in its normalised frame, the unit of `refit_tolerance`.
-    let spacing_b = if opts.refits > 0 && opts.refit_tolerance > 0.0 {
-        nearest_neighbour_stats_of(&sb.pts, d).0
-    } else {
-        0.0
-    };
     let mut prev: Option<Vec<MatchPair>> = None;
     let mut refits = 0;
     let mut solves = 0;
