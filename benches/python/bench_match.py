@@ -237,6 +237,7 @@ def main():
         methods = {
             "pymodal.match (defaults: global, recipe)": modal(),
             "pymodal.match search='local'": modal(search="local"),
+            "pymodal.match search='best' (many-to-one)": modal(search="best"),
             "pymodal.match excess=False": modal(excess=False),
             "pymodal.match refits=0": modal(refits=0),
             "pymodal.match refits=3": modal(refits=3),
@@ -264,6 +265,8 @@ def main():
         methods = {
             "pymodal.match 3-D (defaults: kappa=3, common sigma, positions 0.7, cost power 1/8)": modal(),
             "  same + excess=False": modal(excess=False),
+            "  same, search='best' (many-to-one, like pycpd's read-out)": modal(search="best"),
+            "  same, search='best', modal distance only": modal(search="best", position_weight=0.0),
             "  same, squared costs (cost_power=1)": modal(cost_power=1.0),
             "  same, modal distance only (position_weight=0)": modal(position_weight=0.0),
             "  modal distance only, squared costs (the earlier default)": modal(position_weight=0.0, cost_power=1.0),

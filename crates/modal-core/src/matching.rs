@@ -8,7 +8,7 @@ use crate::align::{self, Affine};
 use crate::excess;
 use crate::features::{align_modes, AffinityMatrix, ModalFeatures};
 use crate::gaussian::nearest_neighbour_stats_of;
-use crate::search::{global_matches, local_matches, ThresholdMode};
+use crate::search::{best_matches, global_matches, local_matches, ThresholdMode};
 use crate::{modal_basis, ModalError, ModelOptions, Shape, Topology};
 
 /// Which one-to-one search produces the primary matches.
@@ -19,6 +19,10 @@ pub enum Search {
     /// Optimal assignment saturating the smaller object (the seed's optimisation, SPEC §6.2).
     #[default]
     Global,
+    /// Every node of the first object to its lowest-cost node of the second, under the
+    /// threshold: many-to-one, no excess step. For independent samplings of one surface, where
+    /// no one-to-one answer can be right for every node (README, "Surfaces").
+    Best,
 }
 
 /// How the two objects are brought into a common frame before their modes are compared.
@@ -217,7 +221,8 @@ impl MatchResult {
     pub fn local_count(&self) -> usize {
         self.local_pairs.len()
     }
-    /// Number of one-to-one matches from the primary search (the seed's "optimisation" column).
+    /// Number of matches from the primary search (the seed's "optimisation" column): one-to-one
+    /// except with [`Search::Best`], whose pairs are many-to-one.
     pub fn one_to_one_count(&self) -> usize {
         self.pairs.iter().filter(|p| !p.excess).count()
     }
@@ -514,6 +519,7 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         let one = match opts.search {
             Search::Global => global_matches(&z, opts.method, threshold, opts.threshold_mode)?,
             Search::Local => local_matches(&z, threshold),
+            Search::Best => best_matches(&z, threshold),
         };
         let mut pairs: Vec<MatchPair> = one
             .iter()

@@ -46,6 +46,27 @@ pub fn local_matches(z: &AffinityMatrix, threshold: f64) -> Vec<(usize, usize)> 
     out
 }
 
+/// One-sided best matches: every node `i` of A paired with its row minimum `j` (ties to the lowest
+/// index) when `Z[i, j] ≤ threshold` — many-to-one, the read-out of coherent point drift's
+/// `argmax P`. For independent samplings of one surface, where no one-to-one answer can be right
+/// for every node. Sorted by `i`.
+pub fn best_matches(z: &AffinityMatrix, threshold: f64) -> Vec<(usize, usize)> {
+    if z.cols() == 0 {
+        return Vec::new();
+    }
+    z.as_slice()
+        .chunks_exact(z.cols())
+        .enumerate()
+        .filter_map(|(i, row)| {
+            let (j, &v) =
+                row.iter()
+                    .enumerate()
+                    .fold((0, &row[0]), |b, (j, v)| if v < b.1 { (j, v) } else { b });
+            (v <= threshold).then_some((i, j))
+        })
+        .collect()
+}
+
 /// Global search (SPEC §6.2): the minimum-cost one-to-one matching that saturates the smaller
 /// object (equivalent to padding with constant-cost dummy nodes), then the threshold. Sorted by `i`.
 pub fn global_matches(
@@ -95,6 +116,19 @@ mod tests {
         // Ties go to the lowest index.
         let t = zm(2, 2, &[0.5, 0.5, 0.5, 0.5]);
         assert_eq!(local_matches(&t, 1.0), vec![(0, 0)]);
+    }
+
+    #[test]
+    fn best_is_each_row_minimum_many_to_one() {
+        // Rows 0 and 1 both prefer column 0; row 2 ties columns 1 and 2.
+        let z = zm(3, 3, &[0.2, 0.5, 0.9, 0.1, 0.4, 0.8, 0.7, 0.3, 0.3]);
+        assert_eq!(best_matches(&z, 1.0), vec![(0, 0), (1, 0), (2, 1)]);
+        assert_eq!(best_matches(&z, 0.2), vec![(0, 0), (1, 0)]);
+        // Every mutual-best match is a row minimum.
+        for p in local_matches(&z, 1.0) {
+            assert!(best_matches(&z, 1.0).contains(&p));
+        }
+        assert!(best_matches(&zm(2, 0, &[]), 1.0).is_empty());
     }
 
     #[test]

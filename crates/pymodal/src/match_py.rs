@@ -14,8 +14,9 @@ use crate::errors::to_py;
 ///
 /// Attributes
 /// ----------
-/// pairs : (k, 2) int64 — (index in a, index in b); one-to-one pairs first (sorted by a), then the
-///     pairs added by the excess-node step.
+/// pairs : (k, 2) int64 — (index in a, index in b); the search's pairs first (sorted by a;
+///     one-to-one, except many-to-one with ``search="best"``), then the pairs added by the
+///     excess-node step.
 /// costs : (k,) float64 — the search's cost Z[a, b] of each pair: the normalised modal distance,
 ///     with positions mixed in and raised to ``cost_power`` when those options say so.
 /// excess : (k,) bool — True for pairs from the excess-node step (one-to-many).
@@ -211,7 +212,9 @@ fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
 /// a, b : (n, 2) or (n, 3) array_like — the node coordinates of the two objects.
 /// element : {"gaussian", "axial"} — Sclaroff's Gaussian element or bar elements (contours/meshes).
 /// modes : float in (0, 1] — fraction of ``dim · min(n, m)`` modes kept (default 0.25).
-/// search : {"global", "local"} — optimal assignment or mutual best matches.
+/// search : {"global", "local", "best"} — optimal assignment, mutual best matches, or every node
+///     of a to its best node of b (many-to-one, no excess step; the most accurate read-out for
+///     independent samplings of one surface, README).
 /// solver : {"jv", "hungarian", "simplex"} — assignment algorithm.
 /// threshold : float or None — reject pairs with normalised cost above it.
 /// excess : bool — match the nodes the one-to-one search leaves over (global search).
@@ -317,9 +320,10 @@ fn match_py(
     opts.search = match search {
         "global" => Search::Global,
         "local" => Search::Local,
+        "best" => Search::Best,
         o => {
             return Err(PyValueError::new_err(format!(
-                "unknown search {o:?}; expected \"global\" or \"local\""
+                "unknown search {o:?}; expected \"global\", \"local\" or \"best\""
             )))
         }
     };

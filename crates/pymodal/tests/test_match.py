@@ -171,17 +171,14 @@ def _pressure(g, p):
             + g[i + 1, j] * (1 - fx) * fy + g[i + 1, j + 1] * fx * fy)
 
 
-def test_independent_surface_samplings_against_the_squared_cost_oracle():
-    # Two independent samplings of a real pressure image (x, y, pressure) — no point of b sits
-    # where a point of a lands. An assignment of squared distances, even on the TRUE positions
-    # (scipy), puts only about a quarter of a's points within one spacing; the surface defaults
-    # (powered costs) must do clearly better from the data alone.
-    from scipy.optimize import linear_sum_assignment
+def _surface_cases():
+    """Two independent samplings of a real pressure image (x, y, pressure), b warped: no point
+    of b sits where a point of a lands. Yields a, b, the true positions of a's points in b's
+    frame, and b's mean nearest-neighbour distance (the tolerance)."""
     from scipy.spatial import cKDTree
 
     g = np.loadtxt(DATA / "mun104l.txt")
     zs = 20.0 / 350.0
-    got, squared, oracle = [], [], []
     for seed in range(6):
         rng = np.random.default_rng(seed)
 
@@ -203,20 +200,43 @@ def test_independent_surface_samplings_against_the_squared_cost_oracle():
         a = np.column_stack([pa, zs * _pressure(g, pa)])
         b = np.column_stack([w(pb), 1.05 * zs * _pressure(g, pb)])
         truth = np.column_stack([w(pa), 1.05 * zs * _pressure(g, pa)])
-        tol = cKDTree(b).query(b, 2)[0][:, 1].mean()
+        yield a, b, truth, cKDTree(b).query(b, 2)[0][:, 1].mean()
 
-        def hits(m):
-            one = ~m.excess  # a has fewer points: every one of them is in a one-to-one pair
-            i, j = m.pairs[one, 0], m.pairs[one, 1]
-            return (np.linalg.norm(b[j] - truth[i], axis=1) <= tol).sum() / len(a)
 
-        got.append(hits(pymodal.match(a, b)))
-        squared.append(hits(pymodal.match(a, b, cost_power=1.0)))
+def _hits(m, b, truth, tol):
+    """Share of a's points whose (one-to-one, non-excess) partner is within tol of the truth."""
+    one = ~m.excess  # a has fewer points: every one of them is in a non-excess pair
+    i, j = m.pairs[one, 0], m.pairs[one, 1]
+    return (np.linalg.norm(b[j] - truth[i], axis=1) <= tol).sum() / len(truth)
+
+
+def test_independent_surface_samplings_against_the_squared_cost_oracle():
+    # An assignment of squared distances, even on the TRUE positions (scipy), puts only about a
+    # quarter of a's points within one spacing; the surface defaults (powered costs) must do
+    # clearly better from the data alone.
+    from scipy.optimize import linear_sum_assignment
+
+    got, squared, oracle = [], [], []
+    for a, b, truth, tol in _surface_cases():
+        got.append(_hits(pymodal.match(a, b), b, truth, tol))
+        squared.append(_hits(pymodal.match(a, b, cost_power=1.0), b, truth, tol))
         ri, ci = linear_sum_assignment(((truth[:, None] - b[None]) ** 2).sum(2))
         oracle.append((np.linalg.norm(b[ci] - truth[ri], axis=1) <= tol).mean())
     got, squared, oracle = np.mean(got), np.mean(squared), np.mean(oracle)
     assert got > oracle + 0.05, (got, oracle)
     assert got > squared + 0.05, (got, squared)
+
+
+def test_best_search_is_the_row_minimum_many_to_one():
+    best, one_to_one = [], []
+    for a, b, truth, tol in _surface_cases():
+        m = pymodal.match(a, b, search="best")
+        assert m.pairs.shape == (len(a), 2) and not m.excess.any()
+        np.testing.assert_array_equal(m.pairs[:, 0], np.arange(len(a)))
+        np.testing.assert_array_equal(m.pairs[:, 1], m.affinity.argmin(1))
+        best.append(_hits(m, b, truth, tol))
+        one_to_one.append(_hits(pymodal.match(a, b), b, truth, tol))
+    assert np.mean(best) > np.mean(one_to_one) + 0.05, (np.mean(best), np.mean(one_to_one))
 
 
 @pytest.mark.parametrize(
