@@ -11,7 +11,7 @@ use crate::gaussian::nearest_neighbour_stats_of;
 use crate::search::{best_matches, global_matches, local_matches, ThresholdMode};
 use crate::{modal_basis, ModalError, ModelOptions, Shape, Topology};
 
-/// Which one-to-one search produces the primary matches.
+/// Which search produces the primary matches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Search {
     /// Mutual best matches under the threshold (the original modal matching, SPEC §6.1).
@@ -67,7 +67,8 @@ pub struct MatchOptions {
     /// moves A by a map its pairs already agree with. 0 re-fits up to `refits` times.
     pub refit_tolerance: f64,
     /// Weight `w` of aligned positions in the cost: `Z = (1 − w)·Z_modal + w·D`, both
-    /// max-normalised, `D` the squared distance of the aligned coordinates. 0 is pure modal
+    /// max-normalised (and each raised to [`MatchOptions::cost_power`]), `D` the squared distance
+    /// of the aligned coordinates. 0 is pure modal
     /// matching; 1 skips the modal solves and matches aligned positions (a baseline).
     pub position_weight: f64,
     /// Exponent `p` of the costs the search adds up: the assignment minimises `Σ Z[i, j]^p`,
@@ -197,8 +198,8 @@ pub struct MatchPair {
 /// Outcome of [`match_shapes`].
 #[derive(Debug, Clone)]
 pub struct MatchResult {
-    /// One-to-one pairs sorted by `a`, followed by excess pairs sorted by `b` (or by `a` when the
-    /// first object is the larger).
+    /// The search's pairs sorted by `a` (one-to-one except with [`Search::Best`]), followed by
+    /// excess pairs sorted by `b` (or by `a` when the first object is the larger).
     pub pairs: Vec<MatchPair>,
     /// The final affinity matrix the search used (entries in [0, 1]), rows = nodes of the first
     /// object, original order.
