@@ -6,7 +6,9 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use modal_core::{align, match_shapes, modal_basis, MatchOptions, ModelOptions, Shape, Topology};
+use modal_core::{
+    align, match_shapes, modal_basis, MatchOptions, ModelOptions, Search, Shape, Topology,
+};
 
 /// A real foot outline (MUN104 left, level 15) resampled at `n` points, and a warped copy with
 /// `m` points: rotation 12°, anisotropic scale, shear and bending.
@@ -47,6 +49,95 @@ fn pair(n: usize, m: usize) -> (Shape, Shape) {
         Shape::from_points_2d(&sample(&pts, n, 0), Topology::ClosedContour).unwrap(),
         Shape::from_points_2d(&sample(&warped, m, 17), Topology::ClosedContour).unwrap(),
     )
+}
+
+/// Two independent samplings (`n` and `m` points) of the loaded region (> 30 kPa) of the MUN104
+/// pressure template as (x, y, pressure · 20/350), the second turned by 12° and scaled: the
+/// surface case of `bench_match.py`.
+fn surface_pair(n: usize, m: usize) -> (Shape, Shape) {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/crates/modal-core/tests/data/mun104l.txt"
+    );
+    let grid: Vec<Vec<f64>> = std::fs::read_to_string(path)
+        .expect("pressure fixture")
+        .lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| l.split_whitespace().map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let (rows, cols) = (grid.len(), grid[0].len());
+    let pressure = |x: f64, y: f64| {
+        let (j, i) = (x.floor() as usize, y.floor() as usize);
+        let (fx, fy) = (x - j as f64, y - i as f64);
+        grid[i][j] * (1.0 - fx) * (1.0 - fy)
+            + grid[i][j + 1] * fx * (1.0 - fy)
+            + grid[i + 1][j] * (1.0 - fx) * fy
+            + grid[i + 1][j + 1] * fx * fy
+    };
+    let mut seed = 12345u64;
+    let mut unit = move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut sample = |k: usize| -> Vec<[f64; 3]> {
+        let mut out = Vec::with_capacity(k);
+        while out.len() < k {
+            let (x, y) = (unit() * (cols - 2) as f64, unit() * (rows - 2) as f64);
+            let p = pressure(x, y);
+            if p > 30.0 {
+                out.push([x, y, p * 20.0 / 350.0]);
+            }
+        }
+        out
+    };
+    let a = sample(n);
+    let (t, s) = (12f64.to_radians(), 1.05);
+    let b: Vec<[f64; 3]> = sample(m)
+        .into_iter()
+        .map(|[x, y, z]| {
+            [
+                s * (t.cos() * x - t.sin() * y) + 3.0,
+                s * (t.sin() * x + t.cos() * y) - 2.0,
+                z,
+            ]
+        })
+        .collect();
+    (
+        Shape::from_points_3d(&a, Topology::None).unwrap(),
+        Shape::from_points_3d(&b, Topology::None).unwrap(),
+    )
+}
+
+fn bench_surfaces(c: &mut Criterion) {
+    let (a, b) = surface_pair(110, 118);
+    let mut g = c.benchmark_group("match_surface_110x118");
+    g.sample_size(20);
+    let surf = MatchOptions::for_surfaces();
+    g.bench_function("surface_setting", |x| {
+        x.iter(|| match_shapes(black_box(&a), black_box(&b), &surf).unwrap())
+    });
+    let best = MatchOptions {
+        search: Search::Best,
+        ..surf.clone()
+    };
+    g.bench_function("surface_setting_search_best", |x| {
+        x.iter(|| match_shapes(black_box(&a), black_box(&b), &best).unwrap())
+    });
+    let mut reduced = surf.clone();
+    reduced.model.center_stride = 2;
+    g.bench_function("surface_setting_center_stride_2", |x| {
+        x.iter(|| match_shapes(black_box(&a), black_box(&b), &reduced).unwrap())
+    });
+    let positions = MatchOptions {
+        position_weight: 1.0,
+        ..surf.clone()
+    };
+    g.bench_function("positions_only", |x| {
+        x.iter(|| match_shapes(black_box(&a), black_box(&b), &positions).unwrap())
+    });
+    g.finish();
 }
 
 fn bench(c: &mut Criterion) {
@@ -114,5 +205,5 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+criterion_group!(benches, bench, bench_surfaces);
 criterion_main!(benches);
