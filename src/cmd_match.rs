@@ -6,7 +6,7 @@ use crate::output::{self, OutDir};
 use clap::Args;
 use modal_core::{ElementKind, Shape, Topology};
 use pedo_io::figure;
-use pedo_io::sequence::{ObjectModel, RunParams, SearchMode};
+use pedo_io::sequence::{RunParams, SearchMode};
 use std::path::{Path, PathBuf};
 
 #[derive(Args)]
@@ -121,15 +121,12 @@ pub fn run(args: MatchArgs) -> Result<(), String> {
         excess: !args.no_excess,
         paper: args.paper,
         center_stride: args.center_stride,
-        // Unordered 3-D point files are surfaces: the same setting as `pymodal.match`.
-        model: if a.dim() == 3 && !args.closed {
-            ObjectModel::Surface
-        } else {
-            ObjectModel::Contour
-        },
         ..RunParams::default()
     };
-    let o = params.match_options().map_err(|e| e.to_string())?;
+    // The same setting `pymodal.match` picks for these objects (unordered 3-D points: surfaces).
+    let o = params
+        .match_options_for(a.dim(), args.closed)
+        .map_err(|e| e.to_string())?;
     let r = modal_core::match_shapes(&a, &b, &o).map_err(|e| e.to_string())?;
     let rows = r.pairs.iter().map(|p| {
         vec![

@@ -142,9 +142,18 @@ impl Default for RunParams {
 
 impl RunParams {
     /// The matching part of the parameters (element, modes, search, solver, threshold, excess,
-    /// paper setting; the surface setting for the surface model), checked; what `pedomatch
-    /// match` uses for a single pair.
+    /// paper setting), checked, for this run's object model: surfaces are unordered 3-D meshes
+    /// and get the measured surface setting (on the synthetic moving blob at 60 nodes, 0.44 of
+    /// the pairs within one spacing of the true position against 0.31 with the contour recipe;
+    /// see the README), contours and isocontours the contour recipe.
     pub fn match_options(&self) -> Result<MatchOptions> {
+        let surface = self.model == ObjectModel::Surface;
+        self.match_options_for(if surface { 3 } else { 2 }, !surface)
+    }
+
+    /// [`RunParams::match_options`] for objects of `dim` dimensions, ordered contours or not,
+    /// starting from [`MatchOptions::for_input`]; what `pedomatch match` uses for a single pair.
+    pub fn match_options_for(&self, dim: usize, ordered: bool) -> Result<MatchOptions> {
         if !(self.modes > 0.0 && self.modes <= 1.0) {
             return Err(IoError::invalid(format!(
                 "modes must be in (0, 1], got {}",
@@ -158,13 +167,10 @@ impl RunParams {
                 )));
             }
         }
-        // Surfaces are unordered 3-D meshes: they get the measured surface setting (on the
-        // synthetic moving blob at 60 nodes, 0.44 of the pairs within one spacing of the true
-        // position against 0.31 with the contour recipe; see the README).
-        let mut matching = match (self.paper, self.model) {
-            (true, _) => MatchOptions::paper(),
-            (false, ObjectModel::Surface) => MatchOptions::for_input(3, false),
-            (false, _) => MatchOptions::default(),
+        let mut matching = if self.paper {
+            MatchOptions::paper()
+        } else {
+            MatchOptions::for_input(dim, ordered)
         };
         matching.model.element = self.element;
         matching.mode_fraction = self.modes;
