@@ -36,6 +36,14 @@ fn same_sampling_3d_is_recovered_exactly() {
     }
 }
 
+/// Both objects of a surface case as unordered 3-D point sets.
+fn shapes(case: &SurfaceCase) -> (Shape, Shape) {
+    (
+        Shape::from_points_3d(&case.a, Topology::None).unwrap(),
+        Shape::from_points_3d(&case.b, Topology::None).unwrap(),
+    )
+}
+
 fn mean_accuracy(opts: &MatchOptions, sev: Severity, seeds: std::ops::Range<u64>) -> f64 {
     let g = pressure_grid();
     let mut acc = Vec::new();
@@ -47,8 +55,7 @@ fn mean_accuracy(opts: &MatchOptions, sev: Severity, seeds: std::ops::Range<u64>
             100 + (seed as usize % 15),
             108 + (seed as usize % 7),
         );
-        let sa = Shape::from_points_3d(&case.a, Topology::None).unwrap();
-        let sb = Shape::from_points_3d(&case.b, Topology::None).unwrap();
+        let (sa, sb) = shapes(&case);
         let r = match_shapes(&sa, &sb, opts).unwrap();
         assert_eq!(
             r.pairs.len(),
@@ -106,8 +113,7 @@ fn aligned_point_sets_keep_the_frame_of_the_fit() {
     let (mut kept, mut renormalised) = (0.0, 0.0);
     for seed in 0..8u64 {
         let case = surface_case(&g, Severity::Moderate, seed, 110, 115);
-        let sa = Shape::from_points_3d(&case.a, Topology::None).unwrap();
-        let sb = Shape::from_points_3d(&case.b, Topology::None).unwrap();
+        let (sa, sb) = shapes(&case);
         let (pa, _) = prealign_normalized(&sa, &sb, &MatchOptions::for_surfaces()).unwrap();
         let flat_b: Vec<f64> = case.b.iter().flatten().copied().collect();
         let (_, c, s) = normalize(&flat_b, 3).unwrap();
@@ -138,8 +144,7 @@ fn aligned_point_sets_keep_the_frame_of_the_fit() {
 fn cost_power_reshapes_the_sum_not_the_order() {
     let g = pressure_grid();
     let case = surface_case(&g, Severity::Mild, 3, 100, 108);
-    let sa = Shape::from_points_3d(&case.a, Topology::None).unwrap();
-    let sb = Shape::from_points_3d(&case.b, Topology::None).unwrap();
+    let (sa, sb) = shapes(&case);
     let with = |p: f64| MatchOptions {
         position_weight: 0.0,
         cost_power: p,
@@ -175,8 +180,7 @@ fn best_search_reads_out_every_node_many_to_one() {
     let (mut acc_best, mut acc_global) = (0.0, 0.0);
     for seed in 0..8u64 {
         let case = surface_case(&g, Severity::Mild, seed, 100 + seed as usize % 15, 108);
-        let sa = Shape::from_points_3d(&case.a, Topology::None).unwrap();
-        let sb = Shape::from_points_3d(&case.b, Topology::None).unwrap();
+        let (sa, sb) = shapes(&case);
         let r = match_shapes(&sa, &sb, &best).unwrap();
         assert_eq!(r.pairs.len(), case.a.len(), "one pair per node of A");
         for (i, p) in r.pairs.iter().enumerate() {
