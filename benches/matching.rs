@@ -10,27 +10,14 @@ use modal_core::{
     align, match_shapes, modal_basis, MatchOptions, ModelOptions, Search, Shape, Topology,
 };
 
-/// A real foot outline (MUN104 left, level 15) resampled at `n` points, and a warped copy with
-/// `m` points: rotation 12°, anisotropic scale, shear and bending.
+// The tests' ground-truth generator (fixtures and warps), shared rather than re-written.
+#[path = "../crates/modal-core/tests/match_common/mod.rs"]
+mod match_common;
+
+/// A real foot outline (MUN104 left, level 15) sampled at `n` of its vertices, and a warped copy
+/// with `m`: rotation 12°, anisotropic scale, shear and bending — a pair that needs both re-fits.
 fn pair(n: usize, m: usize) -> (Shape, Shape) {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/crates/modal-core/tests/data/contours.txt"
-    );
-    let text = std::fs::read_to_string(path).expect("contour fixture");
-    let mut pts: Vec<[f64; 2]> = Vec::new();
-    let mut on = false;
-    for l in text.lines() {
-        if l.starts_with("# ") {
-            if on {
-                break;
-            }
-            on = l.contains("MUN104L-level15");
-        } else if on && !l.trim().is_empty() {
-            let v: Vec<f64> = l.split_whitespace().map(|s| s.parse().unwrap()).collect();
-            pts.push([v[0], v[1]]);
-        }
-    }
+    let pts = match_common::outline("MUN104L-level15");
     let sample = |c: &[[f64; 2]], k: usize, start: usize| -> Vec<[f64; 2]> {
         (0..k)
             .map(|i| c[(start + i * c.len() / k) % c.len()])
@@ -51,62 +38,15 @@ fn pair(n: usize, m: usize) -> (Shape, Shape) {
     )
 }
 
-/// Two independent samplings (`n` and `m` points) of the loaded region (> 30 kPa) of the MUN104
-/// pressure template as (x, y, pressure · 20/350), the second turned by 12° and scaled: the
-/// surface case of `bench_match.py`.
+/// A moderate surface case of the tests' generator (the kind `bench_match.py` builds): two
+/// independent samplings (`n` and `m` points) of the loaded region (> 30 kPa) of the MUN104
+/// pressure template as (x, y, pressure · 20/350), the second warped.
 fn surface_pair(n: usize, m: usize) -> (Shape, Shape) {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/crates/modal-core/tests/data/mun104l.txt"
-    );
-    let grid: Vec<Vec<f64>> = std::fs::read_to_string(path)
-        .expect("pressure fixture")
-        .lines()
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| l.split_whitespace().map(|v| v.parse().unwrap()).collect())
-        .collect();
-    let (rows, cols) = (grid.len(), grid[0].len());
-    let pressure = |x: f64, y: f64| {
-        let (j, i) = (x.floor() as usize, y.floor() as usize);
-        let (fx, fy) = (x - j as f64, y - i as f64);
-        grid[i][j] * (1.0 - fx) * (1.0 - fy)
-            + grid[i][j + 1] * fx * (1.0 - fy)
-            + grid[i + 1][j] * (1.0 - fx) * fy
-            + grid[i + 1][j + 1] * fx * fy
-    };
-    let mut seed = 12345u64;
-    let mut unit = move || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
-    let mut sample = |k: usize| -> Vec<[f64; 3]> {
-        let mut out = Vec::with_capacity(k);
-        while out.len() < k {
-            let (x, y) = (unit() * (cols - 2) as f64, unit() * (rows - 2) as f64);
-            let p = pressure(x, y);
-            if p > 30.0 {
-                out.push([x, y, p * 20.0 / 350.0]);
-            }
-        }
-        out
-    };
-    let a = sample(n);
-    let (t, s) = (12f64.to_radians(), 1.05);
-    let b: Vec<[f64; 3]> = sample(m)
-        .into_iter()
-        .map(|[x, y, z]| {
-            [
-                s * (t.cos() * x - t.sin() * y) + 3.0,
-                s * (t.sin() * x + t.cos() * y) - 2.0,
-                z,
-            ]
-        })
-        .collect();
+    let grid = match_common::pressure_grid();
+    let case = match_common::surface_case(&grid, match_common::Severity::Moderate, 12345, n, m);
     (
-        Shape::from_points_3d(&a, Topology::None).unwrap(),
-        Shape::from_points_3d(&b, Topology::None).unwrap(),
+        Shape::from_points_3d(&case.a, Topology::None).unwrap(),
+        Shape::from_points_3d(&case.b, Topology::None).unwrap(),
     )
 }
 

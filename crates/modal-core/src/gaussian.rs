@@ -116,6 +116,22 @@ fn finish_nn_stats(
     (total / n as f64, min, pair)
 }
 
+/// `G_ij = exp(−|x_i − c_j|² / 2σ²)`: the Gaussians centred on `centers` evaluated at `nodes`,
+/// `nodes.len() × centers.len()`. With the nodes as centres this is [`GaussianIntegrals::g`]
+/// (which shares its exponentials with `Γ` instead); a reduced basis interpolates its modes to
+/// every node with it.
+pub fn gaussians_at(nodes: &Shape, centers: &Shape, sigma: f64) -> Mat<f64> {
+    let dim = nodes.dim();
+    let (x, c) = (nodes.coords(), centers.coords());
+    let inv = -0.5 / (sigma * sigma);
+    Mat::from_fn(nodes.len(), centers.len(), |i, j| {
+        let r2: f64 = (0..dim)
+            .map(|a| (x[i * dim + a] - c[j * dim + a]).powi(2))
+            .sum();
+        (r2 * inv).exp()
+    })
+}
+
 impl GaussianIntegrals {
     /// Closed forms of SPEC §2.2 for the nodes of `shape` and width `sigma`.
     pub fn new(shape: &Shape, sigma: f64) -> Self {

@@ -382,7 +382,7 @@ fn gaussian_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, 
                 let stiffness = ints.k_tilde(lambda, mu);
                 let interpolation = match &centers {
                     None => ints.g,
-                    Some(c) => gaussians_at(shape, c, sigma),
+                    Some(c) => crate::gaussian::gaussians_at(shape, c, sigma),
                 };
                 return Ok(SolverModel {
                     stiffness,
@@ -428,19 +428,6 @@ fn reduced_centers(shape: &Shape, stride: usize) -> Result<Option<Shape>, ModalE
         ))
     })?;
     Ok(Some(centers))
-}
-
-/// `G_ij = exp(−|x_i − c_j|² / 2σ²)`: the centres' Gaussians evaluated at the nodes.
-fn gaussians_at(shape: &Shape, centers: &Shape, sigma: f64) -> Mat<f64> {
-    let dim = shape.dim();
-    let (x, c) = (shape.coords(), centers.coords());
-    let inv = -0.5 / (sigma * sigma);
-    Mat::from_fn(shape.len(), centers.len(), |i, j| {
-        let r2: f64 = (0..dim)
-            .map(|a| (x[i * dim + a] - c[j * dim + a]).powi(2))
-            .sum();
-        (r2 * inv).exp()
-    })
 }
 
 /// The rigid basis mapped to the reduced (standard-problem) coordinates `y = (I⊗Lᵀ) T⁻¹ R` and

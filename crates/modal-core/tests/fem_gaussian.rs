@@ -3,7 +3,7 @@
 
 use faer::Mat;
 use modal_core::eigen::generalized_eigen;
-use modal_core::gaussian::GaussianIntegrals;
+use modal_core::gaussian::{gaussians_at, GaussianIntegrals};
 use modal_core::{
     modal_basis, model_matrices, ElementKind, Material, ModalBasis, ModelOptions, PlaneModel,
     Shape, Topology,
@@ -212,6 +212,29 @@ fn closed_forms_match_quadrature_3d() {
         let (k, m, _) = model_matrices(&shape, &opts).unwrap();
         assert!(rel_err(&k, &kq) < 1e-7, "K {}", rel_err(&k, &kq));
         assert!(rel_err(&m, &mq) < 1e-7, "M {}", rel_err(&m, &mq));
+    }
+}
+
+#[test]
+fn gaussians_at_the_nodes_are_the_interpolation_matrix() {
+    for dim in [2, 3] {
+        let shape = random_shape(dim, 9, 11 + dim as u64);
+        let ints = GaussianIntegrals::new(&shape, 0.6);
+        assert!(rel_err(&gaussians_at(&shape, &shape, 0.6), &ints.g) < 1e-14);
+        // Rectangular: every other node as a centre picks the matching columns of G.
+        let idx: Vec<usize> = (0..9).step_by(2).collect();
+        let coords: Vec<f64> = idx
+            .iter()
+            .flat_map(|&j| shape.coords()[j * dim..(j + 1) * dim].to_vec())
+            .collect();
+        let centers = Shape::new(dim, coords, Topology::None).unwrap();
+        let rect = gaussians_at(&shape, &centers, 0.6);
+        assert_eq!((rect.nrows(), rect.ncols()), (9, idx.len()));
+        for (k, &j) in idx.iter().enumerate() {
+            for i in 0..9 {
+                assert!((rect[(i, k)] - ints.g[(i, j)]).abs() < 1e-14);
+            }
+        }
     }
 }
 

@@ -5,8 +5,15 @@
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
+/// A fixture of modal-core's `tests/data`. The root package's benches include this module too
+/// (`#[path]`), and there the manifest directory is the workspace root.
 pub fn data_path(name: &str) -> String {
-    format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"))
+    let dir = if env!("CARGO_PKG_NAME") == "modal-core" {
+        "tests/data"
+    } else {
+        "crates/modal-core/tests/data"
+    };
+    format!("{}/{dir}/{name}", env!("CARGO_MANIFEST_DIR"))
 }
 
 /// Dense closed outlines `(name, points)`.
@@ -27,6 +34,15 @@ pub fn outlines() -> Vec<(String, Vec<[f64; 2]>)> {
         }
     }
     out
+}
+
+/// The dense outline called `name` in contours.txt.
+pub fn outline(name: &str) -> Vec<[f64; 2]> {
+    outlines()
+        .into_iter()
+        .find(|(n, _)| n == name)
+        .unwrap_or_else(|| panic!("no outline {name} in contours.txt"))
+        .1
 }
 
 /// The MUN104 left peak-pressure template, rows × cols.
