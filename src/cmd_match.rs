@@ -1,12 +1,11 @@
 //! `pedomatch match A B`: correspondences between two objects given as images or point files.
 
-use crate::cmd_assign::SolverArg;
-use crate::cmd_run::{ElementArg, SearchArg};
+use crate::modal_args::ModalArgs;
 use crate::output::{self, OutDir};
-use clap::Args;
-use modal_core::{ElementKind, Shape, Topology};
+use clap::{Args, ValueEnum};
+use modal_core::{Search, Shape, Topology};
 use pedo_io::figure;
-use pedo_io::sequence::{RunParams, SearchMode};
+use pedo_io::sequence::SearchMode;
 use std::path::{Path, PathBuf};
 
 #[derive(Args)]
@@ -24,28 +23,23 @@ pub struct MatchArgs {
     /// Frame (1-based) to take from a multi-frame recording.
     #[arg(long, default_value_t = 1)]
     pub frame: usize,
-    #[arg(long, value_enum, default_value = "gaussian")]
-    pub element: ElementArg,
-    #[arg(long, default_value_t = 0.25)]
-    pub modes: f64,
+    #[command(flatten)]
+    pub modal: ModalArgs,
+    /// Search strategy: the optimal one-to-one assignment (`global`), mutual best matches
+    /// (`local`), or every node of A to its cheapest node of B (`best`: many-to-one, the most
+    /// right matches between independently sampled surfaces).
     #[arg(long, value_enum, default_value = "global")]
-    pub search: SearchArg,
-    #[arg(long, value_enum, default_value = "jv")]
-    pub solver: SolverArg,
-    #[arg(long)]
-    pub threshold: Option<f64>,
-    #[arg(long)]
-    pub no_excess: bool,
-    /// The paper's literal setting (no rotation pre-alignment, no re-fits).
-    #[arg(long)]
-    pub paper: bool,
-    /// Gaussian element: a Gaussian on every N-th node only (faster, less accurate under
-    /// severe warps).
-    #[arg(long, default_value_t = 1, value_name = "N")]
-    pub center_stride: usize,
+    pub search: MatchSearchArg,
     /// Write matches.csv, match.json and match.png/svg into this folder instead of printing.
     #[arg(long)]
     pub out: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MatchSearchArg {
+    Global,
+    Local,
+    Best,
 }
 
 const POINT_EXTENSIONS: [&str; 4] = ["xy", "xyz", "pts", "txt"];
@@ -105,28 +99,19 @@ fn load_object(path: &Path, args: &MatchArgs) -> Result<Shape, String> {
 pub fn run(args: MatchArgs) -> Result<(), String> {
     let a = load_object(&args.a, &args)?;
     let b = load_object(&args.b, &args)?;
-    let params = RunParams {
-        element: match args.element {
-            ElementArg::Gaussian => ElementKind::Gaussian,
-            ElementArg::Axial => ElementKind::Axial,
-        },
-        modes: args.modes,
-        search: if args.search == SearchArg::Local {
-            SearchMode::Local
-        } else {
-            SearchMode::Global
-        },
-        method: args.solver.into(),
-        threshold: args.threshold,
-        excess: !args.no_excess,
-        paper: args.paper,
-        center_stride: args.center_stride,
-        ..RunParams::default()
-    };
+    let params = args.modal.params(if args.search == MatchSearchArg::Local {
+        SearchMode::Local
+    } else {
+        SearchMode::Global
+    });
     // The same setting `pymodal.match` picks for these objects (unordered 3-D points: surfaces).
-    let o = params
+    let mut o = params
         .match_options_for(a.dim(), args.closed)
         .map_err(|e| e.to_string())?;
+    if args.search == MatchSearchArg::Best {
+        // Recordings have no such mode (their tracks follow one-to-one matches); a pair may.
+        o.search = Search::Best;
+    }
     let r = modal_core::match_shapes(&a, &b, &o).map_err(|e| e.to_string())?;
     let rows = r.pairs.iter().map(|p| {
         vec![
@@ -139,6 +124,7 @@ pub fn run(args: MatchArgs) -> Result<(), String> {
     let table = output::csv_table(&["node_a", "node_b", "cost", "excess"], rows);
     let summary = serde_json::json!({
         "a": args.a.display().to_string(), "b": args.b.display().to_string(),
+        "search": format!("{:?}", args.search).to_lowercase(), "matches": r.pairs.len(),
         "nodes_a": a.len(), "nodes_b": b.len(),
         "local_matches": r.local_count(), "one_to_one_matches": r.one_to_one_count(),
         "excess_matches": r.excess_count(), "modes": r.n_modes, "refits": r.refits,
@@ -147,8 +133,13 @@ pub fn run(args: MatchArgs) -> Result<(), String> {
     match &args.out {
         None => {
             print!("{table}");
+            let primary = if o.search == Search::Best {
+                "best (many-to-one)"
+            } else {
+                "one-to-one"
+            };
             eprintln!(
-                "{} × {} nodes: {} local, {} one-to-one, {} excess matches",
+                "{} × {} nodes: {} local, {} {primary}, {} excess matches",
                 a.len(),
                 b.len(),
                 r.local_count(),

@@ -1,10 +1,9 @@
 //! `pedomatch run` and `pedomatch demo`: a whole recording in; tables, figures and tracks out.
 
-use crate::cmd_assign::SolverArg;
+use crate::modal_args::ModalArgs;
 use crate::output::{self, OutDir};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use modal_core::ElementKind;
 use pedo_io::sequence::{
     run_sequence, ObjectModel, RunParams, SearchMode, SequenceOptions, SequenceResult, Stage,
 };
@@ -17,12 +16,6 @@ pub enum ModelArg {
     Contour,
     Surface,
     Isocontour,
-}
-
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum ElementArg {
-    Gaussian,
-    Axial,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -46,31 +39,11 @@ pub struct RunOptionsArgs {
     /// Object model of each frame.
     #[arg(long, value_enum, default_value = "contour")]
     pub model: ModelArg,
-    /// Finite element of the modal model.
-    #[arg(long, value_enum, default_value = "gaussian")]
-    pub element: ElementArg,
-    /// Fraction of the vibration modes used as features.
-    #[arg(long, default_value_t = 0.25)]
-    pub modes: f64,
+    #[command(flatten)]
+    pub modal: ModalArgs,
     /// Search strategy: `both` reports local and optimisation matches side by side.
     #[arg(long, value_enum, default_value = "both")]
     pub search: SearchArg,
-    /// Assignment solver of the optimisation (global) search.
-    #[arg(long, value_enum, default_value = "jv")]
-    pub solver: SolverArg,
-    /// Matching threshold on the max-normalised modal cost, in [0, 1] (default: keep all).
-    #[arg(long)]
-    pub threshold: Option<f64>,
-    /// Disable the excess-node step.
-    #[arg(long)]
-    pub no_excess: bool,
-    /// The paper's literal setting (centroid/scale pre-alignment only, no affine re-fits).
-    #[arg(long)]
-    pub paper: bool,
-    /// Gaussian element: a Gaussian on every N-th contour node only — about twice as fast, as
-    /// accurate for the small changes between consecutive frames, less under severe warps.
-    #[arg(long, default_value_t = 1, value_name = "N")]
-    pub center_stride: usize,
     /// Frames to use, 1-based and inclusive, e.g. `10..60`.
     #[arg(long)]
     pub frames: Option<String>,
@@ -177,21 +150,6 @@ pub fn sequence_options(
             ModelArg::Surface => ObjectModel::Surface,
             ModelArg::Isocontour => ObjectModel::Isocontour,
         },
-        element: match o.element {
-            ElementArg::Gaussian => ElementKind::Gaussian,
-            ElementArg::Axial => ElementKind::Axial,
-        },
-        modes: o.modes,
-        search: match o.search {
-            SearchArg::Global => SearchMode::Global,
-            SearchArg::Local => SearchMode::Local,
-            SearchArg::Both => SearchMode::Both,
-        },
-        method: o.solver.into(),
-        threshold: o.threshold,
-        excess: !o.no_excess,
-        paper: o.paper,
-        center_stride: o.center_stride,
         frames,
         noise: o.noise,
         smooth: o.smooth,
@@ -199,6 +157,11 @@ pub fn sequence_options(
         surface_nodes: o.surface_nodes,
         iso_frame: o.iso_frame,
         iso_levels: o.iso_levels,
+        ..o.modal.params(match o.search {
+            SearchArg::Global => SearchMode::Global,
+            SearchArg::Local => SearchMode::Local,
+            SearchArg::Both => SearchMode::Both,
+        })
     };
     params.to_options(recording).map_err(|e| e.to_string())
 }

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 mod cmd_assign;
 mod cmd_match;
 mod cmd_run;
+mod modal_args;
 mod output;
 
 #[derive(Parser)]
