@@ -126,13 +126,12 @@ pub fn modal_basis(shape: &Shape, options: &ModelOptions) -> Result<ModalBasis, 
     solve_model(shape, &model, options)
 }
 
-/// Bar model on explicitly given edges (no mechanism remedy is added: the edges must brace the
-/// structure, or the zero-mode check fails). `options.element` is ignored.
-pub fn modal_basis_with_edges(
+/// The bar model on `edges` after the input checks, with `options` set to the axial element.
+fn model_on_edges(
     shape: &Shape,
     edges: &[[usize; 2]],
     options: &ModelOptions,
-) -> Result<ModalBasis, ModalError> {
+) -> Result<(SolverModel, ModelOptions), ModalError> {
     options.material.validate()?;
     validate_nodes(shape)?;
     let model = crate::axial::axial_model_with_edges(shape, edges, &[], options)?;
@@ -140,6 +139,17 @@ pub fn modal_basis_with_edges(
         element: ElementKind::Axial,
         ..options.clone()
     };
+    Ok((model, opts))
+}
+
+/// Bar model on explicitly given edges (no mechanism remedy is added: the edges must brace the
+/// structure, or the zero-mode check fails). `options.element` is ignored.
+pub fn modal_basis_with_edges(
+    shape: &Shape,
+    edges: &[[usize; 2]],
+    options: &ModelOptions,
+) -> Result<ModalBasis, ModalError> {
+    let (model, opts) = model_on_edges(shape, edges, options)?;
     solve_model(shape, &model, &opts)
 }
 
@@ -272,13 +282,7 @@ pub fn model_matrices_with_edges(
     edges: &[[usize; 2]],
     options: &ModelOptions,
 ) -> Result<ExplicitModel, ModalError> {
-    options.material.validate()?;
-    validate_nodes(shape)?;
-    let model = crate::axial::axial_model_with_edges(shape, edges, &[], options)?;
-    let opts = ModelOptions {
-        element: ElementKind::Axial,
-        ..options.clone()
-    };
+    let (model, opts) = model_on_edges(shape, edges, options)?;
     explicit_matrices(shape, &model, &opts)
 }
 
