@@ -16,7 +16,7 @@ fn run(sev: Severity, seeds: std::ops::Range<u64>, opts: &MatchOptions) -> (f64,
         let a = Shape::from_points_2d(&case.a, Topology::ClosedContour).unwrap();
         let b = Shape::from_points_2d(&case.b, Topology::ClosedContour).unwrap();
         let res = match_shapes(&a, &b, opts).unwrap();
-        accs.push(accuracy_2d(&res, &case.b, &case.truth, case.spacing_b));
+        accs.push(accuracy(&res, &case.b, &case.truth, case.spacing_b));
     }
     (accs.iter().sum::<f64>() / accs.len() as f64, accs)
 }
@@ -98,7 +98,7 @@ fn refit_tolerance_skips_only_refits_the_pairs_do_not_need() {
             let (a, b) = shapes(&case);
             for (t, opts) in [&every, &MatchOptions::default()].into_iter().enumerate() {
                 let r = match_shapes(&a, &b, opts).unwrap();
-                acc[t] += accuracy_2d(&r, &case.b, &case.truth, case.spacing_b);
+                acc[t] += accuracy(&r, &case.b, &case.truth, case.spacing_b);
                 refits[t] += r.refits;
             }
             let skipped = match_shapes(&a, &b, &never).unwrap();
@@ -343,7 +343,7 @@ fn local_search_returns_only_mutual_best() {
         assert_eq!(z.get(p.a, p.b), row_min);
         assert_eq!(z.get(p.a, p.b), col_min);
     }
-    let acc = accuracy_2d(&r, &case.b, &case.truth, case.spacing_b);
+    let acc = accuracy(&r, &case.b, &case.truth, case.spacing_b);
     let prec = r
         .pairs
         .iter()

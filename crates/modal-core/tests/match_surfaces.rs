@@ -62,7 +62,7 @@ fn mean_accuracy(opts: &MatchOptions, sev: Severity, seeds: std::ops::Range<u64>
             case.a.len().max(case.b.len()),
             "excess completes to max(n, m)"
         );
-        acc.push(accuracy_3d(&r, &case.b, &case.truth, case.spacing_b));
+        acc.push(accuracy(&r, &case.b, &case.truth, case.spacing_b));
     }
     acc.iter().sum::<f64>() / acc.len() as f64
 }
@@ -190,9 +190,9 @@ fn best_search_reads_out_every_node_many_to_one() {
             let min = row.iter().copied().fold(f64::INFINITY, f64::min);
             assert_eq!(p.cost, min, "node {i} is paired with its row minimum");
         }
-        acc_best += accuracy_3d(&r, &case.b, &case.truth, case.spacing_b) / 8.0;
+        acc_best += accuracy(&r, &case.b, &case.truth, case.spacing_b) / 8.0;
         let r = match_shapes(&sa, &sb, &surf).unwrap();
-        acc_global += accuracy_3d(&r, &case.b, &case.truth, case.spacing_b) / 8.0;
+        acc_global += accuracy(&r, &case.b, &case.truth, case.spacing_b) / 8.0;
     }
     eprintln!("surfaces mild: best {acc_best:.3}, global {acc_global:.3}");
     // Two independent samplings: the best one-to-one answer cannot be right for every node,

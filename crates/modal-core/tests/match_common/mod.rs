@@ -185,11 +185,11 @@ pub fn contour_case(outline: &[[f64; 2]], sev: Severity, seed: u64) -> ContourCa
 }
 
 /// Fraction of A's nodes whose match (the one-to-one one if any, else an excess one) lies within
-/// one B spacing of the true position.
-pub fn accuracy_2d(
+/// `tol` (one B spacing) of the true position; 2-D contours and 3-D surfaces alike.
+pub fn accuracy<const D: usize>(
     res: &modal_core::MatchResult,
-    b: &[[f64; 2]],
-    truth: &[[f64; 2]],
+    b: &[[f64; D]],
+    truth: &[[f64; D]],
     tol: f64,
 ) -> f64 {
     let mut best: Vec<Option<(bool, usize)>> = vec![None; truth.len()];
@@ -199,6 +199,7 @@ pub fn accuracy_2d(
             *e = Some((p.excess, p.b));
         }
     }
+    let dist = |p: [f64; D], q: [f64; D]| (0..D).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
     best.iter()
         .enumerate()
         .filter(|(i, m)| m.is_some_and(|(_, j)| dist(b[j], truth[*i]) <= tol))
@@ -270,48 +271,11 @@ pub fn surface_case(g: &[Vec<f64>], sev: Severity, seed: u64, na: usize, nb: usi
         })
         .collect();
     // Spacing: mean nearest-neighbour distance of B.
-    let spacing_b = b
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            b.iter()
-                .enumerate()
-                .filter(|(j, _)| *j != i)
-                .map(|(_, q)| {
-                    ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
-                })
-                .fold(f64::INFINITY, f64::min)
-        })
-        .sum::<f64>()
-        / b.len() as f64;
+    let spacing_b = modal_core::gaussian::nearest_neighbour_stats_of(&b.concat(), 3).0;
     SurfaceCase {
         a,
         b,
         truth,
         spacing_b,
     }
-}
-
-pub fn dist3(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
-
-pub fn accuracy_3d(
-    res: &modal_core::MatchResult,
-    b: &[[f64; 3]],
-    truth: &[[f64; 3]],
-    tol: f64,
-) -> f64 {
-    let mut best: Vec<Option<(bool, usize)>> = vec![None; truth.len()];
-    for p in &res.pairs {
-        let e = &mut best[p.a];
-        if e.is_none() || (e.unwrap().0 && !p.excess) {
-            *e = Some((p.excess, p.b));
-        }
-    }
-    best.iter()
-        .enumerate()
-        .filter(|(i, m)| m.is_some_and(|(_, j)| dist3(b[j], truth[*i]) <= tol))
-        .count() as f64
-        / truth.len() as f64
 }
