@@ -42,25 +42,6 @@ fn as_f64_matrix<'py>(
     arr.extract()
 }
 
-/// Solve the linear sum assignment problem.
-///
-/// A drop-in for ``scipy.optimize.linear_sum_assignment``: returns ``(row_ind, col_ind)``, int64
-/// arrays with ``row_ind`` sorted, such that ``cost[row_ind, col_ind].sum()`` is optimal over all
-/// assignments of ``min(n, m)`` pairs. ``inf`` (``-inf`` when maximising) forbids a pair.
-///
-/// Parameters
-/// ----------
-/// cost_matrix : array_like, 2-D, numbers or bools
-/// maximize : bool, default False
-/// method : {"jv", "hungarian", "simplex"}, keyword-only, default "jv"
-///     Jonker–Volgenant shortest augmenting paths, Kuhn–Munkres, or network simplex. All give
-///     the same optimal total.
-///
-/// Raises
-/// ------
-/// ValueError
-///     if the input is not 2-D, contains NaN or ``-inf`` (``+inf`` when
-///     maximising), or admits no complete assignment.
 /// `(row_ind, col_ind)` as returned by scipy.
 type IndexArrays<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>);
 
@@ -98,6 +79,25 @@ fn solve_to_arrays<'py>(
     Ok((PyArray1::from_vec(py, r), PyArray1::from_vec(py, c)))
 }
 
+/// Solve the linear sum assignment problem.
+///
+/// A drop-in for ``scipy.optimize.linear_sum_assignment``: returns ``(row_ind, col_ind)``, int64
+/// arrays with ``row_ind`` sorted, such that ``cost[row_ind, col_ind].sum()`` is optimal over all
+/// assignments of ``min(n, m)`` pairs. ``inf`` (``-inf`` when maximising) forbids a pair.
+///
+/// Parameters
+/// ----------
+/// cost_matrix : array_like, 2-D, numbers or bools
+/// maximize : bool, default False
+/// method : {"jv", "hungarian", "simplex"}, keyword-only, default "jv"
+///     Jonker–Volgenant shortest augmenting paths, Kuhn–Munkres, or network simplex. All give
+///     the same optimal total.
+///
+/// Raises
+/// ------
+/// ValueError
+///     if the input is not 2-D, contains NaN or ``-inf`` (``+inf`` when
+///     maximising), or admits no complete assignment.
 #[pyfunction]
 #[pyo3(signature = (cost_matrix, maximize=false, *, method="jv"))]
 fn linear_sum_assignment<'py>(

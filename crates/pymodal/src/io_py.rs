@@ -71,6 +71,7 @@ impl PyRecording {
 
 #[pymethods]
 impl PyRecording {
+    /// (T, H, W) float32 pressure frames, NaN where there is no sensor.
     #[getter]
     fn frames<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
         let r = &self.inner;
@@ -78,6 +79,7 @@ impl PyRecording {
             .map_err(to_py)?;
         Ok(a.into_pyarray(py))
     }
+    /// (H, W) bool, True where a sensor exists.
     #[getter]
     fn sensor_mask<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<bool>>> {
         let r = &self.inner;
@@ -85,62 +87,79 @@ impl PyRecording {
             .map_err(to_py)?;
         Ok(a.into_pyarray(py))
     }
+    /// ``(dx, dy)`` = (column spacing, row spacing) in mm, or None when the file does not say.
     #[getter]
     fn pitch_mm(&self) -> Option<(f64, f64)> {
         self.inner.pitch_mm.map(|p| (p[0], p[1]))
     }
+    /// Seconds between frames, or None when unknown.
     #[getter]
     fn dt_s(&self) -> Option<f64> {
         self.inner.dt_s
     }
+    /// Pressure units as the file writes them (e.g. ``"kPa"``); ``""`` when unknown.
     #[getter]
     fn units(&self) -> String {
         self.inner.units.clone()
     }
+    /// Area of one sensor in mm²: the stated area, else ``dx * dy``, else None.
     #[getter]
     fn sensel_area_mm2(&self) -> Option<f64> {
         self.inner.sensel_area()
     }
+    /// The file's own noise threshold (Tekscan ``NOISE_THRESHOLD``) in its units, or None.
     #[getter]
     fn noise_threshold(&self) -> Option<f64> {
         self.inner.noise_threshold
     }
+    /// The format read: ``"asf"``, ``"lst"``, ``"csv"``, ``"npy"``, ``"png"`` or ``"tiff"``; None
+    /// when built in memory.
     #[getter]
     fn format(&self) -> Option<String> {
         self.inner.format.map(|f| format!("{f:?}").to_lowercase())
     }
+    /// Number of frames T.
     #[getter]
     fn n_frames(&self) -> usize {
         self.inner.n_frames()
     }
+    /// ``(T, H, W)``.
     #[getter]
     fn shape(&self) -> (usize, usize, usize) {
         (self.inner.n_frames(), self.inner.rows(), self.inner.cols())
     }
+    /// (H, W) float64: per sensor the maximum over all frames.
     #[getter]
     fn peak_image<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let g = self.inner.peak_image();
         let a = Array2::from_shape_vec((g.rows(), g.cols()), g.data().to_vec()).map_err(to_py)?;
         Ok(a.into_pyarray(py))
     }
+    /// (T,) float64 contact area per frame: sensors above 0 times the sensor area in mm², in
+    /// sensels when the area is unknown.
     #[getter]
     fn contact_area<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         measures_dict(py, &self.inner, 0.0)?
             .as_any()
             .get_item("contact_area")
     }
+    /// (T,) float64 total force per frame: in N when units and sensor area are known, else the sum
+    /// of the values times the area factor.
     #[getter]
     fn total_force<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         measures_dict(py, &self.inner, 0.0)?
             .as_any()
             .get_item("total_force")
     }
+    /// (T,) float64 highest pressure per frame.
     #[getter]
     fn peak_pressure<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         measures_dict(py, &self.inner, 0.0)?
             .as_any()
             .get_item("peak_pressure")
     }
+    /// (T, 2) float64 centre of pressure ``(x, y)`` per frame in sensel units, NaN for empty
+    /// frames.
     #[getter]
     fn cop<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         measures_dict(py, &self.inner, 0.0)?
@@ -325,10 +344,12 @@ pub struct PySurface {
 
 #[pymethods]
 impl PySurface {
+    /// (n, 3) float64 nodes ``(x, y, z)``.
     #[getter]
     fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         points_array(py, &self.inner.points)
     }
+    /// (t, 3) int64 node indices, counter-clockwise in x-y.
     #[getter]
     fn triangles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
         let t = &self.inner.triangles;

@@ -50,18 +50,22 @@ impl PyMatch {
 
 #[pymethods]
 impl PyMatch {
+    /// (k, 2) int64 ``(index in a, index in b)``: the search's pairs, then the excess pairs.
     #[getter]
     fn pairs<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
         pairs_array(py, self.inner.pairs.iter().map(|p| (p.a, p.b)))
     }
+    /// (k,) float64 cost Z[a, b] of each pair.
     #[getter]
     fn costs<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_vec(py, self.inner.pairs.iter().map(|p| p.cost).collect())
     }
+    /// (k,) bool, True for the pairs added by the excess-node step.
     #[getter]
     fn excess<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
         PyArray1::from_vec(py, self.inner.pairs.iter().map(|p| p.excess).collect())
     }
+    /// (n, m) float64 final affinity matrix Z in [0, 1].
     #[getter]
     fn affinity<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         let z = &self.inner.affinity;
@@ -69,6 +73,7 @@ impl PyMatch {
             .reshape([z.rows(), z.cols()])
             .expect("n × m reshape")
     }
+    /// int64 nodes of ``a`` in no pair.
     #[getter]
     fn unmatched_a<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
         PyArray1::from_vec(
@@ -76,6 +81,7 @@ impl PyMatch {
             self.inner.unmatched_a.iter().map(|&i| i as i64).collect(),
         )
     }
+    /// int64 nodes of ``b`` in no pair.
     #[getter]
     fn unmatched_b<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
         PyArray1::from_vec(
@@ -83,26 +89,32 @@ impl PyMatch {
             self.inner.unmatched_b.iter().map(|&i| i as i64).collect(),
         )
     }
+    /// (l, 2) int64 mutual-best matches on the final Z, under the threshold.
     #[getter]
     fn local_pairs<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
         pairs_array(py, self.inner.local_pairs.iter().copied())
     }
+    /// Number of mutual-best (local) matches.
     #[getter]
     fn local_count(&self) -> usize {
         self.inner.local_count()
     }
+    /// Number of the search's own pairs (the seed's optimisation column).
     #[getter]
     fn optimisation_count(&self) -> usize {
         self.inner.one_to_one_count()
     }
+    /// Number of pairs added by the excess-node step.
     #[getter]
     fn excess_count(&self) -> usize {
         self.inner.excess_count()
     }
+    /// Modes per object in the features.
     #[getter]
     fn n_modes(&self) -> usize {
         self.inner.n_modes
     }
+    /// Modal affine re-fits performed.
     #[getter]
     fn refits(&self) -> usize {
         self.inner.refits

@@ -1,0 +1,221 @@
+# Type stubs of the compiled module (crates/pymodal/src). The runtime signatures are the
+# source of truth: tests/test_stubs.py checks every name, parameter and default against them.
+import os
+from typing import Any, Literal, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+ArrayLike = npt.ArrayLike
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+Material = Union[
+    None,
+    Literal["rubber", "steel", "aluminium", "cork", "unit"],
+    Mapping[str, float],
+    Tuple[float, float, float],
+]
+Path = Union[str, os.PathLike]
+Element = Literal["gaussian", "axial"]
+Solver = Literal["jv", "hungarian", "simplex"]
+
+class ModalModel:
+    def __init__(
+        self,
+        points: ArrayLike,
+        *,
+        element: Optional[Element] = None,
+        material: Material = None,
+        sigma: Optional[float] = None,
+        edges: Optional[ArrayLike] = None,
+        triangles: Optional[ArrayLike] = None,
+        kappa: float = 1.0,
+        n_modes: Optional[int] = None,
+        exact_rigid: bool = False,
+        plane: Literal["stress", "strain"] = "stress",
+        center_stride: int = 1,
+    ) -> None: ...
+    @property
+    def eigenvalues(self) -> FloatArray: ...
+    @property
+    def frequencies(self) -> FloatArray: ...
+    @property
+    def modes(self) -> FloatArray: ...
+    @property
+    def sigma(self) -> Optional[float]: ...
+    @property
+    def dim(self) -> int: ...
+    @property
+    def n_nodes(self) -> int: ...
+    @property
+    def element(self) -> Element: ...
+    def features(self, k: int) -> FloatArray: ...
+    def mass(self) -> FloatArray: ...
+    def stiffness(self) -> FloatArray: ...
+
+class Match:
+    @property
+    def pairs(self) -> IntArray: ...
+    @property
+    def costs(self) -> FloatArray: ...
+    @property
+    def excess(self) -> BoolArray: ...
+    @property
+    def affinity(self) -> FloatArray: ...
+    @property
+    def unmatched_a(self) -> IntArray: ...
+    @property
+    def unmatched_b(self) -> IntArray: ...
+    @property
+    def local_pairs(self) -> IntArray: ...
+    @property
+    def local_count(self) -> int: ...
+    @property
+    def optimisation_count(self) -> int: ...
+    @property
+    def excess_count(self) -> int: ...
+    @property
+    def n_modes(self) -> int: ...
+    @property
+    def refits(self) -> int: ...
+    def __len__(self) -> int: ...
+
+class Recording:
+    @property
+    def frames(self) -> npt.NDArray[np.float32]: ...
+    @property
+    def sensor_mask(self) -> BoolArray: ...
+    @property
+    def pitch_mm(self) -> Optional[Tuple[float, float]]: ...
+    @property
+    def dt_s(self) -> Optional[float]: ...
+    @property
+    def units(self) -> str: ...
+    @property
+    def sensel_area_mm2(self) -> Optional[float]: ...
+    @property
+    def noise_threshold(self) -> Optional[float]: ...
+    @property
+    def format(self) -> Optional[str]: ...
+    @property
+    def n_frames(self) -> int: ...
+    @property
+    def shape(self) -> Tuple[int, int, int]: ...
+    @property
+    def peak_image(self) -> FloatArray: ...
+    @property
+    def contact_area(self) -> FloatArray: ...
+    @property
+    def total_force(self) -> FloatArray: ...
+    @property
+    def peak_pressure(self) -> FloatArray: ...
+    @property
+    def cop(self) -> FloatArray: ...
+    def measures(self, threshold: float = 0.0) -> dict[str, npt.NDArray[Any]]: ...
+    def __len__(self) -> int: ...
+
+class Surface:
+    @property
+    def points(self) -> FloatArray: ...
+    @property
+    def triangles(self) -> IntArray: ...
+
+def match(
+    a: ArrayLike,
+    b: ArrayLike,
+    *,
+    element: Element = "gaussian",
+    modes: float = 0.25,
+    search: Literal["global", "local", "best"] = "global",
+    solver: Solver = "jv",
+    threshold: Optional[float] = None,
+    excess: bool = True,
+    ordered: Optional[bool] = None,
+    material: Material = None,
+    prealign: Literal["robust", "spec", "normalize"] = "robust",
+    refits: Optional[int] = None,
+    refit_tolerance: Optional[float] = None,
+    skip_rigid: bool = False,
+    band: int = 3,
+    kappa: Optional[float] = None,
+    center_stride: int = 1,
+    threshold_in_optimizer: bool = False,
+    position_weight: Optional[float] = None,
+    cost_power: Optional[float] = None,
+    common_sigma: Optional[bool] = None,
+    triangles_a: Optional[ArrayLike] = None,
+    triangles_b: Optional[ArrayLike] = None,
+) -> Match: ...
+def eigh(
+    k: ArrayLike, m: ArrayLike, *, n_modes: Optional[int] = None
+) -> Tuple[FloatArray, FloatArray]: ...
+def linear_sum_assignment(
+    cost_matrix: ArrayLike, maximize: bool = False, *, method: Solver = "jv"
+) -> Tuple[IntArray, IntArray]: ...
+def linear_sum_assignment_threshold(
+    cost_matrix: ArrayLike, tau: float, maximize: bool = False, *, method: Solver = "jv"
+) -> Tuple[IntArray, IntArray]: ...
+def read_recording(path: Path) -> Recording: ...
+def contours(
+    frame: ArrayLike,
+    *,
+    level: Optional[float] = None,
+    n_points: Optional[int] = None,
+    spacing: Optional[float] = None,
+    smooth: Optional[float] = None,
+    threshold: Optional[float] = None,
+    upsample: Optional[int] = None,
+    interpolation: Literal["bilinear", "bicubic"] = "bilinear",
+    method: Literal["marching", "chain"] = "marching",
+    high: Optional[float] = None,
+    fully_connected: Literal["low", "high"] = "low",
+    include_holes: bool = True,
+    min_area: float = 0.0,
+) -> list[FloatArray]: ...
+def isocontours(
+    frame: ArrayLike,
+    levels: Sequence[float],
+    *,
+    smooth: Optional[float] = None,
+    threshold: Optional[float] = None,
+    three_d: bool = False,
+    n_points: Optional[int] = None,
+    spacing: Optional[float] = None,
+    include_holes: bool = True,
+    fully_connected: Literal["low", "high"] = "low",
+) -> list[Tuple[float, FloatArray]]: ...
+def surface(
+    frame: ArrayLike,
+    *,
+    threshold: Optional[float] = None,
+    max_nodes: Optional[int] = None,
+    smooth: Optional[float] = None,
+    step: int = 1,
+    keep_hull: bool = True,
+    laplacian_iterations: int = 20,
+    relaxation: float = 0.01,
+    z_scale: Literal["xy", "keep"] = "xy",
+) -> Surface: ...
+def run(
+    recording: Union[Recording, Path, ArrayLike],
+    *,
+    model: Literal["contour", "surface", "isocontour"] = "contour",
+    element: Element = "gaussian",
+    modes: float = 0.25,
+    search: Literal["global", "local", "both"] = "both",
+    solver: Solver = "jv",
+    threshold: Optional[float] = None,
+    excess: bool = True,
+    paper: bool = False,
+    center_stride: int = 1,
+    frames: Optional[Tuple[int, int]] = None,
+    noise: Optional[float] = None,
+    smooth: float = 0.0,
+    spacing: float = 1.0,
+    surface_nodes: int = 120,
+    iso_frame: Optional[int] = None,
+    iso_levels: int = 10,
+) -> dict[str, Any]: ...
