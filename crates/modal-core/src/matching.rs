@@ -444,31 +444,32 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
             Some(opts.model.kappa * 0.5 * (nearest_neighbour_stats_of(&sa.pts, d).0 + spacing_b));
     }
     let modal = opts.position_weight < 1.0;
-    // B's modes (solved once) and A's pre-alignment followed by A's first solve are independent:
-    // run them side by side. rayon::join, not a plain thread: a whole sequence matches its pairs
-    // on the rayon pool, and a plain thread joined from inside a rayon worker can deadlock it.
+    // The pre-alignment first, on both cores (its rotation starts are screened on the rayon
+    // pool); then B's modes (solved once) and A's first solve side by side. Measured against
+    // running B's solve beside the pre-alignment and A's solve: the rotation search then has one
+    // core, and the critical path is search + solve instead of search/2 + solve.
+    // rayon::join, not a plain thread: a whole sequence matches its pairs on the rayon pool, and
+    // a plain thread joined from inside a rayon worker can deadlock it.
+    let cur = match opts.prealign {
+        Prealign::Normalize => sa.pts.clone(),
+        Prealign::Robust => {
+            let t = align::robust_prealign(&sa.pts, &sb.pts, d, &opts.rotation_search, ordered);
+            into_b_frame(t.apply(&sa.pts), d, ordered)?
+        }
+    };
     let (fb, first) = rayon::join(
         || {
             modal
                 .then(|| features_of(&sb.pts, d, &sb.topology, &model, skip, k + band))
                 .transpose()
         },
-        || -> Result<(Vec<f64>, Option<ModalFeatures>), ModalError> {
-            let cur = match opts.prealign {
-                Prealign::Normalize => sa.pts.clone(),
-                Prealign::Robust => {
-                    let t =
-                        align::robust_prealign(&sa.pts, &sb.pts, d, &opts.rotation_search, ordered);
-                    into_b_frame(t.apply(&sa.pts), d, ordered)?
-                }
-            };
-            let fa = modal
+        || {
+            modal
                 .then(|| features_of(&cur, d, &sa.topology, &model, skip, k))
-                .transpose()?;
-            Ok((cur, fa))
+                .transpose()
         },
     );
-    let (fb, (mut cur, mut first_fa)) = (fb?, first?);
+    let (fb, mut first_fa, mut cur) = (fb?, first?, cur);
     let band = fb.as_ref().map_or(0, |f| f.n_modes.saturating_sub(k));
 
     let nbr = if !ordered && opts.excess && opts.search == Search::Global {
