@@ -124,7 +124,8 @@ pub fn run(args: MatchArgs) -> Result<(), String> {
     let table = output::csv_table(&["node_a", "node_b", "cost", "excess"], rows);
     let summary = serde_json::json!({
         "a": args.a.display().to_string(), "b": args.b.display().to_string(),
-        "search": format!("{:?}", args.search).to_lowercase(), "matches": r.pairs.len(),
+        "search": args.search.to_possible_value().map(|v| v.get_name().to_string()),
+        "matches": r.pairs.len(),
         "nodes_a": a.len(), "nodes_b": b.len(),
         "local_matches": r.local_count(), "one_to_one_matches": r.one_to_one_count(),
         "excess_matches": r.excess_count(), "modes": r.n_modes, "refits": r.refits,

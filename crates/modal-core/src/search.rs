@@ -32,18 +32,24 @@ pub fn local_matches(z: &AffinityMatrix, threshold: f64) -> Vec<(usize, usize)> 
         }
     }
     let mut out = Vec::new();
-    for i in 0..n {
-        let mut best = 0;
-        for j in 1..m {
-            if z.get(i, j) < z.get(i, best) {
-                best = j;
-            }
-        }
-        if col_best[best] == i && z.get(i, best) <= threshold {
+    for (i, row) in z.as_slice().chunks_exact(m).enumerate() {
+        let best = row_minimum(row);
+        if col_best[best] == i && row[best] <= threshold {
             out.push((i, best));
         }
     }
     out
+}
+
+/// Index of a row's smallest entry, the lowest on ties (the rule of both searches below).
+fn row_minimum(row: &[f64]) -> usize {
+    let mut best = 0;
+    for j in 1..row.len() {
+        if row[j] < row[best] {
+            best = j;
+        }
+    }
+    best
 }
 
 /// One-sided best matches: every node `i` of A paired with its row minimum `j` (ties to the lowest
@@ -58,11 +64,8 @@ pub fn best_matches(z: &AffinityMatrix, threshold: f64) -> Vec<(usize, usize)> {
         .chunks_exact(z.cols())
         .enumerate()
         .filter_map(|(i, row)| {
-            let (j, &v) =
-                row.iter()
-                    .enumerate()
-                    .fold((0, &row[0]), |b, (j, v)| if v < b.1 { (j, v) } else { b });
-            (v <= threshold).then_some((i, j))
+            let j = row_minimum(row);
+            (row[j] <= threshold).then_some((i, j))
         })
         .collect()
 }

@@ -276,28 +276,24 @@ impl PyModalModel {
     }
 
     /// Gaussian width σ used (after the conditioning guard), or None for bar elements.
-
     #[getter]
     fn sigma(&self) -> Option<f64> {
         self.basis.sigma
     }
 
     /// Spatial dimension, 2 or 3.
-
     #[getter]
     fn dim(&self) -> usize {
         self.basis.dim
     }
 
     /// Number of nodes n.
-
     #[getter]
     fn n_nodes(&self) -> usize {
         self.basis.n_nodes
     }
 
     /// ``"gaussian"`` or ``"axial"``.
-
     #[getter]
     fn element(&self) -> &'static str {
         match self.options.element {
