@@ -26,7 +26,7 @@ fn contours_all_severities() {
     let opts = MatchOptions::default();
     for (sev, target) in [
         // The targets; measured 1.000 / 1.000 / 0.964 on these 36 cases (0.9998 /
-        // 0.9995 / 0.966 on 90; see the README for the Python benchmark).
+        // 0.9986 / 0.966 on 90; see the README for the Python benchmark).
         (Severity::Mild, 0.99),
         (Severity::Moderate, 0.98),
         (Severity::Severe, 0.95),
@@ -40,7 +40,7 @@ fn contours_all_severities() {
 #[test]
 fn reduced_gaussian_basis_trades_severe_accuracy_for_speed() {
     // Gaussians on every second node only (a third of the solve time). Measured on these 90
-    // cases: 1.000 / 0.995 / 0.939 against 0.9998 / 0.9995 / 0.966 for the full element — the
+    // cases: 1.000 / 0.992 / 0.939 against 0.9998 / 0.9986 / 0.966 for the full element — the
     // issue's targets hold at mild and moderate warps (consecutive frames), not at severe ones.
     let mut opts = MatchOptions::default();
     opts.model.center_stride = 2;
@@ -72,10 +72,10 @@ fn dense_rotation_search_beats_the_five_spec_candidates() {
 
 #[test]
 fn refit_tolerance_skips_only_refits_the_pairs_do_not_need() {
-    // The re-fits stop once one affine map explains the pairs to within the tolerance (in B
-    // spacings). Every re-fit (0) and the default (0.3) must agree in accuracy while the default
-    // solves fewer (measured 0.9745 with 81 and with 59 re-fits on these 48 cases); an
-    // unreachable tolerance is the same as no re-fit at all.
+    // The re-fits stop once one affine map explains the one-to-one pairs to within the
+    // tolerance (in B spacings). Every re-fit (0) and the default (0.6) must agree in accuracy
+    // while the default solves far fewer (measured 0.9745 with 81 and with 43 re-fits on these 48
+    // cases; the earlier RMS test: 59); an unreachable tolerance is the same as no re-fit at all.
     let outlines = outlines();
     let every = MatchOptions {
         refit_tolerance: 0.0,
@@ -118,7 +118,7 @@ fn refit_tolerance_skips_only_refits_the_pairs_do_not_need() {
         "{default_acc} vs {every_acc}"
     );
     assert!(
-        (refits[1] as f64) < 0.85 * refits[0] as f64,
+        (refits[1] as f64) < 0.65 * refits[0] as f64,
         "{} vs {} re-fits",
         refits[1],
         refits[0]
@@ -354,4 +354,37 @@ fn local_search_returns_only_mutual_best() {
         prec >= 0.95 && acc > 0.5,
         "precision {prec}, coverage {acc}"
     );
+}
+
+#[test]
+fn mild_warps_stop_refitting_once_the_one_to_one_pairs_fit() {
+    // Under a mild warp one affine map explains the pairs; what is left is the sampling: excess
+    // pairs (many-to-one) sit up to a spacing along the outline from their partner, one-to-one
+    // pairs within about half of one. The stop test looks at the one-to-one pairs only, so these
+    // pairs are not re-fitted. Measured on these 36 cases: 19 re-fits, accuracy 1.000; the
+    // earlier rule (RMS of all pairs below 0.3 spacing, none beyond 0.6) re-fitted 36 times.
+    let outlines = outlines();
+    let (mut refits, mut excess_pairs) = (0usize, 0usize);
+    let mut acc = 0.0;
+    let cases = 36u64;
+    for seed in 0..cases {
+        let (_, o) = &outlines[seed as usize % outlines.len()];
+        let case = contour_case(o, Severity::Mild, seed);
+        let (a, b) = shapes(&case);
+        let r = match_shapes(&a, &b, &MatchOptions::default()).unwrap();
+        refits += r.refits;
+        excess_pairs += r.excess_count();
+        acc += accuracy(&r, &case.b, &case.truth, case.spacing_b);
+    }
+    let n = cases as f64;
+    eprintln!(
+        "mild: {refits} re-fits, {excess_pairs} excess pairs, accuracy {:.4}",
+        acc / n
+    );
+    assert!(
+        excess_pairs > 36,
+        "the cases must have excess pairs to leave out"
+    );
+    assert!(acc / n >= 0.999, "{}", acc / n);
+    assert!(refits <= 27, "{refits} re-fits in {cases} pairs");
 }

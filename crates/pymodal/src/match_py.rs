@@ -238,8 +238,8 @@ fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
 /// skip_rigid : bool; band : int;
 /// refits : int or None — modal affine re-fits (None: 2, or 0 for 3-D point sets);
 /// refit_tolerance : float ≥ 0 or None — no (further) re-fit once one affine map explains the
-///     pairs: RMS residual below this fraction of b's node spacing, none beyond twice it (None:
-///     0.3; 0 re-fits ``refits`` times);
+///     pairs: every one-to-one pair within this fraction of b's node spacing of its partner
+///     (None: 0.6; 0 re-fits ``refits`` times);
 /// kappa : float or None — σ = kappa × mean nearest-neighbour distance (None: 0.8, or 3 for 3-D
 ///     point sets, where independent samplings need smoother modes);
 /// center_stride : int ≥ 1 — Gaussians on every ``center_stride``-th node only (Gaussian element):
