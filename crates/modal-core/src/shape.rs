@@ -97,9 +97,67 @@ impl Shape {
     }
 }
 
+/// Whether row-major 2-D points, read in their order, trace a closed outline: the mean step
+/// from each point to the next (the last back to the first) is at most 1.5 × the mean
+/// nearest-neighbour distance. Points sampled along a boundary pass; a scattered cloud, whose
+/// consecutive points are unrelated, does not; 3-D points and fewer than 4 never do. Callers
+/// that are not told whether their points are ordered use it to pick the contour recipe.
+///
+/// ```
+/// use modal_core::shape::looks_like_closed_contour;
+/// let ring: Vec<f64> = (0..12)
+///     .flat_map(|i| {
+///         let t = i as f64 / 12.0 * std::f64::consts::TAU;
+///         [t.cos(), 0.5 * t.sin()]
+///     })
+///     .collect();
+/// assert!(looks_like_closed_contour(&ring, 2));
+/// // Every other point first: consecutive points are two steps apart.
+/// let mut skipped: Vec<f64> = ring.chunks(2).step_by(2).flatten().copied().collect();
+/// skipped.extend(ring.chunks(2).skip(1).step_by(2).flatten());
+/// assert!(!looks_like_closed_contour(&skipped, 2));
+/// ```
+pub fn looks_like_closed_contour(coords: &[f64], dim: usize) -> bool {
+    let n = coords.len() / dim.max(1);
+    if dim != 2 || n < 4 {
+        return false;
+    }
+    let step = (0..n)
+        .map(|i| {
+            let j = (i + 1) % n;
+            ((coords[2 * i] - coords[2 * j]).powi(2)
+                + (coords[2 * i + 1] - coords[2 * j + 1]).powi(2))
+            .sqrt()
+        })
+        .sum::<f64>()
+        / n as f64;
+    step <= 1.5 * crate::gaussian::nearest_neighbour_stats_of(coords, 2).0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn closed_contours_are_told_from_scattered_points() {
+        let ring: Vec<f64> = (0..40)
+            .flat_map(|i| {
+                let t = i as f64 / 40.0 * std::f64::consts::TAU;
+                [3.0 * t.cos() + 0.4 * (3.0 * t).cos(), t.sin()]
+            })
+            .collect();
+        assert!(looks_like_closed_contour(&ring, 2));
+        // The same points in a scrambled order (a fixed permutation: 17 is coprime with 40).
+        let scrambled: Vec<f64> = (0..40)
+            .flat_map(|i| ring[2 * (i * 17 % 40)..2 * (i * 17 % 40) + 2].to_vec())
+            .collect();
+        assert!(!looks_like_closed_contour(&scrambled, 2));
+        // 3-D points and too few points are never contours.
+        let lifted: Vec<f64> = ring.chunks(2).flat_map(|p| [p[0], p[1], 0.0]).collect();
+        assert!(!looks_like_closed_contour(&lifted, 3));
+        assert!(!looks_like_closed_contour(&ring[..6], 2));
+        assert!(!looks_like_closed_contour(&[], 2));
+    }
 
     #[test]
     fn rejects_non_finite_and_bad_triangles() {

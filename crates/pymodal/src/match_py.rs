@@ -1,5 +1,6 @@
 //! `pymodal.match`: modal matching of two point sets, contours or meshes.
 
+use modal_core::shape::looks_like_closed_contour;
 use modal_core::{
     match_shapes, ElementKind, MatchOptions, MatchResult, Prealign, RotationSearch, Search, Shape,
     ThresholdMode, Topology,
@@ -187,29 +188,6 @@ fn triangles(
     ))
 }
 
-/// True when consecutive points (with wrap-around) are about as close as nearest neighbours:
-/// the array reads as an ordered closed contour.
-fn looks_like_contour(dim: usize, c: &[f64]) -> bool {
-    let n = c.len() / dim;
-    if dim != 2 || n < 4 {
-        return false;
-    }
-    let d = |i: usize, j: usize| {
-        ((c[2 * i] - c[2 * j]).powi(2) + (c[2 * i + 1] - c[2 * j + 1]).powi(2)).sqrt()
-    };
-    let step: f64 = (0..n).map(|i| d(i, (i + 1) % n)).sum::<f64>() / n as f64;
-    let nn: f64 = (0..n)
-        .map(|i| {
-            (0..n)
-                .filter(|&j| j != i)
-                .map(|j| d(i, j))
-                .fold(f64::INFINITY, f64::min)
-        })
-        .sum::<f64>()
-        / n as f64;
-    step <= 1.5 * nn
-}
-
 /// Modal matching of two objects.
 ///
 /// Builds a finite-element model of each object, computes its vibration modes and matches the
@@ -304,8 +282,8 @@ fn match_py(
         None => {
             ta.is_none()
                 && tb.is_none()
-                && looks_like_contour(da, &ca)
-                && looks_like_contour(db, &cb)
+                && looks_like_closed_contour(&ca, da)
+                && looks_like_closed_contour(&cb, db)
         }
     };
     // Contours get the §10 recipe; unordered 3-D point sets the measured surface setting.

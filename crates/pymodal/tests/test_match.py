@@ -82,6 +82,25 @@ def test_swapping_objects_and_searches(case):
     assert (t.costs <= 0.05).all() and len(t.unmatched_a) > 0
 
 
+def test_ordered_contours_are_detected_from_the_point_order(case):
+    # Left to itself (ordered=None), match treats points that trace an outline in their order as
+    # a contour and anything else as a point set; the two recipes differ (excess step, orientation).
+    a, b, truth, spacing = case
+    as_contour = pymodal.match(a, b, ordered=True)
+    as_points = pymodal.match(a, b, ordered=False)
+    assert not np.array_equal(as_contour.pairs, as_points.pairs)
+    assert np.array_equal(pymodal.match(a, b).pairs, as_contour.pairs)
+    perm = np.random.default_rng(0).permutation(len(a))
+    scrambled = pymodal.match(a[perm], b)
+    assert np.array_equal(scrambled.pairs, pymodal.match(a[perm], b, ordered=False).pairs)
+    # The point-set recipe does not depend on the order: mapped back, the same pairs.
+    back = np.column_stack([perm[scrambled.pairs[:, 0]], scrambled.pairs[:, 1]])
+    for excess in (False, True):
+        assert set(map(tuple, back[scrambled.excess == excess])) == set(
+            map(tuple, as_points.pairs[as_points.excess == excess])
+        )
+
+
 def test_refit_tolerance(case):
     a, b, truth, spacing = case
     every = pymodal.match(a, b, refit_tolerance=0.0, refits=3)
