@@ -995,8 +995,9 @@ mod tests {
             (1..30).map(|i| 10f64.powi(i / 3 - 6)).collect(),
         ));
         cases.push((vec![3.0; 25], vec![0.0; 24]));
-        // Entries near the ends of the exponent range: t² of the rearranged step overflows (or
-        // 1/p does) and the step falls back to dsterf's γ²/c.
+        // Entries near the ends of the exponent range: the step's products of three entries
+        // over- or underflow unless the matrix is scaled first (without the scaling neither
+        // case converged).
         for scale in [1e150, 1e-150] {
             cases.push((
                 (0..33).map(|_| scale * rnd()).collect(),
