@@ -1,0 +1,70 @@
+"""Speed of pymodal.match relative to coherent point drift, timed case by case.
+
+bench_match.py times each method over all cases back to back. Here every case is matched by each
+method in turn, so the ratios are per case and share the machine's state, and pymodal meets the
+cold thread pool a call meets after other work. Also times pymodal back to back and after a pause,
+which shows what waking rayon's idle worker costs on this machine.
+
+Run:  python benches/python/bench_speed_ratio.py [--cases 30] [--pause-ms 15]
+"""
+import argparse
+import time
+
+import numpy as np
+
+import pymodal
+from bench_match import SEVERITY, contour_case, cpd, outlines
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--cases", type=int, default=30, help="contour cases per severity")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--pause-ms", type=float, default=15.0)
+    args = ap.parse_args()
+    outs = outlines()
+    cases = []
+    for sev in SEVERITY:
+        rng = np.random.default_rng(args.seed)
+        cases += [contour_case(outs[k % len(outs)], sev, rng) for k in range(args.cases)]
+    peers = {
+        "pycpd rigid, affine, then deformable": cpd("rigid", "affine"),
+        "pycpd rigid, then deformable": cpd("rigid"),
+        "pycpd deformable": cpd(),
+    }
+    ours = {"pymodal.match defaults": {}, "pymodal.match refits=0": {"refits": 0}}
+    pymodal.match(cases[0][0], cases[0][1])
+    t = {k: [] for k in list(peers) + list(ours)}
+    for a, b, *_ in cases:
+        for k, f in peers.items():
+            t0 = time.perf_counter()
+            f(a, b)
+            t[k].append(time.perf_counter() - t0)
+        for k, kw in ours.items():
+            t0 = time.perf_counter()
+            pymodal.match(a, b, **kw)
+            t[k].append(time.perf_counter() - t0)
+    t = {k: np.array(v) for k, v in t.items()}
+    print(f"Interleaved, {len(cases)} contour pairs (median ms per pair; per-case ratio median):")
+    for k in peers:
+        print(f"  {k:40s} {np.median(t[k]) * 1e3:7.2f}")
+    for k in ours:
+        ratios = ", ".join(f"{np.median(t[p] / t[k]):.1f}x {p}" for p in peers)
+        print(f"  {k:40s} {np.median(t[k]) * 1e3:7.2f}   ({ratios})")
+
+    def timed(pause):
+        ts = []
+        for a, b, *_ in cases:
+            if pause:
+                time.sleep(pause)
+            t0 = time.perf_counter()
+            pymodal.match(a, b)
+            ts.append(time.perf_counter() - t0)
+        return np.median(ts) * 1e3
+
+    warm, cold = timed(0.0), timed(args.pause_ms / 1e3)
+    print(f"pymodal.match defaults back to back {warm:.2f} ms, after a {args.pause_ms:g} ms pause {cold:.2f} ms")
+
+
+if __name__ == "__main__":
+    main()
