@@ -225,11 +225,16 @@ pub fn nearest_both(from: &[f64], to: &[f64], dim: usize) -> NearestBoth {
 }
 
 /// Nearest neighbours from every point of `from` into `to` and, with `COLS`, from every point of
-/// `to` into `from`, in one structure-of-arrays scan the compiler vectorises (ICP and the re-fit
-/// loop call this thousands of times per pair). Ties go to the first index, as in a plain scan.
+/// `to` into `from`, in one structure-of-arrays scan (ICP and the re-fit loop call this thousands
+/// of times per pair). Ties go to the first index, as in a plain scan. Planar point sets, by far
+/// the most frequent, take an AVX-512 or AVX2 kernel when the CPU has one.
 fn nearest_soa<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) -> NearestBoth {
     #[cfg(target_arch = "x86_64")]
     {
+        if D == 2 && std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: AVX-512F was just detected.
+            return unsafe { nearest_planar_avx512::<COLS>(from, to) };
+        }
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: AVX2 was just detected.
             return unsafe { nearest_soa_avx2::<D, COLS>(from, to) };
@@ -241,69 +246,339 @@ fn nearest_soa<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) -> Ne
 /// Nearest neighbours one way and the other: `(index, squared distance)` per point of each set.
 pub type NearestBoth = (Vec<(usize, f64)>, Vec<(usize, f64)>);
 
-/// The same scan compiled for AVX2; the planar case, by far the most frequent, written out with
-/// intrinsics because the auto-vectoriser mixes 128- and 256-bit halves in it. Separate multiply
-/// and add (no FMA) keep every distance bit-identical to the plain scan's, so ties break alike.
+/// Rows of `from` that share a pass over the blocks of `to` in the planar kernels: a block's
+/// column minima are then loaded and stored once per group, not once per row.
+#[cfg(target_arch = "x86_64")]
+const GROUP: usize = 4;
+
+/// Points of `to` whose blocks a planar kernel keeps on the stack (on the heap beyond): room to
+/// spare for the 40–80 of a contour in the pipeline, and no allocation.
+#[cfg(target_arch = "x86_64")]
+const STACK_POINTS: usize = 128;
+
+/// Four points of `to` for the AVX2 scan, with the nearest row so far of each, as f64: AVX2 has no
+/// 64-bit integer `max` (see [`rows_avx2`]), and f64 holds an index exactly.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct Block256 {
+    x: std::arch::x86_64::__m256d,
+    y: std::arch::x86_64::__m256d,
+    v: std::arch::x86_64::__m256d,
+    i: std::arch::x86_64::__m256d,
+}
+
+/// The same scan compiled for AVX2 (three dimensions go through the auto-vectorised body); the
+/// planar case written out with intrinsics, because the auto-vectoriser mixes 128- and 256-bit
+/// halves in it. Separate multiply and add (no FMA) keep every distance bit-identical to the
+/// plain scan's, so ties break alike.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn nearest_soa_avx2<const D: usize, const COLS: bool>(
-    from: &[f64],
-    to: &[f64],
-) -> NearestBoth {
+fn nearest_soa_avx2<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) -> NearestBoth {
     use std::arch::x86_64::*;
-    if D != 2 || from.is_empty() || to.is_empty() {
+    let (n, m) = (from.len() / D, to.len() / D);
+    if D != 2 || n == 0 || m == 0 {
         return nearest_soa_body::<D, COLS>(from, to);
     }
-    let (n, m) = (from.len() / 2, to.len() / 2);
+    let init = Block256 {
+        x: _mm256_setzero_pd(),
+        y: _mm256_setzero_pd(),
+        v: _mm256_set1_pd(f64::INFINITY),
+        i: _mm256_setzero_pd(),
+    };
+    let mut stack = [init; STACK_POINTS / 4];
+    let mut heap = Vec::new();
     let blocks = m.div_ceil(4);
-    // Padding far away (squared distances stay finite) never wins against a real point.
-    let mut xs = vec![1e100; blocks * 4];
-    let mut ys = vec![1e100; blocks * 4];
-    for (j, q) in to.chunks_exact(2).enumerate() {
-        xs[j] = q[0];
-        ys[j] = q[1];
+    let cols: &mut [Block256] = if blocks <= stack.len() {
+        &mut stack[..blocks]
+    } else {
+        heap.resize(blocks, init);
+        &mut heap
+    };
+    for (blk, q) in cols.iter_mut().zip(to.chunks(8)) {
+        // NaN padding: its distances compare false, so padded lanes never hold a minimum.
+        let (mut x, mut y) = ([f64::NAN; 4], [f64::NAN; 4]);
+        for (l, p) in q.chunks_exact(2).enumerate() {
+            (x[l], y[l]) = (p[0], p[1]);
+        }
+        blk.x = _mm256_setr_pd(x[0], x[1], x[2], x[3]);
+        blk.y = _mm256_setr_pd(y[0], y[1], y[2], y[3]);
     }
-    let mut col_v = vec![f64::INFINITY; if COLS { blocks * 4 } else { 0 }];
-    let mut col_i = vec![0.0f64; if COLS { blocks * 4 } else { 0 }];
-    let mut rows = Vec::with_capacity(n);
-    for (i, p) in from.chunks_exact(2).enumerate() {
-        let (px, py) = (_mm256_set1_pd(p[0]), _mm256_set1_pd(p[1]));
-        let row = _mm256_set1_pd(i as f64);
-        let mut best_v = _mm256_set1_pd(f64::INFINITY);
-        let mut best_b = _mm256_setzero_pd();
-        for b in 0..blocks {
-            // SAFETY: every vector is 4 f64 inside the blocks · 4 long buffers.
-            let dx = _mm256_sub_pd(_mm256_loadu_pd(xs.as_ptr().add(4 * b)), px);
-            let dy = _mm256_sub_pd(_mm256_loadu_pd(ys.as_ptr().add(4 * b)), py);
+    let mut rows = vec![(0, 0.0); n];
+    let mut groups = from
+        .chunks_exact(2 * GROUP)
+        .zip(rows.chunks_exact_mut(GROUP));
+    for (g, (p, out)) in groups.by_ref().enumerate() {
+        rows_avx2::<GROUP, COLS>(p, GROUP * g, cols, out);
+    }
+    let i0 = n - n % GROUP;
+    for (k, (p, out)) in from[2 * i0..]
+        .chunks_exact(2)
+        .zip(&mut rows[i0..])
+        .enumerate()
+    {
+        rows_avx2::<1, COLS>(p, i0 + k, cols, std::slice::from_mut(out));
+    }
+    let mut back = vec![(0, 0.0); if COLS { m } else { 0 }];
+    for (blk, out) in cols.iter().zip(back.chunks_mut(4)) {
+        let (v, i) = (lanes256(blk.v), lanes256(blk.i));
+        for (o, (&v, &i)) in out.iter_mut().zip(v.iter().zip(&i)) {
+            *o = (i as usize, v);
+        }
+    }
+    (rows, back)
+}
+
+/// Rows `i0 .. i0 + R` (the points of `p`) against every block of four, their minima kept in
+/// registers. A minimum is updated by `min` (`d < v ? d : v`, the strict update) and its index by
+/// `max(index, better & current)`, exact because the current block (or row) index is never below
+/// a kept one: two single-µop instructions where a blend costs two or three.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn rows_avx2<const R: usize, const COLS: bool>(
+    p: &[f64],
+    i0: usize,
+    cols: &mut [Block256],
+    out: &mut [(usize, f64)],
+) {
+    use std::arch::x86_64::*;
+    let px: [__m256d; R] = std::array::from_fn(|r| _mm256_set1_pd(p[2 * r]));
+    let py: [__m256d; R] = std::array::from_fn(|r| _mm256_set1_pd(p[2 * r + 1]));
+    let row: [__m256d; R] = std::array::from_fn(|r| _mm256_set1_pd((i0 + r) as f64));
+    let mut best_v = [_mm256_set1_pd(f64::INFINITY); R];
+    let mut best_b = [_mm256_setzero_pd(); R];
+    let mut b = _mm256_setzero_pd();
+    for blk in cols.iter_mut() {
+        let (mut cv, mut ci) = (blk.v, blk.i);
+        for r in 0..R {
+            let dx = _mm256_sub_pd(blk.x, px[r]);
+            let dy = _mm256_sub_pd(blk.y, py[r]);
             let d = _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy));
-            let better = _mm256_cmp_pd::<_CMP_LT_OQ>(d, best_v);
-            best_v = _mm256_blendv_pd(best_v, d, better);
-            best_b = _mm256_blendv_pd(best_b, _mm256_set1_pd(b as f64), better);
+            let better = _mm256_cmp_pd::<_CMP_LT_OQ>(d, best_v[r]);
+            best_v[r] = _mm256_min_pd(d, best_v[r]);
+            best_b[r] = _mm256_max_pd(best_b[r], _mm256_and_pd(better, b));
             if COLS {
-                let cv = _mm256_loadu_pd(col_v.as_ptr().add(4 * b));
-                let ci = _mm256_loadu_pd(col_i.as_ptr().add(4 * b));
+                // Rows come in increasing order: strict `<` keeps the first on ties.
                 let better = _mm256_cmp_pd::<_CMP_LT_OQ>(d, cv);
-                _mm256_storeu_pd(
-                    col_v.as_mut_ptr().add(4 * b),
-                    _mm256_blendv_pd(cv, d, better),
-                );
-                _mm256_storeu_pd(
-                    col_i.as_mut_ptr().add(4 * b),
-                    _mm256_blendv_pd(ci, row, better),
-                );
+                cv = _mm256_min_pd(d, cv);
+                ci = _mm256_max_pd(ci, _mm256_and_pd(better, row[r]));
             }
         }
-        let (mut v, mut bb) = ([0.0f64; 4], [0.0f64; 4]);
-        _mm256_storeu_pd(v.as_mut_ptr(), best_v);
-        _mm256_storeu_pd(bb.as_mut_ptr(), best_b);
-        rows.push(reduce_lanes(&v, &bb, m));
+        if COLS {
+            (blk.v, blk.i) = (cv, ci);
+        }
+        b = _mm256_add_pd(b, _mm256_set1_pd(1.0));
     }
-    let back = if COLS {
-        (0..m).map(|j| (col_i[j] as usize, col_v[j])).collect()
-    } else {
-        Vec::new()
+    for r in 0..R {
+        // Padded lanes keep (0, ∞), which never wins: no index bound needed.
+        out[r] = reduce_lanes(&lanes256(best_v[r]), &lanes256(best_b[r]), usize::MAX);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn lanes256(v: std::arch::x86_64::__m256d) -> [f64; 4] {
+    use std::arch::x86_64::*;
+    let (lo, hi) = (_mm256_castpd256_pd128(v), _mm256_extractf128_pd::<1>(v));
+    [
+        _mm_cvtsd_f64(lo),
+        _mm_cvtsd_f64(_mm_unpackhi_pd(lo, lo)),
+        _mm_cvtsd_f64(hi),
+        _mm_cvtsd_f64(_mm_unpackhi_pd(hi, hi)),
+    ]
+}
+
+/// Eight points of `to` for the AVX-512 scan, with the nearest row so far of each.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct Block512 {
+    x: std::arch::x86_64::__m512d,
+    y: std::arch::x86_64::__m512d,
+    v: std::arch::x86_64::__m512d,
+    i: std::arch::x86_64::__m512i,
+}
+
+/// The planar scan in 8-lane AVX-512 vectors: a compare into a mask register and two masked moves
+/// per minimum where AVX2 needs four operations, on twice the lanes.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn nearest_planar_avx512<const COLS: bool>(from: &[f64], to: &[f64]) -> NearestBoth {
+    use std::arch::x86_64::*;
+    let (n, m) = (from.len() / 2, to.len() / 2);
+    if n == 0 || m == 0 {
+        return nearest_soa_body::<2, COLS>(from, to);
+    }
+    let init = Block512 {
+        x: _mm512_setzero_pd(),
+        y: _mm512_setzero_pd(),
+        v: _mm512_set1_pd(f64::INFINITY),
+        i: _mm512_setzero_si512(),
     };
+    let mut stack = [init; STACK_POINTS / 8];
+    let mut heap = Vec::new();
+    let blocks = m.div_ceil(8);
+    let cols: &mut [Block512] = if blocks <= stack.len() {
+        &mut stack[..blocks]
+    } else {
+        heap.resize(blocks, init);
+        &mut heap
+    };
+    for (blk, q) in cols.iter_mut().zip(to.chunks(16)) {
+        // NaN padding: its distances compare false, so padded lanes never hold a minimum.
+        let (mut x, mut y) = ([f64::NAN; 8], [f64::NAN; 8]);
+        for (l, p) in q.chunks_exact(2).enumerate() {
+            (x[l], y[l]) = (p[0], p[1]);
+        }
+        blk.x = _mm512_setr_pd(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]);
+        blk.y = _mm512_setr_pd(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7]);
+    }
+    let mut rows = vec![(0, 0.0); n];
+    let mut groups = from
+        .chunks_exact(2 * GROUP)
+        .zip(rows.chunks_exact_mut(GROUP));
+    for (g, (p, out)) in groups.by_ref().enumerate() {
+        rows_avx512::<GROUP, COLS>(p, GROUP * g, cols, out);
+    }
+    let i0 = n - n % GROUP;
+    let (p, out) = (&from[2 * i0..], &mut rows[i0..]);
+    match n % GROUP {
+        0 => {}
+        1 => rows_avx512::<1, COLS>(p, i0, cols, out),
+        2 => rows_avx512::<2, COLS>(p, i0, cols, out),
+        _ => rows_avx512::<3, COLS>(p, i0, cols, out),
+    }
+    let mut back = vec![(0, 0.0); if COLS { m } else { 0 }];
+    for (blk, out) in cols.iter().zip(back.chunks_mut(8)) {
+        let (v, i) = (lanes512_pd(blk.v), lanes512_epi64(blk.i));
+        for (o, (&v, &i)) in out.iter_mut().zip(v.iter().zip(&i)) {
+            *o = (i as usize, v);
+        }
+    }
     (rows, back)
+}
+
+/// Rows `i0 .. i0 + R` (the points of `p`, `R` ≤ 4) against every block of eight, their minima
+/// kept in registers and reduced across lanes together at the end.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn rows_avx512<const R: usize, const COLS: bool>(
+    p: &[f64],
+    i0: usize,
+    cols: &mut [Block512],
+    out: &mut [(usize, f64)],
+) {
+    use std::arch::x86_64::*;
+    let px: [__m512d; R] = std::array::from_fn(|r| _mm512_set1_pd(p[2 * r]));
+    let py: [__m512d; R] = std::array::from_fn(|r| _mm512_set1_pd(p[2 * r + 1]));
+    let row: [__m512i; R] = std::array::from_fn(|r| _mm512_set1_epi64((i0 + r) as i64));
+    let mut best_v = [_mm512_set1_pd(f64::INFINITY); R];
+    let mut best_j = [_mm512_setzero_si512(); R];
+    let mut j = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
+    for blk in cols.iter_mut() {
+        let (mut cv, mut ci) = (blk.v, blk.i);
+        for r in 0..R {
+            let dx = _mm512_sub_pd(blk.x, px[r]);
+            let dy = _mm512_sub_pd(blk.y, py[r]);
+            let d = _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy));
+            let better = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(d, best_v[r]);
+            best_v[r] = _mm512_mask_mov_pd(best_v[r], better, d);
+            best_j[r] = _mm512_mask_mov_epi64(best_j[r], better, j);
+            if COLS {
+                // Rows come in increasing order: strict `<` keeps the first on ties.
+                let better = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(d, cv);
+                cv = _mm512_mask_mov_pd(cv, better, d);
+                ci = _mm512_mask_mov_epi64(ci, better, row[r]);
+            }
+        }
+        if COLS {
+            (blk.v, blk.i) = (cv, ci);
+        }
+        j = _mm512_add_epi64(j, _mm512_set1_epi64(8));
+    }
+    // Each lane kept its first minimum; across lanes the lowest index among equal minima wins.
+    // Lanes never updated hold (0, ∞), the plain scan's answer when nothing is below ∞.
+    let inf = _mm512_set1_pd(f64::INFINITY);
+    let min = min4_pd(std::array::from_fn(|r| if r < R { best_v[r] } else { inf }));
+    let lane = |r: usize| _mm512_set1_epi64(2 * r as i64);
+    let first = min4_epi64(std::array::from_fn(|r| {
+        if r < R {
+            let at =
+                _mm512_cmp_pd_mask::<_CMP_EQ_OQ>(best_v[r], _mm512_permutexvar_pd(lane(r), min));
+            _mm512_mask_blend_epi64(at, _mm512_set1_epi64(i64::MAX), best_j[r])
+        } else {
+            _mm512_setzero_si512()
+        }
+    }));
+    for (r, o) in out.iter_mut().enumerate().take(R) {
+        let v = _mm512_castpd512_pd128(_mm512_permutexvar_pd(lane(r), min));
+        let j = _mm512_castsi512_si128(_mm512_permutexvar_epi64(lane(r), first));
+        *o = (_mm_cvtsi128_si64(j) as usize, _mm_cvtsd_f64(v));
+    }
+}
+
+/// The minimum of each of four vectors, in lanes 2r and 2r + 1: 11 shuffles and minima for the
+/// four, where reducing each alone takes 6 and leaves four results to gather.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn min4_pd(v: [std::arch::x86_64::__m512d; 4]) -> std::arch::x86_64::__m512d {
+    use std::arch::x86_64::*;
+    // Lanes 0–3 of a and b against lanes 4–7; then pairs; then within pairs.
+    let ab = _mm512_min_pd(
+        _mm512_shuffle_f64x2::<0b01_00_01_00>(v[0], v[1]),
+        _mm512_shuffle_f64x2::<0b11_10_11_10>(v[0], v[1]),
+    );
+    let cd = _mm512_min_pd(
+        _mm512_shuffle_f64x2::<0b01_00_01_00>(v[2], v[3]),
+        _mm512_shuffle_f64x2::<0b11_10_11_10>(v[2], v[3]),
+    );
+    let q = _mm512_min_pd(
+        _mm512_shuffle_f64x2::<0b10_00_10_00>(ab, cd),
+        _mm512_shuffle_f64x2::<0b11_01_11_01>(ab, cd),
+    );
+    _mm512_min_pd(q, _mm512_permute_pd::<0b0101_0101>(q))
+}
+
+/// [`min4_pd`] of signed 64-bit lanes.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn min4_epi64(v: [std::arch::x86_64::__m512i; 4]) -> std::arch::x86_64::__m512i {
+    use std::arch::x86_64::*;
+    let ab = _mm512_min_epi64(
+        _mm512_shuffle_i64x2::<0b01_00_01_00>(v[0], v[1]),
+        _mm512_shuffle_i64x2::<0b11_10_11_10>(v[0], v[1]),
+    );
+    let cd = _mm512_min_epi64(
+        _mm512_shuffle_i64x2::<0b01_00_01_00>(v[2], v[3]),
+        _mm512_shuffle_i64x2::<0b11_10_11_10>(v[2], v[3]),
+    );
+    let q = _mm512_min_epi64(
+        _mm512_shuffle_i64x2::<0b10_00_10_00>(ab, cd),
+        _mm512_shuffle_i64x2::<0b11_01_11_01>(ab, cd),
+    );
+    _mm512_min_epi64(q, _mm512_shuffle_epi32::<0b01_00_11_10>(q))
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn lanes512_pd(v: std::arch::x86_64::__m512d) -> [f64; 8] {
+    use std::arch::x86_64::*;
+    std::array::from_fn(|l| _mm512_cvtsd_f64(_mm512_permutexvar_pd(_mm512_set1_epi64(l as i64), v)))
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn lanes512_epi64(v: std::arch::x86_64::__m512i) -> [i64; 8] {
+    use std::arch::x86_64::*;
+    std::array::from_fn(|l| {
+        let at = _mm512_permutexvar_epi64(_mm512_set1_epi64(l as i64), v);
+        _mm_cvtsi128_si64(_mm512_castsi512_si128(at))
+    })
 }
 
 /// The first nearest point among the lanes' minima (lane `l` of block `b` is point `4b + l`):
@@ -717,6 +992,42 @@ mod tests {
             .collect()
     }
 
+    /// Both-way and one-way results of every nearest-neighbour kernel this CPU can run.
+    fn kernel_results<const D: usize>(
+        a: &[f64],
+        b: &[f64],
+    ) -> Vec<(&'static str, NearestBoth, NearestBoth)> {
+        let mut out = vec![(
+            "portable",
+            nearest_soa_body::<D, true>(a, b),
+            nearest_soa_body::<D, false>(a, b),
+        )];
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::is_x86_feature_detected!("avx2") {
+                // SAFETY: AVX2 was just detected.
+                let (both, one) = unsafe {
+                    (
+                        nearest_soa_avx2::<D, true>(a, b),
+                        nearest_soa_avx2::<D, false>(a, b),
+                    )
+                };
+                out.push(("avx2", both, one));
+            }
+            if D == 2 && std::is_x86_feature_detected!("avx512f") {
+                // SAFETY: AVX-512F was just detected.
+                let (both, one) = unsafe {
+                    (
+                        nearest_planar_avx512::<true>(a, b),
+                        nearest_planar_avx512::<false>(a, b),
+                    )
+                };
+                out.push(("avx512", both, one));
+            }
+        }
+        out
+    }
+
     #[test]
     fn nearest_one_and_both_ways_match_a_plain_scan_with_ties() {
         let mut seed = 7u64;
@@ -727,40 +1038,61 @@ mod tests {
             // Coarse values make exact distance ties common.
             ((seed >> 40) % 7) as f64 - 3.0
         };
+        let plain = |from: &[f64], to: &[f64], dim: usize| -> Vec<(usize, f64)> {
+            from.chunks_exact(dim)
+                .map(|p| {
+                    let mut best = (0, f64::INFINITY);
+                    for (j, q) in to.chunks_exact(dim).enumerate() {
+                        let d: f64 = (0..dim).map(|c| (p[c] - q[c]).powi(2)).sum();
+                        if d < best.1 {
+                            best = (j, d);
+                        }
+                    }
+                    best
+                })
+                .collect()
+        };
+        let check = |a: &[f64], b: &[f64], dim: usize, what: &str| {
+            let want = (plain(a, b, dim), plain(b, a, dim));
+            assert_eq!(nearest(a, b, dim), want.0, "{what}");
+            assert_eq!(nearest_both(a, b, dim), want, "both, {what}");
+            let kernels = match dim {
+                2 => kernel_results::<2>(a, b),
+                3 => kernel_results::<3>(a, b),
+                _ => vec![],
+            };
+            for (name, both, one) in kernels {
+                assert_eq!(both, want, "{name}, {what}");
+                assert_eq!(one, (want.0.clone(), vec![]), "{name} one way, {what}");
+            }
+        };
+        // Every remainder of the planar kernels' groups of rows (n mod 4) and lanes (m mod 8),
+        // empty sets, and contour-sized pairs.
+        let sizes = (1..=9).flat_map(|n| (1..=17).map(move |m| (n, m))).chain([
+            (20, 8),
+            (3, 40),
+            (0, 4),
+            (4, 0),
+            (60, 64),
+            (64, 60),
+            (130, 7),
+        ]);
         for dim in 1..=4 {
-            for (n, m) in [(1, 1), (5, 3), (9, 17), (20, 8), (3, 40), (0, 4)] {
+            for (n, m) in sizes.clone() {
                 let a: Vec<f64> = (0..n * dim).map(|_| rnd()).collect();
                 let b: Vec<f64> = (0..m * dim).map(|_| rnd()).collect();
-                let plain = |from: &[f64], to: &[f64]| -> Vec<(usize, f64)> {
-                    from.chunks_exact(dim)
-                        .map(|p| {
-                            let mut best = (0, f64::INFINITY);
-                            for (j, q) in to.chunks_exact(dim).enumerate() {
-                                let d: f64 = (0..dim).map(|c| (p[c] - q[c]).powi(2)).sum();
-                                if d < best.1 {
-                                    best = (j, d);
-                                }
-                            }
-                            best
-                        })
-                        .collect()
-                };
-                assert_eq!(nearest(&a, &b, dim), plain(&a, &b), "dim {dim}, {n}×{m}");
-                let (ab, ba) = nearest_both(&a, &b, dim);
-                assert_eq!(ab, plain(&a, &b), "both, dim {dim}, {n}×{m}");
-                assert_eq!(ba, plain(&b, &a), "both, dim {dim}, {n}×{m}");
-                // The portable scan too, whatever this machine dispatches to.
-                let portable = match dim {
-                    2 => Some(nearest_soa_body::<2, true>(&a, &b)),
-                    3 => Some(nearest_soa_body::<3, true>(&a, &b)),
-                    _ => None,
-                };
-                if let Some((ab, ba)) = portable {
-                    assert_eq!(ab, plain(&a, &b), "portable, dim {dim}, {n}×{m}");
-                    assert_eq!(ba, plain(&b, &a), "portable, dim {dim}, {n}×{m}");
-                }
+                check(&a, &b, dim, &format!("dim {dim}, {n}×{m}"));
             }
         }
+        // NaN distances never count and infinite ones never beat the empty answer (0, ∞).
+        let a = [0.0, 0.0, f64::NAN, 1.0, 1e200, 0.0, 2.0, 1.0, 3.0, f64::NAN];
+        let b = [1.0, 1.0, -1e200, 5.0, 0.0, f64::NAN, 2.0, 1.0, 0.0, 0.0];
+        check(&a, &b, 2, "NaN and overflow");
+        check(&a[..6], &b[..2], 2, "NaN and overflow, 3×1");
+        // Beyond the kernels' stack blocks.
+        let a: Vec<f64> = (0..2 * 70).map(|_| rnd()).collect();
+        let b: Vec<f64> = (0..2 * 300).map(|_| rnd()).collect();
+        check(&a, &b, 2, "70×300");
         assert_eq!(nearest(&[0.0, 0.0], &[], 2), vec![(0, f64::INFINITY)]);
     }
 
