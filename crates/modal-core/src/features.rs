@@ -6,6 +6,7 @@
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
 
+use crate::simd::dot;
 use crate::ModalError;
 
 /// The retained modes of one object, ready for comparison with another object's.
@@ -263,6 +264,7 @@ impl AffinityMatrix {
                 Par::Seq,
             );
         }
+        crate::simd::clear_upper_state();
         let sq_norms = |f: MatRef<'_, f64>, len: usize| -> Vec<f64> {
             let mut out = vec![0.0; len];
             for p in 0..k {
@@ -359,22 +361,6 @@ impl AffinityMatrix {
             data,
         }
     }
-}
-
-/// Dot product with eight independent partial sums: a plain `zip().sum()` is one sequential
-/// chain the compiler may not reorder, which made the mode-alignment loop latency-bound.
-fn dot(x: &[f64], y: &[f64]) -> f64 {
-    const W: usize = 8;
-    let mut acc = [0.0f64; W];
-    let (xc, xr) = x.split_at(x.len() - x.len() % W);
-    let (yc, yr) = y.split_at(xc.len());
-    for (a, b) in xc.chunks_exact(W).zip(yc.chunks_exact(W)) {
-        for l in 0..W {
-            acc[l] += a[l] * b[l];
-        }
-    }
-    let tail: f64 = xr.iter().zip(yr).map(|(a, b)| a * b).sum();
-    acc.iter().sum::<f64>() + tail
 }
 
 #[cfg(test)]

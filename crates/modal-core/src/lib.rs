@@ -17,6 +17,7 @@ pub mod model;
 pub mod rigid;
 pub mod search;
 pub mod shape;
+mod simd;
 
 pub use align::RotationSearch;
 pub use error::ModalError;

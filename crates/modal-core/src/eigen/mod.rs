@@ -9,17 +9,25 @@
 //! (2n²k flops instead of 2n³). This route also serves the full spectrum (`k = n`): it measured
 //! 14 % faster than faer's divide-and-conquer at 300 dof and 29 % faster at 900
 //! (`cargo bench --bench eigen`); faer's dense solver remains for tiny matrices.
+//!
+//! When only the lowest `k` modes are wanted and the other eigenvalues are not
+//! ([`symmetric_eigen_lowest`], what a modal solve asks for), the eigenvalues come from lane-parallel
+//! bisection instead of the QL (`bisection`): `O(k n)` vector work instead of an `O(n²)` chain.
 
 // Index loops over several matrices at once read better than zipped iterators here.
 #![allow(clippy::needless_range_loop)]
 
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::evd::{self, ComputeEigenvectors};
-use faer::linalg::{cholesky, householder, triangular_solve};
+use faer::linalg::{cholesky, triangular_solve};
 use faer::reborrow::{Reborrow, ReborrowMut};
-use faer::{Conj, Mat, MatMut, MatRef, Par};
+use faer::{Mat, MatMut, MatRef, Par};
 
+use crate::simd::clear_upper_state;
 use crate::ModalError;
+
+pub mod bisection;
+mod householder;
 
 /// Eigenvalues (ascending) and the matching eigenvectors (columns).
 #[derive(Debug, Clone)]
@@ -28,8 +36,9 @@ pub struct EigenPairs {
     pub values: Vec<f64>,
     /// One column per computed eigenvalue.
     pub vectors: Mat<f64>,
-    /// Every eigenvalue of the problem (ascending), also those whose vectors were not computed.
-    pub all_values: Vec<f64>,
+    /// Every eigenvalue of the problem (ascending), also those whose vectors were not computed;
+    /// `None` from [`symmetric_eigen_lowest`], which finds only the wanted ones.
+    pub all_values: Option<Vec<f64>>,
 }
 
 /// Below this order faer's dense solver is used directly.
@@ -44,7 +53,7 @@ pub fn cholesky_in_place(a: MatMut<'_, f64>) -> Result<(), usize> {
     let mut mem = MemBuffer::new(req);
     let stack = MemStack::new(&mut mem);
     cholesky::llt::factor::cholesky_in_place(a, Default::default(), par, stack, Default::default())
-        .map(|_| ())
+        .map(|_| clear_upper_state())
         .map_err(|e| match e {
             cholesky::llt::factor::LltError::NonPositivePivot { index } => index,
         })
@@ -53,11 +62,13 @@ pub fn cholesky_in_place(a: MatMut<'_, f64>) -> Result<(), usize> {
 /// `X ← L⁻¹ X` with `L` the lower triangle of `l`.
 pub fn solve_lower(l: MatRef<'_, f64>, x: MatMut<'_, f64>) {
     triangular_solve::solve_lower_triangular_in_place(l, x, Par::Seq);
+    clear_upper_state();
 }
 
 /// `X ← L⁻ᵀ X` with `L` the lower triangle of `l`.
 pub fn solve_lower_transpose(l: MatRef<'_, f64>, x: MatMut<'_, f64>) {
     triangular_solve::solve_upper_triangular_in_place(l.transpose(), x, Par::Seq);
+    clear_upper_state();
 }
 
 /// `S ← L⁻¹ S L⁻ᵀ` for a symmetric `S` (full storage in, full storage out, symmetrised).
@@ -157,6 +168,7 @@ pub fn reduce_lower_in_place(l: MatRef<'_, f64>, mut a: MatMut<'_, f64>) {
             // A21 ← L22⁻¹ A21
             solve_lower(l22, a21.rb_mut());
         }
+        clear_upper_state();
         k += kb;
     }
 }
@@ -174,15 +186,60 @@ pub fn symmetrise(mut s: MatMut<'_, f64>) {
 }
 
 /// Eigenpairs of the symmetric matrix `c` (only its lower triangle is read; it is overwritten),
-/// ascending; the `n_modes` lowest if given, all otherwise. Eigenvectors are orthonormal.
-pub fn symmetric_eigen(mut c: Mat<f64>, n_modes: Option<usize>) -> Result<EigenPairs, ModalError> {
+/// ascending; the `n_modes` lowest if given, all otherwise. Eigenvectors are orthonormal. Every
+/// eigenvalue is returned in [`EigenPairs::all_values`].
+pub fn symmetric_eigen(c: Mat<f64>, n_modes: Option<usize>) -> Result<EigenPairs, ModalError> {
     let n = c.nrows();
-    let k = n_modes.unwrap_or(n).min(n);
+    solve_symmetric(c, n_modes.unwrap_or(n), Spectrum::All)
+}
+
+/// The `k` lowest eigenpairs of the symmetric matrix `c` (only its lower triangle is read; it is
+/// overwritten), ascending, with orthonormal eigenvectors; the other eigenvalues are not computed
+/// ([`EigenPairs::all_values`] is `None`). The same pairs as [`symmetric_eigen`] to round-off,
+/// faster when `k` is a fraction of the order.
+///
+/// ```
+/// use faer::Mat;
+/// use modal_core::eigen::symmetric_eigen_lowest;
+/// // The path-graph Laplacian: eigenvalues 2 − 2cos(jπ/n), j = 0 … n−1.
+/// let n = 40;
+/// let c = Mat::<f64>::from_fn(n, n, |i, j| match (i, j) {
+///     _ if i == j => if i == 0 || i == n - 1 { 1.0 } else { 2.0 },
+///     _ if i.abs_diff(j) == 1 => -1.0,
+///     _ => 0.0,
+/// });
+/// let pairs = symmetric_eigen_lowest(c, 3).unwrap();
+/// for (j, v) in pairs.values.iter().enumerate() {
+///     let exact = 2.0 - 2.0 * (j as f64 * std::f64::consts::PI / n as f64).cos();
+///     assert!((v - exact).abs() < 1e-13);
+/// }
+/// assert!(pairs.all_values.is_none());
+/// ```
+pub fn symmetric_eigen_lowest(c: Mat<f64>, k: usize) -> Result<EigenPairs, ModalError> {
+    solve_symmetric(c, k, Spectrum::Wanted)
+}
+
+/// Which eigenvalues a solve computes besides the wanted ones.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Spectrum {
+    /// Every eigenvalue (the QL iteration).
+    All,
+    /// Only those of the wanted pairs (bisection).
+    Wanted,
+}
+
+fn solve_symmetric(
+    mut c: Mat<f64>,
+    k: usize,
+    spectrum: Spectrum,
+) -> Result<EigenPairs, ModalError> {
+    let n = c.nrows();
+    let k = k.min(n);
     if n == 0 || k == 0 {
-        let all_values = if n == 0 {
-            Vec::new()
-        } else {
-            full_eigen_values(c.as_ref())?
+        let all_values = match spectrum {
+            Spectrum::All if n > 0 => Some(full_eigen_values(c.as_ref())?),
+            Spectrum::All => Some(Vec::new()),
+            Spectrum::Wanted => None,
         };
         return Ok(EigenPairs {
             values: Vec::new(),
@@ -195,10 +252,15 @@ pub fn symmetric_eigen(mut c: Mat<f64>, n_modes: Option<usize>) -> Result<EigenP
             "matrix has non-finite entries".into(),
         ));
     }
-    if n < TRIDIAGONAL_MIN_ORDER {
-        return full_eigen(c.as_ref(), k);
+    let mut pairs = if n < TRIDIAGONAL_MIN_ORDER {
+        full_eigen(c.as_ref(), k)?
+    } else {
+        tridiagonal_route(c.as_mut(), k, spectrum)?
+    };
+    if spectrum == Spectrum::Wanted {
+        pairs.all_values = None;
     }
-    tridiagonal_route(c.as_mut(), k)
+    Ok(pairs)
 }
 
 fn full_eigen(c: MatRef<'_, f64>, k: usize) -> Result<EigenPairs, ModalError> {
@@ -230,7 +292,7 @@ fn full_eigen(c: MatRef<'_, f64>, k: usize) -> Result<EigenPairs, ModalError> {
     Ok(EigenPairs {
         values,
         vectors,
-        all_values,
+        all_values: Some(all_values),
     })
 }
 
@@ -255,40 +317,37 @@ fn ascending_order(values: &[f64]) -> Vec<usize> {
     order
 }
 
-fn tridiagonal_route(mut c: MatMut<'_, f64>, k: usize) -> Result<EigenPairs, ModalError> {
+fn tridiagonal_route(
+    c: MatMut<'_, f64>,
+    k: usize,
+    spectrum: Spectrum,
+) -> Result<EigenPairs, ModalError> {
     let n = c.nrows();
-    let par = Par::Seq;
-    let bs = faer::linalg::qr::no_pivoting::factor::recommended_block_size::<f64>(n, n);
-    let mut hh = Mat::<f64>::zeros(bs, n - 1);
-    let req = StackReq::any_of(&[
-        evd::tridiag::tridiag_in_place_scratch::<f64>(n, par, Default::default()),
-        householder::apply_block_householder_sequence_on_the_left_in_place_scratch::<f64>(
-            n - 1,
-            bs,
-            k,
-        ),
-    ]);
-    let mut mem = MemBuffer::new(req);
-    let stack = MemStack::new(&mut mem);
-    evd::tridiag::tridiag_in_place(c.rb_mut(), hh.as_mut(), par, stack, Default::default());
-    let diag: Vec<f64> = (0..n).map(|i| c[(i, i)]).collect();
-    let off: Vec<f64> = (0..n - 1).map(|i| c[(i + 1, i)]).collect();
-    let all_values = tridiagonal_eigenvalues(&diag, &off)?;
+    let t = householder::tridiagonalize(c.rb());
+    let (values, all_values) = tridiagonal_values(&t.diag, &t.off, k, spectrum)?;
     let mut u = Mat::<f64>::zeros(n, k);
-    tridiagonal_inverse_iteration(&diag, &off, &all_values[..k], u.as_mut())?;
-    let values = all_values[..k].to_vec();
-    householder::apply_block_householder_sequence_on_the_left_in_place_with_conj(
-        c.rb().submatrix(1, 0, n - 1, n - 1),
-        hh.as_ref(),
-        Conj::No,
-        u.as_mut().subrows_mut(1, n - 1),
-        par,
-        stack,
-    );
+    tridiagonal_inverse_iteration(&t.diag, &t.off, &values, u.as_mut())?;
+    t.apply_q(u.as_mut());
     Ok(EigenPairs {
         values,
         vectors: u,
         all_values,
+    })
+}
+
+/// The wanted `k` eigenvalues of the tridiagonal matrix, and every eigenvalue when asked.
+fn tridiagonal_values(
+    diag: &[f64],
+    off: &[f64],
+    k: usize,
+    spectrum: Spectrum,
+) -> Result<(Vec<f64>, Option<Vec<f64>>), ModalError> {
+    Ok(match spectrum {
+        Spectrum::All => {
+            let all = tridiagonal_eigenvalues(diag, off)?;
+            (all[..k].to_vec(), Some(all))
+        }
+        Spectrum::Wanted => (bisection::lowest_eigenvalues(diag, off, k), None),
     })
 }
 
@@ -437,7 +496,52 @@ fn eig2(a: f64, b: f64, c: f64) -> (f64, f64) {
 
 /// Eigenvectors of the symmetric tridiagonal matrix (`diag`, `off`) for the given ascending
 /// eigenvalues, by inverse iteration with Gram–Schmidt inside clusters (after LAPACK `dstein`).
+/// Compiled for the widest vector unit this CPU has (the interleaved lanes fill it); the same
+/// operations in the same order on every path, so the same vectors.
 fn tridiagonal_inverse_iteration(
+    diag: &[f64],
+    off: &[f64],
+    values: &[f64],
+    out: MatMut<'_, f64>,
+) -> Result<(), ModalError> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: AVX-512F was just detected.
+            return unsafe { inverse_iteration_avx512(diag, off, values, out) };
+        }
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 was just detected.
+            return unsafe { inverse_iteration_avx2(diag, off, values, out) };
+        }
+    }
+    inverse_iteration_body(diag, off, values, out)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn inverse_iteration_avx512(
+    diag: &[f64],
+    off: &[f64],
+    values: &[f64],
+    out: MatMut<'_, f64>,
+) -> Result<(), ModalError> {
+    inverse_iteration_body(diag, off, values, out)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn inverse_iteration_avx2(
+    diag: &[f64],
+    off: &[f64],
+    values: &[f64],
+    out: MatMut<'_, f64>,
+) -> Result<(), ModalError> {
+    inverse_iteration_body(diag, off, values, out)
+}
+
+#[inline(always)]
+fn inverse_iteration_body(
     diag: &[f64],
     off: &[f64],
     values: &[f64],
@@ -636,27 +740,36 @@ impl<const L: usize> TridiagLu<L> {
             dl[i] = [off[i]; L];
         }
         for i in 0..n.saturating_sub(1) {
+            // dgttrf's step without branches (lane-wise selects, which vectorise): pivot when
+            // the sub-diagonal entry is the larger. The same operations as the branches would
+            // do, so the same factors.
+            // Whole lane arrays in and out: the shape the compiler turns into vector code.
+            let (d, lo, up, next) = (dd[i], dl[i], du[i], dd[i + 1]);
+            let un = if i + 2 < n { du[i + 1] } else { [0.0; L] };
+            let (mut nd, mut nf, mut nu, mut nnext, mut ndu2, mut nun) =
+                ([0.0; L], [0.0; L], [0.0; L], [0.0; L], [0.0; L], [0.0; L]);
+            let mut swaps = [false; L];
             for l in 0..L {
-                if dd[i][l].abs() >= dl[i][l].abs() {
-                    if dd[i][l] == 0.0 {
-                        dd[i][l] = tiny;
-                    }
-                    let f = dl[i][l] / dd[i][l];
-                    dl[i][l] = f;
-                    dd[i + 1][l] -= f * du[i][l];
+                let swap = d[l].abs() < lo[l].abs();
+                // Without a pivot a zero diagonal is replaced by `tiny` (a singular shift).
+                let dl_ = if !swap && d[l] == 0.0 { tiny } else { d[l] };
+                let (num, den) = if swap { (dl_, lo[l]) } else { (lo[l], dl_) };
+                let f = num / den;
+                swaps[l] = swap;
+                nd[l] = den;
+                nf[l] = f;
+                nu[l] = if swap { next[l] } else { up[l] };
+                nnext[l] = if swap {
+                    up[l] - f * next[l]
                 } else {
-                    piv[i][l] = true;
-                    let f = dd[i][l] / dl[i][l];
-                    dd[i][l] = dl[i][l];
-                    dl[i][l] = f;
-                    let t = du[i][l];
-                    du[i][l] = dd[i + 1][l];
-                    dd[i + 1][l] = t - f * dd[i + 1][l];
-                    if i + 2 < n {
-                        du2[i][l] = du[i + 1][l];
-                        du[i + 1][l] *= -f;
-                    }
-                }
+                    next[l] - f * up[l]
+                };
+                ndu2[l] = if swap { un[l] } else { 0.0 };
+                nun[l] = if swap { -f * un[l] } else { un[l] };
+            }
+            (piv[i], dd[i], dl[i], du[i], dd[i + 1]) = (swaps, nd, nf, nu, nnext);
+            if i + 2 < n {
+                (du2[i], du[i + 1]) = (ndu2, nun);
             }
         }
         for i in 0..n {
@@ -708,13 +821,15 @@ impl<const L: usize> TridiagLu<L> {
     }
 }
 
-/// Interleaved inverse-iteration lanes of [`tridiagonal_inverse_iteration`].
-const LANES: usize = 4;
+/// Interleaved inverse-iteration lanes of [`tridiagonal_inverse_iteration`]: one AVX-512
+/// register, two AVX2 registers.
+const LANES: usize = 8;
 
 /// Eigenvectors for up to [`LANES`] well-separated eigenvalues at once (no Gram–Schmidt needed):
 /// the same LU with partial pivoting, substitutions and acceptance test as the one-vector path,
 /// with the lanes interleaved in every loop. Unused lanes repeat the last shift. `scratch` is
 /// overwritten.
+#[inline(always)]
 fn inverse_iteration_lanes(
     diag: &[f64],
     off: &[f64],
@@ -953,8 +1068,13 @@ mod tests {
             let k = n / 4;
             let part = symmetric_eigen(c.clone(), Some(k)).unwrap();
             check_pairs(&c, &part, 1e-13);
+            let lowest = symmetric_eigen_lowest(c.clone(), k).unwrap();
+            check_pairs(&c, &lowest, 1e-13);
+            assert!(lowest.all_values.is_none());
+            assert_eq!(full.all_values.as_ref().map(Vec::len), Some(n));
             for i in 0..k {
                 assert!((full.values[i] - part.values[i]).abs() < 1e-11 * full.values[n - 1]);
+                assert!((full.values[i] - lowest.values[i]).abs() < 1e-12 * full.values[n - 1]);
             }
         }
     }
@@ -1039,10 +1159,14 @@ mod tests {
         let c = &q * &d * q.transpose();
         let mut c = c.clone();
         symmetrise(c.as_mut());
-        let part = symmetric_eigen(c.clone(), Some(12)).unwrap();
-        check_pairs(&c, &part, 1e-13);
-        for i in 0..12 {
-            assert!((part.values[i] - (i / 4) as f64).abs() < 1e-12);
+        for part in [
+            symmetric_eigen(c.clone(), Some(12)).unwrap(),
+            symmetric_eigen_lowest(c.clone(), 12).unwrap(),
+        ] {
+            check_pairs(&c, &part, 1e-13);
+            for i in 0..12 {
+                assert!((part.values[i] - (i / 4) as f64).abs() < 1e-12);
+            }
         }
     }
 
@@ -1068,10 +1192,14 @@ mod tests {
         let mut c = &q * &d * q.transpose();
         symmetrise(c.as_mut());
         for k in [n, 7, 13] {
-            let p = symmetric_eigen(c.clone(), Some(k)).unwrap();
-            check_pairs(&c, &p, 1e-12);
-            for i in 0..k {
-                assert!((p.values[i] - vals[i]).abs() < 1e-12, "k = {k}, value {i}");
+            for p in [
+                symmetric_eigen(c.clone(), Some(k)).unwrap(),
+                symmetric_eigen_lowest(c.clone(), k).unwrap(),
+            ] {
+                check_pairs(&c, &p, 1e-12);
+                for i in 0..k {
+                    assert!((p.values[i] - vals[i]).abs() < 1e-12, "k = {k}, value {i}");
+                }
             }
         }
     }

@@ -1,0 +1,580 @@
+//! The lowest eigenvalues of a symmetric tridiagonal matrix by bisection on Sturm counts.
+//!
+//! A modal solve needs about a quarter of the spectrum. The root-free QL iteration finds every
+//! eigenvalue along one dependent chain of divisions (~35 cycles a step); bisection finds just
+//! the wanted ones, each in its own lane, so the lanes fill the vector units. The count uses the
+//! characteristic-polynomial recurrence `p_i = (d_i − x)·p_{i−1} − e²_{i−1}·p_{i−2}` rather than
+//! LAPACK's ratio form `q_i = d_i − x − e²_{i−1}/q_{i−1}`: no division at all, which is what makes
+//! the lanes cheap. Its rounding errors are those of the ratio form (each computed `p_i / p_{i−1}`
+//! is the exact ratio for `d_i − x` and `e²_{i−1}` perturbed by a few ulps), so the counts are as
+//! trustworthy as `dstebz`'s; what the ratio form gets for free, a safe range, comes from scaling
+//! the pair `(p_{i−1}, p_i)` by a power of two every few steps (exact).
+
+/// Lanes are padded to a multiple of this (one AVX-512 register, two AVX2 registers).
+const LANES: usize = 8;
+
+/// Steps between two renormalisations of the recurrence. Between them `|p|` grows by at most
+/// `(‖T‖ + |x| + max e²)⁴ < 2¹²` on the scaled matrix and its pair maximum shrinks by at most
+/// `(E2_FLOOR / 4)⁴ ≈ 2⁻⁴⁹⁰`, both far inside the exponent range (no overflow, no subnormals).
+const RESCALE_EVERY: usize = 4;
+
+/// Squared off-diagonals are raised to at least this (relative to a largest entry of ~1): an
+/// off-diagonal perturbation of 2⁻⁶⁰‖T‖, far below rounding, that keeps the recurrence from
+/// collapsing to zero at a split (`e = 0` and `p_i = 0` would zero every later `p`).
+const E2_FLOOR: f64 = 7.523_163_845_262_64e-37; // 2⁻¹²⁰
+
+/// The `k` lowest eigenvalues (ascending) of the symmetric tridiagonal matrix with diagonal
+/// `diag` and off-diagonal `off`, each to an absolute accuracy of a few `ε·‖T‖` (the accuracy of
+/// the QL iteration). `k` is clamped to the order. The results do not depend on the CPU's
+/// vector width: every path does the same operations in the same order, without FMA.
+pub fn lowest_eigenvalues(diag: &[f64], off: &[f64], k: usize) -> Vec<f64> {
+    let n = diag.len();
+    let k = k.min(n);
+    if k == 0 {
+        return Vec::new();
+    }
+    // A power of two (exact) that brings the largest entry to about 1, as the QL does.
+    let amax = diag.iter().chain(off).fold(0.0f64, |m, v| m.max(v.abs()));
+    if amax == 0.0 {
+        return vec![0.0; k];
+    }
+    let scale_exp = (amax.log2().round() as i32).clamp(-1000, 1000);
+    let (down, up) = (2f64.powi(-scale_exp), 2f64.powi(scale_exp));
+    let d: Vec<f64> = diag.iter().map(|v| v * down).collect();
+    let e2: Vec<f64> = off
+        .iter()
+        .map(|o| ((o * down) * (o * down)).max(E2_FLOOR))
+        .collect();
+
+    // Gershgorin bounds, widened by the rounding of the counts (as dstebz widens them).
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut tnorm = 0.0f64;
+    for i in 0..n {
+        let r =
+            if i > 0 { e2[i - 1].sqrt() } else { 0.0 } + if i + 1 < n { e2[i].sqrt() } else { 0.0 };
+        lo = lo.min(d[i] - r);
+        hi = hi.max(d[i] + r);
+        tnorm = tnorm.max(d[i].abs() + r);
+    }
+    let pad = 2.0 * f64::EPSILON * tnorm * n as f64;
+    lo -= pad;
+    hi += pad;
+    let abs_tol = f64::EPSILON * tnorm;
+
+    let lanes = k.div_ceil(LANES) * LANES;
+    let (mut a, mut b) = (vec![lo; lanes], vec![hi; lanes]);
+    let mut x = vec![lo; lanes];
+    let mut counts = vec![0u64; lanes];
+    loop {
+        let mut open = false;
+        for j in 0..lanes {
+            let (aj, bj) = (a[j], b[j]);
+            // Converged lanes keep evaluating at their midpoint: a vector runs whole.
+            let width_ok = bj - aj <= abs_tol.max(2.0 * f64::EPSILON * aj.abs().max(bj.abs()));
+            open |= !width_ok && j < k;
+            x[j] = 0.5 * (aj + bj);
+        }
+        if !open {
+            break;
+        }
+        sturm_counts(&d, &e2, &x, &mut counts);
+        for j in 0..lanes {
+            // Lane j brackets the (j+1)-th smallest eigenvalue: N(a) ≤ j < N(b), where N(x)
+            // counts the eigenvalues below x.
+            if counts[j] > j as u64 {
+                b[j] = x[j];
+            } else {
+                a[j] = x[j];
+            }
+        }
+    }
+    let mut values: Vec<f64> = (0..k).map(|j| 0.5 * (a[j] + b[j]) * up).collect();
+    // Counts that are not monotone by an ulp could leave neighbours out of order.
+    values.sort_by(f64::total_cmp);
+    values
+}
+
+/// `counts[j]` ← the number of eigenvalues below `x[j]` (the sign changes of the Sturm
+/// sequence), on the widest vector unit this CPU has. `x.len()` is a multiple of [`LANES`].
+fn sturm_counts(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: AVX-512F was just detected.
+            return unsafe { sturm_counts_avx512(d, e2, x, counts) };
+        }
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 was just detected.
+            return unsafe { sturm_counts_avx2(d, e2, x, counts) };
+        }
+    }
+    sturm_counts_in::<Portable>(d, e2, x, counts);
+}
+
+/// The operations of the recurrence on one vector of lanes. Every implementation does the same
+/// IEEE operations in the same order (no FMA), so every path gives the same bits.
+trait SturmVector: Copy {
+    const WIDTH: usize;
+    /// Vectors whose recurrences run side by side, so that each one's multiply–subtract chain
+    /// waits while the others compute (as many as fit in the registers with their state).
+    const GROUP: usize;
+    type Count: Copy;
+    fn splat(v: f64) -> Self;
+    /// # Safety
+    /// `x` holds at least `WIDTH` values.
+    unsafe fn load(x: &[f64]) -> Self;
+    fn zero_count() -> Self::Count;
+    /// `(d − x)·cur − e·prev`.
+    fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self;
+    /// `count + 1` in the lanes where `p` and `cur` differ in sign.
+    fn count_change(count: Self::Count, p: Self, cur: Self) -> Self::Count;
+    /// Divides both by the power of two of the larger magnitude of the pair, lane by lane.
+    fn rescale(prev: Self, cur: Self) -> (Self, Self);
+    /// # Safety
+    /// `out` holds at least `WIDTH` values.
+    unsafe fn store(count: Self::Count, out: &mut [u64]);
+}
+
+const EXPONENT_BITS: u64 = 0x7ff0_0000_0000_0000;
+/// `2^(1023 − E)` has the biased exponent `2046 − E`.
+const INVERSE_EXPONENT: u64 = 2046 << 52;
+
+/// Plain code for CPUs without AVX2 (the compiler vectorises what it can).
+#[derive(Clone, Copy)]
+struct Portable([f64; 4]);
+
+impl SturmVector for Portable {
+    const WIDTH: usize = 4;
+    const GROUP: usize = 2;
+    type Count = [u64; 4];
+    fn splat(v: f64) -> Self {
+        Self([v; 4])
+    }
+    unsafe fn load(x: &[f64]) -> Self {
+        Self(std::array::from_fn(|l| x[l]))
+    }
+    fn zero_count() -> [u64; 4] {
+        [0; 4]
+    }
+    fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self {
+        Self(std::array::from_fn(|l| {
+            (d.0[l] - x.0[l]) * cur.0[l] - e.0[l] * prev.0[l]
+        }))
+    }
+    fn count_change(count: [u64; 4], p: Self, cur: Self) -> [u64; 4] {
+        std::array::from_fn(|l| count[l] + ((p.0[l].to_bits() ^ cur.0[l].to_bits()) >> 63))
+    }
+    fn rescale(prev: Self, cur: Self) -> (Self, Self) {
+        let f: [f64; 4] = std::array::from_fn(|l| {
+            let (a, b) = (prev.0[l].abs(), cur.0[l].abs());
+            let top = if a > b { a } else { b }.to_bits() & EXPONENT_BITS;
+            f64::from_bits(INVERSE_EXPONENT.wrapping_sub(top))
+        });
+        (
+            Self(std::array::from_fn(|l| prev.0[l] * f[l])),
+            Self(std::array::from_fn(|l| cur.0[l] * f[l])),
+        )
+    }
+    unsafe fn store(count: [u64; 4], out: &mut [u64]) {
+        out[..4].copy_from_slice(&count);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use super::{SturmVector, EXPONENT_BITS, INVERSE_EXPONENT};
+    use std::arch::x86_64::*;
+
+    #[derive(Clone, Copy)]
+    pub(super) struct Avx512(__m512d);
+
+    // SAFETY (for every method): only reached from `sturm_counts_avx512`, whose caller detected
+    // AVX-512F; the loads and stores take slices of at least 8 values (the trait's contract).
+    impl SturmVector for Avx512 {
+        const WIDTH: usize = 8;
+        // 6 vectors × (x, prev, cur, count) = 24 of the 32 registers.
+        const GROUP: usize = 6;
+        type Count = __m512i;
+        #[inline(always)]
+        fn splat(v: f64) -> Self {
+            unsafe { Self(_mm512_set1_pd(v)) }
+        }
+        #[inline(always)]
+        unsafe fn load(x: &[f64]) -> Self {
+            Self(_mm512_loadu_pd(x[..8].as_ptr()))
+        }
+        #[inline(always)]
+        fn zero_count() -> __m512i {
+            unsafe { _mm512_setzero_si512() }
+        }
+        #[inline(always)]
+        fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self {
+            unsafe {
+                let t = _mm512_mul_pd(_mm512_sub_pd(d.0, x.0), cur.0);
+                Self(_mm512_sub_pd(t, _mm512_mul_pd(e.0, prev.0)))
+            }
+        }
+        #[inline(always)]
+        fn count_change(count: __m512i, p: Self, cur: Self) -> __m512i {
+            unsafe {
+                let signs = _mm512_xor_si512(_mm512_castpd_si512(p.0), _mm512_castpd_si512(cur.0));
+                _mm512_add_epi64(count, _mm512_srli_epi64::<63>(signs))
+            }
+        }
+        #[inline(always)]
+        fn rescale(prev: Self, cur: Self) -> (Self, Self) {
+            unsafe {
+                let top = _mm512_max_pd(_mm512_abs_pd(prev.0), _mm512_abs_pd(cur.0));
+                let top = _mm512_and_si512(
+                    _mm512_castpd_si512(top),
+                    _mm512_set1_epi64(EXPONENT_BITS as i64),
+                );
+                let f = _mm512_castsi512_pd(_mm512_sub_epi64(
+                    _mm512_set1_epi64(INVERSE_EXPONENT as i64),
+                    top,
+                ));
+                (
+                    Self(_mm512_mul_pd(prev.0, f)),
+                    Self(_mm512_mul_pd(cur.0, f)),
+                )
+            }
+        }
+        #[inline(always)]
+        unsafe fn store(count: __m512i, out: &mut [u64]) {
+            _mm512_storeu_si512(out[..8].as_mut_ptr().cast(), count)
+        }
+    }
+
+    #[derive(Clone, Copy)]
+    pub(super) struct Avx2(__m256d);
+
+    // SAFETY (for every method): only reached from `sturm_counts_avx2`, whose caller detected
+    // AVX2; the loads and stores take slices of at least 4 values (the trait's contract).
+    impl SturmVector for Avx2 {
+        const WIDTH: usize = 4;
+        // 3 vectors × (x, prev, cur, count) = 12 of the 16 registers.
+        const GROUP: usize = 3;
+        type Count = __m256i;
+        #[inline(always)]
+        fn splat(v: f64) -> Self {
+            unsafe { Self(_mm256_set1_pd(v)) }
+        }
+        #[inline(always)]
+        unsafe fn load(x: &[f64]) -> Self {
+            Self(_mm256_loadu_pd(x[..4].as_ptr()))
+        }
+        #[inline(always)]
+        fn zero_count() -> __m256i {
+            unsafe { _mm256_setzero_si256() }
+        }
+        #[inline(always)]
+        fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self {
+            unsafe {
+                let t = _mm256_mul_pd(_mm256_sub_pd(d.0, x.0), cur.0);
+                Self(_mm256_sub_pd(t, _mm256_mul_pd(e.0, prev.0)))
+            }
+        }
+        #[inline(always)]
+        fn count_change(count: __m256i, p: Self, cur: Self) -> __m256i {
+            unsafe {
+                let signs = _mm256_xor_si256(_mm256_castpd_si256(p.0), _mm256_castpd_si256(cur.0));
+                _mm256_add_epi64(count, _mm256_srli_epi64::<63>(signs))
+            }
+        }
+        #[inline(always)]
+        fn rescale(prev: Self, cur: Self) -> (Self, Self) {
+            unsafe {
+                let abs = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
+                let top = _mm256_max_pd(_mm256_and_pd(prev.0, abs), _mm256_and_pd(cur.0, abs));
+                let top = _mm256_and_si256(
+                    _mm256_castpd_si256(top),
+                    _mm256_set1_epi64x(EXPONENT_BITS as i64),
+                );
+                let f = _mm256_castsi256_pd(_mm256_sub_epi64(
+                    _mm256_set1_epi64x(INVERSE_EXPONENT as i64),
+                    top,
+                ));
+                (
+                    Self(_mm256_mul_pd(prev.0, f)),
+                    Self(_mm256_mul_pd(cur.0, f)),
+                )
+            }
+        }
+        #[inline(always)]
+        unsafe fn store(count: __m256i, out: &mut [u64]) {
+            _mm256_storeu_si256(out[..4].as_mut_ptr().cast(), count)
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn sturm_counts_avx512(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]) {
+    sturm_counts_in::<x86::Avx512>(d, e2, x, counts);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn sturm_counts_avx2(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]) {
+    sturm_counts_in::<x86::Avx2>(d, e2, x, counts);
+}
+
+/// The vectors of `x` in groups of at most `V::GROUP`, balanced (five vectors with groups of
+/// six run as one group of five, not six and none).
+#[inline(always)]
+fn sturm_counts_in<V: SturmVector>(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]) {
+    let vectors = x.len() / V::WIDTH;
+    let groups = vectors.div_ceil(V::GROUP);
+    let mut start = 0;
+    for g in 0..groups {
+        let end = (g + 1) * vectors / groups;
+        let (xs, cs) = (
+            &x[start * V::WIDTH..end * V::WIDTH],
+            &mut counts[start * V::WIDTH..end * V::WIDTH],
+        );
+        match end - start {
+            1 => sturm_group::<V, 1>(d, e2, xs, cs),
+            2 => sturm_group::<V, 2>(d, e2, xs, cs),
+            3 => sturm_group::<V, 3>(d, e2, xs, cs),
+            4 => sturm_group::<V, 4>(d, e2, xs, cs),
+            5 => sturm_group::<V, 5>(d, e2, xs, cs),
+            _ => sturm_group::<V, 6>(d, e2, xs, cs),
+        }
+        start = end;
+    }
+}
+
+/// The recurrence for `G` vectors at once, their state in registers.
+#[inline(always)]
+fn sturm_group<V: SturmVector, const G: usize>(
+    d: &[f64],
+    e2: &[f64],
+    x: &[f64],
+    counts: &mut [u64],
+) {
+    let n = d.len();
+    // SAFETY: the caller passes G vectors of V::WIDTH values.
+    let x: [V; G] = std::array::from_fn(|g| unsafe { V::load(&x[g * V::WIDTH..]) });
+    // p₀ = 1, p₁ = d₀ − x.
+    let one = V::splat(1.0);
+    let mut prev = [one; G];
+    let mut cur = [one; G];
+    let mut cnt = [V::zero_count(); G];
+    let (d0, zero) = (V::splat(d[0]), V::splat(0.0));
+    for g in 0..G {
+        cur[g] = V::step(d0, x[g], zero, one, one);
+        cnt[g] = V::count_change(cnt[g], cur[g], one);
+    }
+    for i in 1..n {
+        let (di, ei) = (V::splat(d[i]), V::splat(e2[i - 1]));
+        for g in 0..G {
+            // An exact zero needs no special case: with e² > 0 the next term has the sign
+            // opposite to the one before the zero, so the pair still counts one change.
+            let p = V::step(di, x[g], ei, cur[g], prev[g]);
+            cnt[g] = V::count_change(cnt[g], p, cur[g]);
+            prev[g] = cur[g];
+            cur[g] = p;
+        }
+        if i % RESCALE_EVERY == 0 {
+            for g in 0..G {
+                (prev[g], cur[g]) = V::rescale(prev[g], cur[g]);
+            }
+        }
+    }
+    for g in 0..G {
+        // SAFETY: the caller passes G vectors of V::WIDTH counts.
+        unsafe { V::store(cnt[g], &mut counts[g * V::WIDTH..]) };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every eigenvalue of a symmetric tridiagonal matrix by Jacobi rotations on the dense
+    /// matrix: slow and simple, an oracle independent of both QL and bisection.
+    fn jacobi_eigenvalues(diag: &[f64], off: &[f64]) -> Vec<f64> {
+        let n = diag.len();
+        let mut a = vec![vec![0.0; n]; n];
+        for i in 0..n {
+            a[i][i] = diag[i];
+            if i + 1 < n {
+                a[i][i + 1] = off[i];
+                a[i + 1][i] = off[i];
+            }
+        }
+        let total: f64 = a.iter().flatten().map(|v| v * v).sum();
+        for _sweep in 0..100 {
+            let off_norm: f64 = (0..n)
+                .flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j)))
+                .map(|(i, j)| a[i][j] * a[i][j])
+                .sum();
+            if off_norm <= 1e-40 * total {
+                break;
+            }
+            for p in 0..n {
+                for q in p + 1..n {
+                    if a[p][q] == 0.0 {
+                        continue;
+                    }
+                    let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+                    let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                    let t = if theta == 0.0 { 1.0 } else { t };
+                    let c = 1.0 / (t * t + 1.0).sqrt();
+                    let s = t * c;
+                    for r in 0..n {
+                        let (arp, arq) = (a[r][p], a[r][q]);
+                        a[r][p] = c * arp - s * arq;
+                        a[r][q] = s * arp + c * arq;
+                    }
+                    for r in 0..n {
+                        let (apr, aqr) = (a[p][r], a[q][r]);
+                        a[p][r] = c * apr - s * aqr;
+                        a[q][r] = s * apr + c * aqr;
+                    }
+                }
+            }
+        }
+        let mut v: Vec<f64> = (0..n).map(|i| a[i][i]).collect();
+        v.sort_by(f64::total_cmp);
+        v
+    }
+
+    fn lcg(seed: &mut u64) -> f64 {
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+    }
+
+    fn assert_close(got: &[f64], want: &[f64], tnorm: f64, what: &str) {
+        assert_eq!(got.len(), want.len(), "{what}");
+        for (j, (g, w)) in got.iter().zip(want).enumerate() {
+            assert!(
+                (g - w).abs() <= 64.0 * f64::EPSILON * tnorm,
+                "{what}: eigenvalue {j}: {g} vs {w} (‖T‖ = {tnorm})"
+            );
+        }
+    }
+
+    fn norm(diag: &[f64], off: &[f64]) -> f64 {
+        (0..diag.len())
+            .map(|i| {
+                diag[i].abs()
+                    + if i > 0 { off[i - 1].abs() } else { 0.0 }
+                    + off.get(i).map_or(0.0, |o| o.abs())
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn random_matrices_match_jacobi_at_every_k() {
+        let mut seed = 11u64;
+        for n in [1usize, 2, 3, 7, 8, 9, 16, 17, 40, 65] {
+            let diag: Vec<f64> = (0..n).map(|_| 4.0 * lcg(&mut seed)).collect();
+            let off: Vec<f64> = (0..n.saturating_sub(1)).map(|_| lcg(&mut seed)).collect();
+            let all = jacobi_eigenvalues(&diag, &off);
+            let t = norm(&diag, &off);
+            for k in [1, n / 4, n / 2 + 1, n] {
+                let got = lowest_eigenvalues(&diag, &off, k);
+                assert_close(&got, &all[..k.min(n)], t, &format!("n {n}, k {k}"));
+            }
+        }
+    }
+
+    #[test]
+    fn splits_zeros_and_repeated_eigenvalues() {
+        // Exact zeros on the off-diagonal (a split matrix), eigenvalues repeated across the
+        // blocks and bisection midpoints that land exactly on diagonal entries.
+        let diag = [1.0, 1.0, 0.0, 2.0, 1.0, 1.0, -3.0, 0.5, 0.5];
+        let off = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let want = jacobi_eigenvalues(&diag, &off);
+        let t = norm(&diag, &off);
+        assert_close(&lowest_eigenvalues(&diag, &off, 9), &want, t, "split");
+        // A diagonal matrix: its sorted diagonal.
+        let diag: Vec<f64> = (0..20).map(|i| ((i * 7) % 5) as f64).collect();
+        let off = vec![0.0; 19];
+        let mut want = diag.clone();
+        want.sort_by(f64::total_cmp);
+        assert_close(&lowest_eigenvalues(&diag, &off, 20), &want, 4.0, "diagonal");
+        // The 1-2-1 matrix: eigenvalues 2 − 2cos(jπ/(n+1)), closely spaced at the bottom.
+        let n = 200;
+        let want: Vec<f64> = (1..=n)
+            .map(|j| 2.0 - 2.0 * (j as f64 * std::f64::consts::PI / (n as f64 + 1.0)).cos())
+            .collect();
+        let got = lowest_eigenvalues(&vec![2.0; n], &vec![-1.0; n - 1], 50);
+        assert_close(&got, &want[..50], 4.0, "1-2-1");
+        // Wilkinson's W21+: pairs of eigenvalues equal to ~15 digits.
+        let diag: Vec<f64> = (0..21i32).map(|i| (10 - i).abs() as f64).collect();
+        let off = vec![1.0; 20];
+        let want = jacobi_eigenvalues(&diag, &off);
+        assert_close(&lowest_eigenvalues(&diag, &off, 21), &want, 12.0, "W21+");
+    }
+
+    #[test]
+    fn extreme_scales_stay_in_range() {
+        let mut seed = 5u64;
+        let n = 60;
+        let diag: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
+        let off: Vec<f64> = (0..n - 1).map(|_| lcg(&mut seed)).collect();
+        let want = jacobi_eigenvalues(&diag, &off);
+        for s in [1e-150, 1e-30, 1e30, 1e150] {
+            let d: Vec<f64> = diag.iter().map(|v| v * s).collect();
+            let o: Vec<f64> = off.iter().map(|v| v * s).collect();
+            let got = lowest_eigenvalues(&d, &o, 20);
+            let w: Vec<f64> = want[..20].iter().map(|v| v * s).collect();
+            assert_close(&got, &w, norm(&d, &o), &format!("scale {s:e}"));
+        }
+        // Entries spanning many orders of magnitude (a graded matrix).
+        let d: Vec<f64> = (0..n).map(|i| 10f64.powi(i as i32 / 4 - 7)).collect();
+        let o: Vec<f64> = (0..n - 1)
+            .map(|i| 0.3 * 10f64.powi(i as i32 / 4 - 7))
+            .collect();
+        let want = jacobi_eigenvalues(&d, &o);
+        assert_close(
+            &lowest_eigenvalues(&d, &o, n),
+            &want,
+            norm(&d, &o),
+            "graded",
+        );
+    }
+
+    #[test]
+    fn every_vector_path_gives_the_same_bits() {
+        let mut seed = 3u64;
+        let n = 130;
+        let diag: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
+        let off: Vec<f64> = (0..n - 1).map(|_| lcg(&mut seed)).collect();
+        let e2: Vec<f64> = off.iter().map(|o| (o * o).max(E2_FLOOR)).collect();
+        let all = jacobi_eigenvalues(&diag, &off);
+        // 1 … 13 vectors of 8 lanes: every group size of every path, and several groups.
+        for vectors in 1..=13 {
+            let x: Vec<f64> = (0..vectors * LANES).map(|_| 2.0 * lcg(&mut seed)).collect();
+            let run = |f: &dyn Fn(&mut [u64])| {
+                let mut counts = vec![0u64; x.len()];
+                f(&mut counts);
+                counts
+            };
+            let portable = run(&|c| sturm_counts_in::<Portable>(&diag, &e2, &x, c));
+            assert_eq!(portable, run(&|c| sturm_counts(&diag, &e2, &x, c)));
+            #[cfg(target_arch = "x86_64")]
+            {
+                if std::is_x86_feature_detected!("avx2") {
+                    // SAFETY: AVX2 was just detected.
+                    let avx2 = run(&|c| unsafe { sturm_counts_avx2(&diag, &e2, &x, c) });
+                    assert_eq!(portable, avx2, "AVX2, {vectors} vectors");
+                }
+                if std::is_x86_feature_detected!("avx512f") {
+                    // SAFETY: AVX-512F was just detected.
+                    let avx512 = run(&|c| unsafe { sturm_counts_avx512(&diag, &e2, &x, c) });
+                    assert_eq!(portable, avx512, "AVX-512, {vectors} vectors");
+                }
+            }
+            // The counts themselves, against the dense oracle.
+            for (j, xj) in x.iter().enumerate() {
+                let want = all.iter().filter(|&&e| e < *xj).count() as u64;
+                assert_eq!(portable[j], want, "x = {xj}");
+            }
+        }
+    }
+}

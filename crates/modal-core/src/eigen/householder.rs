@@ -1,0 +1,855 @@
+//! Householder tridiagonalisation `A = Q T Qᵀ` of a symmetric matrix, and `Y ← Q Y`.
+//!
+//! LAPACK's `dsytd2` (lower) with its two sweeps over the trailing matrix per step — the rank-2
+//! update of one step and the symmetric product of the next — fused into one, as faer does; but
+//! four columns at a time, so the row vectors of the sweep are loaded once for four columns and
+//! the dot products of four columns are summed across lanes together. At the orders of a modal
+//! solve (100–300) faer's one-column sweep spends most of its time outside its inner loop; this
+//! one runs 3–4× faster there (README, "Eigensolver").
+
+use faer::{MatMut, MatRef};
+
+use crate::simd::dot;
+
+/// The tridiagonal matrix of [`tridiagonalize`] and the reflectors that produced it.
+#[derive(Debug, Clone)]
+pub(crate) struct Tridiagonal {
+    pub diag: Vec<f64>,
+    pub off: Vec<f64>,
+    /// `n × n`, column-major with leading dimension `ld`: reflector `k` is
+    /// `H_k = I − tau[k]·v vᵀ` with `v = (0, …, 0, 1, vecs[k+2..n, k])`, 1 at row `k + 1`.
+    vecs: Vec<f64>,
+    ld: usize,
+    tau: Vec<f64>,
+}
+
+/// Spare zero rows below the matrix and zeros after every row vector: a sweep's vectors may then
+/// run past the last row (padding contributes nothing) instead of ending in scalar tails.
+const PAD_ROWS: usize = 8;
+
+/// Reduces the symmetric `a` (only its lower triangle is read) to tridiagonal form.
+pub(crate) fn tridiagonalize(a: MatRef<'_, f64>) -> Tridiagonal {
+    // The O(n²) work around the sweeps (the reflectors, `w`, the copies) compiled for the widest
+    // vector unit too.
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: AVX-512F was just detected.
+            return unsafe { tridiagonalize_avx512(a) };
+        }
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 was just detected.
+            return unsafe { tridiagonalize_avx2(a) };
+        }
+    }
+    tridiagonalize_body(a)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn tridiagonalize_avx512(a: MatRef<'_, f64>) -> Tridiagonal {
+    tridiagonalize_body(a)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn tridiagonalize_avx2(a: MatRef<'_, f64>) -> Tridiagonal {
+    tridiagonalize_body(a)
+}
+
+#[inline(always)]
+fn tridiagonalize_body(a: MatRef<'_, f64>) -> Tridiagonal {
+    let n = a.nrows();
+    // Columns of whole cache lines, kept off multiples of 4 KiB apart (which alias in the store
+    // buffer); `COLS` spare zero columns let the last pass of a sweep be a full one.
+    let mut ld = (n + PAD_ROWS).div_ceil(8) * 8;
+    if ld.is_multiple_of(512) {
+        ld += 8;
+    }
+    let mut m = vec![0.0; ld * (n + COLS)];
+    for j in 0..n {
+        let dst = &mut m[j * ld + j..j * ld + n];
+        match a.col(j).try_as_col_major() {
+            Some(col) => dst.copy_from_slice(&col.as_slice()[j..]),
+            None => dst.iter_mut().zip(j..n).for_each(|(d, i)| *d = a[(i, j)]),
+        }
+    }
+    // A power of two (exact) bringing the largest entry to about 1: the sums of squares of the
+    // reflectors then neither overflow nor underflow, whatever the units of the model. Eight
+    // running maxima, so the comparisons do not wait on each other.
+    let mut lanes = [0.0f64; 8];
+    for chunk in m.chunks_exact(8) {
+        for l in 0..8 {
+            let v = chunk[l].abs();
+            lanes[l] = if v > lanes[l] { v } else { lanes[l] };
+        }
+    }
+    let amax = lanes.iter().fold(0.0f64, |x, &y| if y > x { y } else { x });
+    let scale_exp = if amax > 0.0 && amax.is_finite() {
+        (amax.log2().round() as i32).clamp(-1000, 1000)
+    } else {
+        0
+    };
+    let (down, up) = (2f64.powi(-scale_exp), 2f64.powi(scale_exp));
+    if scale_exp != 0 {
+        m.iter_mut().for_each(|v| *v *= down);
+    }
+    let mut diag = vec![0.0; n];
+    let mut off = vec![0.0; n.saturating_sub(1)];
+    let mut tau = vec![0.0; n.saturating_sub(1)];
+    // The previous step's reflector `u` and `w = τ B u − ½τ²(uᵀ B u) u`, indexed by global row
+    // (zero past row n); its rank-2 update `B ← B − u wᵀ − w uᵀ` is applied in the next sweep.
+    let len = n + PAD_ROWS;
+    let (mut u, mut w, mut v, mut y) = (
+        vec![0.0; len],
+        vec![0.0; len],
+        vec![0.0; len],
+        vec![0.0; len],
+    );
+    for k in 0..n {
+        // Column k (rows k..n) gets the pending update first: its reflector comes from it.
+        let (wk, uk) = (w[k], u[k]);
+        for i in k..n {
+            m[i + k * ld] -= u[i] * wk + w[i] * uk;
+        }
+        diag[k] = m[k + k * ld];
+        if k + 1 == n {
+            break;
+        }
+        // The reflector of column k below the diagonal (LAPACK dlarfg).
+        let (beta, t) = householder_in_place(&mut m[k * ld + k + 1..k * ld + n]);
+        off[k] = beta;
+        tau[k] = t;
+        let s = k + 1;
+        v[s] = 1.0;
+        v[s + 1..n].copy_from_slice(&m[k * ld + k + 2..k * ld + n]);
+        // y = B v on the trailing block, B updated by the pending reflector on the way.
+        sweep(
+            &mut m[s * ld + s..],
+            ld,
+            n - s,
+            &u[s..],
+            &w[s..],
+            &v[s..],
+            &mut y[s..],
+        );
+        // w = τ y − ½ τ² (yᵀ v) v, the symmetric rank-2 form of H B H.
+        let alpha = -0.5 * t * t * dot(&y[s..n], &v[s..n]);
+        for i in s..n {
+            w[i] = t * y[i] + alpha * v[i];
+        }
+        u[s..n].copy_from_slice(&v[s..n]);
+        // Rows above the block are no longer read; keep them zero for the next column update.
+        (u[k], w[k]) = (0.0, 0.0);
+    }
+    for d in diag.iter_mut() {
+        *d *= up;
+    }
+    for e in off.iter_mut() {
+        *e *= up;
+    }
+    Tridiagonal {
+        diag,
+        off,
+        vecs: m,
+        ld,
+        tau,
+    }
+}
+
+/// From this many vectors on, [`Tridiagonal::apply_q`] applies the reflectors in blocks (faer's
+/// compact-WY form, matrix products): 300 dof, all 300 vectors, 5.0 → 1.5 ms; with the 30 vectors
+/// of a matching solve one reflector at a time is faster (no block factors to build).
+const BLOCKED_APPLY_MIN_VECTORS: usize = 96;
+
+impl Tridiagonal {
+    /// `Y ← Q Y` for the eigenvectors `Y` (`n × k`) of the tridiagonal matrix, `Q = H₀ H₁ ⋯`.
+    pub(crate) fn apply_q(&self, y: MatMut<'_, f64>) {
+        let n = self.diag.len();
+        let k = y.ncols();
+        if n < 2 || k == 0 {
+            return;
+        }
+        if k >= BLOCKED_APPLY_MIN_VECTORS {
+            self.apply_q_blocked(y);
+        } else {
+            self.apply_q_unblocked(y);
+        }
+    }
+
+    /// `Y ← Q Y` one reflector at a time, on a row-major copy.
+    fn apply_q_unblocked(&self, mut y: MatMut<'_, f64>) {
+        let n = self.diag.len();
+        let k = y.ncols();
+        // Row-major, rows padded to whole vectors: a reflector's dot products with all k vectors
+        // are then sums of rows in vector registers, not k dot products summed across lanes.
+        let width = k.div_ceil(8) * 8;
+        let mut rows = vec![0.0f64; n * width];
+        for c in 0..k {
+            for (i, v) in y.rb().col(c).iter().enumerate() {
+                rows[i * width + c] = *v;
+            }
+        }
+        apply_reflectors(&self.vecs, self.ld, &self.tau, width, &mut rows);
+        for c in 0..k {
+            for (i, v) in y.rb_mut().col_mut(c).iter_mut().enumerate() {
+                *v = rows[i * width + c];
+            }
+        }
+    }
+}
+
+impl Tridiagonal {
+    /// `Y ← Q Y` by faer's blocked Householder sequence: the reflectors are stored as faer's
+    /// tridiagonalisation stores them (column `k` below row `k + 1`, the unit head implicit), and
+    /// faer's `τ` is the reciprocal of LAPACK's (∞ for the identity).
+    fn apply_q_blocked(&self, y: MatMut<'_, f64>) {
+        use faer::dyn_stack::{MemBuffer, MemStack};
+        use faer::linalg::householder as hh;
+        let n = self.diag.len();
+        let m = n - 1;
+        let essentials = MatRef::from_column_major_slice_with_stride(&self.vecs, n, n, self.ld)
+            .submatrix(1, 0, m, m);
+        let bs = faer::linalg::qr::no_pivoting::factor::recommended_block_size::<f64>(m, m);
+        let mut factor = faer::Mat::<f64>::zeros(bs, m);
+        let mut j = 0;
+        while j < m {
+            let b = bs.min(m - j);
+            let mut block = factor.as_mut().submatrix_mut(0, j, b, b);
+            for c in 0..b {
+                let t = self.tau[j + c];
+                block[(c, c)] = if t == 0.0 { f64::INFINITY } else { 1.0 / t };
+            }
+            hh::upgrade_householder_factor(
+                block,
+                essentials.submatrix(j, j, m - j, b),
+                b,
+                1,
+                faer::Par::Seq,
+            );
+            j += b;
+        }
+        let k = y.ncols();
+        let mut mem = MemBuffer::new(
+            hh::apply_block_householder_sequence_on_the_left_in_place_scratch::<f64>(m, bs, k),
+        );
+        hh::apply_block_householder_sequence_on_the_left_in_place_with_conj(
+            essentials,
+            factor.as_ref(),
+            faer::Conj::No,
+            y.subrows_mut(1, m),
+            faer::Par::Seq,
+            MemStack::new(&mut mem),
+        );
+        crate::simd::clear_upper_state();
+    }
+}
+
+/// `rows ← H₀ ⋯ H_{n−2} rows` (`rows`: `n` rows of `width` values, a multiple of 8), on the
+/// widest vector unit this CPU has.
+fn apply_reflectors(vecs: &[f64], ld: usize, tau: &[f64], width: usize, rows: &mut [f64]) {
+    assert!(width.is_multiple_of(8) && rows.len().is_multiple_of(width));
+    let n = rows.len() / width;
+    assert!(tau.len() + 1 >= n && vecs.len() >= ld * n.saturating_sub(1));
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: AVX-512F was just detected; the sizes were asserted above.
+            return unsafe { apply_reflectors_avx512(vecs, ld, tau, width, rows) };
+        }
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            // SAFETY: AVX2 and FMA were just detected; the sizes were asserted above.
+            return unsafe { apply_reflectors_avx2(vecs, ld, tau, width, rows) };
+        }
+    }
+    // SAFETY: the sizes were asserted above.
+    unsafe { apply_reflectors_in::<Portable>(vecs, ld, tau, width, rows) }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn apply_reflectors_avx512(
+    vecs: &[f64],
+    ld: usize,
+    tau: &[f64],
+    width: usize,
+    rows: &mut [f64],
+) {
+    apply_reflectors_in::<x86::Avx512>(vecs, ld, tau, width, rows)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn apply_reflectors_avx2(
+    vecs: &[f64],
+    ld: usize,
+    tau: &[f64],
+    width: usize,
+    rows: &mut [f64],
+) {
+    apply_reflectors_in::<x86::Avx2>(vecs, ld, tau, width, rows)
+}
+
+/// One vector of columns at a time: its dot products with the reflector accumulate in two
+/// registers (even and odd rows, so consecutive rows do not wait on each other), then the
+/// rank-1 update runs down the same columns.
+///
+/// # Safety
+/// As asserted by [`apply_reflectors`]; the CPU has `V`'s instructions.
+#[inline(always)]
+unsafe fn apply_reflectors_in<V: Lanes>(
+    vecs: &[f64],
+    ld: usize,
+    tau: &[f64],
+    width: usize,
+    rows: &mut [f64],
+) {
+    let n = rows.len() / width;
+    let p = rows.as_mut_ptr();
+    let one = V::splat(1.0);
+    for r in (0..n.saturating_sub(1)).rev() {
+        let t = tau[r];
+        if t == 0.0 {
+            continue;
+        }
+        // v = (1, vecs[r+2..n, r]) on rows r+1..n.
+        let v = &vecs[r * ld + r + 2..r * ld + n];
+        let head = p.add((r + 1) * width);
+        let below = p.add((r + 2) * width);
+        let mut c = 0;
+        while c < width {
+            let mut even = V::load(head.add(c));
+            let mut odd = V::splat(0.0);
+            let mut i = 0;
+            while i + 1 < v.len() {
+                even = V::mul_add(V::splat(v[i]), V::load(below.add(i * width + c)), even);
+                odd = V::mul_add(
+                    V::splat(v[i + 1]),
+                    V::load(below.add((i + 1) * width + c)),
+                    odd,
+                );
+                i += 2;
+            }
+            if i < v.len() {
+                even = V::mul_add(V::splat(v[i]), V::load(below.add(i * width + c)), even);
+            }
+            let d = V::mul(V::splat(t), V::mul_add(odd, one, even));
+            V::neg_mul_add(d, one, V::load(head.add(c))).store(head.add(c));
+            for (i, &vi) in v.iter().enumerate() {
+                let e = below.add(i * width + c);
+                V::neg_mul_add(V::splat(vi), d, V::load(e)).store(e);
+            }
+            c += V::WIDTH;
+        }
+    }
+}
+
+use faer::reborrow::{Reborrow, ReborrowMut};
+
+/// LAPACK `dlarfg` on `x = (α, x₁…)`: overwrites `x₁…` with the reflector's tail `v` (its head
+/// is 1) and returns `(β, τ)` with `(I − τ v vᵀ) x = (β, 0, …)`. `τ = 0` (no reflection) when
+/// `x₁… = 0`. The matrix is scaled to entries of about 1, so no rescaling loop is needed.
+#[inline(always)]
+fn householder_in_place(x: &mut [f64]) -> (f64, f64) {
+    let alpha = x[0];
+    let xnorm2 = dot(&x[1..], &x[1..]);
+    if xnorm2 == 0.0 {
+        return (alpha, 0.0);
+    }
+    let beta = -(alpha * alpha + xnorm2).sqrt().copysign(alpha);
+    let tau = (beta - alpha) / beta;
+    let scale = 1.0 / (alpha - beta);
+    for v in x[1..].iter_mut() {
+        *v *= scale;
+    }
+    x[0] = beta;
+    (beta, tau)
+}
+
+/// The fused sweep over the lower triangle of the `m × m` block `b` (leading dimension `ld`):
+/// `b ← b − u wᵀ − w uᵀ`, then `y = b v`, in one pass, on the widest vector unit this CPU has.
+/// `b` has `PAD_ROWS` zero rows below the block and `COLS` zero columns after it; `u`, `w`, `v`
+/// are zero past `m`, so whole vectors can run into the padding.
+fn sweep(b: &mut [f64], ld: usize, m: usize, u: &[f64], w: &[f64], v: &[f64], y: &mut [f64]) {
+    let span = m + PAD_ROWS;
+    assert!(b.len() >= (m + COLS - 1) * ld + span && ld >= span);
+    assert!(u.len() >= span && w.len() >= span && v.len() >= span && y.len() >= span);
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: AVX-512F was just detected; the sizes were asserted above.
+            return unsafe { sweep_avx512(b, ld, m, u, w, v, y) };
+        }
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            // SAFETY: AVX2 and FMA were just detected; the sizes were asserted above.
+            return unsafe { sweep_avx2(b, ld, m, u, w, v, y) };
+        }
+    }
+    // SAFETY: the sizes were asserted above.
+    unsafe { sweep_in::<Portable>(b, ld, m, u, w, v, y) }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn sweep_avx512(
+    b: &mut [f64],
+    ld: usize,
+    m: usize,
+    u: &[f64],
+    w: &[f64],
+    v: &[f64],
+    y: &mut [f64],
+) {
+    sweep_in::<x86::Avx512>(b, ld, m, u, w, v, y)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn sweep_avx2(
+    b: &mut [f64],
+    ld: usize,
+    m: usize,
+    u: &[f64],
+    w: &[f64],
+    v: &[f64],
+    y: &mut [f64],
+) {
+    sweep_in::<x86::Avx2>(b, ld, m, u, w, v, y)
+}
+
+/// The vector operations of the sweep.
+trait Lanes: Copy {
+    const WIDTH: usize;
+    /// # Safety
+    /// `p` points at `WIDTH` readable values.
+    unsafe fn load(p: *const f64) -> Self;
+    /// # Safety
+    /// `p` points at `WIDTH` writable values.
+    unsafe fn store(self, p: *mut f64);
+    fn splat(v: f64) -> Self;
+    /// 1 in the lanes `l` with `l ≥ from`, 0 in the others.
+    fn lanes_from(from: usize) -> Self;
+    fn mul(a: Self, b: Self) -> Self;
+    /// `a·b + c`.
+    fn mul_add(a: Self, b: Self, c: Self) -> Self;
+    /// `c − a·b`.
+    fn neg_mul_add(a: Self, b: Self, c: Self) -> Self;
+    /// The four horizontal sums.
+    fn sum4(a: [Self; 4]) -> [f64; 4];
+}
+
+/// Columns of one pass of the sweep.
+const COLS: usize = 4;
+
+/// The sweep for a vector type, four columns `j..j+4` a pass, rows from the diagonal `j` down in
+/// whole vectors. In the first vector, the lanes above a column's diagonal (upper-triangle
+/// storage, never read) are updated too but masked out of both products, and the diagonal
+/// entry enters `y` once.
+///
+/// # Safety
+/// As asserted by [`sweep`]; the CPU has `V`'s instructions.
+#[inline(always)]
+unsafe fn sweep_in<V: Lanes>(
+    b: &mut [f64],
+    ld: usize,
+    m: usize,
+    u: &[f64],
+    w: &[f64],
+    v: &[f64],
+    y: &mut [f64],
+) {
+    y[..m + PAD_ROWS].fill(0.0);
+    let bp = b.as_mut_ptr();
+    let (up, wp, vp, yp) = (u.as_ptr(), w.as_ptr(), v.as_ptr(), y.as_mut_ptr());
+    // Lane masks of the first vector of a pass: column c takes rows j + l with l ≥ c into its
+    // dot product and rows with l > c into the symmetric half of `y`.
+    let ge: [V; COLS] = std::array::from_fn(|c| V::lanes_from(c));
+    let gt: [V; COLS] = std::array::from_fn(|c| V::lanes_from(c + 1));
+    let mut j = 0;
+    while j < m {
+        let cols: [*mut f64; COLS] = std::array::from_fn(|c| bp.add((j + c) * ld));
+        let wj: [V; COLS] = std::array::from_fn(|c| V::splat(w[j + c]));
+        let uj: [V; COLS] = std::array::from_fn(|c| V::splat(u[j + c]));
+        let vj: [V; COLS] = std::array::from_fn(|c| V::splat(v[j + c]));
+        let mut acc = [V::splat(0.0); COLS];
+        let mut i = j;
+        let mut first = true;
+        while i < m {
+            let (ui, wi, vi) = (V::load(up.add(i)), V::load(wp.add(i)), V::load(vp.add(i)));
+            let mut yi = V::load(yp.add(i));
+            for c in 0..COLS {
+                let e = cols[c].add(i);
+                let bij = V::neg_mul_add(wi, uj[c], V::neg_mul_add(ui, wj[c], V::load(e)));
+                bij.store(e);
+                let (vd, vs) = if first {
+                    (V::mul(vi, ge[c]), V::mul(vj[c], gt[c]))
+                } else {
+                    (vi, vj[c])
+                };
+                acc[c] = V::mul_add(bij, vd, acc[c]);
+                yi = V::mul_add(bij, vs, yi);
+            }
+            yi.store(yp.add(i));
+            first = false;
+            i += V::WIDTH;
+        }
+        let sums = V::sum4(acc);
+        for c in 0..COLS {
+            y[j + c] += sums[c];
+        }
+        j += COLS;
+    }
+}
+
+/// Plain code for CPUs without AVX2 and FMA.
+#[derive(Clone, Copy)]
+struct Portable([f64; 4]);
+
+impl Lanes for Portable {
+    const WIDTH: usize = 4;
+    unsafe fn load(p: *const f64) -> Self {
+        Self(std::array::from_fn(|l| *p.add(l)))
+    }
+    unsafe fn store(self, p: *mut f64) {
+        for l in 0..4 {
+            *p.add(l) = self.0[l];
+        }
+    }
+    fn splat(v: f64) -> Self {
+        Self([v; 4])
+    }
+    fn lanes_from(from: usize) -> Self {
+        Self(std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 }))
+    }
+    fn mul(a: Self, b: Self) -> Self {
+        Self(std::array::from_fn(|l| a.0[l] * b.0[l]))
+    }
+    fn mul_add(a: Self, b: Self, c: Self) -> Self {
+        Self(std::array::from_fn(|l| a.0[l] * b.0[l] + c.0[l]))
+    }
+    fn neg_mul_add(a: Self, b: Self, c: Self) -> Self {
+        Self(std::array::from_fn(|l| c.0[l] - a.0[l] * b.0[l]))
+    }
+    fn sum4(a: [Self; 4]) -> [f64; 4] {
+        a.map(|x| (x.0[0] + x.0[1]) + (x.0[2] + x.0[3]))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use super::Lanes;
+    use std::arch::x86_64::*;
+
+    #[derive(Clone, Copy)]
+    pub(super) struct Avx512(__m512d);
+
+    // SAFETY (for every method): only reached from `sweep_avx512`, whose caller detected
+    // AVX-512F; the pointers are valid for 8 values (the trait's contract).
+    impl Lanes for Avx512 {
+        const WIDTH: usize = 8;
+        #[inline(always)]
+        unsafe fn load(p: *const f64) -> Self {
+            Self(_mm512_loadu_pd(p))
+        }
+        #[inline(always)]
+        unsafe fn store(self, p: *mut f64) {
+            _mm512_storeu_pd(p, self.0)
+        }
+        #[inline(always)]
+        fn splat(v: f64) -> Self {
+            unsafe { Self(_mm512_set1_pd(v)) }
+        }
+        #[inline(always)]
+        fn lanes_from(from: usize) -> Self {
+            let m: [f64; 8] = std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 });
+            unsafe { Self(_mm512_loadu_pd(m.as_ptr())) }
+        }
+        #[inline(always)]
+        fn mul(a: Self, b: Self) -> Self {
+            unsafe { Self(_mm512_mul_pd(a.0, b.0)) }
+        }
+        #[inline(always)]
+        fn mul_add(a: Self, b: Self, c: Self) -> Self {
+            unsafe { Self(_mm512_fmadd_pd(a.0, b.0, c.0)) }
+        }
+        #[inline(always)]
+        fn neg_mul_add(a: Self, b: Self, c: Self) -> Self {
+            unsafe { Self(_mm512_fnmadd_pd(a.0, b.0, c.0)) }
+        }
+        #[inline(always)]
+        fn sum4(a: [Self; 4]) -> [f64; 4] {
+            unsafe {
+                // 8 → 4 lanes each, then the four 4-lane sums side by side.
+                let h: [__m256d; 4] = a.map(|x| {
+                    _mm256_add_pd(
+                        _mm512_castpd512_pd256(x.0),
+                        _mm512_extractf64x4_pd::<1>(x.0),
+                    )
+                });
+                let s01 = _mm256_hadd_pd(h[0], h[1]);
+                let s23 = _mm256_hadd_pd(h[2], h[3]);
+                let lo = _mm256_permute2f128_pd::<0x20>(s01, s23);
+                let hi = _mm256_permute2f128_pd::<0x31>(s01, s23);
+                let mut out = [0.0; 4];
+                _mm256_storeu_pd(out.as_mut_ptr(), _mm256_add_pd(lo, hi));
+                out
+            }
+        }
+    }
+
+    #[derive(Clone, Copy)]
+    pub(super) struct Avx2(__m256d);
+
+    // SAFETY (for every method): only reached from `sweep_avx2`, whose caller detected AVX2 and
+    // FMA; the pointers are valid for 4 values (the trait's contract).
+    impl Lanes for Avx2 {
+        const WIDTH: usize = 4;
+        #[inline(always)]
+        unsafe fn load(p: *const f64) -> Self {
+            Self(_mm256_loadu_pd(p))
+        }
+        #[inline(always)]
+        unsafe fn store(self, p: *mut f64) {
+            _mm256_storeu_pd(p, self.0)
+        }
+        #[inline(always)]
+        fn splat(v: f64) -> Self {
+            unsafe { Self(_mm256_set1_pd(v)) }
+        }
+        #[inline(always)]
+        fn lanes_from(from: usize) -> Self {
+            let m: [f64; 4] = std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 });
+            unsafe { Self(_mm256_loadu_pd(m.as_ptr())) }
+        }
+        #[inline(always)]
+        fn mul(a: Self, b: Self) -> Self {
+            unsafe { Self(_mm256_mul_pd(a.0, b.0)) }
+        }
+        #[inline(always)]
+        fn mul_add(a: Self, b: Self, c: Self) -> Self {
+            unsafe { Self(_mm256_fmadd_pd(a.0, b.0, c.0)) }
+        }
+        #[inline(always)]
+        fn neg_mul_add(a: Self, b: Self, c: Self) -> Self {
+            unsafe { Self(_mm256_fnmadd_pd(a.0, b.0, c.0)) }
+        }
+        #[inline(always)]
+        fn sum4(a: [Self; 4]) -> [f64; 4] {
+            unsafe {
+                let s01 = _mm256_hadd_pd(a[0].0, a[1].0);
+                let s23 = _mm256_hadd_pd(a[2].0, a[3].0);
+                let lo = _mm256_permute2f128_pd::<0x20>(s01, s23);
+                let hi = _mm256_permute2f128_pd::<0x31>(s01, s23);
+                let mut out = [0.0; 4];
+                _mm256_storeu_pd(out.as_mut_ptr(), _mm256_add_pd(lo, hi));
+                out
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use faer::Mat;
+
+    fn lcg(seed: &mut u64) -> f64 {
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+    }
+
+    fn random_symmetric(n: usize, seed: u64) -> Mat<f64> {
+        let mut s = seed;
+        let mut a = Mat::<f64>::zeros(n, n);
+        for j in 0..n {
+            for i in j..n {
+                let v = lcg(&mut s);
+                a[(i, j)] = v;
+                a[(j, i)] = v;
+            }
+        }
+        a
+    }
+
+    /// `Q` (from `apply_q` on the identity) is orthogonal and `Q T Qᵀ = A`.
+    fn check_reduction(a: &Mat<f64>, what: &str) {
+        let n = a.nrows();
+        let t = tridiagonalize(a.as_ref());
+        let mut q = Mat::<f64>::identity(n, n);
+        t.apply_q(q.as_mut());
+        let tm = Mat::<f64>::from_fn(n, n, |i, j| match i.abs_diff(j) {
+            0 => t.diag[i],
+            1 => t.off[i.min(j)],
+            _ => 0.0,
+        });
+        let scale = a.norm_max().max(f64::MIN_POSITIVE);
+        let rebuilt = &q * &tm * q.transpose();
+        let err = (&rebuilt - a).norm_max() / scale;
+        assert!(err < 1e-13 * n as f64, "{what}: ‖QTQᵀ − A‖ = {err:e}·‖A‖");
+        let ortho = (q.transpose() * &q - Mat::<f64>::identity(n, n)).norm_max();
+        assert!(ortho < 1e-14 * n as f64, "{what}: ‖QᵀQ − I‖ = {ortho:e}");
+    }
+
+    #[test]
+    fn reduction_rebuilds_the_matrix_at_every_order() {
+        // Orders around the vector widths, the four-column passes and the padding.
+        for n in (1..=20).chain([31, 32, 33, 63, 64, 65, 100, 128, 130]) {
+            check_reduction(&random_symmetric(n, n as u64), &format!("n = {n}"));
+        }
+    }
+
+    #[test]
+    fn reduction_of_special_matrices() {
+        // Already diagonal: every reflector is the identity (τ = 0).
+        let d = Mat::<f64>::from_fn(9, 9, |i, j| if i == j { i as f64 - 4.0 } else { 0.0 });
+        check_reduction(&d, "diagonal");
+        let t = tridiagonalize(d.as_ref());
+        assert!(t.tau.iter().all(|&x| x == 0.0));
+        // A zero column in the middle, and a block-diagonal matrix.
+        let mut a = random_symmetric(12, 4);
+        for i in 0..12 {
+            a[(i, 5)] = 0.0;
+            a[(5, i)] = 0.0;
+        }
+        check_reduction(&a, "zero column");
+        let b = Mat::<f64>::from_fn(10, 10, |i, j| {
+            if (i < 5) == (j < 5) {
+                1.0 / (1 + i + j) as f64
+            } else {
+                0.0
+            }
+        });
+        check_reduction(&b, "block diagonal");
+        // Extreme units: the reduction works at any scale, and a power-of-two scale (exact)
+        // scales T exactly and leaves the reflectors as they were.
+        let a = random_symmetric(40, 9);
+        for s in [1e-150, 1e150] {
+            check_reduction(&(&a * faer::Scale(s)), &format!("scale {s:e}"));
+        }
+        let t1 = tridiagonalize(a.as_ref());
+        for s in [2f64.powi(-500), 2f64.powi(500)] {
+            let ts = tridiagonalize((&a * faer::Scale(s)).as_ref());
+            assert!(ts.diag.iter().zip(&t1.diag).all(|(x, y)| *x == y * s));
+            assert!(ts.off.iter().zip(&t1.off).all(|(x, y)| *x == y * s));
+            assert_eq!(ts.tau, t1.tau);
+        }
+    }
+
+    #[test]
+    fn blocked_and_unblocked_back_transforms_agree() {
+        for (n, k) in [(5, 3), (40, 40), (130, 7), (130, 130), (200, 120)] {
+            let t = tridiagonalize(random_symmetric(n, 7 * n as u64).as_ref());
+            let y = Mat::<f64>::from_fn(n, k, |i, j| ((i * 31 + j * 17) % 23) as f64 - 11.0);
+            let (mut a, mut b) = (y.clone(), y.clone());
+            t.apply_q_blocked(a.as_mut());
+            t.apply_q_unblocked(b.as_mut());
+            assert!(
+                (&a - &b).norm_max() < 1e-12 * y.norm_max() * n as f64,
+                "n {n}, k {k}"
+            );
+            // Q is orthogonal: the columns keep their norms.
+            for c in 0..k {
+                assert!(
+                    (a.col(c).norm_l2() - y.col(c).norm_l2()).abs() < 1e-12 * y.col(c).norm_l2()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn eigenvalues_agree_with_faer() {
+        for n in [7, 60, 129] {
+            let a = random_symmetric(n, 100 + n as u64);
+            let t = tridiagonalize(a.as_ref());
+            let mut ours = super::super::tridiagonal_eigenvalues(&t.diag, &t.off).unwrap();
+            ours.sort_by(f64::total_cmp);
+            let mut theirs: Vec<f64> = a.self_adjoint_eigenvalues(faer::Side::Lower).unwrap();
+            theirs.sort_by(f64::total_cmp);
+            for (x, y) in ours.iter().zip(&theirs) {
+                assert!((x - y).abs() < 1e-13 * n as f64, "n = {n}: {x} vs {y}");
+            }
+        }
+    }
+
+    #[test]
+    fn every_sweep_path_agrees() {
+        let mut seed = 21u64;
+        for m in [1usize, 3, 4, 5, 8, 9, 17, 40] {
+            let ld = (m + PAD_ROWS).div_ceil(8) * 8;
+            let mut b = vec![0.0; ld * (m + COLS)];
+            for j in 0..m {
+                for i in j..m {
+                    b[i + j * ld] = lcg(&mut seed);
+                }
+            }
+            let vec_of = |seed: &mut u64| -> Vec<f64> {
+                let mut v: Vec<f64> = (0..m).map(|_| lcg(seed)).collect();
+                v.resize(m + PAD_ROWS, 0.0);
+                v
+            };
+            let (u, w, v) = (vec_of(&mut seed), vec_of(&mut seed), vec_of(&mut seed));
+            // A plain reference: update the lower triangle, then the symmetric product.
+            let mut r = b.clone();
+            let mut want = vec![0.0; m];
+            for j in 0..m {
+                for i in j..m {
+                    r[i + j * ld] -= u[i] * w[j] + w[i] * u[j];
+                }
+            }
+            for j in 0..m {
+                for i in 0..m {
+                    let (hi, lo) = (i.max(j), i.min(j));
+                    want[i] += r[hi + lo * ld] * v[j];
+                }
+            }
+            let run = |f: &dyn Fn(&mut [f64], &mut [f64])| {
+                let mut bb = b.clone();
+                let mut y = vec![0.0; m + PAD_ROWS];
+                f(&mut bb, &mut y);
+                (bb, y)
+            };
+            let mut results = vec![(
+                "portable",
+                // SAFETY: the sizes are those `sweep` asserts.
+                run(&|bb, y| unsafe { sweep_in::<Portable>(bb, ld, m, &u, &w, &v, y) }),
+            )];
+            results.push(("dispatched", run(&|bb, y| sweep(bb, ld, m, &u, &w, &v, y))));
+            #[cfg(target_arch = "x86_64")]
+            {
+                if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+                    // SAFETY: AVX2 and FMA were just detected; the sizes are those asserted.
+                    results.push((
+                        "AVX2",
+                        run(&|bb, y| unsafe { sweep_avx2(bb, ld, m, &u, &w, &v, y) }),
+                    ));
+                }
+                if std::is_x86_feature_detected!("avx512f") {
+                    // SAFETY: AVX-512F was just detected; the sizes are those asserted.
+                    results.push((
+                        "AVX-512",
+                        run(&|bb, y| unsafe { sweep_avx512(bb, ld, m, &u, &w, &v, y) }),
+                    ));
+                }
+            }
+            for (name, (bb, y)) in &results {
+                for j in 0..m {
+                    for i in j..m {
+                        assert!(
+                            (bb[i + j * ld] - r[i + j * ld]).abs() < 1e-14,
+                            "{name}, m = {m}"
+                        );
+                    }
+                    // The padding stays zero.
+                    for i in m..m + PAD_ROWS {
+                        assert_eq!(bb[i + j * ld], 0.0, "{name}, m = {m}, padding");
+                    }
+                }
+                for i in 0..m {
+                    assert!((y[i] - want[i]).abs() < 1e-13, "{name}, m = {m}: y[{i}]");
+                }
+            }
+        }
+    }
+}
