@@ -123,13 +123,30 @@ fn finish_nn_stats(
 pub fn gaussians_at(nodes: &Shape, centers: &Shape, sigma: f64) -> Mat<f64> {
     let dim = nodes.dim();
     let (x, c) = (nodes.coords(), centers.coords());
-    let inv = -0.5 / (sigma * sigma);
+    let inv = 0.5 / (sigma * sigma);
     Mat::from_fn(nodes.len(), centers.len(), |i, j| {
         let r2: f64 = (0..dim)
             .map(|a| (x[i * dim + a] - c[j * dim + a]).powi(2))
             .sum();
-        (r2 * inv).exp()
+        gaussian(r2 * inv)
     })
+}
+
+/// Exponents beyond which a Gaussian is stored as an exact zero: `e^−600 ≈ 3·10⁻²⁶¹`, a relative
+/// perturbation no sum of these matrices can see, while the values between it and the smallest
+/// normal number (`e^−708`) are subnormal, and every product that touches a subnormal runs
+/// through a microcode assist ~100× slower: a 150-node contour's `G` had 348 of them, and
+/// `φ = G ψ` (300 modes) took 7.6 ms instead of 0.37 ms.
+const NEGLIGIBLE_EXPONENT: f64 = 600.0;
+
+/// `e^−x` for `x ≥ 0`, an exact zero where it would be negligible (and possibly subnormal).
+#[inline]
+fn gaussian(x: f64) -> f64 {
+    if x > NEGLIGIBLE_EXPONENT {
+        0.0
+    } else {
+        (-x).exp()
+    }
 }
 
 impl GaussianIntegrals {
@@ -153,8 +170,10 @@ impl GaussianIntegrals {
                     d[a] = c[j * dim + a] - c[i * dim + a];
                     r2 += d[a] * d[a];
                 }
-                let e = (-r2 / (4.0 * s2)).exp();
-                let gij = e * e;
+                let arg = r2 / (4.0 * s2);
+                let e = gaussian(arg);
+                // G's exponent is twice Γ's: it reaches the negligible range first.
+                let gij = gaussian(2.0 * arg);
                 let gm = v * e;
                 g[(i, j)] = gij;
                 g[(j, i)] = gij;
