@@ -935,38 +935,70 @@ pub fn robust_prealign(
     search: &RotationSearch,
     keep_orientation: bool,
 ) -> Affine {
-    const TIE: f64 = 1e-3;
+    prealign_search(a, b, dim, search, keep_orientation, true)
+}
+
+/// [`robust_prealign`], its ICP runs on the rayon pool (`parallel`) or on the calling thread.
+/// The same candidates in the same order either way, so the same result.
+pub(crate) fn prealign_search(
+    a: &[f64],
+    b: &[f64],
+    dim: usize,
+    search: &RotationSearch,
+    keep_orientation: bool,
+    parallel: bool,
+) -> Affine {
     let screen = search.screen_iterations.min(search.iterations);
-    // The starts are independent: screen them on the rayon pool, where the other object's modal
-    // solve runs at the same time inside `match_shapes` — whichever finishes first helps here.
-    // `collect` keeps the candidates' order, so the result does not depend on the scheduling.
-    let mut cands: Vec<(Affine, f64)> = rotation_candidates(a, b, dim, search.turns)
-        .into_par_iter()
-        .with_min_len(SCREEN_CHUNK)
-        .map(|c| icp_affine(a, b, dim, c, screen, keep_orientation))
-        .collect();
-    if search.iterations > screen {
-        // The identity (index 0) survives whatever its score: see the tie rule.
-        let mut order: Vec<usize> = (1..cands.len()).collect();
-        order.sort_by(|&x, &y| cands[x].1.total_cmp(&cands[y].1));
-        order.truncate(search.survivors.saturating_sub(1));
-        order.insert(0, 0);
-        cands = order
+    let starts = rotation_candidates(a, b, dim, search.turns);
+    let screened = |c: Affine| icp_affine(a, b, dim, c, screen, keep_orientation);
+    // The starts are independent: screened on the rayon pool when asked. `collect` keeps the
+    // candidates' order, so the result does not depend on the scheduling.
+    let mut cands: Vec<(Affine, f64)> = if parallel {
+        starts
             .into_par_iter()
-            .map(|i| {
-                icp_affine(
-                    a,
-                    b,
-                    dim,
-                    cands[i].0,
-                    search.iterations - screen,
-                    keep_orientation,
-                )
-            })
-            .collect();
+            .with_min_len(SCREEN_CHUNK)
+            .map(screened)
+            .collect()
+    } else {
+        starts.into_iter().map(screened).collect()
+    };
+    if search.iterations > screen {
+        let order = survivor_order(&cands, search);
+        let refined = |i: usize| {
+            icp_affine(
+                a,
+                b,
+                dim,
+                cands[i].0,
+                search.iterations - screen,
+                keep_orientation,
+            )
+        };
+        cands = if parallel {
+            order.into_par_iter().map(refined).collect()
+        } else {
+            order.into_iter().map(refined).collect()
+        };
     }
+    best_start(&cands, dim)
+}
+
+/// The screened starts that run to convergence: the identity (index 0), whatever its score (see
+/// the tie rule of [`best_start`]), then the best-scoring others, `survivors` in all.
+pub(crate) fn survivor_order(screened: &[(Affine, f64)], search: &RotationSearch) -> Vec<usize> {
+    let mut order: Vec<usize> = (1..screened.len()).collect();
+    order.sort_by(|&x, &y| screened[x].1.total_cmp(&screened[y].1));
+    order.truncate(search.survivors.saturating_sub(1));
+    order.insert(0, 0);
+    order
+}
+
+/// The lowest chamfer distance; the identity (index 0) wins ties within 0.1 %, because every
+/// turn of a nearly round outline scores about the same.
+pub(crate) fn best_start(cands: &[(Affine, f64)], dim: usize) -> Affine {
+    const TIE: f64 = 1e-3;
     let mut best: Option<(Affine, f64)> = None;
-    for (k, (aff, score)) in cands.into_iter().enumerate() {
+    for (k, &(aff, score)) in cands.iter().enumerate() {
         let take = match &best {
             None => true,
             Some((_, s)) => score < s * (1.0 - TIE) || (k == 0 && score <= *s),
@@ -1171,6 +1203,12 @@ mod tests {
                 (aff.m[0][0] - rot.cos()).abs() < 0.1 && (aff.m[1][0] - rot.sin()).abs() < 0.1,
                 "rot {rot}"
             );
+            // On the pool or on this thread: the same candidates in the same order, same map.
+            for search in [RotationSearch::default(), RotationSearch::spec(5)] {
+                let par = prealign_search(&a, &b, 2, &search, true, true);
+                let seq = prealign_search(&a, &b, 2, &search, true, false);
+                assert_eq!(par, seq, "rot {rot}");
+            }
         }
     }
 }

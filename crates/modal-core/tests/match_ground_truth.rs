@@ -388,3 +388,77 @@ fn mild_warps_stop_refitting_once_the_one_to_one_pairs_fit() {
     assert!(acc / n >= 0.999, "{}", acc / n);
     assert!(refits <= 27, "{refits} re-fits in {cases} pairs");
 }
+
+/// Everything a result holds, floats as bits: two results are equal only when identical.
+type Fingerprint = (Vec<(usize, usize, u64, bool)>, Vec<u64>, usize, usize);
+
+fn fingerprint(r: &modal_core::MatchResult) -> Fingerprint {
+    (
+        r.pairs
+            .iter()
+            .map(|p| (p.a, p.b, p.cost.to_bits(), p.excess))
+            .collect(),
+        r.affinity.as_slice().iter().map(|v| v.to_bits()).collect(),
+        r.refits,
+        r.solves,
+    )
+}
+
+#[test]
+fn the_schedule_does_not_change_the_matches() {
+    // From outside the rayon pool (this test's thread) a pair runs on the calling thread with a
+    // helper job taking rotation starts and B's solve when it wakes; from inside the pool (a
+    // sequence) on both workers with rayon::join. Every result must be identical, bit for bit,
+    // whoever computed what.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let outlines = outlines();
+    let options = [
+        MatchOptions::default(),
+        MatchOptions::paper(),
+        MatchOptions {
+            position_weight: 1.0,
+            ..MatchOptions::default()
+        },
+    ];
+    for (k, sev) in [Severity::Mild, Severity::Moderate, Severity::Severe]
+        .into_iter()
+        .enumerate()
+    {
+        for seed in 0..3u64 {
+            let case = contour_case(
+                &outlines[(seed as usize + k) % outlines.len()].1,
+                sev,
+                500 + seed,
+            );
+            let (a, b) = shapes(&case);
+            // The same outlines as unordered point sets take the point-set recipe.
+            let (pa, pb) = (
+                Shape::from_points_2d(&case.a, Topology::None).unwrap(),
+                Shape::from_points_2d(&case.b, Topology::None).unwrap(),
+            );
+            for opts in &options {
+                for (x, y) in [(&a, &b), (&pa, &pb)] {
+                    let outside = match_shapes(x, y, opts).unwrap();
+                    let inside = pool.install(|| match_shapes(x, y, opts)).unwrap();
+                    assert_eq!(
+                        fingerprint(&outside),
+                        fingerprint(&inside),
+                        "{sev:?} seed {seed}"
+                    );
+                }
+            }
+        }
+    }
+    // A surface pair (3-D point sets, the surface setting).
+    let g = pressure_grid();
+    let case = surface_case(&g, Severity::Moderate, 7, 60, 66);
+    let a = Shape::new(3, case.a.concat(), Topology::None).unwrap();
+    let b = Shape::new(3, case.b.concat(), Topology::None).unwrap();
+    let opts = MatchOptions::for_surfaces();
+    let outside = match_shapes(&a, &b, &opts).unwrap();
+    let inside = pool.install(|| match_shapes(&a, &b, &opts)).unwrap();
+    assert_eq!(fingerprint(&outside), fingerprint(&inside), "surface");
+}

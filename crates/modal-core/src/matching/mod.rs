@@ -11,6 +11,8 @@ use crate::gaussian::nearest_neighbour_stats_of;
 use crate::search::{best_matches, global_matches, local_matches, ThresholdMode};
 use crate::{modal_basis, ModalError, ModelOptions, Shape, Topology};
 
+mod first_phase;
+
 /// Which search produces the primary matches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Search {
@@ -352,18 +354,6 @@ fn features_of(
 /// (0, 1], a negative or NaN threshold, or `ordered` on shapes that cannot be contours;
 /// model and assignment failures are passed through.
 pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchResult, ModalError> {
-    // A caller outside the rayon pool (Python, one CLI pair) would hand each parallel section
-    // to the pool and sleep until it is done: three times per pair, each a wake-up of a pool
-    // thread and of the caller. Running the whole match on a pool thread makes that one hand-off,
-    // and the sections inside split with the other worker directly. Measured (90 bench_match.py
-    // contour pairs × 10): median 1.32–1.34 → 0.99–1.03 ms per pair.
-    if rayon::current_thread_index().is_none() {
-        return rayon::scope(|_| match_in_pool(a, b, opts));
-    }
-    match_in_pool(a, b, opts)
-}
-
-fn match_in_pool(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchResult, ModalError> {
     if a.dim() != b.dim() {
         return Err(ModalError::InvalidShape(format!(
             "the objects have different dimensions ({} and {})",
@@ -457,31 +447,67 @@ fn match_in_pool(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchResul
             Some(opts.model.kappa * 0.5 * (nearest_neighbour_stats_of(&sa.pts, d).0 + spacing_b));
     }
     let modal = opts.position_weight < 1.0;
-    // The pre-alignment first, on both cores (its rotation starts are screened on the rayon
-    // pool); then B's modes (solved once) and A's first solve side by side. Measured against
-    // running B's solve beside the pre-alignment and A's solve: the rotation search then has one
-    // core, and the critical path is search + solve instead of search/2 + solve.
-    // rayon::join, not a plain thread: a whole sequence matches its pairs on the rayon pool, and
-    // a plain thread joined from inside a rayon worker can deadlock it.
-    let cur = match opts.prealign {
-        Prealign::Normalize => sa.pts.clone(),
-        Prealign::Robust => {
-            let t = align::robust_prealign(&sa.pts, &sb.pts, d, &opts.rotation_search, ordered);
-            into_b_frame(t.apply(&sa.pts), d, ordered)?
+    let prealigned = |parallel: bool| -> Result<Vec<f64>, ModalError> {
+        match opts.prealign {
+            Prealign::Normalize => Ok(sa.pts.clone()),
+            Prealign::Robust => {
+                let t = align::prealign_search(
+                    &sa.pts,
+                    &sb.pts,
+                    d,
+                    &opts.rotation_search,
+                    ordered,
+                    parallel,
+                );
+                into_b_frame(t.apply(&sa.pts), d, ordered)
+            }
         }
     };
-    let (fb, first) = rayon::join(
-        || {
-            modal
-                .then(|| features_of(&sb.pts, d, &sb.topology, &model, skip, k + band))
-                .transpose()
-        },
-        || {
-            modal
-                .then(|| features_of(&cur, d, &sa.topology, &model, skip, k))
-                .transpose()
-        },
-    );
+    let solve_b = || {
+        modal
+            .then(|| features_of(&sb.pts, d, &sb.topology, &model, skip, k + band))
+            .transpose()
+    };
+    let solve_a = |cur: &[f64]| {
+        modal
+            .then(|| features_of(cur, d, &sa.topology, &model, skip, k))
+            .transpose()
+    };
+    let (cur, fb, first) = if rayon::current_thread_index().is_some() {
+        // On the pool (a whole sequence matches its pairs there; its other worker is busy or
+        // about to be): the pre-alignment first, on both cores, then B's modes (solved once)
+        // beside A's first solve. rayon::join, not a plain thread: a plain thread joined from
+        // inside a rayon worker can deadlock it.
+        let cur = prealigned(true)?;
+        let (fb, first) = rayon::join(solve_b, || solve_a(&cur));
+        (cur, fb, first)
+    } else {
+        // From outside the pool: this thread does the whole phase in an order that never waits
+        // for the pool, and a helper job takes rotation starts and B's solve when it wakes
+        // (first_phase.rs).
+        let phase = first_phase::FirstPhase::start(
+            d,
+            (opts.prealign == Prealign::Robust).then(|| first_phase::Screening {
+                a: sa.pts.clone(),
+                b: sb.pts.clone(),
+                search: opts.rotation_search,
+                keep_orientation: ordered,
+            }),
+            modal.then(|| first_phase::SolveB {
+                pts: sb.pts.clone(),
+                topology: sb.topology.clone(),
+                model: model.clone(),
+                skip,
+                modes: k + band,
+            }),
+        );
+        let cur = match phase.prealign() {
+            Some(t) => into_b_frame(t.apply(&sa.pts), d, ordered)?,
+            None => sa.pts.clone(),
+        };
+        let first = solve_a(&cur)?;
+        (cur, phase.b_modes(), Ok(first))
+    };
     let (fb, mut first_fa, mut cur) = (fb?, first?, cur);
     let band = fb.as_ref().map_or(0, |f| f.n_modes.saturating_sub(k));
 
