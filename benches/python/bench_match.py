@@ -292,6 +292,7 @@ def main():
             "  same, per-object sigma": modal(common_sigma=False),
             "contour setting (kappa=1, per-object sigma, 3 re-fits)": modal(kappa=1.0, common_sigma=False, refits=3, position_weight=0.0, cost_power=1.0),
             "same pipeline, aligned positions only": modal(position_weight=1.0),
+            "same pipeline, aligned positions only, search='best'": modal(position_weight=1.0, search="best"),
             "same pipeline, aligned positions only, squared costs": modal(position_weight=1.0, cost_power=1.0),
             "pymodal.match on xy only (2-D modes, kappa=3)": lambda a, b: modal(ordered=False, kappa=3.0, common_sigma=True, refits=0)(a[:, :2], b[:, :2]),
             "pycpd deformable + argmax P": cpd(),
