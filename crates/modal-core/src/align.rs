@@ -919,6 +919,11 @@ impl RotationSearch {
             iterations,
         }
     }
+
+    /// ICP iterations every start gets before the screening ranks them (at most `iterations`).
+    pub(crate) fn screening_iterations(&self) -> usize {
+        self.screen_iterations.min(self.iterations)
+    }
 }
 
 /// Starts screened per rayon task: one start's two ICP iterations take ~10 µs, too little to be
@@ -935,57 +940,55 @@ pub fn robust_prealign(
     search: &RotationSearch,
     keep_orientation: bool,
 ) -> Affine {
-    prealign_search(a, b, dim, search, keep_orientation, true)
+    let screen = search.screening_iterations();
+    // The starts are independent: screened on the rayon pool. `collect` keeps the candidates'
+    // order, so the result does not depend on the scheduling.
+    let screened: Vec<(Affine, f64)> = rotation_candidates(a, b, dim, search.turns)
+        .into_par_iter()
+        .with_min_len(SCREEN_CHUNK)
+        .map(|c| icp_affine(a, b, dim, c, screen, keep_orientation))
+        .collect();
+    finish_search(a, b, dim, search, keep_orientation, &screened, true)
 }
 
-/// [`robust_prealign`], its ICP runs on the rayon pool (`parallel`) or on the calling thread.
-/// The same candidates in the same order either way, so the same result.
-pub(crate) fn prealign_search(
+/// The search after the screening: the survivors of the screened starts (in the order of
+/// [`rotation_candidates`]) run to convergence, on the rayon pool (`parallel`) or on the calling
+/// thread, and the best of them wins. The same map either way.
+pub(crate) fn finish_search(
     a: &[f64],
     b: &[f64],
     dim: usize,
     search: &RotationSearch,
     keep_orientation: bool,
+    screened: &[(Affine, f64)],
     parallel: bool,
 ) -> Affine {
-    let screen = search.screen_iterations.min(search.iterations);
-    let starts = rotation_candidates(a, b, dim, search.turns);
-    let screened = |c: Affine| icp_affine(a, b, dim, c, screen, keep_orientation);
-    // The starts are independent: screened on the rayon pool when asked. `collect` keeps the
-    // candidates' order, so the result does not depend on the scheduling.
-    let mut cands: Vec<(Affine, f64)> = if parallel {
-        starts
-            .into_par_iter()
-            .with_min_len(SCREEN_CHUNK)
-            .map(screened)
-            .collect()
-    } else {
-        starts.into_iter().map(screened).collect()
-    };
-    if search.iterations > screen {
-        let order = survivor_order(&cands, search);
-        let refined = |i: usize| {
-            icp_affine(
-                a,
-                b,
-                dim,
-                cands[i].0,
-                search.iterations - screen,
-                keep_orientation,
-            )
-        };
-        cands = if parallel {
-            order.into_par_iter().map(refined).collect()
-        } else {
-            order.into_iter().map(refined).collect()
-        };
+    let screen = search.screening_iterations();
+    if search.iterations <= screen {
+        return best_start(screened, dim);
     }
+    let order = survivor_order(screened, search);
+    let refined = |i: usize| {
+        icp_affine(
+            a,
+            b,
+            dim,
+            screened[i].0,
+            search.iterations - screen,
+            keep_orientation,
+        )
+    };
+    let cands: Vec<(Affine, f64)> = if parallel {
+        order.into_par_iter().map(refined).collect()
+    } else {
+        order.into_iter().map(refined).collect()
+    };
     best_start(&cands, dim)
 }
 
 /// The screened starts that run to convergence: the identity (index 0), whatever its score (see
 /// the tie rule of [`best_start`]), then the best-scoring others, `survivors` in all.
-pub(crate) fn survivor_order(screened: &[(Affine, f64)], search: &RotationSearch) -> Vec<usize> {
+fn survivor_order(screened: &[(Affine, f64)], search: &RotationSearch) -> Vec<usize> {
     let mut order: Vec<usize> = (1..screened.len()).collect();
     order.sort_by(|&x, &y| screened[x].1.total_cmp(&screened[y].1));
     order.truncate(search.survivors.saturating_sub(1));
@@ -995,7 +998,7 @@ pub(crate) fn survivor_order(screened: &[(Affine, f64)], search: &RotationSearch
 
 /// The lowest chamfer distance; the identity (index 0) wins ties within 0.1 %, because every
 /// turn of a nearly round outline scores about the same.
-pub(crate) fn best_start(cands: &[(Affine, f64)], dim: usize) -> Affine {
+fn best_start(cands: &[(Affine, f64)], dim: usize) -> Affine {
     const TIE: f64 = 1e-3;
     let mut best: Option<(Affine, f64)> = None;
     for (k, &(aff, score)) in cands.iter().enumerate() {
@@ -1205,8 +1208,13 @@ mod tests {
             );
             // On the pool or on this thread: the same candidates in the same order, same map.
             for search in [RotationSearch::default(), RotationSearch::spec(5)] {
-                let par = prealign_search(&a, &b, 2, &search, true, true);
-                let seq = prealign_search(&a, &b, 2, &search, true, false);
+                let par = robust_prealign(&a, &b, 2, &search, true);
+                let screen = search.screening_iterations();
+                let screened: Vec<(Affine, f64)> = rotation_candidates(&a, &b, 2, search.turns)
+                    .into_iter()
+                    .map(|c| icp_affine(&a, &b, 2, c, screen, true))
+                    .collect();
+                let seq = finish_search(&a, &b, 2, &search, true, &screened, false);
                 assert_eq!(par, seq, "rot {rot}");
             }
         }

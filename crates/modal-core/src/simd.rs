@@ -34,6 +34,57 @@ pub(crate) fn clear_upper_state() {
     }
 }
 
+/// Defines `$name`, which runs its body compiled for the widest vector unit this CPU has:
+/// AVX-512F, else AVX2 (with the extra features listed, detected too), else the baseline. The
+/// two x86 copies get their own names (`$avx512`, `$avx2`) so tests can run every path. Each copy
+/// has its own expression: a generic kernel instantiated for that copy's vector type, or the same
+/// `#[inline(always)]` body compiled twice. The optional `requires` block runs first; it asserts
+/// whatever the copies' unsafe kernels need (their `# Safety`), so the dispatcher stays safe.
+macro_rules! widest_simd {
+    (
+        $(#[$meta:meta])*
+        $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)?;
+        $(requires $pre:block;)?
+        avx512 $avx512:ident => $on512:expr;
+        avx2 $avx2:ident [$($feat:tt),*] => $on2:expr;
+        portable => $portable:expr;
+    ) => {
+        $(#[$meta])*
+        $vis fn $name($($arg: $ty),*) $(-> $ret)? {
+            $($pre)?
+            #[cfg(target_arch = "x86_64")]
+            {
+                if std::is_x86_feature_detected!("avx512f") {
+                    // SAFETY: AVX-512F was just detected (and `requires` has run).
+                    return unsafe { $avx512($($arg),*) };
+                }
+                if std::is_x86_feature_detected!("avx2")
+                    $(&& std::is_x86_feature_detected!($feat))*
+                {
+                    // SAFETY: AVX2 and the listed features were just detected (and `requires`
+                    // has run).
+                    return unsafe { $avx2($($arg),*) };
+                }
+            }
+            $portable
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f")]
+        unsafe fn $avx512($($arg: $ty),*) $(-> $ret)? {
+            $on512
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        $(#[target_feature(enable = $feat)])*
+        unsafe fn $avx2($($arg: $ty),*) $(-> $ret)? {
+            $on2
+        }
+    };
+}
+pub(crate) use widest_simd;
+
 #[cfg(test)]
 mod tests {
     #[test]

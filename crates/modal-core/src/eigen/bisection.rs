@@ -10,6 +10,8 @@
 //! trustworthy as `dstebz`'s; what the ratio form gets for free, a safe range, comes from scaling
 //! the pair `(p_{i−1}, p_i)` by a power of two every few steps (exact).
 
+use crate::simd::widest_simd;
+
 /// Lanes are padded to a multiple of this (one AVX-512 register, two AVX2 registers).
 const LANES: usize = 8;
 
@@ -27,7 +29,7 @@ const E2_FLOOR: f64 = 7.523_163_845_262_64e-37; // 2⁻¹²⁰
 /// `diag` and off-diagonal `off`, each to an absolute accuracy of a few `ε·‖T‖` (the accuracy of
 /// the QL iteration). `k` is clamped to the order. The results do not depend on the CPU's
 /// vector width: every path does the same operations in the same order, without FMA.
-pub fn lowest_eigenvalues(diag: &[f64], off: &[f64], k: usize) -> Vec<f64> {
+pub(crate) fn lowest_eigenvalues(diag: &[f64], off: &[f64], k: usize) -> Vec<f64> {
     let n = diag.len();
     let k = k.min(n);
     if k == 0 {
@@ -94,21 +96,13 @@ pub fn lowest_eigenvalues(diag: &[f64], off: &[f64], k: usize) -> Vec<f64> {
     values
 }
 
-/// `counts[j]` ← the number of eigenvalues below `x[j]` (the sign changes of the Sturm
-/// sequence), on the widest vector unit this CPU has. `x.len()` is a multiple of [`LANES`].
-fn sturm_counts(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::is_x86_feature_detected!("avx512f") {
-            // SAFETY: AVX-512F was just detected.
-            return unsafe { sturm_counts_avx512(d, e2, x, counts) };
-        }
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: AVX2 was just detected.
-            return unsafe { sturm_counts_avx2(d, e2, x, counts) };
-        }
-    }
-    sturm_counts_in::<Portable>(d, e2, x, counts);
+widest_simd! {
+    /// `counts[j]` ← the number of eigenvalues below `x[j]` (the sign changes of the Sturm
+    /// sequence), on the widest vector unit this CPU has. `x.len()` is a multiple of [`LANES`].
+    fn sturm_counts(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]);
+    avx512 sturm_counts_avx512 => sturm_counts_in::<x86::Avx512>(d, e2, x, counts);
+    avx2 sturm_counts_avx2 [] => sturm_counts_in::<x86::Avx2>(d, e2, x, counts);
+    portable => sturm_counts_in::<Portable>(d, e2, x, counts);
 }
 
 /// The operations of the recurrence on one vector of lanes. Every implementation does the same
@@ -305,18 +299,6 @@ mod x86 {
             _mm256_storeu_si256(out[..4].as_mut_ptr().cast(), count)
         }
     }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-unsafe fn sturm_counts_avx512(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]) {
-    sturm_counts_in::<x86::Avx512>(d, e2, x, counts);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn sturm_counts_avx2(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]) {
-    sturm_counts_in::<x86::Avx2>(d, e2, x, counts);
 }
 
 /// The vectors of `x` in groups of at most `V::GROUP`, balanced (five vectors with groups of

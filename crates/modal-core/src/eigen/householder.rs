@@ -9,7 +9,7 @@
 
 use faer::{MatMut, MatRef};
 
-use crate::simd::dot;
+use crate::simd::{dot, widest_simd};
 
 /// The tridiagonal matrix of [`tridiagonalize`] and the reflectors that produced it.
 #[derive(Debug, Clone)]
@@ -27,34 +27,14 @@ pub(crate) struct Tridiagonal {
 /// run past the last row (padding contributes nothing) instead of ending in scalar tails.
 const PAD_ROWS: usize = 8;
 
-/// Reduces the symmetric `a` (only its lower triangle is read) to tridiagonal form.
-pub(crate) fn tridiagonalize(a: MatRef<'_, f64>) -> Tridiagonal {
-    // The O(n²) work around the sweeps (the reflectors, `w`, the copies) compiled for the widest
-    // vector unit too.
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::is_x86_feature_detected!("avx512f") {
-            // SAFETY: AVX-512F was just detected.
-            return unsafe { tridiagonalize_avx512(a) };
-        }
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: AVX2 was just detected.
-            return unsafe { tridiagonalize_avx2(a) };
-        }
-    }
-    tridiagonalize_body(a)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-unsafe fn tridiagonalize_avx512(a: MatRef<'_, f64>) -> Tridiagonal {
-    tridiagonalize_body(a)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn tridiagonalize_avx2(a: MatRef<'_, f64>) -> Tridiagonal {
-    tridiagonalize_body(a)
+widest_simd! {
+    /// Reduces the symmetric `a` (only its lower triangle is read) to tridiagonal form. The
+    /// O(n²) work around the sweeps (the reflectors, `w`, the copies) is compiled for the widest
+    /// vector unit too.
+    pub(crate) fn tridiagonalize(a: MatRef<'_, f64>) -> Tridiagonal;
+    avx512 tridiagonalize_avx512 => tridiagonalize_body(a);
+    avx2 tridiagonalize_avx2 [] => tridiagonalize_body(a);
+    portable => tridiagonalize_body(a);
 }
 
 #[inline(always)]
@@ -245,49 +225,21 @@ impl Tridiagonal {
     }
 }
 
-/// `rows ← H₀ ⋯ H_{n−2} rows` (`rows`: `n` rows of `width` values, a multiple of 8), on the
-/// widest vector unit this CPU has.
-fn apply_reflectors(vecs: &[f64], ld: usize, tau: &[f64], width: usize, rows: &mut [f64]) {
-    assert!(width.is_multiple_of(8) && rows.len().is_multiple_of(width));
-    let n = rows.len() / width;
-    assert!(tau.len() + 1 >= n && vecs.len() >= ld * n.saturating_sub(1));
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::is_x86_feature_detected!("avx512f") {
-            // SAFETY: AVX-512F was just detected; the sizes were asserted above.
-            return unsafe { apply_reflectors_avx512(vecs, ld, tau, width, rows) };
-        }
-        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-            // SAFETY: AVX2 and FMA were just detected; the sizes were asserted above.
-            return unsafe { apply_reflectors_avx2(vecs, ld, tau, width, rows) };
-        }
-    }
-    // SAFETY: the sizes were asserted above.
-    unsafe { apply_reflectors_in::<Portable>(vecs, ld, tau, width, rows) }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-unsafe fn apply_reflectors_avx512(
-    vecs: &[f64],
-    ld: usize,
-    tau: &[f64],
-    width: usize,
-    rows: &mut [f64],
-) {
-    apply_reflectors_in::<x86::Avx512>(vecs, ld, tau, width, rows)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn apply_reflectors_avx2(
-    vecs: &[f64],
-    ld: usize,
-    tau: &[f64],
-    width: usize,
-    rows: &mut [f64],
-) {
-    apply_reflectors_in::<x86::Avx2>(vecs, ld, tau, width, rows)
+widest_simd! {
+    /// `rows ← H₀ ⋯ H_{n−2} rows` (`rows`: `n` rows of `width` values, a multiple of 8), on the
+    /// widest vector unit this CPU has.
+    fn apply_reflectors(vecs: &[f64], ld: usize, tau: &[f64], width: usize, rows: &mut [f64]);
+    requires {
+        assert!(width.is_multiple_of(8) && rows.len().is_multiple_of(width));
+        let n = rows.len() / width;
+        assert!(tau.len() + 1 >= n && vecs.len() >= ld * n.saturating_sub(1));
+    };
+    avx512 apply_reflectors_avx512 =>
+        apply_reflectors_in::<x86::Avx512>(vecs, ld, tau, width, rows);
+    avx2 apply_reflectors_avx2 ["fma"] =>
+        apply_reflectors_in::<x86::Avx2>(vecs, ld, tau, width, rows);
+    // SAFETY: `requires` asserted the sizes.
+    portable => unsafe { apply_reflectors_in::<Portable>(vecs, ld, tau, width, rows) };
 }
 
 /// One vector of columns at a time: its dot products with the reflector accumulate in two
@@ -366,55 +318,21 @@ fn householder_in_place(x: &mut [f64]) -> (f64, f64) {
     (beta, tau)
 }
 
-/// The fused sweep over the lower triangle of the `m × m` block `b` (leading dimension `ld`):
-/// `b ← b − u wᵀ − w uᵀ`, then `y = b v`, in one pass, on the widest vector unit this CPU has.
-/// `b` has `PAD_ROWS` zero rows below the block and `COLS` zero columns after it; `u`, `w`, `v`
-/// are zero past `m`, so whole vectors can run into the padding.
-fn sweep(b: &mut [f64], ld: usize, m: usize, u: &[f64], w: &[f64], v: &[f64], y: &mut [f64]) {
-    let span = m + PAD_ROWS;
-    assert!(b.len() >= (m + COLS - 1) * ld + span && ld >= span);
-    assert!(u.len() >= span && w.len() >= span && v.len() >= span && y.len() >= span);
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::is_x86_feature_detected!("avx512f") {
-            // SAFETY: AVX-512F was just detected; the sizes were asserted above.
-            return unsafe { sweep_avx512(b, ld, m, u, w, v, y) };
-        }
-        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-            // SAFETY: AVX2 and FMA were just detected; the sizes were asserted above.
-            return unsafe { sweep_avx2(b, ld, m, u, w, v, y) };
-        }
-    }
-    // SAFETY: the sizes were asserted above.
-    unsafe { sweep_in::<Portable>(b, ld, m, u, w, v, y) }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-unsafe fn sweep_avx512(
-    b: &mut [f64],
-    ld: usize,
-    m: usize,
-    u: &[f64],
-    w: &[f64],
-    v: &[f64],
-    y: &mut [f64],
-) {
-    sweep_in::<x86::Avx512>(b, ld, m, u, w, v, y)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn sweep_avx2(
-    b: &mut [f64],
-    ld: usize,
-    m: usize,
-    u: &[f64],
-    w: &[f64],
-    v: &[f64],
-    y: &mut [f64],
-) {
-    sweep_in::<x86::Avx2>(b, ld, m, u, w, v, y)
+widest_simd! {
+    /// The fused sweep over the lower triangle of the `m × m` block `b` (leading dimension `ld`):
+    /// `b ← b − u wᵀ − w uᵀ`, then `y = b v`, in one pass, on the widest vector unit this CPU
+    /// has. `b` has `PAD_ROWS` zero rows below the block and `COLS` zero columns after it; `u`,
+    /// `w`, `v` are zero past `m`, so whole vectors can run into the padding.
+    fn sweep(b: &mut [f64], ld: usize, m: usize, u: &[f64], w: &[f64], v: &[f64], y: &mut [f64]);
+    requires {
+        let span = m + PAD_ROWS;
+        assert!(b.len() >= (m + COLS - 1) * ld + span && ld >= span);
+        assert!(u.len() >= span && w.len() >= span && v.len() >= span && y.len() >= span);
+    };
+    avx512 sweep_avx512 => sweep_in::<x86::Avx512>(b, ld, m, u, w, v, y);
+    avx2 sweep_avx2 ["fma"] => sweep_in::<x86::Avx2>(b, ld, m, u, w, v, y);
+    // SAFETY: `requires` asserted the sizes.
+    portable => unsafe { sweep_in::<Portable>(b, ld, m, u, w, v, y) };
 }
 
 /// The vector operations of the sweep.
@@ -543,8 +461,9 @@ mod x86 {
     #[derive(Clone, Copy)]
     pub(super) struct Avx512(__m512d);
 
-    // SAFETY (for every method): only reached from `sweep_avx512`, whose caller detected
-    // AVX-512F; the pointers are valid for 8 values (the trait's contract).
+    // SAFETY (for every method): only reached from the AVX-512 copies (`sweep_avx512`,
+    // `apply_reflectors_avx512`), whose caller detected AVX-512F; the pointers are valid for 8
+    // values (the trait's contract).
     impl Lanes for Avx512 {
         const WIDTH: usize = 8;
         #[inline(always)]
@@ -600,8 +519,9 @@ mod x86 {
     #[derive(Clone, Copy)]
     pub(super) struct Avx2(__m256d);
 
-    // SAFETY (for every method): only reached from `sweep_avx2`, whose caller detected AVX2 and
-    // FMA; the pointers are valid for 4 values (the trait's contract).
+    // SAFETY (for every method): only reached from the AVX2 copies (`sweep_avx2`,
+    // `apply_reflectors_avx2`), whose caller detected AVX2 and FMA; the pointers are valid for 4
+    // values (the trait's contract).
     impl Lanes for Avx2 {
         const WIDTH: usize = 4;
         #[inline(always)]

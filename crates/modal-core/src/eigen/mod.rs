@@ -2,17 +2,15 @@
 //!
 //! `K x = λ B x` with `B` positive definite is reduced to a standard problem by `B = L Lᵀ`,
 //! `C = L⁻¹ K L⁻ᵀ`, `C y = λ y`, `x = L⁻ᵀ y` (so `xᵀ B x = I`). The standard problem is
-//! tridiagonalised with faer's blocked Householder reduction; then the tridiagonal eigenvalues
-//! come from the root-free QL iteration (O(n²), no vectors), the vectors of the `k` wanted ones
-//! from inverse iteration on the tridiagonal matrix (O(n k), re-orthogonalised inside clusters as
-//! LAPACK's `dstein` does), and the Householder back-transform is applied to an `n × k` block only
-//! (2n²k flops instead of 2n³). This route also serves the full spectrum (`k = n`): it measured
-//! 14 % faster than faer's divide-and-conquer at 300 dof and 29 % faster at 900
-//! (`cargo bench --bench eigen`); faer's dense solver remains for tiny matrices.
-//!
-//! When only the lowest `k` modes are wanted and the other eigenvalues are not
-//! ([`symmetric_eigen_lowest`], what a modal solve asks for), the eigenvalues come from lane-parallel
-//! bisection instead of the QL (`bisection`): `O(k n)` vector work instead of an `O(n²)` chain.
+//! tridiagonalised by this crate's own Householder reduction (`householder`: four-column fused
+//! sweeps, faster than faer's one-column sweep at every order measured); the eigenvalues of the
+//! tridiagonal matrix come from the root-free QL iteration (all of them, O(n²), no vectors) or,
+//! when only the lowest `k` are wanted and the others are not ([`symmetric_eigen_lowest`], what
+//! a modal solve asks for), from lane-parallel bisection (`bisection`: `O(k n)` vector work
+//! instead of an `O(n²)` chain); the vectors of the `k` wanted ones from inverse iteration on the
+//! tridiagonal matrix (O(n k), re-orthogonalised inside clusters as LAPACK's `dstein` does); and
+//! the Householder back-transform is applied to an `n × k` block only (2n²k flops instead of
+//! 2n³). faer's dense solver remains for tiny matrices.
 
 // Index loops over several matrices at once read better than zipped iterators here.
 #![allow(clippy::needless_range_loop)]
@@ -23,10 +21,10 @@ use faer::linalg::{cholesky, triangular_solve};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Mat, MatMut, MatRef, Par};
 
-use crate::simd::clear_upper_state;
+use crate::simd::{clear_upper_state, widest_simd};
 use crate::ModalError;
 
-pub mod bisection;
+mod bisection;
 mod householder;
 
 /// Eigenvalues (ascending) and the matching eigenvectors (columns).
@@ -494,50 +492,20 @@ fn eig2(a: f64, b: f64, c: f64) -> (f64, f64) {
     }
 }
 
-/// Eigenvectors of the symmetric tridiagonal matrix (`diag`, `off`) for the given ascending
-/// eigenvalues, by inverse iteration with Gram–Schmidt inside clusters (after LAPACK `dstein`).
-/// Compiled for the widest vector unit this CPU has (the interleaved lanes fill it); the same
-/// operations in the same order on every path, so the same vectors.
-fn tridiagonal_inverse_iteration(
-    diag: &[f64],
-    off: &[f64],
-    values: &[f64],
-    out: MatMut<'_, f64>,
-) -> Result<(), ModalError> {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::is_x86_feature_detected!("avx512f") {
-            // SAFETY: AVX-512F was just detected.
-            return unsafe { inverse_iteration_avx512(diag, off, values, out) };
-        }
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: AVX2 was just detected.
-            return unsafe { inverse_iteration_avx2(diag, off, values, out) };
-        }
-    }
-    inverse_iteration_body(diag, off, values, out)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-unsafe fn inverse_iteration_avx512(
-    diag: &[f64],
-    off: &[f64],
-    values: &[f64],
-    out: MatMut<'_, f64>,
-) -> Result<(), ModalError> {
-    inverse_iteration_body(diag, off, values, out)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn inverse_iteration_avx2(
-    diag: &[f64],
-    off: &[f64],
-    values: &[f64],
-    out: MatMut<'_, f64>,
-) -> Result<(), ModalError> {
-    inverse_iteration_body(diag, off, values, out)
+widest_simd! {
+    /// Eigenvectors of the symmetric tridiagonal matrix (`diag`, `off`) for the given ascending
+    /// eigenvalues, by inverse iteration with Gram–Schmidt inside clusters (after LAPACK
+    /// `dstein`). Compiled for the widest vector unit this CPU has (the interleaved lanes fill
+    /// it); the same operations in the same order on every path, so the same vectors.
+    fn tridiagonal_inverse_iteration(
+        diag: &[f64],
+        off: &[f64],
+        values: &[f64],
+        out: MatMut<'_, f64>,
+    ) -> Result<(), ModalError>;
+    avx512 inverse_iteration_avx512 => inverse_iteration_body(diag, off, values, out);
+    avx2 inverse_iteration_avx2 [] => inverse_iteration_body(diag, off, values, out);
+    portable => inverse_iteration_body(diag, off, values, out);
 }
 
 #[inline(always)]

@@ -51,7 +51,7 @@ impl Shared {
     /// Screens starts until none is left.
     fn screen(&self) {
         let Some(s) = &self.screening else { return };
-        let iters = s.search.screen_iterations.min(s.search.iterations);
+        let iters = s.search.screening_iterations();
         loop {
             let i = self.next.fetch_add(1, Ordering::Relaxed);
             if i >= self.starts.len() {
@@ -70,13 +70,11 @@ impl Shared {
         }
     }
 
-    /// Solves B unless the other thread has claimed it; true when this thread did.
-    fn solve_b(&self) -> bool {
-        let Some(job) = &self.solve_b else {
-            return false;
-        };
+    /// Solves B unless the other thread has claimed it.
+    fn solve_b(&self) {
+        let Some(job) = &self.solve_b else { return };
         if self.b_claimed.swap(true, Ordering::AcqRel) {
-            return false;
+            return;
         }
         let out = features_of(
             &job.pts,
@@ -87,7 +85,6 @@ impl Shared {
             job.modes,
         );
         let _ = self.b_modes.set(out.map(Some));
-        true
     }
 }
 
@@ -132,32 +129,22 @@ impl FirstPhase {
     }
 
     /// The rotation search's result (`None` when no screening was given): the starts this
-    /// thread screens, the survivors to convergence, the best by [`align::best_start`] — the
-    /// same candidates and order as [`align::robust_prealign`], so the same map.
+    /// thread screens, then [`align::finish_search`] on this thread — the same candidates and
+    /// order as [`align::robust_prealign`], so the same map.
     pub(super) fn prealign(&self) -> Option<Affine> {
         let shared = &self.shared;
         shared.screen();
         let s = shared.screening.as_ref()?;
         let screened: Vec<(Affine, f64)> = shared.screened.iter().map(|r| *wait(r)).collect();
-        let screen = s.search.screen_iterations.min(s.search.iterations);
-        let cands = if s.search.iterations > screen {
-            align::survivor_order(&screened, &s.search)
-                .into_iter()
-                .map(|i| {
-                    align::icp_affine(
-                        &s.a,
-                        &s.b,
-                        shared.dim,
-                        screened[i].0,
-                        s.search.iterations - screen,
-                        s.keep_orientation,
-                    )
-                })
-                .collect()
-        } else {
-            screened
-        };
-        Some(align::best_start(&cands, shared.dim))
+        Some(align::finish_search(
+            &s.a,
+            &s.b,
+            shared.dim,
+            &s.search,
+            s.keep_orientation,
+            &screened,
+            false,
+        ))
     }
 
     /// B's modes (`Ok(None)` when no solve was given): solved here if the helper has not

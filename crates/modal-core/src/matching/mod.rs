@@ -447,22 +447,12 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
             Some(opts.model.kappa * 0.5 * (nearest_neighbour_stats_of(&sa.pts, d).0 + spacing_b));
     }
     let modal = opts.position_weight < 1.0;
-    let prealigned = |parallel: bool| -> Result<Vec<f64>, ModalError> {
-        match opts.prealign {
-            Prealign::Normalize => Ok(sa.pts.clone()),
-            Prealign::Robust => {
-                let t = align::prealign_search(
-                    &sa.pts,
-                    &sb.pts,
-                    d,
-                    &opts.rotation_search,
-                    ordered,
-                    parallel,
-                );
-                into_b_frame(t.apply(&sa.pts), d, ordered)
-            }
-        }
+    // A's coordinates after the rotation search's map (none with `Prealign::Normalize`).
+    let in_b_frame = |t: Option<Affine>| match t {
+        Some(t) => into_b_frame(t.apply(&sa.pts), d, ordered),
+        None => Ok(sa.pts.clone()),
     };
+    let robust = opts.prealign == Prealign::Robust;
     let solve_b = || {
         modal
             .then(|| features_of(&sb.pts, d, &sb.topology, &model, skip, k + band))
@@ -478,7 +468,10 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         // about to be): the pre-alignment first, on both cores, then B's modes (solved once)
         // beside A's first solve. rayon::join, not a plain thread: a plain thread joined from
         // inside a rayon worker can deadlock it.
-        let cur = prealigned(true)?;
+        let cur =
+            in_b_frame(robust.then(|| {
+                align::robust_prealign(&sa.pts, &sb.pts, d, &opts.rotation_search, ordered)
+            }))?;
         let (fb, first) = rayon::join(solve_b, || solve_a(&cur));
         (cur, fb, first)
     } else {
@@ -487,7 +480,7 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         // (first_phase.rs).
         let phase = first_phase::FirstPhase::start(
             d,
-            (opts.prealign == Prealign::Robust).then(|| first_phase::Screening {
+            robust.then(|| first_phase::Screening {
                 a: sa.pts.clone(),
                 b: sb.pts.clone(),
                 search: opts.rotation_search,
@@ -501,10 +494,7 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
                 modes: k + band,
             }),
         );
-        let cur = match phase.prealign() {
-            Some(t) => into_b_frame(t.apply(&sa.pts), d, ordered)?,
-            None => sa.pts.clone(),
-        };
+        let cur = in_b_frame(phase.prealign())?;
         let first = solve_a(&cur)?;
         (cur, phase.b_modes(), Ok(first))
     };
