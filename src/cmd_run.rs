@@ -257,6 +257,19 @@ fn print_summary(name: &str, out: &std::path::Path, r: &SequenceResult) {
         mean(&|p| p.optimisation_percent),
         mean(&|p| p.mean_cost)
     );
+    if !r.skipped_pairs.is_empty() || !r.skipped_frames.is_empty() {
+        let first = r
+            .skipped_pairs
+            .first()
+            .map(|s| s.reason.as_str())
+            .or(r.skipped_frames.first().map(|s| s.reason.as_str()))
+            .unwrap_or_default();
+        println!(
+            "skipped {} pairs and {} frames that could not be matched (reasons in pairs.csv and summary.json; first: {first})",
+            r.skipped_pairs.len(),
+            r.skipped_frames.len()
+        );
+    }
     println!(
         "results in {}/ (pairs.csv, pairs.json, tracks.csv, summary.json, figures/)",
         out.display()

@@ -7,6 +7,7 @@ mod cmd_assign;
 mod cmd_match;
 mod cmd_run;
 mod modal_args;
+mod outdir;
 mod output;
 
 #[derive(Parser)]
@@ -34,6 +35,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    outdir::install_interrupt_handler();
     let result = match cli.command {
         Command::Run(args) => cmd_run::run(args),
         Command::Demo(args) => cmd_run::demo(args),

@@ -1,7 +1,7 @@
 //! File input and output shared by the subcommands: small CSV readers and atomic writes.
 
 use pedo_io::figure::{self, Figure};
-use pedo_io::sequence::{PairRow, SequenceOptions, SequenceResult};
+use pedo_io::sequence::{PairRow, SequenceOptions, SequenceResult, SkippedPair};
 use std::path::Path;
 
 /// Reads a dense CSV matrix of f64 (comma, semicolon, tab or space separated; `inf`, `-inf` and
@@ -44,73 +44,7 @@ pub fn read_cost_csv(path: &Path) -> Result<(Vec<f64>, usize, usize), String> {
     Ok((values, rows, cols.unwrap_or(0)))
 }
 
-/// An output folder whose files appear all together or not at all: everything is written into a
-/// hidden staging folder inside it and moved into place by [`OutDir::commit`]; a run that fails
-/// half-way leaves the folder as it was.
-pub struct OutDir {
-    root: std::path::PathBuf,
-    staging: std::path::PathBuf,
-    written: std::sync::Mutex<Vec<String>>,
-    committed: bool,
-}
-
-impl OutDir {
-    pub fn create(root: &Path) -> Result<Self, String> {
-        let staging = root.join(format!(".pedomatch-staging-{}", std::process::id()));
-        std::fs::create_dir_all(&staging).map_err(|e| format!("{}: {e}", root.display()))?;
-        Ok(Self {
-            root: root.to_path_buf(),
-            staging,
-            written: Default::default(),
-            committed: false,
-        })
-    }
-
-    /// Writes `rel` (which may include sub-folders) into the staging folder.
-    pub fn write(&self, rel: &str, contents: &[u8]) -> Result<(), String> {
-        let path = self.staging.join(rel);
-        if let Some(parent) = path.parent() {
-            std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
-        }
-        std::fs::write(&path, contents)
-            .map_err(|e| format!("{}: {e}", self.root.join(rel).display()))?;
-        self.written
-            .lock()
-            .expect("no panics while holding the lock")
-            .push(rel.to_string());
-        Ok(())
-    }
-
-    /// Moves every written file into place (each by an atomic rename).
-    pub fn commit(mut self) -> Result<(), String> {
-        let written = std::mem::take(
-            &mut *self
-                .written
-                .lock()
-                .expect("no panics while holding the lock"),
-        );
-        for rel in &written {
-            let dest = self.root.join(rel);
-            if let Some(parent) = dest.parent() {
-                std::fs::create_dir_all(parent)
-                    .map_err(|e| format!("{}: {e}", parent.display()))?;
-            }
-            std::fs::rename(self.staging.join(rel), &dest)
-                .map_err(|e| format!("{}: {e}", dest.display()))?;
-        }
-        self.committed = true;
-        let _ = std::fs::remove_dir_all(&self.staging);
-        Ok(())
-    }
-}
-
-impl Drop for OutDir {
-    fn drop(&mut self) {
-        if !self.committed {
-            let _ = std::fs::remove_dir_all(&self.staging);
-        }
-    }
-}
+pub use crate::outdir::OutDir;
 
 /// Formats a CSV table; fields are numbers or identifiers, so no quoting is needed.
 pub fn csv_table(header: &[&str], rows: impl IntoIterator<Item = Vec<String>>) -> String {
@@ -133,7 +67,7 @@ fn pair_row_json(r: &PairRow) -> serde_json::Value {
     })
 }
 
-const PAIR_HEADER: [&str; 12] = [
+const PAIR_HEADER: [&str; 14] = [
     "id_a",
     "id_b",
     "frame_a",
@@ -146,6 +80,8 @@ const PAIR_HEADER: [&str; 12] = [
     "optimisation_percent",
     "excess_matches",
     "mean_cost",
+    "status",
+    "reason",
 ];
 
 fn pair_row_csv(r: &PairRow) -> Vec<String> {
@@ -162,7 +98,44 @@ fn pair_row_csv(r: &PairRow) -> Vec<String> {
         format!("{:.1}", r.optimisation_percent),
         r.excess_matches.to_string(),
         format!("{:.6}", r.mean_cost),
+        "ok".to_string(),
+        String::new(),
     ]
+}
+
+/// A pair the run could not match: its identity, empty measures, and why.
+fn skipped_pair_csv(r: &SequenceResult, s: &SkippedPair) -> Vec<String> {
+    let (oa, ob) = (&r.objects[s.a], &r.objects[s.b]);
+    let mut row = vec![
+        oa.id.to_string(),
+        ob.id.to_string(),
+        (oa.frame + 1).to_string(),
+        (ob.frame + 1).to_string(),
+        oa.shape.len().to_string(),
+        ob.shape.len().to_string(),
+    ];
+    row.extend(std::iter::repeat_n(String::new(), 6));
+    row.push("skipped".to_string());
+    row.push(csv_quote(&s.reason));
+    row
+}
+
+/// Quotes a free-text CSV field (RFC 4180): in double quotes, inner quotes doubled.
+pub fn csv_quote(field: &str) -> String {
+    format!("\"{}\"", field.replace('"', "\"\""))
+}
+
+fn skipped_json(r: &SequenceResult) -> serde_json::Value {
+    serde_json::json!({
+        "frames": r.skipped_frames.iter().map(|s| serde_json::json!({
+            "frame": s.frame, "reason": s.reason,
+        })).collect::<Vec<_>>(),
+        "pairs": r.skipped_pairs.iter().map(|s| serde_json::json!({
+            "id_a": r.objects[s.a].id, "id_b": r.objects[s.b].id,
+            "frame_a": r.objects[s.a].frame, "frame_b": r.objects[s.b].frame,
+            "reason": s.reason,
+        })).collect::<Vec<_>>(),
+    })
 }
 
 /// Writes every result of a sequence run: tables, per-pair matches, tracks, figures, summary.
@@ -177,7 +150,14 @@ pub fn write_sequence(
     use rayon::prelude::*;
     dir.write(
         "pairs.csv",
-        csv_table(&PAIR_HEADER, r.pairs.iter().map(|p| pair_row_csv(&p.row))).as_bytes(),
+        csv_table(
+            &PAIR_HEADER,
+            r.pairs
+                .iter()
+                .map(|p| pair_row_csv(&p.row))
+                .chain(r.skipped_pairs.iter().map(|s| skipped_pair_csv(r, s))),
+        )
+        .as_bytes(),
     )?;
     let rows: Vec<_> = r.pairs.iter().map(|p| pair_row_json(&p.row)).collect();
     dir.write("pairs.json", pretty(&rows)?.as_bytes())?;
@@ -287,6 +267,7 @@ pub fn write_sequence(
         "merges": r.merges.iter().map(|(is, j)| serde_json::json!({
             "ids": is.iter().map(|&i| r.objects[i].id).collect::<Vec<_>>(), "into": r.objects[*j].id,
         })).collect::<Vec<_>>(),
+        "skipped": skipped_json(r),
         "mean_local_percent": mean(|p| p.local_percent),
         "mean_optimisation_percent": mean(|p| p.optimisation_percent),
         "mean_cost": mean(|p| p.mean_cost),

@@ -51,6 +51,14 @@ pub fn second_neighbour_edges(n: usize) -> Vec<[usize; 2]> {
     (0..n).map(|k| [k, (k + 2) % n]).collect()
 }
 
+/// Bars `(k, k + n/2 mod n)` across a closed loop.
+pub fn opposite_edges(n: usize) -> Vec<[usize; 2]> {
+    (0..n)
+        .map(|k| [k, (k + n / 2) % n])
+        .filter(|[a, b]| a != b)
+        .collect()
+}
+
 /// Ear-clipping triangulation of a simple polygon (2-D, row-major `coords`); `None` if the
 /// polygon is not simple (no ear can be found).
 pub fn ear_clip(coords: &[f64]) -> Option<Vec<[usize; 3]>> {
@@ -76,14 +84,25 @@ pub fn ear_clip(coords: &[f64]) -> Option<Vec<[usize; 3]>> {
     let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| {
         (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
     };
+    // Quality of a triangle: twice its area over its longest edge squared (0 for a sliver).
+    let quality = |a: (f64, f64), b: (f64, f64), c: (f64, f64)| {
+        let d2 = |u: (f64, f64), v: (f64, f64)| (u.0 - v.0).powi(2) + (u.1 - v.1).powi(2);
+        cross(a, b, c) / d2(a, b).max(d2(b, c)).max(d2(c, a)).max(f64::MIN_POSITIVE)
+    };
     let mut tris = Vec::with_capacity(n - 2);
     while idx.len() > 3 {
         let m = idx.len();
-        let mut clipped = false;
+        // Clip the fattest ear, not the first one: first-found ears along straight runs of a
+        // pixel outline leave slivers whose near-zero stiffness reads as a mechanism.
+        let mut best: Option<(usize, f64)> = None;
         for k in 0..m {
             let (ia, ib, ic) = (idx[(k + m - 1) % m], idx[k], idx[(k + 1) % m]);
             let (a, b, c) = (p(ia), p(ib), p(ic));
             if cross(a, b, c) <= eps {
+                continue;
+            }
+            let q = quality(a, b, c);
+            if best.is_some_and(|(_, bq)| bq >= q) {
                 continue;
             }
             let blocked = idx.iter().any(|&q| {
@@ -93,17 +112,15 @@ pub fn ear_clip(coords: &[f64]) -> Option<Vec<[usize; 3]>> {
                 let x = p(q);
                 cross(a, b, x) >= -eps && cross(b, c, x) >= -eps && cross(c, a, x) >= -eps
             });
-            if blocked {
-                continue;
+            if !blocked {
+                best = Some((k, q));
             }
-            tris.push([ia, ib, ic]);
-            idx.remove(k);
-            clipped = true;
-            break;
         }
-        if !clipped {
+        let Some((k, _)) = best else {
             return None;
-        }
+        };
+        tris.push([idx[(k + m - 1) % m], idx[k], idx[(k + 1) % m]]);
+        idx.remove(k);
     }
     let (a, b, c) = (p(idx[0]), p(idx[1]), p(idx[2]));
     if cross(a, b, c) <= eps {
@@ -274,10 +291,15 @@ pub fn model_edges(shape: &Shape) -> Result<(Vec<[usize; 2]>, Vec<Hinge>), Modal
                 ));
             }
             let mut edges = ring_edges(n);
-            match ear_clip(shape.coords()) {
-                Some(tris) => edges.extend(triangle_edges(&tris)),
-                None => edges.extend(second_neighbour_edges(n)),
+            // A triangulated polygon is minimally rigid, so one thin triangle (a straight run of
+            // a pixel outline) already reads as a mechanism. The second-neighbour bars and one
+            // bar across the loop from every node over-brace it; a contour that is not a simple
+            // polygon (resampled outlines can touch themselves at narrow necks) gets these alone.
+            if let Some(tris) = ear_clip(shape.coords()) {
+                edges.extend(triangle_edges(&tris));
             }
+            edges.extend(second_neighbour_edges(n));
+            edges.extend(opposite_edges(n));
             let mut edges: Vec<[usize; 2]> = edges
                 .into_iter()
                 .map(|[a, b]| [a.min(b), a.max(b)])

@@ -315,7 +315,30 @@ pub struct SequenceResult {
     pub splits: Vec<(usize, Vec<usize>)>,
     /// Contour model: several objects continue as one object of the next frame.
     pub merges: Vec<(Vec<usize>, usize)>,
+    /// Frames whose objects could not be built, with the reason; the run goes on without them.
+    pub skipped_frames: Vec<SkippedFrame>,
+    /// Pairs that could not be matched (degenerate objects, a structure with too many
+    /// zero-energy modes, ...), with the reason; the run goes on without them.
+    pub skipped_pairs: Vec<SkippedPair>,
     pub timings: StageTimings,
+}
+
+/// A frame left out of a run: its objects could not be built.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SkippedFrame {
+    /// Frame index (0-based) in the recording.
+    pub frame: usize,
+    /// The error, as one line.
+    pub reason: String,
+}
+
+/// A pair of objects (indices into [`SequenceResult::objects`]) that could not be matched.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SkippedPair {
+    pub a: usize,
+    pub b: usize,
+    /// The matching error, as one line.
+    pub reason: String,
 }
 
 /// What [`run_sequence`] reports to a progress callback.
@@ -360,23 +383,11 @@ pub fn run_sequence(
         pairs: candidate_pairs,
         splits,
         merges,
+        skipped_frames,
     } = build_objects(recording, options, start, end, progress)?;
     let t1 = Instant::now();
 
-    let done = AtomicUsize::new(0);
-    let total = candidate_pairs.len();
-    let pairs: Vec<PairMatch> = candidate_pairs
-        .par_iter()
-        .map(|&(a, b)| {
-            let r = match_pair(&objects, a, b, options);
-            progress(
-                Stage::Matching,
-                done.fetch_add(1, Ordering::Relaxed) + 1,
-                total,
-            );
-            r
-        })
-        .collect::<Result<_>>()?;
+    let (pairs, skipped_pairs) = match_all(&objects, &candidate_pairs, options, progress);
     let t2 = Instant::now();
     let tracks = chain_tracks(&objects, &pairs);
     let timings = StageTimings {
@@ -390,8 +401,43 @@ pub fn run_sequence(
         tracks,
         splits,
         merges,
+        skipped_frames,
+        skipped_pairs,
         timings,
     })
+}
+
+/// Matches every candidate pair (in parallel). One pair that cannot be matched never sinks the
+/// recording: it is reported with its reason and left out.
+fn match_all(
+    objects: &[SequenceObject],
+    candidates: &[(usize, usize)],
+    options: &SequenceOptions,
+    progress: &(dyn Fn(Stage, usize, usize) + Sync),
+) -> (Vec<PairMatch>, Vec<SkippedPair>) {
+    let done = AtomicUsize::new(0);
+    let outcomes: Vec<std::result::Result<PairMatch, SkippedPair>> = candidates
+        .par_iter()
+        .map(|&(a, b)| {
+            let r = match_pair(objects, a, b, options).map_err(|e| SkippedPair {
+                a,
+                b,
+                reason: e.to_string(),
+            });
+            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress(Stage::Matching, n, candidates.len());
+            r
+        })
+        .collect();
+    let mut pairs = Vec::with_capacity(outcomes.len());
+    let mut skipped = Vec::new();
+    for outcome in outcomes {
+        match outcome {
+            Ok(p) => pairs.push(p),
+            Err(s) => skipped.push(s),
+        }
+    }
+    (pairs, skipped)
 }
 
 fn match_pair(
@@ -490,6 +536,7 @@ struct Built {
     pairs: Vec<(usize, usize)>,
     splits: Vec<(usize, Vec<usize>)>,
     merges: Vec<(Vec<usize>, usize)>,
+    skipped_frames: Vec<SkippedFrame>,
 }
 
 /// The outer contours of a frame worth modelling, largest first (so object 0 of a frame is its
@@ -500,7 +547,8 @@ fn frame_contours(
     options: &SequenceOptions,
 ) -> Result<Vec<Contour>> {
     let mut cs = contours(&recording.frame(t)?, &options.contour)?;
-    cs.retain(|c| !c.hole && c.points.len() >= options.min_nodes.max(3));
+    // Only contours that make a valid shape become objects (`to_shape` cannot fail later).
+    cs.retain(|c| !c.hole && c.points.len() >= options.min_nodes.max(3) && c.to_shape().is_ok());
     cs.sort_by(|a, b| b.area().total_cmp(&a.area()));
     Ok(cs)
 }
@@ -518,6 +566,7 @@ fn build_objects(
         pairs: Vec::new(),
         splits: Vec::new(),
         merges: Vec::new(),
+        skipped_frames: Vec::new(),
     };
     let done = AtomicUsize::new(0);
     let tick = |total: usize| {
@@ -529,14 +578,25 @@ fn build_objects(
     };
     match options.model {
         ObjectModel::Contour => {
-            let per_frame: Vec<Vec<Contour>> = (start..end)
+            let outcomes: Vec<Result<Vec<Contour>>> = (start..end)
                 .into_par_iter()
                 .map(|t| {
                     let cs = frame_contours(recording, t, options);
                     tick(end - start);
                     cs
                 })
-                .collect::<Result<_>>()?;
+                .collect();
+            // A frame whose contours cannot be extracted has no objects; the run goes on.
+            let mut per_frame = Vec::with_capacity(outcomes.len());
+            for (k, outcome) in outcomes.into_iter().enumerate() {
+                per_frame.push(outcome.unwrap_or_else(|e| {
+                    built.skipped_frames.push(SkippedFrame {
+                        frame: start + k,
+                        reason: e.to_string(),
+                    });
+                    Vec::new()
+                }));
+            }
             let pairings = crate::track::track(&per_frame, PairingMethod::default())?;
             let mut first = Vec::with_capacity(per_frame.len());
             for (k, cs) in per_frame.iter().enumerate() {
@@ -571,25 +631,25 @@ fn build_objects(
         }
         ObjectModel::Surface => {
             let threshold = options.surface.preprocess.threshold.unwrap_or(0.0);
-            let per_frame: Vec<Option<Shape>> = (start..end)
+            let outcomes: Vec<Result<Option<Shape>>> = (start..end)
                 .into_par_iter()
                 .map(|t| {
-                    let frame = recording.frame(t)?;
-                    let shape = if frame.max() > threshold {
-                        match crate::surface::surface(&frame, &options.surface) {
-                            Ok(s) => Some(s.to_shape()?).filter(|s| keep(s)),
-                            // A frame whose few loaded sensels cannot be triangulated has no
-                            // surface object, like a frame with no contact.
-                            Err(IoError::InvalidInput(_)) => None,
-                            Err(e) => return Err(e),
-                        }
-                    } else {
-                        None
-                    };
+                    let shape = frame_surface(recording, t, threshold, options, &keep);
                     tick(end - start);
-                    Ok(shape)
+                    shape
                 })
-                .collect::<Result<_>>()?;
+                .collect();
+            // A frame whose surface cannot be built has no object; the run goes on.
+            let mut per_frame = Vec::with_capacity(outcomes.len());
+            for (k, outcome) in outcomes.into_iter().enumerate() {
+                per_frame.push(outcome.unwrap_or_else(|e| {
+                    built.skipped_frames.push(SkippedFrame {
+                        frame: start + k,
+                        reason: e.to_string(),
+                    });
+                    None
+                }));
+            }
             let mut previous: Option<usize> = None;
             for (k, shape) in per_frame.into_iter().enumerate() {
                 match shape {
@@ -661,9 +721,84 @@ fn build_objects(
     Ok(built)
 }
 
+/// The brightness surface of frame `t`, or `None` when the frame has no contact or too few
+/// loaded sensels to triangulate (like a frame with no contact).
+fn frame_surface(
+    recording: &Recording,
+    t: usize,
+    threshold: f64,
+    options: &SequenceOptions,
+    keep: &dyn Fn(&Shape) -> bool,
+) -> Result<Option<Shape>> {
+    let frame = recording.frame(t)?;
+    if frame.max() <= threshold {
+        return Ok(None);
+    }
+    match crate::surface::surface(&frame, &options.surface) {
+        Ok(s) => Ok(Some(s.to_shape()?).filter(|s| keep(s))),
+        Err(IoError::InvalidInput(_)) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
 /// Sum of the frame's values: the load the isocontour model picks its frame by.
 fn frame_load(recording: &Recording, t: usize) -> f64 {
     recording
         .frame_slice(t)
         .map_or(0.0, |f| f.iter().map(|&v| v as f64).sum())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A recording of `frames`, each drawn by `draw(frame, row, col) -> loaded`.
+    fn recording(frames: usize, draw: impl Fn(usize, usize, usize) -> bool) -> Recording {
+        let (rows, cols) = (24, 24);
+        let mut data = Vec::with_capacity(frames * rows * cols);
+        for f in 0..frames {
+            for r in 0..rows {
+                for c in 0..cols {
+                    data.push(if draw(f, r, c) { 100.0 } else { 0.0 });
+                }
+            }
+        }
+        Recording::new(frames, rows, cols, data, vec![true; rows * cols]).unwrap()
+    }
+
+    fn disc(cx: f64, cy: f64, radius: f64) -> impl Fn(usize, usize) -> bool {
+        move |r, c| (r as f64 - cy).hypot(c as f64 - cx) <= radius
+    }
+
+    #[test]
+    fn a_pair_that_cannot_be_matched_is_skipped_with_its_reason() {
+        let rec = recording(4, |f, r, c| disc(11.0 + f as f64 * 0.5, 11.0, 6.0)(r, c));
+        let options = SequenceOptions::default();
+        let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+        assert_eq!(run.pairs.len(), 3);
+        assert!(run.skipped_pairs.is_empty() && run.skipped_frames.is_empty());
+        // Object 2 gets two coincident nodes, as an outline touching itself has.
+        let mut objects = run.objects.clone();
+        let shape = &objects[2].shape;
+        let mut coords = shape.coords().to_vec();
+        coords[2] = coords[0];
+        coords[3] = coords[1];
+        objects[2].shape = Shape::new(2, coords, shape.topology().clone()).unwrap();
+        let candidates = [(0, 1), (1, 2), (2, 3)];
+        let (pairs, skipped) = match_all(&objects, &candidates, &options, &|_, _, _| {});
+        assert_eq!(
+            pairs.iter().map(|p| (p.a, p.b)).collect::<Vec<_>>(),
+            vec![(0, 1)]
+        );
+        assert_eq!(
+            skipped.iter().map(|s| (s.a, s.b)).collect::<Vec<_>>(),
+            vec![(1, 2), (2, 3)]
+        );
+        assert!(
+            skipped.iter().all(|s| s.reason.contains("coincide")),
+            "{skipped:?}"
+        );
+        // The tracks of what was matched are still chained.
+        assert!(!chain_tracks(&objects, &pairs).is_empty());
+    }
 }
