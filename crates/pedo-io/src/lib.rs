@@ -26,6 +26,6 @@ pub mod track;
 
 pub use contour::{contour_shapes, contours, Contour, ContourMethod, ContourOptions, Resample};
 pub use error::{IoError, Result};
-pub use formats::{detect_format, parse_bytes, read_recording};
+pub use formats::{detect_format, parse_bytes, read_recording, sniff_format};
 pub use grid::{CoordUnits, Grid};
 pub use recording::{Format, FrameMeasures, Recording};
