@@ -335,3 +335,20 @@ fn recording_from_array_with_pitch_rate_units_and_mask() {
     assert!(masked.clone().with_frame_rate(f64::NAN).is_err());
     assert!(Recording::from_array(2, 1, 3, vec![1.0; 3], None).is_err());
 }
+
+#[test]
+fn npz_written_by_numpy() {
+    // np.savez and np.savez_compressed of MUN104L and its half, NaN where the template is 0.
+    let grid = read_recording(data("MUN104L.csv")).unwrap();
+    for file in ["numpy-MUN104L-stored.npz", "numpy-MUN104L-deflated.npz"] {
+        let rec = read_recording(data(file)).unwrap();
+        assert_eq!(rec.format, Some(Format::Npz), "{file}");
+        assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (2, 63, 27), "{file}");
+        let g = grid.frame_slice(0).unwrap();
+        for (i, &v) in g.iter().enumerate() {
+            assert_eq!(rec.sensor_mask()[i], v != 0.0, "{file}");
+            assert_eq!(rec.data()[i], v);
+            assert_eq!(rec.data()[g.len() + i], v / 2.0);
+        }
+    }
+}
