@@ -27,7 +27,10 @@ pub enum IoError {
     Format { path: String, msg: String },
     /// The file is not a recording of any supported format: `recognised` says what the content
     /// looks like (or that nothing was recognised); the message lists the supported formats.
-    #[error("{path}: not a supported pressure recording: {recognised}; supported: {}", crate::formats::SUPPORTED)]
+    #[error(
+        "{path}: not a supported pressure recording: {recognised}; supported: {}",
+        crate::formats::SUPPORTED
+    )]
     UnknownFormat { path: String, recognised: String },
     /// An argument is out of range or inconsistent.
     #[error("invalid input: {0}")]

@@ -165,12 +165,43 @@ impl Rng {
 
 /// Tokens that steer mutations into the readers' structure: markers, sizes, separators.
 const TOKENS: &[&[u8]] = &[
-    b"\n", b"\r\n", b"\t", b",", b";", b"=", b"-1", b"B", b"NaN", b"0", b"@@", b"[Data]",
-    b"[Data1]", b"[Data999999999]", b"[Technical]", b"SensCountX=", b"SensCountY=",
-    b"MinIdx=", b"MaxIdx=1000000000", b"ROWS 100000", b"COLS 100000", b"END_FRAME ",
-    b"ASCII_DATA @@", b"Frame ", b"Matrix: 10000x10000", b"Force", b"\x0c", b"999999999999",
-    b"4294967295", b"-9223372036854775808", b"1e308", b"\xff\xff\xff\xff", b"\0\0\0\0",
-    b"PK\x01\x02", b"PK\x05\x06", b"(1000000000, 1000, 1000)", b"'shape': (",
+    b"\n",
+    b"\r\n",
+    b"\t",
+    b",",
+    b";",
+    b"=",
+    b"-1",
+    b"B",
+    b"NaN",
+    b"0",
+    b"@@",
+    b"[Data]",
+    b"[Data1]",
+    b"[Data999999999]",
+    b"[Technical]",
+    b"SensCountX=",
+    b"SensCountY=",
+    b"MinIdx=",
+    b"MaxIdx=1000000000",
+    b"ROWS 100000",
+    b"COLS 100000",
+    b"END_FRAME ",
+    b"ASCII_DATA @@",
+    b"Frame ",
+    b"Matrix: 10000x10000",
+    b"Force",
+    b"\x0c",
+    b"999999999999",
+    b"4294967295",
+    b"-9223372036854775808",
+    b"1e308",
+    b"\xff\xff\xff\xff",
+    b"\0\0\0\0",
+    b"PK\x01\x02",
+    b"PK\x05\x06",
+    b"(1000000000, 1000, 1000)",
+    b"'shape': (",
 ];
 
 fn mutate_once(rng: &mut Rng, v: &mut Vec<u8>, seeds: &[(String, Format, Vec<u8>)]) {
@@ -207,8 +238,8 @@ fn mutate_once(rng: &mut Rng, v: &mut Vec<u8>, seeds: &[(String, Format, Vec<u8>
             let i = rng.below(n);
             if let Some(s) = (i..n).find(|&k| v[k].is_ascii_digit()) {
                 let e = (s..n).find(|&k| !v[k].is_ascii_digit()).unwrap_or(n);
-                let t: &[u8] = [&b"0"[..], b"1000000000", b"99999999999999999999", b"-1"]
-                    [rng.below(4)];
+                let t: &[u8] =
+                    [&b"0"[..], b"1000000000", b"99999999999999999999", b"-1"][rng.below(4)];
                 v.splice(s..e, t.iter().copied());
             }
         }
@@ -259,17 +290,32 @@ fn fuzz_seeds() -> Vec<(String, Format, Vec<u8>)> {
     let png = pedo_io::formats::images::frame_to_png16(&small, 0, 1.0).unwrap();
     let seeds = vec![
         ("FrasP01L.asf", Format::Asf, sample("FrasP01L.asf").to_vec()),
-        ("synthetic-walk.lst", Format::Lst, sample("synthetic-walk.lst").to_vec()),
+        (
+            "synthetic-walk.lst",
+            Format::Lst,
+            sample("synthetic-walk.lst").to_vec(),
+        ),
         ("MUN104L.csv", Format::Csv, read("MUN104L.csv")),
         ("MDwalk2.apd", Format::Zebris, read("MDwalk2.apd")),
         ("footscan excerpt", Format::Footscan, footscan),
         ("tekscan csv excerpt", Format::TekscanCsv, tekscan),
         ("small.npy", Format::Npy, npy::recording_to_npy(&small)),
-        ("numpy stored .npz", Format::Npz, read("numpy-MUN104L-stored.npz")),
-        ("numpy deflated .npz", Format::Npz, read("numpy-MUN104L-deflated.npz")),
+        (
+            "numpy stored .npz",
+            Format::Npz,
+            read("numpy-MUN104L-stored.npz"),
+        ),
+        (
+            "numpy deflated .npz",
+            Format::Npz,
+            read("numpy-MUN104L-deflated.npz"),
+        ),
         ("small.png", Format::Png, png),
     ];
-    seeds.into_iter().map(|(n, f, b)| (n.to_string(), f, b)).collect()
+    seeds
+        .into_iter()
+        .map(|(n, f, b)| (n.to_string(), f, b))
+        .collect()
 }
 
 /// Runs one input through the seed's reader and through whatever the sniffer picks; returns
@@ -322,7 +368,10 @@ fn mutation_fuzz_every_reader() {
         };
         let big = match outcome {
             Ok(b) => b,
-            Err(_) => panic!("execution {i} (seed {name}) panicked; input kept in {}", keep()),
+            Err(_) => panic!(
+                "execution {i} (seed {name}) panicked; input kept in {}",
+                keep()
+            ),
         };
         // Every input is at most a few hundred kB: a reader allocating more than 16 MiB plus
         // 512 bytes per input byte trusted a size field it should have capped.

@@ -568,7 +568,14 @@ fn smoothing_that_would_fold_keeps_the_mesh_valid() {
     let s = surface(&g, &SurfaceOptions::default()).unwrap();
     assert_valid(&s);
     // Without smoothing the same triangles come out: smoothing moves points, never topology.
-    let raw = surface(&g, &SurfaceOptions { laplacian: None, ..Default::default() }).unwrap();
+    let raw = surface(
+        &g,
+        &SurfaceOptions {
+            laplacian: None,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(raw.triangles, s.triangles);
     // Far harsher smoothing than the defaults on a cone and on the real frame: still valid.
     let harsh = Laplacian {
@@ -577,7 +584,13 @@ fn smoothing_that_would_fold_keeps_the_mesh_valid() {
         ..Default::default()
     };
     for g in [cone(15, 9, 4.0, 7.0, 5.0), g] {
-        let s = surface(&g, &SurfaceOptions { laplacian: Some(harsh), ..Default::default() });
+        let s = surface(
+            &g,
+            &SurfaceOptions {
+                laplacian: Some(harsh),
+                ..Default::default()
+            },
+        );
         assert_valid(&s.unwrap());
     }
 }

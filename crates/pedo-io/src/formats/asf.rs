@@ -16,10 +16,10 @@ fn length_mm(v: &str) -> Option<f64> {
     let mut it = v.split_whitespace();
     let x = parse_num(it.next()?)?;
     let f = match it.next().map(|u| u.to_ascii_lowercase()).as_deref() {
-        None | Some("mm") => 1.0,
-        Some("cm") => 10.0,
+        None | Some("mm") | Some("millimeters") | Some("millimetres") => 1.0,
+        Some("cm") | Some("centimeters") | Some("centimetres") => 10.0,
         Some("in") | Some("inch") | Some("inches") => 25.4,
-        Some("m") => 1000.0,
+        Some("m") | Some("meters") | Some("metres") => 1000.0,
         _ => return None,
     };
     Some(x * f)
@@ -186,7 +186,12 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
             let rest = t
                 .strip_prefix("Frame")
                 .ok_or_else(|| err(ln, format!("expected `Frame N`, found {:?}", trunc(t))))?;
-            rest.trim()
+            // I-Scan exports follow the number with the frame's time and raw sum:
+            // `Frame 1, 0,, 12/2/2019 6:21:52.34PM,,,Raw Sum=,,310`.
+            rest.split(',')
+                .next()
+                .unwrap_or("")
+                .trim()
                 .parse::<i64>()
                 .map_err(|_| err(ln, format!("bad frame number in {:?}", trunc(t))))?;
             if expected.is_some_and(|e| n_frames >= e) {

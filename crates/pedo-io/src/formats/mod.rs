@@ -6,11 +6,12 @@ pub mod images;
 pub mod lst;
 pub mod npy;
 pub mod npz;
+pub mod pedar;
 pub mod pedcad;
 
 use crate::error::{IoError, Result};
 use crate::recording::{Format, Recording};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Text lines of a Latin-1 (or ASCII/UTF-8 treated bytewise) file with their 1-based numbers and
 /// without the line end (`\n` or `\r\n`).
@@ -50,8 +51,16 @@ pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 }
 
 /// The formats [`read_recording`] understands, as listed in [`IoError::UnknownFormat`].
-pub const SUPPORTED: &str = "Tekscan .asf and CSV export, novel emed .lst, Zebris .apd, \
-RSscan/Materialise footscan export, CSV grid, NumPy .npy/.npz, PNG/TIFF images";
+pub const SUPPORTED: &str = "Tekscan .asf and CSV export, novel emed .lst, novel pedar .asc, \
+Zebris .apd, RSscan/Materialise footscan export, CSV grid, NumPy .npy/.npz, PNG/TIFF images";
+
+/// What reading needs besides the file itself.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ReadOptions {
+    /// A pedar sensor-layout table (see [`pedar::PedarLayout::parse`]); `None`: the bundled
+    /// layout of the common insole.
+    pub layout: Option<PathBuf>,
+}
 
 /// How many leading bytes [`sniff_format`] looks at.
 pub const SNIFF_BYTES: usize = 16 * 1024;
@@ -125,7 +134,13 @@ fn sniff_text(text: &str) -> Option<Format> {
     if text.contains("ASCII_DATA") {
         return Some(Format::Asf);
     }
-    let tekscan_keys = ["DATA_TYPE", "ROWS", "COLS", "SECONDS_PER_FRAME", "START_FRAME"];
+    let tekscan_keys = [
+        "DATA_TYPE",
+        "ROWS",
+        "COLS",
+        "SECONDS_PER_FRAME",
+        "START_FRAME",
+    ];
     if tekscan_keys.iter().filter(|k| starts(k)).count() >= 2 && starts("Frame") {
         return Some(Format::TekscanCsv);
     }
@@ -137,6 +152,13 @@ fn sniff_text(text: &str) -> Option<Format> {
         } else {
             Format::Footscan
         });
+    }
+    if (text.contains("scanning rate [Hz]") || text.contains("mask definition"))
+        && lines
+            .iter()
+            .any(|l| l.to_ascii_lowercase().starts_with("time["))
+    {
+        return Some(Format::Pedar);
     }
     if text.contains("Matrix:") && (text.contains("Page") || text.contains("Pict-No")) {
         return Some(Format::Lst);
@@ -170,13 +192,22 @@ fn looks_like_grid(lines: &[&str]) -> bool {
 
 /// One phrase saying what a text that is not a known recording looks like.
 fn describe_text(text: &str) -> String {
-    let first = text.lines().map(str::trim).find(|l| !l.is_empty()).unwrap_or("");
+    let first = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty())
+        .unwrap_or("");
     let l = text.to_ascii_lowercase();
     if l.contains("pedar") {
-        return "a novel pedar ASCII export (pedar exports are not read yet)".into();
+        return "text mentioning pedar, but without a pedar ASCII export's header \
+                (`scanning rate [Hz]`, `time[secs]` column)"
+            .into();
     }
     if first.starts_with('{') || first.starts_with('[') {
-        return format!("JSON or other structured text, first line {:?}", asf::trunc(first));
+        return format!(
+            "JSON or other structured text, first line {:?}",
+            asf::trunc(first)
+        );
     }
     if first.starts_with('<') {
         return "XML/HTML text".into();
@@ -198,14 +229,27 @@ pub fn parse_bytes(bytes: &[u8], format: Format, name: &str) -> Result<Recording
         Format::TekscanCsv => asf::parse_tekscan_csv(bytes, name)?,
         Format::Zebris | Format::Footscan => pedcad::parse_pedcad(bytes, name)?,
         Format::Npz => npz::parse_npz(bytes, name)?,
-        Format::Pedar => {
-            return Err(IoError::format(name, "pedar exports need a sensor layout"))
-        }
+        Format::Pedar => pedar::parse_pedar(bytes, name, pedar::PedarLayout::bundled())?,
     };
     if matches!(format, Format::Png | Format::Tiff) {
         rec.format = Some(format);
     }
     Ok(rec)
+}
+
+/// [`parse_bytes`] with reading options (a pedar layout file).
+pub fn parse_bytes_with(
+    bytes: &[u8],
+    format: Format,
+    name: &str,
+    opts: &ReadOptions,
+) -> Result<Recording> {
+    match (format, &opts.layout) {
+        (Format::Pedar, Some(layout)) => {
+            pedar::parse_pedar(bytes, name, &pedar::PedarLayout::from_file(layout)?)
+        }
+        _ => parse_bytes(bytes, format, name),
+    }
 }
 
 /// Reads a recording from a file, a folder of images, or a numbered image sequence.
@@ -216,6 +260,11 @@ pub fn parse_bytes(bytes: &[u8], format: Format, name: &str) -> Result<Recording
 /// - a file: the format is decided by its content ([`sniff_format`]); the extension only breaks
 ///   ties. A file that is no recording is an [`IoError::UnknownFormat`] saying what it looks like.
 pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording> {
+    read_recording_with(path, &ReadOptions::default())
+}
+
+/// [`read_recording`] with reading options (a pedar layout file for `--layout FILE`).
+pub fn read_recording_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Recording> {
     let path = path.as_ref();
     if path.is_dir() {
         return images::read_image_folder(path);
@@ -227,7 +276,6 @@ pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording> {
     }
     let bytes = read_bytes(path)?;
     let name = path.display().to_string();
-    let format =
-        sniff_format(path, &bytes).map_err(|what| IoError::unknown_format(&name, what))?;
-    parse_bytes(&bytes, format, &name)
+    let format = sniff_format(path, &bytes).map_err(|what| IoError::unknown_format(&name, what))?;
+    parse_bytes_with(&bytes, format, &name, opts)
 }

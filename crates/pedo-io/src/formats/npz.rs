@@ -68,9 +68,15 @@ fn members(b: &[u8], name: &str) -> Result<Vec<Member>> {
         let e = e.ok_or_else(|| fail("bad central directory entry"))?;
         let field = |i| u16_at(e, i).ok_or_else(|| fail("truncated directory entry"));
         let word = |i| u32_at(e, i).ok_or_else(|| fail("truncated directory entry"));
-        let (n, x, c) = (field(28)? as usize, field(30)? as usize, field(32)? as usize);
+        let (n, x, c) = (
+            field(28)? as usize,
+            field(30)? as usize,
+            field(32)? as usize,
+        );
         let raw_name = e.get(46..46 + n).ok_or_else(|| fail("truncated name"))?;
-        let extra = e.get(46 + n..46 + n + x).ok_or_else(|| fail("truncated extra field"))?;
+        let extra = e
+            .get(46 + n..46 + n + x)
+            .ok_or_else(|| fail("truncated extra field"))?;
         let mut m = Member {
             name: String::from_utf8_lossy(raw_name).into_owned(),
             method: field(10)?,
@@ -95,9 +101,9 @@ fn apply_zip64(m: &mut Member, mut extra: &[u8]) {
             return;
         };
         if id == 1 {
-            let mut vals = body.chunks_exact(8).map(|c| {
-                u64::from_le_bytes(c.try_into().expect("chunks of 8 bytes"))
-            });
+            let mut vals = body
+                .chunks_exact(8)
+                .map(|c| u64::from_le_bytes(c.try_into().expect("chunks of 8 bytes")));
             for f in [&mut m.uncompressed, &mut m.compressed, &mut m.local_offset] {
                 if *f == 0xFFFF_FFFF {
                     match vals.next() {
@@ -126,7 +132,11 @@ fn member_bytes(b: &[u8], m: &Member, name: &str) -> Result<Vec<u8>> {
     let data = start
         .checked_add(size)
         .and_then(|end| local.get(start..end))
-        .ok_or_else(|| fail(format!("truncated: {size} bytes stated, the archive ends first")))?;
+        .ok_or_else(|| {
+            fail(format!(
+                "truncated: {size} bytes stated, the archive ends first"
+            ))
+        })?;
     let out = match m.method {
         0 => data.to_vec(),
         8 => {
@@ -179,6 +189,9 @@ pub fn parse_npz(bytes: &[u8], name: &str) -> Result<Recording> {
     }
     Err(IoError::format(
         name,
-        format!("no member is a 2-D or 3-D numeric array ({})", tried.join("; ")),
+        format!(
+            "no member is a 2-D or 3-D numeric array ({})",
+            tried.join("; ")
+        ),
     ))
 }

@@ -121,7 +121,11 @@ pub fn parse_pedcad(bytes: &[u8], name: &str) -> Result<Recording> {
                 ));
             }
             let mut k = 0usize;
-            for tok in t.split(['\t', ';']).map(str::trim).filter(|s| !s.is_empty()) {
+            for tok in t
+                .split(['\t', ';'])
+                .map(str::trim)
+                .filter(|s| !s.is_empty())
+            {
                 if k == cols {
                     return Err(err(ln, format!("more than SensCountY = {cols} values")));
                 }
@@ -271,7 +275,10 @@ fn build(h: Header, grids: Vec<Grid>, name: &str, last_ln: usize) -> Result<Reco
     let mm = mm_per(h.unit_distance.as_deref()).ok_or_else(|| {
         IoError::format(
             name,
-            format!("unknown UnitDistance {:?}", h.unit_distance.unwrap_or_default()),
+            format!(
+                "unknown UnitDistance {:?}",
+                h.unit_distance.unwrap_or_default()
+            ),
         )
     })?;
     // LDistX runs along the rows (x of the plate = row index), LDistY along a row.
@@ -285,7 +292,10 @@ fn build(h: Header, grids: Vec<Grid>, name: &str, last_ln: usize) -> Result<Reco
             let s = s_per(h.unit_time.as_deref()).ok_or_else(|| {
                 IoError::format(
                     name,
-                    format!("unknown UnitTime {:?}", h.unit_time.clone().unwrap_or_default()),
+                    format!(
+                        "unknown UnitTime {:?}",
+                        h.unit_time.clone().unwrap_or_default()
+                    ),
                 )
             })?;
             rec.dt_s = Some(td * s);
@@ -293,10 +303,12 @@ fn build(h: Header, grids: Vec<Grid>, name: &str, last_ln: usize) -> Result<Reco
     }
     rec.units = h.unit_pressure.unwrap_or_default();
     let zebris = h.source.to_ascii_lowercase().contains("zebris");
-    rec.format = Some(if zebris || (h.min_idx.is_none() && h.time_diff.is_none()) {
-        Format::Zebris
-    } else {
-        Format::Footscan
-    });
+    rec.format = Some(
+        if zebris || (h.min_idx.is_none() && h.time_diff.is_none()) {
+            Format::Zebris
+        } else {
+            Format::Footscan
+        },
+    );
     Ok(rec)
 }
