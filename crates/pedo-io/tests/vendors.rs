@@ -524,3 +524,21 @@ fn iscan_csv_export_with_timed_frame_lines() {
         assert_eq!(sum, printed, "frame {t}");
     }
 }
+
+#[test]
+fn real_emed_export_with_total_force() {
+    // Real novel emed export (pressuRe inst/extdata/emed_test.lst, MIT), pages 1-10; its Force
+    // lines end with the page's total force.
+    let b = bytes("emed-test-1-10.lst");
+    let (rec, forces) = pedo_io::formats::lst::parse_lst(&b, "emed").unwrap();
+    assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (10, 95, 64));
+    assert_eq!((rec.pitch_mm, rec.dt_s, rec.sensel_area()), (Some([5.0, 5.0]), Some(0.01), Some(25.0)));
+    let ms = rec.measures(0.0);
+    for (t, (m, f)) in ms.iter().zip(&forces).enumerate() {
+        // Force [N] = sum(kPa) x 0.25 cm² / 10; printed forces are rounded to 0.01 N.
+        let printed: f64 = f.column_forces.iter().sum();
+        let tol = 0.005 * f.column_forces.len() as f64 + 1e-9;
+        assert!((m.total_force - printed).abs() <= tol, "page {t}: {} vs {printed}", m.total_force);
+    }
+    assert!(ms.iter().any(|m| m.total_force > 10.0));
+}

@@ -147,7 +147,11 @@ pub fn parse_lst(bytes: &[u8], name: &str) -> Result<(Recording, Vec<LstPageForc
                 _ => &fields,
             };
             if fields.first() == Some(&"Force") {
-                let vals = &fields[1..];
+                let mut vals = &fields[1..];
+                // With row forces, the Force line may end with the page's total force.
+                if pg.has_row_force && vals.len() == pg.columns.len() + 1 {
+                    vals = &vals[..pg.columns.len()];
+                }
                 if vals.len() != pg.columns.len() {
                     return Err(err(
                         ln,
