@@ -3,8 +3,9 @@
 //! samples in tests/data, that fails on any panic, hang or outsized allocation.
 //!
 //! The fuzzer runs `PEDO_FUZZ_EXECS` executions in total (default 20 000, a few seconds); the
-//! full campaign is `PEDO_FUZZ_EXECS=1000000 cargo test -p pedo-io --release --test fuzz
-//! mutation_fuzz -- --nocapture`. `PEDO_FUZZ_SEED` changes the random sequence.
+//! full campaign is `PEDO_FUZZ_EXECS=1000000 cargo test -p pedo-io --test fuzz mutation_fuzz --
+//! --nocapture` (a debug build, so integer overflows panic too). `PEDO_FUZZ_SEED` changes the
+//! random sequence.
 
 use pedo_io::formats::{asf, csv, lst, npy};
 use pedo_io::surface::{surface, SurfaceOptions};
@@ -281,6 +282,19 @@ fn fuzz_seeds() -> Vec<(String, Format, Vec<u8>)> {
     let footscan = footscan[..footscan.find("[Data3]").unwrap()]
         .replace("MaxIdx=10", "MaxIdx=2")
         .into_bytes();
+    // Short excerpts of the real pedar, I-Scan and emed exports (headers stating the counts).
+    let pedar = text("pedar-example-3.01-4.00.asc");
+    let cut = pedar.find("     3.05000").unwrap();
+    let pedar = pedar[..cut]
+        .replace("total time [secs]:   1.000", "total time [secs]:   0.040")
+        .into_bytes();
+    let iscan = text("iscan-test-1-20.csv");
+    let iscan = format!("{}@@\n", &iscan[..iscan.find("Frame 3,").unwrap()])
+        .replace("END_FRAME 20", "END_FRAME 2")
+        .into_bytes();
+    let emed = read("emed-test-1-10.lst");
+    let second = emed.iter().position(|&b| b == 0x0c).unwrap();
+    let emed = emed[..second].to_vec();
     let small = pedo_io::Recording::new(2, 3, 4, (0..24).map(|v| v as f32).collect(), {
         let mut m = vec![true; 12];
         m[5] = false;
@@ -311,6 +325,9 @@ fn fuzz_seeds() -> Vec<(String, Format, Vec<u8>)> {
             read("numpy-MUN104L-deflated.npz"),
         ),
         ("small.png", Format::Png, png),
+        ("pedar excerpt", Format::Pedar, pedar),
+        ("iscan excerpt", Format::Asf, iscan),
+        ("real emed excerpt", Format::Lst, emed),
     ];
     seeds
         .into_iter()
