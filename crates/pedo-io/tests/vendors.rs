@@ -427,7 +427,10 @@ fn pedar_export_on_the_bundled_layout() {
     let rec = read_recording(data("pedar-example-3.01-4.00.asc")).unwrap();
     assert_eq!(rec.format, Some(Format::Pedar));
     assert_eq!(rec.n_frames(), 100);
-    assert_eq!((rec.dt_s, rec.units.as_str(), rec.pitch_mm), (Some(0.01), "kPa", None));
+    assert_eq!(
+        (rec.dt_s, rec.units.as_str(), rec.pitch_mm),
+        (Some(0.01), "kPa", None)
+    );
     // Every sensor's value sits in its cells: with the layout's cell map, each frame's image
     // reproduces the 198 columns exactly, and no cell outside a sensor is a sensor.
     let layout = PedarLayout::bundled();
@@ -435,14 +438,17 @@ fn pedar_export_on_the_bundled_layout() {
     let d = pedar::parse_pedar_data(text.as_bytes(), "p").unwrap();
     assert_eq!(d.columns[0], (Insole::Left, 1));
     assert_eq!(d.columns[99], (Insole::Right, 1));
-    for t in 0..100 {
+    for (t, (_, vals)) in rows.iter().enumerate() {
         let img = rec.frame_slice(t).unwrap();
-        let file_max = rows[t].1.iter().copied().fold(0.0, f64::max);
+        let file_max = vals.iter().copied().fold(0.0, f64::max);
         let img_max = img.iter().fold(0.0f32, |a, &b| a.max(b)) as f64;
         assert_eq!(img_max, file_max, "frame {t}");
         // The image holds only the file's values (and 0).
         for &v in img {
-            assert!(v == 0.0 || rows[t].1.contains(&(v as f64)), "frame {t}: {v}");
+            assert!(
+                v == 0.0 || rows[t].1.contains(&(v as f64)),
+                "frame {t}: {v}"
+            );
         }
     }
     // Each sensor covers some cells: at least 198 sensor cells, all sensors distinguishable.
@@ -450,19 +456,38 @@ fn pedar_export_on_the_bundled_layout() {
     // Left and right insoles are separate objects: frame 50 loads both (left 4262, right 792 kPa
     // summed in the file), and the contours at level 0 fall on both sides of the gap.
     let t = (0..100)
-        .find(|&t| rows[t].1[..99].iter().sum::<f64>() > 500.0 && rows[t].1[99..].iter().sum::<f64>() > 500.0)
+        .find(|&t| {
+            rows[t].1[..99].iter().sum::<f64>() > 500.0
+                && rows[t].1[99..].iter().sum::<f64>() > 500.0
+        })
         .unwrap();
     let g = rec.frame(t).unwrap();
-    let cs = pedo_io::contours(&g, &pedo_io::ContourOptions { level: Some(0.0), ..Default::default() }).unwrap();
+    let cs = pedo_io::contours(
+        &g,
+        &pedo_io::ContourOptions {
+            level: Some(0.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let (left, right) = pedar::parse_pedar_insoles(text.as_bytes(), "p", layout).unwrap();
     let split = left.cols() as f64 + 0.5; // the two empty columns after the left insole
-    let xs: Vec<f64> = cs.iter().map(|c| c.points.iter().map(|p| p[0]).sum::<f64>() / c.points.len() as f64).collect();
-    assert!(xs.iter().any(|&x| x < split) && xs.iter().any(|&x| x > split), "{xs:?}");
+    let xs: Vec<f64> = cs
+        .iter()
+        .map(|c| c.points.iter().map(|p| p[0]).sum::<f64>() / c.points.len() as f64)
+        .collect();
+    assert!(
+        xs.iter().any(|&x| x < split) && xs.iter().any(|&x| x > split),
+        "{xs:?}"
+    );
     // Each insole alone: 99 sensors' values, the same frames.
     for (r, off) in [(&left, 0), (&right, 99)] {
         assert_eq!(r.n_frames(), 100);
         let m = r.peak_image().max();
-        let want = rows.iter().flat_map(|(_, v)| v[off..off + 99].iter().copied()).fold(0.0, f64::max);
+        let want = rows
+            .iter()
+            .flat_map(|(_, v)| v[off..off + 99].iter().copied())
+            .fold(0.0, f64::max);
         assert_eq!(m, want);
     }
     assert_eq!(left.rows(), rec.rows());
@@ -477,19 +502,37 @@ fn pedar_truncation_layout_files_and_options() {
     let text = String::from_utf8(b.clone()).unwrap();
     // Cut inside frame 61: the error names the frames found and the frames the header states.
     let cut = text.find("     3.62000").unwrap() + 50;
-    let e = parse_bytes(&b[..cut], Format::Pedar, "cut.asc").unwrap_err().to_string();
-    assert!(e.contains("cut.asc") && e.contains("after 61 frames") && e.contains("states 100"), "{e}");
+    let e = parse_bytes(&b[..cut], Format::Pedar, "cut.asc")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cut.asc") && e.contains("after 61 frames") && e.contains("states 100"),
+        "{e}"
+    );
     // A layout file in millimetres gives the recording a pitch of half a sensor.
     let s = Scratch::new("layout");
     let mut mm = String::from("# unit: mm\ninsole,sensor,x1,y1,x2,y2,x3,y3,x4,y4\n");
     for side in ["L", "R"] {
         for k in 0..99 {
             let (x, y) = ((k % 9) as f64 * 10.0, (k / 9) as f64 * 20.0);
-            mm += &format!("{side},{},{x},{y},{},{y},{},{},{x},{}\n", k + 1, x + 10.0, x + 10.0, y + 20.0, y + 20.0);
+            mm += &format!(
+                "{side},{},{x},{y},{},{y},{},{},{x},{}\n",
+                k + 1,
+                x + 10.0,
+                x + 10.0,
+                y + 20.0,
+                y + 20.0
+            );
         }
     }
     let p = s.write("grid-layout.csv", mm.as_bytes());
-    let rec = read_recording_with(data("pedar-example-3.01-4.00.asc"), &ReadOptions { layout: Some(p.clone()) }).unwrap();
+    let rec = read_recording_with(
+        data("pedar-example-3.01-4.00.asc"),
+        &ReadOptions {
+            layout: Some(p.clone()),
+        },
+    )
+    .unwrap();
     assert_eq!(rec.pitch_mm, Some([5.0, 10.0]));
     // 9 x 11 sensors of 2 x 2 cells each, per insole, two empty columns between.
     assert_eq!((rec.rows(), rec.cols()), (22, 18 + 2 + 18));
@@ -499,12 +542,16 @@ fn pedar_truncation_layout_files_and_options() {
     assert_eq!(rec.frame_slice(0).unwrap()[21 * 38], rows[0].1[0] as f32);
     // Bad layouts are errors naming the file and line.
     let bad = s.write("bad.csv", b"L,1,0,0,1,0,1,1\n");
-    let e = read_recording_with(data("pedar-example-3.01-4.00.asc"), &ReadOptions { layout: Some(bad) })
-        .unwrap_err()
-        .to_string();
+    let e = read_recording_with(
+        data("pedar-example-3.01-4.00.asc"),
+        &ReadOptions { layout: Some(bad) },
+    )
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("bad.csv:1") && e.contains("expected 10"), "{e}");
     let partial = s.write("partial.csv", b"L,1,0,0,1,0,1,1,0,1\n");
-    let e = pedar::parse_pedar(&b, "p.asc", &PedarLayout::from_file(&partial).unwrap()).unwrap_err();
+    let e =
+        pedar::parse_pedar(&b, "p.asc", &PedarLayout::from_file(&partial).unwrap()).unwrap_err();
     assert!(e.to_string().contains("not in the layout"), "{e}");
 }
 
@@ -532,13 +579,20 @@ fn real_emed_export_with_total_force() {
     let b = bytes("emed-test-1-10.lst");
     let (rec, forces) = pedo_io::formats::lst::parse_lst(&b, "emed").unwrap();
     assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (10, 95, 64));
-    assert_eq!((rec.pitch_mm, rec.dt_s, rec.sensel_area()), (Some([5.0, 5.0]), Some(0.01), Some(25.0)));
+    assert_eq!(
+        (rec.pitch_mm, rec.dt_s, rec.sensel_area()),
+        (Some([5.0, 5.0]), Some(0.01), Some(25.0))
+    );
     let ms = rec.measures(0.0);
     for (t, (m, f)) in ms.iter().zip(&forces).enumerate() {
         // Force [N] = sum(kPa) x 0.25 cm² / 10; printed forces are rounded to 0.01 N.
         let printed: f64 = f.column_forces.iter().sum();
         let tol = 0.005 * f.column_forces.len() as f64 + 1e-9;
-        assert!((m.total_force - printed).abs() <= tol, "page {t}: {} vs {printed}", m.total_force);
+        assert!(
+            (m.total_force - printed).abs() <= tol,
+            "page {t}: {} vs {printed}",
+            m.total_force
+        );
     }
     assert!(ms.iter().any(|m| m.total_force > 10.0));
 }

@@ -260,9 +260,11 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
             n_frames += 1;
         }
     }
-    let partial = (row_in_frame != rows)
-        .then(|| format!(" (the frame at line {frame_ln} has {row_in_frame} of {rows} rows)"))
-        .unwrap_or_default();
+    let partial = if row_in_frame != rows {
+        format!(" (the frame at line {frame_ln} has {row_in_frame} of {rows} rows)")
+    } else {
+        String::new()
+    };
     if let Some(e) = expected {
         if n_frames < e {
             return Err(err(
