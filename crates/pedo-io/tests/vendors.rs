@@ -80,6 +80,11 @@ fn a_known_format_under_another_extension_reads_the_same() {
         ("synthetic-walk.lst", Format::Lst),
         ("tekscan-FrasP01L-11-20.csv", Format::TekscanCsv),
         ("footscan-FrasP01L-11-20.txt", Format::Footscan),
+        ("pedar-example-3.01-4.00.asc", Format::Pedar),
+        ("iscan-test-1-20.csv", Format::Asf),
+        ("emed-test-1-10.lst", Format::Lst),
+        ("numpy-MUN104L-deflated.npz", Format::Npz),
+        ("MUN104L.csv", Format::Csv),
     ] {
         let want = read_recording(data(sample)).unwrap();
         assert_eq!(want.format, Some(format), "{sample}");
