@@ -25,6 +25,13 @@ pub enum IoError {
     /// A file is malformed as a whole (binary header, missing frames, unknown format).
     #[error("{path}: {msg}")]
     Format { path: String, msg: String },
+    /// The file is not a recording of any supported format: `recognised` says what the content
+    /// looks like (or that nothing was recognised); the message lists the supported formats.
+    #[error(
+        "{path}: not a supported pressure recording: {recognised}; supported: {}",
+        crate::formats::SUPPORTED
+    )]
+    UnknownFormat { path: String, recognised: String },
     /// An argument is out of range or inconsistent.
     #[error("invalid input: {0}")]
     InvalidInput(String),
@@ -45,6 +52,12 @@ impl IoError {
         IoError::Format {
             path: path.to_string(),
             msg: msg.into(),
+        }
+    }
+    pub(crate) fn unknown_format(path: &str, recognised: impl Into<String>) -> Self {
+        IoError::UnknownFormat {
+            path: path.to_string(),
+            recognised: recognised.into(),
         }
     }
     pub(crate) fn invalid(msg: impl Into<String>) -> Self {

@@ -1,7 +1,9 @@
 //! Plantar-pressure recordings in; contours, brightness surfaces and isobaric contours out.
 //!
-//! - [`read_recording`] reads Tekscan `.asf`, novel emed `.lst`, CSV grids, NumPy `.npy`, and PNG/TIFF
-//!   images (single, folder, numbered sequence) into a [`Recording`];
+//! - [`read_recording`] reads Tekscan `.asf` and CSV exports, novel emed `.lst`, novel pedar `.asc`
+//!   (on a sensor layout), Zebris `.apd`, RSscan/Materialise footscan exports, CSV grids, NumPy
+//!   `.npy`/`.npz`, and PNG/TIFF images (single, folder, numbered sequence) into a [`Recording`],
+//!   deciding the format by content ([`sniff_format`]);
 //! - [`preprocess`] thresholds, smooths and upsamples frames;
 //! - [`contour`] extracts closed, counter-clockwise contours (sub-pixel marching squares or the
 //!   seed's edge chain) and [`track`] pairs them across frames;
@@ -26,6 +28,9 @@ pub mod track;
 
 pub use contour::{contour_shapes, contours, Contour, ContourMethod, ContourOptions, Resample};
 pub use error::{IoError, Result};
-pub use formats::{detect_format, parse_bytes, read_recording};
+pub use formats::{
+    detect_format, parse_bytes, parse_bytes_with, read_recording, read_recording_with,
+    sniff_format, ReadOptions,
+};
 pub use grid::{CoordUnits, Grid};
 pub use recording::{Format, FrameMeasures, Recording};

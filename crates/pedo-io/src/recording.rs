@@ -19,6 +19,41 @@ pub enum Format {
     Png,
     /// TIFF images (8- or 16-bit grayscale).
     Tiff,
+    /// Tekscan CSV export: the `.asf` header and frames with every line padded by commas.
+    TekscanCsv,
+    /// Zebris FDM "pedcad import file" (`.apd`): `[General]`, `[Technical]`, `[Data]` sections.
+    Zebris,
+    /// RSscan/Materialise footscan text export: `[Data]` peak image, `[Data<k>]` frames.
+    Footscan,
+    /// NumPy `.npz`: a zip archive of `.npy` arrays (the first 2-D or 3-D one is read).
+    Npz,
+    /// novel pedar ASCII export (`.asc`/`.txt`): 99 sensors per insole placed on a layout grid.
+    Pedar,
+}
+
+impl Format {
+    /// The lower-case name used in messages, tables and `summary.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Asf => "asf",
+            Format::Lst => "lst",
+            Format::Csv => "csv",
+            Format::Npy => "npy",
+            Format::Png => "png",
+            Format::Tiff => "tiff",
+            Format::TekscanCsv => "tekscan-csv",
+            Format::Zebris => "zebris",
+            Format::Footscan => "footscan",
+            Format::Npz => "npz",
+            Format::Pedar => "pedar",
+        }
+    }
+}
+
+impl std::fmt::Display for Format {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 /// A plantar-pressure recording: `T` frames of `rows × cols` values (`f32`).
@@ -152,6 +187,59 @@ impl Recording {
             }
         }
         Self::new(n_frames, rows, cols, data, mask)
+    }
+
+    /// Builds a recording from any array (`n_frames × rows × cols`, row-major per frame), the way
+    /// arrays from MATLAB, HDF5 or NumPy arrive: NaN marks "no sensor" when `mask` is `None`
+    /// (see [`from_nan_frames`](Self::from_nan_frames)); with a mask (`rows × cols`, `true`
+    /// where a sensor exists) values at missing sensors are ignored. Set the pitch, frame rate
+    /// and units with [`with_pitch_mm`](Self::with_pitch_mm),
+    /// [`with_frame_rate`](Self::with_frame_rate) and [`with_units`](Self::with_units).
+    pub fn from_array(
+        n_frames: usize,
+        rows: usize,
+        cols: usize,
+        data: Vec<f32>,
+        mask: Option<Vec<bool>>,
+    ) -> Result<Self> {
+        match mask {
+            Some(mask) => Self::new(n_frames, rows, cols, data, mask),
+            None => Self::from_nan_frames(n_frames, rows, cols, data),
+        }
+    }
+
+    /// Sets the sensor pitch `[dx, dy]` in mm (column spacing, row spacing); both must be
+    /// finite and positive.
+    pub fn with_pitch_mm(mut self, pitch: [f64; 2]) -> Result<Self> {
+        if !pitch.iter().all(|p| p.is_finite() && *p > 0.0) {
+            return Err(IoError::invalid(format!(
+                "pitch must be finite and positive, got {pitch:?} mm"
+            )));
+        }
+        self.pitch_mm = Some(pitch);
+        Ok(self)
+    }
+
+    /// Sets the frame rate in Hz (stored as the time between frames); finite and positive.
+    pub fn with_frame_rate(mut self, hz: f64) -> Result<Self> {
+        if !(hz.is_finite() && hz > 0.0) {
+            return Err(IoError::invalid(format!(
+                "frame rate must be finite and positive, got {hz} Hz"
+            )));
+        }
+        self.dt_s = Some(1.0 / hz);
+        Ok(self)
+    }
+
+    /// Sets the pressure units as written (`"kPa"`, `"N/cm2"`, …).
+    pub fn with_units(mut self, units: impl Into<String>) -> Self {
+        self.units = units.into();
+        self
+    }
+
+    /// The frame rate in Hz, when the time between frames is known.
+    pub fn frame_rate(&self) -> Option<f64> {
+        self.dt_s.map(|dt| 1.0 / dt)
     }
 
     pub fn n_frames(&self) -> usize {

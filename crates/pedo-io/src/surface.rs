@@ -22,6 +22,8 @@ use std::collections::{BinaryHeap, HashMap};
 
 /// Laplacian smoothing as `vtkSmoothPolyDataFilter` with feature-edge smoothing off: every
 /// iteration moves each vertex by `relaxation × (mean of its neighbours − itself)` in x, y and z.
+/// Unlike VTK, a move that would fold a triangle (bring its x-y area to a millionth of its
+/// starting area or below) is taken back for that iteration, so the mesh always stays valid.
 /// Interior vertices use all mesh neighbours; with `boundary_smoothing`, boundary vertices use
 /// their two boundary neighbours and stay fixed where the boundary turns by more than
 /// `edge_angle_deg` (corners); without it boundary vertices do not move.
@@ -345,6 +347,10 @@ fn laplacian(points: &mut [[f64; 3]], tris: &[[usize; 3]], lap: &Laplacian) -> R
             });
         }
     }
+    // No triangle may fall below a millionth of its starting x-y area: a move that would fold
+    // (or flatten) a triangle is taken back for that iteration, so the mesh stays valid whatever
+    // the relaxation. Meshes that never come near folding are smoothed exactly as VTK does.
+    let floor: Vec<f64> = tris.iter().map(|t| area_xy(points, t) * 1e-6).collect();
     let mut next = points.to_vec();
     for _ in 0..lap.iterations {
         for v in 0..n {
@@ -363,9 +369,43 @@ fn laplacian(points: &mut [[f64; 3]], tris: &[[usize; 3]], lap: &Laplacian) -> R
                 next[v][k] = points[v][k] + lap.relaxation * (m[k] / r.len() as f64 - points[v][k]);
             }
         }
+        keep_triangles_positive(points, &mut next, tris, &floor);
         points.copy_from_slice(&next);
     }
     Ok(())
+}
+
+/// Twice the signed x-y area of triangle `t` (positive = counter-clockwise).
+fn area_xy(p: &[[f64; 3]], t: &[usize; 3]) -> f64 {
+    let [a, b, c] = t.map(|i| p[i]);
+    (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])
+}
+
+/// Moves back to `before` the vertices of every triangle whose area in `next` is at or below its
+/// floor, until none is. Terminates: each pass puts back at least one vertex, and with all of a
+/// triangle's vertices back it has its previous area, which was above the floor.
+fn keep_triangles_positive(
+    before: &[[f64; 3]],
+    next: &mut [[f64; 3]],
+    tris: &[[usize; 3]],
+    floor: &[f64],
+) {
+    loop {
+        let mut moved_back = false;
+        for (t, &f) in tris.iter().zip(floor) {
+            if area_xy(next, t) <= f {
+                for &v in t {
+                    if next[v] != before[v] {
+                        next[v] = before[v];
+                        moved_back = true;
+                    }
+                }
+            }
+        }
+        if !moved_back {
+            return;
+        }
+    }
 }
 
 /// Builds the brightness surface of a frame (see the module documentation). An empty frame (no
@@ -451,9 +491,11 @@ pub fn surface(frame: &Grid, opts: &SurfaceOptions) -> Result<Surface> {
             points: points.clone(),
             triangles: triangles.clone(),
         };
+        // Smoothing keeps every triangle above a fraction of its area, so this only guards
+        // against a triangulation that was degenerate to begin with.
         if (0..triangles.len()).any(|t| s.triangle_area_xy(t) <= 0.0) {
             return Err(IoError::invalid(
-                "Laplacian smoothing folded the mesh: lower the relaxation or iterations",
+                "degenerate triangle in the smoothed mesh: lower the relaxation or iterations",
             ));
         }
     }

@@ -1,5 +1,11 @@
 //! Property tests: the parsers never panic on arbitrary or mutated bytes, and the geometry
-//! never panics on arbitrary frames.
+//! never panics on arbitrary frames; and a mutation fuzzer over every reader, seeded with the
+//! samples in tests/data, that fails on any panic, hang or outsized allocation.
+//!
+//! The fuzzer runs `PEDO_FUZZ_EXECS` executions in total (default 20 000, a few seconds); the
+//! full campaign is `PEDO_FUZZ_EXECS=1000000 cargo test -p pedo-io --test fuzz mutation_fuzz --
+//! --nocapture` (a debug build, so integer overflows panic too). `PEDO_FUZZ_SEED` changes the
+//! random sequence.
 
 use pedo_io::formats::{asf, csv, lst, npy};
 use pedo_io::surface::{surface, SurfaceOptions};
@@ -99,4 +105,319 @@ proptest! {
             prop_assert!((0..s.triangles.len()).all(|t| s.triangle_area_xy(t) > 0.0));
         }
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Mutation fuzzer.
+
+use pedo_io::sniff_format;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// Records, per thread, the largest single allocation since the last reset, so that a reader
+/// trusting a size field ("10⁹ frames") shows up even when the allocation would succeed.
+struct LargestAllocation;
+
+thread_local! {
+    static LARGEST: Cell<usize> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for LargestAllocation {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note(layout.size());
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note(layout.size());
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note(new_size);
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+fn note(size: usize) {
+    let _ = LARGEST.try_with(|m| m.set(m.get().max(size)));
+}
+
+#[global_allocator]
+static ALLOCATOR: LargestAllocation = LargestAllocation;
+
+/// SplitMix64: small, fast and reproducible.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
+
+/// Tokens that steer mutations into the readers' structure: markers, sizes, separators.
+const TOKENS: &[&[u8]] = &[
+    b"\n",
+    b"\r\n",
+    b"\t",
+    b",",
+    b";",
+    b"=",
+    b"-1",
+    b"B",
+    b"NaN",
+    b"0",
+    b"@@",
+    b"[Data]",
+    b"[Data1]",
+    b"[Data999999999]",
+    b"[Technical]",
+    b"SensCountX=",
+    b"SensCountY=",
+    b"MinIdx=",
+    b"MaxIdx=1000000000",
+    b"ROWS 100000",
+    b"COLS 100000",
+    b"END_FRAME ",
+    b"ASCII_DATA @@",
+    b"Frame ",
+    b"Matrix: 10000x10000",
+    b"Force",
+    b"\x0c",
+    b"999999999999",
+    b"4294967295",
+    b"-9223372036854775808",
+    b"1e308",
+    b"\xff\xff\xff\xff",
+    b"\0\0\0\0",
+    b"PK\x01\x02",
+    b"PK\x05\x06",
+    b"(1000000000, 1000, 1000)",
+    b"'shape': (",
+];
+
+fn mutate_once(rng: &mut Rng, v: &mut Vec<u8>, seeds: &[(String, Format, Vec<u8>)]) {
+    let n = v.len();
+    match rng.below(9) {
+        0 if n > 0 => {
+            let i = rng.below(n);
+            v[i] ^= 1 << rng.below(8);
+        }
+        1 if n > 0 => {
+            let i = rng.below(n);
+            v[i] = rng.next() as u8;
+        }
+        2 => {
+            let t = TOKENS[rng.below(TOKENS.len())];
+            let i = rng.below(n + 1);
+            v.splice(i..i, t.iter().copied());
+        }
+        3 if n > 0 => {
+            let i = rng.below(n);
+            let len = 1 + rng.below((n - i).min(64));
+            v.drain(i..i + len);
+        }
+        4 if n > 0 => {
+            let i = rng.below(n);
+            let len = 1 + rng.below((n - i).min(256));
+            let chunk: Vec<u8> = v[i..i + len].to_vec();
+            let j = rng.below(n + 1);
+            v.splice(j..j, chunk);
+        }
+        5 => v.truncate(rng.below(n + 1)),
+        6 if n > 0 => {
+            // Replace a run of digits by a huge or degenerate number.
+            let i = rng.below(n);
+            if let Some(s) = (i..n).find(|&k| v[k].is_ascii_digit()) {
+                let e = (s..n).find(|&k| !v[k].is_ascii_digit()).unwrap_or(n);
+                let t: &[u8] =
+                    [&b"0"[..], b"1000000000", b"99999999999999999999", b"-1"][rng.below(4)];
+                v.splice(s..e, t.iter().copied());
+            }
+        }
+        7 => {
+            // Splice in a slice of another seed.
+            let other = &seeds[rng.below(seeds.len())].2;
+            if !other.is_empty() {
+                let i = rng.below(other.len());
+                let len = 1 + rng.below((other.len() - i).min(512));
+                let j = rng.below(n + 1);
+                v.splice(j..j, other[i..i + len].iter().copied());
+            }
+        }
+        _ if n > 0 => {
+            // Overwrite 2, 4 or 8 bytes with an extreme integer (binary size fields).
+            let w = [2usize, 4, 8][rng.below(3)];
+            let i = rng.below(n);
+            let val: u64 = [0, u64::MAX, 0xFFFF_FFFF, 1 << 31, rng.next()][rng.below(5)];
+            for (k, b) in val.to_le_bytes().iter().take(w).enumerate() {
+                if let Some(x) = v.get_mut(i + k) {
+                    *x = *b;
+                }
+            }
+        }
+        _ => v.extend_from_slice(TOKENS[rng.below(TOKENS.len())]),
+    }
+}
+
+/// Short, complete excerpts of every sample (each execution stays fast), with their format.
+fn fuzz_seeds() -> Vec<(String, Format, Vec<u8>)> {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/");
+    let read = |n: &str| std::fs::read(format!("{dir}{n}")).unwrap();
+    let text = |n: &str| String::from_utf8_lossy(&read(n)).into_owned();
+    let tekscan = text("tekscan-FrasP01L-11-20.csv");
+    let tekscan = tekscan[..tekscan.find("Frame 14").unwrap()]
+        .replace("END_FRAME 20", "END_FRAME 13")
+        .into_bytes();
+    let footscan = text("footscan-FrasP01L-11-20.txt");
+    let footscan = footscan[..footscan.find("[Data3]").unwrap()]
+        .replace("MaxIdx=10", "MaxIdx=2")
+        .into_bytes();
+    // Short excerpts of the real pedar, I-Scan and emed exports (headers stating the counts).
+    let pedar = text("pedar-example-3.01-4.00.asc");
+    let cut = pedar.find("     3.05000").unwrap();
+    let pedar = pedar[..cut]
+        .replace("total time [secs]:   1.000", "total time [secs]:   0.040")
+        .into_bytes();
+    let iscan = text("iscan-test-1-20.csv");
+    let iscan = format!("{}@@\n", &iscan[..iscan.find("Frame 3,").unwrap()])
+        .replace("END_FRAME 20", "END_FRAME 2")
+        .into_bytes();
+    let emed = read("emed-test-1-10.lst");
+    let second = emed.iter().position(|&b| b == 0x0c).unwrap();
+    let emed = emed[..second].to_vec();
+    let small = pedo_io::Recording::new(2, 3, 4, (0..24).map(|v| v as f32).collect(), {
+        let mut m = vec![true; 12];
+        m[5] = false;
+        m
+    })
+    .unwrap();
+    let png = pedo_io::formats::images::frame_to_png16(&small, 0, 1.0).unwrap();
+    let seeds = vec![
+        ("FrasP01L.asf", Format::Asf, sample("FrasP01L.asf").to_vec()),
+        (
+            "synthetic-walk.lst",
+            Format::Lst,
+            sample("synthetic-walk.lst").to_vec(),
+        ),
+        ("MUN104L.csv", Format::Csv, read("MUN104L.csv")),
+        ("MDwalk2.apd", Format::Zebris, read("MDwalk2.apd")),
+        ("footscan excerpt", Format::Footscan, footscan),
+        ("tekscan csv excerpt", Format::TekscanCsv, tekscan),
+        ("small.npy", Format::Npy, npy::recording_to_npy(&small)),
+        (
+            "numpy stored .npz",
+            Format::Npz,
+            read("numpy-MUN104L-stored.npz"),
+        ),
+        (
+            "numpy deflated .npz",
+            Format::Npz,
+            read("numpy-MUN104L-deflated.npz"),
+        ),
+        ("small.png", Format::Png, png),
+        ("pedar excerpt", Format::Pedar, pedar),
+        ("iscan excerpt", Format::Asf, iscan),
+        ("real emed excerpt", Format::Lst, emed),
+    ];
+    seeds
+        .into_iter()
+        .map(|(n, f, b)| (n.to_string(), f, b))
+        .collect()
+}
+
+/// Runs one input through the seed's reader and through whatever the sniffer picks; returns
+/// the largest single allocation made.
+fn execute(input: &[u8], format: Format) -> usize {
+    LARGEST.with(|m| m.set(0));
+    if let Ok(r) = parse_bytes(input, format, "fuzz") {
+        assert_eq!(r.data().len(), r.n_frames() * r.rows() * r.cols());
+    }
+    if let Ok(f) = sniff_format(Path::new("fuzz"), input) {
+        if f != format {
+            let _ = parse_bytes(input, f, "fuzz");
+        }
+    }
+    LARGEST.with(|m| m.get())
+}
+
+#[test]
+fn mutation_fuzz_every_reader() {
+    let execs: usize = std::env::var("PEDO_FUZZ_EXECS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(20_000);
+    let seed: u64 = std::env::var("PEDO_FUZZ_SEED")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0x5EED);
+    let seeds = fuzz_seeds();
+    for (name, f, b) in &seeds {
+        assert!(parse_bytes(b, *f, name).is_ok(), "seed {name} must parse");
+    }
+    let mut rng = Rng(seed);
+    let mut per_reader = vec![0usize; seeds.len()];
+    let (mut slowest, mut largest) = (Duration::ZERO, 0usize);
+    let start = Instant::now();
+    for i in 0..execs {
+        let k = i % seeds.len();
+        let (name, format, base) = &seeds[k];
+        let mut input = base.clone();
+        for _ in 0..1 + rng.below(8) {
+            mutate_once(&mut rng, &mut input, &seeds);
+        }
+        let t = Instant::now();
+        let outcome = std::panic::catch_unwind(|| execute(&input, *format));
+        let took = t.elapsed();
+        let keep = || {
+            let p = std::env::temp_dir().join(format!("pedo-fuzz-crash-{i}.bin"));
+            std::fs::write(&p, &input).unwrap();
+            p.display().to_string()
+        };
+        let big = match outcome {
+            Ok(b) => b,
+            Err(_) => panic!(
+                "execution {i} (seed {name}) panicked; input kept in {}",
+                keep()
+            ),
+        };
+        // Every input is at most a few hundred kB: a reader allocating more than 16 MiB plus
+        // 512 bytes per input byte trusted a size field it should have capped.
+        let cap = (16 << 20) + 512 * input.len();
+        assert!(
+            big <= cap,
+            "execution {i} (seed {name}) allocated {big} bytes at once; input kept in {}",
+            keep()
+        );
+        assert!(
+            took < Duration::from_secs(5),
+            "execution {i} (seed {name}) took {took:?}; input kept in {}",
+            keep()
+        );
+        per_reader[k] += 1;
+        slowest = slowest.max(took);
+        largest = largest.max(big);
+    }
+    eprintln!(
+        "mutation fuzz: {execs} executions in {:.1} s, zero panics; slowest {:.1} ms, largest \
+         allocation {} kB; per seed: {}",
+        start.elapsed().as_secs_f64(),
+        slowest.as_secs_f64() * 1e3,
+        largest / 1024,
+        seeds
+            .iter()
+            .zip(&per_reader)
+            .map(|((n, ..), c)| format!("{n} {c}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
 }

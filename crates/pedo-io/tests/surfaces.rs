@@ -501,3 +501,96 @@ fn pairing_by_a_custom_cost_takes_the_cheapest() {
     assert_eq!(near.pairs, vec![(0, 1), (1, 0)]);
     assert!(pair_contours_by(&a, &b, |_, _| Some(f64::NAN)).is_err());
 }
+
+/// Every frame of a real walk gives a valid surface under default settings, or the error that
+/// says there is no surface (no contact, or fewer than 3 non-collinear samples). Smoothing used
+/// to fold thin triangles along the hull of some frames.
+fn every_frame_valid_with_defaults(rec: &Recording) -> (usize, usize) {
+    let (mut surfaces, mut empty) = (0, 0);
+    for t in 0..rec.n_frames() {
+        let g = rec.frame(t).unwrap();
+        match surface(&g, &SurfaceOptions::default()) {
+            Ok(s) => {
+                assert_valid(&s);
+                surfaces += 1;
+            }
+            Err(e) => {
+                let m = e.to_string();
+                assert!(
+                    m.contains("no sample above") || m.contains("non-collinear"),
+                    "frame {t}: {m}"
+                );
+                empty += 1;
+            }
+        }
+    }
+    (surfaces, empty)
+}
+
+/// Frames with at least 3 loaded sensels that are not all on one line, counted directly.
+fn frames_with_a_surface(rec: &Recording) -> usize {
+    (0..rec.n_frames())
+        .filter(|&t| {
+            let f = rec.frame_slice(t).unwrap();
+            let p: Vec<(i64, i64)> = (0..f.len())
+                .filter(|&i| f[i] > 0.0)
+                .map(|i| ((i % rec.cols()) as i64, (i / rec.cols()) as i64))
+                .collect();
+            p.len() >= 3
+                && p.iter().any(|&(x, y)| {
+                    (p[1].0 - p[0].0) * (y - p[0].1) != (x - p[0].0) * (p[1].1 - p[0].1)
+                })
+        })
+        .count()
+}
+
+#[test]
+fn every_real_frame_gives_a_valid_surface_with_defaults() {
+    let rec = fscan();
+    let (surfaces, empty) = every_frame_valid_with_defaults(&rec);
+    assert_eq!(surfaces + empty, 205);
+    assert_eq!(surfaces, frames_with_a_surface(&rec));
+    // More walks (e.g. the right foot of the same trial): PEDO_SURFACE_EXTRA=a.asf:b.asf.
+    if let Ok(list) = std::env::var("PEDO_SURFACE_EXTRA") {
+        for path in list.split(':').filter(|p| !p.is_empty()) {
+            let r = read_recording(path).unwrap();
+            let (s, _) = every_frame_valid_with_defaults(&r);
+            assert_eq!(s, frames_with_a_surface(&r), "{path}");
+            eprintln!("{path}: {s} valid surfaces of {} frames", r.n_frames());
+        }
+    }
+}
+
+#[test]
+fn smoothing_that_would_fold_keeps_the_mesh_valid() {
+    // Frame 48 of the walk: thin triangles along the hull folded under VTK's rule.
+    let g = fscan().frame(48).unwrap();
+    let s = surface(&g, &SurfaceOptions::default()).unwrap();
+    assert_valid(&s);
+    // Without smoothing the same triangles come out: smoothing moves points, never topology.
+    let raw = surface(
+        &g,
+        &SurfaceOptions {
+            laplacian: None,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(raw.triangles, s.triangles);
+    // Far harsher smoothing than the defaults on a cone and on the real frame: still valid.
+    let harsh = Laplacian {
+        iterations: 200,
+        relaxation: 1.0,
+        ..Default::default()
+    };
+    for g in [cone(15, 9, 4.0, 7.0, 5.0), g] {
+        let s = surface(
+            &g,
+            &SurfaceOptions {
+                laplacian: Some(harsh),
+                ..Default::default()
+            },
+        );
+        assert_valid(&s.unwrap());
+    }
+}

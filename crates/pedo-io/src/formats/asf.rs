@@ -1,5 +1,11 @@
 //! Tekscan ASCII movie (`.asf`): `KEY value` header up to `ASCII_DATA @@`, then `Frame N` blocks of
 //! ROWS lines of COLS comma-separated values; `B` marks a sensel outside the sensor outline.
+//!
+//! The Tekscan CSV export carries the same header and frames, but every line is padded with
+//! commas to the width of the widest line (`ROWS 60,,,,`, `Frame 1,,,,`, blank lines `,,,,`),
+//! there is no `ASCII_DATA @@` line and no closing `@@`: the header ends at the first `Frame`
+//! line (the layout the CSV parser of the public `jiwooba/HSS-TAP` repository,
+//! `additionalFiles/onfly_tekscan_2mat.m`, reads).
 
 use super::{latin1_lines, parse_num};
 use crate::error::{IoError, Result};
@@ -10,10 +16,10 @@ fn length_mm(v: &str) -> Option<f64> {
     let mut it = v.split_whitespace();
     let x = parse_num(it.next()?)?;
     let f = match it.next().map(|u| u.to_ascii_lowercase()).as_deref() {
-        None | Some("mm") => 1.0,
-        Some("cm") => 10.0,
+        None | Some("mm") | Some("millimeters") | Some("millimetres") => 1.0,
+        Some("cm") | Some("centimeters") | Some("centimetres") => 10.0,
         Some("in") | Some("inch") | Some("inches") => 25.4,
-        Some("m") => 1000.0,
+        Some("m") | Some("meters") | Some("metres") => 1000.0,
         _ => return None,
     };
     Some(x * f)
@@ -33,20 +39,49 @@ fn area_mm2(v: &str) -> Option<f64> {
 
 /// Parses a Tekscan `.asf` file held in memory; `name` appears in error messages.
 pub fn parse_asf(bytes: &[u8], name: &str) -> Result<Recording> {
+    parse_tekscan(bytes, name, false)
+}
+
+/// Parses a Tekscan CSV export held in memory (see the module documentation).
+pub fn parse_tekscan_csv(bytes: &[u8], name: &str) -> Result<Recording> {
+    parse_tekscan(bytes, name, true)
+}
+
+/// A CSV-export line without its comma padding.
+fn unpad(line: String) -> String {
+    let t = line.trim_end_matches(|c: char| c == ',' || c.is_whitespace());
+    if t.len() == line.len() {
+        line
+    } else {
+        t.to_string()
+    }
+}
+
+fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
     let err = |line: usize, msg: String| IoError::parse(name, line, msg);
-    let mut lines = latin1_lines(bytes);
+    let n_lines = latin1_lines(bytes).count();
+    let mut lines = latin1_lines(bytes)
+        .map(|(ln, l)| (ln, if csv { unpad(l) } else { l }))
+        .peekable();
     let (mut rows, mut cols) = (None::<usize>, None::<usize>);
     let (mut dy, mut dx, mut area, mut dt, mut noise) = (None, None, None, None, None);
     let (mut start, mut end) = (None::<i64>, None::<i64>);
     let mut units = String::new();
     let mut data_line = None;
-    for (ln, line) in lines.by_ref() {
-        let t = line.trim();
+    while let Some((ln, line)) = lines.peek() {
+        let (ln, t) = (*ln, line.trim().to_string());
+        if csv && t.starts_with("Frame") {
+            data_line = Some(ln);
+            break;
+        }
+        lines.next();
         if t.starts_with("ASCII_DATA") {
             data_line = Some(ln);
             break;
         }
-        let (key, val) = match t.split_once(char::is_whitespace) {
+        let t = t.as_str();
+        let split = |c: char| c.is_whitespace() || (csv && c == ',');
+        let (key, val) = match t.split_once(split) {
             Some((k, v)) => (k, v.trim()),
             None => (t, ""),
         };
@@ -93,15 +128,26 @@ pub fn parse_asf(bytes: &[u8], name: &str) -> Result<Recording> {
     let data_line = data_line.ok_or_else(|| {
         IoError::format(
             name,
-            "no ASCII_DATA line: not a Tekscan ASCII file or truncated header",
+            if csv {
+                "no `Frame` line: not a Tekscan CSV export or truncated header"
+            } else {
+                "no ASCII_DATA line: not a Tekscan ASCII file or truncated header"
+            },
         )
     })?;
     let rows = rows.ok_or_else(|| err(data_line, "header has no ROWS".into()))?;
     let cols = cols.ok_or_else(|| err(data_line, "header has no COLS".into()))?;
+    // Every sensel takes at least two bytes in the file, so a frame larger than the file is a
+    // corrupt header, refused before anything of its size is allocated.
     let per = rows
         .checked_mul(cols)
-        .filter(|&p| p <= 100_000_000)
-        .ok_or_else(|| err(data_line, "ROWS x COLS too large".into()))?;
+        .filter(|&p| p <= bytes.len())
+        .ok_or_else(|| {
+            err(
+                data_line,
+                format!("ROWS x COLS = {rows} x {cols} is more than the file can hold"),
+            )
+        })?;
     let expected = match (start, end) {
         (Some(s), Some(e)) if e >= s => Some((e - s + 1) as usize),
         (Some(s), Some(e)) => {
@@ -140,7 +186,12 @@ pub fn parse_asf(bytes: &[u8], name: &str) -> Result<Recording> {
             let rest = t
                 .strip_prefix("Frame")
                 .ok_or_else(|| err(ln, format!("expected `Frame N`, found {:?}", trunc(t))))?;
-            rest.trim()
+            // I-Scan exports follow the number with the frame's time and raw sum:
+            // `Frame 1, 0,, 12/2/2019 6:21:52.34PM,,,Raw Sum=,,310`.
+            rest.split(',')
+                .next()
+                .unwrap_or("")
+                .trim()
                 .parse::<i64>()
                 .map_err(|_| err(ln, format!("bad frame number in {:?}", trunc(t))))?;
             if expected.is_some_and(|e| n_frames >= e) {
@@ -197,6 +248,11 @@ pub fn parse_asf(bytes: &[u8], name: &str) -> Result<Recording> {
             k += 1;
         }
         if k != cols {
+            if ln == n_lines {
+                // The file ends inside this row: reported below as a truncated frame.
+                data.truncate(data.len() - k);
+                break;
+            }
             return Err(err(ln, format!("{k} values, expected COLS = {cols}")));
         }
         row_in_frame += 1;
@@ -204,32 +260,35 @@ pub fn parse_asf(bytes: &[u8], name: &str) -> Result<Recording> {
             n_frames += 1;
         }
     }
+    let partial = if row_in_frame != rows {
+        format!(" (the frame at line {frame_ln} has {row_in_frame} of {rows} rows)")
+    } else {
+        String::new()
+    };
+    if let Some(e) = expected {
+        if n_frames < e {
+            return Err(err(
+                last_ln,
+                format!(
+                    "truncated: the file ends after {n_frames} complete frames, its header \
+                     (START_FRAME..END_FRAME) states {e}{partial}"
+                ),
+            ));
+        }
+    }
     if row_in_frame != rows {
-        return Err(err(
-            last_ln,
-            format!(
-                "truncated: frame starting at line {frame_ln} has {row_in_frame} of {rows} rows"
-            ),
-        ));
+        return Err(err(last_ln, format!("truncated{partial}")));
     }
     if n_frames == 0 {
         return Err(err(last_ln, "no frames".into()));
     }
-    if !ended {
+    if !ended && !csv {
         // The export closes its data with `@@`; without it the file was cut, possibly inside a
         // number of the last row, which would otherwise pass unnoticed.
         return Err(err(
             last_ln,
             "truncated: no closing @@ after the last frame".into(),
         ));
-    }
-    if let Some(e) = expected {
-        if n_frames != e {
-            return Err(err(
-                last_ln,
-                format!("truncated: {n_frames} frames, header promises {e}"),
-            ));
-        }
     }
     let mask: Vec<bool> = mask.into_iter().map(|m| m.unwrap_or(true)).collect();
     let mut rec = Recording::new(n_frames, rows, cols, data, mask)?;
@@ -243,7 +302,7 @@ pub fn parse_asf(bytes: &[u8], name: &str) -> Result<Recording> {
     rec.dt_s = dt;
     rec.units = units;
     rec.noise_threshold = noise;
-    rec.format = Some(Format::Asf);
+    rec.format = Some(if csv { Format::TekscanCsv } else { Format::Asf });
     Ok(rec)
 }
 

@@ -21,7 +21,15 @@ fn decode(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>, Format)> 
             ))
         }
     };
-    let img = image::load_from_memory_with_format(bytes, fmt)
+    // A header may claim any size: the decoder may allocate at most what a compressed image of
+    // this length can plausibly expand to (deflate reaches ~1000:1), never the claim itself.
+    let mut limits = image::Limits::default();
+    limits.max_alloc =
+        Some((16u64 << 20).saturating_add(1032u64.saturating_mul(bytes.len() as u64)));
+    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), fmt);
+    reader.limits(limits);
+    let img = reader
+        .decode()
         .map_err(|e| IoError::format(name, format!("cannot decode image: {e}")))?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let data: Vec<f32> = match img {

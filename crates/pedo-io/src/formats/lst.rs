@@ -147,7 +147,11 @@ pub fn parse_lst(bytes: &[u8], name: &str) -> Result<(Recording, Vec<LstPageForc
                 _ => &fields,
             };
             if fields.first() == Some(&"Force") {
-                let vals = &fields[1..];
+                let mut vals = &fields[1..];
+                // With row forces, the Force line may end with the page's total force.
+                if pg.has_row_force && vals.len() == pg.columns.len() + 1 {
+                    vals = &vals[..pg.columns.len()];
+                }
                 if vals.len() != pg.columns.len() {
                     return Err(err(
                         ln,
@@ -202,7 +206,19 @@ pub fn parse_lst(bytes: &[u8], name: &str) -> Result<(Recording, Vec<LstPageForc
         .find_map(|p| p.matrix)
         .ok_or_else(|| IoError::format(name, "no `Matrix: CxR` line"))?;
     let per = rows * cols;
-    let mut data = vec![0.0f32; parsed.len() * per];
+    // Pages print windows of the plate, so the plate may be larger than the text; but not
+    // hundreds of times: a larger claim is a corrupt header, refused before allocating it.
+    let cells = per.saturating_mul(parsed.len());
+    if cells > bytes.len().saturating_mul(256).max(1 << 16) {
+        return Err(IoError::format(
+            name,
+            format!(
+                "{} pages of a {cols}x{rows} matrix are far more than the file holds",
+                parsed.len()
+            ),
+        ));
+    }
+    let mut data = vec![0.0f32; cells];
     let mut forces = Vec::with_capacity(parsed.len());
     for (t, pg) in parsed.iter().enumerate() {
         if let Some((c, r, ln)) = pg.matrix {

@@ -5,10 +5,13 @@ pub mod csv;
 pub mod images;
 pub mod lst;
 pub mod npy;
+pub mod npz;
+pub mod pedar;
+pub mod pedcad;
 
 use crate::error::{IoError, Result};
 use crate::recording::{Format, Recording};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Text lines of a Latin-1 (or ASCII/UTF-8 treated bytewise) file with their 1-based numbers and
 /// without the line end (`\n` or `\r\n`).
@@ -47,45 +50,172 @@ pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     })
 }
 
-/// Guesses the format of a file from its first bytes, then from its extension.
+/// The formats [`read_recording`] understands, as listed in [`IoError::UnknownFormat`].
+pub const SUPPORTED: &str = "Tekscan .asf and CSV export, novel emed .lst, novel pedar .asc, \
+Zebris .apd, RSscan/Materialise footscan export, CSV grid, NumPy .npy/.npz, PNG/TIFF images";
+
+/// What reading needs besides the file itself.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ReadOptions {
+    /// A pedar sensor-layout table (see [`pedar::PedarLayout::parse`]); `None`: the bundled
+    /// layout of the common insole.
+    pub layout: Option<PathBuf>,
+}
+
+/// How many leading bytes [`sniff_format`] looks at.
+pub const SNIFF_BYTES: usize = 16 * 1024;
+
+/// Guesses the format of a file from its content; see [`sniff_format`].
 pub fn detect_format(path: &Path, head: &[u8]) -> Option<Format> {
-    if head.starts_with(b"\x93NUMPY") {
-        return Some(Format::Npy);
-    }
-    if head.starts_with(b"\x89PNG\r\n\x1a\n") {
-        return Some(Format::Png);
-    }
-    if head.starts_with(b"II*\0") || head.starts_with(b"MM\0*") {
-        return Some(Format::Tiff);
-    }
-    let ext = path
-        .extension()
+    sniff_format(path, head).ok()
+}
+
+fn extension(path: &Path) -> Option<String> {
+    path.extension()
         .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase());
-    match ext.as_deref() {
-        Some("asf") => return Some(Format::Asf),
-        Some("lst") => return Some(Format::Lst),
-        Some("npy") => return Some(Format::Npy),
-        Some("png") => return Some(Format::Png),
-        Some("tif") | Some("tiff") => return Some(Format::Tiff),
-        Some("csv") => return Some(Format::Csv),
+        .map(|e| e.to_ascii_lowercase())
+}
+
+/// Decides the format of a file from its first bytes (`head`, ideally [`SNIFF_BYTES`] long):
+/// magic numbers, then the text's markers; the extension only breaks ties (a text that matches
+/// no marker but carries a structured format's extension goes to that format's parser, which
+/// then names the line that is wrong). `Err` says what the content looks like instead.
+pub fn sniff_format(path: &Path, head: &[u8]) -> std::result::Result<Format, String> {
+    let head = &head[..head.len().min(SNIFF_BYTES)];
+    if head.is_empty() {
+        return Err("the file is empty".into());
+    }
+    let magic: [(&[u8], Format); 5] = [
+        (b"\x93NUMPY", Format::Npy),
+        (b"PK\x03\x04", Format::Npz),
+        (b"\x89PNG\r\n\x1a\n", Format::Png),
+        (b"II*\0", Format::Tiff),
+        (b"MM\0*", Format::Tiff),
+    ];
+    if let Some(&(_, f)) = magic.iter().find(|(m, _)| head.starts_with(m)) {
+        return Ok(f);
+    }
+    if head.starts_with(b"PK\x05\x06") {
+        return Err("an empty zip archive".into());
+    }
+    let head = head.strip_prefix(b"\xef\xbb\xbf").unwrap_or(head);
+    // Text: no NUL and hardly any control characters besides tab, line ends and form feed.
+    let controls = head
+        .iter()
+        .filter(|&&b| b < 32 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0c))
+        .count();
+    if head.contains(&0) || controls * 100 > head.len() {
+        return Err(format!(
+            "binary data of no known kind (first bytes {})",
+            head.iter()
+                .take(8)
+                .map(|b| format!("{b:02x}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        ));
+    }
+    let text: String = head.iter().map(|&b| b as char).collect();
+    if let Some(f) = sniff_text(&text) {
+        return Ok(f);
+    }
+    match extension(path).as_deref() {
+        Some("asf") => return Ok(Format::Asf),
+        Some("lst") => return Ok(Format::Lst),
+        Some("apd") => return Ok(Format::Zebris),
         _ => {}
     }
-    let text: String = head.iter().take(4096).map(|&b| b as char).collect();
-    if text.contains("ASCII_DATA") || text.starts_with("DATA_TYPE") || text.contains("\nFrame ") {
+    Err(describe_text(&text))
+}
+
+/// The format a text's markers name, if any.
+fn sniff_text(text: &str) -> Option<Format> {
+    let lines: Vec<&str> = text.lines().map(str::trim).collect();
+    let starts = |p: &str| lines.iter().any(|l| l.starts_with(p));
+    if text.contains("ASCII_DATA") {
         return Some(Format::Asf);
+    }
+    let tekscan_keys = [
+        "DATA_TYPE",
+        "ROWS",
+        "COLS",
+        "SECONDS_PER_FRAME",
+        "START_FRAME",
+    ];
+    if tekscan_keys.iter().filter(|k| starts(k)).count() >= 2 && starts("Frame") {
+        return Some(Format::TekscanCsv);
+    }
+    if starts("SensCountX=") || starts("[Technical]") {
+        let l = text.to_ascii_lowercase();
+        let footscan = l.contains("footscan") || l.contains("rsscan") || starts("MinIdx=");
+        return Some(if l.contains("zebris") || !footscan {
+            Format::Zebris
+        } else {
+            Format::Footscan
+        });
+    }
+    if (text.contains("scanning rate [Hz]") || text.contains("mask definition"))
+        && lines
+            .iter()
+            .any(|l| l.to_ascii_lowercase().starts_with("time["))
+    {
+        return Some(Format::Pedar);
     }
     if text.contains("Matrix:") && (text.contains("Page") || text.contains("Pict-No")) {
         return Some(Format::Lst);
     }
-    let printable = head
-        .iter()
-        .take(4096)
-        .all(|&b| b == b'\t' || b == b'\n' || b == b'\r' || (32..127).contains(&b));
-    if printable && !head.is_empty() {
-        return Some(Format::Csv);
+    looks_like_grid(&lines).then_some(Format::Csv)
+}
+
+/// A delimited grid: after at most one header line, the first lines are all numbers (or the
+/// no-sensor marks `-1`, `B`, `NaN`).
+fn looks_like_grid(lines: &[&str]) -> bool {
+    let content: Vec<&&str> = lines.iter().filter(|l| !l.is_empty()).take(6).collect();
+    let numeric = |l: &str| {
+        let fields: Vec<&str> = l
+            .split([',', ';', '\t', ' '])
+            .map(str::trim)
+            .filter(|f| !f.is_empty())
+            .collect();
+        !fields.is_empty()
+            && fields.iter().all(|f| {
+                parse_num(f).is_some() || matches!(f.to_ascii_lowercase().as_str(), "b" | "nan")
+            })
+    };
+    let body = match content.first() {
+        Some(first) if !numeric(first) => &content[1..],
+        _ => &content[..],
+    };
+    // A last line may be cut by the sniffing window.
+    let full = body.len().saturating_sub(usize::from(body.len() > 1));
+    !body.is_empty() && body[..full.max(1)].iter().all(|l| numeric(l))
+}
+
+/// One phrase saying what a text that is not a known recording looks like.
+fn describe_text(text: &str) -> String {
+    let first = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty())
+        .unwrap_or("");
+    let l = text.to_ascii_lowercase();
+    if l.contains("pedar") {
+        return "text mentioning pedar, but without a pedar ASCII export's header \
+                (`scanning rate [Hz]`, `time[secs]` column)"
+            .into();
     }
-    None
+    if first.starts_with('{') || first.starts_with('[') {
+        return format!(
+            "JSON or other structured text, first line {:?}",
+            asf::trunc(first)
+        );
+    }
+    if first.starts_with('<') {
+        return "XML/HTML text".into();
+    }
+    format!(
+        "text that is neither a known export nor a numeric grid, first line {:?}",
+        asf::trunc(first)
+    )
 }
 
 /// Parses an in-memory file of a known format; `name` is used in error messages.
@@ -96,6 +226,10 @@ pub fn parse_bytes(bytes: &[u8], format: Format, name: &str) -> Result<Recording
         Format::Csv => csv::parse_csv(bytes, name)?,
         Format::Npy => npy::parse_npy(bytes, name)?,
         Format::Png | Format::Tiff => images::decode_image(bytes, name)?,
+        Format::TekscanCsv => asf::parse_tekscan_csv(bytes, name)?,
+        Format::Zebris | Format::Footscan => pedcad::parse_pedcad(bytes, name)?,
+        Format::Npz => npz::parse_npz(bytes, name)?,
+        Format::Pedar => pedar::parse_pedar(bytes, name, pedar::PedarLayout::bundled())?,
     };
     if matches!(format, Format::Png | Format::Tiff) {
         rec.format = Some(format);
@@ -103,13 +237,34 @@ pub fn parse_bytes(bytes: &[u8], format: Format, name: &str) -> Result<Recording
     Ok(rec)
 }
 
+/// [`parse_bytes`] with reading options (a pedar layout file).
+pub fn parse_bytes_with(
+    bytes: &[u8],
+    format: Format,
+    name: &str,
+    opts: &ReadOptions,
+) -> Result<Recording> {
+    match (format, &opts.layout) {
+        (Format::Pedar, Some(layout)) => {
+            pedar::parse_pedar(bytes, name, &pedar::PedarLayout::from_file(layout)?)
+        }
+        _ => parse_bytes(bytes, format, name),
+    }
+}
+
 /// Reads a recording from a file, a folder of images, or a numbered image sequence.
 ///
 /// - a folder: every `.png`/`.tif`/`.tiff` in it, in natural (numeric-aware) name order;
 /// - a path with a printf-style counter (`walk_%03d.png`, `walk_%d.png`): the files counting up from
 ///   0 or 1 until the first missing number;
-/// - a file: the format is detected from its magic bytes, its extension, then its text.
+/// - a file: the format is decided by its content ([`sniff_format`]); the extension only breaks
+///   ties. A file that is no recording is an [`IoError::UnknownFormat`] saying what it looks like.
 pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording> {
+    read_recording_with(path, &ReadOptions::default())
+}
+
+/// [`read_recording`] with reading options (a pedar layout file for `--layout FILE`).
+pub fn read_recording_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Recording> {
     let path = path.as_ref();
     if path.is_dir() {
         return images::read_image_folder(path);
@@ -121,7 +276,6 @@ pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording> {
     }
     let bytes = read_bytes(path)?;
     let name = path.display().to_string();
-    let format = detect_format(path, &bytes[..bytes.len().min(4096)])
-        .ok_or_else(|| IoError::format(&name, "unknown file format"))?;
-    parse_bytes(&bytes, format, &name)
+    let format = sniff_format(path, &bytes).map_err(|what| IoError::unknown_format(&name, what))?;
+    parse_bytes_with(&bytes, format, &name, opts)
 }

@@ -1,0 +1,557 @@
+//! novel pedar ASCII export (`.asc`/`.txt`) and the sensor layouts that turn it into images.
+//!
+//! The export is tab-separated text: a header (`sensor type:`, `total time [secs]:`,
+//! `time per frame [secs]:`, `scanning rate [Hz]:`, `pressure values in kPa`, and a `mask
+//! definition` naming the exported sensors of the `left insole:` and `right insole:`), then a
+//! `time[secs]` column header and one line per frame: the time, the left insole's sensors, the
+//! right insole's sensors (99 each for a full insole).
+//!
+//! Pedar sensors are not a grid. A [`PedarLayout`] gives each sensor's outline (a quadrilateral);
+//! the outlines are rasterised on a grid of half a typical sensor's width and length, each cell
+//! taking the value of the sensor that covers its centre and cells outside every sensor being
+//! "no sensor". Both insoles share one image, left insole on the left, with two empty columns
+//! between them, so they always come out as separate objects; [`parse_pedar_insoles`] gives
+//! each insole as a recording of its own. Row 0 is the toe end.
+
+use super::asf::trunc;
+use super::{latin1_lines, parse_num, read_bytes};
+use crate::error::{IoError, Result};
+use crate::recording::{Format, Recording};
+use std::path::Path;
+use std::sync::OnceLock;
+
+/// Which insole a sensor belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Insole {
+    Left,
+    Right,
+}
+
+/// One sensor's outline: `corners` in order around it, in layout units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SensorOutline {
+    pub insole: Insole,
+    /// pedar's 1-based sensor number (1 at the heel, 99 at the toes for a full insole).
+    pub sensor: usize,
+    pub corners: [[f64; 2]; 4],
+}
+
+/// Where every sensor of both insoles lies.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PedarLayout {
+    pub sensors: Vec<SensorOutline>,
+    /// Millimetres per layout unit, when the layout file says (`# unit: mm`); `None` for the
+    /// normalised coordinates of the bundled layout (the recording then has no pitch).
+    pub mm_per_unit: Option<f64>,
+}
+
+/// The bundled layout: the common pedar insole as tabulated by the R package pressuRe
+/// (`layouts/pedar-pressuRe.csv`, MIT; source in the file's header).
+pub const BUNDLED_LAYOUT: &str = include_str!("../../layouts/pedar-pressuRe.csv");
+
+impl PedarLayout {
+    /// The bundled layout (see [`BUNDLED_LAYOUT`]).
+    pub fn bundled() -> &'static PedarLayout {
+        static L: OnceLock<PedarLayout> = OnceLock::new();
+        // The bundled table is part of the crate and covered by a test.
+        L.get_or_init(|| {
+            PedarLayout::parse(BUNDLED_LAYOUT, "bundled pedar layout").expect("valid table")
+        })
+    }
+
+    /// Reads a layout file (see [`PedarLayout::parse`]).
+    pub fn from_file(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let bytes = read_bytes(path)?;
+        Self::parse(
+            &String::from_utf8_lossy(&bytes),
+            &path.display().to_string(),
+        )
+    }
+
+    /// Parses a layout table: comma-separated lines `insole,sensor,x1,y1,x2,y2,x3,y3,x4,y4`
+    /// (`insole` is `L`/`R` or `left`/`right`; the corners go around the sensor; y grows from
+    /// heel to toes); an optional header line starting with `insole`; `#` comment lines, of
+    /// which `# unit: mm` (or `cm`) makes the coordinates millimetres (centimetres) so that the
+    /// recording gets a pitch.
+    pub fn parse(text: &str, name: &str) -> Result<Self> {
+        let err = |line: usize, msg: String| IoError::parse(name, line, msg);
+        let mut sensors: Vec<SensorOutline> = Vec::new();
+        let mut mm_per_unit = None;
+        for (i, line) in text.lines().enumerate() {
+            let (ln, t) = (i + 1, line.trim());
+            if let Some(c) = t.strip_prefix('#') {
+                if let Some(u) = c.trim().strip_prefix("unit:") {
+                    mm_per_unit = match u.trim().to_ascii_lowercase().as_str() {
+                        "mm" => Some(1.0),
+                        "cm" => Some(10.0),
+                        _ => None,
+                    };
+                }
+                continue;
+            }
+            if t.is_empty() || t.to_ascii_lowercase().starts_with("insole") {
+                continue;
+            }
+            let f: Vec<&str> = t.split(',').map(str::trim).collect();
+            if f.len() != 10 {
+                return Err(err(
+                    ln,
+                    format!(
+                        "{} fields, expected 10: insole,sensor,x1,y1,...,y4",
+                        f.len()
+                    ),
+                ));
+            }
+            let insole = match f[0].to_ascii_lowercase().as_str() {
+                "l" | "left" => Insole::Left,
+                "r" | "right" => Insole::Right,
+                o => {
+                    return Err(err(
+                        ln,
+                        format!("insole must be L or R, got {:?}", trunc(o)),
+                    ))
+                }
+            };
+            let sensor = f[1]
+                .parse::<usize>()
+                .ok()
+                .filter(|&s| (1..=1024).contains(&s))
+                .ok_or_else(|| err(ln, format!("bad sensor number {:?}", trunc(f[1]))))?;
+            let mut corners = [[0.0; 2]; 4];
+            for (k, tok) in f[2..].iter().enumerate() {
+                corners[k / 2][k % 2] = parse_num(tok).ok_or_else(|| {
+                    err(ln, format!("corner value {:?} is not a number", trunc(tok)))
+                })?;
+            }
+            if sensors
+                .iter()
+                .any(|s| s.insole == insole && s.sensor == sensor)
+            {
+                return Err(err(
+                    ln,
+                    format!("sensor {sensor} of the {insole:?} insole listed twice"),
+                ));
+            }
+            sensors.push(SensorOutline {
+                insole,
+                sensor,
+                corners,
+            });
+        }
+        if sensors.is_empty() {
+            return Err(IoError::format(name, "no sensors in the layout"));
+        }
+        Ok(Self {
+            sensors,
+            mm_per_unit,
+        })
+    }
+
+    fn find(&self, insole: Insole, sensor: usize) -> Option<&SensorOutline> {
+        self.sensors
+            .iter()
+            .find(|s| s.insole == insole && s.sensor == sensor)
+    }
+}
+
+/// A pedar export as read: times and per frame the values of the listed sensors.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PedarData {
+    /// `(insole, sensor)` of each value column, in file order.
+    pub columns: Vec<(Insole, usize)>,
+    /// `n_frames × columns.len()` values.
+    pub values: Vec<f32>,
+    pub n_frames: usize,
+    /// Time between frames in seconds (from `time per frame` or `scanning rate`).
+    pub dt_s: Option<f64>,
+    pub units: String,
+    /// The `sensor type:` line (insole model and size).
+    pub sensor_type: String,
+}
+
+fn sensor_list(v: &str) -> Option<Vec<usize>> {
+    v.split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse::<usize>().ok().filter(|&n| (1..=1024).contains(&n)))
+        .collect()
+}
+
+/// The value after `key` on a header line (`total time [secs]:  15.050`).
+fn after_key(line: &str, key: &str) -> Option<f64> {
+    let i = line.find(key)? + key.len();
+    parse_num(line[i..].split_whitespace().next()?)
+}
+
+/// Parses the export itself (no layout needed).
+pub fn parse_pedar_data(bytes: &[u8], name: &str) -> Result<PedarData> {
+    let err = |line: usize, msg: String| IoError::parse(name, line, msg);
+    let n_lines = latin1_lines(bytes).count();
+    let mut lines = latin1_lines(bytes);
+    let (mut total, mut dt, mut rate) = (None, None, None);
+    let (mut left, mut right) = (None, None);
+    let (mut units, mut sensor_type) = (String::new(), String::new());
+    let mut header_line = None;
+    for (ln, line) in lines.by_ref() {
+        let t = line.trim();
+        let lower = t.to_ascii_lowercase();
+        if lower.starts_with("time[") || lower.starts_with("time [") {
+            header_line = Some((ln, line));
+            break;
+        }
+        total = total.or(after_key(t, "total time [secs]:"));
+        dt = dt.or(after_key(t, "time per frame [secs]:"));
+        rate = rate.or(after_key(t, "scanning rate [Hz]:"));
+        if let Some(v) = t.strip_prefix("sensor type:") {
+            sensor_type = v.trim().to_string();
+        }
+        if let Some(v) = t.strip_prefix("pressure values in") {
+            units = v.trim().to_string();
+        }
+        if let Some(v) = t.strip_prefix("left insole:") {
+            left =
+                Some(sensor_list(v).ok_or_else(|| err(ln, "bad left insole sensor list".into()))?);
+        }
+        if let Some(v) = t.strip_prefix("right insole:") {
+            right =
+                Some(sensor_list(v).ok_or_else(|| err(ln, "bad right insole sensor list".into()))?);
+        }
+    }
+    let (hl, header) = header_line.ok_or_else(|| {
+        IoError::format(
+            name,
+            "no `time[secs]` column header: not a pedar ASCII export or truncated",
+        )
+    })?;
+    let n_cols = header.split_whitespace().count().saturating_sub(1);
+    let all: Vec<usize> = (1..=99).collect();
+    let (left, right) = match (left, right) {
+        (Some(l), Some(r)) => (l, r),
+        (None, None) if n_cols == 198 => (all.clone(), all),
+        _ => {
+            return Err(err(
+                hl,
+                format!("{n_cols} sensor columns and no `left insole:` / `right insole:` lists"),
+            ))
+        }
+    };
+    let columns: Vec<(Insole, usize)> = left
+        .iter()
+        .map(|&s| (Insole::Left, s))
+        .chain(right.iter().map(|&s| (Insole::Right, s)))
+        .collect();
+    if n_cols != columns.len() {
+        return Err(err(
+            hl,
+            format!(
+                "{n_cols} sensor columns, the mask definition lists {}",
+                columns.len()
+            ),
+        ));
+    }
+    let dt = dt
+        .or(rate.filter(|&r| r > 0.0).map(|r| 1.0 / r))
+        .filter(|&d| d > 0.0);
+    let expected = match (total, dt) {
+        (Some(t), Some(d)) if t >= 0.0 && t / d < 1e12 => Some((t / d).round() as u64),
+        _ => None,
+    };
+    let mut values: Vec<f32> = Vec::new();
+    let mut n_frames = 0usize;
+    for (ln, line) in lines {
+        let mut f = line.split_whitespace();
+        let Some(time) = f.next() else { continue };
+        parse_num(time)
+            .ok_or_else(|| err(ln, format!("time {:?} is not a number", trunc(time))))?;
+        let mut k = 0;
+        for tok in f {
+            if k == columns.len() {
+                return Err(err(
+                    ln,
+                    format!("more than {} sensor values", columns.len()),
+                ));
+            }
+            let v = parse_num(tok).ok_or_else(|| {
+                err(
+                    ln,
+                    format!("value {} is not a number: {:?}", k + 1, trunc(tok)),
+                )
+            })?;
+            values.push(v as f32);
+            k += 1;
+        }
+        if k != columns.len() {
+            if ln == n_lines {
+                values.truncate(values.len() - k); // cut inside the last line
+                break;
+            }
+            return Err(err(
+                ln,
+                format!("{k} sensor values, expected {}", columns.len()),
+            ));
+        }
+        n_frames += 1;
+    }
+    if let Some(e) = expected {
+        if n_frames as u64 != e {
+            return Err(IoError::format(
+                name,
+                format!(
+                    "{}: the file ends after {n_frames} frames, its header (total time / time per \
+                     frame) states {e}",
+                    if (n_frames as u64) < e {
+                        "truncated"
+                    } else {
+                        "too many frames"
+                    }
+                ),
+            ));
+        }
+    }
+    if n_frames == 0 {
+        return Err(IoError::format(name, "no frames"));
+    }
+    Ok(PedarData {
+        columns,
+        values,
+        n_frames,
+        dt_s: dt,
+        units,
+        sensor_type,
+    })
+}
+
+/// A layout's sensors rasterised: the image size and, per sensor, the cells it covers.
+struct Raster {
+    rows: usize,
+    cols: usize,
+    cells: Vec<Vec<usize>>,
+    pitch: Option<[f64; 2]>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn inside(p: [f64; 2], q: &[[f64; 2]; 4]) -> bool {
+    let mut c = false;
+    for i in 0..4 {
+        let (a, b) = (q[i], q[(i + 1) % 4]);
+        if (a[1] > p[1]) != (b[1] > p[1])
+            && p[0] < a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
+        {
+            c = !c;
+        }
+    }
+    c
+}
+
+/// Rasterises `groups` of outlines side by side (two empty columns between groups) with one
+/// cell size and one y range.
+fn rasterise(groups: &[Vec<&SensorOutline>], mm: Option<f64>, name: &str) -> Result<Raster> {
+    let all: Vec<&&SensorOutline> = groups.iter().flatten().collect();
+    let span = |s: &SensorOutline, a: usize| {
+        let v = s.corners.map(|c| c[a]);
+        (
+            v.iter().copied().fold(f64::INFINITY, f64::min),
+            v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        )
+    };
+    let cw = median(
+        all.iter()
+            .map(|s| {
+                let (a, b) = span(s, 0);
+                b - a
+            })
+            .collect(),
+    ) / 2.0;
+    let ch = median(
+        all.iter()
+            .map(|s| {
+                let (a, b) = span(s, 1);
+                b - a
+            })
+            .collect(),
+    ) / 2.0;
+    if !(cw > 0.0 && ch > 0.0) {
+        return Err(IoError::format(name, "layout sensors have no extent"));
+    }
+    let y_lo = all
+        .iter()
+        .map(|s| span(s, 1).0)
+        .fold(f64::INFINITY, f64::min);
+    let y_hi = all
+        .iter()
+        .map(|s| span(s, 1).1)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let rows = ((y_hi - y_lo) / ch).ceil().max(1.0);
+    let mut x_ranges = Vec::new();
+    let mut cols = 0.0f64;
+    for g in groups {
+        let lo = g.iter().map(|s| span(s, 0).0).fold(f64::INFINITY, f64::min);
+        let hi = g
+            .iter()
+            .map(|s| span(s, 0).1)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let n = ((hi - lo) / cw).ceil().max(1.0);
+        x_ranges.push((lo, cols));
+        cols += n + 2.0;
+    }
+    cols -= 2.0;
+    // Each frame becomes rows × cols values: a layout needing more than 200 000 cells (a
+    // thousand per sensor) is not a sensor layout.
+    if rows * cols > 2e5 {
+        return Err(IoError::format(
+            name,
+            "layout too fine: more than 200 000 cells",
+        ));
+    }
+    let (rows, cols) = (rows as usize, cols as usize);
+    let mut owner = vec![usize::MAX; rows * cols];
+    let mut cells = Vec::with_capacity(all.len());
+    let mut id = 0;
+    for (g, &(x_lo, c0)) in groups.iter().zip(&x_ranges) {
+        for s in g {
+            let (xa, xb) = span(s, 0);
+            let (ya, yb) = span(s, 1);
+            let col = |x: f64| c0 + (x - x_lo) / cw;
+            let row = |y: f64| (y_hi - y) / ch;
+            let mut mine = Vec::new();
+            let (r0, r1) = (
+                row(yb).floor().max(0.0) as usize,
+                (row(ya).ceil() as usize).min(rows),
+            );
+            let (k0, k1) = (
+                col(xa).floor().max(0.0) as usize,
+                (col(xb).ceil() as usize).min(cols),
+            );
+            for r in r0..r1 {
+                for c in k0..k1 {
+                    let p = [
+                        x_lo + (c as f64 - c0 + 0.5) * cw,
+                        y_hi - (r as f64 + 0.5) * ch,
+                    ];
+                    if owner[r * cols + c] == usize::MAX && inside(p, &s.corners) {
+                        owner[r * cols + c] = id;
+                        mine.push(r * cols + c);
+                    }
+                }
+            }
+            if mine.is_empty() {
+                // A sensor smaller than a cell: the cell under its centre.
+                let cx = s.corners.iter().map(|c| c[0]).sum::<f64>() / 4.0;
+                let cy = s.corners.iter().map(|c| c[1]).sum::<f64>() / 4.0;
+                let (r, c) = (
+                    (row(cy) as usize).min(rows - 1),
+                    (col(cx) as usize).min(cols - 1),
+                );
+                if owner[r * cols + c] != usize::MAX {
+                    return Err(IoError::format(
+                        name,
+                        format!(
+                            "layout sensor {} ({:?}) overlaps another sensor entirely",
+                            s.sensor, s.insole
+                        ),
+                    ));
+                }
+                owner[r * cols + c] = id;
+                mine.push(r * cols + c);
+            }
+            cells.push(mine);
+            id += 1;
+        }
+    }
+    let pitch = mm.map(|m| [cw * m, ch * m]);
+    Ok(Raster {
+        rows,
+        cols,
+        cells,
+        pitch,
+    })
+}
+
+/// Places the export's insoles on a layout: one recording per group of insoles.
+fn to_recording(
+    d: &PedarData,
+    layout: &PedarLayout,
+    insoles: &[Insole],
+    name: &str,
+) -> Result<Recording> {
+    let mut groups: Vec<Vec<&SensorOutline>> = Vec::new();
+    let mut sources: Vec<Vec<usize>> = Vec::new(); // per group: column index of each outline
+    for &side in insoles {
+        let mut g = Vec::new();
+        let mut src = Vec::new();
+        for (k, &(ins, sensor)) in d.columns.iter().enumerate().filter(|(_, c)| c.0 == side) {
+            let s = layout.find(ins, sensor).ok_or_else(|| {
+                IoError::format(
+                    name,
+                    format!("sensor {sensor} of the {ins:?} insole is not in the layout"),
+                )
+            })?;
+            g.push(s);
+            src.push(k);
+        }
+        if g.is_empty() {
+            return Err(IoError::format(
+                name,
+                format!("the export has no {side:?} insole sensors"),
+            ));
+        }
+        groups.push(g);
+        sources.push(src);
+    }
+    let r = rasterise(&groups, layout.mm_per_unit, name)?;
+    let per = r.rows * r.cols;
+    let mut mask = vec![false; per];
+    r.cells.iter().flatten().for_each(|&i| mask[i] = true);
+    let nc = d.columns.len();
+    let src: Vec<usize> = sources.concat();
+    let mut data = vec![
+        0.0f32;
+        d.n_frames
+            .checked_mul(per)
+            .ok_or_else(|| IoError::format(name, "too large"))?
+    ];
+    for t in 0..d.n_frames {
+        let row = &d.values[t * nc..(t + 1) * nc];
+        let frame = &mut data[t * per..(t + 1) * per];
+        for (cells, &k) in r.cells.iter().zip(&src) {
+            for &i in cells {
+                frame[i] = row[k];
+            }
+        }
+    }
+    let mut rec = Recording::new(d.n_frames, r.rows, r.cols, data, mask)?;
+    rec.pitch_mm = r.pitch;
+    rec.dt_s = d.dt_s;
+    rec.units = d.units.clone();
+    rec.format = Some(Format::Pedar);
+    Ok(rec)
+}
+
+/// Parses a pedar export onto a layout: both insoles in one image (left insole on the left,
+/// two empty columns between), so that each insole is an object of its own.
+pub fn parse_pedar(bytes: &[u8], name: &str, layout: &PedarLayout) -> Result<Recording> {
+    let d = parse_pedar_data(bytes, name)?;
+    let sides: Vec<Insole> = [Insole::Left, Insole::Right]
+        .into_iter()
+        .filter(|s| d.columns.iter().any(|c| c.0 == *s))
+        .collect();
+    to_recording(&d, layout, &sides, name)
+}
+
+/// Parses a pedar export into one recording per insole: `(left, right)`.
+pub fn parse_pedar_insoles(
+    bytes: &[u8],
+    name: &str,
+    layout: &PedarLayout,
+) -> Result<(Recording, Recording)> {
+    let d = parse_pedar_data(bytes, name)?;
+    Ok((
+        to_recording(&d, layout, &[Insole::Left], name)?,
+        to_recording(&d, layout, &[Insole::Right], name)?,
+    ))
+}

@@ -1,0 +1,314 @@
+//! The INI-like "pedcad import file" written by Zebris FDM (`.apd`) and by RSscan/Materialise
+//! footscan: `[Section]` headers, `Key=Value` lines, then grids of tab-separated values.
+//!
+//! - `[Technical]` holds `SensCountX` (rows of every grid), `SensCountY` (values per row),
+//!   `LDistX`/`LDistY` (sensor spacing along rows / columns, in `UnitDistance`), and in footscan
+//!   exports `MinIdx`, `MaxIdx` (the frame numbers) and `TimeDiff` (time between frames, in
+//!   `UnitTime`);
+//! - `[General]` holds `UnitDistance`, `UnitPressure`, `UnitTime` and `Source` (`<<zebris>>`);
+//! - `[Data]` is the peak-pressure image, `[Data<k>]` frame `k` (footscan); `-1` marks a sensor
+//!   outside the recorded window. A sensor that is `-1` in every grid is "no sensor"; `-1` in some
+//!   frames only is an unloaded sensor (0).
+//!
+//! A file with `[Data<k>]` frames reads as those frames; a peak-only file (Zebris `.apd`) as one
+//! frame.
+
+use super::asf::trunc;
+use super::{latin1_lines, parse_num};
+use crate::error::{IoError, Result};
+use crate::recording::{Format, Recording};
+
+/// One `[Data]` or `[Data<k>]` grid as read.
+struct Grid {
+    /// `None` for the peak image `[Data]`, `Some(k)` for `[Data<k>]`.
+    index: Option<i64>,
+    header_line: usize,
+    values: Vec<f32>,
+    rows_read: usize,
+}
+
+#[derive(Default)]
+struct Header {
+    rows: Option<usize>,
+    cols: Option<usize>,
+    dist_x: Option<f64>,
+    dist_y: Option<f64>,
+    unit_distance: Option<String>,
+    unit_pressure: Option<String>,
+    unit_time: Option<String>,
+    time_diff: Option<f64>,
+    min_idx: Option<i64>,
+    max_idx: Option<i64>,
+    source: String,
+}
+
+fn mm_per(unit: Option<&str>) -> Option<f64> {
+    match unit.map(|u| u.trim().to_ascii_lowercase()).as_deref() {
+        None | Some("mm") => Some(1.0),
+        Some("cm") => Some(10.0),
+        Some("m") => Some(1000.0),
+        Some("in") | Some("inch") => Some(25.4),
+        _ => None,
+    }
+}
+
+fn s_per(unit: Option<&str>) -> Option<f64> {
+    match unit.map(|u| u.trim().to_ascii_lowercase()).as_deref() {
+        None | Some("ms") => Some(1e-3),
+        Some("s") | Some("sec") => Some(1.0),
+        Some("us") | Some("µs") => Some(1e-6),
+        _ => None,
+    }
+}
+
+/// `[Data]` → `Some(None)`, `[Data12]` → `Some(Some(12))`, other sections → `None`.
+fn data_section(name: &str) -> Option<Option<i64>> {
+    let rest = name.strip_prefix("Data")?;
+    if rest.is_empty() {
+        return Some(None);
+    }
+    rest.parse::<i64>().ok().map(Some)
+}
+
+/// Parses a Zebris `.apd` or footscan export held in memory; `name` appears in error messages.
+pub fn parse_pedcad(bytes: &[u8], name: &str) -> Result<Recording> {
+    let err = |line: usize, msg: String| IoError::parse(name, line, msg);
+    let mut h = Header::default();
+    let mut grids: Vec<Grid> = Vec::new();
+    let mut in_data = false;
+    let mut last_ln = 0;
+    let n_lines = latin1_lines(bytes).count();
+    for (ln, line) in latin1_lines(bytes) {
+        last_ln = ln;
+        let t = line.trim();
+        if t.is_empty() {
+            continue;
+        }
+        if let Some(sec) = t.strip_prefix('[').and_then(|s| s.strip_suffix(']')) {
+            if let Some(g) = grids.last() {
+                check_complete(g, &h, name)?;
+            }
+            in_data = false;
+            if let Some(index) = data_section(sec.trim()) {
+                if h.rows.is_none() || h.cols.is_none() {
+                    return Err(err(
+                        ln,
+                        "a [Data] section before SensCountX and SensCountY".into(),
+                    ));
+                }
+                // A grid grows row by row as the file holds it, so a header claiming a huge
+                // size allocates nothing it does not read.
+                grids.push(Grid {
+                    index,
+                    header_line: ln,
+                    values: Vec::new(),
+                    rows_read: 0,
+                });
+                in_data = true;
+            }
+            continue;
+        }
+        if in_data {
+            let g = grids.last_mut().expect("a data section is open");
+            let (rows, cols) = (h.rows.unwrap_or(0), h.cols.unwrap_or(0));
+            if g.rows_read == rows {
+                return Err(err(
+                    ln,
+                    format!(
+                        "more than SensCountX = {rows} rows in the section opened at line {}",
+                        g.header_line
+                    ),
+                ));
+            }
+            let mut k = 0usize;
+            for tok in t
+                .split(['\t', ';'])
+                .map(str::trim)
+                .filter(|s| !s.is_empty())
+            {
+                if k == cols {
+                    return Err(err(ln, format!("more than SensCountY = {cols} values")));
+                }
+                let v = parse_num(tok).ok_or_else(|| {
+                    err(
+                        ln,
+                        format!("value {} is not a number: {:?}", k + 1, trunc(tok)),
+                    )
+                })?;
+                g.values.push(v as f32);
+                k += 1;
+            }
+            if k != cols {
+                if ln == n_lines {
+                    // The file ends inside this row: reported as a truncated section.
+                    g.values.truncate(g.values.len() - k);
+                    break;
+                }
+                return Err(err(ln, format!("{k} values, expected SensCountY = {cols}")));
+            }
+            g.rows_read += 1;
+            continue;
+        }
+        let Some((key, val)) = t.split_once('=') else {
+            return Err(err(
+                ln,
+                format!("expected `Key=Value` or `[Section]`, found {:?}", trunc(t)),
+            ));
+        };
+        read_key(&mut h, key.trim(), val.trim()).map_err(|what| err(ln, what))?;
+    }
+    // A file cut inside its last frame: that frame is dropped, so that the frame count check
+    // names the frames found and the frames the header states.
+    if let Some(g) = grids.last() {
+        if g.index.is_some() && h.max_idx.is_some() && check_complete(g, &h, name).is_err() {
+            grids.pop();
+        }
+    }
+    if let Some(g) = grids.last() {
+        check_complete(g, &h, name)?;
+    }
+    build(h, grids, name, last_ln)
+}
+
+fn read_key(h: &mut Header, key: &str, val: &str) -> std::result::Result<(), String> {
+    let bad = |what: &str| format!("cannot read {what} from {:?}", trunc(val));
+    let count = |v: &str| v.parse::<usize>().ok().filter(|&n| n > 0 && n <= 100_000);
+    let positive = |v: &str| parse_num(v).filter(|&x| x > 0.0);
+    match key {
+        "SensCountX" => h.rows = Some(count(val).ok_or_else(|| bad(key))?),
+        "SensCountY" => h.cols = Some(count(val).ok_or_else(|| bad(key))?),
+        "LDistX" => h.dist_x = Some(positive(val).ok_or_else(|| bad(key))?),
+        "LDistY" => h.dist_y = Some(positive(val).ok_or_else(|| bad(key))?),
+        "TimeDiff" => h.time_diff = Some(positive(val).ok_or_else(|| bad(key))?),
+        "MinIdx" => h.min_idx = Some(val.parse().map_err(|_| bad(key))?),
+        "MaxIdx" => h.max_idx = Some(val.parse().map_err(|_| bad(key))?),
+        "UnitDistance" => h.unit_distance = Some(val.to_string()),
+        "UnitPressure" => h.unit_pressure = Some(val.to_string()),
+        "UnitTime" => h.unit_time = Some(val.to_string()),
+        "Source" => h.source = val.to_string(),
+        _ => {}
+    }
+    Ok(())
+}
+
+fn check_complete(g: &Grid, h: &Header, name: &str) -> Result<()> {
+    let rows = h.rows.unwrap_or(0);
+    if g.rows_read != rows {
+        return Err(IoError::parse(
+            name,
+            g.header_line,
+            format!(
+                "truncated: section has {} of SensCountX = {rows} rows",
+                g.rows_read
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn build(h: Header, grids: Vec<Grid>, name: &str, last_ln: usize) -> Result<Recording> {
+    let err = |line: usize, msg: String| IoError::parse(name, line, msg);
+    let (rows, cols) = match (h.rows, h.cols) {
+        (Some(r), Some(c)) => (r, c),
+        _ => return Err(IoError::format(name, "no SensCountX / SensCountY")),
+    };
+    let peak = grids.iter().find(|g| g.index.is_none());
+    let mut frames: Vec<&Grid> = grids.iter().filter(|g| g.index.is_some()).collect();
+    let expected = match (h.min_idx, h.max_idx) {
+        (Some(a), Some(b)) if b >= a => Some((b - a + 1) as u64),
+        (Some(a), Some(b)) => {
+            return Err(err(last_ln, format!("MaxIdx {b} before MinIdx {a}")));
+        }
+        _ => None,
+    };
+    if let Some(e) = expected {
+        if (frames.len() as u64) < e {
+            return Err(err(
+                last_ln,
+                format!(
+                    "truncated: the file ends after {} frames, its header (MinIdx..MaxIdx) states {e}",
+                    frames.len()
+                ),
+            ));
+        }
+        if frames.len() as u64 > e {
+            return Err(err(
+                last_ln,
+                format!(
+                    "{} frames, more than the {e} its header (MinIdx..MaxIdx) states",
+                    frames.len()
+                ),
+            ));
+        }
+    }
+    for w in frames.windows(2) {
+        if w[1].index <= w[0].index {
+            return Err(err(
+                w[1].header_line,
+                format!(
+                    "frame [Data{}] after [Data{}]: frames out of order",
+                    w[1].index.unwrap_or(0),
+                    w[0].index.unwrap_or(0)
+                ),
+            ));
+        }
+    }
+    if frames.is_empty() {
+        frames.extend(peak);
+    }
+    if frames.is_empty() {
+        return Err(IoError::format(name, "no [Data] section"));
+    }
+    let per = rows * cols;
+    // A sensor exists when any grid (frames or peak) holds something other than -1 there.
+    let mut mask = vec![false; per];
+    for g in frames.iter().copied().chain(peak) {
+        for (m, &v) in mask.iter_mut().zip(&g.values) {
+            *m |= v != -1.0;
+        }
+    }
+    let mut data = Vec::with_capacity(frames.len() * per);
+    for g in &frames {
+        data.extend(g.values.iter().map(|&v| if v == -1.0 { 0.0 } else { v }));
+    }
+    let mut rec = Recording::new(frames.len(), rows, cols, data, mask)?;
+    let mm = mm_per(h.unit_distance.as_deref()).ok_or_else(|| {
+        IoError::format(
+            name,
+            format!(
+                "unknown UnitDistance {:?}",
+                h.unit_distance.unwrap_or_default()
+            ),
+        )
+    })?;
+    // LDistX runs along the rows (x of the plate = row index), LDistY along a row.
+    rec.pitch_mm = match (h.dist_y, h.dist_x) {
+        (Some(dx), Some(dy)) => Some([dx * mm, dy * mm]),
+        (Some(d), None) | (None, Some(d)) => Some([d * mm, d * mm]),
+        _ => None,
+    };
+    if rec.n_frames() > 1 || h.min_idx.is_some() {
+        if let Some(td) = h.time_diff {
+            let s = s_per(h.unit_time.as_deref()).ok_or_else(|| {
+                IoError::format(
+                    name,
+                    format!(
+                        "unknown UnitTime {:?}",
+                        h.unit_time.clone().unwrap_or_default()
+                    ),
+                )
+            })?;
+            rec.dt_s = Some(td * s);
+        }
+    }
+    rec.units = h.unit_pressure.unwrap_or_default();
+    let zebris = h.source.to_ascii_lowercase().contains("zebris");
+    rec.format = Some(
+        if zebris || (h.min_idx.is_none() && h.time_diff.is_none()) {
+            Format::Zebris
+        } else {
+            Format::Footscan
+        },
+    );
+    Ok(rec)
+}

@@ -1,0 +1,603 @@
+//! Vendor exports (Zebris `.apd`, footscan, Tekscan CSV, NumPy `.npz`), content sniffing and the
+//! refusals of files that are not recordings. Samples and their sources: tests/data/README.md.
+
+use pedo_io::formats::{asf, npz, pedcad};
+use pedo_io::{parse_bytes, read_recording, sniff_format, Format, IoError, Recording};
+use std::path::{Path, PathBuf};
+
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+}
+
+fn bytes(name: &str) -> Vec<u8> {
+    std::fs::read(data(name)).unwrap()
+}
+
+/// A scratch folder removed when dropped.
+struct Scratch(PathBuf);
+impl Scratch {
+    fn new(tag: &str) -> Self {
+        let p = std::env::temp_dir().join(format!("pedo-io-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&p).unwrap();
+        Scratch(p)
+    }
+    fn write(&self, name: &str, b: &[u8]) -> PathBuf {
+        let p = self.0.join(name);
+        std::fs::write(&p, b).unwrap();
+        p
+    }
+}
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// The `[Data]` grid of a pedcad file as numbers, read independently of the library.
+fn pedcad_grid(text: &str, section: &str) -> Vec<Vec<f64>> {
+    let start = text.find(&format!("[{section}]\n")).unwrap() + section.len() + 3;
+    text[start..]
+        .lines()
+        .take_while(|l| !l.trim().is_empty() && !l.starts_with('['))
+        .map(|l| l.split('\t').map(|v| v.parse().unwrap()).collect())
+        .collect()
+}
+
+#[test]
+fn zebris_apd_real_sample() {
+    // Real Zebris FDM export, BMClab/BMC data/MDwalk2.apd (MIT).
+    let rec = read_recording(data("MDwalk2.apd")).unwrap();
+    assert_eq!(rec.format, Some(Format::Zebris));
+    assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (1, 32, 15));
+    assert_eq!(rec.pitch_mm, Some([8.46591, 8.46591]));
+    assert_eq!(rec.units, "N/cm2");
+    assert_eq!(rec.dt_s, None);
+    // N/cm² = 10 kPa; kPa × mm² × 1e-3 = N.
+    let f = rec.force_factor().unwrap();
+    assert!((f - 10.0 * 8.46591 * 8.46591 * 1e-3).abs() < 1e-12);
+    let text = String::from_utf8(bytes("MDwalk2.apd")).unwrap();
+    let grid = pedcad_grid(&text, "Data");
+    assert_eq!((grid.len(), grid[0].len()), (32, 15));
+    let flat: Vec<f64> = grid.concat();
+    let sensors = flat.iter().filter(|&&v| v != -1.0).count();
+    assert_eq!(rec.n_sensors(), sensors);
+    for (i, &v) in flat.iter().enumerate() {
+        assert_eq!(rec.sensor_mask()[i], v != -1.0);
+        assert_eq!(rec.data()[i] as f64, if v == -1.0 { 0.0 } else { v });
+    }
+    assert_eq!(rec.peak_image().max(), 36.5);
+    assert_eq!((rec.data()[2], rec.data()[3]), (1.0, 3.0));
+}
+
+#[test]
+fn a_known_format_under_another_extension_reads_the_same() {
+    let s = Scratch::new("ext");
+    for (sample, format) in [
+        ("MDwalk2.apd", Format::Zebris),
+        ("FrasP01L.asf", Format::Asf),
+        ("synthetic-walk.lst", Format::Lst),
+        ("tekscan-FrasP01L-11-20.csv", Format::TekscanCsv),
+        ("footscan-FrasP01L-11-20.txt", Format::Footscan),
+        ("pedar-example-3.01-4.00.asc", Format::Pedar),
+        ("iscan-test-1-20.csv", Format::Asf),
+        ("emed-test-1-10.lst", Format::Lst),
+        ("numpy-MUN104L-deflated.npz", Format::Npz),
+        ("MUN104L.csv", Format::Csv),
+    ] {
+        let want = read_recording(data(sample)).unwrap();
+        assert_eq!(want.format, Some(format), "{sample}");
+        for ext in ["csv", "txt", "dat", "asf", "npy"] {
+            let p = s.write(&format!("renamed.{ext}"), &bytes(sample));
+            let got = read_recording(&p).unwrap_or_else(|e| panic!("{sample} as .{ext}: {e}"));
+            assert_eq!(got, want, "{sample} as .{ext}");
+        }
+    }
+}
+
+#[test]
+fn tekscan_csv_export_matches_the_asf_frames() {
+    let asf = read_recording(data("FrasP01L.asf")).unwrap();
+    let rec = read_recording(data("tekscan-FrasP01L-11-20.csv")).unwrap();
+    assert_eq!(rec.format, Some(Format::TekscanCsv));
+    assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (10, 60, 21));
+    assert_eq!((rec.pitch_mm, rec.dt_s), (asf.pitch_mm, asf.dt_s));
+    assert_eq!(
+        (rec.units.as_str(), rec.noise_threshold),
+        ("kPa", Some(3.0))
+    );
+    assert_eq!(rec.sensor_mask(), asf.sensor_mask());
+    for t in 0..10 {
+        assert_eq!(rec.frame_slice(t), asf.frame_slice(10 + t), "frame {t}");
+    }
+    assert!(
+        rec.peak_image().max() > 0.0,
+        "the excerpt holds a loaded frame"
+    );
+    // Cut inside frame 6: the error names both counts.
+    let b = bytes("tekscan-FrasP01L-11-20.csv");
+    let text = String::from_utf8(b.clone()).unwrap();
+    let cut = text.find("Frame 16").unwrap() + 300;
+    let e = parse_bytes(&b[..cut], Format::TekscanCsv, "cut.csv").unwrap_err();
+    let m = e.to_string();
+    assert!(
+        m.contains("cut.csv") && m.contains("after 5 complete frames") && m.contains("states 10"),
+        "{m}"
+    );
+}
+
+#[test]
+fn footscan_export_frames_peak_and_mask() {
+    let asf = read_recording(data("FrasP01L.asf")).unwrap();
+    let rec = read_recording(data("footscan-FrasP01L-11-20.txt")).unwrap();
+    assert_eq!(rec.format, Some(Format::Footscan));
+    assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (10, 60, 21));
+    assert_eq!(rec.pitch_mm, Some([5.08, 5.08]));
+    assert_eq!(rec.dt_s, Some(0.032));
+    assert_eq!(rec.units, "N/cm2");
+    // -1 marks exactly the sensels the Tekscan file marks B.
+    assert_eq!(rec.sensor_mask(), asf.sensor_mask());
+    for t in 0..10 {
+        let (a, b) = (
+            rec.frame_slice(t).unwrap(),
+            asf.frame_slice(10 + t).unwrap(),
+        );
+        for (x, y) in a.iter().zip(b) {
+            assert!((x - y / 10.0).abs() < 1e-4, "frame {t}: {x} vs {y} kPa");
+        }
+    }
+    // The file's [Data] peak image is the maximum over its frames.
+    let text = String::from_utf8(bytes("footscan-FrasP01L-11-20.txt")).unwrap();
+    let peak: Vec<f64> = pedcad_grid(&text, "Data").concat();
+    for (p, q) in peak.iter().zip(rec.peak_image().data()) {
+        assert!((p.max(0.0) - q).abs() < 1e-4);
+    }
+    // Drop the last frame: the error names the frames found and the frames promised.
+    let cut = text.find("[Data10]").unwrap();
+    let e = pedcad::parse_pedcad(&text.as_bytes()[..cut], "cut.txt").unwrap_err();
+    let m = e.to_string();
+    assert!(
+        m.contains("after 9 frames") && m.contains("states 10"),
+        "{m}"
+    );
+    // Cut inside a grid: the section is named as truncated.
+    let e = pedcad::parse_pedcad(&text.as_bytes()[..cut - 200], "cut.txt").unwrap_err();
+    assert!(e.to_string().contains("truncated"), "{e}");
+}
+
+/// A zip archive of `(name, bytes)` members, stored (method 0) or deflated (method 8), with
+/// ZIP64 extra fields as `np.savez` writes them when `zip64` is set.
+fn zip(members: &[(&str, Vec<u8>)], deflate: bool, zip64: bool) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut central = Vec::new();
+    for (name, raw) in members {
+        let body = if deflate {
+            miniz_oxide::deflate::compress_to_vec(raw, 6)
+        } else {
+            raw.clone()
+        };
+        let mut h = crc32fast::Hasher::new();
+        h.update(raw);
+        let crc = h.finalize();
+        let offset = out.len() as u32;
+        let method: u16 = if deflate { 8 } else { 0 };
+        let (cs, us) = if zip64 {
+            (0xFFFF_FFFFu32, 0xFFFF_FFFFu32)
+        } else {
+            (body.len() as u32, raw.len() as u32)
+        };
+        let mut extra = Vec::new();
+        if zip64 {
+            extra.extend_from_slice(&1u16.to_le_bytes());
+            extra.extend_from_slice(&16u16.to_le_bytes());
+            extra.extend_from_slice(&(raw.len() as u64).to_le_bytes());
+            extra.extend_from_slice(&(body.len() as u64).to_le_bytes());
+        }
+        let common = |v: &mut Vec<u8>| {
+            v.extend_from_slice(&20u16.to_le_bytes()); // version needed
+            v.extend_from_slice(&0u16.to_le_bytes()); // flags
+            v.extend_from_slice(&method.to_le_bytes());
+            v.extend_from_slice(&[0; 4]); // time, date
+            v.extend_from_slice(&crc.to_le_bytes());
+            v.extend_from_slice(&cs.to_le_bytes());
+            v.extend_from_slice(&us.to_le_bytes());
+            v.extend_from_slice(&(name.len() as u16).to_le_bytes());
+            v.extend_from_slice(&(extra.len() as u16).to_le_bytes());
+        };
+        out.extend_from_slice(b"PK\x03\x04");
+        common(&mut out);
+        out.extend_from_slice(name.as_bytes());
+        out.extend_from_slice(&extra);
+        out.extend_from_slice(&body);
+        central.extend_from_slice(b"PK\x01\x02");
+        central.extend_from_slice(&20u16.to_le_bytes()); // version made by
+        common(&mut central);
+        central.extend_from_slice(&[0; 6]); // comment length, disk, internal attributes
+        central.extend_from_slice(&[0; 4]); // external attributes
+        central.extend_from_slice(&offset.to_le_bytes());
+        central.extend_from_slice(name.as_bytes());
+        central.extend_from_slice(&extra);
+    }
+    let cd_offset = out.len() as u32;
+    out.extend_from_slice(&central);
+    out.extend_from_slice(b"PK\x05\x06");
+    out.extend_from_slice(&[0; 4]);
+    out.extend_from_slice(&(members.len() as u16).to_le_bytes());
+    out.extend_from_slice(&(members.len() as u16).to_le_bytes());
+    out.extend_from_slice(&(central.len() as u32).to_le_bytes());
+    out.extend_from_slice(&cd_offset.to_le_bytes());
+    out.extend_from_slice(&0u16.to_le_bytes());
+    out
+}
+
+#[test]
+fn npz_stored_and_deflated() {
+    let asf = read_recording(data("FrasP01L.asf")).unwrap();
+    let npy = pedo_io::formats::npy::recording_to_npy(&asf);
+    // A 1-D member first: not a recording, skipped for the frames after it.
+    let dict = "{'descr': '<f4', 'fortran_order': False, 'shape': (2,), }";
+    let mut label = b"\x93NUMPY\x01\x00".to_vec();
+    label.extend_from_slice(&(dict.len() as u16 + 1).to_le_bytes());
+    label.extend_from_slice(dict.as_bytes());
+    label.push(b'\n');
+    label.extend_from_slice(&[0; 8]);
+    for deflate in [false, true] {
+        for zip64 in [false, true] {
+            let z = zip(
+                &[("labels.npy", label.clone()), ("frames.npy", npy.clone())],
+                deflate,
+                zip64,
+            );
+            let rec = parse_bytes(&z, Format::Npz, "x.npz").unwrap();
+            assert_eq!(rec.format, Some(Format::Npz));
+            assert_eq!(
+                (rec.data(), rec.sensor_mask()),
+                (asf.data(), asf.sensor_mask())
+            );
+            let s = Scratch::new(&format!("npz{deflate}{zip64}"));
+            assert_eq!(read_recording(s.write("walk.dat", &z)).unwrap(), rec);
+            // Truncated archives and flipped bytes are errors naming the file, never panics.
+            for cut in [z.len() - 1, z.len() / 2, 30] {
+                let e = npz::parse_npz(&z[..cut], "cut.npz").unwrap_err();
+                assert!(e.to_string().contains("cut.npz"), "{e}");
+            }
+        }
+    }
+    let z = zip(&[("a.txt", b"hello".to_vec())], false, false);
+    let e = npz::parse_npz(&z, "a.npz").unwrap_err().to_string();
+    assert!(e.contains("without .npy members"), "{e}");
+    // A corrupted member fails its CRC.
+    let mut z = zip(&[("f.npy", npy.clone())], false, false);
+    let i = z.len() / 2;
+    z[i] ^= 0x55;
+    assert!(npz::parse_npz(&z, "crc.npz").is_err());
+}
+
+#[test]
+fn files_that_are_not_recordings_are_named_and_refused() {
+    let s = Scratch::new("unknown");
+    let cases: [(&str, &[u8], &str); 6] = [
+        (
+            "notes.csv",
+            b"Dear user,\nthis is a letter, not a grid.\n",
+            "neither a known export",
+        ),
+        ("data.json", b"{\"frames\": [1, 2, 3]}\n", "JSON"),
+        (
+            "blob.asf.bin",
+            b"\x00\x01\x02\xff\xfe\x00\x00",
+            "binary data",
+        ),
+        ("empty.csv", b"", "empty"),
+        (
+            "walk.asc",
+            b"pedar ASCII export\nscanning rate: 50 Hz\ntime\t1\t2\t3\n",
+            "pedar",
+        ),
+        ("page.html", b"<html><body>hi</body></html>\n", "XML/HTML"),
+    ];
+    for (file, content, what) in cases {
+        let e = read_recording(s.write(file, content)).unwrap_err();
+        let m = e.to_string();
+        assert!(matches!(e, IoError::UnknownFormat { .. }), "{file}: {m}");
+        assert!(m.contains(file) && m.contains(what), "{file}: {m}");
+        assert!(
+            m.contains("Zebris .apd") && m.contains("NumPy"),
+            "lists formats: {m}"
+        );
+        assert!(!m.contains('\n'), "one line: {m}");
+    }
+}
+
+#[test]
+fn sniffing_decides_by_content_and_extension_breaks_ties() {
+    let head = |n: &str| bytes(n);
+    assert_eq!(
+        sniff_format(Path::new("a.csv"), &head("MDwalk2.apd")),
+        Ok(Format::Zebris)
+    );
+    assert_eq!(
+        sniff_format(Path::new("a.apd"), &head("MUN104L.csv")),
+        Ok(Format::Csv)
+    );
+    assert_eq!(
+        sniff_format(Path::new("a.lst"), &head("FrasP01L.asf")),
+        Ok(Format::Asf)
+    );
+    // A header cut before its markers: the extension picks the parser, which names the line.
+    let cut = &head("FrasP01L.asf")[..120];
+    assert_eq!(sniff_format(Path::new("a.asf"), cut), Ok(Format::Asf));
+    assert!(sniff_format(Path::new("a.txt"), cut).is_err());
+    let e = parse_bytes(cut, Format::Asf, "cut.asf")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("cut.asf") && e.contains("ASCII_DATA"), "{e}");
+}
+
+#[test]
+fn headers_claiming_huge_sizes_allocate_nothing() {
+    // Each would need gigabytes if believed; each must fail at once.
+    let asf = b"ROWS 100000\nCOLS 100000\nSTART_FRAME 1\nEND_FRAME 1000000000\nASCII_DATA @@\nFrame 1\n0\n";
+    assert!(asf::parse_asf(asf, "huge.asf")
+        .unwrap_err()
+        .to_string()
+        .contains("more than the file"));
+    let csv = b"ROWS 50000,,\nCOLS 50000,,\nEND_FRAME 1000000000,,\nFrame 1,,\n0,0\n";
+    assert!(asf::parse_tekscan_csv(csv, "huge.csv").is_err());
+    let apd = b"[Technical]\nSensCountX=100000\nSensCountY=100000\nMinIdx=1\nMaxIdx=1000000000\n[Data1]\n1\t2\n";
+    assert!(pedcad::parse_pedcad(apd, "huge.apd").is_err());
+    let lst = b"Page 1\nMatrix: 10000x10000\n1\t2\tForce\n1\t0\t0\t0\nForce\t0\t0\n";
+    assert!(parse_bytes(lst, Format::Lst, "huge.lst").is_err());
+    let npy = b"\x93NUMPY\x01\x00\x46\x00{'descr': '<f4', 'fortran_order': False, 'shape': (1000000000, 1000, 1000), }\n";
+    assert!(parse_bytes(npy, Format::Npy, "huge.npy").is_err());
+    // A deflated member claiming 4 GiB from a few bytes.
+    let mut z = zip(&[("f.npy", vec![0u8; 64])], true, true);
+    let at = z.windows(4).position(|w| w == b"PK\x01\x02").unwrap();
+    let extra = at + 46 + 5 + 4;
+    z[extra..extra + 8].copy_from_slice(&(4u64 << 30).to_le_bytes());
+    assert!(npz::parse_npz(&z, "bomb.npz").is_err());
+}
+
+#[test]
+fn recording_from_array_with_pitch_rate_units_and_mask() {
+    let rec = Recording::from_array(
+        2,
+        2,
+        2,
+        vec![1.0, f32::NAN, 3.0, 4.0, 5.0, f32::NAN, 7.0, 8.0],
+        None,
+    )
+    .unwrap()
+    .with_pitch_mm([5.0, 7.62])
+    .unwrap()
+    .with_frame_rate(100.0)
+    .unwrap()
+    .with_units("kPa");
+    assert_eq!(rec.sensor_mask(), &[true, false, true, true]);
+    assert_eq!(rec.pitch_mm, Some([5.0, 7.62]));
+    assert_eq!(rec.frame_rate(), Some(100.0));
+    assert_eq!(rec.dt_s, Some(0.01));
+    assert_eq!(rec.force_factor(), Some(5.0 * 7.62 * 1e-3));
+    let masked =
+        Recording::from_array(1, 1, 3, vec![1.0, 99.0, 2.0], Some(vec![true, false, true]))
+            .unwrap();
+    assert_eq!(masked.data(), &[1.0, 0.0, 2.0]);
+    assert!(masked.clone().with_pitch_mm([0.0, 1.0]).is_err());
+    assert!(masked.clone().with_frame_rate(f64::NAN).is_err());
+    assert!(Recording::from_array(2, 1, 3, vec![1.0; 3], None).is_err());
+}
+
+#[test]
+fn npz_written_by_numpy() {
+    // np.savez and np.savez_compressed of MUN104L and its half, NaN where the template is 0.
+    let grid = read_recording(data("MUN104L.csv")).unwrap();
+    for file in ["numpy-MUN104L-stored.npz", "numpy-MUN104L-deflated.npz"] {
+        let rec = read_recording(data(file)).unwrap();
+        assert_eq!(rec.format, Some(Format::Npz), "{file}");
+        assert_eq!(
+            (rec.n_frames(), rec.rows(), rec.cols()),
+            (2, 63, 27),
+            "{file}"
+        );
+        let g = grid.frame_slice(0).unwrap();
+        for (i, &v) in g.iter().enumerate() {
+            assert_eq!(rec.sensor_mask()[i], v != 0.0, "{file}");
+            assert_eq!(rec.data()[i], v);
+            assert_eq!(rec.data()[g.len() + i], v / 2.0);
+        }
+    }
+}
+
+/// The 198 sensor columns of a pedar export, read independently: per frame `(time, values)`.
+fn pedar_rows(text: &str) -> Vec<(f64, Vec<f64>)> {
+    text.lines()
+        .skip_while(|l| !l.starts_with("time["))
+        .skip(1)
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            (v[0], v[1..].to_vec())
+        })
+        .collect()
+}
+
+#[test]
+fn pedar_export_on_the_bundled_layout() {
+    use pedo_io::formats::pedar::{self, Insole, PedarLayout};
+    // Real pedar-X export (pressuRe inst/extdata/pedar_example.asc, MIT), frames 301-400.
+    let text = String::from_utf8(bytes("pedar-example-3.01-4.00.asc")).unwrap();
+    let rows = pedar_rows(&text);
+    assert_eq!((rows.len(), rows[0].1.len()), (100, 198));
+    let rec = read_recording(data("pedar-example-3.01-4.00.asc")).unwrap();
+    assert_eq!(rec.format, Some(Format::Pedar));
+    assert_eq!(rec.n_frames(), 100);
+    assert_eq!(
+        (rec.dt_s, rec.units.as_str(), rec.pitch_mm),
+        (Some(0.01), "kPa", None)
+    );
+    // Every sensor's value sits in its cells: with the layout's cell map, each frame's image
+    // reproduces the 198 columns exactly, and no cell outside a sensor is a sensor.
+    let layout = PedarLayout::bundled();
+    assert_eq!(layout.sensors.len(), 198);
+    let d = pedar::parse_pedar_data(text.as_bytes(), "p").unwrap();
+    assert_eq!(d.columns[0], (Insole::Left, 1));
+    assert_eq!(d.columns[99], (Insole::Right, 1));
+    for (t, (_, vals)) in rows.iter().enumerate() {
+        let img = rec.frame_slice(t).unwrap();
+        let file_max = vals.iter().copied().fold(0.0, f64::max);
+        let img_max = img.iter().fold(0.0f32, |a, &b| a.max(b)) as f64;
+        assert_eq!(img_max, file_max, "frame {t}");
+        // The image holds only the file's values (and 0).
+        for &v in img {
+            assert!(
+                v == 0.0 || rows[t].1.contains(&(v as f64)),
+                "frame {t}: {v}"
+            );
+        }
+    }
+    // Each sensor covers some cells: at least 198 sensor cells, all sensors distinguishable.
+    assert!(rec.n_sensors() >= 198, "{}", rec.n_sensors());
+    // Left and right insoles are separate objects: frame 50 loads both (left 4262, right 792 kPa
+    // summed in the file), and the contours at level 0 fall on both sides of the gap.
+    let t = (0..100)
+        .find(|&t| {
+            rows[t].1[..99].iter().sum::<f64>() > 500.0
+                && rows[t].1[99..].iter().sum::<f64>() > 500.0
+        })
+        .unwrap();
+    let g = rec.frame(t).unwrap();
+    let cs = pedo_io::contours(
+        &g,
+        &pedo_io::ContourOptions {
+            level: Some(0.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let (left, right) = pedar::parse_pedar_insoles(text.as_bytes(), "p", layout).unwrap();
+    let split = left.cols() as f64 + 0.5; // the two empty columns after the left insole
+    let xs: Vec<f64> = cs
+        .iter()
+        .map(|c| c.points.iter().map(|p| p[0]).sum::<f64>() / c.points.len() as f64)
+        .collect();
+    assert!(
+        xs.iter().any(|&x| x < split) && xs.iter().any(|&x| x > split),
+        "{xs:?}"
+    );
+    // Each insole alone: 99 sensors' values, the same frames.
+    for (r, off) in [(&left, 0), (&right, 99)] {
+        assert_eq!(r.n_frames(), 100);
+        let m = r.peak_image().max();
+        let want = rows
+            .iter()
+            .flat_map(|(_, v)| v[off..off + 99].iter().copied())
+            .fold(0.0, f64::max);
+        assert_eq!(m, want);
+    }
+    assert_eq!(left.rows(), rec.rows());
+    assert_eq!(left.cols() + 2 + right.cols(), rec.cols());
+}
+
+#[test]
+fn pedar_truncation_layout_files_and_options() {
+    use pedo_io::formats::pedar::{self, PedarLayout};
+    use pedo_io::{read_recording_with, ReadOptions};
+    let b = bytes("pedar-example-3.01-4.00.asc");
+    let text = String::from_utf8(b.clone()).unwrap();
+    // Cut inside frame 61: the error names the frames found and the frames the header states.
+    let cut = text.find("     3.62000").unwrap() + 50;
+    let e = parse_bytes(&b[..cut], Format::Pedar, "cut.asc")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cut.asc") && e.contains("after 61 frames") && e.contains("states 100"),
+        "{e}"
+    );
+    // A layout file in millimetres gives the recording a pitch of half a sensor.
+    let s = Scratch::new("layout");
+    let mut mm = String::from("# unit: mm\ninsole,sensor,x1,y1,x2,y2,x3,y3,x4,y4\n");
+    for side in ["L", "R"] {
+        for k in 0..99 {
+            let (x, y) = ((k % 9) as f64 * 10.0, (k / 9) as f64 * 20.0);
+            mm += &format!(
+                "{side},{},{x},{y},{},{y},{},{},{x},{}\n",
+                k + 1,
+                x + 10.0,
+                x + 10.0,
+                y + 20.0,
+                y + 20.0
+            );
+        }
+    }
+    let p = s.write("grid-layout.csv", mm.as_bytes());
+    let rec = read_recording_with(
+        data("pedar-example-3.01-4.00.asc"),
+        &ReadOptions {
+            layout: Some(p.clone()),
+        },
+    )
+    .unwrap();
+    assert_eq!(rec.pitch_mm, Some([5.0, 10.0]));
+    // 9 x 11 sensors of 2 x 2 cells each, per insole, two empty columns between.
+    assert_eq!((rec.rows(), rec.cols()), (22, 18 + 2 + 18));
+    assert_eq!(rec.n_sensors(), 2 * 99 * 4);
+    // Left sensor 1 is the bottom-left 2 x 2 block (heel at the bottom row).
+    let rows = pedar_rows(&text);
+    assert_eq!(rec.frame_slice(0).unwrap()[21 * 38], rows[0].1[0] as f32);
+    // Bad layouts are errors naming the file and line.
+    let bad = s.write("bad.csv", b"L,1,0,0,1,0,1,1\n");
+    let e = read_recording_with(
+        data("pedar-example-3.01-4.00.asc"),
+        &ReadOptions { layout: Some(bad) },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("bad.csv:1") && e.contains("expected 10"), "{e}");
+    let partial = s.write("partial.csv", b"L,1,0,0,1,0,1,1,0,1\n");
+    let e =
+        pedar::parse_pedar(&b, "p.asc", &PedarLayout::from_file(&partial).unwrap()).unwrap_err();
+    assert!(e.to_string().contains("not in the layout"), "{e}");
+}
+
+#[test]
+fn iscan_csv_export_with_timed_frame_lines() {
+    // Real Tekscan I-Scan export saved as .csv (pressuRe inst/extdata/iscan_test.csv, MIT),
+    // frames 1-20: `Frame 1, 0,, 12/2/2019 6:21:52.34PM,,,Raw Sum=,,310` lines.
+    let rec = read_recording(data("iscan-test-1-20.csv")).unwrap();
+    assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (20, 28, 28));
+    assert_eq!(rec.pitch_mm, Some([1.27, 1.27]));
+    assert_eq!((rec.dt_s, rec.units.as_str()), (Some(0.1), "raw"));
+    let text = String::from_utf8(bytes("iscan-test-1-20.csv")).unwrap();
+    // The Raw Sum printed on each frame line is the frame's sum.
+    for (t, line) in text.lines().filter(|l| l.starts_with("Frame ")).enumerate() {
+        let printed: f64 = line.rsplit(',').next().unwrap().trim().parse().unwrap();
+        let sum: f64 = rec.frame_slice(t).unwrap().iter().map(|&v| v as f64).sum();
+        assert_eq!(sum, printed, "frame {t}");
+    }
+}
+
+#[test]
+fn real_emed_export_with_total_force() {
+    // Real novel emed export (pressuRe inst/extdata/emed_test.lst, MIT), pages 1-10; its Force
+    // lines end with the page's total force.
+    let b = bytes("emed-test-1-10.lst");
+    let (rec, forces) = pedo_io::formats::lst::parse_lst(&b, "emed").unwrap();
+    assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (10, 95, 64));
+    assert_eq!(
+        (rec.pitch_mm, rec.dt_s, rec.sensel_area()),
+        (Some([5.0, 5.0]), Some(0.01), Some(25.0))
+    );
+    let ms = rec.measures(0.0);
+    for (t, (m, f)) in ms.iter().zip(&forces).enumerate() {
+        // Force [N] = sum(kPa) x 0.25 cm² / 10; printed forces are rounded to 0.01 N.
+        let printed: f64 = f.column_forces.iter().sum();
+        let tol = 0.005 * f.column_forces.len() as f64 + 1e-9;
+        assert!(
+            (m.total_force - printed).abs() <= tol,
+            "page {t}: {} vs {printed}",
+            m.total_force
+        );
+    }
+    assert!(ms.iter().any(|m| m.total_force > 10.0));
+}
