@@ -265,6 +265,18 @@ fn json_output_of_match_and_assign_parses() {
         m["options"]["ordered"], true,
         "a ring of nearest-neighbour points is a contour"
     );
+    // Two frames of a recording: --frame is 0-based, and the pair reports its time and pitch.
+    let m = stdout_json(&pedomatch(&[
+        "match", BUNDLED, BUNDLED, "--frame", "40", "--json",
+    ]));
+    assert!((m["time_a_s"].as_f64().unwrap() - 40.0 * DT_S).abs() < 1e-9);
+    assert_eq!(m["pitch_mm_a"], serde_json::json!([PITCH_MM, PITCH_MM]));
+    assert_eq!(
+        m["options"]["ordered"], true,
+        "recording outlines are closed contours"
+    );
+    let o = pedomatch(&["match", BUNDLED, BUNDLED, "--frame", "205"]);
+    assert_eq!(o.status.code(), Some(2), "frames are 0..205");
     std::fs::write(dir.join("cost.csv"), "4,1\n2,0\n").unwrap();
     let a = stdout_json(&pedomatch(&[
         "assign",

@@ -355,8 +355,15 @@ impl InputInfo {
     }
 
     /// The name and hash of a file, or of every file of a folder in name order (an image
-    /// sequence), hashed in that order.
+    /// sequence), hashed in that order. A numbered-sequence pattern (`walk_%03d.png`) names no
+    /// single file and gets no hash.
     pub fn of_path(path: &std::path::Path) -> Result<Self> {
+        if !path.exists() {
+            return Ok(Self {
+                name: path.display().to_string(),
+                sha256: None,
+            });
+        }
         let io = |e| IoError::Io {
             path: path.display().to_string(),
             source: e,
