@@ -1,45 +1,29 @@
 //! `pedomatch assign`: solve a linear assignment problem read from a CSV cost matrix.
 
+use crate::modal_args::{help, word};
 use crate::output;
-use clap::{Args, ValueEnum};
+use crate::CliError;
+use clap::Args;
 use std::path::PathBuf;
-
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum SolverArg {
-    Jv,
-    Hungarian,
-    Simplex,
-}
-
-impl From<SolverArg> for assign::Method {
-    fn from(s: SolverArg) -> Self {
-        match s {
-            SolverArg::Jv => assign::Method::JonkerVolgenant,
-            SolverArg::Hungarian => assign::Method::Hungarian,
-            SolverArg::Simplex => assign::Method::NetworkSimplex,
-        }
-    }
-}
 
 #[derive(Args)]
 pub struct AssignArgs {
     /// CSV file of costs: one matrix row per line, `inf` marks a forbidden pair.
     pub cost: PathBuf,
-    /// Which solver to use.
-    #[arg(long, value_enum, default_value = "jv")]
-    pub method: SolverArg,
+    #[arg(long, alias = "method", value_parser = word::<assign::Method>(), help = help("solver"))]
+    pub solver: Option<assign::Method>,
     /// Maximise the total instead of minimising it.
     #[arg(long)]
     pub maximize: bool,
-    /// Print JSON instead of a table.
+    /// Print the solution as one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
 }
 
-pub fn run(args: AssignArgs) -> Result<(), String> {
+pub fn run(args: AssignArgs) -> Result<(), CliError> {
     let (cost, rows, cols) = output::read_cost_csv(&args.cost)?;
     let options = assign::Options {
-        method: args.method.into(),
+        method: args.solver.unwrap_or_default(),
         maximize: args.maximize,
     };
     let result = assign::solve(&cost, rows, cols, &options)
@@ -54,7 +38,7 @@ pub fn run(args: AssignArgs) -> Result<(), String> {
         let value = serde_json::json!({
             "rows": rows,
             "cols": cols,
-            "method": format!("{:?}", args.method).to_lowercase(),
+            "solver": args.solver.unwrap_or_default().to_string(),
             "maximize": args.maximize,
             "pairs": pairs,
             "total_cost": result.cost,

@@ -1,11 +1,12 @@
 //! `pedomatch match A B`: correspondences between two objects given as images or point files.
 
-use crate::modal_args::ModalArgs;
+use crate::modal_args::{help, tri_state, ModalArgs, UnitArgs};
 use crate::output::{self, OutDir};
-use clap::{Args, ValueEnum};
+use crate::CliError;
+use clap::Args;
+use modal_core::shape::looks_like_closed_contour;
 use modal_core::{Search, Shape, Topology};
 use pedo_io::figure;
-use pedo_io::sequence::SearchMode;
 use std::path::{Path, PathBuf};
 
 #[derive(Args)]
@@ -17,65 +18,68 @@ pub struct MatchArgs {
     /// Read both inputs as point files even if their extension suggests an image.
     #[arg(long)]
     pub points: bool,
-    /// Point files are ordered closed contours (enables the order-keeping excess step).
-    #[arg(long)]
-    pub closed: bool,
-    /// Frame (1-based) to take from a multi-frame recording.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, alias = "closed", help = help("ordered"), conflicts_with = "no_ordered")]
+    pub ordered: bool,
+    #[arg(long, help = "Turn --ordered off")]
+    pub no_ordered: bool,
+    /// Frame (0-based) to take from a multi-frame recording.
+    #[arg(long, default_value_t = 0)]
     pub frame: usize,
     #[command(flatten)]
     pub modal: ModalArgs,
-    /// Search strategy: the optimal one-to-one assignment (`global`), mutual best matches
-    /// (`local`), or every node of A to its cheapest node of B (`best`: many-to-one, the most
-    /// right matches between independently sampled surfaces).
-    #[arg(long, value_enum, default_value = "global")]
-    pub search: MatchSearchArg,
+    #[command(flatten)]
+    pub units: UnitArgs,
     /// Write matches.csv, match.json and match.png/svg into this folder instead of printing.
     #[arg(long)]
     pub out: Option<PathBuf>,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum MatchSearchArg {
-    Global,
-    Local,
-    Best,
+    /// Print the match result as one JSON object (with its pairs) instead of a table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 const POINT_EXTENSIONS: [&str; 4] = ["xy", "xyz", "pts", "txt"];
 
+/// An object read from a file, and the pitch (mm) and frame time (s) when it came from a
+/// recording that knows them.
+struct Object {
+    points: Shape,
+    pitch_mm: Option<[f64; 2]>,
+    time_s: Option<f64>,
+}
+
 /// An object from a file: a point file as it is, or the largest contour of a pressure frame.
-fn load_object(path: &Path, args: &MatchArgs) -> Result<Shape, String> {
+fn load_object(path: &Path, args: &MatchArgs) -> Result<Object, CliError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
-    let topology = if args.closed {
-        Topology::ClosedContour
-    } else {
-        Topology::None
+    let plain = |points| Object {
+        points,
+        pitch_mm: args.units.pitch_mm,
+        time_s: None,
     };
     let as_points = args.points || POINT_EXTENSIONS.contains(&ext.as_str());
     if as_points {
-        return pedo_io::points::read_points(path, topology).map_err(|e| e.to_string());
+        return Ok(plain(pedo_io::points::read_points(path, Topology::None)?));
     }
     // A CSV is a point file when it has 2 or 3 columns, a pressure grid otherwise.
     if ext == "csv" {
-        if let Ok(shape) = pedo_io::points::read_points(path, topology.clone()) {
-            return Ok(shape);
+        if let Ok(shape) = pedo_io::points::read_points(path, Topology::None) {
+            return Ok(plain(shape));
         }
     }
-    let rec = pedo_io::read_recording(path).map_err(|e| e.to_string())?;
-    if args.frame == 0 || args.frame > rec.n_frames() {
-        return Err(format!(
-            "{}: --frame {} is not in 1..={}",
+    let mut rec = pedo_io::read_recording(path)?;
+    args.units.overrides().apply(&mut rec)?;
+    if args.frame >= rec.n_frames() {
+        return Err(CliError::Usage(format!(
+            "{}: frame = {}: expected a frame in 0..{} (0-based)",
             path.display(),
             args.frame,
             rec.n_frames()
-        ));
+        )));
     }
-    let frame = rec.frame(args.frame - 1).map_err(|e| e.to_string())?;
+    let frame = rec.frame(args.frame)?;
     let opts = pedo_io::ContourOptions {
         resample: pedo_io::Resample::Spacing(1.0),
         include_holes: false,
@@ -93,26 +97,55 @@ fn load_object(path: &Path, args: &MatchArgs) -> Result<Shape, String> {
                 args.frame
             )
         })?;
-    largest.to_shape().map_err(|e| e.to_string())
+    Ok(Object {
+        points: largest.to_shape()?,
+        pitch_mm: rec.pitch_mm,
+        time_s: rec.time_s(args.frame),
+    })
 }
 
-pub fn run(args: MatchArgs) -> Result<(), String> {
-    let a = load_object(&args.a, &args)?;
-    let b = load_object(&args.b, &args)?;
-    let params = args.modal.params(if args.search == MatchSearchArg::Local {
-        SearchMode::Local
+/// The objects with the topology `ordered` asks for (decided from the data when not given,
+/// as `pymodal.match` does).
+fn with_topology(
+    a: Shape,
+    b: Shape,
+    ordered: Option<bool>,
+) -> Result<(Shape, Shape, bool), CliError> {
+    let closed = |s: &Shape| {
+        matches!(s.topology(), Topology::ClosedContour)
+            || looks_like_closed_contour(s.coords(), s.dim())
+    };
+    let ordered = ordered.unwrap_or_else(|| a.dim() == 2 && closed(&a) && closed(&b));
+    let topology = if ordered {
+        Topology::ClosedContour
     } else {
-        SearchMode::Global
-    });
-    // The same setting `pymodal.match` picks for these objects (unordered 3-D points: surfaces).
-    let mut o = params
-        .match_options_for(a.dim(), args.closed)
-        .map_err(|e| e.to_string())?;
-    if args.search == MatchSearchArg::Best {
-        // Recordings have no such mode (their tracks follow one-to-one matches); a pair may.
-        o.search = Search::Best;
+        Topology::None
+    };
+    let retag = |s: Shape| Shape::new(s.dim(), s.coords().to_vec(), topology.clone());
+    Ok((retag(a)?, retag(b)?, ordered))
+}
+
+pub fn run(args: MatchArgs) -> Result<(), CliError> {
+    let params = args.modal.params();
+    params.validate()?;
+    args.units.overrides().validate()?;
+    let oa = load_object(&args.a, &args)?;
+    let ob = load_object(&args.b, &args)?;
+    let ordered = tri_state(args.ordered, args.no_ordered);
+    let (a, b, ordered) = with_topology(oa.points, ob.points, ordered)?;
+    if a.dim() != b.dim() {
+        return Err(CliError::Runtime(format!(
+            "{} has {}-D points but {} has {}-D points",
+            args.a.display(),
+            a.dim(),
+            args.b.display(),
+            b.dim()
+        )));
     }
-    let r = modal_core::match_shapes(&a, &b, &o).map_err(|e| e.to_string())?;
+    // The same setting `pymodal.match` picks for these objects (unordered 3-D points: surfaces).
+    let mut o = params.to_match_options(a.dim(), ordered)?;
+    o.ordered = Some(ordered);
+    let r = modal_core::match_shapes(&a, &b, &o)?;
     let rows = r.pairs.iter().map(|p| {
         vec![
             p.a.to_string(),
@@ -122,42 +155,62 @@ pub fn run(args: MatchArgs) -> Result<(), String> {
         ]
     });
     let table = output::csv_table(&["node_a", "node_b", "cost", "excess"], rows);
+    let used: serde_json::Map<String, serde_json::Value> = params
+        .used(&o)
+        .iter()
+        .map(|(k, v)| (k.to_string(), pedo_io::report::option_json(v)))
+        .chain([("ordered".to_string(), serde_json::json!(ordered))])
+        .collect();
     let summary = serde_json::json!({
+        "pedomatch_version": env!("CARGO_PKG_VERSION"),
         "a": args.a.display().to_string(), "b": args.b.display().to_string(),
-        "search": args.search.to_possible_value().map(|v| v.get_name().to_string()),
+        "frame": args.frame, "time_a_s": oa.time_s, "time_b_s": ob.time_s,
+        "pitch_mm_a": oa.pitch_mm, "pitch_mm_b": ob.pitch_mm,
+        "options": used,
+        "search": o.search.to_string(),
         "matches": r.pairs.len(),
         "nodes_a": a.len(), "nodes_b": b.len(),
         "local_matches": r.local_count(), "one_to_one_matches": r.one_to_one_count(),
         "excess_matches": r.excess_count(), "modes": r.n_modes, "refits": r.refits,
         "unmatched_a": r.unmatched_a, "unmatched_b": r.unmatched_b,
     });
-    match &args.out {
-        None => {
-            print!("{table}");
-            let primary = if o.search == Search::Best {
-                "best (many-to-one)"
-            } else {
-                "one-to-one"
-            };
-            eprintln!(
-                "{} × {} nodes: {} local, {} {primary}, {} excess matches",
-                a.len(),
-                b.len(),
-                r.local_count(),
-                r.one_to_one_count(),
-                r.excess_count()
-            );
-        }
-        Some(dir) => {
-            let dir = OutDir::create(dir)?;
-            dir.write("matches.csv", table.as_bytes())?;
-            dir.write("match.json", format!("{summary:#}\n").as_bytes())?;
-            let fig = figure::match_figure(&a, &b, &r.pairs);
-            dir.write("match.png", &fig.to_png())?;
-            dir.write("match.svg", fig.to_svg().as_bytes())?;
-            dir.commit()?;
-            println!("{summary:#}");
-        }
+    let with_pairs = || {
+        let mut s = summary.clone();
+        s["pairs"] = r
+            .pairs
+            .iter()
+            .map(|p| serde_json::json!({"node_a": p.a, "node_b": p.b, "cost": p.cost, "excess": p.excess}))
+            .collect();
+        s
+    };
+    if let Some(dir) = &args.out {
+        let dir = OutDir::create(dir)?;
+        dir.write("matches.csv", table.as_bytes())?;
+        dir.write("match.json", output::pretty(&summary)?.as_bytes())?;
+        let fig = figure::match_figure(&a, &b, &r.pairs);
+        dir.write("match.png", &fig.to_png())?;
+        dir.write("match.svg", fig.to_svg().as_bytes())?;
+        dir.commit()?;
+    }
+    if args.json {
+        print!("{}", output::pretty(&with_pairs())?);
+    } else if args.out.is_some() {
+        print!("{}", output::pretty(&summary)?);
+    } else {
+        print!("{table}");
+        let primary = if o.search == Search::Best {
+            "best (many-to-one)"
+        } else {
+            "one-to-one"
+        };
+        eprintln!(
+            "{} × {} nodes: {} local, {} {primary}, {} excess matches",
+            a.len(),
+            b.len(),
+            r.local_count(),
+            r.one_to_one_count(),
+            r.excess_count()
+        );
     }
     Ok(())
 }

@@ -1,29 +1,15 @@
 //! `pedomatch run` and `pedomatch demo`: a whole recording in; tables, figures and tracks out.
 
-use crate::modal_args::ModalArgs;
+use crate::modal_args::{help, word, ModalArgs, UnitArgs};
 use crate::output::{self, OutDir};
+use crate::CliError;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use pedo_io::sequence::{
-    run_sequence, ObjectModel, RunParams, SearchMode, SequenceOptions, SequenceResult, Stage,
-};
+use pedo_io::report::InputInfo;
+use pedo_io::sequence::{run_sequence, FrameRange, ObjectModel, RunParams, SequenceResult, Stage};
 use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::Instant;
-
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum ModelArg {
-    Contour,
-    Surface,
-    Isocontour,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum SearchArg {
-    Global,
-    Local,
-    Both,
-}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum FigureArg {
@@ -36,41 +22,54 @@ pub enum FigureArg {
 /// Options shared by `run` and `demo`.
 #[derive(Args, Clone)]
 pub struct RunOptionsArgs {
-    /// Object model of each frame.
-    #[arg(long, value_enum, default_value = "contour")]
-    pub model: ModelArg,
+    #[arg(long, value_parser = word::<ObjectModel>(), help = help("model"))]
+    pub model: Option<ObjectModel>,
     #[command(flatten)]
     pub modal: ModalArgs,
-    /// Search strategy: `both` reports local and optimisation matches side by side.
-    #[arg(long, value_enum, default_value = "both")]
-    pub search: SearchArg,
-    /// Frames to use, 1-based and inclusive, e.g. `10..60`.
-    #[arg(long)]
-    pub frames: Option<String>,
-    /// Noise threshold in the recording's units (default: the file's own, else 0).
-    #[arg(long)]
+    #[arg(long, value_name = "START..END", value_parser = |s: &str| s.parse::<FrameRange>(), help = help("frames"))]
+    pub frames: Option<FrameRange>,
+    #[arg(long, help = help("noise"))]
     pub noise: Option<f64>,
-    /// Gaussian smoothing of each frame, σ in sensels.
-    #[arg(long, default_value_t = 0.0)]
-    pub smooth: f64,
-    /// Contour node spacing in sensels.
-    #[arg(long, default_value_t = 1.0)]
-    pub spacing: f64,
-    /// Node budget of each brightness surface.
-    #[arg(long, default_value_t = 120)]
-    pub surface_nodes: usize,
-    /// Isocontour model: the frame (1-based; default: the frame of largest load) and the number
-    /// of levels.
-    #[arg(long)]
+    #[arg(long, help = help("smooth"))]
+    pub smooth: Option<f64>,
+    #[arg(long, help = help("spacing"))]
+    pub spacing: Option<f64>,
+    #[arg(long, help = help("surface_nodes"))]
+    pub surface_nodes: Option<usize>,
+    #[arg(long, help = help("iso_frame"))]
     pub iso_frame: Option<usize>,
-    #[arg(long, default_value_t = 10)]
-    pub iso_levels: usize,
+    #[arg(long, help = help("iso_levels"))]
+    pub iso_levels: Option<usize>,
+    #[command(flatten)]
+    pub units: UnitArgs,
     /// Figures of every pair and of the tracks.
     #[arg(long, value_enum, default_value = "png")]
     pub figures: FigureArg,
     /// Print the time spent in each stage.
     #[arg(long)]
     pub timings: bool,
+    /// Print the run's summary (summary.json) on stdout instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl RunOptionsArgs {
+    /// These options as the library's parameters; absent ones at the library's defaults.
+    pub fn params(&self) -> RunParams {
+        let d = RunParams::default();
+        RunParams {
+            matching: self.modal.params(),
+            model: self.model.unwrap_or(d.model),
+            frames: self.frames.or(d.frames),
+            noise: self.noise.or(d.noise),
+            smooth: self.smooth.unwrap_or(d.smooth),
+            spacing: self.spacing.unwrap_or(d.spacing),
+            surface_nodes: self.surface_nodes.unwrap_or(d.surface_nodes),
+            iso_frame: self.iso_frame.or(d.iso_frame),
+            iso_levels: self.iso_levels.unwrap_or(d.iso_levels),
+            units: self.units.overrides(),
+        }
+    }
 }
 
 #[derive(Args)]
@@ -96,85 +95,36 @@ pub struct DemoArgs {
 /// The bundled real recording (Tekscan F-Scan, MIT licence: examples/data/LICENSE-footPress.txt).
 const DEMO_RECORDING: &[u8] = include_bytes!("../examples/data/FrasP01L.asf");
 
-pub fn run(args: RunArgs) -> Result<(), String> {
+pub fn run(args: RunArgs) -> Result<(), CliError> {
     let t = Instant::now();
-    let recording = pedo_io::read_recording(&args.recording).map_err(|e| e.to_string())?;
-    execute(
-        recording,
-        &args.recording.display().to_string(),
-        &args.out,
-        &args.options,
-        t,
-    )
+    let params = args.options.params();
+    params.validate()?;
+    let recording = pedo_io::read_recording(&args.recording)?;
+    let input = InputInfo::of_path(&args.recording)?;
+    execute(recording, &input, &args.out, &args.options, params, t)
 }
 
-pub fn demo(args: DemoArgs) -> Result<(), String> {
+pub fn demo(args: DemoArgs) -> Result<(), CliError> {
     let t = Instant::now();
+    let params = args.options.params();
+    params.validate()?;
     let name = "examples/data/FrasP01L.asf";
-    let recording = pedo_io::parse_bytes(DEMO_RECORDING, pedo_io::Format::Asf, name)
-        .map_err(|e| e.to_string())?;
-    execute(recording, name, &args.out, &args.options, t)
-}
-
-fn parse_frames(spec: &str) -> Result<(usize, usize), String> {
-    let bad =
-        || format!("--frames {spec:?}: expected A..B, 1-based and inclusive (A.. and ..B allowed)");
-    let (a, b) = spec.split_once("..").ok_or_else(bad)?;
-    let a: usize = if a.trim().is_empty() {
-        1
-    } else {
-        a.trim().parse().map_err(|_| bad())?
-    };
-    let b: usize = if b.trim().is_empty() {
-        usize::MAX
-    } else {
-        b.trim().parse().map_err(|_| bad())?
-    };
-    Ok((a, b))
-}
-
-/// The command-line options as the library's [`RunParams`], checked against `recording`.
-pub fn sequence_options(
-    o: &RunOptionsArgs,
-    recording: &pedo_io::Recording,
-) -> Result<SequenceOptions, String> {
-    let frames = o
-        .frames
-        .as_deref()
-        .map(parse_frames)
-        .transpose()?
-        .map(|(a, b)| (a, b.min(recording.n_frames())));
-    let params = RunParams {
-        model: match o.model {
-            ModelArg::Contour => ObjectModel::Contour,
-            ModelArg::Surface => ObjectModel::Surface,
-            ModelArg::Isocontour => ObjectModel::Isocontour,
-        },
-        frames,
-        noise: o.noise,
-        smooth: o.smooth,
-        spacing: o.spacing,
-        surface_nodes: o.surface_nodes,
-        iso_frame: o.iso_frame,
-        iso_levels: o.iso_levels,
-        ..o.modal.params(match o.search {
-            SearchArg::Global => SearchMode::Global,
-            SearchArg::Local => SearchMode::Local,
-            SearchArg::Both => SearchMode::Both,
-        })
-    };
-    params.to_options(recording).map_err(|e| e.to_string())
+    let recording = pedo_io::parse_bytes(DEMO_RECORDING, pedo_io::Format::Asf, name)?;
+    let input = InputInfo::of_bytes(name, DEMO_RECORDING);
+    execute(recording, &input, &args.out, &args.options, params, t)
 }
 
 fn execute(
-    recording: pedo_io::Recording,
-    name: &str,
+    mut recording: pedo_io::Recording,
+    input: &InputInfo,
     out: &std::path::Path,
     o: &RunOptionsArgs,
+    params: RunParams,
     started: Instant,
-) -> Result<(), String> {
+) -> Result<(), CliError> {
+    params.units.apply(&mut recording)?;
     let read_time = started.elapsed();
-    let options = sequence_options(o, &recording)?;
+    let options = params.to_options(&recording)?;
     let bar = progress_bar();
     let bar_state = Mutex::new(None::<Stage>);
     let progress = |stage: Stage, done: usize, total: usize| {
@@ -190,29 +140,35 @@ fn execute(
         }
         bar.set_position(done as u64);
     };
-    let result = run_sequence(&recording, &options, &progress).map_err(|e| e.to_string())?;
+    let result = run_sequence(&recording, &options, &progress)?;
     bar.finish_and_clear();
 
     let t_out = Instant::now();
     let dir = OutDir::create(out)?;
-    output::write_sequence(
-        &dir,
-        name,
+    output::write_sequence(&dir, &recording, &options, &result, figure_kinds(o.figures))?;
+    let write_time = t_out.elapsed().as_secs_f64();
+    let summary = pedo_io::report::run_summary(
+        input,
         &recording,
+        &params,
         &options,
         &result,
-        figure_kinds(o.figures),
-    )?;
+        &[("read", read_time.as_secs_f64()), ("output", write_time)],
+    );
+    dir.write("summary.json", output::pretty(&summary)?.as_bytes())?;
     dir.commit()?;
-    let write_time = t_out.elapsed();
-    print_summary(name, out, &result);
+    if o.json {
+        print!("{}", output::pretty(&summary)?);
+    } else {
+        print_summary(&input.name, out, &result);
+    }
     if o.timings {
         eprintln!("timings: read {:.3} s, objects {:.3} s, matching {:.3} s, tracks {:.3} s, output {:.3} s, total {:.3} s",
             read_time.as_secs_f64(),
             result.timings.objects.as_secs_f64(),
             result.timings.matching.as_secs_f64(),
             result.timings.tracks.as_secs_f64(),
-            write_time.as_secs_f64(),
+            write_time,
             started.elapsed().as_secs_f64());
     }
     Ok(())
@@ -271,7 +227,7 @@ fn print_summary(name: &str, out: &std::path::Path, r: &SequenceResult) {
         );
     }
     println!(
-        "results in {}/ (pairs.csv, pairs.json, tracks.csv, summary.json, figures/)",
+        "results in {}/ (pairs.csv, pairs.json, objects.csv, matches.csv, tracks.csv, frames.csv, summary.json, figures/)",
         out.display()
     );
 }

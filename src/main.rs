@@ -4,17 +4,23 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod cmd_assign;
+mod cmd_inspect;
 mod cmd_match;
 mod cmd_run;
 mod modal_args;
 mod outdir;
 mod output;
 
+const EXIT_CODES: &str = "Exit status: 0 success; 1 runtime failure (unreadable or malformed \
+input, failed run, unwritable output); 2 usage error (unknown flag, missing argument, bad option \
+value). With --json, a subcommand prints one JSON object on stdout.";
+
 #[derive(Parser)]
 #[command(
     name = "pedomatch",
     version,
-    about = "Modal matching of objects in dynamic pedobarography"
+    about = "Modal matching of objects in dynamic pedobarography",
+    after_help = EXIT_CODES
 )]
 struct Cli {
     #[command(subcommand)]
@@ -24,13 +30,60 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Match the objects of a whole recording frame by frame; write tables, figures and tracks.
+    #[command(after_help = EXIT_CODES)]
     Run(cmd_run::RunArgs),
     /// `run` on the bundled F-Scan recording, writing ./pedomatch-out/.
+    #[command(after_help = EXIT_CODES)]
     Demo(cmd_run::DemoArgs),
     /// Match two objects given as point files or pressure images.
+    #[command(after_help = EXIT_CODES)]
     Match(cmd_match::MatchArgs),
     /// Solve a linear assignment problem read from a CSV cost matrix.
+    #[command(after_help = EXIT_CODES)]
     Assign(cmd_assign::AssignArgs),
+    /// Describe a recording: format, size, pitch, frame rate, units and per-frame measures.
+    #[command(after_help = EXIT_CODES)]
+    Inspect(cmd_inspect::InspectArgs),
+}
+
+/// Why a subcommand failed; decides the exit status.
+#[derive(Debug)]
+pub enum CliError {
+    /// A bad option value found after parsing (exit 2, like clap's own usage errors).
+    Usage(String),
+    /// Anything else: input, computation, output (exit 1).
+    Runtime(String),
+}
+
+impl From<String> for CliError {
+    fn from(msg: String) -> Self {
+        CliError::Runtime(msg)
+    }
+}
+
+impl From<pedo_io::IoError> for CliError {
+    fn from(e: pedo_io::IoError) -> Self {
+        use modal_core::ModalError;
+        use pedo_io::IoError;
+        match e {
+            IoError::Option(_) | IoError::Shape(ModalError::Option(_)) => {
+                CliError::Usage(e.to_string())
+            }
+            other => CliError::Runtime(other.to_string()),
+        }
+    }
+}
+
+impl From<modal_core::OptionError> for CliError {
+    fn from(e: modal_core::OptionError) -> Self {
+        CliError::Usage(e.to_string())
+    }
+}
+
+impl From<modal_core::ModalError> for CliError {
+    fn from(e: modal_core::ModalError) -> Self {
+        pedo_io::IoError::from(e).into()
+    }
 }
 
 fn main() -> ExitCode {
@@ -41,10 +94,15 @@ fn main() -> ExitCode {
         Command::Demo(args) => cmd_run::demo(args),
         Command::Match(args) => cmd_match::run(args),
         Command::Assign(args) => cmd_assign::run(args),
+        Command::Inspect(args) => cmd_inspect::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(msg) => {
+        Err(CliError::Usage(msg)) => {
+            eprintln!("pedomatch: error: {msg}");
+            ExitCode::from(2)
+        }
+        Err(CliError::Runtime(msg)) => {
             eprintln!("pedomatch: error: {msg}");
             ExitCode::FAILURE
         }

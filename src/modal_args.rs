@@ -1,65 +1,126 @@
-//! The modal-matching options that `match`, `run` and `demo` share.
+//! The options `match`, `run` and `demo` share, read from the one definition of each option in
+//! the library crates ([`modal_core::options`], [`pedo_io::sequence`], [`pedo_io::units`]):
+//! the same names as Python's keywords (`--x-y` for `x_y`), the same words, the same defaults
+//! (an absent option is the library's default) and the same help text.
 
-use crate::cmd_assign::SolverArg;
-use clap::{Args, ValueEnum};
-use modal_core::ElementKind;
-use pedo_io::sequence::{RunParams, SearchMode};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+use clap::Args;
+use modal_core::{Choice, ElementKind, MatchParams, Material, Prealign, Search, ThresholdMode};
+use pedo_io::units::UnitOverrides;
 
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum ElementArg {
-    Gaussian,
-    Axial,
+/// A clap parser for an enumerated option: the possible values are the Rust type's words, the
+/// value is parsed by its `FromStr`.
+pub fn word<T: Choice + Send + Sync>() -> impl TypedValueParser<Value = T> {
+    PossibleValuesParser::new(T::NAMES).try_map(|s| T::parse_word(&s))
 }
 
-impl From<ElementArg> for ElementKind {
-    fn from(e: ElementArg) -> Self {
-        match e {
-            ElementArg::Gaussian => ElementKind::Gaussian,
-            ElementArg::Axial => ElementKind::Axial,
+/// The help text of an option (with its default) from the library's option tables.
+pub fn help(name: &str) -> String {
+    modal_core::options::match_option_specs()
+        .into_iter()
+        .chain(modal_core::options::pair_option_specs())
+        .chain(pedo_io::sequence::recording_option_specs())
+        .find(|s| s.name == name)
+        .map(|s| s.help_with_default())
+        .unwrap_or_else(|| panic!("option {name} is not in the library's option tables"))
+}
+
+/// Every matching option (`pedomatch match`, `run` and `demo`; `pymodal.match` and `run`).
+#[derive(Args, Clone, Debug)]
+pub struct ModalArgs {
+    #[arg(long, value_parser = word::<ElementKind>(), help = help("element"))]
+    pub element: Option<ElementKind>,
+    #[arg(long, help = help("modes"))]
+    pub modes: Option<f64>,
+    #[arg(long, value_parser = word::<Search>(), help = help("search"))]
+    pub search: Option<Search>,
+    #[arg(long, value_parser = word::<assign::Method>(), help = help("solver"))]
+    pub solver: Option<assign::Method>,
+    #[arg(long, help = help("threshold"))]
+    pub threshold: Option<f64>,
+    #[arg(long, value_parser = word::<ThresholdMode>(), help = help("threshold_mode"))]
+    pub threshold_mode: Option<ThresholdMode>,
+    #[arg(long, help = help("excess"))]
+    pub no_excess: bool,
+    #[arg(long, help = help("paper"))]
+    pub paper: bool,
+    #[arg(long, value_parser = word::<Prealign>(), help = help("prealign"))]
+    pub prealign: Option<Prealign>,
+    #[arg(long, help = help("refits"))]
+    pub refits: Option<usize>,
+    #[arg(long, help = help("refit_tolerance"))]
+    pub refit_tolerance: Option<f64>,
+    #[arg(long, help = help("kappa"))]
+    pub kappa: Option<f64>,
+    #[arg(long, value_name = "N", help = help("center_stride"))]
+    pub center_stride: Option<usize>,
+    #[arg(long, help = help("position_weight"))]
+    pub position_weight: Option<f64>,
+    #[arg(long, help = help("cost_power"))]
+    pub cost_power: Option<f64>,
+    #[arg(long, help = help("common_sigma"), conflicts_with = "no_common_sigma")]
+    pub common_sigma: bool,
+    #[arg(long, help = "Turn --common-sigma off")]
+    pub no_common_sigma: bool,
+    #[arg(long, help = help("skip_rigid"))]
+    pub skip_rigid: bool,
+    #[arg(long, help = help("band"))]
+    pub band: Option<usize>,
+    #[arg(long, value_parser = |s: &str| s.parse::<Material>(), help = help("material"))]
+    pub material: Option<Material>,
+}
+
+impl ModalArgs {
+    /// These options as the library's parameters; absent ones at the library's defaults.
+    pub fn params(&self) -> MatchParams {
+        let d = MatchParams::default();
+        MatchParams {
+            element: self.element.unwrap_or(d.element),
+            modes: self.modes.unwrap_or(d.modes),
+            search: self.search.unwrap_or(d.search),
+            solver: self.solver.unwrap_or(d.solver),
+            threshold: self.threshold.or(d.threshold),
+            threshold_mode: self.threshold_mode.unwrap_or(d.threshold_mode),
+            excess: d.excess && !self.no_excess,
+            paper: d.paper || self.paper,
+            prealign: self.prealign.or(d.prealign),
+            refits: self.refits.or(d.refits),
+            refit_tolerance: self.refit_tolerance.or(d.refit_tolerance),
+            kappa: self.kappa.or(d.kappa),
+            center_stride: self.center_stride.unwrap_or(d.center_stride),
+            position_weight: self.position_weight.or(d.position_weight),
+            cost_power: self.cost_power.or(d.cost_power),
+            common_sigma: tri_state(self.common_sigma, self.no_common_sigma).or(d.common_sigma),
+            skip_rigid: d.skip_rigid || self.skip_rigid,
+            band: self.band.unwrap_or(d.band),
+            material: self.material.or(d.material),
         }
     }
 }
 
-/// Finite element, modes, assignment and the recipe's switches.
-#[derive(Args, Clone)]
-pub struct ModalArgs {
-    /// Finite element of the modal model.
-    #[arg(long, value_enum, default_value = "gaussian")]
-    pub element: ElementArg,
-    /// Fraction of the vibration modes used as features.
-    #[arg(long, default_value_t = 0.25)]
-    pub modes: f64,
-    /// Assignment solver of the optimisation (global) search.
-    #[arg(long, value_enum, default_value = "jv")]
-    pub solver: SolverArg,
-    /// Matching threshold on the max-normalised modal cost, in [0, 1] (default: keep all).
-    #[arg(long)]
-    pub threshold: Option<f64>,
-    /// Disable the excess-node step.
-    #[arg(long)]
-    pub no_excess: bool,
-    /// The paper's literal setting (centroid/scale pre-alignment only, no affine re-fits).
-    #[arg(long)]
-    pub paper: bool,
-    /// Gaussian element: a Gaussian on every N-th node only — about twice as fast, as accurate
-    /// for the small changes between consecutive frames, less under severe warps.
-    #[arg(long, default_value_t = 1, value_name = "N")]
-    pub center_stride: usize,
+/// `--x` / `--no-x` / neither.
+pub fn tri_state(on: bool, off: bool) -> Option<bool> {
+    match (on, off) {
+        (true, _) => Some(true),
+        (_, true) => Some(false),
+        _ => None,
+    }
 }
 
-impl ModalArgs {
-    /// These options with `search` as the library's parameters; the rest at their defaults.
-    pub fn params(&self, search: SearchMode) -> RunParams {
-        RunParams {
-            element: self.element.into(),
-            modes: self.modes,
-            search,
-            method: self.solver.into(),
-            threshold: self.threshold,
-            excess: !self.no_excess,
-            paper: self.paper,
-            center_stride: self.center_stride,
-            ..RunParams::default()
+/// The sensor pitch and frame rate overriding a file's.
+#[derive(Args, Clone, Debug)]
+pub struct UnitArgs {
+    #[arg(long, value_name = "X[,Y]", value_parser = |s: &str| pedo_io::units::parse_pitch(s), help = help("pitch_mm"))]
+    pub pitch_mm: Option<[f64; 2]>,
+    #[arg(long, value_name = "HZ", value_parser = |s: &str| pedo_io::units::parse_frame_rate(s), help = help("frame_rate"))]
+    pub frame_rate: Option<f64>,
+}
+
+impl UnitArgs {
+    pub fn overrides(&self) -> UnitOverrides {
+        UnitOverrides {
+            pitch_mm: self.pitch_mm,
+            frame_rate: self.frame_rate,
         }
     }
 }

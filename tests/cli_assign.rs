@@ -21,7 +21,7 @@ fn write_temp(name: &str, contents: &str) -> std::path::PathBuf {
 fn bundled_example_has_known_optimum_for_every_method() {
     let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/cost.csv");
     for method in ["jv", "hungarian", "simplex"] {
-        let out = pedomatch(&["assign", example, "--method", method, "--json"]);
+        let out = pedomatch(&["assign", example, "--solver", method, "--json"]);
         assert!(
             out.status.success(),
             "{}",

@@ -52,7 +52,7 @@ def peers():
         import pymodal
 
         for m in ["jv", "hungarian", "simplex"]:
-            out[f"pymodal-{m}"] = lambda c, m=m: pymodal.linear_sum_assignment(c, method=m)
+            out[f"pymodal-{m}"] = lambda c, m=m: pymodal.linear_sum_assignment(c, solver=m)
     except ImportError:
         pass
     try:

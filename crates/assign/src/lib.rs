@@ -40,6 +40,51 @@ pub enum Method {
     NetworkSimplex,
 }
 
+impl Method {
+    /// The solvers' names as the CLI (`--solver`) and Python (`solver=`) spell them, in the order
+    /// of the variants: `jv`, `hungarian`, `simplex`.
+    pub const NAMES: [&'static str; 3] = ["jv", "hungarian", "simplex"];
+
+    /// This solver's name (one of [`Method::NAMES`]).
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::JonkerVolgenant => Self::NAMES[0],
+            Method::Hungarian => Self::NAMES[1],
+            Method::NetworkSimplex => Self::NAMES[2],
+        }
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A solver name that is not one of [`Method::NAMES`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown solver {0:?}; expected one of jv, hungarian, simplex")]
+pub struct UnknownMethod(pub String);
+
+impl std::str::FromStr for Method {
+    type Err = UnknownMethod;
+
+    /// Parses `jv`, `hungarian` or `simplex`.
+    ///
+    /// ```
+    /// assert_eq!("simplex".parse::<assign::Method>(), Ok(assign::Method::NetworkSimplex));
+    /// assert_eq!(assign::Method::Hungarian.to_string(), "hungarian");
+    /// ```
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "jv" => Ok(Method::JonkerVolgenant),
+            "hungarian" => Ok(Method::Hungarian),
+            "simplex" => Ok(Method::NetworkSimplex),
+            other => Err(UnknownMethod(other.to_string())),
+        }
+    }
+}
+
 /// Options of [`solve`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Options {

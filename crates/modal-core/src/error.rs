@@ -9,6 +9,9 @@ pub enum ModalError {
     InvalidParameter(String),
     #[error("numerical failure: {0}")]
     Numerical(String),
+    /// A user-facing option has a value it does not accept.
+    #[error(transparent)]
+    Option(#[from] crate::options::OptionError),
     #[error(transparent)]
     Assign(#[from] assign::AssignError),
 }

@@ -35,6 +35,9 @@ pub enum IoError {
     /// An argument is out of range or inconsistent.
     #[error("invalid input: {0}")]
     InvalidInput(String),
+    /// A user-facing option has a value it does not accept.
+    #[error(transparent)]
+    Option(#[from] modal_core::OptionError),
     /// A produced object could not be turned into a modal-core shape.
     #[error(transparent)]
     Shape(#[from] ModalError),

@@ -22,9 +22,11 @@ pub mod points;
 
 pub mod preprocess;
 pub mod recording;
+pub mod report;
 pub mod sequence;
 pub mod surface;
 pub mod track;
+pub mod units;
 
 pub use contour::{contour_shapes, contours, Contour, ContourMethod, ContourOptions, Resample};
 pub use error::{IoError, Result};

@@ -9,7 +9,10 @@ use crate::contour::{contours, Contour, ContourOptions, Resample};
 use crate::error::{IoError, Result};
 use crate::recording::Recording;
 use crate::track::PairingMethod;
-use modal_core::{match_shapes, ElementKind, MatchOptions, MatchResult, Search, Shape};
+use modal_core::{
+    match_shapes, MatchOptions, MatchParams, MatchResult, OptionError, OptionSpec, OptionValue,
+    Search, Shape,
+};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
@@ -45,8 +48,6 @@ pub struct SequenceOptions {
     /// Frames `start..end` of the recording to use (`None`: all).
     pub frames: Option<(usize, usize)>,
     pub matching: MatchOptions,
-    /// Also run the local (mutual-best) search, for the table's local-match column.
-    pub local_column: bool,
 }
 
 impl Default for SequenceOptions {
@@ -68,42 +69,91 @@ impl Default for SequenceOptions {
             min_nodes: 8,
             frames: None,
             matching: MatchOptions::default(),
-            local_column: true,
         }
     }
 }
 
-/// Which searches fill the table's match columns.
+modal_core::choice!(ObjectModel, "model", [
+    "contour" => ObjectModel::Contour,
+    "surface" => ObjectModel::Surface,
+    "isocontour" => ObjectModel::Isocontour,
+]);
+
+/// Frames `start..end` of a recording: 0-based and half-open like a Python slice (`10..60` is
+/// frames 10 to 59); an open end runs to the last frame. Written `START..END`, `START..` or
+/// `..END`.
+///
+/// ```
+/// use pedo_io::sequence::FrameRange;
+/// let r: FrameRange = "10..".parse().unwrap();
+/// assert_eq!(r.resolve(100).unwrap(), (10, 100));
+/// assert_eq!("..60".parse::<FrameRange>().unwrap().to_string(), "0..60");
+/// assert!("5..3".parse::<FrameRange>().unwrap().resolve(100).is_err());
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum SearchMode {
-    /// Optimisation (global) search only.
-    Global,
-    /// Local (mutual-best) search only.
-    Local,
-    /// Both columns, as in the seed's tables; the matches themselves come from the global search.
-    #[default]
-    Both,
+pub struct FrameRange {
+    pub start: usize,
+    /// One past the last frame; `None`: to the end of the recording.
+    pub end: Option<usize>,
 }
 
-/// The user-facing parameters of a sequence run, shared by the CLI and the Python bindings;
-/// [`RunParams::to_options`] validates them against a recording.
+impl FrameRange {
+    /// `(start, end)` for a recording of `n_frames`: a non-empty range within it.
+    pub fn resolve(&self, n_frames: usize) -> std::result::Result<(usize, usize), OptionError> {
+        let end = self.end.unwrap_or(n_frames);
+        if self.start < end && end <= n_frames {
+            Ok((self.start, end))
+        } else {
+            Err(OptionError::new(
+                "frames",
+                self,
+                format!("a non-empty range START..END within the recording's 0..{n_frames} (0-based, END excluded)"),
+            ))
+        }
+    }
+}
+
+impl std::fmt::Display for FrameRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.end {
+            Some(e) => write!(f, "{}..{e}", self.start),
+            None => write!(f, "{}..", self.start),
+        }
+    }
+}
+
+impl std::str::FromStr for FrameRange {
+    type Err = OptionError;
+    fn from_str(s: &str) -> std::result::Result<Self, OptionError> {
+        let bad = || {
+            OptionError::new(
+                "frames",
+                s,
+                "START..END, 0-based with END excluded (START.. and ..END allowed)",
+            )
+        };
+        let (a, b) = s.split_once("..").ok_or_else(bad)?;
+        let number = |x: &str| x.trim().parse::<usize>().map_err(|_| bad());
+        Ok(Self {
+            start: if a.trim().is_empty() { 0 } else { number(a)? },
+            end: if b.trim().is_empty() {
+                None
+            } else {
+                Some(number(b)?)
+            },
+        })
+    }
+}
+
+/// The user-facing parameters of a sequence run, shared by the CLI and the Python bindings:
+/// the matching options and how each frame becomes objects. [`RunParams::to_options`] checks
+/// them against a recording.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunParams {
+    pub matching: MatchParams,
     pub model: ObjectModel,
-    pub element: ElementKind,
-    /// Fraction of the modes used as features, in (0, 1].
-    pub modes: f64,
-    pub search: SearchMode,
-    pub method: assign::Method,
-    /// Threshold on the max-normalised modal cost, in [0, 1].
-    pub threshold: Option<f64>,
-    pub excess: bool,
-    /// The paper's literal setting (no rotation pre-alignment, no re-fits).
-    pub paper: bool,
-    /// Gaussian element: a Gaussian on every `center_stride`-th node only (1: every node).
-    pub center_stride: usize,
-    /// Frames `first..=last`, 1-based.
-    pub frames: Option<(usize, usize)>,
+    /// Frames to use (`None`: all).
+    pub frames: Option<FrameRange>,
     /// Noise threshold in the recording's units (`None`: the file's own, else 0).
     pub noise: Option<f64>,
     /// Gaussian smoothing σ in sensels (0: none).
@@ -112,119 +162,105 @@ pub struct RunParams {
     pub spacing: f64,
     /// Node budget of each brightness surface.
     pub surface_nodes: usize,
-    /// Isocontour model: the frame (1-based; `None`: the frame of largest load) and level count.
+    /// Isocontour model: the frame (0-based; `None`: the frame of largest load) and level count.
     pub iso_frame: Option<usize>,
     pub iso_levels: usize,
+    /// Sensor pitch and frame rate overriding the file's.
+    pub units: crate::units::UnitOverrides,
 }
 
 impl Default for RunParams {
+    /// The defaults of [`SequenceOptions::default`] and [`MatchParams::default`], written there.
     fn default() -> Self {
+        let d = SequenceOptions::default();
+        let spacing = match d.contour.resample {
+            Resample::Spacing(s) => s,
+            _ => 1.0,
+        };
         Self {
-            model: ObjectModel::Contour,
-            element: ElementKind::Gaussian,
-            modes: 0.25,
-            search: SearchMode::Both,
-            method: assign::Method::JonkerVolgenant,
-            threshold: None,
-            excess: true,
-            paper: false,
-            center_stride: 1,
+            matching: MatchParams::default(),
+            model: d.model,
             frames: None,
             noise: None,
-            smooth: 0.0,
-            spacing: 1.0,
-            surface_nodes: 120,
-            iso_frame: None,
-            iso_levels: 10,
+            smooth: d.contour.preprocess.sigma.unwrap_or(0.0),
+            spacing,
+            surface_nodes: d.surface.max_nodes.unwrap_or(120),
+            iso_frame: d.iso_frame,
+            iso_levels: d.iso_count,
+            units: Default::default(),
         }
     }
 }
 
 impl RunParams {
-    /// The matching part of the parameters (element, modes, search, solver, threshold, excess,
-    /// paper setting), checked, for this run's object model: surfaces are unordered 3-D meshes
-    /// and get the measured surface setting (on the synthetic moving blob at 60 nodes, 0.44 of
-    /// the pairs within one spacing of the true position against 0.31 with the contour recipe;
-    /// see the README), contours and isocontours the contour recipe.
-    pub fn match_options(&self) -> Result<MatchOptions> {
+    /// The engine's matching options for this run's object model: surfaces are unordered 3-D
+    /// meshes and get the measured surface setting, contours and isocontours the contour recipe.
+    pub fn match_options(&self) -> std::result::Result<MatchOptions, OptionError> {
         let surface = self.model == ObjectModel::Surface;
-        self.match_options_for(if surface { 3 } else { 2 }, !surface)
+        self.matching
+            .to_match_options(if surface { 3 } else { 2 }, !surface)
     }
 
-    /// [`RunParams::match_options`] for objects of `dim` dimensions, ordered contours or not,
-    /// starting from [`MatchOptions::for_input`]; what `pedomatch match` uses for a single pair.
-    pub fn match_options_for(&self, dim: usize, ordered: bool) -> Result<MatchOptions> {
-        if !(self.modes > 0.0 && self.modes <= 1.0) {
-            return Err(IoError::invalid(format!(
-                "modes must be in (0, 1], got {}",
-                self.modes
-            )));
-        }
-        if let Some(t) = self.threshold {
-            if !(t.is_finite() && t >= 0.0) {
-                return Err(IoError::invalid(format!(
-                    "threshold must be a non-negative number, got {t}"
-                )));
+    /// Checks every parameter that does not depend on a recording.
+    pub fn validate(&self) -> std::result::Result<(), OptionError> {
+        self.matching.validate()?;
+        self.units.validate()?;
+        let positive = |ok: bool, name: &'static str, v: f64, what: &str| {
+            if ok {
+                Ok(())
+            } else {
+                Err(OptionError::new(name, v, what))
             }
-        }
-        let mut matching = if self.paper {
-            MatchOptions::paper()
-        } else {
-            MatchOptions::for_input(dim, ordered)
         };
-        matching.model.element = self.element;
-        matching.mode_fraction = self.modes;
-        matching.search = if self.search == SearchMode::Local {
-            Search::Local
-        } else {
-            Search::Global
-        };
-        matching.method = self.method;
-        matching.threshold = self.threshold;
-        matching.excess = self.excess;
-        if self.center_stride == 0 {
-            return Err(IoError::invalid("center stride must be ≥ 1, got 0"));
-        }
-        matching.model.center_stride = self.center_stride;
-        Ok(matching)
-    }
-
-    /// Checks every parameter and turns them into [`SequenceOptions`] for `recording`.
-    pub fn to_options(&self, recording: &Recording) -> Result<SequenceOptions> {
-        let bad = |msg: String| Err(IoError::invalid(msg));
-        let matching = self.match_options()?;
-        if !(self.spacing.is_finite() && self.spacing > 0.0) {
-            return bad(format!("spacing must be positive, got {}", self.spacing));
-        }
-        if !(self.smooth.is_finite() && self.smooth >= 0.0) {
-            return bad(format!("smooth must be >= 0, got {}", self.smooth));
+        positive(
+            self.spacing.is_finite() && self.spacing > 0.0,
+            "spacing",
+            self.spacing,
+            "a number > 0",
+        )?;
+        positive(
+            self.smooth.is_finite() && self.smooth >= 0.0,
+            "smooth",
+            self.smooth,
+            "a number >= 0",
+        )?;
+        if let Some(n) = self.noise {
+            positive(n.is_finite(), "noise", n, "a finite number")?;
         }
         if self.iso_levels < 2 {
-            return bad(format!(
-                "iso_levels must be at least 2, got {}",
-                self.iso_levels
+            return Err(OptionError::new(
+                "iso_levels",
+                self.iso_levels,
+                "an integer >= 2",
             ));
         }
         if self.surface_nodes < 8 {
-            return bad(format!(
-                "surface_nodes must be at least 8, got {}",
-                self.surface_nodes
+            return Err(OptionError::new(
+                "surface_nodes",
+                self.surface_nodes,
+                "an integer >= 8",
             ));
         }
+        Ok(())
+    }
+
+    /// Checks every parameter and turns them into [`SequenceOptions`] for `recording` (whose
+    /// units should already carry [`RunParams::units`], see [`crate::units::UnitOverrides::apply`]).
+    pub fn to_options(&self, recording: &Recording) -> Result<SequenceOptions> {
+        self.validate()?;
+        let matching = self.match_options()?;
         let n = recording.n_frames();
-        let frames = match self.frames {
-            None => None,
-            Some((a, b)) if a >= 1 && a <= b && b <= n => Some((a - 1, b)),
-            Some((a, b)) => {
-                return bad(format!(
-                    "frames {a}..{b} are not within 1..{n} (1-based, inclusive)"
-                ))
-            }
-        };
+        let frames = self.frames.map(|r| r.resolve(n)).transpose()?;
         let iso_frame = match self.iso_frame {
-            None => None,
-            Some(f) if f >= 1 && f <= n => Some(f - 1),
-            Some(f) => return bad(format!("iso_frame {f} is not within 1..{n} (1-based)")),
+            Some(f) if f >= n => {
+                return Err(OptionError::new(
+                    "iso_frame",
+                    f,
+                    format!("a frame in 0..{n} (0-based)"),
+                )
+                .into())
+            }
+            other => other,
         };
         let noise = self.noise.or(recording.noise_threshold).unwrap_or(0.0);
         let sigma = (self.smooth > 0.0).then_some(self.smooth);
@@ -236,7 +272,6 @@ impl RunParams {
             iso_count: self.iso_levels,
             ..Default::default()
         };
-        o.local_column = self.search != SearchMode::Global;
         o.contour.preprocess.threshold = Some(noise);
         o.contour.preprocess.sigma = sigma;
         o.contour.resample = Resample::Spacing(self.spacing);
@@ -245,12 +280,75 @@ impl RunParams {
         o.surface.max_nodes = Some(self.surface_nodes);
         Ok(o)
     }
+
+    /// Every option as actually used by `options` (from [`RunParams::to_options`]), defaults and
+    /// the recording's values filled in: the matching options, then those of
+    /// [`recording_option_specs`].
+    pub fn used(
+        &self,
+        options: &SequenceOptions,
+        recording: &Recording,
+    ) -> Vec<(&'static str, OptionValue)> {
+        use OptionValue::{Absent, Float, Int, Numbers, Word};
+        let mut v = self.matching.used(&options.matching);
+        let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
+        v.extend([
+            ("model", Word(options.model.to_string())),
+            (
+                "frames",
+                Word(
+                    FrameRange {
+                        start,
+                        end: Some(end),
+                    }
+                    .to_string(),
+                ),
+            ),
+            (
+                "noise",
+                options.contour.preprocess.threshold.map_or(Absent, Float),
+            ),
+            ("smooth", Float(self.smooth)),
+            ("spacing", Float(self.spacing)),
+            ("surface_nodes", Int(self.surface_nodes)),
+            ("iso_frame", options.iso_frame.map_or(Absent, Int)),
+            ("iso_levels", Int(self.iso_levels)),
+            (
+                "pitch_mm",
+                recording.pitch_mm.map_or(Absent, |p| Numbers(p.to_vec())),
+            ),
+            (
+                "frame_rate",
+                recording.dt_s.map_or(Absent, |dt| Float(1.0 / dt)),
+            ),
+        ]);
+        v
+    }
+}
+
+/// The options of a recording run beyond matching (`pedomatch run`/`demo`, `pymodal.run`), in
+/// the order of [`RunParams`]' fields, then the unit options ([`crate::units::unit_option_specs`]).
+pub fn recording_option_specs() -> Vec<OptionSpec> {
+    use modal_core::OptionKind::Value;
+    let d = RunParams::default();
+    let mut specs = vec![
+        OptionSpec::choice(d.model, "Object model of each frame: closed contours of the loaded regions, brightness surfaces (pressure as height), or the isobaric contours of one frame matched level after level."),
+        OptionSpec::new("frames", Value, "all", "Frames START..END, 0-based with END excluded like a Python slice (START.. and ..END allowed)."),
+        OptionSpec::new("noise", Value, "the file's noise threshold, else 0", "Noise threshold in the recording's pressure units: lower values count as no contact."),
+        OptionSpec::new("smooth", Value, d.smooth, "Gaussian smoothing of each frame, sigma in sensels (0: none)."),
+        OptionSpec::new("spacing", Value, d.spacing, "Contour node spacing in sensels."),
+        OptionSpec::new("surface_nodes", Value, d.surface_nodes, "Node budget of each brightness surface."),
+        OptionSpec::new("iso_frame", Value, "the frame of largest load", "Isocontour model: the frame (0-based) whose isobaric contours are matched."),
+        OptionSpec::new("iso_levels", Value, d.iso_levels, "Isocontour model: the number of isobaric levels."),
+    ];
+    specs.extend(crate::units::unit_option_specs());
+    specs
 }
 
 /// One object of the sequence.
 #[derive(Debug, Clone)]
 pub struct SequenceObject {
-    /// 1-based identifier in sequence order, as the seed's tables number images.
+    /// Identifier in sequence order: the object's index in [`SequenceResult::objects`].
     pub id: usize,
     /// Frame index (0-based) in the recording.
     pub frame: usize,
@@ -456,15 +554,12 @@ fn match_pair(
     let (n, m) = (oa.shape.len(), ob.shape.len());
     let min = n.min(m).max(1) as f64;
     let one_to_one: Vec<_> = result.pairs.iter().filter(|p| !p.excess).collect();
-    let local = if options.local_column || options.matching.search == Search::Local {
-        result.local_count()
-    } else {
+    // Mutual-best matches on the final affinity are counted whatever the search.
+    let local = result.local_count();
+    let optimisation = if options.matching.search == Search::Local {
         0
-    };
-    let optimisation = if options.matching.search == Search::Global {
+    } else {
         one_to_one.len()
-    } else {
-        0
     };
     let mean_cost = if one_to_one.is_empty() {
         0.0
@@ -529,7 +624,7 @@ pub fn chain_tracks(objects: &[SequenceObject], pairs: &[PairMatch]) -> Vec<Trac
     tracks
 }
 
-/// Objects in sequence order (numbered from 1), the pairs to match (indices into the objects)
+/// Objects in sequence order (numbered from 0), the pairs to match (indices into the objects)
 /// and, for contours, the splits and merges between consecutive frames.
 struct Built {
     objects: Vec<SequenceObject>,
@@ -602,7 +697,7 @@ fn build_objects(
             for (k, cs) in per_frame.iter().enumerate() {
                 first.push(built.objects.len());
                 for (index, c) in cs.iter().enumerate() {
-                    let id = built.objects.len() + 1;
+                    let id = built.objects.len();
                     built.objects.push(SequenceObject {
                         id,
                         frame: start + k,
@@ -661,7 +756,7 @@ fn build_objects(
                             }
                         }
                         built.objects.push(SequenceObject {
-                            id: o + 1,
+                            id: o,
                             frame: start + k,
                             index: 0,
                             level: None,
@@ -706,7 +801,7 @@ fn build_objects(
                             built.pairs.push((o - 1, o));
                         }
                         built.objects.push(SequenceObject {
-                            id: o + 1,
+                            id: o,
                             frame: t,
                             index,
                             level: Some(level),

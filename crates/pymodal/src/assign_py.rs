@@ -6,17 +6,28 @@ use pyo3::prelude::*;
 
 use crate::errors::to_py;
 
-/// An assignment method from its Python name; `what` names the parameter in the error
-/// (`method` here, `solver` in `match` and `run`).
-pub(crate) fn parse_method(what: &str, method: &str) -> PyResult<assign::Method> {
-    match method {
-        "jv" => Ok(assign::Method::JonkerVolgenant),
-        "hungarian" => Ok(assign::Method::Hungarian),
-        "simplex" => Ok(assign::Method::NetworkSimplex),
-        other => Err(PyValueError::new_err(format!(
-            "unknown {what} {other:?}; expected \"jv\", \"hungarian\" or \"simplex\""
-        ))),
-    }
+/// The solver from `solver=` or its deprecated alias `method=` (which warns); `None`: the
+/// default solver.
+fn solver_of(
+    py: Python<'_>,
+    solver: Option<&str>,
+    method: Option<&str>,
+) -> PyResult<assign::Method> {
+    let name = match (solver, method) {
+        (Some(_), Some(_)) => {
+            return Err(PyValueError::new_err(
+                "give solver= only (method= is its deprecated alias)",
+            ))
+        }
+        (Some(s), None) => Some(s),
+        (None, Some(m)) => {
+            let warning = py.get_type::<pyo3::exceptions::PyDeprecationWarning>();
+            PyErr::warn(py, &warning, c"method= is deprecated; use solver=", 2)?;
+            Some(m)
+        }
+        (None, None) => None,
+    };
+    crate::options_py::word(name, assign::Method::default())
 }
 
 /// Converts any 2-D array-like of numbers or bools to a C-contiguous float64 array, raising the
@@ -51,7 +62,7 @@ fn solve_to_arrays<'py>(
     py: Python<'py>,
     cost_matrix: &Bound<'py, PyAny>,
     maximize: bool,
-    method: &str,
+    method: assign::Method,
     solve: impl FnOnce(
             &[f64],
             usize,
@@ -60,10 +71,7 @@ fn solve_to_arrays<'py>(
         ) -> Result<assign::Assignment, assign::AssignError>
         + Send,
 ) -> PyResult<IndexArrays<'py>> {
-    let options = assign::Options {
-        method: parse_method("method", method)?,
-        maximize,
-    };
+    let options = assign::Options { method, maximize };
     let arr = as_f64_matrix(py, cost_matrix)?;
     let shape = arr.shape();
     let (rows, cols) = (shape[0], shape[1]);
@@ -89,9 +97,10 @@ fn solve_to_arrays<'py>(
 /// ----------
 /// cost_matrix : array_like, 2-D, numbers or bools
 /// maximize : bool, default False
-/// method : {"jv", "hungarian", "simplex"}, keyword-only, default "jv"
+/// solver : {"jv", "hungarian", "simplex"}, keyword-only, default "jv"
 ///     Jonker–Volgenant shortest augmenting paths, Kuhn–Munkres, or network simplex. All give
-///     the same optimal total.
+///     the same optimal total (the ``--solver`` of ``pedomatch assign``).
+/// method : deprecated alias of ``solver``.
 ///
 /// Raises
 /// ------
@@ -99,13 +108,15 @@ fn solve_to_arrays<'py>(
 ///     if the input is not 2-D, contains NaN or ``-inf`` (``+inf`` when
 ///     maximising), or admits no complete assignment.
 #[pyfunction]
-#[pyo3(signature = (cost_matrix, maximize=false, *, method="jv"))]
+#[pyo3(signature = (cost_matrix, maximize=false, *, solver=None, method=None))]
 fn linear_sum_assignment<'py>(
     py: Python<'py>,
     cost_matrix: &Bound<'py, PyAny>,
     maximize: bool,
-    method: &str,
+    solver: Option<&str>,
+    method: Option<&str>,
 ) -> PyResult<IndexArrays<'py>> {
+    let method = solver_of(py, solver, method)?;
     solve_to_arrays(py, cost_matrix, maximize, method, assign::solve)
 }
 
@@ -114,16 +125,18 @@ fn linear_sum_assignment<'py>(
 /// Finds the matching of any size that minimises ``sum(cost[i, j] - tau)`` over its pairs (with
 /// ``maximize``: maximises ``sum(cost[i, j] - tau)``), so no pair worse than ``tau`` is kept.
 /// Returns ``(row_ind, col_ind)`` like :func:`linear_sum_assignment`, possibly with fewer than
-/// ``min(n, m)`` pairs.
+/// ``min(n, m)`` pairs; ``solver`` (and its deprecated alias ``method``) as there.
 #[pyfunction]
-#[pyo3(signature = (cost_matrix, tau, maximize=false, *, method="jv"))]
+#[pyo3(signature = (cost_matrix, tau, maximize=false, *, solver=None, method=None))]
 fn linear_sum_assignment_threshold<'py>(
     py: Python<'py>,
     cost_matrix: &Bound<'py, PyAny>,
     tau: f64,
     maximize: bool,
-    method: &str,
+    solver: Option<&str>,
+    method: Option<&str>,
 ) -> PyResult<IndexArrays<'py>> {
+    let method = solver_of(py, solver, method)?;
     solve_to_arrays(
         py,
         cost_matrix,

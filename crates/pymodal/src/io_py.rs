@@ -116,7 +116,7 @@ impl PyRecording {
     /// when built in memory.
     #[getter]
     fn format(&self) -> Option<String> {
-        self.inner.format.map(|f| format!("{f:?}").to_lowercase())
+        self.inner.format.map(|f| f.name().to_string())
     }
     /// Number of frames T.
     #[getter]
@@ -193,12 +193,23 @@ impl PyRecording {
 /// (2-D or 3-D), PNG/TIFF (8/16-bit grayscale), a folder of images, or a numbered sequence
 /// (``"walk_%03d.png"``). The format is detected from the content and the extension.
 ///
+/// ``pitch_mm`` (mm per sensel, a number or (x, y)) and ``frame_rate`` (Hz) set or override
+/// what the file says, as ``--pitch-mm`` and ``--frame-rate`` do on the command line.
+///
 /// Raises ValueError naming the file (and line, for text formats) if it is corrupt or truncated.
 #[pyfunction]
-fn read_recording(py: Python<'_>, path: PathBuf) -> PyResult<PyRecording> {
-    let rec = py
+#[pyo3(signature = (path, *, pitch_mm=None, frame_rate=None))]
+fn read_recording(
+    py: Python<'_>,
+    path: PathBuf,
+    pitch_mm: Option<&Bound<'_, PyAny>>,
+    frame_rate: Option<f64>,
+) -> PyResult<PyRecording> {
+    let units = crate::options_py::units(pitch_mm, frame_rate)?;
+    let mut rec = py
         .detach(|| pedo_io::read_recording(&path))
         .map_err(to_py)?;
+    units.apply(&mut rec).map_err(to_py)?;
     Ok(PyRecording { inner: rec })
 }
 

@@ -8,6 +8,7 @@ mod errors;
 mod io_py;
 mod match_py;
 mod model_py;
+mod options_py;
 mod run_py;
 
 #[pymodule]
@@ -18,5 +19,6 @@ fn _pymodal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     match_py::register(m)?;
     io_py::register(m)?;
     run_py::register(m)?;
+    options_py::register(m)?;
     Ok(())
 }

@@ -1,10 +1,7 @@
 //! `pymodal.match`: modal matching of two point sets, contours or meshes.
 
 use modal_core::shape::looks_like_closed_contour;
-use modal_core::{
-    match_shapes, ElementKind, MatchOptions, MatchResult, Prealign, RotationSearch, Search, Shape,
-    ThresholdMode, Topology,
-};
+use modal_core::{match_shapes, MatchResult, Shape, Topology};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -191,83 +188,108 @@ fn triangles(
 /// Modal matching of two objects.
 ///
 /// Builds a finite-element model of each object, computes its vibration modes and matches the
-/// nodes in modal space. The defaults are the most accurate setting measured (robust rotation
+/// nodes in modal space. Every option defaults to ``None``: the documented default below, the
+/// same as ``pedomatch match`` (keyword ``x_y`` is the flag ``--x-y``; ``pymodal._options()``
+/// lists them all). The defaults are the most accurate setting measured (robust rotation
 /// pre-alignment, up to two modal affine re-fits, cross-object mode alignment, excess nodes on
-/// contours; for unordered 3-D point sets the surface setting: wide common σ, no re-fits, aligned
-/// positions mixed in, powered costs); ``prealign="normalize", refits=0`` is the paper's literal
-/// setting.
+/// contours; for unordered 3-D point sets the surface setting: wide common σ, no re-fits,
+/// aligned positions mixed in, powered costs); ``paper=True`` is the paper's literal setting.
 ///
 /// Parameters
 /// ----------
 /// a, b : (n, 2) or (n, 3) array_like — the node coordinates of the two objects.
-/// element : {"gaussian", "axial"} — Sclaroff's Gaussian element or bar elements (contours/meshes).
+/// element : {"gaussian", "axial"} — Sclaroff's Gaussian element or bar elements (default
+///     "gaussian").
 /// modes : float in (0, 1] — fraction of ``dim · min(n, m)`` modes kept (default 0.25).
-/// search : {"global", "local", "best"} — optimal assignment, mutual best matches, or every node
-///     of a to its best node of b (many-to-one, no excess step; the most accurate read-out for
-///     independent samplings of one surface, README).
-/// solver : {"jv", "hungarian", "simplex"} — assignment algorithm.
-/// threshold : float or None — reject pairs with normalised cost above it.
-/// excess : bool — match the nodes the one-to-one search leaves over (global search).
-/// ordered : bool or None — treat the inputs as ordered closed contours; None decides from the
-///     data (2-D arrays whose consecutive points are nearest-neighbour close).
-/// material : None, preset name, dict or (E, nu, rho) — only ν changes the matches.
-/// prealign : {"robust", "spec", "normalize"} — rotation search over 36 turns plus the principal
-///     axes (default), SPEC §10's five starts only, or centroid and scale only;
-/// skip_rigid : bool; band : int;
-/// refits : int or None — modal affine re-fits (None: 2, or 0 for 3-D point sets);
-/// refit_tolerance : float ≥ 0 or None — no (further) re-fit once one affine map explains the
-///     pairs: every one-to-one pair within this fraction of b's node spacing of its partner
-///     (None: 0.6; 0 re-fits ``refits`` times);
-/// kappa : float or None — σ = kappa × mean nearest-neighbour distance (None: 0.8, or 3 for 3-D
-///     point sets, where independent samplings need smoother modes);
-/// center_stride : int ≥ 1 — Gaussians on every ``center_stride``-th node only (Gaussian element):
-///     2 solves in a third of the time, at the cost of accuracy under severe warps (README);
-/// threshold_in_optimizer : bool — let the assignment itself reject pairs above the threshold;
-/// position_weight : float in [0, 1] or None — mix of aligned-position distance into the cost
-///     (1 = positions only, a baseline; None: 0, or 0.7 for 3-D point sets);
-/// cost_power : float > 0 or None — the assignment minimises the sum of costs to this power
-///     (None: 1, the squared modal distance; 0.125 for 3-D point sets, whose independent
-///     samplings need many near-exact pairs rather than evenly spread errors); costs, affinity
-///     and threshold are in powered units;
-/// common_sigma : bool or None — one σ for both objects (None: on for 3-D point sets);
-/// triangles_a, triangles_b : (t, 3) int arrays — meshes (for ``element="axial"`` and §6.4).
+/// search : {"global", "local", "best"} — optimal assignment (default), mutual best matches, or
+///     every node of a to its best node of b (many-to-one, no excess step).
+/// solver : {"jv", "hungarian", "simplex"} — assignment algorithm (default "jv").
+/// threshold : float or None — reject pairs with normalised cost above it (default: keep all).
+/// threshold_mode : {"after", "during"} — drop pairs above the threshold after the assignment
+///     (default) or let the assignment itself reject them.
+/// excess : bool — match the nodes the one-to-one search leaves over (default True).
+/// paper : bool — start from the paper's literal setting (default False).
+/// prealign : {"robust", "normalize"} — rotation search with affine ICP (default; "normalize"
+///     with ``paper``), or centroid and scale only.
+/// refits : int — modal affine re-fits (default 2, or 0 for unordered 3-D points).
+/// refit_tolerance : float ≥ 0 — no (further) re-fit once every one-to-one pair is within this
+///     fraction of b's node spacing of its partner under one affine map (default 0.6; 0
+///     re-fits ``refits`` times).
+/// kappa : float > 0 — σ = kappa × mean nearest-neighbour distance (default 0.8, or 3 for
+///     unordered 3-D points).
+/// center_stride : int ≥ 1 — Gaussians on every ``center_stride``-th node only (default 1).
+/// position_weight : float in [0, 1] — mix of aligned-position distance into the cost (default
+///     0, or 0.7 for unordered 3-D points).
+/// cost_power : float > 0 — the assignment minimises the sum of costs to this power (default 1,
+///     or 0.125 for unordered 3-D points); costs, affinity and threshold are in powered units.
+/// common_sigma : bool — one σ for both objects (default False, True for unordered 3-D points).
+/// skip_rigid : bool — leave the quasi-rigid modes out (default False).
+/// band : int — band of the cross-object mode reordering (default 3).
+/// material : preset name, "E,NU,RHO", dict or (E, nu, rho) — only ν changes the matches.
+/// ordered : bool — treat the inputs as ordered closed contours (default: decided from the data,
+///     2-D arrays whose consecutive points are nearest-neighbour close).
+/// triangles_a, triangles_b : (t, 3) int arrays — meshes (for ``element="axial"``).
 ///
 /// Raises
 /// ------
 /// ValueError — bad shapes, degenerate objects (too few, coincident or collinear nodes, NaN),
-///     unknown option values.
+///     option values out of range or unknown.
 #[pyfunction]
-#[pyo3(name = "match", signature = (a, b, *, element="gaussian", modes=0.25, search="global", solver="jv",
-    threshold=None, excess=true, ordered=None, material=None, prealign="robust", refits=None,
-    refit_tolerance=None, skip_rigid=false, band=3, kappa=None, center_stride=1, threshold_in_optimizer=false, position_weight=None, cost_power=None, common_sigma=None, triangles_a=None,
+#[pyo3(name = "match", signature = (a, b, *, element=None, modes=None, search=None, solver=None,
+    threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, refits=None,
+    refit_tolerance=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
+    common_sigma=None, skip_rigid=None, band=None, material=None, ordered=None, triangles_a=None,
     triangles_b=None))]
 #[allow(clippy::too_many_arguments)]
 fn match_py(
     py: Python<'_>,
     a: &Bound<'_, PyAny>,
     b: &Bound<'_, PyAny>,
-    element: &str,
-    modes: f64,
-    search: &str,
-    solver: &str,
+    element: Option<&str>,
+    modes: Option<f64>,
+    search: Option<&str>,
+    solver: Option<&str>,
     threshold: Option<f64>,
-    excess: bool,
-    ordered: Option<bool>,
-    material: Option<&Bound<'_, PyAny>>,
-    prealign: &str,
+    threshold_mode: Option<&str>,
+    excess: Option<bool>,
+    paper: Option<bool>,
+    prealign: Option<&str>,
     refits: Option<usize>,
     refit_tolerance: Option<f64>,
-    skip_rigid: bool,
-    band: usize,
     kappa: Option<f64>,
-    center_stride: usize,
-    threshold_in_optimizer: bool,
+    center_stride: Option<usize>,
     position_weight: Option<f64>,
     cost_power: Option<f64>,
     common_sigma: Option<bool>,
+    skip_rigid: Option<bool>,
+    band: Option<usize>,
+    material: Option<&Bound<'_, PyAny>>,
+    ordered: Option<bool>,
     triangles_a: Option<&Bound<'_, PyAny>>,
     triangles_b: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyMatch> {
+    let params = crate::options_py::MatchKw {
+        element,
+        modes,
+        search,
+        solver,
+        threshold,
+        threshold_mode,
+        excess,
+        paper,
+        prealign,
+        refits,
+        refit_tolerance,
+        kappa,
+        center_stride,
+        position_weight,
+        cost_power,
+        common_sigma,
+        skip_rigid,
+        band,
+        material,
+    }
+    .params()?;
     let (da, ca) = points(py, a, "a")?;
     let (db, cb) = points(py, b, "b")?;
     if da != db {
@@ -286,75 +308,8 @@ fn match_py(
                 && looks_like_closed_contour(&cb, db)
         }
     };
-    // Contours get the §10 recipe; unordered 3-D point sets the measured surface setting.
-    let mut opts = MatchOptions::for_input(da, ordered);
-    opts.model.element = match element {
-        "gaussian" => ElementKind::Gaussian,
-        "axial" => ElementKind::Axial,
-        o => {
-            return Err(PyValueError::new_err(format!(
-                "unknown element {o:?}; expected \"gaussian\" or \"axial\""
-            )))
-        }
-    };
-    // None keeps the matching default; anything else is parsed as for ModalModel.
-    if let Some(m) = material.filter(|o| !o.is_none()) {
-        let m = crate::model_py::parse_material(Some(m))?;
-        opts.model.material = m;
-    }
-    if let Some(kappa) = kappa {
-        opts.model.kappa = kappa;
-    }
-    opts.model.center_stride = center_stride;
-    opts.mode_fraction = modes;
-    opts.search = match search {
-        "global" => Search::Global,
-        "local" => Search::Local,
-        "best" => Search::Best,
-        o => {
-            return Err(PyValueError::new_err(format!(
-                "unknown search {o:?}; expected \"global\", \"local\" or \"best\""
-            )))
-        }
-    };
-    opts.method = crate::assign_py::parse_method("solver", solver)?;
-    opts.prealign = match prealign {
-        "robust" => Prealign::Robust,
-        "spec" => {
-            opts.rotation_search = RotationSearch::spec(5);
-            Prealign::Robust
-        }
-        "normalize" => Prealign::Normalize,
-        o => {
-            return Err(PyValueError::new_err(format!(
-                "unknown prealign {o:?}; expected \"robust\", \"spec\" or \"normalize\""
-            )))
-        }
-    };
-    opts.threshold = threshold;
-    opts.threshold_mode = if threshold_in_optimizer {
-        ThresholdMode::InOptimizer
-    } else {
-        ThresholdMode::AfterAssignment
-    };
-    opts.excess = excess;
-    if let Some(r) = refits {
-        opts.refits = r;
-    }
-    if let Some(t) = refit_tolerance {
-        opts.refit_tolerance = t;
-    }
-    opts.skip_rigid = skip_rigid;
-    opts.band = band;
-    if let Some(w) = position_weight {
-        opts.position_weight = w;
-    }
-    if let Some(p) = cost_power {
-        opts.cost_power = p;
-    }
-    if let Some(c) = common_sigma {
-        opts.common_sigma = c;
-    }
+    // Contours get the contour recipe; unordered 3-D point sets the measured surface setting.
+    let mut opts = params.to_match_options(da, ordered).map_err(to_py)?;
     opts.ordered = Some(ordered);
     let topo = |t: Option<Vec<[usize; 3]>>| match t {
         Some(triangles) => Topology::Mesh { triangles },

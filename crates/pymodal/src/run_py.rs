@@ -1,7 +1,8 @@
 //! `pymodal.run`: a whole recording in; the per-pair table, the matches and the node tracks out.
 
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
-use pedo_io::sequence::{run_sequence, ObjectModel, RunParams, SearchMode, SequenceResult};
+use pedo_io::report::{self, InputInfo};
+use pedo_io::sequence::{run_sequence, SequenceResult};
 use pedo_io::Recording;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -9,14 +10,25 @@ use pyo3::types::{PyDict, PyList};
 
 use crate::errors::to_py;
 use crate::match_py::PyMatch;
+use crate::options_py::{json_to_py, table_rows, MatchKw, RecordingKw};
 
-/// A recording from a path, a (T, H, W) or (H, W) array (NaN = no sensor), or a `Recording`.
-fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Recording> {
+/// A recording from a path, a (T, H, W) or (H, W) array (NaN = no sensor), or a `Recording`,
+/// and where it came from (a file's name and SHA-256).
+fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording, InputInfo)> {
+    let unnamed = |name: &str| InputInfo {
+        name: name.to_string(),
+        sha256: None,
+    };
     if let Ok(rec) = obj.cast::<crate::io_py::PyRecording>() {
-        return Ok(rec.get().recording().clone());
+        return Ok((rec.get().recording().clone(), unnamed("Recording")));
     }
     if let Ok(path) = obj.extract::<std::path::PathBuf>() {
-        return py.detach(|| pedo_io::read_recording(&path)).map_err(to_py);
+        return py
+            .detach(|| {
+                let rec = pedo_io::read_recording(&path)?;
+                Ok::<_, pedo_io::IoError>((rec, InputInfo::of_path(&path)?))
+            })
+            .map_err(to_py);
     }
     let arr: PyReadonlyArrayDyn<'_, f32> = obj
         .call_method1("astype", ("float32",))
@@ -37,120 +49,103 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Recording>
         }
     };
     let data = arr.as_array().iter().copied().collect();
-    Recording::from_nan_frames(t, h, w, data).map_err(to_py)
-}
-
-fn parse<T: Copy>(what: &str, value: &str, options: &[(&str, T)]) -> PyResult<T> {
-    options
-        .iter()
-        .find(|(k, _)| *k == value)
-        .map(|&(_, v)| v)
-        .ok_or_else(|| {
-            let names: Vec<String> = options.iter().map(|(k, _)| format!("{k:?}")).collect();
-            PyValueError::new_err(format!(
-                "unknown {what} {value:?}; expected one of {}",
-                names.join(", ")
-            ))
-        })
-}
-
-fn table<'py>(py: Python<'py>, r: &SequenceResult) -> PyResult<Bound<'py, PyList>> {
-    let rows = PyList::empty(py);
-    for p in &r.pairs {
-        let row = &p.row;
-        let d = PyDict::new(py);
-        d.set_item("id_a", row.id_a)?;
-        d.set_item("id_b", row.id_b)?;
-        d.set_item("frame_a", row.frame_a + 1)?;
-        d.set_item("frame_b", row.frame_b + 1)?;
-        d.set_item("nodes_a", row.nodes_a)?;
-        d.set_item("nodes_b", row.nodes_b)?;
-        d.set_item("local_matches", row.local_matches)?;
-        d.set_item("local_percent", row.local_percent)?;
-        d.set_item("optimisation_matches", row.optimisation_matches)?;
-        d.set_item("optimisation_percent", row.optimisation_percent)?;
-        d.set_item("excess_matches", row.excess_matches)?;
-        d.set_item("mean_cost", row.mean_cost)?;
-        rows.append(d)?;
-    }
-    Ok(rows)
+    let rec = Recording::from_nan_frames(t, h, w, data).map_err(to_py)?;
+    Ok((rec, unnamed("array")))
 }
 
 /// Match the objects of a whole recording, frame after frame (or level after level).
 ///
-/// Parameters are those of ``pedomatch run``: ``model`` ("contour", "surface", "isocontour"),
-/// ``element`` ("gaussian", "axial"), ``modes``, ``search`` ("global", "local", "both"), ``solver``
-/// ("jv", "hungarian", "simplex"), ``threshold``, ``excess``, ``paper`` (the paper's literal
-/// setting), ``center_stride`` (Gaussians on every n-th node only: faster), ``frames`` ((first, last), 1-based inclusive), ``noise``, ``smooth``, ``spacing``,
-/// ``surface_nodes``, ``iso_frame`` (1-based), ``iso_levels``.
+/// The options are those of ``pedomatch run`` (keyword ``x_y`` is the flag ``--x-y``;
+/// ``pymodal._options()`` lists them with their defaults and meanings) and default to ``None``,
+/// meaning the documented default: the matching options of :func:`match` (``element``,
+/// ``modes``, ``search``, ``solver``, ``threshold``, ``threshold_mode``, ``excess``, ``paper``,
+/// ``prealign``, ``refits``, ``refit_tolerance``, ``kappa``, ``center_stride``,
+/// ``position_weight``, ``cost_power``, ``common_sigma``, ``skip_rigid``, ``band``,
+/// ``material``), then ``model`` ("contour", "surface", "isocontour"), ``frames`` ((start, end),
+/// 0-based, end excluded like a slice; either may be None), ``noise``, ``smooth``, ``spacing``,
+/// ``surface_nodes``, ``iso_frame`` (0-based), ``iso_levels``, ``pitch_mm`` (mm per sensel, a
+/// number or (x, y); overrides the file's) and ``frame_rate`` (Hz; overrides the file's).
 ///
 /// Returns a dict with
 ///
-/// - ``table``: list of dicts, one per matched pair, with the seed's columns (ids, frames, node
-///   counts, local matches and %, optimisation matches and %, matches after the excess step);
+/// - ``table``: list of dicts, one per matched pair (ids, 0-based frames, their times
+///   ``time_a_s``/``time_b_s`` when the frame rate is known, node counts, local matches and %,
+///   optimisation matches and %, matches after the excess step, mean cost);
 /// - ``matches``: list of :class:`Match`, aligned with ``table``;
-/// - ``objects``: list of dicts ``{id, frame, index, level, points}`` (``points`` (n, d) array);
-/// - ``tracks``: list of (k, 1 + d) float arrays of ``(frame, x, y[, z])`` rows, one per node track;
+/// - ``objects``: list of dicts ``{id, frame, time_s, index, level, points, points_mm}``
+///   (``id`` is the index in this list; ``points`` (n, d) array in sensels, ``points_mm`` its
+///   x, y in mm or None when the pitch is unknown);
+/// - ``tracks``: list of (k, 1 + d) float arrays of ``(frame, x, y[, z])`` rows, one per track;
+/// - ``frames``: list of dicts of per-frame measures (``frame``, ``time_s``,
+///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
+///   units allow, like ``frames.csv``);
+/// - ``summary``: the provenance and outcome of the run, as ``summary.json``;
 /// - ``timings``: seconds per stage.
 #[pyfunction]
-#[pyo3(signature = (recording, *, model="contour", element="gaussian", modes=0.25, search="both", solver="jv",
-    threshold=None, excess=true, paper=false, center_stride=1, frames=None, noise=None, smooth=0.0, spacing=1.0,
-    surface_nodes=120, iso_frame=None, iso_levels=10))]
+#[pyo3(signature = (recording, *, element=None, modes=None, search=None, solver=None,
+    threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, refits=None,
+    refit_tolerance=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
+    common_sigma=None, skip_rigid=None, band=None, material=None, model=None, frames=None,
+    noise=None, smooth=None, spacing=None, surface_nodes=None, iso_frame=None, iso_levels=None,
+    pitch_mm=None, frame_rate=None))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
     py: Python<'py>,
     recording: &Bound<'py, PyAny>,
-    model: &str,
-    element: &str,
-    modes: f64,
-    search: &str,
-    solver: &str,
+    element: Option<&str>,
+    modes: Option<f64>,
+    search: Option<&str>,
+    solver: Option<&str>,
     threshold: Option<f64>,
-    excess: bool,
-    paper: bool,
-    center_stride: usize,
-    frames: Option<(usize, usize)>,
+    threshold_mode: Option<&str>,
+    excess: Option<bool>,
+    paper: Option<bool>,
+    prealign: Option<&str>,
+    refits: Option<usize>,
+    refit_tolerance: Option<f64>,
+    kappa: Option<f64>,
+    center_stride: Option<usize>,
+    position_weight: Option<f64>,
+    cost_power: Option<f64>,
+    common_sigma: Option<bool>,
+    skip_rigid: Option<bool>,
+    band: Option<usize>,
+    material: Option<&Bound<'py, PyAny>>,
+    model: Option<&str>,
+    frames: Option<(Option<usize>, Option<usize>)>,
     noise: Option<f64>,
-    smooth: f64,
-    spacing: f64,
-    surface_nodes: usize,
+    smooth: Option<f64>,
+    spacing: Option<f64>,
+    surface_nodes: Option<usize>,
     iso_frame: Option<usize>,
-    iso_levels: usize,
+    iso_levels: Option<usize>,
+    pitch_mm: Option<&Bound<'py, PyAny>>,
+    frame_rate: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let rec = recording_from(py, recording)?;
-    let params = RunParams {
-        model: parse(
-            "model",
-            model,
-            &[
-                ("contour", ObjectModel::Contour),
-                ("surface", ObjectModel::Surface),
-                ("isocontour", ObjectModel::Isocontour),
-            ],
-        )?,
-        element: parse(
-            "element",
-            element,
-            &[
-                ("gaussian", modal_core::ElementKind::Gaussian),
-                ("axial", modal_core::ElementKind::Axial),
-            ],
-        )?,
+    let matching = MatchKw {
+        element,
         modes,
-        search: parse(
-            "search",
-            search,
-            &[
-                ("global", SearchMode::Global),
-                ("local", SearchMode::Local),
-                ("both", SearchMode::Both),
-            ],
-        )?,
-        method: crate::assign_py::parse_method("solver", solver)?,
+        search,
+        solver,
         threshold,
+        threshold_mode,
         excess,
         paper,
+        prealign,
+        refits,
+        refit_tolerance,
+        kappa,
         center_stride,
+        position_weight,
+        cost_power,
+        common_sigma,
+        skip_rigid,
+        band,
+        material,
+    }
+    .params()?;
+    let params = RecordingKw {
+        model,
         frames,
         noise,
         smooth,
@@ -158,49 +153,96 @@ fn run<'py>(
         surface_nodes,
         iso_frame,
         iso_levels,
-    };
+        pitch_mm,
+        frame_rate,
+    }
+    .params(matching)?;
+    params.validate().map_err(to_py)?;
+    let started = std::time::Instant::now();
+    let (mut rec, input) = recording_from(py, recording)?;
+    params.units.apply(&mut rec).map_err(to_py)?;
+    let read_time = started.elapsed().as_secs_f64();
     let options = params.to_options(&rec).map_err(to_py)?;
     let result = py
         .detach(|| run_sequence(&rec, &options, &|_, _, _| {}))
         .map_err(to_py)?;
 
     let out = PyDict::new(py);
-    out.set_item("table", table(py, &result)?)?;
+    out.set_item(
+        "table",
+        table_rows(py, &report::pairs_table(&rec, &result))?,
+    )?;
     let matches = PyList::empty(py);
     for p in &result.pairs {
         matches.append(Py::new(py, PyMatch::from_result(p.result.clone()))?)?;
     }
     out.set_item("matches", matches)?;
-    let objects = PyList::empty(py);
-    for o in &result.objects {
-        let d = PyDict::new(py);
-        d.set_item("id", o.id)?;
-        d.set_item("frame", o.frame + 1)?;
-        d.set_item("index", o.index)?;
-        d.set_item("level", o.level)?;
-        let pts =
-            PyArray1::from_slice(py, o.shape.coords()).reshape([o.shape.len(), o.shape.dim()])?;
-        d.set_item("points", pts)?;
-        objects.append(d)?;
-    }
-    out.set_item("objects", objects)?;
+    out.set_item("objects", objects(py, &rec, &result)?)?;
     let tracks = PyList::empty(py);
     for t in &result.tracks {
         let pts = result.track_points(t);
         let width = 1 + pts.first().map_or(2, |(_, p)| p.len());
         let flat: Vec<f64> = pts
             .iter()
-            .flat_map(|(f, p)| std::iter::once((*f + 1) as f64).chain(p.iter().copied()))
+            .flat_map(|(f, p)| std::iter::once(*f as f64).chain(p.iter().copied()))
             .collect();
         tracks.append(PyArray1::from_vec(py, flat).reshape([pts.len(), width])?)?;
     }
     out.set_item("tracks", tracks)?;
+    let (start, end) = options.frames.unwrap_or((0, rec.n_frames()));
+    let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
+    let measures = report::frames_table(&rec, threshold, start, end);
+    out.set_item("frames", table_rows(py, &measures)?)?;
+    let summary = report::run_summary(
+        &input,
+        &rec,
+        &params,
+        &options,
+        &result,
+        &[("read", read_time)],
+    );
+    out.set_item("summary", json_to_py(py, &summary)?)?;
     let timings = PyDict::new(py);
+    timings.set_item("read", read_time)?;
     timings.set_item("objects", result.timings.objects.as_secs_f64())?;
     timings.set_item("matching", result.timings.matching.as_secs_f64())?;
     timings.set_item("tracks", result.timings.tracks.as_secs_f64())?;
     out.set_item("timings", timings)?;
     Ok(out)
+}
+
+/// The objects as dicts, with their frame times and their points in mm where known.
+fn objects<'py>(
+    py: Python<'py>,
+    rec: &Recording,
+    result: &SequenceResult,
+) -> PyResult<Bound<'py, PyList>> {
+    let objects = PyList::empty(py);
+    for o in &result.objects {
+        let d = PyDict::new(py);
+        d.set_item("id", o.id)?;
+        d.set_item("frame", o.frame)?;
+        d.set_item("time_s", rec.time_s(o.frame))?;
+        d.set_item("index", o.index)?;
+        d.set_item("level", o.level)?;
+        let (n, dim) = (o.shape.len(), o.shape.dim());
+        let pts = PyArray1::from_slice(py, o.shape.coords()).reshape([n, dim])?;
+        d.set_item("points", pts)?;
+        match rec.pitch_mm {
+            Some(p) => {
+                let mm: Vec<f64> = (0..n)
+                    .flat_map(|i| {
+                        let q = o.shape.point(i);
+                        [q[0] * p[0], q[1] * p[1]]
+                    })
+                    .collect();
+                d.set_item("points_mm", PyArray1::from_vec(py, mm).reshape([n, 2])?)?;
+            }
+            None => d.set_item("points_mm", py.None())?,
+        }
+        objects.append(d)?;
+    }
+    Ok(objects)
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -21,7 +21,7 @@ def check_against_scipy(cost, maximize=False):
     expected = total(cost.astype(float), sr, sc)
     scale = float(max(1.0, np.abs(cost[np.isfinite(cost)]).max(initial=0.0)))
     for method in METHODS:
-        r, c = pymodal.linear_sum_assignment(cost, maximize, method=method)
+        r, c = pymodal.linear_sum_assignment(cost, maximize, solver=method)
         assert r.dtype == np.int64 and c.dtype == np.int64
         assert r.shape == c.shape == (min(cost.shape),)
         assert np.all(np.diff(r) > 0), "row_ind must be sorted"
@@ -69,7 +69,7 @@ def test_random_against_scipy(idx, maximize):
         assert "infeasible" in str(e)
         for method in METHODS:
             with pytest.raises(ValueError, match="cost matrix is infeasible"):
-                pymodal.linear_sum_assignment(cost, maximize, method=method)
+                pymodal.linear_sum_assignment(cost, maximize, solver=method)
         return
     check_against_scipy(cost, maximize)
 
@@ -77,7 +77,7 @@ def test_random_against_scipy(idx, maximize):
 def test_scipy_doc_example():
     cost = np.array([[4, 1, 3], [2, 0, 5], [3, 2, 2]])
     for method in METHODS:
-        r, c = pymodal.linear_sum_assignment(cost, method=method)
+        r, c = pymodal.linear_sum_assignment(cost, solver=method)
         assert r.tolist() == [0, 1, 2]
         assert c.tolist() == [1, 0, 2]
         assert cost[r, c].sum() == 5
@@ -90,18 +90,18 @@ def test_brute_force_small():
         cost = rng.integers(0, 5, size=(n, n)).astype(float)
         best = min(sum(cost[i, p[i]] for i in range(n)) for p in itertools.permutations(range(n)))
         for method in METHODS:
-            r, c = pymodal.linear_sum_assignment(cost, method=method)
+            r, c = pymodal.linear_sum_assignment(cost, solver=method)
             assert cost[r, c].sum() == best
 
 
 def test_array_likes_and_bools():
     for method in METHODS:
-        r, c = pymodal.linear_sum_assignment([[1, 2], [3, 0]], method=method)
+        r, c = pymodal.linear_sum_assignment([[1, 2], [3, 0]], solver=method)
         assert (r.tolist(), c.tolist()) == ([0, 1], [0, 1])
         b = np.array([[True, False], [False, True]])
-        r, c = pymodal.linear_sum_assignment(b, method=method)
+        r, c = pymodal.linear_sum_assignment(b, solver=method)
         assert c.tolist() == [1, 0]
-        r, c = pymodal.linear_sum_assignment(b, maximize=True, method=method)
+        r, c = pymodal.linear_sum_assignment(b, maximize=True, solver=method)
         assert c.tolist() == [0, 1]
         # Non-contiguous and non-float64 views.
         big = np.arange(36, dtype=np.float32).reshape(6, 6)[::2, ::3]
@@ -115,7 +115,7 @@ def test_empty(shape):
     cost = np.zeros(shape)
     sr, sc = scipy_lsa(cost)
     for method in METHODS:
-        r, c = pymodal.linear_sum_assignment(cost, method=method)
+        r, c = pymodal.linear_sum_assignment(cost, solver=method)
         assert r.shape == c.shape == sr.shape == (0,)
         assert r.dtype == np.int64
 
@@ -135,7 +135,7 @@ def test_errors_like_scipy(method):
         with pytest.raises(ValueError, match=msg):
             scipy_lsa(cost, maximize=maximize)
         with pytest.raises(ValueError, match=msg):
-            pymodal.linear_sum_assignment(cost, maximize, method=method)
+            pymodal.linear_sum_assignment(cost, maximize, solver=method)
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -144,20 +144,29 @@ def test_non_numeric_like_scipy(method):
         with pytest.raises(TypeError, match="Cannot cast"):
             scipy_lsa(cost)
         with pytest.raises(TypeError, match="Cannot cast"):
-            pymodal.linear_sum_assignment(cost, method=method)
+            pymodal.linear_sum_assignment(cost, solver=method)
 
 
-def test_unknown_method():
-    with pytest.raises(ValueError, match="unknown method"):
-        pymodal.linear_sum_assignment([[1.0]], method="auction")
+def test_unknown_solver():
+    with pytest.raises(ValueError, match="solver = auction: expected one of jv, hungarian, simplex"):
+        pymodal.linear_sum_assignment([[1.0]], solver="auction")
+
+
+def test_method_is_a_deprecated_alias_of_solver():
+    cost = np.array([[4.0, 1.0], [2.0, 0.0]])
+    with pytest.warns(DeprecationWarning, match="solver="):
+        r, c = pymodal.linear_sum_assignment(cost, method="hungarian")
+    assert cost[r, c].sum() == 3.0
+    with pytest.raises(ValueError, match="solver= only"):
+        pymodal.linear_sum_assignment(cost, solver="jv", method="jv")
 
 
 def test_threshold():
     cost = np.array([[1.0, 9.0], [2.0, 8.0]])
     for method in METHODS:
-        r, c = pymodal.linear_sum_assignment_threshold(cost, 3.0, method=method)
+        r, c = pymodal.linear_sum_assignment_threshold(cost, 3.0, solver=method)
         assert (r.tolist(), c.tolist()) == ([0], [0])
-        r, c = pymodal.linear_sum_assignment_threshold(cost, 100.0, method=method)
+        r, c = pymodal.linear_sum_assignment_threshold(cost, 100.0, solver=method)
         assert cost[r, c].sum() == 9.0
     # Against the explicit (n+m)x(n+m) padding of SPEC §6.2 solved by scipy.
     rng = np.random.default_rng(5)
@@ -173,7 +182,7 @@ def test_threshold():
         br, bc = scipy_lsa(big)
         expected = big[br, bc].sum()
         for method in METHODS:
-            r, c = pymodal.linear_sum_assignment_threshold(cost, tau, method=method)
+            r, c = pymodal.linear_sum_assignment_threshold(cost, tau, solver=method)
             assert np.all(cost[r, c] <= tau)
             got = cost[r, c].sum() + tau / 2 * (n + m - 2 * len(r))
             assert got == pytest.approx(expected, abs=1e-12)

@@ -142,7 +142,7 @@ def test_rotation_search_on_a_rounded_heel():
         r = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
         return ((p - c) @ np.diag([sx, sy])) @ r.T + c + [2.0, -1.0]
 
-    acc = {"robust": [], "spec": []}
+    acc = {"robust": []}
     for deg in (-35, -25, -15, 15, 25, 35):
         for sx, sy in ((1.2, 0.85), (0.85, 1.15)):
             a = resample(o, 50, 0.3)
@@ -155,9 +155,9 @@ def test_rotation_search_on_a_rounded_heel():
                 one = m.pairs[~m.excess]
                 err = np.linalg.norm(b[one[:, 1]] - truth[one[:, 0]], axis=1)
                 acc[k].append((err <= spacing).mean())
-    # Measured 1.00 in all 12 cases with the default, 0.08 on average with the five starts.
+    # Measured 1.00 in all 12 cases with the default (0.08 on average with the five starts of a
+    # plain identity / principal-axes search).
     assert min(acc["robust"]) >= 0.95
-    assert np.mean(acc["robust"]) >= np.mean(acc["spec"]) + 0.5
 
 
 def test_material_invariance(case):
@@ -261,18 +261,22 @@ def test_best_search_is_the_row_minimum_many_to_one():
 @pytest.mark.parametrize(
     "kwargs, text",
     [
-        (dict(search="nearest"), "unknown search"),
-        (dict(solver="lapjv"), "unknown solver"),
-        (dict(element="spline"), "unknown element"),
-        (dict(modes=0.0), "mode fraction"),
-        (dict(threshold=-1.0), "threshold"),
-        (dict(material="jelly"), "jelly|material|preset"),
-        (dict(prealign="pca"), "unknown prealign"),
-        (dict(refit_tolerance=-0.5), "refit tolerance"),
+        (dict(search="nearest"), "search = nearest: expected one of global, local, best"),
+        (dict(solver="lapjv"), "solver = lapjv: expected one of jv, hungarian, simplex"),
+        (dict(element="spline"), "element = spline"),
+        (dict(modes=0.0), "modes = 0"),
+        (dict(threshold=-1.0), "threshold = -1"),
+        (dict(threshold_mode="before"), "threshold_mode = before"),
+        (dict(material="jelly"), "material = jelly"),
+        (dict(prealign="pca"), "prealign = pca"),
+        (dict(prealign="spec"), "prealign = spec"),
+        (dict(refit_tolerance=-0.5), "refit_tolerance"),
         (dict(center_stride=0), "center_stride"),
-        (dict(refit_tolerance=float("nan")), "refit tolerance"),
-        (dict(cost_power=0.0), "cost power"),
-        (dict(cost_power=float("inf")), "cost power"),
+        (dict(refit_tolerance=float("nan")), "refit_tolerance"),
+        (dict(kappa=0.0), "kappa"),
+        (dict(position_weight=1.5), "position_weight"),
+        (dict(cost_power=0.0), "cost_power"),
+        (dict(cost_power=float("inf")), "cost_power"),
     ],
 )
 def test_bad_options(case, kwargs, text):

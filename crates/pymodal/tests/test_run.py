@@ -1,6 +1,7 @@
 """pymodal.run on a synthetic recording with known motion and on the bundled F-Scan recording,
 and the pymodal.plot helpers."""
 
+import hashlib
 from pathlib import Path
 
 import numpy as np
@@ -63,20 +64,88 @@ def test_run_models_and_options():
 
 
 def test_run_bundled_recording_from_path_and_recording():
-    res = pymodal.run(str(BUNDLED), frames=(1, 40))
+    res = pymodal.run(str(BUNDLED), frames=(0, 40))
     assert len(res["table"]) >= 10
     rec = pymodal.read_recording(BUNDLED)
-    again = pymodal.run(rec, frames=(1, 40))
+    again = pymodal.run(rec, frames=(0, 40))
     assert [r["nodes_a"] for r in again["table"]] == [r["nodes_a"] for r in res["table"]]
 
 
 @pytest.mark.parametrize(
     "kwargs",
-    [dict(model="mesh"), dict(search="best"), dict(modes=0.0), dict(frames=(5, 2)), dict(frames=(1, 999))],
+    [
+        dict(model="mesh"),
+        dict(search="both"),
+        dict(modes=0.0),
+        dict(frames=(5, 2)),
+        dict(frames=(1, 999)),
+        dict(iso_frame=3),
+        dict(pitch_mm=-1.0),
+        dict(pitch_mm=(1.0, 2.0, 3.0)),
+        dict(frame_rate=0.0),
+    ],
 )
 def test_run_bad_options_raise_value_error(kwargs):
     with pytest.raises(ValueError):
         pymodal.run(moving_blob(frames=3), **kwargs)
+
+
+def test_frames_objects_and_tracks_are_zero_based():
+    frames = moving_blob(frames=6)
+    res = pymodal.run(frames, frames=(2, None))
+    assert [o["id"] for o in res["objects"]] == list(range(len(res["objects"])))
+    assert [o["frame"] for o in res["objects"]] == [2, 3, 4, 5]
+    assert [(r["frame_a"], r["frame_b"]) for r in res["table"]] == [(2, 3), (3, 4), (4, 5)]
+    assert {int(f) for t in res["tracks"] for f in t[:, 0]} == {2, 3, 4, 5}
+    assert [r["frame"] for r in res["frames"]] == [2, 3, 4, 5]
+    assert res["summary"]["options"]["frames"] == "2..6"
+    # No pitch nor frame rate in a bare array: pixel columns only.
+    assert res["objects"][0]["time_s"] is None and res["objects"][0]["points_mm"] is None
+    assert "time_a_s" not in res["table"][0]
+    iso = pymodal.run(frames, model="isocontour", iso_frame=0, iso_levels=3)
+    assert {o["frame"] for o in iso["objects"]} == {0}
+
+
+def test_run_reports_time_mm_and_provenance():
+    res = pymodal.run(str(BUNDLED), frames=(20, 60))
+    s = res["summary"]
+    assert s["pedomatch_version"] == pymodal.__version__
+    assert s["input"]["sha256"] == hashlib.sha256(BUNDLED.read_bytes()).hexdigest()
+    assert s["input"]["format"] == "asf"
+    assert s["recording"]["pitch_mm"] == [5.08, 5.08]
+    assert s["recording"]["frame_rate_hz"] == pytest.approx(31.25)
+    assert s["recording"]["pressure_units"] == "kPa"
+    names = {o["name"] for group in ("match", "recording") for o in pymodal._options()[group]}
+    assert set(s["options"]) == names
+    assert {"read", "objects", "matching", "tracks"} <= set(s["timings_s"])
+    for o in res["objects"]:
+        assert o["time_s"] == pytest.approx(o["frame"] * 0.032)
+        np.testing.assert_allclose(o["points_mm"], o["points"][:, :2] * 5.08)
+    for row in res["table"]:
+        assert row["time_b_s"] == pytest.approx(row["frame_b"] * 0.032)
+    assert len(res["frames"]) == 40
+    for row in res["frames"]:
+        assert row["contact_area_mm2"] == pytest.approx(row["contact_sensors"] * 25.8064)
+        assert row["time_s"] == pytest.approx(row["frame"] * 0.032)
+    # Overridden units reach every table.
+    res = pymodal.run(str(BUNDLED), frames=(20, 30), pitch_mm=(2.0, 3.0), frame_rate=100.0)
+    assert res["summary"]["recording"]["pitch_mm"] == [2.0, 3.0]
+    o = res["objects"][0]
+    assert o["time_s"] == pytest.approx(o["frame"] / 100.0)
+    np.testing.assert_allclose(o["points_mm"], o["points"][:, :2] * [2.0, 3.0])
+
+
+def test_read_recording_units_override():
+    rec = pymodal.read_recording(BUNDLED, pitch_mm=2.5, frame_rate=50.0)
+    assert rec.pitch_mm == (2.5, 2.5)
+    assert rec.dt_s == pytest.approx(0.02)
+    assert pymodal.read_recording(BUNDLED).pitch_mm == (5.08, 5.08)
+
+
+def test_run_best_search_is_accepted():
+    res = pymodal.run(moving_blob(frames=3), search="best")
+    assert len(res["table"]) == 2
+    assert all(r["optimisation_matches"] == r["nodes_a"] for r in res["table"])
 
 
 def test_run_bad_input():

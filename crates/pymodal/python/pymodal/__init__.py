@@ -5,3 +5,4 @@ Python bindings of the pedomatch Rust workspace: numpy arrays in, numpy arrays o
 
 from ._pymodal import *  # noqa: F401,F403
 from ._pymodal import __version__  # noqa: F401
+from ._pymodal import _options  # type: ignore[attr-defined]  # noqa: F401

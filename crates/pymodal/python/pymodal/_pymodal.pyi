@@ -15,12 +15,17 @@ BoolArray = npt.NDArray[np.bool_]
 Material = Union[
     None,
     Literal["rubber", "steel", "aluminium", "cork", "unit"],
+    str,
     Mapping[str, float],
     Tuple[float, float, float],
 ]
 Path = Union[str, os.PathLike]
 Element = Literal["gaussian", "axial"]
 Solver = Literal["jv", "hungarian", "simplex"]
+Search = Literal["global", "local", "best"]
+Prealign = Literal["robust", "normalize"]
+ThresholdMode = Literal["after", "during"]
+Pitch = Union[float, Tuple[float, float]]
 
 class ModalModel:
     def __init__(
@@ -127,25 +132,26 @@ def match(
     a: ArrayLike,
     b: ArrayLike,
     *,
-    element: Element = "gaussian",
-    modes: float = 0.25,
-    search: Literal["global", "local", "best"] = "global",
-    solver: Solver = "jv",
+    element: Optional[Element] = None,
+    modes: Optional[float] = None,
+    search: Optional[Search] = None,
+    solver: Optional[Solver] = None,
     threshold: Optional[float] = None,
-    excess: bool = True,
-    ordered: Optional[bool] = None,
-    material: Material = None,
-    prealign: Literal["robust", "spec", "normalize"] = "robust",
+    threshold_mode: Optional[ThresholdMode] = None,
+    excess: Optional[bool] = None,
+    paper: Optional[bool] = None,
+    prealign: Optional[Prealign] = None,
     refits: Optional[int] = None,
     refit_tolerance: Optional[float] = None,
-    skip_rigid: bool = False,
-    band: int = 3,
     kappa: Optional[float] = None,
-    center_stride: int = 1,
-    threshold_in_optimizer: bool = False,
+    center_stride: Optional[int] = None,
     position_weight: Optional[float] = None,
     cost_power: Optional[float] = None,
     common_sigma: Optional[bool] = None,
+    skip_rigid: Optional[bool] = None,
+    band: Optional[int] = None,
+    material: Material = None,
+    ordered: Optional[bool] = None,
     triangles_a: Optional[ArrayLike] = None,
     triangles_b: Optional[ArrayLike] = None,
 ) -> Match: ...
@@ -153,12 +159,23 @@ def eigh(
     k: ArrayLike, m: ArrayLike, *, n_modes: Optional[int] = None
 ) -> Tuple[FloatArray, FloatArray]: ...
 def linear_sum_assignment(
-    cost_matrix: ArrayLike, maximize: bool = False, *, method: Solver = "jv"
+    cost_matrix: ArrayLike,
+    maximize: bool = False,
+    *,
+    solver: Optional[Solver] = None,
+    method: Optional[Solver] = None,
 ) -> Tuple[IntArray, IntArray]: ...
 def linear_sum_assignment_threshold(
-    cost_matrix: ArrayLike, tau: float, maximize: bool = False, *, method: Solver = "jv"
+    cost_matrix: ArrayLike,
+    tau: float,
+    maximize: bool = False,
+    *,
+    solver: Optional[Solver] = None,
+    method: Optional[Solver] = None,
 ) -> Tuple[IntArray, IntArray]: ...
-def read_recording(path: Path) -> Recording: ...
+def read_recording(
+    path: Path, *, pitch_mm: Optional[Pitch] = None, frame_rate: Optional[float] = None
+) -> Recording: ...
 def contours(
     frame: ArrayLike,
     *,
@@ -202,20 +219,33 @@ def surface(
 def run(
     recording: Union[Recording, Path, ArrayLike],
     *,
-    model: Literal["contour", "surface", "isocontour"] = "contour",
-    element: Element = "gaussian",
-    modes: float = 0.25,
-    search: Literal["global", "local", "both"] = "both",
-    solver: Solver = "jv",
+    element: Optional[Element] = None,
+    modes: Optional[float] = None,
+    search: Optional[Search] = None,
+    solver: Optional[Solver] = None,
     threshold: Optional[float] = None,
-    excess: bool = True,
-    paper: bool = False,
-    center_stride: int = 1,
-    frames: Optional[Tuple[int, int]] = None,
+    threshold_mode: Optional[ThresholdMode] = None,
+    excess: Optional[bool] = None,
+    paper: Optional[bool] = None,
+    prealign: Optional[Prealign] = None,
+    refits: Optional[int] = None,
+    refit_tolerance: Optional[float] = None,
+    kappa: Optional[float] = None,
+    center_stride: Optional[int] = None,
+    position_weight: Optional[float] = None,
+    cost_power: Optional[float] = None,
+    common_sigma: Optional[bool] = None,
+    skip_rigid: Optional[bool] = None,
+    band: Optional[int] = None,
+    material: Material = None,
+    model: Optional[Literal["contour", "surface", "isocontour"]] = None,
+    frames: Optional[Tuple[Optional[int], Optional[int]]] = None,
     noise: Optional[float] = None,
-    smooth: float = 0.0,
-    spacing: float = 1.0,
-    surface_nodes: int = 120,
+    smooth: Optional[float] = None,
+    spacing: Optional[float] = None,
+    surface_nodes: Optional[int] = None,
     iso_frame: Optional[int] = None,
-    iso_levels: int = 10,
+    iso_levels: Optional[int] = None,
+    pitch_mm: Optional[Pitch] = None,
+    frame_rate: Optional[float] = None,
 ) -> dict[str, Any]: ...

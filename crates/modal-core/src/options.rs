@@ -1,0 +1,594 @@
+//! The user-facing matching options: for each one name, one set of values, one default and one
+//! meaning, shared by the `pedomatch` command line (`--x-y`) and the Python bindings (`x_y=`).
+//!
+//! [`MatchParams`] holds what a user chooses; [`MatchParams::to_match_options`] checks every
+//! value (the one place where they are validated) and turns them into the engine's
+//! [`MatchOptions`] for a kind of input. [`match_option_specs`] describes every option for help
+//! texts and for the tests that keep the command line and Python in step. Enumerated values are
+//! lower-case words parsed by [`std::str::FromStr`] and printed by [`std::fmt::Display`]; each
+//! such type lists its words in [`Choice::NAMES`].
+
+use crate::search::ThresholdMode;
+use crate::{ElementKind, MatchOptions, Material, Prealign, Search};
+
+/// An option value that is not allowed: which option, the value given, what was expected.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{option} = {value}: expected {expected}")]
+pub struct OptionError {
+    /// The option's name (Python spelling, `x_y`; the CLI flag is `--x-y`).
+    pub option: &'static str,
+    /// The rejected value as given.
+    pub value: String,
+    /// What the option accepts.
+    pub expected: String,
+}
+
+impl OptionError {
+    /// A rejected value of `option`.
+    pub fn new(option: &'static str, value: impl ToString, expected: impl Into<String>) -> Self {
+        Self {
+            option,
+            value: value.to_string(),
+            expected: expected.into(),
+        }
+    }
+
+    /// A word that is not one of `T`'s values.
+    pub fn unknown<T: Choice>(value: &str) -> Self {
+        Self::new(T::OPTION, value, format!("one of {}", T::NAMES.join(", ")))
+    }
+}
+
+/// An enumerated option: its values are the lower-case words of [`Choice::NAMES`], parsed by
+/// `FromStr` and printed by `Display`.
+pub trait Choice: Sized + Copy + std::str::FromStr + std::fmt::Display + 'static {
+    /// The option whose values these are, e.g. `"element"`.
+    const OPTION: &'static str;
+    /// Every accepted word, in the order of the variants.
+    const NAMES: &'static [&'static str];
+
+    /// Parses a word, naming the option in the error.
+    fn parse_word(s: &str) -> Result<Self, OptionError> {
+        s.parse().map_err(|_| OptionError::unknown::<Self>(s))
+    }
+}
+
+/// Implements [`Choice`], `FromStr` and `Display` for a fieldless enum from `word => Variant`
+/// pairs, so that the words are written once.
+#[macro_export]
+macro_rules! choice {
+    ($ty:ty, $option:literal, [$($word:literal => $variant:path),+ $(,)?]) => {
+        impl $crate::options::Choice for $ty {
+            const OPTION: &'static str = $option;
+            const NAMES: &'static [&'static str] = &[$($word),+];
+        }
+        impl ::std::fmt::Display for $ty {
+            fn fmt(&self, f: &mut ::std::fmt::Formatter<'_>) -> ::std::fmt::Result {
+                f.write_str(match self { $($variant => $word),+ })
+            }
+        }
+        impl ::std::str::FromStr for $ty {
+            type Err = $crate::options::OptionError;
+            fn from_str(s: &str) -> ::std::result::Result<Self, Self::Err> {
+                match s {
+                    $($word => Ok($variant),)+
+                    other => Err($crate::options::OptionError::unknown::<$ty>(other)),
+                }
+            }
+        }
+    };
+}
+
+choice!(ElementKind, "element", ["gaussian" => ElementKind::Gaussian, "axial" => ElementKind::Axial]);
+choice!(Search, "search", [
+    "global" => Search::Global,
+    "local" => Search::Local,
+    "best" => Search::Best,
+]);
+choice!(Prealign, "prealign", ["robust" => Prealign::Robust, "normalize" => Prealign::Normalize]);
+choice!(ThresholdMode, "threshold_mode", [
+    "after" => ThresholdMode::AfterAssignment,
+    "during" => ThresholdMode::InOptimizer,
+]);
+
+impl Choice for assign::Method {
+    const OPTION: &'static str = "solver";
+    const NAMES: &'static [&'static str] = &assign::Method::NAMES;
+}
+
+impl std::str::FromStr for Material {
+    type Err = OptionError;
+
+    /// A preset name (`rubber`, `steel`, `aluminium`, `cork`, `unit`) or `E,NU,RHO`.
+    ///
+    /// ```
+    /// use modal_core::Material;
+    /// assert_eq!("rubber".parse::<Material>().unwrap(), Material::RUBBER);
+    /// assert_eq!("2,0.3,5".parse::<Material>().unwrap(), Material::new(2.0, 0.3, 5.0).unwrap());
+    /// ```
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let expected = || {
+            format!(
+                "a preset ({}) or E,NU,RHO with E > 0, -1 < NU < 0.5, RHO > 0",
+                Material::PRESETS.join(", ")
+            )
+        };
+        let numbers: Vec<&str> = s.split(',').map(str::trim).collect();
+        let material = if numbers.len() == 3 {
+            let v: Vec<f64> = numbers
+                .iter()
+                .map(|x| x.parse::<f64>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| OptionError::new("material", s, expected()))?;
+            Material::new(v[0], v[1], v[2])
+        } else {
+            Material::preset(s)
+        };
+        material.map_err(|_| OptionError::new("material", s, expected()))
+    }
+}
+
+impl std::fmt::Display for Material {
+    /// `E,NU,RHO`, the form [`Material`]'s `FromStr` reads back.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{},{}", self.young, self.poisson, self.density)
+    }
+}
+
+/// The matching options a user chooses, with the documented defaults ([`Default`]). A field that
+/// is an `Option` defaults to `None`: the measured recipe's value for the kind of input
+/// (contours and 2-D points, or unordered 3-D points such as brightness surfaces; see
+/// [`MatchOptions::for_input`]).
+///
+/// ```
+/// use modal_core::{MatchParams, Search};
+/// let params = MatchParams { search: Search::Local, refits: Some(0), ..MatchParams::default() };
+/// let options = params.to_match_options(2, true).unwrap();
+/// assert_eq!((options.search, options.refits), (Search::Local, 0));
+/// assert!(MatchParams { modes: 1.5, ..MatchParams::default() }.to_match_options(2, true).is_err());
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct MatchParams {
+    /// Finite element of the modal model.
+    pub element: ElementKind,
+    /// Fraction of the modes used as features, in (0, 1].
+    pub modes: f64,
+    /// Which search produces the matches.
+    pub search: Search,
+    /// Assignment solver of the global search and of the mode alignment.
+    pub solver: assign::Method,
+    /// Reject pairs whose max-normalised cost exceeds this (in [0, 1]); `None` keeps all.
+    pub threshold: Option<f64>,
+    /// Whether pairs above the threshold are dropped after the assignment or by it.
+    pub threshold_mode: ThresholdMode,
+    /// Match the nodes the one-to-one search leaves over (global search).
+    pub excess: bool,
+    /// Start from the paper's literal setting (centroid and scale pre-alignment, no re-fits).
+    pub paper: bool,
+    /// Pre-alignment (`None`: robust, or normalize with `paper`).
+    pub prealign: Option<Prealign>,
+    /// Maximum modal affine re-fits (`None`: the recipe's).
+    pub refits: Option<usize>,
+    /// Re-fit stopping tolerance in B's node spacings (`None`: the recipe's).
+    pub refit_tolerance: Option<f64>,
+    /// Gaussian width factor σ = kappa × mean nearest-neighbour distance (`None`: the recipe's).
+    pub kappa: Option<f64>,
+    /// Gaussian element: a Gaussian on every `center_stride`-th node only (1: every node).
+    pub center_stride: usize,
+    /// Weight of aligned positions in the cost, in [0, 1] (`None`: the recipe's).
+    pub position_weight: Option<f64>,
+    /// Exponent of the costs the search adds up, > 0 (`None`: the recipe's).
+    pub cost_power: Option<f64>,
+    /// One Gaussian width for both objects (`None`: the recipe's).
+    pub common_sigma: Option<bool>,
+    /// Skip the quasi-rigid modes.
+    pub skip_rigid: bool,
+    /// Band of the cross-object mode reordering (0: signs only).
+    pub band: usize,
+    /// Material of the model; only Poisson's ratio changes matches (`None`: the recipe's).
+    pub material: Option<Material>,
+}
+
+impl Default for MatchParams {
+    /// Every default is the engine's own ([`MatchOptions::default`]), so it is written once.
+    fn default() -> Self {
+        let d = MatchOptions::default();
+        Self {
+            element: d.model.element,
+            modes: d.mode_fraction,
+            search: d.search,
+            solver: d.method,
+            threshold: d.threshold,
+            threshold_mode: d.threshold_mode,
+            excess: d.excess,
+            paper: false,
+            prealign: None,
+            refits: None,
+            refit_tolerance: None,
+            kappa: None,
+            center_stride: d.model.center_stride,
+            position_weight: None,
+            cost_power: None,
+            common_sigma: None,
+            skip_rigid: d.skip_rigid,
+            band: d.band,
+            material: None,
+        }
+    }
+}
+
+/// `Err` unless `ok`, naming the option, the value and what is expected.
+fn check(ok: bool, option: &'static str, value: f64, expected: &str) -> Result<(), OptionError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(OptionError::new(option, value, expected))
+    }
+}
+
+impl MatchParams {
+    /// Checks every value.
+    pub fn validate(&self) -> Result<(), OptionError> {
+        check(
+            self.modes > 0.0 && self.modes <= 1.0,
+            "modes",
+            self.modes,
+            "a fraction in (0, 1]",
+        )?;
+        if let Some(t) = self.threshold {
+            check(t.is_finite() && t >= 0.0, "threshold", t, "a number >= 0")?;
+        }
+        if let Some(t) = self.refit_tolerance {
+            check(
+                t.is_finite() && t >= 0.0,
+                "refit_tolerance",
+                t,
+                "a finite number >= 0",
+            )?;
+        }
+        if let Some(k) = self.kappa {
+            check(k.is_finite() && k > 0.0, "kappa", k, "a finite number > 0")?;
+        }
+        if self.center_stride == 0 {
+            return Err(OptionError::new("center_stride", 0, "an integer >= 1"));
+        }
+        if let Some(w) = self.position_weight {
+            check(
+                (0.0..=1.0).contains(&w),
+                "position_weight",
+                w,
+                "a number in [0, 1]",
+            )?;
+        }
+        if let Some(p) = self.cost_power {
+            check(
+                p.is_finite() && p > 0.0,
+                "cost_power",
+                p,
+                "a finite number > 0",
+            )?;
+        }
+        if let Some(m) = self.material {
+            m.validate()
+                .map_err(|e| OptionError::new("material", m, e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    /// The engine's options for objects of `dim` dimensions, ordered closed contours or not:
+    /// the recipe for that kind of input ([`MatchOptions::for_input`], or
+    /// [`MatchOptions::paper`]) with every chosen value applied. `ordered` is left to the caller.
+    pub fn to_match_options(&self, dim: usize, ordered: bool) -> Result<MatchOptions, OptionError> {
+        self.validate()?;
+        let mut o = if self.paper {
+            MatchOptions::paper()
+        } else {
+            MatchOptions::for_input(dim, ordered)
+        };
+        o.model.element = self.element;
+        o.model.center_stride = self.center_stride;
+        if let Some(k) = self.kappa {
+            o.model.kappa = k;
+        }
+        if let Some(m) = self.material {
+            o.model.material = m;
+        }
+        o.mode_fraction = self.modes;
+        o.search = self.search;
+        o.method = self.solver;
+        o.threshold = self.threshold;
+        o.threshold_mode = self.threshold_mode;
+        o.excess = self.excess;
+        o.skip_rigid = self.skip_rigid;
+        o.band = self.band;
+        o.prealign = self.prealign.unwrap_or(o.prealign);
+        o.refits = self.refits.unwrap_or(o.refits);
+        o.refit_tolerance = self.refit_tolerance.unwrap_or(o.refit_tolerance);
+        o.position_weight = self.position_weight.unwrap_or(o.position_weight);
+        o.cost_power = self.cost_power.unwrap_or(o.cost_power);
+        o.common_sigma = self.common_sigma.unwrap_or(o.common_sigma);
+        Ok(o)
+    }
+
+    /// Every option as actually used by `used` (the result of
+    /// [`MatchParams::to_match_options`]): the recipe's values filled in, in the order of
+    /// [`match_option_specs`]. For provenance records.
+    pub fn used(&self, used: &MatchOptions) -> Vec<(&'static str, OptionValue)> {
+        use OptionValue::{Bool, Float, Int, Word};
+        vec![
+            ("element", Word(used.model.element.to_string())),
+            ("modes", Float(used.mode_fraction)),
+            ("search", Word(used.search.to_string())),
+            ("solver", Word(used.method.to_string())),
+            (
+                "threshold",
+                used.threshold.map_or(OptionValue::Absent, Float),
+            ),
+            ("threshold_mode", Word(used.threshold_mode.to_string())),
+            ("excess", Bool(used.excess)),
+            ("paper", Bool(self.paper)),
+            ("prealign", Word(used.prealign.to_string())),
+            ("refits", Int(used.refits)),
+            ("refit_tolerance", Float(used.refit_tolerance)),
+            ("kappa", Float(used.model.kappa)),
+            ("center_stride", Int(used.model.center_stride)),
+            ("position_weight", Float(used.position_weight)),
+            ("cost_power", Float(used.cost_power)),
+            ("common_sigma", Bool(used.common_sigma)),
+            ("skip_rigid", Bool(used.skip_rigid)),
+            ("band", Int(used.band)),
+            ("material", Word(used.model.material.to_string())),
+        ]
+    }
+}
+
+/// The value of an option in a provenance record.
+#[derive(Debug, Clone, PartialEq)]
+pub enum OptionValue {
+    /// Not set (e.g. no threshold).
+    Absent,
+    Bool(bool),
+    Int(usize),
+    Float(f64),
+    /// An enumerated value or other text.
+    Word(String),
+    /// Several numbers (a pitch `[x, y]`, a frame range).
+    Numbers(Vec<f64>),
+}
+
+/// How an option is given on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OptionKind {
+    /// A switch that is off by default: `--x` turns it on (Python `x=True`).
+    Flag,
+    /// A switch that is on by default: `--no-x` turns it off (Python `x=False`).
+    NegatedFlag,
+    /// A switch whose default depends on the input: `--x` / `--no-x` (Python `True`/`False`).
+    TriState,
+    /// One of the listed words.
+    Word(&'static [&'static str]),
+    /// A number or other value written as text.
+    Value,
+}
+
+/// The description of one option: its name (Python `x_y`, CLI `--x-y`), how it is given, its
+/// default and its meaning.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OptionSpec {
+    pub name: &'static str,
+    pub kind: OptionKind,
+    /// The documented default, as text.
+    pub default: String,
+    pub help: &'static str,
+}
+
+impl OptionSpec {
+    /// Builds a description.
+    pub fn new(
+        name: &'static str,
+        kind: OptionKind,
+        default: impl ToString,
+        help: &'static str,
+    ) -> Self {
+        Self {
+            name,
+            kind,
+            default: default.to_string(),
+            help,
+        }
+    }
+
+    /// An enumerated option of type `T`, with its default value.
+    pub fn choice<T: Choice>(default: T, help: &'static str) -> Self {
+        Self::new(T::OPTION, OptionKind::Word(T::NAMES), default, help)
+    }
+
+    /// The command-line flags of this option: `--x-y`, `--no-x-y` or both.
+    pub fn cli_flags(&self) -> Vec<String> {
+        let flag = self.name.replace('_', "-");
+        match self.kind {
+            OptionKind::NegatedFlag => vec![format!("--no-{flag}")],
+            OptionKind::TriState => vec![format!("--{flag}"), format!("--no-{flag}")],
+            _ => vec![format!("--{flag}")],
+        }
+    }
+
+    /// The help text with the default appended, as the command line shows it.
+    pub fn help_with_default(&self) -> String {
+        match self.kind {
+            OptionKind::NegatedFlag => format!("Turn off: {} [on by default]", self.help),
+            OptionKind::Flag => format!("{} [default: off]", self.help),
+            _ => format!("{} [default: {}]", self.help, self.default),
+        }
+    }
+}
+
+/// A recipe-dependent default as text: the contour value and the surface value.
+fn by_input<T: std::fmt::Display + PartialEq>(f: impl Fn(&MatchOptions) -> T) -> String {
+    let (c, s) = (
+        f(&MatchOptions::default()),
+        f(&MatchOptions::for_surfaces()),
+    );
+    if c == s {
+        c.to_string()
+    } else {
+        format!("{c} for contours and 2-D points, {s} for unordered 3-D points")
+    }
+}
+
+/// Every matching option of `pedomatch match`, `pedomatch run`, `pymodal.match` and
+/// `pymodal.run`, in the order of [`MatchParams`]' fields.
+pub fn match_option_specs() -> Vec<OptionSpec> {
+    use OptionKind::{Flag, NegatedFlag, TriState, Value};
+    let d = MatchParams::default();
+    vec![
+        OptionSpec::choice(d.element, "Finite element of the modal model: Sclaroff's Gaussian element or bar elements along contour or mesh edges."),
+        OptionSpec::new("modes", Value, d.modes, "Fraction of the dim × min(n, m) vibration modes used as features, in (0, 1]."),
+        OptionSpec::choice(d.search, "Search: the optimal one-to-one assignment (global), mutual best matches (local), or every node of the first object to its cheapest node of the second (best: many-to-one, no excess step)."),
+        OptionSpec::choice(d.solver, "Assignment solver: Jonker-Volgenant, Kuhn-Munkres or network simplex (same optimum)."),
+        OptionSpec::new("threshold", Value, "none", "Reject pairs whose max-normalised cost exceeds this number in [0, 1]; none keeps all."),
+        OptionSpec::choice(d.threshold_mode, "Threshold applied after the optimal assignment (after) or by the assignment itself, which may then keep other pairs under it (during)."),
+        OptionSpec::new("excess", NegatedFlag, d.excess, "Match the nodes the one-to-one search leaves over (excess-node step, global search)."),
+        OptionSpec::new("paper", Flag, d.paper, "Start from the paper's literal setting: centroid and scale pre-alignment, no affine re-fits."),
+        OptionSpec::new("prealign", OptionKind::Word(Prealign::NAMES), "robust (normalize with paper)", "Pre-alignment: rotation search with affine ICP (robust) or centroid and scale only (normalize)."),
+        OptionSpec::new("refits", Value, by_input(|o| o.refits), "Maximum modal affine re-fits (stops earlier when the pairs stop changing)."),
+        OptionSpec::new("refit_tolerance", Value, by_input(|o| o.refit_tolerance), "No further re-fit once every one-to-one pair lies within this fraction of the second object's node spacing of its partner under one affine map; 0 always re-fits."),
+        OptionSpec::new("kappa", Value, by_input(|o| o.model.kappa), "Gaussian width sigma = kappa × mean nearest-neighbour distance."),
+        OptionSpec::new("center_stride", Value, d.center_stride, "Gaussian element: a Gaussian on every N-th node only (faster, less accurate under severe warps)."),
+        OptionSpec::new("position_weight", Value, by_input(|o| o.position_weight), "Weight in [0, 1] of the aligned positions' distance mixed into the modal cost (1: positions only)."),
+        OptionSpec::new("cost_power", Value, by_input(|o| o.cost_power), "Exponent > 0 of the costs the search adds up (below 1 favours many near-exact pairs)."),
+        OptionSpec::new("common_sigma", TriState, by_input(|o| o.common_sigma), "One Gaussian width for both objects (for independently sampled point sets)."),
+        OptionSpec::new("skip_rigid", Flag, d.skip_rigid, "Leave the quasi-rigid modes out of the features."),
+        OptionSpec::new("band", Value, d.band, "Band of the cross-object mode reordering (0: signs only)."),
+        OptionSpec::new("material", Value, by_input(|o| o.model.material), "Material: a preset (rubber, steel, aluminium, cork, unit) or E,NU,RHO; only Poisson's ratio changes the matches."),
+    ]
+}
+
+/// Options describing how a pair of objects is read, for `pedomatch match` and `pymodal.match`.
+pub fn pair_option_specs() -> Vec<OptionSpec> {
+    vec![OptionSpec::new(
+        "ordered",
+        OptionKind::TriState,
+        "decided from the data",
+        "Treat both objects as ordered closed contours (enables the order-keeping excess step); by default 2-D points whose consecutive points are nearest neighbours are.",
+    )]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn round_trip<T: Choice + PartialEq + std::fmt::Debug>() {
+        for &w in T::NAMES {
+            let v = T::parse_word(w).unwrap();
+            assert_eq!(v.to_string(), w);
+        }
+        let e = T::parse_word("no-such-word").unwrap_err();
+        assert_eq!(e.option, T::OPTION);
+        assert!(e.to_string().contains(T::NAMES[0]), "{e}");
+    }
+
+    #[test]
+    fn every_word_parses_and_prints_back() {
+        round_trip::<ElementKind>();
+        round_trip::<Search>();
+        round_trip::<Prealign>();
+        round_trip::<ThresholdMode>();
+        round_trip::<assign::Method>();
+    }
+
+    #[test]
+    fn defaults_are_the_engines_recipe() {
+        let d = MatchParams::default();
+        assert_eq!(
+            d.to_match_options(2, true).unwrap(),
+            MatchOptions::default()
+        );
+        assert_eq!(
+            d.to_match_options(3, false).unwrap(),
+            MatchOptions::for_surfaces()
+        );
+        let paper = MatchParams { paper: true, ..d };
+        assert_eq!(
+            paper.to_match_options(2, true).unwrap(),
+            MatchOptions::paper()
+        );
+    }
+
+    #[test]
+    fn validation_names_the_option() {
+        let d = MatchParams::default;
+        let cases: [(MatchParams, &str); 7] = [
+            (MatchParams { modes: 0.0, ..d() }, "modes"),
+            (
+                MatchParams {
+                    threshold: Some(f64::NAN),
+                    ..d()
+                },
+                "threshold",
+            ),
+            (
+                MatchParams {
+                    refit_tolerance: Some(-0.5),
+                    ..d()
+                },
+                "refit_tolerance",
+            ),
+            (
+                MatchParams {
+                    kappa: Some(0.0),
+                    ..d()
+                },
+                "kappa",
+            ),
+            (
+                MatchParams {
+                    center_stride: 0,
+                    ..d()
+                },
+                "center_stride",
+            ),
+            (
+                MatchParams {
+                    position_weight: Some(1.5),
+                    ..d()
+                },
+                "position_weight",
+            ),
+            (
+                MatchParams {
+                    cost_power: Some(f64::INFINITY),
+                    ..d()
+                },
+                "cost_power",
+            ),
+        ];
+        for (p, name) in cases {
+            assert_eq!(p.to_match_options(2, true).unwrap_err().option, name);
+        }
+    }
+
+    #[test]
+    fn specs_follow_the_params_and_the_used_record() {
+        let names: Vec<_> = match_option_specs().iter().map(|s| s.name).collect();
+        let d = MatchParams::default();
+        let used: Vec<_> = d
+            .used(&d.to_match_options(2, true).unwrap())
+            .into_iter()
+            .map(|(n, _)| n)
+            .collect();
+        assert_eq!(names, used);
+        let excess = &match_option_specs()[6];
+        assert_eq!(excess.cli_flags(), ["--no-excess"]);
+        assert!(match_option_specs()[9].default.contains("2 for contours"));
+    }
+
+    #[test]
+    fn materials_parse_and_print_back() {
+        let m: Material = "1,0.49,1".parse().unwrap();
+        assert_eq!(m.to_string().parse::<Material>().unwrap(), m);
+        assert_eq!("steel".parse::<Material>().unwrap(), Material::STEEL);
+        assert!("jelly".parse::<Material>().is_err());
+        assert!("1,0.7,1".parse::<Material>().is_err());
+    }
+}

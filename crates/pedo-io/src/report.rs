@@ -1,0 +1,618 @@
+//! What a run reports: its tables with physical units where the recording knows them, the
+//! per-frame measures, a description of a recording and the provenance summary. The CLI writes
+//! these as CSV and JSON, the Python bindings return them as dicts; both build them here.
+//!
+//! Column names carry their unit: `time_s` (frame × frame interval) when the frame rate is
+//! known, `x_mm`/`y_mm` (pixel coordinate × pitch) when the pitch is known, beside the pixel
+//! columns `x`/`y` (x = column, y = row, sensel centres at integers). Frames and object ids are
+//! 0-based.
+
+use crate::error::{IoError, Result};
+use crate::recording::{kpa_per_unit, Recording};
+use crate::sequence::{RunParams, SequenceOptions, SequenceResult};
+use modal_core::OptionValue;
+use serde_json::{json, Map, Value};
+use sha2::{Digest, Sha256};
+
+/// One field of a table.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Cell {
+    Int(i64),
+    /// A number and the decimals it is written with in CSV.
+    Float(f64, usize),
+    Text(String),
+    /// No value (written as an empty CSV field, JSON `null`).
+    Empty,
+}
+
+impl Cell {
+    fn int(v: usize) -> Self {
+        Cell::Int(v as i64)
+    }
+    fn opt(v: Option<f64>, decimals: usize) -> Self {
+        v.map_or(Cell::Empty, |v| Cell::Float(v, decimals))
+    }
+    /// The value as JSON.
+    pub fn to_json(&self) -> Value {
+        match self {
+            Cell::Int(v) => json!(v),
+            Cell::Float(v, _) => json!(v),
+            Cell::Text(s) => json!(s),
+            Cell::Empty => Value::Null,
+        }
+    }
+    fn to_csv(&self) -> String {
+        match self {
+            Cell::Int(v) => v.to_string(),
+            Cell::Float(v, d) => format!("{v:.d$}"),
+            Cell::Text(s) if s.contains([',', '"', '\n', '\r']) => {
+                // RFC 4180: free text (an error message) in double quotes, inner quotes doubled.
+                format!("\"{}\"", s.replace('"', "\"\""))
+            }
+            Cell::Text(s) => s.clone(),
+            Cell::Empty => String::new(),
+        }
+    }
+}
+
+/// A table: named columns (units in the names) and rows of cells.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Table {
+    pub header: Vec<String>,
+    pub rows: Vec<Vec<Cell>>,
+}
+
+impl Table {
+    fn new(header: &[&str]) -> Self {
+        Self {
+            header: header.iter().map(|s| s.to_string()).collect(),
+            rows: Vec::new(),
+        }
+    }
+    fn push_column(&mut self, name: &str) {
+        self.header.push(name.to_string());
+    }
+    /// The table as CSV with a header line (free text quoted as RFC 4180 says).
+    pub fn to_csv(&self) -> String {
+        let mut s = self.header.join(",");
+        s.push('\n');
+        for r in &self.rows {
+            let fields: Vec<String> = r.iter().map(Cell::to_csv).collect();
+            s.push_str(&fields.join(","));
+            s.push('\n');
+        }
+        s
+    }
+    /// The rows as JSON objects keyed by column name.
+    pub fn to_json(&self) -> Value {
+        Value::Array(
+            self.rows
+                .iter()
+                .map(|r| {
+                    let m: Map<String, Value> = self
+                        .header
+                        .iter()
+                        .cloned()
+                        .zip(r.iter().map(Cell::to_json))
+                        .collect();
+                    Value::Object(m)
+                })
+                .collect(),
+        )
+    }
+}
+
+/// The per-pair table: ids, frames (and their times), node counts, the local, optimisation and
+/// excess matches, the mean cost, and a status: `ok`, or `skipped` with the reason for a pair that
+/// could not be matched (its match columns empty).
+pub fn pairs_table(recording: &Recording, r: &SequenceResult) -> Table {
+    let timed = recording.dt_s.is_some();
+    let mut t = Table::new(&["id_a", "id_b", "frame_a", "frame_b"]);
+    if timed {
+        t.push_column("time_a_s");
+        t.push_column("time_b_s");
+    }
+    for c in [
+        "nodes_a",
+        "nodes_b",
+        "local_matches",
+        "local_percent",
+        "optimisation_matches",
+        "optimisation_percent",
+        "excess_matches",
+        "mean_cost",
+        "status",
+        "reason",
+    ] {
+        t.push_column(c);
+    }
+    for p in &r.pairs {
+        let row = &p.row;
+        let mut cells = vec![
+            Cell::int(row.id_a),
+            Cell::int(row.id_b),
+            Cell::int(row.frame_a),
+            Cell::int(row.frame_b),
+        ];
+        if timed {
+            cells.push(Cell::opt(recording.time_s(row.frame_a), 6));
+            cells.push(Cell::opt(recording.time_s(row.frame_b), 6));
+        }
+        cells.extend([
+            Cell::int(row.nodes_a),
+            Cell::int(row.nodes_b),
+            Cell::int(row.local_matches),
+            Cell::Float(row.local_percent, 1),
+            Cell::int(row.optimisation_matches),
+            Cell::Float(row.optimisation_percent, 1),
+            Cell::int(row.excess_matches),
+            Cell::Float(row.mean_cost, 6),
+            Cell::Text("ok".into()),
+            Cell::Empty,
+        ]);
+        t.rows.push(cells);
+    }
+    for s in &r.skipped_pairs {
+        let (oa, ob) = (&r.objects[s.a], &r.objects[s.b]);
+        let mut cells = vec![
+            Cell::int(oa.id),
+            Cell::int(ob.id),
+            Cell::int(oa.frame),
+            Cell::int(ob.frame),
+        ];
+        if timed {
+            cells.push(Cell::opt(recording.time_s(oa.frame), 6));
+            cells.push(Cell::opt(recording.time_s(ob.frame), 6));
+        }
+        cells.extend([Cell::int(oa.shape.len()), Cell::int(ob.shape.len())]);
+        cells.extend(std::iter::repeat_n(Cell::Empty, 6));
+        cells.extend([Cell::Text("skipped".into()), Cell::Text(s.reason.clone())]);
+        t.rows.push(cells);
+    }
+    t
+}
+
+/// Appends `x, y` (pixels) and, when the pitch is known, `x_mm, y_mm` of a point.
+fn push_xy(cells: &mut Vec<Cell>, recording: &Recording, x: f64, y: f64, mm: bool) {
+    cells.push(Cell::Float(x, 4));
+    cells.push(Cell::Float(y, 4));
+    if mm {
+        let [xm, ym] = recording.to_mm(x, y).unwrap_or([f64::NAN; 2]);
+        cells.push(Cell::Float(xm, 4));
+        cells.push(Cell::Float(ym, 4));
+    }
+}
+
+/// The objects: id (0-based, the row index), frame, time, index in the frame (or level index),
+/// node count, isobaric level, centroid of the nodes in pixels and mm.
+pub fn objects_table(recording: &Recording, r: &SequenceResult) -> Table {
+    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
+    let mut t = Table::new(&["id", "frame"]);
+    if timed {
+        t.push_column("time_s");
+    }
+    for c in ["index", "nodes", "level", "centroid_x", "centroid_y"] {
+        t.push_column(c);
+    }
+    if mm {
+        t.push_column("centroid_x_mm");
+        t.push_column("centroid_y_mm");
+    }
+    for o in &r.objects {
+        let mut cells = vec![Cell::int(o.id), Cell::int(o.frame)];
+        if timed {
+            cells.push(Cell::opt(recording.time_s(o.frame), 6));
+        }
+        cells.extend([
+            Cell::int(o.index),
+            Cell::int(o.shape.len()),
+            Cell::opt(o.level, 3),
+        ]);
+        let n = o.shape.len().max(1) as f64;
+        let (cx, cy) = (0..o.shape.len()).fold((0.0, 0.0), |(x, y), i| {
+            let p = o.shape.point(i);
+            (x + p[0] / n, y + p[1] / n)
+        });
+        push_xy(&mut cells, recording, cx, cy, mm);
+        t.rows.push(cells);
+    }
+    t
+}
+
+/// Every match of every pair: object ids, nodes, cost, excess flag, and the in-plane distance
+/// between the two nodes in sensels (and mm when the pitch is known).
+pub fn matches_table(recording: &Recording, r: &SequenceResult) -> Table {
+    let mm = recording.pitch_mm.is_some();
+    let mut t = Table::new(&[
+        "id_a", "id_b", "node_a", "node_b", "cost", "excess", "distance",
+    ]);
+    if mm {
+        t.push_column("distance_mm");
+    }
+    for p in &r.pairs {
+        let (oa, ob) = (&r.objects[p.a], &r.objects[p.b]);
+        for m in &p.result.pairs {
+            let (pa, pb) = (oa.shape.point(m.a), ob.shape.point(m.b));
+            let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
+            let mut cells = vec![
+                Cell::int(oa.id),
+                Cell::int(ob.id),
+                Cell::int(m.a),
+                Cell::int(m.b),
+                Cell::Float(m.cost, 6),
+                Cell::int(m.excess as usize),
+                Cell::Float(dx.hypot(dy), 4),
+            ];
+            if let Some(p) = recording.pitch_mm {
+                cells.push(Cell::Float((dx * p[0]).hypot(dy * p[1]), 4));
+            }
+            t.rows.push(cells);
+        }
+    }
+    t
+}
+
+/// The node tracks, one row per step: track, step, frame, time, object id, node, `x, y[, z]`
+/// (pixels; `z` the pressure of a surface node) and `x_mm, y_mm` when the pitch is known.
+pub fn tracks_table(recording: &Recording, r: &SequenceResult) -> Table {
+    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
+    let dim = r.objects.first().map_or(2, |o| o.shape.dim());
+    let mut t = Table::new(&["track", "step", "frame"]);
+    if timed {
+        t.push_column("time_s");
+    }
+    for c in ["object_id", "node", "x", "y"] {
+        t.push_column(c);
+    }
+    if mm {
+        t.push_column("x_mm");
+        t.push_column("y_mm");
+    }
+    if dim == 3 {
+        t.push_column("z");
+    }
+    for (k, tr) in r.tracks.iter().enumerate() {
+        for (s, &(o, n)) in tr.steps.iter().enumerate() {
+            let obj = &r.objects[o];
+            let p = obj.shape.point(n);
+            let mut cells = vec![Cell::int(k), Cell::int(s), Cell::int(obj.frame)];
+            if timed {
+                cells.push(Cell::opt(recording.time_s(obj.frame), 6));
+            }
+            cells.extend([Cell::int(obj.id), Cell::int(n)]);
+            push_xy(&mut cells, recording, p[0], p[1], mm);
+            if dim == 3 {
+                cells.push(Cell::Float(p[2], 4));
+            }
+            t.rows.push(cells);
+        }
+    }
+    t
+}
+
+/// The names and unit factors of the measures' columns for this recording.
+struct MeasureUnits {
+    area: (&'static str, f64),
+    force: &'static str,
+    peak: (&'static str, f64),
+}
+
+fn measure_units(recording: &Recording) -> MeasureUnits {
+    MeasureUnits {
+        area: match recording.sensel_area() {
+            Some(_) => ("contact_area_mm2", 1.0),
+            None => ("contact_area_sensels", 1.0),
+        },
+        force: if recording.force_factor().is_some() {
+            "total_force_n"
+        } else {
+            // Without units and sensel area the sum of the values is all there is.
+            "total_load"
+        },
+        peak: match kpa_per_unit(&recording.units) {
+            Some(k) => ("peak_pressure_kpa", k),
+            None => ("peak_pressure", 1.0),
+        },
+    }
+}
+
+/// The per-frame measures of frames `start..end` counting values above `threshold`: frame,
+/// time, contact sensors, contact area (mm² when the sensel area is known), total force (N when
+/// the pressure units and the sensel area are known), peak pressure (kPa when the units are
+/// known), centre of pressure in pixels and mm.
+pub fn frames_table(recording: &Recording, threshold: f64, start: usize, end: usize) -> Table {
+    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
+    let u = measure_units(recording);
+    let mut t = Table::new(&["frame"]);
+    if timed {
+        t.push_column("time_s");
+    }
+    for c in [
+        "contact_sensors",
+        u.area.0,
+        u.force,
+        u.peak.0,
+        "cop_x",
+        "cop_y",
+    ] {
+        t.push_column(c);
+    }
+    if mm {
+        t.push_column("cop_x_mm");
+        t.push_column("cop_y_mm");
+    }
+    let measures = recording.measures(threshold);
+    for (f, m) in measures.iter().enumerate().take(end).skip(start) {
+        let mut cells = vec![Cell::int(f)];
+        if timed {
+            cells.push(Cell::opt(recording.time_s(f), 6));
+        }
+        cells.extend([
+            Cell::int(m.contact_sensors),
+            Cell::Float(m.contact_area * u.area.1, 4),
+            Cell::Float(m.total_force, 4),
+            Cell::Float(m.peak_pressure * u.peak.1, 4),
+        ]);
+        match m.cop {
+            Some([x, y]) => push_xy(&mut cells, recording, x, y, mm),
+            None => cells.extend(std::iter::repeat_n(Cell::Empty, if mm { 4 } else { 2 })),
+        }
+        t.rows.push(cells);
+    }
+    t
+}
+
+/// Where a recording came from: a name (the path as given) and, for files, the SHA-256 of its
+/// bytes.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct InputInfo {
+    pub name: String,
+    /// Lower-case hex SHA-256 of the input's bytes; `None` for in-memory arrays.
+    pub sha256: Option<String>,
+}
+
+impl InputInfo {
+    /// The name and hash of bytes read from `name`.
+    pub fn of_bytes(name: &str, bytes: &[u8]) -> Self {
+        Self {
+            name: name.to_string(),
+            sha256: Some(sha256_hex(bytes)),
+        }
+    }
+
+    /// The name and hash of a file, or of every file of a folder in name order (an image
+    /// sequence), hashed in that order. A numbered-sequence pattern (`walk_%03d.png`) names no
+    /// single file and gets no hash.
+    pub fn of_path(path: &std::path::Path) -> Result<Self> {
+        if !path.exists() {
+            return Ok(Self {
+                name: path.display().to_string(),
+                sha256: None,
+            });
+        }
+        let io = |e| IoError::Io {
+            path: path.display().to_string(),
+            source: e,
+        };
+        let mut hasher = Sha256::new();
+        if path.is_dir() {
+            let mut files: Vec<_> = std::fs::read_dir(path)
+                .map_err(io)?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.is_file())
+                .collect();
+            files.sort();
+            for f in files {
+                hasher.update(std::fs::read(&f).map_err(io)?);
+            }
+        } else {
+            hasher.update(std::fs::read(path).map_err(io)?);
+        }
+        Ok(Self {
+            name: path.display().to_string(),
+            sha256: Some(hex(&hasher.finalize())),
+        })
+    }
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Lower-case hex SHA-256 of `bytes`.
+///
+/// ```
+/// assert_eq!(
+///     pedo_io::report::sha256_hex(b"abc"),
+///     "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+/// );
+/// ```
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    hex(&Sha256::digest(bytes))
+}
+
+/// An option value as JSON.
+pub fn option_json(v: &OptionValue) -> Value {
+    match v {
+        OptionValue::Absent => Value::Null,
+        OptionValue::Bool(b) => json!(b),
+        OptionValue::Int(i) => json!(i),
+        OptionValue::Float(f) => json!(f),
+        OptionValue::Word(w) => json!(w),
+        OptionValue::Numbers(v) => json!(v),
+    }
+}
+
+fn min_mean_max(values: impl Iterator<Item = f64>) -> Value {
+    let v: Vec<f64> = values.collect();
+    if v.is_empty() {
+        return Value::Null;
+    }
+    let min = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    json!({"min": min, "mean": v.iter().sum::<f64>() / v.len() as f64, "max": max})
+}
+
+/// What a recording holds: format, size, pitch, frame rate, units, noise threshold and the
+/// min / mean / max over frames of the per-frame measures above `threshold` (as in
+/// [`frames_table`]; the unit is in each measure's name).
+pub fn describe(recording: &Recording, input: &InputInfo, threshold: f64) -> Value {
+    let u = measure_units(recording);
+    let m = recording.measures(threshold);
+    let loaded = m.iter().filter(|x| x.contact_sensors > 0).count();
+    let mut measures = Map::new();
+    measures.insert(
+        u.area.0.into(),
+        min_mean_max(m.iter().map(|x| x.contact_area * u.area.1)),
+    );
+    measures.insert(
+        u.force.into(),
+        min_mean_max(m.iter().map(|x| x.total_force)),
+    );
+    measures.insert(
+        u.peak.0.into(),
+        min_mean_max(m.iter().map(|x| x.peak_pressure * u.peak.1)),
+    );
+    json!({
+        "file": input.name,
+        "sha256": input.sha256,
+        "format": recording.format.map(|f| f.name()),
+        "frames": recording.n_frames(),
+        "rows": recording.rows(),
+        "cols": recording.cols(),
+        "sensors": recording.n_sensors(),
+        "pitch_mm": recording.pitch_mm,
+        "sensel_area_mm2": recording.sensel_area(),
+        "frame_rate_hz": recording.frame_rate(),
+        "duration_s": recording.dt_s.map(|dt| dt * recording.n_frames() as f64),
+        "pressure_units": (!recording.units.is_empty()).then_some(&recording.units),
+        "noise_threshold": recording.noise_threshold,
+        "measures_threshold": threshold,
+        "loaded_frames": loaded,
+        "measures": measures,
+    })
+}
+
+/// The provenance and outcome of a run, as written to `summary.json` and returned by
+/// `pymodal.run`: the pedomatch version, the input (name, SHA-256, format), the recording's
+/// size and units, every option actually used (defaults included), the counts and means of the
+/// results, and the seconds spent in each stage (`timings`: the stages measured outside the
+/// sequence run, e.g. reading, are passed in and come first).
+pub fn run_summary(
+    input: &InputInfo,
+    recording: &Recording,
+    params: &RunParams,
+    options: &SequenceOptions,
+    r: &SequenceResult,
+    timings: &[(&str, f64)],
+) -> Value {
+    let used: Map<String, Value> = params
+        .used(options, recording)
+        .iter()
+        .map(|(k, v)| (k.to_string(), option_json(v)))
+        .collect();
+    let n = r.pairs.len().max(1) as f64;
+    let mean = |f: fn(&crate::sequence::PairRow) -> f64| {
+        r.pairs.iter().map(|p| f(&p.row)).sum::<f64>() / n
+    };
+    let mut stages: Map<String, Value> = timings
+        .iter()
+        .map(|(k, v)| (k.to_string(), json!(v)))
+        .collect();
+    stages.insert("objects".into(), json!(r.timings.objects.as_secs_f64()));
+    stages.insert("matching".into(), json!(r.timings.matching.as_secs_f64()));
+    stages.insert("tracks".into(), json!(r.timings.tracks.as_secs_f64()));
+    json!({
+        "pedomatch_version": env!("CARGO_PKG_VERSION"),
+        "input": {
+            "file": input.name,
+            "sha256": input.sha256,
+            "format": recording.format.map(|f| f.name()),
+        },
+        "recording": {
+            "frames": recording.n_frames(),
+            "rows": recording.rows(),
+            "cols": recording.cols(),
+            "pitch_mm": recording.pitch_mm,
+            "frame_rate_hz": recording.frame_rate(),
+            "pressure_units": (!recording.units.is_empty()).then_some(&recording.units),
+        },
+        "options": used,
+        "objects": r.objects.len(),
+        "pairs": r.pairs.len(),
+        "tracks": r.tracks.len(),
+        "tracks_3_or_more": r.tracks.iter().filter(|t| t.steps.len() >= 3).count(),
+        "splits": r.splits.iter().map(|(i, js)| json!({
+            "id": r.objects[*i].id, "into": js.iter().map(|&j| r.objects[j].id).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+        "merges": r.merges.iter().map(|(is, j)| json!({
+            "ids": is.iter().map(|&i| r.objects[i].id).collect::<Vec<_>>(), "into": r.objects[*j].id,
+        })).collect::<Vec<_>>(),
+        "skipped": {
+            "frames": r.skipped_frames.iter().map(|s| json!({
+                "frame": s.frame, "reason": s.reason,
+            })).collect::<Vec<_>>(),
+            "pairs": r.skipped_pairs.iter().map(|s| json!({
+                "id_a": r.objects[s.a].id, "id_b": r.objects[s.b].id,
+                "frame_a": r.objects[s.a].frame, "frame_b": r.objects[s.b].frame,
+                "reason": s.reason,
+            })).collect::<Vec<_>>(),
+        },
+        "mean_local_percent": mean(|p| p.local_percent),
+        "mean_optimisation_percent": mean(|p| p.optimisation_percent),
+        "mean_cost": mean(|p| p.mean_cost),
+        "timings_s": stages,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_table_has_units_when_known() {
+        let mut rec = Recording::new(
+            2,
+            2,
+            2,
+            vec![0., 10., 0., 30., 0., 0., 0., 0.],
+            vec![true; 4],
+        )
+        .unwrap();
+        let plain = frames_table(&rec, 0.0, 0, 2);
+        assert_eq!(
+            plain.header,
+            [
+                "frame",
+                "contact_sensors",
+                "contact_area_sensels",
+                "total_load",
+                "peak_pressure",
+                "cop_x",
+                "cop_y"
+            ]
+        );
+        rec.pitch_mm = Some([2.0, 2.0]);
+        rec.dt_s = Some(0.5);
+        rec.units = "N/cm2".into();
+        let t = frames_table(&rec, 0.0, 0, 2);
+        assert_eq!(t.header[1], "time_s");
+        assert_eq!(
+            t.header[3..6],
+            ["contact_area_mm2", "total_force_n", "peak_pressure_kpa"]
+        );
+        let row = &t.rows[0];
+        assert_eq!(row[3], Cell::Float(8.0, 4)); // 2 sensels of 4 mm²
+                                                 // 40 N/cm² in all = 400 kPa on sensels of 4 mm²: 400 × 4 × 1e-3 = 1.6 N.
+        assert!(
+            matches!(row[4], Cell::Float(f, 4) if (f - 1.6).abs() < 1e-12),
+            "{:?}",
+            row[4]
+        );
+        assert_eq!(row[5], Cell::Float(300.0, 4));
+        assert_eq!(t.rows[1][1], Cell::Float(0.5, 6));
+        assert_eq!(t.rows[1][6], Cell::Empty, "no load, no centre of pressure");
+        let csv = t.to_csv();
+        assert!(csv.starts_with("frame,time_s,"), "{csv}");
+    }
+}

@@ -1,0 +1,220 @@
+//! The keyword options of `pymodal.match` and `pymodal.run`, read into the library's option
+//! types: every keyword defaults to `None`, meaning the documented default, which the library
+//! fills in ([`MatchParams::default`], [`RunParams::default`]); words are parsed by the Rust
+//! types' `FromStr`, so Python and the CLI accept the same values.
+
+use modal_core::{Choice, MatchParams, OptionKind, OptionSpec};
+use pedo_io::report::{Cell, Table};
+use pedo_io::sequence::{FrameRange, RunParams};
+use pedo_io::units::UnitOverrides;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use crate::errors::to_py;
+
+/// A word option: `None` keeps `default`, a string is parsed by `T`'s `FromStr`.
+pub fn word<T: Choice>(value: Option<&str>, default: T) -> PyResult<T> {
+    value.map_or(Ok(default), |s| T::parse_word(s).map_err(to_py))
+}
+
+/// The matching keywords, in the order of [`modal_core::options::match_option_specs`].
+pub struct MatchKw<'a, 'py> {
+    pub element: Option<&'a str>,
+    pub modes: Option<f64>,
+    pub search: Option<&'a str>,
+    pub solver: Option<&'a str>,
+    pub threshold: Option<f64>,
+    pub threshold_mode: Option<&'a str>,
+    pub excess: Option<bool>,
+    pub paper: Option<bool>,
+    pub prealign: Option<&'a str>,
+    pub refits: Option<usize>,
+    pub refit_tolerance: Option<f64>,
+    pub kappa: Option<f64>,
+    pub center_stride: Option<usize>,
+    pub position_weight: Option<f64>,
+    pub cost_power: Option<f64>,
+    pub common_sigma: Option<bool>,
+    pub skip_rigid: Option<bool>,
+    pub band: Option<usize>,
+    pub material: Option<&'a Bound<'py, PyAny>>,
+}
+
+impl MatchKw<'_, '_> {
+    /// The library's parameters; `None` keywords at their defaults. Not yet validated.
+    pub fn params(&self) -> PyResult<MatchParams> {
+        let d = MatchParams::default();
+        let material = match self.material.filter(|m| !m.is_none()) {
+            None => d.material,
+            Some(m) => Some(match m.extract::<String>() {
+                Ok(s) => s.parse().map_err(to_py)?,
+                Err(_) => crate::model_py::parse_material(Some(m))?,
+            }),
+        };
+        Ok(MatchParams {
+            element: word(self.element, d.element)?,
+            modes: self.modes.unwrap_or(d.modes),
+            search: word(self.search, d.search)?,
+            solver: word(self.solver, d.solver)?,
+            threshold: self.threshold.or(d.threshold),
+            threshold_mode: word(self.threshold_mode, d.threshold_mode)?,
+            excess: self.excess.unwrap_or(d.excess),
+            paper: self.paper.unwrap_or(d.paper),
+            prealign: self
+                .prealign
+                .map(|s| word(Some(s), modal_core::Prealign::default()))
+                .transpose()?
+                .or(d.prealign),
+            refits: self.refits.or(d.refits),
+            refit_tolerance: self.refit_tolerance.or(d.refit_tolerance),
+            kappa: self.kappa.or(d.kappa),
+            center_stride: self.center_stride.unwrap_or(d.center_stride),
+            position_weight: self.position_weight.or(d.position_weight),
+            cost_power: self.cost_power.or(d.cost_power),
+            common_sigma: self.common_sigma.or(d.common_sigma),
+            skip_rigid: self.skip_rigid.unwrap_or(d.skip_rigid),
+            band: self.band.unwrap_or(d.band),
+            material,
+        })
+    }
+}
+
+/// `pitch_mm=`: a number (square sensels) or an `(x, y)` pair.
+pub fn pitch(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<[f64; 2]>> {
+    let Some(v) = value.filter(|v| !v.is_none()) else {
+        return Ok(None);
+    };
+    if let Ok(x) = v.extract::<f64>() {
+        return Ok(Some([x, x]));
+    }
+    let (x, y): (f64, f64) = v.extract().map_err(|_| {
+        PyValueError::new_err(
+            "pitch_mm must be a number or an (x, y) pair of numbers (mm per sensel)",
+        )
+    })?;
+    Ok(Some([x, y]))
+}
+
+/// The unit keywords, checked.
+pub fn units(
+    pitch_mm: Option<&Bound<'_, PyAny>>,
+    frame_rate: Option<f64>,
+) -> PyResult<UnitOverrides> {
+    let u = UnitOverrides {
+        pitch_mm: pitch(pitch_mm)?,
+        frame_rate,
+    };
+    u.validate().map_err(to_py)?;
+    Ok(u)
+}
+
+/// The recording keywords of `pymodal.run`.
+pub struct RecordingKw<'a, 'py> {
+    pub model: Option<&'a str>,
+    pub frames: Option<(Option<usize>, Option<usize>)>,
+    pub noise: Option<f64>,
+    pub smooth: Option<f64>,
+    pub spacing: Option<f64>,
+    pub surface_nodes: Option<usize>,
+    pub iso_frame: Option<usize>,
+    pub iso_levels: Option<usize>,
+    pub pitch_mm: Option<&'a Bound<'py, PyAny>>,
+    pub frame_rate: Option<f64>,
+}
+
+impl RecordingKw<'_, '_> {
+    /// The library's run parameters with `matching`; `None` keywords at their defaults.
+    pub fn params(&self, matching: MatchParams) -> PyResult<RunParams> {
+        let d = RunParams::default();
+        Ok(RunParams {
+            matching,
+            model: word(self.model, d.model)?,
+            frames: self.frames.map(|(start, end)| FrameRange {
+                start: start.unwrap_or(0),
+                end,
+            }),
+            noise: self.noise.or(d.noise),
+            smooth: self.smooth.unwrap_or(d.smooth),
+            spacing: self.spacing.unwrap_or(d.spacing),
+            surface_nodes: self.surface_nodes.unwrap_or(d.surface_nodes),
+            iso_frame: self.iso_frame.or(d.iso_frame),
+            iso_levels: self.iso_levels.unwrap_or(d.iso_levels),
+            units: units(self.pitch_mm, self.frame_rate)?,
+        })
+    }
+}
+
+/// A table as a list of dicts keyed by column name.
+pub fn table_rows<'py>(py: Python<'py>, t: &Table) -> PyResult<Bound<'py, PyList>> {
+    let rows = PyList::empty(py);
+    for r in &t.rows {
+        let d = PyDict::new(py);
+        for (k, c) in t.header.iter().zip(r) {
+            match c {
+                Cell::Int(v) => d.set_item(k, v)?,
+                Cell::Float(v, _) => d.set_item(k, v)?,
+                Cell::Text(s) => d.set_item(k, s)?,
+                Cell::Empty => d.set_item(k, py.None())?,
+            }
+        }
+        rows.append(d)?;
+    }
+    Ok(rows)
+}
+
+/// A JSON value as the equivalent Python object (dicts, lists, numbers, strings, None).
+pub fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
+    py.import("json")?.call_method1("loads", (v.to_string(),))
+}
+
+fn spec_dicts<'py>(py: Python<'py>, specs: &[OptionSpec]) -> PyResult<Bound<'py, PyList>> {
+    let out = PyList::empty(py);
+    for s in specs {
+        let d = PyDict::new(py);
+        d.set_item("name", s.name)?;
+        let (kind, values): (&str, Vec<&str>) = match s.kind {
+            OptionKind::Flag | OptionKind::NegatedFlag | OptionKind::TriState => ("bool", vec![]),
+            OptionKind::Word(w) => ("word", w.to_vec()),
+            OptionKind::Value => ("value", vec![]),
+        };
+        d.set_item("kind", kind)?;
+        d.set_item("values", values)?;
+        d.set_item("default", &s.default)?;
+        d.set_item("help", s.help)?;
+        d.set_item("cli_flags", s.cli_flags())?;
+        out.append(d)?;
+    }
+    Ok(out)
+}
+
+/// The library's option tables: ``{"match": [...], "pair": [...], "recording": [...],
+/// "units": [...]}``, each option a dict ``{name, kind, values, default, help, cli_flags}``.
+/// ``match`` takes the "match" and "pair" options, ``run`` the "match" and "recording" ones
+/// (which include "units"), ``read_recording`` the "units" ones.
+#[pyfunction]
+fn _options<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item(
+        "match",
+        spec_dicts(py, &modal_core::options::match_option_specs())?,
+    )?;
+    d.set_item(
+        "pair",
+        spec_dicts(py, &modal_core::options::pair_option_specs())?,
+    )?;
+    d.set_item(
+        "recording",
+        spec_dicts(py, &pedo_io::sequence::recording_option_specs())?,
+    )?;
+    d.set_item(
+        "units",
+        spec_dicts(py, &pedo_io::units::unit_option_specs())?,
+    )?;
+    Ok(d)
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_options, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,57 @@
+"""One vocabulary: the keywords of pymodal.match and pymodal.run are the library's option tables
+(pymodal._options(), the tables the pedomatch CLI reads too: a Rust test checks its flags), and
+the word options accept exactly the listed values."""
+import inspect
+
+import numpy as np
+import pytest
+
+import pymodal
+
+OPTIONS = pymodal._options()
+
+
+def names(*groups):
+    return [o["name"] for g in groups for o in OPTIONS[g]]
+
+
+def keywords(fn):
+    return [p.name for p in inspect.signature(fn).parameters.values() if p.kind == p.KEYWORD_ONLY]
+
+
+def test_match_keywords_are_the_match_and_pair_options():
+    extra = ["triangles_a", "triangles_b"]  # meshes given as arrays: Python only
+    assert keywords(pymodal.match) == names("match", "pair") + extra
+
+
+def test_run_keywords_are_the_match_and_recording_options():
+    assert keywords(pymodal.run) == names("match", "recording")
+
+
+def test_read_recording_keywords_are_the_unit_options():
+    assert keywords(pymodal.read_recording) == names("units")
+    assert set(names("units")) <= set(names("recording"))
+
+
+def test_every_keyword_defaults_to_none():
+    for fn in (pymodal.match, pymodal.run, pymodal.read_recording):
+        for p in inspect.signature(fn).parameters.values():
+            if p.kind == p.KEYWORD_ONLY:
+                assert p.default is None, (fn.__name__, p.name)
+
+
+def test_cli_flags_follow_the_python_names():
+    for group in OPTIONS.values():
+        for o in group:
+            flag = "--" + o["name"].replace("_", "-")
+            assert flag in o["cli_flags"] or "--no-" + flag[2:] in o["cli_flags"], o
+
+
+@pytest.mark.parametrize("option", [o for o in OPTIONS["match"] if o["kind"] == "word"], ids=lambda o: o["name"])
+def test_every_listed_word_is_accepted_by_match(option):
+    t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    a = np.c_[3 * np.cos(t), 2 * np.sin(t)]
+    for value in option["values"]:
+        pymodal.match(a, a * 1.1, **{option["name"]: value})
+    with pytest.raises(ValueError, match=option["name"]):
+        pymodal.match(a, a, **{option["name"]: "no-such-value"})

@@ -1,0 +1,71 @@
+//! `pedomatch inspect FILE`: what a recording holds, in its physical units.
+
+use crate::modal_args::{help, UnitArgs};
+use crate::CliError;
+use clap::Args;
+use pedo_io::report::{describe, InputInfo};
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct InspectArgs {
+    /// The recording: .asf, .lst, .npy, .csv, a PNG/TIFF image, a folder or numbered sequence.
+    pub recording: PathBuf,
+    #[command(flatten)]
+    pub units: UnitArgs,
+    #[arg(long, help = help("noise"))]
+    pub noise: Option<f64>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: InspectArgs) -> Result<(), CliError> {
+    let mut rec = pedo_io::read_recording(&args.recording)?;
+    args.units.overrides().apply(&mut rec)?;
+    let input = InputInfo::of_path(&args.recording)?;
+    let threshold = args.noise.or(rec.noise_threshold).unwrap_or(0.0);
+    let d = describe(&rec, &input, threshold);
+    if args.json {
+        println!("{}", crate::output::pretty(&d)?);
+        return Ok(());
+    }
+    let show = |v: &serde_json::Value| match v {
+        serde_json::Value::Null => "unknown".to_string(),
+        serde_json::Value::String(s) => s.clone(),
+        // Six decimals hide binary rounding (0.032 s × 205 frames = 6.5600000000000005 s).
+        serde_json::Value::Number(n) if n.is_f64() => {
+            let x = n.as_f64().unwrap_or(f64::NAN);
+            ((x * 1e6).round() / 1e6).to_string()
+        }
+        other => other.to_string(),
+    };
+    println!("file            {}", args.recording.display());
+    println!("sha256          {}", show(&d["sha256"]));
+    println!("format          {}", show(&d["format"]));
+    println!("frames          {}", d["frames"]);
+    println!(
+        "grid            {} rows x {} cols, {} sensors",
+        d["rows"], d["cols"], d["sensors"]
+    );
+    println!("pitch (mm)      {}", show(&d["pitch_mm"]));
+    println!("frame rate (Hz) {}", show(&d["frame_rate_hz"]));
+    println!("duration (s)    {}", show(&d["duration_s"]));
+    println!("pressure units  {}", show(&d["pressure_units"]));
+    println!("noise threshold {}", show(&d["noise_threshold"]));
+    println!(
+        "per-frame measures above {threshold} ({} loaded frames):",
+        d["loaded_frames"]
+    );
+    if let Some(m) = d["measures"].as_object() {
+        for (name, s) in m {
+            let f = |k: &str| s[k].as_f64().map_or("-".into(), |v| format!("{v:.3}"));
+            println!(
+                "  {name:<22} min {}  mean {}  max {}",
+                f("min"),
+                f("mean"),
+                f("max")
+            );
+        }
+    }
+    Ok(())
+}

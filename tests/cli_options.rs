@@ -1,0 +1,306 @@
+//! The command line against the library's option tables, units and provenance of a run on the
+//! bundled recording, `--json`, `inspect` and the exit codes.
+
+use std::collections::{BTreeSet, HashMap};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BUNDLED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
+/// What the bundled file's header says.
+const PITCH_MM: f64 = 5.08;
+const DT_S: f64 = 0.032;
+
+fn pedomatch(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pedomatch"))
+        .args(args)
+        .output()
+        .expect("run pedomatch")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("pedomatch-opts-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn stdout_json(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout)
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stdout)))
+}
+
+fn read_csv(path: &Path) -> Vec<HashMap<String, f64>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .zip(l.split(','))
+                // Numeric columns only (pairs.csv's status is text).
+                .filter_map(|(k, v)| Some((k.to_string(), v.parse().ok()?)))
+                .collect()
+        })
+        .collect()
+}
+
+/// The long flags a subcommand's `--help` lists.
+fn long_flags(subcommand: &str) -> BTreeSet<String> {
+    let o = pedomatch(&[subcommand, "--help"]);
+    assert!(o.status.success());
+    String::from_utf8(o.stdout)
+        .unwrap()
+        .lines()
+        .map(str::trim_start)
+        .filter(|l| l.starts_with("--") || l.starts_with("-h, --"))
+        .map(|l| {
+            let l = l.trim_start_matches("-h, ");
+            l.split([' ', '\t']).next().unwrap().to_string()
+        })
+        .collect()
+}
+
+fn flags_of(specs: &[modal_core::OptionSpec]) -> BTreeSet<String> {
+    specs.iter().flat_map(|s| s.cli_flags()).collect()
+}
+
+#[test]
+fn run_and_match_flags_are_the_library_option_tables() {
+    let matching = modal_core::options::match_option_specs();
+    let recording = pedo_io::sequence::recording_option_specs();
+    let units = pedo_io::units::unit_option_specs();
+    let pair = modal_core::options::pair_option_specs();
+    let own =
+        |names: &[&str]| -> BTreeSet<String> { names.iter().map(|n| format!("--{n}")).collect() };
+
+    let mut expected = flags_of(&matching);
+    expected.extend(flags_of(&recording));
+    expected.extend(own(&["out", "figures", "timings", "json", "help"]));
+    assert_eq!(long_flags("run"), expected);
+    assert_eq!(long_flags("demo"), expected);
+
+    let mut expected = flags_of(&matching);
+    expected.extend(flags_of(&pair));
+    expected.extend(flags_of(&units));
+    expected.extend(own(&["points", "frame", "out", "json", "help"]));
+    assert_eq!(long_flags("match"), expected);
+
+    let mut expected = flags_of(&units);
+    expected.extend(own(&["noise", "json", "help"]));
+    assert_eq!(long_flags("inspect"), expected);
+    assert!(long_flags("assign").contains("--solver"));
+}
+
+#[test]
+fn run_on_the_bundled_recording_reports_time_mm_and_provenance() {
+    let out = temp_dir("units").join("out");
+    let o = pedomatch(&[
+        "run",
+        BUNDLED,
+        "--frames",
+        "20..60",
+        "--figures",
+        "none",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    let summary = stdout_json(&o);
+    assert_eq!(
+        summary,
+        serde_json::from_slice::<serde_json::Value>(
+            &std::fs::read(out.join("summary.json")).unwrap()
+        )
+        .unwrap()
+    );
+    assert_eq!(summary["pedomatch_version"], env!("CARGO_PKG_VERSION"));
+    let sha = pedo_io::report::sha256_hex(&std::fs::read(BUNDLED).unwrap());
+    assert_eq!(summary["input"]["sha256"], sha);
+    assert!(summary["input"]["file"]
+        .as_str()
+        .unwrap()
+        .ends_with("FrasP01L.asf"));
+    assert_eq!(summary["input"]["format"], "asf");
+    assert_eq!(
+        summary["recording"]["pitch_mm"],
+        serde_json::json!([PITCH_MM, PITCH_MM])
+    );
+    assert!((summary["recording"]["frame_rate_hz"].as_f64().unwrap() - 1.0 / DT_S).abs() < 1e-9);
+    assert_eq!(summary["recording"]["pressure_units"], "kPa");
+    let options = summary["options"].as_object().unwrap();
+    for spec in modal_core::options::match_option_specs()
+        .iter()
+        .chain(&pedo_io::sequence::recording_option_specs())
+    {
+        assert!(
+            options.contains_key(spec.name),
+            "summary lacks option {}",
+            spec.name
+        );
+    }
+    assert_eq!(options["frames"], "20..60");
+    assert_eq!(options["refits"], 2);
+    assert_eq!(options["noise"], 3.0);
+    for stage in ["read", "objects", "matching", "tracks", "output"] {
+        assert!(
+            summary["timings_s"][stage].as_f64().unwrap() >= 0.0,
+            "{stage}"
+        );
+    }
+
+    let near = |a: f64, b: f64| (a - b).abs() < 1e-3;
+    let tracks = read_csv(&out.join("tracks.csv"));
+    assert!(!tracks.is_empty());
+    for r in &tracks {
+        assert!(r["frame"] >= 20.0 && r["frame"] < 60.0);
+        assert!(near(r["time_s"], r["frame"] * DT_S), "{r:?}");
+        assert!(
+            near(r["x_mm"], r["x"] * PITCH_MM) && near(r["y_mm"], r["y"] * PITCH_MM),
+            "{r:?}"
+        );
+    }
+    let objects = read_csv(&out.join("objects.csv"));
+    for (i, r) in objects.iter().enumerate() {
+        assert_eq!(r["id"], i as f64, "object ids are 0-based row indices");
+        assert!(near(r["centroid_x_mm"], r["centroid_x"] * PITCH_MM));
+    }
+    for r in read_csv(&out.join("pairs.csv")) {
+        assert!(
+            near(r["time_a_s"], r["frame_a"] * DT_S) && near(r["time_b_s"], r["frame_b"] * DT_S)
+        );
+        assert_eq!(objects[r["id_a"] as usize]["frame"], r["frame_a"]);
+    }
+    for r in read_csv(&out.join("matches.csv")).iter().take(50) {
+        assert!(near(r["distance_mm"], r["distance"] * PITCH_MM), "{r:?}");
+    }
+    let frames = read_csv(&out.join("frames.csv"));
+    assert_eq!(frames.len(), 40, "one row per frame used");
+    assert_eq!(frames[0]["frame"], 20.0);
+    for r in &frames {
+        assert!(near(r["time_s"], r["frame"] * DT_S));
+        assert!(near(r["contact_area_mm2"], r["contact_sensors"] * 25.8064));
+        assert!(r["total_force_n"] >= 0.0 && r["peak_pressure_kpa"] >= 0.0);
+        if r["contact_sensors"] > 0.0 {
+            assert!(near(r["cop_x_mm"], r["cop_x"] * PITCH_MM));
+        }
+    }
+}
+
+#[test]
+fn pitch_and_frame_rate_override_the_file() {
+    let d = stdout_json(&pedomatch(&[
+        "inspect",
+        BUNDLED,
+        "--pitch-mm",
+        "2,3",
+        "--frame-rate",
+        "100",
+        "--json",
+    ]));
+    assert_eq!(d["pitch_mm"], serde_json::json!([2.0, 3.0]));
+    assert_eq!(d["frame_rate_hz"], 100.0);
+    assert_eq!(d["sensel_area_mm2"], 6.0);
+}
+
+#[test]
+fn inspect_describes_the_bundled_recording() {
+    let d = stdout_json(&pedomatch(&["inspect", BUNDLED, "--json"]));
+    assert_eq!(d["format"], "asf");
+    assert_eq!(
+        (d["frames"].as_u64(), d["rows"].as_u64(), d["cols"].as_u64()),
+        (Some(205), Some(60), Some(21))
+    );
+    assert_eq!(d["pitch_mm"], serde_json::json!([PITCH_MM, PITCH_MM]));
+    assert!((d["frame_rate_hz"].as_f64().unwrap() - 31.25).abs() < 1e-9);
+    assert_eq!(d["pressure_units"], "kPa");
+    let area = &d["measures"]["contact_area_mm2"];
+    assert_eq!(
+        area["min"], 0.0,
+        "the recording starts and ends without contact"
+    );
+    assert!(area["max"].as_f64().unwrap() > area["mean"].as_f64().unwrap());
+    assert!(d["measures"]["total_force_n"]["max"].as_f64().unwrap() > 100.0);
+    assert!(d["measures"]["peak_pressure_kpa"]["max"].as_f64().unwrap() > 100.0);
+
+    let o = pedomatch(&["inspect", BUNDLED]);
+    assert!(o.status.success());
+    let text = String::from_utf8(o.stdout).unwrap();
+    for part in [
+        "asf",
+        "205",
+        "60 rows x 21 cols",
+        "5.08",
+        "31.25",
+        "kPa",
+        "peak_pressure_kpa",
+    ] {
+        assert!(text.contains(part), "{part} missing in\n{text}");
+    }
+}
+
+#[test]
+fn json_output_of_match_and_assign_parses() {
+    let dir = temp_dir("json");
+    let ring: String = (0..30)
+        .map(|k| {
+            let t = k as f64 / 30.0 * std::f64::consts::TAU;
+            format!("{},{}\n", 3.0 * t.cos(), 2.0 * t.sin())
+        })
+        .collect();
+    std::fs::write(dir.join("a.xy"), &ring).unwrap();
+    std::fs::write(dir.join("b.xy"), &ring).unwrap();
+    let m = stdout_json(&pedomatch(&[
+        "match",
+        dir.join("a.xy").to_str().unwrap(),
+        dir.join("b.xy").to_str().unwrap(),
+        "--refits",
+        "0",
+        "--json",
+    ]));
+    assert_eq!(m["pairs"].as_array().unwrap().len(), 30);
+    assert_eq!(m["options"]["refits"], 0);
+    assert_eq!(
+        m["options"]["ordered"], true,
+        "a ring of nearest-neighbour points is a contour"
+    );
+    // Two frames of a recording: --frame is 0-based, and the pair reports its time and pitch.
+    let m = stdout_json(&pedomatch(&[
+        "match", BUNDLED, BUNDLED, "--frame", "40", "--json",
+    ]));
+    assert!((m["time_a_s"].as_f64().unwrap() - 40.0 * DT_S).abs() < 1e-9);
+    assert_eq!(m["pitch_mm_a"], serde_json::json!([PITCH_MM, PITCH_MM]));
+    assert_eq!(
+        m["options"]["ordered"], true,
+        "recording outlines are closed contours"
+    );
+    let o = pedomatch(&["match", BUNDLED, BUNDLED, "--frame", "205"]);
+    assert_eq!(o.status.code(), Some(2), "frames are 0..205");
+    std::fs::write(dir.join("cost.csv"), "4,1\n2,0\n").unwrap();
+    let a = stdout_json(&pedomatch(&[
+        "assign",
+        dir.join("cost.csv").to_str().unwrap(),
+        "--json",
+    ]));
+    assert_eq!(a["total_cost"], 3.0);
+    assert_eq!(a["solver"], "jv");
+}
+
+#[test]
+fn exit_codes_are_0_ok_1_runtime_2_usage() {
+    let code = |args: &[&str]| pedomatch(args).status.code();
+    assert_eq!(code(&["inspect", BUNDLED]), Some(0));
+    assert_eq!(code(&["inspect", "/nonexistent/file.asf"]), Some(1));
+    assert_eq!(code(&["run", "--no-such-flag", BUNDLED]), Some(2));
+    assert_eq!(code(&["run", BUNDLED, "--search", "nearest"]), Some(2));
+    assert_eq!(code(&["run", BUNDLED, "--modes", "1.5"]), Some(2));
+    assert_eq!(code(&["run", BUNDLED, "--frames", "5..3"]), Some(2));
+    assert_eq!(code(&["run", BUNDLED, "--frames", "0..999"]), Some(2));
+    assert_eq!(code(&["inspect", BUNDLED, "--pitch-mm", "-1"]), Some(2));
+    let help = String::from_utf8(pedomatch(&["--help"]).stdout).unwrap();
+    assert!(
+        help.contains("Exit status: 0 success; 1 runtime failure"),
+        "{help}"
+    );
+}
