@@ -4,7 +4,7 @@ use crate::modal_args::ModalArgs;
 use crate::output::{self, OutDir};
 use clap::{Args, ValueEnum};
 use modal_core::{Search, Shape, Topology};
-use pedo_io::figure;
+use pedo_io::figure::{FigureAxes, MatchFigure, ObjectLabel};
 use pedo_io::sequence::SearchMode;
 use std::path::{Path, PathBuf};
 
@@ -152,12 +152,78 @@ pub fn run(args: MatchArgs) -> Result<(), String> {
             let dir = OutDir::create(dir)?;
             dir.write("matches.csv", table.as_bytes())?;
             dir.write("match.json", format!("{summary:#}\n").as_bytes())?;
-            let fig = figure::match_figure(&a, &b, &r.pairs);
-            dir.write("match.png", &fig.to_png())?;
-            dir.write("match.svg", fig.to_svg().as_bytes())?;
+            write_match_figure(&dir, &args, (&a, &b), &r.pairs, (true, true))?;
             dir.commit()?;
             println!("{summary:#}");
         }
     }
     Ok(())
+}
+
+/// `match.png` and/or `match.svg`: A and B labelled by their file names (and frame, when taken
+/// from a recording), axes in mm when the recording states its pitch.
+fn write_match_figure(
+    dir: &OutDir,
+    args: &MatchArgs,
+    (a, b): (&Shape, &Shape),
+    pairs: &[modal_core::MatchPair],
+    kinds: (bool, bool),
+) -> Result<(), String> {
+    let source = |path: &Path| -> (FigureAxes, ObjectLabel) {
+        let name = path.file_name().map_or_else(
+            || path.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        // The recording was already read successfully by `load_object` when it is one.
+        match recording_of(path, args) {
+            Some(rec) => (
+                FigureAxes::of_recording(&rec),
+                // `--frame` counts from 1 here.
+                ObjectLabel {
+                    name,
+                    frame: Some(args.frame.saturating_sub(1)),
+                },
+            ),
+            None => (
+                FigureAxes::unscaled("file units"),
+                ObjectLabel { name, frame: None },
+            ),
+        }
+    };
+    let (axes, label_a) = source(&args.a);
+    let (axes_b, label_b) = source(&args.b);
+    // Both objects share one pair of axes: mm only when both files agree on the pitch.
+    let axes = if axes.pitch_mm == axes_b.pitch_mm {
+        axes
+    } else {
+        FigureAxes {
+            pitch_mm: None,
+            ..axes
+        }
+    };
+    let fig = MatchFigure {
+        a,
+        b,
+        pairs,
+        axes: &axes,
+        label_a,
+        label_b,
+    };
+    output::write_figure(dir, "match", kinds, || fig.to_png(), || fig.to_svg())
+}
+
+/// The recording behind an image/recording input (`None` for point files).
+fn recording_of(path: &Path, args: &MatchArgs) -> Option<pedo_io::Recording> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    if args.points || POINT_EXTENSIONS.contains(&ext.as_str()) {
+        return None;
+    }
+    if ext == "csv" && pedo_io::points::read_points(path, Topology::None).is_ok() {
+        return None;
+    }
+    pedo_io::read_recording(path).ok()
 }
