@@ -7,8 +7,9 @@
 //! bar in the recording's pressure units. Axes keep an equal aspect ratio, so shapes are not
 //! distorted, and y grows downwards as in the pressure image (row 0 at the top).
 //!
-//! Text is drawn with DejaVu Sans, bundled in the crate and registered with plotters' `ab_glyph`
-//! renderer, so a figure looks the same on every machine, with or without system fonts.
+//! Text is set in DejaVu Sans, bundled in the crate: PNG text is rasterised from it (see the
+//! `text` module) and SVG text is laid out with its metrics and names it as the font family. No
+//! system font is ever looked up, so a figure looks the same on every machine, fonts or none.
 //!
 //! The caller describes the recording once in a [`FigureAxes`] and labels the objects with
 //! [`ObjectLabel`]; [`MatchFigure`] and [`TracksFigure`] then render with `to_png` / `to_svg`.
@@ -24,17 +25,19 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::FontStyle;
 use std::ops::Range;
 
+mod text;
+
 /// The bundled font (DejaVu Sans; licence in `fonts/LICENSE-DejaVu.txt`).
 static FONT_BYTES: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");
 /// The family name under which the bundled font is registered. It is also the CSS font-family
 /// an SVG carries, so viewers that have DejaVu Sans show exactly the laid-out text.
 const FONT: &str = "DejaVu Sans, sans-serif";
 
-const TITLE_SIZE: f64 = 19.0;
-const SUBTITLE_SIZE: f64 = 15.0;
-const LABEL_SIZE: f64 = 15.0;
-const TICK_SIZE: f64 = 14.0;
-const LEGEND_SIZE: f64 = 15.0;
+const TITLE_SIZE: f64 = 21.0;
+const SUBTITLE_SIZE: f64 = 17.0;
+const LABEL_SIZE: f64 = 18.0;
+const TICK_SIZE: f64 = 17.0;
+const LEGEND_SIZE: f64 = 17.0;
 
 /// Longer side of the plot area in pixels; the other side follows the data's aspect ratio.
 const PLOT_LONG_SIDE: f64 = 520.0;
@@ -544,7 +547,7 @@ struct PressureImage {
 /// next to the peaks; the colour bar shows the same mapping against a linear pressure scale.
 fn pressure_color(v: f64, max: f64) -> RGBColor {
     let t = (v / max).clamp(0.0, 1.0).sqrt();
-    let g = (235.0 - 195.0 * t).round() as u8;
+    let g = (235.0 - 150.0 * t).round() as u8;
     RGBColor(g, g, g)
 }
 
@@ -577,7 +580,7 @@ struct Layout {
 }
 
 const COLORBAR_WIDTH: u32 = 104;
-const LEGEND_WIDTH: u32 = 190;
+const LEGEND_WIDTH: u32 = 200;
 const MAX_SIDE: u32 = 4096;
 
 impl Layout {
@@ -677,8 +680,9 @@ impl Layout {
             .y_desc(&self.y_desc)
             .label_style((FONT, TICK_SIZE))
             .axis_desc_style((FONT, LABEL_SIZE))
-            .x_labels(8)
-            .y_labels(8)
+            // About one tick label per 70 px, so that labels never touch.
+            .x_labels((self.plot.0 as usize / 70).max(3))
+            .y_labels((self.plot.1 as usize / 60).max(3))
             .x_label_formatter(&x_fmt)
             .y_label_formatter(&y_fmt)
             .bold_line_style(COLOR_GRID.stroke_width(1))
@@ -745,14 +749,15 @@ impl Layout {
                 }
             }
         }
-        // A frame around the plot area, as in a journal figure.
-        let frame = [(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)];
-        chart
-            .draw_series(std::iter::once(PathElement::new(
-                frame.to_vec(),
-                BLACK.stroke_width(1),
-            )))
-            .map_err(figure_error)?;
+        // A frame around the plot area, as in a journal figure (drawn in pixels: the data's
+        // far edges map one pixel past the area and would be clipped).
+        let plot = chart.plotting_area().strip_coord_spec();
+        let (pw, ph) = plot.dim_in_pixel();
+        plot.draw(&Rectangle::new(
+            [(0, 0), (pw as i32 - 1, ph as i32 - 1)],
+            BLACK.stroke_width(1),
+        ))
+        .map_err(figure_error)?;
         Ok(())
     }
 }
@@ -885,7 +890,13 @@ fn render_png(layout: &Layout) -> Result<Vec<u8>> {
     let (w, h) = layout.size();
     let mut pixels = vec![255u8; w as usize * h as usize * 3];
     {
-        let root = BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area();
+        let font = ab_glyph::FontRef::try_from_slice(FONT_BYTES)
+            .map_err(|_| IoError::Figure("the bundled font could not be read".to_string()))?;
+        let root = text::TextBitmap {
+            inner: BitMapBackend::with_buffer(&mut pixels, (w, h)),
+            font,
+        }
+        .into_drawing_area();
         layout.draw(&root)?;
         root.present().map_err(figure_error)?;
     }
@@ -1230,6 +1241,33 @@ mod tests {
             .to_svg()
             .unwrap()
             .contains("peak pressure (units unknown)"));
+    }
+
+    #[test]
+    fn png_rendering_is_deterministic_and_independent_of_system_fonts() {
+        // Text comes only from the bundled font: two renderings are identical byte for byte,
+        // and the title's glyphs are drawn (dark pixels in the title band).
+        let (a, b) = (
+            ellipse(30, [10.0, 20.0], 4.0, 9.0),
+            ellipse(24, [11.0, 21.0], 4.5, 8.0),
+        );
+        let (pairs, axes) = (pairs(), plate_axes());
+        let fig = MatchFigure {
+            a: &a,
+            b: &b,
+            pairs: &pairs,
+            axes: &axes,
+            label_a: ObjectLabel::object(12, 40),
+            label_b: ObjectLabel::object(13, 41),
+        };
+        let png = fig.to_png().unwrap();
+        assert_eq!(png, fig.to_png().unwrap());
+        let img = decode(&png);
+        let dark = (0..TITLE_HEIGHT)
+            .flat_map(|y| (0..img.width()).map(move |x| (x, y)))
+            .filter(|&(x, y)| img.get_pixel(x, y).0.iter().all(|&v| v < 80))
+            .count();
+        assert!(dark > 200, "title text missing ({dark} dark pixels)");
     }
 
     #[test]
