@@ -672,17 +672,21 @@ impl Layout {
             .y_label_area_size(Y_LABEL_AREA)
             .build_cartesian_2d(x0..x1, y1..y0)
             .map_err(figure_error)?;
-        let x_fmt = tick_formatter(x1 - x0);
-        let y_fmt = tick_formatter(y1 - y0);
+        // About one tick label per 70 px, so that labels never touch.
+        let (x_ticks, y_ticks) = (
+            (self.plot.0 as usize / 70).max(3),
+            (self.plot.1 as usize / 60).max(3),
+        );
+        let x_fmt = tick_formatter(x1 - x0, x_ticks);
+        let y_fmt = tick_formatter(y1 - y0, y_ticks);
         chart
             .configure_mesh()
             .x_desc(&self.x_desc)
             .y_desc(&self.y_desc)
             .label_style((FONT, TICK_SIZE))
             .axis_desc_style((FONT, LABEL_SIZE))
-            // About one tick label per 70 px, so that labels never touch.
-            .x_labels((self.plot.0 as usize / 70).max(3))
-            .y_labels((self.plot.1 as usize / 60).max(3))
+            .x_labels(x_ticks)
+            .y_labels(y_ticks)
             .x_label_formatter(&x_fmt)
             .y_label_formatter(&y_fmt)
             .bold_line_style(COLOR_GRID.stroke_width(1))
@@ -777,7 +781,7 @@ fn draw_colorbar<DB: DrawingBackend>(
         .right_y_label_area_size(COLORBAR_WIDTH - 32)
         .build_cartesian_2d(0.0..1.0, 0.0..image.max)
         .map_err(figure_error)?;
-    let fmt = tick_formatter(image.max);
+    let fmt = tick_formatter(image.max, 6);
     bar.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
@@ -847,10 +851,24 @@ fn draw_legend<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Tick labels with as many decimals as the tick spacing of a range this wide needs.
-fn tick_formatter(range: f64) -> impl Fn(&f64) -> String {
-    let step = (range.abs() / 8.0).max(1e-12);
-    let decimals = (-step.log10()).ceil().clamp(0.0, 6.0) as usize;
+/// Tick labels with as many decimals as the tick spacing needs: plotters places at most
+/// `max_ticks` ticks at a spacing of 1, 2 or 5 times a power of ten, the finest that fits.
+fn tick_formatter(range: f64, max_ticks: usize) -> impl Fn(&f64) -> String {
+    let range = range.abs().max(1e-12);
+    let fits = |step: f64| (range / step).floor() as usize + 1 <= max_ticks.max(2);
+    let mut power = 10f64.powf(range.log10().ceil());
+    let mut step = power;
+    'search: loop {
+        for m in [5.0, 2.0, 1.0] {
+            let candidate = power / 10.0 * m;
+            if !fits(candidate) || candidate < 1e-9 {
+                break 'search;
+            }
+            step = candidate;
+        }
+        power /= 10.0;
+    }
+    let decimals = (-step.log10() - 1e-9).ceil().clamp(0.0, 6.0) as usize;
     move |v: &f64| {
         let s = format!("{v:.decimals$}");
         // "-0" reads as a different tick from "0".
@@ -1272,8 +1290,13 @@ mod tests {
 
     #[test]
     fn tick_labels_have_the_decimals_their_spacing_needs() {
-        assert_eq!(tick_formatter(150.0)(&40.0), "40");
-        assert_eq!(tick_formatter(3.0)(&0.5), "0.5");
-        assert_eq!(tick_formatter(3.0)(&-0.0), "0.0");
+        // 150 mm with at most 8 ticks: every 20 mm.
+        assert_eq!(tick_formatter(150.0, 8)(&40.0), "40");
+        // 3 units with 8 ticks: every 0.5; with 4 ticks: every 1.
+        assert_eq!(tick_formatter(3.0, 8)(&0.5), "0.5");
+        assert_eq!(tick_formatter(3.0, 8)(&-0.0), "0.0");
+        assert_eq!(tick_formatter(3.0, 4)(&2.0), "2");
+        // 0.06 with 7 ticks: every 0.01.
+        assert_eq!(tick_formatter(0.06, 7)(&0.03), "0.03");
     }
 }
