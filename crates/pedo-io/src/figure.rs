@@ -855,7 +855,7 @@ fn draw_legend<DB: DrawingBackend>(
 /// `max_ticks` ticks at a spacing of 1, 2 or 5 times a power of ten, the finest that fits.
 fn tick_formatter(range: f64, max_ticks: usize) -> impl Fn(&f64) -> String {
     let range = range.abs().max(1e-12);
-    let fits = |step: f64| (range / step).floor() as usize + 1 <= max_ticks.max(2);
+    let fits = |step: f64| ((range / step).floor() as usize) < max_ticks.max(2);
     let mut power = 10f64.powf(range.log10().ceil());
     let mut step = power;
     'search: loop {
