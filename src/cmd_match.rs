@@ -6,7 +6,7 @@ use crate::CliError;
 use clap::Args;
 use modal_core::shape::looks_like_closed_contour;
 use modal_core::{Search, Shape, Topology};
-use pedo_io::figure;
+use pedo_io::figure::{FigureAxes, MatchFigure, ObjectLabel};
 use std::path::{Path, PathBuf};
 
 #[derive(Args)]
@@ -29,9 +29,12 @@ pub struct MatchArgs {
     pub modal: ModalArgs,
     #[command(flatten)]
     pub units: UnitArgs,
-    /// Write matches.csv, match.json and match.png/svg into this folder instead of printing.
+    /// Write matches.csv, match.json and the match figure into this folder instead of printing.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Format of the match figure written with --out.
+    #[arg(long, value_enum, default_value = "png")]
+    pub figures: crate::cmd_run::FigureArg,
     /// Print the match result as one JSON object (with its pairs) instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -45,6 +48,8 @@ struct Object {
     points: Shape,
     pitch_mm: Option<[f64; 2]>,
     time_s: Option<f64>,
+    /// The figure axes of the recording the object was taken from (`None`: a point file).
+    axes: Option<FigureAxes>,
 }
 
 /// An object from a file: a point file as it is, or the largest contour of a pressure frame.
@@ -58,6 +63,7 @@ fn load_object(path: &Path, args: &MatchArgs) -> Result<Object, CliError> {
         points,
         pitch_mm: args.units.pitch_mm,
         time_s: None,
+        axes: None,
     };
     let as_points = args.points || POINT_EXTENSIONS.contains(&ext.as_str());
     if as_points {
@@ -101,6 +107,7 @@ fn load_object(path: &Path, args: &MatchArgs) -> Result<Object, CliError> {
         points: largest.to_shape()?,
         pitch_mm: rec.pitch_mm,
         time_s: rec.time_s(args.frame),
+        axes: Some(FigureAxes::of_recording(&rec)),
     })
 }
 
@@ -132,7 +139,7 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let oa = load_object(&args.a, &args)?;
     let ob = load_object(&args.b, &args)?;
     let ordered = tri_state(args.ordered, args.no_ordered);
-    let (a, b, ordered) = with_topology(oa.points, ob.points, ordered)?;
+    let (a, b, ordered) = with_topology(oa.points.clone(), ob.points.clone(), ordered)?;
     if a.dim() != b.dim() {
         return Err(CliError::Runtime(format!(
             "{} has {}-D points but {} has {}-D points",
@@ -187,9 +194,12 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         let dir = OutDir::create(dir)?;
         dir.write("matches.csv", table.as_bytes())?;
         dir.write("match.json", output::pretty(&summary)?.as_bytes())?;
-        let fig = figure::match_figure(&a, &b, &r.pairs);
-        dir.write("match.png", &fig.to_png())?;
-        dir.write("match.svg", fig.to_svg().as_bytes())?;
+        let figure = MatchFigureInput {
+            args: &args,
+            shapes: (&a, &b),
+            objects: (&oa, &ob),
+        };
+        write_match_figure(&dir, &figure, &r.pairs, args.figures.kinds())?;
         dir.commit()?;
     }
     if args.json {
@@ -213,4 +223,47 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         );
     }
     Ok(())
+}
+
+/// `match.png` and/or `match.svg`: A and B labelled by their file names (and frame, when taken
+/// What the match figure shows: the two objects and where they came from.
+struct MatchFigureInput<'a> {
+    args: &'a MatchArgs,
+    shapes: (&'a Shape, &'a Shape),
+    objects: (&'a Object, &'a Object),
+}
+
+/// `match.png` and/or `match.svg`: A and B labelled by their file names (and frame, when taken
+/// from a recording), axes in mm when both objects know the same pitch.
+fn write_match_figure(
+    dir: &OutDir,
+    input: &MatchFigureInput,
+    pairs: &[modal_core::MatchPair],
+    kinds: (bool, bool),
+) -> Result<(), String> {
+    let label = |path: &Path, object: &Object| ObjectLabel {
+        name: path.file_name().map_or_else(
+            || path.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        ),
+        frame: object.axes.is_some().then_some(input.args.frame),
+    };
+    let (oa, ob) = input.objects;
+    let mut axes = oa
+        .axes
+        .clone()
+        .unwrap_or_else(|| FigureAxes::unscaled("file units"));
+    // Both objects share one pair of axes: mm only when both agree on the pitch.
+    if oa.pitch_mm != ob.pitch_mm {
+        axes.pitch_mm = None;
+    }
+    let fig = MatchFigure {
+        a: input.shapes.0,
+        b: input.shapes.1,
+        pairs,
+        axes: &axes,
+        label_a: label(&input.args.a, oa),
+        label_b: label(&input.args.b, ob),
+    };
+    output::write_figure(dir, "match", kinds, || fig.to_png(), || fig.to_svg())
 }

@@ -15,8 +15,18 @@ use std::time::Instant;
 pub enum FigureArg {
     Png,
     Svg,
-    Both,
     None,
+}
+
+impl FigureArg {
+    /// Whether PNG and SVG files are written.
+    pub fn kinds(self) -> (bool, bool) {
+        match self {
+            FigureArg::Png => (true, false),
+            FigureArg::Svg => (false, true),
+            FigureArg::None => (false, false),
+        }
+    }
 }
 
 /// Options shared by `run` and `demo`.
@@ -145,7 +155,7 @@ fn execute(
 
     let t_out = Instant::now();
     let dir = OutDir::create(out)?;
-    output::write_sequence(&dir, &recording, &options, &result, figure_kinds(o.figures))?;
+    output::write_sequence(&dir, &recording, &options, &result, o.figures.kinds())?;
     let write_time = t_out.elapsed().as_secs_f64();
     let summary = pedo_io::report::run_summary(
         input,
@@ -172,15 +182,6 @@ fn execute(
             started.elapsed().as_secs_f64());
     }
     Ok(())
-}
-
-fn figure_kinds(f: FigureArg) -> (bool, bool) {
-    match f {
-        FigureArg::Png => (true, false),
-        FigureArg::Svg => (false, true),
-        FigureArg::Both => (true, true),
-        FigureArg::None => (false, false),
-    }
 }
 
 fn progress_bar() -> ProgressBar {

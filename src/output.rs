@@ -1,6 +1,6 @@
 //! File input and output shared by the subcommands: small CSV readers and atomic writes.
 
-use pedo_io::figure::{self, Figure};
+use pedo_io::figure::{FigureAxes, MatchFigure, ObjectLabel, TracksFigure};
 use pedo_io::sequence::{SequenceOptions, SequenceResult};
 use std::path::Path;
 
@@ -68,7 +68,6 @@ pub fn write_sequence(
     (png, svg): (bool, bool),
 ) -> Result<(), String> {
     use pedo_io::report;
-    use rayon::prelude::*;
     let pairs = report::pairs_table(recording, r);
     dir.write("pairs.csv", pairs.to_csv().as_bytes())?;
     dir.write("pairs.json", pretty(&pairs.to_json())?.as_bytes())?;
@@ -90,35 +89,7 @@ pub fn write_sequence(
     dir.write("frames.csv", frames.to_csv().as_bytes())?;
 
     if png || svg {
-        let figures: Vec<(String, Figure)> = r
-            .pairs
-            .par_iter()
-            .map(|p| {
-                let (oa, ob) = (&r.objects[p.a], &r.objects[p.b]);
-                (
-                    format!("figures/pair_{:04}_{:04}", oa.id, ob.id),
-                    figure::match_figure(&oa.shape, &ob.shape, &p.result.pairs),
-                )
-            })
-            .collect();
-        figures
-            .par_iter()
-            .try_for_each(|(stem, f)| -> Result<(), String> {
-                if png {
-                    dir.write(&format!("{stem}.png"), &f.to_png())?;
-                }
-                if svg {
-                    dir.write(&format!("{stem}.svg"), f.to_svg().as_bytes())?;
-                }
-                Ok(())
-            })?;
-        let tracks = figure::tracks_figure(r, &recording.peak_image(), 3, 40);
-        if png {
-            dir.write("tracks.png", &tracks.to_png())?;
-        }
-        if svg {
-            dir.write("tracks.svg", tracks.to_svg().as_bytes())?;
-        }
+        write_sequence_figures(dir, recording, r, (png, svg))?;
     }
     Ok(())
 }
@@ -132,3 +103,61 @@ pub fn pretty<T: serde::Serialize>(v: &T) -> Result<String, String> {
         })
         .map_err(|e| e.to_string())
 }
+/// The match figure of every pair (in parallel) and the tracks figure, as PNG and/or SVG.
+fn write_sequence_figures(
+    dir: &OutDir,
+    recording: &pedo_io::Recording,
+    r: &SequenceResult,
+    (png, svg): (bool, bool),
+) -> Result<(), String> {
+    use rayon::prelude::*;
+    let axes = FigureAxes::of_recording(recording);
+    r.pairs.par_iter().try_for_each(|p| -> Result<(), String> {
+        let (oa, ob) = (&r.objects[p.a], &r.objects[p.b]);
+        let fig = MatchFigure {
+            a: &oa.shape,
+            b: &ob.shape,
+            pairs: &p.result.pairs,
+            axes: &axes,
+            label_a: ObjectLabel::object(oa.id, oa.frame),
+            label_b: ObjectLabel::object(ob.id, ob.frame),
+        };
+        let stem = format!("figures/pair_{:04}_{:04}", oa.id, ob.id);
+        write_figure(dir, &stem, (png, svg), || fig.to_png(), || fig.to_svg())
+    })?;
+    let peak = recording.peak_image();
+    let tracks = TracksFigure {
+        result: r,
+        peak: &peak,
+        axes: &axes,
+        min_steps: 3,
+        max_tracks: 40,
+    };
+    write_figure(
+        dir,
+        "tracks",
+        (png, svg),
+        || tracks.to_png(),
+        || tracks.to_svg(),
+    )
+}
+
+/// Writes `{stem}.png` and/or `{stem}.svg`.
+pub fn write_figure(
+    dir: &OutDir,
+    stem: &str,
+    (png, svg): (bool, bool),
+    to_png: impl FnOnce() -> pedo_io::Result<Vec<u8>>,
+    to_svg: impl FnOnce() -> pedo_io::Result<String>,
+) -> Result<(), String> {
+    if png {
+        let bytes = to_png().map_err(|e| format!("{stem}.png: {e}"))?;
+        dir.write(&format!("{stem}.png"), &bytes)?;
+    }
+    if svg {
+        let text = to_svg().map_err(|e| format!("{stem}.svg: {e}"))?;
+        dir.write(&format!("{stem}.svg"), text.as_bytes())?;
+    }
+    Ok(())
+}
+

@@ -84,7 +84,7 @@ fn run_and_match_flags_are_the_library_option_tables() {
     let mut expected = flags_of(&matching);
     expected.extend(flags_of(&pair));
     expected.extend(flags_of(&units));
-    expected.extend(own(&["points", "frame", "out", "json", "help"]));
+    expected.extend(own(&["points", "frame", "out", "figures", "json", "help"]));
     assert_eq!(long_flags("match"), expected);
 
     let mut expected = flags_of(&units);

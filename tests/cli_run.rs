@@ -125,7 +125,7 @@ fn assert_tracks_follow_the_motion(tracks: &[std::collections::HashMap<String, S
 
 #[test]
 fn run_on_synthetic_motion_gives_complete_matches_and_true_tracks() {
-    let out = run_synthetic("synthetic", &["--figures", "both"]);
+    let out = run_synthetic("synthetic", &["--figures", "svg"]);
 
     let rows = read_csv(&out.join("pairs.csv"));
     assert_eq!(rows.len(), 9, "one pair per consecutive frame");
@@ -154,10 +154,14 @@ fn run_on_synthetic_motion_gives_complete_matches_and_true_tracks() {
     assert!(longest >= 9.0, "some node is tracked through all 10 frames");
 
     for name in ["tracks.png", "figures/pair_0000_0001.png"] {
-        assert_png(&out.join(name));
+        assert!(!out.join(name).exists(), "--figures svg writes no {name}");
     }
+    assert!(out.join("tracks.svg").is_file());
     let svg = std::fs::read_to_string(out.join("figures/pair_0000_0001.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    // An .npy states no pitch and no frame rate: axes in sensels, frames without times.
+    assert!(svg.contains("x (sensels)") && !svg.contains("(mm)"));
+    assert!(svg.contains("object 0 (frame 0) \u{2192} object 1 (frame 1)"));
     let summary = read_json(&out.join("summary.json"));
     assert_eq!(summary["pairs"], 9);
 }
@@ -195,6 +199,49 @@ fn demo_on_bundled_recording() {
         assert!(num(row, "frame_b") > num(row, "frame_a"));
     }
     assert_png(&out.join("tracks.png"));
+}
+
+#[test]
+fn demo_figures_have_mm_axes_times_and_a_pressure_scale() {
+    let dir = temp_dir("demo-svg");
+    let out = dir.join("out");
+    let args = [
+        "demo",
+        "--out",
+        out.to_str().unwrap(),
+        "--frames",
+        "1..12",
+        "--figures",
+        "svg",
+    ];
+    let o = pedomatch(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let pairs = read_csv(&out.join("pairs.csv"));
+    let first = &pairs[0];
+    let id = |k: &str| first[k].parse::<usize>().unwrap();
+    let stem = format!("figures/pair_{:04}_{:04}", id("id_a"), id("id_b"));
+    let svg = std::fs::read_to_string(out.join(format!("{stem}.svg"))).unwrap();
+    assert!(!out.join(format!("{stem}.png")).exists());
+    // The Tekscan file states 5.08 mm sensels and 0.032 s per frame.
+    assert!(svg.contains("x (mm)") && svg.contains("y (mm)"));
+    assert!(
+        svg.contains(" s) \u{2192} object "),
+        "no times in the title"
+    );
+    for entry in [
+        "A contour",
+        "B contour",
+        "matched (",
+        "excess (",
+        "unmatched (",
+    ] {
+        assert!(svg.contains(entry), "legend lacks {entry:?}");
+    }
+    let tracks = std::fs::read_to_string(out.join("tracks.svg")).unwrap();
+    assert!(
+        tracks.contains("peak pressure (kPa)"),
+        "no pressure scale with units"
+    );
 }
 
 #[test]

@@ -41,6 +41,9 @@ pub enum IoError {
     /// A produced object could not be turned into a modal-core shape.
     #[error(transparent)]
     Shape(#[from] ModalError),
+    /// A figure could not be drawn or encoded.
+    #[error("figure: {0}")]
+    Figure(String),
 }
 
 impl IoError {
