@@ -28,6 +28,10 @@ pub enum IoError {
     /// An argument is out of range or inconsistent.
     #[error("invalid input: {0}")]
     InvalidInput(String),
+    /// The input holds no object that can be modelled (a frame with too few non-collinear
+    /// samples above the level for a surface).
+    #[error("invalid input: {0}")]
+    NoObject(String),
     /// A produced object could not be turned into a modal-core shape.
     #[error(transparent)]
     Shape(#[from] ModalError),
@@ -49,6 +53,9 @@ impl IoError {
     }
     pub(crate) fn invalid(msg: impl Into<String>) -> Self {
         IoError::InvalidInput(msg.into())
+    }
+    pub(crate) fn no_object(msg: impl Into<String>) -> Self {
+        IoError::NoObject(msg.into())
     }
 }
 

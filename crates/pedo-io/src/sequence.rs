@@ -580,7 +580,7 @@ fn build_objects(
                             Ok(s) => Some(s.to_shape()?).filter(|s| keep(s)),
                             // A frame whose few loaded sensels cannot be triangulated has no
                             // surface object, like a frame with no contact.
-                            Err(IoError::InvalidInput(_)) => None,
+                            Err(IoError::InvalidInput(_) | IoError::NoObject(_)) => None,
                             Err(e) => return Err(e),
                         }
                     } else {

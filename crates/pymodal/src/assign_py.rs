@@ -4,7 +4,7 @@ use numpy::{PyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use crate::errors::to_py;
+use crate::errors::{internal, option_error, to_py};
 
 /// An assignment method from its Python name; `what` names the parameter in the error
 /// (`method` here, `solver` in `match` and `run`).
@@ -13,7 +13,7 @@ pub(crate) fn parse_method(what: &str, method: &str) -> PyResult<assign::Method>
         "jv" => Ok(assign::Method::JonkerVolgenant),
         "hungarian" => Ok(assign::Method::Hungarian),
         "simplex" => Ok(assign::Method::NetworkSimplex),
-        other => Err(PyValueError::new_err(format!(
+        other => Err(option_error(format!(
             "unknown {what} {other:?}; expected \"jv\", \"hungarian\" or \"simplex\""
         ))),
     }
@@ -67,7 +67,7 @@ fn solve_to_arrays<'py>(
     let arr = as_f64_matrix(py, cost_matrix)?;
     let shape = arr.shape();
     let (rows, cols) = (shape[0], shape[1]);
-    let cost = arr.as_slice().map_err(to_py)?;
+    let cost = arr.as_slice().map_err(internal)?;
     let result = py
         .detach(|| solve(cost, rows, cols, &options))
         .map_err(to_py)?;
@@ -96,8 +96,10 @@ fn solve_to_arrays<'py>(
 /// Raises
 /// ------
 /// ValueError
-///     if the input is not 2-D, contains NaN or ``-inf`` (``+inf`` when
-///     maximising), or admits no complete assignment.
+///     if the input is not 2-D; :class:`InputError` if it contains NaN or ``-inf`` (``+inf``
+///     when maximising); :class:`InfeasibleError` if it admits no complete assignment;
+///     :class:`OptionError` for an unknown ``method``. All are ``ValueError`` subclasses, as in
+///     scipy.
 #[pyfunction]
 #[pyo3(signature = (cost_matrix, maximize=false, *, method="jv"))]
 fn linear_sum_assignment<'py>(
