@@ -49,10 +49,11 @@ def test_missing_file_is_file_not_found(tmp_path):
 
 
 def test_unreadable_path_is_os_error(tmp_path):
-    # A directory where a file is expected: the OS's own error, not a format error.
-    (tmp_path / "dir.npy").mkdir()
-    with pytest.raises(OSError) as info:
-        pymodal.read_recording(str(tmp_path / "dir.npy"))
+    # A path through a file: the OS's own error (ENOTDIR), not a format error.
+    (tmp_path / "plain").write_text("x")
+    with pytest.raises(NotADirectoryError) as info:
+        pymodal.read_recording(str(tmp_path / "plain" / "r.npy"))
+    assert info.value.errno == errno.ENOTDIR and info.value.filename.endswith("r.npy")
     assert not isinstance(info.value, pymodal.PedomatchError)
 
 

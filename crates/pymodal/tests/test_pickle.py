@@ -88,7 +88,7 @@ def test_recording_round_trip(tmp_path):
 
 def test_surface_round_trip():
     rec = pymodal.read_recording(str(ASF))
-    s = pymodal.surface(rec.frames[60], threshold=1.0, max_nodes=80)
+    s = pymodal.surface(rec.frames[int(np.argmax(rec.peak_pressure))], threshold=1.0, max_nodes=80)
     round_trip(s)
 
 

@@ -82,7 +82,7 @@ def test_run_bad_options_raise_value_error(kwargs):
 def test_run_bad_input():
     with pytest.raises(ValueError):
         pymodal.run(np.zeros((2, 2, 2, 2)))
-    with pytest.raises(ValueError):
+    with pytest.raises(FileNotFoundError):
         pymodal.run("/nonexistent/recording.asf")
 
 
