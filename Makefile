@@ -38,8 +38,8 @@ test-python: wheel
 # The wheel on its own: a throw-away venv, pip (numpy from PyPI as a binary wheel), and a small
 # real match, with every directory holding cargo or rustc removed from PATH.
 PYTHON3 := $(shell command -v python3)
-NO_RUST_PATH = $(shell for d in $$(echo "$$PATH" | tr : ' '); do \
-	[ -x "$$d/cargo" ] || [ -x "$$d/rustc" ] || printf '%s:' "$$d"; done)
+NO_RUST_PATH = $(shell p=; for d in $$(echo "$$PATH" | tr : ' '); do \
+	[ -x "$$d/cargo" ] || [ -x "$$d/rustc" ] || p="$$p$$d:"; done; echo "$${p%:}")
 wheel-check: wheel
 	set -e; tmp=$$(mktemp -d); trap 'rm -rf "$$tmp"' EXIT; \
 	export PATH="$(NO_RUST_PATH)" CARGO_HOME="$$tmp/none" RUSTUP_HOME="$$tmp/none"; \
