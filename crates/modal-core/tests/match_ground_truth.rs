@@ -478,7 +478,10 @@ fn transform_maps_a_onto_the_aligned_nodes_and_recovers_a_rigid_motion() {
             .iter()
             .zip(&res.aligned_a)
             .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
-        assert!(err < 1e-9 * scale, "seed {seed}: |T(a) - aligned_a| = {err}");
+        assert!(
+            err < 1e-9 * scale,
+            "seed {seed}: |T(a) - aligned_a| = {err}"
+        );
     }
     // B is A turned by 35° and shifted, re-indexed: the map is found exactly.
     let a = &outlines[0].1;
@@ -498,7 +501,10 @@ fn transform_maps_a_onto_the_aligned_nodes_and_recovers_a_rigid_motion() {
     for r in 0..2 {
         for (k, want) in expected[r].iter().enumerate() {
             let got = if k < 2 { t.m[r][k] } else { t.t[r] };
-            assert!((got - want).abs() < 1e-6, "transform[{r}][{k}] = {got}, expected {want}");
+            assert!(
+                (got - want).abs() < 1e-6,
+                "transform[{r}][{k}] = {got}, expected {want}"
+            );
         }
     }
 }

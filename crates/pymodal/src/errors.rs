@@ -67,7 +67,10 @@ impl ExceptionClass {
             let bases = match self.parent {
                 None => PyTuple::new(
                     py,
-                    [py.get_type::<PedomatchError>(), py.get_type::<PyValueError>()],
+                    [
+                        py.get_type::<PedomatchError>(),
+                        py.get_type::<PyValueError>(),
+                    ],
                 )?,
                 Some(parent) => PyTuple::new(py, [parent.type_object(py)?])?,
             };

@@ -109,7 +109,9 @@ impl PyRecording {
         rec.format = match format.as_str() {
             "" => None,
             name => Some(format_of_name(name).ok_or_else(|| {
-                PyValueError::new_err(format!("cannot unpickle Recording: unknown format {name:?}"))
+                PyValueError::new_err(format!(
+                    "cannot unpickle Recording: unknown format {name:?}"
+                ))
             })?),
         };
         Ok(Self { inner: rec })
@@ -420,7 +422,14 @@ impl PySurface {
         let s = &self.inner;
         let mut w = Writer::new();
         w.f64s(&s.points.iter().flatten().copied().collect::<Vec<_>>())
-            .usizes(s.triangles.iter().flatten().copied().collect::<Vec<_>>().into_iter());
+            .usizes(
+                s.triangles
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .collect::<Vec<_>>()
+                    .into_iter(),
+            );
         w
     }
 
@@ -432,7 +441,10 @@ impl PySurface {
         Ok(Self {
             inner: pedo_io::surface::Surface {
                 points: points.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect(),
-                triangles: triangles.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+                triangles: triangles
+                    .chunks_exact(3)
+                    .map(|t| [t[0], t[1], t[2]])
+                    .collect(),
             },
         })
     }

@@ -1,7 +1,7 @@
 //! `pymodal.match`: modal matching of two point sets, contours or meshes.
 
-use modal_core::shape::looks_like_closed_contour;
 use modal_core::align::Affine;
+use modal_core::shape::looks_like_closed_contour;
 use modal_core::{
     match_shapes, AffinityMatrix, ElementKind, MatchOptions, MatchPair, MatchResult, Prealign,
     RotationSearch, Search, Shape, ThresholdMode, Topology,
@@ -68,7 +68,13 @@ impl PyMatch {
         w.usize(r.affinity.rows())
             .usize(r.affinity.cols())
             .f64s(r.affinity.as_slice())
-            .usizes(r.local_pairs.iter().flat_map(|&(a, b)| [a, b]).collect::<Vec<_>>().into_iter())
+            .usizes(
+                r.local_pairs
+                    .iter()
+                    .flat_map(|&(a, b)| [a, b])
+                    .collect::<Vec<_>>()
+                    .into_iter(),
+            )
             .usizes(r.unmatched_a.iter().copied())
             .usizes(r.unmatched_b.iter().copied())
             .usize(r.n_modes)

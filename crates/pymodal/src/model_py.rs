@@ -345,9 +345,14 @@ impl PyModalModel {
         match shape.topology() {
             Topology::None => w.usize(0),
             Topology::ClosedContour => w.usize(1),
-            Topology::Mesh { triangles } => w
-                .usize(2)
-                .usizes(triangles.iter().flatten().copied().collect::<Vec<_>>().into_iter()),
+            Topology::Mesh { triangles } => w.usize(2).usizes(
+                triangles
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .collect::<Vec<_>>()
+                    .into_iter(),
+            ),
         };
         let o = &self.options;
         w.usize(match o.element {
@@ -367,7 +372,15 @@ impl PyModalModel {
         .opt_usize(o.n_modes)
         .usize(o.center_stride)
         .bool(self.edges.is_some())
-        .usizes(self.edges.iter().flatten().flatten().copied().collect::<Vec<_>>().into_iter());
+        .usizes(
+            self.edges
+                .iter()
+                .flatten()
+                .flatten()
+                .copied()
+                .collect::<Vec<_>>()
+                .into_iter(),
+        );
         let b = &self.basis;
         let modes = &b.modes;
         let column_major: Vec<f64> = (0..modes.ncols())
@@ -392,7 +405,11 @@ impl PyModalModel {
             0 => Topology::None,
             1 => Topology::ClosedContour,
             2 => Topology::Mesh {
-                triangles: r.usizes()?.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+                triangles: r
+                    .usizes()?
+                    .chunks_exact(3)
+                    .map(|t| [t[0], t[1], t[2]])
+                    .collect(),
             },
             _ => return Err(corrupt()),
         };

@@ -720,9 +720,7 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         n_modes: k,
         refits,
         solves,
-        transform: from_b_frame
-            .compose(&to_aligned)
-            .compose(&sa.to_normalized),
+        transform: from_b_frame.compose(&to_aligned).compose(&sa.to_normalized),
         aligned_a,
     })
 }
