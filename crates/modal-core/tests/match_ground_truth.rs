@@ -498,8 +498,8 @@ fn transform_maps_a_onto_the_aligned_nodes_and_recovers_a_rigid_motion() {
     let res = match_shapes(&sa, &sb, &MatchOptions::default()).unwrap();
     let t = res.transform;
     let expected = [[c, -s, 4.0], [s, c, -7.0]];
-    for r in 0..2 {
-        for (k, want) in expected[r].iter().enumerate() {
+    for (r, row) in expected.iter().enumerate() {
+        for (k, want) in row.iter().enumerate() {
             let got = if k < 2 { t.m[r][k] } else { t.t[r] };
             assert!(
                 (got - want).abs() < 1e-6,
