@@ -140,7 +140,7 @@ const CLASSES: [&ExceptionClass; 6] = [
     &NUMERICAL_ERROR,
 ];
 
-/// An [`OptionError`](OPTION_ERROR): an option's value is unknown or out of range.
+/// An `OptionError`: an option's value is unknown or out of range.
 pub fn option_error(msg: impl Into<String>) -> PyErr {
     OPTION_ERROR.err(msg)
 }
