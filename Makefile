@@ -3,10 +3,11 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 PIP_PACKAGES := maturin numpy scipy pytest scikit-image matplotlib
 
-.PHONY: test test-rust test-python venv wheel bench bench-python lint demo
+.PHONY: test test-rust test-python venv wheel wheel-check bench bench-python lint demo
 
-# Every test: Rust (unit, integration, doc) and Python.
-test: test-rust test-python
+# Every test: Rust (unit, integration, doc), Python (against the installed wheel), and the wheel
+# installed on its own in a fresh venv without Rust.
+test: test-rust test-python wheel-check
 
 test-rust: venv
 	cargo test
@@ -20,12 +21,32 @@ $(VENV)/.ready:
 	$(PY) -m pip install -q $(PIP_PACKAGES)
 	touch $@
 
-# Builds the pymodal wheel (release profile) and installs it into the venv.
+# Builds the pymodal wheel (release profile, abi3: one wheel for CPython >= 3.9) into dist/ and
+# installs it into the venv. Cargo rebuilds nothing when the sources have not changed.
 wheel: venv
-	$(PY) -m pip install -q --force-reinstall --no-deps ./crates/pymodal
+	rm -f dist/pymodal-*.whl
+	$(VENV)/bin/maturin build --release --quiet -i $(PY) -m crates/pymodal/Cargo.toml -o dist
+	$(PY) -m pip install -q --force-reinstall --no-deps dist/pymodal-*.whl
 
+# The Python tests run against the installed wheel: from outside the source tree, so that
+# `import pymodal` cannot resolve to crates/pymodal/python.
 test-python: wheel
-	$(PY) -m pytest -q crates/pymodal/tests
+	cd $(VENV) && ./bin/python -c 'import pymodal, sys; \
+		sys.exit(0 if "site-packages" in pymodal.__file__ else "pymodal not imported from the wheel: " + pymodal.__file__)'
+	cd $(VENV) && ./bin/python -m pytest -q -p no:cacheprovider $(abspath crates/pymodal/tests)
+
+# The wheel on its own: a throw-away venv, pip (numpy from PyPI as a binary wheel), and a small
+# real match, with every directory holding cargo or rustc removed from PATH.
+PYTHON3 := $(shell command -v python3)
+NO_RUST_PATH = $(shell p=; for d in $$(echo "$$PATH" | tr : ' '); do \
+	[ -x "$$d/cargo" ] || [ -x "$$d/rustc" ] || p="$$p$$d:"; done; echo "$${p%:}")
+wheel-check: wheel
+	set -e; tmp=$$(mktemp -d); trap 'rm -rf "$$tmp"' EXIT; \
+	export PATH="$(NO_RUST_PATH)" CARGO_HOME="$$tmp/none" RUSTUP_HOME="$$tmp/none"; \
+	if command -v cargo || command -v rustc; then echo "Rust is still on PATH" >&2; exit 1; fi; \
+	$(PYTHON3) -m venv "$$tmp/venv"; \
+	"$$tmp/venv/bin/python" -m pip install -q --only-binary=:all: dist/pymodal-*-cp39-abi3-*.whl; \
+	cd "$$tmp" && "$$tmp/venv/bin/python" $(abspath crates/pymodal/tests/smoke_installed_wheel.py)
 
 bench:
 	cargo bench

@@ -462,3 +462,49 @@ fn the_schedule_does_not_change_the_matches() {
     let inside = pool.install(|| match_shapes(&a, &b, &opts)).unwrap();
     assert_eq!(fingerprint(&outside), fingerprint(&inside), "surface");
 }
+
+#[test]
+fn transform_maps_a_onto_the_aligned_nodes_and_recovers_a_rigid_motion() {
+    let outlines = outlines();
+    for seed in 0..6u64 {
+        let (_, o) = &outlines[seed as usize % outlines.len()];
+        let case = contour_case(o, Severity::Moderate, seed);
+        let a = Shape::from_points_2d(&case.a, Topology::ClosedContour).unwrap();
+        let b = Shape::from_points_2d(&case.b, Topology::ClosedContour).unwrap();
+        let res = match_shapes(&a, &b, &MatchOptions::default()).unwrap();
+        let moved = res.transform.apply(a.coords());
+        let scale = b.coords().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let err = moved
+            .iter()
+            .zip(&res.aligned_a)
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        assert!(
+            err < 1e-9 * scale,
+            "seed {seed}: |T(a) - aligned_a| = {err}"
+        );
+    }
+    // B is A turned by 35° and shifted, re-indexed: the map is found exactly.
+    let a = &outlines[0].1;
+    let (c, s) = (35f64.to_radians().cos(), 35f64.to_radians().sin());
+    let n = a.len();
+    let b: Vec<[f64; 2]> = (0..n)
+        .map(|i| {
+            let p = a[(i + 11) % n];
+            [c * p[0] - s * p[1] + 4.0, s * p[0] + c * p[1] - 7.0]
+        })
+        .collect();
+    let sa = Shape::from_points_2d(a, Topology::ClosedContour).unwrap();
+    let sb = Shape::from_points_2d(&b, Topology::ClosedContour).unwrap();
+    let res = match_shapes(&sa, &sb, &MatchOptions::default()).unwrap();
+    let t = res.transform;
+    let expected = [[c, -s, 4.0], [s, c, -7.0]];
+    for (r, row) in expected.iter().enumerate() {
+        for (k, want) in row.iter().enumerate() {
+            let got = if k < 2 { t.m[r][k] } else { t.t[r] };
+            assert!(
+                (got - want).abs() < 1e-6,
+                "transform[{r}][{k}] = {got}, expected {want}"
+            );
+        }
+    }
+}

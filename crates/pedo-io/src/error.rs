@@ -38,6 +38,10 @@ pub enum IoError {
     /// A user-facing option has a value it does not accept.
     #[error(transparent)]
     Option(#[from] modal_core::OptionError),
+    /// The input holds no object that can be modelled (a frame with too few non-collinear
+    /// samples above the level for a surface).
+    #[error("invalid input: {0}")]
+    NoObject(String),
     /// A produced object could not be turned into a modal-core shape.
     #[error(transparent)]
     Shape(#[from] ModalError),
@@ -68,6 +72,9 @@ impl IoError {
     }
     pub(crate) fn invalid(msg: impl Into<String>) -> Self {
         IoError::InvalidInput(msg.into())
+    }
+    pub(crate) fn no_object(msg: impl Into<String>) -> Self {
+        IoError::NoObject(msg.into())
     }
 }
 

@@ -831,7 +831,7 @@ fn frame_surface(
     }
     match crate::surface::surface(&frame, &options.surface) {
         Ok(s) => Ok(Some(s.to_shape()?).filter(|s| keep(s))),
-        Err(IoError::InvalidInput(_)) => Ok(None),
+        Err(IoError::InvalidInput(_) | IoError::NoObject(_)) => Ok(None),
         Err(e) => Err(e),
     }
 }

@@ -433,7 +433,7 @@ pub fn surface(frame: &Grid, opts: &SurfaceOptions) -> Result<Surface> {
         }
     }
     if r0 == usize::MAX {
-        return Err(IoError::invalid(format!(
+        return Err(IoError::no_object(format!(
             "no sample above {level}: the frame has no object"
         )));
     }
@@ -453,7 +453,7 @@ pub fn surface(frame: &Grid, opts: &SurfaceOptions) -> Result<Surface> {
     let mut tri = Dt::bulk_load_stable(samples)
         .map_err(|e| IoError::invalid(format!("triangulation failed: {e:?}")))?;
     if tri.num_inner_faces() == 0 {
-        return Err(IoError::invalid(
+        return Err(IoError::no_object(
             "fewer than 3 non-collinear samples: no surface",
         ));
     }

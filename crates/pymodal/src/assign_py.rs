@@ -4,7 +4,7 @@ use numpy::{PyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use crate::errors::to_py;
+use crate::errors::{internal, to_py};
 
 /// The solver from `solver=` or its deprecated alias `method=` (which warns); `None`: the
 /// default solver.
@@ -75,7 +75,7 @@ fn solve_to_arrays<'py>(
     let arr = as_f64_matrix(py, cost_matrix)?;
     let shape = arr.shape();
     let (rows, cols) = (shape[0], shape[1]);
-    let cost = arr.as_slice().map_err(to_py)?;
+    let cost = arr.as_slice().map_err(internal)?;
     let result = py
         .detach(|| solve(cost, rows, cols, &options))
         .map_err(to_py)?;
@@ -105,8 +105,10 @@ fn solve_to_arrays<'py>(
 /// Raises
 /// ------
 /// ValueError
-///     if the input is not 2-D, contains NaN or ``-inf`` (``+inf`` when
-///     maximising), or admits no complete assignment.
+///     if the input is not 2-D; :class:`InputError` if it contains NaN or ``-inf`` (``+inf``
+///     when maximising); :class:`InfeasibleError` if it admits no complete assignment;
+///     :class:`OptionError` for an unknown ``method``. All are ``ValueError`` subclasses, as in
+///     scipy.
 #[pyfunction]
 #[pyo3(signature = (cost_matrix, maximize=false, *, solver=None, method=None))]
 fn linear_sum_assignment<'py>(

@@ -4,16 +4,19 @@ use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyTuple};
 use std::path::PathBuf;
 
 use pedo_io::contour::Saddle;
 use pedo_io::isobar::{isocontours as iso_rs, IsoOptions};
 use pedo_io::preprocess::{Interpolation, Preprocess};
 use pedo_io::surface::{surface as surface_rs, Laplacian, SurfaceOptions, ZScale};
-use pedo_io::{contours as contours_rs, ContourMethod, ContourOptions, Grid, Recording, Resample};
+use pedo_io::{
+    contours as contours_rs, ContourMethod, ContourOptions, Format, Grid, Recording, Resample,
+};
 
-use crate::errors::to_py;
+use crate::errors::{input_error, internal, option_error, to_py};
+use crate::pickling::{Reader, Writer};
 
 /// A plantar-pressure recording read by :func:`read_recording`.
 ///
@@ -57,7 +60,7 @@ fn measures_dict<'py>(
         .iter()
         .flat_map(|m| m.cop.unwrap_or([f64::NAN, f64::NAN]))
         .collect();
-    let cop = Array2::from_shape_vec((ms.len(), 2), cop).map_err(to_py)?;
+    let cop = Array2::from_shape_vec((ms.len(), 2), cop).map_err(internal)?;
     d.set_item("cop", cop.into_pyarray(py))?;
     Ok(d)
 }
@@ -67,6 +70,76 @@ impl PyRecording {
     pub fn recording(&self) -> &Recording {
         &self.inner
     }
+
+    /// Every field of the recording, for `__reduce__`.
+    fn state(&self) -> Writer {
+        let r = &self.inner;
+        let mut w = Writer::new();
+        w.usize(r.n_frames())
+            .usize(r.rows())
+            .usize(r.cols())
+            .f32s(r.data())
+            .bools(r.sensor_mask())
+            .bool(r.pitch_mm.is_some());
+        let [dx, dy] = r.pitch_mm.unwrap_or([0.0; 2]);
+        w.f64(dx)
+            .f64(dy)
+            .opt_f64(r.sensel_area_mm2)
+            .opt_f64(r.dt_s)
+            .str(&r.units)
+            .opt_f64(r.noise_threshold)
+            .str(&r.format.map(format_name).unwrap_or_default());
+        w
+    }
+
+    /// The inverse of [`Self::state`].
+    pub(crate) fn restore(state: &[u8]) -> PyResult<Self> {
+        let mut r = Reader::new("Recording", state)?;
+        let (t, rows, cols) = (r.usize()?, r.usize()?, r.usize()?);
+        let mut rec = Recording::new(t, rows, cols, r.f32s()?, r.bools()?).map_err(to_py)?;
+        let has_pitch = r.bool()?;
+        let pitch = [r.f64()?, r.f64()?];
+        rec.pitch_mm = has_pitch.then_some(pitch);
+        rec.sensel_area_mm2 = r.opt_f64()?;
+        rec.dt_s = r.opt_f64()?;
+        rec.units = r.string()?;
+        rec.noise_threshold = r.opt_f64()?;
+        let format = r.string()?;
+        r.finish()?;
+        rec.format = match format.as_str() {
+            "" => None,
+            name => Some(format_of_name(name).ok_or_else(|| {
+                PyValueError::new_err(format!(
+                    "cannot unpickle Recording: unknown format {name:?}"
+                ))
+            })?),
+        };
+        Ok(Self { inner: rec })
+    }
+}
+
+/// The name of a format in Python (`"asf"`, `"npy"`, ...).
+fn format_name(f: Format) -> String {
+    f.name().to_string()
+}
+
+/// The inverse of [`format_name`].
+fn format_of_name(name: &str) -> Option<Format> {
+    [
+        Format::Asf,
+        Format::Lst,
+        Format::Csv,
+        Format::Npy,
+        Format::Png,
+        Format::Tiff,
+        Format::TekscanCsv,
+        Format::Zebris,
+        Format::Footscan,
+        Format::Npz,
+        Format::Pedar,
+    ]
+    .into_iter()
+    .find(|&f| format_name(f) == name)
 }
 
 #[pymethods]
@@ -76,7 +149,7 @@ impl PyRecording {
     fn frames<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
         let r = &self.inner;
         let a = Array3::from_shape_vec((r.n_frames(), r.rows(), r.cols()), r.frames_with_nan())
-            .map_err(to_py)?;
+            .map_err(internal)?;
         Ok(a.into_pyarray(py))
     }
     /// (H, W) bool, True where a sensor exists.
@@ -84,7 +157,7 @@ impl PyRecording {
     fn sensor_mask<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<bool>>> {
         let r = &self.inner;
         let a = Array2::from_shape_vec((r.rows(), r.cols()), r.sensor_mask().to_vec())
-            .map_err(to_py)?;
+            .map_err(internal)?;
         Ok(a.into_pyarray(py))
     }
     /// ``(dx, dy)`` = (column spacing, row spacing) in mm, or None when the file does not say.
@@ -116,7 +189,7 @@ impl PyRecording {
     /// when built in memory.
     #[getter]
     fn format(&self) -> Option<String> {
-        self.inner.format.map(|f| f.name().to_string())
+        self.inner.format.map(format_name)
     }
     /// Number of frames T.
     #[getter]
@@ -132,7 +205,8 @@ impl PyRecording {
     #[getter]
     fn peak_image<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let g = self.inner.peak_image();
-        let a = Array2::from_shape_vec((g.rows(), g.cols()), g.data().to_vec()).map_err(to_py)?;
+        let a =
+            Array2::from_shape_vec((g.rows(), g.cols()), g.data().to_vec()).map_err(internal)?;
         Ok(a.into_pyarray(py))
     }
     /// (T,) float64 contact area per frame: sensors above 0 times the sensor area in mm², in
@@ -175,6 +249,9 @@ impl PyRecording {
     fn __len__(&self) -> usize {
         self.inner.n_frames()
     }
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        self.state().reduce(py, "Recording")
+    }
     fn __repr__(&self) -> String {
         let r = &self.inner;
         format!(
@@ -196,7 +273,9 @@ impl PyRecording {
 /// ``pitch_mm`` (mm per sensel, a number or (x, y)) and ``frame_rate`` (Hz) set or override
 /// what the file says, as ``--pitch-mm`` and ``--frame-rate`` do on the command line.
 ///
-/// Raises ValueError naming the file (and line, for text formats) if it is corrupt or truncated.
+/// Raises ``FileNotFoundError`` (an ``OSError``) if the file does not exist, other ``OSError``
+/// subclasses if it cannot be read, and :class:`FormatError` (a ``ValueError``) naming the file
+/// (and line, for text formats) if it is corrupt, truncated or of no known format.
 #[pyfunction]
 #[pyo3(signature = (path, *, pitch_mm=None, frame_rate=None))]
 fn read_recording(
@@ -221,7 +300,7 @@ fn grid_of(py: Python<'_>, frame: &Bound<'_, PyAny>) -> PyResult<Grid> {
     let arr = np.call_method("ascontiguousarray", (frame,), Some(&kw))?;
     let ndim: usize = arr.getattr("ndim")?.extract()?;
     if ndim != 2 {
-        return Err(PyValueError::new_err(format!(
+        return Err(input_error(format!(
             "expected a 2-D frame, got a {ndim}-D array"
         )));
     }
@@ -229,7 +308,7 @@ fn grid_of(py: Python<'_>, frame: &Bound<'_, PyAny>) -> PyResult<Grid> {
     let (rows, cols) = (arr.shape()[0], arr.shape()[1]);
     let data: Vec<f64> = arr
         .as_slice()
-        .map_err(to_py)?
+        .map_err(internal)?
         .iter()
         .map(|&v| if v.is_nan() { 0.0 } else { v })
         .collect();
@@ -246,7 +325,7 @@ fn preprocess_of(
         "bilinear" => Interpolation::Bilinear,
         "bicubic" => Interpolation::Bicubic,
         o => {
-            return Err(PyValueError::new_err(format!(
+            return Err(option_error(format!(
                 "interpolation must be \"bilinear\" or \"bicubic\", got {o:?}"
             )))
         }
@@ -260,7 +339,7 @@ fn preprocess_of(
 
 fn resample_of(n_points: Option<usize>, spacing: Option<f64>) -> PyResult<Resample> {
     match (n_points, spacing) {
-        (Some(_), Some(_)) => Err(PyValueError::new_err("give n_points or spacing, not both")),
+        (Some(_), Some(_)) => Err(input_error("give n_points or spacing, not both")),
         (Some(n), None) => Ok(Resample::Points(n)),
         (None, Some(s)) => Ok(Resample::Spacing(s)),
         (None, None) => Ok(Resample::None),
@@ -272,7 +351,7 @@ fn saddle_of(s: &str) -> PyResult<Saddle> {
         "low" => Ok(Saddle::LowConnected),
         "high" => Ok(Saddle::HighConnected),
         "average" => Ok(Saddle::Average),
-        o => Err(PyValueError::new_err(format!(
+        o => Err(option_error(format!(
             "fully_connected must be \"low\", \"high\" or \"average\", got {o:?}"
         ))),
     }
@@ -284,7 +363,7 @@ fn points_array<'py, const D: usize>(
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let flat: Vec<f64> = pts.iter().flatten().copied().collect();
     Ok(Array2::from_shape_vec((pts.len(), D), flat)
-        .map_err(to_py)?
+        .map_err(internal)?
         .into_pyarray(py))
 }
 
@@ -328,7 +407,7 @@ fn contours<'py>(
         },
         "chain" => ContourMethod::Chain { high, refine: true },
         o => {
-            return Err(PyValueError::new_err(format!(
+            return Err(option_error(format!(
                 "method must be \"marching\" or \"chain\", got {o:?}"
             )))
         }
@@ -353,6 +432,40 @@ pub struct PySurface {
     inner: pedo_io::surface::Surface,
 }
 
+impl PySurface {
+    /// Points and triangles, for `__reduce__`.
+    fn state(&self) -> Writer {
+        let s = &self.inner;
+        let mut w = Writer::new();
+        w.f64s(&s.points.iter().flatten().copied().collect::<Vec<_>>())
+            .usizes(
+                s.triangles
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .collect::<Vec<_>>()
+                    .into_iter(),
+            );
+        w
+    }
+
+    /// The inverse of [`Self::state`].
+    pub(crate) fn restore(state: &[u8]) -> PyResult<Self> {
+        let mut r = Reader::new("Surface", state)?;
+        let (points, triangles) = (r.f64s()?, r.usizes()?);
+        r.finish()?;
+        Ok(Self {
+            inner: pedo_io::surface::Surface {
+                points: points.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect(),
+                triangles: triangles
+                    .chunks_exact(3)
+                    .map(|t| [t[0], t[1], t[2]])
+                    .collect(),
+            },
+        })
+    }
+}
+
 #[pymethods]
 impl PySurface {
     /// (n, 3) float64 nodes ``(x, y, z)``.
@@ -366,8 +479,11 @@ impl PySurface {
         let t = &self.inner.triangles;
         let flat: Vec<i64> = t.iter().flatten().map(|&i| i as i64).collect();
         Ok(Array2::from_shape_vec((t.len(), 3), flat)
-            .map_err(to_py)?
+            .map_err(internal)?
             .into_pyarray(py))
+    }
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        self.state().reduce(py, "Surface")
     }
     fn __repr__(&self) -> String {
         format!(
@@ -405,7 +521,7 @@ fn surface(
         "xy" => ZScale::MatchXY,
         "keep" => ZScale::Keep,
         o => {
-            return Err(PyValueError::new_err(format!(
+            return Err(option_error(format!(
                 "z_scale must be \"xy\" or \"keep\", got {o:?}"
             )))
         }

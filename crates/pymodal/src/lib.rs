@@ -9,11 +9,14 @@ mod io_py;
 mod match_py;
 mod model_py;
 mod options_py;
+mod pickling;
 mod run_py;
 
 #[pymodule]
 fn _pymodal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    errors::register(m)?;
+    pickling::register(m)?;
     assign_py::register(m)?;
     model_py::register(m)?;
     match_py::register(m)?;

@@ -1,12 +1,15 @@
 //! `pymodal.match`: modal matching of two point sets, contours or meshes.
 
+use modal_core::align::Affine;
 use modal_core::shape::looks_like_closed_contour;
-use modal_core::{match_shapes, MatchResult, Shape, Topology};
+use modal_core::{match_shapes, AffinityMatrix, MatchPair, MatchResult, Shape, Topology};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 
-use crate::errors::to_py;
+use crate::errors::{internal, to_py};
+use crate::pickling::{Reader, Writer};
 
 /// Result of :func:`match`.
 ///
@@ -23,6 +26,12 @@ use crate::errors::to_py;
 /// local_pairs : (l, 2) int64 — mutual-best matches on the final Z (under the threshold).
 /// local_count, optimisation_count, excess_count : int — the three counts of the seed's tables.
 /// n_modes : int — modes per object in the features; refits : int — affine re-fits performed.
+/// transform : (d+1, d+1) float64 — the affine map from a's coordinates to b's that produced
+///     ``aligned_a`` (pre-alignment, then re-fits), homogeneous: ``aligned = (transform @
+///     [x, y, 1])[:d]``, i.e. ``a @ transform[:d, :d].T + transform[:d, d]``.
+/// aligned_a : (n, d) float64 — a's nodes in b's frame as the search used them.
+///
+/// Matches pickle (``pickle``, ``multiprocessing``, Dask) and round-trip exactly.
 #[pyclass(name = "Match", module = "pymodal", frozen)]
 pub struct PyMatch {
     inner: MatchResult,
@@ -43,6 +52,79 @@ impl PyMatch {
     /// Wraps a Rust result (for other bindings that return matches, e.g. sequences).
     pub fn from_result(inner: MatchResult) -> Self {
         Self { inner }
+    }
+
+    /// Every field of the result, for `__reduce__`.
+    fn state(&self) -> Writer {
+        let r = &self.inner;
+        let mut w = Writer::new();
+        w.usize(r.pairs.len());
+        for p in &r.pairs {
+            w.usize(p.a).usize(p.b).f64(p.cost).bool(p.excess);
+        }
+        w.usize(r.affinity.rows())
+            .usize(r.affinity.cols())
+            .f64s(r.affinity.as_slice())
+            .usizes(
+                r.local_pairs
+                    .iter()
+                    .flat_map(|&(a, b)| [a, b])
+                    .collect::<Vec<_>>()
+                    .into_iter(),
+            )
+            .usizes(r.unmatched_a.iter().copied())
+            .usizes(r.unmatched_b.iter().copied())
+            .usize(r.n_modes)
+            .usize(r.refits)
+            .usize(r.solves);
+        let t = &r.transform;
+        w.usize(t.dim);
+        t.m.iter().flatten().chain(&t.t).for_each(|&v| {
+            w.f64(v);
+        });
+        w.f64s(&r.aligned_a);
+        w
+    }
+
+    /// The inverse of [`Self::state`].
+    pub(crate) fn restore(state: &[u8]) -> PyResult<Self> {
+        let mut r = Reader::new("Match", state)?;
+        // a, b, cost: 8 bytes each; excess: 1.
+        let n_pairs = r.count(25)?;
+        let pairs = (0..n_pairs)
+            .map(|_| {
+                Ok(MatchPair {
+                    a: r.usize()?,
+                    b: r.usize()?,
+                    cost: r.f64()?,
+                    excess: r.bool()?,
+                })
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        let (rows, cols) = (r.usize()?, r.usize()?);
+        let affinity = AffinityMatrix::new(rows, cols, r.f64s()?).map_err(to_py)?;
+        let local = r.usizes()?;
+        let local_pairs = local.chunks_exact(2).map(|p| (p[0], p[1])).collect();
+        let (unmatched_a, unmatched_b) = (r.usizes()?, r.usizes()?);
+        let (n_modes, refits, solves) = (r.usize()?, r.usize()?, r.usize()?);
+        let mut transform = Affine::identity(r.usize()?);
+        for v in transform.m.iter_mut().flatten().chain(&mut transform.t) {
+            *v = r.f64()?;
+        }
+        let aligned_a = r.f64s()?;
+        r.finish()?;
+        Ok(Self::from_result(MatchResult {
+            pairs,
+            affinity,
+            local_pairs,
+            unmatched_a,
+            unmatched_b,
+            n_modes,
+            refits,
+            solves,
+            transform,
+            aligned_a,
+        }))
     }
 }
 
@@ -117,6 +199,33 @@ impl PyMatch {
     fn refits(&self) -> usize {
         self.inner.refits
     }
+    /// (d+1, d+1) float64 homogeneous affine map from a's coordinates to b's that produced
+    /// ``aligned_a``: ``a @ transform[:d, :d].T + transform[:d, d]``.
+    #[getter]
+    fn transform<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let t = &self.inner.transform;
+        let d = t.dim;
+        let mut h = vec![0.0; (d + 1) * (d + 1)];
+        for r in 0..d {
+            h[r * (d + 1)..r * (d + 1) + d].copy_from_slice(&t.m[r][..d]);
+            h[r * (d + 1) + d] = t.t[r];
+        }
+        h[(d + 1) * (d + 1) - 1] = 1.0;
+        PyArray1::from_vec(py, h)
+            .reshape([d + 1, d + 1])
+            .expect("(d+1) × (d+1) reshape")
+    }
+    /// (n, d) float64 nodes of a in b's frame, as the search used them.
+    #[getter]
+    fn aligned_a<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let d = self.inner.transform.dim;
+        PyArray1::from_slice(py, &self.inner.aligned_a)
+            .reshape([self.inner.aligned_a.len() / d, d])
+            .expect("n × d reshape")
+    }
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        self.state().reduce(py, "Match")
+    }
     fn __len__(&self) -> usize {
         self.inner.pairs.len()
     }
@@ -152,7 +261,7 @@ fn points(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(usize
             "{name} must have 2 or 3 columns, got shape {shape:?}"
         )));
     }
-    Ok((shape[1], arr.as_slice().map_err(to_py)?.to_vec()))
+    Ok((shape[1], arr.as_slice().map_err(internal)?.to_vec()))
 }
 
 fn triangles(
@@ -172,7 +281,7 @@ fn triangles(
     if arr.shape()[1] != 3 {
         return Err(PyValueError::new_err(format!("{name} must have 3 columns")));
     }
-    let v = arr.as_slice().map_err(to_py)?;
+    let v = arr.as_slice().map_err(internal)?;
     if let Some(bad) = v.iter().find(|&&x| x < 0) {
         return Err(PyValueError::new_err(format!(
             "{name} holds a negative index {bad}"
@@ -232,8 +341,9 @@ fn triangles(
 ///
 /// Raises
 /// ------
-/// ValueError — bad shapes, degenerate objects (too few, coincident or collinear nodes, NaN),
-///     option values out of range or unknown.
+/// DegenerateShapeError — too few, coincident or collinear nodes, NaN;
+/// OptionError — an unknown or out-of-range option value;
+/// ValueError — arrays of the wrong shape. All three are ``ValueError`` subclasses.
 #[pyfunction]
 #[pyo3(name = "match", signature = (a, b, *, element=None, modes=None, search=None, solver=None,
     threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, refits=None,

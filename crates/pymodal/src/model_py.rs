@@ -12,7 +12,8 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::errors::to_py;
+use crate::errors::{input_error, internal, option_error, to_py};
+use crate::pickling::{Reader, Writer};
 
 fn float_matrix<'py>(
     py: Python<'py>,
@@ -58,7 +59,7 @@ fn index_rows(
             arr.shape()
         )));
     }
-    let v = arr.as_slice().map_err(to_py)?;
+    let v = arr.as_slice().map_err(internal)?;
     if let Some(bad) = v.iter().find(|&&x| x < 0) {
         return Err(PyValueError::new_err(format!(
             "{name} holds a negative index {bad}"
@@ -83,7 +84,7 @@ pub(crate) fn parse_material(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Materia
         for key in d.keys() {
             let k: String = key.extract()?;
             if !["young", "poisson", "density"].contains(&k.as_str()) {
-                return Err(PyValueError::new_err(format!(
+                return Err(option_error(format!(
                     "unknown material key {k:?}; expected young, poisson, density"
                 )));
             }
@@ -106,7 +107,7 @@ pub(crate) fn parse_material(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Materia
         let (e, nu, rho): (f64, f64, f64) = t.extract()?;
         return Material::new(e, nu, rho).map_err(to_py);
     }
-    Err(PyValueError::new_err(
+    Err(option_error(
         "material must be None, a preset name (rubber, steel, aluminium, cork, unit), a dict \
          {young, poisson, density} or an (E, nu, rho) tuple",
     ))
@@ -191,26 +192,26 @@ impl PyModalModel {
                 pts.shape()
             )));
         }
-        let coords = pts.as_slice().map_err(to_py)?.to_vec();
+        let coords = pts.as_slice().map_err(internal)?.to_vec();
         let edges: Option<Vec<[usize; 2]>> = index_rows(py, edges, 2, "edges")?
             .map(|v| v.chunks_exact(2).map(|e| [e[0], e[1]]).collect());
         let tris: Option<Vec<[usize; 3]>> = index_rows(py, triangles, 3, "triangles")?
             .map(|v| v.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect());
         if edges.is_some() && tris.is_some() {
-            return Err(PyValueError::new_err("give edges or triangles, not both"));
+            return Err(input_error("give edges or triangles, not both"));
         }
         let element = match element {
             None if edges.is_some() || tris.is_some() => ElementKind::Axial,
             None | Some("gaussian") => ElementKind::Gaussian,
             Some("axial" | "bar") => ElementKind::Axial,
             Some(other) => {
-                return Err(PyValueError::new_err(format!(
+                return Err(option_error(format!(
                     "unknown element {other:?}; expected \"gaussian\" or \"axial\""
                 )))
             }
         };
         if edges.is_some() && element == ElementKind::Gaussian {
-            return Err(PyValueError::new_err(
+            return Err(input_error(
                 "edges define bar elements; they cannot be used with element=\"gaussian\"",
             ));
         }
@@ -218,7 +219,7 @@ impl PyModalModel {
             "stress" => PlaneModel::Stress,
             "strain" => PlaneModel::Strain,
             other => {
-                return Err(PyValueError::new_err(format!(
+                return Err(option_error(format!(
                     "unknown plane model {other:?}; expected \"stress\" or \"strain\""
                 )))
             }
@@ -319,6 +320,10 @@ impl PyModalModel {
         Ok(mat_to_numpy(py, &self.matrices(py)?.1))
     }
 
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        self.state().reduce(py, "ModalModel")
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "ModalModel(dim={}, n_nodes={}, element={:?}, modes={}, sigma={:?})",
@@ -332,6 +337,132 @@ impl PyModalModel {
 }
 
 impl PyModalModel {
+    /// The shape, the options, the edges and the computed basis, for `__reduce__`.
+    fn state(&self) -> Writer {
+        let mut w = Writer::new();
+        let shape = &self.shape;
+        w.usize(shape.dim()).f64s(shape.coords());
+        match shape.topology() {
+            Topology::None => w.usize(0),
+            Topology::ClosedContour => w.usize(1),
+            Topology::Mesh { triangles } => w.usize(2).usizes(
+                triangles
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .collect::<Vec<_>>()
+                    .into_iter(),
+            ),
+        };
+        let o = &self.options;
+        w.usize(match o.element {
+            ElementKind::Gaussian => 0,
+            ElementKind::Axial => 1,
+        })
+        .f64(o.material.young)
+        .f64(o.material.poisson)
+        .f64(o.material.density)
+        .usize(match o.plane {
+            PlaneModel::Stress => 0,
+            PlaneModel::Strain => 1,
+        })
+        .opt_f64(o.sigma)
+        .f64(o.kappa)
+        .bool(o.exact_rigid)
+        .opt_usize(o.n_modes)
+        .usize(o.center_stride)
+        .bool(self.edges.is_some())
+        .usizes(
+            self.edges
+                .iter()
+                .flatten()
+                .flatten()
+                .copied()
+                .collect::<Vec<_>>()
+                .into_iter(),
+        );
+        let b = &self.basis;
+        let modes = &b.modes;
+        let column_major: Vec<f64> = (0..modes.ncols())
+            .flat_map(|j| (0..modes.nrows()).map(move |i| modes[(i, j)]))
+            .collect();
+        w.usize(b.dim)
+            .usize(b.n_nodes)
+            .f64s(&b.eigenvalues)
+            .usize(modes.nrows())
+            .usize(modes.ncols())
+            .f64s(&column_major)
+            .opt_f64(b.sigma);
+        w
+    }
+
+    /// The inverse of [`Self::state`].
+    pub(crate) fn restore(state: &[u8]) -> PyResult<Self> {
+        let mut r = Reader::new("ModalModel", state)?;
+        let corrupt = || PyValueError::new_err("cannot unpickle ModalModel: corrupt state");
+        let (dim, coords) = (r.usize()?, r.f64s()?);
+        let topology = match r.usize()? {
+            0 => Topology::None,
+            1 => Topology::ClosedContour,
+            2 => Topology::Mesh {
+                triangles: r
+                    .usizes()?
+                    .chunks_exact(3)
+                    .map(|t| [t[0], t[1], t[2]])
+                    .collect(),
+            },
+            _ => return Err(corrupt()),
+        };
+        let shape = Shape::new(dim, coords, topology).map_err(to_py)?;
+        let element = match r.usize()? {
+            0 => ElementKind::Gaussian,
+            1 => ElementKind::Axial,
+            _ => return Err(corrupt()),
+        };
+        let material = Material {
+            young: r.f64()?,
+            poisson: r.f64()?,
+            density: r.f64()?,
+        };
+        let plane = match r.usize()? {
+            0 => PlaneModel::Stress,
+            1 => PlaneModel::Strain,
+            _ => return Err(corrupt()),
+        };
+        let options = ModelOptions {
+            element,
+            material,
+            plane,
+            sigma: r.opt_f64()?,
+            kappa: r.f64()?,
+            exact_rigid: r.bool()?,
+            n_modes: r.opt_usize()?,
+            center_stride: r.usize()?,
+        };
+        let has_edges = r.bool()?;
+        let edges = r.usizes()?;
+        let edges = has_edges.then(|| edges.chunks_exact(2).map(|e| [e[0], e[1]]).collect());
+        let (basis_dim, n_nodes, eigenvalues) = (r.usize()?, r.usize()?, r.f64s()?);
+        let (rows, cols, column_major) = (r.usize()?, r.usize()?, r.f64s()?);
+        if rows.checked_mul(cols) != Some(column_major.len()) {
+            return Err(corrupt());
+        }
+        let basis = ModalBasis {
+            dim: basis_dim,
+            n_nodes,
+            eigenvalues,
+            modes: Mat::from_fn(rows, cols, |i, j| column_major[j * rows + i]),
+            sigma: r.opt_f64()?,
+        };
+        r.finish()?;
+        Ok(Self {
+            shape,
+            options,
+            edges,
+            basis,
+        })
+    }
+
     fn matrices(&self, py: Python<'_>) -> PyResult<(Mat<f64>, Mat<f64>)> {
         let (shape, options, edges) = (&self.shape, &self.options, &self.edges);
         let (k, m, _) = py
@@ -350,7 +481,8 @@ type EighResult<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>);
 /// Generalized symmetric-definite eigenproblem ``K x = λ M x`` (like ``scipy.linalg.eigh(K, M)``).
 ///
 /// Returns ``(w, v)``: eigenvalues ascending and M-normalised eigenvectors as columns. Only the
-/// lower triangles are read. ``n_modes`` computes only the lowest ones (much faster).
+/// lower triangles are read (like scipy's default ``lower=True``): the upper ones may hold
+/// anything finite. ``n_modes`` computes only the lowest ones (much faster).
 #[pyfunction]
 #[pyo3(signature = (k, m, *, n_modes=None))]
 fn eigh<'py>(
@@ -375,17 +507,17 @@ fn eigh<'py>(
             "n_modes must be in 1..={kr}"
         )));
     }
-    let ks = ka.as_slice().map_err(to_py)?;
-    let ms = ma.as_slice().map_err(to_py)?;
+    let ks = ka.as_slice().map_err(internal)?;
+    let ms = ma.as_slice().map_err(internal)?;
     if ks.iter().chain(ms).any(|v| !v.is_finite()) {
         return Err(PyValueError::new_err("array must not contain infs or NaNs"));
     }
     let pairs = py
         .detach(|| {
-            // Row-major input read as column-major is the transpose: for the symmetric inputs
-            // this solver assumes, reading the upper triangle as the lower one is the same.
-            let kmat = faer::MatRef::from_column_major_slice(ks, kr, kr);
-            let mmat = faer::MatRef::from_column_major_slice(ms, kr, kr);
+            // numpy's row-major layout, so that the solver reads the lower triangle the caller
+            // sees (like scipy.linalg.eigh), whatever the upper one holds.
+            let kmat = faer::MatRef::from_row_major_slice(ks, kr, kr);
+            let mmat = faer::MatRef::from_row_major_slice(ms, kr, kr);
             modal_core::eigen::generalized_eigen(kmat, mmat, n_modes)
         })
         .map_err(to_py)?;

@@ -52,7 +52,7 @@ def test_read_errors_name_the_file(tmp_path):
     bad.write_bytes(ASF.read_bytes()[:100000])
     with pytest.raises(ValueError, match="broken.asf"):
         pymodal.read_recording(str(bad))
-    with pytest.raises(ValueError, match="missing.npy"):
+    with pytest.raises(FileNotFoundError, match="missing.npy"):
         pymodal.read_recording(str(tmp_path / "missing.npy"))
 
 

@@ -305,3 +305,43 @@ def test_bad_inputs(case):
         pymodal.match(np.column_stack([np.arange(10.0), 2 * np.arange(10.0)]), b)
     with pytest.raises(ValueError):
         pymodal.match("abc", b)
+
+
+def apply(transform, pts):
+    d = pts.shape[1]
+    return pts @ transform[:d, :d].T + transform[:d, d]
+
+
+@pytest.mark.parametrize("kwargs", [dict(), dict(prealign="normalize"), dict(refits=0), dict(search="best")])
+def test_transform_maps_a_onto_aligned_a(case, kwargs):
+    a, b, _, spacing = case
+    m = pymodal.match(a, b, **kwargs)
+    assert m.transform.shape == (3, 3) and m.aligned_a.shape == a.shape
+    np.testing.assert_array_equal(m.transform[2], [0.0, 0.0, 1.0])
+    np.testing.assert_allclose(apply(m.transform, a), m.aligned_a, rtol=0, atol=1e-9 * np.abs(b).max())
+    if kwargs.get("prealign") != "normalize":
+        # Aligned into b's frame: the one-to-one pairs lie within a few node spacings.
+        one = m.pairs[~m.excess]
+        gap = np.linalg.norm(m.aligned_a[one[:, 0]] - b[one[:, 1]], axis=1)
+        assert np.median(gap) < 2 * spacing
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_transform_recovers_a_rigid_motion(case, dim):
+    a = case[0]
+    if dim == 3:
+        a = np.random.default_rng(7).normal(size=(60, 3)) * [3.0, 2.0, 1.0]
+    t = np.deg2rad(35.0)
+    rot = np.eye(dim)
+    rot[:2, :2] = [[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]]
+    shift = np.array([4.0, -7.0, 2.5][:dim])
+    perm = np.roll(np.arange(len(a)), 11)
+    b = (a @ rot.T + shift)[perm]
+    m = pymodal.match(a, b)
+    truth = np.eye(dim + 1)
+    truth[:dim, :dim], truth[:dim, dim] = rot, shift
+    np.testing.assert_allclose(m.transform, truth, atol=1e-6)
+    np.testing.assert_allclose(m.aligned_a, a @ rot.T + shift, atol=1e-6)
+    # Every node found its own image.
+    one = m.pairs[~m.excess]
+    np.testing.assert_array_equal(perm[one[:, 1]], one[:, 0])

@@ -173,3 +173,26 @@ def test_eigh_matches_scipy():
         pymodal.eigh(K, -M)
     with pytest.raises(ValueError):
         pymodal.eigh(K, M[:10, :10])
+
+
+def test_eigh_reads_the_lower_triangle_like_scipy():
+    rng = np.random.default_rng(11)
+    a = rng.normal(size=(30, 30))
+    K = a @ a.T
+    b = rng.normal(size=(30, 30))
+    M = b @ b.T + 30 * np.eye(30)
+    upper = np.triu_indices(30, 1)
+    k_lower, m_lower = K.copy(), M.copy()
+    # Garbage above the diagonal: neither symmetric nor definite, finite.
+    k_lower[upper] = rng.normal(scale=1e3, size=len(upper[0]))
+    m_lower[upper] = -rng.uniform(1e2, 1e3, size=len(upper[0]))
+    ws, vs = scipy.linalg.eigh(k_lower, m_lower)  # lower=True is scipy's default
+    w, v = pymodal.eigh(k_lower, m_lower)
+    np.testing.assert_allclose(w, ws, rtol=1e-9, atol=1e-12 * ws.max())
+    np.testing.assert_allclose(w, scipy.linalg.eigh(K, M, eigvals_only=True), rtol=1e-9, atol=1e-12 * ws.max())
+    np.testing.assert_allclose(v.T @ M @ v, np.eye(30), atol=1e-9)
+    for j in range(30):
+        assert same_up_to_sign(v[:, j], vs[:, j], 1e-6)
+    # Fortran-ordered input reads the same lower triangle.
+    w_f, _ = pymodal.eigh(np.asfortranarray(k_lower), np.asfortranarray(m_lower))
+    np.testing.assert_allclose(w_f, ws, rtol=1e-9, atol=1e-12 * ws.max())

@@ -151,7 +151,7 @@ def test_run_best_search_is_accepted():
 def test_run_bad_input():
     with pytest.raises(ValueError):
         pymodal.run(np.zeros((2, 2, 2, 2)))
-    with pytest.raises(ValueError):
+    with pytest.raises(FileNotFoundError):
         pymodal.run("/nonexistent/recording.asf")
 
 

@@ -218,6 +218,14 @@ pub struct MatchResult {
     pub refits: usize,
     /// Modal solves of the first object (the second is solved once).
     pub solves: usize,
+    /// The affine map `x ↦ M x + t` from the first object's coordinates to the second's that
+    /// produced the aligned coordinates of the kept iteration (pre-alignment, then re-fits), in
+    /// the callers' units: `transform.apply(a.coords())` equals [`Self::aligned_a`] up to
+    /// rounding.
+    pub transform: Affine,
+    /// The first object's nodes in the second's frame as the search used them (row-major,
+    /// `n × dim`, the callers' node order and units).
+    pub aligned_a: Vec<f64>,
 }
 
 impl MatchResult {
@@ -282,12 +290,15 @@ struct Side {
     pts: Vec<f64>,
     perm: Vec<usize>,
     topology: Topology,
+    /// The map from the callers' coordinates to `pts`'s normalised frame.
+    to_normalized: Affine,
 }
 
 fn prepare(s: &Shape, ordered: bool) -> Result<Side, ModalError> {
     let d = s.dim();
     let n = s.len();
-    let (mut pts, _, _) = align::normalize(s.coords(), d)?;
+    let (mut pts, centroid, scale) = align::normalize(s.coords(), d)?;
+    let to_normalized = normalizing_map(d, centroid, scale);
     let mut perm: Vec<usize> = (0..n).collect();
     if ordered {
         let xy: Vec<f64> = pts.chunks_exact(d).flat_map(|p| [p[0], p[1]]).collect();
@@ -320,6 +331,7 @@ fn prepare(s: &Shape, ordered: bool) -> Result<Side, ModalError> {
         pts,
         perm,
         topology,
+        to_normalized,
     })
 }
 
@@ -447,10 +459,12 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
             Some(opts.model.kappa * 0.5 * (nearest_neighbour_stats_of(&sa.pts, d).0 + spacing_b));
     }
     let modal = opts.position_weight < 1.0;
-    // A's coordinates after the rotation search's map (none with `Prealign::Normalize`).
+    // A's coordinates after the rotation search's map (none with `Prealign::Normalize`), and
+    // the map from A's normalised frame to them.
     let in_b_frame = |t: Option<Affine>| match t {
-        Some(t) => into_b_frame(t.apply(&sa.pts), d, ordered),
-        None => Ok(sa.pts.clone()),
+        Some(t) => into_b_frame(t.apply(&sa.pts), d, ordered)
+            .map(|(cur, renormalize)| (cur, renormalize.compose(&t))),
+        None => Ok((sa.pts.clone(), Affine::identity(d))),
     };
     let robust = opts.prealign == Prealign::Robust;
     let solve_b = || {
@@ -472,7 +486,7 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
             in_b_frame(robust.then(|| {
                 align::robust_prealign(&sa.pts, &sb.pts, d, &opts.rotation_search, ordered)
             }))?;
-        let (fb, first) = rayon::join(solve_b, || solve_a(&cur));
+        let (fb, first) = rayon::join(solve_b, || solve_a(&cur.0));
         (cur, fb, first)
     } else {
         // From outside the pool: this thread does the whole phase in an order that never waits
@@ -495,10 +509,11 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
             }),
         );
         let cur = in_b_frame(phase.prealign())?;
-        let first = solve_a(&cur)?;
+        let first = solve_a(&cur.0)?;
         (cur, phase.b_modes(), Ok(first))
     };
-    let (fb, mut first_fa, mut cur) = (fb?, first?, cur);
+    // `to_cur` maps A's normalised frame to `cur`.
+    let (fb, mut first_fa, (mut cur, mut to_cur)) = (fb?, first?, cur);
     let band = fb.as_ref().map_or(0, |f| f.n_modes.saturating_sub(k));
 
     let nbr = if !ordered && opts.excess && opts.search == Search::Global {
@@ -514,7 +529,7 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
     let mut prev: Option<Vec<MatchPair>> = None;
     let mut refits = 0;
     let mut solves = 0;
-    let mut best: Option<(AffinityMatrix, Vec<MatchPair>, f64)> = None;
+    let mut best: Option<Iteration> = None;
     loop {
         let z = match &fb {
             Some(fb) => {
@@ -619,12 +634,15 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
             (sum / pairs.len().max(1) as f64, max)
         });
         let stable = prev.as_ref().is_some_and(|p| same_pairs(p, &pairs));
-        let better = !opts.keep_best_fit
-            || best
-                .as_ref()
-                .is_none_or(|b: &(AffinityMatrix, Vec<MatchPair>, f64)| resid < b.2);
+        let better = !opts.keep_best_fit || best.as_ref().is_none_or(|b| resid < b.resid);
         if better {
-            best = Some((z, pairs.clone(), resid));
+            best = Some(Iteration {
+                z,
+                pairs: pairs.clone(),
+                resid,
+                aligned: cur.clone(),
+                to_aligned: to_cur,
+            });
         }
         let explained = worst.sqrt() < opts.refit_tolerance * spacing_b;
         if stable || explained || refits >= opts.refits {
@@ -639,14 +657,21 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         if !moved || (ordered && t.det() <= 0.0) {
             break;
         }
-        let Ok(next) = into_b_frame(t.apply(&cur), d, ordered) else {
+        let Ok((next, renormalize)) = into_b_frame(t.apply(&cur), d, ordered) else {
             break;
         };
         cur = next;
+        to_cur = renormalize.compose(&t).compose(&to_cur);
         prev = Some(pairs);
         refits += 1;
     }
-    let (z, pairs, _) = best.expect("at least one iteration ran");
+    let Iteration {
+        z,
+        pairs,
+        aligned,
+        to_aligned,
+        ..
+    } = best.expect("at least one iteration ran");
 
     // Back to the callers' node numbering.
     let inv = |perm: &[usize]| {
@@ -680,6 +705,12 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         used_a[p.a] = true;
         used_b[p.b] = true;
     }
+    // From B's normalised frame back to B's coordinates, in the callers' node order.
+    let from_b_frame = inverse_normalizing_map(&sb.to_normalized);
+    let mut aligned_a = vec![0.0; n * d];
+    for (t, p) in from_b_frame.apply(&aligned).chunks_exact(d).enumerate() {
+        aligned_a[sa.perm[t] * d..(sa.perm[t] + 1) * d].copy_from_slice(p);
+    }
     Ok(MatchResult {
         pairs: out,
         affinity,
@@ -689,7 +720,41 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
         n_modes: k,
         refits,
         solves,
+        transform: from_b_frame.compose(&to_aligned).compose(&sa.to_normalized),
+        aligned_a,
     })
+}
+
+/// One pass of the search loop, kept when it explains its pairs best.
+struct Iteration {
+    z: AffinityMatrix,
+    pairs: Vec<MatchPair>,
+    /// Mean squared residual of the pairs under the affine map fitted to them.
+    resid: f64,
+    /// A's coordinates the pass matched, in B's normalised frame.
+    aligned: Vec<f64>,
+    /// The map from A's normalised frame to `aligned`.
+    to_aligned: Affine,
+}
+
+/// `x ↦ scale · (x − centroid)`, the map [`align::normalize`] applied.
+fn normalizing_map(d: usize, centroid: [f64; 3], scale: f64) -> Affine {
+    let mut map = Affine::identity(d);
+    for a in 0..d {
+        map.m[a][a] = scale;
+        map.t[a] = -scale * centroid[a];
+    }
+    map
+}
+
+/// The inverse of a [`normalizing_map`]: `y ↦ y / scale + centroid`.
+fn inverse_normalizing_map(map: &Affine) -> Affine {
+    let mut inv = Affine::identity(map.dim);
+    for a in 0..map.dim {
+        inv.m[a][a] = 1.0 / map.m[a][a];
+        inv.t[a] = -map.t[a] / map.m[a][a];
+    }
+    inv
 }
 
 /// A's coordinates after an affine map into B's normalised frame. A closed outline resampled by
@@ -700,9 +765,18 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
 /// hits of aligned surfaces from 0.49 to 0.39; not re-normalising contours cost the
 /// positions-only baseline 0.946 → 0.940 on 210 severe cases (the modal recipe: no change).
 /// An affine map that collapses A is an error either way.
-fn into_b_frame(moved: Vec<f64>, d: usize, ordered: bool) -> Result<Vec<f64>, ModalError> {
-    let (normalised, _, _) = align::normalize(&moved, d)?;
-    Ok(if ordered { normalised } else { moved })
+/// Also returns the map the re-normalisation applied (the identity for a point set).
+fn into_b_frame(
+    moved: Vec<f64>,
+    d: usize,
+    ordered: bool,
+) -> Result<(Vec<f64>, Affine), ModalError> {
+    let (normalised, centroid, scale) = align::normalize(&moved, d)?;
+    Ok(if ordered {
+        (normalised, normalizing_map(d, centroid, scale))
+    } else {
+        (moved, Affine::identity(d))
+    })
 }
 
 /// Max-normalised squared distances between aligned coordinates.
@@ -746,5 +820,5 @@ pub fn prealign_normalized(
         Prealign::Normalize => Affine::identity(d),
         Prealign::Robust => align::robust_prealign(&pa, &pb, d, &opts.rotation_search, ordered),
     };
-    Ok((into_b_frame(t.apply(&pa), d, ordered)?, pb))
+    Ok((into_b_frame(t.apply(&pa), d, ordered)?.0, pb))
 }
