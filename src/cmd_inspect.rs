@@ -11,6 +11,8 @@ pub struct InspectArgs {
     /// The recording: .asf, .lst, .npy, .csv, a PNG/TIFF image, a folder or numbered sequence.
     pub recording: PathBuf,
     #[command(flatten)]
+    pub read: crate::modal_args::ReadArgs,
+    #[command(flatten)]
     pub units: UnitArgs,
     #[arg(long, help = help("noise"))]
     pub noise: Option<f64>,
@@ -20,7 +22,7 @@ pub struct InspectArgs {
 }
 
 pub fn run(args: InspectArgs) -> Result<(), CliError> {
-    let mut rec = pedo_io::read_recording(&args.recording)?;
+    let mut rec = args.read.read(&args.recording)?;
     args.units.overrides().apply(&mut rec)?;
     let input = InputInfo::of_path(&args.recording)?;
     let threshold = args.noise.or(rec.noise_threshold).unwrap_or(0.0);

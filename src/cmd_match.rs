@@ -29,6 +29,8 @@ pub struct MatchArgs {
     pub modal: ModalArgs,
     #[command(flatten)]
     pub units: UnitArgs,
+    #[command(flatten)]
+    pub read: crate::modal_args::ReadArgs,
     /// Write matches.csv, match.json and the match figure into this folder instead of printing.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -75,7 +77,7 @@ fn load_object(path: &Path, args: &MatchArgs) -> Result<Object, CliError> {
             return Ok(plain(shape));
         }
     }
-    let mut rec = pedo_io::read_recording(path)?;
+    let mut rec = args.read.read(path)?;
     args.units.overrides().apply(&mut rec)?;
     if args.frame >= rec.n_frames() {
         return Err(CliError::Usage(format!(

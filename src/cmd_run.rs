@@ -90,6 +90,8 @@ pub struct RunArgs {
     #[arg(long, default_value = "pedomatch-out")]
     pub out: PathBuf,
     #[command(flatten)]
+    pub read: crate::modal_args::ReadArgs,
+    #[command(flatten)]
     pub options: RunOptionsArgs,
 }
 
@@ -109,7 +111,7 @@ pub fn run(args: RunArgs) -> Result<(), CliError> {
     let t = Instant::now();
     let params = args.options.params();
     params.validate()?;
-    let recording = pedo_io::read_recording(&args.recording)?;
+    let recording = args.read.read(&args.recording)?;
     let input = InputInfo::of_path(&args.recording)?;
     execute(recording, &input, &args.out, &args.options, params, t)
 }

@@ -124,3 +124,23 @@ impl UnitArgs {
         }
     }
 }
+
+/// How a recording file is read.
+#[derive(Args, Clone, Debug, Default)]
+pub struct ReadArgs {
+    /// Sensor-layout table of a novel pedar insole (CSV lines `insole,sensor,x1,y1,...,x4,y4`,
+    /// `# unit: mm` for a pitch; default: the bundled layout of the common insole). Only pedar
+    /// exports use it.
+    #[arg(long, value_name = "FILE")]
+    pub layout: Option<std::path::PathBuf>,
+}
+
+impl ReadArgs {
+    /// Reads the recording at `path` with these settings.
+    pub fn read(&self, path: &std::path::Path) -> pedo_io::Result<pedo_io::Recording> {
+        let opts = pedo_io::formats::ReadOptions {
+            layout: self.layout.clone(),
+        };
+        pedo_io::formats::read_recording_with(path, &opts)
+    }
+}

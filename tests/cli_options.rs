@@ -78,17 +78,18 @@ fn run_and_match_flags_are_the_library_option_tables() {
     let mut expected = flags_of(&matching);
     expected.extend(flags_of(&recording));
     expected.extend(own(&["out", "figures", "timings", "json", "help"]));
-    assert_eq!(long_flags("run"), expected);
     assert_eq!(long_flags("demo"), expected);
+    expected.extend(own(&["layout"]));
+    assert_eq!(long_flags("run"), expected);
 
     let mut expected = flags_of(&matching);
     expected.extend(flags_of(&pair));
     expected.extend(flags_of(&units));
-    expected.extend(own(&["points", "frame", "out", "figures", "json", "help"]));
+    expected.extend(own(&["points", "frame", "out", "figures", "layout", "json", "help"]));
     assert_eq!(long_flags("match"), expected);
 
     let mut expected = flags_of(&units);
-    expected.extend(own(&["noise", "json", "help"]));
+    expected.extend(own(&["noise", "layout", "json", "help"]));
     assert_eq!(long_flags("inspect"), expected);
     assert!(long_flags("assign").contains("--solver"));
 }
