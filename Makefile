@@ -3,10 +3,10 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 PIP_PACKAGES := maturin numpy scipy pytest scikit-image matplotlib
 
-.PHONY: test test-rust test-python venv wheel bench bench-python lint demo
+.PHONY: test test-rust test-python examples venv wheel bench bench-python lint demo
 
-# Every test: Rust (unit, integration, doc) and Python.
-test: test-rust test-python
+# Every test: Rust (unit, integration, doc), Python, and every example.
+test: test-rust test-python examples
 
 test-rust: venv
 	cargo test
@@ -26,6 +26,19 @@ wheel: venv
 
 test-python: wheel
 	$(PY) -m pytest -q crates/pymodal/tests
+
+# Every example: one Rust example per crate (plus the assignment timing harness on small
+# sizes), then the Python ones with the venv's interpreter against the installed wheel. Outputs
+# go to a temporary folder, removed afterwards.
+examples: wheel
+	cargo run -q -p assign --example solve_small
+	cargo run -q -p assign --example timing -- 200
+	cargo run -q -p modal-core --example match_contours
+	cargo run -q -p pedo-io --example read_asf
+	cargo run -q -p pedomatch --example run_recording
+	tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && \
+	$(PY) examples/match_two_frames.py --out "$$tmp/match.png" && test -s "$$tmp/match.png" && \
+	$(PY) examples/run_recording.py --out-dir "$$tmp" && test -s "$$tmp/pairs.csv"
 
 bench:
 	cargo bench

@@ -1,6 +1,6 @@
 """Accuracy and time per pair of pymodal.match against coherent point drift (pycpd) and optimal
 assignment on normalised positions, on ground-truth cases built from real foot outlines and a real
-pressure image (crates/modal-core/tests/data, extracted from /work/shared/data by make_fixtures.py).
+pressure image (crates/modal-core/tests/data, extracted from the sample recordings by make_fixtures.py).
 
 Contours: A sampled on an outline (48-72 points, random start), B on the same outline warped by a
 known smooth deformation (rotation, anisotropic scale, shear, bending, translation) with
@@ -259,7 +259,7 @@ def main():
             "pymodal.match refit_tolerance=0 (every re-fit)": modal(refit_tolerance=0.0),
             "pymodal.match center_stride=2 (reduced basis)": modal(center_stride=2),
             "pymodal.match center_stride=2, refits=0": modal(center_stride=2, refits=0),
-            "pymodal.match prealign='spec' (SPEC §10's five starts)": modal(prealign="spec"),
+            "pymodal.match prealign='spec' (five principal-axes starts)": modal(prealign="spec"),
             "pymodal.match paper (normalize, no re-fit)": modal(prealign="normalize", refits=0),
             "same pipeline, positions only (no modes)": modal(position_weight=1.0),
             "pycpd deformable + argmax P": cpd(),

@@ -24,7 +24,7 @@ use crate::errors::to_py;
 /// affinity : (n, m) float64 — the final affinity matrix Z the search used, in [0, 1].
 /// unmatched_a, unmatched_b : int64 arrays of nodes in no pair.
 /// local_pairs : (l, 2) int64 — mutual-best matches on the final Z (under the threshold).
-/// local_count, optimisation_count, excess_count : int — the three counts of the seed's tables.
+/// local_count, optimisation_count, excess_count : int — the three counts of the paper's tables.
 /// n_modes : int — modes per object in the features; refits : int — affine re-fits performed.
 #[pyclass(name = "Match", module = "pymodal", frozen)]
 pub struct PyMatch {
@@ -100,7 +100,7 @@ impl PyMatch {
     fn local_count(&self) -> usize {
         self.inner.local_count()
     }
-    /// Number of the search's own pairs (the seed's optimisation column).
+    /// Number of the search's own pairs (the paper's optimisation column).
     #[getter]
     fn optimisation_count(&self) -> usize {
         self.inner.one_to_one_count()
@@ -212,7 +212,7 @@ fn triangles(
 ///     data (2-D arrays whose consecutive points are nearest-neighbour close).
 /// material : None, preset name, dict or (E, nu, rho) — only ν changes the matches.
 /// prealign : {"robust", "spec", "normalize"} — rotation search over 36 turns plus the principal
-///     axes (default), SPEC §10's five starts only, or centroid and scale only;
+///     axes (default), the five principal-axes starts only, or centroid and scale only;
 /// skip_rigid : bool; band : int;
 /// refits : int or None — modal affine re-fits (None: 2, or 0 for 3-D point sets);
 /// refit_tolerance : float ≥ 0 or None — no (further) re-fit once one affine map explains the

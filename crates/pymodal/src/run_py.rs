@@ -86,7 +86,7 @@ fn table<'py>(py: Python<'py>, r: &SequenceResult) -> PyResult<Bound<'py, PyList
 ///
 /// Returns a dict with
 ///
-/// - ``table``: list of dicts, one per matched pair, with the seed's columns (ids, frames, node
+/// - ``table``: list of dicts, one per matched pair, with the paper's columns (ids, frames, node
 ///   counts, local matches and %, optimisation matches and %, matches after the excess step);
 /// - ``matches``: list of :class:`Match`, aligned with ``table``;
 /// - ``objects``: list of dicts ``{id, frame, index, level, points}`` (``points`` (n, d) array);
