@@ -1,6 +1,6 @@
 """Read the bundled recording, match the largest contours of two frames, and plot the matches.
 
-Run:  python examples/match_two_frames.py [--frames 60 62] [--out match.png]
+Run:  python examples/match_two_frames.py [--frames 40 42] [--out match.png]
 
 Needs pymodal and matplotlib (``pip install matplotlib``). Frames are 0-based, like the arrays.
 """
@@ -12,6 +12,7 @@ import matplotlib
 
 matplotlib.use("Agg")  # no display needed
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 import numpy as np  # noqa: E402
 
 import pymodal  # noqa: E402
@@ -31,7 +32,7 @@ def largest_contour(frame):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--recording", default=str(DATA))
-    ap.add_argument("--frames", type=int, nargs=2, default=[60, 62], metavar=("A", "B"))
+    ap.add_argument("--frames", type=int, nargs=2, default=[40, 42], metavar=("A", "B"))
     ap.add_argument("--out", default="match.png")
     args = ap.parse_args()
 
@@ -50,9 +51,15 @@ def main():
     fig, ax = plt.subplots(figsize=(4, 8))
     ax.imshow(np.nan_to_num(rec.frames[fa]), cmap="Greys", alpha=0.4)
     plot_match(a, b, m, ax=ax)
-    ax.set_title(f"frames {fa} (blue) and {fb} (red)")
+    ax.set_title(f"largest contours of frames {fa} and {fb}")
     ax.set_xlabel("x (sensels)")
     ax.set_ylabel("y (sensels)")
+    ax.legend(handles=[
+        Line2D([], [], color="tab:blue", marker=".", label=f"frame {fa}"),
+        Line2D([], [], color="tab:red", marker=".", label=f"frame {fb}"),
+        Line2D([], [], color="0.5", label="one-to-one match"),
+        Line2D([], [], color="tab:orange", ls="--", label="excess match"),
+    ], loc="upper right", fontsize="small")
     fig.savefig(args.out, dpi=120, bbox_inches="tight")
     print(f"wrote {args.out}")
 

@@ -35,7 +35,7 @@ def main():
     out.mkdir(parents=True, exist_ok=True)
 
     # The file gives its pitch and frame rate; pitch_mm= and frame_rate= would override them.
-    res = pymodal.run(args.recording, frames=tuple(args.frames), search="global")
+    res = pymodal.run(args.recording, frames=tuple(args.frames))
     table = res["table"]
     print(f"{len(res['objects'])} objects, {len(table)} matched pairs, {len(res['tracks'])} tracks")
 
