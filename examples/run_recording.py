@@ -52,6 +52,14 @@ def main():
     print(f"longest track: {len(longest)} steps, frames {int(longest[0, 0])}..{int(longest[-1, 0])}, "
           f"moved {np.linalg.norm(longest[-1, 1:] - longest[0, 1:]):.1f} sensels")
 
+    # Per-frame measures (as frames.csv), when this pymodal reports them.
+    if res.get("frames"):
+        frames_csv = out / "frames.csv"
+        write_csv(frames_csv, res["frames"])
+        measures = np.genfromtxt(frames_csv, delimiter=",", names=True)
+        force = [c for c in measures.dtype.names if c.startswith("total_")][0]
+        print(f"{len(measures)} frames; {force}: peak {np.nanmax(measures[force]):.1f}")
+
     try:
         import pandas as pd
     except ImportError:
