@@ -91,8 +91,8 @@ fn main() -> Result<(), modal_core::ModalError> {
         .sum::<f64>()
         / b.len() as f64;
     let mut right = 0;
-    for i in 0..a.len() {
-        let truth = warp(outline(a_params[i]));
+    for (i, &t) in a_params.iter().enumerate() {
+        let truth = warp(outline(t));
         let found = r.pairs.iter().find(|p| p.a == i);
         if found.is_some_and(|p| dist(b.point(p.b), truth) <= spacing) {
             right += 1;

@@ -78,8 +78,8 @@ pub struct ModalBasis {
     pub n_nodes: usize,
     /// ω², ascending, one per retained mode.
     pub eigenvalues: Vec<f64>,
-    /// `(dim·n) × k`, component-major rows (`a·n + i` is component `a` of node `i`),
-    /// mass-normalised columns (`φᵀ M φ = I`), each with its largest-|·| entry positive.
+    /// `(dim·n) × k`, component-major rows (`a·n + i` is component `a` of node `i`), mass-normalised
+    /// columns (`φᵀ M φ = I`), each with its largest-|·| entry positive.
     pub modes: faer::Mat<f64>,
     /// The Gaussian width actually used (after the conditioning guard), if Gaussian.
     pub sigma: Option<f64>,

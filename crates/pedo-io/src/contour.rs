@@ -289,8 +289,7 @@ pub fn marching_squares(grid: &Grid, level: f64, saddle: Saddle) -> Result<Vec<C
         }
     };
     let frac = |a: f64, b: f64| if a == b { 0.0 } else { (level - a) / (b - a) };
-    // Edge keys: horizontal edge from (i, j) to (i, j+1) = 2(i w + j); vertical (i, j)-(i+1, j) =
-    // +1.
+    // Edge keys: horizontal edge from (i, j) to (i, j+1) = 2(i w + j); vertical (i, j)-(i+1, j) = +1.
     let key_of = |i: usize, j: usize, e: u8| -> usize {
         match e {
             0 => 2 * (i * w + j),

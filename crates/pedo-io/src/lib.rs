@@ -1,7 +1,7 @@
 //! Plantar-pressure recordings in; contours, brightness surfaces and isobaric contours out.
 //!
-//! - [`read_recording`] reads Tekscan `.asf`, novel emed `.lst`, CSV grids, NumPy `.npy`, and
-//! PNG/TIFF   images (single, folder, numbered sequence) into a [`Recording`];
+//! - [`read_recording`] reads Tekscan `.asf`, novel emed `.lst`, CSV grids, NumPy `.npy`, and PNG/TIFF
+//!   images (single, folder, numbered sequence) into a [`Recording`];
 //! - [`preprocess`] thresholds, smooths and upsamples frames;
 //! - [`contour`] extracts closed, counter-clockwise contours (sub-pixel marching squares or the
 //!   paper's edge chain) and [`track`] pairs them across frames;
