@@ -897,7 +897,8 @@ pub struct RotationSearch {
 
 impl Default for RotationSearch {
     /// Measured on severe ground-truth contour pairs: 210 of bench_match.py (seeds 1–7) 0.925
-    /// with the spec's five candidates, 0.976 with these; the Rust tests' 90: 0.921 vs 0.966.
+    /// with the five principal-axes candidates, 0.976 with these; the Rust tests' 90: 0.921 vs
+    /// 0.966.
     /// Fewer turns (16–30) or a single screening iteration lost 0.01–0.03 of that.
     fn default() -> Self {
         Self {
