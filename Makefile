@@ -3,11 +3,11 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 PIP_PACKAGES := maturin numpy scipy pytest scikit-image matplotlib
 
-.PHONY: test test-rust test-python venv wheel wheel-check bench bench-python lint demo
+.PHONY: test test-rust test-python wheel-check examples venv wheel bench bench-python lint demo
 
-# Every test: Rust (unit, integration, doc), Python (against the installed wheel), and the wheel
-# installed on its own in a fresh venv without Rust.
-test: test-rust test-python wheel-check
+# Every test: Rust (unit, integration, doc), Python (against the installed wheel), the wheel
+# installed on its own in a fresh venv without Rust, and every example.
+test: test-rust test-python wheel-check examples
 
 test-rust: venv
 	cargo test
@@ -47,6 +47,19 @@ wheel-check: wheel
 	$(PYTHON3) -m venv "$$tmp/venv"; \
 	"$$tmp/venv/bin/python" -m pip install -q --only-binary=:all: dist/pymodal-*-cp39-abi3-*.whl; \
 	cd "$$tmp" && "$$tmp/venv/bin/python" $(abspath crates/pymodal/tests/smoke_installed_wheel.py)
+
+# Every example: one Rust example per crate (plus the assignment timing harness on small
+# sizes), then the Python ones with the venv's interpreter against the installed wheel. Outputs
+# go to a temporary folder, removed afterwards.
+examples: wheel
+	cargo run -q -p assign --example solve_small
+	cargo run -q -p assign --example timing -- 200
+	cargo run -q -p modal-core --example match_contours
+	cargo run -q -p pedo-io --example read_asf
+	cargo run -q -p pedomatch --example run_recording
+	tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && \
+	$(PY) examples/match_two_frames.py --out "$$tmp/match.png" && test -s "$$tmp/match.png" && \
+	$(PY) examples/run_recording.py --out-dir "$$tmp" && test -s "$$tmp/pairs.csv"
 
 bench:
 	cargo bench

@@ -13,8 +13,8 @@ Times are medians of CPU time (time.process_time) over --repeat runs; every solv
 single-threaded, and CPU time is less disturbed by other processes on a shared machine.
 
 Example (the command behind the README tables):
-    /work/venv-assign/bin/python benches/python/bench_assign.py \
-        --other-python /work/venv-lapx/bin/python --sizes 1000 2000
+    python benches/python/bench_assign.py \
+        --other-python LAPX_VENV/bin/python --sizes 1000 2000
 """
 
 import argparse

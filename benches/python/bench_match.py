@@ -1,6 +1,6 @@
 """Accuracy and time per pair of pymodal.match against coherent point drift (pycpd) and optimal
 assignment on normalised positions, on ground-truth cases built from real foot outlines and a real
-pressure image (crates/modal-core/tests/data, extracted from /work/shared/data by make_fixtures.py).
+pressure image (crates/modal-core/tests/data, extracted from the sample recordings by make_fixtures.py).
 
 Contours: A sampled on an outline (48-72 points, random start), B on the same outline warped by a
 known smooth deformation (rotation, anisotropic scale, shear, bending, translation) with

@@ -303,8 +303,8 @@ pub fn solve(
 /// are indifferent and may or may not be kept. With `options.maximize` the sense flips: the
 /// saving is `Σ (cost[i][j] − τ)` and no pair below `τ` is kept.
 ///
-/// This is the `(n + m) × (n + m)` padding with dummy cost `τ` of SPEC §6.2 (dummy rows and
-/// columns at `τ/2` each), solved without building the padded matrix: the smaller side gets one
+/// This is the `(n + m) × (n + m)` padding with dummy cost `τ` of docs/method.md §6.2 (dummy rows
+/// and columns at `τ/2` each), solved without building the padded matrix: the smaller side gets one
 /// private dummy partner each, `min(n, m) × (n + m)` entries in total.
 ///
 /// # Errors

@@ -1,4 +1,4 @@
-//! Pre-alignment of two objects (SPEC §5.3 and the robust recipe of §10): normalisation,
+//! Pre-alignment of two objects (docs/method.md §5.3 and §7): normalisation,
 //! principal-axis rotation candidates, symmetric affine ICP scored by chamfer distance, and
 //! least-squares affine fits from correspondences.
 
@@ -75,7 +75,7 @@ impl Affine {
     }
 }
 
-/// Centres points on their centroid and scales them to RMS radius 1 (SPEC §5.3).
+/// Centres points on their centroid and scales them to RMS radius 1 (docs/method.md §5.3).
 /// Returns the normalised points, the centroid and the scale factor applied.
 pub fn normalize(pts: &[f64], dim: usize) -> Result<(Vec<f64>, [f64; 3], f64), ModalError> {
     let n = pts.len() / dim;
@@ -814,7 +814,7 @@ pub fn icp_affine(
     }
 }
 
-/// Rotation candidates mapping A's normalised frame into B's (SPEC §10 step 2): the identity,
+/// Rotation candidates mapping A's normalised frame into B's (docs/method.md §7.1): the identity,
 /// `V_b · diag(s) · V_aᵀ` for every proper sign pattern `s`, and each of those turned by 90° about
 /// B's last principal axis; then, when `turns > 1`, the turns by `2πk / turns` (k = 1 … turns − 1)
 /// about the same axis.
@@ -885,7 +885,7 @@ fn sandwich(dim: usize, u: &[[f64; 3]; 3], t: &[[f64; 3]; 3], v: &[[f64; 3]; 3])
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RotationSearch {
     /// Evenly spaced starting turns (every `360° / turns`) added to the identity and the
-    /// principal-axes candidates of SPEC §10; 0 or 1 adds none (the spec's five candidates).
+    /// principal-axes candidates; 0 or 1 adds none (the five principal-axes candidates only).
     pub turns: usize,
     /// ICP iterations every start gets before the screening.
     pub screen_iterations: usize,
@@ -897,7 +897,8 @@ pub struct RotationSearch {
 
 impl Default for RotationSearch {
     /// Measured on severe ground-truth contour pairs: 210 of bench_match.py (seeds 1–7) 0.925
-    /// with the spec's five candidates, 0.976 with these; the Rust tests' 90: 0.921 vs 0.966.
+    /// with the five principal-axes candidates, 0.976 with these; the Rust tests' 90: 0.921 vs
+    /// 0.966.
     /// Fewer turns (16–30) or a single screening iteration lost 0.01–0.03 of that.
     fn default() -> Self {
         Self {
@@ -910,7 +911,8 @@ impl Default for RotationSearch {
 }
 
 impl RotationSearch {
-    /// SPEC §10 step 2 as written: identity and principal-axes candidates, `iterations` ICP each.
+    /// The five principal-axes starts only: identity and principal-axes candidates, `iterations`
+    /// ICP each.
     pub fn spec(iterations: usize) -> Self {
         Self {
             turns: 0,
@@ -930,7 +932,7 @@ impl RotationSearch {
 /// a task of its own.
 const SCREEN_CHUNK: usize = 8;
 
-/// The robust pre-alignment of SPEC §10 step 2: rotation candidates refined by symmetric affine
+/// The robust pre-alignment of docs/method.md §7.1: rotation candidates refined by symmetric affine
 /// ICP and scored by chamfer distance, searched as `search` says; the identity wins ties (within
 /// 0.1 %), because every turn of a nearly round outline scores about the same.
 pub fn robust_prealign(

@@ -1,5 +1,5 @@
-//! Linear axial (bar/truss) elements with consistent mass (SPEC §3), and the remedies for the
-//! spurious zero-energy mechanisms of plain bar loops and open surfaces (§3.2).
+//! Linear axial (bar/truss) elements with consistent mass (docs/method.md §3), and the remedies for
+//! the spurious zero-energy mechanisms of plain bar loops and open surfaces (§3.2).
 //!
 //! - 2-D closed contours: the ring of `m` bars is a mechanism with `m` zero modes. The polygon
 //!   interior is triangulated by ear clipping and every diagonal becomes a bar too (2m − 3 bars, a

@@ -1,15 +1,17 @@
-//! Matching the nodes left over by the one-to-one search (SPEC §6.3 contours, §6.4 surfaces).
+//! Matching the nodes left over by the one-to-one search (docs/method.md §6.3 contours, §6.4 point
+//! sets and meshes).
 
 // Small fixed-size matrix code reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
 use crate::AffinityMatrix;
 
-/// SPEC §6.3 on two counter-clockwise closed contours. `z` has the *smaller* contour (A, `n_a`
-/// nodes) on its rows and the larger (B) on its columns; `pairs` are one-to-one `(a, b)`.
+/// docs/method.md §6.3 on two counter-clockwise closed contours. `z` has the *smaller* contour (A,
+/// `n_a` nodes) on its rows and the larger (B) on its columns; `pairs` are one-to-one `(a, b)`.
 /// Every unmatched B node lying between two matched B nodes `p, q` is given an A node from the arc
 /// `a(p) … a(q)`, non-decreasing along the run, so neighbours stay neighbours and no two matches
-/// cross; several B nodes may share one A node. Returns the new `(a, b)` pairs with `Z ≤ threshold`.
+/// cross; several B nodes may share one A node. Returns the new `(a, b)` pairs with `Z ≤
+/// threshold`.
 pub fn contour_excess(
     z: &AffinityMatrix,
     pairs: &[(usize, usize)],
@@ -91,7 +93,7 @@ pub fn contour_excess(
     out
 }
 
-/// SPEC §6.4, generalised to unordered point sets and meshes in 2-D or 3-D.
+/// docs/method.md §6.4, generalised to unordered point sets and meshes in 2-D or 3-D.
 ///
 /// `z` has object A on its rows and B on its columns; each unmatched B node `e` (B is the larger
 /// object, the one whose nodes are left over) gets an A node from the candidates formed by the

@@ -1,4 +1,5 @@
-//! Modal feature vectors, the cross-object mode alignment of SPEC §5.5 and the affinity matrix Z.
+//! Modal feature vectors, the cross-object mode alignment of docs/method.md §5.4 and the affinity
+//! matrix Z.
 
 // Small fixed-size matrix code reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
@@ -24,7 +25,8 @@ pub struct ModalFeatures {
 impl ModalFeatures {
     /// Takes modes `skip .. skip + k` of a `(dim·n) × K` mode matrix given column by column
     /// (`column(p)` returns mode `p`). Each column is scaled to norm `√n` (independent of ρ, σ and
-    /// node count, SPEC §5.3) and signed so that its largest-|·| entry is positive (SPEC §4.3).
+    /// node count, docs/method.md §5.1) and signed so that its largest-|·| entry is positive
+    /// (docs/method.md §4.2).
     pub fn from_columns<'a, F>(
         dim: usize,
         n_nodes: usize,
@@ -132,13 +134,13 @@ pub struct ModeAlignment {
     pub order: Vec<usize>,
     /// Sign applied to that mode of B.
     pub signs: Vec<f64>,
-    /// |cosine similarity| of each aligned pair (SPEC §5.5 flags < 0.3 as unreliable).
+    /// |cosine similarity| of each aligned pair (below about 0.3 the alignment is unreliable).
     pub similarity: Vec<f64>,
 }
 
-/// SPEC §5.5: aligns the sign and order of B's modes to A's by the spatial correlation of their
-/// displacement fields, sampled at each A node's nearest B node (`nn[i]`). Mode `p` of A may be
-/// paired with B's modes `q` with `|p − q| ≤ band` (one-to-one, rectangular assignment).
+/// docs/method.md §5.4: aligns the sign and order of B's modes to A's by the spatial correlation of
+/// their displacement fields, sampled at each A node's nearest B node (`nn[i]`). Mode `p` of A may
+/// be paired with B's modes `q` with `|p − q| ≤ band` (one-to-one, rectangular assignment).
 pub fn align_modes(
     a: &ModalFeatures,
     b: &ModalFeatures,
@@ -214,7 +216,8 @@ pub fn align_modes(
     })
 }
 
-/// Dense `rows × cols` matrix of modal distances between the nodes of two objects (SPEC §5.1):
+/// Dense `rows × cols` matrix of modal distances between the nodes of two objects (docs/method.md
+/// §5.1):
 /// `Z[i, j] = ‖f_i − f_j‖²`, row `i` a node of A, column `j` a node of B.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AffinityMatrix {
@@ -308,8 +311,8 @@ impl AffinityMatrix {
         self.data.iter().copied().fold(0.0, f64::max)
     }
 
-    /// Divides by the largest entry, so thresholds are fractions in [0, 1] (SPEC §5.1). An all-zero
-    /// matrix (identical objects with identical sampling) is left as is.
+    /// Divides by the largest entry, so thresholds are fractions in [0, 1] (docs/method.md §5.1).
+    /// An all-zero matrix (identical objects with identical sampling) is left as is.
     pub fn normalized(mut self) -> Self {
         let mx = self.max();
         if mx > 0.0 {

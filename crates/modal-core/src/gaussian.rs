@@ -1,4 +1,4 @@
-//! Sclaroff's isoparametric Gaussian element in 2-D and 3-D (SPEC §2).
+//! Sclaroff's isoparametric Gaussian element in 2-D and 3-D (docs/method.md §2).
 //!
 //! Interpolants `h = A g` with `g_k(x) = exp(−|x−X_k|²/2σ²)` and `A = G⁻¹`. All integrals are over
 //! ℝ^d and closed-form (§2.2). The stiffness and mass are `K = Â K̃ Â`, `M = Â Γ̃ Â` with
@@ -150,7 +150,7 @@ fn gaussian(x: f64) -> f64 {
 }
 
 impl GaussianIntegrals {
-    /// Closed forms of SPEC §2.2 for the nodes of `shape` and width `sigma`.
+    /// Closed forms of docs/method.md §2.2 for the nodes of `shape` and width `sigma`.
     pub fn new(shape: &Shape, sigma: f64) -> Self {
         let dim = shape.dim();
         let n = shape.len();
@@ -206,7 +206,8 @@ impl GaussianIntegrals {
         &self.gamma_d[pair_index(self.dim, a, b)]
     }
 
-    /// The (a, b) block of `K̃`: `(λ+μ) Γ^{ab} + μ δ_ab Σ_c Γ^{cc}` (SPEC §2.4 without the `A`s).
+    /// The (a, b) block of `K̃`: `(λ+μ) Γ^{ab} + μ δ_ab Σ_c Γ^{cc}` (docs/method.md §2.4 without
+    /// the `A`s).
     pub fn k_tilde_block(&self, a: usize, b: usize, lambda: f64, mu: f64) -> Mat<f64> {
         let mut out = self.gamma_ab(a, b) * faer::Scale(lambda + mu);
         if a == b {
@@ -230,8 +231,8 @@ impl GaussianIntegrals {
         k
     }
 
-    /// Explicit `K = Â K̃ Â` and `M = Â Γ̃ Â` with `A = G⁻¹` (SPEC §2.3–2.4). For tests, exports and
-    /// oracles only; the modal solve never forms `G⁻¹`.
+    /// Explicit `K = Â K̃ Â` and `M = Â Γ̃ Â` with `A = G⁻¹` (docs/method.md §2.3–2.4). For tests,
+    /// exports and oracles only; the modal solve never forms `G⁻¹`.
     pub fn explicit_matrices(
         &self,
         material: &Material,

@@ -24,7 +24,7 @@ pub struct Material {
 }
 
 impl Material {
-    /// Natural rubber, the seed's virtual material: E = 0.05 GPa, ν = 0.49, ρ = 930 kg/m³.
+    /// Natural rubber, the papers' virtual elastic material: E = 0.05 GPa, ν = 0.49, ρ = 930 kg/m³.
     pub const RUBBER: Material = Material {
         young: 5.0e7,
         poisson: 0.49,
@@ -48,7 +48,8 @@ impl Material {
         poisson: 0.0,
         density: 240.0,
     };
-    /// Dimensionless unit material E = 1, ν = 0.3, ρ = 1 (the SPEC §2.5 golden values).
+    /// Dimensionless unit material E = 1, ν = 0.3, ρ = 1 (the golden values of
+    /// tests/fem_golden.rs).
     pub const UNIT: Material = Material {
         young: 1.0,
         poisson: 0.3,
@@ -112,7 +113,7 @@ impl Material {
         self.young / (2.0 * (1.0 + self.poisson))
     }
 
-    /// Lamé constants (λ, μ) of a `dim`-dimensional model (SPEC §2.4): the 3-D values for
+    /// Lamé constants (λ, μ) of a `dim`-dimensional model (docs/method.md §2.4): the 3-D values for
     /// `dim == 3`; in 2-D, plane stress uses the reduced λ* = Eν/(1−ν²).
     pub fn lame(&self, dim: usize, plane: PlaneModel) -> (f64, f64) {
         let (e, nu) = (self.young, self.poisson);

@@ -29,9 +29,9 @@ pub struct ModelOptions {
     pub plane: PlaneModel,
     /// Absolute Gaussian width; `None` uses `kappa × mean nearest-neighbour distance`.
     pub sigma: Option<f64>,
-    /// σ rule factor (SPEC §2.8).
+    /// σ rule factor (docs/method.md §2.7).
     pub kappa: f64,
-    /// Project out the exact rigid-body motions (SPEC §2.7).
+    /// Project out the exact rigid-body motions (docs/method.md §2.6).
     pub exact_rigid: bool,
     /// Compute only the lowest `k` modes; `None` computes all the model has (`dim × n`, or
     /// `dim ×` the centre count of a reduced basis).
@@ -96,7 +96,7 @@ impl ModalBasis {
     }
 
     /// Per-node modal features of the first `k` modes: an `n × (dim·k)` matrix whose row `i`
-    /// is `[u_i(0..k), v_i(0..k), (w_i(0..k))]` (seed eqs 1–2).
+    /// is `[u_i(0..k), v_i(0..k), (w_i(0..k))]` (Tavares & Bastos 2005, eqs 1–2).
     pub fn features(&self, k: usize) -> Result<Mat<f64>, ModalError> {
         if k > self.modes.ncols() {
             return Err(ModalError::InvalidParameter(format!(
@@ -111,7 +111,7 @@ impl ModalBasis {
     }
 }
 
-/// Relative eigenvalue below which a mode counts as zero-energy (SPEC §4.3).
+/// Relative eigenvalue below which a mode counts as zero-energy (docs/method.md §4.2).
 pub const ZERO_MODE_TOL: f64 = 1e-9;
 
 /// Largest accepted `max(L_ii)/min(L_ii)` of the Cholesky factor of Γ (cond(Γ) ≲ 10¹²; §2.8).
@@ -182,8 +182,8 @@ pub fn solve_model(
         let u = rigid.as_ref().expect("rigid basis built above");
         deflate_rigid(&mut c, u);
     }
-    // Bar models count their zero modes over the whole spectrum (SPEC §4.3); every other model
-    // needs only the eigenvalues of the modes it returns.
+    // Bar models count their zero modes over the whole spectrum (docs/method.md §3.2); every other
+    // model needs only the eigenvalues of the modes it returns.
     let zero_mode_check = options.element == ElementKind::Axial && !options.exact_rigid;
     let mut pairs = if zero_mode_check {
         eigen::symmetric_eigen(c, Some(k))?
@@ -192,7 +192,7 @@ pub fn solve_model(
     };
     if options.exact_rigid {
         // The deflated rigid space sits at eigenvalue −s; replace the solver's arbitrary basis
-        // of it by the canonical M-orthonormal one (SPEC §2.7).
+        // of it by the canonical M-orthonormal one (docs/method.md §2.6).
         let u = rigid.as_ref().expect("rigid basis built above");
         for j in 0..r.min(k) {
             pairs.values[j] = 0.0;
@@ -476,7 +476,8 @@ fn rigid_reduced_basis(shape: &Shape, model: &SolverModel) -> Result<Mat<f64>, M
 }
 
 /// `C ← Q C Q − s U Uᵀ` with `Q = I − U Uᵀ`: the flexible spectrum is that of the M-orthogonal
-/// projection (SPEC §2.7) and the rigid space is moved to `−s < 0` so that it sorts first.
+/// projection (docs/method.md §2.6) and the rigid space is moved to `−s < 0` so that it sorts
+/// first.
 fn deflate_rigid(c: &mut Mat<f64>, u: &Mat<f64>) {
     let v = &*c * u; // C U
     let h = u.transpose() * &v; // Uᵀ C U
@@ -507,7 +508,7 @@ fn check_zero_modes(pairs: &EigenPairs, dim: usize) -> Result<(), ModalError> {
     Ok(())
 }
 
-/// Number of eigenvalues below `ZERO_MODE_TOL × max` (SPEC §4.3).
+/// Number of eigenvalues below `ZERO_MODE_TOL × max` (docs/method.md §4.2).
 pub fn count_zero_modes(eigenvalues: &[f64]) -> usize {
     let max = eigenvalues
         .iter()

@@ -1,4 +1,4 @@
-//! Exact rigid-body motions of a node set (SPEC §2.7).
+//! Exact rigid-body motions of a node set (docs/method.md §2.6).
 
 // Index loops over several matrices at once read better than zipped iterators here.
 #![allow(clippy::needless_range_loop)]

@@ -1,4 +1,4 @@
-//! Searching the affinity matrix for one-to-one correspondences (SPEC §6.1–6.2).
+//! Searching the affinity matrix for one-to-one correspondences (docs/method.md §6.1–6.2).
 
 // Small fixed-size matrix code reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
@@ -8,7 +8,8 @@ use crate::{AffinityMatrix, ModalError};
 /// How a threshold interacts with the optimal assignment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ThresholdMode {
-    /// Solve the assignment first, then delete pairs whose cost exceeds the threshold (the seed).
+    /// Solve the assignment first, then delete pairs whose cost exceeds the threshold (the paper's
+    /// order).
     #[default]
     AfterAssignment,
     /// Let the optimiser reject pairs: every node may instead pay half the threshold to stay
@@ -16,8 +17,8 @@ pub enum ThresholdMode {
     InOptimizer,
 }
 
-/// Local search (SPEC §6.1): `(i, j)` is a match iff `j` is the row minimum of `i`, `i` the column
-/// minimum of `j` (ties to the lowest index) and `Z[i, j] ≤ threshold`. Sorted by `i`.
+/// Local search (docs/method.md §6.1): `(i, j)` is a match iff `j` is the row minimum of `i`, `i`
+/// the column minimum of `j` (ties to the lowest index) and `Z[i, j] ≤ threshold`. Sorted by `i`.
 pub fn local_matches(z: &AffinityMatrix, threshold: f64) -> Vec<(usize, usize)> {
     let (n, m) = (z.rows(), z.cols());
     if n == 0 || m == 0 {
@@ -70,8 +71,9 @@ pub fn best_matches(z: &AffinityMatrix, threshold: f64) -> Vec<(usize, usize)> {
         .collect()
 }
 
-/// Global search (SPEC §6.2): the minimum-cost one-to-one matching that saturates the smaller
-/// object (equivalent to padding with constant-cost dummy nodes), then the threshold. Sorted by `i`.
+/// Global search (docs/method.md §6.2): the minimum-cost one-to-one matching that saturates the
+/// smaller object (equivalent to padding with constant-cost dummy nodes), then the threshold.
+/// Sorted by `i`.
 pub fn global_matches(
     z: &AffinityMatrix,
     method: assign::Method,
@@ -88,7 +90,7 @@ pub fn global_matches(
     };
     let sol = match mode {
         ThresholdMode::AfterAssignment => assign::solve(z.as_slice(), n, m, &opts)?,
-        // The (n+m)² padding with dummy cost τ of SPEC §6.2, solved without building it.
+        // The (n+m)² padding with dummy cost τ of docs/method.md §6.2, solved without building it.
         ThresholdMode::InOptimizer if threshold.is_finite() => {
             assign::solve_with_threshold(z.as_slice(), n, m, threshold, &opts)?
         }

@@ -1,5 +1,5 @@
-//! Bar (axial) models: zero-mode counts with and without the mechanism remedies (SPEC §3.2),
-//! normalisation, and input errors.
+//! Bar (axial) models: zero-mode counts with and without the mechanism remedies (docs/method.md
+//! §3.2), normalisation, and input errors.
 
 use faer::Mat;
 use modal_core::axial::{

@@ -607,8 +607,8 @@ fn reduced_basis_is_a_rayleigh_ritz_subspace_of_the_full_element() {
             full.eigenvalues[j]
         );
     }
-    // The ten lowest modes (the Gaussian element's quasi-rigid ones among them, SPEC §2.7)
-    // within 1 % of the full element's, with the same shapes at the nodes.
+    // The ten lowest modes (the Gaussian element's quasi-rigid ones among them, docs/method.md
+    // §2.6) within 1 % of the full element's, with the same shapes at the nodes.
     for j in 0..10 {
         let rel = reduced.eigenvalues[j] / full.eigenvalues[j] - 1.0;
         assert!(rel < 0.01, "mode {j}: {rel}");

@@ -1,4 +1,5 @@
-//! SPEC §2.5 golden values of the Gaussian element.
+//! Golden values of the Gaussian element's closed forms (docs/method.md §2.2–2.4), computed
+//! independently.
 
 use modal_core::gaussian::GaussianIntegrals;
 use modal_core::{
@@ -30,7 +31,7 @@ fn tri() -> Shape {
 }
 
 #[test]
-#[allow(clippy::approx_constant)] // Γ^xx_00 = V/(2σ²) = π/2: the SPEC prints it rounded.
+#[allow(clippy::approx_constant)] // Γ^xx_00 = V/(2σ²) = π/2: the reference value is printed rounded.
 fn golden_2d_integrals() {
     let ints = GaussianIntegrals::new(&tri(), 0.7);
     let row = |m: &faer::Mat<f64>, i: usize| (0..3).map(|j| m[(i, j)]).collect::<Vec<_>>();

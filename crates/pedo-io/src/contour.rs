@@ -1,4 +1,4 @@
-//! Closed contours of a frame: sub-pixel marching squares (default) or the seed's chain
+//! Closed contours of a frame: sub-pixel marching squares (default) or the paper's chain
 //! (threshold, smoothing, Sobel edge enhancement, hysteresis, boundary tracking).
 //!
 //! Every contour is closed (the last point joins the first, which is not repeated),
@@ -28,7 +28,7 @@ pub enum Saddle {
 pub enum ContourMethod {
     /// Sub-pixel marching squares at the level (linear interpolation along cell edges).
     MarchingSquares { saddle: Saddle },
-    /// The seed's chain: regions by hysteresis (seeds above `high`, grown through pixels above the
+    /// The paper's chain: regions by hysteresis (seeds above `high`, grown through pixels above the
     /// level, 8-connected), Moore tracing of each region's outer boundary, and, if `refine`, each
     /// boundary pixel moved along the gradient to the peak of the Sobel gradient magnitude (the
     /// edge-enhancement step) with a parabolic fit, at most one pixel.
@@ -376,7 +376,7 @@ pub fn marching_squares(grid: &Grid, level: f64, saddle: Saddle) -> Result<Vec<C
 }
 
 // ---------------------------------------------------------------------------------------------
-// The seed's chain
+// The paper's chain
 
 const DIRS: [(isize, isize); 8] = [
     (-1, 0),
@@ -424,7 +424,7 @@ fn bilinear(v: &[f64], rows: usize, cols: usize, x: f64, y: f64) -> f64 {
     a * (1.0 - ty) + b * ty
 }
 
-/// The seed's chain on an already preprocessed grid (see [`ContourMethod::Chain`]).
+/// The paper's chain on an already preprocessed grid (see [`ContourMethod::Chain`]).
 pub fn chain_contours(g: &Grid, low: f64, high: f64, refine: bool) -> Result<Vec<Contour>> {
     if !(low.is_finite() && high.is_finite()) {
         return Err(IoError::invalid(

@@ -1,5 +1,5 @@
-//! Isobaric contours (seed §3.3): level lines at chosen pressures of the same thresholded,
-//! smoothed frame the surfaces use, as 2-D `(x, y)` or 3-D `(x, y, level)` point sets.
+//! Isobaric contours (docs/method.md §8.4): level lines at chosen pressures of the same
+//! thresholded, smoothed frame the surfaces use, as 2-D `(x, y)` or 3-D `(x, y, level)` point sets.
 
 use crate::contour::{
     marching_squares, resample_closed, resample_spacing, Contour, Resample, Saddle,

@@ -6,8 +6,8 @@
 //!   deciding the format by content ([`sniff_format`]);
 //! - [`preprocess`] thresholds, smooths and upsamples frames;
 //! - [`contour`] extracts closed, counter-clockwise contours (sub-pixel marching squares or the
-//!   seed's edge chain) and [`track`] pairs them across frames;
-//! - [`surface`] builds the seed's brightness surfaces and [`isobar`] its isobaric contours.
+//!   paper's edge chain) and [`track`] pairs them across frames;
+//! - [`surface`] builds the paper's brightness surfaces and [`isobar`] its isobaric contours.
 //!
 //! Coordinates follow the convention documented in [`grid`]: x = column, y = row, pixel units
 //! (sensel centres at integers), or millimetres via [`CoordUnits::Millimetres`].

@@ -16,7 +16,7 @@ pub enum Interpolation {
 /// The preprocessing chain, applied in the order threshold → smoothing → upsampling.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Preprocess {
-    /// Values strictly below this are set to 0 (noise removal, seed §3.2 step 1).
+    /// Values strictly below this are set to 0 (noise removal, docs/method.md §8.1).
     pub threshold: Option<f64>,
     /// Gaussian smoothing with this σ in pixels of the input grid (0 or `None`: no smoothing).
     pub sigma: Option<f64>,

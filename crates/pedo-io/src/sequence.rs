@@ -1,9 +1,9 @@
 //! Whole recordings: the objects of every frame, matched pair by pair, chained into node tracks.
 //!
-//! This is the job of the seed's Tables 1–3: for a contour or surface model, the objects of
+//! This is the job of Tables 1–3 of Tavares & Bastos (2005): for a contour or surface model, the objects of
 //! consecutive frames (paired by [`crate::track`]) are matched; for the isocontour model, the
-//! isobaric contours of one frame are matched level after level (seed §5.3). Each matched pair
-//! yields one [`PairRow`] with the seed's columns, and the matches are chained into [`Track`]s.
+//! isobaric contours of one frame are matched level after level (docs/method.md §9). Each matched pair
+//! yields one [`PairRow`] with the paper's columns, and the matches are chained into [`Track`]s.
 
 use crate::contour::{contours, Contour, ContourOptions, Resample};
 use crate::error::{IoError, Result};
@@ -20,12 +20,12 @@ use std::time::{Duration, Instant};
 /// Which object model represents a frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ObjectModel {
-    /// Closed contours of the loaded region (seed §3.1).
+    /// Closed contours of the loaded region (docs/method.md §8.2).
     #[default]
     Contour,
-    /// Brightness surfaces: pressure as height over the loaded region (seed §3.2).
+    /// Brightness surfaces: pressure as height over the loaded region (docs/method.md §8.3).
     Surface,
-    /// Isobaric contours of a single frame, matched level after level (seed §3.3, §5.3).
+    /// Isobaric contours of a single frame, matched level after level (docs/method.md §8.4).
     Isocontour,
 }
 
@@ -359,7 +359,7 @@ pub struct SequenceObject {
     pub shape: Shape,
 }
 
-/// One row of the per-pair table: the seed's columns.
+/// One row of the per-pair table: the paper's columns.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PairRow {
     pub id_a: usize,

@@ -1,5 +1,5 @@
-//! Brightness surfaces (seed §3.2): the pressure of each sample as the third coordinate of a
-//! triangulated surface.
+//! Brightness surfaces (docs/method.md §8.3): the pressure of each sample as the third coordinate
+//! of a triangulated surface.
 //!
 //! Steps: (1) noise threshold and Gaussian smoothing ([`Preprocess`]); (2) sampling of the object's
 //! bounding rectangle, keeping only samples above the threshold; (3) 2-D Delaunay triangulation
@@ -50,7 +50,8 @@ impl Default for Laplacian {
 /// How z (pressure) is scaled at the end.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum ZScale {
-    /// `z' = z · max(x range, y range) / (z range)` (seed step 6); unchanged if z is constant.
+    /// `z' = z · max(x range, y range) / (z range)` (docs/method.md §8.3); unchanged if z is
+    /// constant.
     #[default]
     MatchXY,
     /// `z' = z · factor`.

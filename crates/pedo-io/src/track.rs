@@ -1,5 +1,5 @@
-//! Pairing contours across consecutive frames, with splits and merges reported (seed §3: the
-//! contours of one object must be followed through the sequence).
+//! Pairing contours across consecutive frames, with splits and merges reported (docs/method.md §9:
+//! the contours of one object must be followed through the sequence).
 //!
 //! Two links are offered: area overlap of the regions the contours enclose, and centroid
 //! distance. Pairs are the one-to-one continuations; an object linked to several in the next
@@ -17,7 +17,7 @@ pub enum PairingMethod {
     Overlap { min_fraction: f64, resolution: f64 },
     /// Linked when the centroids are at most `max_distance` apart (same units as the points).
     Centroid { max_distance: f64 },
-    /// Centroid tracking with a constant-velocity prediction (the noise-free limit of the seed's
+    /// Centroid tracking with a constant-velocity prediction (the noise-free limit of the paper's
     /// Kalman tracking of centroids): in [`track`], a contour that continued an object from the
     /// frame before is expected at `centroid + (centroid − previous centroid)`, and linked when
     /// the next frame's centroid is at most `max_distance` from that prediction. In
@@ -209,7 +209,7 @@ fn classify(a: &[Contour], b: &[Contour], links: Vec<(usize, usize, f64)>) -> Pa
 }
 
 /// Links contours by a caller-supplied cost — for instance the modal deformation energy needed
-/// to align two contours, the seed's third option — where `cost(a_i, b_j)` is `None` for "not
+/// to align two contours, the paper's third option — where `cost(a_i, b_j)` is `None` for "not
 /// linked" and lower is better. Holes are skipped as in [`pair_contours`]; non-finite costs are an
 /// error.
 pub fn pair_contours_by<F>(a: &[Contour], b: &[Contour], mut cost: F) -> Result<Pairing>

@@ -374,7 +374,7 @@ fn points_array<'py, const D: usize>(
 /// ``n_points`` / ``spacing``: resample uniformly in arc length. ``smooth``: Gaussian σ in pixels.
 /// ``threshold``: values below are set to 0 first. ``upsample``: integer factor (coordinates stay
 /// in input pixels), ``interpolation`` "bilinear" or "bicubic". ``method``: "marching" (sub-pixel
-/// marching squares) or "chain" (the seed's hysteresis + boundary tracking; ``high`` is its upper
+/// marching squares) or "chain" (the paper's hysteresis + boundary tracking; ``high`` is its upper
 /// threshold). ``fully_connected``: saddle rule as in ``skimage.measure.find_contours``.
 /// ``include_holes``: keep contours around holes. ``min_area``: drop smaller contours (px²).
 /// NaN in the frame means no sensor (read as 0); the frame is surrounded by zeros so every
@@ -494,7 +494,7 @@ impl PySurface {
     }
 }
 
-/// The seed's brightness surface of a frame (§3.2): values below ``threshold`` removed, Gaussian
+/// The paper's brightness surface of a frame (docs/method.md §8.3): values below ``threshold`` removed, Gaussian
 /// smoothing ``smooth`` (σ px), samples above the threshold in the object's bounding rectangle
 /// (every ``step`` px), Delaunay triangulation with pressure as z, decimation to ``max_nodes``
 /// (hull corners kept unless ``keep_hull=False``), Laplacian smoothing (VTK semantics:

@@ -168,7 +168,7 @@ def test_threshold():
         assert (r.tolist(), c.tolist()) == ([0], [0])
         r, c = pymodal.linear_sum_assignment_threshold(cost, 100.0, solver=method)
         assert cost[r, c].sum() == 9.0
-    # Against the explicit (n+m)x(n+m) padding of SPEC §6.2 solved by scipy.
+    # Against the explicit (n+m)x(n+m) padding of docs/method.md §6.2 solved by scipy.
     rng = np.random.default_rng(5)
     for _ in range(30):
         n, m = rng.integers(1, 12, size=2)

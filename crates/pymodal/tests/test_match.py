@@ -133,7 +133,7 @@ def test_reduced_gaussian_basis(case):
 
 def test_rotation_search_on_a_rounded_heel():
     # The nearly round heel blob of a late F-Scan frame, turned 15-35 degrees and stretched:
-    # affine ICP from SPEC 10's five starts stops in a wrong minimum, the dense search does not.
+    # affine ICP from the five principal-axes starts stops in a wrong minimum, the dense search does not.
     o = outline("FrasP01L-frame67-late")
     c = o.mean(0)
 

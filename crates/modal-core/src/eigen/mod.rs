@@ -1,4 +1,4 @@
-//! Symmetric and generalized symmetric-definite eigensolvers (SPEC §4).
+//! Symmetric and generalized symmetric-definite eigensolvers (docs/method.md §4).
 //!
 //! `K x = λ B x` with `B` positive definite is reduced to a standard problem by `B = L Lᵀ`,
 //! `C = L⁻¹ K L⁻ᵀ`, `C y = λ y`, `x = L⁻ᵀ y` (so `xᵀ B x = I`). The standard problem is
@@ -914,7 +914,7 @@ pub fn generalized_eigen(
 /// `C = (I_d ⊗ L)⁻¹ K (I_d ⊗ L)⁻ᵀ` for a `d·n × d·n` matrix `K` (full storage, symmetric) and the
 /// Cholesky factor `L` of the `n × n` diagonal block of a block-diagonal `B = I_d ⊗ L Lᵀ`.
 /// Only `d(d+1)/2` block congruences with the `n × n` factor are needed instead of one with the
-/// `dn × dn` factor (SPEC §4.1, block form). `C` is returned with full symmetric storage.
+/// `dn × dn` factor (docs/method.md §4.1, block form). `C` is returned with full symmetric storage.
 pub fn block_congruence(k: MatRef<'_, f64>, l: MatRef<'_, f64>, dim: usize) -> Mat<f64> {
     let n = l.nrows();
     let mut c = k.to_owned();

@@ -1,5 +1,5 @@
 //! The modal matching pipeline: pre-alignment, modal features, mode alignment, affinity,
-//! search, excess nodes and iterative affine re-fits (SPEC §5, §6 and the recipe of §10).
+//! search, excess nodes and iterative affine re-fits (docs/method.md §5–7).
 
 // Small fixed-size matrix code reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
@@ -16,9 +16,10 @@ mod first_phase;
 /// Which search produces the primary matches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Search {
-    /// Mutual best matches under the threshold (the original modal matching, SPEC §6.1).
+    /// Mutual best matches under the threshold (the original modal matching, docs/method.md §6.1).
     Local,
-    /// Optimal assignment saturating the smaller object (the seed's optimisation, SPEC §6.2).
+    /// Optimal assignment saturating the smaller object (the paper's optimisation, docs/method.md
+    /// §6.2).
     #[default]
     Global,
     /// Every node of the first object to its lowest-cost node of the second, under the
@@ -37,7 +38,7 @@ pub enum Prealign {
     Robust,
 }
 
-/// Parameters of [`match_shapes`]. The defaults are the measured recipe of SPEC §10.
+/// Parameters of [`match_shapes`]. The defaults are the measured recipe of docs/method.md §7.3.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MatchOptions {
     /// Element, material (only ν matters, E and ρ do not change matches), σ rule, exact-rigid
@@ -47,7 +48,7 @@ pub struct MatchOptions {
     pub mode_fraction: f64,
     /// Skip the first 3 (2-D) or 6 (3-D) quasi-rigid modes.
     pub skip_rigid: bool,
-    /// Band of the cross-object mode reordering (SPEC §5.5); 0 fixes signs only.
+    /// Band of the cross-object mode reordering (docs/method.md §5.4); 0 fixes signs only.
     pub band: usize,
     pub search: Search,
     /// Assignment algorithm of the global search and of the mode alignment.
@@ -74,7 +75,7 @@ pub struct MatchOptions {
     /// matching; 1 skips the modal solves and matches aligned positions (a baseline).
     pub position_weight: f64,
     /// Exponent `p` of the costs the search adds up: the assignment minimises `Σ Z[i, j]^p`,
-    /// with positions mixed in `(1 − w)·Z_modal^p + w·D^p`. 1 is the seed's squared modal
+    /// with positions mixed in `(1 − w)·Z_modal^p + w·D^p`. 1 is the paper's squared modal
     /// distance. Below 1 the sum prefers many near-exact pairs to evenly spread errors, which
     /// independent samplings of one surface need: even with the true positions, an optimal
     /// assignment of squared distances puts only 25 % of the points within one spacing, of
@@ -99,7 +100,7 @@ impl Default for MatchOptions {
                 density: 1.0,
             },
             // σ = 0.8 × the mean nearest-neighbour distance: measured on 270 ground-truth contour
-            // pairs (bench_match.py, seeds 1–3), 0.8 beat SPEC §10's 1.0 at moderate and severe
+            // pairs (bench_match.py, seeds 1–3), 0.8 beat the earlier 1.0 at moderate and severe
             // warps (0.986 vs 0.976 and 0.939 vs 0.926); 0.6, 0.7, 0.9 and ≥ 1.15 did not.
             kappa: 0.8,
             ..ModelOptions::default()
@@ -233,7 +234,7 @@ impl MatchResult {
     pub fn local_count(&self) -> usize {
         self.local_pairs.len()
     }
-    /// Number of matches from the primary search (the seed's "optimisation" column): one-to-one
+    /// Number of matches from the primary search (the paper's "optimisation" column): one-to-one
     /// except with [`Search::Best`], whose pairs are many-to-one.
     pub fn one_to_one_count(&self) -> usize {
         self.pairs.iter().filter(|p| !p.excess).count()

@@ -1,11 +1,11 @@
-"""Extracts dense foot outlines and a pressure grid from the real recordings in /work/shared/data.
+"""Extracts dense foot outlines and a pressure grid from the real sample recordings (F-Scan and MUN104).
 
 Writes, beside this script:
   contours.txt  -- closed outlines as blocks "# name" followed by "x y" lines (sensel units,
                    sub-pixel marching squares on a lightly smoothed image), blank line between blocks;
   mun104l.txt   -- the MUN104 left-foot peak-pressure template (63 x 27, whitespace separated),
                    used for the 3-D surface ground truth.
-Run: python make_fixtures.py [/work/shared/data]   (needs numpy, scipy, scikit-image)
+Run: python make_fixtures.py DATA_DIR   (needs numpy, scipy, scikit-image)
 """
 import sys
 from pathlib import Path

@@ -252,7 +252,7 @@ pub fn surface_case(g: &[Vec<f64>], sev: Severity, seed: u64, na: usize, nb: usi
     let all: Vec<[f64; 2]> = pa.iter().chain(&pb).copied().collect();
     let w = Warp::random(&mut rng, sev, &all);
     let gain = 1.0 + rng.random_range(-0.1..=0.1);
-    // z scaled so its range is comparable to xy (SPEC §7.5 step 6): 350 kPa ≈ 20 sensels.
+    // z scaled so its range is comparable to xy (docs/method.md §8.3): 350 kPa ≈ 20 sensels.
     let zs = 20.0 / 350.0;
     let lift = |p: [f64; 2], gain: f64| bilinear(g, p[0], p[1]) * zs * gain;
     let a: Vec<[f64; 3]> = pa.iter().map(|&p| [p[0], p[1], lift(p, 1.0)]).collect();
