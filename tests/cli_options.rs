@@ -305,3 +305,23 @@ fn exit_codes_are_0_ok_1_runtime_2_usage() {
         "{help}"
     );
 }
+
+#[test]
+fn inspect_reads_a_pedar_export_with_a_given_layout() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/pedo-io");
+    let asc = data.join("tests/data/pedar-example-3.01-4.00.asc");
+    let layout = data.join("layouts/pedar-pressuRe.csv");
+    let bundled = stdout_json(&pedomatch(&["inspect", asc.to_str().unwrap(), "--json"]));
+    let given = stdout_json(&pedomatch(&[
+        "inspect",
+        asc.to_str().unwrap(),
+        "--layout",
+        layout.to_str().unwrap(),
+        "--json",
+    ]));
+    assert_eq!(bundled["format"], "pedar");
+    assert_eq!(given, bundled);
+    let missing = pedomatch(&["inspect", asc.to_str().unwrap(), "--layout", "/nonexistent.csv"]);
+    assert_eq!(missing.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("nonexistent.csv"));
+}

@@ -144,6 +144,54 @@ fn format_of_name(name: &str) -> Option<Format> {
 
 #[pymethods]
 impl PyRecording {
+    /// A recording from any array: MATLAB (``scipy.io.loadmat``), HDF5 (``h5py``), NumPy, ...
+    ///
+    /// Parameters
+    /// ----------
+    /// frames : (T, H, W) or (H, W) array of pressures; NaN marks a sensel with no sensor
+    ///     (unless ``mask`` is given).
+    /// pitch_mm : float or (x, y), optional — sensor pitch in mm.
+    /// frame_rate : float, optional — frames per second (Hz).
+    /// units : str, optional — pressure units as written (``"kPa"``, ``"N/cm2"``, ...).
+    /// mask : (H, W) bool array, optional — True where a sensor exists.
+    ///
+    /// Raises :class:`InputError` (a ``ValueError``) for arrays of the wrong shape, infinite
+    /// values, or a non-positive pitch or frame rate.
+    #[staticmethod]
+    #[pyo3(signature = (frames, *, pitch_mm=None, frame_rate=None, units=None, mask=None))]
+    fn from_array(
+        py: Python<'_>,
+        frames: &Bound<'_, PyAny>,
+        pitch_mm: Option<&Bound<'_, PyAny>>,
+        frame_rate: Option<f64>,
+        units: Option<String>,
+        mask: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let (t, h, w, data) = frames_of(py, frames)?;
+        let mask = match mask {
+            None => None,
+            Some(m) => {
+                let np = py.import("numpy")?;
+                let m = np.call_method1("asarray", (m, np.getattr("bool_")?))?;
+                let shape: Vec<usize> = m.getattr("shape")?.extract()?;
+                if shape != [h, w] {
+                    return Err(input_error(format!(
+                        "mask has shape {shape:?}, the frames are {h} x {w}"
+                    )));
+                }
+                let flat: Vec<bool> = m.call_method0("ravel")?.call_method0("tolist")?.extract()?;
+                Some(flat)
+            }
+        };
+        let overrides = crate::options_py::units(pitch_mm, frame_rate)?;
+        let mut rec = Recording::from_array(t, h, w, data, mask).map_err(to_py)?;
+        overrides.apply(&mut rec).map_err(to_py)?;
+        if let Some(u) = units {
+            rec = rec.with_units(u);
+        }
+        Ok(Self { inner: rec })
+    }
+
     /// (T, H, W) float32 pressure frames, NaN where there is no sensor.
     #[getter]
     fn frames<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
@@ -271,25 +319,52 @@ impl PyRecording {
 /// (``"walk_%03d.png"``). The format is detected from the content and the extension.
 ///
 /// ``pitch_mm`` (mm per sensel, a number or (x, y)) and ``frame_rate`` (Hz) set or override
-/// what the file says, as ``--pitch-mm`` and ``--frame-rate`` do on the command line.
+/// what the file says, as ``--pitch-mm`` and ``--frame-rate`` do on the command line;
+/// ``layout`` is a pedar sensor-layout table (``--layout``; default: the bundled insole).
 ///
 /// Raises ``FileNotFoundError`` (an ``OSError``) if the file does not exist, other ``OSError``
 /// subclasses if it cannot be read, and :class:`FormatError` (a ``ValueError``) naming the file
 /// (and line, for text formats) if it is corrupt, truncated or of no known format.
 #[pyfunction]
-#[pyo3(signature = (path, *, pitch_mm=None, frame_rate=None))]
+#[pyo3(signature = (path, *, pitch_mm=None, frame_rate=None, layout=None))]
 fn read_recording(
     py: Python<'_>,
     path: PathBuf,
     pitch_mm: Option<&Bound<'_, PyAny>>,
     frame_rate: Option<f64>,
+    layout: Option<PathBuf>,
 ) -> PyResult<PyRecording> {
     let units = crate::options_py::units(pitch_mm, frame_rate)?;
+    let opts = pedo_io::formats::ReadOptions { layout };
     let mut rec = py
-        .detach(|| pedo_io::read_recording(&path))
+        .detach(|| pedo_io::formats::read_recording_with(&path, &opts))
         .map_err(to_py)?;
     units.apply(&mut rec).map_err(to_py)?;
     Ok(PyRecording { inner: rec })
+}
+
+/// A (T, H, W) or (H, W) array-like as `(T, H, W, row-major f32 data)`.
+fn frames_of(
+    py: Python<'_>,
+    frames: &Bound<'_, PyAny>,
+) -> PyResult<(usize, usize, usize, Vec<f32>)> {
+    let np = py.import("numpy")?;
+    let kw = PyDict::new(py);
+    kw.set_item("dtype", np.getattr("float32")?)?;
+    let arr = np.call_method("ascontiguousarray", (frames,), Some(&kw))?;
+    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
+    let (t, h, w) = match shape.as_slice() {
+        [h, w] => (1, *h, *w),
+        [t, h, w] => (*t, *h, *w),
+        _ => {
+            return Err(input_error(format!(
+                "frames must be a (T, H, W) or (H, W) array, got shape {shape:?}"
+            )))
+        }
+    };
+    let flat = arr.call_method0("ravel")?;
+    let flat: numpy::PyReadonlyArray1<'_, f32> = flat.extract()?;
+    Ok((t, h, w, flat.as_slice().map_err(internal)?.to_vec()))
 }
 
 /// A 2-D array-like as a grid; NaN (no sensor) reads as 0, infinities are rejected.

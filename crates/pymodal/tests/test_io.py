@@ -169,3 +169,51 @@ def test_isocontours_nest(rec):
     iso3 = pymodal.isocontours(frame, levels, smooth=1.0, threshold=3.0, three_d=True)
     for lv, c in iso3:
         assert c.shape[1] == 3 and (c[:, 2] == lv).all()
+
+
+def test_recording_from_array_keeps_values_mask_and_units(rec):
+    frames = rec.frames  # NaN where there is no sensor
+    r = pymodal.Recording.from_array(frames, pitch_mm=5.08, frame_rate=31.25, units="kPa")
+    assert r.shape == rec.shape
+    np.testing.assert_array_equal(np.isnan(r.frames), np.isnan(frames))
+    np.testing.assert_array_equal(np.nan_to_num(r.frames), np.nan_to_num(frames))
+    np.testing.assert_array_equal(r.sensor_mask, rec.sensor_mask)
+    assert r.pitch_mm == (5.08, 5.08)
+    assert r.dt_s == pytest.approx(0.032)
+    assert r.units == "kPa"
+    # The same measures as the file it came from.
+    np.testing.assert_allclose(r.total_force, rec.total_force)
+
+
+def test_recording_from_array_with_an_explicit_mask_and_one_frame():
+    frame = np.arange(12, dtype=float).reshape(3, 4)
+    mask = np.ones((3, 4), bool)
+    mask[0, 0] = False
+    r = pymodal.Recording.from_array(frame, mask=mask)
+    assert r.shape == (1, 3, 4)
+    assert np.isnan(r.frames[0, 0, 0]) and r.frames[0, 2, 3] == 11
+    assert r.pitch_mm is None and r.dt_s is None
+
+
+@pytest.mark.parametrize(
+    "frames, kwargs, message",
+    [
+        (np.zeros(5), {}, "(T, H, W) or (H, W)"),
+        (np.zeros((2, 3)), {"mask": np.ones((3, 2), bool)}, "mask has shape"),
+        (np.zeros((2, 3)), {"pitch_mm": -1.0}, "pitch"),
+        (np.zeros((2, 3)), {"frame_rate": 0.0}, "frame_rate"),
+    ],
+)
+def test_recording_from_array_refuses_bad_input(frames, kwargs, message):
+    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        pymodal.Recording.from_array(frames, **kwargs)
+
+
+def test_read_recording_takes_a_pedar_layout(tmp_path):
+    asc = DATA / "pedar-example-3.01-4.00.asc"
+    bundled = pymodal.read_recording(asc)
+    layout = DATA.parents[1] / "layouts" / "pedar-pressuRe.csv"
+    same = pymodal.read_recording(asc, layout=layout)
+    np.testing.assert_array_equal(np.nan_to_num(same.frames), np.nan_to_num(bundled.frames))
+    with pytest.raises(FileNotFoundError):
+        pymodal.read_recording(asc, layout=tmp_path / "missing.csv")

@@ -103,6 +103,15 @@ class Match:
     def __len__(self) -> int: ...
 
 class Recording:
+    @staticmethod
+    def from_array(
+        frames: ArrayLike,
+        *,
+        pitch_mm: Optional[Pitch] = None,
+        frame_rate: Optional[float] = None,
+        units: Optional[str] = None,
+        mask: Optional[ArrayLike] = None,
+    ) -> Recording: ...
     @property
     def frames(self) -> npt.NDArray[np.float32]: ...
     @property
@@ -188,7 +197,11 @@ def linear_sum_assignment_threshold(
     method: Optional[Solver] = None,
 ) -> Tuple[IntArray, IntArray]: ...
 def read_recording(
-    path: Path, *, pitch_mm: Optional[Pitch] = None, frame_rate: Optional[float] = None
+    path: Path,
+    *,
+    pitch_mm: Optional[Pitch] = None,
+    frame_rate: Optional[float] = None,
+    layout: Optional[Path] = None,
 ) -> Recording: ...
 def contours(
     frame: ArrayLike,
