@@ -29,7 +29,8 @@ def test_run_keywords_are_the_match_and_recording_options():
 
 
 def test_read_recording_keywords_are_the_unit_options():
-    assert keywords(pymodal.read_recording) == names("units")
+    # Plus the pedar layout table, as `--layout` beside --pitch-mm/--frame-rate on the CLI.
+    assert keywords(pymodal.read_recording) == names("units") + ["layout"]
     assert set(names("units")) <= set(names("recording"))
 
 
