@@ -13,7 +13,8 @@ mod output;
 
 const EXIT_CODES: &str = "Exit status: 0 success; 1 runtime failure (unreadable or malformed \
 input, failed run, unwritable output); 2 usage error (unknown flag, missing argument, bad option \
-value). With --json, a subcommand prints one JSON object on stdout.";
+value); 130 interrupted (Ctrl-C or SIGTERM: the output folder is left as it was). With --json, a \
+subcommand prints one JSON object on stdout.";
 
 #[derive(Parser)]
 #[command(
@@ -96,6 +97,10 @@ fn main() -> ExitCode {
         Command::Assign(args) => cmd_assign::run(args),
         Command::Inspect(args) => cmd_inspect::run(args),
     };
+    if outdir::interrupted() {
+        // The Ctrl-C handler is removing the staging folders and exits with 130 when done.
+        outdir::wait_for_interrupt_exit();
+    }
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(CliError::Usage(msg)) => {

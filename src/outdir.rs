@@ -7,6 +7,7 @@
 //! that finishes last wins, whole.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
 /// Marks a folder as a pedomatch output, which a later run may replace as a whole. A non-empty
@@ -15,6 +16,9 @@ const MARKER: &str = ".pedomatch-output";
 
 /// Staging folders of this process, removed by the interrupt handler.
 static STAGING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Set by the interrupt handler: no file is written after it.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
 /// Exit code of a run stopped by SIGINT or SIGTERM (128 + SIGINT, the shell convention).
 pub const EXIT_INTERRUPTED: u8 = 130;
@@ -25,14 +29,36 @@ pub fn install_interrupt_handler() {
     // Failing to install (another handler exists) only loses the clean-up; the next run sweeps
     // stale staging folders anyway.
     let _ = ctrlc::set_handler(|| {
-        if let Ok(dirs) = STAGING.lock() {
-            for d in dirs.iter() {
+        INTERRUPTED.store(true, Ordering::SeqCst);
+        // Writers check the flag before each file; one that passed the check just before it
+        // finishes within milliseconds, so the removal is repeated until nothing comes back.
+        let dirs = STAGING.lock().map(|d| d.clone()).unwrap_or_default();
+        for _ in 0..10 {
+            for d in &dirs {
                 let _ = std::fs::remove_dir_all(d);
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            if dirs.iter().all(|d| !d.exists()) {
+                break;
             }
         }
         eprintln!("pedomatch: interrupted");
         std::process::exit(EXIT_INTERRUPTED as i32);
     });
+}
+
+/// Whether Ctrl-C (or SIGTERM) arrived. The handler then owns the exit: a caller that sees an
+/// error caused by the interruption must not exit on its own before the clean-up is done, so it
+/// calls [`wait_for_interrupt_exit`].
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::SeqCst)
+}
+
+/// Blocks until the interrupt handler ends the process with [`EXIT_INTERRUPTED`].
+pub fn wait_for_interrupt_exit() -> ! {
+    loop {
+        std::thread::park();
+    }
 }
 
 /// An output folder being written; see the module docs.
@@ -73,6 +99,9 @@ impl OutDir {
 
     /// Writes `rel` (which may include sub-folders) into the staging folder.
     pub fn write(&self, rel: &str, contents: &[u8]) -> Result<(), String> {
+        if INTERRUPTED.load(Ordering::SeqCst) {
+            return Err("interrupted".into());
+        }
         let path = self.staging.join(rel);
         if let Some(parent) = path.parent() {
             std::fs::create_dir_all(parent)
@@ -84,6 +113,9 @@ impl OutDir {
 
     /// Puts the complete folder in place of the previous one in one step.
     pub fn commit(mut self) -> Result<(), String> {
+        if INTERRUPTED.load(Ordering::SeqCst) {
+            return Err("interrupted".into());
+        }
         check_replaceable(&self.root)?;
         swap_into_place(&self.staging, &self.root)
             .map_err(|e| format!("{}: {e}", self.root.display()))?;

@@ -140,3 +140,30 @@ fn the_bar_model_runs_the_whole_bundled_walk() {
     assert!(rows.iter().all(|r| r.contains(",ok,")), "{pairs}");
     std::fs::remove_dir_all(&base).unwrap();
 }
+
+#[test]
+fn two_runs_into_one_folder_never_interleave_their_files() {
+    let base = temp_dir("concurrent");
+    let out = base.join("out");
+    // Two different outputs: with figures and without. The folder must end up exactly one of them.
+    let with_figures = {
+        let o = base.join("with");
+        assert!(demo(&o, &[]).wait().unwrap().success());
+        listing(&o)
+    };
+    let without = {
+        let o = base.join("without");
+        assert!(demo(&o, &["--figures", "none"]).wait().unwrap().success());
+        listing(&o)
+    };
+    assert_ne!(with_figures, without);
+    for _ in 0..3 {
+        let mut a = demo(&out, &[]);
+        let mut b = demo(&out, &["--figures", "none"]);
+        assert!(a.wait().unwrap().success() && b.wait().unwrap().success());
+        let got = listing(&out);
+        assert!(got == with_figures || got == without, "mixed output: {got:?}");
+        assert_eq!(staging_folders(&base), Vec::<String>::new());
+    }
+    std::fs::remove_dir_all(&base).unwrap();
+}

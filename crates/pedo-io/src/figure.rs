@@ -1210,6 +1210,8 @@ mod tests {
             tracks,
             splits: Vec::new(),
             merges: Vec::new(),
+            skipped_frames: Vec::new(),
+            skipped_pairs: Vec::new(),
             timings: Default::default(),
         };
         let (rows, cols) = (16, 12);
