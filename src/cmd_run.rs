@@ -26,6 +26,12 @@ pub enum SearchArg {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ReportArg {
+    Html,
+    None,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum FigureArg {
     Png,
     Svg,
@@ -71,6 +77,9 @@ pub struct RunOptionsArgs {
     /// Print the time spent in each stage.
     #[arg(long)]
     pub timings: bool,
+    /// The interactive report: `html` writes a self-contained `report.html` (opens offline).
+    #[arg(long, value_enum, default_value = "html")]
+    pub report: ReportArg,
 }
 
 #[derive(Args)]
@@ -203,6 +212,30 @@ fn execute(
         &result,
         figure_kinds(o.figures),
     )?;
+    if o.report == ReportArg::Html {
+        let timings = vec![
+            ("read".to_string(), read_time.as_secs_f64()),
+            ("objects".to_string(), result.timings.objects.as_secs_f64()),
+            (
+                "matching".to_string(),
+                result.timings.matching.as_secs_f64(),
+            ),
+            ("tracks".to_string(), result.timings.tracks.as_secs_f64()),
+            (
+                "tables and figures".to_string(),
+                t_out.elapsed().as_secs_f64(),
+            ),
+        ];
+        output::write_report(
+            &dir,
+            name,
+            &recording,
+            &options,
+            &result,
+            report_options(o),
+            timings,
+        )?;
+    }
     dir.commit()?;
     let write_time = t_out.elapsed();
     print_summary(name, out, &result);
@@ -216,6 +249,32 @@ fn execute(
             started.elapsed().as_secs_f64());
     }
     Ok(())
+}
+
+/// The options of a run as (name, value) text for the report's header.
+fn report_options(o: &RunOptionsArgs) -> Vec<(String, String)> {
+    let opt = |v: Option<String>| v.unwrap_or_else(|| "default".into());
+    [
+        ("model", format!("{:?}", o.model).to_lowercase()),
+        ("element", format!("{:?}", o.modal.element).to_lowercase()),
+        ("modes", o.modal.modes.to_string()),
+        ("search", format!("{:?}", o.search).to_lowercase()),
+        ("solver", format!("{:?}", o.modal.solver).to_lowercase()),
+        ("threshold", opt(o.modal.threshold.map(|t| t.to_string()))),
+        ("excess", (!o.modal.no_excess).to_string()),
+        ("paper", o.modal.paper.to_string()),
+        ("center_stride", o.modal.center_stride.to_string()),
+        ("frames", opt(o.frames.clone())),
+        ("noise", opt(o.noise.map(|v| v.to_string()))),
+        ("smooth", o.smooth.to_string()),
+        ("spacing", o.spacing.to_string()),
+        ("surface_nodes", o.surface_nodes.to_string()),
+        ("iso_frame", opt(o.iso_frame.map(|v| v.to_string()))),
+        ("iso_levels", o.iso_levels.to_string()),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
 }
 
 fn figure_kinds(f: FigureArg) -> (bool, bool) {
