@@ -3,10 +3,10 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 PIP_PACKAGES := maturin numpy scipy pytest scikit-image matplotlib
 
-.PHONY: test test-rust test-python venv wheel bench bench-python lint demo
+.PHONY: test test-rust test-python test-browser venv wheel bench bench-python lint demo
 
 # Every test: Rust (unit, integration, doc) and Python.
-test: test-rust test-python
+test: test-rust test-python test-browser
 
 test-rust: venv
 	cargo test
@@ -26,6 +26,11 @@ wheel: venv
 
 test-python: wheel
 	$(PY) -m pytest -q crates/pymodal/tests
+
+# The demo's report.html in headless Chromium (Debian's `chromium`): drawn, playable, offline.
+test-browser:
+	cargo build --bin pedomatch
+	python3 tests/browser/test_report.py target/debug/pedomatch
 
 bench:
 	cargo bench
