@@ -16,8 +16,8 @@ use serde_json::{json, Value};
 use std::collections::HashMap;
 
 /// Most pressure values the player embeds (frames × rows × cols); beyond it frames are
-/// decimated. About 4 bytes each, so the page stays well under 25 MB with plotly.js (4.6 MB).
-pub const MAX_PLAYER_VALUES: usize = 3_000_000;
+/// decimated. At most 5 bytes each: 12.5 MB, plus plotly.js (4.6 MB) and the overlays, under 25 MB.
+pub const MAX_PLAYER_VALUES: usize = 2_500_000;
 
 /// Frames of history drawn as a trail behind each track's node.
 const TRAIL_FRAMES: usize = 4;
@@ -390,3 +390,134 @@ fn overlays(result: &SequenceResult, shown: &[usize], mm: &dyn Fn(&[f64]) -> [f6
 }
 
 const TEMPLATE: &str = include_str!("report.html");
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pedo_io::sequence::{run_sequence, SequenceOptions, StageTimings};
+
+    /// A disc of pressure moving one sensel right per frame.
+    fn walking_disc(frames: usize) -> Recording {
+        let (rows, cols) = (16, 24);
+        let mut data = vec![0.0f32; frames * rows * cols];
+        for t in 0..frames {
+            for r in 0..rows {
+                for c in 0..cols {
+                    let (dy, dx) = (r as f64 - 8.0, c as f64 - 6.0 - t as f64);
+                    let d2 = dx * dx + dy * dy;
+                    if d2 < 20.0 {
+                        data[(t * rows + r) * cols + c] = (100.0 - 4.0 * d2) as f32;
+                    }
+                }
+            }
+        }
+        Recording::from_array(frames, rows, cols, data, None)
+            .unwrap()
+            .with_pitch_mm([5.0, 4.0])
+            .unwrap()
+            .with_frame_rate(50.0)
+            .unwrap()
+            .with_units("kPa")
+    }
+
+    fn embedded_data(html: &str) -> Value {
+        let start = html.find("id=\"report-data\">").unwrap() + "id=\"report-data\">".len();
+        let end = start + html[start..].find("</script>").unwrap();
+        serde_json::from_str(&html[start..end]).unwrap()
+    }
+
+    fn info() -> ReportInfo {
+        ReportInfo {
+            input: "walk </script><b>.npy".into(),
+            format: Some("npy".into()),
+            version: "9.9.9".into(),
+            options: vec![("modes".into(), "0.25".into())],
+            timings: vec![("matching".into(), 0.5)],
+            contact_threshold: 0.0,
+        }
+    }
+
+    #[test]
+    fn report_embeds_frames_matches_and_measures_in_physical_units() {
+        let rec = walking_disc(6);
+        let result = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
+        assert_eq!(result.pairs.len(), 5);
+        let html = run_report(&rec, &result, &info()).unwrap();
+        // Self-contained: plotly.js inline, nothing loaded from elsewhere, loads forbidden.
+        assert!(html.contains("default-src 'none'"));
+        assert!(!html.contains("<script src"));
+        assert!(!html.contains("tex-svg") && html.contains("plotly.js"));
+        // The header, escaped.
+        assert!(html.contains("walk &lt;/script&gt;&lt;b&gt;.npy"));
+        assert!(html.contains("5 × 4 mm") && html.contains("50 Hz") && html.contains("npy"));
+        let d = embedded_data(&html);
+        assert_eq!(d["step"], 1);
+        assert_eq!(d["shown"], json!([0, 1, 2, 3, 4, 5]));
+        assert_eq!(d["xy_units"], "mm");
+        // Pressure decodes back to the recording within half a quantum.
+        let q = d["quantum"].as_f64().unwrap();
+        let (r, c, t) = (8, 9, 3);
+        let coded = d["z"][t][r * 24 + c].as_f64().unwrap();
+        let value = rec.frame_slice(t).unwrap()[r * 24 + c] as f64;
+        assert!(
+            (coded * q - value).abs() <= q / 2.0,
+            "{coded} × {q} vs {value}"
+        );
+        // Every match of the pair leaving frame 2 is drawn as one segment (two points).
+        let frame2 = &d["overlays"]["frames"][2];
+        let drawn: usize = frame2["matches"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .chain([&frame2["excess"]])
+            .map(|l| {
+                l["x"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .filter(|v| !v.is_null())
+                    .count()
+            })
+            .sum();
+        let pair = result.pairs.iter().find(|p| p.row.frame_a == 2).unwrap();
+        assert_eq!(drawn, 2 * pair.result.pairs.len());
+        // Contours in mm: the disc's nodes lie within its mm extent.
+        let xs: Vec<f64> = frame2["contours"]["x"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|v| v.as_f64())
+            .collect();
+        assert!(
+            xs.iter().all(|&x| (5.0 * 3.0..=5.0 * 13.0).contains(&x)),
+            "{xs:?}"
+        );
+        // Time series: the contact area of frame 0 in mm² (20 mm² per sensel).
+        let sensels = rec.measures(0.0)[0].contact_sensors as f64;
+        assert_eq!(d["series"]["area"][0].as_f64().unwrap(), sensels * 20.0);
+    }
+
+    #[test]
+    fn long_recordings_are_decimated_below_the_bound() {
+        let (frames, rows, cols) = (301, 100, 100);
+        let rec = Recording::from_array(frames, rows, cols, vec![0.0; frames * rows * cols], None)
+            .unwrap();
+        let result = SequenceResult {
+            objects: vec![],
+            pairs: vec![],
+            tracks: vec![],
+            splits: vec![],
+            merges: vec![],
+            skipped_frames: vec![],
+            skipped_pairs: vec![],
+            timings: StageTimings::default(),
+        };
+        let html = run_report(&rec, &result, &info()).unwrap();
+        let d = embedded_data(&html);
+        assert_eq!(d["step"], 2);
+        assert_eq!(d["shown"].as_array().unwrap().len(), 151);
+        assert_eq!(d["series"]["area"].as_array().unwrap().len(), frames);
+        assert!(html.len() < 25 << 20, "{} bytes", html.len());
+        assert_eq!(d["xy_units"], "sensels");
+    }
+}
