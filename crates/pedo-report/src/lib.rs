@@ -259,6 +259,7 @@ fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo
         "pressure_units": punits, "quantum": quantum, "z": z, "peak_image": peak_image,
         "overlays": overlays, "series": series, "pairs": pairs,
         "max_player_values": MAX_PLAYER_VALUES,
+        "surface": result.objects.first().is_some_and(|o| o.shape.dim() == 3),
     })
 }
 
