@@ -232,7 +232,8 @@ fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo
     };
 
     let mm = |p: &[f64]| -> [f64; 2] { [round3(p[0] * pitch[0]), round3(p[1] * pitch[1])] };
-    let overlays = overlays(result, &shown, &mm);
+    // Surfaces' heights are pressure rescaled to the footprint's extent (in sensels): same units as x.
+    let overlays = overlays(result, &shown, &mm, pitch[0]);
 
     let measures = recording.measures(info.contact_threshold);
     let force_known = recording.force_factor().is_some();
@@ -293,7 +294,12 @@ impl Lines {
 
 /// Per shown frame: contours, matches into the next frame by cost class, excess matches,
 /// unmatched nodes, and track trails; plus the cost-class bounds.
-fn overlays(result: &SequenceResult, shown: &[usize], mm: &dyn Fn(&[f64]) -> [f64; 2]) -> Value {
+fn overlays(
+    result: &SequenceResult,
+    shown: &[usize],
+    mm: &dyn Fn(&[f64]) -> [f64; 2],
+    z_scale: f64,
+) -> Value {
     let mut costs: Vec<f64> = result
         .pairs
         .iter()
@@ -381,13 +387,68 @@ fn overlays(result: &SequenceResult, shown: &[usize], mm: &dyn Fn(&[f64]) -> [f6
                     );
                 }
             }
+            let surfaces = pairs_by_frame
+                .get(&f)
+                .and_then(|ps| ps.first())
+                .map(|&pi| surface_pair(result, &result.pairs[pi], mm, z_scale));
             json!({
                 "contours": contours, "matches": by_cost, "excess": excess,
-                "unmatched": unmatched, "trails": trails,
+                "unmatched": unmatched, "trails": trails, "surfaces": surfaces,
             })
         })
         .collect();
     json!({ "cost_bounds": bounds, "frames": frames })
+}
+
+/// For the 3-D view: a surface pair's two meshes (x, y in mm or sensels; z the surface's height,
+/// pressure rescaled to the footprint, times `z_scale`) and its matches as segments; `None` for
+/// 2-D objects.
+fn surface_pair(
+    result: &SequenceResult,
+    pair: &pedo_io::sequence::PairMatch,
+    mm: &dyn Fn(&[f64]) -> [f64; 2],
+    z_scale: f64,
+) -> Option<Value> {
+    let (sa, sb) = (&result.objects[pair.a].shape, &result.objects[pair.b].shape);
+    if sa.dim() != 3 || sb.dim() != 3 {
+        return None;
+    }
+    let point = |s: &modal_core::Shape, i: usize| {
+        let p = s.point(i);
+        let [x, y] = mm(p);
+        [x, y, round3(p[2] * z_scale)]
+    };
+    let mesh = |s: &modal_core::Shape| {
+        let pts: Vec<[f64; 3]> = (0..s.len()).map(|i| point(s, i)).collect();
+        let tris: &[[usize; 3]] = match s.topology() {
+            modal_core::Topology::Mesh { triangles } => triangles,
+            _ => &[],
+        };
+        json!({
+            "x": pts.iter().map(|p| p[0]).collect::<Vec<_>>(),
+            "y": pts.iter().map(|p| p[1]).collect::<Vec<_>>(),
+            "z": pts.iter().map(|p| p[2]).collect::<Vec<_>>(),
+            "i": tris.iter().map(|t| t[0]).collect::<Vec<_>>(),
+            "j": tris.iter().map(|t| t[1]).collect::<Vec<_>>(),
+            "k": tris.iter().map(|t| t[2]).collect::<Vec<_>>(),
+        })
+    };
+    let mut seg: [Vec<Option<f64>>; 3] = Default::default();
+    for m in &pair.result.pairs {
+        for p in [point(sa, m.a), point(sb, m.b)] {
+            for (axis, v) in seg.iter_mut().zip(p) {
+                axis.push(Some(v));
+            }
+        }
+        for axis in &mut seg {
+            axis.push(None);
+        }
+    }
+    Some(json!({
+        "a": mesh(sa), "b": mesh(sb),
+        "frames": [result.objects[pair.a].frame, result.objects[pair.b].frame],
+        "matches": { "x": seg[0], "y": seg[1], "z": seg[2] },
+    }))
 }
 
 const TEMPLATE: &str = include_str!("report.html");
