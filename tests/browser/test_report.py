@@ -5,7 +5,7 @@ Usage: test_report.py PEDOMATCH_BINARY [SCREENSHOT.png]
 
 Checks: the three plots are drawn (plotly's SVG root exists for each), no script error and no
 blocked load was logged (the page's own error log and Chromium's console), moving the slider to
-frame k shows frame k (label, plot title and the page's state), the page makes no network request
+frame k shows frame k (label, plot title and the page's state), a surface run draws its 3-D view, the page makes no network request
 (every host resolves to nothing, and the page's Content-Security-Policy would report any load),
 and `--report none` writes no report. Standard library only; needs `chromium` on PATH.
 """
@@ -90,6 +90,15 @@ def main():
                      "--window-size=1400,1300")
             if not os.path.exists(screenshot):
                 failures.append("no screenshot written")
+        # Surfaces: the 3-D view of the pair leaving the frame shown is drawn (WebGL scene).
+        surf = os.path.join(tmp, "surface")
+        subprocess.run([binary, "demo", "--out", surf, "--figures", "none", "--model", "surface",
+                        "--frames", "60..80"], check=True, stdout=subprocess.DEVNULL)
+        dom = check_frame(os.path.join(surf, "report.html"), 72, failures)
+        if '<div id="surface-view">' not in dom or 'class="gl-container"' not in dom:
+            failures.append("surface run: the 3-D view is not shown")
+        if not re.search(r'class="legendtext"[^>]*>frame 73<', dom):
+            failures.append("surface run: the 3-D view does not show the pair 72 -> 73")
         none = os.path.join(tmp, "none")
         subprocess.run([binary, "demo", "--out", none, "--figures", "none", "--report", "none"],
                        check=True, stdout=subprocess.DEVNULL)
