@@ -3,11 +3,11 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 PIP_PACKAGES := maturin numpy scipy pytest scikit-image matplotlib
 
-.PHONY: test test-rust test-python wheel-check examples venv wheel bench bench-python lint demo
+.PHONY: test test-rust test-python test-browser wheel-check examples venv wheel bench bench-python lint demo
 
 # Every test: Rust (unit, integration, doc), Python (against the installed wheel), the wheel
-# installed on its own in a fresh venv without Rust, and every example.
-test: test-rust test-python wheel-check examples
+# installed on its own in a fresh venv without Rust, every example, and the report in a browser.
+test: test-rust test-python wheel-check examples test-browser
 
 test-rust: venv
 	cargo test
@@ -60,6 +60,11 @@ examples: wheel
 	tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && \
 	$(PY) examples/match_two_frames.py --out "$$tmp/match.png" && test -s "$$tmp/match.png" && \
 	$(PY) examples/run_recording.py --out-dir "$$tmp" && test -s "$$tmp/pairs.csv"
+
+# The demo's report.html in headless Chromium (Debian's `chromium`): drawn, playable, offline.
+test-browser:
+	cargo build --bin pedomatch
+	python3 tests/browser/test_report.py target/debug/pedomatch
 
 bench:
 	cargo bench

@@ -12,6 +12,12 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ReportArg {
+    Html,
+    None,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum FigureArg {
     Png,
     Svg,
@@ -61,6 +67,9 @@ pub struct RunOptionsArgs {
     /// Print the run's summary (summary.json) on stdout instead of text.
     #[arg(long)]
     pub json: bool,
+    /// The interactive report: `html` writes a self-contained `report.html` (opens offline).
+    #[arg(long, value_enum, default_value = "html")]
+    pub report: ReportArg,
 }
 
 impl RunOptionsArgs {
@@ -168,6 +177,29 @@ fn execute(
         &[("read", read_time.as_secs_f64()), ("output", write_time)],
     );
     dir.write("summary.json", output::pretty(&summary)?.as_bytes())?;
+    if o.report == ReportArg::Html {
+        let timings = summary["timings_s"]
+            .as_object()
+            .map(|m| {
+                m.iter()
+                    .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(0.0)))
+                    .collect()
+            })
+            .unwrap_or_default();
+        let used = summary["options"]
+            .as_object()
+            .map(|m| m.iter().map(|(k, v)| (k.clone(), option_text(v))).collect())
+            .unwrap_or_default();
+        output::write_report(
+            &dir,
+            &input.name,
+            &recording,
+            &options,
+            &result,
+            used,
+            timings,
+        )?;
+    }
     dir.commit()?;
     if o.json {
         print!("{}", output::pretty(&summary)?);
@@ -184,6 +216,15 @@ fn execute(
             started.elapsed().as_secs_f64());
     }
     Ok(())
+}
+
+/// An option's value as the report's header shows it (`none` for an unset one).
+fn option_text(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::Null => "none".into(),
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
 }
 
 fn progress_bar() -> ProgressBar {

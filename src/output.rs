@@ -94,6 +94,28 @@ pub fn write_sequence(
     Ok(())
 }
 
+/// Writes `report.html`, the self-contained interactive report of a sequence run.
+pub fn write_report(
+    dir: &OutDir,
+    name: &str,
+    recording: &pedo_io::Recording,
+    options: &SequenceOptions,
+    r: &SequenceResult,
+    used: Vec<(String, String)>,
+    timings: Vec<(String, f64)>,
+) -> Result<(), String> {
+    let info = pedo_report::ReportInfo {
+        input: name.to_string(),
+        format: recording.format.map(|f| f.name().to_string()),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        options: used,
+        timings,
+        contact_threshold: options.contour.preprocess.threshold.unwrap_or(0.0),
+    };
+    let html = pedo_report::run_report(recording, r, &info).map_err(|e| e.to_string())?;
+    dir.write("report.html", html.as_bytes())
+}
+
 /// Pretty JSON with a final newline.
 pub fn pretty<T: serde::Serialize>(v: &T) -> Result<String, String> {
     serde_json::to_string_pretty(v)
@@ -160,4 +182,3 @@ pub fn write_figure(
     }
     Ok(())
 }
-

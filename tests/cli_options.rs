@@ -77,7 +77,9 @@ fn run_and_match_flags_are_the_library_option_tables() {
 
     let mut expected = flags_of(&matching);
     expected.extend(flags_of(&recording));
-    expected.extend(own(&["out", "figures", "timings", "json", "help"]));
+    expected.extend(own(&[
+        "out", "figures", "report", "timings", "json", "help",
+    ]));
     assert_eq!(long_flags("demo"), expected);
     expected.extend(own(&["layout"]));
     assert_eq!(long_flags("run"), expected);
@@ -85,7 +87,9 @@ fn run_and_match_flags_are_the_library_option_tables() {
     let mut expected = flags_of(&matching);
     expected.extend(flags_of(&pair));
     expected.extend(flags_of(&units));
-    expected.extend(own(&["points", "frame", "out", "figures", "layout", "json", "help"]));
+    expected.extend(own(&[
+        "points", "frame", "out", "figures", "layout", "json", "help",
+    ]));
     assert_eq!(long_flags("match"), expected);
 
     let mut expected = flags_of(&units);
@@ -321,7 +325,12 @@ fn inspect_reads_a_pedar_export_with_a_given_layout() {
     ]));
     assert_eq!(bundled["format"], "pedar");
     assert_eq!(given, bundled);
-    let missing = pedomatch(&["inspect", asc.to_str().unwrap(), "--layout", "/nonexistent.csv"]);
+    let missing = pedomatch(&[
+        "inspect",
+        asc.to_str().unwrap(),
+        "--layout",
+        "/nonexistent.csv",
+    ]);
     assert_eq!(missing.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("nonexistent.csv"));
 }

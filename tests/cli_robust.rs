@@ -162,7 +162,10 @@ fn two_runs_into_one_folder_never_interleave_their_files() {
         let mut b = demo(&out, &["--figures", "none"]);
         assert!(a.wait().unwrap().success() && b.wait().unwrap().success());
         let got = listing(&out);
-        assert!(got == with_figures || got == without, "mixed output: {got:?}");
+        assert!(
+            got == with_figures || got == without,
+            "mixed output: {got:?}"
+        );
         assert_eq!(staging_folders(&base), Vec::<String>::new());
     }
     std::fs::remove_dir_all(&base).unwrap();

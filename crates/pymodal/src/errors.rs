@@ -197,7 +197,8 @@ impl LibraryError for IoError {
     fn into_py_err(self) -> PyErr {
         match self {
             IoError::Io { path, source } => os_error(path, &source),
-            e @ (IoError::Parse { .. } | IoError::Format { .. } | IoError::UnknownFormat { .. }) => {
+            e
+            @ (IoError::Parse { .. } | IoError::Format { .. } | IoError::UnknownFormat { .. }) => {
                 FORMAT_ERROR.err(e.to_string())
             }
             IoError::Option(e) => e.into_py_err(),

@@ -1,0 +1,585 @@
+//! One self-contained interactive HTML report of a whole-recording run.
+//!
+//! The page embeds plotly.js (from the `plotly` crate's `plotly_embed_js` resources) and the
+//! run's data as JSON, so it opens offline from the output folder and makes no network request
+//! (a Content-Security-Policy forbids any). It holds a header (input, format, units, options,
+//! timings, skipped frames and pairs), a player (pressure image, contours, matches into the next
+//! frame coloured by cost, excess matches, unmatched nodes, short track trails) driven by a frame
+//! slider and a play button, time series along the recording and the centre-of-pressure path.
+//!
+//! Size is bounded: when `frames × rows × cols` exceeds [`MAX_PLAYER_VALUES`], the player keeps
+//! every `s`-th frame only (the report says so); the time series keep every frame.
+
+use pedo_io::sequence::SequenceResult;
+use pedo_io::Recording;
+use serde_json::{json, Value};
+use std::collections::HashMap;
+
+/// Most pressure values the player embeds (frames × rows × cols); beyond it frames are
+/// decimated. At most 5 bytes each: 12.5 MB, plus plotly.js (4.6 MB) and the overlays, under 25 MB.
+pub const MAX_PLAYER_VALUES: usize = 2_500_000;
+
+/// Frames of history drawn as a trail behind each track's node.
+const TRAIL_FRAMES: usize = 4;
+
+/// Number of cost classes the matches are coloured by (quantiles of all costs).
+const COST_CLASSES: usize = 5;
+
+/// Errors building a report.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    #[error("the recording has no frames")]
+    Empty,
+    #[error("cannot encode the report data: {0}")]
+    Encode(#[from] serde_json::Error),
+}
+
+/// What the report's header states about the run (besides what the recording itself holds:
+/// its pitch, frame rate and pressure units).
+#[derive(Debug, Clone, Default)]
+pub struct ReportInfo {
+    /// The input's name as the user gave it.
+    pub input: String,
+    /// The detected file format (e.g. "asf"), if known.
+    pub format: Option<String>,
+    /// The pedomatch version.
+    pub version: String,
+    /// Every option used, as (name, value) text.
+    pub options: Vec<(String, String)>,
+    /// Time spent per stage, (stage, seconds).
+    pub timings: Vec<(String, f64)>,
+    /// Sensors above this value count as contact in the time series (the run's noise level).
+    pub contact_threshold: f64,
+}
+
+/// The report of one run as a complete HTML page.
+pub fn run_report(
+    recording: &Recording,
+    result: &SequenceResult,
+    info: &ReportInfo,
+) -> Result<String, ReportError> {
+    if recording.n_frames() == 0 {
+        return Err(ReportError::Empty);
+    }
+    let data = report_data(recording, result, info);
+    let data = serde_json::to_string(&data)?;
+    Ok(TEMPLATE
+        .replace("{{TITLE}}", &html_escape(&info.input))
+        .replace("{{HEADER}}", &header_html(recording, result, info))
+        .replace("{{PLOTLY}}", &plotly_js())
+        // `</` cannot end the script element early: JSON never needs a raw `</`.
+        .replace("{{DATA}}", &data.replace("</", "<\\/")))
+}
+
+/// plotly.js alone: the crate's offline sources also carry MathJax, which the report does not
+/// use (2 MB).
+fn plotly_js() -> String {
+    let all = plotly::Plot::offline_js_sources();
+    match all.find("</script>") {
+        Some(end) => all[..end + "</script>".len()].to_string(),
+        None => all,
+    }
+}
+
+fn html_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// Physical pressure units: kPa when the recording's units convert, else its own units.
+fn pressure_scale(recording: &Recording) -> (f64, String) {
+    match pedo_io::recording::kpa_per_unit(&recording.units) {
+        Some(k) => (k, "kPa".to_string()),
+        None if recording.units.is_empty() => (1.0, "units".to_string()),
+        None => (1.0, recording.units.clone()),
+    }
+}
+
+fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo) -> String {
+    let (_, punits) = pressure_scale(recording);
+    let mut rows: Vec<(String, String)> = vec![
+        ("input".into(), info.input.clone()),
+        (
+            "format".into(),
+            info.format.clone().unwrap_or_else(|| "unknown".into()),
+        ),
+        (
+            "frames".into(),
+            format!(
+                "{} of {} × {} sensels",
+                recording.n_frames(),
+                recording.rows(),
+                recording.cols()
+            ),
+        ),
+        (
+            "pitch".into(),
+            recording
+                .pitch_mm
+                .map(|p| format!("{} × {} mm", p[0], p[1]))
+                .unwrap_or_else(|| "unknown (axes in sensels)".into()),
+        ),
+        (
+            "frame rate".into(),
+            recording
+                .frame_rate()
+                .map(|f| format!("{f} Hz"))
+                .unwrap_or_else(|| "unknown (time in frames)".into()),
+        ),
+        ("pressure".into(), punits),
+        ("version".into(), format!("pedomatch {}", info.version)),
+        (
+            "result".into(),
+            format!(
+                "{} objects, {} matched pairs, {} tracks",
+                result.objects.len(),
+                result.pairs.len(),
+                result.tracks.len()
+            ),
+        ),
+    ];
+    if !info.timings.is_empty() {
+        let t: Vec<String> = info
+            .timings
+            .iter()
+            .map(|(s, v)| format!("{s} {v:.3} s"))
+            .collect();
+        rows.push(("timings".into(), t.join(", ")));
+    }
+    let table = |rows: &[(String, String)]| -> String {
+        rows.iter()
+            .map(|(k, v)| {
+                format!(
+                    "<tr><th>{}</th><td>{}</td></tr>",
+                    html_escape(k),
+                    html_escape(v)
+                )
+            })
+            .collect()
+    };
+    let mut out = format!("<table class=\"facts\">{}</table>", table(&rows));
+    if !info.options.is_empty() {
+        out += &format!(
+            "<details><summary>options used ({})</summary><table class=\"facts\">{}</table></details>",
+            info.options.len(),
+            table(&info.options)
+        );
+    }
+    let skipped: Vec<String> = result
+        .skipped_frames
+        .iter()
+        .map(|s| format!("frame {}: {}", s.frame, s.reason))
+        .chain(result.skipped_pairs.iter().map(|s| {
+            let (a, b) = (&result.objects[s.a], &result.objects[s.b]);
+            format!(
+                "pair {}→{} (frames {}→{}): {}",
+                a.id, b.id, a.frame, b.frame, s.reason
+            )
+        }))
+        .map(|s| format!("<li>{}</li>", html_escape(&s)))
+        .collect();
+    if !skipped.is_empty() {
+        out += &format!(
+            "<details open class=\"skipped\"><summary>skipped ({})</summary><ul>{}</ul></details>",
+            skipped.len(),
+            skipped.join("")
+        );
+    }
+    out
+}
+
+/// Everything the page's script draws, as JSON.
+fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo) -> Value {
+    let (n, rows, cols) = (recording.n_frames(), recording.rows(), recording.cols());
+    let step = (n * rows * cols).div_ceil(MAX_PLAYER_VALUES).max(1);
+    let shown: Vec<usize> = (0..n).step_by(step).collect();
+    let (kpa, punits) = pressure_scale(recording);
+    let (pitch, xy_units) = match recording.pitch_mm {
+        Some(p) => (p, "mm"),
+        None => ([1.0, 1.0], "sensels"),
+    };
+    let rate = recording.frame_rate();
+
+    // Pressure as integers of a fixed quantum: compact JSON and 3 significant digits at the peak.
+    let peak = recording
+        .data()
+        .iter()
+        .fold(0.0f64, |m, &v| m.max(v as f64))
+        * kpa;
+    let quantum = if peak > 0.0 {
+        10f64.powf((peak / 1000.0).log10().floor())
+    } else {
+        1.0
+    };
+    let mask = recording.sensor_mask();
+    let encode = |values: &[f32]| -> Vec<Option<i64>> {
+        values
+            .iter()
+            .zip(mask)
+            .map(|(&v, &m)| (m && v.is_finite()).then(|| (v as f64 * kpa / quantum).round() as i64))
+            .collect()
+    };
+    let z: Vec<Vec<Option<i64>>> = shown
+        .iter()
+        .map(|&t| encode(recording.frame_slice(t).unwrap_or(&[])))
+        .collect();
+    let peak_image: Vec<Option<i64>> = {
+        let g = recording.peak_image();
+        let v: Vec<f32> = g.data().iter().map(|&v| v as f32).collect();
+        encode(&v)
+    };
+
+    let mm = |p: &[f64]| -> [f64; 2] { [round3(p[0] * pitch[0]), round3(p[1] * pitch[1])] };
+    // Surfaces' heights are pressure rescaled to the footprint's extent (in sensels): same units as x.
+    let overlays = overlays(result, &shown, &mm, pitch[0]);
+
+    let measures = recording.measures(info.contact_threshold);
+    let force_known = recording.force_factor().is_some();
+    let area_known = recording.sensel_area().is_some();
+    let series = json!({
+        "frame": (0..n).collect::<Vec<_>>(),
+        "area": measures.iter().map(|m| round3(m.contact_area)).collect::<Vec<_>>(),
+        "force": measures.iter().map(|m| round3(m.total_force)).collect::<Vec<_>>(),
+        "peak": measures.iter().map(|m| round3(m.peak_pressure * kpa)).collect::<Vec<_>>(),
+        "cop": measures.iter().map(|m| m.cop.map(|c| mm(&c))).collect::<Vec<_>>(),
+        "area_label": if area_known { "contact area (mm²)" } else { "contact area (sensels)" },
+        "force_label": if force_known { "total force (N)" } else { "total load (units × sensels)" },
+        "peak_label": format!("peak pressure ({punits})"),
+    });
+    let pairs = json!({
+        "frame": result.pairs.iter().map(|p| p.row.frame_a).collect::<Vec<_>>(),
+        "local": result.pairs.iter().map(|p| round3(p.row.local_percent)).collect::<Vec<_>>(),
+        "optimisation": result.pairs.iter().map(|p| round3(p.row.optimisation_percent)).collect::<Vec<_>>(),
+        "cost": result.pairs.iter().map(|p| round6(p.row.mean_cost)).collect::<Vec<_>>(),
+    });
+    json!({
+        "n_frames": n, "rows": rows, "cols": cols, "step": step, "shown": shown,
+        "frame_rate": rate, "dx": pitch[0], "dy": pitch[1], "xy_units": xy_units,
+        "pressure_units": punits, "quantum": quantum, "z": z, "peak_image": peak_image,
+        "overlays": overlays, "series": series, "pairs": pairs,
+        "max_player_values": MAX_PLAYER_VALUES,
+        "surface": result.objects.first().is_some_and(|o| o.shape.dim() == 3),
+    })
+}
+
+fn round3(v: f64) -> f64 {
+    (v * 1e3).round() / 1e3
+}
+
+fn round6(v: f64) -> f64 {
+    (v * 1e6).round() / 1e6
+}
+
+/// Polylines as plotly wants them: x and y lists with `null` between pieces.
+#[derive(Default, serde::Serialize)]
+struct Lines {
+    x: Vec<Option<f64>>,
+    y: Vec<Option<f64>>,
+}
+
+impl Lines {
+    fn piece(&mut self, points: impl IntoIterator<Item = [f64; 2]>) {
+        if !self.x.is_empty() {
+            self.x.push(None);
+            self.y.push(None);
+        }
+        for p in points {
+            self.x.push(Some(p[0]));
+            self.y.push(Some(p[1]));
+        }
+    }
+}
+
+/// Per shown frame: contours, matches into the next frame by cost class, excess matches,
+/// unmatched nodes, and track trails; plus the cost-class bounds.
+fn overlays(
+    result: &SequenceResult,
+    shown: &[usize],
+    mm: &dyn Fn(&[f64]) -> [f64; 2],
+    z_scale: f64,
+) -> Value {
+    let mut costs: Vec<f64> = result
+        .pairs
+        .iter()
+        .flat_map(|p| p.result.pairs.iter().map(|m| m.cost))
+        .filter(|c| c.is_finite())
+        .collect();
+    costs.sort_by(f64::total_cmp);
+    let bounds: Vec<f64> = (1..COST_CLASSES)
+        .map(|i| {
+            costs
+                .get(i * costs.len() / COST_CLASSES)
+                .copied()
+                .unwrap_or(0.0)
+        })
+        .collect();
+    let class = |c: f64| bounds.iter().take_while(|&&b| c > b).count();
+
+    let mut objects_by_frame: HashMap<usize, Vec<usize>> = HashMap::new();
+    for (i, o) in result.objects.iter().enumerate() {
+        objects_by_frame.entry(o.frame).or_default().push(i);
+    }
+    let mut pairs_by_frame: HashMap<usize, Vec<usize>> = HashMap::new();
+    for (i, p) in result.pairs.iter().enumerate() {
+        pairs_by_frame
+            .entry(result.objects[p.a].frame)
+            .or_default()
+            .push(i);
+    }
+    // Track steps by frame: (track, step index).
+    let mut steps_by_frame: HashMap<usize, Vec<(usize, usize)>> = HashMap::new();
+    for (t, track) in result.tracks.iter().enumerate() {
+        for (s, &(o, _)) in track.steps.iter().enumerate() {
+            steps_by_frame
+                .entry(result.objects[o].frame)
+                .or_default()
+                .push((t, s));
+        }
+    }
+    let frames: Vec<Value> = shown
+        .iter()
+        .map(|&f| {
+            let mut contours = Lines::default();
+            for &o in objects_by_frame.get(&f).into_iter().flatten() {
+                let shape = &result.objects[o].shape;
+                let mut pts: Vec<[f64; 2]> = (0..shape.len()).map(|i| mm(shape.point(i))).collect();
+                if let Some(&first) = pts.first() {
+                    if shape.dim() == 2 {
+                        pts.push(first);
+                        contours.piece(pts);
+                    } else {
+                        // Surfaces: nodes only, as separate one-point pieces (markers).
+                        for p in pts {
+                            contours.piece([p]);
+                        }
+                    }
+                }
+            }
+            let mut by_cost: Vec<Lines> = (0..COST_CLASSES).map(|_| Lines::default()).collect();
+            let mut excess = Lines::default();
+            let mut unmatched = Lines::default();
+            for &pi in pairs_by_frame.get(&f).into_iter().flatten() {
+                let p = &result.pairs[pi];
+                let (sa, sb) = (&result.objects[p.a].shape, &result.objects[p.b].shape);
+                for m in &p.result.pairs {
+                    let seg = [mm(sa.point(m.a)), mm(sb.point(m.b))];
+                    if m.excess {
+                        excess.piece(seg);
+                    } else {
+                        by_cost[class(m.cost)].piece(seg);
+                    }
+                }
+                for &u in &p.result.unmatched_a {
+                    unmatched.piece([mm(sa.point(u))]);
+                }
+            }
+            let mut trails = Lines::default();
+            for &(t, s) in steps_by_frame.get(&f).into_iter().flatten() {
+                let steps = &result.tracks[t].steps;
+                let from = s.saturating_sub(TRAIL_FRAMES);
+                if s > from {
+                    trails.piece(
+                        steps[from..=s]
+                            .iter()
+                            .map(|&(o, node)| mm(result.objects[o].shape.point(node))),
+                    );
+                }
+            }
+            let surfaces = pairs_by_frame
+                .get(&f)
+                .and_then(|ps| ps.first())
+                .map(|&pi| surface_pair(result, &result.pairs[pi], mm, z_scale));
+            json!({
+                "contours": contours, "matches": by_cost, "excess": excess,
+                "unmatched": unmatched, "trails": trails, "surfaces": surfaces,
+            })
+        })
+        .collect();
+    json!({ "cost_bounds": bounds, "frames": frames })
+}
+
+/// For the 3-D view: a surface pair's two meshes (x, y in mm or sensels; z the surface's height,
+/// pressure rescaled to the footprint, times `z_scale`) and its matches as segments; `None` for
+/// 2-D objects.
+fn surface_pair(
+    result: &SequenceResult,
+    pair: &pedo_io::sequence::PairMatch,
+    mm: &dyn Fn(&[f64]) -> [f64; 2],
+    z_scale: f64,
+) -> Option<Value> {
+    let (sa, sb) = (&result.objects[pair.a].shape, &result.objects[pair.b].shape);
+    if sa.dim() != 3 || sb.dim() != 3 {
+        return None;
+    }
+    let point = |s: &modal_core::Shape, i: usize| {
+        let p = s.point(i);
+        let [x, y] = mm(p);
+        [x, y, round3(p[2] * z_scale)]
+    };
+    let mesh = |s: &modal_core::Shape| {
+        let pts: Vec<[f64; 3]> = (0..s.len()).map(|i| point(s, i)).collect();
+        let tris: &[[usize; 3]] = match s.topology() {
+            modal_core::Topology::Mesh { triangles } => triangles,
+            _ => &[],
+        };
+        json!({
+            "x": pts.iter().map(|p| p[0]).collect::<Vec<_>>(),
+            "y": pts.iter().map(|p| p[1]).collect::<Vec<_>>(),
+            "z": pts.iter().map(|p| p[2]).collect::<Vec<_>>(),
+            "i": tris.iter().map(|t| t[0]).collect::<Vec<_>>(),
+            "j": tris.iter().map(|t| t[1]).collect::<Vec<_>>(),
+            "k": tris.iter().map(|t| t[2]).collect::<Vec<_>>(),
+        })
+    };
+    let mut seg: [Vec<Option<f64>>; 3] = Default::default();
+    for m in &pair.result.pairs {
+        for p in [point(sa, m.a), point(sb, m.b)] {
+            for (axis, v) in seg.iter_mut().zip(p) {
+                axis.push(Some(v));
+            }
+        }
+        for axis in &mut seg {
+            axis.push(None);
+        }
+    }
+    Some(json!({
+        "a": mesh(sa), "b": mesh(sb),
+        "frames": [result.objects[pair.a].frame, result.objects[pair.b].frame],
+        "matches": { "x": seg[0], "y": seg[1], "z": seg[2] },
+    }))
+}
+
+const TEMPLATE: &str = include_str!("report.html");
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pedo_io::sequence::{run_sequence, SequenceOptions, StageTimings};
+
+    /// A disc of pressure moving one sensel right per frame.
+    fn walking_disc(frames: usize) -> Recording {
+        let (rows, cols) = (16, 24);
+        let mut data = vec![0.0f32; frames * rows * cols];
+        for t in 0..frames {
+            for r in 0..rows {
+                for c in 0..cols {
+                    let (dy, dx) = (r as f64 - 8.0, c as f64 - 6.0 - t as f64);
+                    let d2 = dx * dx + dy * dy;
+                    if d2 < 20.0 {
+                        data[(t * rows + r) * cols + c] = (100.0 - 4.0 * d2) as f32;
+                    }
+                }
+            }
+        }
+        Recording::from_array(frames, rows, cols, data, None)
+            .unwrap()
+            .with_pitch_mm([5.0, 4.0])
+            .unwrap()
+            .with_frame_rate(50.0)
+            .unwrap()
+            .with_units("kPa")
+    }
+
+    fn embedded_data(html: &str) -> Value {
+        let start = html.find("id=\"report-data\">").unwrap() + "id=\"report-data\">".len();
+        let end = start + html[start..].find("</script>").unwrap();
+        serde_json::from_str(&html[start..end]).unwrap()
+    }
+
+    fn info() -> ReportInfo {
+        ReportInfo {
+            input: "walk </script><b>.npy".into(),
+            format: Some("npy".into()),
+            version: "9.9.9".into(),
+            options: vec![("modes".into(), "0.25".into())],
+            timings: vec![("matching".into(), 0.5)],
+            contact_threshold: 0.0,
+        }
+    }
+
+    #[test]
+    fn report_embeds_frames_matches_and_measures_in_physical_units() {
+        let rec = walking_disc(6);
+        let result = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
+        assert_eq!(result.pairs.len(), 5);
+        let html = run_report(&rec, &result, &info()).unwrap();
+        // Self-contained: plotly.js inline, nothing loaded from elsewhere, loads forbidden.
+        assert!(html.contains("default-src 'none'"));
+        assert!(!html.contains("<script src"));
+        assert!(!html.contains("tex-svg") && html.contains("plotly.js"));
+        // The header, escaped.
+        assert!(html.contains("walk &lt;/script&gt;&lt;b&gt;.npy"));
+        assert!(html.contains("5 × 4 mm") && html.contains("50 Hz") && html.contains("npy"));
+        let d = embedded_data(&html);
+        assert_eq!(d["step"], 1);
+        assert_eq!(d["shown"], json!([0, 1, 2, 3, 4, 5]));
+        assert_eq!(d["xy_units"], "mm");
+        // Pressure decodes back to the recording within half a quantum.
+        let q = d["quantum"].as_f64().unwrap();
+        let (r, c, t) = (8, 9, 3);
+        let coded = d["z"][t][r * 24 + c].as_f64().unwrap();
+        let value = rec.frame_slice(t).unwrap()[r * 24 + c] as f64;
+        assert!(
+            (coded * q - value).abs() <= q / 2.0,
+            "{coded} × {q} vs {value}"
+        );
+        // Every match of the pair leaving frame 2 is drawn as one segment (two points).
+        let frame2 = &d["overlays"]["frames"][2];
+        let drawn: usize = frame2["matches"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .chain([&frame2["excess"]])
+            .map(|l| {
+                l["x"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .filter(|v| !v.is_null())
+                    .count()
+            })
+            .sum();
+        let pair = result.pairs.iter().find(|p| p.row.frame_a == 2).unwrap();
+        assert_eq!(drawn, 2 * pair.result.pairs.len());
+        // Contours in mm: the disc's nodes lie within its mm extent.
+        let xs: Vec<f64> = frame2["contours"]["x"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|v| v.as_f64())
+            .collect();
+        assert!(
+            xs.iter().all(|&x| (5.0 * 3.0..=5.0 * 13.0).contains(&x)),
+            "{xs:?}"
+        );
+        // Time series: the contact area of frame 0 in mm² (20 mm² per sensel).
+        let sensels = rec.measures(0.0)[0].contact_sensors as f64;
+        assert_eq!(d["series"]["area"][0].as_f64().unwrap(), sensels * 20.0);
+    }
+
+    #[test]
+    fn long_recordings_are_decimated_below_the_bound() {
+        let (frames, rows, cols) = (301, 100, 100);
+        let rec = Recording::from_array(frames, rows, cols, vec![0.0; frames * rows * cols], None)
+            .unwrap();
+        let result = SequenceResult {
+            objects: vec![],
+            pairs: vec![],
+            tracks: vec![],
+            splits: vec![],
+            merges: vec![],
+            skipped_frames: vec![],
+            skipped_pairs: vec![],
+            timings: StageTimings::default(),
+        };
+        let html = run_report(&rec, &result, &info()).unwrap();
+        let d = embedded_data(&html);
+        assert_eq!(d["step"], 2);
+        assert_eq!(d["shown"].as_array().unwrap().len(), 151);
+        assert_eq!(d["series"]["area"].as_array().unwrap().len(), frames);
+        assert!(html.len() < 25 << 20, "{} bytes", html.len());
+        assert_eq!(d["xy_units"], "sensels");
+    }
+}

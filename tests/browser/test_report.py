@@ -1,0 +1,115 @@
+#!/usr/bin/env python3
+"""Opens the demo's report.html in headless Chromium and checks what a reader would see.
+
+Usage: test_report.py PEDOMATCH_BINARY [SCREENSHOT.png]
+
+Checks: the three plots are drawn (plotly's SVG root exists for each), no script error and no
+blocked load was logged (the page's own error log and Chromium's console), moving the slider to
+frame k shows frame k (label, plot title and the page's state), a surface run draws its 3-D view, the page makes no network request
+(every host resolves to nothing, and the page's Content-Security-Policy would report any load),
+and `--report none` writes no report. Standard library only; needs `chromium` on PATH.
+"""
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+def chromium(url, *extra):
+    """Runs headless Chromium on `url` until the page is rendered; returns (stdout, stderr)."""
+    cmd = [
+        CHROMIUM, "--headless", "--disable-gpu", "--no-sandbox", "--hide-scrollbars",
+        # Nothing may be fetched: every host name resolves to nothing.
+        "--host-resolver-rules=MAP * ~NOTFOUND",
+        "--enable-logging=stderr", "--v=0",
+        # Virtual time runs the page's timers and rendering before the DOM is dumped.
+        "--virtual-time-budget=10000", *extra, url,
+    ]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    return p.stdout, p.stderr
+
+
+def console_errors(stderr):
+    """Script errors Chromium logged from the page's console."""
+    return [l for l in stderr.splitlines()
+            if "CONSOLE" in l and ("Uncaught" in l or "Error" in l or "Refused" in l)]
+
+
+def check_frame(report, k, failures):
+    dom, err = chromium(f"file://{report}#frame={k}", "--dump-dom")
+    def expect(cond, what):
+        if not cond:
+            failures.append(f"frame {k}: {what}")
+    expect('data-ready="1"' in dom, "the page's script did not finish")
+    expect(len(re.findall(r'<svg class="main-svg"', dom)) >= 6,
+           "the three plotly plots are not drawn (main-svg elements missing)")
+    expect(f'data-frame="{k}"' in dom, "the page's state is not frame k")
+    label = re.search(r'id="frame-label">([^<]*)<', dom)
+    expect(label and re.match(rf"frame {k}\b", label.group(1)),
+           f"the label does not say frame {k}: {label.group(1) if label else None!r}")
+    titles = re.findall(r'class="g-gtitle".*?<text[^>]*>([^<]*)<', dom)
+    expect(any(re.match(rf"frame {k}\b", t) for t in titles),
+           f"the player's title does not say frame {k}: {titles!r}")
+    errors = re.search(r'id="js-errors">([^<]*)<', dom)
+    expect(errors is not None and errors.group(1).strip() == "",
+           f"the page logged errors or blocked loads: {errors.group(1) if errors else 'no log'!r}")
+    expect(not console_errors(err), f"console errors: {console_errors(err)!r}")
+    expect("ERR_NAME_NOT_RESOLVED" not in err, "the page tried to reach the network")
+    return dom
+
+
+def main():
+    if len(sys.argv) < 2:
+        sys.exit(__doc__)
+    binary = os.path.abspath(sys.argv[1])
+    screenshot = os.path.abspath(sys.argv[2]) if len(sys.argv) > 2 else None
+    if CHROMIUM is None:
+        sys.exit("chromium is required for the browser test (apt-get install chromium)")
+    failures = []
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "demo")
+        subprocess.run([binary, "demo", "--out", out, "--figures", "none"], check=True,
+                       stdout=subprocess.DEVNULL)
+        report = os.path.join(out, "report.html")
+        size = os.path.getsize(report)
+        if size > 25 * 2**20:
+            failures.append(f"report.html is {size} bytes, over 25 MB")
+        for k in (0, 75, 204):
+            check_frame(report, k, failures)
+        # A frame not on the slider's range is clamped to the last frame.
+        check_frame_clamped = chromium(f"file://{report}#frame=999", "--dump-dom")[0]
+        if 'data-frame="204"' not in check_frame_clamped:
+            failures.append("frame 999 did not clamp to the last frame, 204")
+        if screenshot:
+            chromium(f"file://{report}#frame=75", f"--screenshot={screenshot}",
+                     "--window-size=1400,1300")
+            if not os.path.exists(screenshot):
+                failures.append("no screenshot written")
+        # Surfaces: the 3-D view of the pair leaving the frame shown is drawn (WebGL scene).
+        surf = os.path.join(tmp, "surface")
+        subprocess.run([binary, "demo", "--out", surf, "--figures", "none", "--model", "surface",
+                        "--frames", "60..80"], check=True, stdout=subprocess.DEVNULL)
+        dom = check_frame(os.path.join(surf, "report.html"), 72, failures)
+        if '<div id="surface-view">' not in dom or 'class="gl-container"' not in dom:
+            failures.append("surface run: the 3-D view is not shown")
+        if not re.search(r'class="legendtext"[^>]*>frame 73<', dom):
+            failures.append("surface run: the 3-D view does not show the pair 72 -> 73")
+        none = os.path.join(tmp, "none")
+        subprocess.run([binary, "demo", "--out", none, "--figures", "none", "--report", "none"],
+                       check=True, stdout=subprocess.DEVNULL)
+        if os.path.exists(os.path.join(none, "report.html")):
+            failures.append("--report none wrote report.html")
+    for f in failures:
+        print("FAIL:", f)
+    if failures:
+        sys.exit(1)
+    print(f"browser test passed: report.html of the demo is {size / 2**20:.1f} MB")
+
+
+if __name__ == "__main__":
+    main()
