@@ -116,9 +116,7 @@ pub fn ear_clip(coords: &[f64]) -> Option<Vec<[usize; 3]>> {
                 best = Some((k, q));
             }
         }
-        let Some((k, _)) = best else {
-            return None;
-        };
+        let (k, _) = best?;
         tris.push([idx[(k + m - 1) % m], idx[k], idx[(k + 1) % m]]);
         idx.remove(k);
     }
