@@ -51,19 +51,23 @@ wheel-check: wheel
 # Every example: one Rust example per crate (plus the assignment timing harness on small
 # sizes), then the Python ones with the venv's interpreter against the installed wheel. Outputs
 # go to a temporary folder, removed afterwards.
+# One build of every example with the tests' feature set (no second build of the dependencies).
+EXAMPLES := target/debug/examples
 examples: wheel
-	cargo run -q -p assign --example solve_small
-	cargo run -q -p assign --example timing -- 200
-	cargo run -q -p modal-core --example match_contours
-	cargo run -q -p pedo-io --example read_asf
-	cargo run -q -p pedomatch --example run_recording
+	cargo build -q --examples
+	$(EXAMPLES)/solve_small
+	$(EXAMPLES)/timing 200
+	$(EXAMPLES)/match_contours
+	$(EXAMPLES)/read_asf
+	$(EXAMPLES)/run_recording
 	tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && \
 	$(PY) examples/match_two_frames.py --out "$$tmp/match.png" && test -s "$$tmp/match.png" && \
 	$(PY) examples/run_recording.py --out-dir "$$tmp" && test -s "$$tmp/pairs.csv"
 
 # The demo's report.html in headless Chromium (Debian's `chromium`): drawn, playable, offline.
+# The binary as the tests build it (the same features: nothing is rebuilt after `cargo test`).
 test-browser:
-	cargo build --bin pedomatch
+	cargo test -q --no-run --test cli_run
 	python3 tests/browser/test_report.py target/debug/pedomatch
 
 bench:
