@@ -673,25 +673,12 @@ fn build_objects(
     };
     match options.model {
         ObjectModel::Contour => {
-            let outcomes: Vec<Result<Vec<Contour>>> = (start..end)
-                .into_par_iter()
-                .map(|t| {
+            let per_frame: Vec<Vec<Contour>> =
+                per_frame_or_skipped(start..end, &mut built.skipped_frames, |t| {
                     let cs = frame_contours(recording, t, options);
                     tick(end - start);
                     cs
-                })
-                .collect();
-            // A frame whose contours cannot be extracted has no objects; the run goes on.
-            let mut per_frame = Vec::with_capacity(outcomes.len());
-            for (k, outcome) in outcomes.into_iter().enumerate() {
-                per_frame.push(outcome.unwrap_or_else(|e| {
-                    built.skipped_frames.push(SkippedFrame {
-                        frame: start + k,
-                        reason: e.to_string(),
-                    });
-                    Vec::new()
-                }));
-            }
+                });
             let pairings = crate::track::track(&per_frame, PairingMethod::default())?;
             let mut first = Vec::with_capacity(per_frame.len());
             for (k, cs) in per_frame.iter().enumerate() {
@@ -726,25 +713,12 @@ fn build_objects(
         }
         ObjectModel::Surface => {
             let threshold = options.surface.preprocess.threshold.unwrap_or(0.0);
-            let outcomes: Vec<Result<Option<Shape>>> = (start..end)
-                .into_par_iter()
-                .map(|t| {
+            let per_frame: Vec<Option<Shape>> =
+                per_frame_or_skipped(start..end, &mut built.skipped_frames, |t| {
                     let shape = frame_surface(recording, t, threshold, options, &keep);
                     tick(end - start);
                     shape
-                })
-                .collect();
-            // A frame whose surface cannot be built has no object; the run goes on.
-            let mut per_frame = Vec::with_capacity(outcomes.len());
-            for (k, outcome) in outcomes.into_iter().enumerate() {
-                per_frame.push(outcome.unwrap_or_else(|e| {
-                    built.skipped_frames.push(SkippedFrame {
-                        frame: start + k,
-                        reason: e.to_string(),
-                    });
-                    None
-                }));
-            }
+                });
             let mut previous: Option<usize> = None;
             for (k, shape) in per_frame.into_iter().enumerate() {
                 match shape {
@@ -814,6 +788,28 @@ fn build_objects(
         }
     }
     Ok(built)
+}
+
+/// `build(t)` for every frame of `frames`, in parallel. A frame whose objects cannot be built is
+/// recorded in `skipped` with its reason and gets no objects (`T::default()`); the run goes on.
+fn per_frame_or_skipped<T: Send + Default>(
+    frames: std::ops::Range<usize>,
+    skipped: &mut Vec<SkippedFrame>,
+    build: impl Fn(usize) -> Result<T> + Sync,
+) -> Vec<T> {
+    let outcomes: Vec<Result<T>> = frames.clone().into_par_iter().map(&build).collect();
+    frames
+        .zip(outcomes)
+        .map(|(frame, outcome)| {
+            outcome.unwrap_or_else(|e| {
+                skipped.push(SkippedFrame {
+                    frame,
+                    reason: e.to_string(),
+                });
+                T::default()
+            })
+        })
+        .collect()
 }
 
 /// The brightness surface of frame `t`, or `None` when the frame has no contact or too few
