@@ -29,9 +29,36 @@ pub enum Format {
     Npz,
     /// novel pedar ASCII export (`.asc`/`.txt`): 99 sensors per insole placed on a layout grid.
     Pedar,
+    /// Zebris FDM frame-by-frame raw-data export as XML (`<measurement>`, `<clip>`, `<quant>`
+    /// frames with their windows), also gzip-compressed.
+    ZebrisXml,
+    /// The same export converted to JSON by the public TRIPOD dataset (`zebris_raw.json.gz`).
+    ZebrisJson,
 }
 
 impl Format {
+    /// Every format, in the order the README lists them.
+    pub const ALL: [Format; 13] = [
+        Format::Asf,
+        Format::TekscanCsv,
+        Format::Lst,
+        Format::Pedar,
+        Format::Zebris,
+        Format::ZebrisXml,
+        Format::ZebrisJson,
+        Format::Footscan,
+        Format::Csv,
+        Format::Npy,
+        Format::Npz,
+        Format::Png,
+        Format::Tiff,
+    ];
+
+    /// The format of a [`name`](Self::name), if any.
+    pub fn from_name(name: &str) -> Option<Format> {
+        Format::ALL.into_iter().find(|f| f.name() == name)
+    }
+
     /// The lower-case name used in messages, tables and `summary.json`.
     pub fn name(self) -> &'static str {
         match self {
@@ -46,6 +73,8 @@ impl Format {
             Format::Footscan => "footscan",
             Format::Npz => "npz",
             Format::Pedar => "pedar",
+            Format::ZebrisXml => "zebris-xml",
+            Format::ZebrisJson => "zebris-json",
         }
     }
 }

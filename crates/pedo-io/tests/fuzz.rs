@@ -302,6 +302,20 @@ fn fuzz_seeds() -> Vec<(String, Format, Vec<u8>)> {
     })
     .unwrap();
     let png = pedo_io::formats::images::frame_to_png16(&small, 0, 1.0).unwrap();
+    // The first six frames of the Zebris XML sample (four unloaded, two windows).
+    let zebris = text("zebris-FrasP01L-26-55.xml");
+    let keep = zebris.match_indices("<quant").nth(6).unwrap().0;
+    let zebris_xml = format!(
+        "{}</data></clip></clips></movement></movements></measurement>\n",
+        zebris[..keep].trim_end()
+    )
+    .replace("<count>30</count>", "<count>6</count>")
+    .into_bytes();
+    let zebris_json = br#"{"cell_count": {"x": 4, "y": 3}, "cell_size": {"x": 8.5, "y": 8.5},
+        "frequency": 100, "pressure_unit": "N/cm2", "sample_count": 2, "begin": 0.0,
+        "samples": [{"origin": {"x": null, "y": null}, "size": {"x": 0, "y": 0}, "pressure": []},
+        {"origin": {"x": 1, "y": 0}, "size": {"x": 2, "y": 2}, "pressure": [1, 2.5, 3, 4]}]}"#
+        .to_vec();
     let seeds = vec![
         ("FrasP01L.asf", Format::Asf, sample("FrasP01L.asf").to_vec()),
         (
@@ -328,6 +342,8 @@ fn fuzz_seeds() -> Vec<(String, Format, Vec<u8>)> {
         ("pedar excerpt", Format::Pedar, pedar),
         ("iscan excerpt", Format::Asf, iscan),
         ("real emed excerpt", Format::Lst, emed),
+        ("zebris xml excerpt", Format::ZebrisXml, zebris_xml),
+        ("zebris json excerpt", Format::ZebrisJson, zebris_json),
     ];
     seeds
         .into_iter()

@@ -85,6 +85,8 @@ fn a_known_format_under_another_extension_reads_the_same() {
         ("emed-test-1-10.lst", Format::Lst),
         ("numpy-MUN104L-deflated.npz", Format::Npz),
         ("MUN104L.csv", Format::Csv),
+        ("zebris-FrasP01L-26-55.xml", Format::ZebrisXml),
+        ("zebris-FrasP01L-26-55.json.gz", Format::ZebrisJson),
     ] {
         let want = read_recording(data(sample)).unwrap();
         assert_eq!(want.format, Some(format), "{sample}");
@@ -600,4 +602,162 @@ fn real_emed_export_with_total_force() {
         );
     }
     assert!(ms.iter().any(|m| m.total_force > 10.0));
+}
+
+/// The Zebris raw-data samples hold frames 26..55 of the F-Scan walk, in N/cm², placed on a
+/// 30 x 80 plate with the image's top-left sensel at column 5, row 10 (see reconstruct.py).
+fn check_zebris_raw(rec: &Recording, format: Format) {
+    let asf = read_recording(data("FrasP01L.asf")).unwrap();
+    assert_eq!(rec.format, Some(format));
+    assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (30, 80, 30));
+    assert_eq!(rec.pitch_mm, Some([5.08, 5.08]));
+    assert_eq!(rec.dt_s, Some(1.0 / 31.25));
+    assert_eq!(rec.units, "N/cm2");
+    assert_eq!(rec.n_sensors(), 80 * 30, "every sensor of a plate exists");
+    let (oy, ox) = (10, 5);
+    for t in 0..30 {
+        // asf frame numbers start at 1: frame 26 is index 25.
+        let want = asf.frame_slice(25 + t).unwrap();
+        let got = rec.frame_slice(t).unwrap();
+        for r in 0..80 {
+            for c in 0..30 {
+                let inside = (oy..oy + 60).contains(&r) && (ox..ox + 21).contains(&c);
+                let expect = if inside {
+                    let v = want[(r - oy) * 21 + (c - ox)] as f64 / 10.0;
+                    (v * 10.0).round() / 10.0
+                } else {
+                    0.0
+                };
+                let g = got[r * 30 + c] as f64;
+                assert!(
+                    (g - expect).abs() < 1e-4,
+                    "frame {t} row {r} col {c}: {g} vs {expect}"
+                );
+            }
+        }
+    }
+    let loads: Vec<f64> = (0..30)
+        .map(|t| rec.frame_slice(t).unwrap().iter().map(|&v| v as f64).sum())
+        .collect();
+    assert!(
+        loads[..4].iter().all(|&l| l == 0.0),
+        "swing before heel strike"
+    );
+    assert!(loads[4] > 0.0 && loads[20] > loads[4]);
+}
+
+#[test]
+fn zebris_raw_xml_export_places_each_window_on_the_plate() {
+    let rec = read_recording(data("zebris-FrasP01L-26-55.xml")).unwrap();
+    check_zebris_raw(&rec, Format::ZebrisXml);
+    // The same file gzip-compressed reads the same (sniffed through the compression).
+    let s = Scratch::new("zebris-gz");
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    std::io::Write::write_all(&mut gz, &bytes("zebris-FrasP01L-26-55.xml")).unwrap();
+    let p = s.write("zebris_raw.xml.gz", &gz.finish().unwrap());
+    assert_eq!(read_recording(&p).unwrap(), rec);
+}
+
+#[test]
+fn zebris_raw_json_form_reads_like_the_xml() {
+    let rec = read_recording(data("zebris-FrasP01L-26-55.json.gz")).unwrap();
+    check_zebris_raw(&rec, Format::ZebrisJson);
+    let xml = read_recording(data("zebris-FrasP01L-26-55.xml")).unwrap();
+    assert_eq!(rec.data(), xml.data());
+}
+
+fn zebris_xml(count: usize, quants: &str) -> Vec<u8> {
+    format!(
+        "<measurement><cell_count><x>4</x><y>3</y></cell_count><movements><movement><clips>\
+         <clip><units>km/h</units><data><quant>1.0</quant></data></clip>\
+         <clip><cell_size><x>8.5</x><y>8.5</y></cell_size><frequency>100</frequency>\
+         <units>N/cm&#178;</units><count>{count}</count><data>{quants}</data></clip>\
+         </clips></movement></movements></measurement>"
+    )
+    .into_bytes()
+}
+
+const WINDOW: &str = "<quant><cell_begin><x>1</x><y>0</y></cell_begin>\
+    <cell_count><x>2</x><y>2</y></cell_count><cells>1 2 3 4</cells></quant>";
+
+#[test]
+fn zebris_raw_xml_variants_and_refusals() {
+    // The velocity clip may come first; empty frames may be written either way; y points up.
+    let empty = "<quant><cells></cells></quant><quant/>";
+    let rec = parse_bytes(
+        &zebris_xml(3, &format!("{WINDOW}{empty}")),
+        Format::ZebrisXml,
+        "v.xml",
+    )
+    .unwrap();
+    assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (3, 3, 4));
+    assert_eq!(rec.units, "N/cm²");
+    assert_eq!(rec.dt_s, Some(0.01));
+    #[rustfmt::skip]
+    assert_eq!(rec.frame_slice(0).unwrap(), &[0., 0., 0., 0.,
+                                    0., 3., 4., 0.,
+                                    0., 1., 2., 0.]);
+    assert!(rec
+        .frame_slice(1)
+        .unwrap()
+        .iter()
+        .chain(rec.frame_slice(2).unwrap())
+        .all(|&v| v == 0.0));
+
+    let refuse = |quants: &str, count: usize, needle: &str| {
+        let e = parse_bytes(&zebris_xml(count, quants), Format::ZebrisXml, "bad.xml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("bad.xml") && e.contains(needle),
+            "{e:?} lacks {needle:?}"
+        );
+    };
+    refuse(WINDOW, 2, "holds 1 frames, its <count> states 2");
+    refuse(
+        &WINDOW.replace("<x>1</x><y>0</y>", "<x>3</x><y>0</y>"),
+        1,
+        "leaves the 4 x 3 plate",
+    );
+    refuse(
+        &WINDOW.replace("1 2 3 4", "1 2 3"),
+        1,
+        "3 values for a window of 2 x 2",
+    );
+    refuse(
+        &WINDOW.replace("1 2 3 4", "1 x 3 4"),
+        1,
+        "value 1 is not a number",
+    );
+    refuse(&WINDOW.replace("1 2 3 4", "1 -2 3 4"), 1, "negative");
+    refuse(
+        &WINDOW.replace("<cell_begin><x>1</x><y>0</y></cell_begin>", ""),
+        1,
+        "without its window",
+    );
+    let cut = zebris_xml(1, WINDOW);
+    let e = parse_bytes(&cut[..cut.len() - 40], Format::ZebrisXml, "cut.xml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("truncated XML"), "{e}");
+    let at = String::from_utf8_lossy(&cut).find("</data>").unwrap();
+    let e = parse_bytes(&cut[..at], Format::ZebrisXml, "cut.xml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("truncated: the file ends inside <measurement>"),
+        "{e}"
+    );
+    let huge = b"<measurement><cell_count><x>100000</x><y>100000</y></cell_count><clip>\
+        <cell_size><x>1</x><y>1</y></cell_size><data><quant/></data></clip></measurement>";
+    let e = parse_bytes(huge, Format::ZebrisXml, "huge.xml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("100000 x 100000"), "{e}");
+    // XML that is not a Zebris export is named for what it is, not parsed.
+    assert!(
+        sniff_format(Path::new("a.xml"), b"<html><body>hi</body></html>")
+            .unwrap_err()
+            .contains("XML")
+    );
 }

@@ -125,21 +125,7 @@ fn format_name(f: Format) -> String {
 
 /// The inverse of [`format_name`].
 fn format_of_name(name: &str) -> Option<Format> {
-    [
-        Format::Asf,
-        Format::Lst,
-        Format::Csv,
-        Format::Npy,
-        Format::Png,
-        Format::Tiff,
-        Format::TekscanCsv,
-        Format::Zebris,
-        Format::Footscan,
-        Format::Npz,
-        Format::Pedar,
-    ]
-    .into_iter()
-    .find(|&f| format_name(f) == name)
+    Format::from_name(name)
 }
 
 #[pymethods]

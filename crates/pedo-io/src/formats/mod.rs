@@ -8,6 +8,7 @@ pub mod npy;
 pub mod npz;
 pub mod pedar;
 pub mod pedcad;
+pub mod zebris_raw;
 
 use crate::error::{IoError, Result};
 use crate::recording::{Format, Recording};
@@ -52,7 +53,8 @@ pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 
 /// The formats [`read_recording`] understands, as listed in [`IoError::UnknownFormat`].
 pub const SUPPORTED: &str = "Tekscan .asf and CSV export, novel emed .lst, novel pedar .asc, \
-Zebris .apd, RSscan/Materialise footscan export, CSV grid, NumPy .npy/.npz, PNG/TIFF images";
+Zebris .apd and XML raw-data export (or its TRIPOD JSON form, also gzip-compressed), \
+RSscan/Materialise footscan export, CSV grid, NumPy .npy/.npz, PNG/TIFF images";
 
 /// What reading needs besides the file itself.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -95,6 +97,9 @@ pub fn sniff_format(path: &Path, head: &[u8]) -> std::result::Result<Format, Str
     if let Some(&(_, f)) = magic.iter().find(|(m, _)| head.starts_with(m)) {
         return Ok(f);
     }
+    if head.starts_with(GZIP_MAGIC) {
+        return sniff_gzip(path, head);
+    }
     if head.starts_with(b"PK\x05\x06") {
         return Err("an empty zip archive".into());
     }
@@ -129,6 +134,9 @@ pub fn sniff_format(path: &Path, head: &[u8]) -> std::result::Result<Format, Str
 
 /// The format a text's markers name, if any.
 fn sniff_text(text: &str) -> Option<Format> {
+    if let Some(f) = zebris_raw::sniff(text) {
+        return Some(f);
+    }
     let lines: Vec<&str> = text.lines().map(str::trim).collect();
     let starts = |p: &str| lines.iter().any(|l| l.starts_with(p));
     if text.contains("ASCII_DATA") {
@@ -218,8 +226,51 @@ fn describe_text(text: &str) -> String {
     )
 }
 
-/// Parses an in-memory file of a known format; `name` is used in error messages.
+/// The first bytes of a gzip stream.
+const GZIP_MAGIC: &[u8] = b"\x1f\x8b";
+
+/// The most a gzip-compressed recording may expand to (a larger claim is refused, not allocated).
+const MAX_GUNZIPPED: u64 = 1 << 31;
+
+/// The format of the content of a gzip-compressed file, from the part of it `head` holds.
+fn sniff_gzip(path: &Path, head: &[u8]) -> std::result::Result<Format, String> {
+    use std::io::Read;
+    let mut inner = Vec::new();
+    // A head cut mid-stream decodes as far as it goes and then fails: what was decoded is enough.
+    let _ = flate2::read::GzDecoder::new(head)
+        .take(SNIFF_BYTES as u64)
+        .read_to_end(&mut inner);
+    let inner_path = path.with_extension("");
+    match sniff_format(&inner_path, &inner) {
+        Ok(f) if !matches!(f, Format::Npy | Format::Npz | Format::Png | Format::Tiff) => Ok(f),
+        Ok(f) => Err(format!("gzip-compressed {f} (decompress it first)")),
+        Err(what) => Err(format!("gzip-compressed {what}")),
+    }
+}
+
+/// Decompresses a gzip-compressed file, refusing more than [`MAX_GUNZIPPED`] bytes.
+fn gunzip(bytes: &[u8], name: &str) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let mut out = Vec::new();
+    flate2::read::GzDecoder::new(bytes)
+        .take(MAX_GUNZIPPED + 1)
+        .read_to_end(&mut out)
+        .map_err(|e| IoError::format(name, format!("gzip stream: {e}")))?;
+    if out.len() as u64 > MAX_GUNZIPPED {
+        return Err(IoError::format(
+            name,
+            format!("decompresses to more than {MAX_GUNZIPPED} bytes"),
+        ));
+    }
+    Ok(out)
+}
+
+/// Parses an in-memory file of a known format; `name` is used in error messages. A
+/// gzip-compressed file is decompressed first.
 pub fn parse_bytes(bytes: &[u8], format: Format, name: &str) -> Result<Recording> {
+    if bytes.starts_with(GZIP_MAGIC) {
+        return parse_bytes(&gunzip(bytes, name)?, format, name);
+    }
     let mut rec = match format {
         Format::Asf => asf::parse_asf(bytes, name)?,
         Format::Lst => lst::parse_lst(bytes, name)?.0,
@@ -230,6 +281,8 @@ pub fn parse_bytes(bytes: &[u8], format: Format, name: &str) -> Result<Recording
         Format::Zebris | Format::Footscan => pedcad::parse_pedcad(bytes, name)?,
         Format::Npz => npz::parse_npz(bytes, name)?,
         Format::Pedar => pedar::parse_pedar(bytes, name, pedar::PedarLayout::bundled())?,
+        Format::ZebrisXml => zebris_raw::parse_zebris_xml(bytes, name)?,
+        Format::ZebrisJson => zebris_raw::parse_zebris_json(bytes, name)?,
     };
     if matches!(format, Format::Png | Format::Tiff) {
         rec.format = Some(format);
