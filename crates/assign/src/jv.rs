@@ -335,6 +335,9 @@ fn scan_portable<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> S
 /// vectorised) and only a block holding a candidate below the current second minimum or free
 /// minimum is replayed entry by entry, in index order: exactly the portable semantics, at
 /// close to memory speed instead of a dozen blends per vector.
+///
+/// # Safety
+/// The CPU must support AVX2 (the only requirement: the slice lengths are asserted).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn scan_avx2<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
@@ -351,6 +354,8 @@ unsafe fn scan_avx2<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -
         arg_free: NONE,
         valid: true,
     };
+    // SAFETY (every `.add(o)` load below): `o + 4 ≤ mb ≤ m`, and `row`, `v` and `freepen`
+    // hold at least `m` values (asserted above).
     let (rp, vp, fp) = (row.as_ptr(), v.as_ptr(), freepen.as_ptr());
     let replay = |s: &mut Scan, lo: usize, hi: usize| {
         for j in lo..hi {
@@ -593,6 +598,9 @@ fn relax_avx2_entry(
 /// the two arg-minima, the costly part, are found like in [`scan_avx2`]: per block of 16 columns
 /// a vector minimum is compared with the running minima, and only a block holding a smaller
 /// value is replayed entry by entry in index order, which gives exactly [`relax`]'s answer.
+///
+/// # Safety
+/// The CPU must support AVX2 (the only requirement: the slice lengths are asserted).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn relax_avx2(
@@ -617,6 +625,9 @@ unsafe fn relax_avx2(
         min_free: f64::INFINITY,
         arg_free: 0,
     };
+    // SAFETY (every `.add(o)` / `.add(j)` access below): `o + 4 ≤ mb` and `j < mb ≤ m`, and
+    // every slice holds at least `m` values (asserted above); `dk` and `pred` are borrowed
+    // mutably, so the stores through `dp` and `pp` alias nothing else.
     let (rp, vp, dp, pp, fp) = (
         row.as_ptr(),
         v.as_ptr(),

@@ -120,43 +120,11 @@ pub fn signed_area(pts: &[f64]) -> f64 {
         * 0.5
 }
 
-/// Eigen-decomposition of a symmetric 3×3 matrix by cyclic Jacobi rotations.
-/// Returns eigenvalues and eigenvectors as columns (`vecs[row][k]` for eigenvalue `k`), unsorted.
-pub fn sym_eigen3(mut a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
-    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    for _ in 0..50 {
-        let off = a[0][1].powi(2) + a[0][2].powi(2) + a[1][2].powi(2);
-        let scale = a[0][0].powi(2) + a[1][1].powi(2) + a[2][2].powi(2);
-        if off <= 1e-30 * scale.max(1e-300) {
-            break;
-        }
-        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
-            if a[p][q].abs() < 1e-300 {
-                continue;
-            }
-            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-            let t = if theta == 0.0 { 1.0 } else { t };
-            let c = 1.0 / (t * t + 1.0).sqrt();
-            let s = t * c;
-            for k in 0..3 {
-                let (akp, akq) = (a[k][p], a[k][q]);
-                a[k][p] = c * akp - s * akq;
-                a[k][q] = s * akp + c * akq;
-            }
-            for k in 0..3 {
-                let (apk, aqk) = (a[p][k], a[q][k]);
-                a[p][k] = c * apk - s * aqk;
-                a[q][k] = s * apk + c * aqk;
-            }
-            for row in v.iter_mut() {
-                let (vp, vq) = (row[p], row[q]);
-                row[p] = c * vp - s * vq;
-                row[q] = s * vp + c * vq;
-            }
-        }
-    }
-    ([a[0][0], a[1][1], a[2][2]], v)
+/// Eigen-decomposition of a symmetric 3×3 matrix (nalgebra's symmetric eigensolver).
+/// Returns eigenvalues and eigenvectors as columns (`vecs[row][k]` for eigenvalue `k`), unsorted;
+/// each vector has its largest entry positive.
+pub fn sym_eigen3(a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
+    crate::geometry::sym_eigen3(&a)
 }
 
 /// Principal axes of centred points: columns sorted by descending variance, determinant +1,
@@ -170,10 +138,12 @@ pub fn principal_axes(pts: &[f64], dim: usize) -> ([[f64; 3]; 3], [f64; 3]) {
             }
         }
     }
-    if dim == 2 {
-        cov[2][2] = -1.0; // keep the padding axis last
-    }
-    let (vals, vecs) = sym_eigen3(cov);
+    let (vals, vecs) = if dim == 2 {
+        // The padding axis sorts last.
+        crate::geometry::sym_eigen2_padded(&cov, -1.0)
+    } else {
+        crate::geometry::sym_eigen3(&cov)
+    };
     let mut idx = [0usize, 1, 2];
     idx.sort_by(|&x, &y| vals[y].total_cmp(&vals[x]));
     let mut out = [[0.0; 3]; 3];
@@ -696,7 +666,7 @@ pub fn fit_affine(
         3 => normal_equations::<3>(src, dst, pairs),
         _ => return None,
     };
-    let w = solve_spd(&ata, &atb, d1, dim)?;
+    let w = crate::geometry::solve_normal_equations(&ata, &atb, dim)?;
     let mut aff = Affine::identity(dim);
     for a in 0..dim {
         for b in 0..dim {
@@ -736,38 +706,6 @@ fn normal_equations<const D: usize>(
         }
     }
     (ata, atb)
-}
-
-/// Gaussian elimination with partial pivoting on a tiny system; `None` if (near-)singular.
-fn solve_spd(a: &[[f64; 4]; 4], b: &[[f64; 3]; 4], n: usize, nrhs: usize) -> Option<[[f64; 3]; 4]> {
-    let mut a = *a;
-    let mut b = *b;
-    let scale = (0..n).map(|i| a[i][i].abs()).fold(0.0, f64::max);
-    for col in 0..n {
-        let piv = (col..n).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs()))?;
-        if a[piv][col].abs() <= 1e-10 * scale {
-            return None;
-        }
-        a.swap(col, piv);
-        b.swap(col, piv);
-        for r in 0..n {
-            if r != col {
-                let f = a[r][col] / a[col][col];
-                for c in col..n {
-                    a[r][c] -= f * a[col][c];
-                }
-                for c in 0..nrhs {
-                    b[r][c] -= f * b[col][c];
-                }
-            }
-        }
-    }
-    for r in 0..n {
-        for c in 0..nrhs {
-            b[r][c] /= a[r][r];
-        }
-    }
-    Some(b)
 }
 
 /// Symmetric affine ICP from `start`: nearest neighbours in both directions, least-squares affine
@@ -850,30 +788,22 @@ pub fn rotation_candidates(a: &[f64], b: &[f64], dim: usize, turns: usize) -> Ve
                     inner[r][c] = t * s[c];
                 }
             }
-            out.push(Affine::linear(dim, sandwich(dim, &vb, &inner, &va)));
+            out.push(Affine::linear(
+                dim,
+                crate::geometry::sandwich(dim, &vb, &inner, &va),
+            ));
         }
     }
     for k in 1..turns {
-        let (sin, cos) = (std::f64::consts::TAU * k as f64 / turns as f64).sin_cos();
         // R = V_b · Rz(θ) · V_bᵀ: a turn in the plane of B's first two principal axes (in 2-D
         // simply the rotation by θ).
-        let rz = [[cos, -sin, 0.0], [sin, cos, 0.0], [0.0, 0.0, 1.0]];
-        out.push(Affine::linear(dim, sandwich(dim, &vb, &rz, &vb)));
+        let rz = crate::geometry::rotation_z(std::f64::consts::TAU * k as f64 / turns as f64);
+        out.push(Affine::linear(
+            dim,
+            crate::geometry::sandwich(dim, &vb, &rz, &vb),
+        ));
     }
     out
-}
-
-/// `U · T · Vᵀ` on the leading `dim × dim` blocks.
-fn sandwich(dim: usize, u: &[[f64; 3]; 3], t: &[[f64; 3]; 3], v: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    let mut m = [[0.0; 3]; 3];
-    for r in 0..dim {
-        for c in 0..dim {
-            m[r][c] = (0..dim)
-                .map(|p| (0..dim).map(|q| u[r][p] * t[p][q] * v[c][q]).sum::<f64>())
-                .sum();
-        }
-    }
-    m
 }
 
 /// How [`robust_prealign`] searches the rotation between two objects.
@@ -1144,7 +1074,7 @@ mod tests {
     }
 
     #[test]
-    fn jacobi_eigen_reconstructs() {
+    fn sym_eigen3_reconstructs() {
         let a = [[4.0, 1.0, 0.5], [1.0, 3.0, -0.2], [0.5, -0.2, 1.0]];
         let (vals, v) = sym_eigen3(a);
         for r in 0..3 {

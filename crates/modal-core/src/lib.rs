@@ -11,6 +11,7 @@ mod error;
 pub mod excess;
 pub mod features;
 pub mod gaussian;
+mod geometry;
 pub mod matching;
 pub mod material;
 pub mod model;

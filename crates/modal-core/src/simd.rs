@@ -69,12 +69,16 @@ macro_rules! widest_simd {
             $portable
         }
 
+        /// # Safety
+        /// The CPU must support AVX-512F.
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx512f")]
         unsafe fn $avx512($($arg: $ty),*) $(-> $ret)? {
             $on512
         }
 
+        /// # Safety
+        /// The CPU must support AVX2 and the features listed.
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx2")]
         $(#[target_feature(enable = $feat)])*

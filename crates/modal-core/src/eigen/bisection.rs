@@ -191,18 +191,22 @@ mod x86 {
         type Count = __m512i;
         #[inline(always)]
         fn splat(v: f64) -> Self {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
             unsafe { Self(_mm512_set1_pd(v)) }
         }
         #[inline(always)]
         unsafe fn load(x: &[f64]) -> Self {
+            // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
             Self(_mm512_loadu_pd(x[..8].as_ptr()))
         }
         #[inline(always)]
         fn zero_count() -> __m512i {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
             unsafe { _mm512_setzero_si512() }
         }
         #[inline(always)]
         fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
             unsafe {
                 let t = _mm512_mul_pd(_mm512_sub_pd(d.0, x.0), cur.0);
                 Self(_mm512_sub_pd(t, _mm512_mul_pd(e.0, prev.0)))
@@ -210,6 +214,7 @@ mod x86 {
         }
         #[inline(always)]
         fn count_change(count: __m512i, p: Self, cur: Self) -> __m512i {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
             unsafe {
                 let signs = _mm512_xor_si512(_mm512_castpd_si512(p.0), _mm512_castpd_si512(cur.0));
                 _mm512_add_epi64(count, _mm512_srli_epi64::<63>(signs))
@@ -217,6 +222,7 @@ mod x86 {
         }
         #[inline(always)]
         fn rescale(prev: Self, cur: Self) -> (Self, Self) {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
             unsafe {
                 let top = _mm512_max_pd(_mm512_abs_pd(prev.0), _mm512_abs_pd(cur.0));
                 let top = _mm512_and_si512(
@@ -235,6 +241,7 @@ mod x86 {
         }
         #[inline(always)]
         unsafe fn store(count: __m512i, out: &mut [u64]) {
+            // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
             _mm512_storeu_si512(out[..8].as_mut_ptr().cast(), count)
         }
     }
@@ -251,18 +258,22 @@ mod x86 {
         type Count = __m256i;
         #[inline(always)]
         fn splat(v: f64) -> Self {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
             unsafe { Self(_mm256_set1_pd(v)) }
         }
         #[inline(always)]
         unsafe fn load(x: &[f64]) -> Self {
+            // SAFETY: AVX2 as above; the caller passes a full vector of values (the contract).
             Self(_mm256_loadu_pd(x[..4].as_ptr()))
         }
         #[inline(always)]
         fn zero_count() -> __m256i {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
             unsafe { _mm256_setzero_si256() }
         }
         #[inline(always)]
         fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
             unsafe {
                 let t = _mm256_mul_pd(_mm256_sub_pd(d.0, x.0), cur.0);
                 Self(_mm256_sub_pd(t, _mm256_mul_pd(e.0, prev.0)))
@@ -270,6 +281,7 @@ mod x86 {
         }
         #[inline(always)]
         fn count_change(count: __m256i, p: Self, cur: Self) -> __m256i {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
             unsafe {
                 let signs = _mm256_xor_si256(_mm256_castpd_si256(p.0), _mm256_castpd_si256(cur.0));
                 _mm256_add_epi64(count, _mm256_srli_epi64::<63>(signs))
@@ -277,6 +289,7 @@ mod x86 {
         }
         #[inline(always)]
         fn rescale(prev: Self, cur: Self) -> (Self, Self) {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
             unsafe {
                 let abs = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
                 let top = _mm256_max_pd(_mm256_and_pd(prev.0, abs), _mm256_and_pd(cur.0, abs));
@@ -296,6 +309,7 @@ mod x86 {
         }
         #[inline(always)]
         unsafe fn store(count: __m256i, out: &mut [u64]) {
+            // SAFETY: AVX2 as above; the caller passes a full vector of values (the contract).
             _mm256_storeu_si256(out[..4].as_mut_ptr().cast(), count)
         }
     }

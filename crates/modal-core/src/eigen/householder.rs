@@ -137,50 +137,20 @@ fn tridiagonalize_body(a: MatRef<'_, f64>) -> Tridiagonal {
     }
 }
 
-/// From this many vectors on, [`Tridiagonal::apply_q`] applies the reflectors in blocks (faer's
-/// compact-WY form, matrix products): 300 dof, all 300 vectors, 5.0 → 1.5 ms; with the 30 vectors
-/// of a matching solve one reflector at a time is faster (no block factors to build).
-const BLOCKED_APPLY_MIN_VECTORS: usize = 96;
-
 impl Tridiagonal {
     /// `Y ← Q Y` for the eigenvectors `Y` (`n × k`) of the tridiagonal matrix, `Q = H₀ H₁ ⋯`.
     pub(crate) fn apply_q(&self, y: MatMut<'_, f64>) {
         let n = self.diag.len();
-        let k = y.ncols();
-        if n < 2 || k == 0 {
+        if n < 2 || y.ncols() == 0 {
             return;
         }
-        if k >= BLOCKED_APPLY_MIN_VECTORS {
-            self.apply_q_blocked(y);
-        } else {
-            self.apply_q_unblocked(y);
-        }
-    }
-
-    /// `Y ← Q Y` one reflector at a time, on a row-major copy.
-    fn apply_q_unblocked(&self, mut y: MatMut<'_, f64>) {
-        let n = self.diag.len();
-        let k = y.ncols();
-        // Row-major, rows padded to whole vectors: a reflector's dot products with all k vectors
-        // are then sums of rows in vector registers, not k dot products summed across lanes.
-        let width = k.div_ceil(8) * 8;
-        let mut rows = vec![0.0f64; n * width];
-        for c in 0..k {
-            for (i, v) in y.rb().col(c).iter().enumerate() {
-                rows[i * width + c] = *v;
-            }
-        }
-        apply_reflectors(&self.vecs, self.ld, &self.tau, width, &mut rows);
-        for c in 0..k {
-            for (i, v) in y.rb_mut().col_mut(c).iter_mut().enumerate() {
-                *v = rows[i * width + c];
-            }
-        }
+        self.apply_q_blocked(y);
     }
 }
 
 impl Tridiagonal {
-    /// `Y ← Q Y` by faer's blocked Householder sequence: the reflectors are stored as faer's
+    /// `Y ← Q Y` by faer's blocked Householder sequence (faster than applying the reflectors one
+    /// at a time at every order measured, BENCHMARKS.md "Eigensolver"): the reflectors are stored as faer's
     /// tridiagonalisation stores them (column `k` below row `k + 1`, the unit head implicit), and
     /// faer's `τ` is the reciprocal of LAPACK's (∞ for the identity).
     fn apply_q_blocked(&self, y: MatMut<'_, f64>) {
@@ -224,79 +194,6 @@ impl Tridiagonal {
         crate::simd::clear_upper_state();
     }
 }
-
-widest_simd! {
-    /// `rows ← H₀ ⋯ H_{n−2} rows` (`rows`: `n` rows of `width` values, a multiple of 8), on the
-    /// widest vector unit this CPU has.
-    fn apply_reflectors(vecs: &[f64], ld: usize, tau: &[f64], width: usize, rows: &mut [f64]);
-    requires {
-        assert!(width.is_multiple_of(8) && rows.len().is_multiple_of(width));
-        let n = rows.len() / width;
-        assert!(tau.len() + 1 >= n && vecs.len() >= ld * n.saturating_sub(1));
-    };
-    avx512 apply_reflectors_avx512 =>
-        apply_reflectors_in::<x86::Avx512>(vecs, ld, tau, width, rows);
-    avx2 apply_reflectors_avx2 ["fma"] =>
-        apply_reflectors_in::<x86::Avx2>(vecs, ld, tau, width, rows);
-    // SAFETY: `requires` asserted the sizes.
-    portable => unsafe { apply_reflectors_in::<Portable>(vecs, ld, tau, width, rows) };
-}
-
-/// One vector of columns at a time: its dot products with the reflector accumulate in two
-/// registers (even and odd rows, so consecutive rows do not wait on each other), then the
-/// rank-1 update runs down the same columns.
-///
-/// # Safety
-/// As asserted by [`apply_reflectors`]; the CPU has `V`'s instructions.
-#[inline(always)]
-unsafe fn apply_reflectors_in<V: Lanes>(
-    vecs: &[f64],
-    ld: usize,
-    tau: &[f64],
-    width: usize,
-    rows: &mut [f64],
-) {
-    let n = rows.len() / width;
-    let p = rows.as_mut_ptr();
-    let one = V::splat(1.0);
-    for r in (0..n.saturating_sub(1)).rev() {
-        let t = tau[r];
-        if t == 0.0 {
-            continue;
-        }
-        // v = (1, vecs[r+2..n, r]) on rows r+1..n.
-        let v = &vecs[r * ld + r + 2..r * ld + n];
-        let head = p.add((r + 1) * width);
-        let below = p.add((r + 2) * width);
-        let mut c = 0;
-        while c < width {
-            let mut even = V::load(head.add(c));
-            let mut odd = V::splat(0.0);
-            let mut i = 0;
-            while i + 1 < v.len() {
-                even = V::mul_add(V::splat(v[i]), V::load(below.add(i * width + c)), even);
-                odd = V::mul_add(
-                    V::splat(v[i + 1]),
-                    V::load(below.add((i + 1) * width + c)),
-                    odd,
-                );
-                i += 2;
-            }
-            if i < v.len() {
-                even = V::mul_add(V::splat(v[i]), V::load(below.add(i * width + c)), even);
-            }
-            let d = V::mul(V::splat(t), V::mul_add(odd, one, even));
-            V::neg_mul_add(d, one, V::load(head.add(c))).store(head.add(c));
-            for (i, &vi) in v.iter().enumerate() {
-                let e = below.add(i * width + c);
-                V::neg_mul_add(V::splat(vi), d, V::load(e)).store(e);
-            }
-            c += V::WIDTH;
-        }
-    }
-}
-
-use faer::reborrow::{Reborrow, ReborrowMut};
 
 /// LAPACK `dlarfg` on `x = (α, x₁…)`: overwrites `x₁…` with the reflector's tail `v` (its head
 /// is 1) and returns `(β, τ)` with `(I − τ v vᵀ) x = (β, 0, …)`. `τ = 0` (no reflection) when
@@ -426,9 +323,11 @@ struct Portable([f64; 4]);
 impl Lanes for Portable {
     const WIDTH: usize = 4;
     unsafe fn load(p: *const f64) -> Self {
+        // SAFETY: the caller guarantees 4 readable values at `p` (the trait's contract).
         Self(std::array::from_fn(|l| *p.add(l)))
     }
     unsafe fn store(self, p: *mut f64) {
+        // SAFETY: the caller guarantees 4 writable values at `p` (the trait's contract).
         for l in 0..4 {
             *p.add(l) = self.0[l];
         }
@@ -461,42 +360,49 @@ mod x86 {
     #[derive(Clone, Copy)]
     pub(super) struct Avx512(__m512d);
 
-    // SAFETY (for every method): only reached from the AVX-512 copies (`sweep_avx512`,
-    // `apply_reflectors_avx512`), whose caller detected AVX-512F; the pointers are valid for 8
-    // values (the trait's contract).
+    // SAFETY (for every method): only reached from `sweep_avx512`, whose caller detected
+    // AVX-512F; the pointers are valid for 8 values (the trait's contract).
     impl Lanes for Avx512 {
         const WIDTH: usize = 8;
         #[inline(always)]
         unsafe fn load(p: *const f64) -> Self {
+            // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
             Self(_mm512_loadu_pd(p))
         }
         #[inline(always)]
         unsafe fn store(self, p: *mut f64) {
+            // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
             _mm512_storeu_pd(p, self.0)
         }
         #[inline(always)]
         fn splat(v: f64) -> Self {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
             unsafe { Self(_mm512_set1_pd(v)) }
         }
         #[inline(always)]
         fn lanes_from(from: usize) -> Self {
             let m: [f64; 8] = std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 });
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
             unsafe { Self(_mm512_loadu_pd(m.as_ptr())) }
         }
         #[inline(always)]
         fn mul(a: Self, b: Self) -> Self {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
             unsafe { Self(_mm512_mul_pd(a.0, b.0)) }
         }
         #[inline(always)]
         fn mul_add(a: Self, b: Self, c: Self) -> Self {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
             unsafe { Self(_mm512_fmadd_pd(a.0, b.0, c.0)) }
         }
         #[inline(always)]
         fn neg_mul_add(a: Self, b: Self, c: Self) -> Self {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
             unsafe { Self(_mm512_fnmadd_pd(a.0, b.0, c.0)) }
         }
         #[inline(always)]
         fn sum4(a: [Self; 4]) -> [f64; 4] {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
             unsafe {
                 // 8 → 4 lanes each, then the four 4-lane sums side by side.
                 let h: [__m256d; 4] = a.map(|x| {
@@ -519,42 +425,49 @@ mod x86 {
     #[derive(Clone, Copy)]
     pub(super) struct Avx2(__m256d);
 
-    // SAFETY (for every method): only reached from the AVX2 copies (`sweep_avx2`,
-    // `apply_reflectors_avx2`), whose caller detected AVX2 and FMA; the pointers are valid for 4
-    // values (the trait's contract).
+    // SAFETY (for every method): only reached from `sweep_avx2`, whose caller detected AVX2 and
+    // FMA; the pointers are valid for 4 values (the trait's contract).
     impl Lanes for Avx2 {
         const WIDTH: usize = 4;
         #[inline(always)]
         unsafe fn load(p: *const f64) -> Self {
+            // SAFETY: AVX2 and FMA as above; the caller passes a full vector of values (the contract).
             Self(_mm256_loadu_pd(p))
         }
         #[inline(always)]
         unsafe fn store(self, p: *mut f64) {
+            // SAFETY: AVX2 and FMA as above; the caller passes a full vector of values (the contract).
             _mm256_storeu_pd(p, self.0)
         }
         #[inline(always)]
         fn splat(v: f64) -> Self {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
             unsafe { Self(_mm256_set1_pd(v)) }
         }
         #[inline(always)]
         fn lanes_from(from: usize) -> Self {
             let m: [f64; 4] = std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 });
+            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
             unsafe { Self(_mm256_loadu_pd(m.as_ptr())) }
         }
         #[inline(always)]
         fn mul(a: Self, b: Self) -> Self {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
             unsafe { Self(_mm256_mul_pd(a.0, b.0)) }
         }
         #[inline(always)]
         fn mul_add(a: Self, b: Self, c: Self) -> Self {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
             unsafe { Self(_mm256_fmadd_pd(a.0, b.0, c.0)) }
         }
         #[inline(always)]
         fn neg_mul_add(a: Self, b: Self, c: Self) -> Self {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
             unsafe { Self(_mm256_fnmadd_pd(a.0, b.0, c.0)) }
         }
         #[inline(always)]
         fn sum4(a: [Self; 4]) -> [f64; 4] {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
             unsafe {
                 let s01 = _mm256_hadd_pd(a[0].0, a[1].0);
                 let s23 = _mm256_hadd_pd(a[2].0, a[3].0);
@@ -654,27 +567,6 @@ mod tests {
             assert!(ts.diag.iter().zip(&t1.diag).all(|(x, y)| *x == y * s));
             assert!(ts.off.iter().zip(&t1.off).all(|(x, y)| *x == y * s));
             assert_eq!(ts.tau, t1.tau);
-        }
-    }
-
-    #[test]
-    fn blocked_and_unblocked_back_transforms_agree() {
-        for (n, k) in [(5, 3), (40, 40), (130, 7), (130, 130), (200, 120)] {
-            let t = tridiagonalize(random_symmetric(n, 7 * n as u64).as_ref());
-            let y = Mat::<f64>::from_fn(n, k, |i, j| ((i * 31 + j * 17) % 23) as f64 - 11.0);
-            let (mut a, mut b) = (y.clone(), y.clone());
-            t.apply_q_blocked(a.as_mut());
-            t.apply_q_unblocked(b.as_mut());
-            assert!(
-                (&a - &b).norm_max() < 1e-12 * y.norm_max() * n as f64,
-                "n {n}, k {k}"
-            );
-            // Q is orthogonal: the columns keep their norms.
-            for c in 0..k {
-                assert!(
-                    (a.col(c).norm_l2() - y.col(c).norm_l2()).abs() < 1e-12 * y.col(c).norm_l2()
-                );
-            }
         }
     }
 

@@ -1,16 +1,17 @@
 //! Symmetric and generalized symmetric-definite eigensolvers (docs/method.md §4).
 //!
 //! `K x = λ B x` with `B` positive definite is reduced to a standard problem by `B = L Lᵀ`,
-//! `C = L⁻¹ K L⁻ᵀ`, `C y = λ y`, `x = L⁻ᵀ y` (so `xᵀ B x = I`). The standard problem is
-//! tridiagonalised by this crate's own Householder reduction (`householder`: four-column fused
-//! sweeps, faster than faer's one-column sweep at every order measured); the eigenvalues of the
-//! tridiagonal matrix come from the root-free QL iteration (all of them, O(n²), no vectors) or,
-//! when only the lowest `k` are wanted and the others are not ([`symmetric_eigen_lowest`], what
-//! a modal solve asks for), from lane-parallel bisection (`bisection`: `O(k n)` vector work
-//! instead of an `O(n²)` chain); the vectors of the `k` wanted ones from inverse iteration on the
-//! tridiagonal matrix (O(n k), re-orthogonalised inside clusters as LAPACK's `dstein` does); and
-//! the Householder back-transform is applied to an `n × k` block only (2n²k flops instead of
-//! 2n³). faer's dense solver remains for tiny matrices.
+//! `C = L⁻¹ K L⁻ᵀ`, `C y = λ y`, `x = L⁻ᵀ y` (so `xᵀ B x = I`). faer does the Cholesky
+//! factorisation, the congruence (two triangular solves), the back-transform by the Householder
+//! reflectors (its blocked compact-WY product) and the whole solve of tiny matrices. Hand-written
+//! code remains where faer has no routine or where a side-by-side benchmark shows it clearly
+//! faster (BENCHMARKS.md, "Eigensolver", with the lines each piece costs): the Householder
+//! tridiagonalisation (`householder`: four-column fused sweeps, ~2.4× faer's at 120 dof, ~2× at
+//! 300); the root-free QL iteration for every eigenvalue without vectors (~3× faer's QR); and, for
+//! the lowest `k` pairs a modal solve asks for ([`symmetric_eigen_lowest`]), lane-parallel
+//! bisection (`bisection`) and inverse iteration on the tridiagonal matrix (re-orthogonalised
+//! inside clusters as LAPACK's `dstein` does), for which faer has no routine: its only
+//! alternative, the full tridiagonal eigendecomposition, is 7–25× slower.
 
 // Index loops over several matrices at once read better than zipped iterators here.
 #![allow(clippy::needless_range_loop)]
@@ -26,6 +27,8 @@ use crate::ModalError;
 
 mod bisection;
 mod householder;
+#[doc(hidden)]
+pub mod stages;
 
 /// Eigenvalues (ascending) and the matching eigenvectors (columns).
 #[derive(Debug, Clone)]
@@ -84,91 +87,6 @@ pub fn congruence_inverse(l: MatRef<'_, f64>, mut s: MatMut<'_, f64>) {
     }
     solve_lower(l, s.rb_mut());
     symmetrise(s);
-}
-
-/// `A ← L⁻¹ A L⁻ᵀ` on the lower triangle of a symmetric `A` (the upper triangle is neither read
-/// nor written), blocked as LAPACK's `dsygst` (itype 1, lower): n³ flops instead of the 2n³ of
-/// two full triangular solves, with the trailing update as a symmetric rank-2k product.
-pub fn reduce_lower_in_place(l: MatRef<'_, f64>, mut a: MatMut<'_, f64>) {
-    use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure};
-    use faer::Accum;
-    let n = a.nrows();
-    let nb = if n <= 128 { 32 } else { 64 };
-    let mut k = 0;
-    while k < n {
-        let kb = nb.min(n - k);
-        let l11 = l.submatrix(k, k, kb, kb);
-        // Diagonal block: small, full-storage congruence.
-        let mut a11 = Mat::<f64>::zeros(kb, kb);
-        for j in 0..kb {
-            for i in j..kb {
-                let v = a[(k + i, k + j)];
-                a11[(i, j)] = v;
-                a11[(j, i)] = v;
-            }
-        }
-        congruence_inverse(l11, a11.as_mut());
-        for j in 0..kb {
-            for i in j..kb {
-                a[(k + i, k + j)] = a11[(i, j)];
-            }
-        }
-        let rest = n - k - kb;
-        if rest > 0 {
-            let l21 = l.submatrix(k + kb, k, rest, kb);
-            let l22 = l.submatrix(k + kb, k + kb, rest, rest);
-            let (_, _, mut a21, mut a22) = a
-                .rb_mut()
-                .submatrix_mut(k, k, n - k, n - k)
-                .split_at_mut(kb, kb);
-            // A21 ← A21 L11⁻ᵀ, i.e. L11 A21ᵀ = A21ᵀ.
-            solve_lower(l11, a21.rb_mut().transpose_mut());
-            // A21 ← A21 − ½ L21 A11
-            faer::linalg::matmul::matmul(
-                a21.rb_mut(),
-                Accum::Add,
-                l21,
-                a11.as_ref(),
-                -0.5,
-                Par::Seq,
-            );
-            // A22 ← A22 − A21 L21ᵀ − L21 A21ᵀ (lower triangle)
-            tri_matmul(
-                a22.rb_mut(),
-                BlockStructure::TriangularLower,
-                Accum::Add,
-                a21.rb(),
-                BlockStructure::Rectangular,
-                l21.transpose(),
-                BlockStructure::Rectangular,
-                -1.0,
-                Par::Seq,
-            );
-            tri_matmul(
-                a22.rb_mut(),
-                BlockStructure::TriangularLower,
-                Accum::Add,
-                l21,
-                BlockStructure::Rectangular,
-                a21.rb().transpose(),
-                BlockStructure::Rectangular,
-                -1.0,
-                Par::Seq,
-            );
-            faer::linalg::matmul::matmul(
-                a21.rb_mut(),
-                Accum::Add,
-                l21,
-                a11.as_ref(),
-                -0.5,
-                Par::Seq,
-            );
-            // A21 ← L22⁻¹ A21
-            solve_lower(l22, a21.rb_mut());
-        }
-        clear_upper_state();
-        k += kb;
-    }
 }
 
 /// `S ← (S + Sᵀ)/2`.
@@ -903,9 +821,8 @@ pub fn generalized_eigen(
     l.copy_from_triangular_lower(b);
     cholesky_in_place(l.as_mut())
         .map_err(|i| ModalError::Numerical(format!("B is not positive definite (pivot {i})")))?;
-    let mut c = Mat::<f64>::zeros(n, n);
-    c.copy_from_triangular_lower(k);
-    reduce_lower_in_place(l.as_ref(), c.as_mut());
+    let mut c = Mat::<f64>::from_fn(n, n, |i, j| if i >= j { k[(i, j)] } else { k[(j, i)] });
+    congruence_inverse(l.as_ref(), c.as_mut());
     let mut pairs = symmetric_eigen(c, n_modes)?;
     solve_lower_transpose(l.as_ref(), pairs.vectors.as_mut());
     Ok(pairs)
@@ -919,35 +836,19 @@ pub fn block_congruence(k: MatRef<'_, f64>, l: MatRef<'_, f64>, dim: usize) -> M
     let n = l.nrows();
     let mut c = k.to_owned();
     for a in 0..dim {
-        for b in a..dim {
-            let blk = c.as_ref().submatrix(b * n, a * n, n, n);
-            let scale = blk.norm_max();
-            let symmetric = (0..n)
-                .all(|j| ((j + 1)..n).all(|i| (blk[(i, j)] - blk[(j, i)]).abs() <= 1e-14 * scale));
-            if symmetric {
-                // The common case (Gaussian K̃, plain bars): one n³ reduction per block.
-                reduce_lower_in_place(l, c.as_mut().submatrix_mut(b * n, a * n, n, n));
-                for j in 0..n {
-                    for i in (j + 1)..n {
-                        let v = c[(b * n + i, a * n + j)];
-                        c[(b * n + j, a * n + i)] = v;
-                    }
+        congruence_inverse(l, c.as_mut().submatrix_mut(a * n, a * n, n, n));
+        for b in (a + 1)..dim {
+            // C_ba = L⁻¹ K_ba L⁻ᵀ = L⁻¹ (L⁻¹ K_baᵀ)ᵀ = L⁻¹ (L⁻¹ K_ab)ᵀ, and C_ab = C_baᵀ.
+            solve_lower(l, c.as_mut().submatrix_mut(a * n, b * n, n, n));
+            for j in 0..n {
+                for i in 0..n {
+                    c[(b * n + i, a * n + j)] = c[(a * n + j, b * n + i)];
                 }
-            } else {
-                // C_ba = L⁻¹ K_ba L⁻ᵀ = L⁻¹ (L⁻¹ K_baᵀ)ᵀ = L⁻¹ (L⁻¹ K_ab)ᵀ.
-                solve_lower(l, c.as_mut().submatrix_mut(a * n, b * n, n, n));
-                for j in 0..n {
-                    for i in 0..n {
-                        c[(b * n + i, a * n + j)] = c[(a * n + j, b * n + i)];
-                    }
-                }
-                solve_lower(l, c.as_mut().submatrix_mut(b * n, a * n, n, n));
             }
-            if a != b {
-                for j in 0..n {
-                    for i in 0..n {
-                        c[(a * n + j, b * n + i)] = c[(b * n + i, a * n + j)];
-                    }
+            solve_lower(l, c.as_mut().submatrix_mut(b * n, a * n, n, n));
+            for j in 0..n {
+                for i in 0..n {
+                    c[(a * n + j, b * n + i)] = c[(b * n + i, a * n + j)];
                 }
             }
         }
@@ -1167,34 +1068,6 @@ mod tests {
                 check_pairs(&c, &p, 1e-12);
                 for i in 0..k {
                     assert!((p.values[i] - vals[i]).abs() < 1e-12, "k = {k}, value {i}");
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn blocked_reduction_matches_two_triangular_solves() {
-        for n in [5usize, 33, 150, 301] {
-            let b = random_spd(n, 21 + n as u64, 1.0);
-            let k = random_spd(n, 22 + n as u64, 0.0);
-            let mut l = b.clone();
-            cholesky_in_place(l.as_mut()).unwrap();
-            let mut want = k.clone();
-            congruence_inverse(l.as_ref(), want.as_mut());
-            let mut got = Mat::<f64>::zeros(n, n);
-            got.copy_from_triangular_lower(&k);
-            // Garbage in the strict upper triangle must be ignored.
-            for j in 1..n {
-                got[(0, j)] = f64::NAN;
-            }
-            reduce_lower_in_place(l.as_ref(), got.as_mut());
-            let scale = want.norm_max();
-            for j in 0..n {
-                for i in j..n {
-                    assert!(
-                        (got[(i, j)] - want[(i, j)]).abs() < 1e-10 * scale,
-                        "{n} {i} {j}"
-                    );
                 }
             }
         }
