@@ -2,11 +2,11 @@
 //! §3.2), normalisation, and input errors.
 
 use faer::Mat;
+use modal_core::eigen::generalized_eigen;
 use modal_core::model::axial::{
     add_hinge_bending, assemble_bars, ear_clip, hinges, ring_edges, second_neighbour_edges,
     triangle_edges,
 };
-use modal_core::eigen::generalized_eigen;
 use modal_core::model::count_zero_modes;
 use modal_core::{
     modal_basis, model_matrices, ElementKind, Material, ModelOptions, Shape, Topology,

@@ -1,7 +1,7 @@
 //! `pymodal.match`: modal matching of two point sets, contours or meshes.
 
-use modal_core::Affine;
 use modal_core::shape::looks_like_closed_contour;
+use modal_core::Affine;
 use modal_core::{match_shapes, AffinityMatrix, MatchPair, MatchResult, Shape, Topology};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;

@@ -280,7 +280,10 @@ impl From<BarModel> for SolverModel {
 }
 
 /// Validates the input and assembles the solver form of the model.
-pub(crate) fn build_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, ModalError> {
+pub(crate) fn build_model(
+    shape: &Shape,
+    options: &ModelOptions,
+) -> Result<SolverModel, ModalError> {
     options.material.validate()?;
     validate_nodes(shape)?;
     match options.element {
