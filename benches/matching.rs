@@ -6,8 +6,10 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use modal_core::matching::prealign as align;
 use modal_core::{
-    align, match_shapes, modal_basis, MatchOptions, ModelOptions, Search, Shape, Topology,
+    match_prepared, match_shapes, modal_basis, prepare, MatchOptions, ModelOptions, Parallelism,
+    Search, Shape, Topology,
 };
 
 // The tests' ground-truth generator (fixtures and warps), shared rather than re-written.
@@ -87,6 +89,13 @@ fn bench(c: &mut Criterion) {
     g.bench_function("recipe_default", |x| {
         x.iter(|| match_shapes(black_box(&a), black_box(&b), &MatchOptions::default()).unwrap())
     });
+    g.bench_function("recipe_default_serial", |x| {
+        let o = MatchOptions::default();
+        x.iter(|| {
+            let (pa, pb) = (prepare(&a, &o).unwrap(), prepare(&b, &o).unwrap());
+            match_prepared(black_box(&pa), black_box(&pb), &o, Parallelism::Serial).unwrap()
+        })
+    });
     g.bench_function("recipe_no_refit", |x| {
         let o = MatchOptions {
             refits: 0,
@@ -145,5 +154,46 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench, bench_surfaces);
+/// A recording's worth of contours: the outline and its warped copy of [`pair`], alternately, at
+/// 60–64 nodes; consecutive frames are matched, one pair after the other on one thread, either
+/// from the shapes (every object prepared for each of its two pairs) or from objects prepared
+/// once (`run`'s way).
+fn bench_sequence(c: &mut Criterion) {
+    let frames: Vec<Shape> = (0..9)
+        .map(|f| {
+            let (a, b) = pair(60 + f % 5, 60 + f % 5);
+            if f % 2 == 0 {
+                a
+            } else {
+                b
+            }
+        })
+        .collect();
+    let mut g = c.benchmark_group("sequence_9_contours");
+    g.sample_size(20);
+    for (name, o) in [
+        ("recipe", MatchOptions::default()),
+        ("paper", MatchOptions::paper()),
+    ] {
+        g.bench_function(format!("{name}_shapes_per_pair"), |x| {
+            x.iter(|| {
+                for w in frames.windows(2) {
+                    let (pa, pb) = (prepare(&w[0], &o).unwrap(), prepare(&w[1], &o).unwrap());
+                    black_box(match_prepared(&pa, &pb, &o, Parallelism::Serial).unwrap());
+                }
+            })
+        });
+        g.bench_function(format!("{name}_prepared_once"), |x| {
+            x.iter(|| {
+                let prepared: Vec<_> = frames.iter().map(|s| prepare(s, &o).unwrap()).collect();
+                for w in prepared.windows(2) {
+                    black_box(match_prepared(&w[0], &w[1], &o, Parallelism::Serial).unwrap());
+                }
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_surfaces, bench_sequence);
 criterion_main!(benches);

@@ -5,6 +5,7 @@
 
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
+use modal_core::options::MatchOverrides;
 use modal_core::{Choice, ElementKind, MatchParams, Material, Prealign, Search, ThresholdMode};
 use pedo_io::units::UnitOverrides;
 
@@ -73,28 +74,28 @@ pub struct ModalArgs {
 impl ModalArgs {
     /// These options as the library's parameters; absent ones at the library's defaults.
     pub fn params(&self) -> MatchParams {
-        let d = MatchParams::default();
-        MatchParams {
-            element: self.element.unwrap_or(d.element),
-            modes: self.modes.unwrap_or(d.modes),
-            search: self.search.unwrap_or(d.search),
-            solver: self.solver.unwrap_or(d.solver),
-            threshold: self.threshold.or(d.threshold),
-            threshold_mode: self.threshold_mode.unwrap_or(d.threshold_mode),
-            excess: d.excess && !self.no_excess,
-            paper: d.paper || self.paper,
-            prealign: self.prealign.or(d.prealign),
-            refits: self.refits.or(d.refits),
-            refit_tolerance: self.refit_tolerance.or(d.refit_tolerance),
-            kappa: self.kappa.or(d.kappa),
-            center_stride: self.center_stride.unwrap_or(d.center_stride),
-            position_weight: self.position_weight.or(d.position_weight),
-            cost_power: self.cost_power.or(d.cost_power),
-            common_sigma: tri_state(self.common_sigma, self.no_common_sigma).or(d.common_sigma),
-            skip_rigid: d.skip_rigid || self.skip_rigid,
-            band: self.band.unwrap_or(d.band),
-            material: self.material.or(d.material),
+        MatchOverrides {
+            element: self.element,
+            modes: self.modes,
+            search: self.search,
+            solver: self.solver,
+            threshold: self.threshold,
+            threshold_mode: self.threshold_mode,
+            excess: self.no_excess.then_some(false),
+            paper: self.paper.then_some(true),
+            prealign: self.prealign,
+            refits: self.refits,
+            refit_tolerance: self.refit_tolerance,
+            kappa: self.kappa,
+            center_stride: self.center_stride,
+            position_weight: self.position_weight,
+            cost_power: self.cost_power,
+            common_sigma: tri_state(self.common_sigma, self.no_common_sigma),
+            skip_rigid: self.skip_rigid.then_some(true),
+            band: self.band,
+            material: self.material,
         }
+        .params()
     }
 }
 

@@ -315,7 +315,7 @@ fn surface_model_matches_the_moving_blob() {
     // Mean nearest-neighbour distance of each object's nodes: the tolerance of a hit.
     let spacing: std::collections::HashMap<usize, f64> = coords
         .iter()
-        .map(|(&o, c)| (o, modal_core::gaussian::nearest_neighbour_stats_of(c, 3).0))
+        .map(|(&o, c)| (o, modal_core::shape::nearest_neighbour_stats_of(c, 3).0))
         .collect();
     let (mut hits, mut total) = (0, 0);
     for r in read_csv(&out.join("matches.csv")) {
@@ -417,7 +417,7 @@ fn match_search_best_pairs_every_surface_node_with_its_cheapest() {
     };
     write("a.xyz", &a);
     write("b.xyz", &b);
-    let tol = modal_core::gaussian::nearest_neighbour_stats_of(&b.concat(), 3).0;
+    let tol = modal_core::shape::nearest_neighbour_stats_of(&b.concat(), 3).0;
     let hits = |search: &str| -> (Vec<usize>, f64) {
         let out = dir.join(search);
         let o = pedomatch(&[

@@ -7,7 +7,8 @@
 
 use nalgebra::{Matrix2, Matrix3, Matrix4, Point2, Point3, Rotation3, Vector3};
 
-use crate::{ModalError, Shape, Topology};
+use crate::error::ModalError;
+use crate::shape::{Shape, Topology};
 
 impl Shape {
     /// A 2-D shape from nalgebra points.

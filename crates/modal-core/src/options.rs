@@ -8,31 +8,12 @@
 //! lower-case words parsed by [`std::str::FromStr`] and printed by [`std::fmt::Display`]; each
 //! such type lists its words in [`Choice::NAMES`].
 
-use crate::search::ThresholdMode;
-use crate::{ElementKind, MatchOptions, Material, Prealign, Search};
-
-/// An option value that is not allowed: which option, the value given, what was expected.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("{option} = {value}: expected {expected}")]
-pub struct OptionError {
-    /// The option's name (Python spelling, `x_y`; the CLI flag is `--x-y`).
-    pub option: &'static str,
-    /// The rejected value as given.
-    pub value: String,
-    /// What the option accepts.
-    pub expected: String,
-}
+pub use crate::error::OptionError;
+use crate::matching::search::ThresholdMode;
+use crate::matching::{MatchOptions, Prealign, Search};
+use crate::model::{ElementKind, Material};
 
 impl OptionError {
-    /// A rejected value of `option`.
-    pub fn new(option: &'static str, value: impl ToString, expected: impl Into<String>) -> Self {
-        Self {
-            option,
-            value: value.to_string(),
-            expected: expected.into(),
-        }
-    }
-
     /// A word that is not one of `T`'s values.
     pub fn unknown<T: Choice>(value: &str) -> Self {
         Self::new(T::OPTION, value, format!("one of {}", T::NAMES.join(", ")))
@@ -339,6 +320,73 @@ impl MatchParams {
             ("band", Int(used.band)),
             ("material", Word(used.model.material.to_string())),
         ]
+    }
+}
+
+/// The options a user set, each `None` when left at its default: what the command line and the
+/// Python keywords read, overlaid on [`MatchParams::default`] by [`MatchOverrides::apply`] (one
+/// overlay for both front ends). Not validated here: [`MatchParams::to_match_options`] checks.
+///
+/// ```
+/// use modal_core::options::MatchOverrides;
+/// use modal_core::{MatchParams, Search};
+/// let set = MatchOverrides { search: Some(Search::Local), excess: Some(false), ..Default::default() };
+/// let params = set.params();
+/// assert_eq!((params.search, params.excess), (Search::Local, false));
+/// assert_eq!(params.modes, MatchParams::default().modes);
+/// ```
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MatchOverrides {
+    pub element: Option<ElementKind>,
+    pub modes: Option<f64>,
+    pub search: Option<Search>,
+    pub solver: Option<assign::Method>,
+    pub threshold: Option<f64>,
+    pub threshold_mode: Option<ThresholdMode>,
+    pub excess: Option<bool>,
+    pub paper: Option<bool>,
+    pub prealign: Option<Prealign>,
+    pub refits: Option<usize>,
+    pub refit_tolerance: Option<f64>,
+    pub kappa: Option<f64>,
+    pub center_stride: Option<usize>,
+    pub position_weight: Option<f64>,
+    pub cost_power: Option<f64>,
+    pub common_sigma: Option<bool>,
+    pub skip_rigid: Option<bool>,
+    pub band: Option<usize>,
+    pub material: Option<Material>,
+}
+
+impl MatchOverrides {
+    /// `base` with every set option replaced.
+    pub fn apply(&self, base: MatchParams) -> MatchParams {
+        MatchParams {
+            element: self.element.unwrap_or(base.element),
+            modes: self.modes.unwrap_or(base.modes),
+            search: self.search.unwrap_or(base.search),
+            solver: self.solver.unwrap_or(base.solver),
+            threshold: self.threshold.or(base.threshold),
+            threshold_mode: self.threshold_mode.unwrap_or(base.threshold_mode),
+            excess: self.excess.unwrap_or(base.excess),
+            paper: self.paper.unwrap_or(base.paper),
+            prealign: self.prealign.or(base.prealign),
+            refits: self.refits.or(base.refits),
+            refit_tolerance: self.refit_tolerance.or(base.refit_tolerance),
+            kappa: self.kappa.or(base.kappa),
+            center_stride: self.center_stride.unwrap_or(base.center_stride),
+            position_weight: self.position_weight.or(base.position_weight),
+            cost_power: self.cost_power.or(base.cost_power),
+            common_sigma: self.common_sigma.or(base.common_sigma),
+            skip_rigid: self.skip_rigid.unwrap_or(base.skip_rigid),
+            band: self.band.unwrap_or(base.band),
+            material: self.material.or(base.material),
+        }
+    }
+
+    /// The defaults with every set option replaced.
+    pub fn params(&self) -> MatchParams {
+        self.apply(MatchParams::default())
     }
 }
 

@@ -1,6 +1,6 @@
 //! Objects to be matched: 2-D or 3-D point sets with optional topology.
 
-use crate::ModalError;
+use crate::error::ModalError;
 
 /// How the nodes of a [`Shape`] are connected.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -131,7 +131,88 @@ pub fn looks_like_closed_contour(coords: &[f64], dim: usize) -> bool {
         })
         .sum::<f64>()
         / n as f64;
-    step <= 1.5 * crate::gaussian::nearest_neighbour_stats_of(coords, 2).0
+    step <= 1.5 * nearest_neighbour_stats_of(coords, 2).0
+}
+
+/// Mean and minimum nearest-neighbour distance, with the pair realising the minimum.
+pub fn nearest_neighbour_stats(shape: &Shape) -> (f64, f64, (usize, usize)) {
+    nearest_neighbour_stats_of(shape.coords(), shape.dim())
+}
+
+/// [`nearest_neighbour_stats`] of row-major `dim`-D points.
+pub fn nearest_neighbour_stats_of(coords: &[f64], dim: usize) -> (f64, f64, (usize, usize)) {
+    // Every model build (each modal solve) calls this O(n²) scan: 2-D and 3-D get a
+    // fixed-dimension loop the compiler can unroll.
+    match dim {
+        2 => nn_stats::<2>(coords),
+        3 => nn_stats::<3>(coords),
+        d => nn_stats_dyn(coords, d),
+    }
+}
+
+fn nn_stats<const D: usize>(c: &[f64]) -> (f64, f64, (usize, usize)) {
+    let pts: Vec<[f64; D]> = c
+        .chunks_exact(D)
+        .map(|p| std::array::from_fn(|a| p[a]))
+        .collect();
+    finish_nn_stats(pts.len(), |i| {
+        let p = pts[i];
+        let mut best = f64::INFINITY;
+        let mut bj = i;
+        for (j, q) in pts.iter().enumerate() {
+            let mut r2 = 0.0;
+            for a in 0..D {
+                let d = p[a] - q[a];
+                r2 += d * d;
+            }
+            if j != i && r2 < best {
+                best = r2;
+                bj = j;
+            }
+        }
+        (best, bj)
+    })
+}
+
+fn nn_stats_dyn(c: &[f64], dim: usize) -> (f64, f64, (usize, usize)) {
+    let n = c.len() / dim;
+    finish_nn_stats(n, |i| {
+        let mut best = f64::INFINITY;
+        let mut bj = i;
+        for j in 0..n {
+            if j == i {
+                continue;
+            }
+            let r2: f64 = (0..dim)
+                .map(|a| (c[i * dim + a] - c[j * dim + a]).powi(2))
+                .sum();
+            if r2 < best {
+                best = r2;
+                bj = j;
+            }
+        }
+        (best, bj)
+    })
+}
+
+/// Reduces per-node (squared nearest distance, neighbour) into (mean, min, pair).
+fn finish_nn_stats(
+    n: usize,
+    nearest: impl Fn(usize) -> (f64, usize),
+) -> (f64, f64, (usize, usize)) {
+    let mut total = 0.0;
+    let mut min = f64::INFINITY;
+    let mut pair = (0, 0);
+    for i in 0..n {
+        let (best, bj) = nearest(i);
+        let r = best.sqrt();
+        total += r;
+        if r < min {
+            min = r;
+            pair = (i.min(bj), i.max(bj));
+        }
+    }
+    (total / n as f64, min, pair)
 }
 
 #[cfg(test)]

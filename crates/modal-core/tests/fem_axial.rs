@@ -2,11 +2,11 @@
 //! §3.2), normalisation, and input errors.
 
 use faer::Mat;
-use modal_core::axial::{
+use modal_core::eigen::generalized_eigen;
+use modal_core::model::axial::{
     add_hinge_bending, assemble_bars, ear_clip, hinges, ring_edges, second_neighbour_edges,
     triangle_edges,
 };
-use modal_core::eigen::generalized_eigen;
 use modal_core::model::count_zero_modes;
 use modal_core::{
     modal_basis, model_matrices, ElementKind, Material, ModelOptions, Shape, Topology,
@@ -175,7 +175,7 @@ fn hinge_bending_is_orthogonal_to_rigid_motions() {
     let h = hinges(&triangles);
     assert_eq!(h.len(), triangle_edges(&triangles).len() - 2 * (4 + 5));
     add_hinge_bending(&shape, &h, &Material::UNIT, &mut k).unwrap();
-    let r = modal_core::rigid::rigid_basis(&shape);
+    let r = modal_core::model::rigid::rigid_basis(&shape);
     let kr = &k * &r;
     assert!(
         kr.norm_max() < 1e-10 * k.norm_max() * r.norm_max(),

@@ -3,7 +3,7 @@
 
 use faer::Mat;
 use modal_core::eigen::generalized_eigen;
-use modal_core::gaussian::{gaussians_at, GaussianIntegrals};
+use modal_core::model::gaussian::{gaussians_at, GaussianIntegrals};
 use modal_core::{
     modal_basis, model_matrices, ElementKind, Material, ModalBasis, ModelOptions, PlaneModel,
     Shape, Topology,
@@ -403,7 +403,7 @@ fn exact_rigid_gives_exact_zero_modes() {
         assert!(basis.eigenvalues[r] > 1e-6 * top);
         // Rigid modes span the rigid basis (canonical order T_x, T_y, …): projecting them onto
         // span(R) leaves nothing.
-        let rb = modal_core::rigid::rigid_basis(&shape);
+        let rb = modal_core::model::rigid::rigid_basis(&shape);
         let phi_r = basis.modes.as_ref().subcols(0, r);
         let qr = rb.qr();
         let q = qr.compute_thin_Q();
@@ -495,7 +495,7 @@ fn conditioning_guard_shrinks_sigma() {
         },
     )
     .unwrap();
-    let (mean_nn, _, _) = modal_core::gaussian::nearest_neighbour_stats(&shape);
+    let (mean_nn, _, _) = modal_core::shape::nearest_neighbour_stats(&shape);
     let sigma = basis.sigma.unwrap();
     assert!(
         sigma < 6.0 * mean_nn && sigma > 0.5 * mean_nn,

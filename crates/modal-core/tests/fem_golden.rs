@@ -1,7 +1,7 @@
 //! Golden values of the Gaussian element's closed forms (docs/method.md §2.2–2.4), computed
 //! independently.
 
-use modal_core::gaussian::GaussianIntegrals;
+use modal_core::model::gaussian::GaussianIntegrals;
 use modal_core::{
     modal_basis, model_matrices, Material, ModelOptions, PlaneModel, Shape, Topology,
 };

@@ -3,7 +3,7 @@
 mod match_common;
 
 use match_common::*;
-use modal_core::align::normalize;
+use modal_core::matching::prealign::normalize;
 use modal_core::matching::prealign_normalized;
 use modal_core::{match_shapes, MatchOptions, Search, Shape, Topology};
 

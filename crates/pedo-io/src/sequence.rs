@@ -10,8 +10,8 @@ use crate::error::{IoError, Result};
 use crate::recording::Recording;
 use crate::track::PairingMethod;
 use modal_core::{
-    match_shapes, MatchOptions, MatchParams, MatchResult, OptionError, OptionSpec, OptionValue,
-    Search, Shape,
+    match_prepared, match_shapes, prepare, MatchOptions, MatchParams, MatchResult, ModalError,
+    OptionError, OptionSpec, OptionValue, Parallelism, PreparedShape, Search, Shape,
 };
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -513,11 +513,12 @@ fn match_all(
     options: &SequenceOptions,
     progress: &(dyn Fn(Stage, usize, usize) + Sync),
 ) -> (Vec<PairMatch>, Vec<SkippedPair>) {
+    let prepared = prepare_objects(objects, &options.matching);
     let done = AtomicUsize::new(0);
     let outcomes: Vec<std::result::Result<PairMatch, SkippedPair>> = candidates
         .par_iter()
         .map(|&(a, b)| {
-            let r = match_pair(objects, a, b, options).map_err(|e| SkippedPair {
+            let r = match_pair(objects, &prepared, a, b, options).map_err(|e| SkippedPair {
                 a,
                 b,
                 reason: e.to_string(),
@@ -538,14 +539,34 @@ fn match_all(
     (pairs, skipped)
 }
 
+/// Every object prepared once (in parallel) for the pairs it takes part in: as the second object
+/// of the pair with its predecessor and the first of the pair with its successor. An object that
+/// cannot be prepared keeps its error for the pairs that need it.
+fn prepare_objects(
+    objects: &[SequenceObject],
+    options: &MatchOptions,
+) -> Vec<std::result::Result<PreparedShape, ModalError>> {
+    objects
+        .par_iter()
+        .map(|o| prepare(&o.shape, options))
+        .collect()
+}
+
 fn match_pair(
     objects: &[SequenceObject],
+    prepared: &[std::result::Result<PreparedShape, ModalError>],
     a: usize,
     b: usize,
     options: &SequenceOptions,
 ) -> Result<PairMatch> {
     let (oa, ob) = (&objects[a], &objects[b]);
-    let result = match_shapes(&oa.shape, &ob.shape, &options.matching).map_err(|e| {
+    // The pairs run in parallel on the pool, so each pair runs on one thread.
+    let result = match (&prepared[a], &prepared[b]) {
+        (Ok(pa), Ok(pb)) => match_prepared(pa, pb, &options.matching, Parallelism::Serial),
+        // The error names the object's role in the pair, as the one-call form words it.
+        _ => match_shapes(&oa.shape, &ob.shape, &options.matching),
+    }
+    .map_err(|e| {
         IoError::invalid(format!(
             "matching object {} (frame {}) with object {} (frame {}): {e}",
             oa.id, oa.frame, ob.id, ob.frame
@@ -635,17 +656,19 @@ struct Built {
 }
 
 /// The outer contours of a frame worth modelling, largest first (so object 0 of a frame is its
-/// main region).
+/// main region), with their shapes: only contours that make a valid shape become objects.
 fn frame_contours(
     recording: &Recording,
     t: usize,
     options: &SequenceOptions,
-) -> Result<Vec<Contour>> {
-    let mut cs = contours(&recording.frame(t)?, &options.contour)?;
-    // Only contours that make a valid shape become objects (`to_shape` cannot fail later).
-    cs.retain(|c| !c.hole && c.points.len() >= options.min_nodes.max(3) && c.to_shape().is_ok());
-    cs.sort_by(|a, b| b.area().total_cmp(&a.area()));
-    Ok(cs)
+) -> Result<(Vec<Contour>, Vec<Shape>)> {
+    let mut cs: Vec<(Contour, Shape)> = contours(&recording.frame(t)?, &options.contour)?
+        .into_iter()
+        .filter(|c| !c.hole && c.points.len() >= options.min_nodes.max(3))
+        .filter_map(|c| c.to_shape().ok().map(|s| (c, s)))
+        .collect();
+    cs.sort_by(|a, b| b.0.area().total_cmp(&a.0.area()));
+    Ok(cs.into_iter().unzip())
 }
 
 fn build_objects(
@@ -673,24 +696,26 @@ fn build_objects(
     };
     match options.model {
         ObjectModel::Contour => {
-            let per_frame: Vec<Vec<Contour>> =
+            let (per_frame, shapes): (Vec<Vec<Contour>>, Vec<Vec<Shape>>) =
                 per_frame_or_skipped(start..end, &mut built.skipped_frames, |t| {
                     let cs = frame_contours(recording, t, options);
                     tick(end - start);
                     cs
-                });
+                })
+                .into_iter()
+                .unzip();
             let pairings = crate::track::track(&per_frame, PairingMethod::default())?;
             let mut first = Vec::with_capacity(per_frame.len());
-            for (k, cs) in per_frame.iter().enumerate() {
+            for (k, frame_shapes) in shapes.into_iter().enumerate() {
                 first.push(built.objects.len());
-                for (index, c) in cs.iter().enumerate() {
+                for (index, shape) in frame_shapes.into_iter().enumerate() {
                     let id = built.objects.len();
                     built.objects.push(SequenceObject {
                         id,
                         frame: start + k,
                         index,
                         level: None,
-                        shape: c.to_shape()?,
+                        shape,
                     });
                 }
             }

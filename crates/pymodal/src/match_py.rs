@@ -1,7 +1,7 @@
 //! `pymodal.match`: modal matching of two point sets, contours or meshes.
 
-use modal_core::align::Affine;
 use modal_core::shape::looks_like_closed_contour;
+use modal_core::Affine;
 use modal_core::{match_shapes, AffinityMatrix, MatchPair, MatchResult, Shape, Topology};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
@@ -378,7 +378,7 @@ fn match_py(
     triangles_a: Option<&Bound<'_, PyAny>>,
     triangles_b: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyMatch> {
-    let params = crate::options_py::MatchKw {
+    let params = crate::options_py::MatchKw::new(
         element,
         modes,
         search,
@@ -398,7 +398,7 @@ fn match_py(
         skip_rigid,
         band,
         material,
-    }
+    )
     .params()?;
     let (da, ca) = points(py, a, "a")?;
     let (db, cb) = points(py, b, "b")?;

@@ -3,6 +3,7 @@
 //! fills in ([`MatchParams::default`], [`RunParams::default`]); words are parsed by the Rust
 //! types' `FromStr`, so Python and the CLI accept the same values.
 
+use modal_core::options::MatchOverrides;
 use modal_core::{Choice, MatchParams, OptionKind, OptionSpec};
 use pedo_io::report::{Cell, Table};
 use pedo_io::sequence::{FrameRange, RunParams};
@@ -41,43 +42,91 @@ pub struct MatchKw<'a, 'py> {
     pub material: Option<&'a Bound<'py, PyAny>>,
 }
 
-impl MatchKw<'_, '_> {
+impl<'a, 'py> MatchKw<'a, 'py> {
+    /// The keywords in the order of the `match` and `run` signatures, so both read them with one
+    /// call.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        element: Option<&'a str>,
+        modes: Option<f64>,
+        search: Option<&'a str>,
+        solver: Option<&'a str>,
+        threshold: Option<f64>,
+        threshold_mode: Option<&'a str>,
+        excess: Option<bool>,
+        paper: Option<bool>,
+        prealign: Option<&'a str>,
+        refits: Option<usize>,
+        refit_tolerance: Option<f64>,
+        kappa: Option<f64>,
+        center_stride: Option<usize>,
+        position_weight: Option<f64>,
+        cost_power: Option<f64>,
+        common_sigma: Option<bool>,
+        skip_rigid: Option<bool>,
+        band: Option<usize>,
+        material: Option<&'a Bound<'py, PyAny>>,
+    ) -> Self {
+        Self {
+            element,
+            modes,
+            search,
+            solver,
+            threshold,
+            threshold_mode,
+            excess,
+            paper,
+            prealign,
+            refits,
+            refit_tolerance,
+            kappa,
+            center_stride,
+            position_weight,
+            cost_power,
+            common_sigma,
+            skip_rigid,
+            band,
+            material,
+        }
+    }
+
     /// The library's parameters; `None` keywords at their defaults. Not yet validated.
     pub fn params(&self) -> PyResult<MatchParams> {
-        let d = MatchParams::default();
         let material = match self.material.filter(|m| !m.is_none()) {
-            None => d.material,
+            None => None,
             Some(m) => Some(match m.extract::<String>() {
                 Ok(s) => s.parse().map_err(to_py)?,
                 Err(_) => crate::model_py::parse_material(Some(m))?,
             }),
         };
-        Ok(MatchParams {
-            element: word(self.element, d.element)?,
-            modes: self.modes.unwrap_or(d.modes),
-            search: word(self.search, d.search)?,
-            solver: word(self.solver, d.solver)?,
-            threshold: self.threshold.or(d.threshold),
-            threshold_mode: word(self.threshold_mode, d.threshold_mode)?,
-            excess: self.excess.unwrap_or(d.excess),
-            paper: self.paper.unwrap_or(d.paper),
-            prealign: self
-                .prealign
-                .map(|s| word(Some(s), modal_core::Prealign::default()))
-                .transpose()?
-                .or(d.prealign),
-            refits: self.refits.or(d.refits),
-            refit_tolerance: self.refit_tolerance.or(d.refit_tolerance),
-            kappa: self.kappa.or(d.kappa),
-            center_stride: self.center_stride.unwrap_or(d.center_stride),
-            position_weight: self.position_weight.or(d.position_weight),
-            cost_power: self.cost_power.or(d.cost_power),
-            common_sigma: self.common_sigma.or(d.common_sigma),
-            skip_rigid: self.skip_rigid.unwrap_or(d.skip_rigid),
-            band: self.band.unwrap_or(d.band),
+        Ok(MatchOverrides {
+            element: parsed(self.element)?,
+            modes: self.modes,
+            search: parsed(self.search)?,
+            solver: parsed(self.solver)?,
+            threshold: self.threshold,
+            threshold_mode: parsed(self.threshold_mode)?,
+            excess: self.excess,
+            paper: self.paper,
+            prealign: parsed(self.prealign)?,
+            refits: self.refits,
+            refit_tolerance: self.refit_tolerance,
+            kappa: self.kappa,
+            center_stride: self.center_stride,
+            position_weight: self.position_weight,
+            cost_power: self.cost_power,
+            common_sigma: self.common_sigma,
+            skip_rigid: self.skip_rigid,
+            band: self.band,
             material,
-        })
+        }
+        .params())
     }
+}
+
+/// A word option as given: `None` when absent, else parsed by `T`'s `FromStr`.
+fn parsed<T: Choice>(value: Option<&str>) -> PyResult<Option<T>> {
+    value.map(|s| T::parse_word(s).map_err(to_py)).transpose()
 }
 
 /// `pitch_mm=`: a number (square sensels) or an `(x, y)` pair.

@@ -122,7 +122,7 @@ fn run<'py>(
     pitch_mm: Option<&Bound<'py, PyAny>>,
     frame_rate: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let matching = MatchKw {
+    let matching = MatchKw::new(
         element,
         modes,
         search,
@@ -142,7 +142,7 @@ fn run<'py>(
         skip_rigid,
         band,
         material,
-    }
+    )
     .params()?;
     let params = RecordingKw {
         model,

@@ -22,8 +22,8 @@ use faer::linalg::{cholesky, triangular_solve};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Mat, MatMut, MatRef, Par};
 
+use crate::error::ModalError;
 use crate::simd::{clear_upper_state, widest_simd};
-use crate::ModalError;
 
 mod bisection;
 mod householder;

@@ -9,7 +9,7 @@ use faer::reborrow::ReborrowMut;
 use faer::{Mat, MatMut, MatRef, Par};
 
 use super::{bisection, householder};
-use crate::ModalError;
+use crate::error::ModalError;
 
 /// A tridiagonal matrix and the reflectors that produced it, from either reduction.
 pub struct Tridiagonal(Reduction);

@@ -1,39 +1,135 @@
-//! The first phase of a pair — the rotation search, B's modes and A's first modes — for a caller
-//! outside the rayon pool.
+//! The first phase of a pair — the pre-alignment (stage 2), B's modes and A's first modes — on
+//! the calling thread alone ([`Parallelism::Serial`]) or shared with one helper job on the rayon
+//! pool ([`Parallelism::Pair`]).
 //!
-//! Such a caller (Python, one CLI pair) would hand every parallel section to the pool and sleep
-//! until it is done, and between calls the pool's workers fall asleep: a section then waits on
-//! waking one, which on a VM can take longer than the section saves (after 15 ms pauses two
-//! threads ran slower than one). So this thread does all the work itself, in an order that never
-//! waits for a helper, and one helper job on the pool takes what is left when it wakes: rotation
-//! starts from a shared counter, then B's solve if this thread has not claimed it yet. Whoever
-//! computes a result stores it in its slot, so the outcome does not depend on the timing; a late
-//! helper finds nothing left to do.
+//! With a helper, this thread still does all the work itself, in an order that never waits for a
+//! helper that has not started: a pool worker can take long to wake (on a VM, after a 15 ms pause,
+//! two threads ran slower than one). The helper takes rotation starts from a shared counter and
+//! then B's solve if this thread has not claimed it yet. Whoever computes a result stores it in
+//! its slot, so the outcome does not depend on the timing. This thread waits (blocked on a
+//! condition variable, not spinning) only for a start or a solve the helper has claimed and is
+//! therefore running.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Condvar, Mutex};
 
-use super::features_of;
-use crate::align::{self, Affine, RotationSearch};
-use crate::{ModalError, ModalFeatures, ModelOptions, Topology};
+use super::features::ModalFeatures;
+use super::prealign::Prealign;
+use super::prealign::{self, Affine, RotationSearch};
+use super::prepare::{Pair, PreparedShape};
+use super::refine::Start;
+use crate::error::ModalError;
+use crate::model::ModelOptions;
 
-/// B's modal solve, as the helper or the calling thread runs it.
-pub(super) struct SolveB {
-    pub pts: Vec<f64>,
-    pub topology: Topology,
-    pub model: ModelOptions,
-    pub skip: usize,
-    pub modes: usize,
+/// How many threads one pair uses: the caller's choice, by what else it runs at the same time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Parallelism {
+    /// The calling thread only. For callers that match many pairs at once, one pair per thread
+    /// (a recording's pairs on the rayon pool): the pairs keep every core busy.
+    Serial,
+    /// The calling thread and one helper job on the rayon pool, which takes rotation starts and
+    /// the second object's solve when it gets a core. For one pair at a time (the `pedomatch
+    /// match` command, `pymodal.match`). The result is the same as with [`Parallelism::Serial`].
+    #[default]
+    Pair,
 }
 
-type Features = Result<Option<ModalFeatures>, ModalError>;
+/// Stage 2 and the first solves: A in B's frame, B's modes and A's modes there.
+pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<Start, ModalError> {
+    let (a, b) = (pair.a.get(), pair.b.get());
+    let (d, ordered) = (pair.dim, pair.ordered);
+    let robust = pair.opts.prealign == Prealign::Robust;
+    let search = pair.opts.rotation_search;
+    let modal = pair.modal();
+    match parallelism {
+        Parallelism::Serial => {
+            let t = robust
+                .then(|| prealign::robust_prealign_serial(&a.pts, &b.pts, d, &search, ordered));
+            let (cur, to_cur) = prealign::start_in_b_frame(&a.pts, t, d, ordered)?;
+            let modes_b = modal.then(|| pair.modes_b()).transpose()?;
+            let modes_a = modal.then(|| pair.modes_a(&cur)).transpose()?;
+            Ok(Start {
+                cur,
+                to_cur,
+                modes_b,
+                modes_a,
+            })
+        }
+        Parallelism::Pair => {
+            let phase = FirstPhase::start(
+                d,
+                robust.then(|| Screening {
+                    a: a.pts.clone(),
+                    b: b.pts.clone(),
+                    search,
+                    keep_orientation: ordered,
+                }),
+                modal.then(|| SolveB {
+                    b: pair.b.clone().into_owned(),
+                    model: pair.model.clone(),
+                    skip: pair.skip,
+                    modes: pair.k + pair.band,
+                }),
+            );
+            let (cur, to_cur) = prealign::start_in_b_frame(&a.pts, phase.prealign(), d, ordered)?;
+            let modes_a = modal.then(|| pair.modes_a(&cur)).transpose()?;
+            let modes_b = phase.b_modes()?;
+            Ok(Start {
+                cur,
+                to_cur,
+                modes_b,
+                modes_a,
+            })
+        }
+    }
+}
+
+/// B's modal solve, as the helper or the calling thread runs it (cached in B).
+struct SolveB {
+    b: PreparedShape,
+    model: ModelOptions,
+    skip: usize,
+    modes: usize,
+}
+
+type Features = Result<Option<Arc<ModalFeatures>>, ModalError>;
 
 /// The rotation search's screening, as the helper or the calling thread runs it.
-pub(super) struct Screening {
-    pub a: Vec<f64>,
-    pub b: Vec<f64>,
-    pub search: RotationSearch,
-    pub keep_orientation: bool,
+struct Screening {
+    a: Vec<f64>,
+    b: Vec<f64>,
+    search: RotationSearch,
+    keep_orientation: bool,
+}
+
+/// A result one thread fills and the other may wait for, blocked.
+struct Slot<T> {
+    value: Mutex<Option<T>>,
+    filled: Condvar,
+}
+
+impl<T: Clone> Slot<T> {
+    fn new() -> Self {
+        Self {
+            value: Mutex::new(None),
+            filled: Condvar::new(),
+        }
+    }
+
+    fn set(&self, v: T) {
+        *self.value.lock().expect("slot") = Some(v);
+        self.filled.notify_all();
+    }
+
+    /// Blocks until the slot is filled; only called for work a running thread has claimed.
+    fn wait(&self) -> T {
+        let guard = self.value.lock().expect("slot");
+        let guard = self
+            .filled
+            .wait_while(guard, |v| v.is_none())
+            .expect("slot");
+        guard.clone().expect("filled")
+    }
 }
 
 struct Shared {
@@ -41,10 +137,10 @@ struct Shared {
     screening: Option<Screening>,
     starts: Vec<Affine>,
     next: AtomicUsize,
-    screened: Vec<OnceLock<(Affine, f64)>>,
+    screened: Vec<Slot<(Affine, f64)>>,
     solve_b: Option<SolveB>,
     b_claimed: AtomicBool,
-    b_modes: OnceLock<Features>,
+    b_modes: Slot<Features>,
 }
 
 impl Shared {
@@ -57,7 +153,7 @@ impl Shared {
             if i >= self.starts.len() {
                 return;
             }
-            let r = align::icp_affine(
+            let r = prealign::icp_affine(
                 &s.a,
                 &s.b,
                 self.dim,
@@ -65,8 +161,8 @@ impl Shared {
                 iters,
                 s.keep_orientation,
             );
-            // Only the thread that took index i writes slot i.
-            let _ = self.screened[i].set(r);
+            // Only the thread that took index i fills slot i.
+            self.screened[i].set(r);
         }
     }
 
@@ -76,49 +172,32 @@ impl Shared {
         if self.b_claimed.swap(true, Ordering::AcqRel) {
             return;
         }
-        let out = features_of(
-            &job.pts,
-            self.dim,
-            &job.topology,
-            &job.model,
-            job.skip,
-            job.modes,
-        );
-        let _ = self.b_modes.set(out.map(Some));
-    }
-}
-
-/// Waits for a slot the other thread is filling (it has claimed the work, so it is running).
-fn wait<T>(slot: &OnceLock<T>) -> &T {
-    loop {
-        if let Some(v) = slot.get() {
-            return v;
-        }
-        std::thread::yield_now();
+        let out = job.b.get().own_modes(&job.model, job.skip, job.modes);
+        self.b_modes.set(out.map(Some));
     }
 }
 
 /// The first phase under way: a helper job is on the pool from [`FirstPhase::start`] on.
-pub(super) struct FirstPhase {
+struct FirstPhase {
     shared: Arc<Shared>,
 }
 
 impl FirstPhase {
     /// Puts the helper on the pool: it screens rotation starts (when `screening` is given) and
     /// then solves B (when `solve_b` is given) unless this thread has claimed it.
-    pub(super) fn start(dim: usize, screening: Option<Screening>, solve_b: Option<SolveB>) -> Self {
+    fn start(dim: usize, screening: Option<Screening>, solve_b: Option<SolveB>) -> Self {
         let starts = screening.as_ref().map_or_else(Vec::new, |s| {
-            align::rotation_candidates(&s.a, &s.b, dim, s.search.turns)
+            prealign::rotation_candidates(&s.a, &s.b, dim, s.search.turns)
         });
         let shared = Arc::new(Shared {
             dim,
-            screened: (0..starts.len()).map(|_| OnceLock::new()).collect(),
+            screened: (0..starts.len()).map(|_| Slot::new()).collect(),
             starts,
             screening,
             next: AtomicUsize::new(0),
             solve_b,
             b_claimed: AtomicBool::new(false),
-            b_modes: OnceLock::new(),
+            b_modes: Slot::new(),
         });
         let helper = Arc::clone(&shared);
         rayon::spawn(move || {
@@ -129,14 +208,14 @@ impl FirstPhase {
     }
 
     /// The rotation search's result (`None` when no screening was given): the starts this
-    /// thread screens, then [`align::finish_search`] on this thread — the same candidates and
-    /// order as [`align::robust_prealign`], so the same map.
-    pub(super) fn prealign(&self) -> Option<Affine> {
+    /// thread screens, then [`prealign::finish_search`] on this thread — the same candidates and
+    /// order as [`prealign::robust_prealign`], so the same map.
+    fn prealign(&self) -> Option<Affine> {
         let shared = &self.shared;
         shared.screen();
         let s = shared.screening.as_ref()?;
-        let screened: Vec<(Affine, f64)> = shared.screened.iter().map(|r| *wait(r)).collect();
-        Some(align::finish_search(
+        let screened: Vec<(Affine, f64)> = shared.screened.iter().map(Slot::wait).collect();
+        Some(prealign::finish_search(
             &s.a,
             &s.b,
             shared.dim,
@@ -149,11 +228,11 @@ impl FirstPhase {
 
     /// B's modes (`Ok(None)` when no solve was given): solved here if the helper has not
     /// claimed them yet, else waited for.
-    pub(super) fn b_modes(self) -> Features {
+    fn b_modes(self) -> Features {
         if self.shared.solve_b.is_none() {
             return Ok(None);
         }
         self.shared.solve_b();
-        wait(&self.shared.b_modes).clone()
+        self.shared.b_modes.wait()
     }
 }

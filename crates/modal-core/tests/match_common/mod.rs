@@ -271,7 +271,7 @@ pub fn surface_case(g: &[Vec<f64>], sev: Severity, seed: u64, na: usize, nb: usi
         })
         .collect();
     // Spacing: mean nearest-neighbour distance of B.
-    let spacing_b = modal_core::gaussian::nearest_neighbour_stats_of(&b.concat(), 3).0;
+    let spacing_b = modal_core::shape::nearest_neighbour_stats_of(&b.concat(), 3).0;
     SurfaceCase {
         a,
         b,

@@ -7,13 +7,15 @@
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
 
+use super::prealign::nearest;
+use super::recipe::MatchOptions;
+use crate::error::ModalError;
 use crate::simd::dot;
-use crate::ModalError;
 
 /// The retained modes of one object, ready for comparison with another object's.
 ///
 /// Stored `(dim·n) × k`, column-major (`data[p * dim * n + a * n + i]` is component `a` of node `i`
-/// in mode `p`), matching the component-major row layout of [`crate::ModalBasis::modes`].
+/// in mode `p`), matching the component-major row layout of [`crate::model::ModalBasis::modes`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModalFeatures {
     pub dim: usize,
@@ -27,7 +29,7 @@ impl ModalFeatures {
     /// (`column(p)` returns mode `p`). Each column is scaled to norm `√n` (independent of ρ, σ and
     /// node count, docs/method.md §5.1) and signed so that its largest-|·| entry is positive
     /// (docs/method.md §4.2).
-    pub fn from_columns<'a, F>(
+    pub(crate) fn from_columns<'a, F>(
         dim: usize,
         n_nodes: usize,
         available: usize,
@@ -79,9 +81,9 @@ impl ModalFeatures {
         })
     }
 
-    /// Builds features from a [`crate::ModalBasis`].
-    pub fn from_basis(
-        basis: &crate::ModalBasis,
+    /// Builds features from a [`crate::model::ModalBasis`].
+    pub(crate) fn from_basis(
+        basis: &crate::model::ModalBasis,
         skip: usize,
         k: usize,
     ) -> Result<Self, ModalError> {
@@ -99,20 +101,8 @@ impl ModalFeatures {
         &self.data[p * len..(p + 1) * len]
     }
 
-    /// Keeps the first `k` modes.
-    pub fn truncated(&self, k: usize) -> Self {
-        let k = k.min(self.n_modes);
-        let len = self.dim * self.n_nodes;
-        Self {
-            dim: self.dim,
-            n_nodes: self.n_nodes,
-            n_modes: k,
-            data: self.data[..k * len].to_vec(),
-        }
-    }
-
     /// Re-indexes and re-signs the modes: new mode `p` is `signs[p] · old mode order[p]`.
-    pub fn permuted(&self, order: &[usize], signs: &[f64]) -> Self {
+    pub(crate) fn permuted(&self, order: &[usize], signs: &[f64]) -> Self {
         let len = self.dim * self.n_nodes;
         let mut data = Vec::with_capacity(order.len() * len);
         for (&q, &s) in order.iter().zip(signs) {
@@ -129,7 +119,7 @@ impl ModalFeatures {
 
 /// Outcome of the cross-object mode alignment.
 #[derive(Debug, Clone, PartialEq)]
-pub struct ModeAlignment {
+pub(crate) struct ModeAlignment {
     /// Mode of object B assigned to each of A's modes.
     pub order: Vec<usize>,
     /// Sign applied to that mode of B.
@@ -141,7 +131,7 @@ pub struct ModeAlignment {
 /// docs/method.md §5.4: aligns the sign and order of B's modes to A's by the spatial correlation of
 /// their displacement fields, sampled at each A node's nearest B node (`nn[i]`). Mode `p` of A may
 /// be paired with B's modes `q` with `|p − q| ≤ band` (one-to-one, rectangular assignment).
-pub fn align_modes(
+pub(crate) fn align_modes(
     a: &ModalFeatures,
     b: &ModalFeatures,
     nn: &[usize],
@@ -244,7 +234,7 @@ impl AffinityMatrix {
     }
 
     /// `Z` of two feature sets, both with the same number of modes.
-    pub fn from_features(a: &ModalFeatures, b: &ModalFeatures) -> Result<Self, ModalError> {
+    pub(crate) fn from_features(a: &ModalFeatures, b: &ModalFeatures) -> Result<Self, ModalError> {
         if a.dim != b.dim || a.n_modes != b.n_modes {
             return Err(ModalError::InvalidParameter(
                 "affinity: the two objects have different dimensions or mode counts".into(),
@@ -313,7 +303,7 @@ impl AffinityMatrix {
 
     /// Divides by the largest entry, so thresholds are fractions in [0, 1] (docs/method.md §5.1).
     /// An all-zero matrix (identical objects with identical sampling) is left as is.
-    pub fn normalized(mut self) -> Self {
+    pub(crate) fn normalized(mut self) -> Self {
         let mx = self.max();
         if mx > 0.0 {
             self.data.iter_mut().for_each(|v| *v /= mx);
@@ -331,7 +321,7 @@ impl AffinityMatrix {
     /// let z = AffinityMatrix::new(1, 3, vec![0.0, 0.25, 1.0]).unwrap();
     /// assert_eq!(z.powered(0.5).as_slice(), &[0.0, 0.5, 1.0]);
     /// ```
-    pub fn powered(mut self, p: f64) -> Self {
+    pub(crate) fn powered(mut self, p: f64) -> Self {
         if p != 1.0 {
             self.data.iter_mut().for_each(|v| *v = v.powf(p));
         }
@@ -339,7 +329,7 @@ impl AffinityMatrix {
     }
 
     /// Re-indexes rows and columns: new `(i, j)` is old `(row_of[i], col_of[j])`.
-    pub fn reindexed(&self, row_of: &[usize], col_of: &[usize]) -> Self {
+    pub(crate) fn reindexed(&self, row_of: &[usize], col_of: &[usize]) -> Self {
         let mut data = Vec::with_capacity(row_of.len() * col_of.len());
         for &r in row_of {
             data.extend(col_of.iter().map(|&c| self.data[r * self.cols + c]));
@@ -351,7 +341,7 @@ impl AffinityMatrix {
         }
     }
 
-    pub fn transposed(&self) -> Self {
+    pub(crate) fn transposed(&self) -> Self {
         let mut data = vec![0.0; self.data.len()];
         for i in 0..self.rows {
             for j in 0..self.cols {
@@ -364,6 +354,56 @@ impl AffinityMatrix {
             data,
         }
     }
+}
+
+/// Stage 3: the cost matrix the search reads at A's coordinates `cur` (B's at `b`, `k` modes) — the modal
+/// distances between A's features and B's after B's modes are aligned to A's (§5.4), or the
+/// squared distances of the aligned positions when the modes are left out (`None`), mixed with
+/// positions and raised to the power as the options say; max-normalised.
+pub(crate) fn cost_matrix(
+    cur: &[f64],
+    b: &[f64],
+    d: usize,
+    modes: Option<(&ModalFeatures, &ModalFeatures)>,
+    k: usize,
+    opts: &MatchOptions,
+) -> Result<AffinityMatrix, ModalError> {
+    let z = match modes {
+        Some((fa, fb)) => {
+            // B has `k + band` modes.
+            let band = fb.n_modes.saturating_sub(k);
+            let nn: Vec<usize> = nearest(cur, b, d).into_iter().map(|x| x.0).collect();
+            let al = align_modes(fa, fb, &nn, band, opts.method)?;
+            let fb_al = fb.permuted(&al.order, &al.signs);
+            AffinityMatrix::from_features(fa, &fb_al)?.normalized()
+        }
+        _ => position_costs(cur, b, d)?,
+    }
+    .powered(opts.cost_power);
+    if !(modes.is_some() && opts.position_weight > 0.0) {
+        return Ok(z);
+    }
+    let w = opts.position_weight;
+    let p = position_costs(cur, b, d)?.powered(opts.cost_power);
+    let mixed = z
+        .as_slice()
+        .iter()
+        .zip(p.as_slice())
+        .map(|(x, y)| (1.0 - w) * x + w * y)
+        .collect();
+    Ok(AffinityMatrix::new(z.rows(), z.cols(), mixed)?.normalized())
+}
+
+/// Max-normalised squared distances between aligned coordinates.
+fn position_costs(a: &[f64], b: &[f64], d: usize) -> Result<AffinityMatrix, ModalError> {
+    let data = a
+        .chunks_exact(d)
+        .flat_map(|p| {
+            b.chunks_exact(d)
+                .map(move |q| (0..d).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>())
+        })
+        .collect();
+    Ok(AffinityMatrix::new(a.len() / d, b.len() / d, data)?.normalized())
 }
 
 #[cfg(test)]

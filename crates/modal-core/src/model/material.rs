@@ -1,6 +1,6 @@
 //! Virtual elastic materials of the finite-element models.
 
-use crate::ModalError;
+use crate::error::ModalError;
 
 /// How a 2-D model treats the third dimension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -11,7 +11,9 @@
 use faer::linalg::solvers::DenseSolveCore;
 use faer::Mat;
 
-use crate::{Material, ModalError, PlaneModel, Shape};
+use super::material::{Material, PlaneModel};
+use crate::error::ModalError;
+use crate::shape::Shape;
 
 /// The closed-form integrals of one Gaussian element (without material constants).
 #[derive(Debug, Clone)]
@@ -29,91 +31,10 @@ pub struct GaussianIntegrals {
 
 /// Index of the unordered component pair `(a, b)` in [`GaussianIntegrals::gamma_d`]:
 /// 2-D `xx, xy, yy`; 3-D `xx, xy, xz, yy, yz, zz`.
-pub fn pair_index(dim: usize, a: usize, b: usize) -> usize {
+pub(crate) fn pair_index(dim: usize, a: usize, b: usize) -> usize {
     let (a, b) = if a <= b { (a, b) } else { (b, a) };
     // Row-major upper triangle.
     a * dim - a * a.saturating_sub(1) / 2 + (b - a)
-}
-
-/// Mean and minimum nearest-neighbour distance, with the pair realising the minimum.
-pub fn nearest_neighbour_stats(shape: &Shape) -> (f64, f64, (usize, usize)) {
-    nearest_neighbour_stats_of(shape.coords(), shape.dim())
-}
-
-/// [`nearest_neighbour_stats`] of row-major `dim`-D points.
-pub fn nearest_neighbour_stats_of(coords: &[f64], dim: usize) -> (f64, f64, (usize, usize)) {
-    // Every model build (each modal solve) calls this O(n²) scan: 2-D and 3-D get a
-    // fixed-dimension loop the compiler can unroll.
-    match dim {
-        2 => nn_stats::<2>(coords),
-        3 => nn_stats::<3>(coords),
-        d => nn_stats_dyn(coords, d),
-    }
-}
-
-fn nn_stats<const D: usize>(c: &[f64]) -> (f64, f64, (usize, usize)) {
-    let pts: Vec<[f64; D]> = c
-        .chunks_exact(D)
-        .map(|p| std::array::from_fn(|a| p[a]))
-        .collect();
-    finish_nn_stats(pts.len(), |i| {
-        let p = pts[i];
-        let mut best = f64::INFINITY;
-        let mut bj = i;
-        for (j, q) in pts.iter().enumerate() {
-            let mut r2 = 0.0;
-            for a in 0..D {
-                let d = p[a] - q[a];
-                r2 += d * d;
-            }
-            if j != i && r2 < best {
-                best = r2;
-                bj = j;
-            }
-        }
-        (best, bj)
-    })
-}
-
-fn nn_stats_dyn(c: &[f64], dim: usize) -> (f64, f64, (usize, usize)) {
-    let n = c.len() / dim;
-    finish_nn_stats(n, |i| {
-        let mut best = f64::INFINITY;
-        let mut bj = i;
-        for j in 0..n {
-            if j == i {
-                continue;
-            }
-            let r2: f64 = (0..dim)
-                .map(|a| (c[i * dim + a] - c[j * dim + a]).powi(2))
-                .sum();
-            if r2 < best {
-                best = r2;
-                bj = j;
-            }
-        }
-        (best, bj)
-    })
-}
-
-/// Reduces per-node (squared nearest distance, neighbour) into (mean, min, pair).
-fn finish_nn_stats(
-    n: usize,
-    nearest: impl Fn(usize) -> (f64, usize),
-) -> (f64, f64, (usize, usize)) {
-    let mut total = 0.0;
-    let mut min = f64::INFINITY;
-    let mut pair = (0, 0);
-    for i in 0..n {
-        let (best, bj) = nearest(i);
-        let r = best.sqrt();
-        total += r;
-        if r < min {
-            min = r;
-            pair = (i.min(bj), i.max(bj));
-        }
-    }
-    (total / n as f64, min, pair)
 }
 
 /// `G_ij = exp(−|x_i − c_j|² / 2σ²)`: the Gaussians centred on `centers` evaluated at `nodes`,
@@ -208,7 +129,7 @@ impl GaussianIntegrals {
 
     /// The (a, b) block of `K̃`: `(λ+μ) Γ^{ab} + μ δ_ab Σ_c Γ^{cc}` (docs/method.md §2.4 without
     /// the `A`s).
-    pub fn k_tilde_block(&self, a: usize, b: usize, lambda: f64, mu: f64) -> Mat<f64> {
+    pub(crate) fn k_tilde_block(&self, a: usize, b: usize, lambda: f64, mu: f64) -> Mat<f64> {
         let mut out = self.gamma_ab(a, b) * faer::Scale(lambda + mu);
         if a == b {
             for c in 0..self.dim {
@@ -233,7 +154,7 @@ impl GaussianIntegrals {
 
     /// Explicit `K = Â K̃ Â` and `M = Â Γ̃ Â` with `A = G⁻¹` (docs/method.md §2.3–2.4). For tests,
     /// exports and oracles only; the modal solve never forms `G⁻¹`.
-    pub fn explicit_matrices(
+    pub(crate) fn explicit_matrices(
         &self,
         material: &Material,
         plane: PlaneModel,

@@ -3,7 +3,23 @@
 // Small fixed-size matrix code reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use crate::{AffinityMatrix, ModalError};
+use super::features::AffinityMatrix;
+use crate::error::ModalError;
+
+/// Which search produces the primary matches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Search {
+    /// Mutual best matches under the threshold (the original modal matching, docs/method.md §6.1).
+    Local,
+    /// Optimal assignment saturating the smaller object (the paper's optimisation, docs/method.md
+    /// §6.2).
+    #[default]
+    Global,
+    /// Every node of the first object to its lowest-cost node of the second, under the
+    /// threshold: many-to-one, no excess step. For independent samplings of one surface, where
+    /// no one-to-one answer can be right for every node (README, "Surfaces").
+    Best,
+}
 
 /// How a threshold interacts with the optimal assignment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -19,7 +35,7 @@ pub enum ThresholdMode {
 
 /// Local search (docs/method.md §6.1): `(i, j)` is a match iff `j` is the row minimum of `i`, `i`
 /// the column minimum of `j` (ties to the lowest index) and `Z[i, j] ≤ threshold`. Sorted by `i`.
-pub fn local_matches(z: &AffinityMatrix, threshold: f64) -> Vec<(usize, usize)> {
+pub(crate) fn local_matches(z: &AffinityMatrix, threshold: f64) -> Vec<(usize, usize)> {
     let (n, m) = (z.rows(), z.cols());
     if n == 0 || m == 0 {
         return Vec::new();
@@ -57,7 +73,7 @@ fn row_minimum(row: &[f64]) -> usize {
 /// index) when `Z[i, j] ≤ threshold` — many-to-one, the read-out of coherent point drift's
 /// `argmax P`. For independent samplings of one surface, where no one-to-one answer can be right
 /// for every node. Sorted by `i`.
-pub fn best_matches(z: &AffinityMatrix, threshold: f64) -> Vec<(usize, usize)> {
+pub(crate) fn best_matches(z: &AffinityMatrix, threshold: f64) -> Vec<(usize, usize)> {
     if z.cols() == 0 {
         return Vec::new();
     }
@@ -74,7 +90,7 @@ pub fn best_matches(z: &AffinityMatrix, threshold: f64) -> Vec<(usize, usize)> {
 /// Global search (docs/method.md §6.2): the minimum-cost one-to-one matching that saturates the
 /// smaller object (equivalent to padding with constant-cost dummy nodes), then the threshold.
 /// Sorted by `i`.
-pub fn global_matches(
+pub(crate) fn global_matches(
     z: &AffinityMatrix,
     method: assign::Method,
     threshold: f64,
@@ -102,6 +118,22 @@ pub fn global_matches(
         .filter(|&(i, j)| z.get(i, j) <= threshold)
         .collect();
     Ok(out)
+}
+
+/// Stage 4: the primary matches of `z` by the options' search (local, global or best) under
+/// `threshold`, sorted by row.
+pub(crate) fn primary_matches(
+    z: &AffinityMatrix,
+    search: Search,
+    method: assign::Method,
+    threshold: f64,
+    mode: ThresholdMode,
+) -> Result<Vec<(usize, usize)>, ModalError> {
+    Ok(match search {
+        Search::Global => global_matches(z, method, threshold, mode)?,
+        Search::Local => local_matches(z, threshold),
+        Search::Best => best_matches(z, threshold),
+    })
 }
 
 #[cfg(test)]

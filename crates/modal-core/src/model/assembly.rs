@@ -7,9 +7,14 @@ use faer::linalg::solvers::Solve;
 use faer::reborrow::ReborrowMut;
 use faer::Mat;
 
+use super::axial::{self, BarModel};
+use super::gaussian::GaussianIntegrals;
+use super::material::{Material, PlaneModel};
+use super::rigid;
 use crate::eigen::{self, EigenPairs};
-use crate::gaussian::{nearest_neighbour_stats, GaussianIntegrals};
-use crate::{Material, ModalError, PlaneModel, Shape};
+use crate::error::ModalError;
+use crate::shape::nearest_neighbour_stats;
+use crate::shape::{Shape, Topology};
 
 /// Which finite elements model the object.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -112,10 +117,10 @@ impl ModalBasis {
 }
 
 /// Relative eigenvalue below which a mode counts as zero-energy (docs/method.md §4.2).
-pub const ZERO_MODE_TOL: f64 = 1e-9;
+pub(crate) const ZERO_MODE_TOL: f64 = 1e-9;
 
 /// Largest accepted `max(L_ii)/min(L_ii)` of the Cholesky factor of Γ (cond(Γ) ≲ 10¹²; §2.8).
-pub const CONDITION_GUARD: f64 = 1e6;
+pub(crate) const CONDITION_GUARD: f64 = 1e6;
 
 /// How many times the conditioning guard shrinks σ by 0.8 before giving up.
 const GUARD_RETRIES: usize = 30;
@@ -134,7 +139,7 @@ fn model_on_edges(
 ) -> Result<(SolverModel, ModelOptions), ModalError> {
     options.material.validate()?;
     validate_nodes(shape)?;
-    let model = crate::axial::axial_model_with_edges(shape, edges, &[], options)?;
+    let model = axial::axial_model_with_edges(shape, edges, &[], &options.material)?.into();
     let opts = ModelOptions {
         element: ElementKind::Axial,
         ..options.clone()
@@ -154,7 +159,7 @@ pub fn modal_basis_with_edges(
 }
 
 /// Solves an assembled model; `options.element` selects the Axial zero-mode check.
-pub fn solve_model(
+pub(crate) fn solve_model(
     shape: &Shape,
     model: &SolverModel,
     options: &ModelOptions,
@@ -251,7 +256,7 @@ pub fn solve_model(
 /// The assembled model in the form the solver uses: `K_s φ_s = ω² (I_d ⊗ L Lᵀ) φ_s`, with the
 /// nodal modes `φ = (I_d ⊗ T) φ_s` (`T = G` for the Gaussian element's ψ-form, identity for bars).
 #[derive(Debug, Clone)]
-pub struct SolverModel {
+pub(crate) struct SolverModel {
     /// `K̃` (Gaussian, ψ-form) or `K` (bars): `d·n × d·n`, full symmetric storage.
     pub stiffness: Mat<f64>,
     /// Lower Cholesky factor of the `n × n` mass block (`ρΓ`, or the bars' consistent `M_s`).
@@ -263,13 +268,27 @@ pub struct SolverModel {
     pub sigma: Option<f64>,
 }
 
+impl From<BarModel> for SolverModel {
+    fn from(bars: BarModel) -> Self {
+        Self {
+            stiffness: bars.stiffness,
+            mass_factor: bars.mass_factor,
+            interpolation: None,
+            sigma: None,
+        }
+    }
+}
+
 /// Validates the input and assembles the solver form of the model.
-pub fn build_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, ModalError> {
+pub(crate) fn build_model(
+    shape: &Shape,
+    options: &ModelOptions,
+) -> Result<SolverModel, ModalError> {
     options.material.validate()?;
     validate_nodes(shape)?;
     match options.element {
         ElementKind::Gaussian => gaussian_model(shape, options),
-        ElementKind::Axial => crate::axial::axial_model(shape, options),
+        ElementKind::Axial => Ok(axial::axial_model(shape, &options.material)?.into()),
     }
 }
 
@@ -395,7 +414,7 @@ fn gaussian_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, 
                 let stiffness = ints.k_tilde(lambda, mu);
                 let interpolation = match &centers {
                     None => ints.g,
-                    Some(c) => crate::gaussian::gaussians_at(shape, c, sigma),
+                    Some(c) => super::gaussian::gaussians_at(shape, c, sigma),
                 };
                 return Ok(SolverModel {
                     stiffness,
@@ -428,7 +447,7 @@ fn reduced_centers(shape: &Shape, stride: usize) -> Result<Option<Shape>, ModalE
         .step_by(stride)
         .flat_map(|i| shape.coords()[i * dim..(i + 1) * dim].iter().copied())
         .collect();
-    let centers = Shape::new(dim, coords, crate::Topology::None)?;
+    let centers = Shape::new(dim, coords, Topology::None)?;
     validate_nodes(&centers).map_err(|e| {
         ModalError::InvalidParameter(format!(
             "center_stride {stride} leaves {} centres of {} nodes: {}",
@@ -455,7 +474,7 @@ fn rigid_reduced_basis(shape: &Shape, model: &SolverModel) -> Result<Mat<f64>, M
                 .into(),
         ));
     }
-    let mut y = crate::rigid::rigid_basis(shape);
+    let mut y = rigid::rigid_basis(shape);
     if let Some(g) = &model.interpolation {
         let llt = g
             .llt(faer::Side::Lower)
@@ -471,7 +490,7 @@ fn rigid_reduced_basis(shape: &Shape, model: &SolverModel) -> Result<Mat<f64>, M
         let blk = y.as_ref().subrows(a * n, n).to_owned();
         y.as_mut().subrows_mut(a * n, n).copy_from(lt * &blk);
     }
-    crate::rigid::orthonormalise(&mut y)?;
+    rigid::orthonormalise(&mut y)?;
     Ok(y)
 }
 

@@ -4,7 +4,7 @@
 // Small fixed-size matrix code reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use crate::AffinityMatrix;
+use super::features::AffinityMatrix;
 
 /// docs/method.md §6.3 on two counter-clockwise closed contours. `z` has the *smaller* contour (A,
 /// `n_a` nodes) on its rows and the larger (B) on its columns; `pairs` are one-to-one `(a, b)`.
@@ -12,7 +12,7 @@ use crate::AffinityMatrix;
 /// `a(p) … a(q)`, non-decreasing along the run, so neighbours stay neighbours and no two matches
 /// cross; several B nodes may share one A node. Returns the new `(a, b)` pairs with `Z ≤
 /// threshold`.
-pub fn contour_excess(
+pub(crate) fn contour_excess(
     z: &AffinityMatrix,
     pairs: &[(usize, usize)],
     threshold: f64,
@@ -107,7 +107,7 @@ pub fn contour_excess(
 /// the aligned coordinates (row-major, `dim` per node) and `normal` the common "up" direction
 /// used for the in-plane orientation (for 2-D pass `None`).
 #[allow(clippy::too_many_arguments)]
-pub fn point_set_excess(
+pub(crate) fn point_set_excess(
     z: &AffinityMatrix,
     pairs: &[(usize, usize)],
     threshold: f64,
@@ -251,7 +251,7 @@ fn matched_neighbours(e: usize, nbr: &[Vec<usize>], mb: &[Option<usize>]) -> Vec
 }
 
 /// k nearest neighbours of every node (brute force; objects have at most a few hundred nodes).
-pub fn knn(pos: &[f64], dim: usize, k: usize) -> Vec<Vec<usize>> {
+pub(crate) fn knn(pos: &[f64], dim: usize, k: usize) -> Vec<Vec<usize>> {
     let n = pos.len() / dim;
     (0..n)
         .map(|i| {
@@ -273,7 +273,7 @@ pub fn knn(pos: &[f64], dim: usize, k: usize) -> Vec<Vec<usize>> {
 }
 
 /// 1-ring neighbours from triangles.
-pub fn mesh_rings(n: usize, triangles: &[[usize; 3]]) -> Vec<Vec<usize>> {
+pub(crate) fn mesh_rings(n: usize, triangles: &[[usize; 3]]) -> Vec<Vec<usize>> {
     let mut r: Vec<Vec<usize>> = vec![Vec::new(); n];
     for t in triangles {
         for (x, y) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
@@ -326,7 +326,7 @@ fn least_variance_axis(idx: &[usize], p: &dyn Fn(usize) -> [f64; 3]) -> [f64; 3]
             }
         }
     }
-    let (vals, vecs) = crate::align::sym_eigen3(cov);
+    let (vals, vecs) = super::prealign::sym_eigen3(cov);
     let k = (0..3)
         .min_by(|&x, &y| vals[x].total_cmp(&vals[y]))
         .unwrap_or(2);
@@ -370,7 +370,8 @@ fn normalize(a: [f64; 3]) -> [f64; 3] {
 /// read along both contours starting from the first pair, the order must never decrease.
 /// Returns the number of order inversions of B's sequence when sorted along A (0 = no crossings),
 /// treating several B nodes on one A node as ordered.
-pub fn contour_crossings(pairs: &[(usize, usize)], na: usize, nb: usize) -> usize {
+#[cfg(test)]
+pub(crate) fn contour_crossings(pairs: &[(usize, usize)], na: usize, nb: usize) -> usize {
     if pairs.len() < 3 {
         return 0;
     }
@@ -381,6 +382,45 @@ pub fn contour_crossings(pairs: &[(usize, usize)], na: usize, nb: usize) -> usiz
     // Cyclic sequences: count descents; a perfectly order-keeping matching has exactly one
     // wrap-around at most, which we have removed by rotating to start at the first pair.
     seq.windows(2).filter(|w| w[1] < w[0]).count()
+}
+
+/// Stage 5: the excess pairs for the one-to-one pairs `one` on `z`: along the contours when
+/// `ordered`, else by the neighbourhoods of the point sets (`positions`: A's aligned coordinates
+/// and B's, `dim` per node; `neighbours`: their neighbour lists, asked for only here). The
+/// smaller object is always the one whose nodes are shared.
+pub(crate) fn excess_pairs<'n>(
+    z: &AffinityMatrix,
+    one: &[(usize, usize)],
+    threshold: f64,
+    ordered: bool,
+    (dim, pa, pb): (usize, &[f64], &[f64]),
+    neighbours: impl FnOnce() -> (&'n [Vec<usize>], &'n [Vec<usize>]),
+) -> Vec<(usize, usize)> {
+    let (n, m) = (z.rows(), z.cols());
+    let swapped = || one.iter().map(|&(i, j)| (j, i)).collect::<Vec<_>>();
+    let back = |v: Vec<(usize, usize)>| v.into_iter().map(|(j, i)| (i, j)).collect();
+    if ordered {
+        return if n <= m {
+            contour_excess(z, one, threshold)
+        } else {
+            back(contour_excess(&z.transposed(), &swapped(), threshold))
+        };
+    }
+    let (na, nb) = neighbours();
+    if n <= m {
+        point_set_excess(z, one, threshold, dim, pa, pb, na, nb)
+    } else {
+        back(point_set_excess(
+            &z.transposed(),
+            &swapped(),
+            threshold,
+            dim,
+            pb,
+            pa,
+            nb,
+            na,
+        ))
+    }
 }
 
 #[cfg(test)]

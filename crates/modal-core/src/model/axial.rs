@@ -21,15 +21,17 @@ use std::collections::BTreeMap;
 
 use faer::Mat;
 
-use crate::model::{ModelOptions, SolverModel};
-use crate::{eigen, Material, ModalError, Shape, Topology};
+use super::material::Material;
+use crate::eigen;
+use crate::error::ModalError;
+use crate::shape::{Shape, Topology};
 
 /// Section area of every bar. K and M both scale with it, so ω² does not depend on it and the
 /// mass-normalised modes only scale by 1/√A.
-pub const BAR_AREA: f64 = 1.0;
+pub(crate) const BAR_AREA: f64 = 1.0;
 
 /// Hinge-bending stiffness relative to the bars: `k_b = BENDING_WEIGHT · E · A · |edge|`.
-pub const BENDING_WEIGHT: f64 = 0.1;
+pub(crate) const BENDING_WEIGHT: f64 = 0.1;
 
 /// A bending hinge: the shared edge `(e0, e1)` and the opposite vertices `o0`, `o1` of its two
 /// triangles.
@@ -52,7 +54,7 @@ pub fn second_neighbour_edges(n: usize) -> Vec<[usize; 2]> {
 }
 
 /// Bars `(k, k + n/2 mod n)` across a closed loop.
-pub fn opposite_edges(n: usize) -> Vec<[usize; 2]> {
+pub(crate) fn opposite_edges(n: usize) -> Vec<[usize; 2]> {
     (0..n)
         .map(|k| [k, (k + n / 2) % n])
         .filter(|[a, b]| a != b)
@@ -273,7 +275,7 @@ pub fn add_hinge_bending(
 }
 
 /// The bars (and hinges) of `shape` with the mechanism remedies of the module docs.
-pub fn model_edges(shape: &Shape) -> Result<(Vec<[usize; 2]>, Vec<Hinge>), ModalError> {
+pub(crate) fn model_edges(shape: &Shape) -> Result<(Vec<[usize; 2]>, Vec<Hinge>), ModalError> {
     let n = shape.len();
     let dim = shape.dim();
     match shape.topology() {
@@ -336,19 +338,26 @@ pub fn model_edges(shape: &Shape) -> Result<(Vec<[usize; 2]>, Vec<Hinge>), Modal
     }
 }
 
+/// The bar model in solver form: stiffness `K` (`d·n × d·n`) and the lower Cholesky factor `L`
+/// of the `n × n` consistent mass block `M_s` (`M = I_d ⊗ M_s = I_d ⊗ L Lᵀ`).
+pub(crate) struct BarModel {
+    pub stiffness: Mat<f64>,
+    pub mass_factor: Mat<f64>,
+}
+
 /// Assembles the bar model of `shape` in solver form (`B = I_d ⊗ M_s`, `L = chol(M_s)`).
-pub fn axial_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, ModalError> {
+pub(crate) fn axial_model(shape: &Shape, material: &Material) -> Result<BarModel, ModalError> {
     let (edges, hinge_list) = model_edges(shape)?;
-    axial_model_with_edges(shape, &edges, &hinge_list, options)
+    axial_model_with_edges(shape, &edges, &hinge_list, material)
 }
 
 /// Bar model on the given edges (and bending hinges, 3-D only).
-pub fn axial_model_with_edges(
+pub(crate) fn axial_model_with_edges(
     shape: &Shape,
     edges: &[[usize; 2]],
     hinge_list: &[Hinge],
-    options: &ModelOptions,
-) -> Result<SolverModel, ModalError> {
+    material: &Material,
+) -> Result<BarModel, ModalError> {
     let n = shape.len();
     let mut used = vec![false; n];
     for &[a, b] in edges {
@@ -368,14 +377,14 @@ pub fn axial_model_with_edges(
     let mut edges: Vec<[usize; 2]> = edges.iter().map(|&[a, b]| [a.min(b), a.max(b)]).collect();
     edges.sort_unstable();
     edges.dedup();
-    let (mut k, ms) = assemble_bars(shape, &edges, &options.material)?;
+    let (mut k, ms) = assemble_bars(shape, &edges, material)?;
     if !hinge_list.is_empty() {
         if shape.dim() != 3 {
             return Err(ModalError::InvalidParameter(
                 "bending hinges need 3-D nodes".into(),
             ));
         }
-        add_hinge_bending(shape, hinge_list, &options.material, &mut k)?;
+        add_hinge_bending(shape, hinge_list, material, &mut k)?;
     }
     eigen::symmetrise(k.as_mut());
     let mut l = ms;
@@ -386,10 +395,8 @@ pub fn axial_model_with_edges(
             l[(i, j)] = 0.0;
         }
     }
-    Ok(SolverModel {
+    Ok(BarModel {
         stiffness: k,
         mass_factor: l,
-        interpolation: None,
-        sigma: None,
     })
 }

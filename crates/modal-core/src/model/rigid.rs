@@ -5,7 +5,8 @@
 
 use faer::Mat;
 
-use crate::{ModalError, Shape};
+use crate::error::ModalError;
+use crate::shape::Shape;
 
 /// The rigid nodal basis `R` (`d·n × r`, component-major rows), in the canonical order
 /// `T_x, T_y, (T_z), R_z, (R_x, R_y)`; rotations are infinitesimal, about the centroid.
@@ -48,7 +49,7 @@ pub fn rigid_basis(shape: &Shape) -> Mat<f64> {
 /// Modified Gram–Schmidt of the columns of `y` in the Euclidean inner product, in column order.
 /// Fails if a column is (numerically) dependent on the previous ones: the rigid motions of
 /// collinear 3-D nodes, for instance, are not independent.
-pub fn orthonormalise(y: &mut Mat<f64>) -> Result<(), ModalError> {
+pub(crate) fn orthonormalise(y: &mut Mat<f64>) -> Result<(), ModalError> {
     let (rows, cols) = (y.nrows(), y.ncols());
     for j in 0..cols {
         let norm0 = y.col(j).norm_l2();

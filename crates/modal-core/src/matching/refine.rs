@@ -1,0 +1,191 @@
+//! Stage 6, refine: the modal affine re-fits (docs/method.md §7.2). Each pass matches A at its
+//! current coordinates (features → search → excess), fits one affine map to its pairs and, unless
+//! that map already explains them, moves A by it and solves A's modes again. The pass whose pairs
+//! one affine map explains best is kept.
+
+// Small fixed-size matrix code reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
+use std::sync::Arc;
+
+use super::excess::excess_pairs;
+use super::features::{cost_matrix, AffinityMatrix, ModalFeatures};
+use super::prealign::{fit_affine, into_b_frame, Affine};
+use super::prepare::Pair;
+use super::result::MatchPair;
+use super::search::primary_matches;
+use crate::error::ModalError;
+
+/// Where the passes start: A after the pre-alignment, with the modes solved for it.
+pub(crate) struct Start {
+    /// A's coordinates in B's normalised frame.
+    pub cur: Vec<f64>,
+    /// The map from A's normalised frame to `cur`.
+    pub to_cur: Affine,
+    /// B's modes (`None` when the cost is positions only).
+    pub modes_b: Option<Arc<ModalFeatures>>,
+    /// A's modes at `cur`.
+    pub modes_a: Option<Arc<ModalFeatures>>,
+}
+
+/// One pass of the search loop, kept when it explains its pairs best.
+pub(crate) struct Iteration {
+    pub z: AffinityMatrix,
+    /// Pairs in the prepared (oriented) numbering.
+    pub pairs: Vec<MatchPair>,
+    /// Mean squared residual of the pairs under the affine map fitted to them.
+    resid: f64,
+    /// A's coordinates the pass matched, in B's normalised frame.
+    pub aligned: Vec<f64>,
+    /// The map from A's normalised frame to `aligned`.
+    pub to_aligned: Affine,
+}
+
+/// What the passes return: the kept pass, and how many re-fits and A-solves were run.
+pub(crate) struct Refined {
+    pub kept: Iteration,
+    pub refits: usize,
+    pub solves: usize,
+}
+
+/// Runs the passes from `start` until the pairs stop changing, one affine map explains them, or
+/// `refits` re-fits were made.
+pub(crate) fn refine(pair: &Pair<'_>, start: Start) -> Result<Refined, ModalError> {
+    let opts = pair.opts;
+    let Start {
+        mut cur,
+        mut to_cur,
+        modes_b,
+        modes_a,
+    } = start;
+    let mut first_modes = modes_a;
+    let mut prev: Option<Vec<MatchPair>> = None;
+    let (mut refits, mut solves) = (0, 0);
+    let mut best: Option<Iteration> = None;
+    loop {
+        let fa = match (&modes_b, first_modes.take()) {
+            (None, _) => None,
+            (Some(_), Some(fa)) => Some(fa),
+            (Some(_), None) => Some(pair.modes_a(&cur)?),
+        };
+        if fa.is_some() {
+            solves += 1;
+        }
+        let z = cost_matrix(
+            &cur,
+            &pair.b.get().pts,
+            pair.dim,
+            fa.as_deref().zip(modes_b.as_deref()),
+            pair.k,
+            opts,
+        )?;
+        let pairs = pass_pairs(pair, &z, &cur)?;
+        let (resid, worst, fit) = explained(pair, &cur, &pairs);
+        let stable = prev.as_ref().is_some_and(|p| same_pairs(p, &pairs));
+        let better = !opts.keep_best_fit || best.as_ref().is_none_or(|b| resid < b.resid);
+        if better {
+            best = Some(Iteration {
+                z,
+                pairs: pairs.clone(),
+                resid,
+                aligned: cur.clone(),
+                to_aligned: to_cur,
+            });
+        }
+        let explained = worst.sqrt() < opts.refit_tolerance * pair.spacing_b;
+        if stable || explained || refits >= opts.refits {
+            break;
+        }
+        let Some(t) = fit else { break };
+        if !moves(&t) || (pair.ordered && t.det() <= 0.0) {
+            break;
+        }
+        let Ok((next, renormalize)) = into_b_frame(t.apply(&cur), pair.dim, pair.ordered) else {
+            break;
+        };
+        cur = next;
+        to_cur = renormalize.compose(&t).compose(&to_cur);
+        prev = Some(pairs);
+        refits += 1;
+    }
+    Ok(Refined {
+        kept: best.expect("at least one iteration ran"),
+        refits,
+        solves,
+    })
+}
+
+/// One pass's pairs on `z`: the search's, then the excess step's.
+fn pass_pairs(
+    pair: &Pair<'_>,
+    z: &AffinityMatrix,
+    cur: &[f64],
+) -> Result<Vec<MatchPair>, ModalError> {
+    let opts = pair.opts;
+    let one = primary_matches(
+        z,
+        opts.search,
+        opts.method,
+        pair.threshold,
+        opts.threshold_mode,
+    )?;
+    let as_pair = |excess: bool| {
+        move |(i, j): (usize, usize)| MatchPair {
+            a: i,
+            b: j,
+            cost: z.get(i, j),
+            excess,
+        }
+    };
+    let mut pairs: Vec<MatchPair> = one.iter().copied().map(as_pair(false)).collect();
+    if pair.excess() {
+        pairs.extend(
+            excess_pairs(
+                z,
+                &one,
+                pair.threshold,
+                pair.ordered,
+                (pair.dim, cur, &pair.b.get().pts),
+                || (pair.a.get().neighbours(), pair.b.get().neighbours()),
+            )
+            .into_iter()
+            .map(as_pair(true)),
+        );
+    }
+    Ok(pairs)
+}
+
+/// How well one affine map explains the pairs, measured in B's fixed frame, so the passes are
+/// comparable: wrong pairs do not fit a smooth map. The mean squared residual of all pairs ranks
+/// the passes; the largest of the one-to-one pairs decides whether another re-fit is worth a
+/// solve. Excess pairs are left out of that: they are many-to-one by construction, so their
+/// offsets along the contour measure the sampling, not the fit. Returns both and the map.
+fn explained(pair: &Pair<'_>, cur: &[f64], pairs: &[MatchPair]) -> (f64, f64, Option<Affine>) {
+    let (d, b) = (pair.dim, &pair.b.get().pts);
+    let idx: Vec<(usize, usize)> = pairs.iter().map(|p| (p.a, p.b)).collect();
+    let fit = fit_affine(cur, b, d, &idx);
+    let (resid, worst) = fit.as_ref().map_or((f64::INFINITY, f64::INFINITY), |t| {
+        let moved = t.apply(cur);
+        let (sum, max) = pairs.iter().fold((0.0, 0.0f64), |(sum, max), p| {
+            let r2 = (0..d)
+                .map(|c| (moved[p.a * d + c] - b[p.b * d + c]).powi(2))
+                .sum::<f64>();
+            (sum + r2, if p.excess { max } else { max.max(r2) })
+        });
+        (sum / pairs.len().max(1) as f64, max)
+    });
+    (resid, worst, fit)
+}
+
+/// Whether a map moves A at all: one this close to the identity cannot change the pairs, so the
+/// solve it would cost is skipped.
+fn moves(t: &Affine) -> bool {
+    (0..t.dim).any(|r| {
+        t.t[r].abs() > 1e-4
+            || (0..t.dim).any(|c| (t.m[r][c] - if r == c { 1.0 } else { 0.0 }).abs() > 1e-4)
+    })
+}
+
+fn same_pairs(x: &[MatchPair], y: &[MatchPair]) -> bool {
+    x.len() == y.len() && x.iter().zip(y).all(|(p, q)| p.a == q.a && p.b == q.b)
+}

@@ -1,0 +1,63 @@
+//! What a match returns: the pairs and what produced them.
+
+use super::features::AffinityMatrix;
+use super::prealign::Affine;
+
+/// One correspondence: node `a` of the first object, node `b` of the second.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MatchPair {
+    pub a: usize,
+    pub b: usize,
+    /// The search's cost `Z[a, b]`: the max-normalised modal distance, with positions mixed in
+    /// and raised to the power as [`MatchOptions::position_weight`](super::MatchOptions::position_weight) and
+    /// [`MatchOptions::cost_power`](super::MatchOptions::cost_power) say.
+    pub cost: f64,
+    /// Found by the excess-node step (one-to-many) rather than by the one-to-one search.
+    pub excess: bool,
+}
+
+/// Outcome of [`match_shapes`](super::match_shapes).
+#[derive(Debug, Clone)]
+pub struct MatchResult {
+    /// The search's pairs sorted by `a` (one-to-one except with [`Search::Best`](super::Search::Best)), followed by
+    /// excess pairs sorted by `b` (or by `a` when the first object is the larger).
+    pub pairs: Vec<MatchPair>,
+    /// The final affinity matrix the search used (entries in [0, 1]), rows = nodes of the first
+    /// object, original order.
+    pub affinity: AffinityMatrix,
+    /// Mutual-best (local) matches on the final affinity, under the threshold, whatever `search`.
+    pub local_pairs: Vec<(usize, usize)>,
+    /// Nodes of the first / second object in no pair.
+    pub unmatched_a: Vec<usize>,
+    pub unmatched_b: Vec<usize>,
+    /// Modes per object used in the features.
+    pub n_modes: usize,
+    /// Modal affine re-fits actually performed.
+    pub refits: usize,
+    /// Modal solves of the first object (the second is solved once).
+    pub solves: usize,
+    /// The affine map `x ↦ M x + t` from the first object's coordinates to the second's that
+    /// produced the aligned coordinates of the kept iteration (pre-alignment, then re-fits), in
+    /// the callers' units: `transform.apply(a.coords())` equals [`Self::aligned_a`] up to
+    /// rounding.
+    pub transform: Affine,
+    /// The first object's nodes in the second's frame as the search used them (row-major,
+    /// `n × dim`, the callers' node order and units).
+    pub aligned_a: Vec<f64>,
+}
+
+impl MatchResult {
+    /// Number of local (mutual-best) matches.
+    pub fn local_count(&self) -> usize {
+        self.local_pairs.len()
+    }
+    /// Number of matches from the primary search (the paper's "optimisation" column): one-to-one
+    /// except with [`Search::Best`](super::Search::Best), whose pairs are many-to-one.
+    pub fn one_to_one_count(&self) -> usize {
+        self.pairs.iter().filter(|p| !p.excess).count()
+    }
+    /// Number of matches added by the excess-node step.
+    pub fn excess_count(&self) -> usize {
+        self.pairs.iter().filter(|p| p.excess).count()
+    }
+}
