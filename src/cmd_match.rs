@@ -1,8 +1,8 @@
 //! `pedomatch match A B`: correspondences between two objects given as images or point files.
 
+use crate::cmd_run::{option_text, ReportArg};
 use crate::modal_args::{help, tri_state, ModalArgs, UnitArgs};
 use crate::output::{self, OutDir};
-use crate::cmd_run::{option_text, ReportArg};
 use crate::CliError;
 use clap::Args;
 use modal_core::shape::looks_like_closed_contour;
@@ -352,7 +352,12 @@ fn write_match_report(
         ("pitch", pitch),
         (
             "nodes",
-            format!("A {}, B {} ({}-D)", pair.a.len(), pair.b.len(), pair.a.dim()),
+            format!(
+                "A {}, B {} ({}-D)",
+                pair.a.len(),
+                pair.b.len(),
+                pair.a.dim()
+            ),
         ),
         (
             "matches",

@@ -381,7 +381,10 @@ fn match_two_point_files() {
     assert_self_contained(&html);
     let summary = read_json(&out.join("match.json"));
     for (k, v) in summary["options"].as_object().unwrap() {
-        assert!(html.contains(&format!("<th>{k}</th>")), "option {k} = {v} not shown");
+        assert!(
+            html.contains(&format!("<th>{k}</th>")),
+            "option {k} = {v} not shown"
+        );
     }
     assert!(summary["timings_s"]["matching"].as_f64().unwrap() > 0.0);
     assert!(html.contains("matching ") && html.contains(env!("CARGO_PKG_VERSION")));
@@ -391,7 +394,14 @@ fn match_two_point_files() {
         .unwrap()
         .iter()
         .chain([&data["excess"]])
-        .map(|l| l["x"].as_array().unwrap().iter().filter(|v| !v.is_null()).count())
+        .map(|l| {
+            l["x"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter(|v| !v.is_null())
+                .count()
+        })
         .sum();
     assert_eq!(drawn, 2 * rows.len(), "one segment per match");
     assert_eq!(data["a"]["closed"], true);
@@ -424,7 +434,13 @@ fn assert_self_contained(html: &str) {
     }
     markup.push_str(&rest);
     let lower = markup;
-    for attr in ["src=\"http", "href=\"http", "src='http", "href='http", "<script src"] {
+    for attr in [
+        "src=\"http",
+        "href=\"http",
+        "src='http",
+        "href='http",
+        "<script src",
+    ] {
         assert!(!lower.contains(attr), "the page loads {attr}...");
     }
     assert!(html.contains("default-src 'none'") && html.contains("plotly.js"));
@@ -443,7 +459,14 @@ fn animation_gif_plays_every_frame_at_the_recording_rate() {
     use image::AnimationDecoder;
     let out = run_synthetic(
         "animation",
-        &["--animation", "gif", "--figures", "none", "--frame-rate", "20"],
+        &[
+            "--animation",
+            "gif",
+            "--figures",
+            "none",
+            "--frame-rate",
+            "20",
+        ],
     );
     let bytes = std::fs::read(out.join("animation.gif")).unwrap();
     assert!(bytes.starts_with(b"GIF89a"));

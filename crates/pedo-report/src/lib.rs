@@ -761,7 +761,10 @@ mod tests {
         }
         assert!(expected.windows(2).all(|w| w[0] < w[1]));
         assert!(frame3["contours"]["x"].as_array().unwrap().is_empty());
-        assert!(d["overlays"]["frames"][2]["levels"].as_array().unwrap().is_empty());
+        assert!(d["overlays"]["frames"][2]["levels"]
+            .as_array()
+            .unwrap()
+            .is_empty());
     }
 
     fn ellipse(n: usize, scale: f64) -> modal_core::Shape {
@@ -798,7 +801,10 @@ mod tests {
         assert!(html.contains("a.xy &lt;1&gt;") && html.contains("pedomatch 9.9.9"));
         assert!(html.contains("matching 0.500 s") && html.contains("<th>modes</th>"));
         let d = embedded_data(&html);
-        assert_eq!((d["dim"].as_u64(), d["xy_units"].as_str()), (Some(2), Some("mm")));
+        assert_eq!(
+            (d["dim"].as_u64(), d["xy_units"].as_str()),
+            (Some(2), Some("mm"))
+        );
         // Closed outlines: A's 40 nodes and its first again, in mm.
         assert_eq!(d["a"]["x"].as_array().unwrap().len(), 41);
         assert_eq!(d["a"]["x"][0].as_f64().unwrap(), 2.0 * a.point(0)[0]);
@@ -854,7 +860,14 @@ mod tests {
             .unwrap()
             .iter()
             .chain([&d["excess3d"]])
-            .map(|m| m["z"].as_array().unwrap().iter().filter(|v| !v.is_null()).count())
+            .map(|m| {
+                m["z"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .filter(|v| !v.is_null())
+                    .count()
+            })
             .sum();
         assert_eq!(segments, 2 * r.pairs.len());
     }

@@ -232,11 +232,19 @@ impl PyMatch {
     /// The match's counts as an HTML table (shown by Jupyter).
     fn _repr_html_(&self) -> String {
         let r = &self.inner;
-        let one_to_one: Vec<f64> = r.pairs.iter().filter(|p| !p.excess).map(|p| p.cost).collect();
+        let one_to_one: Vec<f64> = r
+            .pairs
+            .iter()
+            .filter(|p| !p.excess)
+            .map(|p| p.cost)
+            .collect();
         let mean_cost = if one_to_one.is_empty() {
             "n/a".to_string()
         } else {
-            format!("{:.4}", one_to_one.iter().sum::<f64>() / one_to_one.len() as f64)
+            format!(
+                "{:.4}",
+                one_to_one.iter().sum::<f64>() / one_to_one.len() as f64
+            )
         };
         let rows = [
             ("matches", r.pairs.len().to_string()),
