@@ -50,14 +50,14 @@ def main():
 
     fig, ax = plt.subplots(figsize=(4, 8))
     ax.imshow(np.nan_to_num(rec.frames[fa]), cmap="Greys", alpha=0.4)
-    plot_match(a, b, m, ax=ax)
+    plot_match(m, a, b, ax=ax)
     ax.set_title(f"largest contours of frames {fa} and {fb}")
     ax.set_xlabel("x (sensels)")
     ax.set_ylabel("y (sensels)")
     ax.legend(handles=[
         Line2D([], [], color="tab:blue", marker=".", label=f"frame {fa}"),
-        Line2D([], [], color="tab:red", marker=".", label=f"frame {fb}"),
-        Line2D([], [], color="0.5", label="one-to-one match"),
+        Line2D([], [], color="0.15", marker=".", label=f"frame {fb}"),
+        Line2D([], [], color="tab:green", label="one-to-one match (by cost)"),
         Line2D([], [], color="tab:orange", ls="--", label="excess match"),
     ], loc="upper right", fontsize="small")
     fig.savefig(args.out, dpi=120, bbox_inches="tight")

@@ -1,5 +1,6 @@
 //! `pedomatch match A B`: correspondences between two objects given as images or point files.
 
+use crate::cmd_run::{option_text, ReportArg};
 use crate::modal_args::{help, tri_state, ModalArgs, UnitArgs};
 use crate::output::{self, OutDir};
 use crate::CliError;
@@ -8,6 +9,7 @@ use modal_core::shape::looks_like_closed_contour;
 use modal_core::{Search, Shape, Topology};
 use pedo_io::figure::{FigureAxes, MatchFigure, ObjectLabel};
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 #[derive(Args)]
 pub struct MatchArgs {
@@ -40,6 +42,10 @@ pub struct MatchArgs {
     /// Print the match result as one JSON object (with its pairs) instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// The interactive report written with --out: `html` writes a self-contained `report.html`
+    /// (opens offline).
+    #[arg(long, value_enum, default_value = "html")]
+    pub report: crate::cmd_run::ReportArg,
 }
 
 const POINT_EXTENSIONS: [&str; 4] = ["xy", "xyz", "pts", "txt"];
@@ -135,11 +141,13 @@ fn with_topology(
 }
 
 pub fn run(args: MatchArgs) -> Result<(), CliError> {
+    let started = Instant::now();
     let params = args.modal.params();
     params.validate()?;
     args.units.overrides().validate()?;
     let oa = load_object(&args.a, &args)?;
     let ob = load_object(&args.b, &args)?;
+    let read_time = started.elapsed().as_secs_f64();
     let ordered = tri_state(args.ordered, args.no_ordered);
     let (a, b, ordered) = with_topology(oa.points.clone(), ob.points.clone(), ordered)?;
     if a.dim() != b.dim() {
@@ -154,7 +162,9 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     // The same setting `pymodal.match` picks for these objects (unordered 3-D points: surfaces).
     let mut o = params.to_match_options(a.dim(), ordered)?;
     o.ordered = Some(ordered);
+    let t_match = Instant::now();
     let r = modal_core::match_shapes(&a, &b, &o)?;
+    let match_time = t_match.elapsed().as_secs_f64();
     let rows = r.pairs.iter().map(|p| {
         vec![
             p.a.to_string(),
@@ -182,6 +192,7 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         "local_matches": r.local_count(), "one_to_one_matches": r.one_to_one_count(),
         "excess_matches": r.excess_count(), "modes": r.n_modes, "refits": r.refits,
         "unmatched_a": r.unmatched_a, "unmatched_b": r.unmatched_b,
+        "timings_s": { "read": read_time, "matching": match_time },
     });
     let with_pairs = || {
         let mut s = summary.clone();
@@ -202,6 +213,9 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
             objects: (&oa, &ob),
         };
         write_match_figure(&dir, &figure, &r.pairs, args.figures.kinds())?;
+        if args.report == ReportArg::Html {
+            write_match_report(&dir, &figure, &r, &summary)?;
+        }
         dir.commit()?;
     }
     if args.json {
@@ -227,7 +241,6 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// `match.png` and/or `match.svg`: A and B labelled by their file names (and frame, when taken
 /// What the match figure shows: the two objects and where they came from.
 struct MatchFigureInput<'a> {
     args: &'a MatchArgs,
@@ -243,29 +256,127 @@ fn write_match_figure(
     pairs: &[modal_core::MatchPair],
     kinds: (bool, bool),
 ) -> Result<(), String> {
-    let label = |path: &Path, object: &Object| ObjectLabel {
-        name: path.file_name().map_or_else(
-            || path.display().to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        ),
-        frame: object.axes.is_some().then_some(input.args.frame),
-    };
     let (oa, ob) = input.objects;
-    let mut axes = oa
-        .axes
-        .clone()
-        .unwrap_or_else(|| FigureAxes::unscaled("file units"));
-    // Both objects share one pair of axes: mm only when both agree on the pitch.
-    if oa.pitch_mm != ob.pitch_mm {
-        axes.pitch_mm = None;
-    }
+    let axes = input.axes();
     let fig = MatchFigure {
         a: input.shapes.0,
         b: input.shapes.1,
         pairs,
         axes: &axes,
-        label_a: label(&input.args.a, oa),
-        label_b: label(&input.args.b, ob),
+        label_a: input.label(&input.args.a, oa),
+        label_b: input.label(&input.args.b, ob),
     };
     output::write_figure(dir, "match", kinds, || fig.to_png(), || fig.to_svg())
+}
+
+impl MatchFigureInput<'_> {
+    /// An object named by its file name, and its frame when taken from a recording.
+    fn label(&self, path: &Path, object: &Object) -> ObjectLabel {
+        ObjectLabel {
+            name: path.file_name().map_or_else(
+                || path.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            ),
+            frame: object.axes.is_some().then_some(self.args.frame),
+        }
+    }
+
+    /// The axes both objects share: mm only when both agree on the pitch.
+    fn axes(&self) -> FigureAxes {
+        let (oa, ob) = self.objects;
+        let mut axes = oa
+            .axes
+            .clone()
+            .unwrap_or_else(|| FigureAxes::unscaled("file units"));
+        if oa.pitch_mm != ob.pitch_mm {
+            axes.pitch_mm = None;
+        }
+        axes
+    }
+}
+
+/// `report.html`: the pair in physical units with its matches, and the content of `match.json`
+/// (inputs, result, options, version, timings) as its header.
+fn write_match_report(
+    dir: &OutDir,
+    input: &MatchFigureInput,
+    r: &modal_core::MatchResult,
+    summary: &serde_json::Value,
+) -> Result<(), String> {
+    let (oa, ob) = input.objects;
+    let axes = input.axes();
+    let name = |path: &Path, o: &Object| {
+        let label = input.label(path, o);
+        match (label.frame, o.time_s) {
+            (Some(f), Some(t)) => format!("{} (frame {f}, {t:.3} s)", label.name),
+            (Some(f), None) => format!("{} (frame {f})", label.name),
+            _ => label.name,
+        }
+    };
+    let (label_a, label_b) = (name(&input.args.a, oa), name(&input.args.b, ob));
+    let pair = pedo_report::MatchPairInput {
+        a: input.shapes.0,
+        b: input.shapes.1,
+        result: r,
+        pitch_mm: axes.pitch_mm,
+        data_unit: &axes.data_unit,
+        label_a: &label_a,
+        label_b: &label_b,
+    };
+    let entries = |key: &str| -> Vec<(String, serde_json::Value)> {
+        summary[key]
+            .as_object()
+            .map(|m| m.iter().map(|(k, v)| (k.clone(), v.clone())).collect())
+            .unwrap_or_default()
+    };
+    let info = pedo_report::ReportInfo {
+        input: format!("{label_a} \u{2192} {label_b}"),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        options: entries("options")
+            .iter()
+            .map(|(k, v)| (k.clone(), option_text(v)))
+            .collect(),
+        timings: entries("timings_s")
+            .iter()
+            .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(0.0)))
+            .collect(),
+        ..Default::default()
+    };
+    let pitch = match axes.pitch_mm {
+        Some(p) => format!("{} × {} mm", p[0], p[1]),
+        None => format!("unknown (axes in {})", axes.data_unit),
+    };
+    let facts = [
+        ("A", label_a.clone()),
+        ("B", label_b.clone()),
+        ("pitch", pitch),
+        (
+            "nodes",
+            format!(
+                "A {}, B {} ({}-D)",
+                pair.a.len(),
+                pair.b.len(),
+                pair.a.dim()
+            ),
+        ),
+        (
+            "matches",
+            format!(
+                "{} in all: {} local, {} one-to-one, {} excess; search {}",
+                r.pairs.len(),
+                r.local_count(),
+                r.one_to_one_count(),
+                r.excess_count(),
+                summary["search"].as_str().unwrap_or("?")
+            ),
+        ),
+        (
+            "unmatched",
+            format!("A {}, B {}", r.unmatched_a.len(), r.unmatched_b.len()),
+        ),
+        ("modes", format!("{} (refits {})", r.n_modes, r.refits)),
+    ]
+    .map(|(k, v)| (k.to_string(), v));
+    let html = pedo_report::match_report(&pair, &info, &facts).map_err(|e| e.to_string())?;
+    dir.write("report.html", html.as_bytes())
 }

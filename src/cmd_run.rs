@@ -18,6 +18,12 @@ pub enum ReportArg {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum AnimationArg {
+    Gif,
+    None,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum FigureArg {
     Png,
     Svg,
@@ -70,6 +76,10 @@ pub struct RunOptionsArgs {
     /// The interactive report: `html` writes a self-contained `report.html` (opens offline).
     #[arg(long, value_enum, default_value = "html")]
     pub report: ReportArg,
+    /// The recording played back: `gif` writes `animation.gif` (pressure frames with their
+    /// contours and matches; long runs decimated to at most 150 frames).
+    #[arg(long, value_enum, default_value = "none")]
+    pub animation: AnimationArg,
 }
 
 impl RunOptionsArgs {
@@ -200,6 +210,9 @@ fn execute(
             timings,
         )?;
     }
+    if o.animation == AnimationArg::Gif {
+        output::write_animation(&dir, &recording, &options, &result)?;
+    }
     dir.commit()?;
     if o.json {
         print!("{}", output::pretty(&summary)?);
@@ -219,7 +232,7 @@ fn execute(
 }
 
 /// An option's value as the report's header shows it (`none` for an unset one).
-fn option_text(v: &serde_json::Value) -> String {
+pub(crate) fn option_text(v: &serde_json::Value) -> String {
     match v {
         serde_json::Value::Null => "none".into(),
         serde_json::Value::String(s) => s.clone(),

@@ -116,6 +116,26 @@ pub fn write_report(
     dir.write("report.html", html.as_bytes())
 }
 
+/// Writes `animation.gif`: the frames of the run played back with their contours and matches.
+pub fn write_animation(
+    dir: &OutDir,
+    recording: &pedo_io::Recording,
+    options: &SequenceOptions,
+    r: &SequenceResult,
+) -> Result<(), String> {
+    let axes = FigureAxes::of_recording(recording);
+    let animation = pedo_io::figure::Animation {
+        recording,
+        result: r,
+        axes: &axes,
+        frames: options.frames.unwrap_or((0, recording.n_frames())),
+    };
+    let gif = animation
+        .to_gif()
+        .map_err(|e| format!("animation.gif: {e}"))?;
+    dir.write("animation.gif", &gif)
+}
+
 /// Pretty JSON with a final newline.
 pub fn pretty<T: serde::Serialize>(v: &T) -> Result<String, String> {
     serde_json::to_string_pretty(v)

@@ -78,7 +78,13 @@ fn run_and_match_flags_are_the_library_option_tables() {
     let mut expected = flags_of(&matching);
     expected.extend(flags_of(&recording));
     expected.extend(own(&[
-        "out", "figures", "report", "timings", "json", "help",
+        "out",
+        "figures",
+        "report",
+        "animation",
+        "timings",
+        "json",
+        "help",
     ]));
     assert_eq!(long_flags("demo"), expected);
     expected.extend(own(&["layout"]));
@@ -88,7 +94,7 @@ fn run_and_match_flags_are_the_library_option_tables() {
     expected.extend(flags_of(&pair));
     expected.extend(flags_of(&units));
     expected.extend(own(&[
-        "points", "frame", "out", "figures", "layout", "json", "help",
+        "points", "frame", "out", "figures", "report", "layout", "json", "help",
     ]));
     assert_eq!(long_flags("match"), expected);
 

@@ -375,6 +375,113 @@ fn match_two_point_files() {
         .count();
     assert!(correct >= n - 2, "{correct}/{n} correct");
     assert_png(&out.join("match.png"));
+
+    // The report: self-contained, its header the content of match.json, every match drawn.
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert_self_contained(&html);
+    let summary = read_json(&out.join("match.json"));
+    for (k, v) in summary["options"].as_object().unwrap() {
+        assert!(
+            html.contains(&format!("<th>{k}</th>")),
+            "option {k} = {v} not shown"
+        );
+    }
+    assert!(summary["timings_s"]["matching"].as_f64().unwrap() > 0.0);
+    assert!(html.contains("matching ") && html.contains(env!("CARGO_PKG_VERSION")));
+    let data = embedded_json(&html);
+    let drawn: usize = data["matches"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .chain([&data["excess"]])
+        .map(|l| {
+            l["x"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter(|v| !v.is_null())
+                .count()
+        })
+        .sum();
+    assert_eq!(drawn, 2 * rows.len(), "one segment per match");
+    assert_eq!(data["a"]["closed"], true);
+    assert_eq!(data["xy_units"], "file units");
+
+    let none = dir.join("none");
+    let o = pedomatch(&[
+        "match",
+        dir.join("a.csv").to_str().unwrap(),
+        dir.join("b.csv").to_str().unwrap(),
+        "--out",
+        none.to_str().unwrap(),
+        "--report",
+        "none",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(none.join("matches.csv").exists() && !none.join("report.html").exists());
+}
+
+/// A page that loads nothing from elsewhere: plotly.js inline, no http(s) source or link in the
+/// markup (script bodies, plotly.js among them, are code, not markup: left out of the search).
+fn assert_self_contained(html: &str) {
+    let mut markup = String::new();
+    let mut rest = html.to_ascii_lowercase();
+    while let Some(open) = rest.find("<script") {
+        let body = open + rest[open..].find('>').unwrap() + 1;
+        markup.push_str(&rest[..body]);
+        let close = body + rest[body..].find("</script>").unwrap();
+        rest = rest[close..].to_string();
+    }
+    markup.push_str(&rest);
+    let lower = markup;
+    for attr in [
+        "src=\"http",
+        "href=\"http",
+        "src='http",
+        "href='http",
+        "<script src",
+    ] {
+        assert!(!lower.contains(attr), "the page loads {attr}...");
+    }
+    assert!(html.contains("default-src 'none'") && html.contains("plotly.js"));
+}
+
+/// The report's embedded data.
+fn embedded_json(html: &str) -> serde_json::Value {
+    let tag = "id=\"report-data\">";
+    let start = html.find(tag).unwrap() + tag.len();
+    let end = start + html[start..].find("</script>").unwrap();
+    serde_json::from_str(&html[start..end]).unwrap()
+}
+
+#[test]
+fn animation_gif_plays_every_frame_at_the_recording_rate() {
+    use image::AnimationDecoder;
+    let out = run_synthetic(
+        "animation",
+        &[
+            "--animation",
+            "gif",
+            "--figures",
+            "none",
+            "--frame-rate",
+            "20",
+        ],
+    );
+    let bytes = std::fs::read(out.join("animation.gif")).unwrap();
+    assert!(bytes.starts_with(b"GIF89a"));
+    let decoder = image::codecs::gif::GifDecoder::new(std::io::Cursor::new(&bytes)).unwrap();
+    let frames = decoder.into_frames().collect_frames().unwrap();
+    // 10 frames, under the decimation bound: all shown, each 1/20 s.
+    assert_eq!(frames.len(), 10);
+    for f in &frames {
+        assert_eq!(f.delay().numer_denom_ms(), (50, 1));
+    }
+    // Composited frames differ: the blob moves.
+    assert_ne!(frames[0].buffer(), frames[9].buffer());
+    assert!(out.join("report.html").exists());
+    let none = run_synthetic("no-animation", &["--figures", "none"]);
+    assert!(!none.join("animation.gif").exists());
 }
 
 #[test]

@@ -5,11 +5,15 @@ Usage: test_report.py PEDOMATCH_BINARY [SCREENSHOT.png]
 
 Checks: the three plots are drawn (plotly's SVG root exists for each), no script error and no
 blocked load was logged (the page's own error log and Chromium's console), moving the slider to
-frame k shows frame k (label, plot title and the page's state), a surface run draws its 3-D view, the page makes no network request
+frame k shows frame k (label, plot title and the page's state), a surface run draws its 3-D view,
+an isocontour run shows each level of its frame, `pedomatch match` reports are drawn (with a 3-D
+view for 3-D points), the pages make no network request
 (every host resolves to nothing, and the page's Content-Security-Policy would report any load),
 and `--report none` writes no report. Standard library only; needs `chromium` on PATH.
 """
 
+import json
+import math
 import os
 import re
 import shutil
@@ -40,12 +44,31 @@ def console_errors(stderr):
             if "CONSOLE" in l and ("Uncaught" in l or "Error" in l or "Refused" in l)]
 
 
-def check_frame(report, k, failures):
-    dom, err = chromium(f"file://{report}#frame={k}", "--dump-dom")
+def check_page(page, failures, name):
+    """Opens a page; checks that its script finished, logged no error and reached no network.
+    Returns (DOM, expect) where expect(cond, what) records a failure for this page."""
+    dom, err = chromium(page, "--dump-dom")
     def expect(cond, what):
         if not cond:
-            failures.append(f"frame {k}: {what}")
+            failures.append(f"{name}: {what}")
     expect('data-ready="1"' in dom, "the page's script did not finish")
+    errors = re.search(r'id="js-errors">([^<]*)<', dom)
+    expect(errors is not None and errors.group(1).strip() == "",
+           f"the page logged errors or blocked loads: {errors.group(1) if errors else 'no log'!r}")
+    expect(not console_errors(err), f"console errors: {console_errors(err)!r}")
+    expect("ERR_NAME_NOT_RESOLVED" not in err, "the page tried to reach the network")
+    return dom, expect
+
+
+def embedded_data(report):
+    """The JSON data a report embeds."""
+    html = open(report, encoding="utf-8").read()
+    start = html.index('id="report-data">') + len('id="report-data">')
+    return json.loads(html[start:html.index("</script>", start)])
+
+
+def check_frame(report, k, failures):
+    dom, expect = check_page(f"file://{report}#frame={k}", failures, f"frame {k}")
     expect(len(re.findall(r'<svg class="main-svg"', dom)) >= 6,
            "the three plotly plots are not drawn (main-svg elements missing)")
     expect(f'data-frame="{k}"' in dom, "the page's state is not frame k")
@@ -55,12 +78,64 @@ def check_frame(report, k, failures):
     titles = re.findall(r'class="g-gtitle".*?<text[^>]*>([^<]*)<', dom)
     expect(any(re.match(rf"frame {k}\b", t) for t in titles),
            f"the player's title does not say frame {k}: {titles!r}")
-    errors = re.search(r'id="js-errors">([^<]*)<', dom)
-    expect(errors is not None and errors.group(1).strip() == "",
-           f"the page logged errors or blocked loads: {errors.group(1) if errors else 'no log'!r}")
-    expect(not console_errors(err), f"console errors: {console_errors(err)!r}")
-    expect("ERR_NAME_NOT_RESOLVED" not in err, "the page tried to reach the network")
     return dom
+
+
+def write_points(path, points):
+    with open(path, "w") as f:
+        f.write("\n".join(",".join(f"{v:.6f}" for v in p) for p in points) + "\n")
+
+
+def check_match_reports(binary, tmp, failures):
+    """`pedomatch match` of two outlines and of two 3-D point sets: each report is drawn (the
+    3-D one with its WebGL scene), offline, with every match of match.json."""
+    ring = lambda n, s, d: [(3 * s * math.cos(2 * math.pi * k / n) + d,  # noqa: E731
+                             2 * s * math.sin(2 * math.pi * k / n)) for k in range(n)]
+    write_points(os.path.join(tmp, "a.xy"), ring(40, 1.0, 0.0))
+    write_points(os.path.join(tmp, "b.xy"), ring(32, 1.1, 0.4))
+    bump = [(x, y, math.exp(-(x * x + y * y) / 8)) for x in range(-4, 5) for y in range(-3, 4)]
+    write_points(os.path.join(tmp, "a.xyz"), bump)
+    write_points(os.path.join(tmp, "b.xyz"), [(x + 0.3, y, z) for x, y, z in bump])
+    for name, ext, svgs in (("outlines", "xy", 2), ("points 3-D", "xyz", 2)):
+        out = os.path.join(tmp, "match-" + ext)
+        subprocess.run([binary, "match", os.path.join(tmp, "a." + ext),
+                        os.path.join(tmp, "b." + ext), "--out", out, "--figures", "none"],
+                       check=True, stdout=subprocess.DEVNULL)
+        report = os.path.join(out, "report.html")
+        dom, expect = check_page(f"file://{report}", failures, f"match report ({name})")
+        expect(len(re.findall(r'<svg class="main-svg"', dom)) >= svgs, "the pair is not drawn")
+        legend = re.findall(r'class="legendtext"[^>]*>([^<]*)<', dom)
+        summary = json.load(open(os.path.join(out, "match.json")))
+        # plotly leaves empty traces out of the legend: excess only when there are some.
+        expect(any(t.startswith("a.") for t in legend)
+               and ("excess" in legend) == (summary["excess_matches"] > 0),
+               f"the legend lacks the objects or the excess matches: {legend!r}")
+        data = embedded_data(report)
+        drawn = sum(sum(v is not None for v in m["x"]) for m in data["matches"] + [data["excess"]])
+        expect(drawn == 2 * summary["matches"], f"{drawn // 2} of {summary['matches']} matches drawn")
+        if ext == "xyz":
+            expect('class="gl-container"' in dom and '<div id="surface-view">' in dom,
+                   "the 3-D view is not shown")
+
+
+def check_isocontours(binary, tmp, failures):
+    """An isocontour run opens on its frame and draws each level in the legend with its kPa."""
+    out = os.path.join(tmp, "iso")
+    subprocess.run([binary, "demo", "--out", out, "--figures", "none", "--model", "isocontour",
+                    "--iso-levels", "6"], check=True, stdout=subprocess.DEVNULL)
+    report = os.path.join(out, "report.html")
+    data = embedded_data(report)
+    frame = data["first_object_frame"]
+    levels = data["overlays"]["frames"][data["shown"].index(frame)]["levels"]
+    dom = check_frame(report, frame, failures)
+    legend = re.findall(r'class="legendtext"[^>]*>([^<]*)<', dom)
+    named = [t for t in legend if re.fullmatch(r"[0-9.]+ kPa", t)]
+    if len(levels) < 3 or len(named) != len(levels):
+        failures.append(f"isocontours: {len(levels)} levels, legend {legend!r}")
+    # Opened without a frame, the page shows the isocontours' frame.
+    dom, _ = check_page(f"file://{report}", failures, "isocontours")
+    if f'data-frame="{frame}"' not in dom:
+        failures.append(f"isocontours: the page does not open on frame {frame}")
 
 
 def main():
@@ -99,6 +174,8 @@ def main():
             failures.append("surface run: the 3-D view is not shown")
         if not re.search(r'class="legendtext"[^>]*>frame 73<', dom):
             failures.append("surface run: the 3-D view does not show the pair 72 -> 73")
+        check_isocontours(binary, tmp, failures)
+        check_match_reports(binary, tmp, failures)
         none = os.path.join(tmp, "none")
         subprocess.run([binary, "demo", "--out", none, "--figures", "none", "--report", "none"],
                        check=True, stdout=subprocess.DEVNULL)
@@ -107,8 +184,9 @@ def main():
     for f in failures:
         print("FAIL:", f)
     print(f"report.html of the demo is {size / 2**20:.1f} MB")
-    # Scenarios: size, frames 0 / 75 / 204, the clamped frame, the surface view, --report none.
-    scenarios = 7
+    # Scenarios: size, frames 0 / 75 / 204, the clamped frame, the surface view, isocontours,
+    # two match reports, --report none.
+    scenarios = 10
     failed = min(len(failures), scenarios)
     print(f"browser: {scenarios - failed} passed, {failed} failed")
     if failures:

@@ -12,7 +12,8 @@
 //! system font is ever looked up, so a figure looks the same on every machine, fonts or none.
 //!
 //! The caller describes the recording once in a [`FigureAxes`] and labels the objects with
-//! [`ObjectLabel`]; [`MatchFigure`] and [`TracksFigure`] then render with `to_png` / `to_svg`.
+//! [`ObjectLabel`]; [`MatchFigure`] and [`TracksFigure`] then render with `to_png` / `to_svg`,
+//! and [`Animation`] plays a run's frames back as an animated GIF.
 
 use crate::error::{IoError, Result};
 use crate::sequence::{SequenceResult, Track};
@@ -25,7 +26,10 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::FontStyle;
 use std::ops::Range;
 
+mod animation;
 mod text;
+
+pub use animation::{Animation, DEFAULT_GIF_DELAY_CS, MAX_ANIMATION_FRAMES, MIN_GIF_DELAY_CS};
 
 /// The bundled font (DejaVu Sans; licence in `fonts/LICENSE-DejaVu.txt`).
 static FONT_BYTES: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");
@@ -904,6 +908,21 @@ fn register_bundled_font() -> Result<()> {
 
 fn render_png(layout: &Layout) -> Result<Vec<u8>> {
     use image::ImageEncoder;
+    let (w, h, pixels) = render_rgb(layout)?;
+    let mut out = Vec::new();
+    // Fast compression: figures are written by the hundred and stay small anyway.
+    image::codecs::png::PngEncoder::new_with_quality(
+        &mut out,
+        image::codecs::png::CompressionType::Fast,
+        image::codecs::png::FilterType::Adaptive,
+    )
+    .write_image(&pixels, w, h, image::ExtendedColorType::Rgb8)
+    .map_err(figure_error)?;
+    Ok(out)
+}
+
+/// The figure as 8-bit RGB pixels, row by row: (width, height, pixels).
+fn render_rgb(layout: &Layout) -> Result<(u32, u32, Vec<u8>)> {
     register_bundled_font()?;
     let (w, h) = layout.size();
     let mut pixels = vec![255u8; w as usize * h as usize * 3];
@@ -918,16 +937,7 @@ fn render_png(layout: &Layout) -> Result<Vec<u8>> {
         layout.draw(&root)?;
         root.present().map_err(figure_error)?;
     }
-    let mut out = Vec::new();
-    // Fast compression: figures are written by the hundred and stay small anyway.
-    image::codecs::png::PngEncoder::new_with_quality(
-        &mut out,
-        image::codecs::png::CompressionType::Fast,
-        image::codecs::png::FilterType::Adaptive,
-    )
-    .write_image(&pixels, w, h, image::ExtendedColorType::Rgb8)
-    .map_err(figure_error)?;
-    Ok(out)
+    Ok((w, h, pixels))
 }
 
 fn render_svg(layout: &Layout) -> Result<String> {

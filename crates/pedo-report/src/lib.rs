@@ -1,4 +1,5 @@
-//! One self-contained interactive HTML report of a whole-recording run.
+//! Self-contained interactive HTML reports: of a whole-recording run ([`run_report`]) and of
+//! one matched pair ([`match_report`]).
 //!
 //! The page embeds plotly.js (from the `plotly` crate's `plotly_embed_js` resources) and the
 //! run's data as JSON, so it opens offline from the output folder and makes no network request
@@ -6,6 +7,9 @@
 //! timings, skipped frames and pairs), a player (pressure image, contours, matches into the next
 //! frame coloured by cost, excess matches, unmatched nodes, short track trails) driven by a frame
 //! slider and a play button, time series along the recording and the centre-of-pressure path.
+//! For isocontours the player draws each level of the frame, labelled with its pressure. The
+//! match page shows both objects, the matches by cost class, excess matches and unmatched nodes,
+//! and a 3-D view for 3-D points.
 //!
 //! Size is bounded: when `frames × rows × cols` exceeds [`MAX_PLAYER_VALUES`], the player keeps
 //! every `s`-th frame only (the report says so); the time series keep every frame.
@@ -63,12 +67,157 @@ pub fn run_report(
     }
     let data = report_data(recording, result, info);
     let data = serde_json::to_string(&data)?;
-    Ok(TEMPLATE
-        .replace("{{TITLE}}", &html_escape(&info.input))
-        .replace("{{HEADER}}", &header_html(recording, result, info))
+    Ok(page(
+        TEMPLATE,
+        &info.input,
+        &header_html(recording, result, info),
+        &data,
+    ))
+}
+
+/// A template filled in: title, header, the shared head, plotly.js and the data.
+fn page(template: &str, title: &str, header: &str, data: &str) -> String {
+    template
+        .replace("{{TITLE}}", &html_escape(title))
+        .replace("{{HEADER}}", header)
+        .replace("{{HEAD}}", HEAD)
         .replace("{{PLOTLY}}", &plotly_js())
         // `</` cannot end the script element early: JSON never needs a raw `</`.
-        .replace("{{DATA}}", &data.replace("</", "<\\/")))
+        .replace("{{DATA}}", &data.replace("</", "<\\/"))
+}
+
+/// One matched pair of objects, for [`match_report`].
+#[derive(Debug, Clone, Copy)]
+pub struct MatchPairInput<'a> {
+    pub a: &'a modal_core::Shape,
+    pub b: &'a modal_core::Shape,
+    pub result: &'a modal_core::MatchResult,
+    /// Millimetres per coordinate unit along x and y; `None`: the axes are in `data_unit`.
+    pub pitch_mm: Option<[f64; 2]>,
+    /// The coordinates' own unit when the pitch is unknown (`"sensels"`, `"file units"`, ...).
+    pub data_unit: &'a str,
+    /// How the objects are named in the legend (e.g. their file names and frames).
+    pub label_a: &'a str,
+    pub label_b: &'a str,
+}
+
+/// The report of one match (`pedomatch match`) as a complete HTML page: a header with `facts`
+/// (inputs, result, ... as (name, value) rows), the options and timings of `info`, then both
+/// objects in physical units with their matches coloured by cost, excess matches and unmatched
+/// nodes, and a rotatable 3-D view for 3-D objects.
+pub fn match_report(
+    pair: &MatchPairInput,
+    info: &ReportInfo,
+    facts: &[(String, String)],
+) -> Result<String, ReportError> {
+    let data = serde_json::to_string(&match_data(pair))?;
+    let mut rows = facts.to_vec();
+    rows.push(("version".into(), format!("pedomatch {}", info.version)));
+    if !info.timings.is_empty() {
+        rows.push(("timings".into(), timings_text(&info.timings)));
+    }
+    let header = facts_html(&rows) + &options_html(&info.options);
+    Ok(page(MATCH_TEMPLATE, &info.input, &header, &data))
+}
+
+/// What the match page draws, as JSON.
+fn match_data(pair: &MatchPairInput) -> Value {
+    let ([dx, dy], xy_units) = match pair.pitch_mm {
+        Some(p) if p.iter().all(|v| v.is_finite() && *v > 0.0) => (p, "mm"),
+        _ => ([1.0, 1.0], pair.data_unit),
+    };
+    let point = |s: &modal_core::Shape, i: usize| -> [f64; 3] {
+        let p = s.point(i);
+        let z = if s.dim() == 3 { p[2] } else { 0.0 };
+        [round6(p[0] * dx), round6(p[1] * dy), round6(z)]
+    };
+    let object = |s: &modal_core::Shape| {
+        let closed = matches!(s.topology(), modal_core::Topology::ClosedContour);
+        let mut pts: Vec<[f64; 3]> = (0..s.len()).map(|i| point(s, i)).collect();
+        if closed {
+            pts.extend(pts.first().copied());
+        }
+        json!({
+            "closed": closed,
+            "x": pts.iter().map(|p| p[0]).collect::<Vec<_>>(),
+            "y": pts.iter().map(|p| p[1]).collect::<Vec<_>>(),
+            "z": pts.iter().map(|p| p[2]).collect::<Vec<_>>(),
+        })
+    };
+    let r = pair.result;
+    let bounds = cost_bounds(r.pairs.iter().map(|m| m.cost).collect());
+    let class = |c: f64| bounds.iter().take_while(|&&b| c > b).count();
+    let mut by_cost: Vec<Segments> = (0..COST_CLASSES).map(|_| Segments::default()).collect();
+    let mut excess = Segments::default();
+    for m in &r.pairs {
+        let seg = [point(pair.a, m.a), point(pair.b, m.b)];
+        if m.excess {
+            excess.push(seg);
+        } else {
+            by_cost[class(m.cost)].push(seg);
+        }
+    }
+    let nodes = |s: &modal_core::Shape, which: &[usize]| {
+        let mut l = Lines::default();
+        for &i in which {
+            let p = point(s, i);
+            l.piece([[p[0], p[1]]]);
+        }
+        l
+    };
+    json!({
+        "dim": pair.a.dim(), "xy_units": xy_units,
+        "label_a": pair.label_a, "label_b": pair.label_b,
+        "a": object(pair.a), "b": object(pair.b),
+        "cost_bounds": bounds,
+        "matches": by_cost.iter().map(|s| &s.xy).collect::<Vec<_>>(),
+        "matches3d": by_cost.iter().map(|s| &s.xyz).collect::<Vec<_>>(),
+        "excess": excess.xy, "excess3d": excess.xyz,
+        "unmatched_a": nodes(pair.a, &r.unmatched_a),
+        "unmatched_b": nodes(pair.b, &r.unmatched_b),
+    })
+}
+
+/// Segments for plotly: in the x-y plane and in 3-D, `null` between segments.
+struct Segments {
+    xy: Lines,
+    xyz: Value,
+}
+
+impl Default for Segments {
+    fn default() -> Self {
+        Self {
+            xy: Lines::default(),
+            xyz: json!({ "x": [], "y": [], "z": [] }),
+        }
+    }
+}
+
+impl Segments {
+    fn push(&mut self, [p, q]: [[f64; 3]; 2]) {
+        self.xy.piece([[p[0], p[1]], [q[0], q[1]]]);
+        for (axis, k) in ["x", "y", "z"].into_iter().zip(0..) {
+            let v = self.xyz[axis].as_array_mut().expect("built above");
+            if !v.is_empty() {
+                v.push(Value::Null);
+            }
+            v.extend([json!(p[k]), json!(q[k])]);
+        }
+    }
+}
+
+/// The `COST_CLASSES - 1` bounds between cost classes: quantiles of the finite costs.
+fn cost_bounds(mut costs: Vec<f64>) -> Vec<f64> {
+    costs.retain(|c| c.is_finite());
+    costs.sort_by(f64::total_cmp);
+    (1..COST_CLASSES)
+        .map(|i| {
+            costs
+                .get(i * costs.len() / COST_CLASSES)
+                .copied()
+                .unwrap_or(0.0)
+        })
+        .collect()
 }
 
 /// plotly.js alone: the crate's offline sources also carry MathJax, which the report does not
@@ -141,32 +290,9 @@ fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo
         ),
     ];
     if !info.timings.is_empty() {
-        let t: Vec<String> = info
-            .timings
-            .iter()
-            .map(|(s, v)| format!("{s} {v:.3} s"))
-            .collect();
-        rows.push(("timings".into(), t.join(", ")));
+        rows.push(("timings".into(), timings_text(&info.timings)));
     }
-    let table = |rows: &[(String, String)]| -> String {
-        rows.iter()
-            .map(|(k, v)| {
-                format!(
-                    "<tr><th>{}</th><td>{}</td></tr>",
-                    html_escape(k),
-                    html_escape(v)
-                )
-            })
-            .collect()
-    };
-    let mut out = format!("<table class=\"facts\">{}</table>", table(&rows));
-    if !info.options.is_empty() {
-        out += &format!(
-            "<details><summary>options used ({})</summary><table class=\"facts\">{}</table></details>",
-            info.options.len(),
-            table(&info.options)
-        );
-    }
+    let mut out = facts_html(&rows) + &options_html(&info.options);
     let skipped: Vec<String> = result
         .skipped_frames
         .iter()
@@ -188,6 +314,44 @@ fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo
         );
     }
     out
+}
+
+/// `"read 0.012 s, matching 0.300 s"`.
+fn timings_text(timings: &[(String, f64)]) -> String {
+    let t: Vec<String> = timings
+        .iter()
+        .map(|(s, v)| format!("{s} {v:.3} s"))
+        .collect();
+    t.join(", ")
+}
+
+/// (name, value) rows as an HTML table, escaped.
+fn table_rows(rows: &[(String, String)]) -> String {
+    rows.iter()
+        .map(|(k, v)| {
+            format!(
+                "<tr><th>{}</th><td>{}</td></tr>",
+                html_escape(k),
+                html_escape(v)
+            )
+        })
+        .collect()
+}
+
+fn facts_html(rows: &[(String, String)]) -> String {
+    format!("<table class=\"facts\">{}</table>", table_rows(rows))
+}
+
+/// Every option used, folded away under a summary line.
+fn options_html(options: &[(String, String)]) -> String {
+    if options.is_empty() {
+        return String::new();
+    }
+    format!(
+        "<details><summary>options used ({})</summary><table class=\"facts\">{}</table></details>",
+        options.len(),
+        table_rows(options)
+    )
 }
 
 /// Everything the page's script draws, as JSON.
@@ -233,7 +397,7 @@ fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo
 
     let mm = |p: &[f64]| -> [f64; 2] { [round3(p[0] * pitch[0]), round3(p[1] * pitch[1])] };
     // Surfaces' heights are pressure rescaled to the footprint's extent (in sensels): same units as x.
-    let overlays = overlays(result, &shown, &mm, pitch[0]);
+    let overlays = overlays(result, &shown, &mm, pitch[0], kpa);
 
     let measures = recording.measures(info.contact_threshold);
     let force_known = recording.force_factor().is_some();
@@ -261,6 +425,9 @@ fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo
         "overlays": overlays, "series": series, "pairs": pairs,
         "max_player_values": MAX_PLAYER_VALUES,
         "surface": result.objects.first().is_some_and(|o| o.shape.dim() == 3),
+        "isocontour": result.objects.iter().any(|o| o.level.is_some()),
+        // The player opens on the first frame holding objects (an isocontour run has one).
+        "first_object_frame": result.objects.first().map(|o| o.frame),
     })
 }
 
@@ -292,29 +459,23 @@ impl Lines {
     }
 }
 
-/// Per shown frame: contours, matches into the next frame by cost class, excess matches,
-/// unmatched nodes, and track trails; plus the cost-class bounds.
+/// Per shown frame: contours (isocontours: one outline per level, with the level in the
+/// report's pressure units, `level_scale` per recording unit), matches into the next frame by
+/// cost class, excess matches, unmatched nodes, and track trails; plus the cost-class bounds.
 fn overlays(
     result: &SequenceResult,
     shown: &[usize],
     mm: &dyn Fn(&[f64]) -> [f64; 2],
     z_scale: f64,
+    level_scale: f64,
 ) -> Value {
-    let mut costs: Vec<f64> = result
-        .pairs
-        .iter()
-        .flat_map(|p| p.result.pairs.iter().map(|m| m.cost))
-        .filter(|c| c.is_finite())
-        .collect();
-    costs.sort_by(f64::total_cmp);
-    let bounds: Vec<f64> = (1..COST_CLASSES)
-        .map(|i| {
-            costs
-                .get(i * costs.len() / COST_CLASSES)
-                .copied()
-                .unwrap_or(0.0)
-        })
-        .collect();
+    let bounds = cost_bounds(
+        result
+            .pairs
+            .iter()
+            .flat_map(|p| p.result.pairs.iter().map(|m| m.cost))
+            .collect(),
+    );
     let class = |c: f64| bounds.iter().take_while(|&&b| c > b).count();
 
     let mut objects_by_frame: HashMap<usize, Vec<usize>> = HashMap::new();
@@ -342,11 +503,18 @@ fn overlays(
         .iter()
         .map(|&f| {
             let mut contours = Lines::default();
+            let mut levels = Vec::new();
             for &o in objects_by_frame.get(&f).into_iter().flatten() {
                 let shape = &result.objects[o].shape;
                 let mut pts: Vec<[f64; 2]> = (0..shape.len()).map(|i| mm(shape.point(i))).collect();
                 if let Some(&first) = pts.first() {
-                    if shape.dim() == 2 {
+                    if let Some(level) = result.objects[o].level {
+                        pts.push(first);
+                        let mut outline = Lines::default();
+                        outline.piece(pts);
+                        let level = round6(level * level_scale);
+                        levels.push(json!({ "level": level, "x": outline.x, "y": outline.y }));
+                    } else if shape.dim() == 2 {
                         pts.push(first);
                         contours.piece(pts);
                     } else {
@@ -392,7 +560,7 @@ fn overlays(
                 .and_then(|ps| ps.first())
                 .map(|&pi| surface_pair(result, &result.pairs[pi], mm, z_scale));
             json!({
-                "contours": contours, "matches": by_cost, "excess": excess,
+                "contours": contours, "levels": levels, "matches": by_cost, "excess": excess,
                 "unmatched": unmatched, "trails": trails, "surfaces": surfaces,
             })
         })
@@ -452,6 +620,9 @@ fn surface_pair(
 }
 
 const TEMPLATE: &str = include_str!("report.html");
+const MATCH_TEMPLATE: &str = include_str!("match.html");
+/// The security policy, style and error log both pages share.
+const HEAD: &str = include_str!("head.html");
 
 #[cfg(test)]
 mod tests {
@@ -557,6 +728,148 @@ mod tests {
         // Time series: the contact area of frame 0 in mm² (20 mm² per sensel).
         let sensels = rec.measures(0.0)[0].contact_sensors as f64;
         assert_eq!(d["series"]["area"][0].as_f64().unwrap(), sensels * 20.0);
+    }
+
+    #[test]
+    fn isocontour_runs_show_each_level_of_the_frame_with_its_pressure() {
+        let rec = walking_disc(6);
+        let options = SequenceOptions {
+            model: pedo_io::sequence::ObjectModel::Isocontour,
+            iso_frame: Some(3),
+            iso_count: 4,
+            ..Default::default()
+        };
+        let result = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+        let expected: Vec<f64> = result.objects.iter().filter_map(|o| o.level).collect();
+        assert!(expected.len() >= 3, "{expected:?}");
+        let d = embedded_data(&run_report(&rec, &result, &info()).unwrap());
+        assert_eq!(d["isocontour"], true);
+        assert_eq!(d["first_object_frame"], 3);
+        let frame3 = &d["overlays"]["frames"][3];
+        let levels = frame3["levels"].as_array().unwrap();
+        // One closed outline per level, in increasing pressure, none drawn as a plain contour.
+        assert_eq!(levels.len(), expected.len());
+        for (l, want) in levels.iter().zip(&expected) {
+            assert!((l["level"].as_f64().unwrap() - want).abs() < 1e-6);
+            let (x, y) = (l["x"].as_array().unwrap(), l["y"].as_array().unwrap());
+            assert!(x.len() > 8 && x.first() == x.last() && y.first() == y.last());
+            // Inside the disc (radius √20 sensels around column 9, row 8; 5 × 4 mm sensels).
+            for (x, y) in x.iter().zip(y) {
+                let (c, r) = (x.as_f64().unwrap() / 5.0, y.as_f64().unwrap() / 4.0);
+                assert!((c - 9.0).hypot(r - 8.0) <= 20f64.sqrt() + 0.5, "{c} {r}");
+            }
+        }
+        assert!(expected.windows(2).all(|w| w[0] < w[1]));
+        assert!(frame3["contours"]["x"].as_array().unwrap().is_empty());
+        assert!(d["overlays"]["frames"][2]["levels"]
+            .as_array()
+            .unwrap()
+            .is_empty());
+    }
+
+    fn ellipse(n: usize, scale: f64) -> modal_core::Shape {
+        let pts: Vec<[f64; 2]> = (0..n)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / n as f64;
+                [10.0 + 3.0 * scale * t.cos(), 8.0 + 2.0 * scale * t.sin()]
+            })
+            .collect();
+        modal_core::Shape::from_points_2d(&pts, modal_core::Topology::ClosedContour).unwrap()
+    }
+
+    #[test]
+    fn match_report_draws_every_match_in_mm_with_its_facts() {
+        let (a, b) = (ellipse(40, 1.0), ellipse(32, 1.1));
+        let opts = modal_core::MatchOptions {
+            excess: false,
+            ..Default::default()
+        };
+        let r = modal_core::match_shapes(&a, &b, &opts).unwrap();
+        assert_eq!((r.pairs.len(), r.unmatched_a.len()), (32, 8));
+        let pair = MatchPairInput {
+            a: &a,
+            b: &b,
+            result: &r,
+            pitch_mm: Some([2.0, 3.0]),
+            data_unit: "sensels",
+            label_a: "a.xy",
+            label_b: "b.xy",
+        };
+        let facts = [("A".to_string(), "a.xy <1>".to_string())];
+        let html = match_report(&pair, &info(), &facts).unwrap();
+        assert!(html.contains("default-src 'none'") && !html.contains("<script src"));
+        assert!(html.contains("a.xy &lt;1&gt;") && html.contains("pedomatch 9.9.9"));
+        assert!(html.contains("matching 0.500 s") && html.contains("<th>modes</th>"));
+        let d = embedded_data(&html);
+        assert_eq!(
+            (d["dim"].as_u64(), d["xy_units"].as_str()),
+            (Some(2), Some("mm"))
+        );
+        // Closed outlines: A's 40 nodes and its first again, in mm.
+        assert_eq!(d["a"]["x"].as_array().unwrap().len(), 41);
+        assert_eq!(d["a"]["x"][0].as_f64().unwrap(), 2.0 * a.point(0)[0]);
+        assert_eq!(d["a"]["y"][0].as_f64().unwrap(), 3.0 * a.point(0)[1]);
+        // Every match once, in the cost class its cost falls in; unmatched nodes listed.
+        let bounds: Vec<f64> = serde_json::from_value(d["cost_bounds"].clone()).unwrap();
+        let mut per_class = vec![0; COST_CLASSES];
+        for m in &r.pairs {
+            per_class[bounds.iter().take_while(|&&b| m.cost > b).count()] += 1;
+        }
+        for (k, n) in per_class.iter().enumerate() {
+            let drawn = d["matches"][k]["x"].as_array().unwrap();
+            assert_eq!(drawn.iter().filter(|v| !v.is_null()).count(), 2 * n);
+        }
+        let unmatched = d["unmatched_a"]["x"].as_array().unwrap();
+        assert_eq!(unmatched.iter().filter(|v| !v.is_null()).count(), 8);
+        assert!(d["excess"]["x"].as_array().unwrap().is_empty());
+    }
+
+    #[test]
+    fn match_report_of_3d_points_carries_the_third_coordinate() {
+        let coords: Vec<f64> = (0..30)
+            .flat_map(|k| {
+                let (x, y) = ((k % 6) as f64, (k / 6) as f64);
+                [x, y, (-(x - 2.5).powi(2) - (y - 2.0).powi(2)).exp()]
+            })
+            .collect();
+        let a = modal_core::Shape::new(3, coords.clone(), modal_core::Topology::None).unwrap();
+        let shifted: Vec<f64> = coords
+            .chunks(3)
+            .flat_map(|p| [p[0] + 0.2, p[1], p[2]])
+            .collect();
+        let b = modal_core::Shape::new(3, shifted, modal_core::Topology::None).unwrap();
+        let r = modal_core::match_shapes(&a, &b, &Default::default()).unwrap();
+        let pair = MatchPairInput {
+            a: &a,
+            b: &b,
+            result: &r,
+            pitch_mm: None,
+            data_unit: "file units",
+            label_a: "a",
+            label_b: "b",
+        };
+        let d = embedded_data(&match_report(&pair, &info(), &[]).unwrap());
+        assert_eq!(d["dim"], 3);
+        assert_eq!(d["xy_units"], "file units");
+        assert_eq!(d["a"]["closed"], false);
+        let z: Vec<f64> = serde_json::from_value(d["b"]["z"].clone()).unwrap();
+        assert_eq!(z.len(), 30);
+        assert!((z[14] - b.point(14)[2]).abs() < 1e-6);
+        let segments: usize = d["matches3d"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .chain([&d["excess3d"]])
+            .map(|m| {
+                m["z"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .filter(|v| !v.is_null())
+                    .count()
+            })
+            .sum();
+        assert_eq!(segments, 2 * r.pairs.len());
     }
 
     #[test]

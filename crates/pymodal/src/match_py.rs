@@ -229,6 +229,40 @@ impl PyMatch {
     fn __len__(&self) -> usize {
         self.inner.pairs.len()
     }
+    /// The match's counts as an HTML table (shown by Jupyter).
+    fn _repr_html_(&self) -> String {
+        let r = &self.inner;
+        let one_to_one: Vec<f64> = r
+            .pairs
+            .iter()
+            .filter(|p| !p.excess)
+            .map(|p| p.cost)
+            .collect();
+        let mean_cost = if one_to_one.is_empty() {
+            "n/a".to_string()
+        } else {
+            format!(
+                "{:.4}",
+                one_to_one.iter().sum::<f64>() / one_to_one.len() as f64
+            )
+        };
+        let rows = [
+            ("matches", r.pairs.len().to_string()),
+            ("local (mutual best)", r.local_count().to_string()),
+            ("one-to-one", r.one_to_one_count().to_string()),
+            ("excess", r.excess_count().to_string()),
+            ("unmatched in a", r.unmatched_a.len().to_string()),
+            ("unmatched in b", r.unmatched_b.len().to_string()),
+            ("mean one-to-one cost", mean_cost),
+            ("modes", r.n_modes.to_string()),
+            ("refits", r.refits.to_string()),
+        ];
+        let body: String = rows
+            .iter()
+            .map(|(k, v)| format!("<tr><th style='text-align:left'>{k}</th><td>{v}</td></tr>"))
+            .collect();
+        format!("<table class='pymodal-match'><caption>pymodal.Match</caption>{body}</table>")
+    }
     fn __repr__(&self) -> String {
         format!(
             "Match(pairs={}, local={}, optimisation={}, excess={}, n_modes={}, refits={})",

@@ -3,6 +3,62 @@
 Python bindings of the pedomatch Rust workspace: numpy arrays in, numpy arrays out.
 """
 
+import functools as _functools
+import html as _html
+
 from ._pymodal import *  # noqa: F401,F403
 from ._pymodal import __version__  # noqa: F401
 from ._pymodal import _options  # type: ignore[attr-defined]  # noqa: F401
+from ._pymodal import run as _run
+from .plot import plot_frame, plot_match, plot_tracks  # noqa: F401  (matplotlib loads lazily)
+
+
+class RunResult(dict):
+    """What :func:`run` returns: a dict (``table``, ``matches``, ``objects``, ``tracks``,
+    ``frames``, ``summary``, ``timings``) that Jupyter shows as a table of its summary."""
+
+    def _repr_html_(self):
+        """The run's summary as an HTML table: input, format, frames, pairs, mean match
+        percentages and cost, what was skipped, and the time per stage."""
+        s = self.get("summary", {})
+        rec = s.get("recording", {})
+        inp = s.get("input", {})
+        skipped = s.get("skipped", {})
+        timings = s.get("timings_s", {})
+
+        def num(v, fmt):
+            return "n/a" if v is None else format(v, fmt)
+
+        rows = [
+            ("input", inp.get("file")),
+            ("format", inp.get("format") or "unknown"),
+            ("frames", f"{rec.get('frames')} of {rec.get('rows')} × {rec.get('cols')} sensels"),
+            ("pitch", "unknown" if rec.get("pitch_mm") is None
+             else " × ".join(str(p) for p in rec["pitch_mm"]) + " mm"),
+            ("frame rate", "unknown" if rec.get("frame_rate_hz") is None
+             else f"{rec['frame_rate_hz']:g} Hz"),
+            ("objects", s.get("objects")),
+            ("pairs", s.get("pairs")),
+            ("tracks", s.get("tracks")),
+            ("mean local matches", num(s.get("mean_local_percent"), ".1f") + " %"),
+            ("mean optimisation matches", num(s.get("mean_optimisation_percent"), ".1f") + " %"),
+            ("mean cost", num(s.get("mean_cost"), ".4f")),
+            ("skipped", f"{len(skipped.get('frames', []))} frames, "
+                        f"{len(skipped.get('pairs', []))} pairs"),
+            ("timings", ", ".join(f"{k} {v:.3f} s" for k, v in timings.items())),
+            ("version", f"pedomatch {s.get('pedomatch_version', __version__)}"),
+        ]
+        body = "".join(
+            f"<tr><th style='text-align:left'>{_html.escape(str(k))}</th>"
+            f"<td style='text-align:left'>{_html.escape(str(v))}</td></tr>"
+            for k, v in rows
+        )
+        return f"<table class='pymodal-run'><caption>pymodal.run</caption>{body}</table>"
+
+
+@_functools.wraps(_run)
+def run(recording, **options):
+    return RunResult(_run(recording, **options))
+
+
+run.__module__ = __name__

@@ -1,0 +1,359 @@
+//! The recording played back as an animated GIF: each frame's pressure image with its contours
+//! and its matches into the next frame, drawn like the static figures (same axes, colour bar,
+//! legend and font).
+
+use super::*;
+use crate::Recording;
+use image::codecs::gif::{GifEncoder, Repeat};
+use image::{Delay, Frame, RgbaImage};
+
+/// Most frames an animation holds: a longer run keeps every `s`-th frame, `s` the smallest step
+/// that fits, and each shown frame lasts `s` frame intervals, so the playback keeps real time.
+/// About 2 s of a typical 50–100 Hz plate recording per 100 frames, and a few MB at most.
+pub const MAX_ANIMATION_FRAMES: usize = 150;
+
+/// GIF delays are whole hundredths of a second and browsers show delays under 2 cs as 10 cs:
+/// the shortest delay written (a faster recording plays slightly slower than real time).
+pub const MIN_GIF_DELAY_CS: u32 = 2;
+
+/// Delay of each shown frame when the recording has no frame rate: 10 frames per second.
+pub const DEFAULT_GIF_DELAY_CS: u32 = 10;
+
+/// An animation of frames `frames.0..frames.1` of a run: per frame the pressure image (grey,
+/// on the recording's peak scale), the outlines (or nodes) of its objects, and the matches of
+/// each pair leaving the frame as segments onto the next frame's objects, excess matches dashed.
+#[derive(Debug, Clone)]
+pub struct Animation<'a> {
+    pub recording: &'a Recording,
+    pub result: &'a SequenceResult,
+    pub axes: &'a FigureAxes,
+    /// Frames `start..end` (0-based, end excluded) to play.
+    pub frames: (usize, usize),
+}
+
+impl Animation<'_> {
+    /// Every how many frames one is shown (1 up to [`MAX_ANIMATION_FRAMES`] frames).
+    pub fn frame_step(&self) -> usize {
+        let n = self.frames.1.saturating_sub(self.frames.0);
+        n.div_ceil(MAX_ANIMATION_FRAMES).max(1)
+    }
+
+    /// The recording frames the animation shows, in order.
+    pub fn shown_frames(&self) -> Vec<usize> {
+        (self.frames.0..self.frames.1)
+            .step_by(self.frame_step())
+            .collect()
+    }
+
+    /// The delay of each shown frame in hundredths of a second: the frame step times the
+    /// recording's frame interval, at least [`MIN_GIF_DELAY_CS`];
+    /// [`DEFAULT_GIF_DELAY_CS`] times the step without a frame rate.
+    pub fn delay_cs(&self) -> u32 {
+        let step = self.frame_step() as f64;
+        let cs = match self.axes.dt_s.filter(|dt| dt.is_finite() && *dt > 0.0) {
+            Some(dt) => (step * dt * 100.0).round(),
+            None => step * f64::from(DEFAULT_GIF_DELAY_CS),
+        };
+        (cs.min(f64::from(u16::MAX)) as u32).max(MIN_GIF_DELAY_CS)
+    }
+
+    /// The animation as GIF bytes, looping forever. Each frame after the first stores only
+    /// the rectangle that changed, which keeps the file small.
+    pub fn to_gif(&self) -> Result<Vec<u8>> {
+        let shown = self.shown_frames();
+        if shown.is_empty() || self.frames.1 > self.recording.n_frames() {
+            return Err(IoError::invalid(format!(
+                "an animation needs frames within the recording's 0..{}, got {}..{}",
+                self.recording.n_frames(),
+                self.frames.0,
+                self.frames.1
+            )));
+        }
+        let peak = self.recording.peak_image().max();
+        let delay = Delay::from_numer_denom_ms(self.delay_cs() * 10, 1);
+        let mut out = Vec::new();
+        {
+            // Speed 30: the fastest colour quantisation; the figures hold few colours.
+            let mut encoder = GifEncoder::new_with_speed(&mut out, 30);
+            encoder.set_repeat(Repeat::Infinite).map_err(figure_error)?;
+            let mut previous: Option<RgbaImage> = None;
+            for &t in &shown {
+                let (w, h, rgb) = render_rgb(&self.layout(t, peak)?)?;
+                let image = RgbaImage::from_fn(w, h, |x, y| {
+                    let i = 3 * (y as usize * w as usize + x as usize);
+                    image::Rgba([rgb[i], rgb[i + 1], rgb[i + 2], 255])
+                });
+                let frame = match &previous {
+                    Some(prev) => changed_part(prev, &image, delay),
+                    None => Frame::from_parts(image.clone(), 0, 0, delay),
+                };
+                encoder.encode_frame(frame).map_err(figure_error)?;
+                previous = Some(image);
+            }
+        }
+        Ok(out)
+    }
+
+    fn layout(&self, t: usize, peak: f64) -> Result<Layout> {
+        let r = self.result;
+        let plot = |s: &Shape, i: usize| {
+            let p = s.point(i);
+            self.axes.to_plot([p[0], p[1]])
+        };
+        let mut layers = Vec::new();
+        let mut outlines = |s: &Shape, color| {
+            let pts: Vec<(f64, f64)> = (0..s.len()).map(|i| plot(s, i)).collect();
+            if matches!(s.topology(), Topology::ClosedContour) && pts.len() > 2 {
+                let mut ring = pts.clone();
+                ring.push(pts[0]);
+                layers.push(Layer::Line {
+                    points: ring,
+                    color,
+                    width: 2,
+                });
+            } else {
+                layers.push(Layer::Dots {
+                    points: pts,
+                    color,
+                    radius: 2,
+                });
+            }
+        };
+        let leaving: Vec<&crate::sequence::PairMatch> = r
+            .pairs
+            .iter()
+            .filter(|p| r.objects[p.a].frame == t)
+            .collect();
+        for o in r.objects.iter().filter(|o| o.frame == t) {
+            outlines(&o.shape, COLOR_A);
+        }
+        for p in &leaving {
+            if r.objects[p.b].frame != t {
+                outlines(&r.objects[p.b].shape, COLOR_B);
+            }
+        }
+        let (mut matched, mut excess) = (0, 0);
+        for p in &leaving {
+            let (sa, sb) = (&r.objects[p.a].shape, &r.objects[p.b].shape);
+            for m in &p.result.pairs {
+                let points = vec![plot(sa, m.a), plot(sb, m.b)];
+                if m.excess {
+                    excess += 1;
+                    layers.push(Layer::Dashed {
+                        points,
+                        color: COLOR_EXCESS,
+                    });
+                } else {
+                    matched += 1;
+                    layers.push(Layer::Line {
+                        points,
+                        color: COLOR_MATCH,
+                        width: 1,
+                    });
+                }
+            }
+        }
+        // The matches first, the outlines over them.
+        let outlines_drawn = layers.len() - matched - excess;
+        layers.rotate_left(outlines_drawn);
+
+        let grid = self.recording.frame(t)?;
+        let (rows, cols) = (grid.rows(), grid.cols());
+        let corner = |c: f64, r: f64| self.axes.to_plot([c, r]);
+        let mut bounds = Bounds::of([
+            corner(-0.5, -0.5),
+            corner(cols as f64 - 0.5, rows as f64 - 0.5),
+        ])
+        .ok_or_else(|| IoError::invalid("the recording has no finite extent"))?;
+        bounds.pad = false;
+        let max = if peak.is_finite() && peak > 0.0 {
+            peak
+        } else {
+            1.0
+        };
+        let image = PressureImage {
+            cells: (0..rows)
+                .flat_map(|row| (0..cols).map(move |col| (row, col)))
+                .filter_map(|(row, col)| {
+                    let v = grid.get(row, col);
+                    (v > 0.0).then(|| {
+                        let (x0, y0) = corner(col as f64 - 0.5, row as f64 - 0.5);
+                        let (x1, y1) = corner(col as f64 + 0.5, row as f64 + 0.5);
+                        ([(x0, y0), (x1, y1)], v)
+                    })
+                })
+                .collect(),
+            max,
+            label: self.axes.pressure_label("pressure"),
+        };
+        let title = self.axes.frame_text(t);
+        let objects = r.objects.iter().filter(|o| o.frame == t).count();
+        let subtitle =
+            format!("{objects} objects; {matched} matches ({excess} excess) into the next");
+        let legend = vec![
+            LegendEntry {
+                text: "this frame".to_string(),
+                glyph: Glyph::LineDot(COLOR_A),
+            },
+            LegendEntry {
+                text: "matched onto".to_string(),
+                glyph: Glyph::LineDot(COLOR_B),
+            },
+            LegendEntry {
+                text: "match".to_string(),
+                glyph: Glyph::Line(COLOR_MATCH),
+            },
+            LegendEntry {
+                text: "excess match".to_string(),
+                glyph: Glyph::Dashed(COLOR_EXCESS),
+            },
+        ];
+        Ok(Layout::new(
+            bounds,
+            self.axes,
+            title,
+            subtitle,
+            legend,
+            Some(image),
+            layers,
+        ))
+    }
+}
+
+/// The smallest rectangle of `next` that differs from `prev` (same size), as a GIF frame placed
+/// over the previous one; one pixel when nothing changed.
+fn changed_part(prev: &RgbaImage, next: &RgbaImage, delay: Delay) -> Frame {
+    let (w, h) = next.dimensions();
+    let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
+    for (x, y, p) in next.enumerate_pixels() {
+        if prev.get_pixel(x, y) != p {
+            (x0, y0) = (x0.min(x), y0.min(y));
+            (x1, y1) = (x1.max(x + 1), y1.max(y + 1));
+        }
+    }
+    if x0 >= x1 {
+        (x0, y0, x1, y1) = (0, 0, 1, 1);
+    }
+    let part = image::imageops::crop_imm(next, x0, y0, x1 - x0, y1 - y0).to_image();
+    Frame::from_parts(part, x0, y0, delay)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sequence::{run_sequence, SequenceOptions, StageTimings};
+    use image::AnimationDecoder;
+
+    /// A disc of pressure moving one sensel right per frame.
+    fn moving_disc(frames: usize, rows: usize, cols: usize) -> Recording {
+        let mut data = vec![0.0f32; frames * rows * cols];
+        for t in 0..frames {
+            for r in 0..rows {
+                for c in 0..cols {
+                    let (dy, dx) = (r as f64 - 8.0, c as f64 - 6.0 - (t % 8) as f64);
+                    let d2 = dx * dx + dy * dy;
+                    if d2 < 20.0 {
+                        data[(t * rows + r) * cols + c] = (100.0 - 4.0 * d2) as f32;
+                    }
+                }
+            }
+        }
+        Recording::from_array(frames, rows, cols, data, None).unwrap()
+    }
+
+    fn empty_result() -> SequenceResult {
+        SequenceResult {
+            objects: vec![],
+            pairs: vec![],
+            tracks: vec![],
+            splits: vec![],
+            merges: vec![],
+            skipped_frames: vec![],
+            skipped_pairs: vec![],
+            timings: StageTimings::default(),
+        }
+    }
+
+    fn decode(gif: &[u8]) -> Vec<image::Frame> {
+        image::codecs::gif::GifDecoder::new(std::io::Cursor::new(gif))
+            .unwrap()
+            .into_frames()
+            .collect_frames()
+            .unwrap()
+    }
+
+    #[test]
+    fn every_frame_is_drawn_with_its_contours_and_matches_at_the_frame_rate() {
+        let rec = moving_disc(5, 16, 24)
+            .with_pitch_mm([5.0, 5.0])
+            .unwrap()
+            .with_frame_rate(25.0)
+            .unwrap()
+            .with_units("kPa");
+        let result = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
+        assert_eq!(result.pairs.len(), 4);
+        let axes = FigureAxes::of_recording(&rec);
+        let animation = Animation {
+            recording: &rec,
+            result: &result,
+            axes: &axes,
+            frames: (0, 5),
+        };
+        assert_eq!(animation.delay_cs(), 4);
+        let frames = decode(&animation.to_gif().unwrap());
+        assert_eq!(frames.len(), 5);
+        let (w, h) = animation.layout(0, 100.0).unwrap().size();
+        for f in &frames {
+            assert_eq!(f.delay().numer_denom_ms(), (40, 1));
+            assert_eq!(f.buffer().dimensions(), (w, h));
+        }
+        // Frames 0-3 show the matches into the next frame (contours of both frames drawn in
+        // their colours); the last frame has no pair leaving it.
+        let near = |p: &image::Rgba<u8>, c: RGBColor| {
+            (0..3).all(|k| (i32::from(p.0[k]) - i32::from([c.0, c.1, c.2][k])).abs() <= 40)
+        };
+        let count = |f: &image::Frame, c| f.buffer().pixels().filter(|p| near(p, c)).count();
+        // (The legend shows both colours too, equally in every frame.)
+        let last_b = count(&frames[4], COLOR_B);
+        for f in &frames[..4] {
+            assert!(count(f, COLOR_B) > last_b + 30);
+        }
+        assert!(count(&frames[4], COLOR_A) > last_b + 30);
+        assert_ne!(frames[0].buffer(), frames[1].buffer());
+    }
+
+    #[test]
+    fn long_recordings_are_decimated_and_keep_real_time() {
+        let rec = moving_disc(301, 16, 24).with_frame_rate(100.0).unwrap();
+        let result = empty_result();
+        let axes = FigureAxes::of_recording(&rec);
+        let mut animation = Animation {
+            recording: &rec,
+            result: &result,
+            axes: &axes,
+            frames: (0, 301),
+        };
+        assert_eq!(animation.frame_step(), 3);
+        assert_eq!(animation.shown_frames().len(), 101);
+        assert!(animation.shown_frames().len() <= MAX_ANIMATION_FRAMES);
+        // Three 10 ms frame intervals per shown frame.
+        assert_eq!(animation.delay_cs(), 3);
+        let frames = decode(&animation.to_gif().unwrap());
+        assert_eq!(frames.len(), 101);
+        // A recording at 1 kHz would need 0.3 cs: GIF shows 2 cs at least.
+        let fast = rec.clone().with_frame_rate(1000.0).unwrap();
+        let fast_axes = FigureAxes::of_recording(&fast);
+        animation.axes = &fast_axes;
+        assert_eq!(animation.delay_cs(), MIN_GIF_DELAY_CS);
+        // Without a frame rate: 10 shown frames per second of playback.
+        let unknown = FigureAxes {
+            dt_s: None,
+            ..axes.clone()
+        };
+        animation.axes = &unknown;
+        animation.frames = (0, 10);
+        assert_eq!(animation.delay_cs(), DEFAULT_GIF_DELAY_CS);
+        animation.frames = (5, 400);
+        assert!(animation.to_gif().is_err());
+    }
+}

@@ -1,0 +1,165 @@
+"""The matplotlib helpers (pymodal.plot_match, pymodal.plot_frame) and the HTML summaries Jupyter
+shows for pymodal.run and a Match: what is drawn and what is said, checked on the artists."""
+
+import pickle
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import pymodal
+
+mpl = pytest.importorskip("matplotlib")
+mpl.use("Agg")
+from matplotlib.collections import LineCollection  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+@pytest.fixture(autouse=True)
+def close_figures():
+    yield
+    plt.close("all")
+
+
+def ellipse(n, scale=1.0, shift=0.0):
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return np.c_[3 * np.cos(t), 2 * np.sin(t)] * scale + shift
+
+
+def blob_recording(frames=3, pitch_mm=(5.0, 4.0)):
+    r, c = np.mgrid[0:30, 0:20]
+    out = np.zeros((frames, 30, 20), np.float32)
+    for t in range(frames):
+        q = ((c - 9 - t) / 5.0) ** 2 + ((r - 14) / 9.0) ** 2
+        out[t] = np.maximum(0.0, 300.0 * (1.0 - q))
+    return pymodal.Recording.from_array(out, pitch_mm=pitch_mm, frame_rate=50.0, units="kPa")
+
+
+def segments(ax):
+    """(one-to-one segments, excess segments) as drawn: LineCollections by line style."""
+    cols = [c for c in ax.collections if isinstance(c, LineCollection)]
+    dashed = [c for c in cols if c.get_linestyle()[0][1] is not None]
+    solid = [c for c in cols if c.get_linestyle()[0][1] is None]
+    count = lambda cs: sum(len(c.get_segments()) for c in cs)  # noqa: E731
+    return solid, count(solid), count(dashed)
+
+
+def test_plot_match_draws_every_match_coloured_by_cost_in_mm():
+    a, b = ellipse(40), ellipse(30, 1.1, 0.3)
+    m = pymodal.match(a, b)
+    assert m.excess_count > 0 and len(m.unmatched_a) + len(m.unmatched_b) == 0
+    ax = pymodal.plot_match(m, a, b, pitch_mm=5.0)
+    solid, n_one, n_excess = segments(ax)
+    assert n_one == m.optimisation_count
+    assert n_excess == m.excess_count
+    # The segments join a's node to b's, in mm; their colours follow the costs.
+    one = m.pairs[~m.excess]
+    drawn = np.asarray(solid[0].get_segments())
+    np.testing.assert_allclose(drawn[:, 0], a[one[:, 0]] * 5.0)
+    np.testing.assert_allclose(drawn[:, 1], b[one[:, 1]] * 5.0)
+    np.testing.assert_allclose(solid[0].get_array(), m.costs[~m.excess])
+    assert len(ax.lines) == 2, "the two closed outlines"
+    assert ax.get_xlabel() == "x (mm)" and ax.get_ylabel() == "y (mm)"
+    bars = [a_ for a_ in ax.figure.axes if a_ is not ax]
+    assert len(bars) == 1 and bars[0].get_ylabel() == "match cost"
+    assert ax.yaxis_inverted()
+
+
+def test_plot_match_rings_unmatched_nodes_and_draws_3d():
+    a, b = ellipse(40), ellipse(30, 1.1, 0.3)
+    m = pymodal.match(a, b, excess=False)
+    ax = pymodal.plot_match(m, a, b)
+    assert ax.get_xlabel() == "x (sensels)"
+    _, n_one, n_excess = segments(ax)
+    assert (n_one, n_excess) == (30, 0)
+    rings = [c for c in ax.collections if c.get_label() == "unmatched"]
+    assert sum(len(c.get_offsets()) for c in rings) == len(m.unmatched_a) == 10
+    # 3-D points: a 3-D axes with a z label.
+    rng = np.random.default_rng(0)
+    p = np.c_[rng.normal(size=(25, 2)) * 3, rng.random(25)]
+    m3 = pymodal.match(p, p + [0.1, 0.0, 0.0])
+    ax3 = pymodal.plot_match(m3, p, p + [0.1, 0.0, 0.0])
+    assert ax3.name == "3d" and ax3.get_zlabel() == "z"
+    with pytest.raises(ValueError, match="beyond"):
+        pymodal.plot_match(m, a[:5], b)
+
+
+def test_plot_frame_shows_pressure_in_mm_with_colour_bar_and_contours():
+    rec = blob_recording()
+    ax = pymodal.plot_frame(rec, 1)
+    image = ax.images[0]
+    frame = rec.frames[1]
+    np.testing.assert_allclose(np.ma.filled(image.get_array(), np.nan), frame)
+    # The image covers the grid in mm: 20 columns of 5 mm, 30 rows of 4 mm, row 0 at the top.
+    assert image.get_extent() == pytest.approx((-2.5, 97.5, 118.0, -2.0))
+    assert ax.get_xlabel() == "x (mm)" and ax.get_ylabel() == "y (mm)"
+    assert ax.get_title() == "frame 1, 0.020 s"
+    bar = [a for a in ax.figure.axes if a is not ax]
+    assert len(bar) == 1 and bar[0].get_ylabel() == "pressure (kPa)"
+    # One closed outline: the blob's contour, in mm, around its centre (column 10, row 14).
+    contours = pymodal.contours(frame)
+    assert len(ax.lines) == len(contours) == 1
+    x, y = ax.lines[0].get_data()
+    assert x[0] == x[-1] and y[0] == y[-1]
+    assert np.mean(x) == pytest.approx(10 * 5.0, abs=2.5)
+    assert np.mean(y) == pytest.approx(14 * 4.0, abs=2.0)
+    # Without a pitch: sensels.
+    ax = pymodal.plot_frame(blob_recording(pitch_mm=None), 0, contours=False)
+    assert ax.get_xlabel() == "x (sensels)" and len(ax.lines) == 0
+    with pytest.raises(IndexError):
+        pymodal.plot_frame(rec, 3)
+
+
+def test_run_result_shows_its_summary_as_html():
+    rec = blob_recording(frames=4)
+    res = pymodal.run(rec)
+    assert isinstance(res, dict) and isinstance(res, pymodal.RunResult)
+    s = res["summary"]
+    html = res._repr_html_()
+    assert html.startswith("<table") and html.endswith("</table>")
+    for text in (
+        "Recording",
+        "4 of 30 × 20 sensels",
+        "5.0 × 4.0 mm",
+        "50 Hz",
+        f"<td style='text-align:left'>{s['pairs']}</td>",
+        f"{s['mean_local_percent']:.1f} %",
+        f"{s['mean_optimisation_percent']:.1f} %",
+        f"{s['mean_cost']:.4f}",
+        "0 frames, 0 pairs",
+        f"matching {s['timings_s']['matching']:.3f} s",
+    ):
+        assert text in html, text
+    # Still a plain dict to pickle, and the wrapper keeps run's signature and help.
+    assert pickle.loads(pickle.dumps(res))["summary"] == s
+    import inspect
+
+    assert "iso_levels" in inspect.signature(pymodal.run).parameters
+    assert "Match the objects of a whole recording" in pymodal.run.__doc__
+
+
+def test_match_shows_its_counts_as_html():
+    a, b = ellipse(40), ellipse(30, 1.1, 0.3)
+    m = pymodal.match(a, b)
+    html = m._repr_html_()
+    mean = np.mean(m.costs[~m.excess])
+    for k, v in (("matches", len(m.pairs)), ("one-to-one", m.optimisation_count),
+                 ("excess", m.excess_count), ("local (mutual best)", m.local_count),
+                 ("mean one-to-one cost", f"{mean:.4f}")):
+        assert f"<th style='text-align:left'>{k}</th><td>{v}</td>" in html, k
+
+
+def test_without_matplotlib_the_helpers_say_how_to_install_it():
+    code = (
+        "import sys; sys.modules['matplotlib'] = None; sys.modules['matplotlib.pyplot'] = None\n"
+        "import numpy as np, pymodal\n"
+        "a = np.c_[np.cos(np.arange(12)), np.sin(np.arange(12))]\n"
+        "m = pymodal.match(a, a)\n"
+        "try:\n"
+        "    pymodal.plot_match(m, a, a)\n"
+        "except ImportError as e:\n"
+        "    print(e)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert "pip install 'pymodal[plot]'" in out.stdout, out.stdout + out.stderr
