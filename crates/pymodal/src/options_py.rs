@@ -29,6 +29,7 @@ pub struct MatchKw<'a, 'py> {
     pub excess: Option<bool>,
     pub paper: Option<bool>,
     pub prealign: Option<&'a str>,
+    pub max_rotation: Option<f64>,
     pub refits: Option<usize>,
     pub refit_tolerance: Option<f64>,
     pub kappa: Option<f64>,
@@ -66,6 +67,7 @@ impl MatchKw<'_, '_> {
                 .map(|s| word(Some(s), modal_core::Prealign::default()))
                 .transpose()?
                 .or(d.prealign),
+            max_rotation: self.max_rotation.or(d.max_rotation),
             refits: self.refits.or(d.refits),
             refit_tolerance: self.refit_tolerance.or(d.refit_tolerance),
             kappa: self.kappa.or(d.kappa),
