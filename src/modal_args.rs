@@ -47,6 +47,8 @@ pub struct ModalArgs {
     pub paper: bool,
     #[arg(long, value_parser = word::<Prealign>(), help = help("prealign"))]
     pub prealign: Option<Prealign>,
+    #[arg(long, value_name = "DEGREES", help = help("max_rotation"))]
+    pub max_rotation: Option<f64>,
     #[arg(long, help = help("refits"))]
     pub refits: Option<usize>,
     #[arg(long, help = help("refit_tolerance"))]
@@ -84,6 +86,7 @@ impl ModalArgs {
             excess: self.no_excess.then_some(false),
             paper: self.paper.then_some(true),
             prealign: self.prealign,
+            max_rotation: self.max_rotation,
             refits: self.refits,
             refit_tolerance: self.refit_tolerance,
             kappa: self.kappa,

@@ -17,6 +17,7 @@ costs several times as long; speed ratios should be quoted against the CPD row o
 being compared.
 
 Run:  python benches/python/bench_match.py [--cases 30] [--surface-cases 12] [--markdown]
+      python benches/python/bench_match.py --held-out [--cases 60]   (accuracy as a distribution)
 """
 import argparse
 import time
@@ -36,9 +37,9 @@ SEVERITY = {  # rotation deg, per-axis scale, shear, bending
 }
 
 
-def outlines():
+def outlines(name="contours.txt"):
     out, cur = [], None
-    for line in (DATA / "contours.txt").read_text().splitlines():
+    for line in (DATA / name).read_text().splitlines():
         if line.startswith("# "):
             if not line.startswith("# closed outlines"):
                 cur = []
@@ -221,11 +222,13 @@ def evaluate(methods, cases):
             pairs, excess = fn(a, b, truth, tol) if getattr(fn, "oracle", False) else fn(a, b)
             times.append(time.perf_counter() - t0)
             accs.append(score(pairs, excess, b, truth, tol))
-        rows[name] = (np.mean(accs), np.median(times) * 1e3)
+        rows[name] = (np.mean(accs), np.median(times) * 1e3, np.percentile(accs, 5), np.min(accs),
+                      int(np.sum(np.array(accs) < 0.5)))
     return rows
 
 
-def table(title, sevs, results, md):
+def table(title, sevs, results, md, dist=False):
+    """dist: every cell is mean / 5th percentile / worst pair (and the pairs below 0.5)."""
     names = list(next(iter(results.values())).keys())
     print(f"\n{title}")
     if md:
@@ -233,8 +236,31 @@ def table(title, sevs, results, md):
         print("|---|" + "---|" * (len(sevs) + 1))
     for n in names:
         accs = " | ".join(f"{results[s][n][0]:.3f}" for s in sevs)
+        if dist:
+            accs = " | ".join(f"{results[s][n][0]:.3f} / {results[s][n][2]:.3f} / {results[s][n][3]:.3f}"
+                              f" ({results[s][n][4]} < 0.5)" for s in sevs)
         ms = np.mean([results[s][n][1] for s in sevs])
         print(f"| {n} | {accs} | {ms:.2f} |" if md else f"{n:45s} {accs}   {ms:8.2f} ms")
+
+
+def held_out(outs, sevs, args):
+    """Mean, 5th percentile and worst pair per severity on pairs used for no tuning: seeds from
+    1000 on, every second case on a heel-strike outline (nearly round), beside CPD."""
+    heels = outlines("heel_strike.txt")
+    methods = {
+        "pymodal.match (defaults)": modal(),
+        "pymodal.match max_rotation=30 (run's default)": modal(max_rotation=30.0),
+        "pycpd rigid, affine, then deformable + argmax P": cpd("rigid", "affine"),
+        "pycpd rigid, then deformable + argmax P": cpd("rigid"),
+    }
+    results = {}
+    for s in sevs:
+        rng = np.random.default_rng(1000 + args.seed)
+        cases = [contour_case((heels if k % 2 else outs)[k // 2 % len(heels if k % 2 else outs)], s, rng)
+                 for k in range(args.cases)]
+        results[s] = evaluate(methods, cases)
+    table(f"Held-out contours ({args.cases} per severity, half heel strikes): mean / 5th percentile / worst",
+          sevs, results, args.markdown, dist=True)
 
 
 def main():
@@ -245,9 +271,15 @@ def main():
     ap.add_argument("--markdown", action="store_true")
     ap.add_argument("--skip-surfaces", action="store_true")
     ap.add_argument("--skip-contours", action="store_true")
+    ap.add_argument("--held-out", action="store_true",
+                    help="accuracy as a distribution on held-out pairs: seeds from 1000 on, the "
+                         "heel-strike outlines (heel_strike.txt) beside the others")
     args = ap.parse_args()
     outs = outlines()
     sevs = list(SEVERITY)
+    if args.held_out:
+        held_out(outs, sevs, args)
+        return
     if not args.skip_contours:
         methods = {
             "pymodal.match (defaults: global, recipe)": modal(),

@@ -148,6 +148,10 @@ pub struct MatchParams {
     pub paper: bool,
     /// Pre-alignment (`None`: robust, or normalize with `paper`).
     pub prealign: Option<Prealign>,
+    /// Largest turn in degrees the robust pre-alignment may find, in (0, 180] (180: any turn;
+    /// `None`: the caller's default, unbounded for a pair, [`RUN_MAX_ROTATION`] for a
+    /// recording's consecutive frames).
+    pub max_rotation: Option<f64>,
     /// Maximum modal affine re-fits (`None`: the recipe's).
     pub refits: Option<usize>,
     /// Re-fit stopping tolerance in B's node spacings (`None`: the recipe's).
@@ -184,6 +188,7 @@ impl Default for MatchParams {
             excess: d.excess,
             paper: false,
             prealign: None,
+            max_rotation: None,
             refits: None,
             refit_tolerance: None,
             kappa: None,
@@ -218,6 +223,14 @@ impl MatchParams {
         )?;
         if let Some(t) = self.threshold {
             check(t.is_finite() && t >= 0.0, "threshold", t, "a number >= 0")?;
+        }
+        if let Some(r) = self.max_rotation {
+            check(
+                r > 0.0 && r <= 180.0,
+                "max_rotation",
+                r,
+                "degrees in (0, 180]",
+            )?;
         }
         if let Some(t) = self.refit_tolerance {
             check(
@@ -283,6 +296,10 @@ impl MatchParams {
         o.skip_rigid = self.skip_rigid;
         o.band = self.band;
         o.prealign = self.prealign.unwrap_or(o.prealign);
+        o.rotation_search.max_rotation = self
+            .max_rotation
+            .filter(|&r| r < 180.0)
+            .or(o.rotation_search.max_rotation);
         o.refits = self.refits.unwrap_or(o.refits);
         o.refit_tolerance = self.refit_tolerance.unwrap_or(o.refit_tolerance);
         o.position_weight = self.position_weight.unwrap_or(o.position_weight);
@@ -309,6 +326,10 @@ impl MatchParams {
             ("excess", Bool(used.excess)),
             ("paper", Bool(self.paper)),
             ("prealign", Word(used.prealign.to_string())),
+            (
+                "max_rotation",
+                Float(used.rotation_search.max_rotation.unwrap_or(180.0)),
+            ),
             ("refits", Int(used.refits)),
             ("refit_tolerance", Float(used.refit_tolerance)),
             ("kappa", Float(used.model.kappa)),
@@ -346,6 +367,7 @@ pub struct MatchOverrides {
     pub excess: Option<bool>,
     pub paper: Option<bool>,
     pub prealign: Option<Prealign>,
+    pub max_rotation: Option<f64>,
     pub refits: Option<usize>,
     pub refit_tolerance: Option<f64>,
     pub kappa: Option<f64>,
@@ -371,6 +393,7 @@ impl MatchOverrides {
             excess: self.excess.unwrap_or(base.excess),
             paper: self.paper.unwrap_or(base.paper),
             prealign: self.prealign.or(base.prealign),
+            max_rotation: self.max_rotation.or(base.max_rotation),
             refits: self.refits.or(base.refits),
             refit_tolerance: self.refit_tolerance.or(base.refit_tolerance),
             kappa: self.kappa.or(base.kappa),
@@ -389,6 +412,12 @@ impl MatchOverrides {
         self.apply(MatchParams::default())
     }
 }
+
+/// The default [`MatchParams::max_rotation`] of a recording run (`pedomatch run`, `pymodal.run`):
+/// consecutive frames hardly turn (a foot rolls over, it does not spin between two frames at
+/// 30-500 Hz), while the rotation search's starts lie 10° apart, so the bound keeps the two
+/// starts either side of a plausible turn.
+pub const RUN_MAX_ROTATION: f64 = 30.0;
 
 /// The value of an option in a provenance record.
 #[derive(Debug, Clone, PartialEq)]
@@ -499,6 +528,7 @@ pub fn match_option_specs() -> Vec<OptionSpec> {
         OptionSpec::new("excess", NegatedFlag, d.excess, "Match the nodes the one-to-one search leaves over (excess-node step, global search)."),
         OptionSpec::new("paper", Flag, d.paper, "Start from the paper's literal setting: centroid and scale pre-alignment, no affine re-fits."),
         OptionSpec::new("prealign", OptionKind::Word(Prealign::NAMES), "robust (normalize with paper)", "Pre-alignment: rotation search with affine ICP (robust) or centroid and scale only (normalize)."),
+        OptionSpec::new("max_rotation", Value, format!("180 (any turn) for a pair, {RUN_MAX_ROTATION} for a recording's consecutive frames"), "Largest turn in degrees, in (0, 180], the robust pre-alignment may find between two objects; among turns that fit nearly as well the smallest always wins."),
         OptionSpec::new("refits", Value, by_input(|o| o.refits), "Maximum modal affine re-fits (stops earlier when the pairs stop changing)."),
         OptionSpec::new("refit_tolerance", Value, by_input(|o| o.refit_tolerance), "No further re-fit once every one-to-one pair lies within this fraction of the second object's node spacing of its partner under one affine map; 0 always re-fits."),
         OptionSpec::new("kappa", Value, by_input(|o| o.model.kappa), "Gaussian width sigma = kappa × mean nearest-neighbour distance."),
@@ -566,7 +596,21 @@ mod tests {
     #[test]
     fn validation_names_the_option() {
         let d = MatchParams::default;
-        let cases: [(MatchParams, &str); 7] = [
+        let cases: [(MatchParams, &str); 9] = [
+            (
+                MatchParams {
+                    max_rotation: Some(0.0),
+                    ..d()
+                },
+                "max_rotation",
+            ),
+            (
+                MatchParams {
+                    max_rotation: Some(f64::NAN),
+                    ..d()
+                },
+                "max_rotation",
+            ),
             (MatchParams { modes: 0.0, ..d() }, "modes"),
             (
                 MatchParams {
@@ -628,7 +672,7 @@ mod tests {
         assert_eq!(names, used);
         let excess = &match_option_specs()[6];
         assert_eq!(excess.cli_flags(), ["--no-excess"]);
-        assert!(match_option_specs()[9].default.contains("2 for contours"));
+        assert!(match_option_specs()[10].default.contains("2 for contours"));
     }
 
     #[test]

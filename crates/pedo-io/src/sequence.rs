@@ -195,10 +195,17 @@ impl Default for RunParams {
 impl RunParams {
     /// The engine's matching options for this run's object model: surfaces are unordered 3-D
     /// meshes and get the measured surface setting, contours and isocontours the contour recipe.
+    /// Consecutive frames hardly turn: the rotation search is bounded by
+    /// [`modal_core::options::RUN_MAX_ROTATION`] unless `max_rotation` is given.
     pub fn match_options(&self) -> std::result::Result<MatchOptions, OptionError> {
         let surface = self.model == ObjectModel::Surface;
-        self.matching
-            .to_match_options(if surface { 3 } else { 2 }, !surface)
+        let mut o = self
+            .matching
+            .to_match_options(if surface { 3 } else { 2 }, !surface)?;
+        if self.matching.max_rotation.is_none() {
+            o.rotation_search.max_rotation = Some(modal_core::options::RUN_MAX_ROTATION);
+        }
+        Ok(o)
     }
 
     /// Checks every parameter that does not depend on a recording.

@@ -380,7 +380,7 @@ fn triangles(
 /// ValueError — arrays of the wrong shape. All three are ``ValueError`` subclasses.
 #[pyfunction]
 #[pyo3(name = "match", signature = (a, b, *, element=None, modes=None, search=None, solver=None,
-    threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, refits=None,
+    threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, max_rotation=None, refits=None,
     refit_tolerance=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
     common_sigma=None, skip_rigid=None, band=None, material=None, ordered=None, triangles_a=None,
     triangles_b=None))]
@@ -398,6 +398,7 @@ fn match_py(
     excess: Option<bool>,
     paper: Option<bool>,
     prealign: Option<&str>,
+    max_rotation: Option<f64>,
     refits: Option<usize>,
     refit_tolerance: Option<f64>,
     kappa: Option<f64>,
@@ -422,6 +423,7 @@ fn match_py(
         excess,
         paper,
         prealign,
+        max_rotation,
         refits,
         refit_tolerance,
         kappa,

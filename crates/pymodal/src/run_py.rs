@@ -83,7 +83,7 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 /// - ``timings``: seconds per stage.
 #[pyfunction]
 #[pyo3(signature = (recording, *, element=None, modes=None, search=None, solver=None,
-    threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, refits=None,
+    threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, max_rotation=None, refits=None,
     refit_tolerance=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
     common_sigma=None, skip_rigid=None, band=None, material=None, model=None, frames=None,
     noise=None, smooth=None, spacing=None, surface_nodes=None, iso_frame=None, iso_levels=None,
@@ -101,6 +101,7 @@ fn run<'py>(
     excess: Option<bool>,
     paper: Option<bool>,
     prealign: Option<&str>,
+    max_rotation: Option<f64>,
     refits: Option<usize>,
     refit_tolerance: Option<f64>,
     kappa: Option<f64>,
@@ -132,6 +133,7 @@ fn run<'py>(
         excess,
         paper,
         prealign,
+        max_rotation,
         refits,
         refit_tolerance,
         kappa,

@@ -3,6 +3,9 @@
 Writes, beside this script:
   contours.txt  -- closed outlines as blocks "# name" followed by "x y" lines (sensel units,
                    sub-pixel marching squares on a lightly smoothed image), blank line between blocks;
+  heel_strike.txt -- held-out outlines (same format): the heel alone in the first two loaded
+                   frames of every stance of the F-Scan walk, nearly round (principal-axis ratio
+                   1.09-1.17); not used to tune anything;
   mun104l.txt   -- the MUN104 left-foot peak-pressure template (63 x 27, whitespace separated),
                    used for the 3-D surface ground truth.
 Run: python make_fixtures.py DATA_DIR   (needs numpy, scipy, scikit-image)
@@ -37,6 +40,29 @@ def outline(img, level, smooth=0.8):
     return c[:, ::-1]  # (x = column, y = row)
 
 
+def write_outlines(path, out):
+    with open(path, "w") as f:
+        f.write("# closed outlines extracted by make_fixtures.py; x y in sensel units\n")
+        for name, c in out:
+            f.write(f"# {name}\n")
+            for x, y in c:
+                f.write(f"{x:.5f} {y:.5f}\n")
+            f.write("\n")
+
+
+def heel_strikes(frames):
+    """The first two frames of every stance whose only outline is the heel (rows >= 45)."""
+    out = []
+    loaded = [f.sum() > 0.05 * max(g.sum() for g in frames) for f in frames]
+    for i in range(1, len(frames) - 1):
+        if loaded[i] and not loaded[i - 1]:
+            for k in (i, i + 1):
+                c = outline(frames[k], 20.0)
+                if len(c) > 20 and c[:, 1].mean() >= 45:
+                    out.append((f"FrasP01L-frame{k}-heel", c))
+    return out
+
+
 def main():
     out = []
     for side in "LR":
@@ -52,15 +78,11 @@ def main():
         c = outline(frames[idx], 20.0)
         if len(c) > 20:
             out.append((f"FrasP01L-frame{idx}-{tag}", c))
-    with open(OUT / "contours.txt", "w") as f:
-        f.write("# closed outlines extracted by make_fixtures.py; x y in sensel units\n")
-        for name, c in out:
-            f.write(f"# {name}\n")
-            for x, y in c:
-                f.write(f"{x:.5f} {y:.5f}\n")
-            f.write("\n")
+    write_outlines(OUT / "contours.txt", out)
+    heels = heel_strikes(frames)
+    write_outlines(OUT / "heel_strike.txt", heels)
     np.savetxt(OUT / "mun104l.txt", np.loadtxt(SRC / "MUN104L.csv", delimiter=","), fmt="%d")
-    for name, c in out:
+    for name, c in out + heels:
         print(name, len(c))
 
 

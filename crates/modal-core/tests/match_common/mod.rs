@@ -18,7 +18,18 @@ pub fn data_path(name: &str) -> String {
 
 /// Dense closed outlines `(name, points)`.
 pub fn outlines() -> Vec<(String, Vec<[f64; 2]>)> {
-    let text = std::fs::read_to_string(data_path("contours.txt")).expect("contours.txt");
+    outlines_in("contours.txt")
+}
+
+/// Held-out outlines: the nearly round heel of the first loaded frames of every stance of the
+/// F-Scan walk (heel_strike.txt). Used by no tuning.
+pub fn heel_strikes() -> Vec<(String, Vec<[f64; 2]>)> {
+    outlines_in("heel_strike.txt")
+}
+
+/// The outlines of a fixture file: blocks `# name` followed by `x y` lines.
+pub fn outlines_in(file: &str) -> Vec<(String, Vec<[f64; 2]>)> {
+    let text = std::fs::read_to_string(data_path(file)).expect(file);
     let mut out: Vec<(String, Vec<[f64; 2]>)> = Vec::new();
     for line in text.lines() {
         if let Some(name) = line.strip_prefix("# ") {
