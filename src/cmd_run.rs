@@ -62,6 +62,8 @@ pub struct RunOptionsArgs {
     pub iso_frame: Option<usize>,
     #[arg(long, help = help("iso_levels"))]
     pub iso_levels: Option<usize>,
+    #[arg(long, help = help("drift_reference"))]
+    pub drift_reference: Option<usize>,
     #[command(flatten)]
     pub units: UnitArgs,
     /// Figures of every pair and of the tracks.
@@ -97,6 +99,7 @@ impl RunOptionsArgs {
             iso_frame: self.iso_frame.or(d.iso_frame),
             iso_levels: self.iso_levels.unwrap_or(d.iso_levels),
             units: self.units.overrides(),
+            drift_reference: self.drift_reference.unwrap_or(d.drift_reference),
         }
     }
 }

@@ -13,6 +13,7 @@
 //! (sensel centres at integers), or millimetres via [`CoordUnits::Millimetres`].
 
 pub mod contour;
+pub mod drift;
 mod error;
 pub mod figure;
 pub mod formats;
@@ -25,6 +26,7 @@ pub mod recording;
 pub mod report;
 pub mod sequence;
 pub mod surface;
+pub mod synthetic;
 pub mod track;
 pub mod units;
 

@@ -48,6 +48,9 @@ pub struct SequenceOptions {
     /// Frames `start..end` of the recording to use (`None`: all).
     pub frames: Option<(usize, usize)>,
     pub matching: MatchOptions,
+    /// Drift correction: reference frames every this many frames, each object also matched
+    /// against its ancestor on the last reference frame ([`crate::drift`]); 0: off.
+    pub drift_reference: usize,
 }
 
 impl Default for SequenceOptions {
@@ -69,6 +72,7 @@ impl Default for SequenceOptions {
             min_nodes: 8,
             frames: None,
             matching: MatchOptions::default(),
+            drift_reference: 0,
         }
     }
 }
@@ -167,6 +171,8 @@ pub struct RunParams {
     pub iso_levels: usize,
     /// Sensor pitch and frame rate overriding the file's.
     pub units: crate::units::UnitOverrides,
+    /// Drift correction: frames between reference frames (0: off); see [`crate::drift`].
+    pub drift_reference: usize,
 }
 
 impl Default for RunParams {
@@ -188,6 +194,7 @@ impl Default for RunParams {
             iso_frame: d.iso_frame,
             iso_levels: d.iso_count,
             units: Default::default(),
+            drift_reference: d.drift_reference,
         }
     }
 }
@@ -241,6 +248,13 @@ impl RunParams {
                 "an integer >= 2",
             ));
         }
+        if self.drift_reference == 1 {
+            return Err(OptionError::new(
+                "drift_reference",
+                self.drift_reference,
+                "0 (off) or an integer >= 2",
+            ));
+        }
         if self.surface_nodes < 8 {
             return Err(OptionError::new(
                 "surface_nodes",
@@ -277,6 +291,7 @@ impl RunParams {
             frames,
             iso_frame,
             iso_count: self.iso_levels,
+            drift_reference: self.drift_reference,
             ..Default::default()
         };
         o.contour.preprocess.threshold = Some(noise);
@@ -320,6 +335,7 @@ impl RunParams {
             ("surface_nodes", Int(self.surface_nodes)),
             ("iso_frame", options.iso_frame.map_or(Absent, Int)),
             ("iso_levels", Int(self.iso_levels)),
+            ("drift_reference", Int(options.drift_reference)),
             (
                 "pitch_mm",
                 recording.pitch_mm.map_or(Absent, |p| Numbers(p.to_vec())),
@@ -347,6 +363,7 @@ pub fn recording_option_specs() -> Vec<OptionSpec> {
         OptionSpec::new("surface_nodes", Value, d.surface_nodes, "Node budget of each brightness surface."),
         OptionSpec::new("iso_frame", Value, "the frame of largest load", "Isocontour model: the frame (0-based) whose isobaric contours are matched."),
         OptionSpec::new("iso_levels", Value, d.iso_levels, "Isocontour model: the number of isobaric levels."),
+        OptionSpec::new("drift_reference", Value, d.drift_reference, "Drift correction of tracks: every this many frames is a reference frame, and each object is also matched against its ancestor on the last one; tracks follow those matches first (0: off)."),
     ];
     specs.extend(crate::units::unit_option_specs());
     specs
@@ -494,7 +511,14 @@ pub fn run_sequence(
 
     let (pairs, skipped_pairs) = match_all(&objects, &candidate_pairs, options, progress);
     let t2 = Instant::now();
-    let tracks = chain_tracks(&objects, &pairs);
+    let tracks = match options.drift_reference {
+        k if k >= 2 && options.model != ObjectModel::Isocontour => {
+            let refs = crate::drift::reference_pairs(&objects, &candidate_pairs, start, k);
+            let (anchors, _) = match_all(&objects, &refs, options, &|_, _, _| {});
+            crate::drift::anchored_tracks(&objects, &pairs, &anchors)
+        }
+        _ => chain_tracks(&objects, &pairs),
+    };
     let timings = StageTimings {
         objects: t1 - t0,
         matching: t2 - t1,

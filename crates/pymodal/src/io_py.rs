@@ -71,6 +71,11 @@ impl PyRecording {
         &self.inner
     }
 
+    /// A Python `Recording` holding `inner` (for other bindings that make one).
+    pub(crate) fn wrap(inner: Recording) -> Self {
+        Self { inner }
+    }
+
     /// Every field of the recording, for `__reduce__`.
     fn state(&self) -> Writer {
         let r = &self.inner;

@@ -11,6 +11,7 @@ mod model_py;
 mod options_py;
 mod pickling;
 mod run_py;
+mod synthetic_py;
 
 #[pymodule]
 fn _pymodal(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -23,5 +24,6 @@ fn _pymodal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     io_py::register(m)?;
     run_py::register(m)?;
     options_py::register(m)?;
+    synthetic_py::register(m)?;
     Ok(())
 }

@@ -172,6 +172,7 @@ pub struct RecordingKw<'a, 'py> {
     pub iso_levels: Option<usize>,
     pub pitch_mm: Option<&'a Bound<'py, PyAny>>,
     pub frame_rate: Option<f64>,
+    pub drift_reference: Option<usize>,
 }
 
 impl RecordingKw<'_, '_> {
@@ -192,6 +193,7 @@ impl RecordingKw<'_, '_> {
             iso_frame: self.iso_frame.or(d.iso_frame),
             iso_levels: self.iso_levels.unwrap_or(d.iso_levels),
             units: units(self.pitch_mm, self.frame_rate)?,
+            drift_reference: self.drift_reference.unwrap_or(d.drift_reference),
         })
     }
 }

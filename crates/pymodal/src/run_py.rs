@@ -64,7 +64,8 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 /// ``material``), then ``model`` ("contour", "surface", "isocontour"), ``frames`` ((start, end),
 /// 0-based, end excluded like a slice; either may be None), ``noise``, ``smooth``, ``spacing``,
 /// ``surface_nodes``, ``iso_frame`` (0-based), ``iso_levels``, ``pitch_mm`` (mm per sensel, a
-/// number or (x, y); overrides the file's) and ``frame_rate`` (Hz; overrides the file's).
+/// number or (x, y); overrides the file's), ``frame_rate`` (Hz; overrides the file's) and
+/// ``drift_reference`` (drift correction of tracks: frames between reference frames; 0: off).
 ///
 /// Returns a dict with
 ///
@@ -87,7 +88,7 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
     refit_tolerance=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
     common_sigma=None, skip_rigid=None, band=None, material=None, model=None, frames=None,
     noise=None, smooth=None, spacing=None, surface_nodes=None, iso_frame=None, iso_levels=None,
-    pitch_mm=None, frame_rate=None))]
+    pitch_mm=None, frame_rate=None, drift_reference=None))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
     py: Python<'py>,
@@ -122,6 +123,7 @@ fn run<'py>(
     iso_levels: Option<usize>,
     pitch_mm: Option<&Bound<'py, PyAny>>,
     frame_rate: Option<f64>,
+    drift_reference: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let matching = MatchKw::new(
         element,
@@ -157,6 +159,7 @@ fn run<'py>(
         iso_levels,
         pitch_mm,
         frame_rate,
+        drift_reference,
     }
     .params(matching)?;
     params.validate().map_err(to_py)?;

@@ -1,0 +1,122 @@
+//! `pymodal.SyntheticWalk`: a synthetic recording with a known motion, and its ground truth.
+
+use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use pedo_io::synthetic::SyntheticWalk;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+use crate::errors::to_py;
+use crate::io_py::PyRecording;
+
+/// A foot-like pressure field warped smoothly in time (translation towards the toes, rotation,
+/// widening of the forefoot) with the true map from frame-0 coordinates to frame ``t`` known.
+///
+/// Keywords (all optional; lengths in sensels, angles in degrees): ``frames`` (120), ``rows``
+/// (84), ``cols`` (40), ``translation`` ((dx, dy) reached at the last frame; (0, -10)),
+/// ``rotation`` (12), ``spread`` (relative forefoot widening at the last frame; 0.15),
+/// ``noise`` (threshold in kPa; 10), ``pitch_mm`` (5), ``frame_rate`` (Hz; 100).
+///
+/// ``recording()`` is the :class:`Recording`; ``true_positions(t, points)`` maps an (n, 2) array
+/// of frame-0 (x, y) points to frame ``t``; ``reference_positions(t, points)`` is its inverse.
+#[pyclass(name = "SyntheticWalk", module = "pymodal", frozen)]
+pub struct PySyntheticWalk {
+    inner: SyntheticWalk,
+}
+
+fn map_points<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    f: impl Fn([f64; 2]) -> [f64; 2],
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    if points.shape()[1] != 2 {
+        return Err(PyValueError::new_err(format!(
+            "points must be an (n, 2) array, got shape {:?}",
+            points.shape()
+        )));
+    }
+    let a = points.as_array();
+    let out: Vec<Vec<f64>> = a
+        .rows()
+        .into_iter()
+        .map(|r| f([r[0], r[1]]).to_vec())
+        .collect();
+    if out.is_empty() {
+        return Ok(PyArray2::zeros(py, [0, 2], false));
+    }
+    Ok(PyArray2::from_vec2(py, &out)?)
+}
+
+#[pymethods]
+impl PySyntheticWalk {
+    #[new]
+    #[pyo3(signature = (*, frames=None, rows=None, cols=None, translation=None, rotation=None,
+        spread=None, noise=None, pitch_mm=None, frame_rate=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        frames: Option<usize>,
+        rows: Option<usize>,
+        cols: Option<usize>,
+        translation: Option<(f64, f64)>,
+        rotation: Option<f64>,
+        spread: Option<f64>,
+        noise: Option<f64>,
+        pitch_mm: Option<f64>,
+        frame_rate: Option<f64>,
+    ) -> PyResult<Self> {
+        let d = SyntheticWalk::default();
+        let inner = SyntheticWalk {
+            frames: frames.unwrap_or(d.frames),
+            rows: rows.unwrap_or(d.rows),
+            cols: cols.unwrap_or(d.cols),
+            translation: translation.map_or(d.translation, |(x, y)| [x, y]),
+            rotation_deg: rotation.unwrap_or(d.rotation_deg),
+            spread: spread.unwrap_or(d.spread),
+            noise_kpa: noise.unwrap_or(d.noise_kpa),
+            pitch_mm: pitch_mm.unwrap_or(d.pitch_mm),
+            frame_rate_hz: frame_rate.unwrap_or(d.frame_rate_hz),
+        };
+        inner.validate().map_err(to_py)?;
+        Ok(Self { inner })
+    }
+
+    /// The synthetic recording (kPa, with pitch, frame rate and noise threshold).
+    fn recording(&self, py: Python<'_>) -> PyResult<PyRecording> {
+        let w = self.inner.clone();
+        let rec = py.detach(move || w.recording()).map_err(to_py)?;
+        Ok(PyRecording::wrap(rec))
+    }
+
+    /// Where the frame-0 points (n, 2; x = column, y = row) lie in frame ``t``.
+    fn true_positions<'py>(
+        &self,
+        py: Python<'py>,
+        t: usize,
+        points: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        map_points(py, points, |p| self.inner.true_position(t, p))
+    }
+
+    /// Where the frame-``t`` points (n, 2) lay in frame 0.
+    fn reference_positions<'py>(
+        &self,
+        py: Python<'py>,
+        t: usize,
+        points: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        map_points(py, points, |p| self.inner.reference_position(t, p))
+    }
+
+    #[getter]
+    fn frames(&self) -> usize {
+        self.inner.frames
+    }
+
+    fn __repr__(&self) -> String {
+        format!("{:?}", self.inner)
+    }
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PySyntheticWalk>()?;
+    Ok(())
+}
