@@ -91,7 +91,11 @@ fn a_corrupt_recording_fails_alone_and_a_second_run_resumes() {
     assert_eq!(code, Some(1), "a failed recording makes exit status 1");
     assert!(stderr.contains("corrupt.asf"), "{stderr}");
     let first_rows = rows(&first);
-    assert_eq!(first_rows.len(), 4, "notes.txt is no recording: {first_rows:?}");
+    assert_eq!(
+        first_rows.len(),
+        4,
+        "notes.txt is no recording: {first_rows:?}"
+    );
     assert_eq!(
         (&first["ok"], &first["error"]),
         (&Value::from(3), &Value::from(1))
@@ -160,7 +164,10 @@ fn a_corrupt_recording_fails_alone_and_a_second_run_resumes() {
         if a["status"] == "ok" {
             assert_eq!(b["status"], "skipped", "{b}");
             assert_eq!(numbers(a), numbers(b));
-            assert_eq!(a["wall_time_s"], b["wall_time_s"], "the previous row's time is kept");
+            assert_eq!(
+                a["wall_time_s"], b["wall_time_s"],
+                "the previous row's time is kept"
+            );
         } else {
             assert_eq!(b["status"], "error");
         }
@@ -177,7 +184,10 @@ fn a_corrupt_recording_fails_alone_and_a_second_run_resumes() {
 
     // --force redoes complete folders.
     let (_, forced, _) = batch_json(&[i, "--out", o, "--spacing", "1.5", "--force"]);
-    assert_eq!((&forced["ok"], &forced["skipped"]), (&Value::from(3), &Value::from(0)));
+    assert_eq!(
+        (&forced["ok"], &forced["skipped"]),
+        (&Value::from(3), &Value::from(0))
+    );
     std::fs::remove_dir_all(&base).unwrap();
 }
 

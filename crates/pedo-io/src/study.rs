@@ -451,7 +451,9 @@ pub fn run_study(
             .with_max_len(1)
             .enumerate()
             .map(|(index, path)| {
-                let before = previous.iter().find(|r| Path::new(&r.path) == path.as_path());
+                let before = previous
+                    .iter()
+                    .find(|r| Path::new(&r.path) == path.as_path());
                 let report = |fraction| progress(StudyEvent::Progress { index, fraction });
                 let row = on_one_thread(|| run_recording(path, opts, before, &report));
                 progress(StudyEvent::Finished { index, row: &row });
@@ -669,8 +671,8 @@ fn complete_summary(
     if !outdir::is_output(folder) || input.sha256.is_none() {
         return None;
     }
-    let summary: Value = serde_json::from_slice(&std::fs::read(folder.join("summary.json")).ok()?)
-        .ok()?;
+    let summary: Value =
+        serde_json::from_slice(&std::fs::read(folder.join("summary.json")).ok()?).ok()?;
     let same_input = summary["input"]["sha256"].as_str() == input.sha256.as_deref();
     if !same_input || !json_close(&summary["options"], used) {
         return None;

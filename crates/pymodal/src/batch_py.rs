@@ -48,7 +48,9 @@ fn study_options(
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<StudyOptions<'static>> {
     if jobs == Some(0) {
-        return Err(option_error("jobs: 0 is not a number of jobs; expected >= 1 or None (every core)"));
+        return Err(option_error(
+            "jobs: 0 is not a number of jobs; expected >= 1 or None (every core)",
+        ));
     }
     let params = crate::run_py::run_params(py, options)?;
     params.validate().map_err(to_py)?;
@@ -145,7 +147,9 @@ fn batch_row<'py>(
                 Some(out) => study::open_study_folder(out)?,
                 None => Vec::new(),
             };
-            let before = previous.iter().find(|r| std::path::Path::new(&r.path) == path);
+            let before = previous
+                .iter()
+                .find(|r| std::path::Path::new(&r.path) == path);
             let row = study::on_one_thread(|| study::run_recording(&path, &opts, before, &|_| {}));
             Ok::<_, pedo_io::IoError>(row)
         })
