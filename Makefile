@@ -1,7 +1,7 @@
 # Developer entry points. `make test` is what CI runs (through .ci/run).
 VENV ?= .venv
 PY := $(VENV)/bin/python
-PIP_PACKAGES := maturin numpy scipy pytest scikit-image matplotlib
+PIP_PACKAGES := maturin numpy scipy pytest scikit-image matplotlib pandas dask[distributed]
 
 .PHONY: test test-rust test-python test-browser wheel-check examples venv wheel bench bench-python lint demo
 

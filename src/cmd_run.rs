@@ -1,7 +1,7 @@
 //! `pedomatch run` and `pedomatch demo`: a whole recording in; tables, figures and tracks out.
 
 use crate::modal_args::{help, word, ModalArgs, UnitArgs};
-use crate::output::{self, OutDir};
+use crate::output;
 use crate::CliError;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -177,46 +177,27 @@ fn execute(
     let result = run_sequence(&recording, &options, &progress)?;
     bar.finish_and_clear();
 
-    let t_out = Instant::now();
-    let dir = OutDir::create(out)?;
-    output::write_sequence(&dir, &recording, &options, &result, o.figures.kinds())?;
-    let write_time = t_out.elapsed().as_secs_f64();
-    let summary = pedo_io::report::run_summary(
+    let run = pedo_io::study::RunRecord {
         input,
-        &recording,
-        &params,
-        &options,
-        &result,
-        &[("read", read_time.as_secs_f64()), ("output", write_time)],
-    );
-    dir.write("summary.json", output::pretty(&summary)?.as_bytes())?;
-    if o.report == ReportArg::Html {
-        let timings = summary["timings_s"]
-            .as_object()
-            .map(|m| {
-                m.iter()
-                    .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(0.0)))
-                    .collect()
-            })
-            .unwrap_or_default();
-        let used = summary["options"]
-            .as_object()
-            .map(|m| m.iter().map(|(k, v)| (k.clone(), option_text(v))).collect())
-            .unwrap_or_default();
-        output::write_report(
-            &dir,
-            &input.name,
-            &recording,
-            &options,
-            &result,
-            used,
-            timings,
-        )?;
-    }
-    if o.animation == AnimationArg::Gif {
-        output::write_animation(&dir, &recording, &options, &result)?;
-    }
-    dir.commit()?;
+        recording: &recording,
+        params: &params,
+        options: &options,
+        result: &result,
+    };
+    let (png, svg) = o.figures.kinds();
+    let outputs = pedo_io::study::RunOutputs {
+        figures: pedo_io::study::FigureKinds { png, svg },
+        report: (o.report == ReportArg::Html)
+            .then_some(&output::report_page as &pedo_io::study::ReportWriter),
+        animation: o.animation == AnimationArg::Gif,
+    };
+    let summary = pedo_io::study::write_run_folder(
+        out,
+        &run,
+        &outputs,
+        &[("read", read_time.as_secs_f64())],
+    )?;
+    let write_time = summary["timings_s"]["output"].as_f64().unwrap_or(0.0);
     if o.json {
         print!("{}", output::pretty(&summary)?);
     } else {
@@ -234,16 +215,7 @@ fn execute(
     Ok(())
 }
 
-/// An option's value as the report's header shows it (`none` for an unset one).
-pub(crate) fn option_text(v: &serde_json::Value) -> String {
-    match v {
-        serde_json::Value::Null => "none".into(),
-        serde_json::Value::String(s) => s.clone(),
-        other => other.to_string(),
-    }
-}
-
-fn progress_bar() -> ProgressBar {
+pub fn progress_bar() -> ProgressBar {
     // indicatif hides itself when stderr is not a terminal, so scripted runs stay quiet.
     let bar = ProgressBar::new(0);
     bar.set_style(

@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod cmd_assign;
+mod cmd_batch;
 mod cmd_inspect;
 mod cmd_match;
 mod cmd_run;
@@ -12,7 +13,8 @@ mod outdir;
 mod output;
 
 const EXIT_CODES: &str = "Exit status: 0 success; 1 runtime failure (unreadable or malformed \
-input, failed run, unwritable output); 2 usage error (unknown flag, missing argument, bad option \
+input, failed run, unwritable output; for batch: any recording failed, the others' outputs and \
+the study table are still written); 2 usage error (unknown flag, missing argument, bad option \
 value); 130 interrupted (Ctrl-C or SIGTERM: the output folder is left as it was). With --json, a \
 subcommand prints one JSON object on stdout.";
 
@@ -33,6 +35,10 @@ enum Command {
     /// Match the objects of a whole recording frame by frame; write tables, figures and tracks.
     #[command(after_help = EXIT_CODES)]
     Run(cmd_run::RunArgs),
+    /// `run` on many recordings at once (files, folders, glob patterns), one folder each, and a
+    /// study table with a row per recording.
+    #[command(after_help = EXIT_CODES)]
+    Batch(cmd_batch::BatchArgs),
     /// `run` on the bundled F-Scan recording, writing ./pedomatch-out/.
     #[command(after_help = EXIT_CODES)]
     Demo(cmd_run::DemoArgs),
@@ -92,6 +98,7 @@ fn main() -> ExitCode {
     outdir::install_interrupt_handler();
     let result = match cli.command {
         Command::Run(args) => cmd_run::run(args),
+        Command::Batch(args) => cmd_batch::run(args),
         Command::Demo(args) => cmd_run::demo(args),
         Command::Match(args) => cmd_match::run(args),
         Command::Assign(args) => cmd_assign::run(args),

@@ -45,6 +45,10 @@ pub enum IoError {
     /// A produced object could not be turned into a modal-core shape.
     #[error(transparent)]
     Shape(#[from] ModalError),
+    /// An output folder cannot be written: it is not a usable name, it holds files that are not a
+    /// pedomatch output, or the run was interrupted.
+    #[error("{path}: {msg}")]
+    Output { path: String, msg: String },
     /// A figure could not be drawn or encoded.
     #[error("figure: {0}")]
     Figure(String),

@@ -19,12 +19,14 @@ pub mod figure;
 pub mod formats;
 pub mod grid;
 pub mod isobar;
+pub mod outdir;
 pub mod points;
 
 pub mod preprocess;
 pub mod recording;
 pub mod report;
 pub mod sequence;
+pub mod study;
 pub mod surface;
 pub mod synthetic;
 pub mod track;

@@ -203,7 +203,9 @@ impl LibraryError for IoError {
             }
             IoError::Option(e) => e.into_py_err(),
             e @ IoError::Figure(_) => internal(e),
-            e @ IoError::InvalidInput(_) => INPUT_ERROR.err(e.to_string()),
+            e @ (IoError::InvalidInput(_) | IoError::Output { .. }) => {
+                INPUT_ERROR.err(e.to_string())
+            }
             e @ IoError::NoObject(_) => DEGENERATE_SHAPE_ERROR.err(e.to_string()),
             IoError::Shape(e) => e.into_py_err(),
         }

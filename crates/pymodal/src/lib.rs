@@ -4,6 +4,7 @@
 use pyo3::prelude::*;
 
 mod assign_py;
+mod batch_py;
 mod errors;
 mod io_py;
 mod match_py;
@@ -23,6 +24,7 @@ fn _pymodal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     match_py::register(m)?;
     io_py::register(m)?;
     run_py::register(m)?;
+    batch_py::register(m)?;
     options_py::register(m)?;
     synthetic_py::register(m)?;
     Ok(())

@@ -254,3 +254,109 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run, m)?)?;
     Ok(())
 }
+
+/// The keywords of [`run`] that a study takes as `**options`.
+const RUN_KEYWORDS: [&str; 29] = [
+    "element",
+    "modes",
+    "search",
+    "solver",
+    "threshold",
+    "threshold_mode",
+    "excess",
+    "paper",
+    "prealign",
+    "refits",
+    "refit_tolerance",
+    "kappa",
+    "center_stride",
+    "position_weight",
+    "cost_power",
+    "common_sigma",
+    "skip_rigid",
+    "band",
+    "material",
+    "model",
+    "frames",
+    "noise",
+    "smooth",
+    "spacing",
+    "surface_nodes",
+    "iso_frame",
+    "iso_levels",
+    "pitch_mm",
+    "frame_rate",
+];
+
+/// The run parameters of `**options` holding [`run`]'s keywords (read exactly as `run` reads
+/// them, through [`MatchKw`] and [`RecordingKw`]); an unknown keyword is an `OptionError`.
+pub fn run_params<'py>(
+    py: Python<'py>,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<pedo_io::sequence::RunParams> {
+    let d = options.cloned().unwrap_or_else(|| PyDict::new(py));
+    for key in d.keys() {
+        let key: String = key.extract()?;
+        if !RUN_KEYWORDS.contains(&key.as_str()) {
+            return Err(crate::errors::option_error(format!(
+                "unknown option {key:?}; the options are the keywords of pymodal.run: {}",
+                RUN_KEYWORDS.join(", ")
+            )));
+        }
+    }
+    let any = |k: &str| -> PyResult<Option<Bound<'py, PyAny>>> {
+        Ok(d.get_item(k)?.filter(|v| !v.is_none()))
+    };
+    macro_rules! get {
+        ($k:literal, $t:ty) => {
+            any($k)?.map(|v| v.extract::<$t>()).transpose()?
+        };
+    }
+    let (element, search, solver) = (
+        get!("element", String),
+        get!("search", String),
+        get!("solver", String),
+    );
+    let (threshold_mode, prealign, model) = (
+        get!("threshold_mode", String),
+        get!("prealign", String),
+        get!("model", String),
+    );
+    let material = any("material")?;
+    let pitch_mm = any("pitch_mm")?;
+    let matching = MatchKw {
+        element: element.as_deref(),
+        modes: get!("modes", f64),
+        search: search.as_deref(),
+        solver: solver.as_deref(),
+        threshold: get!("threshold", f64),
+        threshold_mode: threshold_mode.as_deref(),
+        excess: get!("excess", bool),
+        paper: get!("paper", bool),
+        prealign: prealign.as_deref(),
+        refits: get!("refits", usize),
+        refit_tolerance: get!("refit_tolerance", f64),
+        kappa: get!("kappa", f64),
+        center_stride: get!("center_stride", usize),
+        position_weight: get!("position_weight", f64),
+        cost_power: get!("cost_power", f64),
+        common_sigma: get!("common_sigma", bool),
+        skip_rigid: get!("skip_rigid", bool),
+        band: get!("band", usize),
+        material: material.as_ref(),
+    }
+    .params()?;
+    RecordingKw {
+        model: model.as_deref(),
+        frames: get!("frames", (Option<usize>, Option<usize>)),
+        noise: get!("noise", f64),
+        smooth: get!("smooth", f64),
+        spacing: get!("spacing", f64),
+        surface_nodes: get!("surface_nodes", usize),
+        iso_frame: get!("iso_frame", usize),
+        iso_levels: get!("iso_levels", usize),
+        pitch_mm: pitch_mm.as_ref(),
+        frame_rate: get!("frame_rate", f64),
+    }
+    .params(matching)
+}

@@ -26,10 +26,14 @@ def stub_params(fn, skip_self=False):
         ast.literal_eval(d) for d in a.defaults
     ]
     out = [(p.arg, inspect.Parameter.POSITIONAL_OR_KEYWORD, d) for p, d in zip(pos, defaults)]
+    if a.vararg:
+        out.append((a.vararg.arg, inspect.Parameter.VAR_POSITIONAL, inspect.Parameter.empty))
     for p, d in zip(a.kwonlyargs, a.kw_defaults):
         out.append(
             (p.arg, inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.empty if d is None else ast.literal_eval(d))
         )
+    if a.kwarg:
+        out.append((a.kwarg.arg, inspect.Parameter.VAR_KEYWORD, inspect.Parameter.empty))
     return out
 
 

@@ -279,3 +279,35 @@ def run(
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
 ) -> dict[str, Any]: ...
+
+# A row of a study table (batch, batch_row): path, output, format, frames, pairs,
+# mean_local_percent, mean_optimisation_percent, tracks, wall_time_s, status ("ok", "skipped",
+# "error") and message, the columns of study.csv.
+StudyRow = dict[str, Any]
+
+def find_recordings(inputs: Union[Path, Sequence[Path]]) -> list[str]:
+    """The recordings named by files, folders (searched recursively) and glob patterns, in order, each once."""
+    ...
+
+def batch(
+    paths: Union[Path, Sequence[Path]],
+    out: Optional[Path] = None,
+    jobs: Optional[int] = None,
+    *,
+    force: bool = False,
+    figures: Literal["png", "svg", "none"] = "png",
+    **options: Any,
+) -> list[StudyRow]:
+    """Run every recording like :func:`run` (several at once); return the study table, one dict per recording."""
+    ...
+
+def batch_row(
+    path: Path,
+    out: Optional[Path] = None,
+    *,
+    force: bool = False,
+    figures: Literal["png", "svg", "none"] = "png",
+    **options: Any,
+) -> StudyRow:
+    """One row of :func:`batch`'s table: one recording on one thread (for Dask or a job queue)."""
+    ...

@@ -1,0 +1,840 @@
+//! A whole study: many recordings, each run like `pedomatch run` into a folder of its own, several
+//! at once, summed up in one table (`study.csv`/`study.json`) with a row per recording.
+//!
+//! - [`find_recordings`] turns files, folders (searched recursively) and glob patterns into the
+//!   list of recordings;
+//! - [`run_study`] runs them on a pool of `jobs` threads, each recording on one thread (its pairs
+//!   are matched in order, so the two levels of parallelism never compete for the cores). One
+//!   recording that cannot be read or matched becomes an `error` row; the others go on;
+//! - with an output folder, a recording whose folder is complete (see [`is_complete`]) is not
+//!   run again but reported as `skipped` with its previous numbers, unless `force` is set;
+//! - [`run_recording`] is one row of that table, for callers that distribute the recordings
+//!   themselves (Python's `pymodal.batch_row`, e.g. on a Dask cluster).
+//!
+//! The folder of one run is written by [`write_run_folder`], which `pedomatch run` uses too.
+
+use crate::error::{IoError, Result};
+use crate::figure::{FigureAxes, MatchFigure, ObjectLabel, TracksFigure};
+use crate::formats::{read_recording_with, sniff_format, ReadOptions, SNIFF_BYTES};
+use crate::outdir::{self, OutDir};
+use crate::recording::{Format, Recording};
+use crate::report::{self, Cell, InputInfo, Table};
+use crate::sequence::{run_sequence, RunParams, SequenceOptions, SequenceResult, Stage};
+use rayon::prelude::*;
+use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Marks a folder as a study output ([`run_study`] writes only into an empty folder or one
+/// holding it).
+const STUDY_MARKER: &str = ".pedomatch-study";
+
+/// The tables every run folder holds (besides `summary.json`).
+pub const RUN_TABLES: [&str; 6] = [
+    "pairs.csv",
+    "pairs.json",
+    "objects.csv",
+    "matches.csv",
+    "tracks.csv",
+    "frames.csv",
+];
+
+/// Which figure files a run writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct FigureKinds {
+    pub png: bool,
+    pub svg: bool,
+}
+
+/// A finished run of one recording, as the writers of its folder see it.
+pub struct RunRecord<'a> {
+    pub input: &'a InputInfo,
+    pub recording: &'a Recording,
+    pub params: &'a RunParams,
+    pub options: &'a SequenceOptions,
+    pub result: &'a SequenceResult,
+}
+
+/// Builds the HTML page `report.html` of a run from the run and its summary (`summary.json`).
+/// The interactive report lives in a crate above this one, so the caller passes it in.
+pub type ReportWriter = dyn Fn(&RunRecord<'_>, &Value) -> Result<String> + Sync;
+
+/// What a run folder holds besides its tables and `summary.json`.
+#[derive(Clone, Copy, Default)]
+pub struct RunOutputs<'a> {
+    pub figures: FigureKinds,
+    /// `report.html`, when given.
+    pub report: Option<&'a ReportWriter>,
+    /// `animation.gif`: the frames with their contours and matches (`--animation gif`).
+    pub animation: bool,
+}
+
+/// Writes every table of a sequence run (pairs.csv/.json, objects.csv, matches.csv, tracks.csv,
+/// and frames.csv: the per-frame measures of the frames used).
+pub fn write_tables(
+    dir: &OutDir,
+    recording: &Recording,
+    options: &SequenceOptions,
+    r: &SequenceResult,
+) -> Result<()> {
+    let pairs = report::pairs_table(recording, r);
+    dir.write("pairs.csv", pairs.to_csv().as_bytes())?;
+    dir.write("pairs.json", pretty(&pairs.to_json()).as_bytes())?;
+    let objects = report::objects_table(recording, r);
+    dir.write("objects.csv", objects.to_csv().as_bytes())?;
+    let matches = report::matches_table(recording, r);
+    dir.write("matches.csv", matches.to_csv().as_bytes())?;
+    let tracks = report::tracks_table(recording, r);
+    dir.write("tracks.csv", tracks.to_csv().as_bytes())?;
+    let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
+    let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
+    let frames = report::frames_table(recording, threshold, start, end);
+    dir.write("frames.csv", frames.to_csv().as_bytes())
+}
+
+/// Writes the match figure of every pair (in parallel on the current rayon pool) and the tracks
+/// figure, as PNG and/or SVG, under `figures/` and as `tracks.*`.
+pub fn write_figures(
+    dir: &OutDir,
+    recording: &Recording,
+    r: &SequenceResult,
+    kinds: FigureKinds,
+) -> Result<()> {
+    if !kinds.png && !kinds.svg {
+        return Ok(());
+    }
+    let axes = FigureAxes::of_recording(recording);
+    r.pairs.par_iter().try_for_each(|p| -> Result<()> {
+        let (oa, ob) = (&r.objects[p.a], &r.objects[p.b]);
+        let fig = MatchFigure {
+            a: &oa.shape,
+            b: &ob.shape,
+            pairs: &p.result.pairs,
+            axes: &axes,
+            label_a: ObjectLabel::object(oa.id, oa.frame),
+            label_b: ObjectLabel::object(ob.id, ob.frame),
+        };
+        let stem = format!("figures/pair_{:04}_{:04}", oa.id, ob.id);
+        write_figure(dir, &stem, kinds, || fig.to_png(), || fig.to_svg())
+    })?;
+    let peak = recording.peak_image();
+    let tracks = TracksFigure {
+        result: r,
+        peak: &peak,
+        axes: &axes,
+        min_steps: 3,
+        max_tracks: 40,
+    };
+    write_figure(dir, "tracks", kinds, || tracks.to_png(), || tracks.to_svg())
+}
+
+/// Writes `{stem}.png` and/or `{stem}.svg`.
+pub fn write_figure(
+    dir: &OutDir,
+    stem: &str,
+    kinds: FigureKinds,
+    to_png: impl FnOnce() -> Result<Vec<u8>>,
+    to_svg: impl FnOnce() -> Result<String>,
+) -> Result<()> {
+    let named = |e: IoError| IoError::Figure(format!("{stem}: {e}"));
+    if kinds.png {
+        dir.write(&format!("{stem}.png"), &to_png().map_err(named)?)?;
+    }
+    if kinds.svg {
+        dir.write(&format!("{stem}.svg"), to_svg().map_err(named)?.as_bytes())?;
+    }
+    Ok(())
+}
+
+/// Pretty JSON with a final newline.
+pub fn pretty(v: &Value) -> String {
+    let mut s = serde_json::to_string_pretty(v).unwrap_or_else(|_| v.to_string());
+    s.push('\n');
+    s
+}
+
+/// Writes the folder `out` of a run, whole or not at all (see [`crate::outdir`]): the tables, the
+/// figures, `summary.json` and, when asked, `report.html`. `timings` are the stages measured
+/// before the sequence run (e.g. reading); the time spent here is added as `output`. Returns
+/// the summary.
+pub fn write_run_folder(
+    out: &Path,
+    run: &RunRecord<'_>,
+    outputs: &RunOutputs<'_>,
+    timings: &[(&str, f64)],
+) -> Result<Value> {
+    let started = Instant::now();
+    let dir = OutDir::create(out)?;
+    write_tables(&dir, run.recording, run.options, run.result)?;
+    write_figures(&dir, run.recording, run.result, outputs.figures)?;
+    let mut stages = timings.to_vec();
+    stages.push(("output", started.elapsed().as_secs_f64()));
+    let summary = report::run_summary(
+        run.input,
+        run.recording,
+        run.params,
+        run.options,
+        run.result,
+        &stages,
+    );
+    dir.write("summary.json", pretty(&summary).as_bytes())?;
+    if let Some(report) = outputs.report {
+        dir.write("report.html", report(run, &summary)?.as_bytes())?;
+    }
+    if outputs.animation {
+        let axes = crate::figure::FigureAxes::of_recording(run.recording);
+        let animation = crate::figure::Animation {
+            recording: run.recording,
+            result: run.result,
+            axes: &axes,
+            frames: run.options.frames.unwrap_or((0, run.recording.n_frames())),
+        };
+        dir.write("animation.gif", &animation.to_gif()?)?;
+    }
+    dir.commit()?;
+    Ok(summary)
+}
+
+/// What became of one recording of a study.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RowStatus {
+    /// Run now.
+    Ok,
+    /// Its folder was complete; not run again.
+    Skipped,
+    /// It could not be read, matched or written.
+    Error,
+}
+
+impl RowStatus {
+    /// The word in the `status` column.
+    pub fn name(self) -> &'static str {
+        match self {
+            RowStatus::Ok => "ok",
+            RowStatus::Skipped => "skipped",
+            RowStatus::Error => "error",
+        }
+    }
+}
+
+/// One row of the study table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyRow {
+    /// The recording's path as found (an input, or a file in an input folder).
+    pub path: String,
+    /// Its folder's name under the study folder (`None` without an output folder).
+    pub output: Option<String>,
+    /// The format read (also for a file that failed to parse, when its content was recognised).
+    pub format: Option<String>,
+    pub frames: Option<usize>,
+    /// Matched pairs.
+    pub pairs: Option<usize>,
+    pub mean_local_percent: Option<f64>,
+    pub mean_optimisation_percent: Option<f64>,
+    pub tracks: Option<usize>,
+    /// Seconds from the start of this recording to its row (for a skipped one: those of the
+    /// run that wrote the folder).
+    pub wall_time_s: f64,
+    pub status: RowStatus,
+    /// One line: why it failed, why it was skipped, or what the run left out.
+    pub message: String,
+}
+
+/// The columns of the study table, units in the names.
+pub const STUDY_COLUMNS: [&str; 11] = [
+    "path",
+    "output",
+    "format",
+    "frames",
+    "pairs",
+    "mean_local_percent",
+    "mean_optimisation_percent",
+    "tracks",
+    "wall_time_s",
+    "status",
+    "message",
+];
+
+/// The study table: one row per recording, in the order given.
+pub fn study_table(rows: &[StudyRow]) -> Table {
+    let text = |s: &Option<String>| s.clone().map_or(Cell::Empty, Cell::Text);
+    let int = |v: Option<usize>| v.map_or(Cell::Empty, |v| Cell::Int(v as i64));
+    let float = |v: Option<f64>, d| v.map_or(Cell::Empty, |v| Cell::Float(v, d));
+    Table {
+        header: STUDY_COLUMNS.iter().map(|s| s.to_string()).collect(),
+        rows: rows
+            .iter()
+            .map(|r| {
+                vec![
+                    Cell::Text(r.path.clone()),
+                    text(&r.output),
+                    text(&r.format),
+                    int(r.frames),
+                    int(r.pairs),
+                    float(r.mean_local_percent, 1),
+                    float(r.mean_optimisation_percent, 1),
+                    int(r.tracks),
+                    Cell::Float(r.wall_time_s, 3),
+                    Cell::Text(r.status.name().into()),
+                    Cell::Text(r.message.clone()),
+                ]
+            })
+            .collect(),
+    }
+}
+
+/// A row back from `study.json` (`None` if it is not one).
+fn row_from_json(v: &Value) -> Option<StudyRow> {
+    let text = |k: &str| v.get(k).and_then(Value::as_str).map(str::to_string);
+    let int = |k: &str| v.get(k).and_then(Value::as_u64).map(|x| x as usize);
+    let float = |k: &str| v.get(k).and_then(Value::as_f64);
+    Some(StudyRow {
+        path: text("path")?,
+        output: text("output"),
+        format: text("format"),
+        frames: int("frames"),
+        pairs: int("pairs"),
+        mean_local_percent: float("mean_local_percent"),
+        mean_optimisation_percent: float("mean_optimisation_percent"),
+        tracks: int("tracks"),
+        wall_time_s: float("wall_time_s")?,
+        status: match text("status")?.as_str() {
+            "ok" => RowStatus::Ok,
+            "skipped" => RowStatus::Skipped,
+            _ => RowStatus::Error,
+        },
+        message: text("message").unwrap_or_default(),
+    })
+}
+
+/// The name of a recording's folder under the study folder: its file name and 8 hex digits of
+/// the SHA-256 of its absolute path, so that `a/walk.asf` and `b/walk.asf` never share a folder
+/// and a second run finds the same one.
+pub fn output_name(path: &Path) -> String {
+    let absolute = std::fs::canonicalize(path)
+        .or_else(|_| std::path::absolute(path))
+        .unwrap_or_else(|_| path.to_path_buf());
+    let hash = report::sha256_hex(absolute.to_string_lossy().as_bytes());
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .filter(|n| !n.is_empty() && !n.starts_with('.'))
+        .unwrap_or_else(|| "recording".into());
+    format!("{name}-{}", &hash[..8])
+}
+
+/// The recordings named by `inputs`, in order, each once:
+///
+/// - an existing file is taken as it is (if it is no recording, its row says so);
+/// - a folder is searched recursively, in name order, for files whose content sniffs as a
+///   recording ([`sniff_format`]); PNG/TIFF images are not recordings on their own there: a
+///   folder holding images is one image-sequence recording. Hidden folders and pedomatch output
+///   folders are not searched;
+/// - anything else is a glob pattern (`data/**/*.asf`), each match taken as above.
+///
+/// A path that neither exists nor matches is kept, so that its row reports it missing.
+/// Fails on a malformed pattern.
+pub fn find_recordings<S: AsRef<str>>(inputs: &[S]) -> Result<Vec<PathBuf>> {
+    let mut found = Vec::new();
+    for input in inputs {
+        let input = input.as_ref();
+        let path = Path::new(input);
+        if path.exists() {
+            add_path(path, &mut found);
+            continue;
+        }
+        let pattern = glob::glob(input)
+            .map_err(|e| IoError::invalid(format!("input pattern {input:?}: {e}")))?;
+        let matches: Vec<PathBuf> = pattern.flatten().collect();
+        if matches.is_empty() {
+            found.push(path.to_path_buf());
+        }
+        for m in matches {
+            add_path(&m, &mut found);
+        }
+    }
+    let mut seen = std::collections::HashSet::new();
+    found.retain(|p| seen.insert(std::fs::canonicalize(p).unwrap_or_else(|_| p.clone())));
+    Ok(found)
+}
+
+fn add_path(path: &Path, found: &mut Vec<PathBuf>) {
+    if path.is_dir() {
+        search_folder(path, found);
+    } else {
+        found.push(path.to_path_buf());
+    }
+}
+
+fn search_folder(root: &Path, found: &mut Vec<PathBuf>) {
+    let is_skipped_dir = |e: &walkdir::DirEntry| {
+        e.depth() > 0
+            && e.file_type().is_dir()
+            && (e.file_name().to_string_lossy().starts_with('.')
+                || outdir::is_output(e.path())
+                || e.path().join(STUDY_MARKER).is_file())
+    };
+    let walk = walkdir::WalkDir::new(root)
+        .sort_by_file_name()
+        .into_iter()
+        .filter_entry(|e| !is_skipped_dir(e));
+    let mut image_folders = Vec::new();
+    for entry in walk.flatten() {
+        if !entry.file_type().is_file() || entry.file_name().to_string_lossy().starts_with('.') {
+            continue;
+        }
+        match sniff_file(entry.path()) {
+            Some(Format::Png | Format::Tiff) => {
+                let folder = entry.path().parent().unwrap_or(root).to_path_buf();
+                if !image_folders.contains(&folder) {
+                    image_folders.push(folder.clone());
+                    found.push(folder);
+                }
+            }
+            Some(_) => found.push(entry.into_path()),
+            None => {}
+        }
+    }
+}
+
+/// The format of a file by its first bytes, if it is a recording.
+fn sniff_file(path: &Path) -> Option<Format> {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(SNIFF_BYTES);
+    std::fs::File::open(path)
+        .ok()?
+        .take(SNIFF_BYTES as u64)
+        .read_to_end(&mut head)
+        .ok()?;
+    sniff_format(path, &head).ok()
+}
+
+/// How a study runs.
+#[derive(Clone, Default)]
+pub struct StudyOptions<'a> {
+    pub params: RunParams,
+    pub read: ReadOptions,
+    /// The study folder: one folder per recording ([`output_name`]) and the study table. `None`:
+    /// nothing is written, the rows are only returned.
+    pub out: Option<PathBuf>,
+    /// Recordings run at once (0: one per available core).
+    pub jobs: usize,
+    /// Run recordings again even when their folders are complete.
+    pub force: bool,
+    pub outputs: RunOutputs<'a>,
+}
+
+/// What [`run_study`] reports as it goes (possibly from several threads).
+#[derive(Debug, Clone, Copy)]
+pub enum StudyEvent<'a> {
+    /// Recording `index` is `fraction` (0 to 1) done: object building is the first half, matching
+    /// the second.
+    Progress { index: usize, fraction: f64 },
+    /// Recording `index` is done.
+    Finished { index: usize, row: &'a StudyRow },
+}
+
+/// Runs every recording of `paths` (see the module docs) and returns one row per recording, in
+/// order. With an output folder, writes each recording's folder and `study.csv` + `study.json`
+/// (atomically, after the last recording). Fails only before any recording runs: invalid
+/// options, or an output folder that holds other files.
+pub fn run_study(
+    paths: &[PathBuf],
+    opts: &StudyOptions<'_>,
+    progress: &(dyn Fn(StudyEvent<'_>) + Sync),
+) -> Result<Vec<StudyRow>> {
+    opts.params.validate()?;
+    let previous = match &opts.out {
+        Some(out) => open_study_folder(out)?,
+        None => Vec::new(),
+    };
+    let jobs = if opts.jobs == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        opts.jobs
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build()
+        .map_err(|e| IoError::invalid(format!("cannot start {jobs} threads: {e}")))?;
+    let rows: Vec<StudyRow> = pool.install(|| {
+        paths
+            .par_iter()
+            .with_max_len(1)
+            .enumerate()
+            .map(|(index, path)| {
+                let before = previous
+                    .iter()
+                    .find(|r| Path::new(&r.path) == path.as_path());
+                let report = |fraction| progress(StudyEvent::Progress { index, fraction });
+                let row = on_one_thread(|| run_recording(path, opts, before, &report));
+                progress(StudyEvent::Finished { index, row: &row });
+                row
+            })
+            .collect()
+    });
+    if let Some(out) = &opts.out {
+        if !outdir::interrupted() {
+            write_study_table(out, &rows)?;
+        }
+    }
+    Ok(rows)
+}
+
+/// Runs `f` on a rayon pool of one thread: the pairs of one recording are then matched in turn
+/// (the recordings are what runs in parallel). Falls back to the current thread if no thread
+/// can be started.
+pub fn on_one_thread<T: Send>(f: impl FnOnce() -> T + Send) -> T {
+    match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
+        Ok(pool) => pool.install(f),
+        Err(_) => f(),
+    }
+}
+
+/// Creates the study folder `out` (marking it as one) or checks that it is one; returns the rows
+/// of its previous table (none if it has none). Fails if `out` holds files and is not a study.
+pub fn open_study_folder(out: &Path) -> Result<Vec<StudyRow>> {
+    let io = |e| IoError::Io {
+        path: out.display().to_string(),
+        source: e,
+    };
+    let marker = out.join(STUDY_MARKER);
+    match std::fs::read_dir(out).map(|mut entries| entries.next().is_some()) {
+        Ok(true) if !marker.is_file() => {
+            return Err(IoError::Output {
+                path: out.display().to_string(),
+                msg: "folder exists and is not a pedomatch study; choose another output folder"
+                    .into(),
+            })
+        }
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            if out.exists() {
+                return Err(IoError::Output {
+                    path: out.display().to_string(),
+                    msg: "exists and is not a folder; choose another output folder".into(),
+                });
+            }
+            return Err(io(e));
+        }
+        _ => {}
+    }
+    std::fs::create_dir_all(out).map_err(io)?;
+    std::fs::write(&marker, b"written by pedomatch batch\n").map_err(io)?;
+    let previous = std::fs::read(out.join("study.json"))
+        .ok()
+        .and_then(|b| serde_json::from_slice::<Value>(&b).ok());
+    Ok(previous
+        .as_ref()
+        .and_then(Value::as_array)
+        .map(|rows| rows.iter().filter_map(row_from_json).collect())
+        .unwrap_or_default())
+}
+
+/// Writes `study.csv` and `study.json`, each replaced in one rename.
+fn write_study_table(out: &Path, rows: &[StudyRow]) -> Result<()> {
+    let table = study_table(rows);
+    let write = |name: &str, text: String| {
+        let tmp = out.join(format!(".{name}.tmp-{}", std::process::id()));
+        let target = out.join(name);
+        std::fs::write(&tmp, text)
+            .and_then(|()| std::fs::rename(&tmp, &target))
+            .map_err(|e| {
+                let _ = std::fs::remove_file(&tmp);
+                IoError::Io {
+                    path: target.display().to_string(),
+                    source: e,
+                }
+            })
+    };
+    write("study.csv", table.to_csv())?;
+    write("study.json", pretty(&table.to_json()))
+}
+
+/// One recording of a study: read, run and (with an output folder) written, or skipped when its
+/// folder is complete; never fails: what goes wrong is the row's `error` and message.
+/// `previous` is its row in the study's previous table (kept for a skipped recording);
+/// `progress` gets the fraction done. Runs on the current rayon pool: call it from a pool of one
+/// thread to keep the recording on one core.
+pub fn run_recording(
+    path: &Path,
+    opts: &StudyOptions<'_>,
+    previous: Option<&StudyRow>,
+    progress: &(dyn Fn(f64) + Sync),
+) -> StudyRow {
+    let started = Instant::now();
+    let output = opts.out.as_ref().map(|_| output_name(path));
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        process(path, opts, output.as_deref(), previous, progress, started)
+    }));
+    let outcome = match outcome {
+        Ok(r) => r,
+        Err(panic) => Err(IoError::invalid(format!(
+            "internal error (please report it): {}",
+            panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_default()
+        ))),
+    };
+    outcome.unwrap_or_else(|e| StudyRow {
+        path: path.display().to_string(),
+        output,
+        format: sniff_file(path).map(|f| f.name().to_string()),
+        frames: None,
+        pairs: None,
+        mean_local_percent: None,
+        mean_optimisation_percent: None,
+        tracks: None,
+        wall_time_s: started.elapsed().as_secs_f64(),
+        status: RowStatus::Error,
+        message: one_line(&e.to_string()),
+    })
+}
+
+fn process(
+    path: &Path,
+    opts: &StudyOptions<'_>,
+    output: Option<&str>,
+    previous: Option<&StudyRow>,
+    progress: &(dyn Fn(f64) + Sync),
+    started: Instant,
+) -> Result<StudyRow> {
+    opts.params.validate()?;
+    let mut recording = read_recording_with(path, &opts.read)?;
+    let input = InputInfo::of_path(path)?;
+    opts.params.units.apply(&mut recording)?;
+    let options = opts.params.to_options(&recording)?;
+    let read_s = started.elapsed().as_secs_f64();
+    let folder = opts.out.as_ref().zip(output).map(|(o, n)| o.join(n));
+    if let Some(folder) = folder.as_deref().filter(|_| !opts.force) {
+        let used = used_options(&opts.params, &options, &recording);
+        if let Some(summary) = complete_summary(folder, &input, &used, &opts.outputs) {
+            let mut row = row_of_summary(path, output, &summary, started);
+            if let Some(p) = previous {
+                row.wall_time_s = p.wall_time_s;
+            }
+            row.status = RowStatus::Skipped;
+            row.message =
+                "outputs complete (same input SHA-256 and options); force re-runs it".into();
+            return Ok(row);
+        }
+    }
+    let on_stage = |stage: Stage, done: usize, total: usize| {
+        let part = done as f64 / total.max(1) as f64;
+        progress(match stage {
+            Stage::Objects => 0.5 * part,
+            Stage::Matching => 0.5 + 0.5 * part,
+        })
+    };
+    let result = run_sequence(&recording, &options, &on_stage)?;
+    let run = RunRecord {
+        input: &input,
+        recording: &recording,
+        params: &opts.params,
+        options: &options,
+        result: &result,
+    };
+    let summary = match folder {
+        Some(folder) => write_run_folder(&folder, &run, &opts.outputs, &[("read", read_s)])?,
+        None => report::run_summary(
+            &input,
+            &recording,
+            &opts.params,
+            &options,
+            &result,
+            &[("read", read_s)],
+        ),
+    };
+    let mut row = row_of_summary(path, output, &summary, started);
+    row.message = left_out(&result);
+    Ok(row)
+}
+
+/// The options of a run as `summary.json` records them.
+fn used_options(params: &RunParams, options: &SequenceOptions, recording: &Recording) -> Value {
+    Value::Object(
+        params
+            .used(options, recording)
+            .iter()
+            .map(|(k, v)| (k.to_string(), report::option_json(v)))
+            .collect::<Map<String, Value>>(),
+    )
+}
+
+/// The summary of `folder` if it is complete: a pedomatch output whose `summary.json` has the
+/// input's SHA-256 and the options `used`, with every table, and the report and tracks figure
+/// that `outputs` asks for.
+pub fn is_complete(
+    folder: &Path,
+    input: &InputInfo,
+    used: &Value,
+    outputs: &RunOutputs<'_>,
+) -> bool {
+    complete_summary(folder, input, used, outputs).is_some()
+}
+
+fn complete_summary(
+    folder: &Path,
+    input: &InputInfo,
+    used: &Value,
+    outputs: &RunOutputs<'_>,
+) -> Option<Value> {
+    if !outdir::is_output(folder) || input.sha256.is_none() {
+        return None;
+    }
+    let summary: Value =
+        serde_json::from_slice(&std::fs::read(folder.join("summary.json")).ok()?).ok()?;
+    let same_input = summary["input"]["sha256"].as_str() == input.sha256.as_deref();
+    if !same_input || !json_close(&summary["options"], used) {
+        return None;
+    }
+    let mut files: Vec<&str> = RUN_TABLES.to_vec();
+    if outputs.report.is_some() {
+        files.push("report.html");
+    }
+    if outputs.figures.png {
+        files.push("tracks.png");
+    }
+    if outputs.figures.svg {
+        files.push("tracks.svg");
+    }
+    files
+        .iter()
+        .all(|f| folder.join(f).is_file())
+        .then_some(summary)
+}
+
+/// Equal JSON values, numbers equal to 12 significant digits (a float written and read back
+/// may differ in its last bit).
+fn json_close(a: &Value, b: &Value) -> bool {
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => match (x.as_f64(), y.as_f64()) {
+            (Some(x), Some(y)) => x == y || (x - y).abs() <= 1e-12 * x.abs().max(y.abs()),
+            _ => x == y,
+        },
+        (Value::Array(x), Value::Array(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(x, y)| json_close(x, y))
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            x.len() == y.len()
+                && x.iter()
+                    .all(|(k, v)| y.get(k).is_some_and(|w| json_close(v, w)))
+        }
+        _ => a == b,
+    }
+}
+
+fn row_of_summary(
+    path: &Path,
+    output: Option<&str>,
+    summary: &Value,
+    started: Instant,
+) -> StudyRow {
+    let int = |v: &Value| v.as_u64().map(|x| x as usize);
+    StudyRow {
+        path: path.display().to_string(),
+        output: output.map(str::to_string),
+        format: summary["input"]["format"].as_str().map(str::to_string),
+        frames: int(&summary["recording"]["frames"]),
+        pairs: int(&summary["pairs"]),
+        mean_local_percent: summary["mean_local_percent"].as_f64(),
+        mean_optimisation_percent: summary["mean_optimisation_percent"].as_f64(),
+        tracks: int(&summary["tracks"]),
+        wall_time_s: started.elapsed().as_secs_f64(),
+        status: RowStatus::Ok,
+        message: String::new(),
+    }
+}
+
+/// What a successful run left out, in one line (empty if nothing).
+fn left_out(r: &SequenceResult) -> String {
+    if r.skipped_pairs.is_empty() && r.skipped_frames.is_empty() {
+        return String::new();
+    }
+    let first = r
+        .skipped_pairs
+        .first()
+        .map(|s| s.reason.as_str())
+        .or(r.skipped_frames.first().map(|s| s.reason.as_str()))
+        .unwrap_or_default();
+    one_line(&format!(
+        "{} pairs and {} frames skipped (first: {first})",
+        r.skipped_pairs.len(),
+        r.skipped_frames.len()
+    ))
+}
+
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// The counts of a study's rows by status, as `--json` and the closing line report them.
+pub fn status_counts(rows: &[StudyRow]) -> Value {
+    let count = |s: RowStatus| rows.iter().filter(|r| r.status == s).count();
+    json!({
+        "recordings": rows.len(),
+        "ok": count(RowStatus::Ok),
+        "skipped": count(RowStatus::Skipped),
+        "error": count(RowStatus::Error),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(status: RowStatus) -> StudyRow {
+        StudyRow {
+            path: "data/s01, left \"walk\".asf".into(),
+            output: Some("walk.asf-0123abcd".into()),
+            format: Some("asf".into()),
+            frames: Some(205),
+            pairs: Some(150),
+            mean_local_percent: Some(61.25),
+            mean_optimisation_percent: Some(97.5),
+            tracks: Some(900),
+            wall_time_s: 1.5,
+            status,
+            message: String::new(),
+        }
+    }
+
+    #[test]
+    fn a_row_survives_the_study_json() {
+        for status in [RowStatus::Ok, RowStatus::Skipped, RowStatus::Error] {
+            let r = row(status);
+            let json = study_table(std::slice::from_ref(&r)).to_json();
+            assert_eq!(row_from_json(&json[0]), Some(r));
+        }
+        let csv = study_table(&[row(RowStatus::Ok)]).to_csv();
+        assert_eq!(csv.lines().next().unwrap(), STUDY_COLUMNS.join(","));
+        assert!(
+            csv.contains("\"data/s01, left \"\"walk\"\".asf\","),
+            "free text is quoted: {csv}"
+        );
+    }
+
+    #[test]
+    fn same_file_names_in_different_folders_get_different_stable_folders() {
+        let a = output_name(Path::new("a/walk.asf"));
+        let b = output_name(Path::new("b/walk.asf"));
+        assert!(a.starts_with("walk.asf-") && b.starts_with("walk.asf-"));
+        assert_ne!(a, b);
+        assert_eq!(a, output_name(Path::new("a/walk.asf")));
+        assert_eq!(a.len(), "walk.asf-".len() + 8);
+    }
+
+    #[test]
+    fn options_read_back_compare_equal_to_the_last_bits() {
+        let used = json!({"spacing": 0.1 + 0.2, "model": "contour", "pitch_mm": [5.08, 5.08]});
+        let mut read_back = used.clone();
+        read_back["spacing"] = json!(0.30000000000000004_f64.next_down());
+        assert!(json_close(&used, &read_back));
+        read_back["spacing"] = json!(0.3001);
+        assert!(!json_close(&used, &read_back));
+        read_back["spacing"] = used["spacing"].clone();
+        read_back["model"] = json!("surface");
+        assert!(!json_close(&used, &read_back));
+    }
+}

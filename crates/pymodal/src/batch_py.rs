@@ -1,0 +1,165 @@
+//! `pymodal.batch`, `pymodal.batch_row` and `pymodal.find_recordings`: a whole study, with the
+//! library's study code ([`pedo_io::study`]) that `pedomatch batch` runs.
+
+use pedo_io::study::{self, FigureKinds, RunOutputs, StudyOptions, StudyRow};
+use pedo_io::ReadOptions;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::path::PathBuf;
+
+use crate::errors::{option_error, to_py};
+use crate::options_py::table_rows;
+
+/// Inputs as strings: one path or pattern, or a sequence of them (str or os.PathLike).
+fn input_strings(inputs: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
+    let one = |v: &Bound<'_, PyAny>| -> PyResult<String> {
+        Ok(v.extract::<PathBuf>()?.to_string_lossy().into_owned())
+    };
+    if let Ok(s) = one(inputs) {
+        return Ok(vec![s]);
+    }
+    inputs.try_iter()?.map(|v| one(&v?)).collect()
+}
+
+fn figure_kinds(figures: &str) -> PyResult<FigureKinds> {
+    match figures {
+        "png" => Ok(FigureKinds {
+            png: true,
+            svg: false,
+        }),
+        "svg" => Ok(FigureKinds {
+            png: false,
+            svg: true,
+        }),
+        "none" => Ok(FigureKinds::default()),
+        other => Err(option_error(format!(
+            "figures: unknown value {other:?}; expected one of png, svg, none"
+        ))),
+    }
+}
+
+/// The study options of the keywords.
+fn study_options(
+    py: Python<'_>,
+    out: Option<PathBuf>,
+    jobs: Option<usize>,
+    force: bool,
+    figures: &str,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<StudyOptions<'static>> {
+    if jobs == Some(0) {
+        return Err(option_error(
+            "jobs: 0 is not a number of jobs; expected >= 1 or None (every core)",
+        ));
+    }
+    let params = crate::run_py::run_params(py, options)?;
+    params.validate().map_err(to_py)?;
+    Ok(StudyOptions {
+        params,
+        read: ReadOptions::default(),
+        out,
+        jobs: jobs.unwrap_or(0),
+        force,
+        outputs: RunOutputs {
+            figures: figure_kinds(figures)?,
+            report: None,
+        },
+    })
+}
+
+fn row_dict<'py>(py: Python<'py>, row: &StudyRow) -> PyResult<Bound<'py, PyAny>> {
+    let rows = table_rows(py, &study::study_table(std::slice::from_ref(row)))?;
+    rows.get_item(0)
+}
+
+/// The recordings named by ``inputs`` (a path or pattern, or a sequence of them), in order,
+/// each once, as :func:`batch` finds them: a file as it is; a folder searched recursively for
+/// files whose content is a recording (a folder of PNG/TIFF images is one image-sequence
+/// recording; hidden folders and pedomatch output folders are not searched); anything else a
+/// glob pattern (``"data/**/*.asf"``). A path that neither exists nor matches is kept (its row
+/// reports it missing). Returns a list of str.
+#[pyfunction]
+fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
+    let inputs = input_strings(inputs)?;
+    let found = py
+        .detach(|| study::find_recordings(&inputs))
+        .map_err(to_py)?;
+    Ok(found.iter().map(|p| p.display().to_string()).collect())
+}
+
+/// Run every recording of ``paths`` like :func:`run` and return the study table: a list of dicts,
+/// one per recording in order, with the columns of ``study.csv``: ``path``, ``output`` (its
+/// folder under ``out``, or None), ``format``, ``frames``, ``pairs``, ``mean_local_percent``,
+/// ``mean_optimisation_percent``, ``tracks``, ``wall_time_s``, ``status`` (``"ok"``,
+/// ``"skipped"`` or ``"error"``) and ``message`` (one line: why it failed or was skipped).
+/// ``pandas.DataFrame(rows)`` makes it a data frame.
+///
+/// ``paths``: files, folders or glob patterns (see :func:`find_recordings`). ``out``: the study
+/// folder; each recording's folder (the tables, figures and ``summary.json`` of
+/// ``pedomatch run``; ``report.html`` is the command line's) is written there atomically, with
+/// ``study.csv`` and ``study.json``; a recording whose folder is complete (same input SHA-256
+/// and options) is skipped unless ``force``. ``jobs``: recordings run at once, each on one
+/// thread (None: every core). ``figures``: ``"png"``, ``"svg"`` or ``"none"``. ``options``: the
+/// keywords of :func:`run`. A recording that fails is an ``"error"`` row; the others go on. Bad
+/// options or an ``out`` folder holding other files raise. The GIL is released throughout.
+#[pyfunction]
+#[pyo3(signature = (paths, out=None, jobs=None, *, force=false, figures="png", **options))]
+fn batch<'py>(
+    py: Python<'py>,
+    paths: &Bound<'py, PyAny>,
+    out: Option<PathBuf>,
+    jobs: Option<usize>,
+    force: bool,
+    figures: &str,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyList>> {
+    let inputs = input_strings(paths)?;
+    let opts = study_options(py, out, jobs, force, figures, options)?;
+    let rows = py
+        .detach(|| {
+            let found = study::find_recordings(&inputs)?;
+            study::run_study(&found, &opts, &|_| {})
+        })
+        .map_err(to_py)?;
+    table_rows(py, &study::study_table(&rows))
+}
+
+/// One row of :func:`batch`'s table: runs the recording at ``path`` (on one thread, the GIL
+/// released), writing its folder under ``out`` when given (skipped when complete unless
+/// ``force``), but no study table. For distributing a study yourself (a Dask cluster, a job
+/// queue): ``[batch_row(p, out) for p in find_recordings(inputs)]`` equals
+/// ``batch(inputs, out)`` but for ``wall_time_s``. Never raises for a bad recording (its row says
+/// what went wrong); bad options raise.
+#[pyfunction]
+#[pyo3(signature = (path, out=None, *, force=false, figures="png", **options))]
+fn batch_row<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    out: Option<PathBuf>,
+    force: bool,
+    figures: &str,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let opts = study_options(py, out, Some(1), force, figures, options)?;
+    let row = py
+        .detach(|| {
+            let previous = match &opts.out {
+                Some(out) => study::open_study_folder(out)?,
+                None => Vec::new(),
+            };
+            let before = previous
+                .iter()
+                .find(|r| std::path::Path::new(&r.path) == path);
+            let row = study::on_one_thread(|| study::run_recording(&path, &opts, before, &|_| {}));
+            Ok::<_, pedo_io::IoError>(row)
+        })
+        .map_err(to_py)?;
+    row_dict(py, &row)
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(find_recordings, m)?)?;
+    m.add_function(wrap_pyfunction!(batch, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_row, m)?)?;
+    Ok(())
+}

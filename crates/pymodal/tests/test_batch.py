@@ -1,0 +1,119 @@
+"""pymodal.batch, batch_row and find_recordings on a small study with a corrupt file: the rows
+agree with pymodal.run on each recording, a corrupt file is an error row, a second run skips,
+rows are picklable, and the folders are those of `pedomatch run`."""
+
+import json
+import pickle
+import shutil
+from pathlib import Path
+
+import pytest
+
+import pymodal
+
+DATA = Path(__file__).resolve().parents[3] / "crates" / "pedo-io" / "tests" / "data"
+COLUMNS = [
+    "path",
+    "output",
+    "format",
+    "frames",
+    "pairs",
+    "mean_local_percent",
+    "mean_optimisation_percent",
+    "tracks",
+    "wall_time_s",
+    "status",
+    "message",
+]
+
+
+@pytest.fixture()
+def study(tmp_path):
+    """Three recordings (two named trial.lst in different folders) and a truncated F-Scan file."""
+    (tmp_path / "in" / "a").mkdir(parents=True)
+    (tmp_path / "in" / "b").mkdir()
+    shutil.copy(DATA / "emed-test-1-10.lst", tmp_path / "in" / "a" / "trial.lst")
+    shutil.copy(DATA / "synthetic-walk.lst", tmp_path / "in" / "b" / "trial.lst")
+    shutil.copy(DATA / "tekscan-FrasP01L-11-20.csv", tmp_path / "in" / "tekscan.csv")
+    asf = (DATA / "FrasP01L.asf").read_bytes()
+    (tmp_path / "in" / "corrupt.asf").write_bytes(asf[: len(asf) // 50])
+    return tmp_path
+
+
+def timeless(rows):
+    return [{k: v for k, v in r.items() if k != "wall_time_s"} for r in rows]
+
+
+def test_find_recordings_searches_folders_and_globs(study):
+    found = pymodal.find_recordings(study / "in")
+    assert [Path(p).relative_to(study / "in").as_posix() for p in found] == [
+        "a/trial.lst",
+        "b/trial.lst",
+        "corrupt.asf",
+        "tekscan.csv",
+    ]
+    pattern = str(study / "in" / "*" / "trial.lst")
+    assert pymodal.find_recordings([pattern, study / "in" / "a"]) == found[:2]
+
+
+def test_batch_rows_agree_with_run_and_name_the_failure(study):
+    rows = pymodal.batch(study / "in", jobs=2, figures="none")
+    assert [list(r) for r in rows] == [COLUMNS] * 4
+    by_name = {Path(r["path"]).relative_to(study / "in").as_posix(): r for r in rows}
+    bad = by_name["corrupt.asf"]
+    assert bad["status"] == "error" and bad["format"] == "asf"
+    assert "corrupt.asf" in bad["message"] and bad["frames"] is None
+    for name in ["a/trial.lst", "b/trial.lst", "tekscan.csv"]:
+        row = by_name[name]
+        assert row["status"] == "ok" and row["output"] is None
+        summary = pymodal.run(study / "in" / name)["summary"]
+        assert row["frames"] == summary["recording"]["frames"]
+        assert row["pairs"] == summary["pairs"] > 0
+        assert row["tracks"] == summary["tracks"]
+        assert row["mean_local_percent"] == pytest.approx(summary["mean_local_percent"])
+        assert row["mean_optimisation_percent"] == pytest.approx(summary["mean_optimisation_percent"])
+    assert pickle.loads(pickle.dumps(rows)) == rows
+
+
+def test_batch_writes_folders_and_resumes(study):
+    out = study / "out"
+    first = pymodal.batch([study / "in"], out, figures="none")
+    assert [r["status"] for r in first].count("ok") == 3
+    table = json.loads((out / "study.json").read_text())
+    assert table == first
+    assert (out / "study.csv").read_text().splitlines()[0] == ",".join(COLUMNS)
+    for r in first:
+        if r["status"] == "ok":
+            folder = out / r["output"]
+            for f in ["pairs.csv", "objects.csv", "matches.csv", "tracks.csv", "frames.csv", "summary.json"]:
+                assert (folder / f).is_file(), folder / f
+            assert not (folder / "report.html").exists(), "the report is the command line's"
+    second = pymodal.batch([study / "in"], out, figures="none")
+    assert [r["status"] for r in second] == ["skipped" if r["status"] == "ok" else "error" for r in first]
+    assert timeless(second) != timeless(first)  # status and message differ ...
+    keep = ["frames", "pairs", "tracks", "mean_local_percent", "wall_time_s"]
+    assert [[r[k] for k in keep] for r in second] == [[r[k] for k in keep] for r in first]
+    forced = pymodal.batch([study / "in"], out, figures="none", force=True)
+    assert [r["status"] for r in forced] == [r["status"] for r in first]
+
+
+def test_batch_row_is_one_row_of_batch(study):
+    paths = pymodal.find_recordings(study / "in")
+    rows = [pymodal.batch_row(p, spacing=1.5, figures="none") for p in paths]
+    assert timeless(rows) == timeless(pymodal.batch(paths, spacing=1.5, figures="none"))
+
+
+def test_bad_options_raise_before_any_work(study):
+    with pytest.raises(pymodal.OptionError, match="unknown option"):
+        pymodal.batch(study / "in", spacings=2)
+    with pytest.raises(pymodal.OptionError):
+        pymodal.batch(study / "in", spacing=-1)
+    with pytest.raises(pymodal.OptionError):
+        pymodal.batch(study / "in", figures="gif")
+    with pytest.raises(pymodal.OptionError):
+        pymodal.batch(study / "in", jobs=0)
+    foreign = study / "thesis"
+    foreign.mkdir()
+    (foreign / "chapter.tex").write_text("precious")
+    with pytest.raises(pymodal.InputError, match="not a pedomatch study"):
+        pymodal.batch(study / "in", foreign)

@@ -1,0 +1,250 @@
+//! End-to-end tests of `pedomatch batch`: a folder of recordings with a corrupt one, resuming,
+//! `--force`, glob and folder inputs, and the same table whatever the number of jobs.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/crates/pedo-io/tests/data");
+const FAST: [&str; 4] = ["--figures", "none", "--report", "none"];
+const TABLES: [&str; 7] = [
+    "pairs.csv",
+    "pairs.json",
+    "objects.csv",
+    "matches.csv",
+    "tracks.csv",
+    "frames.csv",
+    "summary.json",
+];
+
+fn pedomatch(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_pedomatch"))
+        .args(args)
+        .output()
+        .expect("run pedomatch")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("pedomatch-batch-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A study folder: two recordings of the same file name in different folders, a third beside
+/// them, and an F-Scan file cut after its header (it sniffs as ASF but cannot be read).
+fn study_inputs(base: &Path) -> PathBuf {
+    let input = base.join("in");
+    for sub in ["a", "b"] {
+        std::fs::create_dir_all(input.join(sub)).unwrap();
+    }
+    let copy = |from: &str, to: &str| std::fs::copy(Path::new(DATA).join(from), input.join(to));
+    copy("emed-test-1-10.lst", "a/trial.lst").unwrap();
+    copy("synthetic-walk.lst", "b/trial.lst").unwrap();
+    copy("tekscan-FrasP01L-11-20.csv", "tekscan.csv").unwrap();
+    let asf = std::fs::read(Path::new(DATA).join("FrasP01L.asf")).unwrap();
+    std::fs::write(input.join("corrupt.asf"), &asf[..asf.len() / 50]).unwrap();
+    // Not a recording: a folder search leaves it out.
+    std::fs::write(input.join("notes.txt"), "subject 3, left foot\n").unwrap();
+    input
+}
+
+fn batch_json(args: &[&str]) -> (Option<i32>, Value, String) {
+    let out = pedomatch(&[&["batch", "--json"], args, &FAST].concat());
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    let json = serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("{e}: {}\n{stderr}", String::from_utf8_lossy(&out.stdout)));
+    (out.status.code(), json, stderr)
+}
+
+fn rows(report: &Value) -> Vec<Value> {
+    report["rows"].as_array().unwrap().clone()
+}
+
+fn row<'a>(rows: &'a [Value], path_end: &str) -> &'a Value {
+    rows.iter()
+        .find(|r| r["path"].as_str().unwrap().ends_with(path_end))
+        .unwrap_or_else(|| panic!("no row for {path_end}: {rows:?}"))
+}
+
+/// The columns that do not depend on timing.
+fn numbers(r: &Value) -> Value {
+    let mut r = r.clone();
+    r.as_object_mut().unwrap().remove("wall_time_s");
+    r.as_object_mut().unwrap().remove("status");
+    r.as_object_mut().unwrap().remove("message");
+    r
+}
+
+fn sha256_of(path: &Path) -> String {
+    pedo_io::report::sha256_hex(&std::fs::read(path).unwrap())
+}
+
+#[test]
+fn a_corrupt_recording_fails_alone_and_a_second_run_resumes() {
+    let base = temp_dir("resume");
+    let input = study_inputs(&base);
+    let out = base.join("study");
+    let (i, o) = (input.to_str().unwrap(), out.to_str().unwrap());
+
+    let (code, first, stderr) = batch_json(&[i, "--out", o, "--jobs", "2"]);
+    assert_eq!(code, Some(1), "a failed recording makes exit status 1");
+    assert!(stderr.contains("corrupt.asf"), "{stderr}");
+    let first_rows = rows(&first);
+    assert_eq!(
+        first_rows.len(),
+        4,
+        "notes.txt is no recording: {first_rows:?}"
+    );
+    assert_eq!(
+        (&first["ok"], &first["error"]),
+        (&Value::from(3), &Value::from(1))
+    );
+    let bad = row(&first_rows, "corrupt.asf");
+    assert_eq!(bad["status"], "error");
+    assert_eq!(bad["format"], "asf", "the content was recognised");
+    let message = bad["message"].as_str().unwrap();
+    assert!(message.contains("corrupt.asf"), "{message}");
+    assert!(bad["frames"].is_null() && bad["pairs"].is_null());
+
+    // Every good recording: its own folder with every table, the summary of that input.
+    let mut folders = Vec::new();
+    for (name, source) in [
+        ("a/trial.lst", "emed-test-1-10.lst"),
+        ("b/trial.lst", "synthetic-walk.lst"),
+        ("tekscan.csv", "tekscan-FrasP01L-11-20.csv"),
+    ] {
+        let r = row(&first_rows, name);
+        assert_eq!(r["status"], "ok", "{r}");
+        let folder = out.join(r["output"].as_str().unwrap());
+        for t in TABLES {
+            assert!(folder.join(t).is_file(), "{}/{t}", folder.display());
+        }
+        let summary: Value =
+            serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap();
+        assert_eq!(
+            summary["input"]["sha256"].as_str().unwrap(),
+            sha256_of(&Path::new(DATA).join(source))
+        );
+        assert_eq!(r["frames"], summary["recording"]["frames"]);
+        assert_eq!(r["pairs"], summary["pairs"]);
+        assert_eq!(r["tracks"], summary["tracks"]);
+        assert!(r["pairs"].as_u64().unwrap() > 0, "{r}");
+        let pairs_csv = std::fs::read_to_string(folder.join("pairs.csv")).unwrap();
+        assert_eq!(
+            pairs_csv.lines().count() - 1,
+            r["pairs"].as_u64().unwrap() as usize,
+            "one pairs.csv line per matched pair"
+        );
+        folders.push(folder);
+    }
+    assert_ne!(folders[0], folders[1], "same file name, different folders");
+
+    // study.csv: the same rows, units in the header, the failure's message quoted.
+    let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
+    let header = csv.lines().next().unwrap();
+    assert_eq!(
+        header,
+        "path,output,format,frames,pairs,mean_local_percent,mean_optimisation_percent,tracks,wall_time_s,status,message"
+    );
+    assert_eq!(csv.lines().count(), 5);
+    let bad_line = csv.lines().find(|l| l.contains("corrupt.asf,")).unwrap();
+    assert!(bad_line.contains(",error,"), "{bad_line}");
+    let study_json: Value =
+        serde_json::from_slice(&std::fs::read(out.join("study.json")).unwrap()).unwrap();
+    assert_eq!(study_json, first["rows"]);
+
+    // Second run: the complete folders are skipped with their numbers; the corrupt file fails again.
+    let before = std::fs::read(folders[2].join("summary.json")).unwrap();
+    let (code, second, _) = batch_json(&[i, "--out", o]);
+    assert_eq!(code, Some(1));
+    let second_rows = rows(&second);
+    for (a, b) in first_rows.iter().zip(&second_rows) {
+        assert_eq!(a["path"], b["path"]);
+        if a["status"] == "ok" {
+            assert_eq!(b["status"], "skipped", "{b}");
+            assert_eq!(numbers(a), numbers(b));
+            assert_eq!(
+                a["wall_time_s"], b["wall_time_s"],
+                "the previous row's time is kept"
+            );
+        } else {
+            assert_eq!(b["status"], "error");
+        }
+    }
+    assert_eq!(
+        std::fs::read(folders[2].join("summary.json")).unwrap(),
+        before,
+        "a skipped folder is not rewritten"
+    );
+
+    // Other options: not the same run, so nothing is skipped.
+    let (_, changed, _) = batch_json(&[i, "--out", o, "--spacing", "1.5"]);
+    assert_eq!(changed["ok"], 3, "{changed}");
+
+    // --force redoes complete folders.
+    let (_, forced, _) = batch_json(&[i, "--out", o, "--spacing", "1.5", "--force"]);
+    assert_eq!(
+        (&forced["ok"], &forced["skipped"]),
+        (&Value::from(3), &Value::from(0))
+    );
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+#[test]
+fn glob_and_file_inputs_and_any_number_of_jobs_give_the_same_table() {
+    let base = temp_dir("glob");
+    let input = study_inputs(&base);
+    let pattern = format!("{}/*/trial.lst", input.display());
+    let file = input.join("tekscan.csv");
+    let file = file.to_str().unwrap();
+    let mut tables = Vec::new();
+    for jobs in ["1", "2"] {
+        let out = base.join(format!("study-{jobs}"));
+        let (code, report, stderr) =
+            batch_json(&[&pattern, file, "--out", out.to_str().unwrap(), "-j", jobs]);
+        assert_eq!(code, Some(0), "{stderr}");
+        let r = rows(&report);
+        assert_eq!(r.len(), 3, "{r:?}");
+        assert!(r[0]["path"].as_str().unwrap().ends_with("a/trial.lst"));
+        assert!(r[1]["path"].as_str().unwrap().ends_with("b/trial.lst"));
+        assert!(r[2]["path"].as_str().unwrap().ends_with("tekscan.csv"));
+        tables.push(r.iter().map(numbers).collect::<Vec<_>>());
+    }
+    assert_eq!(tables[0], tables[1], "one job or two: the same results");
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+#[test]
+fn a_study_folder_is_never_written_over_other_files_and_no_input_is_an_error() {
+    let base = temp_dir("foreign");
+    let input = study_inputs(&base);
+    let mine = base.join("thesis");
+    std::fs::create_dir_all(&mine).unwrap();
+    std::fs::write(mine.join("chapter1.tex"), "precious").unwrap();
+    let out = pedomatch(&[
+        "batch",
+        input.join("tekscan.csv").to_str().unwrap(),
+        "--out",
+        mine.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("not a pedomatch study"), "{stderr}");
+    assert_eq!(std::fs::read_dir(&mine).unwrap().count(), 1);
+
+    let empty = base.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let out = pedomatch(&[
+        "batch",
+        empty.to_str().unwrap(),
+        "--out",
+        base.join("s").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no recordings found"));
+
+    let out = pedomatch(&["batch", "x.asf", "--out", "s", "--jobs", "0"]);
+    assert_eq!(out.status.code(), Some(2), "--jobs 0 is a usage error");
+    std::fs::remove_dir_all(&base).unwrap();
+}
