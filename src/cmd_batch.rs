@@ -55,6 +55,7 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
             figures: study::FigureKinds { png, svg },
             report: (args.options.report == ReportArg::Html)
                 .then_some(&output::report_page as &study::ReportWriter),
+            animation: args.options.animation == crate::cmd_run::AnimationArg::Gif,
         },
     };
 

@@ -810,7 +810,14 @@ mod tests {
         assert_eq!(d["a"]["x"][0].as_f64().unwrap(), 2.0 * a.point(0)[0]);
         assert_eq!(d["a"]["y"][0].as_f64().unwrap(), 3.0 * a.point(0)[1]);
         // Every match once, in the cost class its cost falls in; unmatched nodes listed.
-        let bounds: Vec<f64> = serde_json::from_value(d["cost_bounds"].clone()).unwrap();
+        // The bounds as computed: a cost equal to a bound must not flip class through the JSON
+        // round trip (serde_json's parsing may be one ulp off).
+        let bounds = cost_bounds(r.pairs.iter().map(|m| m.cost).collect());
+        let shown: Vec<f64> = serde_json::from_value(d["cost_bounds"].clone()).unwrap();
+        assert_eq!(shown.len(), bounds.len());
+        for (s, b) in shown.iter().zip(&bounds) {
+            assert!((s - b).abs() <= 1e-12 * b.abs().max(1.0), "{s} vs {b}");
+        }
         let mut per_class = vec![0; COST_CLASSES];
         for m in &r.pairs {
             per_class[bounds.iter().take_while(|&&b| m.cost > b).count()] += 1;

@@ -63,6 +63,7 @@ fn study_options(
         outputs: RunOutputs {
             figures: figure_kinds(figures)?,
             report: None,
+            animation: false,
         },
     })
 }

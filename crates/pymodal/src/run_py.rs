@@ -256,7 +256,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 }
 
 /// The keywords of [`run`] that a study takes as `**options`.
-const RUN_KEYWORDS: [&str; 29] = [
+const RUN_KEYWORDS: [&str; 31] = [
     "element",
     "modes",
     "search",
@@ -266,6 +266,7 @@ const RUN_KEYWORDS: [&str; 29] = [
     "excess",
     "paper",
     "prealign",
+    "max_rotation",
     "refits",
     "refit_tolerance",
     "kappa",
@@ -286,6 +287,7 @@ const RUN_KEYWORDS: [&str; 29] = [
     "iso_levels",
     "pitch_mm",
     "frame_rate",
+    "drift_reference",
 ];
 
 /// The run parameters of `**options` holding [`run`]'s keywords (read exactly as `run` reads
@@ -334,6 +336,7 @@ pub fn run_params<'py>(
         excess: get!("excess", bool),
         paper: get!("paper", bool),
         prealign: prealign.as_deref(),
+        max_rotation: get!("max_rotation", f64),
         refits: get!("refits", usize),
         refit_tolerance: get!("refit_tolerance", f64),
         kappa: get!("kappa", f64),
@@ -357,6 +360,7 @@ pub fn run_params<'py>(
         iso_levels: get!("iso_levels", usize),
         pitch_mm: pitch_mm.as_ref(),
         frame_rate: get!("frame_rate", f64),
+        drift_reference: get!("drift_reference", usize),
     }
     .params(matching)
 }

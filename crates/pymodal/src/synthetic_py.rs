@@ -1,6 +1,6 @@
 //! `pymodal.SyntheticWalk`: a synthetic recording with a known motion, and its ground truth.
 
-use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pedo_io::synthetic::SyntheticWalk;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;

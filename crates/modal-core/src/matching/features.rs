@@ -315,12 +315,6 @@ impl AffinityMatrix {
     /// [0, 1] and every row's and column's order is kept, so thresholds and mutual-best matches
     /// mean the same; only an optimal assignment, which adds costs up, changes. `p < 1` makes
     /// that sum favour many near-exact pairs over evenly spread errors.
-    ///
-    /// ```
-    /// use modal_core::AffinityMatrix;
-    /// let z = AffinityMatrix::new(1, 3, vec![0.0, 0.25, 1.0]).unwrap();
-    /// assert_eq!(z.powered(0.5).as_slice(), &[0.0, 0.5, 1.0]);
-    /// ```
     pub(crate) fn powered(mut self, p: f64) -> Self {
         if p != 1.0 {
             self.data.iter_mut().for_each(|v| *v = v.powf(p));
@@ -408,6 +402,12 @@ fn position_costs(a: &[f64], b: &[f64], d: usize) -> Result<AffinityMatrix, Moda
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn powered_keeps_the_order_and_the_ends() {
+        let z = super::AffinityMatrix::new(1, 3, vec![0.0, 0.25, 1.0]).unwrap();
+        assert_eq!(z.powered(0.5).as_slice(), &[0.0, 0.5, 1.0]);
+    }
+
     use super::*;
 
     fn feats(dim: usize, n: usize, cols: &[Vec<f64>]) -> ModalFeatures {
