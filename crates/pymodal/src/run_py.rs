@@ -88,7 +88,7 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
     refit_tolerance=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
     common_sigma=None, skip_rigid=None, band=None, material=None, model=None, frames=None,
     noise=None, smooth=None, spacing=None, surface_nodes=None, iso_frame=None, iso_levels=None,
-    pitch_mm=None, frame_rate=None, drift_reference=None))]
+    drift_reference=None, pitch_mm=None, frame_rate=None))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
     py: Python<'py>,
@@ -121,9 +121,9 @@ fn run<'py>(
     surface_nodes: Option<usize>,
     iso_frame: Option<usize>,
     iso_levels: Option<usize>,
+    drift_reference: Option<usize>,
     pitch_mm: Option<&Bound<'py, PyAny>>,
     frame_rate: Option<f64>,
-    drift_reference: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let matching = MatchKw::new(
         element,
@@ -285,9 +285,9 @@ const RUN_KEYWORDS: [&str; 31] = [
     "surface_nodes",
     "iso_frame",
     "iso_levels",
+    "drift_reference",
     "pitch_mm",
     "frame_rate",
-    "drift_reference",
 ];
 
 /// The run parameters of `**options` holding [`run`]'s keywords (read exactly as `run` reads

@@ -106,6 +106,7 @@ impl PySyntheticWalk {
         map_points(py, points, |p| self.inner.reference_position(t, p))
     }
 
+    /// Number of frames of the recording.
     #[getter]
     fn frames(&self) -> usize {
         self.inner.frames

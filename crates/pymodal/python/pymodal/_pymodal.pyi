@@ -103,6 +103,37 @@ class Match:
     def _repr_html_(self) -> str: ...
     def __len__(self) -> int: ...
 
+class SyntheticWalk:
+    """A foot-like pressure field warped smoothly in time (translation towards the toes, rotation,
+    widening of the forefoot) with the true map from frame-0 coordinates to frame ``t`` known."""
+
+    def __init__(
+        self,
+        *,
+        frames: Optional[int] = None,
+        rows: Optional[int] = None,
+        cols: Optional[int] = None,
+        translation: Optional[Tuple[float, float]] = None,
+        rotation: Optional[float] = None,
+        spread: Optional[float] = None,
+        noise: Optional[float] = None,
+        pitch_mm: Optional[float] = None,
+        frame_rate: Optional[float] = None,
+    ) -> None: ...
+    def recording(self) -> Recording:
+        """The synthetic recording (kPa, with pitch, frame rate and noise threshold)."""
+        ...
+    def true_positions(self, t: int, points: ArrayLike) -> FloatArray:
+        """Where the frame-0 points (n, 2; x = column, y = row) lie in frame ``t``."""
+        ...
+    def reference_positions(self, t: int, points: ArrayLike) -> FloatArray:
+        """Where the frame-``t`` points (n, 2) lay in frame 0."""
+        ...
+    @property
+    def frames(self) -> int:
+        """Number of frames of the recording."""
+        ...
+
 class Recording:
     @staticmethod
     def from_array(
@@ -276,6 +307,7 @@ def run(
     surface_nodes: Optional[int] = None,
     iso_frame: Optional[int] = None,
     iso_levels: Optional[int] = None,
+    drift_reference: Optional[int] = None,
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
 ) -> dict[str, Any]: ...
