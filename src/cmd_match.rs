@@ -1,8 +1,8 @@
 //! `pedomatch match A B`: correspondences between two objects given as images or point files.
 
 use crate::cmd_run::ReportArg;
-use crate::output::option_text;
 use crate::modal_args::{help, tri_state, ModalArgs, UnitArgs};
+use crate::output::option_text;
 use crate::output::{self, OutDir};
 use crate::CliError;
 use clap::Args;
