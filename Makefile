@@ -2,30 +2,39 @@
 VENV ?= .venv
 PY := $(VENV)/bin/python
 PIP_PACKAGES := maturin numpy scipy pytest scikit-image matplotlib pandas dask[distributed]
+# The wheel's cargo profile: release for `make wheel`; `make test` builds it with the dev profile
+# (assign and modal-core fully optimised, dependencies at opt-level 3 already compiled for
+# `cargo test`), so that CI compiles the dependency tree once instead of twice.
+WHEEL_PROFILE ?= release
+# Every cargo command sees the venv's interpreter, so that pyo3 is configured once for all of them.
+CARGO_ENV := PATH=$(abspath $(VENV))/bin:$$PATH
 
 .PHONY: test test-rust test-python test-browser wheel-check examples venv wheel bench bench-python lint demo
 
 # Every test: Rust (unit, integration, doc), Python (against the installed wheel), the wheel
 # installed on its own in a fresh venv without Rust, every example, and the report in a browser.
+test: WHEEL_PROFILE = dev
 test: test-rust test-python wheel-check examples test-browser
 
+# One cargo invocation for every crate (pymodal's tests need the venv's Python with numpy).
 test-rust: venv
-	cargo test
-	PATH=$(abspath $(VENV))/bin:$$PATH cargo test -p pymodal
+	$(CARGO_ENV) cargo test --workspace
 
 venv: $(VENV)/.ready
 
+# uv resolves and installs the packages in parallel (seconds rather than minutes with pip).
 $(VENV)/.ready:
 	python3 -m venv $(VENV)
-	$(PY) -m pip install -q --upgrade pip
-	$(PY) -m pip install -q $(PIP_PACKAGES)
+	$(PY) -m pip install -q uv
+	$(VENV)/bin/uv pip install -q --python $(PY) $(PIP_PACKAGES)
 	touch $@
 
-# Builds the pymodal wheel (release profile, abi3: one wheel for CPython >= 3.9) into dist/ and
-# installs it into the venv. Cargo rebuilds nothing when the sources have not changed.
+# Builds the pymodal wheel (abi3: one wheel for CPython >= 3.9) into dist/ and installs it into
+# the venv. Cargo rebuilds nothing when the sources have not changed.
 wheel: venv
 	rm -f dist/pymodal-*.whl
-	$(VENV)/bin/maturin build --release --quiet -i $(PY) -m crates/pymodal/Cargo.toml -o dist
+	$(CARGO_ENV) $(VENV)/bin/maturin build --profile $(WHEEL_PROFILE) --strip --quiet -i $(PY) \
+		-m crates/pymodal/Cargo.toml -o dist
 	$(PY) -m pip install -q --force-reinstall --no-deps dist/pymodal-*.whl
 
 # The Python tests run against the installed wheel: from outside the source tree, so that
@@ -54,7 +63,7 @@ wheel-check: wheel
 # One build of every example with the tests' feature set (no second build of the dependencies).
 EXAMPLES := target/debug/examples
 examples: wheel
-	cargo build -q --examples
+	$(CARGO_ENV) cargo build -q --workspace --examples
 	$(EXAMPLES)/solve_small
 	$(EXAMPLES)/timing 200
 	$(EXAMPLES)/match_contours
@@ -66,8 +75,8 @@ examples: wheel
 
 # The demo's report.html in headless Chromium (Debian's `chromium`): drawn, playable, offline.
 # The binary as the tests build it (the same features: nothing is rebuilt after `cargo test`).
-test-browser:
-	cargo test -q --no-run --test cli_run
+test-browser: venv
+	$(CARGO_ENV) cargo test -q --no-run --test cli_run
 	python3 tests/browser/test_report.py target/debug/pedomatch
 
 bench:
