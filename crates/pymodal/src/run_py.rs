@@ -255,40 +255,13 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// The keywords of [`run`] that a study takes as `**options`.
-const RUN_KEYWORDS: [&str; 31] = [
-    "element",
-    "modes",
-    "search",
-    "solver",
-    "threshold",
-    "threshold_mode",
-    "excess",
-    "paper",
-    "prealign",
-    "max_rotation",
-    "refits",
-    "refit_tolerance",
-    "kappa",
-    "center_stride",
-    "position_weight",
-    "cost_power",
-    "common_sigma",
-    "skip_rigid",
-    "band",
-    "material",
-    "model",
-    "frames",
-    "noise",
-    "smooth",
-    "spacing",
-    "surface_nodes",
-    "iso_frame",
-    "iso_levels",
-    "drift_reference",
-    "pitch_mm",
-    "frame_rate",
-];
+/// The keywords of [`run`] that a study takes as `**options`: the matching options, then the
+/// recording options (units included), as the option tables define them.
+fn run_keywords() -> Vec<&'static str> {
+    let matching = modal_core::options::match_option_specs();
+    let recording = pedo_io::sequence::recording_option_specs();
+    matching.iter().chain(&recording).map(|s| s.name).collect()
+}
 
 /// The run parameters of `**options` holding [`run`]'s keywords (read exactly as `run` reads
 /// them, through [`MatchKw`] and [`RecordingKw`]); an unknown keyword is an `OptionError`.
@@ -297,12 +270,13 @@ pub fn run_params<'py>(
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<pedo_io::sequence::RunParams> {
     let d = options.cloned().unwrap_or_else(|| PyDict::new(py));
+    let keywords = run_keywords();
     for key in d.keys() {
         let key: String = key.extract()?;
-        if !RUN_KEYWORDS.contains(&key.as_str()) {
+        if !keywords.contains(&key.as_str()) {
             return Err(crate::errors::option_error(format!(
                 "unknown option {key:?}; the options are the keywords of pymodal.run: {}",
-                RUN_KEYWORDS.join(", ")
+                keywords.join(", ")
             )));
         }
     }
