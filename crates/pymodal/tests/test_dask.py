@@ -1,4 +1,4 @@
-"""The README's Dask recipe (examples/batch_dask.py) on a LocalCluster of 2 worker processes:
+"""The Dask recipe of docs/batch.md (examples/batch_dask.py) on a LocalCluster of 2 worker processes:
 the gathered table equals pymodal.batch's serial one (but for the wall times)."""
 
 import importlib.util
