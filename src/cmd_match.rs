@@ -59,6 +59,9 @@ struct Object {
     time_s: Option<f64>,
     /// The figure axes of the recording the object was taken from (`None`: a point file).
     axes: Option<FigureAxes>,
+    /// The recording and frame the object was taken from (`None`: a point file), drawn under
+    /// it in the report.
+    source: Option<(pedo_io::Recording, usize)>,
 }
 
 /// An object from a file: a point file as it is, or the largest contour of a pressure frame.
@@ -73,6 +76,7 @@ fn load_object(path: &Path, args: &MatchArgs) -> Result<Object, CliError> {
         pitch_mm: args.units.pitch_mm,
         time_s: None,
         axes: None,
+        source: None,
     };
     let as_points = args.points || POINT_EXTENSIONS.contains(&ext.as_str());
     if as_points {
@@ -117,6 +121,7 @@ fn load_object(path: &Path, args: &MatchArgs) -> Result<Object, CliError> {
         pitch_mm: rec.pitch_mm,
         time_s: rec.time_s(args.frame),
         axes: Some(FigureAxes::of_recording(&rec)),
+        source: Some((rec, args.frame)),
     })
 }
 
@@ -323,6 +328,14 @@ fn write_match_report(
         data_unit: &axes.data_unit,
         label_a: &label_a,
         label_b: &label_b,
+        underlays: [oa, ob].map(|o| {
+            o.source
+                .as_ref()
+                .map(|(recording, frame)| pedo_report::FrameUnderlay {
+                    recording,
+                    frame: *frame,
+                })
+        }),
     };
     let entries = |key: &str| -> Vec<(String, serde_json::Value)> {
         summary[key]

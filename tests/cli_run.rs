@@ -406,6 +406,11 @@ fn match_two_point_files() {
     assert_eq!(drawn, 2 * rows.len(), "one segment per match");
     assert_eq!(data["a"]["closed"], true);
     assert_eq!(data["xy_units"], "file units");
+    assert_eq!(
+        data["images"],
+        serde_json::json!([null, null]),
+        "point files: no image"
+    );
 
     let none = dir.join("none");
     let o = pedomatch(&[
@@ -419,6 +424,50 @@ fn match_two_point_files() {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(none.join("matches.csv").exists() && !none.join("report.html").exists());
+}
+
+#[test]
+fn match_report_of_two_frames_draws_their_pressure_under_the_outlines() {
+    let walk = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
+    let out = temp_dir("match-frames").join("out");
+    let o = pedomatch(&[
+        "match",
+        walk,
+        walk,
+        "--frame",
+        "40",
+        "--figures",
+        "none",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let data = embedded_json(&std::fs::read_to_string(out.join("report.html")).unwrap());
+    assert_eq!(data["xy_units"], "mm");
+    assert_eq!(data["pitch"], serde_json::json!([5.08, 5.08]));
+    for img in data["images"].as_array().unwrap() {
+        assert_eq!(
+            (img["rows"].as_u64(), img["cols"].as_u64()),
+            (Some(60), Some(21))
+        );
+        assert_eq!(
+            (img["units"].as_str(), img["frame"].as_u64()),
+            (Some("kPa"), Some(40))
+        );
+        // The frame's peak, decoded from the embedded integers, is the stated peak.
+        let q = img["quantum"].as_f64().unwrap();
+        let max = img["z"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|v| v.as_f64())
+            .fold(0.0, f64::max);
+        let peak = img["peak"].as_f64().unwrap();
+        assert!(
+            peak > 0.0 && (max * q - peak).abs() <= 0.5 * q,
+            "{max} × {q} vs {peak}"
+        );
+    }
 }
 
 /// A page that loads nothing from elsewhere: plotly.js inline, no http(s) source or link in the

@@ -116,6 +116,17 @@ def check_match_reports(binary, tmp, failures):
         if ext == "xyz":
             expect('class="gl-container"' in dom and '<div id="surface-view">' in dom,
                    "the 3-D view is not shown")
+    # Two frames of the walk: their pressure images are drawn under the outlines, with a menu.
+    walk = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..",
+                        "examples", "data", "FrasP01L.asf")
+    out = os.path.join(tmp, "match-frames")
+    subprocess.run([binary, "match", walk, walk, "--frame", "40", "--out", out,
+                    "--figures", "none"], check=True, stdout=subprocess.DEVNULL)
+    dom, expect = check_page(f"file://{os.path.join(out, 'report.html')}", failures,
+                             "match report (frames)")
+    expect('data-images="2"' in dom, "the two pressure frames are not drawn")
+    expect('class="hm"' in dom or "heatmaplayer" in dom, "no heatmap in the plot")
+    expect("updatemenu" in dom, "no menu to choose the pressure image")
 
 
 def check_isocontours(binary, tmp, failures):

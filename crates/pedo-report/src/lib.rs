@@ -99,6 +99,47 @@ pub struct MatchPairInput<'a> {
     /// How the objects are named in the legend (e.g. their file names and frames).
     pub label_a: &'a str,
     pub label_b: &'a str,
+    /// The pressure frames A and B were taken from (`None` for a point file), drawn under the
+    /// objects of a 2-D pair; their sensels must be the objects' coordinate units.
+    pub underlays: [Option<FrameUnderlay<'a>>; 2],
+}
+
+/// A frame of a recording, drawn as a pressure image under the objects taken from it.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameUnderlay<'a> {
+    pub recording: &'a Recording,
+    /// 0-based frame index.
+    pub frame: usize,
+}
+
+impl FrameUnderlay<'_> {
+    /// The frame as JSON: `rows`, `cols`, `units` and the pressure as integers of `quantum`
+    /// (three significant digits at the frame's peak), row after row, `null` where there is no
+    /// sensor; `None` when the frame does not exist.
+    fn to_json(&self) -> Option<Value> {
+        let r = self.recording;
+        let values = r.frame_slice(self.frame)?;
+        let (kpa, units) = pressure_scale(r);
+        let peak = values
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold(0.0f64, |m, &v| m.max(v as f64))
+            * kpa;
+        let quantum = if peak > 0.0 {
+            10f64.powf((peak / 1000.0).log10().floor())
+        } else {
+            1.0
+        };
+        let z: Vec<Option<i64>> = values
+            .iter()
+            .zip(r.sensor_mask())
+            .map(|(&v, &m)| (m && v.is_finite()).then(|| (v as f64 * kpa / quantum).round() as i64))
+            .collect();
+        Some(json!({
+            "rows": r.rows(), "cols": r.cols(), "units": units, "quantum": quantum,
+            "peak": peak, "frame": self.frame, "z": z,
+        }))
+    }
 }
 
 /// The report of one match (`pedomatch match`) as a complete HTML page: a header with `facts`
@@ -175,6 +216,9 @@ fn match_data(pair: &MatchPairInput) -> Value {
         "excess": excess.xy, "excess3d": excess.xyz,
         "unmatched_a": nodes(pair.a, &r.unmatched_a),
         "unmatched_b": nodes(pair.b, &r.unmatched_b),
+        "pitch": [dx, dy],
+        // Pressure images only under 2-D objects (a 3-D object's x-y plane is not a frame's).
+        "images": pair.underlays.map(|u| u.filter(|_| pair.a.dim() == 2).and_then(|u| u.to_json())),
     })
 }
 
@@ -794,6 +838,7 @@ mod tests {
             data_unit: "sensels",
             label_a: "a.xy",
             label_b: "b.xy",
+            underlays: [None, None],
         };
         let facts = [("A".to_string(), "a.xy <1>".to_string())];
         let html = match_report(&pair, &info(), &facts).unwrap();
@@ -832,6 +877,75 @@ mod tests {
     }
 
     #[test]
+    fn match_report_draws_the_frames_under_2d_objects() {
+        // Two frames of 4 × 5 sensels, kPa; one sensel without a sensor (NaN in every frame).
+        let (rows, cols) = (4, 5);
+        let mut data: Vec<f32> = (0..2 * rows * cols).map(|i| i as f32 * 1.5).collect();
+        data[3] = f32::NAN;
+        data[rows * cols + 3] = f32::NAN;
+        let mut rec = Recording::from_array(2, rows, cols, data.clone(), None).unwrap();
+        rec.units = "kPa".into();
+        let (a, b) = (ellipse(40, 1.0), ellipse(32, 1.1));
+        let r = modal_core::match_shapes(&a, &b, &Default::default()).unwrap();
+        let pair = MatchPairInput {
+            a: &a,
+            b: &b,
+            result: &r,
+            pitch_mm: Some([2.0, 3.0]),
+            data_unit: "sensels",
+            label_a: "a",
+            label_b: "b",
+            underlays: [
+                Some(FrameUnderlay {
+                    recording: &rec,
+                    frame: 0,
+                }),
+                Some(FrameUnderlay {
+                    recording: &rec,
+                    frame: 1,
+                }),
+            ],
+        };
+        let d = embedded_data(&match_report(&pair, &info(), &[]).unwrap());
+        assert_eq!(d["pitch"], json!([2.0, 3.0]));
+        for (k, img) in d["images"].as_array().unwrap().iter().enumerate() {
+            assert_eq!(
+                (img["rows"].as_u64(), img["cols"].as_u64()),
+                (Some(4), Some(5))
+            );
+            assert_eq!(
+                (img["units"].as_str(), img["frame"].as_u64()),
+                (Some("kPa"), Some(k as u64))
+            );
+            let q = img["quantum"].as_f64().unwrap();
+            let z = img["z"].as_array().unwrap();
+            assert_eq!(z.len(), rows * cols);
+            assert!(z[3].is_null(), "no sensor: no value");
+            // Every other sensel decodes back to the frame within half a quantum.
+            for (i, v) in z.iter().enumerate().filter(|(i, _)| *i != 3) {
+                let want = data[k * rows * cols + i] as f64;
+                assert!(
+                    (v.as_f64().unwrap() * q - want).abs() <= 0.5 * q,
+                    "sensel {i}"
+                );
+            }
+        }
+        // A frame that does not exist draws nothing; 3-D objects get no image.
+        let missing = MatchPairInput {
+            underlays: [
+                Some(FrameUnderlay {
+                    recording: &rec,
+                    frame: 7,
+                }),
+                None,
+            ],
+            ..pair
+        };
+        let d = embedded_data(&match_report(&missing, &info(), &[]).unwrap());
+        assert_eq!(d["images"], json!([null, null]));
+    }
+
+    #[test]
     fn match_report_of_3d_points_carries_the_third_coordinate() {
         let coords: Vec<f64> = (0..30)
             .flat_map(|k| {
@@ -854,6 +968,7 @@ mod tests {
             data_unit: "file units",
             label_a: "a",
             label_b: "b",
+            underlays: [None, None],
         };
         let d = embedded_data(&match_report(&pair, &info(), &[]).unwrap());
         assert_eq!(d["dim"], 3);
