@@ -344,6 +344,15 @@ pub(crate) struct Pair<'p> {
 }
 
 impl<'p> Pair<'p> {
+    /// The map from A's normalised frame to B's that is the identity in the callers'
+    /// coordinates: the start of [`super::Prealign::Sensor`].
+    pub(crate) fn sensor_map(&self) -> Affine {
+        self.b
+            .get()
+            .to_normalized
+            .compose(&super::inverse_normalizing_map(&self.a.get().to_normalized))
+    }
+
     /// Checks the options against the pair and works out the pair's choices.
     ///
     /// # Errors
