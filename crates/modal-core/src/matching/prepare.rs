@@ -313,9 +313,9 @@ pub(crate) fn inverse(perm: &[usize]) -> Vec<usize> {
 /// `x ↦ scale · (x − centroid)`, the map [`prealign::normalize`] applied.
 pub(crate) fn normalizing_map(d: usize, centroid: [f64; 3], scale: f64) -> Affine {
     let mut map = Affine::identity(d);
-    for a in 0..d {
+    for (a, c) in centroid.iter().enumerate().take(d) {
         map.m[a][a] = scale;
-        map.t[a] = -scale * centroid[a];
+        map.t[a] = -scale * c;
     }
     map
 }
