@@ -3,13 +3,14 @@ followed from one frame to the next, tracks.csv) longer than 3 sensels, beside t
 contour nodes lying more than 3 sensels from the next frame's contour (how far the pressure
 boundary itself moves). A track that moves no further than the boundary does has no reason to
 jump; the target is first <= max(second, 2 %). Also printed: the share of steps longer than 10
-sensels, the longest step, the pairs with such a jump, and the mean optimisation percentage of
-the ordinary pairs (objects of similar size, node counts within 30 %) - which a fix of the jumps
-must leave unchanged.
+sensels, the longest step, the pairs with such a jump, the mean optimisation percentage of
+the ordinary pairs (one-to-one continuations outside merges and splits, node counts within 30 %)
+- which a fix of the jumps must leave unchanged - and the pairs left unmatched (with a reason).
 
 Recordings: the bundled F-Scan walk (examples/data/FrasP01L.asf, 31.25 Hz) and every recording
-in benches/data (emed, pedar, footscan at 100-500 Hz; written by benches/data/make_recordings.py,
-see benches/data/README.md). High-rate recordings are also run at 100 Hz (every k-th frame) so
+in benches/data (emed, pedar, footscan at 100-500 Hz; see benches/data/README.md: the three
+MIT-licensed files are committed, the GPLv3 Pataky file is written by make_recordings.py and used
+when present). High-rate recordings are also run at 100 Hz (every k-th frame) so
 that the frame-to-frame motion is comparable.
 
 Run:  python benches/python/bench_tracks.py [--data DIR] [--markdown] [--option KEY=VALUE ...]
@@ -83,8 +84,13 @@ def measure(path, stride=1, **options):
     seconds = time.perf_counter() - t0
     steps, step_frames = track_steps(out["tracks"])
     bound = boundary_motion(out["objects"])
+    summary = out["summary"]
+    joined = {(i, m["into"]) for m in summary["merges"] for i in m["ids"]}
+    joined |= {(m["id"], j) for m in summary["splits"] for j in m["into"]}
     ordinary = [r["optimisation_percent"] for r in out["table"]
-                if min(r["nodes_a"], r["nodes_b"]) >= 0.7 * max(r["nodes_a"], r["nodes_b"])]
+                if (r["id_a"], r["id_b"]) not in joined and not r.get("reason")
+                and min(r["nodes_a"], r["nodes_b"]) >= 0.7 * max(r["nodes_a"], r["nodes_b"])]
+    skipped = sum(1 for r in out["table"] if r.get("reason"))
     jumps = {int(f) for f, s in zip(step_frames, steps) if s > LIMIT}
     return dict(
         frames=rec.n_frames,
@@ -97,6 +103,7 @@ def measure(path, stride=1, **options):
         jump_frames=len(jumps),
         ordinary=float(np.mean(ordinary)) if ordinary else float("nan"),
         n_ordinary=len(ordinary),
+        skipped=skipped,
         seconds=seconds,
     )
 
@@ -140,7 +147,7 @@ def main():
         m = measure(path, stride=stride, **options)
         rows.append((label, m))
     head = ["recording", "frames", "pairs", "track steps", "steps > 3 sensels", "boundary nodes > 3 sensels",
-            "target met", "steps > 10", "longest step", "frames with a jump", "ordinary pairs: optimisation %", "s"]
+            "target met", "steps > 10", "longest step", "frames with a jump", "ordinary pairs: optimisation %", "skipped pairs", "s"]
     if args.markdown:
         print(f"options: {options or 'defaults'}\n")
         print("| " + " | ".join(head) + " |")
@@ -149,8 +156,8 @@ def main():
         ok = m["over3"] <= max(m["boundary"], 0.02)
         cells = [label, m["frames"], m["pairs"], m["steps"], f"{100 * m['over3']:.1f} %",
                  f"{100 * m['boundary']:.1f} %", "yes" if ok else "no", f"{100 * m['over10']:.1f} %",
-                 f"{m['longest']:.1f}", m["jump_frames"], f"{m['ordinary']:.1f} ({m['n_ordinary']})",
-                 f"{m['seconds']:.1f}"]
+                 f"{m['longest']:.1f}", m["jump_frames"], f"{m['ordinary']:.2f} ({m['n_ordinary']})",
+                 m["skipped"], f"{m['seconds']:.1f}"]
         print("| " + " | ".join(map(str, cells)) + " |" if args.markdown else "  ".join(map(str, cells)))
 
 

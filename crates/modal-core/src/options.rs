@@ -66,7 +66,11 @@ choice!(Search, "search", [
     "local" => Search::Local,
     "best" => Search::Best,
 ]);
-choice!(Prealign, "prealign", ["robust" => Prealign::Robust, "normalize" => Prealign::Normalize]);
+choice!(Prealign, "prealign", [
+    "robust" => Prealign::Robust,
+    "normalize" => Prealign::Normalize,
+    "sensor" => Prealign::Sensor,
+]);
 choice!(ThresholdMode, "threshold_mode", [
     "after" => ThresholdMode::AfterAssignment,
     "during" => ThresholdMode::InOptimizer,
@@ -146,7 +150,8 @@ pub struct MatchParams {
     pub excess: bool,
     /// Start from the paper's literal setting (centroid and scale pre-alignment, no re-fits).
     pub paper: bool,
-    /// Pre-alignment (`None`: robust, or normalize with `paper`).
+    /// Pre-alignment (`None`: robust, or normalize with `paper`; a recording's contours use
+    /// [`RUN_PREALIGN`]).
     pub prealign: Option<Prealign>,
     /// Largest turn in degrees the robust pre-alignment may find, in (0, 180] (180: any turn;
     /// `None`: the caller's default, unbounded for a pair, [`RUN_MAX_ROTATION`] for a
@@ -419,6 +424,11 @@ impl MatchOverrides {
 /// starts either side of a plausible turn.
 pub const RUN_MAX_ROTATION: f64 = 30.0;
 
+/// The default [`MatchParams::prealign`] of a recording run's contours: consecutive frames share
+/// the sensor's coordinates, so their placement is the prior (docs/method.md, "Consecutive
+/// frames"). Unless `paper` asks for the paper's normalisation.
+pub const RUN_PREALIGN: Prealign = Prealign::Sensor;
+
 /// The value of an option in a provenance record.
 #[derive(Debug, Clone, PartialEq)]
 pub enum OptionValue {
@@ -527,7 +537,7 @@ pub fn match_option_specs() -> Vec<OptionSpec> {
         OptionSpec::choice(d.threshold_mode, "Threshold applied after the optimal assignment (after) or by the assignment itself, which may then keep other pairs under it (during)."),
         OptionSpec::new("excess", NegatedFlag, d.excess, "Match the nodes the one-to-one search leaves over (excess-node step, global search)."),
         OptionSpec::new("paper", Flag, d.paper, "Start from the paper's literal setting: centroid and scale pre-alignment, no affine re-fits."),
-        OptionSpec::new("prealign", OptionKind::Word(Prealign::NAMES), "robust (normalize with paper)", "Pre-alignment: rotation search with affine ICP (robust) or centroid and scale only (normalize)."),
+        OptionSpec::new("prealign", OptionKind::Word(Prealign::NAMES), "robust (normalize with paper; sensor for a recording's contours)", "Pre-alignment: rotation search with affine ICP (robust), centroid and scale only (normalize), or the sensor coordinates as the prior, moved only by the affine re-fits (sensor: consecutive frames of one recording)."),
         OptionSpec::new("max_rotation", Value, format!("180 (any turn) for a pair, {RUN_MAX_ROTATION} for a recording's consecutive frames"), "Largest turn in degrees, in (0, 180], the robust pre-alignment may find between two objects; among turns that fit nearly as well the smallest always wins."),
         OptionSpec::new("refits", Value, by_input(|o| o.refits), "Maximum modal affine re-fits (stops earlier when the pairs stop changing)."),
         OptionSpec::new("refit_tolerance", Value, by_input(|o| o.refit_tolerance), "No further re-fit once every one-to-one pair lies within this fraction of the second object's node spacing of its partner under one affine map; 0 always re-fits."),

@@ -135,3 +135,57 @@ fn nearly_round_heel_outlines_match_under_moderate_warps() {
         "bounded {b_mean} {b_worst}"
     );
 }
+
+/// `prealign = "sensor"`: the coordinates as given are the prior. A small outline lying at one end
+/// of a large one (a heel beside the whole foot) starts where it lies; normalised onto the large
+/// outline (the robust search) it starts centred on it. (The re-fits then follow the pairs, and
+/// modes compare whole shapes, so which nodes of the whole a part may match is the caller's
+/// choice: a recording run matches it to its own portion of the whole.) And two consecutive
+/// frames a small shift apart match node for node.
+#[test]
+fn the_sensor_prior_keeps_a_part_where_it_lies() {
+    use modal_core::Prealign;
+    // The whole: an ellipse 40 × 12 centred at (20, 0); the part: a circle of radius 6 at its
+    // left end, centred at (6.5, 0), as a heel region before it merges.
+    let whole: Vec<[f64; 2]> = (0..120)
+        .map(|i| {
+            let t = i as f64 / 120.0 * std::f64::consts::TAU;
+            [20.0 + 20.0 * t.cos(), 6.0 * t.sin()]
+        })
+        .collect();
+    let part: Vec<[f64; 2]> = (0..30)
+        .map(|i| {
+            let t = i as f64 / 30.0 * std::f64::consts::TAU + 0.05;
+            [6.5 + 6.3 * t.cos(), 5.8 * t.sin()]
+        })
+        .collect();
+    let shape = |p: &[[f64; 2]]| Shape::from_points_2d(p, Topology::ClosedContour).unwrap();
+    let placed_at = |prealign| {
+        let opts = MatchOptions {
+            prealign,
+            refits: 0,
+            ..MatchOptions::default()
+        };
+        let r = match_shapes(&shape(&part), &shape(&whole), &opts).unwrap();
+        let n = part.len() as f64;
+        r.aligned_a.chunks_exact(2).map(|p| p[0]).sum::<f64>() / n
+    };
+    let sensor = placed_at(Prealign::Sensor);
+    assert!(
+        (sensor - 6.5).abs() < 2.0,
+        "sensor: centred at x = {sensor}"
+    );
+    let robust = placed_at(Prealign::Robust);
+    assert!(
+        (robust - 20.0).abs() < 2.0,
+        "robust: centred at x = {robust}"
+    );
+    let shifted: Vec<[f64; 2]> = whole.iter().map(|p| [p[0] + 0.4, p[1] - 0.2]).collect();
+    let opts = MatchOptions {
+        prealign: Prealign::Sensor,
+        ..MatchOptions::default()
+    };
+    let r = match_shapes(&shape(&whole), &shape(&shifted), &opts).unwrap();
+    let right = r.pairs.iter().filter(|m| !m.excess && m.a == m.b).count();
+    assert_eq!(right, whole.len());
+}

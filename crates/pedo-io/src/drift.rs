@@ -107,7 +107,8 @@ fn dist(a: &[f64], b: &[f64]) -> f64 {
 /// matches (pairs `(ancestor, object)`) taking precedence: a node matched one-to-one to a node of
 /// its object's reference continues that node's track, when the track's last step is on one of
 /// the object's predecessors and lies within [`JUMP_LIMIT`] spacings. The remaining nodes follow
-/// their predecessor's matches, and nodes with neither start new tracks.
+/// their predecessor's matches where [`crate::track::step_allowed`] allows the step, and nodes
+/// with neither start new tracks.
 pub fn anchored_tracks(
     objects: &[SequenceObject],
     pairs: &[PairMatch],
@@ -150,7 +151,9 @@ pub fn anchored_tracks(
         }
         for p in &incoming[o] {
             for mp in p.result.pairs.iter().filter(|mp| !mp.excess) {
-                if track_of[o][mp.b].is_some() {
+                if track_of[o][mp.b].is_some()
+                    || !crate::sequence::honest_step(objects, p.a, mp.a, o, mp.b)
+                {
                     continue;
                 }
                 if let Some(t) = track_of[p.a][mp.a] {

@@ -10,10 +10,12 @@ use crate::error::{IoError, Result};
 use crate::recording::Recording;
 use crate::track::PairingMethod;
 use modal_core::{
-    match_prepared, match_shapes, prepare, MatchOptions, MatchParams, MatchResult, ModalError,
-    OptionError, OptionSpec, OptionValue, Parallelism, PreparedShape, Search, Shape,
+    match_prepared, match_shapes, prepare, AffinityMatrix, MatchOptions, MatchParams, MatchResult,
+    ModalError, OptionError, OptionSpec, OptionValue, Parallelism, Prealign, PreparedShape, Search,
+    Shape, Topology,
 };
 use rayon::prelude::*;
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
@@ -203,7 +205,9 @@ impl RunParams {
     /// The engine's matching options for this run's object model: surfaces are unordered 3-D
     /// meshes and get the measured surface setting, contours and isocontours the contour recipe.
     /// Consecutive frames hardly turn: the rotation search is bounded by
-    /// [`modal_core::options::RUN_MAX_ROTATION`] unless `max_rotation` is given.
+    /// [`modal_core::options::RUN_MAX_ROTATION`] unless `max_rotation` is given. Consecutive
+    /// contours share the sensor's coordinates: they are pre-aligned by
+    /// [`modal_core::options::RUN_PREALIGN`] unless `prealign` or `paper` is given.
     pub fn match_options(&self) -> std::result::Result<MatchOptions, OptionError> {
         let surface = self.model == ObjectModel::Surface;
         let mut o = self
@@ -211,6 +215,12 @@ impl RunParams {
             .to_match_options(if surface { 3 } else { 2 }, !surface)?;
         if self.matching.max_rotation.is_none() {
             o.rotation_search.max_rotation = Some(modal_core::options::RUN_MAX_ROTATION);
+        }
+        if self.model == ObjectModel::Contour
+            && self.matching.prealign.is_none()
+            && !self.matching.paper
+        {
+            o.prealign = modal_core::options::RUN_PREALIGN;
         }
         Ok(o)
     }
@@ -509,12 +519,19 @@ pub fn run_sequence(
     } = build_objects(recording, options, start, end, progress)?;
     let t1 = Instant::now();
 
-    let (pairs, skipped_pairs) = match_all(&objects, &candidate_pairs, options, progress);
+    let parts = parts_of_wholes(&candidate_pairs, &splits, &merges);
+    let (pairs, skipped_pairs) = match_all(&objects, &candidate_pairs, &parts, options, progress);
     let t2 = Instant::now();
     let tracks = match options.drift_reference {
         k if k >= 2 && options.model != ObjectModel::Isocontour => {
             let refs = crate::drift::reference_pairs(&objects, &candidate_pairs, start, k);
-            let (anchors, _) = match_all(&objects, &refs, options, &|_, _, _| {});
+            // Reference pairs lie frames apart: the sensor prior is for consecutive frames.
+            let mut apart = options.clone();
+            if apart.matching.prealign == Prealign::Sensor {
+                apart.matching.prealign = Prealign::Robust;
+            }
+            let none = HashMap::new();
+            let (anchors, _) = match_all(&objects, &refs, &none, &apart, &|_, _, _| {});
             crate::drift::anchored_tracks(&objects, &pairs, &anchors)
         }
         _ => chain_tracks(&objects, &pairs),
@@ -541,6 +558,7 @@ pub fn run_sequence(
 fn match_all(
     objects: &[SequenceObject],
     candidates: &[(usize, usize)],
+    parts: &HashMap<(usize, usize), PartOfWhole>,
     options: &SequenceOptions,
     progress: &(dyn Fn(Stage, usize, usize) + Sync),
 ) -> (Vec<PairMatch>, Vec<SkippedPair>) {
@@ -549,7 +567,8 @@ fn match_all(
     let outcomes: Vec<std::result::Result<PairMatch, SkippedPair>> = candidates
         .par_iter()
         .map(|&(a, b)| {
-            let r = match_pair(objects, &prepared, a, b, options).map_err(|e| SkippedPair {
+            let part = parts.get(&(a, b));
+            let r = match_pair(objects, &prepared, a, b, part, options).map_err(|e| SkippedPair {
                 a,
                 b,
                 reason: e.to_string(),
@@ -588,12 +607,14 @@ fn match_pair(
     prepared: &[std::result::Result<PreparedShape, ModalError>],
     a: usize,
     b: usize,
+    part: Option<&PartOfWhole>,
     options: &SequenceOptions,
 ) -> Result<PairMatch> {
     let (oa, ob) = (&objects[a], &objects[b]);
     // The pairs run in parallel on the pool, so each pair runs on one thread.
-    let result = match (&prepared[a], &prepared[b]) {
-        (Ok(pa), Ok(pb)) => match_prepared(pa, pb, &options.matching, Parallelism::Serial),
+    let result = match (part, &prepared[a], &prepared[b]) {
+        (Some(part), _, _) => match_part_with_whole(objects, prepared, part, b, &options.matching),
+        (None, Ok(pa), Ok(pb)) => match_prepared(pa, pb, &options.matching, Parallelism::Serial),
         // The error names the object's role in the pair, as the one-call form words it.
         _ => match_shapes(&oa.shape, &ob.shape, &options.matching),
     }
@@ -635,9 +656,165 @@ fn match_pair(
     Ok(PairMatch { a, b, result, row })
 }
 
+/// A part of a region paired with the whole region at a merge or a split (contour model): a heel
+/// outline whose next frame's outline is the whole foot, or the other way round. The part is
+/// matched to its own portion of the whole ([`portion_of_whole`]), never normalised onto it.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct PartOfWhole {
+    part: usize,
+    whole: usize,
+    /// The other parts of the same merge or split.
+    siblings: Vec<usize>,
+}
+
+/// How far from a part, in node spacings of the whole, a node of the whole may lie and still
+/// belong to the part's portion: the boundary's motion between two frames plus a margin.
+pub const PORTION_REACH: f64 = 5.0;
+
+/// The pairs among `pairs` that join a part and a whole: `(i, j)` with `i` among the objects that
+/// merge into `j`, or `j` among the objects `i` splits into.
+fn parts_of_wholes(
+    pairs: &[(usize, usize)],
+    splits: &[(usize, Vec<usize>)],
+    merges: &[(Vec<usize>, usize)],
+) -> HashMap<(usize, usize), PartOfWhole> {
+    let others = |all: &[usize], one: usize| all.iter().copied().filter(|&k| k != one).collect();
+    let mut out = HashMap::new();
+    for &(a, b) in pairs {
+        let merged = merges.iter().find(|(is, j)| *j == b && is.contains(&a));
+        let split = splits.iter().find(|(i, js)| *i == a && js.contains(&b));
+        let part = match (merged, split) {
+            (Some((is, _)), _) => PartOfWhole {
+                part: a,
+                whole: b,
+                siblings: others(is, a),
+            },
+            (None, Some((_, js))) => PartOfWhole {
+                part: b,
+                whole: a,
+                siblings: others(js, b),
+            },
+            (None, None) => continue,
+        };
+        out.insert((a, b), part);
+    }
+    out
+}
+
+/// The nodes of the whole (in its order) that form the part's portion: within
+/// [`PORTION_REACH`] node spacings of the part's outline, and no nearer to a sibling's outline.
+pub(crate) fn portion_of_whole(part: &Shape, whole: &Shape, siblings: &[&Shape]) -> Vec<usize> {
+    let spacing = crate::track::outline_distance(whole.coords(), [0.0, 0.0]).1;
+    let reach = PORTION_REACH * spacing;
+    (0..whole.len())
+        .filter(|&w| {
+            let p = whole.point(w);
+            let near = |s: &Shape| crate::track::outline_distance(s.coords(), [p[0], p[1]]).0;
+            let to_part = near(part);
+            to_part <= reach && siblings.iter().all(|s| near(s) >= to_part)
+        })
+        .collect()
+}
+
+/// Matches a part with its portion of the whole (the portion closed into an outline, as the
+/// region the part covers), and reports the result in the whole's numbering: the whole's nodes
+/// outside the portion stay unmatched. `b` is the pair's second object.
+fn match_part_with_whole(
+    objects: &[SequenceObject],
+    prepared: &[std::result::Result<PreparedShape, ModalError>],
+    part: &PartOfWhole,
+    b: usize,
+    opts: &MatchOptions,
+) -> std::result::Result<MatchResult, ModalError> {
+    let whole = &objects[part.whole].shape;
+    let siblings: Vec<&Shape> = part.siblings.iter().map(|&s| &objects[s].shape).collect();
+    let own = &objects[part.part].shape;
+    let portion = portion_of_whole(own, whole, &siblings);
+    if portion.len() < 3 {
+        return Err(ModalError::InvalidShape(format!(
+            "part-to-whole: only {} nodes of the whole lie within reach of the part",
+            portion.len()
+        )));
+    }
+    let coords = portion
+        .iter()
+        .flat_map(|&w| whole.point(w).to_vec())
+        .collect();
+    let sub = prepare(&Shape::new(2, coords, Topology::ClosedContour)?, opts)?;
+    let own = match &prepared[part.part] {
+        Ok(p) => p.clone(),
+        Err(_) => prepare(own, opts)?,
+    };
+    let whole_is_b = part.whole == b;
+    let r = if whole_is_b {
+        match_prepared(&own, &sub, opts, Parallelism::Serial)?
+    } else {
+        match_prepared(&sub, &own, opts, Parallelism::Serial)?
+    };
+    in_whole_numbering(r, &portion, whole, whole_is_b)
+}
+
+/// A match against a portion of the whole, renumbered to the whole: pairs, local pairs and the
+/// affinity (the columns or rows of the nodes outside the portion at the largest cost, 1).
+fn in_whole_numbering(
+    r: MatchResult,
+    portion: &[usize],
+    whole: &Shape,
+    whole_is_b: bool,
+) -> std::result::Result<MatchResult, ModalError> {
+    let z = &r.affinity;
+    let (rows, cols) = if whole_is_b {
+        (z.rows(), whole.len())
+    } else {
+        (whole.len(), z.cols())
+    };
+    let mut data = vec![1.0; rows * cols];
+    for i in 0..z.rows() {
+        for j in 0..z.cols() {
+            let (ri, cj) = if whole_is_b {
+                (i, portion[j])
+            } else {
+                (portion[i], j)
+            };
+            data[ri * cols + cj] = z.get(i, j);
+        }
+    }
+    let renumber = |(i, j): (usize, usize)| {
+        if whole_is_b {
+            (i, portion[j])
+        } else {
+            (portion[i], j)
+        }
+    };
+    let pairs: Vec<modal_core::MatchPair> = r
+        .pairs
+        .iter()
+        .map(|p| {
+            let (a, b) = renumber((p.a, p.b));
+            modal_core::MatchPair { a, b, ..*p }
+        })
+        .collect();
+    let unmatched = |n: usize, used: &dyn Fn(usize) -> bool| (0..n).filter(|&k| !used(k)).collect();
+    let aligned_a = if whole_is_b {
+        r.aligned_a.clone()
+    } else {
+        r.transform.apply(whole.coords())
+    };
+    Ok(MatchResult {
+        unmatched_a: unmatched(rows, &|k| pairs.iter().any(|p| p.a == k)),
+        unmatched_b: unmatched(cols, &|k| pairs.iter().any(|p| p.b == k)),
+        local_pairs: r.local_pairs.iter().copied().map(renumber).collect(),
+        affinity: AffinityMatrix::new(rows, cols, data)?,
+        pairs,
+        aligned_a,
+        ..r
+    })
+}
+
 /// Chains matches into tracks. A node continues the track of the node it is matched to one-to-one
 /// in the previous object; excess (one-to-many) matches never extend a track, since a track must
-/// stay a single path. Nodes with no one-to-one predecessor start a new track.
+/// stay a single path, and neither does a match between frames that moves further than
+/// [`crate::track::step_allowed`] allows. Nodes with no such predecessor start a new track.
 pub fn chain_tracks(objects: &[SequenceObject], pairs: &[PairMatch]) -> Vec<Track> {
     let mut track_of: Vec<Vec<Option<usize>>> =
         objects.iter().map(|o| vec![None; o.shape.len()]).collect();
@@ -652,6 +829,9 @@ pub fn chain_tracks(objects: &[SequenceObject], pairs: &[PairMatch]) -> Vec<Trac
         for p in &incoming[o] {
             for mp in p.result.pairs.iter().filter(|mp| !mp.excess) {
                 if track_of[o][mp.b].is_some() {
+                    continue;
+                }
+                if !honest_step(objects, p.a, mp.a, o, mp.b) {
                     continue;
                 }
                 if let Some(t) = track_of[p.a][mp.a] {
@@ -674,6 +854,20 @@ pub fn chain_tracks(objects: &[SequenceObject], pairs: &[PairMatch]) -> Vec<Trac
         }
     }
     tracks
+}
+
+/// Whether the match of node `na` of object `a` with node `nb` of object `b` may extend a track:
+/// between frames, [`crate::track::step_allowed`]; within a frame (isocontour levels), always.
+pub(crate) fn honest_step(
+    objects: &[SequenceObject],
+    a: usize,
+    na: usize,
+    b: usize,
+    nb: usize,
+) -> bool {
+    let (oa, ob) = (&objects[a], &objects[b]);
+    oa.frame == ob.frame
+        || crate::track::step_allowed(oa.shape.point(na), ob.shape.point(nb), &ob.shape)
 }
 
 /// Objects in sequence order (numbered from 0), the pairs to match (indices into the objects)
@@ -932,7 +1126,13 @@ mod tests {
         coords[3] = coords[1];
         objects[2].shape = Shape::new(2, coords, shape.topology().clone()).unwrap();
         let candidates = [(0, 1), (1, 2), (2, 3)];
-        let (pairs, skipped) = match_all(&objects, &candidates, &options, &|_, _, _| {});
+        let (pairs, skipped) = match_all(
+            &objects,
+            &candidates,
+            &HashMap::new(),
+            &options,
+            &|_, _, _| {},
+        );
         assert_eq!(
             pairs.iter().map(|p| (p.a, p.b)).collect::<Vec<_>>(),
             vec![(0, 1)]

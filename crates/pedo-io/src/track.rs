@@ -247,3 +247,87 @@ pub fn track(frames: &[Vec<Contour>], method: PairingMethod) -> Result<Vec<Pairi
     }
     Ok(out)
 }
+
+/// The slack of [`step_allowed`], in node spacings of the next outline: how far beyond the
+/// boundary's own motion a node may slide along it between two frames (resampling alone shifts
+/// nodes along an outline by up to one spacing).
+pub const STEP_SLACK: f64 = 1.5;
+
+/// The step rule of node tracks (docs/method.md, "Tracks"): a track may step from node `from` of
+/// one frame's outline to node `to` of the next frame's outline `next` only if the step is no
+/// longer than the boundary itself moved there — the distance from `from` to `next` — plus
+/// [`STEP_SLACK`] node spacings of `next`. A match that asks for more has no honest partner: the
+/// track ends and `to` starts a new one. Only closed planar outlines are bounded (the contour
+/// model); for any other `next` every step is allowed. Both the whole-recording chaining
+/// ([`crate::sequence::chain_tracks`], [`crate::drift`]) and incremental chainers call this.
+pub fn step_allowed(from: &[f64], to: &[f64], next: &modal_core::Shape) -> bool {
+    if next.dim() != 2 || !matches!(next.topology(), modal_core::Topology::ClosedContour) {
+        return true;
+    }
+    let step = ((to[0] - from[0]).powi(2) + (to[1] - from[1]).powi(2)).sqrt();
+    let (motion, spacing) = outline_distance(next.coords(), [from[0], from[1]]);
+    step <= motion + STEP_SLACK * spacing
+}
+
+/// Distance from `p` to the closed polyline `coords` (row-major `x, y`), and the polyline's
+/// median segment length.
+pub(crate) fn outline_distance(coords: &[f64], p: [f64; 2]) -> (f64, f64) {
+    let n = coords.len() / 2;
+    let node = |i: usize| [coords[2 * (i % n)], coords[2 * (i % n) + 1]];
+    let mut best = f64::INFINITY;
+    let mut lengths = Vec::with_capacity(n);
+    for i in 0..n {
+        let (a, b) = (node(i), node(i + 1));
+        let ab = [b[0] - a[0], b[1] - a[1]];
+        let len2 = ab[0] * ab[0] + ab[1] * ab[1];
+        lengths.push(len2.sqrt());
+        let t = if len2 > 0.0 {
+            (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let foot = [a[0] + t * ab[0], a[1] + t * ab[1]];
+        best = best.min(((p[0] - foot[0]).powi(2) + (p[1] - foot[1]).powi(2)).sqrt());
+    }
+    lengths.sort_by(f64::total_cmp);
+    (best, lengths.get(n / 2).copied().unwrap_or(0.0))
+}
+
+#[cfg(test)]
+mod step_tests {
+    use super::*;
+    use modal_core::{Shape, Topology};
+
+    fn square(side: f64, n_per_side: usize) -> Shape {
+        let mut c = Vec::new();
+        let h = side / n_per_side as f64;
+        for k in 0..4 * n_per_side {
+            let (s, r) = (k / n_per_side, (k % n_per_side) as f64 * h);
+            let p = match s {
+                0 => [r, 0.0],
+                1 => [side, r],
+                2 => [side - r, side],
+                _ => [0.0, side - r],
+            };
+            c.extend(p);
+        }
+        Shape::new(2, c, Topology::ClosedContour).unwrap()
+    }
+
+    #[test]
+    fn a_step_may_follow_the_boundary_plus_the_slack_and_no_further() {
+        // A 20 × 20 square sampled every sensel: its boundary lies 2 sensels outside (−2, 5).
+        let next = square(20.0, 20);
+        let from = [-2.0, 5.0];
+        // Straight onto the outline: the boundary's motion.
+        assert!(step_allowed(&from, &[0.0, 5.0], &next));
+        // Onto the outline and 1.5 spacings along it: √(4 + 1.5²) = 2.5 ≤ 2 + 1.5.
+        assert!(step_allowed(&from, &[0.0, 6.5], &next));
+        // Across the foot: 2 + 1.5 = 3.5 allowed, 20 asked.
+        assert!(!step_allowed(&from, &[0.0, 25.0], &next));
+        assert!(!step_allowed(&from, &[0.0, 8.7], &next));
+        // Surfaces and point sets are not bounded.
+        let cloud = Shape::new(2, next.coords().to_vec(), Topology::None).unwrap();
+        assert!(step_allowed(&from, &[0.0, 25.0], &cloud));
+    }
+}

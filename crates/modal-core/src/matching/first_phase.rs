@@ -39,13 +39,16 @@ pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<S
     let (a, b) = (pair.a.get(), pair.b.get());
     let (d, ordered) = (pair.dim, pair.ordered);
     let robust = pair.opts.prealign == Prealign::Robust;
+    let sensor = (pair.opts.prealign == Prealign::Sensor).then(|| pair.sensor_map());
+    let renormalize = pair.opts.prealign.renormalizes(ordered);
     let search = pair.opts.rotation_search;
     let modal = pair.modal();
     match parallelism {
         Parallelism::Serial => {
             let t = robust
-                .then(|| prealign::robust_prealign_serial(&a.pts, &b.pts, d, &search, ordered));
-            let (cur, to_cur) = prealign::start_in_b_frame(&a.pts, t, d, ordered)?;
+                .then(|| prealign::robust_prealign_serial(&a.pts, &b.pts, d, &search, ordered))
+                .or(sensor);
+            let (cur, to_cur) = prealign::start_in_b_frame(&a.pts, t, d, renormalize)?;
             let modes_b = modal.then(|| pair.modes_b()).transpose()?;
             let modes_a = modal.then(|| pair.modes_a(&cur)).transpose()?;
             Ok(Start {
@@ -71,7 +74,8 @@ pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<S
                     modes: pair.k + pair.band,
                 }),
             );
-            let (cur, to_cur) = prealign::start_in_b_frame(&a.pts, phase.prealign(), d, ordered)?;
+            let t = phase.prealign().or(sensor);
+            let (cur, to_cur) = prealign::start_in_b_frame(&a.pts, t, d, renormalize)?;
             let modes_a = modal.then(|| pair.modes_a(&cur)).transpose()?;
             let modes_b = phase.b_modes()?;
             Ok(Start {

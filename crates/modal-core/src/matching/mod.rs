@@ -142,7 +142,7 @@ fn in_callers_terms(pair: &Pair<'_>, refined: Refined) -> MatchResult {
 }
 
 /// The inverse of a `normalizing_map` (prepare.rs): `y ↦ y / scale + centroid`.
-fn inverse_normalizing_map(map: &Affine) -> Affine {
+pub(crate) fn inverse_normalizing_map(map: &Affine) -> Affine {
     let mut inv = Affine::identity(map.dim);
     for a in 0..map.dim {
         inv.m[a][a] = 1.0 / map.m[a][a];
@@ -170,11 +170,15 @@ pub fn prealign_normalized(
             && matches!(b.topology(), Topology::ClosedContour),
     );
     let d = a.dim();
-    let (pa, _, _) = prealign::normalize(a.coords(), d)?;
-    let (pb, _, _) = prealign::normalize(b.coords(), d)?;
+    let (pa, ca, sa) = prealign::normalize(a.coords(), d)?;
+    let (pb, cb, sb) = prealign::normalize(b.coords(), d)?;
     let t = match opts.prealign {
         Prealign::Normalize => Affine::identity(d),
         Prealign::Robust => prealign::robust_prealign(&pa, &pb, d, &opts.rotation_search, ordered),
+        Prealign::Sensor => prepare::normalizing_map(d, cb, sb).compose(&inverse_normalizing_map(
+            &prepare::normalizing_map(d, ca, sa),
+        )),
     };
-    Ok((prealign::into_b_frame(t.apply(&pa), d, ordered)?.0, pb))
+    let renormalize = opts.prealign.renormalizes(ordered);
+    Ok((prealign::into_b_frame(t.apply(&pa), d, renormalize)?.0, pb))
 }

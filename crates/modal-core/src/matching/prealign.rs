@@ -17,6 +17,19 @@ pub enum Prealign {
     /// Centroid, scale, rotation candidates scored by chamfer after symmetric affine ICP (§10).
     #[default]
     Robust,
+    /// The callers' coordinates are the prior (consecutive frames of one recording share the
+    /// sensor's coordinates): A starts where it lies in B's coordinates, with no centroid, scale
+    /// or rotation normalisation between the two, and only the modal affine re-fits move it. A
+    /// part of a region stays on its own portion of the whole instead of being spread over it.
+    Sensor,
+}
+
+impl Prealign {
+    /// Whether A is re-normalised into B's frame after an affine map (see [`into_b_frame`]):
+    /// never with [`Prealign::Sensor`], whose point is to keep A's placement and size.
+    pub(crate) fn renormalizes(self, ordered: bool) -> bool {
+        ordered && self != Prealign::Sensor
+    }
 }
 
 /// A `dim`-dimensional affine map `x ↦ M x + t` (only the leading `dim × dim` block is used).
@@ -1084,7 +1097,8 @@ pub(crate) fn into_b_frame(
 }
 
 /// Stage 2: A in B's normalised frame after the pre-alignment's map `t` (none with
-/// `Prealign::Normalize`), and the map from A's normalised frame to those coordinates.
+/// `Prealign::Normalize`), and the map from A's normalised frame to those coordinates. `ordered`
+/// asks for the re-normalisation of [`into_b_frame`] (see [`Prealign::renormalizes`]).
 pub(crate) fn start_in_b_frame(
     a: &[f64],
     t: Option<Affine>,

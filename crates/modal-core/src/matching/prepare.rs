@@ -313,9 +313,9 @@ pub(crate) fn inverse(perm: &[usize]) -> Vec<usize> {
 /// `x ↦ scale · (x − centroid)`, the map [`prealign::normalize`] applied.
 pub(crate) fn normalizing_map(d: usize, centroid: [f64; 3], scale: f64) -> Affine {
     let mut map = Affine::identity(d);
-    for a in 0..d {
+    for (a, c) in centroid.iter().enumerate().take(d) {
         map.m[a][a] = scale;
-        map.t[a] = -scale * centroid[a];
+        map.t[a] = -scale * c;
     }
     map
 }
@@ -344,6 +344,15 @@ pub(crate) struct Pair<'p> {
 }
 
 impl<'p> Pair<'p> {
+    /// The map from A's normalised frame to B's that is the identity in the callers'
+    /// coordinates: the start of [`super::Prealign::Sensor`].
+    pub(crate) fn sensor_map(&self) -> Affine {
+        self.b
+            .get()
+            .to_normalized
+            .compose(&super::inverse_normalizing_map(&self.a.get().to_normalized))
+    }
+
     /// Checks the options against the pair and works out the pair's choices.
     ///
     /// # Errors

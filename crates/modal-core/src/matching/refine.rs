@@ -100,7 +100,8 @@ pub(crate) fn refine(pair: &Pair<'_>, start: Start) -> Result<Refined, ModalErro
         if !moves(&t) || (pair.ordered && t.det() <= 0.0) {
             break;
         }
-        let Ok((next, renormalize)) = into_b_frame(t.apply(&cur), pair.dim, pair.ordered) else {
+        let renormalizes = pair.opts.prealign.renormalizes(pair.ordered);
+        let Ok((next, renormalize)) = into_b_frame(t.apply(&cur), pair.dim, renormalizes) else {
             break;
         };
         cur = next;

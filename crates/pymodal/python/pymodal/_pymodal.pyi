@@ -23,7 +23,7 @@ Path = Union[str, os.PathLike]
 Element = Literal["gaussian", "axial"]
 Solver = Literal["jv", "hungarian", "simplex"]
 Search = Literal["global", "local", "best"]
-Prealign = Literal["robust", "normalize"]
+Prealign = Literal["robust", "normalize", "sensor"]
 ThresholdMode = Literal["after", "during"]
 Pitch = Union[float, Tuple[float, float]]
 
