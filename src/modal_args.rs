@@ -6,7 +6,9 @@
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 use modal_core::options::MatchOverrides;
-use modal_core::{Choice, ElementKind, MatchParams, Material, Prealign, Search, ThresholdMode};
+use modal_core::{
+    Choice, ElementKind, MatchParams, Material, Prealign, Refine, Search, ThresholdMode,
+};
 use pedo_io::units::UnitOverrides;
 
 /// A clap parser for an enumerated option: the possible values are the Rust type's words, the
@@ -53,6 +55,12 @@ pub struct ModalArgs {
     pub refits: Option<usize>,
     #[arg(long, help = help("refit_tolerance"))]
     pub refit_tolerance: Option<f64>,
+    #[arg(long, value_parser = word::<Refine>(), help = help("refine"))]
+    pub refine: Option<Refine>,
+    #[arg(long, value_name = "N", help = help("deform_modes"))]
+    pub deform_modes: Option<usize>,
+    #[arg(long, help = help("deform_stiffness"))]
+    pub deform_stiffness: Option<f64>,
     #[arg(long, help = help("kappa"))]
     pub kappa: Option<f64>,
     #[arg(long, value_name = "N", help = help("center_stride"))]
@@ -89,6 +97,9 @@ impl ModalArgs {
             max_rotation: self.max_rotation,
             refits: self.refits,
             refit_tolerance: self.refit_tolerance,
+            refine: self.refine,
+            deform_modes: self.deform_modes,
+            deform_stiffness: self.deform_stiffness,
             kappa: self.kappa,
             center_stride: self.center_stride,
             position_weight: self.position_weight,

@@ -25,7 +25,7 @@ pub use matching::prealign::{Affine, RotationSearch};
 pub use matching::search::ThresholdMode;
 pub use matching::{
     match_prepared, match_shapes, prepare, MatchOptions, MatchPair, MatchResult, Parallelism,
-    Prealign, PreparedShape, Search,
+    Prealign, PreparedShape, Refine, Search,
 };
 pub use model::{modal_basis, model_matrices, ElementKind, ModalBasis, ModelOptions};
 pub use model::{Material, PlaneModel};

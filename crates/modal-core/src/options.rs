@@ -10,7 +10,7 @@
 
 pub use crate::error::OptionError;
 use crate::matching::search::ThresholdMode;
-use crate::matching::{MatchOptions, Prealign, Search};
+use crate::matching::{MatchOptions, Prealign, Refine, Search};
 use crate::model::{ElementKind, Material};
 
 impl OptionError {
@@ -71,6 +71,7 @@ choice!(Prealign, "prealign", [
     "normalize" => Prealign::Normalize,
     "sensor" => Prealign::Sensor,
 ]);
+choice!(Refine, "refine", ["affine" => Refine::Affine, "modal" => Refine::Modal]);
 choice!(ThresholdMode, "threshold_mode", [
     "after" => ThresholdMode::AfterAssignment,
     "during" => ThresholdMode::InOptimizer,
@@ -161,6 +162,12 @@ pub struct MatchParams {
     pub refits: Option<usize>,
     /// Re-fit stopping tolerance in B's node spacings (`None`: the recipe's).
     pub refit_tolerance: Option<f64>,
+    /// What follows the affine re-fits: nothing (`affine`) or the modal non-rigid warp (`modal`).
+    pub refine: Refine,
+    /// Modes of the non-rigid warp, rigid ones included (`refine = modal` only).
+    pub deform_modes: usize,
+    /// Strain-energy weight of the non-rigid warp, > 0 (`refine = modal` only).
+    pub deform_stiffness: f64,
     /// Gaussian width factor σ = kappa × mean nearest-neighbour distance (`None`: the recipe's).
     pub kappa: Option<f64>,
     /// Gaussian element: a Gaussian on every `center_stride`-th node only (1: every node).
@@ -196,6 +203,9 @@ impl Default for MatchParams {
             max_rotation: None,
             refits: None,
             refit_tolerance: None,
+            refine: d.refine,
+            deform_modes: d.deform_modes,
+            deform_stiffness: d.deform_stiffness,
             kappa: None,
             center_stride: d.model.center_stride,
             position_weight: None,
@@ -245,6 +255,12 @@ impl MatchParams {
                 "a finite number >= 0",
             )?;
         }
+        check(
+            self.deform_stiffness.is_finite() && self.deform_stiffness > 0.0,
+            "deform_stiffness",
+            self.deform_stiffness,
+            "a finite number > 0",
+        )?;
         if let Some(k) = self.kappa {
             check(k.is_finite() && k > 0.0, "kappa", k, "a finite number > 0")?;
         }
@@ -307,6 +323,9 @@ impl MatchParams {
             .or(o.rotation_search.max_rotation);
         o.refits = self.refits.unwrap_or(o.refits);
         o.refit_tolerance = self.refit_tolerance.unwrap_or(o.refit_tolerance);
+        o.refine = self.refine;
+        o.deform_modes = self.deform_modes;
+        o.deform_stiffness = self.deform_stiffness;
         o.position_weight = self.position_weight.unwrap_or(o.position_weight);
         o.cost_power = self.cost_power.unwrap_or(o.cost_power);
         o.common_sigma = self.common_sigma.unwrap_or(o.common_sigma);
@@ -337,6 +356,9 @@ impl MatchParams {
             ),
             ("refits", Int(used.refits)),
             ("refit_tolerance", Float(used.refit_tolerance)),
+            ("refine", Word(used.refine.to_string())),
+            ("deform_modes", Int(used.deform_modes)),
+            ("deform_stiffness", Float(used.deform_stiffness)),
             ("kappa", Float(used.model.kappa)),
             ("center_stride", Int(used.model.center_stride)),
             ("position_weight", Float(used.position_weight)),
@@ -375,6 +397,9 @@ pub struct MatchOverrides {
     pub max_rotation: Option<f64>,
     pub refits: Option<usize>,
     pub refit_tolerance: Option<f64>,
+    pub refine: Option<Refine>,
+    pub deform_modes: Option<usize>,
+    pub deform_stiffness: Option<f64>,
     pub kappa: Option<f64>,
     pub center_stride: Option<usize>,
     pub position_weight: Option<f64>,
@@ -401,6 +426,9 @@ impl MatchOverrides {
             max_rotation: self.max_rotation.or(base.max_rotation),
             refits: self.refits.or(base.refits),
             refit_tolerance: self.refit_tolerance.or(base.refit_tolerance),
+            refine: self.refine.unwrap_or(base.refine),
+            deform_modes: self.deform_modes.unwrap_or(base.deform_modes),
+            deform_stiffness: self.deform_stiffness.unwrap_or(base.deform_stiffness),
             kappa: self.kappa.or(base.kappa),
             center_stride: self.center_stride.unwrap_or(base.center_stride),
             position_weight: self.position_weight.or(base.position_weight),
@@ -541,6 +569,9 @@ pub fn match_option_specs() -> Vec<OptionSpec> {
         OptionSpec::new("max_rotation", Value, format!("180 (any turn) for a pair, {RUN_MAX_ROTATION} for a recording's consecutive frames"), "Largest turn in degrees, in (0, 180], the robust pre-alignment may find between two objects; among turns that fit nearly as well the smallest always wins."),
         OptionSpec::new("refits", Value, by_input(|o| o.refits), "Maximum modal affine re-fits (stops earlier when the pairs stop changing)."),
         OptionSpec::new("refit_tolerance", Value, by_input(|o| o.refit_tolerance), "No further re-fit once every one-to-one pair lies within this fraction of the second object's node spacing of its partner under one affine map; 0 always re-fits."),
+        OptionSpec::choice(d.refine, "After the affine re-fits: nothing more (affine) or a non-rigid warp of the first object by its own low-order modes, fitted to soft correspondences with the modes' strain energy as regulariser, then one more search (modal; slower, for strongly non-affine deformations)."),
+        OptionSpec::new("deform_modes", Value, d.deform_modes, "refine=modal: modes of the warp's displacement field, the rigid ones included; at most the rigid count leaves the affine result unchanged."),
+        OptionSpec::new("deform_stiffness", Value, d.deform_stiffness, "refine=modal: weight > 0 of the modes' strain energy against the fit; larger keeps the warp closer to the affine alignment."),
         OptionSpec::new("kappa", Value, by_input(|o| o.model.kappa), "Gaussian width sigma = kappa × mean nearest-neighbour distance."),
         OptionSpec::new("center_stride", Value, d.center_stride, "Gaussian element: a Gaussian on every N-th node only (faster, less accurate under severe warps)."),
         OptionSpec::new("position_weight", Value, by_input(|o| o.position_weight), "Weight in [0, 1] of the aligned positions' distance mixed into the modal cost (1: positions only)."),
@@ -582,6 +613,7 @@ mod tests {
         round_trip::<Search>();
         round_trip::<Prealign>();
         round_trip::<ThresholdMode>();
+        round_trip::<Refine>();
         round_trip::<assign::Method>();
     }
 
@@ -606,7 +638,14 @@ mod tests {
     #[test]
     fn validation_names_the_option() {
         let d = MatchParams::default;
-        let cases: [(MatchParams, &str); 9] = [
+        let cases: [(MatchParams, &str); 10] = [
+            (
+                MatchParams {
+                    deform_stiffness: 0.0,
+                    ..d()
+                },
+                "deform_stiffness",
+            ),
             (
                 MatchParams {
                     max_rotation: Some(0.0),

@@ -359,6 +359,12 @@ fn triangles(
 /// refit_tolerance : float ≥ 0 — no (further) re-fit once every one-to-one pair is within this
 ///     fraction of b's node spacing of its partner under one affine map (default 0.6; 0
 ///     re-fits ``refits`` times).
+/// refine : {"affine", "modal"} — after the affine re-fits, nothing more (default) or a
+///     non-rigid warp of a by its own low-order modes onto b, then one more search (slower; for
+///     strongly non-affine deformations of contours, see the README).
+/// deform_modes : int — ``refine="modal"``: modes of the warp, rigid ones included (default 12).
+/// deform_stiffness : float > 0 — ``refine="modal"``: weight of the modes' strain energy
+///     against the fit (default 100).
 /// kappa : float > 0 — σ = kappa × mean nearest-neighbour distance (default 0.8, or 3 for
 ///     unordered 3-D points).
 /// center_stride : int ≥ 1 — Gaussians on every ``center_stride``-th node only (default 1).
@@ -382,7 +388,7 @@ fn triangles(
 #[pyfunction]
 #[pyo3(name = "match", signature = (a, b, *, element=None, modes=None, search=None, solver=None,
     threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, max_rotation=None, refits=None,
-    refit_tolerance=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
+    refit_tolerance=None, refine=None, deform_modes=None, deform_stiffness=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
     common_sigma=None, skip_rigid=None, band=None, material=None, ordered=None, triangles_a=None,
     triangles_b=None))]
 #[allow(clippy::too_many_arguments)]
@@ -402,6 +408,9 @@ fn match_py(
     max_rotation: Option<f64>,
     refits: Option<usize>,
     refit_tolerance: Option<f64>,
+    refine: Option<&str>,
+    deform_modes: Option<usize>,
+    deform_stiffness: Option<f64>,
     kappa: Option<f64>,
     center_stride: Option<usize>,
     position_weight: Option<f64>,
@@ -427,6 +436,9 @@ fn match_py(
         max_rotation,
         refits,
         refit_tolerance,
+        refine,
+        deform_modes,
+        deform_stiffness,
         kappa,
         center_stride,
         position_weight,

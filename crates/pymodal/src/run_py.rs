@@ -59,7 +59,8 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 /// ``pymodal._options()`` lists them with their defaults and meanings) and default to ``None``,
 /// meaning the documented default: the matching options of :func:`match` (``element``,
 /// ``modes``, ``search``, ``solver``, ``threshold``, ``threshold_mode``, ``excess``, ``paper``,
-/// ``prealign``, ``refits``, ``refit_tolerance``, ``kappa``, ``center_stride``,
+/// ``prealign``, ``refits``, ``refit_tolerance``, ``refine``, ``deform_modes``,
+/// ``deform_stiffness``, ``kappa``, ``center_stride``,
 /// ``position_weight``, ``cost_power``, ``common_sigma``, ``skip_rigid``, ``band``,
 /// ``material``), then ``model`` ("contour", "surface", "isocontour"), ``frames`` ((start, end),
 /// 0-based, end excluded like a slice; either may be None), ``noise``, ``smooth``, ``spacing``,
@@ -85,7 +86,7 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 #[pyfunction]
 #[pyo3(signature = (recording, *, element=None, modes=None, search=None, solver=None,
     threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, max_rotation=None, refits=None,
-    refit_tolerance=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
+    refit_tolerance=None, refine=None, deform_modes=None, deform_stiffness=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
     common_sigma=None, skip_rigid=None, band=None, material=None, model=None, frames=None,
     noise=None, smooth=None, spacing=None, surface_nodes=None, iso_frame=None, iso_levels=None,
     drift_reference=None, pitch_mm=None, frame_rate=None))]
@@ -105,6 +106,9 @@ fn run<'py>(
     max_rotation: Option<f64>,
     refits: Option<usize>,
     refit_tolerance: Option<f64>,
+    refine: Option<&str>,
+    deform_modes: Option<usize>,
+    deform_stiffness: Option<f64>,
     kappa: Option<f64>,
     center_stride: Option<usize>,
     position_weight: Option<f64>,
@@ -138,6 +142,9 @@ fn run<'py>(
         max_rotation,
         refits,
         refit_tolerance,
+        refine,
+        deform_modes,
+        deform_stiffness,
         kappa,
         center_stride,
         position_weight,
@@ -298,6 +305,7 @@ pub fn run_params<'py>(
         get!("prealign", String),
         get!("model", String),
     );
+    let refine = get!("refine", String);
     let material = any("material")?;
     let pitch_mm = any("pitch_mm")?;
     let matching = MatchKw {
@@ -313,6 +321,9 @@ pub fn run_params<'py>(
         max_rotation: get!("max_rotation", f64),
         refits: get!("refits", usize),
         refit_tolerance: get!("refit_tolerance", f64),
+        refine: refine.as_deref(),
+        deform_modes: get!("deform_modes", usize),
+        deform_stiffness: get!("deform_stiffness", f64),
         kappa: get!("kappa", f64),
         center_stride: get!("center_stride", usize),
         position_weight: get!("position_weight", f64),

@@ -101,6 +101,24 @@ def test_ordered_contours_are_detected_from_the_point_order(case):
         )
 
 
+def test_refine_modal_warps_a_and_keeps_the_affine_part(case):
+    a, b, truth, spacing = case
+    plain = pymodal.match(a, b)
+    # The warp's settings leave the default (affine) path as it was.
+    same = pymodal.match(a, b, refine="affine", deform_modes=40, deform_stiffness=0.5)
+    assert np.array_equal(plain.pairs, same.pairs) and np.array_equal(plain.aligned_a, same.aligned_a)
+    warped = pymodal.match(a, b, refine="modal")
+    assert np.all(np.isfinite(warped.aligned_a))
+    assert not np.allclose(warped.aligned_a, plain.aligned_a)
+    assert np.allclose(warped.transform, plain.transform)
+    # The warp moves A towards the truth (this pair is bent, so the affine map leaves a residual).
+    err = lambda x: np.sqrt(((x - truth) ** 2).sum(1).mean())
+    assert err(warped.aligned_a) < err(plain.aligned_a), (err(warped.aligned_a), err(plain.aligned_a))
+    # Only the rigid modes: nothing to warp with, the affine result.
+    rigid = pymodal.match(a, b, refine="modal", deform_modes=3)
+    assert np.array_equal(rigid.pairs, plain.pairs) and np.array_equal(rigid.aligned_a, plain.aligned_a)
+
+
 def test_refit_tolerance(case):
     a, b, truth, spacing = case
     every = pymodal.match(a, b, refit_tolerance=0.0, refits=3)
@@ -277,6 +295,8 @@ def test_best_search_is_the_row_minimum_many_to_one():
         (dict(position_weight=1.5), "position_weight"),
         (dict(cost_power=0.0), "cost_power"),
         (dict(cost_power=float("inf")), "cost_power"),
+        (dict(refine="tps"), "refine = tps: expected one of affine, modal"),
+        (dict(refine="modal", deform_stiffness=0.0), "deform_stiffness"),
     ],
 )
 def test_bad_options(case, kwargs, text):

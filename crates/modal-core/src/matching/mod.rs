@@ -7,11 +7,14 @@
 //! 3. [`features`] — the modal features, the mode alignment and the cost matrix `Z`;
 //! 4. [`search`] — local, global (with the assignment of the `assign` crate) or best matches;
 //! 5. [`excess`] — the nodes the one-to-one search leaves over;
-//! 6. `refine` — the modal affine re-fits, which repeat stages 3–5 and keep the best pass.
+//! 6. `refine` — the modal affine re-fits, which repeat stages 3–5 and keep the best pass;
+//! 7. `deform` — optionally ([`Refine::Modal`]), a non-rigid warp of A by its low-order modes,
+//!    then stages 3–5 once more.
 //!
 //! [`match_shapes`] composes them for one pair; [`match_prepared`] does the same from prepared
 //! objects, on one thread or two as the caller chooses ([`Parallelism`]).
 
+mod deform;
 pub mod excess;
 pub mod features;
 mod first_phase;
@@ -33,6 +36,7 @@ pub use self::first_phase::Parallelism;
 pub use self::prealign::Prealign;
 pub use self::prepare::{prepare, PreparedShape};
 pub use self::recipe::MatchOptions;
+pub use self::refine::Refine;
 pub use self::result::{MatchPair, MatchResult};
 pub use self::search::Search;
 

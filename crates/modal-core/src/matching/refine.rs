@@ -16,6 +16,17 @@ use super::result::MatchPair;
 use super::search::primary_matches;
 use crate::error::ModalError;
 
+/// What follows the affine re-fits (docs/method.md §7.4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Refine {
+    /// Nothing: the kept affine pass is the result (the default).
+    #[default]
+    Affine,
+    /// A's aligned nodes warped onto B by A's low-order modes, amplitudes fitted with the modes'
+    /// strain energy as regulariser, then matched once more.
+    Modal,
+}
+
 /// Where the passes start: A after the pre-alignment, with the modes solved for it.
 pub(crate) struct Start {
     /// A's coordinates in B's normalised frame.
@@ -34,7 +45,7 @@ pub(crate) struct Iteration {
     /// Pairs in the prepared (oriented) numbering.
     pub pairs: Vec<MatchPair>,
     /// Mean squared residual of the pairs under the affine map fitted to them.
-    resid: f64,
+    pub resid: f64,
     /// A's coordinates the pass matched, in B's normalised frame.
     pub aligned: Vec<f64>,
     /// The map from A's normalised frame to `aligned`.
@@ -109,15 +120,20 @@ pub(crate) fn refine(pair: &Pair<'_>, start: Start) -> Result<Refined, ModalErro
         prev = Some(pairs);
         refits += 1;
     }
+    let kept = best.expect("at least one iteration ran");
+    let kept = match opts.refine {
+        Refine::Affine => kept,
+        Refine::Modal => super::deform::deform(pair, kept)?,
+    };
     Ok(Refined {
-        kept: best.expect("at least one iteration ran"),
+        kept,
         refits,
         solves,
     })
 }
 
 /// One pass's pairs on `z`: the search's, then the excess step's.
-fn pass_pairs(
+pub(super) fn pass_pairs(
     pair: &Pair<'_>,
     z: &AffinityMatrix,
     cur: &[f64],
@@ -161,7 +177,11 @@ fn pass_pairs(
 /// the passes; the largest of the one-to-one pairs decides whether another re-fit is worth a
 /// solve. Excess pairs are left out of that: they are many-to-one by construction, so their
 /// offsets along the contour measure the sampling, not the fit. Returns both and the map.
-fn explained(pair: &Pair<'_>, cur: &[f64], pairs: &[MatchPair]) -> (f64, f64, Option<Affine>) {
+pub(super) fn explained(
+    pair: &Pair<'_>,
+    cur: &[f64],
+    pairs: &[MatchPair],
+) -> (f64, f64, Option<Affine>) {
     let (d, b) = (pair.dim, &pair.b.get().pts);
     let idx: Vec<(usize, usize)> = pairs.iter().map(|p| (p.a, p.b)).collect();
     let fit = fit_affine(cur, b, d, &idx);

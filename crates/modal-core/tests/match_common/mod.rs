@@ -70,6 +70,9 @@ pub enum Severity {
     Mild,
     Moderate,
     Severe,
+    /// Moderate rotation and scale with a bend of 0.4: a strongly non-affine warp (more than
+    /// three times the severe bend).
+    Bent,
 }
 
 /// A smooth warp in the normalised frame of the original object: bend, shear, anisotropic scale,
@@ -93,6 +96,7 @@ impl Warp {
             Severity::Mild => (5.0, 0.05, 0.02, 0.02),
             Severity::Moderate => (15.0, 0.12, 0.05, 0.06),
             Severity::Severe => (35.0, 0.25, 0.15, 0.12),
+            Severity::Bent => (15.0, 0.12, 0.05, 0.4),
         };
         let n = pts.len() as f64;
         let c = [
