@@ -807,6 +807,19 @@ mod tests {
             let json = study_table(std::slice::from_ref(&r)).to_json();
             assert_eq!(row_from_json(&json[0]), Some(r));
         }
+        // Through the file's text: a resumed study keeps its rows to the last bit. A wall time of
+        // 1_535_625_782 ns is written with 17 digits, which serde_json's default parser rounds
+        // twice (one ulp off); the `float_roundtrip` feature parses it exactly.
+        let nanos = std::time::Duration::from_nanos;
+        for wall_time_s in [nanos(1_535_625_782).as_secs_f64(), 0.1 + 0.2, 12345.678901234567] {
+            let r = StudyRow {
+                wall_time_s,
+                ..row(RowStatus::Ok)
+            };
+            let text = pretty(&study_table(std::slice::from_ref(&r)).to_json());
+            let back: Value = serde_json::from_str(&text).unwrap();
+            assert_eq!(row_from_json(&back[0]), Some(r));
+        }
         let csv = study_table(&[row(RowStatus::Ok)]).to_csv();
         assert_eq!(csv.lines().next().unwrap(), STUDY_COLUMNS.join(","));
         assert!(
