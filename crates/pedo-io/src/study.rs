@@ -482,13 +482,20 @@ pub fn run_study(
 }
 
 /// Runs `f` on a rayon pool of one thread: the pairs of one recording are then matched in turn
-/// (the recordings are what runs in parallel). Falls back to the current thread if no thread
-/// can be started.
+/// (the recordings are what runs in parallel). The pool is the calling thread's own, created on
+/// its first call and kept: a new pool per recording would start a new thread each time, and
+/// glibc gives each new thread a new malloc arena that keeps the memory of its recording, so a
+/// study's peak memory grew with its number of recordings (about 19 MB per walk). Falls back to
+/// the current thread if no thread can be started.
 pub fn on_one_thread<T: Send>(f: impl FnOnce() -> T + Send) -> T {
-    match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
-        Ok(pool) => pool.install(f),
-        Err(_) => f(),
+    thread_local! {
+        static POOL: Option<rayon::ThreadPool> =
+            rayon::ThreadPoolBuilder::new().num_threads(1).build().ok();
     }
+    POOL.with(|pool| match pool {
+        Some(pool) => pool.install(f),
+        None => f(),
+    })
 }
 
 /// Creates the study folder `out` (marking it as one) or checks that it is one; returns the rows
@@ -811,7 +818,11 @@ mod tests {
         // 1_535_625_782 ns is written with 17 digits, which serde_json's default parser rounds
         // twice (one ulp off); the `float_roundtrip` feature parses it exactly.
         let nanos = std::time::Duration::from_nanos;
-        for wall_time_s in [nanos(1_535_625_782).as_secs_f64(), 0.1 + 0.2, 12345.678901234567] {
+        for wall_time_s in [
+            nanos(1_535_625_782).as_secs_f64(),
+            0.1 + 0.2,
+            12345.678901234567,
+        ] {
             let r = StudyRow {
                 wall_time_s,
                 ..row(RowStatus::Ok)
@@ -826,6 +837,22 @@ mod tests {
             csv.contains("\"data/s01, left \"\"walk\"\".asf\","),
             "free text is quoted: {csv}"
         );
+    }
+
+    #[test]
+    fn one_thread_per_caller_is_kept_across_recordings() {
+        // A new thread per recording made a study's memory grow with its recordings (each new
+        // thread got a malloc arena of its own); the caller's pool and its one thread are kept.
+        let worker =
+            || on_one_thread(|| (std::thread::current().id(), rayon::current_num_threads()));
+        let (first, threads) = worker();
+        assert_eq!(threads, 1);
+        assert_ne!(first, std::thread::current().id());
+        for _ in 0..5 {
+            assert_eq!(worker().0, first);
+        }
+        let other = std::thread::spawn(move || worker().0).join().unwrap();
+        assert_ne!(other, first, "each calling thread has its own pool");
     }
 
     #[test]
