@@ -811,7 +811,11 @@ mod tests {
         // 1_535_625_782 ns is written with 17 digits, which serde_json's default parser rounds
         // twice (one ulp off); the `float_roundtrip` feature parses it exactly.
         let nanos = std::time::Duration::from_nanos;
-        for wall_time_s in [nanos(1_535_625_782).as_secs_f64(), 0.1 + 0.2, 12345.678901234567] {
+        for wall_time_s in [
+            nanos(1_535_625_782).as_secs_f64(),
+            0.1 + 0.2,
+            12345.678901234567,
+        ] {
             let r = StudyRow {
                 wall_time_s,
                 ..row(RowStatus::Ok)
