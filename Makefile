@@ -11,10 +11,10 @@ CARGO_ENV := PATH=$(abspath $(VENV))/bin:$$PATH
 
 .PHONY: test test-rust test-python test-browser wheel-check examples venv wheel bench bench-python lint demo
 
-# Every test: Rust (unit, integration, doc), Python (against the installed wheel), the wheel
+# Every test: the lints first (formatting, clippy and rustdoc with warnings as errors), Rust (unit, integration, doc), Python (against the installed wheel), the wheel
 # installed on its own in a fresh venv without Rust, every example, and the report in a browser.
 test: WHEEL_PROFILE = dev
-test: test-rust test-python wheel-check examples test-browser
+test: lint test-rust test-python wheel-check examples test-browser
 
 # One cargo invocation for every crate (pymodal's tests need the venv's Python with numpy).
 test-rust: venv
@@ -87,9 +87,12 @@ bench-python: wheel
 	$(PY) -m pip install -q pycpd pot
 	for s in benches/python/bench_*.py; do $(PY) $$s || exit 1; done
 
-lint:
+# Formatting, clippy on every target of every crate, and the API documentation, each with
+# warnings as errors (pymodal is in the workspace: pyo3 reads the venv's interpreter).
+lint: venv
 	cargo fmt --all -- --check
-	cargo clippy --workspace --all-targets -- -D warnings
+	$(CARGO_ENV) cargo clippy --workspace --all-targets -- -D warnings
+	$(CARGO_ENV) RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
 
 demo:
 	cargo run --release -- demo

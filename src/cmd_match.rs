@@ -83,10 +83,10 @@ fn load_object(path: &Path, args: &MatchArgs) -> Result<Object, CliError> {
         return Ok(plain(pedo_io::points::read_points(path, Topology::None)?));
     }
     // A CSV is a point file when it has 2 or 3 columns, a pressure grid otherwise.
-    if ext == "csv" {
-        if let Ok(shape) = pedo_io::points::read_points(path, Topology::None) {
-            return Ok(plain(shape));
-        }
+    if ext == "csv"
+        && let Ok(shape) = pedo_io::points::read_points(path, Topology::None)
+    {
+        return Ok(plain(shape));
     }
     let mut rec = args.read.read(path)?;
     args.units.overrides().apply(&mut rec)?;

@@ -204,13 +204,15 @@ fn execute(
         print_summary(&input.name, out, &result);
     }
     if o.timings {
-        eprintln!("timings: read {:.3} s, objects {:.3} s, matching {:.3} s, tracks {:.3} s, output {:.3} s, total {:.3} s",
+        eprintln!(
+            "timings: read {:.3} s, objects {:.3} s, matching {:.3} s, tracks {:.3} s, output {:.3} s, total {:.3} s",
             read_time.as_secs_f64(),
             result.timings.objects.as_secs_f64(),
             result.timings.matching.as_secs_f64(),
             result.timings.tracks.as_secs_f64(),
             write_time,
-            started.elapsed().as_secs_f64());
+            started.elapsed().as_secs_f64()
+        );
     }
     Ok(())
 }

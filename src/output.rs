@@ -33,7 +33,7 @@ pub fn read_cost_csv(path: &Path) -> Result<(Vec<f64>, usize, usize), String> {
                     "{}:{}: row has {n} values, the first row has {c}",
                     path.display(),
                     lineno + 1
-                ))
+                ));
             }
             _ => {}
         }

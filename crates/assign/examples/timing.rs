@@ -10,7 +10,7 @@ struct Timespec {
     sec: i64,
     nsec: i64,
 }
-extern "C" {
+unsafe extern "C" {
     fn clock_gettime(clk: i32, tp: *mut Timespec) -> i32;
 }
 

@@ -13,7 +13,9 @@ pub enum AssignError {
     },
     /// NaN, or an infinity that would make the objective unbounded (`-inf` when minimising,
     /// `+inf` when maximising). The message starts like scipy's.
-    #[error("matrix contains invalid numeric entries (NaN, or an infinity favouring the objective) at ({row}, {col})")]
+    #[error(
+        "matrix contains invalid numeric entries (NaN, or an infinity favouring the objective) at ({row}, {col})"
+    )]
     InvalidEntry { row: usize, col: usize },
     /// The forbidden pairs leave no assignment of `min(rows, cols)` pairs.
     #[error("cost matrix is infeasible")]

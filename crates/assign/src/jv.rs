@@ -35,7 +35,7 @@ pub(crate) fn solve(c: &[f64], n: usize, m: usize) -> Result<Solution, AssignErr
         (0..n).collect()
     };
     free = arr(c, m, &mut v, &mut x, &mut y, free, &mut seen, tied)?;
-    for (i, _) in seen.iter().enumerate().filter(|(_, &s)| !s) {
+    for (i, _) in seen.iter().enumerate().filter(|&(_, &s)| !s) {
         if !row_valid(&c[i * m..(i + 1) * m]) {
             return Err(AssignError::InvalidEntry { row: i, col: 0 });
         }
@@ -341,66 +341,68 @@ fn scan_portable<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> S
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn scan_avx2<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
-    use std::arch::x86_64::*;
-    const B: usize = 16;
-    let m = row.len();
-    assert!(v.len() >= m && freepen.len() >= m);
-    let mb = m - m % B;
-    let ninf = _mm256_set1_pd(f64::NEG_INFINITY);
-    let mut ok = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-    let mut s = Scan {
-        top: Top2::EMPTY,
-        min_free: f64::INFINITY,
-        arg_free: NONE,
-        valid: true,
-    };
-    // SAFETY (every `.add(o)` load below): `o + 4 ≤ mb ≤ m`, and `row`, `v` and `freepen`
-    // hold at least `m` values (asserted above).
-    let (rp, vp, fp) = (row.as_ptr(), v.as_ptr(), freepen.as_ptr());
-    let replay = |s: &mut Scan, lo: usize, hi: usize| {
-        for j in lo..hi {
-            let h = row[j] - v[j];
-            if h < s.top.min2 {
-                s.top.offer(h, j);
+    unsafe {
+        use std::arch::x86_64::*;
+        const B: usize = 16;
+        let m = row.len();
+        assert!(v.len() >= m && freepen.len() >= m);
+        let mb = m - m % B;
+        let ninf = _mm256_set1_pd(f64::NEG_INFINITY);
+        let mut ok = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+        let mut s = Scan {
+            top: Top2::EMPTY,
+            min_free: f64::INFINITY,
+            arg_free: NONE,
+            valid: true,
+        };
+        // SAFETY (every `.add(o)` load below): `o + 4 ≤ mb ≤ m`, and `row`, `v` and `freepen`
+        // hold at least `m` values (asserted above).
+        let (rp, vp, fp) = (row.as_ptr(), v.as_ptr(), freepen.as_ptr());
+        let replay = |s: &mut Scan, lo: usize, hi: usize| {
+            for j in lo..hi {
+                let h = row[j] - v[j];
+                if h < s.top.min2 {
+                    s.top.offer(h, j);
+                }
+                let hf = h + freepen[j];
+                if FREE && hf < s.min_free {
+                    s.min_free = hf;
+                    s.arg_free = j;
+                }
             }
-            let hf = h + freepen[j];
-            if FREE && hf < s.min_free {
-                s.min_free = hf;
-                s.arg_free = j;
+        };
+        let mut k = 0;
+        while k < mb {
+            let mut bmin = _mm256_set1_pd(f64::INFINITY);
+            let mut bminf = bmin;
+            for q in 0..B / 4 {
+                let o = k + 4 * q;
+                let r = _mm256_loadu_pd(rp.add(o));
+                ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GT_OQ>(r, ninf));
+                let h = _mm256_sub_pd(r, _mm256_loadu_pd(vp.add(o)));
+                bmin = _mm256_min_pd(bmin, h);
+                if FREE {
+                    bminf = _mm256_min_pd(bminf, _mm256_add_pd(h, _mm256_loadu_pd(fp.add(o))));
+                }
             }
-        }
-    };
-    let mut k = 0;
-    while k < mb {
-        let mut bmin = _mm256_set1_pd(f64::INFINITY);
-        let mut bminf = bmin;
-        for q in 0..B / 4 {
-            let o = k + 4 * q;
-            let r = _mm256_loadu_pd(rp.add(o));
-            ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GT_OQ>(r, ninf));
-            let h = _mm256_sub_pd(r, _mm256_loadu_pd(vp.add(o)));
-            bmin = _mm256_min_pd(bmin, h);
-            if FREE {
-                bminf = _mm256_min_pd(bminf, _mm256_add_pd(h, _mm256_loadu_pd(fp.add(o))));
+            let t2 = _mm256_set1_pd(s.top.min2);
+            let tf = _mm256_set1_pd(s.min_free);
+            let hit = _mm256_or_pd(
+                _mm256_cmp_pd::<_CMP_LT_OQ>(bmin, t2),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(bminf, tf),
+            );
+            if _mm256_movemask_pd(hit) != 0 {
+                replay(&mut s, k, k + B);
             }
+            k += B;
         }
-        let t2 = _mm256_set1_pd(s.top.min2);
-        let tf = _mm256_set1_pd(s.min_free);
-        let hit = _mm256_or_pd(
-            _mm256_cmp_pd::<_CMP_LT_OQ>(bmin, t2),
-            _mm256_cmp_pd::<_CMP_LT_OQ>(bminf, tf),
-        );
-        if _mm256_movemask_pd(hit) != 0 {
-            replay(&mut s, k, k + B);
+        s.valid = _mm256_movemask_pd(ok) == 0b1111;
+        for &r in &row[mb..] {
+            s.valid &= r > f64::NEG_INFINITY;
         }
-        k += B;
+        replay(&mut s, mb, m);
+        s
     }
-    s.valid = _mm256_movemask_pd(ok) == 0b1111;
-    for &r in &row[mb..] {
-        s.valid &= r > f64::NEG_INFINITY;
-    }
-    replay(&mut s, mb, m);
-    s
 }
 
 /// The two smallest reduced costs `row[j] - v[j]` of a row, ordered by (value, column): ties go
@@ -612,88 +614,90 @@ unsafe fn relax_avx2(
     h: f64,
     i: u64,
 ) -> Relaxed {
-    use std::arch::x86_64::*;
-    const B: usize = 16;
-    let m = row.len();
-    assert!(v.len() >= m && dk.len() >= m && pred.len() >= m && freepen.len() >= m);
-    let mb = m - m % B;
-    let hv = _mm256_set1_pd(h);
-    let iv = _mm256_set1_epi64x(i as i64);
-    let mut out = Relaxed {
-        min_all: f64::INFINITY,
-        arg_all: 0,
-        min_free: f64::INFINITY,
-        arg_free: 0,
-    };
-    // SAFETY (every `.add(o)` / `.add(j)` access below): `o + 4 ≤ mb` and `j < mb ≤ m`, and
-    // every slice holds at least `m` values (asserted above); `dk` and `pred` are borrowed
-    // mutably, so the stores through `dp` and `pp` alias nothing else.
-    let (rp, vp, dp, pp, fp) = (
-        row.as_ptr(),
-        v.as_ptr(),
-        dk.as_mut_ptr(),
-        pred.as_mut_ptr(),
-        freepen.as_ptr(),
-    );
-    let mut k = 0;
-    while k < mb {
-        let mut bmin = _mm256_set1_pd(f64::INFINITY);
-        let mut bminf = bmin;
-        for q in 0..B / 4 {
-            let o = k + 4 * q;
-            let cand = _mm256_add_pd(
-                _mm256_sub_pd(_mm256_loadu_pd(rp.add(o)), _mm256_loadu_pd(vp.add(o))),
-                hv,
-            );
-            let d0 = _mm256_loadu_pd(dp.add(o));
-            let lt = _mm256_cmp_pd::<_CMP_LT_OQ>(cand, d0);
-            // min_pd(a, b) is `a < b ? a : b`: the same update as the portable kernel.
-            let d = _mm256_min_pd(cand, d0);
-            _mm256_storeu_pd(dp.add(o), d);
-            _mm256_maskstore_epi64(pp.add(o) as *mut i64, _mm256_castpd_si256(lt), iv);
-            bmin = _mm256_min_pd(bmin, d);
-            bminf = _mm256_min_pd(bminf, _mm256_add_pd(d, _mm256_loadu_pd(fp.add(o))));
-        }
-        let hit = _mm256_or_pd(
-            _mm256_cmp_pd::<_CMP_LT_OQ>(bmin, _mm256_set1_pd(out.min_all)),
-            _mm256_cmp_pd::<_CMP_LT_OQ>(bminf, _mm256_set1_pd(out.min_free)),
+    unsafe {
+        use std::arch::x86_64::*;
+        const B: usize = 16;
+        let m = row.len();
+        assert!(v.len() >= m && dk.len() >= m && pred.len() >= m && freepen.len() >= m);
+        let mb = m - m % B;
+        let hv = _mm256_set1_pd(h);
+        let iv = _mm256_set1_epi64x(i as i64);
+        let mut out = Relaxed {
+            min_all: f64::INFINITY,
+            arg_all: 0,
+            min_free: f64::INFINITY,
+            arg_free: 0,
+        };
+        // SAFETY (every `.add(o)` / `.add(j)` access below): `o + 4 ≤ mb` and `j < mb ≤ m`, and
+        // every slice holds at least `m` values (asserted above); `dk` and `pred` are borrowed
+        // mutably, so the stores through `dp` and `pp` alias nothing else.
+        let (rp, vp, dp, pp, fp) = (
+            row.as_ptr(),
+            v.as_ptr(),
+            dk.as_mut_ptr(),
+            pred.as_mut_ptr(),
+            freepen.as_ptr(),
         );
-        if _mm256_movemask_pd(hit) != 0 {
-            for j in k..k + B {
-                let d = *dp.add(j);
-                if d < out.min_all {
-                    out.min_all = d;
-                    out.arg_all = j;
-                }
-                let df = d + *fp.add(j);
-                if df < out.min_free {
-                    out.min_free = df;
-                    out.arg_free = j;
+        let mut k = 0;
+        while k < mb {
+            let mut bmin = _mm256_set1_pd(f64::INFINITY);
+            let mut bminf = bmin;
+            for q in 0..B / 4 {
+                let o = k + 4 * q;
+                let cand = _mm256_add_pd(
+                    _mm256_sub_pd(_mm256_loadu_pd(rp.add(o)), _mm256_loadu_pd(vp.add(o))),
+                    hv,
+                );
+                let d0 = _mm256_loadu_pd(dp.add(o));
+                let lt = _mm256_cmp_pd::<_CMP_LT_OQ>(cand, d0);
+                // min_pd(a, b) is `a < b ? a : b`: the same update as the portable kernel.
+                let d = _mm256_min_pd(cand, d0);
+                _mm256_storeu_pd(dp.add(o), d);
+                _mm256_maskstore_epi64(pp.add(o) as *mut i64, _mm256_castpd_si256(lt), iv);
+                bmin = _mm256_min_pd(bmin, d);
+                bminf = _mm256_min_pd(bminf, _mm256_add_pd(d, _mm256_loadu_pd(fp.add(o))));
+            }
+            let hit = _mm256_or_pd(
+                _mm256_cmp_pd::<_CMP_LT_OQ>(bmin, _mm256_set1_pd(out.min_all)),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(bminf, _mm256_set1_pd(out.min_free)),
+            );
+            if _mm256_movemask_pd(hit) != 0 {
+                for j in k..k + B {
+                    let d = *dp.add(j);
+                    if d < out.min_all {
+                        out.min_all = d;
+                        out.arg_all = j;
+                    }
+                    let df = d + *fp.add(j);
+                    if df < out.min_free {
+                        out.min_free = df;
+                        out.arg_free = j;
+                    }
                 }
             }
+            k += B;
         }
-        k += B;
+        if mb < m {
+            let t = relax(
+                &row[mb..],
+                &v[mb..m],
+                &mut dk[mb..m],
+                &mut pred[mb..m],
+                &freepen[mb..m],
+                h,
+                i,
+            );
+            if t.min_all < out.min_all {
+                out.min_all = t.min_all;
+                out.arg_all = mb + t.arg_all;
+            }
+            if t.min_free < out.min_free {
+                out.min_free = t.min_free;
+                out.arg_free = mb + t.arg_free;
+            }
+        }
+        out
     }
-    if mb < m {
-        let t = relax(
-            &row[mb..],
-            &v[mb..m],
-            &mut dk[mb..m],
-            &mut pred[mb..m],
-            &freepen[mb..m],
-            h,
-            i,
-        );
-        if t.min_all < out.min_all {
-            out.min_all = t.min_all;
-            out.arg_all = mb + t.arg_all;
-        }
-        if t.min_free < out.min_free {
-            out.min_free = t.min_free;
-            out.arg_free = mb + t.arg_free;
-        }
-    }
-    out
 }
 
 #[cfg(test)]

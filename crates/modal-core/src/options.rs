@@ -557,29 +557,136 @@ pub fn match_option_specs() -> Vec<OptionSpec> {
     use OptionKind::{Flag, NegatedFlag, TriState, Value};
     let d = MatchParams::default();
     vec![
-        OptionSpec::choice(d.element, "Finite element of the modal model: Sclaroff's Gaussian element or bar elements along contour or mesh edges."),
-        OptionSpec::new("modes", Value, d.modes, "Fraction of the dim × min(n, m) vibration modes used as features, in (0, 1]."),
-        OptionSpec::choice(d.search, "Search: the optimal one-to-one assignment (global), mutual best matches (local), or every node of the first object to its cheapest node of the second (best: many-to-one, no excess step)."),
-        OptionSpec::choice(d.solver, "Assignment solver: Jonker-Volgenant, Kuhn-Munkres or network simplex (same optimum)."),
-        OptionSpec::new("threshold", Value, "none", "Reject pairs whose max-normalised cost exceeds this number in [0, 1]; none keeps all."),
-        OptionSpec::choice(d.threshold_mode, "Threshold applied after the optimal assignment (after) or by the assignment itself, which may then keep other pairs under it (during)."),
-        OptionSpec::new("excess", NegatedFlag, d.excess, "Match the nodes the one-to-one search leaves over (excess-node step, global search)."),
-        OptionSpec::new("paper", Flag, d.paper, "Start from the paper's literal setting: centroid and scale pre-alignment, no affine re-fits."),
-        OptionSpec::new("prealign", OptionKind::Word(Prealign::NAMES), "robust (normalize with paper; sensor for a recording's contours)", "Pre-alignment: rotation search with affine ICP (robust), centroid and scale only (normalize), or the sensor coordinates as the prior, moved only by the affine re-fits (sensor: consecutive frames of one recording)."),
-        OptionSpec::new("max_rotation", Value, format!("180 (any turn) for a pair, {RUN_MAX_ROTATION} for a recording's consecutive frames"), "Largest turn in degrees, in (0, 180], the robust pre-alignment may find between two objects; among turns that fit nearly as well the smallest always wins."),
-        OptionSpec::new("refits", Value, by_input(|o| o.refits), "Maximum modal affine re-fits (stops earlier when the pairs stop changing)."),
-        OptionSpec::new("refit_tolerance", Value, by_input(|o| o.refit_tolerance), "No further re-fit once every one-to-one pair lies within this fraction of the second object's node spacing of its partner under one affine map; 0 always re-fits."),
-        OptionSpec::choice(d.refine, "After the affine re-fits: nothing more (affine) or a non-rigid warp of the first object by its own low-order modes, fitted to soft correspondences with the modes' strain energy as regulariser, then one more search (modal; slower, for strongly non-affine deformations)."),
-        OptionSpec::new("deform_modes", Value, d.deform_modes, "refine=modal: modes of the warp's displacement field, the rigid ones included; at most the rigid count leaves the affine result unchanged."),
-        OptionSpec::new("deform_stiffness", Value, d.deform_stiffness, "refine=modal: weight > 0 of the modes' strain energy against the fit; larger keeps the warp closer to the affine alignment."),
-        OptionSpec::new("kappa", Value, by_input(|o| o.model.kappa), "Gaussian width sigma = kappa × mean nearest-neighbour distance."),
-        OptionSpec::new("center_stride", Value, d.center_stride, "Gaussian element: a Gaussian on every N-th node only (faster, less accurate under severe warps)."),
-        OptionSpec::new("position_weight", Value, by_input(|o| o.position_weight), "Weight in [0, 1] of the aligned positions' distance mixed into the modal cost (1: positions only)."),
-        OptionSpec::new("cost_power", Value, by_input(|o| o.cost_power), "Exponent > 0 of the costs the search adds up (below 1 favours many near-exact pairs)."),
-        OptionSpec::new("common_sigma", TriState, by_input(|o| o.common_sigma), "One Gaussian width for both objects (for independently sampled point sets)."),
-        OptionSpec::new("skip_rigid", Flag, d.skip_rigid, "Leave the quasi-rigid modes out of the features."),
-        OptionSpec::new("band", Value, d.band, "Band of the cross-object mode reordering (0: signs only)."),
-        OptionSpec::new("material", Value, by_input(|o| o.model.material), "Material: a preset (rubber, steel, aluminium, cork, unit) or E,NU,RHO; only Poisson's ratio changes the matches."),
+        OptionSpec::choice(
+            d.element,
+            "Finite element of the modal model: Sclaroff's Gaussian element or bar elements along contour or mesh edges.",
+        ),
+        OptionSpec::new(
+            "modes",
+            Value,
+            d.modes,
+            "Fraction of the dim × min(n, m) vibration modes used as features, in (0, 1].",
+        ),
+        OptionSpec::choice(
+            d.search,
+            "Search: the optimal one-to-one assignment (global), mutual best matches (local), or every node of the first object to its cheapest node of the second (best: many-to-one, no excess step).",
+        ),
+        OptionSpec::choice(
+            d.solver,
+            "Assignment solver: Jonker-Volgenant, Kuhn-Munkres or network simplex (same optimum).",
+        ),
+        OptionSpec::new(
+            "threshold",
+            Value,
+            "none",
+            "Reject pairs whose max-normalised cost exceeds this number in [0, 1]; none keeps all.",
+        ),
+        OptionSpec::choice(
+            d.threshold_mode,
+            "Threshold applied after the optimal assignment (after) or by the assignment itself, which may then keep other pairs under it (during).",
+        ),
+        OptionSpec::new(
+            "excess",
+            NegatedFlag,
+            d.excess,
+            "Match the nodes the one-to-one search leaves over (excess-node step, global search).",
+        ),
+        OptionSpec::new(
+            "paper",
+            Flag,
+            d.paper,
+            "Start from the paper's literal setting: centroid and scale pre-alignment, no affine re-fits.",
+        ),
+        OptionSpec::new(
+            "prealign",
+            OptionKind::Word(Prealign::NAMES),
+            "robust (normalize with paper; sensor for a recording's contours)",
+            "Pre-alignment: rotation search with affine ICP (robust), centroid and scale only (normalize), or the sensor coordinates as the prior, moved only by the affine re-fits (sensor: consecutive frames of one recording).",
+        ),
+        OptionSpec::new(
+            "max_rotation",
+            Value,
+            format!(
+                "180 (any turn) for a pair, {RUN_MAX_ROTATION} for a recording's consecutive frames"
+            ),
+            "Largest turn in degrees, in (0, 180], the robust pre-alignment may find between two objects; among turns that fit nearly as well the smallest always wins.",
+        ),
+        OptionSpec::new(
+            "refits",
+            Value,
+            by_input(|o| o.refits),
+            "Maximum modal affine re-fits (stops earlier when the pairs stop changing).",
+        ),
+        OptionSpec::new(
+            "refit_tolerance",
+            Value,
+            by_input(|o| o.refit_tolerance),
+            "No further re-fit once every one-to-one pair lies within this fraction of the second object's node spacing of its partner under one affine map; 0 always re-fits.",
+        ),
+        OptionSpec::choice(
+            d.refine,
+            "After the affine re-fits: nothing more (affine) or a non-rigid warp of the first object by its own low-order modes, fitted to soft correspondences with the modes' strain energy as regulariser, then one more search (modal; slower, for strongly non-affine deformations).",
+        ),
+        OptionSpec::new(
+            "deform_modes",
+            Value,
+            d.deform_modes,
+            "refine=modal: modes of the warp's displacement field, the rigid ones included; at most the rigid count leaves the affine result unchanged.",
+        ),
+        OptionSpec::new(
+            "deform_stiffness",
+            Value,
+            d.deform_stiffness,
+            "refine=modal: weight > 0 of the modes' strain energy against the fit; larger keeps the warp closer to the affine alignment.",
+        ),
+        OptionSpec::new(
+            "kappa",
+            Value,
+            by_input(|o| o.model.kappa),
+            "Gaussian width sigma = kappa × mean nearest-neighbour distance.",
+        ),
+        OptionSpec::new(
+            "center_stride",
+            Value,
+            d.center_stride,
+            "Gaussian element: a Gaussian on every N-th node only (faster, less accurate under severe warps).",
+        ),
+        OptionSpec::new(
+            "position_weight",
+            Value,
+            by_input(|o| o.position_weight),
+            "Weight in [0, 1] of the aligned positions' distance mixed into the modal cost (1: positions only).",
+        ),
+        OptionSpec::new(
+            "cost_power",
+            Value,
+            by_input(|o| o.cost_power),
+            "Exponent > 0 of the costs the search adds up (below 1 favours many near-exact pairs).",
+        ),
+        OptionSpec::new(
+            "common_sigma",
+            TriState,
+            by_input(|o| o.common_sigma),
+            "One Gaussian width for both objects (for independently sampled point sets).",
+        ),
+        OptionSpec::new(
+            "skip_rigid",
+            Flag,
+            d.skip_rigid,
+            "Leave the quasi-rigid modes out of the features.",
+        ),
+        OptionSpec::new(
+            "band",
+            Value,
+            d.band,
+            "Band of the cross-object mode reordering (0: signs only).",
+        ),
+        OptionSpec::new(
+            "material",
+            Value,
+            by_input(|o| o.model.material),
+            "Material: a preset (rubber, steel, aluminium, cork, unit) or E,NU,RHO; only Poisson's ratio changes the matches.",
+        ),
     ]
 }
 

@@ -46,12 +46,12 @@ impl Shape {
             )));
         }
         let n = coords.len() / dim;
-        if let Topology::Mesh { triangles } = &topology {
-            if let Some(t) = triangles.iter().find(|t| t.iter().any(|&v| v >= n)) {
-                return Err(ModalError::InvalidShape(format!(
-                    "triangle {t:?} refers to a node beyond the {n} nodes"
-                )));
-            }
+        if let Topology::Mesh { triangles } = &topology
+            && let Some(t) = triangles.iter().find(|t| t.iter().any(|&v| v >= n))
+        {
+            return Err(ModalError::InvalidShape(format!(
+                "triangle {t:?} refers to a node beyond the {n} nodes"
+            )));
         }
         Ok(Self {
             dim,

@@ -156,11 +156,11 @@ pub fn anchored_tracks(
                 {
                     continue;
                 }
-                if let Some(t) = track_of[p.a][mp.a] {
-                    if tracks[t].steps.last().map(|s| s.0) == Some(p.a) {
-                        tracks[t].steps.push((o, mp.b));
-                        track_of[o][mp.b] = Some(t);
-                    }
+                if let Some(t) = track_of[p.a][mp.a]
+                    && tracks[t].steps.last().map(|s| s.0) == Some(p.a)
+                {
+                    tracks[t].steps.push((o, mp.b));
+                    track_of[o][mp.b] = Some(t);
                 }
             }
         }

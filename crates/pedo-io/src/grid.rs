@@ -31,12 +31,12 @@ impl CoordUnits {
         }
     }
     pub(crate) fn check(&self) -> Result<()> {
-        if let CoordUnits::Millimetres { dx_mm, dy_mm } = *self {
-            if !(dx_mm.is_finite() && dy_mm.is_finite() && dx_mm > 0.0 && dy_mm > 0.0) {
-                return Err(IoError::invalid(format!(
-                    "pitch must be positive and finite, got ({dx_mm}, {dy_mm})"
-                )));
-            }
+        if let CoordUnits::Millimetres { dx_mm, dy_mm } = *self
+            && !(dx_mm.is_finite() && dy_mm.is_finite() && dx_mm > 0.0 && dy_mm > 0.0)
+        {
+            return Err(IoError::invalid(format!(
+                "pitch must be positive and finite, got ({dx_mm}, {dy_mm})"
+            )));
         }
         Ok(())
     }

@@ -30,7 +30,7 @@ pub fn parse_points(text: &str, name: &str, topology: Topology) -> Result<Shape>
                     name,
                     i + 1,
                     format!("not numbers: {line:?}"),
-                ))
+                ));
             }
         };
         seen_data = true;
@@ -41,14 +41,14 @@ pub fn parse_points(text: &str, name: &str, topology: Topology) -> Result<Shape>
                     name,
                     i + 1,
                     format!("expected 2 or 3 columns, got {}", values.len()),
-                ))
+                ));
             }
             Some(d) if d != values.len() => {
                 return Err(IoError::parse(
                     name,
                     i + 1,
                     format!("expected {d} columns, got {}", values.len()),
-                ))
+                ));
             }
             _ => {}
         }

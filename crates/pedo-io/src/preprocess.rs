@@ -32,17 +32,17 @@ impl Preprocess {
             Some(t) => threshold(grid, t)?,
             None => grid.clone(),
         };
-        if let Some(s) = self.sigma {
-            if s != 0.0 {
-                g = gaussian(&g, s)?;
-            }
+        if let Some(s) = self.sigma
+            && s != 0.0
+        {
+            g = gaussian(&g, s)?;
         }
         let mut k = 1;
-        if let Some((f, interp)) = self.upsample {
-            if f != 1 {
-                g = upsample(&g, f, interp)?;
-                k = f;
-            }
+        if let Some((f, interp)) = self.upsample
+            && f != 1
+        {
+            g = upsample(&g, f, interp)?;
+            k = f;
         }
         Ok((g, k))
     }

@@ -113,7 +113,9 @@ impl FrameRange {
             Err(OptionError::new(
                 "frames",
                 self,
-                format!("a non-empty range START..END within the recording's 0..{n_frames} (0-based, END excluded)"),
+                format!(
+                    "a non-empty range START..END within the recording's 0..{n_frames} (0-based, END excluded)"
+                ),
             ))
         }
     }
@@ -289,7 +291,7 @@ impl RunParams {
                     f,
                     format!("a frame in 0..{n} (0-based)"),
                 )
-                .into())
+                .into());
             }
             other => other,
         };
@@ -365,15 +367,58 @@ pub fn recording_option_specs() -> Vec<OptionSpec> {
     use modal_core::OptionKind::Value;
     let d = RunParams::default();
     let mut specs = vec![
-        OptionSpec::choice(d.model, "Object model of each frame: closed contours of the loaded regions, brightness surfaces (pressure as height), or the isobaric contours of one frame matched level after level."),
-        OptionSpec::new("frames", Value, "all", "Frames START..END, 0-based with END excluded like a Python slice (START.. and ..END allowed)."),
-        OptionSpec::new("noise", Value, "the file's noise threshold, else 0", "Noise threshold in the recording's pressure units: lower values count as no contact."),
-        OptionSpec::new("smooth", Value, d.smooth, "Gaussian smoothing of each frame, sigma in sensels (0: none)."),
-        OptionSpec::new("spacing", Value, d.spacing, "Contour node spacing in sensels."),
-        OptionSpec::new("surface_nodes", Value, d.surface_nodes, "Node budget of each brightness surface."),
-        OptionSpec::new("iso_frame", Value, "the frame of largest load", "Isocontour model: the frame (0-based) whose isobaric contours are matched."),
-        OptionSpec::new("iso_levels", Value, d.iso_levels, "Isocontour model: the number of isobaric levels."),
-        OptionSpec::new("drift_reference", Value, d.drift_reference, "Drift correction of tracks: every this many frames is a reference frame, and each object is also matched against its ancestor on the last one; tracks follow those matches first (0: off)."),
+        OptionSpec::choice(
+            d.model,
+            "Object model of each frame: closed contours of the loaded regions, brightness surfaces (pressure as height), or the isobaric contours of one frame matched level after level.",
+        ),
+        OptionSpec::new(
+            "frames",
+            Value,
+            "all",
+            "Frames START..END, 0-based with END excluded like a Python slice (START.. and ..END allowed).",
+        ),
+        OptionSpec::new(
+            "noise",
+            Value,
+            "the file's noise threshold, else 0",
+            "Noise threshold in the recording's pressure units: lower values count as no contact.",
+        ),
+        OptionSpec::new(
+            "smooth",
+            Value,
+            d.smooth,
+            "Gaussian smoothing of each frame, sigma in sensels (0: none).",
+        ),
+        OptionSpec::new(
+            "spacing",
+            Value,
+            d.spacing,
+            "Contour node spacing in sensels.",
+        ),
+        OptionSpec::new(
+            "surface_nodes",
+            Value,
+            d.surface_nodes,
+            "Node budget of each brightness surface.",
+        ),
+        OptionSpec::new(
+            "iso_frame",
+            Value,
+            "the frame of largest load",
+            "Isocontour model: the frame (0-based) whose isobaric contours are matched.",
+        ),
+        OptionSpec::new(
+            "iso_levels",
+            Value,
+            d.iso_levels,
+            "Isocontour model: the number of isobaric levels.",
+        ),
+        OptionSpec::new(
+            "drift_reference",
+            Value,
+            d.drift_reference,
+            "Drift correction of tracks: every this many frames is a reference frame, and each object is also matched against its ancestor on the last one; tracks follow those matches first (0: off).",
+        ),
     ];
     specs.extend(crate::units::unit_option_specs());
     specs
@@ -974,10 +1019,10 @@ fn build_objects(
                 match shape {
                     Some(shape) => {
                         let o = built.objects.len();
-                        if let Some(p) = previous {
-                            if built.objects[p].frame + 1 == start + k {
-                                built.pairs.push((p, o));
-                            }
+                        if let Some(p) = previous
+                            && built.objects[p].frame + 1 == start + k
+                        {
+                            built.pairs.push((p, o));
                         }
                         built.objects.push(SequenceObject {
                             id: o,

@@ -473,10 +473,10 @@ pub fn run_study(
             })
             .collect()
     });
-    if let Some(out) = &opts.out {
-        if !outdir::interrupted() {
-            write_study_table(out, &rows)?;
-        }
+    if let Some(out) = &opts.out
+        && !outdir::interrupted()
+    {
+        write_study_table(out, &rows)?;
     }
     Ok(rows)
 }
@@ -512,7 +512,7 @@ pub fn open_study_folder(out: &Path) -> Result<Vec<StudyRow>> {
                 path: out.display().to_string(),
                 msg: "folder exists and is not a pedomatch study; choose another output folder"
                     .into(),
-            })
+            });
         }
         Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
             if out.exists() {

@@ -513,7 +513,7 @@ pub fn surface(frame: &Grid, opts: &SurfaceOptions) -> Result<Surface> {
         ZScale::Factor(f) => {
             return Err(IoError::invalid(format!(
                 "z factor must be finite, got {f}"
-            )))
+            )));
         }
         ZScale::MatchXY => {
             let zr = hi[2] - lo[2];

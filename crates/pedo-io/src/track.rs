@@ -188,10 +188,10 @@ fn classify(a: &[Contour], b: &[Contour], links: Vec<(usize, usize, f64)>) -> Pa
             1 => {}
             _ => out.splits.push((i, js)),
         }
-        if let Some(j) = best(true, i) {
-            if best(false, j) == Some(i) {
-                out.pairs.push((i, j));
-            }
+        if let Some(j) = best(true, i)
+            && best(false, j) == Some(i)
+        {
+            out.pairs.push((i, j));
         }
     }
     for (j, c) in b.iter().enumerate() {

@@ -17,19 +17,19 @@ pub struct UnitOverrides {
 impl UnitOverrides {
     /// Checks that the pitch and the frame rate are positive and finite.
     pub fn validate(&self) -> Result<(), OptionError> {
-        if let Some(p) = self.pitch_mm {
-            if !p.iter().all(|v| v.is_finite() && *v > 0.0) {
-                return Err(OptionError::new(
-                    "pitch_mm",
-                    format!("{},{}", p[0], p[1]),
-                    "X[,Y]: millimetres per sensel, > 0",
-                ));
-            }
+        if let Some(p) = self.pitch_mm
+            && !p.iter().all(|v| v.is_finite() && *v > 0.0)
+        {
+            return Err(OptionError::new(
+                "pitch_mm",
+                format!("{},{}", p[0], p[1]),
+                "X[,Y]: millimetres per sensel, > 0",
+            ));
         }
-        if let Some(f) = self.frame_rate {
-            if !(f.is_finite() && f > 0.0) {
-                return Err(OptionError::new("frame_rate", f, "frames per second, > 0"));
-            }
+        if let Some(f) = self.frame_rate
+            && !(f.is_finite() && f > 0.0)
+        {
+            return Err(OptionError::new("frame_rate", f, "frames per second, > 0"));
         }
         Ok(())
     }

@@ -358,10 +358,10 @@ fn execute(input: &[u8], format: Format) -> usize {
     if let Ok(r) = parse_bytes(input, format, "fuzz") {
         assert_eq!(r.data().len(), r.n_frames() * r.rows() * r.cols());
     }
-    if let Ok(f) = sniff_format(Path::new("fuzz"), input) {
-        if f != format {
-            let _ = parse_bytes(input, f, "fuzz");
-        }
+    if let Ok(f) = sniff_format(Path::new("fuzz"), input)
+        && f != format
+    {
+        let _ = parse_bytes(input, f, "fuzz");
     }
     LARGEST.with(|m| m.get())
 }

@@ -154,10 +154,10 @@ fn decimation_reaches_target_and_error_falls_with_nodes() {
         let mut err = 0.0f64;
         for r in 0..40 {
             for c in 0..40 {
-                if g.get(r, c) > 0.0 {
-                    if let Some(z) = interp(&s, [c as f64, r as f64]) {
-                        err = err.max((z - g.get(r, c)).abs());
-                    }
+                if g.get(r, c) > 0.0
+                    && let Some(z) = interp(&s, [c as f64, r as f64])
+                {
+                    err = err.max((z - g.get(r, c)).abs());
                 }
             }
         }

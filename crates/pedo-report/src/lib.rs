@@ -116,7 +116,7 @@ impl FrameUnderlay<'_> {
     /// The frame as JSON: `rows`, `cols`, `units` and the pressure as integers of `quantum`
     /// (three significant digits at the frame's peak), row after row, `null` where there is no
     /// sensor; `None` when the frame does not exist.
-    fn to_json(&self) -> Option<Value> {
+    fn to_json(self) -> Option<Value> {
         let r = self.recording;
         let values = r.frame_slice(self.frame)?;
         let (kpa, units) = pressure_scale(r);
@@ -863,7 +863,7 @@ mod tests {
         for (s, b) in shown.iter().zip(&bounds) {
             assert!((s - b).abs() <= 1e-12 * b.abs().max(1.0), "{s} vs {b}");
         }
-        let mut per_class = vec![0; COST_CLASSES];
+        let mut per_class = [0; COST_CLASSES];
         for m in &r.pairs {
             per_class[bounds.iter().take_while(|&&b| m.cost > b).count()] += 1;
         }

@@ -17,7 +17,7 @@ fn solver_of(
         (Some(_), Some(_)) => {
             return Err(PyValueError::new_err(
                 "give solver= only (method= is its deprecated alias)",
-            ))
+            ));
         }
         (Some(s), None) => Some(s),
         (None, Some(m)) => {

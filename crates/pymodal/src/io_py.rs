@@ -350,7 +350,7 @@ fn frames_of(
         _ => {
             return Err(input_error(format!(
                 "frames must be a (T, H, W) or (H, W) array, got shape {shape:?}"
-            )))
+            )));
         }
     };
     let flat = arr.call_method0("ravel")?;
@@ -393,7 +393,7 @@ fn preprocess_of(
         o => {
             return Err(option_error(format!(
                 "interpolation must be \"bilinear\" or \"bicubic\", got {o:?}"
-            )))
+            )));
         }
     };
     Ok(Preprocess {
@@ -475,7 +475,7 @@ fn contours<'py>(
         o => {
             return Err(option_error(format!(
                 "method must be \"marching\" or \"chain\", got {o:?}"
-            )))
+            )));
         }
     };
     let opts = ContourOptions {
@@ -589,7 +589,7 @@ fn surface(
         o => {
             return Err(option_error(format!(
                 "z_scale must be \"xy\" or \"keep\", got {o:?}"
-            )))
+            )));
         }
     };
     let opts = SurfaceOptions {

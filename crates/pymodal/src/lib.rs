@@ -1,5 +1,5 @@
 //! Python bindings of pedomatch: numpy arrays in and out, Rust errors mapped to Python exceptions
-//! in one place ([`errors`]), the GIL released around heavy work.
+//! in one place (the `errors` module), the GIL released around heavy work.
 
 use pyo3::prelude::*;
 

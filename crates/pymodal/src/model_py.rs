@@ -207,7 +207,7 @@ impl PyModalModel {
             Some(other) => {
                 return Err(option_error(format!(
                     "unknown element {other:?}; expected \"gaussian\" or \"axial\""
-                )))
+                )));
             }
         };
         if edges.is_some() && element == ElementKind::Gaussian {
@@ -221,7 +221,7 @@ impl PyModalModel {
             other => {
                 return Err(option_error(format!(
                     "unknown plane model {other:?}; expected \"stress\" or \"strain\""
-                )))
+                )));
             }
         };
         let topology = match (&tris, element) {

@@ -192,7 +192,7 @@ fn _restore(py: Python<'_>, class_name: &str, state: &[u8]) -> PyResult<Py<PyAny
         other => {
             return Err(PyValueError::new_err(format!(
                 "cannot unpickle unknown pymodal class {other:?}"
-            )))
+            )));
         }
     };
     Ok(obj)

@@ -45,7 +45,7 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
         _ => {
             return Err(PyValueError::new_err(format!(
                 "recording array must be 2-D or 3-D, got shape {shape:?}"
-            )))
+            )));
         }
     };
     let data = arr.as_array().iter().copied().collect();

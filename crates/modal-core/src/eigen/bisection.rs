@@ -196,8 +196,10 @@ mod x86 {
         }
         #[inline(always)]
         unsafe fn load(x: &[f64]) -> Self {
-            // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
-            Self(_mm512_loadu_pd(x[..8].as_ptr()))
+            unsafe {
+                // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
+                Self(_mm512_loadu_pd(x[..8].as_ptr()))
+            }
         }
         #[inline(always)]
         fn zero_count() -> __m512i {
@@ -241,8 +243,10 @@ mod x86 {
         }
         #[inline(always)]
         unsafe fn store(count: __m512i, out: &mut [u64]) {
-            // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
-            _mm512_storeu_si512(out[..8].as_mut_ptr().cast(), count)
+            unsafe {
+                // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
+                _mm512_storeu_si512(out[..8].as_mut_ptr().cast(), count)
+            }
         }
     }
 
@@ -263,8 +267,10 @@ mod x86 {
         }
         #[inline(always)]
         unsafe fn load(x: &[f64]) -> Self {
-            // SAFETY: AVX2 as above; the caller passes a full vector of values (the contract).
-            Self(_mm256_loadu_pd(x[..4].as_ptr()))
+            unsafe {
+                // SAFETY: AVX2 as above; the caller passes a full vector of values (the contract).
+                Self(_mm256_loadu_pd(x[..4].as_ptr()))
+            }
         }
         #[inline(always)]
         fn zero_count() -> __m256i {
@@ -309,8 +315,10 @@ mod x86 {
         }
         #[inline(always)]
         unsafe fn store(count: __m256i, out: &mut [u64]) {
-            // SAFETY: AVX2 as above; the caller passes a full vector of values (the contract).
-            _mm256_storeu_si256(out[..4].as_mut_ptr().cast(), count)
+            unsafe {
+                // SAFETY: AVX2 as above; the caller passes a full vector of values (the contract).
+                _mm256_storeu_si256(out[..4].as_mut_ptr().cast(), count)
+            }
         }
     }
 }

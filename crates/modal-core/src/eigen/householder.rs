@@ -226,8 +226,10 @@ widest_simd! {
         assert!(b.len() >= (m + COLS - 1) * ld + span && ld >= span);
         assert!(u.len() >= span && w.len() >= span && v.len() >= span && y.len() >= span);
     };
-    avx512 sweep_avx512 => sweep_in::<x86::Avx512>(b, ld, m, u, w, v, y);
-    avx2 sweep_avx2 ["fma"] => sweep_in::<x86::Avx2>(b, ld, m, u, w, v, y);
+    // SAFETY: `requires` asserted the sizes; the dispatch checked the CPU's features.
+    avx512 sweep_avx512 => unsafe { sweep_in::<x86::Avx512>(b, ld, m, u, w, v, y) };
+    // SAFETY: as above.
+    avx2 sweep_avx2 ["fma"] => unsafe { sweep_in::<x86::Avx2>(b, ld, m, u, w, v, y) };
     // SAFETY: `requires` asserted the sizes.
     portable => unsafe { sweep_in::<Portable>(b, ld, m, u, w, v, y) };
 }
@@ -273,46 +275,48 @@ unsafe fn sweep_in<V: Lanes>(
     v: &[f64],
     y: &mut [f64],
 ) {
-    y[..m + PAD_ROWS].fill(0.0);
-    let bp = b.as_mut_ptr();
-    let (up, wp, vp, yp) = (u.as_ptr(), w.as_ptr(), v.as_ptr(), y.as_mut_ptr());
-    // Lane masks of the first vector of a pass: column c takes rows j + l with l ≥ c into its
-    // dot product and rows with l > c into the symmetric half of `y`.
-    let ge: [V; COLS] = std::array::from_fn(|c| V::lanes_from(c));
-    let gt: [V; COLS] = std::array::from_fn(|c| V::lanes_from(c + 1));
-    let mut j = 0;
-    while j < m {
-        let cols: [*mut f64; COLS] = std::array::from_fn(|c| bp.add((j + c) * ld));
-        let wj: [V; COLS] = std::array::from_fn(|c| V::splat(w[j + c]));
-        let uj: [V; COLS] = std::array::from_fn(|c| V::splat(u[j + c]));
-        let vj: [V; COLS] = std::array::from_fn(|c| V::splat(v[j + c]));
-        let mut acc = [V::splat(0.0); COLS];
-        let mut i = j;
-        let mut first = true;
-        while i < m {
-            let (ui, wi, vi) = (V::load(up.add(i)), V::load(wp.add(i)), V::load(vp.add(i)));
-            let mut yi = V::load(yp.add(i));
-            for c in 0..COLS {
-                let e = cols[c].add(i);
-                let bij = V::neg_mul_add(wi, uj[c], V::neg_mul_add(ui, wj[c], V::load(e)));
-                bij.store(e);
-                let (vd, vs) = if first {
-                    (V::mul(vi, ge[c]), V::mul(vj[c], gt[c]))
-                } else {
-                    (vi, vj[c])
-                };
-                acc[c] = V::mul_add(bij, vd, acc[c]);
-                yi = V::mul_add(bij, vs, yi);
+    unsafe {
+        y[..m + PAD_ROWS].fill(0.0);
+        let bp = b.as_mut_ptr();
+        let (up, wp, vp, yp) = (u.as_ptr(), w.as_ptr(), v.as_ptr(), y.as_mut_ptr());
+        // Lane masks of the first vector of a pass: column c takes rows j + l with l ≥ c into its
+        // dot product and rows with l > c into the symmetric half of `y`.
+        let ge: [V; COLS] = std::array::from_fn(|c| V::lanes_from(c));
+        let gt: [V; COLS] = std::array::from_fn(|c| V::lanes_from(c + 1));
+        let mut j = 0;
+        while j < m {
+            let cols: [*mut f64; COLS] = std::array::from_fn(|c| bp.add((j + c) * ld));
+            let wj: [V; COLS] = std::array::from_fn(|c| V::splat(w[j + c]));
+            let uj: [V; COLS] = std::array::from_fn(|c| V::splat(u[j + c]));
+            let vj: [V; COLS] = std::array::from_fn(|c| V::splat(v[j + c]));
+            let mut acc = [V::splat(0.0); COLS];
+            let mut i = j;
+            let mut first = true;
+            while i < m {
+                let (ui, wi, vi) = (V::load(up.add(i)), V::load(wp.add(i)), V::load(vp.add(i)));
+                let mut yi = V::load(yp.add(i));
+                for c in 0..COLS {
+                    let e = cols[c].add(i);
+                    let bij = V::neg_mul_add(wi, uj[c], V::neg_mul_add(ui, wj[c], V::load(e)));
+                    bij.store(e);
+                    let (vd, vs) = if first {
+                        (V::mul(vi, ge[c]), V::mul(vj[c], gt[c]))
+                    } else {
+                        (vi, vj[c])
+                    };
+                    acc[c] = V::mul_add(bij, vd, acc[c]);
+                    yi = V::mul_add(bij, vs, yi);
+                }
+                yi.store(yp.add(i));
+                first = false;
+                i += V::WIDTH;
             }
-            yi.store(yp.add(i));
-            first = false;
-            i += V::WIDTH;
+            let sums = V::sum4(acc);
+            for c in 0..COLS {
+                y[j + c] += sums[c];
+            }
+            j += COLS;
         }
-        let sums = V::sum4(acc);
-        for c in 0..COLS {
-            y[j + c] += sums[c];
-        }
-        j += COLS;
     }
 }
 
@@ -323,13 +327,17 @@ struct Portable([f64; 4]);
 impl Lanes for Portable {
     const WIDTH: usize = 4;
     unsafe fn load(p: *const f64) -> Self {
-        // SAFETY: the caller guarantees 4 readable values at `p` (the trait's contract).
-        Self(std::array::from_fn(|l| *p.add(l)))
+        unsafe {
+            // SAFETY: the caller guarantees 4 readable values at `p` (the trait's contract).
+            Self(std::array::from_fn(|l| *p.add(l)))
+        }
     }
     unsafe fn store(self, p: *mut f64) {
-        // SAFETY: the caller guarantees 4 writable values at `p` (the trait's contract).
-        for l in 0..4 {
-            *p.add(l) = self.0[l];
+        unsafe {
+            // SAFETY: the caller guarantees 4 writable values at `p` (the trait's contract).
+            for l in 0..4 {
+                *p.add(l) = self.0[l];
+            }
         }
     }
     fn splat(v: f64) -> Self {
@@ -366,13 +374,17 @@ mod x86 {
         const WIDTH: usize = 8;
         #[inline(always)]
         unsafe fn load(p: *const f64) -> Self {
-            // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
-            Self(_mm512_loadu_pd(p))
+            unsafe {
+                // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
+                Self(_mm512_loadu_pd(p))
+            }
         }
         #[inline(always)]
         unsafe fn store(self, p: *mut f64) {
-            // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
-            _mm512_storeu_pd(p, self.0)
+            unsafe {
+                // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
+                _mm512_storeu_pd(p, self.0)
+            }
         }
         #[inline(always)]
         fn splat(v: f64) -> Self {
@@ -431,13 +443,17 @@ mod x86 {
         const WIDTH: usize = 4;
         #[inline(always)]
         unsafe fn load(p: *const f64) -> Self {
-            // SAFETY: AVX2 and FMA as above; the caller passes a full vector of values (the contract).
-            Self(_mm256_loadu_pd(p))
+            unsafe {
+                // SAFETY: AVX2 and FMA as above; the caller passes a full vector of values (the contract).
+                Self(_mm256_loadu_pd(p))
+            }
         }
         #[inline(always)]
         unsafe fn store(self, p: *mut f64) {
-            // SAFETY: AVX2 and FMA as above; the caller passes a full vector of values (the contract).
-            _mm256_storeu_pd(p, self.0)
+            unsafe {
+                // SAFETY: AVX2 and FMA as above; the caller passes a full vector of values (the contract).
+                _mm256_storeu_pd(p, self.0)
+            }
         }
         #[inline(always)]
         fn splat(v: f64) -> Self {

@@ -158,11 +158,11 @@ pub(crate) fn point_set_excess(
         if best_nb.is_empty() {
             // Isolated from every match: the only evidence left is Z.
             let a = (0..z.rows()).min_by(|&x, &y| z.get(x, e).total_cmp(&z.get(y, e)));
-            if let Some(a) = a {
-                if z.get(a, e) <= threshold {
-                    out.push((a, e));
-                    mb[e] = Some(a);
-                }
+            if let Some(a) = a
+                && z.get(a, e) <= threshold
+            {
+                out.push((a, e));
+                mb[e] = Some(a);
             }
             continue;
         }
@@ -222,11 +222,11 @@ pub(crate) fn point_set_excess(
                 best = Some((viol, zc, c));
             }
         }
-        if let Some((_, zc, c)) = best {
-            if zc <= threshold {
-                out.push((c, e));
-                mb[e] = Some(c);
-            }
+        if let Some((_, zc, c)) = best
+            && zc <= threshold
+        {
+            out.push((c, e));
+            mb[e] = Some(c);
         }
     }
     out

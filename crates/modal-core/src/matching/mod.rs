@@ -1,6 +1,6 @@
 //! The modal matching pipeline (docs/method.md §5–7), one file per stage:
 //!
-//! 1. [`prepare`] — one object checked, normalised and oriented, its own-frame modes cached:
+//! 1. [`prepare`](fn@prepare) — one object checked, normalised and oriented, its own-frame modes cached:
 //!    a [`PreparedShape`] serves every pair the object takes part in;
 //! 2. [`prealign`] — the first object brought into the second's normalised frame (centroid and
 //!    scale, or the robust rotation search with affine ICP);
@@ -40,7 +40,7 @@ pub use self::refine::Refine;
 pub use self::result::{MatchPair, MatchResult};
 pub use self::search::Search;
 
-/// Matches the nodes of `a` to the nodes of `b` by modal matching: [`prepare`] both, then
+/// Matches the nodes of `a` to the nodes of `b` by modal matching: [`prepare`](fn@prepare) both, then
 /// [`match_prepared`] with [`Parallelism::Pair`].
 ///
 /// ```
@@ -72,11 +72,11 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
 
 /// Matches two prepared objects: the pre-alignment, the first modal solves, then the passes of
 /// features, search and excess nodes with the affine re-fits between them. Each object may take
-/// part in any number of pairs; what it can share between them was done by [`prepare`] (see
+/// part in any number of pairs; what it can share between them was done by [`prepare`](fn@prepare) (see
 /// docs/method.md, "The pipeline in the code").
 ///
 /// # Errors
-/// As [`match_shapes`], except the checks of single objects, which [`prepare`] made.
+/// As [`match_shapes`], except the checks of single objects, which [`prepare`](fn@prepare) made.
 pub fn match_prepared(
     a: &PreparedShape,
     b: &PreparedShape,

@@ -10,7 +10,7 @@
 //! mode count they were made with, so a later pair that asks for the same reuses them and a pair
 //! that asks for another count solves again: results never depend on what was cached.
 //!
-//! Per pair ([`Pair`], internal): whether the pair is treated as ordered contours, the mode count
+//! Per pair (`Pair`, internal): whether the pair is treated as ordered contours, the mode count
 //! `k` (it depends on the smaller object), the band, a common σ, and B's spacing as the re-fit
 //! tolerance's unit. The first object's modes after the pre-alignment depend on both objects and
 //! are never cached.

@@ -25,7 +25,7 @@ pub struct GaussianIntegrals {
     pub g: Mat<f64>,
     /// `Γ_ij = ∫ g_i g_j`.
     pub gamma: Mat<f64>,
-    /// `Γ^{ab}_ij = ∫ ∂_a g_i ∂_b g_j`, stored for `a ≤ b` in the order of [`pair_index`].
+    /// `Γ^{ab}_ij = ∫ ∂_a g_i ∂_b g_j`, stored for `a ≤ b` in the order of `pair_index`.
     pub gamma_d: Vec<Mat<f64>>,
 }
 

@@ -154,7 +154,7 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
             return Err(err(
                 data_line,
                 format!("END_FRAME {e} before START_FRAME {s}"),
-            ))
+            ));
         }
         _ => None,
     };
@@ -240,7 +240,7 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
                             if present { "a value" } else { "B" },
                             if m { "a value" } else { "B" }
                         ),
-                    ))
+                    ));
                 }
                 _ => {}
             }
@@ -265,16 +265,16 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
     } else {
         String::new()
     };
-    if let Some(e) = expected {
-        if n_frames < e {
-            return Err(err(
-                last_ln,
-                format!(
-                    "truncated: the file ends after {n_frames} complete frames, its header \
+    if let Some(e) = expected
+        && n_frames < e
+    {
+        return Err(err(
+            last_ln,
+            format!(
+                "truncated: the file ends after {n_frames} complete frames, its header \
                      (START_FRAME..END_FRAME) states {e}{partial}"
-                ),
-            ));
-        }
+            ),
+        ));
     }
     if row_in_frame != rows {
         return Err(err(last_ln, format!("truncated{partial}")));

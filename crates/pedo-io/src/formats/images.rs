@@ -18,7 +18,7 @@ fn decode(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>, Format)> 
             return Err(IoError::format(
                 name,
                 format!("unsupported image format {other:?}"),
-            ))
+            ));
         }
     };
     // A header may claim any size: the decoder may allocate at most what a compressed image of
@@ -42,7 +42,7 @@ fn decode(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>, Format)> 
                     "expected an 8- or 16-bit grayscale image, got {:?}",
                     other.color()
                 ),
-            ))
+            ));
         }
     };
     if w == 0 || h == 0 {
@@ -77,7 +77,7 @@ pub fn read_image_sequence<P: AsRef<Path>>(paths: &[P]) -> Result<Recording> {
                 return Err(IoError::format(
                     &name,
                     format!("image is {w}x{h}, the first one is {}x{}", d.1, d.0),
-                ))
+                ));
             }
             _ => {}
         }

@@ -221,13 +221,13 @@ pub fn parse_lst(bytes: &[u8], name: &str) -> Result<(Recording, Vec<LstPageForc
     let mut data = vec![0.0f32; cells];
     let mut forces = Vec::with_capacity(parsed.len());
     for (t, pg) in parsed.iter().enumerate() {
-        if let Some((c, r, ln)) = pg.matrix {
-            if (c, r) != (cols, rows) {
-                return Err(err(
-                    ln,
-                    format!("Matrix {c}x{r} differs from the first page's {cols}x{rows}"),
-                ));
-            }
+        if let Some((c, r, ln)) = pg.matrix
+            && (c, r) != (cols, rows)
+        {
+            return Err(err(
+                ln,
+                format!("Matrix {c}x{r} differs from the first page's {cols}x{rows}"),
+            ));
         }
         if pg.columns.is_empty() {
             return Err(err(

@@ -322,10 +322,11 @@ pub fn read_recording_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result
     if path.is_dir() {
         return images::read_image_folder(path);
     }
-    if let Some(s) = path.to_str() {
-        if images::has_counter(s) && !path.exists() {
-            return images::read_numbered(s);
-        }
+    if let Some(s) = path.to_str()
+        && images::has_counter(s)
+        && !path.exists()
+    {
+        return images::read_numbered(s);
     }
     let bytes = read_bytes(path)?;
     let name = path.display().to_string();

@@ -103,7 +103,7 @@ pub fn parse_npy(bytes: &[u8], name: &str) -> Result<Recording> {
         _ => {
             return Err(fail(format!(
                 "expected a 2-D or 3-D array, got shape {shape:?}"
-            )))
+            )));
         }
     };
     let n = t

@@ -110,7 +110,7 @@ impl PedarLayout {
                     return Err(err(
                         ln,
                         format!("insole must be L or R, got {:?}", trunc(o)),
-                    ))
+                    ));
                 }
             };
             let sensor = f[1]
@@ -233,7 +233,7 @@ pub fn parse_pedar_data(bytes: &[u8], name: &str) -> Result<PedarData> {
             return Err(err(
                 hl,
                 format!("{n_cols} sensor columns and no `left insole:` / `right insole:` lists"),
-            ))
+            ));
         }
     };
     let columns: Vec<(Insole, usize)> = left
@@ -293,21 +293,21 @@ pub fn parse_pedar_data(bytes: &[u8], name: &str) -> Result<PedarData> {
         }
         n_frames += 1;
     }
-    if let Some(e) = expected {
-        if n_frames as u64 != e {
-            return Err(IoError::format(
-                name,
-                format!(
-                    "{}: the file ends after {n_frames} frames, its header (total time / time per \
+    if let Some(e) = expected
+        && n_frames as u64 != e
+    {
+        return Err(IoError::format(
+            name,
+            format!(
+                "{}: the file ends after {n_frames} frames, its header (total time / time per \
                      frame) states {e}",
-                    if (n_frames as u64) < e {
-                        "truncated"
-                    } else {
-                        "too many frames"
-                    }
-                ),
-            ));
-        }
+                if (n_frames as u64) < e {
+                    "truncated"
+                } else {
+                    "too many frames"
+                }
+            ),
+        ));
     }
     if n_frames == 0 {
         return Err(IoError::format(name, "no frames"));

@@ -159,10 +159,12 @@ pub fn parse_pedcad(bytes: &[u8], name: &str) -> Result<Recording> {
     }
     // A file cut inside its last frame: that frame is dropped, so that the frame count check
     // names the frames found and the frames the header states.
-    if let Some(g) = grids.last() {
-        if g.index.is_some() && h.max_idx.is_some() && check_complete(g, &h, name).is_err() {
-            grids.pop();
-        }
+    if let Some(g) = grids.last()
+        && g.index.is_some()
+        && h.max_idx.is_some()
+        && check_complete(g, &h, name).is_err()
+    {
+        grids.pop();
     }
     if let Some(g) = grids.last() {
         check_complete(g, &h, name)?;
@@ -287,19 +289,19 @@ fn build(h: Header, grids: Vec<Grid>, name: &str, last_ln: usize) -> Result<Reco
         (Some(d), None) | (None, Some(d)) => Some([d * mm, d * mm]),
         _ => None,
     };
-    if rec.n_frames() > 1 || h.min_idx.is_some() {
-        if let Some(td) = h.time_diff {
-            let s = s_per(h.unit_time.as_deref()).ok_or_else(|| {
-                IoError::format(
-                    name,
-                    format!(
-                        "unknown UnitTime {:?}",
-                        h.unit_time.clone().unwrap_or_default()
-                    ),
-                )
-            })?;
-            rec.dt_s = Some(td * s);
-        }
+    if (rec.n_frames() > 1 || h.min_idx.is_some())
+        && let Some(td) = h.time_diff
+    {
+        let s = s_per(h.unit_time.as_deref()).ok_or_else(|| {
+            IoError::format(
+                name,
+                format!(
+                    "unknown UnitTime {:?}",
+                    h.unit_time.clone().unwrap_or_default()
+                ),
+            )
+        })?;
+        rec.dt_s = Some(td * s);
     }
     rec.units = h.unit_pressure.unwrap_or_default();
     let zebris = h.source.to_ascii_lowercase().contains("zebris");

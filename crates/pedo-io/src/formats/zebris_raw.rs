@@ -132,16 +132,16 @@ impl<'a> Frames<'a> {
     /// The dense recording: every frame the whole plate, row 0 at the plate's far end.
     fn finish(self, h: &Header) -> Result<Recording> {
         let n = self.frames.len();
-        if let Some(stated) = h.count {
-            if stated != n {
-                return Err(IoError::format(
-                    self.name,
-                    format!(
-                        "truncated or inconsistent: the pressure clip holds {n} frames, its \
+        if let Some(stated) = h.count
+            && stated != n
+        {
+            return Err(IoError::format(
+                self.name,
+                format!(
+                    "truncated or inconsistent: the pressure clip holds {n} frames, its \
                          <count> states {stated}"
-                    ),
-                ));
-            }
+                ),
+            ));
         }
         if n == 0 {
             return Err(IoError::format(self.name, "no frames in the pressure clip"));
@@ -164,10 +164,11 @@ impl<'a> Frames<'a> {
         }
         let mask = vec![true; per];
         let mut rec = Recording::new(n, self.rows, self.cols, data, mask)?;
-        if let [Some(dx), Some(dy)] = h.cell_size {
-            if dx > 0.0 && dy > 0.0 {
-                rec.pitch_mm = Some([dx, dy]);
-            }
+        if let [Some(dx), Some(dy)] = h.cell_size
+            && dx > 0.0
+            && dy > 0.0
+        {
+            rec.pitch_mm = Some([dx, dy]);
         }
         rec.dt_s = h.frequency.filter(|f| *f > 0.0).map(|f| 1.0 / f);
         rec.units = h.units.clone().unwrap_or_default();
@@ -232,10 +233,10 @@ pub fn parse_zebris_xml(bytes: &[u8], name: &str) -> Result<Recording> {
                         window: Window::default(),
                         is_pressure: false,
                     });
-                } else if tag == "quant" {
-                    if let Some(c) = clip.as_mut() {
-                        c.window = Window::default();
-                    }
+                } else if tag == "quant"
+                    && let Some(c) = clip.as_mut()
+                {
+                    c.window = Window::default();
                 }
                 path.push(tag);
                 text.clear();
