@@ -53,6 +53,11 @@ pub struct SequenceOptions {
     /// Drift correction: reference frames every this many frames, each object also matched
     /// against its ancestor on the last reference frame ([`crate::drift`]); 0: off.
     pub drift_reference: usize,
+    /// Keep each pair's whole [`MatchResult`] (affinity matrix, aligned nodes, local pairs).
+    /// Off, a pair keeps only what the run's outputs use (its matches, unmatched nodes and
+    /// transform): the affinity matrix alone is `n × m` numbers per pair, the bulk of a long
+    /// recording's memory. On by default; the CLI and batch runs turn it off.
+    pub keep_match_details: bool,
 }
 
 impl Default for SequenceOptions {
@@ -75,6 +80,7 @@ impl Default for SequenceOptions {
             frames: None,
             matching: MatchOptions::default(),
             drift_reference: 0,
+            keep_match_details: true,
         }
     }
 }
@@ -653,6 +659,15 @@ fn match_pair(
         excess_matches: result.pairs.len(),
         mean_cost,
     };
+    let mut result = result;
+    if !options.keep_match_details {
+        result.affinity = AffinityMatrix::new(0, 0, Vec::new())?;
+        result.aligned_a = Vec::new();
+        result.local_pairs = Vec::new();
+        result.pairs.shrink_to_fit();
+        result.unmatched_a.shrink_to_fit();
+        result.unmatched_b.shrink_to_fit();
+    }
     Ok(PairMatch { a, b, result, row })
 }
 
