@@ -568,11 +568,15 @@ fn match_all(
     options: &SequenceOptions,
     progress: &(dyn Fn(Stage, usize, usize) + Sync),
 ) -> (Vec<PairMatch>, Vec<SkippedPair>) {
-    let prepared = prepare_objects(objects, &options.matching);
+    // The pairs go in windows of MATCH_WINDOW, in order: only the objects of the current window
+    // are prepared (a prepared object holds its n × n modes), so memory does not grow with the
+    // recording's length. An object on a window's edge is prepared in both windows, identically.
     let done = AtomicUsize::new(0);
-    let outcomes: Vec<std::result::Result<PairMatch, SkippedPair>> = candidates
-        .par_iter()
-        .map(|&(a, b)| {
+    let mut outcomes: Vec<std::result::Result<PairMatch, SkippedPair>> =
+        Vec::with_capacity(candidates.len());
+    for window in candidates.chunks(MATCH_WINDOW) {
+        let prepared = prepare_objects(objects, window, &options.matching);
+        outcomes.par_extend(window.par_iter().map(|&(a, b)| {
             let part = parts.get(&(a, b));
             let r = match_pair(objects, &prepared, a, b, part, options).map_err(|e| SkippedPair {
                 a,
@@ -582,8 +586,8 @@ fn match_all(
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress(Stage::Matching, n, candidates.len());
             r
-        })
-        .collect();
+        }));
+    }
     let mut pairs = Vec::with_capacity(outcomes.len());
     let mut skipped = Vec::new();
     for outcome in outcomes {
@@ -595,22 +599,32 @@ fn match_all(
     (pairs, skipped)
 }
 
-/// Every object prepared once (in parallel) for the pairs it takes part in: as the second object
-/// of the pair with its predecessor and the first of the pair with its successor. An object that
+/// Pairs matched per window of [`match_all`]: enough to keep every core busy, few enough that
+/// the prepared objects of one window stay small.
+const MATCH_WINDOW: usize = 256;
+
+/// The objects prepared for matching, by index.
+type Prepared = HashMap<usize, std::result::Result<PreparedShape, ModalError>>;
+
+/// Every object of the pairs `window` prepared once (in parallel): as the second object of the
+/// pair with its predecessor and the first of the pair with its successor. An object that
 /// cannot be prepared keeps its error for the pairs that need it.
 fn prepare_objects(
     objects: &[SequenceObject],
+    window: &[(usize, usize)],
     options: &MatchOptions,
-) -> Vec<std::result::Result<PreparedShape, ModalError>> {
-    objects
-        .par_iter()
-        .map(|o| prepare(&o.shape, options))
+) -> Prepared {
+    let mut ids: Vec<usize> = window.iter().flat_map(|&(a, b)| [a, b]).collect();
+    ids.sort_unstable();
+    ids.dedup();
+    ids.into_par_iter()
+        .map(|o| (o, prepare(&objects[o].shape, options)))
         .collect()
 }
 
 fn match_pair(
     objects: &[SequenceObject],
-    prepared: &[std::result::Result<PreparedShape, ModalError>],
+    prepared: &Prepared,
     a: usize,
     b: usize,
     part: Option<&PartOfWhole>,
@@ -618,9 +632,11 @@ fn match_pair(
 ) -> Result<PairMatch> {
     let (oa, ob) = (&objects[a], &objects[b]);
     // The pairs run in parallel on the pool, so each pair runs on one thread.
-    let result = match (part, &prepared[a], &prepared[b]) {
+    let result = match (part, prepared.get(&a), prepared.get(&b)) {
         (Some(part), _, _) => match_part_with_whole(objects, prepared, part, b, &options.matching),
-        (None, Ok(pa), Ok(pb)) => match_prepared(pa, pb, &options.matching, Parallelism::Serial),
+        (None, Some(Ok(pa)), Some(Ok(pb))) => {
+            match_prepared(pa, pb, &options.matching, Parallelism::Serial)
+        }
         // The error names the object's role in the pair, as the one-call form words it.
         _ => match_shapes(&oa.shape, &ob.shape, &options.matching),
     }
@@ -736,7 +752,7 @@ pub(crate) fn portion_of_whole(part: &Shape, whole: &Shape, siblings: &[&Shape])
 /// outside the portion stay unmatched. `b` is the pair's second object.
 fn match_part_with_whole(
     objects: &[SequenceObject],
-    prepared: &[std::result::Result<PreparedShape, ModalError>],
+    prepared: &Prepared,
     part: &PartOfWhole,
     b: usize,
     opts: &MatchOptions,
@@ -756,9 +772,9 @@ fn match_part_with_whole(
         .flat_map(|&w| whole.point(w).to_vec())
         .collect();
     let sub = prepare(&Shape::new(2, coords, Topology::ClosedContour)?, opts)?;
-    let own = match &prepared[part.part] {
-        Ok(p) => p.clone(),
-        Err(_) => prepare(own, opts)?,
+    let own = match prepared.get(&part.part) {
+        Some(Ok(p)) => p.clone(),
+        _ => prepare(own, opts)?,
     };
     let whole_is_b = part.whole == b;
     let r = if whole_is_b {
