@@ -685,3 +685,27 @@ mod tests {
         assert!(csv.starts_with("frame,time_s,"), "{csv}");
     }
 }
+
+#[cfg(test)]
+mod csv_tests {
+    use super::*;
+
+    #[test]
+    fn streamed_csv_equals_the_whole_table() {
+        let mut t = Table::new(&["a", "b", "c"]);
+        t.rows
+            .push(vec![Cell::Int(1), Cell::Float(2.5, 3), Cell::Empty]);
+        t.rows.push(vec![
+            Cell::Text("x, \"y\"".into()),
+            Cell::Int(-4),
+            Cell::Float(0.1, 1),
+        ]);
+        let mut out = Vec::new();
+        write_csv(&mut out, &t.header, |emit| {
+            t.rows.iter().try_for_each(|r| emit(r.clone()))
+        })
+        .unwrap();
+        assert_eq!(String::from_utf8(out).unwrap(), t.to_csv());
+        assert_eq!(t.to_csv(), "a,b,c\n1,2.500,\n\"x, \"\"y\"\"\",-4,0.1\n");
+    }
+}

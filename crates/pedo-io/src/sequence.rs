@@ -1143,6 +1143,32 @@ mod tests {
     }
 
     #[test]
+    fn a_run_without_match_details_has_the_same_matches_rows_and_tracks() {
+        let rec = recording(6, |f, r, c| {
+            disc(9.0 + f as f64 * 0.7, 11.0, 5.0 + 0.2 * f as f64)(r, c)
+        });
+        let full = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
+        let lean_options = SequenceOptions {
+            keep_match_details: false,
+            ..Default::default()
+        };
+        let lean = run_sequence(&rec, &lean_options, &|_, _, _| {}).unwrap();
+        assert_eq!(full.pairs.len(), 5);
+        assert_eq!(lean.pairs.len(), full.pairs.len());
+        for (f, l) in full.pairs.iter().zip(&lean.pairs) {
+            assert_eq!(f.row, l.row);
+            assert_eq!(f.result.pairs, l.result.pairs);
+            assert_eq!(f.result.unmatched_a, l.result.unmatched_a);
+            assert!(f.result.affinity.rows() > 0);
+            assert_eq!(l.result.affinity.rows(), 0);
+            assert!(l.result.aligned_a.is_empty());
+        }
+        assert_eq!(full.tracks, lean.tracks);
+        let csv = |r: &SequenceResult| crate::report::matches_table(&rec, r).to_csv();
+        assert_eq!(csv(&full), csv(&lean));
+    }
+
+    #[test]
     fn a_pair_that_cannot_be_matched_is_skipped_with_its_reason() {
         let rec = recording(4, |f, r, c| disc(11.0 + f as f64 * 0.5, 11.0, 6.0)(r, c));
         let options = SequenceOptions::default();
