@@ -158,7 +158,9 @@ fn execute(
 ) -> Result<(), CliError> {
     params.units.apply(&mut recording)?;
     let read_time = started.elapsed();
-    let options = params.to_options(&recording)?;
+    let mut options = params.to_options(&recording)?;
+    // The outputs need only each pair's matches: the affinity matrices are not kept.
+    options.keep_match_details = false;
     let bar = progress_bar();
     let bar_state = Mutex::new(None::<Stage>);
     let progress = |stage: Stage, done: usize, total: usize| {

@@ -110,6 +110,30 @@ impl OutDir {
         std::fs::write(&path, contents).map_err(|e| io_error(&self.root.join(rel), e))
     }
 
+    /// Writes `rel` through a buffered writer that `fill` writes to, piece by piece, so that a
+    /// large table never has to be held whole in memory.
+    pub fn write_with(
+        &self,
+        rel: &str,
+        fill: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
+    ) -> Result<()> {
+        use std::io::Write;
+        if interrupted() {
+            return Err(refused(&self.root, "interrupted"));
+        }
+        let path = self.staging.join(rel);
+        let failed = |e| io_error(&self.root.join(rel), e);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent).map_err(failed)?;
+        }
+        let mut w = std::io::BufWriter::with_capacity(
+            1 << 16,
+            std::fs::File::create(&path).map_err(failed)?,
+        );
+        fill(&mut w).map_err(failed)?;
+        w.flush().map_err(failed)
+    }
+
     /// The folder this output goes to.
     pub fn root(&self) -> &Path {
         &self.root

@@ -77,12 +77,42 @@ impl Table {
         let mut s = self.header.join(",");
         s.push('\n');
         for r in &self.rows {
-            let fields: Vec<String> = r.iter().map(Cell::to_csv).collect();
-            s.push_str(&fields.join(","));
-            s.push('\n');
+            push_csv_row(&mut s, r);
         }
         s
     }
+}
+
+/// Appends one CSV line of `cells` (as [`Table::to_csv`] writes it) to `s`.
+fn push_csv_row(s: &mut String, cells: &[Cell]) {
+    for (k, c) in cells.iter().enumerate() {
+        if k > 0 {
+            s.push(',');
+        }
+        s.push_str(&c.to_csv());
+    }
+    s.push('\n');
+}
+
+/// Writes a table as CSV, byte for byte as [`Table::to_csv`] would, from its header and a source
+/// of rows (`rows(emit)` calls `emit` for each row in order), without holding the rows: the
+/// large tables of a long recording (matches, tracks) go to disk as they are produced.
+pub fn write_csv(
+    w: &mut dyn std::io::Write,
+    header: &[String],
+    rows: impl FnOnce(&mut dyn FnMut(Vec<Cell>) -> std::io::Result<()>) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let mut line = header.join(",");
+    line.push('\n');
+    w.write_all(line.as_bytes())?;
+    rows(&mut |cells| {
+        line.clear();
+        push_csv_row(&mut line, &cells);
+        w.write_all(line.as_bytes())
+    })
+}
+
+impl Table {
     /// The rows as JSON objects keyed by column name.
     pub fn to_json(&self) -> Value {
         Value::Array(
@@ -222,13 +252,31 @@ pub fn objects_table(recording: &Recording, r: &SequenceResult) -> Table {
 /// Every match of every pair: object ids, nodes, cost, excess flag, and the in-plane distance
 /// between the two nodes in sensels (and mm when the pitch is known).
 pub fn matches_table(recording: &Recording, r: &SequenceResult) -> Table {
-    let mm = recording.pitch_mm.is_some();
+    let mut t = matches_header(recording);
+    let Ok(()) = matches_rows::<std::convert::Infallible>(recording, r, &mut |cells| {
+        t.rows.push(cells);
+        Ok(())
+    });
+    t
+}
+
+/// The columns of [`matches_table`] (no rows).
+pub fn matches_header(recording: &Recording) -> Table {
     let mut t = Table::new(&[
         "id_a", "id_b", "node_a", "node_b", "cost", "excess", "distance",
     ]);
-    if mm {
+    if recording.pitch_mm.is_some() {
         t.push_column("distance_mm");
     }
+    t
+}
+
+/// The rows of [`matches_table`], one by one to `emit`.
+pub fn matches_rows<E>(
+    recording: &Recording,
+    r: &SequenceResult,
+    emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
+) -> std::result::Result<(), E> {
     for p in &r.pairs {
         let (oa, ob) = (&r.objects[p.a], &r.objects[p.b]);
         for m in &p.result.pairs {
@@ -246,15 +294,25 @@ pub fn matches_table(recording: &Recording, r: &SequenceResult) -> Table {
             if let Some(p) = recording.pitch_mm {
                 cells.push(Cell::Float((dx * p[0]).hypot(dy * p[1]), 4));
             }
-            t.rows.push(cells);
+            emit(cells)?;
         }
     }
-    t
+    Ok(())
 }
 
 /// The node tracks, one row per step: track, step, frame, time, object id, node, `x, y[, z]`
 /// (pixels; `z` the pressure of a surface node) and `x_mm, y_mm` when the pitch is known.
 pub fn tracks_table(recording: &Recording, r: &SequenceResult) -> Table {
+    let mut t = tracks_header(recording, r);
+    let Ok(()) = tracks_rows::<std::convert::Infallible>(recording, r, &mut |cells| {
+        t.rows.push(cells);
+        Ok(())
+    });
+    t
+}
+
+/// The columns of [`tracks_table`] (no rows).
+pub fn tracks_header(recording: &Recording, r: &SequenceResult) -> Table {
     let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
     let dim = r.objects.first().map_or(2, |o| o.shape.dim());
     let mut t = Table::new(&["track", "step", "frame"]);
@@ -271,6 +329,17 @@ pub fn tracks_table(recording: &Recording, r: &SequenceResult) -> Table {
     if dim == 3 {
         t.push_column("z");
     }
+    t
+}
+
+/// The rows of [`tracks_table`], one by one to `emit`.
+pub fn tracks_rows<E>(
+    recording: &Recording,
+    r: &SequenceResult,
+    emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
+) -> std::result::Result<(), E> {
+    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
+    let dim = r.objects.first().map_or(2, |o| o.shape.dim());
     for (k, tr) in r.tracks.iter().enumerate() {
         for (s, &(o, n)) in tr.steps.iter().enumerate() {
             let obj = &r.objects[o];
@@ -284,10 +353,10 @@ pub fn tracks_table(recording: &Recording, r: &SequenceResult) -> Table {
             if dim == 3 {
                 cells.push(Cell::Float(p[2], 4));
             }
-            t.rows.push(cells);
+            emit(cells)?;
         }
     }
-    t
+    Ok(())
 }
 
 /// The names and unit factors of the measures' columns for this recording.
@@ -614,5 +683,29 @@ mod tests {
         assert_eq!(t.rows[1][6], Cell::Empty, "no load, no centre of pressure");
         let csv = t.to_csv();
         assert!(csv.starts_with("frame,time_s,"), "{csv}");
+    }
+}
+
+#[cfg(test)]
+mod csv_tests {
+    use super::*;
+
+    #[test]
+    fn streamed_csv_equals_the_whole_table() {
+        let mut t = Table::new(&["a", "b", "c"]);
+        t.rows
+            .push(vec![Cell::Int(1), Cell::Float(2.5, 3), Cell::Empty]);
+        t.rows.push(vec![
+            Cell::Text("x, \"y\"".into()),
+            Cell::Int(-4),
+            Cell::Float(0.1, 1),
+        ]);
+        let mut out = Vec::new();
+        write_csv(&mut out, &t.header, |emit| {
+            t.rows.iter().try_for_each(|r| emit(r.clone()))
+        })
+        .unwrap();
+        assert_eq!(String::from_utf8(out).unwrap(), t.to_csv());
+        assert_eq!(t.to_csv(), "a,b,c\n1,2.500,\n\"x, \"\"y\"\"\",-4,0.1\n");
     }
 }

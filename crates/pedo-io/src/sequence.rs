@@ -53,6 +53,11 @@ pub struct SequenceOptions {
     /// Drift correction: reference frames every this many frames, each object also matched
     /// against its ancestor on the last reference frame ([`crate::drift`]); 0: off.
     pub drift_reference: usize,
+    /// Keep each pair's whole [`MatchResult`] (affinity matrix, aligned nodes, local pairs).
+    /// Off, a pair keeps only what the run's outputs use (its matches, unmatched nodes and
+    /// transform): the affinity matrix alone is `n × m` numbers per pair, the bulk of a long
+    /// recording's memory. On by default; the CLI and batch runs turn it off.
+    pub keep_match_details: bool,
 }
 
 impl Default for SequenceOptions {
@@ -75,6 +80,7 @@ impl Default for SequenceOptions {
             frames: None,
             matching: MatchOptions::default(),
             drift_reference: 0,
+            keep_match_details: true,
         }
     }
 }
@@ -607,11 +613,15 @@ fn match_all(
     options: &SequenceOptions,
     progress: &(dyn Fn(Stage, usize, usize) + Sync),
 ) -> (Vec<PairMatch>, Vec<SkippedPair>) {
-    let prepared = prepare_objects(objects, &options.matching);
+    // The pairs go in windows of MATCH_WINDOW, in order: only the objects of the current window
+    // are prepared (a prepared object holds its n × n modes), so memory does not grow with the
+    // recording's length. An object on a window's edge is prepared in both windows, identically.
     let done = AtomicUsize::new(0);
-    let outcomes: Vec<std::result::Result<PairMatch, SkippedPair>> = candidates
-        .par_iter()
-        .map(|&(a, b)| {
+    let mut outcomes: Vec<std::result::Result<PairMatch, SkippedPair>> =
+        Vec::with_capacity(candidates.len());
+    for window in candidates.chunks(MATCH_WINDOW) {
+        let prepared = prepare_objects(objects, window, &options.matching);
+        outcomes.par_extend(window.par_iter().map(|&(a, b)| {
             let part = parts.get(&(a, b));
             let r = match_pair(objects, &prepared, a, b, part, options).map_err(|e| SkippedPair {
                 a,
@@ -621,8 +631,8 @@ fn match_all(
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress(Stage::Matching, n, candidates.len());
             r
-        })
-        .collect();
+        }));
+    }
     let mut pairs = Vec::with_capacity(outcomes.len());
     let mut skipped = Vec::new();
     for outcome in outcomes {
@@ -634,22 +644,32 @@ fn match_all(
     (pairs, skipped)
 }
 
-/// Every object prepared once (in parallel) for the pairs it takes part in: as the second object
-/// of the pair with its predecessor and the first of the pair with its successor. An object that
+/// Pairs matched per window of [`match_all`]: enough to keep every core busy, few enough that
+/// the prepared objects of one window stay small.
+const MATCH_WINDOW: usize = 256;
+
+/// The objects prepared for matching, by index.
+type Prepared = HashMap<usize, std::result::Result<PreparedShape, ModalError>>;
+
+/// Every object of the pairs `window` prepared once (in parallel): as the second object of the
+/// pair with its predecessor and the first of the pair with its successor. An object that
 /// cannot be prepared keeps its error for the pairs that need it.
 fn prepare_objects(
     objects: &[SequenceObject],
+    window: &[(usize, usize)],
     options: &MatchOptions,
-) -> Vec<std::result::Result<PreparedShape, ModalError>> {
-    objects
-        .par_iter()
-        .map(|o| prepare(&o.shape, options))
+) -> Prepared {
+    let mut ids: Vec<usize> = window.iter().flat_map(|&(a, b)| [a, b]).collect();
+    ids.sort_unstable();
+    ids.dedup();
+    ids.into_par_iter()
+        .map(|o| (o, prepare(&objects[o].shape, options)))
         .collect()
 }
 
 fn match_pair(
     objects: &[SequenceObject],
-    prepared: &[std::result::Result<PreparedShape, ModalError>],
+    prepared: &Prepared,
     a: usize,
     b: usize,
     part: Option<&PartOfWhole>,
@@ -657,9 +677,11 @@ fn match_pair(
 ) -> Result<PairMatch> {
     let (oa, ob) = (&objects[a], &objects[b]);
     // The pairs run in parallel on the pool, so each pair runs on one thread.
-    let result = match (part, &prepared[a], &prepared[b]) {
+    let result = match (part, prepared.get(&a), prepared.get(&b)) {
         (Some(part), _, _) => match_part_with_whole(objects, prepared, part, b, &options.matching),
-        (None, Ok(pa), Ok(pb)) => match_prepared(pa, pb, &options.matching, Parallelism::Serial),
+        (None, Some(Ok(pa)), Some(Ok(pb))) => {
+            match_prepared(pa, pb, &options.matching, Parallelism::Serial)
+        }
         // The error names the object's role in the pair, as the one-call form words it.
         _ => match_shapes(&oa.shape, &ob.shape, &options.matching),
     }
@@ -698,6 +720,15 @@ fn match_pair(
         excess_matches: result.pairs.len(),
         mean_cost,
     };
+    let mut result = result;
+    if !options.keep_match_details {
+        result.affinity = AffinityMatrix::new(0, 0, Vec::new())?;
+        result.aligned_a = Vec::new();
+        result.local_pairs = Vec::new();
+        result.pairs.shrink_to_fit();
+        result.unmatched_a.shrink_to_fit();
+        result.unmatched_b.shrink_to_fit();
+    }
     Ok(PairMatch { a, b, result, row })
 }
 
@@ -766,7 +797,7 @@ pub(crate) fn portion_of_whole(part: &Shape, whole: &Shape, siblings: &[&Shape])
 /// outside the portion stay unmatched. `b` is the pair's second object.
 fn match_part_with_whole(
     objects: &[SequenceObject],
-    prepared: &[std::result::Result<PreparedShape, ModalError>],
+    prepared: &Prepared,
     part: &PartOfWhole,
     b: usize,
     opts: &MatchOptions,
@@ -786,9 +817,9 @@ fn match_part_with_whole(
         .flat_map(|&w| whole.point(w).to_vec())
         .collect();
     let sub = prepare(&Shape::new(2, coords, Topology::ClosedContour)?, opts)?;
-    let own = match &prepared[part.part] {
-        Ok(p) => p.clone(),
-        Err(_) => prepare(own, opts)?,
+    let own = match prepared.get(&part.part) {
+        Some(Ok(p)) => p.clone(),
+        _ => prepare(own, opts)?,
     };
     let whole_is_b = part.whole == b;
     let r = if whole_is_b {
@@ -1154,6 +1185,32 @@ mod tests {
 
     fn disc(cx: f64, cy: f64, radius: f64) -> impl Fn(usize, usize) -> bool {
         move |r, c| (r as f64 - cy).hypot(c as f64 - cx) <= radius
+    }
+
+    #[test]
+    fn a_run_without_match_details_has_the_same_matches_rows_and_tracks() {
+        let rec = recording(6, |f, r, c| {
+            disc(9.0 + f as f64 * 0.7, 11.0, 5.0 + 0.2 * f as f64)(r, c)
+        });
+        let full = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
+        let lean_options = SequenceOptions {
+            keep_match_details: false,
+            ..Default::default()
+        };
+        let lean = run_sequence(&rec, &lean_options, &|_, _, _| {}).unwrap();
+        assert_eq!(full.pairs.len(), 5);
+        assert_eq!(lean.pairs.len(), full.pairs.len());
+        for (f, l) in full.pairs.iter().zip(&lean.pairs) {
+            assert_eq!(f.row, l.row);
+            assert_eq!(f.result.pairs, l.result.pairs);
+            assert_eq!(f.result.unmatched_a, l.result.unmatched_a);
+            assert!(f.result.affinity.rows() > 0);
+            assert_eq!(l.result.affinity.rows(), 0);
+            assert!(l.result.aligned_a.is_empty());
+        }
+        assert_eq!(full.tracks, lean.tracks);
+        let csv = |r: &SequenceResult| crate::report::matches_table(&rec, r).to_csv();
+        assert_eq!(csv(&full), csv(&lean));
     }
 
     #[test]

@@ -82,10 +82,15 @@ pub fn write_tables(
     dir.write("pairs.json", pretty(&pairs.to_json()).as_bytes())?;
     let objects = report::objects_table(recording, r);
     dir.write("objects.csv", objects.to_csv().as_bytes())?;
-    let matches = report::matches_table(recording, r);
-    dir.write("matches.csv", matches.to_csv().as_bytes())?;
-    let tracks = report::tracks_table(recording, r);
-    dir.write("tracks.csv", tracks.to_csv().as_bytes())?;
+    // The two large tables go to disk row by row (a long recording has millions of rows).
+    dir.write_with("matches.csv", |w| {
+        let header = report::matches_header(recording).header;
+        report::write_csv(w, &header, |emit| report::matches_rows(recording, r, emit))
+    })?;
+    dir.write_with("tracks.csv", |w| {
+        let header = report::tracks_header(recording, r).header;
+        report::write_csv(w, &header, |emit| report::tracks_rows(recording, r, emit))
+    })?;
     let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
     let frames = report::frames_table(recording, threshold, start, end);
@@ -611,7 +616,8 @@ fn process(
     let mut recording = read_recording_with(path, &opts.read)?;
     let input = InputInfo::of_path(path)?;
     opts.params.units.apply(&mut recording)?;
-    let options = opts.params.to_options(&recording)?;
+    let mut options = opts.params.to_options(&recording)?;
+    options.keep_match_details = false;
     let read_s = started.elapsed().as_secs_f64();
     let folder = opts.out.as_ref().zip(output).map(|(o, n)| o.join(n));
     if let Some(folder) = folder.as_deref().filter(|_| !opts.force) {

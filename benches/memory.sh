@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# `pedomatch run` on the bundled F-Scan walk repeated 1x, 10x and 100x (205 -> 20,500 frames):
+# wall time and peak RSS (issue #21: the peak should not grow with the recording's length).
+#
+# Usage: benches/memory.sh [PEDOMATCH] [REPEATS...]   (default target/release/pedomatch, 1 10 100;
+#        build it with `cargo build --release` first). Needs GNU time (/usr/bin/time).
+# Tables only (--figures none --report none), like benches/batch.sh. Prints a Markdown table.
+set -euo pipefail
+bin=$(realpath "${1:-target/release/pedomatch}")
+shift || true
+repeats=("${@:-1 10 100}")
+read -r -a repeats <<<"${repeats[*]}"
+walk=$(realpath crates/pedo-io/tests/data/FrasP01L.asf)
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
+# The walk's header (END_FRAME set to the new count), its 205 frames k times renumbered, the end.
+repeat_walk() {
+  local k=$1 out=$2
+  awk -v k="$k" '
+    /^ASCII_DATA/ { header = header $0 "\n"; inbody = 1; next }
+    !inbody { if ($0 ~ /^END_FRAME/) { sub(/[0-9]+/, "@END@") } header = header $0 "\n"; next }
+    /^@@/ { tail = $0 "\n"; next }
+    /^Frame / { n++ }
+    { body[n] = body[n] $0 "\n" }
+    END {
+      nf = n; gsub(/@END@/, nf * k, header); printf "%s", header; printf "%s", body[0]
+      m = 0
+      for (r = 0; r < k; r++) for (f = 1; f <= nf; f++) {
+        m++; b = body[f]; sub(/^Frame [0-9]+/, "Frame " m, b); printf "%s", b
+      }
+      printf "%s", tail
+    }' "$walk" >"$out"
+}
+
+echo "| walk | frames | wall time (s) | peak RSS (MB) |"
+echo "|---|---:|---:|---:|"
+for k in "${repeats[@]}"; do
+  rec="$tmp/walk_x$k.asf"
+  repeat_walk "$k" "$rec"
+  /usr/bin/time -f "%e %M" -o "$tmp/time" \
+    "$bin" run "$rec" --out "$tmp/out" --figures none --report none >/dev/null
+  frames=$(grep -c '' "$tmp/out/frames.csv")
+  read -r wall rss <"$tmp/time"
+  printf "| %sx | %d | %.2f | %.1f |\n" "$k" "$((frames - 1))" "$wall" "$(echo "$rss / 1024" | bc -l)"
+  rm -rf "$tmp/out"
+done
