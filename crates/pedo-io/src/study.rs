@@ -23,6 +23,8 @@ use crate::sequence::{run_sequence, RunParams, SequenceOptions, SequenceResult, 
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::time::Instant;
 
 /// Marks a folder as a study output ([`run_study`] writes only into an empty folder or one
@@ -458,26 +460,40 @@ pub fn run_study(
     } else {
         opts.jobs
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs)
-        .build()
-        .map_err(|e| IoError::invalid(format!("cannot start {jobs} threads: {e}")))?;
-    let rows: Vec<StudyRow> = pool.install(|| {
-        paths
-            .par_iter()
-            .with_max_len(1)
-            .enumerate()
-            .map(|(index, path)| {
-                let before = previous
-                    .iter()
-                    .find(|r| Path::new(&r.path) == path.as_path());
-                let report = |fraction| progress(StudyEvent::Progress { index, fraction });
-                let row = on_one_thread(|| run_recording(path, opts, before, &report));
-                progress(StudyEvent::Finished { index, row: &row });
-                row
+    // `jobs` plain threads take the recordings in turn, each running one on its own one-thread
+    // pool. Not a rayon pool: a rayon worker waiting for its recording steals the next one and
+    // would start it on the same busy pool (or, with a new pool, run more than `jobs` at once).
+    let next = AtomicUsize::new(0);
+    let done: Mutex<Vec<Option<StudyRow>>> = Mutex::new(vec![None; paths.len()]);
+    let worker = || loop {
+        let index = next.fetch_add(1, Ordering::Relaxed);
+        let Some(path) = paths.get(index) else { break };
+        let before = previous
+            .iter()
+            .find(|r| Path::new(&r.path) == path.as_path());
+        let report = |fraction| progress(StudyEvent::Progress { index, fraction });
+        let row = on_one_thread(|| run_recording(path, opts, before, &report));
+        progress(StudyEvent::Finished { index, row: &row });
+        done.lock().unwrap_or_else(|e| e.into_inner())[index] = Some(row);
+    };
+    std::thread::scope(|scope| {
+        let started = (0..jobs.min(paths.len()))
+            .filter(|_| {
+                std::thread::Builder::new()
+                    .spawn_scoped(scope, worker)
+                    .is_ok()
             })
-            .collect()
+            .count();
+        if started == 0 {
+            worker();
+        }
     });
+    let rows: Vec<StudyRow> = done
+        .into_inner()
+        .unwrap_or_else(|e| e.into_inner())
+        .into_iter()
+        .flatten()
+        .collect();
     if let Some(out) = &opts.out
         && !outdir::interrupted()
     {

@@ -1,0 +1,71 @@
+//! `run_study` runs at most `jobs` recordings at once, each on one thread, and returns the rows in
+//! input order.
+
+use pedo_io::study::{run_study, RunOutputs, StudyEvent, StudyOptions};
+use std::collections::BTreeSet;
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+fn recordings(n: usize) -> Vec<PathBuf> {
+    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let files = [
+        "emed-test-1-10.lst",
+        "tekscan-FrasP01L-11-20.csv",
+        "footscan-FrasP01L-11-20.txt",
+    ];
+    (0..n).map(|i| data.join(files[i % files.len()])).collect()
+}
+
+/// The largest number of recordings seen in flight (started, not finished) during a study.
+fn most_in_flight(jobs: usize, paths: &[PathBuf]) -> (usize, Vec<String>) {
+    let opts = StudyOptions {
+        params: Default::default(),
+        read: Default::default(),
+        out: None,
+        jobs,
+        force: false,
+        outputs: RunOutputs {
+            figures: Default::default(),
+            report: None,
+            animation: false,
+        },
+    };
+    let state = Mutex::new((BTreeSet::new(), BTreeSet::new(), 0usize));
+    let rows = run_study(paths, &opts, &|event| {
+        let mut s = state.lock().unwrap();
+        match event {
+            StudyEvent::Progress { index, .. } if !s.1.contains(&index) => {
+                s.0.insert(index);
+            }
+            StudyEvent::Finished { index, .. } => {
+                s.0.remove(&index);
+                s.1.insert(index);
+            }
+            _ => {}
+        }
+        s.2 = s.2.max(s.0.len());
+    })
+    .unwrap();
+    assert!(rows
+        .iter()
+        .all(|r| r.message.is_empty() || r.frames.is_some()));
+    (
+        state.into_inner().unwrap().2,
+        rows.into_iter().map(|r| r.path).collect(),
+    )
+}
+
+#[test]
+fn at_most_jobs_recordings_run_at_once_and_rows_keep_the_input_order() {
+    let paths = recordings(6);
+    let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    let (one, rows) = most_in_flight(1, &paths);
+    assert_eq!(one, 1, "--jobs 1 ran recordings side by side");
+    assert_eq!(rows, names);
+    let (two, rows) = most_in_flight(2, &paths);
+    assert!(
+        (1..=2).contains(&two),
+        "--jobs 2 had {two} recordings in flight"
+    );
+    assert_eq!(rows, names);
+}
