@@ -7,18 +7,31 @@ PIP_PACKAGES := maturin numpy scipy pytest scikit-image matplotlib pandas dask[d
 # `cargo test`), so that CI compiles the dependency tree once instead of twice.
 WHEEL_PROFILE ?= release
 # Every cargo command sees the venv's interpreter, so that pyo3 is configured once for all of them.
-CARGO_ENV := PATH=$(abspath $(VENV))/bin:$$PATH
+# Under `make test`, rustc is clippy-driver for the workspace's own crates (RUSTC_WORKSPACE_WRAPPER):
+# the test build itself is linted with warnings as errors, with no second compilation (a separate
+# `cargo clippy` needs a check build of every dependency: minutes on 2 cores).
+CARGO_ENV = PATH=$(abspath $(VENV))/bin:$$PATH $(CARGO_LINT)
+CARGO_LINT :=
 
-.PHONY: fmt-check test test-rust test-python test-browser wheel-check examples venv wheel bench bench-python lint demo
+
+.PHONY: doc-check fmt-check test test-rust test-python test-browser wheel-check examples venv wheel bench bench-python lint demo
 
 # Every test: the formatting check first, then Rust (unit, integration, doc), Python (against the installed wheel), the wheel
 # installed on its own in a fresh venv without Rust, every example, and the report in a browser.
 test: WHEEL_PROFILE = dev
-test: fmt-check test-rust test-python wheel-check examples test-browser
+test: CARGO_LINT = RUSTC_WORKSPACE_WRAPPER=$(CLIPPY_DRIVER) CLIPPY_ARGS=-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__
+test: fmt-check test-rust doc-check test-python wheel-check examples test-browser
+CLIPPY_DRIVER = $(shell command -v clippy-driver || echo clippy-driver-not-installed)
 
-# One cargo invocation for every crate (pymodal's tests need the venv's Python with numpy).
+# One cargo invocation for every crate (pymodal's tests need the venv's Python with numpy); the
+# benchmarks are compiled too (with the test profile), so that clippy sees every target.
 test-rust: venv
 	$(CARGO_ENV) cargo test --workspace
+	$(CARGO_ENV) cargo test -q --workspace --benches --no-run
+
+# The API documentation with warnings as errors (broken or private links, bad code blocks).
+doc-check: venv
+	$(CARGO_ENV) RUSTDOCFLAGS="-D warnings" cargo doc -q --workspace --no-deps
 
 venv: $(VENV)/.ready
 
@@ -76,7 +89,7 @@ examples: wheel
 # The demo's report.html in headless Chromium (Debian's `chromium`): drawn, playable, offline.
 # The binary as the tests build it (the same features: nothing is rebuilt after `cargo test`).
 test-browser: venv
-	$(CARGO_ENV) cargo test -q --no-run --test cli_run
+	$(CARGO_ENV) cargo test -q --workspace --no-run
 	python3 tests/browser/test_report.py target/debug/pedomatch
 
 bench:
@@ -87,9 +100,7 @@ bench-python: wheel
 	$(PY) -m pip install -q pycpd pot
 	for s in benches/python/bench_*.py; do $(PY) $$s || exit 1; done
 
-# Formatting only (instant): part of `make test`. Clippy and rustdoc need a check build of every
-# dependency (about 7 minutes on 2 cores from scratch), which would take CI past its 20-minute
-# budget: they run in `make lint`.
+# Formatting (instant): part of `make test`, as are clippy (inside the test build) and rustdoc.
 fmt-check:
 	cargo fmt --all -- --check
 
