@@ -15,9 +15,8 @@
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
-use super::features::cost_matrix;
 use super::prepare::Pair;
-use super::refine::{explained, pass_pairs, Iteration};
+use super::refine::{pass, Iteration, Pass};
 use crate::error::ModalError;
 use crate::model::{modal_basis, ModelOptions};
 use crate::shape::Shape;
@@ -48,16 +47,9 @@ pub(crate) fn deform(pair: &Pair<'_>, kept: Iteration) -> Result<Iteration, Moda
     };
     let modes_b = pair.modal().then(|| pair.modes_b()).transpose()?;
     let modes_a = pair.modal().then(|| pair.modes_a(&warped)).transpose()?;
-    let z = cost_matrix(
-        &warped,
-        &pair.b.get().pts,
-        pair.dim,
-        modes_a.as_deref().zip(modes_b.as_deref()),
-        pair.k,
-        pair.opts,
-    )?;
-    let pairs = pass_pairs(pair, &z, &warped)?;
-    let (resid, _, _) = explained(pair, &warped, &pairs);
+    let Pass {
+        z, pairs, resid, ..
+    } = pass(pair, &warped, modes_a.as_deref().zip(modes_b.as_deref()))?;
     Ok(Iteration {
         z,
         pairs,

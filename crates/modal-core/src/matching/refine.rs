@@ -82,16 +82,13 @@ pub(crate) fn refine(pair: &Pair<'_>, start: Start) -> Result<Refined, ModalErro
         if fa.is_some() {
             solves += 1;
         }
-        let z = cost_matrix(
-            &cur,
-            &pair.b.get().pts,
-            pair.dim,
-            fa.as_deref().zip(modes_b.as_deref()),
-            pair.k,
-            opts,
-        )?;
-        let pairs = pass_pairs(pair, &z, &cur)?;
-        let (resid, worst, fit) = explained(pair, &cur, &pairs);
+        let Pass {
+            z,
+            pairs,
+            resid,
+            worst,
+            fit,
+        } = pass(pair, &cur, fa.as_deref().zip(modes_b.as_deref()))?;
         let stable = prev.as_ref().is_some_and(|p| same_pairs(p, &pairs));
         let better = !opts.keep_best_fit || best.as_ref().is_none_or(|b| resid < b.resid);
         if better {
@@ -132,8 +129,44 @@ pub(crate) fn refine(pair: &Pair<'_>, start: Start) -> Result<Refined, ModalErro
     })
 }
 
+/// One pass at A's coordinates `aligned`: its cost matrix, its pairs, and how well one affine
+/// map explains them (see [`explained`]).
+pub(super) struct Pass {
+    pub z: AffinityMatrix,
+    pub pairs: Vec<MatchPair>,
+    pub resid: f64,
+    pub worst: f64,
+    pub fit: Option<Affine>,
+}
+
+/// Matches A at `aligned` (features → search → excess) with the modes of A there and of B
+/// (`None`: positions only).
+pub(super) fn pass(
+    pair: &Pair<'_>,
+    aligned: &[f64],
+    modes: Option<(&ModalFeatures, &ModalFeatures)>,
+) -> Result<Pass, ModalError> {
+    let z = cost_matrix(
+        aligned,
+        &pair.b.get().pts,
+        pair.dim,
+        modes,
+        pair.k,
+        pair.opts,
+    )?;
+    let pairs = pass_pairs(pair, &z, aligned)?;
+    let (resid, worst, fit) = explained(pair, aligned, &pairs);
+    Ok(Pass {
+        z,
+        pairs,
+        resid,
+        worst,
+        fit,
+    })
+}
+
 /// One pass's pairs on `z`: the search's, then the excess step's.
-pub(super) fn pass_pairs(
+fn pass_pairs(
     pair: &Pair<'_>,
     z: &AffinityMatrix,
     cur: &[f64],
@@ -177,11 +210,7 @@ pub(super) fn pass_pairs(
 /// the passes; the largest of the one-to-one pairs decides whether another re-fit is worth a
 /// solve. Excess pairs are left out of that: they are many-to-one by construction, so their
 /// offsets along the contour measure the sampling, not the fit. Returns both and the map.
-pub(super) fn explained(
-    pair: &Pair<'_>,
-    cur: &[f64],
-    pairs: &[MatchPair],
-) -> (f64, f64, Option<Affine>) {
+fn explained(pair: &Pair<'_>, cur: &[f64], pairs: &[MatchPair]) -> (f64, f64, Option<Affine>) {
     let (d, b) = (pair.dim, &pair.b.get().pts);
     let idx: Vec<(usize, usize)> = pairs.iter().map(|p| (p.a, p.b)).collect();
     let fit = fit_affine(cur, b, d, &idx);
