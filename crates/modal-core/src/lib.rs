@@ -19,7 +19,7 @@ pub mod options;
 pub mod shape;
 mod simd;
 
-pub use error::{ModalError, OptionError};
+pub use error::{ErrorKind, ModalError, OptionError, Side, Unsupported};
 pub use matching::features::{AffinityMatrix, ModalFeatures};
 pub use matching::prealign::{Affine, RotationSearch};
 pub use matching::search::ThresholdMode;

@@ -164,9 +164,9 @@ fn solve_symmetric(
         });
     }
     if c.col_iter().any(|col| col.iter().any(|v| !v.is_finite())) {
-        return Err(ModalError::Numerical(
-            "matrix has non-finite entries".into(),
-        ));
+        return Err(ModalError::NonFiniteResult {
+            stage: "the matrix of the eigenproblem",
+        });
     }
     let mut pairs = if n < TRIDIAGONAL_MIN_ORDER {
         full_eigen(c.as_ref(), k)?
@@ -196,7 +196,9 @@ fn full_eigen(c: MatRef<'_, f64>, k: usize) -> Result<EigenPairs, ModalError> {
         stack,
         Default::default(),
     )
-    .map_err(|_| ModalError::Numerical("symmetric eigensolver did not converge".into()))?;
+    .map_err(|_| ModalError::NotConverged {
+        method: "symmetric eigensolver",
+    })?;
     let raw: Vec<f64> = (0..n).map(|i| s[i]).collect();
     let order = ascending_order(&raw);
     let mut vectors = Mat::<f64>::zeros(n, k);
@@ -221,7 +223,9 @@ fn full_eigen_values(c: MatRef<'_, f64>) -> Result<Vec<f64>, ModalError> {
     let stack = MemStack::new(&mut mem);
     let mut s = faer::diag::Diag::<f64>::zeros(n);
     evd::self_adjoint_evd(c, s.as_mut(), None, par, stack, Default::default())
-        .map_err(|_| ModalError::Numerical("symmetric eigensolver did not converge".into()))?;
+        .map_err(|_| ModalError::NotConverged {
+        method: "symmetric eigensolver",
+    })?;
     let mut v: Vec<f64> = (0..n).map(|i| s[i]).collect();
     v.sort_by(f64::total_cmp);
     Ok(v)
@@ -321,9 +325,9 @@ fn tridiagonal_eigenvalues(diag: &[f64], off: &[f64]) -> Result<Vec<f64>, ModalE
         }
         total += 1;
         if total > max_iter {
-            return Err(ModalError::Numerical(
-                "tridiagonal QL iteration did not converge".into(),
-            ));
+            return Err(ModalError::NotConverged {
+                method: "tridiagonal QL iteration",
+            });
         }
         // Wilkinson-type shift from the leading 2×2 of the block.
         let p0 = d[l];
@@ -375,9 +379,9 @@ fn tridiagonal_eigenvalues(diag: &[f64], off: &[f64]) -> Result<Vec<f64>, ModalE
         d[l] = sigma + gamma;
     }
     if d.iter().any(|v| !v.is_finite()) {
-        return Err(ModalError::Numerical(
-            "tridiagonal eigenvalues are not finite".into(),
-        ));
+        return Err(ModalError::NonFiniteResult {
+            stage: "the tridiagonal eigenvalues",
+        });
     }
     for v in d.iter_mut() {
         *v *= up;
@@ -526,7 +530,9 @@ fn inverse_iteration_body(
             lu.solve(&mut xl);
             let growth = xl.iter().fold(0.0f64, |m, v| m.max(v[0].abs()));
             if !growth.is_finite() {
-                return Err(ModalError::Numerical("inverse iteration overflowed".into()));
+                return Err(ModalError::NonFiniteResult {
+                    stage: "inverse iteration",
+                });
             }
             // dstein's acceptance test: a growth of 1/(√n·eps·‖T‖) means the residual is at
             // round-off level; one extra step after acceptance polishes it.
@@ -540,7 +546,9 @@ fn inverse_iteration_body(
         orthogonalise(&mut xl, &vecs[cluster_start * n..j * n]);
         let nrm = xl.iter().map(|v| v[0] * v[0]).sum::<f64>().sqrt();
         if !(nrm > 0.0 && nrm.is_finite()) {
-            return Err(ModalError::Numerical("inverse iteration failed".into()));
+            return Err(ModalError::NonFiniteResult {
+                stage: "inverse iteration",
+            });
         }
         for i in 0..n {
             vecs[j * n + i] = xl[i][0] / nrm;
@@ -757,7 +765,9 @@ fn inverse_iteration_lanes(
             }
         }
         if scale.contains(&0.0) {
-            return Err(ModalError::Numerical("inverse iteration failed".into()));
+            return Err(ModalError::NonFiniteResult {
+                stage: "inverse iteration",
+            });
         }
         let inv = scale.map(|v| 1.0 / v);
         for xi in x.iter_mut() {
@@ -773,7 +783,9 @@ fn inverse_iteration_lanes(
             }
         }
         if growth.iter().any(|g| !g.is_finite()) {
-            return Err(ModalError::Numerical("inverse iteration overflowed".into()));
+            return Err(ModalError::NonFiniteResult {
+                    stage: "inverse iteration",
+                });
         }
         // As in the one-vector path: accept at round-off growth, then polish once more. A lane
         // that is done keeps iterating with the others, which only polishes it further.
@@ -791,7 +803,9 @@ fn inverse_iteration_lanes(
     for l in 0..b {
         let nrm = x.iter().map(|xi| xi[l] * xi[l]).sum::<f64>().sqrt();
         if !(nrm > 0.0 && nrm.is_finite()) {
-            return Err(ModalError::Numerical("inverse iteration failed".into()));
+            return Err(ModalError::NonFiniteResult {
+                stage: "inverse iteration",
+            });
         }
         for i in 0..n {
             out[l * n + i] = x[i][l] / nrm;
@@ -808,19 +822,26 @@ pub fn generalized_eigen(
     n_modes: Option<usize>,
 ) -> Result<EigenPairs, ModalError> {
     let n = k.nrows();
-    if k.ncols() != n || b.nrows() != n || b.ncols() != n {
-        return Err(ModalError::InvalidParameter(format!(
-            "K is {}×{} and B is {}×{}; both must be square of the same size",
-            k.nrows(),
-            k.ncols(),
-            b.nrows(),
-            b.ncols()
-        )));
+    for (what, found) in [
+        ("columns of K", k.ncols()),
+        ("rows of B", b.nrows()),
+        ("columns of B", b.ncols()),
+    ] {
+        if found != n {
+            return Err(ModalError::SizeMismatch {
+                what,
+                expected: n,
+                found,
+            });
+        }
     }
     let mut l = Mat::<f64>::zeros(n, n);
     l.copy_from_triangular_lower(b);
     cholesky_in_place(l.as_mut())
-        .map_err(|i| ModalError::Numerical(format!("B is not positive definite (pivot {i})")))?;
+        .map_err(|i| ModalError::NotPositiveDefinite {
+            matrix: "B",
+            pivot: Some(i),
+        })?;
     let mut c = Mat::<f64>::from_fn(n, n, |i, j| if i >= j { k[(i, j)] } else { k[(j, i)] });
     congruence_inverse(l.as_ref(), c.as_mut());
     let mut pairs = symmetric_eigen(c, n_modes)?;

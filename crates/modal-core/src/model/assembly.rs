@@ -12,7 +12,7 @@ use super::gaussian::GaussianIntegrals;
 use super::material::{Material, PlaneModel};
 use super::rigid;
 use crate::eigen::{self, EigenPairs};
-use crate::error::ModalError;
+use crate::error::{ModalError, OptionError, Unsupported};
 use crate::shape::nearest_neighbour_stats;
 use crate::shape::{Shape, Topology};
 
@@ -104,10 +104,10 @@ impl ModalBasis {
     /// is `[u_i(0..k), v_i(0..k), (w_i(0..k))]` (Tavares & Bastos 2005, eqs 1–2).
     pub fn features(&self, k: usize) -> Result<Mat<f64>, ModalError> {
         if k > self.modes.ncols() {
-            return Err(ModalError::InvalidParameter(format!(
-                "{k} modes requested but only {} were computed",
-                self.modes.ncols()
-            )));
+            return Err(ModalError::TooFewModes {
+                requested: k,
+                available: self.modes.ncols(),
+            });
         }
         let n = self.n_nodes;
         Ok(Mat::from_fn(n, self.dim * k, |i, c| {
@@ -171,9 +171,7 @@ pub(crate) fn solve_model(
     let dof = model.stiffness.nrows();
     let k = options.n_modes.unwrap_or(dof);
     if k == 0 || k > dof {
-        return Err(ModalError::InvalidParameter(format!(
-            "n_modes must be in 1..={dof}, got {k}"
-        )));
+        return Err(OptionError::new("n_modes", k, format!("an integer in 1..={dof}")).into());
     }
 
     let mut c = eigen::block_congruence(model.stiffness.as_ref(), model.mass_factor.as_ref(), dim);
@@ -242,7 +240,7 @@ pub(crate) fn solve_model(
         eigen::canonical_signs(modes.as_mut());
     }
     if modes.col_iter().any(|c| c.iter().any(|v| !v.is_finite())) {
-        return Err(ModalError::Numerical("modes are not finite".into()));
+        return Err(ModalError::NonFiniteResult { stage: "the modes" });
     }
     Ok(ModalBasis {
         dim,
@@ -321,9 +319,7 @@ fn explicit_matrices(
     let dim = shape.dim();
     let n = shape.len();
     match (&model.interpolation, model.sigma) {
-        (Some(g), _) if g.ncols() != n => Err(ModalError::InvalidParameter(
-            "a reduced Gaussian basis (center_stride > 1) has no nodal K and M".into(),
-        )),
+        (Some(g), _) if g.ncols() != n => Err(Unsupported::ReducedNodalMatrices.into()),
         (Some(_), Some(sigma)) => {
             let ints = GaussianIntegrals::new(shape, sigma);
             let (k, m) = ints.explicit_matrices(&options.material, options.plane)?;
@@ -346,10 +342,10 @@ fn validate_nodes(shape: &Shape) -> Result<(), ModalError> {
     let dim = shape.dim();
     let n = shape.len();
     if n < dim + 1 {
-        return Err(ModalError::InvalidShape(format!(
-            "a {dim}-D model needs at least {} nodes, got {n}",
-            dim + 1
-        )));
+        return Err(ModalError::TooFewNodes {
+            nodes: n,
+            min: dim + 1,
+        });
     }
     let c = shape.coords();
     let mut extent = 0.0f64;
@@ -363,9 +359,10 @@ fn validate_nodes(shape: &Shape) -> Result<(), ModalError> {
     }
     let (_, min_nn, (i, j)) = nearest_neighbour_stats(shape);
     if min_nn.is_nan() || min_nn <= 1e-10 * extent {
-        return Err(ModalError::InvalidShape(format!(
-            "nodes {i} and {j} coincide (distance {min_nn:e}); remove duplicate points"
-        )));
+        return Err(ModalError::CoincidentNodes {
+            first: i.min(j),
+            second: i.max(j),
+        });
     }
     Ok(())
 }
@@ -379,18 +376,13 @@ fn gaussian_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, 
     let mut sigma = match options.sigma {
         Some(s) => {
             if !(s.is_finite() && s > 0.0) {
-                return Err(ModalError::InvalidParameter(format!(
-                    "sigma must be positive and finite, got {s}"
-                )));
+                return Err(OptionError::new("sigma", s, "a finite number > 0").into());
             }
             s
         }
         None => {
             if !(options.kappa.is_finite() && options.kappa > 0.0) {
-                return Err(ModalError::InvalidParameter(format!(
-                    "kappa must be positive and finite, got {}",
-                    options.kappa
-                )));
+                return Err(OptionError::new("kappa", options.kappa, "a finite number > 0").into());
             }
             options.kappa * nearest_neighbour_stats(shape).0 * stride as f64
         }
@@ -426,17 +418,13 @@ fn gaussian_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, 
         }
         sigma *= 0.8;
     }
-    Err(ModalError::Numerical(format!(
-        "Γ stays ill-conditioned after shrinking σ to {sigma:e}"
-    )))
+    Err(ModalError::IllConditioned { sigma })
 }
 
 /// Every `stride`-th node as a Gaussian centre (`None` for stride 1: every node).
 fn reduced_centers(shape: &Shape, stride: usize) -> Result<Option<Shape>, ModalError> {
     if stride == 0 {
-        return Err(ModalError::InvalidParameter(
-            "center_stride must be ≥ 1".into(),
-        ));
+        return Err(OptionError::new("center_stride", 0, "an integer >= 1").into());
     }
     if stride == 1 {
         return Ok(None);
@@ -449,15 +437,15 @@ fn reduced_centers(shape: &Shape, stride: usize) -> Result<Option<Shape>, ModalE
         .collect();
     let centers = Shape::new(dim, coords, Topology::None)?;
     validate_nodes(&centers).map_err(|e| {
-        ModalError::InvalidParameter(format!(
-            "center_stride {stride} leaves {} centres of {} nodes: {}",
-            centers.len(),
-            shape.len(),
-            match e {
-                ModalError::InvalidShape(s) => s,
-                other => other.to_string(),
-            }
-        ))
+        OptionError::new(
+            "center_stride",
+            stride,
+            format!(
+                "a stride that leaves a valid set of centres; it leaves {} centres of {} nodes: {e}",
+                centers.len(),
+                shape.len(),
+            ),
+        )
     })?;
     Ok(Some(centers))
 }
@@ -468,17 +456,16 @@ fn rigid_reduced_basis(shape: &Shape, model: &SolverModel) -> Result<Mat<f64>, M
     let dim = shape.dim();
     let n = shape.len();
     if model.interpolation.as_ref().is_some_and(|g| g.ncols() != n) {
-        return Err(ModalError::InvalidParameter(
-            "exact_rigid needs the full Gaussian element (center_stride 1): a reduced basis \
-             cannot represent the rigid motions exactly"
-                .into(),
-        ));
+        return Err(Unsupported::ExactRigidReduced.into());
     }
     let mut y = rigid::rigid_basis(shape);
     if let Some(g) = &model.interpolation {
         let llt = g
             .llt(faer::Side::Lower)
-            .map_err(|_| ModalError::Numerical("G is not positive definite".into()))?;
+            .map_err(|_| ModalError::NotPositiveDefinite {
+                matrix: "the Gaussian matrix G",
+                pivot: None,
+            })?;
         for a in 0..dim {
             let blk = y.as_ref().subrows(a * n, n).to_owned();
             let solved = llt.solve(&blk);
@@ -514,15 +501,17 @@ fn deflate_rigid(c: &mut Mat<f64>, u: &Mat<f64>) {
 fn check_zero_modes(pairs: &EigenPairs, dim: usize) -> Result<(), ModalError> {
     let expected = if dim == 2 { 3 } else { 6 };
     let all = pairs.all_values.as_deref().ok_or_else(|| {
-        ModalError::Numerical("the zero-mode check needs every eigenvalue".into())
+        ModalError::Internal {
+            invariant: "the zero-mode check needs every eigenvalue",
+        }
     })?;
     let zeros = count_zero_modes(all);
     if zeros != expected {
-        return Err(ModalError::InvalidShape(format!(
-            "the bar model has {zeros} zero-energy modes, a {dim}-D body has {expected}: \
-             the structure is a mechanism (collinear/coplanar nodes, unconnected nodes or \
-             missing bracing)"
-        )));
+        return Err(ModalError::Mechanism {
+            dim,
+            zero_modes: zeros,
+            expected,
+        });
     }
     Ok(())
 }

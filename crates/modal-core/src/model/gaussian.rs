@@ -165,7 +165,10 @@ impl GaussianIntegrals {
         let llt = self
             .g
             .llt(faer::Side::Lower)
-            .map_err(|_| ModalError::Numerical("G is not positive definite".into()))?;
+            .map_err(|_| ModalError::NotPositiveDefinite {
+                matrix: "the Gaussian matrix G",
+                pivot: None,
+            })?;
         let a = llt.inverse();
         let ms = &a * (&self.gamma * faer::Scale(material.density)) * &a;
         let mut m = Mat::<f64>::zeros(dim * n, dim * n);
