@@ -31,7 +31,11 @@ pub enum ModalError {
     CoordinateCount { len: usize, dim: usize },
     /// A coordinate is NaN or infinite.
     #[error("coordinate {axis} of node {node} is not finite ({value})")]
-    NonFiniteCoordinate { node: usize, axis: usize, value: f64 },
+    NonFiniteCoordinate {
+        node: usize,
+        axis: usize,
+        value: f64,
+    },
     /// The object has fewer nodes than the model or the matching needs.
     #[error("{nodes} nodes; at least {min} are needed")]
     TooFewNodes { nodes: usize, min: usize },
@@ -58,16 +62,16 @@ pub enum ModalError {
         expected: usize,
     },
     /// An edge joins a node to itself or names a node that does not exist.
-    #[error("invalid edge ({}, {}) for {nodes} nodes", edge[0], edge[1])]
+    #[error("invalid edge ({}, {}) for {nodes} nodes", .edge[0], .edge[1])]
     InvalidEdge { edge: [usize; 2], nodes: usize },
     /// An edge whose two nodes are at the same place.
-    #[error("edge ({}, {}) has zero length", edge[0], edge[1])]
+    #[error("edge ({}, {}) has zero length", .edge[0], .edge[1])]
     ZeroLengthEdge { edge: [usize; 2] },
     /// A triangle repeats a vertex or names a node that does not exist.
-    #[error("triangle {triangle:?} {}", triangle_problem(triangle, *nodes))]
+    #[error("triangle {triangle:?} {}", triangle_problem(.triangle, .nodes))]
     InvalidTriangle { triangle: [usize; 3], nodes: usize },
     /// A triangle of zero area next to a bending hinge.
-    #[error("degenerate triangle at edge ({}, {})", edge[0], edge[1])]
+    #[error("degenerate triangle at edge ({}, {})", .edge[0], .edge[1])]
     DegenerateTriangle { edge: [usize; 2] },
     /// A node that no element holds (a mechanism of its own).
     #[error("node {node} belongs to no element; an unconnected node is a mechanism")]
@@ -112,7 +116,10 @@ pub enum ModalError {
     // ---- numerical failures --------------------------------------------------------------
     /// A matrix that must be symmetric positive definite is not (`pivot`: where Cholesky
     /// stopped, when known).
-    #[error("{matrix} is not positive definite{}", pivot.map(|p| format!(" (pivot {p})")).unwrap_or_default())]
+    #[error(
+        "{matrix} is not positive definite{}",
+        .pivot.map(|p| format!(" (pivot {p})")).unwrap_or_default()
+    )]
     NotPositiveDefinite {
         matrix: &'static str,
         pivot: Option<usize>,
@@ -135,8 +142,8 @@ pub enum ModalError {
     Assign(#[from] assign::AssignError),
 }
 
-fn triangle_problem(t: &[usize; 3], nodes: usize) -> String {
-    if t.iter().any(|&v| v >= nodes) {
+fn triangle_problem(t: &[usize; 3], nodes: &usize) -> String {
+    if t.iter().any(|v| v >= nodes) {
         format!("refers to a node beyond the {nodes} nodes")
     } else {
         "repeats a vertex".to_string()
@@ -168,34 +175,34 @@ impl ModalError {
     /// assert_eq!(ModalError::Collinear.kind(), ErrorKind::Shape);
     /// ```
     pub fn kind(&self) -> ErrorKind {
-        use ModalError::*;
         match self {
-            UnsupportedDimension { .. }
-            | CoordinateCount { .. }
-            | NonFiniteCoordinate { .. }
-            | TooFewNodes { .. }
-            | CoincidentNodes { .. }
-            | Collinear
-            | ZeroExtent
-            | DependentRigidMotion { .. }
-            | Mechanism { .. }
-            | InvalidEdge { .. }
-            | ZeroLengthEdge { .. }
-            | InvalidTriangle { .. }
-            | DegenerateTriangle { .. }
-            | UnconnectedNode { .. }
-            | DimensionMismatch { .. } => ErrorKind::Shape,
-            Object { error, .. } => error.kind(),
-            Option(_) | Unsupported(_) => ErrorKind::Option,
-            SizeMismatch { .. } | TooFewModes { .. } | NoModeKept { .. } | InvalidEntry { .. } => {
-                ErrorKind::Input
-            }
-            NotPositiveDefinite { .. }
-            | NotConverged { .. }
-            | NonFiniteResult { .. }
-            | IllConditioned { .. }
-            | Internal { .. } => ErrorKind::Numerical,
-            Assign(_) => ErrorKind::Assign,
+            Self::UnsupportedDimension { .. }
+            | Self::CoordinateCount { .. }
+            | Self::NonFiniteCoordinate { .. }
+            | Self::TooFewNodes { .. }
+            | Self::CoincidentNodes { .. }
+            | Self::Collinear
+            | Self::ZeroExtent
+            | Self::DependentRigidMotion { .. }
+            | Self::Mechanism { .. }
+            | Self::InvalidEdge { .. }
+            | Self::ZeroLengthEdge { .. }
+            | Self::InvalidTriangle { .. }
+            | Self::DegenerateTriangle { .. }
+            | Self::UnconnectedNode { .. }
+            | Self::DimensionMismatch { .. } => ErrorKind::Shape,
+            Self::Object { error, .. } => error.kind(),
+            Self::Option(_) | Self::Unsupported(_) => ErrorKind::Option,
+            Self::SizeMismatch { .. }
+            | Self::TooFewModes { .. }
+            | Self::NoModeKept { .. }
+            | Self::InvalidEntry { .. } => ErrorKind::Input,
+            Self::NotPositiveDefinite { .. }
+            | Self::NotConverged { .. }
+            | Self::NonFiniteResult { .. }
+            | Self::IllConditioned { .. }
+            | Self::Internal { .. } => ErrorKind::Numerical,
+            Self::Assign(_) => ErrorKind::Assign,
         }
     }
 

@@ -27,7 +27,7 @@ use crate::simd::{clear_upper_state, widest_simd};
 
 mod bisection;
 mod householder;
-#[doc(hidden)]
+#[cfg(any(test, feature = "internals"))]
 pub mod stages;
 
 /// Eigenvalues (ascending) and the matching eigenvectors (columns).
@@ -222,9 +222,10 @@ fn full_eigen_values(c: MatRef<'_, f64>) -> Result<Vec<f64>, ModalError> {
     let mut mem = MemBuffer::new(req);
     let stack = MemStack::new(&mut mem);
     let mut s = faer::diag::Diag::<f64>::zeros(n);
-    evd::self_adjoint_evd(c, s.as_mut(), None, par, stack, Default::default())
-        .map_err(|_| ModalError::NotConverged {
-        method: "symmetric eigensolver",
+    evd::self_adjoint_evd(c, s.as_mut(), None, par, stack, Default::default()).map_err(|_| {
+        ModalError::NotConverged {
+            method: "symmetric eigensolver",
+        }
     })?;
     let mut v: Vec<f64> = (0..n).map(|i| s[i]).collect();
     v.sort_by(f64::total_cmp);
@@ -784,8 +785,8 @@ fn inverse_iteration_lanes(
         }
         if growth.iter().any(|g| !g.is_finite()) {
             return Err(ModalError::NonFiniteResult {
-                    stage: "inverse iteration",
-                });
+                stage: "inverse iteration",
+            });
         }
         // As in the one-vector path: accept at round-off growth, then polish once more. A lane
         // that is done keeps iterating with the others, which only polishes it further.
@@ -814,6 +815,90 @@ fn inverse_iteration_lanes(
     Ok(())
 }
 
+/// Eigenvalues and eigenvectors of a dense generalized problem ([`generalized_eigh`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EigenSolution {
+    /// The computed eigenvalues, ascending.
+    pub values: Vec<f64>,
+    /// Order of the problem (length of an eigenvector).
+    order: usize,
+    /// The eigenvectors, column-major: vector `j` at `j·order ..`.
+    vectors: Vec<f64>,
+}
+
+impl EigenSolution {
+    /// Order of the problem: the length of each eigenvector.
+    pub fn order(&self) -> usize {
+        self.order
+    }
+
+    /// Eigenvector `j` (of `values[j]`), `M`-normalised.
+    ///
+    /// # Panics
+    /// When `j >= values.len()`.
+    pub fn vector(&self, j: usize) -> &[f64] {
+        &self.vectors[j * self.order..(j + 1) * self.order]
+    }
+
+    /// Every eigenvector, one after the other (`order × values.len()` column-major).
+    pub fn vectors_column_major(&self) -> &[f64] {
+        &self.vectors
+    }
+}
+
+/// The eigenpairs of `K x = λ M x` for dense symmetric `K` and symmetric positive definite `M`,
+/// both `n × n` row-major (like `scipy.linalg.eigh(K, M)`): eigenvalues ascending, eigenvectors
+/// with `xᵀ M x = 1`. Only the lower triangles are read (the upper ones may hold anything
+/// finite). `n_modes` computes only the lowest ones (much faster).
+///
+/// ```
+/// use modal_core::generalized_eigh;
+/// let k = [2.0, 0.0, 0.0, 8.0];
+/// let m = [2.0, 0.0, 0.0, 2.0];
+/// let e = generalized_eigh(&k, &m, 2, None).unwrap();
+/// assert!((e.values[0] - 1.0).abs() < 1e-12 && (e.values[1] - 4.0).abs() < 1e-12);
+/// // M-normalised: xᵀ M x = 2 x₀² = 1.
+/// assert!((e.vector(0)[0].abs() - 0.5f64.sqrt()).abs() < 1e-12);
+/// ```
+///
+/// # Errors
+/// [`ModalError::SizeMismatch`] for slices that are not `n × n`; [`ModalError::Option`] for
+/// `n_modes` outside `1..=n`; [`ModalError::NotPositiveDefinite`] when `M` is not positive
+/// definite; [`ModalError::NonFiniteResult`] for NaN or infinite entries.
+pub fn generalized_eigh(
+    k: &[f64],
+    m: &[f64],
+    n: usize,
+    n_modes: Option<usize>,
+) -> Result<EigenSolution, ModalError> {
+    for (what, found) in [("entries of K", k.len()), ("entries of M", m.len())] {
+        if found != n * n {
+            return Err(ModalError::SizeMismatch {
+                what,
+                expected: n * n,
+                found,
+            });
+        }
+    }
+    if let Some(j) = n_modes.filter(|&j| j == 0 || j > n) {
+        return Err(crate::OptionError::new("n_modes", j, format!("an integer in 1..={n}")).into());
+    }
+    let pairs = generalized_eigen(
+        MatRef::from_row_major_slice(k, n, n),
+        MatRef::from_row_major_slice(m, n, n),
+        n_modes,
+    )?;
+    let v = &pairs.vectors;
+    let vectors = (0..v.ncols())
+        .flat_map(|j| (0..n).map(move |i| v[(i, j)]))
+        .collect();
+    Ok(EigenSolution {
+        values: pairs.values,
+        order: n,
+        vectors,
+    })
+}
+
 /// Generalized symmetric-definite eigenpairs `K x = λ B x`, ascending, `xᵀ B x = I`.
 /// Only the lower triangles of `k` and `b` are read. `n_modes` limits the number of pairs.
 pub fn generalized_eigen(
@@ -837,11 +922,10 @@ pub fn generalized_eigen(
     }
     let mut l = Mat::<f64>::zeros(n, n);
     l.copy_from_triangular_lower(b);
-    cholesky_in_place(l.as_mut())
-        .map_err(|i| ModalError::NotPositiveDefinite {
-            matrix: "B",
-            pivot: Some(i),
-        })?;
+    cholesky_in_place(l.as_mut()).map_err(|i| ModalError::NotPositiveDefinite {
+        matrix: "M",
+        pivot: Some(i),
+    })?;
     let mut c = Mat::<f64>::from_fn(n, n, |i, j| if i >= j { k[(i, j)] } else { k[(j, i)] });
     congruence_inverse(l.as_ref(), c.as_mut());
     let mut pairs = symmetric_eigen(c, n_modes)?;

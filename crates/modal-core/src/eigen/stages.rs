@@ -224,10 +224,9 @@ pub fn cholesky_factor(b: MatRef<'_, f64>) -> Result<Mat<f64>, ModalError> {
     let n = b.nrows();
     let mut l = Mat::<f64>::zeros(n, n);
     l.copy_from_triangular_lower(b);
-    super::cholesky_in_place(l.as_mut())
-        .map_err(|i| ModalError::NotPositiveDefinite {
-            matrix: "B",
-            pivot: Some(i),
-        })?;
+    super::cholesky_in_place(l.as_mut()).map_err(|i| ModalError::NotPositiveDefinite {
+        matrix: "M",
+        pivot: Some(i),
+    })?;
     Ok(l)
 }

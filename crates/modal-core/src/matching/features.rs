@@ -199,8 +199,7 @@ pub(crate) fn align_modes(
     let mut signs = Vec::with_capacity(ka);
     let mut similarity = Vec::with_capacity(ka);
     for (p, q) in sol.row_to_col.iter().enumerate() {
-        let q =
-            q.ok_or(ModalError::Assign(assign::AssignError::Infeasible))?;
+        let q = q.ok_or(ModalError::Assign(assign::AssignError::Infeasible))?;
         let c = corr[p * kb + q];
         order.push(q);
         signs.push(if c < 0.0 { -1.0 } else { 1.0 });

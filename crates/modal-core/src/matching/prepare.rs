@@ -462,12 +462,9 @@ pub(crate) fn check_dims(a: &Shape, b: &Shape) -> Result<(), ModalError> {
 /// Checks the options no single object can check; returns the threshold (`∞` for none).
 fn check_options(opts: &MatchOptions) -> Result<f64, ModalError> {
     if !(opts.mode_fraction > 0.0 && opts.mode_fraction <= 1.0) {
-        return Err(OptionError::new(
-            "mode_fraction",
-            opts.mode_fraction,
-            "a fraction in (0, 1]",
-        )
-        .into());
+        return Err(
+            OptionError::new("mode_fraction", opts.mode_fraction, "a fraction in (0, 1]").into(),
+        );
     }
     let threshold = opts.threshold.unwrap_or(f64::INFINITY);
     if threshold.is_nan() || threshold < 0.0 {

@@ -77,6 +77,15 @@ impl Default for ModelOptions {
 }
 
 /// Vibration modes of one object, ascending by frequency.
+///
+/// ```
+/// use modal_core::{modal_basis, ModelOptions, Shape, Topology};
+/// let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+/// let shape = Shape::from_points_2d(&square, Topology::None).unwrap();
+/// let basis = modal_basis(&shape, &ModelOptions::default()).unwrap();
+/// assert_eq!((basis.n_dofs(), basis.n_modes()), (8, 8));
+/// assert_eq!(basis.mode(3).len(), 8);
+/// ```
 #[derive(Debug, Clone)]
 pub struct ModalBasis {
     pub dim: usize,
@@ -85,12 +94,73 @@ pub struct ModalBasis {
     pub eigenvalues: Vec<f64>,
     /// `(dim·n) × k`, component-major rows (`a·n + i` is component `a` of node `i`), mass-normalised
     /// columns (`φᵀ M φ = I`), each with its largest-|·| entry positive.
-    pub modes: faer::Mat<f64>,
+    pub(crate) modes: Mat<f64>,
     /// The Gaussian width actually used (after the conditioning guard), if Gaussian.
     pub sigma: Option<f64>,
 }
 
 impl ModalBasis {
+    /// A basis from its parts, the modes given column-major (`n_dofs × n_modes`, mode `j` at
+    /// `j·n_dofs ..`), e.g. one stored with [`ModalBasis::modes_column_major`].
+    ///
+    /// # Errors
+    /// [`ModalError::SizeMismatch`] when the sizes do not fit together
+    /// (`n_dofs = dim·n_nodes`, one eigenvalue per mode).
+    pub fn from_column_major(
+        dim: usize,
+        n_nodes: usize,
+        eigenvalues: Vec<f64>,
+        modes: &[f64],
+        sigma: Option<f64>,
+    ) -> Result<Self, ModalError> {
+        let rows = dim * n_nodes;
+        let cols = eigenvalues.len();
+        if modes.len() != rows * cols {
+            return Err(ModalError::SizeMismatch {
+                what: "entries of the modes (dim·n_nodes × eigenvalues)",
+                expected: rows * cols,
+                found: modes.len(),
+            });
+        }
+        Ok(Self {
+            dim,
+            n_nodes,
+            eigenvalues,
+            modes: Mat::from_fn(rows, cols, |i, j| modes[j * rows + i]),
+            sigma,
+        })
+    }
+
+    /// Number of modes computed.
+    pub fn n_modes(&self) -> usize {
+        self.modes.ncols()
+    }
+
+    /// Length of a mode: `dim · n_nodes` degrees of freedom.
+    pub fn n_dofs(&self) -> usize {
+        self.modes.nrows()
+    }
+
+    /// Mode `j` (`j < n_modes()`): `n_dofs()` entries, component-major (`a·n + i` is component
+    /// `a` of node `i`), mass-normalised, its largest-|·| entry positive.
+    ///
+    /// # Panics
+    /// When `j >= n_modes()`.
+    pub fn mode(&self, j: usize) -> &[f64] {
+        self.modes
+            .col(j)
+            .try_as_col_major()
+            .expect("the columns of a dense matrix are contiguous")
+            .as_slice()
+    }
+
+    /// Every mode, one after the other (`n_dofs() × n_modes()` column-major).
+    pub fn modes_column_major(&self) -> Vec<f64> {
+        (0..self.n_modes())
+            .flat_map(|j| self.mode(j).iter().copied())
+            .collect()
+    }
+
     /// Natural angular frequencies ω = √ω² (rad/s in the material's units); tiny negative ω²
     /// from round-off map to 0.
     pub fn frequencies(&self) -> Vec<f64> {
@@ -100,19 +170,25 @@ impl ModalBasis {
             .collect()
     }
 
-    /// Per-node modal features of the first `k` modes: an `n × (dim·k)` matrix whose row `i`
-    /// is `[u_i(0..k), v_i(0..k), (w_i(0..k))]` (Tavares & Bastos 2005, eqs 1–2).
-    pub fn features(&self, k: usize) -> Result<Mat<f64>, ModalError> {
+    /// Per-node modal features of the first `k` modes: an `n × (dim·k)` matrix, row-major, whose
+    /// row `i` is `[u_i(0..k), v_i(0..k), (w_i(0..k))]` (Tavares & Bastos 2005, eqs 1–2).
+    ///
+    /// # Errors
+    /// [`ModalError::TooFewModes`] when `k > n_modes()`.
+    pub fn features(&self, k: usize) -> Result<Vec<f64>, ModalError> {
         if k > self.modes.ncols() {
             return Err(ModalError::TooFewModes {
                 requested: k,
                 available: self.modes.ncols(),
             });
         }
-        let n = self.n_nodes;
-        Ok(Mat::from_fn(n, self.dim * k, |i, c| {
-            self.modes[((c / k) * n + i, c % k)]
-        }))
+        let (n, cols) = (self.n_nodes, self.dim * k);
+        Ok((0..n * cols)
+            .map(|e| {
+                let (i, c) = (e / cols, e % cols);
+                self.modes[((c / k) * n + i, c % k)]
+            })
+            .collect())
     }
 }
 
@@ -290,26 +366,73 @@ pub(crate) fn build_model(
     }
 }
 
-/// Explicit nodal `(K, M)` of the model (`d·n × d·n`, component-major) and the σ used. For
-/// inspection and external solvers (e.g. a scipy oracle); [`modal_basis`] never forms them for
-/// the Gaussian element, whose explicit form needs `G⁻¹`.
-pub fn model_matrices(shape: &Shape, options: &ModelOptions) -> Result<ExplicitModel, ModalError> {
-    let model = build_model(shape, options)?;
-    explicit_matrices(shape, &model, options)
+/// Explicit nodal stiffness and mass matrices of a model ([`model_matrices`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelMatrices {
+    /// Order of both matrices: `dim · n` degrees of freedom, component-major (`a·n + i` is
+    /// component `a` of node `i`).
+    pub n_dofs: usize,
+    /// Stiffness `K`, `n_dofs × n_dofs`, row-major (symmetric).
+    pub stiffness: Vec<f64>,
+    /// Mass `M`, `n_dofs × n_dofs`, row-major (symmetric positive definite).
+    pub mass: Vec<f64>,
+    /// The Gaussian width used (after the conditioning guard), if Gaussian.
+    pub sigma: Option<f64>,
 }
 
-/// `(K, M, σ)`: explicit stiffness and mass (`d·n × d·n`) and the Gaussian width used.
-pub type ExplicitModel = (Mat<f64>, Mat<f64>, Option<f64>);
+impl ModelMatrices {
+    fn from_explicit((k, m, sigma): ExplicitModel) -> Self {
+        let n = k.nrows();
+        let row_major = |a: &Mat<f64>| (0..n * n).map(|e| a[(e / n, e % n)]).collect();
+        Self {
+            n_dofs: n,
+            stiffness: row_major(&k),
+            mass: row_major(&m),
+            sigma,
+        }
+    }
+}
+
+/// Explicit nodal `K` and `M` of the model and the σ used. For inspection and external solvers
+/// (e.g. a scipy oracle); [`modal_basis`] never forms them for the Gaussian element, whose
+/// explicit form needs `G⁻¹`.
+///
+/// ```
+/// use modal_core::{model_matrices, ModelOptions, Shape, Topology};
+/// let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+/// let shape = Shape::from_points_2d(&square, Topology::None).unwrap();
+/// let m = model_matrices(&shape, &ModelOptions::default()).unwrap();
+/// assert_eq!((m.n_dofs, m.stiffness.len()), (8, 64));
+/// ```
+///
+/// # Errors
+/// The errors of [`modal_basis`]; [`Unsupported::ReducedNodalMatrices`] for a reduced Gaussian
+/// basis (`center_stride > 1`).
+pub fn model_matrices(shape: &Shape, options: &ModelOptions) -> Result<ModelMatrices, ModalError> {
+    explicit_model(shape, options).map(ModelMatrices::from_explicit)
+}
 
 /// [`model_matrices`] for a bar model on explicitly given edges.
 pub fn model_matrices_with_edges(
     shape: &Shape,
     edges: &[[usize; 2]],
     options: &ModelOptions,
-) -> Result<ExplicitModel, ModalError> {
+) -> Result<ModelMatrices, ModalError> {
     let (model, opts) = model_on_edges(shape, edges, options)?;
-    explicit_matrices(shape, &model, &opts)
+    explicit_matrices(shape, &model, &opts).map(ModelMatrices::from_explicit)
 }
+
+/// `(K, M, σ)` as dense matrices: [`model_matrices`] for the crate's own checks and benchmarks.
+pub(crate) fn explicit_model(
+    shape: &Shape,
+    options: &ModelOptions,
+) -> Result<ExplicitModel, ModalError> {
+    let model = build_model(shape, options)?;
+    explicit_matrices(shape, &model, options)
+}
+
+/// `(K, M, σ)`: explicit stiffness and mass (`d·n × d·n`) and the Gaussian width used.
+pub(crate) type ExplicitModel = (Mat<f64>, Mat<f64>, Option<f64>);
 
 fn explicit_matrices(
     shape: &Shape,
@@ -500,11 +623,12 @@ fn deflate_rigid(c: &mut Mat<f64>, u: &Mat<f64>) {
 
 fn check_zero_modes(pairs: &EigenPairs, dim: usize) -> Result<(), ModalError> {
     let expected = if dim == 2 { 3 } else { 6 };
-    let all = pairs.all_values.as_deref().ok_or_else(|| {
-        ModalError::Internal {
+    let all = pairs
+        .all_values
+        .as_deref()
+        .ok_or_else(|| ModalError::Internal {
             invariant: "the zero-mode check needs every eigenvalue",
-        }
-    })?;
+        })?;
     let zeros = count_zero_modes(all);
     if zeros != expected {
         return Err(ModalError::Mechanism {

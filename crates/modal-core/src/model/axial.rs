@@ -243,9 +243,7 @@ pub fn add_hinge_bending(
         let le = dot(e, e).sqrt();
         let (a1, a2) = (dot(n1, n1), dot(n2, n2));
         if !(a1 > 1e-24 * le.powi(4) && a2 > 1e-24 * le.powi(4)) {
-            return Err(ModalError::DegenerateTriangle {
-                edge: [h.e0, h.e1],
-            });
+            return Err(ModalError::DegenerateTriangle { edge: [h.e0, h.e1] });
         }
         let s1 = n1.map(|v| v / a1);
         let s2 = n2.map(|v| v / a2);
@@ -378,11 +376,10 @@ pub(crate) fn axial_model_with_edges(
     }
     eigen::symmetrise(k.as_mut());
     let mut l = ms;
-    eigen::cholesky_in_place(l.as_mut())
-        .map_err(|i| ModalError::NotPositiveDefinite {
-            matrix: "the bar mass matrix",
-            pivot: Some(i),
-        })?;
+    eigen::cholesky_in_place(l.as_mut()).map_err(|i| ModalError::NotPositiveDefinite {
+        matrix: "the bar mass matrix",
+        pivot: Some(i),
+    })?;
     for j in 0..n {
         for i in 0..j {
             l[(i, j)] = 0.0;

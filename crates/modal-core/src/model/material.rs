@@ -90,23 +90,17 @@ impl Material {
     /// Checks E > 0, ρ > 0 (both finite) and ν in the open interval (-1, 0.5).
     pub fn validate(&self) -> Result<(), ModalError> {
         if !(self.young.is_finite() && self.young > 0.0) {
-            return Err(OptionError::new(
-                "young",
-                self.young,
-                "Young's modulus, finite and > 0",
-            )
-            .into());
+            return Err(
+                OptionError::new("young", self.young, "Young's modulus, finite and > 0").into(),
+            );
         }
         if !(self.density.is_finite() && self.density > 0.0) {
             return Err(OptionError::new("density", self.density, "finite and > 0").into());
         }
         if !(self.poisson > -1.0 && self.poisson < 0.5) {
-            return Err(OptionError::new(
-                "poisson",
-                self.poisson,
-                "Poisson's ratio in (-1, 0.5)",
-            )
-            .into());
+            return Err(
+                OptionError::new("poisson", self.poisson, "Poisson's ratio in (-1, 0.5)").into(),
+            );
         }
         Ok(())
     }
