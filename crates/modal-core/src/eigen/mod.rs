@@ -27,7 +27,7 @@ use crate::simd::{clear_upper_state, widest_simd};
 
 mod bisection;
 mod householder;
-#[cfg(any(test, feature = "internals"))]
+#[cfg(feature = "internals")]
 pub mod stages;
 
 /// Eigenvalues (ascending) and the matching eigenvectors (columns).
@@ -113,24 +113,6 @@ pub fn symmetric_eigen(c: Mat<f64>, n_modes: Option<usize>) -> Result<EigenPairs
 /// overwritten), ascending, with orthonormal eigenvectors; the other eigenvalues are not computed
 /// ([`EigenPairs::all_values`] is `None`). The same pairs as [`symmetric_eigen`] to round-off,
 /// faster when `k` is a fraction of the order.
-///
-/// ```
-/// use faer::Mat;
-/// use modal_core::eigen::symmetric_eigen_lowest;
-/// // The path-graph Laplacian: eigenvalues 2 − 2cos(jπ/n), j = 0 … n−1.
-/// let n = 40;
-/// let c = Mat::<f64>::from_fn(n, n, |i, j| match (i, j) {
-///     _ if i == j => if i == 0 || i == n - 1 { 1.0 } else { 2.0 },
-///     _ if i.abs_diff(j) == 1 => -1.0,
-///     _ => 0.0,
-/// });
-/// let pairs = symmetric_eigen_lowest(c, 3).unwrap();
-/// for (j, v) in pairs.values.iter().enumerate() {
-///     let exact = 2.0 - 2.0 * (j as f64 * std::f64::consts::PI / n as f64).cos();
-///     assert!((v - exact).abs() < 1e-13);
-/// }
-/// assert!(pairs.all_values.is_none());
-/// ```
 pub fn symmetric_eigen_lowest(c: Mat<f64>, k: usize) -> Result<EigenPairs, ModalError> {
     solve_symmetric(c, k, Spectrum::Wanted)
 }
@@ -989,6 +971,29 @@ pub fn canonical_signs(mut v: MatMut<'_, f64>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lowest_pairs_of_the_path_laplacian() {
+        // The path-graph Laplacian: eigenvalues 2 − 2cos(jπ/n), j = 0 … n−1.
+        let n = 40;
+        let c = Mat::<f64>::from_fn(n, n, |i, j| match (i, j) {
+            _ if i == j => {
+                if i == 0 || i == n - 1 {
+                    1.0
+                } else {
+                    2.0
+                }
+            }
+            _ if i.abs_diff(j) == 1 => -1.0,
+            _ => 0.0,
+        });
+        let pairs = symmetric_eigen_lowest(c, 3).unwrap();
+        for (j, v) in pairs.values.iter().enumerate() {
+            let exact = 2.0 - 2.0 * (j as f64 * std::f64::consts::PI / n as f64).cos();
+            assert!((v - exact).abs() < 1e-13);
+        }
+        assert!(pairs.all_values.is_none());
+    }
 
     fn random_spd(n: usize, seed: u64, shift: f64) -> Mat<f64> {
         let mut s = seed;

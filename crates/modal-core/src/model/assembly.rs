@@ -623,12 +623,9 @@ fn deflate_rigid(c: &mut Mat<f64>, u: &Mat<f64>) {
 
 fn check_zero_modes(pairs: &EigenPairs, dim: usize) -> Result<(), ModalError> {
     let expected = if dim == 2 { 3 } else { 6 };
-    let all = pairs
-        .all_values
-        .as_deref()
-        .ok_or_else(|| ModalError::Internal {
-            invariant: "the zero-mode check needs every eigenvalue",
-        })?;
+    let all = pairs.all_values.as_deref().ok_or(ModalError::Internal {
+        invariant: "the zero-mode check needs every eigenvalue",
+    })?;
     let zeros = count_zero_modes(all);
     if zeros != expected {
         return Err(ModalError::Mechanism {

@@ -20,7 +20,6 @@ use crate::shape::Shape;
 pub struct GaussianIntegrals {
     pub dim: usize,
     pub n: usize,
-    pub sigma: f64,
     /// `G_ij = exp(−r²/2σ²)`.
     pub g: Mat<f64>,
     /// `Γ_ij = ∫ g_i g_j`.
@@ -115,7 +114,6 @@ impl GaussianIntegrals {
         Self {
             dim,
             n,
-            sigma,
             g,
             gamma,
             gamma_d,
