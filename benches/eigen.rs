@@ -10,9 +10,10 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use modal_core::eigen::stages;
-use modal_core::eigen::{generalized_eigen, symmetric_eigen, symmetric_eigen_lowest};
-use modal_core::{modal_basis, model_matrices, ModelOptions, Shape, Topology};
+use modal_core::internals::{
+    generalized_eigen, model_matrices, stages, symmetric_eigen, symmetric_eigen_lowest,
+};
+use modal_core::{modal_basis, ModelOptions, Shape, Topology};
 
 /// A foot-like closed outline with `n` nodes, centred, RMS radius ≈ 1.
 fn contour(n: usize) -> Shape {

@@ -2,7 +2,8 @@
 //!
 //! The pipeline follows Sclaroff & Pentland's modal matching as improved by Tavares & Bastos (2005):
 //! a [`Shape`] is modelled by finite elements ([`model`]), its vibration modes are computed from
-//! the generalized eigenproblem `K φ = ω² M φ` ([`eigen`]), and nodes of two shapes are put in
+//! the generalized eigenproblem `K φ = ω² M φ` (the `eigen` module; [`generalized_eigh`] solves a
+//! dense one), and nodes of two shapes are put in
 //! correspondence in modal space ([`matching`], one file per stage: prepare → prealign → features
 //! → search → excess → refine).
 //!
@@ -10,7 +11,7 @@
 //! `matching`, and `options` (the user-facing names) on top; this file only declares them and
 //! re-exports the types a caller needs.
 
-pub mod eigen;
+mod eigen;
 mod error;
 mod geometry;
 pub mod matching;
@@ -19,7 +20,8 @@ pub mod options;
 pub mod shape;
 mod simd;
 
-pub use error::{ModalError, OptionError};
+pub use eigen::{generalized_eigh, EigenSolution};
+pub use error::{ErrorKind, ModalError, OptionError, Side, Unsupported};
 pub use matching::features::{AffinityMatrix, ModalFeatures};
 pub use matching::prealign::{Affine, RotationSearch};
 pub use matching::search::ThresholdMode;
@@ -27,7 +29,28 @@ pub use matching::{
     match_prepared, match_shapes, prepare, MatchOptions, MatchPair, MatchResult, Parallelism,
     Prealign, PreparedShape, Refine, Search,
 };
-pub use model::{modal_basis, model_matrices, ElementKind, ModalBasis, ModelOptions};
+pub use model::{
+    modal_basis, model_matrices, ElementKind, ModalBasis, ModelMatrices, ModelOptions,
+};
 pub use model::{Material, PlaneModel};
 pub use options::{Choice, MatchParams, OptionKind, OptionSpec, OptionValue};
 pub use shape::{Shape, Topology};
+
+/// The eigensolver's building blocks on faer matrices, for the stage benchmarks
+/// (`benches/eigen.rs`) only: not part of the API (no stability promise), compiled with the
+/// `internals` feature.
+#[cfg(feature = "internals")]
+#[doc(hidden)]
+pub mod internals {
+    pub use crate::eigen::{
+        generalized_eigen, stages, symmetric_eigen, symmetric_eigen_lowest, EigenPairs,
+    };
+
+    /// The explicit `(K, M, σ)` of [`crate::model_matrices`] as dense faer matrices.
+    pub fn model_matrices(
+        shape: &crate::Shape,
+        options: &crate::ModelOptions,
+    ) -> Result<(faer::Mat<f64>, faer::Mat<f64>, Option<f64>), crate::ModalError> {
+        crate::model::assembly::explicit_model(shape, options)
+    }
+}

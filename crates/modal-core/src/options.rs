@@ -284,8 +284,10 @@ impl MatchParams {
             )?;
         }
         if let Some(m) = self.material {
-            m.validate()
-                .map_err(|e| OptionError::new("material", m, e.to_string()))?;
+            m.validate().map_err(|e| match e {
+                crate::ModalError::Option(e) => e,
+                e => OptionError::new("material", m, e.to_string()),
+            })?;
         }
         Ok(())
     }

@@ -27,31 +27,29 @@ impl Shape {
     /// every triangle index is in range.
     pub fn new(dim: usize, coords: Vec<f64>, topology: Topology) -> Result<Self, ModalError> {
         if dim != 2 && dim != 3 {
-            return Err(ModalError::InvalidShape(format!(
-                "dimension must be 2 or 3, got {dim}"
-            )));
+            return Err(ModalError::UnsupportedDimension { dim });
         }
         if !coords.len().is_multiple_of(dim) {
-            return Err(ModalError::InvalidShape(format!(
-                "{} coordinates is not a multiple of the dimension {dim}",
-                coords.len()
-            )));
+            return Err(ModalError::CoordinateCount {
+                len: coords.len(),
+                dim,
+            });
         }
         if let Some(k) = coords.iter().position(|v| !v.is_finite()) {
-            return Err(ModalError::InvalidShape(format!(
-                "coordinate {} of node {} is not finite ({})",
-                k % dim,
-                k / dim,
-                coords[k]
-            )));
+            return Err(ModalError::NonFiniteCoordinate {
+                node: k / dim,
+                axis: k % dim,
+                value: coords[k],
+            });
         }
         let n = coords.len() / dim;
         if let Topology::Mesh { triangles } = &topology
             && let Some(t) = triangles.iter().find(|t| t.iter().any(|&v| v >= n))
         {
-            return Err(ModalError::InvalidShape(format!(
-                "triangle {t:?} refers to a node beyond the {n} nodes"
-            )));
+            return Err(ModalError::InvalidTriangle {
+                triangle: *t,
+                nodes: n,
+            });
         }
         Ok(Self {
             dim,

@@ -1,6 +1,6 @@
 //! Degenerate input gives clear errors, never panics or NaN.
 
-use modal_core::{match_shapes, MatchOptions, ModalError, Shape, Topology};
+use modal_core::{match_shapes, ErrorKind, MatchOptions, ModalError, Shape, Side, Topology};
 
 fn square(n: usize) -> Vec<[f64; 2]> {
     (0..n)
@@ -15,10 +15,18 @@ fn shape(p: &[[f64; 2]]) -> Shape {
     Shape::from_points_2d(p, Topology::ClosedContour).unwrap()
 }
 
-fn err_text(a: &Shape, b: &Shape, o: &MatchOptions) -> String {
+fn err(a: &Shape, b: &Shape, o: &MatchOptions) -> ModalError {
     match match_shapes(a, b, o) {
-        Err(e) => e.to_string(),
+        Err(e) => e,
         Ok(_) => panic!("expected an error"),
+    }
+}
+
+/// The option an `OptionError` names, or a panic naming the error.
+fn option_of(e: &ModalError) -> &'static str {
+    match e {
+        ModalError::Option(o) => o.option,
+        other => panic!("expected an option error, got {other}"),
     }
 }
 
@@ -26,14 +34,31 @@ fn err_text(a: &Shape, b: &Shape, o: &MatchOptions) -> String {
 fn degenerate_inputs_are_rejected_with_reasons() {
     let good = shape(&square(20));
     let o = MatchOptions::default();
-    assert!(err_text(&shape(&[[0.0, 0.0], [1.0, 0.0]]), &good, &o).contains("at least 3"));
+    let e = err(&shape(&[[0.0, 0.0], [1.0, 0.0]]), &good, &o);
+    assert!(e.to_string().contains("at least 3"), "{e}");
+    let too_few = ModalError::TooFewNodes { nodes: 2, min: 3 };
+    assert_eq!(e, too_few.clone().of(Side::A));
+    assert_eq!(e.kind(), ErrorKind::Shape);
     let mut dup = square(20);
     dup[5] = dup[4];
-    assert!(err_text(&shape(&dup), &good, &o).contains("coincide"));
+    let e = err(&shape(&dup), &good, &o);
+    assert!(e.to_string().contains("coincide"), "{e}");
+    assert_eq!(
+        e,
+        ModalError::CoincidentNodes {
+            first: 4,
+            second: 5
+        }
+        .of(Side::A)
+    );
     let line: Vec<[f64; 2]> = (0..10).map(|i| [i as f64, 2.0 * i as f64]).collect();
-    assert!(err_text(&good, &shape(&line), &o).contains("collinear"));
+    let e = err(&good, &shape(&line), &o);
+    assert!(e.to_string().contains("collinear"), "{e}");
+    assert_eq!(e, ModalError::Collinear.of(Side::B));
     let same = vec![[1.0, 1.0]; 5];
-    assert!(!err_text(&shape(&same), &good, &o).is_empty());
+    let e = err(&shape(&same), &good, &o);
+    assert_eq!(e.kind(), ErrorKind::Shape, "{e}");
+    assert!(!e.to_string().is_empty());
     let three = Shape::from_points_3d(
         &[
             [0.0, 0.0, 0.0],
@@ -44,41 +69,49 @@ fn degenerate_inputs_are_rejected_with_reasons() {
         Topology::None,
     )
     .unwrap();
-    assert!(err_text(&good, &three, &o).contains("dimension"));
+    let e = err(&good, &three, &o);
+    assert!(e.to_string().contains("dimension"), "{e}");
+    assert_eq!(e, ModalError::DimensionMismatch { a: 2, b: 3 });
     assert!(matches!(
         Shape::from_points_2d(&[[0.0, f64::NAN]], Topology::None),
-        Err(ModalError::InvalidShape(_))
+        Err(ModalError::NonFiniteCoordinate {
+            node: 0,
+            axis: 1,
+            ..
+        })
     ));
     for bad in [0.0, -0.1, 1.5, f64::NAN] {
         let o = MatchOptions {
             mode_fraction: bad,
             ..MatchOptions::default()
         };
-        assert!(err_text(&good, &good, &o).contains("mode fraction"));
+        assert_eq!(option_of(&err(&good, &good, &o)), "mode_fraction");
     }
     let o = MatchOptions {
         threshold: Some(-1.0),
         ..MatchOptions::default()
     };
-    assert!(err_text(&good, &good, &o).contains("threshold"));
+    assert_eq!(option_of(&err(&good, &good, &o)), "threshold");
     let o = MatchOptions {
         position_weight: 2.0,
         ..MatchOptions::default()
     };
-    assert!(err_text(&good, &good, &o).contains("position weight"));
+    assert_eq!(option_of(&err(&good, &good, &o)), "position_weight");
     for t in [-0.1, f64::NAN, f64::INFINITY] {
         let o = MatchOptions {
             refit_tolerance: t,
             ..MatchOptions::default()
         };
-        assert!(err_text(&good, &good, &o).contains("refit tolerance"));
+        assert_eq!(option_of(&err(&good, &good, &o)), "refit_tolerance");
     }
     for p in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         let o = MatchOptions {
             cost_power: p,
             ..MatchOptions::default()
         };
-        assert!(err_text(&good, &good, &o).contains("cost power"));
+        let e = err(&good, &good, &o);
+        assert_eq!(option_of(&e), "cost_power");
+        assert!(e.to_string().starts_with("cost_power = "), "{e}");
     }
 }
 

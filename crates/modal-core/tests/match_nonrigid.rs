@@ -114,7 +114,10 @@ fn a_stiffness_that_is_not_positive_is_an_error() {
             },
         )
         .unwrap_err();
-        assert!(matches!(e, ModalError::InvalidParameter(_)), "{e}");
+        assert!(
+            matches!(&e, ModalError::Option(o) if o.option == "deform_stiffness"),
+            "{e}"
+        );
     }
 }
 

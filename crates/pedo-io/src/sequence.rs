@@ -12,7 +12,7 @@ use crate::track::PairingMethod;
 use modal_core::{
     match_prepared, match_shapes, prepare, AffinityMatrix, MatchOptions, MatchParams, MatchResult,
     ModalError, OptionError, OptionSpec, OptionValue, Parallelism, Prealign, PreparedShape, Search,
-    Shape, Topology,
+    Shape, Side, Topology,
 };
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -806,11 +806,15 @@ fn match_part_with_whole(
     let siblings: Vec<&Shape> = part.siblings.iter().map(|&s| &objects[s].shape).collect();
     let own = &objects[part.part].shape;
     let portion = portion_of_whole(own, whole, &siblings);
+    let whole_is_b = part.whole == b;
     if portion.len() < 3 {
-        return Err(ModalError::InvalidShape(format!(
-            "part-to-whole: only {} nodes of the whole lie within reach of the part",
-            portion.len()
-        )));
+        // The portion of the whole that the part covers is too small to be modelled.
+        let side = if whole_is_b { Side::B } else { Side::A };
+        let too_few = ModalError::TooFewNodes {
+            nodes: portion.len(),
+            min: 3,
+        };
+        return Err(too_few.of(side));
     }
     let coords = portion
         .iter()
@@ -821,7 +825,6 @@ fn match_part_with_whole(
         Some(Ok(p)) => p.clone(),
         _ => prepare(own, opts)?,
     };
-    let whole_is_b = part.whole == b;
     let r = if whole_is_b {
         match_prepared(&own, &sub, opts, Parallelism::Serial)?
     } else {

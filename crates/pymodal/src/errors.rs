@@ -22,7 +22,7 @@
 //! bases (`create_exception!` takes only one) and cached.
 
 use assign::AssignError;
-use modal_core::ModalError;
+use modal_core::{ErrorKind, ModalError};
 use pedo_io::IoError;
 use pyo3::exceptions::{PyException, PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -167,29 +167,39 @@ pub fn to_py<E: LibraryError>(err: E) -> PyErr {
     err.into_py_err()
 }
 
+/// The class of an assignment error.
+fn assign_class(e: &AssignError) -> &'static ExceptionClass {
+    match e {
+        AssignError::Infeasible => &INFEASIBLE_ERROR,
+        AssignError::InvalidThreshold { .. } => &OPTION_ERROR,
+        AssignError::ShapeMismatch { .. } | AssignError::InvalidEntry { .. } => &INPUT_ERROR,
+    }
+}
+
+/// The class of a modal-core error: by its kind (an assignment error by its own variant).
+fn modal_class(e: &ModalError) -> &'static ExceptionClass {
+    match e {
+        ModalError::Assign(e) => assign_class(e),
+        ModalError::Object { error, .. } => modal_class(error),
+        e => match e.kind() {
+            ErrorKind::Shape => &DEGENERATE_SHAPE_ERROR,
+            ErrorKind::Option => &OPTION_ERROR,
+            ErrorKind::Numerical => &NUMERICAL_ERROR,
+            // Inconsistent arguments, and any kind modal-core adds later.
+            _ => &INPUT_ERROR,
+        },
+    }
+}
+
 impl LibraryError for AssignError {
     fn into_py_err(self) -> PyErr {
-        let msg = self.to_string();
-        match self {
-            AssignError::Infeasible => INFEASIBLE_ERROR.err(msg),
-            AssignError::InvalidThreshold { .. } => OPTION_ERROR.err(msg),
-            AssignError::ShapeMismatch { .. } | AssignError::InvalidEntry { .. } => {
-                INPUT_ERROR.err(msg)
-            }
-        }
+        assign_class(&self).err(self.to_string())
     }
 }
 
 impl LibraryError for ModalError {
     fn into_py_err(self) -> PyErr {
-        let msg = self.to_string();
-        match self {
-            ModalError::InvalidShape(_) => DEGENERATE_SHAPE_ERROR.err(msg),
-            ModalError::InvalidParameter(_) => OPTION_ERROR.err(msg),
-            ModalError::Numerical(_) => NUMERICAL_ERROR.err(msg),
-            ModalError::Assign(e) => e.into_py_err(),
-            ModalError::Option(e) => e.into_py_err(),
-        }
+        modal_class(&self).err(self.to_string())
     }
 }
 

@@ -1,11 +1,10 @@
 //! `pymodal.ModalModel`: the finite-element model of one object and its vibration modes, and
 //! `pymodal.eigh`: the generalized symmetric-definite eigensolver on user matrices.
 
-use faer::Mat;
 use modal_core::model::{modal_basis_with_edges, model_matrices_with_edges};
 use modal_core::{
-    modal_basis, model_matrices, ElementKind, Material, ModalBasis, ModelOptions, PlaneModel,
-    Shape, Topology,
+    modal_basis, model_matrices, ElementKind, Material, ModalBasis, ModelMatrices, ModelOptions,
+    PlaneModel, Shape, Topology,
 };
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
@@ -113,17 +112,29 @@ pub(crate) fn parse_material(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Materia
     ))
 }
 
-fn mat_to_numpy<'py>(py: Python<'py>, m: &Mat<f64>) -> Bound<'py, PyArray2<f64>> {
-    let (r, c) = (m.nrows(), m.ncols());
-    let mut flat = Vec::with_capacity(r * c);
-    for i in 0..r {
-        for j in 0..c {
-            flat.push(m[(i, j)]);
-        }
-    }
+/// A `rows × cols` array from its row-major entries.
+fn row_major_to_numpy<'py>(
+    py: Python<'py>,
+    flat: Vec<f64>,
+    rows: usize,
+    cols: usize,
+) -> Bound<'py, PyArray2<f64>> {
     PyArray1::from_vec(py, flat)
-        .reshape([r, c])
-        .expect("r × c reshape")
+        .reshape([rows, cols])
+        .expect("rows × cols reshape")
+}
+
+/// A `rows × cols` array from its column-major entries.
+fn column_major_to_numpy<'py>(
+    py: Python<'py>,
+    column_major: &[f64],
+    rows: usize,
+    cols: usize,
+) -> Bound<'py, PyArray2<f64>> {
+    let flat = (0..rows * cols)
+        .map(|e| column_major[(e % cols) * rows + e / cols])
+        .collect();
+    row_major_to_numpy(py, flat, rows, cols)
 }
 
 /// Finite-element model of one 2-D or 3-D object and its vibration modes.
@@ -273,7 +284,8 @@ impl PyModalModel {
     /// (d·n, k) mass-normalised modes, component-major rows.
     #[getter]
     fn modes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        mat_to_numpy(py, &self.basis.modes)
+        let b = &self.basis;
+        column_major_to_numpy(py, &b.modes_column_major(), b.n_dofs(), b.n_modes())
     }
 
     /// Gaussian width σ used (after the conditioning guard), or None for bar elements.
@@ -306,18 +318,25 @@ impl PyModalModel {
     /// (n, d·k) modal features: row i = [u_i(0..k), v_i(0..k), (w_i(0..k))].
     fn features<'py>(&self, py: Python<'py>, k: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let f = self.basis.features(k).map_err(to_py)?;
-        Ok(mat_to_numpy(py, &f))
+        Ok(row_major_to_numpy(
+            py,
+            f,
+            self.basis.n_nodes,
+            self.basis.dim * k,
+        ))
     }
 
     /// Explicit (d·n × d·n) stiffness K (Gaussian: K = Â K̃ Â with A = G⁻¹; for inspection and
     /// oracles, the modal solve never forms it).
     fn stiffness<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        Ok(mat_to_numpy(py, &self.matrices(py)?.0))
+        let m = self.matrices(py)?;
+        Ok(row_major_to_numpy(py, m.stiffness, m.n_dofs, m.n_dofs))
     }
 
     /// Explicit (d·n × d·n) mass M, so that ``modes.T @ M @ modes == I``.
     fn mass<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        Ok(mat_to_numpy(py, &self.matrices(py)?.1))
+        let m = self.matrices(py)?;
+        Ok(row_major_to_numpy(py, m.mass, m.n_dofs, m.n_dofs))
     }
 
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
@@ -330,7 +349,7 @@ impl PyModalModel {
             self.basis.dim,
             self.basis.n_nodes,
             self.element(),
-            self.basis.modes.ncols(),
+            self.basis.n_modes(),
             self.basis.sigma
         )
     }
@@ -382,16 +401,12 @@ impl PyModalModel {
                 .into_iter(),
         );
         let b = &self.basis;
-        let modes = &b.modes;
-        let column_major: Vec<f64> = (0..modes.ncols())
-            .flat_map(|j| (0..modes.nrows()).map(move |i| modes[(i, j)]))
-            .collect();
         w.usize(b.dim)
             .usize(b.n_nodes)
             .f64s(&b.eigenvalues)
-            .usize(modes.nrows())
-            .usize(modes.ncols())
-            .f64s(&column_major)
+            .usize(b.n_dofs())
+            .usize(b.n_modes())
+            .f64s(&b.modes_column_major())
             .opt_f64(b.sigma);
         w
     }
@@ -444,16 +459,16 @@ impl PyModalModel {
         let edges = has_edges.then(|| edges.chunks_exact(2).map(|e| [e[0], e[1]]).collect());
         let (basis_dim, n_nodes, eigenvalues) = (r.usize()?, r.usize()?, r.f64s()?);
         let (rows, cols, column_major) = (r.usize()?, r.usize()?, r.f64s()?);
-        if rows.checked_mul(cols) != Some(column_major.len()) {
+        if rows.checked_mul(cols) != Some(column_major.len())
+            || basis_dim.checked_mul(n_nodes) != Some(rows)
+            || eigenvalues.len() != cols
+        {
             return Err(corrupt());
         }
-        let basis = ModalBasis {
-            dim: basis_dim,
-            n_nodes,
-            eigenvalues,
-            modes: Mat::from_fn(rows, cols, |i, j| column_major[j * rows + i]),
-            sigma: r.opt_f64()?,
-        };
+        let sigma = r.opt_f64()?;
+        let basis =
+            ModalBasis::from_column_major(basis_dim, n_nodes, eigenvalues, &column_major, sigma)
+                .map_err(|_| corrupt())?;
         r.finish()?;
         Ok(Self {
             shape,
@@ -463,15 +478,13 @@ impl PyModalModel {
         })
     }
 
-    fn matrices(&self, py: Python<'_>) -> PyResult<(Mat<f64>, Mat<f64>)> {
+    fn matrices(&self, py: Python<'_>) -> PyResult<ModelMatrices> {
         let (shape, options, edges) = (&self.shape, &self.options, &self.edges);
-        let (k, m, _) = py
-            .detach(move || match edges {
-                Some(e) => model_matrices_with_edges(shape, e, options),
-                None => model_matrices(shape, options),
-            })
-            .map_err(to_py)?;
-        Ok((k, m))
+        py.detach(move || match edges {
+            Some(e) => model_matrices_with_edges(shape, e, options),
+            None => model_matrices(shape, options),
+        })
+        .map_err(to_py)
     }
 }
 
@@ -512,18 +525,14 @@ fn eigh<'py>(
     if ks.iter().chain(ms).any(|v| !v.is_finite()) {
         return Err(PyValueError::new_err("array must not contain infs or NaNs"));
     }
-    let pairs = py
-        .detach(|| {
-            // numpy's row-major layout, so that the solver reads the lower triangle the caller
-            // sees (like scipy.linalg.eigh), whatever the upper one holds.
-            let kmat = faer::MatRef::from_row_major_slice(ks, kr, kr);
-            let mmat = faer::MatRef::from_row_major_slice(ms, kr, kr);
-            modal_core::eigen::generalized_eigen(kmat, mmat, n_modes)
-        })
+    // numpy's row-major layout, as generalized_eigh reads it: the solver reads the lower
+    // triangle the caller sees (like scipy.linalg.eigh), whatever the upper one holds.
+    let e = py
+        .detach(|| modal_core::generalized_eigh(ks, ms, kr, n_modes))
         .map_err(to_py)?;
     Ok((
-        PyArray1::from_slice(py, &pairs.values),
-        mat_to_numpy(py, &pairs.vectors),
+        PyArray1::from_slice(py, &e.values),
+        column_major_to_numpy(py, e.vectors_column_major(), kr, e.values.len()),
     ))
 }
 

@@ -27,7 +27,7 @@ use crate::simd::{clear_upper_state, widest_simd};
 
 mod bisection;
 mod householder;
-#[doc(hidden)]
+#[cfg(feature = "internals")]
 pub mod stages;
 
 /// Eigenvalues (ascending) and the matching eigenvectors (columns).
@@ -113,24 +113,6 @@ pub fn symmetric_eigen(c: Mat<f64>, n_modes: Option<usize>) -> Result<EigenPairs
 /// overwritten), ascending, with orthonormal eigenvectors; the other eigenvalues are not computed
 /// ([`EigenPairs::all_values`] is `None`). The same pairs as [`symmetric_eigen`] to round-off,
 /// faster when `k` is a fraction of the order.
-///
-/// ```
-/// use faer::Mat;
-/// use modal_core::eigen::symmetric_eigen_lowest;
-/// // The path-graph Laplacian: eigenvalues 2 − 2cos(jπ/n), j = 0 … n−1.
-/// let n = 40;
-/// let c = Mat::<f64>::from_fn(n, n, |i, j| match (i, j) {
-///     _ if i == j => if i == 0 || i == n - 1 { 1.0 } else { 2.0 },
-///     _ if i.abs_diff(j) == 1 => -1.0,
-///     _ => 0.0,
-/// });
-/// let pairs = symmetric_eigen_lowest(c, 3).unwrap();
-/// for (j, v) in pairs.values.iter().enumerate() {
-///     let exact = 2.0 - 2.0 * (j as f64 * std::f64::consts::PI / n as f64).cos();
-///     assert!((v - exact).abs() < 1e-13);
-/// }
-/// assert!(pairs.all_values.is_none());
-/// ```
 pub fn symmetric_eigen_lowest(c: Mat<f64>, k: usize) -> Result<EigenPairs, ModalError> {
     solve_symmetric(c, k, Spectrum::Wanted)
 }
@@ -164,9 +146,9 @@ fn solve_symmetric(
         });
     }
     if c.col_iter().any(|col| col.iter().any(|v| !v.is_finite())) {
-        return Err(ModalError::Numerical(
-            "matrix has non-finite entries".into(),
-        ));
+        return Err(ModalError::NonFiniteResult {
+            stage: "the matrix of the eigenproblem",
+        });
     }
     let mut pairs = if n < TRIDIAGONAL_MIN_ORDER {
         full_eigen(c.as_ref(), k)?
@@ -196,7 +178,9 @@ fn full_eigen(c: MatRef<'_, f64>, k: usize) -> Result<EigenPairs, ModalError> {
         stack,
         Default::default(),
     )
-    .map_err(|_| ModalError::Numerical("symmetric eigensolver did not converge".into()))?;
+    .map_err(|_| ModalError::NotConverged {
+        method: "symmetric eigensolver",
+    })?;
     let raw: Vec<f64> = (0..n).map(|i| s[i]).collect();
     let order = ascending_order(&raw);
     let mut vectors = Mat::<f64>::zeros(n, k);
@@ -220,8 +204,11 @@ fn full_eigen_values(c: MatRef<'_, f64>) -> Result<Vec<f64>, ModalError> {
     let mut mem = MemBuffer::new(req);
     let stack = MemStack::new(&mut mem);
     let mut s = faer::diag::Diag::<f64>::zeros(n);
-    evd::self_adjoint_evd(c, s.as_mut(), None, par, stack, Default::default())
-        .map_err(|_| ModalError::Numerical("symmetric eigensolver did not converge".into()))?;
+    evd::self_adjoint_evd(c, s.as_mut(), None, par, stack, Default::default()).map_err(|_| {
+        ModalError::NotConverged {
+            method: "symmetric eigensolver",
+        }
+    })?;
     let mut v: Vec<f64> = (0..n).map(|i| s[i]).collect();
     v.sort_by(f64::total_cmp);
     Ok(v)
@@ -321,9 +308,9 @@ fn tridiagonal_eigenvalues(diag: &[f64], off: &[f64]) -> Result<Vec<f64>, ModalE
         }
         total += 1;
         if total > max_iter {
-            return Err(ModalError::Numerical(
-                "tridiagonal QL iteration did not converge".into(),
-            ));
+            return Err(ModalError::NotConverged {
+                method: "tridiagonal QL iteration",
+            });
         }
         // Wilkinson-type shift from the leading 2×2 of the block.
         let p0 = d[l];
@@ -375,9 +362,9 @@ fn tridiagonal_eigenvalues(diag: &[f64], off: &[f64]) -> Result<Vec<f64>, ModalE
         d[l] = sigma + gamma;
     }
     if d.iter().any(|v| !v.is_finite()) {
-        return Err(ModalError::Numerical(
-            "tridiagonal eigenvalues are not finite".into(),
-        ));
+        return Err(ModalError::NonFiniteResult {
+            stage: "the tridiagonal eigenvalues",
+        });
     }
     for v in d.iter_mut() {
         *v *= up;
@@ -526,7 +513,9 @@ fn inverse_iteration_body(
             lu.solve(&mut xl);
             let growth = xl.iter().fold(0.0f64, |m, v| m.max(v[0].abs()));
             if !growth.is_finite() {
-                return Err(ModalError::Numerical("inverse iteration overflowed".into()));
+                return Err(ModalError::NonFiniteResult {
+                    stage: "inverse iteration",
+                });
             }
             // dstein's acceptance test: a growth of 1/(√n·eps·‖T‖) means the residual is at
             // round-off level; one extra step after acceptance polishes it.
@@ -540,7 +529,9 @@ fn inverse_iteration_body(
         orthogonalise(&mut xl, &vecs[cluster_start * n..j * n]);
         let nrm = xl.iter().map(|v| v[0] * v[0]).sum::<f64>().sqrt();
         if !(nrm > 0.0 && nrm.is_finite()) {
-            return Err(ModalError::Numerical("inverse iteration failed".into()));
+            return Err(ModalError::NonFiniteResult {
+                stage: "inverse iteration",
+            });
         }
         for i in 0..n {
             vecs[j * n + i] = xl[i][0] / nrm;
@@ -757,7 +748,9 @@ fn inverse_iteration_lanes(
             }
         }
         if scale.contains(&0.0) {
-            return Err(ModalError::Numerical("inverse iteration failed".into()));
+            return Err(ModalError::NonFiniteResult {
+                stage: "inverse iteration",
+            });
         }
         let inv = scale.map(|v| 1.0 / v);
         for xi in x.iter_mut() {
@@ -773,7 +766,9 @@ fn inverse_iteration_lanes(
             }
         }
         if growth.iter().any(|g| !g.is_finite()) {
-            return Err(ModalError::Numerical("inverse iteration overflowed".into()));
+            return Err(ModalError::NonFiniteResult {
+                stage: "inverse iteration",
+            });
         }
         // As in the one-vector path: accept at round-off growth, then polish once more. A lane
         // that is done keeps iterating with the others, which only polishes it further.
@@ -791,13 +786,99 @@ fn inverse_iteration_lanes(
     for l in 0..b {
         let nrm = x.iter().map(|xi| xi[l] * xi[l]).sum::<f64>().sqrt();
         if !(nrm > 0.0 && nrm.is_finite()) {
-            return Err(ModalError::Numerical("inverse iteration failed".into()));
+            return Err(ModalError::NonFiniteResult {
+                stage: "inverse iteration",
+            });
         }
         for i in 0..n {
             out[l * n + i] = x[i][l] / nrm;
         }
     }
     Ok(())
+}
+
+/// Eigenvalues and eigenvectors of a dense generalized problem ([`generalized_eigh`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EigenSolution {
+    /// The computed eigenvalues, ascending.
+    pub values: Vec<f64>,
+    /// Order of the problem (length of an eigenvector).
+    order: usize,
+    /// The eigenvectors, column-major: vector `j` at `j·order ..`.
+    vectors: Vec<f64>,
+}
+
+impl EigenSolution {
+    /// Order of the problem: the length of each eigenvector.
+    pub fn order(&self) -> usize {
+        self.order
+    }
+
+    /// Eigenvector `j` (of `values[j]`), `M`-normalised.
+    ///
+    /// # Panics
+    /// When `j >= values.len()`.
+    pub fn vector(&self, j: usize) -> &[f64] {
+        &self.vectors[j * self.order..(j + 1) * self.order]
+    }
+
+    /// Every eigenvector, one after the other (`order × values.len()` column-major).
+    pub fn vectors_column_major(&self) -> &[f64] {
+        &self.vectors
+    }
+}
+
+/// The eigenpairs of `K x = λ M x` for dense symmetric `K` and symmetric positive definite `M`,
+/// both `n × n` row-major (like `scipy.linalg.eigh(K, M)`): eigenvalues ascending, eigenvectors
+/// with `xᵀ M x = 1`. Only the lower triangles are read (the upper ones may hold anything
+/// finite). `n_modes` computes only the lowest ones (much faster).
+///
+/// ```
+/// use modal_core::generalized_eigh;
+/// let k = [2.0, 0.0, 0.0, 8.0];
+/// let m = [2.0, 0.0, 0.0, 2.0];
+/// let e = generalized_eigh(&k, &m, 2, None).unwrap();
+/// assert!((e.values[0] - 1.0).abs() < 1e-12 && (e.values[1] - 4.0).abs() < 1e-12);
+/// // M-normalised: xᵀ M x = 2 x₀² = 1.
+/// assert!((e.vector(0)[0].abs() - 0.5f64.sqrt()).abs() < 1e-12);
+/// ```
+///
+/// # Errors
+/// [`ModalError::SizeMismatch`] for slices that are not `n × n`; [`ModalError::Option`] for
+/// `n_modes` outside `1..=n`; [`ModalError::NotPositiveDefinite`] when `M` is not positive
+/// definite; [`ModalError::NonFiniteResult`] for NaN or infinite entries.
+pub fn generalized_eigh(
+    k: &[f64],
+    m: &[f64],
+    n: usize,
+    n_modes: Option<usize>,
+) -> Result<EigenSolution, ModalError> {
+    for (what, found) in [("entries of K", k.len()), ("entries of M", m.len())] {
+        if found != n * n {
+            return Err(ModalError::SizeMismatch {
+                what,
+                expected: n * n,
+                found,
+            });
+        }
+    }
+    if let Some(j) = n_modes.filter(|&j| j == 0 || j > n) {
+        return Err(crate::OptionError::new("n_modes", j, format!("an integer in 1..={n}")).into());
+    }
+    let pairs = generalized_eigen(
+        MatRef::from_row_major_slice(k, n, n),
+        MatRef::from_row_major_slice(m, n, n),
+        n_modes,
+    )?;
+    let v = &pairs.vectors;
+    let vectors = (0..v.ncols())
+        .flat_map(|j| (0..n).map(move |i| v[(i, j)]))
+        .collect();
+    Ok(EigenSolution {
+        values: pairs.values,
+        order: n,
+        vectors,
+    })
 }
 
 /// Generalized symmetric-definite eigenpairs `K x = λ B x`, ascending, `xᵀ B x = I`.
@@ -808,19 +889,25 @@ pub fn generalized_eigen(
     n_modes: Option<usize>,
 ) -> Result<EigenPairs, ModalError> {
     let n = k.nrows();
-    if k.ncols() != n || b.nrows() != n || b.ncols() != n {
-        return Err(ModalError::InvalidParameter(format!(
-            "K is {}×{} and B is {}×{}; both must be square of the same size",
-            k.nrows(),
-            k.ncols(),
-            b.nrows(),
-            b.ncols()
-        )));
+    for (what, found) in [
+        ("columns of K", k.ncols()),
+        ("rows of B", b.nrows()),
+        ("columns of B", b.ncols()),
+    ] {
+        if found != n {
+            return Err(ModalError::SizeMismatch {
+                what,
+                expected: n,
+                found,
+            });
+        }
     }
     let mut l = Mat::<f64>::zeros(n, n);
     l.copy_from_triangular_lower(b);
-    cholesky_in_place(l.as_mut())
-        .map_err(|i| ModalError::Numerical(format!("B is not positive definite (pivot {i})")))?;
+    cholesky_in_place(l.as_mut()).map_err(|i| ModalError::NotPositiveDefinite {
+        matrix: "M",
+        pivot: Some(i),
+    })?;
     let mut c = Mat::<f64>::from_fn(n, n, |i, j| if i >= j { k[(i, j)] } else { k[(j, i)] });
     congruence_inverse(l.as_ref(), c.as_mut());
     let mut pairs = symmetric_eigen(c, n_modes)?;
@@ -884,6 +971,29 @@ pub fn canonical_signs(mut v: MatMut<'_, f64>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lowest_pairs_of_the_path_laplacian() {
+        // The path-graph Laplacian: eigenvalues 2 − 2cos(jπ/n), j = 0 … n−1.
+        let n = 40;
+        let c = Mat::<f64>::from_fn(n, n, |i, j| match (i, j) {
+            _ if i == j => {
+                if i == 0 || i == n - 1 {
+                    1.0
+                } else {
+                    2.0
+                }
+            }
+            _ if i.abs_diff(j) == 1 => -1.0,
+            _ => 0.0,
+        });
+        let pairs = symmetric_eigen_lowest(c, 3).unwrap();
+        for (j, v) in pairs.values.iter().enumerate() {
+            let exact = 2.0 - 2.0 * (j as f64 * std::f64::consts::PI / n as f64).cos();
+            assert!((v - exact).abs() < 1e-13);
+        }
+        assert!(pairs.all_values.is_none());
+    }
 
     fn random_spd(n: usize, seed: u64, shift: f64) -> Mat<f64> {
         let mut s = seed;

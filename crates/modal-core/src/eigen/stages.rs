@@ -163,7 +163,9 @@ pub fn tridiagonal_evd_faer(
         MemStack::new(&mut mem),
         Default::default(),
     )
-    .map_err(|_| ModalError::Numerical("tridiagonal eigensolver did not converge".into()))?;
+    .map_err(|_| ModalError::NotConverged {
+        method: "tridiagonal eigensolver",
+    })?;
     crate::simd::clear_upper_state();
     Ok(((0..n).map(|i| s[i]).collect(), u))
 }
@@ -222,7 +224,9 @@ pub fn cholesky_factor(b: MatRef<'_, f64>) -> Result<Mat<f64>, ModalError> {
     let n = b.nrows();
     let mut l = Mat::<f64>::zeros(n, n);
     l.copy_from_triangular_lower(b);
-    super::cholesky_in_place(l.as_mut())
-        .map_err(|i| ModalError::Numerical(format!("B is not positive definite (pivot {i})")))?;
+    super::cholesky_in_place(l.as_mut()).map_err(|i| ModalError::NotPositiveDefinite {
+        matrix: "M",
+        pivot: Some(i),
+    })?;
     Ok(l)
 }

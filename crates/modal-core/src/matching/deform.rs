@@ -17,7 +17,7 @@ use faer::Mat;
 
 use super::prepare::Pair;
 use super::refine::{pass, Iteration, Pass};
-use crate::error::ModalError;
+use crate::error::{ModalError, OptionError};
 use crate::model::{modal_basis, ModelOptions};
 use crate::shape::Shape;
 
@@ -33,14 +33,12 @@ const OUTLIER_SHARE: f64 = 0.1;
 /// unchanged when the warp cannot be fitted.
 ///
 /// # Errors
-/// [`ModalError::InvalidParameter`] for a stiffness that is not finite and > 0; a failure of the
+/// [`ModalError::Option`] for a stiffness that is not finite and > 0; a failure of the
 /// modal solve of the aligned A or of the search, passed through.
 pub(crate) fn deform(pair: &Pair<'_>, kept: Iteration) -> Result<Iteration, ModalError> {
     let stiffness = pair.opts.deform_stiffness;
     if !(stiffness.is_finite() && stiffness > 0.0) {
-        return Err(ModalError::InvalidParameter(format!(
-            "deform stiffness must be finite and > 0, got {stiffness}"
-        )));
+        return Err(OptionError::new("deform_stiffness", stiffness, "a finite number > 0").into());
     }
     let Some(warped) = warp(pair, &kept.aligned)? else {
         return Ok(kept);

@@ -41,30 +41,31 @@ impl ModalFeatures {
         F: Fn(usize) -> &'a [f64],
     {
         if skip + k > available {
-            return Err(ModalError::InvalidParameter(format!(
-                "{k} modes after skipping {skip} requested but only {available} are available"
-            )));
+            return Err(ModalError::TooFewModes {
+                requested: skip + k,
+                available,
+            });
         }
         if k == 0 {
-            return Err(ModalError::InvalidParameter(
-                "at least one mode must be kept".into(),
-            ));
+            return Err(ModalError::NoModeKept {
+                skipped: skip,
+                available,
+            });
         }
         let len = dim * n_nodes;
         let mut data = Vec::with_capacity(len * k);
         for p in skip..skip + k {
             let col = column(p);
             if col.len() != len {
-                return Err(ModalError::InvalidParameter(format!(
-                    "mode {p} has {} entries, expected {len}",
-                    col.len()
-                )));
+                return Err(ModalError::SizeMismatch {
+                    what: "entries of a mode",
+                    expected: len,
+                    found: col.len(),
+                });
             }
             let norm = col.iter().map(|v| v * v).sum::<f64>().sqrt();
             if !(norm.is_finite() && norm > 0.0) {
-                return Err(ModalError::Numerical(format!(
-                    "mode {p} is zero or not finite"
-                )));
+                return Err(ModalError::NonFiniteResult { stage: "a mode" });
             }
             let big = col
                 .iter()
@@ -138,18 +139,24 @@ pub(crate) fn align_modes(
     band: usize,
     method: assign::Method,
 ) -> Result<ModeAlignment, ModalError> {
-    if a.dim != b.dim || nn.len() != a.n_nodes {
-        return Err(ModalError::InvalidParameter(
-            "mode alignment: inconsistent inputs".into(),
-        ));
+    if a.dim != b.dim {
+        return Err(ModalError::DimensionMismatch { a: a.dim, b: b.dim });
+    }
+    if nn.len() != a.n_nodes {
+        return Err(ModalError::SizeMismatch {
+            what: "nearest neighbours of A's nodes",
+            expected: a.n_nodes,
+            found: nn.len(),
+        });
     }
     let (n, m, d) = (a.n_nodes, b.n_nodes, a.dim);
     let ka = a.n_modes;
     let kb = b.n_modes;
     if kb < ka {
-        return Err(ModalError::InvalidParameter(format!(
-            "mode alignment: B has {kb} modes, fewer than A's {ka}"
-        )));
+        return Err(ModalError::TooFewModes {
+            requested: ka,
+            available: kb,
+        });
     }
     // B's modes resampled at A's nodes through the nearest-neighbour map.
     let mut bs = vec![0.0; kb * d * n];
@@ -192,8 +199,7 @@ pub(crate) fn align_modes(
     let mut signs = Vec::with_capacity(ka);
     let mut similarity = Vec::with_capacity(ka);
     for (p, q) in sol.row_to_col.iter().enumerate() {
-        let q =
-            q.ok_or_else(|| ModalError::Numerical("mode alignment left a mode unassigned".into()))?;
+        let q = q.ok_or(ModalError::Assign(assign::AssignError::Infeasible))?;
         let c = corr[p * kb + q];
         order.push(q);
         signs.push(if c < 0.0 { -1.0 } else { 1.0 });
@@ -220,25 +226,33 @@ impl AffinityMatrix {
     /// Wraps a row-major matrix, rejecting wrong sizes and non-finite or negative entries.
     pub fn new(rows: usize, cols: usize, data: Vec<f64>) -> Result<Self, ModalError> {
         if data.len() != rows * cols {
-            return Err(ModalError::InvalidParameter(format!(
-                "affinity matrix: {} values for {rows} × {cols}",
-                data.len()
-            )));
+            return Err(ModalError::SizeMismatch {
+                what: "entries of the affinity matrix",
+                expected: rows * cols,
+                found: data.len(),
+            });
         }
-        if let Some(v) = data.iter().find(|v| !v.is_finite() || **v < 0.0) {
-            return Err(ModalError::InvalidParameter(format!(
-                "affinity matrix: entries must be finite and non-negative, found {v}"
-            )));
+        if let Some(index) = data.iter().position(|v| !v.is_finite() || *v < 0.0) {
+            return Err(ModalError::InvalidEntry {
+                what: "affinity matrix",
+                index,
+                value: data[index],
+            });
         }
         Ok(Self { rows, cols, data })
     }
 
     /// `Z` of two feature sets, both with the same number of modes.
     pub(crate) fn from_features(a: &ModalFeatures, b: &ModalFeatures) -> Result<Self, ModalError> {
-        if a.dim != b.dim || a.n_modes != b.n_modes {
-            return Err(ModalError::InvalidParameter(
-                "affinity: the two objects have different dimensions or mode counts".into(),
-            ));
+        if a.dim != b.dim {
+            return Err(ModalError::DimensionMismatch { a: a.dim, b: b.dim });
+        }
+        if a.n_modes != b.n_modes {
+            return Err(ModalError::SizeMismatch {
+                what: "modes of B",
+                expected: a.n_modes,
+                found: b.n_modes,
+            });
         }
         let (n, m, d, k) = (a.n_nodes, b.n_nodes, a.dim, a.n_modes);
         // ‖f_i − f_j‖² = ‖f_i‖² + ‖f_j‖² − 2 f_i·f_j, the cross terms one product per component

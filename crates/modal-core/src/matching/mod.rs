@@ -29,7 +29,7 @@ use self::prealign::Affine;
 use self::prepare::{inverse, prepare_as, Pair};
 use self::refine::Refined;
 use self::search::local_matches;
-use crate::error::ModalError;
+use crate::error::{ModalError, Side};
 use crate::shape::{Shape, Topology};
 
 pub use self::first_phase::Parallelism;
@@ -59,14 +59,16 @@ pub use self::search::Search;
 /// ```
 ///
 /// # Errors
-/// [`ModalError::InvalidShape`] for objects of different dimensions, fewer than 3 nodes,
-/// coincident or collinear nodes; [`ModalError::InvalidParameter`] for a mode fraction outside
-/// (0, 1], a negative or NaN threshold, or `ordered` on shapes that cannot be contours;
-/// model and assignment failures are passed through.
+/// [`ModalError::DimensionMismatch`] for objects of different dimensions; a shape error
+/// ([`ModalError::TooFewNodes`], [`ModalError::CoincidentNodes`], [`ModalError::Collinear`], …)
+/// wrapped in [`ModalError::Object`] naming the object; [`ModalError::Option`] for a mode
+/// fraction outside (0, 1], a negative or NaN threshold and the other values
+/// [`MatchOptions`] bounds; [`Unsupported::OrderedMesh`](crate::Unsupported::OrderedMesh) for
+/// `ordered` on meshes; model and assignment failures are passed through.
 pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchResult, ModalError> {
     prepare::check_dims(a, b)?;
-    let a = prepare_as(a, opts, "first object")?;
-    let b = prepare_as(b, opts, "second object")?;
+    let a = prepare_as(a, opts, Some(Side::A))?;
+    let b = prepare_as(b, opts, Some(Side::B))?;
     match_prepared(&a, &b, opts, Parallelism::Pair)
 }
 
@@ -165,9 +167,10 @@ pub fn prealign_normalized(
     opts: &MatchOptions,
 ) -> Result<(Vec<f64>, Vec<f64>), ModalError> {
     if a.dim() != b.dim() {
-        return Err(ModalError::InvalidShape(
-            "the objects have different dimensions".into(),
-        ));
+        return Err(ModalError::DimensionMismatch {
+            a: a.dim(),
+            b: b.dim(),
+        });
     }
     let ordered = opts.ordered.unwrap_or(
         matches!(a.topology(), Topology::ClosedContour)

@@ -103,7 +103,7 @@ impl Affine {
 pub fn normalize(pts: &[f64], dim: usize) -> Result<(Vec<f64>, [f64; 3], f64), ModalError> {
     let n = pts.len() / dim;
     if n == 0 {
-        return Err(ModalError::InvalidShape("no nodes".into()));
+        return Err(ModalError::TooFewNodes { nodes: 0, min: 1 });
     }
     let mut c = [0.0; 3];
     for p in pts.chunks_exact(dim) {
@@ -119,9 +119,7 @@ pub fn normalize(pts: &[f64], dim: usize) -> Result<(Vec<f64>, [f64; 3], f64), M
     let rms = ms.sqrt();
     let extent = pts.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
     if !(rms.is_finite() && rms > 1e-12 * extent) {
-        return Err(ModalError::InvalidShape(
-            "all nodes coincide (zero spread)".into(),
-        ));
+        return Err(ModalError::ZeroExtent);
     }
     let s = 1.0 / rms;
     let out = pts

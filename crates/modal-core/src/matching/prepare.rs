@@ -23,7 +23,7 @@ use super::features::ModalFeatures;
 use super::prealign::{self, Affine};
 use super::recipe::MatchOptions;
 use super::search::Search;
-use crate::error::ModalError;
+use crate::error::{ModalError, OptionError, Side, Unsupported};
 use crate::model::{modal_basis, ModelOptions};
 use crate::shape::{nearest_neighbour_stats_of, Shape, Topology};
 
@@ -88,18 +88,22 @@ struct ModesKey {
 /// contour; a pair that treats it otherwise prepares it again.
 ///
 /// # Errors
-/// [`ModalError::InvalidShape`] for fewer than 3 nodes, coincident or collinear nodes.
+/// [`ModalError::TooFewNodes`] for fewer than 3 nodes, [`ModalError::CoincidentNodes`],
+/// [`ModalError::Collinear`] or [`ModalError::ZeroExtent`].
 pub fn prepare(shape: &Shape, opts: &MatchOptions) -> Result<PreparedShape, ModalError> {
-    prepare_as(shape, opts, "object")
+    prepare_as(shape, opts, None)
 }
 
-/// [`prepare`] with the object named as the messages should name it ("first object", …).
+/// [`prepare`] with its errors about object `side` of a pair, when given.
 pub(crate) fn prepare_as(
     shape: &Shape,
     opts: &MatchOptions,
-    name: &str,
+    side: Option<Side>,
 ) -> Result<PreparedShape, ModalError> {
-    validate(shape, name)?;
+    validate(shape).map_err(|e| match side {
+        Some(side) => e.of(side),
+        None => e,
+    })?;
     let ordered = opts
         .ordered
         .unwrap_or(matches!(shape.topology(), Topology::ClosedContour));
@@ -208,22 +212,20 @@ pub(crate) fn modes_at(
     let basis = modal_basis(&shape, &opts)?;
     let avail = basis.modes.ncols();
     if avail < skip + 1 {
-        return Err(ModalError::Numerical(format!(
-            "the model returned only {avail} modes"
-        )));
+        return Err(ModalError::TooFewModes {
+            requested: skip + 1,
+            available: avail,
+        });
     }
     ModalFeatures::from_basis(&basis, skip, k.min(avail - skip))
 }
 
-fn validate(s: &Shape, name: &str) -> Result<(), ModalError> {
+fn validate(s: &Shape) -> Result<(), ModalError> {
     let (n, d) = (s.len(), s.dim());
     if n < 3 {
-        return Err(ModalError::InvalidShape(format!(
-            "{name} has {n} nodes; at least 3 are needed"
-        )));
+        return Err(ModalError::TooFewNodes { nodes: n, min: 3 });
     }
-    let (pts, _, _) = prealign::normalize(s.coords(), d)
-        .map_err(|e| ModalError::InvalidShape(format!("{name}: {}", e_msg(&e))))?;
+    let (pts, _, _) = prealign::normalize(s.coords(), d)?;
     // After normalisation the RMS radius is 1, so absolute tolerances are meaningful.
     for i in 0..n {
         for j in i + 1..n {
@@ -231,28 +233,18 @@ fn validate(s: &Shape, name: &str) -> Result<(), ModalError> {
                 .map(|c| (pts[i * d + c] - pts[j * d + c]).powi(2))
                 .sum();
             if dd < 1e-18 {
-                return Err(ModalError::InvalidShape(format!(
-                    "{name}: nodes {i} and {j} coincide"
-                )));
+                return Err(ModalError::CoincidentNodes {
+                    first: i,
+                    second: j,
+                });
             }
         }
     }
     let (_, var) = prealign::principal_axes(&pts, d);
     if var[1] <= 1e-10 * var[0] {
-        return Err(ModalError::InvalidShape(format!(
-            "{name}: all nodes are collinear"
-        )));
+        return Err(ModalError::Collinear);
     }
     Ok(())
-}
-
-fn e_msg(e: &ModalError) -> String {
-    match e {
-        ModalError::InvalidShape(s)
-        | ModalError::InvalidParameter(s)
-        | ModalError::Numerical(s) => s.clone(),
-        other => other.to_string(),
-    }
 }
 
 /// Normalised coordinates, counter-clockwise when `ordered` (`perm` maps back to the caller's
@@ -356,10 +348,11 @@ impl<'p> Pair<'p> {
     /// Checks the options against the pair and works out the pair's choices.
     ///
     /// # Errors
-    /// [`ModalError::InvalidShape`] for objects of different dimensions,
-    /// [`ModalError::InvalidParameter`] for a mode fraction outside (0, 1], a negative or NaN
-    /// threshold, a negative or non-finite re-fit tolerance, a cost power ≤ 0, a position weight
-    /// outside [0, 1], `ordered` on meshes, or a skip that leaves no mode.
+    /// [`ModalError::DimensionMismatch`] for objects of different dimensions;
+    /// [`ModalError::Option`] for a mode fraction outside (0, 1], a negative or NaN threshold, a
+    /// negative or non-finite re-fit tolerance, a cost power ≤ 0, a position weight outside
+    /// [0, 1]; [`Unsupported::OrderedMesh`] for `ordered` on meshes;
+    /// [`ModalError::NoModeKept`] for a skip that leaves no mode.
     pub fn new(
         a: &'p PreparedShape,
         b: &'p PreparedShape,
@@ -375,9 +368,7 @@ impl<'p> Pair<'p> {
             && (matches!(sa.topology(), Topology::Mesh { .. })
                 || matches!(sb.topology(), Topology::Mesh { .. }))
         {
-            return Err(ModalError::InvalidParameter(
-                "meshes cannot be treated as ordered contours".into(),
-            ));
+            return Err(Unsupported::OrderedMesh.into());
         }
         let d = sa.dim();
         let (n, m) = (sa.len(), sb.len());
@@ -395,9 +386,10 @@ impl<'p> Pair<'p> {
         );
         let avail = total.min(dof_a).min(dof_b);
         if skip >= avail {
-            return Err(ModalError::InvalidParameter(format!(
-                "skipping {skip} rigid modes leaves none of the {avail} available"
-            )));
+            return Err(ModalError::NoModeKept {
+                skipped: skip,
+                available: avail,
+            });
         }
         let k = ((opts.mode_fraction * total as f64).floor() as usize).clamp(1, avail - skip);
         let band = opts.band.min(dof_b - skip - k);
@@ -459,11 +451,10 @@ impl<'p> Pair<'p> {
 
 pub(crate) fn check_dims(a: &Shape, b: &Shape) -> Result<(), ModalError> {
     if a.dim() != b.dim() {
-        return Err(ModalError::InvalidShape(format!(
-            "the objects have different dimensions ({} and {})",
-            a.dim(),
-            b.dim()
-        )));
+        return Err(ModalError::DimensionMismatch {
+            a: a.dim(),
+            b: b.dim(),
+        });
     }
     Ok(())
 }
@@ -471,34 +462,32 @@ pub(crate) fn check_dims(a: &Shape, b: &Shape) -> Result<(), ModalError> {
 /// Checks the options no single object can check; returns the threshold (`∞` for none).
 fn check_options(opts: &MatchOptions) -> Result<f64, ModalError> {
     if !(opts.mode_fraction > 0.0 && opts.mode_fraction <= 1.0) {
-        return Err(ModalError::InvalidParameter(format!(
-            "mode fraction must be in (0, 1], got {}",
-            opts.mode_fraction
-        )));
+        return Err(
+            OptionError::new("mode_fraction", opts.mode_fraction, "a fraction in (0, 1]").into(),
+        );
     }
     let threshold = opts.threshold.unwrap_or(f64::INFINITY);
     if threshold.is_nan() || threshold < 0.0 {
-        return Err(ModalError::InvalidParameter(format!(
-            "threshold must be ≥ 0, got {threshold}"
-        )));
+        return Err(OptionError::new("threshold", threshold, "a number >= 0").into());
     }
     if !(opts.refit_tolerance >= 0.0 && opts.refit_tolerance.is_finite()) {
-        return Err(ModalError::InvalidParameter(format!(
-            "refit tolerance must be finite and ≥ 0, got {}",
-            opts.refit_tolerance
-        )));
+        return Err(OptionError::new(
+            "refit_tolerance",
+            opts.refit_tolerance,
+            "a finite number >= 0",
+        )
+        .into());
     }
     if !(opts.cost_power > 0.0 && opts.cost_power.is_finite()) {
-        return Err(ModalError::InvalidParameter(format!(
-            "cost power must be finite and > 0, got {}",
-            opts.cost_power
-        )));
+        return Err(OptionError::new("cost_power", opts.cost_power, "a finite number > 0").into());
     }
     if !(0.0..=1.0).contains(&opts.position_weight) {
-        return Err(ModalError::InvalidParameter(format!(
-            "position weight must be in [0, 1], got {}",
-            opts.position_weight
-        )));
+        return Err(OptionError::new(
+            "position_weight",
+            opts.position_weight,
+            "a number in [0, 1]",
+        )
+        .into());
     }
     Ok(threshold)
 }

@@ -12,7 +12,7 @@ use super::gaussian::GaussianIntegrals;
 use super::material::{Material, PlaneModel};
 use super::rigid;
 use crate::eigen::{self, EigenPairs};
-use crate::error::ModalError;
+use crate::error::{ModalError, OptionError, Unsupported};
 use crate::shape::nearest_neighbour_stats;
 use crate::shape::{Shape, Topology};
 
@@ -77,6 +77,15 @@ impl Default for ModelOptions {
 }
 
 /// Vibration modes of one object, ascending by frequency.
+///
+/// ```
+/// use modal_core::{modal_basis, ModelOptions, Shape, Topology};
+/// let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+/// let shape = Shape::from_points_2d(&square, Topology::None).unwrap();
+/// let basis = modal_basis(&shape, &ModelOptions::default()).unwrap();
+/// assert_eq!((basis.n_dofs(), basis.n_modes()), (8, 8));
+/// assert_eq!(basis.mode(3).len(), 8);
+/// ```
 #[derive(Debug, Clone)]
 pub struct ModalBasis {
     pub dim: usize,
@@ -85,12 +94,73 @@ pub struct ModalBasis {
     pub eigenvalues: Vec<f64>,
     /// `(dim·n) × k`, component-major rows (`a·n + i` is component `a` of node `i`), mass-normalised
     /// columns (`φᵀ M φ = I`), each with its largest-|·| entry positive.
-    pub modes: faer::Mat<f64>,
+    pub(crate) modes: Mat<f64>,
     /// The Gaussian width actually used (after the conditioning guard), if Gaussian.
     pub sigma: Option<f64>,
 }
 
 impl ModalBasis {
+    /// A basis from its parts, the modes given column-major (`n_dofs × n_modes`, mode `j` at
+    /// `j·n_dofs ..`), e.g. one stored with [`ModalBasis::modes_column_major`].
+    ///
+    /// # Errors
+    /// [`ModalError::SizeMismatch`] when the sizes do not fit together
+    /// (`n_dofs = dim·n_nodes`, one eigenvalue per mode).
+    pub fn from_column_major(
+        dim: usize,
+        n_nodes: usize,
+        eigenvalues: Vec<f64>,
+        modes: &[f64],
+        sigma: Option<f64>,
+    ) -> Result<Self, ModalError> {
+        let rows = dim * n_nodes;
+        let cols = eigenvalues.len();
+        if modes.len() != rows * cols {
+            return Err(ModalError::SizeMismatch {
+                what: "entries of the modes (dim·n_nodes × eigenvalues)",
+                expected: rows * cols,
+                found: modes.len(),
+            });
+        }
+        Ok(Self {
+            dim,
+            n_nodes,
+            eigenvalues,
+            modes: Mat::from_fn(rows, cols, |i, j| modes[j * rows + i]),
+            sigma,
+        })
+    }
+
+    /// Number of modes computed.
+    pub fn n_modes(&self) -> usize {
+        self.modes.ncols()
+    }
+
+    /// Length of a mode: `dim · n_nodes` degrees of freedom.
+    pub fn n_dofs(&self) -> usize {
+        self.modes.nrows()
+    }
+
+    /// Mode `j` (`j < n_modes()`): `n_dofs()` entries, component-major (`a·n + i` is component
+    /// `a` of node `i`), mass-normalised, its largest-|·| entry positive.
+    ///
+    /// # Panics
+    /// When `j >= n_modes()`.
+    pub fn mode(&self, j: usize) -> &[f64] {
+        self.modes
+            .col(j)
+            .try_as_col_major()
+            .expect("the columns of a dense matrix are contiguous")
+            .as_slice()
+    }
+
+    /// Every mode, one after the other (`n_dofs() × n_modes()` column-major).
+    pub fn modes_column_major(&self) -> Vec<f64> {
+        (0..self.n_modes())
+            .flat_map(|j| self.mode(j).iter().copied())
+            .collect()
+    }
+
     /// Natural angular frequencies ω = √ω² (rad/s in the material's units); tiny negative ω²
     /// from round-off map to 0.
     pub fn frequencies(&self) -> Vec<f64> {
@@ -100,19 +170,25 @@ impl ModalBasis {
             .collect()
     }
 
-    /// Per-node modal features of the first `k` modes: an `n × (dim·k)` matrix whose row `i`
-    /// is `[u_i(0..k), v_i(0..k), (w_i(0..k))]` (Tavares & Bastos 2005, eqs 1–2).
-    pub fn features(&self, k: usize) -> Result<Mat<f64>, ModalError> {
+    /// Per-node modal features of the first `k` modes: an `n × (dim·k)` matrix, row-major, whose
+    /// row `i` is `[u_i(0..k), v_i(0..k), (w_i(0..k))]` (Tavares & Bastos 2005, eqs 1–2).
+    ///
+    /// # Errors
+    /// [`ModalError::TooFewModes`] when `k > n_modes()`.
+    pub fn features(&self, k: usize) -> Result<Vec<f64>, ModalError> {
         if k > self.modes.ncols() {
-            return Err(ModalError::InvalidParameter(format!(
-                "{k} modes requested but only {} were computed",
-                self.modes.ncols()
-            )));
+            return Err(ModalError::TooFewModes {
+                requested: k,
+                available: self.modes.ncols(),
+            });
         }
-        let n = self.n_nodes;
-        Ok(Mat::from_fn(n, self.dim * k, |i, c| {
-            self.modes[((c / k) * n + i, c % k)]
-        }))
+        let (n, cols) = (self.n_nodes, self.dim * k);
+        Ok((0..n * cols)
+            .map(|e| {
+                let (i, c) = (e / cols, e % cols);
+                self.modes[((c / k) * n + i, c % k)]
+            })
+            .collect())
     }
 }
 
@@ -171,9 +247,7 @@ pub(crate) fn solve_model(
     let dof = model.stiffness.nrows();
     let k = options.n_modes.unwrap_or(dof);
     if k == 0 || k > dof {
-        return Err(ModalError::InvalidParameter(format!(
-            "n_modes must be in 1..={dof}, got {k}"
-        )));
+        return Err(OptionError::new("n_modes", k, format!("an integer in 1..={dof}")).into());
     }
 
     let mut c = eigen::block_congruence(model.stiffness.as_ref(), model.mass_factor.as_ref(), dim);
@@ -242,7 +316,7 @@ pub(crate) fn solve_model(
         eigen::canonical_signs(modes.as_mut());
     }
     if modes.col_iter().any(|c| c.iter().any(|v| !v.is_finite())) {
-        return Err(ModalError::Numerical("modes are not finite".into()));
+        return Err(ModalError::NonFiniteResult { stage: "the modes" });
     }
     Ok(ModalBasis {
         dim,
@@ -292,26 +366,73 @@ pub(crate) fn build_model(
     }
 }
 
-/// Explicit nodal `(K, M)` of the model (`d·n × d·n`, component-major) and the σ used. For
-/// inspection and external solvers (e.g. a scipy oracle); [`modal_basis`] never forms them for
-/// the Gaussian element, whose explicit form needs `G⁻¹`.
-pub fn model_matrices(shape: &Shape, options: &ModelOptions) -> Result<ExplicitModel, ModalError> {
-    let model = build_model(shape, options)?;
-    explicit_matrices(shape, &model, options)
+/// Explicit nodal stiffness and mass matrices of a model ([`model_matrices`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelMatrices {
+    /// Order of both matrices: `dim · n` degrees of freedom, component-major (`a·n + i` is
+    /// component `a` of node `i`).
+    pub n_dofs: usize,
+    /// Stiffness `K`, `n_dofs × n_dofs`, row-major (symmetric).
+    pub stiffness: Vec<f64>,
+    /// Mass `M`, `n_dofs × n_dofs`, row-major (symmetric positive definite).
+    pub mass: Vec<f64>,
+    /// The Gaussian width used (after the conditioning guard), if Gaussian.
+    pub sigma: Option<f64>,
 }
 
-/// `(K, M, σ)`: explicit stiffness and mass (`d·n × d·n`) and the Gaussian width used.
-pub type ExplicitModel = (Mat<f64>, Mat<f64>, Option<f64>);
+impl ModelMatrices {
+    fn from_explicit((k, m, sigma): ExplicitModel) -> Self {
+        let n = k.nrows();
+        let row_major = |a: &Mat<f64>| (0..n * n).map(|e| a[(e / n, e % n)]).collect();
+        Self {
+            n_dofs: n,
+            stiffness: row_major(&k),
+            mass: row_major(&m),
+            sigma,
+        }
+    }
+}
+
+/// Explicit nodal `K` and `M` of the model and the σ used. For inspection and external solvers
+/// (e.g. a scipy oracle); [`modal_basis`] never forms them for the Gaussian element, whose
+/// explicit form needs `G⁻¹`.
+///
+/// ```
+/// use modal_core::{model_matrices, ModelOptions, Shape, Topology};
+/// let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+/// let shape = Shape::from_points_2d(&square, Topology::None).unwrap();
+/// let m = model_matrices(&shape, &ModelOptions::default()).unwrap();
+/// assert_eq!((m.n_dofs, m.stiffness.len()), (8, 64));
+/// ```
+///
+/// # Errors
+/// The errors of [`modal_basis`]; [`Unsupported::ReducedNodalMatrices`] for a reduced Gaussian
+/// basis (`center_stride > 1`).
+pub fn model_matrices(shape: &Shape, options: &ModelOptions) -> Result<ModelMatrices, ModalError> {
+    explicit_model(shape, options).map(ModelMatrices::from_explicit)
+}
 
 /// [`model_matrices`] for a bar model on explicitly given edges.
 pub fn model_matrices_with_edges(
     shape: &Shape,
     edges: &[[usize; 2]],
     options: &ModelOptions,
-) -> Result<ExplicitModel, ModalError> {
+) -> Result<ModelMatrices, ModalError> {
     let (model, opts) = model_on_edges(shape, edges, options)?;
-    explicit_matrices(shape, &model, &opts)
+    explicit_matrices(shape, &model, &opts).map(ModelMatrices::from_explicit)
 }
+
+/// `(K, M, σ)` as dense matrices: [`model_matrices`] for the crate's own checks and benchmarks.
+pub(crate) fn explicit_model(
+    shape: &Shape,
+    options: &ModelOptions,
+) -> Result<ExplicitModel, ModalError> {
+    let model = build_model(shape, options)?;
+    explicit_matrices(shape, &model, options)
+}
+
+/// `(K, M, σ)`: explicit stiffness and mass (`d·n × d·n`) and the Gaussian width used.
+pub(crate) type ExplicitModel = (Mat<f64>, Mat<f64>, Option<f64>);
 
 fn explicit_matrices(
     shape: &Shape,
@@ -321,9 +442,7 @@ fn explicit_matrices(
     let dim = shape.dim();
     let n = shape.len();
     match (&model.interpolation, model.sigma) {
-        (Some(g), _) if g.ncols() != n => Err(ModalError::InvalidParameter(
-            "a reduced Gaussian basis (center_stride > 1) has no nodal K and M".into(),
-        )),
+        (Some(g), _) if g.ncols() != n => Err(Unsupported::ReducedNodalMatrices.into()),
         (Some(_), Some(sigma)) => {
             let ints = GaussianIntegrals::new(shape, sigma);
             let (k, m) = ints.explicit_matrices(&options.material, options.plane)?;
@@ -346,10 +465,10 @@ fn validate_nodes(shape: &Shape) -> Result<(), ModalError> {
     let dim = shape.dim();
     let n = shape.len();
     if n < dim + 1 {
-        return Err(ModalError::InvalidShape(format!(
-            "a {dim}-D model needs at least {} nodes, got {n}",
-            dim + 1
-        )));
+        return Err(ModalError::TooFewNodes {
+            nodes: n,
+            min: dim + 1,
+        });
     }
     let c = shape.coords();
     let mut extent = 0.0f64;
@@ -363,9 +482,10 @@ fn validate_nodes(shape: &Shape) -> Result<(), ModalError> {
     }
     let (_, min_nn, (i, j)) = nearest_neighbour_stats(shape);
     if min_nn.is_nan() || min_nn <= 1e-10 * extent {
-        return Err(ModalError::InvalidShape(format!(
-            "nodes {i} and {j} coincide (distance {min_nn:e}); remove duplicate points"
-        )));
+        return Err(ModalError::CoincidentNodes {
+            first: i.min(j),
+            second: i.max(j),
+        });
     }
     Ok(())
 }
@@ -379,18 +499,13 @@ fn gaussian_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, 
     let mut sigma = match options.sigma {
         Some(s) => {
             if !(s.is_finite() && s > 0.0) {
-                return Err(ModalError::InvalidParameter(format!(
-                    "sigma must be positive and finite, got {s}"
-                )));
+                return Err(OptionError::new("sigma", s, "a finite number > 0").into());
             }
             s
         }
         None => {
             if !(options.kappa.is_finite() && options.kappa > 0.0) {
-                return Err(ModalError::InvalidParameter(format!(
-                    "kappa must be positive and finite, got {}",
-                    options.kappa
-                )));
+                return Err(OptionError::new("kappa", options.kappa, "a finite number > 0").into());
             }
             options.kappa * nearest_neighbour_stats(shape).0 * stride as f64
         }
@@ -426,17 +541,13 @@ fn gaussian_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, 
         }
         sigma *= 0.8;
     }
-    Err(ModalError::Numerical(format!(
-        "Γ stays ill-conditioned after shrinking σ to {sigma:e}"
-    )))
+    Err(ModalError::IllConditioned { sigma })
 }
 
 /// Every `stride`-th node as a Gaussian centre (`None` for stride 1: every node).
 fn reduced_centers(shape: &Shape, stride: usize) -> Result<Option<Shape>, ModalError> {
     if stride == 0 {
-        return Err(ModalError::InvalidParameter(
-            "center_stride must be ≥ 1".into(),
-        ));
+        return Err(OptionError::new("center_stride", 0, "an integer >= 1").into());
     }
     if stride == 1 {
         return Ok(None);
@@ -449,15 +560,15 @@ fn reduced_centers(shape: &Shape, stride: usize) -> Result<Option<Shape>, ModalE
         .collect();
     let centers = Shape::new(dim, coords, Topology::None)?;
     validate_nodes(&centers).map_err(|e| {
-        ModalError::InvalidParameter(format!(
-            "center_stride {stride} leaves {} centres of {} nodes: {}",
-            centers.len(),
-            shape.len(),
-            match e {
-                ModalError::InvalidShape(s) => s,
-                other => other.to_string(),
-            }
-        ))
+        OptionError::new(
+            "center_stride",
+            stride,
+            format!(
+                "a stride that leaves a valid set of centres; it leaves {} centres of {} nodes: {e}",
+                centers.len(),
+                shape.len(),
+            ),
+        )
     })?;
     Ok(Some(centers))
 }
@@ -468,17 +579,16 @@ fn rigid_reduced_basis(shape: &Shape, model: &SolverModel) -> Result<Mat<f64>, M
     let dim = shape.dim();
     let n = shape.len();
     if model.interpolation.as_ref().is_some_and(|g| g.ncols() != n) {
-        return Err(ModalError::InvalidParameter(
-            "exact_rigid needs the full Gaussian element (center_stride 1): a reduced basis \
-             cannot represent the rigid motions exactly"
-                .into(),
-        ));
+        return Err(Unsupported::ExactRigidReduced.into());
     }
     let mut y = rigid::rigid_basis(shape);
     if let Some(g) = &model.interpolation {
         let llt = g
             .llt(faer::Side::Lower)
-            .map_err(|_| ModalError::Numerical("G is not positive definite".into()))?;
+            .map_err(|_| ModalError::NotPositiveDefinite {
+                matrix: "the Gaussian matrix G",
+                pivot: None,
+            })?;
         for a in 0..dim {
             let blk = y.as_ref().subrows(a * n, n).to_owned();
             let solved = llt.solve(&blk);
@@ -513,16 +623,16 @@ fn deflate_rigid(c: &mut Mat<f64>, u: &Mat<f64>) {
 
 fn check_zero_modes(pairs: &EigenPairs, dim: usize) -> Result<(), ModalError> {
     let expected = if dim == 2 { 3 } else { 6 };
-    let all = pairs.all_values.as_deref().ok_or_else(|| {
-        ModalError::Numerical("the zero-mode check needs every eigenvalue".into())
+    let all = pairs.all_values.as_deref().ok_or(ModalError::Internal {
+        invariant: "the zero-mode check needs every eigenvalue",
     })?;
     let zeros = count_zero_modes(all);
     if zeros != expected {
-        return Err(ModalError::InvalidShape(format!(
-            "the bar model has {zeros} zero-energy modes, a {dim}-D body has {expected}: \
-             the structure is a mechanism (collinear/coplanar nodes, unconnected nodes or \
-             missing bracing)"
-        )));
+        return Err(ModalError::Mechanism {
+            dim,
+            zero_modes: zeros,
+            expected,
+        });
     }
     Ok(())
 }

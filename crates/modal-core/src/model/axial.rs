@@ -23,7 +23,7 @@ use faer::Mat;
 
 use super::material::Material;
 use crate::eigen;
-use crate::error::ModalError;
+use crate::error::{ModalError, Unsupported};
 use crate::shape::{Shape, Topology};
 
 /// Section area of every bar. K and M both scale with it, so ω² does not depend on it and the
@@ -175,7 +175,10 @@ pub fn assemble_bars(
     let mut ms = Mat::<f64>::zeros(n, n);
     for &[i, j] in edges {
         if i == j || i >= n || j >= n {
-            return Err(ModalError::InvalidShape(format!("invalid bar ({i}, {j})")));
+            return Err(ModalError::InvalidEdge {
+                edge: [i, j],
+                nodes: n,
+            });
         }
         let (pi, pj) = (shape.point(i), shape.point(j));
         let mut c = [0.0f64; 3];
@@ -186,9 +189,7 @@ pub fn assemble_bars(
         }
         let len = len2.sqrt();
         if len.is_nan() || len <= 0.0 {
-            return Err(ModalError::InvalidShape(format!(
-                "bar ({i}, {j}) has zero length"
-            )));
+            return Err(ModalError::ZeroLengthEdge { edge: [i, j] });
         }
         for v in c.iter_mut() {
             *v /= len;
@@ -242,10 +243,7 @@ pub fn add_hinge_bending(
         let le = dot(e, e).sqrt();
         let (a1, a2) = (dot(n1, n1), dot(n2, n2));
         if !(a1 > 1e-24 * le.powi(4) && a2 > 1e-24 * le.powi(4)) {
-            return Err(ModalError::InvalidShape(format!(
-                "degenerate triangle at edge ({}, {})",
-                h.e0, h.e1
-            )));
+            return Err(ModalError::DegenerateTriangle { edge: [h.e0, h.e1] });
         }
         let s1 = n1.map(|v| v / a1);
         let s2 = n2.map(|v| v / a2);
@@ -279,16 +277,10 @@ pub(crate) fn model_edges(shape: &Shape) -> Result<(Vec<[usize; 2]>, Vec<Hinge>)
     let n = shape.len();
     let dim = shape.dim();
     match shape.topology() {
-        Topology::None => Err(ModalError::InvalidParameter(
-            "axial elements need connectivity: an ordered closed contour or a triangle mesh".into(),
-        )),
+        Topology::None => Err(Unsupported::AxialWithoutConnectivity.into()),
         Topology::ClosedContour => {
             if dim != 2 {
-                return Err(ModalError::InvalidParameter(
-                    "axial elements on a 3-D closed contour are a mechanism; give a triangle mesh \
-                     or use the Gaussian element"
-                        .into(),
-                ));
+                return Err(Unsupported::Axial3dContour.into());
             }
             let mut edges = ring_edges(n);
             // A triangulated polygon is minimally rigid, so one thin triangle (a straight run of
@@ -313,9 +305,10 @@ pub(crate) fn model_edges(shape: &Shape) -> Result<(Vec<[usize; 2]>, Vec<Hinge>)
                 .iter()
                 .find(|t| t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
             {
-                return Err(ModalError::InvalidShape(format!(
-                    "triangle {t:?} repeats a vertex"
-                )));
+                return Err(ModalError::InvalidTriangle {
+                    triangle: *t,
+                    nodes: n,
+                });
             }
             let edges = triangle_edges(triangles);
             let mut used = vec![false; n];
@@ -324,9 +317,7 @@ pub(crate) fn model_edges(shape: &Shape) -> Result<(Vec<[usize; 2]>, Vec<Hinge>)
                 used[b] = true;
             }
             if let Some(i) = used.iter().position(|u| !u) {
-                return Err(ModalError::InvalidShape(format!(
-                    "node {i} belongs to no triangle; an unconnected node is a mechanism"
-                )));
+                return Err(ModalError::UnconnectedNode { node: i });
             }
             let h = if dim == 3 {
                 hinges(triangles)
@@ -362,17 +353,16 @@ pub(crate) fn axial_model_with_edges(
     let mut used = vec![false; n];
     for &[a, b] in edges {
         if a >= n || b >= n || a == b {
-            return Err(ModalError::InvalidShape(format!(
-                "invalid edge ({a}, {b}) for {n} nodes"
-            )));
+            return Err(ModalError::InvalidEdge {
+                edge: [a, b],
+                nodes: n,
+            });
         }
         used[a] = true;
         used[b] = true;
     }
     if let Some(i) = used.iter().position(|u| !u) {
-        return Err(ModalError::InvalidShape(format!(
-            "node {i} belongs to no edge; an unconnected node is a mechanism"
-        )));
+        return Err(ModalError::UnconnectedNode { node: i });
     }
     let mut edges: Vec<[usize; 2]> = edges.iter().map(|&[a, b]| [a.min(b), a.max(b)]).collect();
     edges.sort_unstable();
@@ -380,16 +370,16 @@ pub(crate) fn axial_model_with_edges(
     let (mut k, ms) = assemble_bars(shape, &edges, material)?;
     if !hinge_list.is_empty() {
         if shape.dim() != 3 {
-            return Err(ModalError::InvalidParameter(
-                "bending hinges need 3-D nodes".into(),
-            ));
+            return Err(Unsupported::Hinges2d.into());
         }
         add_hinge_bending(shape, hinge_list, material, &mut k)?;
     }
     eigen::symmetrise(k.as_mut());
     let mut l = ms;
-    eigen::cholesky_in_place(l.as_mut())
-        .map_err(|i| ModalError::Numerical(format!("bar mass matrix is singular at node {i}")))?;
+    eigen::cholesky_in_place(l.as_mut()).map_err(|i| ModalError::NotPositiveDefinite {
+        matrix: "the bar mass matrix",
+        pivot: Some(i),
+    })?;
     for j in 0..n {
         for i in 0..j {
             l[(i, j)] = 0.0;

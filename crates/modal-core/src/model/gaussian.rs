@@ -20,7 +20,6 @@ use crate::shape::Shape;
 pub struct GaussianIntegrals {
     pub dim: usize,
     pub n: usize,
-    pub sigma: f64,
     /// `G_ij = exp(−r²/2σ²)`.
     pub g: Mat<f64>,
     /// `Γ_ij = ∫ g_i g_j`.
@@ -115,7 +114,6 @@ impl GaussianIntegrals {
         Self {
             dim,
             n,
-            sigma,
             g,
             gamma,
             gamma_d,
@@ -165,7 +163,10 @@ impl GaussianIntegrals {
         let llt = self
             .g
             .llt(faer::Side::Lower)
-            .map_err(|_| ModalError::Numerical("G is not positive definite".into()))?;
+            .map_err(|_| ModalError::NotPositiveDefinite {
+                matrix: "the Gaussian matrix G",
+                pivot: None,
+            })?;
         let a = llt.inverse();
         let ms = &a * (&self.gamma * faer::Scale(material.density)) * &a;
         let mut m = Mat::<f64>::zeros(dim * n, dim * n);

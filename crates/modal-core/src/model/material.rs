@@ -1,6 +1,6 @@
 //! Virtual elastic materials of the finite-element models.
 
-use crate::error::ModalError;
+use crate::error::{ModalError, OptionError};
 
 /// How a 2-D model treats the third dimension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -78,32 +78,29 @@ impl Material {
             "aluminium" | "aluminum" => Ok(Self::ALUMINIUM),
             "cork" => Ok(Self::CORK),
             "unit" => Ok(Self::UNIT),
-            other => Err(ModalError::InvalidParameter(format!(
-                "unknown material preset {other:?}; known: {}",
-                Self::PRESETS.join(", ")
-            ))),
+            _ => Err(OptionError::new(
+                "material",
+                name,
+                format!("a known preset ({})", Self::PRESETS.join(", ")),
+            )
+            .into()),
         }
     }
 
     /// Checks E > 0, ρ > 0 (both finite) and ν in the open interval (-1, 0.5).
     pub fn validate(&self) -> Result<(), ModalError> {
         if !(self.young.is_finite() && self.young > 0.0) {
-            return Err(ModalError::InvalidParameter(format!(
-                "Young's modulus must be positive and finite, got {}",
-                self.young
-            )));
+            return Err(
+                OptionError::new("young", self.young, "Young's modulus, finite and > 0").into(),
+            );
         }
         if !(self.density.is_finite() && self.density > 0.0) {
-            return Err(ModalError::InvalidParameter(format!(
-                "density must be positive and finite, got {}",
-                self.density
-            )));
+            return Err(OptionError::new("density", self.density, "finite and > 0").into());
         }
         if !(self.poisson > -1.0 && self.poisson < 0.5) {
-            return Err(ModalError::InvalidParameter(format!(
-                "Poisson's ratio must lie in (-1, 0.5), got {}",
-                self.poisson
-            )));
+            return Err(
+                OptionError::new("poisson", self.poisson, "Poisson's ratio in (-1, 0.5)").into(),
+            );
         }
         Ok(())
     }

@@ -61,9 +61,7 @@ pub(crate) fn orthonormalise(y: &mut Mat<f64>) -> Result<(), ModalError> {
         }
         let norm = y.col(j).norm_l2();
         if !(norm > 1e-8 * norm0 && norm.is_finite()) {
-            return Err(ModalError::InvalidShape(format!(
-                "rigid motion {j} is not independent of the others (collinear nodes?)"
-            )));
+            return Err(ModalError::DependentRigidMotion { motion: j });
         }
         for i in 0..rows {
             y[(i, j)] /= norm;

@@ -1,10 +1,9 @@
 //! Golden values of the Gaussian element's closed forms (docs/method.md §2.2–2.4), computed
 //! independently.
 
-use modal_core::model::gaussian::GaussianIntegrals;
-use modal_core::{
-    modal_basis, model_matrices, Material, ModelOptions, PlaneModel, Shape, Topology,
-};
+use crate::model::assembly::explicit_model;
+use crate::model::gaussian::GaussianIntegrals;
+use crate::{modal_basis, Material, ModelOptions, PlaneModel, Shape, Topology};
 
 fn close(a: f64, b: f64, tol: f64) -> bool {
     (a - b).abs() <= tol * b.abs().max(1.0)
@@ -59,7 +58,7 @@ fn golden_2d_integrals() {
 
 #[test]
 fn golden_2d_matrices_and_eigenvalues() {
-    let (k, m, sigma) = model_matrices(&tri(), &options_unit(0.7)).unwrap();
+    let (k, m, sigma) = explicit_model(&tri(), &options_unit(0.7)).unwrap();
     assert_eq!(sigma, Some(0.7));
     assert_row(
         &(0..3).map(|j| m[(0, j)]).collect::<Vec<_>>(),
@@ -122,7 +121,7 @@ fn golden_3d_eigenvalues() {
     let basis = modal_basis(&shape, &options_unit(0.8)).unwrap();
     assert_row(&basis.eigenvalues, &want, "ω² 3-D");
     // The explicit route (A = G⁻¹, dense generalized solve) agrees.
-    let (k, m, _) = model_matrices(&shape, &options_unit(0.8)).unwrap();
-    let pairs = modal_core::eigen::generalized_eigen(k.as_ref(), m.as_ref(), None).unwrap();
+    let (k, m, _) = explicit_model(&shape, &options_unit(0.8)).unwrap();
+    let pairs = crate::eigen::generalized_eigen(k.as_ref(), m.as_ref(), None).unwrap();
     assert_row(&pairs.values, &want, "ω² 3-D explicit");
 }

@@ -1,13 +1,13 @@
 //! Gaussian element: closed forms against quadrature, matrix properties, the ψ-route against the
 //! explicit route, normalisation, exact-rigid option, material scaling and input errors.
 
-use faer::Mat;
-use modal_core::eigen::generalized_eigen;
-use modal_core::model::gaussian::{gaussians_at, GaussianIntegrals};
-use modal_core::{
-    modal_basis, model_matrices, ElementKind, Material, ModalBasis, ModelOptions, PlaneModel,
-    Shape, Topology,
+use crate::eigen::generalized_eigen;
+use crate::model::assembly::explicit_model;
+use crate::model::gaussian::{gaussians_at, GaussianIntegrals};
+use crate::{
+    modal_basis, ElementKind, Material, ModalBasis, ModelOptions, PlaneModel, Shape, Topology,
 };
+use faer::Mat;
 use rand::{Rng, SeedableRng};
 
 /// Gauss–Legendre nodes and weights on [-1, 1] (Newton on P_n).
@@ -179,7 +179,7 @@ fn closed_forms_match_quadrature_2d() {
                 );
             }
         }
-        let (k, m, _) = model_matrices(&shape, &unit(Some(sigma))).unwrap();
+        let (k, m, _) = explicit_model(&shape, &unit(Some(sigma))).unwrap();
         assert!(rel_err(&k, &kq) < 1e-9, "K {}", rel_err(&k, &kq));
         assert!(rel_err(&m, &mq) < 1e-9, "M {}", rel_err(&m, &mq));
     }
@@ -209,7 +209,7 @@ fn closed_forms_match_quadrature_3d() {
             sigma: Some(sigma),
             ..Default::default()
         };
-        let (k, m, _) = model_matrices(&shape, &opts).unwrap();
+        let (k, m, _) = explicit_model(&shape, &opts).unwrap();
         assert!(rel_err(&k, &kq) < 1e-7, "K {}", rel_err(&k, &kq));
         assert!(rel_err(&m, &mq) < 1e-7, "M {}", rel_err(&m, &mq));
     }
@@ -242,9 +242,9 @@ fn gaussians_at_the_nodes_are_the_interpolation_matrix() {
 fn plane_strain_changes_only_lambda() {
     let shape = random_shape(2, 5, 3);
     let mut opts = unit(Some(0.5));
-    let (ks, _, _) = model_matrices(&shape, &opts).unwrap();
+    let (ks, _, _) = explicit_model(&shape, &opts).unwrap();
     opts.plane = PlaneModel::Strain;
-    let (ke, _, _) = model_matrices(&shape, &opts).unwrap();
+    let (ke, _, _) = explicit_model(&shape, &opts).unwrap();
     // Plane strain is stiffer (λ larger) but has the same shear part.
     assert!(rel_err(&ks, &ke) > 1e-3);
     let ints = GaussianIntegrals::new(&shape, 0.5);
@@ -277,14 +277,14 @@ fn check_symmetric_pd(k: &Mat<f64>, m: &Mat<f64>) {
 #[test]
 fn stiffness_and_mass_are_symmetric_and_definite() {
     check_symmetric_pd(
-        &model_matrices(&ellipse(30, 1.3, 0.8), &unit(None))
+        &explicit_model(&ellipse(30, 1.3, 0.8), &unit(None))
             .unwrap()
             .0,
-        &model_matrices(&ellipse(30, 1.3, 0.8), &unit(None))
+        &explicit_model(&ellipse(30, 1.3, 0.8), &unit(None))
             .unwrap()
             .1,
     );
-    let (k, m, _) = model_matrices(&random_shape(3, 25, 4), &ModelOptions::default()).unwrap();
+    let (k, m, _) = explicit_model(&random_shape(3, 25, 4), &ModelOptions::default()).unwrap();
     check_symmetric_pd(&k, &m);
 }
 
@@ -329,7 +329,7 @@ fn modes_are_mass_normalised_and_psi_route_matches_explicit() {
         ),
     ] {
         let basis = modal_basis(&shape, &opts).unwrap();
-        let (k, m, sigma) = model_matrices(&shape, &opts).unwrap();
+        let (k, m, sigma) = explicit_model(&shape, &opts).unwrap();
         assert_eq!(sigma, basis.sigma);
         check_normalised(&basis, &k, &m);
         let explicit = generalized_eigen(k.as_ref(), m.as_ref(), None).unwrap();
@@ -338,7 +338,7 @@ fn modes_are_mass_normalised_and_psi_route_matches_explicit() {
         }
         // Same modes up to sign wherever the eigenvalue is simple.
         let mut x = explicit.vectors.clone();
-        modal_core::eigen::canonical_signs(x.as_mut());
+        crate::eigen::canonical_signs(x.as_mut());
         let ev = &basis.eigenvalues;
         for j in 0..ev.len() {
             let gap_lo = if j > 0 {
@@ -394,7 +394,7 @@ fn exact_rigid_gives_exact_zero_modes() {
             ..ModelOptions::default()
         };
         let basis = modal_basis(&shape, &opts).unwrap();
-        let (k, m, _) = model_matrices(&shape, &opts).unwrap();
+        let (k, m, _) = explicit_model(&shape, &opts).unwrap();
         // Faithful element: no zero eigenvalue at all.
         let plain = modal_basis(&shape, &ModelOptions::default()).unwrap();
         assert!(plain.eigenvalues[0] > 1e-6 * plain.eigenvalues.last().unwrap());
@@ -403,7 +403,7 @@ fn exact_rigid_gives_exact_zero_modes() {
         assert!(basis.eigenvalues[r] > 1e-6 * top);
         // Rigid modes span the rigid basis (canonical order T_x, T_y, …): projecting them onto
         // span(R) leaves nothing.
-        let rb = modal_core::model::rigid::rigid_basis(&shape);
+        let rb = crate::model::rigid::rigid_basis(&shape);
         let phi_r = basis.modes.as_ref().subcols(0, r);
         let qr = rb.qr();
         let q = qr.compute_thin_Q();
@@ -475,12 +475,21 @@ fn young_and_density_scale_as_expected() {
 fn features_are_component_major_rows() {
     let shape = random_shape(3, 10, 8);
     let b = modal_basis(&shape, &ModelOptions::default()).unwrap();
+    // Row-major 10 × 12: entry (i, c) at i·12 + c.
     let f = b.features(4).unwrap();
-    assert_eq!((f.nrows(), f.ncols()), (10, 12));
-    assert_eq!(f[(3, 0)], b.modes[(3, 0)]);
-    assert_eq!(f[(3, 5)], b.modes[(10 + 3, 1)]);
-    assert_eq!(f[(3, 11)], b.modes[(20 + 3, 3)]);
-    assert!(b.features(31).is_err());
+    assert_eq!(f.len(), 10 * 12);
+    assert_eq!(f[3 * 12], b.modes[(3, 0)]);
+    assert_eq!(f[3 * 12 + 5], b.modes[(10 + 3, 1)]);
+    assert_eq!(f[3 * 12 + 11], b.modes[(20 + 3, 3)]);
+    assert_eq!(b.mode(1)[10 + 3], b.modes[(10 + 3, 1)]);
+    assert_eq!((b.n_dofs(), b.n_modes()), (30, 30));
+    assert_eq!(
+        b.features(31),
+        Err(crate::ModalError::TooFewModes {
+            requested: 31,
+            available: 30
+        })
+    );
     assert_eq!(b.frequencies()[2], b.eigenvalues[2].sqrt());
 }
 
@@ -495,7 +504,7 @@ fn conditioning_guard_shrinks_sigma() {
         },
     )
     .unwrap();
-    let (mean_nn, _, _) = modal_core::shape::nearest_neighbour_stats(&shape);
+    let (mean_nn, _, _) = crate::shape::nearest_neighbour_stats(&shape);
     let sigma = basis.sigma.unwrap();
     assert!(
         sigma < 6.0 * mean_nn && sigma > 0.5 * mean_nn,
@@ -641,7 +650,7 @@ fn reduced_basis_rejects_what_it_cannot_do() {
             .ncols(),
         12
     );
-    assert!(model_matrices(&shape, &with(2, false, None))
+    assert!(explicit_model(&shape, &with(2, false, None))
         .unwrap_err()
         .to_string()
         .contains("reduced"));
