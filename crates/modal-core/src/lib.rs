@@ -46,11 +46,14 @@ pub mod internals {
         generalized_eigen, stages, symmetric_eigen, symmetric_eigen_lowest, EigenPairs,
     };
 
-    /// The explicit `(K, M, σ)` of [`crate::model_matrices`] as dense faer matrices.
+    /// `(K, M, σ)`: stiffness and mass as dense faer matrices, the Gaussian width if any.
+    pub type DenseModel = (faer::Mat<f64>, faer::Mat<f64>, Option<f64>);
+
+    /// The explicit model of [`crate::model_matrices`] as dense faer matrices.
     pub fn model_matrices(
         shape: &crate::Shape,
         options: &crate::ModelOptions,
-    ) -> Result<(faer::Mat<f64>, faer::Mat<f64>, Option<f64>), crate::ModalError> {
+    ) -> Result<DenseModel, crate::ModalError> {
         crate::model::assembly::explicit_model(shape, options)
     }
 }
