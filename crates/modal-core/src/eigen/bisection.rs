@@ -155,7 +155,8 @@ fn step<const W: usize>(
 /// `count + 1` in the lanes where `p` and `cur` differ in sign.
 #[inline(always)]
 fn count_change<const W: usize>(count: [u64; W], p: Lanes<W>, cur: Lanes<W>) -> [u64; W] {
-    std::array::from_fn(|l| count[l] + ((p.0[l].to_bits() ^ cur.0[l].to_bits()) >> 63))
+    // Wrapping (counts stay below the order): no overflow check per lane in debug builds.
+    std::array::from_fn(|l| count[l].wrapping_add((p.0[l].to_bits() ^ cur.0[l].to_bits()) >> 63))
 }
 
 /// Divides both by the power of two of the larger magnitude of the pair, lane by lane (exact).
