@@ -453,30 +453,41 @@ enum Frames {
 }
 
 /// The values of each frame that are not 0 (bit for bit: `-0.0` is kept), with their positions
-/// in the frame; frame `t` holds the entries `starts[t]..starts[t + 1]`.
+/// in the frame (`u16`: frames of up to 65,536 sensels, every plate and insole there is); frame
+/// `t` holds the entries `starts[t]..starts[t + 1]`.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct SparseFrames {
     starts: Vec<usize>,
-    at: Vec<u32>,
+    at: Vec<u16>,
     values: Vec<f32>,
+    /// Frames larger than [`SPARSE_MAX`]: every value kept, in `values`, and no positions.
+    whole: bool,
 }
 
+/// The most values a frame held sparsely may have.
+const SPARSE_MAX: usize = u16::MAX as usize + 1;
+
 impl SparseFrames {
-    /// No frames yet.
-    pub(crate) fn new() -> Self {
+    /// No frames yet; frames will have `per` values.
+    pub(crate) fn new(per: usize) -> Self {
         Self {
             starts: vec![0],
             at: Vec::new(),
             values: Vec::new(),
+            whole: per > SPARSE_MAX,
         }
     }
 
-    /// Appends a frame (its value at every position; positions past `u32::MAX` are dropped,
-    /// and such frames are never held sparsely, see [`SparseFrames::pays`]).
+    /// Appends a frame (its value at every position).
     pub(crate) fn push(&mut self, frame: &[f32]) {
+        if self.whole {
+            self.values.extend_from_slice(frame);
+            self.starts.push(self.values.len());
+            return;
+        }
         for (i, &v) in frame.iter().enumerate() {
             if v.to_bits() != 0
-                && let Ok(i) = u32::try_from(i)
+                && let Ok(i) = u16::try_from(i)
             {
                 self.at.push(i);
                 self.values.push(v);
@@ -498,14 +509,14 @@ impl SparseFrames {
     }
 
     fn bytes(&self) -> usize {
-        self.starts.len() * std::mem::size_of::<usize>() + self.values.len() * 8
+        self.starts.len() * std::mem::size_of::<usize>() + self.values.len() * 6
     }
 
     /// Whether `n_frames` frames of `per` values, `stored` of them not 0, take less memory held
     /// sparsely than whole.
     fn pays(n_frames: usize, per: usize, stored: usize) -> bool {
-        per <= u32::MAX as usize
-            && stored.saturating_mul(8).saturating_add((n_frames + 1) * 8)
+        per <= SPARSE_MAX
+            && stored.saturating_mul(6).saturating_add((n_frames + 1) * 8)
                 < n_frames.saturating_mul(per).saturating_mul(4)
     }
 }
@@ -518,7 +529,7 @@ impl Frames {
         if !SparseFrames::pays(n, per, stored) {
             return Frames::Dense(data);
         }
-        let mut s = SparseFrames::new();
+        let mut s = SparseFrames::new(per);
         s.at.reserve_exact(stored);
         s.values.reserve_exact(stored);
         s.starts.reserve_exact(n);
@@ -572,7 +583,10 @@ impl Recording {
     ) -> Result<Self> {
         let n_frames = frames.n_frames();
         let per = rows.saturating_mul(cols);
-        if n_frames == 0 || per == 0 || per > u32::MAX as usize || sensor_mask.len() != per {
+        if frames.whole {
+            return Self::new(n_frames, rows, cols, frames.values, sensor_mask);
+        }
+        if n_frames == 0 || per == 0 || per > SPARSE_MAX || sensor_mask.len() != per {
             return Err(IoError::invalid(format!(
                 "a recording needs at least one frame of at least 1x1 and a mask entry per \
                  sensel, got {n_frames} x {rows}x{cols} with {} mask entries",
@@ -591,7 +605,7 @@ impl Recording {
             }
         }
         if frames.at.iter().any(|&i| !sensor_mask[i as usize]) {
-            let mut kept = SparseFrames::new();
+            let mut kept = SparseFrames::new(per);
             let mut frame = vec![0.0f32; per];
             for t in 0..n_frames {
                 frame.fill(0.0);
@@ -625,7 +639,7 @@ mod tests {
     use super::*;
 
     fn sparse_of(data: &[f32], per: usize) -> SparseFrames {
-        let mut s = SparseFrames::new();
+        let mut s = SparseFrames::new(per);
         for f in data.chunks(per) {
             s.push(f);
         }
@@ -662,6 +676,26 @@ mod tests {
         assert!(!dense.is_sparse());
         let built = Recording::from_sparse(rows, cols, sparse_of(&full, per), mask);
         assert_eq!(built.unwrap(), dense);
+    }
+
+    #[test]
+    fn frames_too_large_for_sparse_positions_are_held_whole() {
+        let (rows, cols) = (300, 300);
+        let mut frame = vec![0.0f32; rows * cols];
+        frame[rows * cols - 1] = 4.0;
+        let rec = Recording::from_sparse(
+            rows,
+            cols,
+            sparse_of(&frame, rows * cols),
+            vec![true; rows * cols],
+        );
+        let rec = rec.unwrap();
+        assert!(!rec.is_sparse());
+        assert_eq!(rec.frame(0).unwrap().get(rows - 1, cols - 1), 4.0);
+        assert_eq!(
+            rec,
+            Recording::new(1, rows, cols, frame, vec![true; rows * cols]).unwrap()
+        );
     }
 
     #[test]

@@ -769,7 +769,7 @@ fn match_all(
 
 /// Pairs matched per window of [`match_all`]: enough to keep every core busy, few enough that
 /// the prepared objects of one window stay small.
-const MATCH_WINDOW: usize = 256;
+const MATCH_WINDOW: usize = 128;
 
 /// The objects prepared for matching, by index.
 type Prepared = HashMap<usize, std::result::Result<PreparedShape, ModalError>>;

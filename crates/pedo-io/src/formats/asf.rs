@@ -160,7 +160,7 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
     };
 
     // Frames are kept sparse as they are read: a long recording is never held as dense values.
-    let mut frames = SparseFrames::new();
+    let mut frames = SparseFrames::new(per);
     let mut frame: Vec<f32> = Vec::with_capacity(per);
     let mut mask: Vec<Option<bool>> = vec![None; per];
     let mut n_frames = 0usize;
