@@ -235,12 +235,12 @@ fn print_summary(name: &str, out: &std::path::Path, r: &SequenceResult) {
     let mean = |f: &dyn Fn(&pedo_io::sequence::PairRow) -> f64| {
         r.pairs.iter().map(|p| f(&p.row)).sum::<f64>() / n
     };
-    let long_tracks = r.tracks.iter().filter(|t| t.steps.len() >= 3).count();
+    let long_tracks = r.track_lengths().filter(|&n| n >= 3).count();
     println!(
         "{name}: {} objects, {} matched pairs, {} tracks ({} spanning 3+ objects)",
         r.objects.len(),
         r.pairs.len(),
-        r.tracks.len(),
+        r.track_count(),
         long_tracks
     );
     println!(

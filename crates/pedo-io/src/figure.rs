@@ -363,11 +363,10 @@ impl TracksFigure<'_> {
         render_svg(&self.layout()?)
     }
 
-    fn chosen_tracks(&self) -> Vec<&Track> {
-        let mut chosen: Vec<&Track> = self
+    fn chosen_tracks(&self) -> Vec<std::borrow::Cow<'_, Track>> {
+        let mut chosen: Vec<_> = self
             .result
-            .tracks
-            .iter()
+            .all_tracks()
             .filter(|t| t.steps.len() >= self.min_steps.max(2))
             .collect();
         // Longest first; ties by first object so the choice is deterministic.
@@ -1218,6 +1217,7 @@ mod tests {
             objects,
             pairs: Vec::new(),
             tracks,
+            packed_tracks: None,
             splits: Vec::new(),
             merges: Vec::new(),
             skipped_frames: Vec::new(),

@@ -3,6 +3,7 @@
 
 use crate::error::{IoError, Result};
 use crate::grid::Grid;
+use std::borrow::Cow;
 
 /// The file format a recording came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -90,12 +91,18 @@ impl std::fmt::Display for Format {
 /// Sensors that do not exist (Tekscan `B`, `-1` or NaN in other exports) are recorded in
 /// [`sensor_mask`](Self::sensor_mask) and hold 0 in [`data`](Self::data); they never count in
 /// areas or means. Zero pressure on an existing sensor is an ordinary 0 with the mask set.
+///
+/// Pressure frames are mostly zeros (the foot covers a part of the sensor, and a walk has swing
+/// phases with no contact at all), so a recording holds only the values that are not 0 with
+/// their positions whenever that takes less memory than every value: about a quarter of the
+/// memory for a walk. [`frame`](Self::frame) and [`frame_slice`](Self::frame_slice) give whole
+/// frames either way.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Recording {
     n_frames: usize,
     rows: usize,
     cols: usize,
-    data: Vec<f32>,
+    frames: Frames,
     sensor_mask: Vec<bool>,
     /// Sensor pitch in mm as `[dx, dy]` = `[column spacing, row spacing]`, when the file says so.
     pub pitch_mm: Option<[f64; 2]>,
@@ -176,7 +183,7 @@ impl Recording {
             n_frames,
             rows,
             cols,
-            data,
+            frames: Frames::compact(data, per),
             sensor_mask,
             pitch_mm: None,
             sensel_area_mm2: None,
@@ -280,9 +287,20 @@ impl Recording {
     pub fn cols(&self) -> usize {
         self.cols
     }
-    /// All frames, `n_frames × rows × cols` row-major, 0 at missing sensors.
-    pub fn data(&self) -> &[f32] {
-        &self.data
+    /// All frames, `n_frames × rows × cols` row-major, 0 at missing sensors (built whole when
+    /// the recording is held sparsely: prefer [`frame_slice`](Self::frame_slice) for long ones).
+    pub fn data(&self) -> Cow<'_, [f32]> {
+        match &self.frames {
+            Frames::Dense(d) => Cow::Borrowed(d),
+            Frames::Sparse(_) => {
+                let per = self.rows * self.cols;
+                let mut out = vec![0.0f32; self.n_frames * per];
+                for (t, frame) in out.chunks_exact_mut(per).enumerate() {
+                    self.frames.fill(t, per, frame);
+                }
+                Cow::Owned(out)
+            }
+        }
     }
     /// `rows × cols`, `true` where a sensor exists.
     pub fn sensor_mask(&self) -> &[bool] {
@@ -294,9 +312,16 @@ impl Recording {
     }
 
     /// Frame `t` as raw values (0 at missing sensors); `None` past the end.
-    pub fn frame_slice(&self, t: usize) -> Option<&[f32]> {
+    pub fn frame_slice(&self, t: usize) -> Option<Cow<'_, [f32]>> {
         let per = self.rows * self.cols;
-        (t < self.n_frames).then(|| &self.data[t * per..(t + 1) * per])
+        (t < self.n_frames).then(|| match &self.frames {
+            Frames::Dense(d) => Cow::Borrowed(&d[t * per..(t + 1) * per]),
+            Frames::Sparse(_) => {
+                let mut out = vec![0.0f32; per];
+                self.frames.fill(t, per, &mut out);
+                Cow::Owned(out)
+            }
+        })
     }
 
     /// Frame `t` as a [`Grid`] (missing sensors read as 0, i.e. no contact).
@@ -310,20 +335,29 @@ impl Recording {
         Grid::new(self.rows, self.cols, s.iter().map(|&v| v as f64).collect())
     }
 
+    /// Whether the frames are held sparsely (only the values that are not 0), see [`Recording`].
+    pub fn is_sparse(&self) -> bool {
+        matches!(self.frames, Frames::Sparse(_))
+    }
+
+    /// Bytes taken by the frames' values (and, held sparsely, their positions).
+    pub fn frames_bytes(&self) -> usize {
+        match &self.frames {
+            Frames::Dense(d) => d.len() * 4,
+            Frames::Sparse(s) => s.bytes(),
+        }
+    }
+
     /// Frames with NaN at missing sensors (the layout the Python binding exposes).
     pub fn frames_with_nan(&self) -> Vec<f32> {
         let per = self.rows * self.cols;
-        self.data
-            .iter()
-            .enumerate()
-            .map(|(i, &v)| {
-                if self.sensor_mask[i % per] {
-                    v
-                } else {
-                    f32::NAN
-                }
-            })
-            .collect()
+        let mut out = self.data().into_owned();
+        for (i, v) in out.iter_mut().enumerate() {
+            if !self.sensor_mask[i % per] {
+                *v = f32::NAN;
+            }
+        }
+        out
     }
 
     /// Area of one sensor in mm²: the stated area, else the pitch product, else `None`.
@@ -342,8 +376,10 @@ impl Recording {
     pub fn peak_image(&self) -> Grid {
         let per = self.rows * self.cols;
         let mut out = vec![0.0f64; per];
+        let mut frame = vec![0.0f32; per];
         for t in 0..self.n_frames {
-            for (o, &v) in out.iter_mut().zip(&self.data[t * per..(t + 1) * per]) {
+            self.frames.fill(t, per, &mut frame);
+            for (o, &v) in out.iter_mut().zip(&frame) {
                 *o = o.max(v as f64);
             }
         }
@@ -357,9 +393,10 @@ impl Recording {
         let per = self.rows * self.cols;
         let area = self.sensel_area().unwrap_or(1.0);
         let force = self.force_factor().unwrap_or(area);
+        let mut f = vec![0.0f32; per];
         (0..self.n_frames)
             .map(|t| {
-                let f = &self.data[t * per..(t + 1) * per];
+                self.frames.fill(t, per, &mut f);
                 let (mut n, mut sum, mut peak, mut sx, mut sy) = (0usize, 0.0f64, 0.0f64, 0.0, 0.0);
                 for (i, &v) in f.iter().enumerate() {
                     let v = v as f64;
@@ -404,4 +441,273 @@ pub fn kpa_per_unit(units: &str) -> Option<f64> {
         "mmhg" => 0.133_322_4,
         _ => return None,
     })
+}
+
+/// The values of every frame: all of them, or only those that are not 0 ([`SparseFrames`]),
+/// whichever takes less memory (decided from the values alone, so that equal recordings are
+/// held alike and compare equal).
+#[derive(Debug, Clone, PartialEq)]
+enum Frames {
+    Dense(Vec<f32>),
+    Sparse(SparseFrames),
+}
+
+/// The values of each frame that are not 0 (bit for bit: `-0.0` is kept), with their positions
+/// in the frame (`u16`: frames of up to 65,536 sensels, every plate and insole there is); frame
+/// `t` holds the entries `starts[t]..starts[t + 1]`.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct SparseFrames {
+    starts: Vec<usize>,
+    at: Vec<u16>,
+    values: Vec<f32>,
+    /// Frames larger than [`SPARSE_MAX`]: every value kept, in `values`, and no positions.
+    whole: bool,
+}
+
+/// The most values a frame held sparsely may have.
+const SPARSE_MAX: usize = u16::MAX as usize + 1;
+
+impl SparseFrames {
+    /// No frames yet; frames will have `per` values.
+    pub(crate) fn new(per: usize) -> Self {
+        Self {
+            starts: vec![0],
+            at: Vec::new(),
+            values: Vec::new(),
+            whole: per > SPARSE_MAX,
+        }
+    }
+
+    /// Appends a frame (its value at every position).
+    pub(crate) fn push(&mut self, frame: &[f32]) {
+        if self.whole {
+            self.values.extend_from_slice(frame);
+            self.starts.push(self.values.len());
+            return;
+        }
+        for (i, &v) in frame.iter().enumerate() {
+            if v.to_bits() != 0
+                && let Ok(i) = u16::try_from(i)
+            {
+                self.at.push(i);
+                self.values.push(v);
+            }
+        }
+        self.starts.push(self.values.len());
+    }
+
+    pub(crate) fn n_frames(&self) -> usize {
+        self.starts.len() - 1
+    }
+
+    fn entries(&self, t: usize) -> impl Iterator<Item = (usize, f32)> + '_ {
+        let r = self.starts[t]..self.starts[t + 1];
+        self.at[r.clone()]
+            .iter()
+            .zip(&self.values[r])
+            .map(|(&i, &v)| (i as usize, v))
+    }
+
+    fn bytes(&self) -> usize {
+        self.starts.len() * std::mem::size_of::<usize>() + self.values.len() * 6
+    }
+
+    /// Whether `n_frames` frames of `per` values, `stored` of them not 0, take less memory held
+    /// sparsely than whole.
+    fn pays(n_frames: usize, per: usize, stored: usize) -> bool {
+        per <= SPARSE_MAX
+            && stored.saturating_mul(6).saturating_add((n_frames + 1) * 8)
+                < n_frames.saturating_mul(per).saturating_mul(4)
+    }
+}
+
+impl Frames {
+    /// `data` (frames of `per` values), held sparsely when that takes less memory.
+    fn compact(data: Vec<f32>, per: usize) -> Self {
+        let n = data.len() / per;
+        let stored = data.iter().filter(|v| v.to_bits() != 0).count();
+        if !SparseFrames::pays(n, per, stored) {
+            return Frames::Dense(data);
+        }
+        let mut s = SparseFrames::new(per);
+        s.at.reserve_exact(stored);
+        s.values.reserve_exact(stored);
+        s.starts.reserve_exact(n);
+        for frame in data.chunks_exact(per) {
+            s.push(frame);
+        }
+        Frames::Sparse(s)
+    }
+
+    /// Frames appended one by one, held whole instead when that takes less memory.
+    fn from_sparse(mut s: SparseFrames, per: usize) -> Self {
+        let n = s.n_frames();
+        if SparseFrames::pays(n, per, s.values.len()) {
+            s.at.shrink_to_fit();
+            s.values.shrink_to_fit();
+            s.starts.shrink_to_fit();
+            return Frames::Sparse(s);
+        }
+        let mut d = vec![0.0f32; n * per];
+        for t in 0..n {
+            for (i, v) in s.entries(t) {
+                d[t * per + i] = v;
+            }
+        }
+        Frames::Dense(d)
+    }
+
+    /// Writes frame `t` (of `per` values) into `out`.
+    fn fill(&self, t: usize, per: usize, out: &mut [f32]) {
+        match self {
+            Frames::Dense(d) => out.copy_from_slice(&d[t * per..(t + 1) * per]),
+            Frames::Sparse(s) => {
+                out.fill(0.0);
+                for (i, v) in s.entries(t) {
+                    out[i] = v;
+                }
+            }
+        }
+    }
+}
+
+impl Recording {
+    /// Builds a recording from frames appended one by one to `frames` (so that a long file is
+    /// never held whole as dense values), with the checks of [`Recording::new`]: values at
+    /// missing sensors are dropped and every other value must be finite.
+    pub(crate) fn from_sparse(
+        rows: usize,
+        cols: usize,
+        mut frames: SparseFrames,
+        sensor_mask: Vec<bool>,
+    ) -> Result<Self> {
+        let n_frames = frames.n_frames();
+        let per = rows.saturating_mul(cols);
+        if frames.whole {
+            return Self::new(n_frames, rows, cols, frames.values, sensor_mask);
+        }
+        if n_frames == 0 || per == 0 || per > SPARSE_MAX || sensor_mask.len() != per {
+            return Err(IoError::invalid(format!(
+                "a recording needs at least one frame of at least 1x1 and a mask entry per \
+                 sensel, got {n_frames} x {rows}x{cols} with {} mask entries",
+                sensor_mask.len()
+            )));
+        }
+        for t in 0..n_frames {
+            for (i, v) in frames.entries(t) {
+                if sensor_mask[i] && !v.is_finite() {
+                    return Err(IoError::invalid(format!(
+                        "frame {t}, row {}, column {} is not finite ({v})",
+                        i / cols,
+                        i % cols
+                    )));
+                }
+            }
+        }
+        if frames.at.iter().any(|&i| !sensor_mask[i as usize]) {
+            let mut kept = SparseFrames::new(per);
+            let mut frame = vec![0.0f32; per];
+            for t in 0..n_frames {
+                frame.fill(0.0);
+                for (i, v) in frames.entries(t) {
+                    if sensor_mask[i] {
+                        frame[i] = v;
+                    }
+                }
+                kept.push(&frame);
+            }
+            frames = kept;
+        }
+        Ok(Self {
+            n_frames,
+            rows,
+            cols,
+            frames: Frames::from_sparse(frames, per),
+            sensor_mask,
+            pitch_mm: None,
+            sensel_area_mm2: None,
+            dt_s: None,
+            units: String::new(),
+            noise_threshold: None,
+            format: None,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sparse_of(data: &[f32], per: usize) -> SparseFrames {
+        let mut s = SparseFrames::new(per);
+        for f in data.chunks(per) {
+            s.push(f);
+        }
+        s
+    }
+
+    #[test]
+    fn mostly_zero_frames_are_held_sparsely_and_read_back_alike() {
+        let (n, rows, cols) = (5, 6, 7);
+        let per = rows * cols;
+        let mut data = vec![0.0f32; n * per];
+        data[3] = 2.5;
+        data[per + 10] = -0.0;
+        data[4 * per + 41] = 7.0;
+        let mask = vec![true; per];
+        let rec = Recording::new(n, rows, cols, data.clone(), mask.clone()).unwrap();
+        assert!(rec.is_sparse());
+        assert!(rec.frames_bytes() < data.len() * 4);
+        assert_eq!(&*rec.data(), &data[..]);
+        // -0.0 is kept bit for bit.
+        assert_eq!(
+            rec.frame_slice(1).unwrap()[10].to_bits(),
+            (-0.0f32).to_bits()
+        );
+        assert_eq!(rec.frame(4).unwrap().get(5, 6), 7.0);
+        assert_eq!(rec.peak_image().max(), 7.0);
+        assert_eq!(rec.measures(0.0)[0].contact_sensors, 1);
+        // Built frame by frame, the recording is the same.
+        let built = Recording::from_sparse(rows, cols, sparse_of(&data, per), mask.clone());
+        assert_eq!(built.unwrap(), rec);
+        // Frames mostly loaded are held whole, either way.
+        let full = vec![1.0f32; n * per];
+        let dense = Recording::new(n, rows, cols, full.clone(), mask.clone()).unwrap();
+        assert!(!dense.is_sparse());
+        let built = Recording::from_sparse(rows, cols, sparse_of(&full, per), mask);
+        assert_eq!(built.unwrap(), dense);
+    }
+
+    #[test]
+    fn frames_too_large_for_sparse_positions_are_held_whole() {
+        let (rows, cols) = (300, 300);
+        let mut frame = vec![0.0f32; rows * cols];
+        frame[rows * cols - 1] = 4.0;
+        let rec = Recording::from_sparse(
+            rows,
+            cols,
+            sparse_of(&frame, rows * cols),
+            vec![true; rows * cols],
+        );
+        let rec = rec.unwrap();
+        assert!(!rec.is_sparse());
+        assert_eq!(rec.frame(0).unwrap().get(rows - 1, cols - 1), 4.0);
+        assert_eq!(
+            rec,
+            Recording::new(1, rows, cols, frame, vec![true; rows * cols]).unwrap()
+        );
+    }
+
+    #[test]
+    fn frames_built_one_by_one_are_checked_like_new() {
+        let mut mask = vec![true; 4];
+        mask[1] = false;
+        let one = |frame: &[f32]| sparse_of(frame, 4);
+        let rec = Recording::from_sparse(2, 2, one(&[0.0, 5.0, 0.0, 1.0]), mask.clone()).unwrap();
+        assert_eq!(&*rec.data(), &[0.0, 0.0, 0.0, 1.0]);
+        let e = Recording::from_sparse(2, 2, one(&[0.0, 0.0, f32::INFINITY, 0.0]), mask)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("frame 0, row 1, column 0 is not finite"), "{e}");
+    }
 }

@@ -115,20 +115,43 @@ pub fn write_csv(
 impl Table {
     /// The rows as JSON objects keyed by column name.
     pub fn to_json(&self) -> Value {
-        Value::Array(
-            self.rows
-                .iter()
-                .map(|r| {
-                    let m: Map<String, Value> = self
-                        .header
-                        .iter()
-                        .cloned()
-                        .zip(r.iter().map(Cell::to_json))
-                        .collect();
-                    Value::Object(m)
-                })
-                .collect(),
-        )
+        Value::Array(self.rows.iter().map(|r| self.row_json(r)).collect())
+    }
+
+    fn row_json(&self, row: &[Cell]) -> Value {
+        let m: Map<String, Value> = self
+            .header
+            .iter()
+            .cloned()
+            .zip(row.iter().map(Cell::to_json))
+            .collect();
+        Value::Object(m)
+    }
+
+    /// Writes [`Table::to_json`] pretty-printed, with a final newline, byte for byte as
+    /// `serde_json::to_string_pretty` would, one row at a time: the JSON values of a long
+    /// table's cells take several times the memory of the table.
+    pub fn write_json(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        if self.rows.is_empty() {
+            return w.write_all(b"[]\n");
+        }
+        w.write_all(b"[\n")?;
+        for (k, r) in self.rows.iter().enumerate() {
+            if k > 0 {
+                w.write_all(b",\n")?;
+            }
+            // One level deeper than alone: every line indented by two spaces (strings hold no
+            // line breaks: JSON escapes them).
+            let row = serde_json::to_string_pretty(&self.row_json(r))?;
+            for (i, line) in row.lines().enumerate() {
+                if i > 0 {
+                    w.write_all(b"\n")?;
+                }
+                w.write_all(b"  ")?;
+                w.write_all(line.as_bytes())?;
+            }
+        }
+        w.write_all(b"\n]\n")
     }
 }
 
@@ -340,7 +363,7 @@ pub fn tracks_rows<E>(
 ) -> std::result::Result<(), E> {
     let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
     let dim = r.objects.first().map_or(2, |o| o.shape.dim());
-    for (k, tr) in r.tracks.iter().enumerate() {
+    for (k, tr) in r.all_tracks().enumerate() {
         for (s, &(o, n)) in tr.steps.iter().enumerate() {
             let obj = &r.objects[o];
             let p = obj.shape.point(n);
@@ -472,15 +495,30 @@ impl InputInfo {
                 .collect();
             files.sort();
             for f in files {
-                hasher.update(std::fs::read(&f).map_err(io)?);
+                hash_file(&mut hasher, &f).map_err(io)?;
             }
         } else {
-            hasher.update(std::fs::read(path).map_err(io)?);
+            hash_file(&mut hasher, path).map_err(io)?;
         }
         Ok(Self {
             name: path.display().to_string(),
             sha256: Some(hex(&hasher.finalize())),
         })
+    }
+}
+
+/// Feeds a file to `hasher` piece by piece (a long recording is not read twice into memory).
+fn hash_file(hasher: &mut Sha256, path: &std::path::Path) -> std::io::Result<()> {
+    use std::io::Read;
+    let mut file = std::fs::File::open(path)?;
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        match file.read(&mut buf) {
+            Ok(0) => return Ok(()),
+            Ok(n) => hasher.update(&buf[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
     }
 }
 
@@ -609,8 +647,8 @@ pub fn run_summary(
         "options": used,
         "objects": r.objects.len(),
         "pairs": r.pairs.len(),
-        "tracks": r.tracks.len(),
-        "tracks_3_or_more": r.tracks.iter().filter(|t| t.steps.len() >= 3).count(),
+        "tracks": r.track_count(),
+        "tracks_3_or_more": r.track_lengths().filter(|&n| n >= 3).count(),
         "splits": r.splits.iter().map(|(i, js)| json!({
             "id": r.objects[*i].id, "into": js.iter().map(|&j| r.objects[j].id).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
@@ -707,5 +745,26 @@ mod csv_tests {
         .unwrap();
         assert_eq!(String::from_utf8(out).unwrap(), t.to_csv());
         assert_eq!(t.to_csv(), "a,b,c\n1,2.500,\n\"x, \"\"y\"\"\",-4,0.1\n");
+    }
+
+    #[test]
+    fn streamed_json_equals_the_whole_table_pretty_printed() {
+        let whole = |t: &Table| serde_json::to_string_pretty(&t.to_json()).unwrap() + "\n";
+        let streamed = |t: &Table| {
+            let mut out = Vec::new();
+            t.write_json(&mut out).unwrap();
+            String::from_utf8(out).unwrap()
+        };
+        let mut t = Table::new(&["a", "b", "c"]);
+        assert_eq!(streamed(&t), whole(&t));
+        t.rows
+            .push(vec![Cell::Int(1), Cell::Float(2.5, 3), Cell::Empty]);
+        t.rows.push(vec![
+            Cell::Text("two\nlines, \"quoted\"".into()),
+            Cell::Int(-4),
+            Cell::Float(0.1, 1),
+        ]);
+        assert_eq!(streamed(&t), whole(&t));
+        assert!(streamed(&t).starts_with("[\n  {\n    \"a\": 1,"));
     }
 }

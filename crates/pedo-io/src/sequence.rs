@@ -488,12 +488,87 @@ pub struct StageTimings {
     pub tracks: Duration,
 }
 
+/// The tracks of a run held compactly: the steps of every track one after the other, object and
+/// node numbers as `u32`. A run without match details ([`SequenceOptions::keep_match_details`]
+/// off: the CLI's and batch runs) keeps its tracks so, in [`SequenceResult::packed_tracks`]:
+/// a long recording has hundreds of thousands of short tracks, each a vector of its own in
+/// [`SequenceResult::tracks`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct PackedTracks {
+    /// Track `k` is `steps[starts[k]..starts[k + 1]]`.
+    starts: Vec<usize>,
+    steps: Vec<(u32, u32)>,
+}
+
+impl Default for PackedTracks {
+    fn default() -> Self {
+        Self {
+            starts: vec![0],
+            steps: Vec::new(),
+        }
+    }
+}
+
+impl PackedTracks {
+    /// Appends a track.
+    pub fn push(&mut self, track: &Track) {
+        let small = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
+        self.steps
+            .extend(track.steps.iter().map(|&(o, n)| (small(o), small(n))));
+        self.starts.push(self.steps.len());
+    }
+    /// Number of tracks.
+    pub fn len(&self) -> usize {
+        self.starts.len() - 1
+    }
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Number of steps of track `k`.
+    fn steps_of(&self, k: usize) -> usize {
+        self.starts[k + 1] - self.starts[k]
+    }
+    /// Track `k`, if there is one.
+    pub fn get(&self, k: usize) -> Option<Track> {
+        (k < self.len()).then(|| Track {
+            steps: self.steps[self.starts[k]..self.starts[k + 1]]
+                .iter()
+                .map(|&(o, n)| (o as usize, n as usize))
+                .collect(),
+        })
+    }
+    /// Every track, in order.
+    pub fn iter(&self) -> impl Iterator<Item = Track> + '_ {
+        (0..self.len()).filter_map(|k| self.get(k))
+    }
+    fn shrink_to_fit(&mut self) {
+        self.starts.shrink_to_fit();
+        self.steps.shrink_to_fit();
+    }
+}
+
+impl FromIterator<Track> for PackedTracks {
+    fn from_iter<I: IntoIterator<Item = Track>>(iter: I) -> Self {
+        let mut p = PackedTracks::default();
+        for t in iter {
+            p.push(&t);
+        }
+        p.shrink_to_fit();
+        p
+    }
+}
+
 /// Everything [`run_sequence`] produces.
 #[derive(Debug, Clone)]
 pub struct SequenceResult {
     pub objects: Vec<SequenceObject>,
     pub pairs: Vec<PairMatch>,
+    /// The tracks, unless they are in [`packed_tracks`](Self::packed_tracks) (runs without
+    /// match details): read them with [`all_tracks`](Self::all_tracks) to cover both.
     pub tracks: Vec<Track>,
+    /// Runs without match details ([`SequenceOptions::keep_match_details`] off) hold their
+    /// tracks here, packed, and leave [`tracks`](Self::tracks) empty.
+    pub packed_tracks: Option<PackedTracks>,
     /// Contour model: object `i` continues as several objects of the next frame.
     pub splits: Vec<(usize, Vec<usize>)>,
     /// Contour model: several objects continue as one object of the next frame.
@@ -532,6 +607,30 @@ pub enum Stage {
 }
 
 impl SequenceResult {
+    /// Every track in order, from [`tracks`](Self::tracks) or, packed, one at a time from
+    /// [`packed_tracks`](Self::packed_tracks).
+    pub fn all_tracks(&self) -> Box<dyn Iterator<Item = std::borrow::Cow<'_, Track>> + '_> {
+        match &self.packed_tracks {
+            Some(p) => Box::new(p.iter().map(std::borrow::Cow::Owned)),
+            None => Box::new(self.tracks.iter().map(std::borrow::Cow::Borrowed)),
+        }
+    }
+
+    /// Number of tracks (held or packed).
+    pub fn track_count(&self) -> usize {
+        self.packed_tracks
+            .as_ref()
+            .map_or(self.tracks.len(), PackedTracks::len)
+    }
+
+    /// Number of steps of every track, in order (held or packed).
+    pub fn track_lengths(&self) -> Box<dyn Iterator<Item = usize> + '_> {
+        match &self.packed_tracks {
+            Some(p) => Box::new((0..p.len()).map(|k| p.steps_of(k))),
+            None => Box::new(self.tracks.iter().map(|t| t.steps.len())),
+        }
+    }
+
     /// Coordinates of the steps of `track` as `(frame, x, y[, z])` rows.
     pub fn track_points(&self, track: &Track) -> Vec<(usize, Vec<f64>)> {
         track
@@ -573,19 +672,39 @@ pub fn run_sequence(
     let parts = parts_of_wholes(&candidate_pairs, &splits, &merges);
     let (pairs, skipped_pairs) = match_all(&objects, &candidate_pairs, &parts, options, progress);
     let t2 = Instant::now();
-    let tracks = match options.drift_reference {
-        k if k >= 2 && options.model != ObjectModel::Isocontour => {
-            let refs = crate::drift::reference_pairs(&objects, &candidate_pairs, start, k);
-            // Reference pairs lie frames apart: the sensor prior is for consecutive frames.
-            let mut apart = options.clone();
-            if apart.matching.prealign == Prealign::Sensor {
-                apart.matching.prealign = Prealign::Robust;
-            }
-            let none = HashMap::new();
-            let (anchors, _) = match_all(&objects, &refs, &none, &apart, &|_, _, _| {});
-            crate::drift::anchored_tracks(&objects, &pairs, &anchors)
+    let drift = options.drift_reference >= 2 && options.model != ObjectModel::Isocontour;
+    let drift_tracks = || {
+        let refs = crate::drift::reference_pairs(
+            &objects,
+            &candidate_pairs,
+            start,
+            options.drift_reference,
+        );
+        // Reference pairs lie frames apart: the sensor prior is for consecutive frames.
+        let mut apart = options.clone();
+        if apart.matching.prealign == Prealign::Sensor {
+            apart.matching.prealign = Prealign::Robust;
         }
-        _ => chain_tracks(&objects, &pairs),
+        let none = HashMap::new();
+        let (anchors, _) = match_all(&objects, &refs, &none, &apart, &|_, _, _| {});
+        crate::drift::anchored_tracks(&objects, &pairs, &anchors)
+    };
+    let (tracks, packed_tracks) = match (drift, options.keep_match_details) {
+        (true, true) => (drift_tracks(), None),
+        (true, false) => (Vec::new(), Some(drift_tracks().into_iter().collect())),
+        (false, true) => (chain_tracks(&objects, &pairs), None),
+        (false, false) => {
+            // Packed as they are chained: the tracks of a long run are never all held as
+            // vectors of their own.
+            let mut packed = PackedTracks::default();
+            let Ok(()) =
+                chain_tracks_with::<std::convert::Infallible>(&objects, &pairs, &mut |t| {
+                    packed.push(&t);
+                    Ok(())
+                });
+            packed.shrink_to_fit();
+            (Vec::new(), Some(packed))
+        }
     };
     let timings = StageTimings {
         objects: t1 - t0,
@@ -596,6 +715,7 @@ pub fn run_sequence(
         objects,
         pairs,
         tracks,
+        packed_tracks,
         splits,
         merges,
         skipped_frames,
@@ -617,28 +737,31 @@ fn match_all(
     // are prepared (a prepared object holds its n × n modes), so memory does not grow with the
     // recording's length. An object on a window's edge is prepared in both windows, identically.
     let done = AtomicUsize::new(0);
-    let mut outcomes: Vec<std::result::Result<PairMatch, SkippedPair>> =
-        Vec::with_capacity(candidates.len());
+    let mut pairs = Vec::with_capacity(candidates.len());
+    let mut skipped = Vec::new();
     for window in candidates.chunks(MATCH_WINDOW) {
         let prepared = prepare_objects(objects, window, &options.matching);
-        outcomes.par_extend(window.par_iter().map(|&(a, b)| {
-            let part = parts.get(&(a, b));
-            let r = match_pair(objects, &prepared, a, b, part, options).map_err(|e| SkippedPair {
-                a,
-                b,
-                reason: e.to_string(),
-            });
-            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress(Stage::Matching, n, candidates.len());
-            r
-        }));
-    }
-    let mut pairs = Vec::with_capacity(outcomes.len());
-    let mut skipped = Vec::new();
-    for outcome in outcomes {
-        match outcome {
-            Ok(p) => pairs.push(p),
-            Err(s) => skipped.push(s),
+        let outcomes: Vec<std::result::Result<PairMatch, SkippedPair>> = window
+            .par_iter()
+            .map(|&(a, b)| {
+                let part = parts.get(&(a, b));
+                let r =
+                    match_pair(objects, &prepared, a, b, part, options).map_err(|e| SkippedPair {
+                        a,
+                        b,
+                        reason: e.to_string(),
+                    });
+                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                progress(Stage::Matching, n, candidates.len());
+                r
+            })
+            .collect();
+        // Only the window's outcomes are held twice while they are sorted out.
+        for outcome in outcomes {
+            match outcome {
+                Ok(p) => pairs.push(p),
+                Err(s) => skipped.push(s),
+            }
         }
     }
     (pairs, skipped)
@@ -646,7 +769,7 @@ fn match_all(
 
 /// Pairs matched per window of [`match_all`]: enough to keep every core busy, few enough that
 /// the prepared objects of one window stay small.
-const MATCH_WINDOW: usize = 256;
+const MATCH_WINDOW: usize = 128;
 
 /// The objects prepared for matching, by index.
 type Prepared = HashMap<usize, std::result::Result<PreparedShape, ModalError>>;
@@ -895,44 +1018,112 @@ fn in_whole_numbering(
 /// stay a single path, and neither does a match between frames that moves further than
 /// [`crate::track::step_allowed`] allows. Nodes with no such predecessor start a new track.
 pub fn chain_tracks(objects: &[SequenceObject], pairs: &[PairMatch]) -> Vec<Track> {
-    let mut track_of: Vec<Vec<Option<usize>>> =
-        objects.iter().map(|o| vec![None; o.shape.len()]).collect();
-    let mut tracks: Vec<Track> = Vec::new();
+    let mut tracks = Vec::new();
+    let Ok(()) = chain_tracks_with::<std::convert::Infallible>(objects, pairs, &mut |t| {
+        tracks.push(t);
+        Ok(())
+    });
+    tracks
+}
+
+/// [`chain_tracks`], handing the tracks to `emit` one by one in order (track 0 first), each as
+/// soon as it can grow no more and every track before it has gone: only the open tracks are
+/// held (those through the last frames chained), not every track of the run.
+pub fn chain_tracks_with<E>(
+    objects: &[SequenceObject],
+    pairs: &[PairMatch],
+    emit: &mut dyn FnMut(Track) -> std::result::Result<(), E>,
+) -> std::result::Result<(), E> {
+    // The track of each node of the objects still ahead of a pair (NONE: none yet); an
+    // object's row is dropped once the last pair leaving it is chained.
+    const NONE: u32 = u32::MAX;
+    let mut track_of: Vec<Vec<u32>> = vec![Vec::new(); objects.len()];
+    let mut last_use = vec![0usize; objects.len()];
     // Objects are in sequence order and every pair goes forward, so visiting the objects in order
     // sees each predecessor before its successors.
     let mut incoming: Vec<Vec<&PairMatch>> = vec![Vec::new(); objects.len()];
     for p in pairs {
         incoming[p.b].push(p);
+        last_use[p.a] = last_use[p.a].max(p.b);
     }
+    // The tracks not emitted yet, `first` the number of the front one, each with whether it
+    // has ended.
+    let mut pending: std::collections::VecDeque<(Track, bool)> = Default::default();
+    let mut first = 0usize;
+    let id = |t: usize| u32::try_from(t).unwrap_or(NONE - 1);
+    // Ends the tracks whose last step is on object `x` (its row of tracks given).
+    let end_at = |x: usize,
+                  row: &[u32],
+                  pending: &mut std::collections::VecDeque<(Track, bool)>,
+                  first: usize| {
+        for &t in row {
+            let t = t as usize;
+            if t >= first
+                && let Some((track, ended)) = pending.get_mut(t - first)
+                && track.steps.last().map(|s| s.0) == Some(x)
+            {
+                *ended = true;
+            }
+        }
+    };
     for o in 0..objects.len() {
+        let mut row = vec![NONE; objects[o].shape.len()];
         for p in &incoming[o] {
             for mp in p.result.pairs.iter().filter(|mp| !mp.excess) {
-                if track_of[o][mp.b].is_some() {
+                if row[mp.b] != NONE {
                     continue;
                 }
                 if !honest_step(objects, p.a, mp.a, o, mp.b) {
                     continue;
                 }
-                if let Some(t) = track_of[p.a][mp.a] {
-                    // A track can pass through one node per object only: a split keeps the
-                    // first continuation.
-                    if tracks[t].steps.last().map(|s| s.0) == Some(p.a) {
-                        tracks[t].steps.push((o, mp.b));
-                        track_of[o][mp.b] = Some(t);
-                    }
+                let t = track_of[p.a][mp.a] as usize;
+                // A track can pass through one node per object only: a split keeps the first
+                // continuation. (A track already emitted has ended elsewhere.)
+                if t >= first
+                    && let Some((track, _)) = pending.get_mut(t - first)
+                    && track.steps.last().map(|s| s.0) == Some(p.a)
+                {
+                    track.steps.push((o, mp.b));
+                    row[mp.b] = id(t);
                 }
             }
         }
-        for (node, slot) in track_of[o].iter_mut().enumerate() {
-            if slot.is_none() {
-                *slot = Some(tracks.len());
-                tracks.push(Track {
-                    steps: vec![(o, node)],
-                });
+        for (node, slot) in row.iter_mut().enumerate() {
+            if *slot == NONE {
+                *slot = id(first + pending.len());
+                pending.push_back((
+                    Track {
+                        steps: vec![(o, node)],
+                    },
+                    false,
+                ));
+            }
+        }
+        // A predecessor whose last pair this was ends the tracks still ending on it; so does
+        // this object when no pair leaves it.
+        for p in std::mem::take(&mut incoming[o]) {
+            if last_use[p.a] == o {
+                let done = std::mem::take(&mut track_of[p.a]);
+                end_at(p.a, &done, &mut pending, first);
+            }
+        }
+        if last_use[o] > o {
+            track_of[o] = row;
+        } else {
+            end_at(o, &row, &mut pending, first);
+        }
+        while pending.front().is_some_and(|(_, ended)| *ended) {
+            if let Some((mut track, _)) = pending.pop_front() {
+                track.steps.shrink_to_fit();
+                first += 1;
+                emit(track)?;
             }
         }
     }
-    tracks
+    for (track, _) in pending {
+        emit(track)?;
+    }
+    Ok(())
 }
 
 /// Whether the match of node `na` of object `a` with node `nb` of object `b` may extend a track:
@@ -1211,9 +1402,73 @@ mod tests {
             assert_eq!(l.result.affinity.rows(), 0);
             assert!(l.result.aligned_a.is_empty());
         }
-        assert_eq!(full.tracks, lean.tracks);
+        assert!(full.packed_tracks.is_none() && lean.tracks.is_empty());
+        assert!(full.tracks.len() > 5);
+        assert_eq!(lean.track_count(), full.tracks.len());
+        let unpacked: Vec<Track> = lean.all_tracks().map(|t| t.into_owned()).collect();
+        assert_eq!(unpacked, full.tracks);
+        assert!(lean
+            .track_lengths()
+            .eq(full.tracks.iter().map(|t| t.steps.len())));
         let csv = |r: &SequenceResult| crate::report::matches_table(&rec, r).to_csv();
         assert_eq!(csv(&full), csv(&lean));
+        let tracks = |r: &SequenceResult| crate::report::tracks_table(&rec, r).to_csv();
+        assert_eq!(tracks(&full), tracks(&lean));
+    }
+
+    /// Tracks chained as [`chain_tracks`] did before it chained them as a stream (every node's
+    /// track held to the end).
+    fn reference_chain(objects: &[SequenceObject], pairs: &[PairMatch]) -> Vec<Track> {
+        let mut track_of: Vec<Vec<Option<usize>>> =
+            objects.iter().map(|o| vec![None; o.shape.len()]).collect();
+        let mut tracks: Vec<Track> = Vec::new();
+        let mut incoming: Vec<Vec<&PairMatch>> = vec![Vec::new(); objects.len()];
+        for p in pairs {
+            incoming[p.b].push(p);
+        }
+        for o in 0..objects.len() {
+            for p in &incoming[o] {
+                for mp in p.result.pairs.iter().filter(|mp| !mp.excess) {
+                    if track_of[o][mp.b].is_some() || !honest_step(objects, p.a, mp.a, o, mp.b) {
+                        continue;
+                    }
+                    if let Some(t) = track_of[p.a][mp.a]
+                        && tracks[t].steps.last().map(|s| s.0) == Some(p.a)
+                    {
+                        tracks[t].steps.push((o, mp.b));
+                        track_of[o][mp.b] = Some(t);
+                    }
+                }
+            }
+            for (node, slot) in track_of[o].iter_mut().enumerate() {
+                if slot.is_none() {
+                    *slot = Some(tracks.len());
+                    tracks.push(Track {
+                        steps: vec![(o, node)],
+                    });
+                }
+            }
+        }
+        tracks
+    }
+
+    #[test]
+    fn streamed_tracks_equal_those_chained_whole_on_a_real_walk() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/FrasP01L.asf");
+        let rec = crate::read_recording(path).unwrap();
+        let options = SequenceOptions {
+            // Stance and swing, with the splits and merges of heel strike and toe-off.
+            frames: Some((0, 120)),
+            keep_match_details: false,
+            ..Default::default()
+        };
+        let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+        let want = reference_chain(&run.objects, &run.pairs);
+        assert!(want.len() > 100 && want.iter().any(|t| t.steps.len() >= 10));
+        assert!(!run.splits.is_empty() || !run.merges.is_empty());
+        assert_eq!(chain_tracks(&run.objects, &run.pairs), want);
+        let packed: Vec<Track> = run.all_tracks().map(|t| t.into_owned()).collect();
+        assert_eq!(packed, want);
     }
 
     #[test]

@@ -81,9 +81,12 @@ pub fn write_tables(
 ) -> Result<()> {
     let pairs = report::pairs_table(recording, r);
     dir.write("pairs.csv", pairs.to_csv().as_bytes())?;
-    dir.write("pairs.json", pretty(&pairs.to_json()).as_bytes())?;
+    dir.write_with("pairs.json", |w| pairs.write_json(w))?;
+    // Each table goes as soon as it is written: a long recording's tables are tens of MB each.
+    drop(pairs);
     let objects = report::objects_table(recording, r);
     dir.write("objects.csv", objects.to_csv().as_bytes())?;
+    drop(objects);
     // The two large tables go to disk row by row (a long recording has millions of rows).
     dir.write_with("matches.csv", |w| {
         let header = report::matches_header(recording).header;

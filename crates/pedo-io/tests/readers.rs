@@ -231,7 +231,7 @@ fn png16_round_trip_and_folder_and_sequence() {
         "m",
     )
     .unwrap();
-    assert_eq!(b.data(), &[1.0, 2.0, 601.0]);
+    assert_eq!(&*b.data(), &[1.0, 2.0, 601.0]);
     assert!(images::frame_to_png16(&r, 0, 1.0).is_err());
 
     let asf = read_recording(data("FrasP01L.asf")).unwrap();

@@ -384,7 +384,7 @@ fn recording_from_array_with_pitch_rate_units_and_mask() {
     let masked =
         Recording::from_array(1, 1, 3, vec![1.0, 99.0, 2.0], Some(vec![true, false, true]))
             .unwrap();
-    assert_eq!(masked.data(), &[1.0, 0.0, 2.0]);
+    assert_eq!(&*masked.data(), &[1.0, 0.0, 2.0]);
     assert!(masked.clone().with_pitch_mm([0.0, 1.0]).is_err());
     assert!(masked.clone().with_frame_rate(f64::NAN).is_err());
     assert!(Recording::from_array(2, 1, 3, vec![1.0; 3], None).is_err());

@@ -329,7 +329,7 @@ fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo
                 "{} objects, {} matched pairs, {} tracks",
                 result.objects.len(),
                 result.pairs.len(),
-                result.tracks.len()
+                result.track_count()
             ),
         ),
     ];
@@ -411,11 +411,9 @@ fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo
     let rate = recording.frame_rate();
 
     // Pressure as integers of a fixed quantum: compact JSON and 3 significant digits at the peak.
-    let peak = recording
-        .data()
-        .iter()
-        .fold(0.0f64, |m, &v| m.max(v as f64))
-        * kpa;
+    // The largest value of any frame (0 at least), frame by frame: a long recording is held
+    // sparsely and never built whole.
+    let peak = recording.peak_image().max().max(0.0) * kpa;
     let quantum = if peak > 0.0 {
         10f64.powf((peak / 1000.0).log10().floor())
     } else {
@@ -431,7 +429,7 @@ fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo
     };
     let z: Vec<Vec<Option<i64>>> = shown
         .iter()
-        .map(|&t| encode(recording.frame_slice(t).unwrap_or(&[])))
+        .map(|&t| encode(&recording.frame_slice(t).unwrap_or_default()))
         .collect();
     let peak_image: Vec<Option<i64>> = {
         let g = recording.peak_image();
@@ -535,7 +533,8 @@ fn overlays(
     }
     // Track steps by frame: (track, step index).
     let mut steps_by_frame: HashMap<usize, Vec<(usize, usize)>> = HashMap::new();
-    for (t, track) in result.tracks.iter().enumerate() {
+    let tracks: Vec<_> = result.all_tracks().collect();
+    for (t, track) in tracks.iter().enumerate() {
         for (s, &(o, _)) in track.steps.iter().enumerate() {
             steps_by_frame
                 .entry(result.objects[o].frame)
@@ -589,7 +588,7 @@ fn overlays(
             }
             let mut trails = Lines::default();
             for &(t, s) in steps_by_frame.get(&f).into_iter().flatten() {
-                let steps = &result.tracks[t].steps;
+                let steps = &tracks[t].steps;
                 let from = s.saturating_sub(TRAIL_FRAMES);
                 if s > from {
                     trails.piece(
@@ -1003,6 +1002,7 @@ mod tests {
             objects: vec![],
             pairs: vec![],
             tracks: vec![],
+            packed_tracks: None,
             splits: vec![],
             merges: vec![],
             skipped_frames: vec![],

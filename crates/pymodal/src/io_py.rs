@@ -83,7 +83,7 @@ impl PyRecording {
         w.usize(r.n_frames())
             .usize(r.rows())
             .usize(r.cols())
-            .f32s(r.data())
+            .f32s(&r.data())
             .bools(r.sensor_mask())
             .bool(r.pitch_mm.is_some());
         let [dx, dy] = r.pitch_mm.unwrap_or([0.0; 2]);

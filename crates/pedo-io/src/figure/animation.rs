@@ -266,6 +266,7 @@ mod tests {
             objects: vec![],
             pairs: vec![],
             tracks: vec![],
+            packed_tracks: None,
             splits: vec![],
             merges: vec![],
             skipped_frames: vec![],

@@ -9,7 +9,7 @@
 
 use super::{latin1_lines, parse_num};
 use crate::error::{IoError, Result};
-use crate::recording::{Format, Recording};
+use crate::recording::{Format, Recording, SparseFrames};
 
 /// A length with its unit (`5.08 mm`, `0.2 in`) in mm.
 fn length_mm(v: &str) -> Option<f64> {
@@ -159,7 +159,9 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
         _ => None,
     };
 
-    let mut data: Vec<f32> = Vec::new();
+    // Frames are kept sparse as they are read: a long recording is never held as dense values.
+    let mut frames = SparseFrames::new(per);
+    let mut frame: Vec<f32> = Vec::with_capacity(per);
     let mut mask: Vec<Option<bool>> = vec![None; per];
     let mut n_frames = 0usize;
     let mut row_in_frame = rows; // `rows` = not inside a frame
@@ -244,13 +246,12 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
                 }
                 _ => {}
             }
-            data.push(v);
+            frame.push(v);
             k += 1;
         }
         if k != cols {
             if ln == n_lines {
                 // The file ends inside this row: reported below as a truncated frame.
-                data.truncate(data.len() - k);
                 break;
             }
             return Err(err(ln, format!("{k} values, expected COLS = {cols}")));
@@ -258,6 +259,8 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
         row_in_frame += 1;
         if row_in_frame == rows {
             n_frames += 1;
+            frames.push(&frame);
+            frame.clear();
         }
     }
     let partial = if row_in_frame != rows {
@@ -291,7 +294,7 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
         ));
     }
     let mask: Vec<bool> = mask.into_iter().map(|m| m.unwrap_or(true)).collect();
-    let mut rec = Recording::new(n_frames, rows, cols, data, mask)?;
+    let mut rec = Recording::from_sparse(rows, cols, frames, mask)?;
     rec.pitch_mm = match (dx, dy) {
         (Some(x), Some(y)) => Some([x, y]),
         (Some(x), None) => Some([x, x]),
