@@ -379,8 +379,22 @@ mod tests {
     use parquet::file::reader::{FileReader, SerializedFileReader};
     use parquet::record::Field;
 
+    /// The bytes as a file, opened for reading (a `bytes` dev-dependency would change the
+    /// features `parquet` is built with, and so build it twice in CI).
+    fn file(bytes: &[u8]) -> std::fs::File {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static N: AtomicUsize = AtomicUsize::new(0);
+        let n = N.fetch_add(1, Ordering::Relaxed);
+        let path =
+            std::env::temp_dir().join(format!("pedo-tables-{}-{n}.parquet", std::process::id()));
+        std::fs::write(&path, bytes).unwrap();
+        let f = std::fs::File::open(&path).unwrap();
+        let _ = std::fs::remove_file(&path);
+        f
+    }
+
     fn read_back(bytes: Vec<u8>) -> (Vec<String>, Vec<Vec<Field>>, usize) {
-        let reader = SerializedFileReader::new(bytes::Bytes::from(bytes)).unwrap();
+        let reader = SerializedFileReader::new(file(&bytes)).unwrap();
         let groups = reader.metadata().num_row_groups();
         let names = reader
             .metadata()
@@ -448,8 +462,7 @@ mod tests {
         assert_eq!(rows[1][2], Field::Str("skipped, \"no\" nodes".into()));
         assert_eq!(rows[2][0], Field::Null);
         assert!(matches!(rows[2][1], Field::Double(v) if v.is_nan()));
-        let reader =
-            SerializedFileReader::new(bytes::Bytes::from(parquet_bytes(&table).unwrap())).unwrap();
+        let reader = SerializedFileReader::new(file(&parquet_bytes(&table).unwrap())).unwrap();
         let schema = reader.metadata().file_metadata().schema_descr_ptr();
         let types: Vec<_> = schema.columns().iter().map(|c| c.physical_type()).collect();
         assert_eq!(
