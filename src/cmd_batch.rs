@@ -56,6 +56,7 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
             report: (args.options.report == ReportArg::Html)
                 .then_some(&output::report_page as &study::ReportWriter),
             animation: args.options.animation == crate::cmd_run::AnimationArg::Gif,
+            tables: args.options.tables.unwrap_or_default(),
         },
     };
 
@@ -85,7 +86,7 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
     bar.finish_and_clear();
 
     let counts = study::status_counts(&rows);
-    let table = args.out.join("study.csv");
+    let table = study::study_table_path(&args.out, opts.outputs.tables);
     if args.options.json {
         let mut report = counts.clone();
         report["study"] = table.display().to_string().into();

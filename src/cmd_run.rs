@@ -7,6 +7,7 @@ use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use pedo_io::report::InputInfo;
 use pedo_io::sequence::{run_sequence, FrameRange, ObjectModel, RunParams, SequenceResult, Stage};
+use pedo_io::TableFormat;
 use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::Instant;
@@ -69,6 +70,8 @@ pub struct RunOptionsArgs {
     /// Figures of every pair and of the tracks.
     #[arg(long, value_enum, default_value = "png")]
     pub figures: FigureArg,
+    #[arg(long, value_parser = word::<TableFormat>(), help = help("tables"))]
+    pub tables: Option<TableFormat>,
     /// Print the time spent in each stage.
     #[arg(long)]
     pub timings: bool,
@@ -192,6 +195,7 @@ fn execute(
         report: (o.report == ReportArg::Html)
             .then_some(&output::report_page as &pedo_io::study::ReportWriter),
         animation: o.animation == AnimationArg::Gif,
+        tables: o.tables.unwrap_or_default(),
     };
     let summary = pedo_io::study::write_run_folder(
         out,
@@ -203,7 +207,7 @@ fn execute(
     if o.json {
         print!("{}", output::pretty(&summary)?);
     } else {
-        print_summary(&input.name, out, &result);
+        print_summary(&input.name, out, &result, outputs.tables);
     }
     if o.timings {
         eprintln!(
@@ -230,7 +234,7 @@ pub fn progress_bar() -> ProgressBar {
     bar
 }
 
-fn print_summary(name: &str, out: &std::path::Path, r: &SequenceResult) {
+fn print_summary(name: &str, out: &std::path::Path, r: &SequenceResult, tables: TableFormat) {
     let n = r.pairs.len().max(1) as f64;
     let mean = |f: &dyn Fn(&pedo_io::sequence::PairRow) -> f64| {
         r.pairs.iter().map(|p| f(&p.row)).sum::<f64>() / n
@@ -257,13 +261,15 @@ fn print_summary(name: &str, out: &std::path::Path, r: &SequenceResult) {
             .or(r.skipped_frames.first().map(|s| s.reason.as_str()))
             .unwrap_or_default();
         println!(
-            "skipped {} pairs and {} frames that could not be matched (reasons in pairs.csv and summary.json; first: {first})",
+            "skipped {} pairs and {} frames that could not be matched (reasons in {} and summary.json; first: {first})",
             r.skipped_pairs.len(),
-            r.skipped_frames.len()
+            r.skipped_frames.len(),
+            tables.file_name("pairs")
         );
     }
     println!(
-        "results in {}/ (pairs.csv, pairs.json, objects.csv, matches.csv, tracks.csv, frames.csv, summary.json, figures/)",
-        out.display()
+        "results in {}/ ({}, summary.json, figures/)",
+        out.display(),
+        pedo_io::study::run_table_files(tables).join(", ")
     );
 }

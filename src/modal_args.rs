@@ -23,6 +23,7 @@ pub fn help(name: &str) -> String {
         .into_iter()
         .chain(modal_core::options::pair_option_specs())
         .chain(pedo_io::sequence::recording_option_specs())
+        .chain(pedo_io::tables::output_option_specs())
         .find(|s| s.name == name)
         .map(|s| s.help_with_default())
         .unwrap_or_else(|| panic!("option {name} is not in the library's option tables"))

@@ -248,3 +248,89 @@ fn a_study_folder_is_never_written_over_other_files_and_no_input_is_an_error() {
     assert_eq!(out.status.code(), Some(2), "--jobs 0 is a usage error");
     std::fs::remove_dir_all(&base).unwrap();
 }
+
+#[test]
+fn tables_parquet_writes_parquet_files_and_an_unknown_format_is_a_usage_error() {
+    let base = temp_dir("parquet");
+    let input = study_inputs(&base);
+    let out = base.join("study");
+    let (i, o) = (input.to_str().unwrap(), out.to_str().unwrap());
+    let (code, report, stderr) = batch_json(&[i, "--out", o, "--tables", "parquet"]);
+    assert_eq!(code, Some(1), "the corrupt file still fails: {stderr}");
+    assert!(
+        report["study"].as_str().unwrap().ends_with("study.parquet"),
+        "{report}"
+    );
+    let is_parquet = |p: &Path| {
+        let b = std::fs::read(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        b.len() > 8 && b.starts_with(b"PAR1") && b.ends_with(b"PAR1")
+    };
+    assert!(is_parquet(&out.join("study.parquet")));
+    assert!(!out.join("study.csv").exists() && out.join("study.json").is_file());
+    let ok: Vec<Value> = rows(&report)
+        .into_iter()
+        .filter(|r| r["status"] == "ok")
+        .collect();
+    assert_eq!(ok.len(), 3);
+    for r in &ok {
+        let folder = out.join(r["output"].as_str().unwrap());
+        for t in ["pairs", "objects", "matches", "tracks", "frames"] {
+            assert!(is_parquet(&folder.join(format!("{t}.parquet"))), "{t}");
+            assert!(!folder.join(format!("{t}.csv")).exists(), "{t}");
+        }
+        assert!(folder.join("pairs.json").is_file() && folder.join("summary.json").is_file());
+    }
+    // A second Parquet run skips them; a CSV run does not take Parquet folders as complete.
+    let (_, again, _) = batch_json(&[i, "--out", o, "--tables", "parquet"]);
+    assert_eq!(again["skipped"], 3, "{again}");
+    let (_, as_csv, _) = batch_json(&[i, "--out", o]);
+    assert_eq!(as_csv["ok"], 3, "{as_csv}");
+    assert!(out.join("study.csv").is_file() && !out.join("study.parquet").exists());
+
+    // `run` too, and its closing line names the files.
+    let run_out = base.join("run");
+    let o = pedomatch(
+        &[
+            &[
+                "run",
+                input.join("tekscan.csv").to_str().unwrap(),
+                "--out",
+                run_out.to_str().unwrap(),
+                "--tables",
+                "parquet",
+            ],
+            &FAST[..],
+        ]
+        .concat(),
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(stdout.contains("matches.parquet"), "{stdout}");
+    assert!(is_parquet(&run_out.join("tracks.parquet")));
+
+    let never = base.join("x");
+    let bad = pedomatch(&[
+        "batch",
+        i,
+        "--out",
+        never.to_str().unwrap(),
+        "--tables",
+        "xlsx",
+    ]);
+    assert_eq!(
+        bad.status.code(),
+        Some(2),
+        "an unknown format is a usage error"
+    );
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        stderr.contains("xlsx") && stderr.contains("--tables") && stderr.contains("parquet"),
+        "{stderr}"
+    );
+    assert!(!never.exists());
+    std::fs::remove_dir_all(&base).unwrap();
+}

@@ -77,6 +77,7 @@ fn run_and_match_flags_are_the_library_option_tables() {
 
     let mut expected = flags_of(&matching);
     expected.extend(flags_of(&recording));
+    expected.extend(flags_of(&pedo_io::tables::output_option_specs()));
     expected.extend(own(&[
         "out",
         "figures",

@@ -29,6 +29,7 @@ pub mod sequence;
 pub mod study;
 pub mod surface;
 pub mod synthetic;
+pub mod tables;
 pub mod track;
 pub mod units;
 
@@ -40,3 +41,4 @@ pub use formats::{
 };
 pub use grid::{CoordUnits, Grid};
 pub use recording::{Format, FrameMeasures, Recording};
+pub use tables::TableFormat;

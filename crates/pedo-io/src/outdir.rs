@@ -115,7 +115,7 @@ impl OutDir {
     pub fn write_with(
         &self,
         rel: &str,
-        fill: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
+        fill: impl FnOnce(&mut (dyn std::io::Write + Send)) -> std::io::Result<()>,
     ) -> Result<()> {
         use std::io::Write;
         if interrupted() {

@@ -1,5 +1,6 @@
 //! A whole study: many recordings, each run like `pedomatch run` into a folder of its own, several
-//! at once, summed up in one table (`study.csv`/`study.json`) with a row per recording.
+//! at once, summed up in one table (`study.csv` or `study.parquet`, and `study.json`) with a row
+//! per recording.
 //!
 //! - [`find_recordings`] turns files, folders (searched recursively) and glob patterns into the
 //!   list of recordings;
@@ -20,6 +21,7 @@ use crate::outdir::{self, OutDir};
 use crate::recording::{Format, Recording};
 use crate::report::{self, Cell, InputInfo, Table};
 use crate::sequence::{run_sequence, RunParams, SequenceOptions, SequenceResult, Stage};
+use crate::tables::{self, TableFormat};
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
@@ -31,15 +33,17 @@ use std::time::Instant;
 /// holding it).
 const STUDY_MARKER: &str = ".pedomatch-study";
 
-/// The tables every run folder holds (besides `summary.json`).
-pub const RUN_TABLES: [&str; 6] = [
-    "pairs.csv",
-    "pairs.json",
-    "objects.csv",
-    "matches.csv",
-    "tracks.csv",
-    "frames.csv",
-];
+/// The tables every run folder holds (besides `summary.json` and `pairs.json`), by name: each
+/// written as `NAME.csv` or `NAME.parquet` ([`TableFormat`]).
+pub const RUN_TABLES: [&str; 5] = ["pairs", "objects", "matches", "tracks", "frames"];
+
+/// The table files of a run folder whose tables are written as `tables`: those of
+/// [`RUN_TABLES`] and `pairs.json`.
+pub fn run_table_files(tables: TableFormat) -> Vec<String> {
+    let mut files: Vec<String> = RUN_TABLES.iter().map(|t| tables.file_name(t)).collect();
+    files.insert(1, "pairs.json".into());
+    files
+}
 
 /// Which figure files a run writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -69,37 +73,40 @@ pub struct RunOutputs<'a> {
     pub report: Option<&'a ReportWriter>,
     /// `animation.gif`: the frames with their contours and matches (`--animation gif`).
     pub animation: bool,
+    /// The file format of the tables (and of a study's table).
+    pub tables: TableFormat,
 }
 
-/// Writes every table of a sequence run (pairs.csv/.json, objects.csv, matches.csv, tracks.csv,
-/// and frames.csv: the per-frame measures of the frames used).
+/// Writes every table of a sequence run as `tables` (CSV or Parquet): pairs (and pairs.json),
+/// objects, matches, tracks, and frames (the per-frame measures of the frames used).
 pub fn write_tables(
     dir: &OutDir,
     recording: &Recording,
     options: &SequenceOptions,
     r: &SequenceResult,
+    tables: TableFormat,
 ) -> Result<()> {
     let pairs = report::pairs_table(recording, r);
-    dir.write("pairs.csv", pairs.to_csv().as_bytes())?;
+    tables::write_table(dir, tables, "pairs", &pairs)?;
     dir.write_with("pairs.json", |w| pairs.write_json(w))?;
     // Each table goes as soon as it is written: a long recording's tables are tens of MB each.
     drop(pairs);
     let objects = report::objects_table(recording, r);
-    dir.write("objects.csv", objects.to_csv().as_bytes())?;
+    tables::write_table(dir, tables, "objects", &objects)?;
     drop(objects);
     // The two large tables go to disk row by row (a long recording has millions of rows).
-    dir.write_with("matches.csv", |w| {
-        let header = report::matches_header(recording).header;
-        report::write_csv(w, &header, |emit| report::matches_rows(recording, r, emit))
+    let header = report::matches_header(recording).header;
+    tables::write_rows(dir, tables, "matches", &header, |emit| {
+        report::matches_rows(recording, r, emit)
     })?;
-    dir.write_with("tracks.csv", |w| {
-        let header = report::tracks_header(recording, r).header;
-        report::write_csv(w, &header, |emit| report::tracks_rows(recording, r, emit))
+    let header = report::tracks_header(recording, r).header;
+    tables::write_rows(dir, tables, "tracks", &header, |emit| {
+        report::tracks_rows(recording, r, emit)
     })?;
     let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
     let frames = report::frames_table(recording, threshold, start, end);
-    dir.write("frames.csv", frames.to_csv().as_bytes())
+    tables::write_table(dir, tables, "frames", &frames)
 }
 
 /// Writes the match figure of every pair (in parallel on the current rayon pool) and the tracks
@@ -175,7 +182,7 @@ pub fn write_run_folder(
 ) -> Result<Value> {
     let started = Instant::now();
     let dir = OutDir::create(out)?;
-    write_tables(&dir, run.recording, run.options, run.result)?;
+    write_tables(&dir, run.recording, run.options, run.result, outputs.tables)?;
     write_figures(&dir, run.recording, run.result, outputs.figures)?;
     let mut stages = timings.to_vec();
     stages.push(("output", started.elapsed().as_secs_f64()));
@@ -445,7 +452,8 @@ pub enum StudyEvent<'a> {
 }
 
 /// Runs every recording of `paths` (see the module docs) and returns one row per recording, in
-/// order. With an output folder, writes each recording's folder and `study.csv` + `study.json`
+/// order. With an output folder, writes each recording's folder and `study.csv` (or
+/// `study.parquet`, see [`RunOutputs::tables`]) + `study.json`
 /// (atomically, after the last recording). Fails only before any recording runs: invalid
 /// options, or an output folder that holds other files.
 pub fn run_study(
@@ -500,7 +508,7 @@ pub fn run_study(
     if let Some(out) = &opts.out
         && !outdir::interrupted()
     {
-        write_study_table(out, &rows)?;
+        write_study_table(out, &rows, opts.outputs.tables)?;
     }
     Ok(rows)
 }
@@ -561,13 +569,15 @@ pub fn open_study_folder(out: &Path) -> Result<Vec<StudyRow>> {
         .unwrap_or_default())
 }
 
-/// Writes `study.csv` and `study.json`, each replaced in one rename.
-fn write_study_table(out: &Path, rows: &[StudyRow]) -> Result<()> {
+/// Writes `study.csv` (or `study.parquet`) and `study.json`, each replaced in one rename; the
+/// study table of the other format, left by an earlier run, is removed.
+fn write_study_table(out: &Path, rows: &[StudyRow], tables: TableFormat) -> Result<()> {
     let table = study_table(rows);
-    let write = |name: &str, text: String| {
+    let write = |name: &str, bytes: std::io::Result<Vec<u8>>| {
         let tmp = out.join(format!(".{name}.tmp-{}", std::process::id()));
         let target = out.join(name);
-        std::fs::write(&tmp, text)
+        bytes
+            .and_then(|bytes| std::fs::write(&tmp, bytes))
             .and_then(|()| std::fs::rename(&tmp, &target))
             .map_err(|e| {
                 let _ = std::fs::remove_file(&tmp);
@@ -577,8 +587,23 @@ fn write_study_table(out: &Path, rows: &[StudyRow]) -> Result<()> {
                 }
             })
     };
-    write("study.csv", table.to_csv())?;
-    write("study.json", pretty(&table.to_json()))
+    let (name, other) = match tables {
+        TableFormat::Csv => ("study.csv", "study.parquet"),
+        TableFormat::Parquet => ("study.parquet", "study.csv"),
+    };
+    let bytes = match tables {
+        TableFormat::Csv => Ok(table.to_csv().into_bytes()),
+        TableFormat::Parquet => tables::parquet_bytes(&table),
+    };
+    write(name, bytes)?;
+    write("study.json", Ok(pretty(&table.to_json()).into_bytes()))?;
+    let _ = std::fs::remove_file(out.join(other));
+    Ok(())
+}
+
+/// The study table's file in study folder `out` when tables are written as `tables`.
+pub fn study_table_path(out: &Path, tables: TableFormat) -> PathBuf {
+    out.join(tables.file_name("study"))
 }
 
 /// One recording of a study: read, run and (with an output folder) written, or skipped when its
@@ -721,15 +746,15 @@ fn complete_summary(
     if !same_input || !json_close(&summary["options"], used) {
         return None;
     }
-    let mut files: Vec<&str> = RUN_TABLES.to_vec();
+    let mut files = run_table_files(outputs.tables);
     if outputs.report.is_some() {
-        files.push("report.html");
+        files.push("report.html".into());
     }
     if outputs.figures.png {
-        files.push("tracks.png");
+        files.push("tracks.png".into());
     }
     if outputs.figures.svg {
-        files.push("tracks.svg");
+        files.push("tracks.svg".into());
     }
     files
         .iter()

@@ -28,6 +28,7 @@ fn most_in_flight(jobs: usize, paths: &[PathBuf]) -> (usize, Vec<String>) {
             figures: Default::default(),
             report: None,
             animation: false,
+            tables: Default::default(),
         },
     };
     let state = Mutex::new((BTreeSet::new(), BTreeSet::new(), 0usize));

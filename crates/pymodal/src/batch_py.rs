@@ -2,7 +2,7 @@
 //! library's study code ([`pedo_io::study`]) that `pedomatch batch` runs.
 
 use pedo_io::study::{self, FigureKinds, RunOutputs, StudyOptions, StudyRow};
-use pedo_io::ReadOptions;
+use pedo_io::{ReadOptions, TableFormat};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
@@ -45,6 +45,7 @@ fn study_options(
     jobs: Option<usize>,
     force: bool,
     figures: &str,
+    tables: &str,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<StudyOptions<'static>> {
     if jobs == Some(0) {
@@ -64,6 +65,7 @@ fn study_options(
             figures: figure_kinds(figures)?,
             report: None,
             animation: false,
+            tables: crate::options_py::word(Some(tables), TableFormat::default())?,
         },
     })
 }
@@ -100,11 +102,14 @@ fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<St
 /// ``pedomatch run``; ``report.html`` is the command line's) is written there atomically, with
 /// ``study.csv`` and ``study.json``; a recording whose folder is complete (same input SHA-256
 /// and options) is skipped unless ``force``. ``jobs``: recordings run at once, each on one
-/// thread (None: every core). ``figures``: ``"png"``, ``"svg"`` or ``"none"``. ``options``: the
+/// thread (None: every core). ``figures``: ``"png"``, ``"svg"`` or ``"none"``. ``tables``:
+/// ``"csv"``, or ``"parquet"`` (typed, compressed columns with the CSV's names and values;
+/// ``pandas.read_parquet`` reads them; the study table is then ``study.parquet``). ``options``: the
 /// keywords of :func:`run`. A recording that fails is an ``"error"`` row; the others go on. Bad
 /// options or an ``out`` folder holding other files raise. The GIL is released throughout.
 #[pyfunction]
-#[pyo3(signature = (paths, out=None, jobs=None, *, force=false, figures="png", **options))]
+#[pyo3(signature = (paths, out=None, jobs=None, *, force=false, figures="png", tables="csv", **options))]
+#[allow(clippy::too_many_arguments)]
 fn batch<'py>(
     py: Python<'py>,
     paths: &Bound<'py, PyAny>,
@@ -112,10 +117,11 @@ fn batch<'py>(
     jobs: Option<usize>,
     force: bool,
     figures: &str,
+    tables: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let inputs = input_strings(paths)?;
-    let opts = study_options(py, out, jobs, force, figures, options)?;
+    let opts = study_options(py, out, jobs, force, figures, tables, options)?;
     let rows = py
         .detach(|| {
             let found = study::find_recordings(&inputs)?;
@@ -130,18 +136,19 @@ fn batch<'py>(
 /// ``force``), but no study table. For distributing a study yourself (a Dask cluster, a job
 /// queue): ``[batch_row(p, out) for p in find_recordings(inputs)]`` equals
 /// ``batch(inputs, out)`` but for ``wall_time_s``. Never raises for a bad recording (its row says
-/// what went wrong); bad options raise.
+/// what went wrong); bad options raise. ``tables`` as for :func:`batch`.
 #[pyfunction]
-#[pyo3(signature = (path, out=None, *, force=false, figures="png", **options))]
+#[pyo3(signature = (path, out=None, *, force=false, figures="png", tables="csv", **options))]
 fn batch_row<'py>(
     py: Python<'py>,
     path: PathBuf,
     out: Option<PathBuf>,
     force: bool,
     figures: &str,
+    tables: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let opts = study_options(py, out, Some(1), force, figures, options)?;
+    let opts = study_options(py, out, Some(1), force, figures, tables, options)?;
     let row = py
         .detach(|| {
             let previous = match &opts.out {

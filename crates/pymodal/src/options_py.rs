@@ -256,9 +256,10 @@ fn spec_dicts<'py>(py: Python<'py>, specs: &[OptionSpec]) -> PyResult<Bound<'py,
 }
 
 /// The library's option tables: ``{"match": [...], "pair": [...], "recording": [...],
-/// "units": [...]}``, each option a dict ``{name, kind, values, default, help, cli_flags}``.
-/// ``match`` takes the "match" and "pair" options, ``run`` the "match" and "recording" ones
-/// (which include "units"), ``read_recording`` the "units" ones.
+/// "units": [...], "output": [...]}``, each option a dict ``{name, kind, values, default, help,
+/// cli_flags}``. ``match`` takes the "match" and "pair" options, ``run`` the "match" and
+/// "recording" ones (which include "units"), ``read_recording`` the "units" ones, ``batch`` the
+/// "output" ones besides those of ``run``.
 #[pyfunction]
 fn _options<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -277,6 +278,10 @@ fn _options<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
     d.set_item(
         "units",
         spec_dicts(py, &pedo_io::units::unit_option_specs())?,
+    )?;
+    d.set_item(
+        "output",
+        spec_dicts(py, &pedo_io::tables::output_option_specs())?,
     )?;
     Ok(d)
 }

@@ -119,3 +119,38 @@ def test_bad_options_raise_before_any_work(study):
     (foreign / "chapter.tex").write_text("precious")
     with pytest.raises(pymodal.InputError, match="not a pedomatch study"):
         pymodal.batch(study / "in", foreign)
+
+
+def test_parquet_tables_load_like_the_csv(study):
+    pd = pytest.importorskip("pandas")
+    pytest.importorskip("pyarrow")
+    csv_rows = pymodal.batch([study / "in"], study / "csv", figures="none")
+    pq_rows = pymodal.batch([study / "in"], study / "pq", figures="none", tables="parquet")
+    assert timeless(pq_rows) == timeless(csv_rows)
+    assert not (study / "pq" / "study.csv").exists()
+    study_pq = pd.read_parquet(study / "pq" / "study.parquet")
+    assert list(study_pq.columns) == COLUMNS
+    # Numbers as study.csv writes them (wall times to the millisecond).
+    pd.testing.assert_frame_equal(
+        study_pq.drop(columns="wall_time_s"),
+        pd.DataFrame(pq_rows).drop(columns="wall_time_s"),
+        check_dtype=False,
+    )
+    assert (study_pq["wall_time_s"] - [r["wall_time_s"] for r in pq_rows]).abs().max() <= 5e-4
+    compared = 0
+    for r in pq_rows:
+        if r["status"] != "ok":
+            continue
+        for table in ["pairs", "objects", "matches", "tracks", "frames"]:
+            csv = pd.read_csv(study / "csv" / r["output"] / f"{table}.csv")
+            pq = pd.read_parquet(study / "pq" / r["output"] / f"{table}.parquet")
+            assert list(pq.columns) == list(csv.columns), table
+            pd.testing.assert_frame_equal(pq, csv, check_dtype=False, rtol=1e-12)
+            for c in csv.columns:
+                if csv[c].notna().all() and pd.api.types.is_numeric_dtype(csv[c]):
+                    assert pq[c].dtype == csv[c].dtype, (table, c)
+            compared += len(pq)
+    assert compared > 1000
+    with pytest.raises(pymodal.OptionError, match="tables"):
+        pymodal.batch(study / "in", study / "never", tables="xlsx")
+    assert not (study / "never").exists()

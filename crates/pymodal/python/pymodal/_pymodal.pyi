@@ -26,6 +26,8 @@ Search = Literal["global", "local", "best"]
 Prealign = Literal["robust", "normalize", "sensor"]
 ThresholdMode = Literal["after", "during"]
 Pitch = Union[float, Tuple[float, float]]
+# The tables' file format (batch, batch_row): "parquet" writes typed, compressed columns.
+Tables = Literal["csv", "parquet"]
 
 # The exception hierarchy (crates/pymodal/src/errors.rs). Every class but the root is also a
 # ValueError; a missing file raises the builtin FileNotFoundError, other OS errors OSError.
@@ -320,7 +322,7 @@ def run(
 
 # A row of a study table (batch, batch_row): path, output, format, frames, pairs,
 # mean_local_percent, mean_optimisation_percent, tracks, wall_time_s, status ("ok", "skipped",
-# "error") and message, the columns of study.csv.
+# "error") and message, the columns of study.csv (or study.parquet).
 StudyRow = dict[str, Any]
 
 def find_recordings(inputs: Union[Path, Sequence[Path]]) -> list[str]:
@@ -334,6 +336,7 @@ def batch(
     *,
     force: bool = False,
     figures: Literal["png", "svg", "none"] = "png",
+    tables: Tables = "csv",
     **options: Any,
 ) -> list[StudyRow]:
     """Run every recording like :func:`run` (several at once); return the study table, one dict per recording."""
@@ -345,6 +348,7 @@ def batch_row(
     *,
     force: bool = False,
     figures: Literal["png", "svg", "none"] = "png",
+    tables: Tables = "csv",
     **options: Any,
 ) -> StudyRow:
     """One row of :func:`batch`'s table: one recording on one thread (for Dask or a job queue)."""
