@@ -145,7 +145,7 @@ fn footscan_export_frames_peak_and_mask() {
             rec.frame_slice(t).unwrap(),
             asf.frame_slice(10 + t).unwrap(),
         );
-        for (x, y) in a.iter().zip(b) {
+        for (x, y) in a.iter().zip(b.iter()) {
             assert!((x - y / 10.0).abs() < 1e-4, "frame {t}: {x} vs {y} kPa");
         }
     }
@@ -451,7 +451,7 @@ fn pedar_export_on_the_bundled_layout() {
         let img_max = img.iter().fold(0.0f32, |a, &b| a.max(b)) as f64;
         assert_eq!(img_max, file_max, "frame {t}");
         // The image holds only the file's values (and 0).
-        for &v in img {
+        for &v in img.iter() {
             assert!(
                 v == 0.0 || rows[t].1.contains(&(v as f64)),
                 "frame {t}: {v}"
@@ -694,14 +694,14 @@ fn zebris_raw_xml_variants_and_refusals() {
     assert_eq!(rec.units, "N/cm²");
     assert_eq!(rec.dt_s, Some(0.01));
     #[rustfmt::skip]
-    assert_eq!(rec.frame_slice(0).unwrap(), &[0., 0., 0., 0.,
+    assert_eq!(&*rec.frame_slice(0).unwrap(), &[0., 0., 0., 0.,
                                     0., 3., 4., 0.,
                                     0., 1., 2., 0.]);
     assert!(rec
         .frame_slice(1)
         .unwrap()
         .iter()
-        .chain(rec.frame_slice(2).unwrap())
+        .chain(rec.frame_slice(2).unwrap().iter())
         .all(|&v| v == 0.0));
 
     let refuse = |quants: &str, count: usize, needle: &str| {
