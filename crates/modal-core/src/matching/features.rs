@@ -15,7 +15,7 @@ use crate::simd::dot;
 /// The retained modes of one object, ready for comparison with another object's.
 ///
 /// Stored `(dim·n) × k`, column-major (`data[p * dim * n + a * n + i]` is component `a` of node `i`
-/// in mode `p`), matching the component-major row layout of [`crate::model::ModalBasis::modes`].
+/// in mode `p`), matching the component-major row layout of [`crate::model::ModalBasis::mode`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModalFeatures {
     pub dim: usize,
