@@ -330,96 +330,79 @@ fn scan_portable<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> S
     s
 }
 
-/// The row scan for CPUs with AVX2: [`scan_blocks`] compiled with AVX2 enabled.
+/// AVX2 row scan. On most rows the two smallest values are found early and later entries
+/// rarely beat them, so each block of 16 entries is first reduced with plain minima (cheap,
+/// vectorised) and only a block holding a candidate below the current second minimum or free
+/// minimum is replayed entry by entry, in index order: exactly the portable semantics, at
+/// close to memory speed instead of a dozen blends per vector.
 ///
 /// # Safety
-/// The CPU must support AVX2.
+/// The CPU must support AVX2 (the only requirement: the slice lengths are asserted).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn scan_avx2<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
-    scan_blocks::<FREE>(row, v, freepen)
-}
-
-/// Entries of a block of the vectorised scans, and lanes of their partial minima.
-#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-const BLOCK: usize = 16;
-#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-const LANES: usize = 4;
-
-/// `a < b ? a : b`, the running minimum as `minpd` computes it (a NaN `b` enters).
-#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-#[inline(always)]
-fn vmin(a: f64, b: f64) -> f64 {
-    if a < b {
-        a
-    } else {
-        b
-    }
-}
-
-/// The row scan in blocks. On most rows the two smallest values are found early and later
-/// entries rarely beat them, so each block of [`BLOCK`] entries is first reduced with plain
-/// minima in [`LANES`] lanes (cheap, vectorised) and only a block holding a candidate below the
-/// current second minimum or free minimum is replayed entry by entry, in index order: exactly
-/// [`scan_portable`]'s semantics, at close to memory speed instead of a dozen blends per vector.
-#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-#[inline(always)]
-fn scan_blocks<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
-    let m = row.len();
-    let (v, freepen) = (&v[..m], &freepen[..m]);
-    let mb = m - m % BLOCK;
-    let mut s = Scan {
-        top: Top2::EMPTY,
-        min_free: f64::INFINITY,
-        arg_free: NONE,
-        valid: true,
-    };
-    let replay = |s: &mut Scan, lo: usize, hi: usize| {
-        for j in lo..hi {
-            let h = row[j] - v[j];
-            if h < s.top.min2 {
-                s.top.offer(h, j);
-            }
-            let hf = h + freepen[j];
-            if FREE && hf < s.min_free {
-                s.min_free = hf;
-                s.arg_free = j;
-            }
-        }
-    };
-    let mut ok = [true; LANES];
-    let blocks = row[..mb]
-        .as_chunks::<BLOCK>()
-        .0
-        .iter()
-        .zip(v[..mb].as_chunks::<BLOCK>().0)
-        .zip(freepen[..mb].as_chunks::<BLOCK>().0);
-    for (k, ((r, vv), f)) in blocks.enumerate() {
-        let mut bmin = [f64::INFINITY; LANES];
-        let mut bminf = bmin;
-        for q in 0..BLOCK / LANES {
-            for l in 0..LANES {
-                let o = LANES * q + l;
-                ok[l] &= r[o] > f64::NEG_INFINITY;
-                let h = r[o] - vv[o];
-                bmin[l] = vmin(bmin[l], h);
-                if FREE {
-                    bminf[l] = vmin(bminf[l], h + f[o]);
+    unsafe {
+        use std::arch::x86_64::*;
+        const B: usize = 16;
+        let m = row.len();
+        assert!(v.len() >= m && freepen.len() >= m);
+        let mb = m - m % B;
+        let ninf = _mm256_set1_pd(f64::NEG_INFINITY);
+        let mut ok = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+        let mut s = Scan {
+            top: Top2::EMPTY,
+            min_free: f64::INFINITY,
+            arg_free: NONE,
+            valid: true,
+        };
+        // SAFETY (every `.add(o)` load below): `o + 4 ≤ mb ≤ m`, and `row`, `v` and `freepen`
+        // hold at least `m` values (asserted above).
+        let (rp, vp, fp) = (row.as_ptr(), v.as_ptr(), freepen.as_ptr());
+        let replay = |s: &mut Scan, lo: usize, hi: usize| {
+            for j in lo..hi {
+                let h = row[j] - v[j];
+                if h < s.top.min2 {
+                    s.top.offer(h, j);
+                }
+                let hf = h + freepen[j];
+                if FREE && hf < s.min_free {
+                    s.min_free = hf;
+                    s.arg_free = j;
                 }
             }
+        };
+        let mut k = 0;
+        while k < mb {
+            let mut bmin = _mm256_set1_pd(f64::INFINITY);
+            let mut bminf = bmin;
+            for q in 0..B / 4 {
+                let o = k + 4 * q;
+                let r = _mm256_loadu_pd(rp.add(o));
+                ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GT_OQ>(r, ninf));
+                let h = _mm256_sub_pd(r, _mm256_loadu_pd(vp.add(o)));
+                bmin = _mm256_min_pd(bmin, h);
+                if FREE {
+                    bminf = _mm256_min_pd(bminf, _mm256_add_pd(h, _mm256_loadu_pd(fp.add(o))));
+                }
+            }
+            let t2 = _mm256_set1_pd(s.top.min2);
+            let tf = _mm256_set1_pd(s.min_free);
+            let hit = _mm256_or_pd(
+                _mm256_cmp_pd::<_CMP_LT_OQ>(bmin, t2),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(bminf, tf),
+            );
+            if _mm256_movemask_pd(hit) != 0 {
+                replay(&mut s, k, k + B);
+            }
+            k += B;
         }
-        let (t2, tf) = (s.top.min2, s.min_free);
-        let hit = (0..LANES).fold(false, |hit, l| hit | (bmin[l] < t2) | (bminf[l] < tf));
-        if hit {
-            replay(&mut s, k * BLOCK, (k + 1) * BLOCK);
+        s.valid = _mm256_movemask_pd(ok) == 0b1111;
+        for &r in &row[mb..] {
+            s.valid &= r > f64::NEG_INFINITY;
         }
+        replay(&mut s, mb, m);
+        s
     }
-    s.valid = ok.iter().all(|&o| o);
-    for &r in &row[mb..] {
-        s.valid &= r > f64::NEG_INFINITY;
-    }
-    replay(&mut s, mb, m);
-    s
 }
 
 /// The two smallest reduced costs `row[j] - v[j]` of a row, ordered by (value, column): ties go
@@ -471,7 +454,7 @@ fn top2(row: &[f64], v: &[f64]) -> Top2 {
 /// Crouse's (scipy's) initialisation-free variant rather than LAPJV's list of columns at the
 /// current minimum: the relaxation of a row, the search for the closest unsettled column and the
 /// search for the closest *free* column are one branch-free pass over contiguous memory
-/// ([`relax`], in blocks that the compiler vectorises on CPUs with AVX2: [`relax_blocks`]). Settled
+/// ([`relax`]), which the compiler vectorises (and an AVX2 kernel does explicitly). Settled
 /// columns are masked by temporarily setting their price to `-inf`, which makes every candidate
 /// distance `+inf`. The path ends as soon as a free column is among the closest, which also
 /// settles ties in favour of free columns (LAPJV's trick against long paths on tied integers).
@@ -613,10 +596,13 @@ fn relax_avx2_entry(
     unsafe { relax_avx2(row, v, dk, pred, freepen, h, i) }
 }
 
-/// The relaxation for CPUs with AVX2: [`relax_blocks`] compiled with AVX2 enabled.
+/// AVX2 relaxation. The distance update is a plain vectorised min (`pred` by masked store);
+/// the two arg-minima, the costly part, are found like in [`scan_avx2`]: per block of 16 columns
+/// a vector minimum is compared with the running minima, and only a block holding a smaller
+/// value is replayed entry by entry in index order, which gives exactly [`relax`]'s answer.
 ///
 /// # Safety
-/// The CPU must support AVX2.
+/// The CPU must support AVX2 (the only requirement: the slice lengths are asserted).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn relax_avx2(
@@ -628,93 +614,90 @@ unsafe fn relax_avx2(
     h: f64,
     i: u64,
 ) -> Relaxed {
-    relax_blocks(row, v, dk, pred, freepen, h, i)
-}
-
-/// [`relax`] in blocks. The distance update is a plain vectorised min (`pred` follows by a
-/// select); the two arg-minima, the costly part, are found like in [`scan_blocks`]: per block of
-/// [`BLOCK`] columns a vector minimum is compared with the running minima, and only a block
-/// holding a smaller value is replayed entry by entry in index order, which gives exactly
-/// [`relax`]'s answer.
-#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-#[inline(always)]
-fn relax_blocks(
-    row: &[f64],
-    v: &[f64],
-    dk: &mut [f64],
-    pred: &mut [u64],
-    freepen: &[f64],
-    h: f64,
-    i: u64,
-) -> Relaxed {
-    let m = row.len();
-    let (v, dk, pred, freepen) = (&v[..m], &mut dk[..m], &mut pred[..m], &freepen[..m]);
-    let mb = m - m % BLOCK;
-    let mut out = Relaxed {
-        min_all: f64::INFINITY,
-        arg_all: 0,
-        min_free: f64::INFINITY,
-        arg_free: 0,
-    };
-    let blocks = row[..mb]
-        .as_chunks::<BLOCK>()
-        .0
-        .iter()
-        .zip(v[..mb].as_chunks::<BLOCK>().0)
-        .zip(freepen[..mb].as_chunks::<BLOCK>().0)
-        .zip(dk[..mb].as_chunks_mut::<BLOCK>().0)
-        .zip(pred[..mb].as_chunks_mut::<BLOCK>().0);
-    for (k, ((((r, vv), f), d), p)) in blocks.enumerate() {
-        let mut bmin = [f64::INFINITY; LANES];
-        let mut bminf = bmin;
-        for q in 0..BLOCK / LANES {
-            for l in 0..LANES {
-                let o = LANES * q + l;
-                let cand = r[o] - vv[o] + h;
-                // The same update as `relax`: `cand < d ? cand : d`.
-                let better = cand < d[o];
-                d[o] = vmin(cand, d[o]);
-                p[o] = if better { i } else { p[o] };
-                bmin[l] = vmin(bmin[l], d[o]);
-                bminf[l] = vmin(bminf[l], d[o] + f[o]);
-            }
-        }
-        let (ta, tf) = (out.min_all, out.min_free);
-        let hit = (0..LANES).fold(false, |hit, l| hit | (bmin[l] < ta) | (bminf[l] < tf));
-        if hit {
-            for (o, (&dj, &fj)) in d.iter().zip(f).enumerate() {
-                if dj < out.min_all {
-                    out.min_all = dj;
-                    out.arg_all = k * BLOCK + o;
-                }
-                let df = dj + fj;
-                if df < out.min_free {
-                    out.min_free = df;
-                    out.arg_free = k * BLOCK + o;
-                }
-            }
-        }
-    }
-    if mb < m {
-        let t = relax(
-            &row[mb..],
-            &v[mb..],
-            &mut dk[mb..],
-            &mut pred[mb..],
-            &freepen[mb..],
-            h,
-            i,
+    unsafe {
+        use std::arch::x86_64::*;
+        const B: usize = 16;
+        let m = row.len();
+        assert!(v.len() >= m && dk.len() >= m && pred.len() >= m && freepen.len() >= m);
+        let mb = m - m % B;
+        let hv = _mm256_set1_pd(h);
+        let iv = _mm256_set1_epi64x(i as i64);
+        let mut out = Relaxed {
+            min_all: f64::INFINITY,
+            arg_all: 0,
+            min_free: f64::INFINITY,
+            arg_free: 0,
+        };
+        // SAFETY (every `.add(o)` / `.add(j)` access below): `o + 4 ≤ mb` and `j < mb ≤ m`, and
+        // every slice holds at least `m` values (asserted above); `dk` and `pred` are borrowed
+        // mutably, so the stores through `dp` and `pp` alias nothing else.
+        let (rp, vp, dp, pp, fp) = (
+            row.as_ptr(),
+            v.as_ptr(),
+            dk.as_mut_ptr(),
+            pred.as_mut_ptr(),
+            freepen.as_ptr(),
         );
-        if t.min_all < out.min_all {
-            out.min_all = t.min_all;
-            out.arg_all = mb + t.arg_all;
+        let mut k = 0;
+        while k < mb {
+            let mut bmin = _mm256_set1_pd(f64::INFINITY);
+            let mut bminf = bmin;
+            for q in 0..B / 4 {
+                let o = k + 4 * q;
+                let cand = _mm256_add_pd(
+                    _mm256_sub_pd(_mm256_loadu_pd(rp.add(o)), _mm256_loadu_pd(vp.add(o))),
+                    hv,
+                );
+                let d0 = _mm256_loadu_pd(dp.add(o));
+                let lt = _mm256_cmp_pd::<_CMP_LT_OQ>(cand, d0);
+                // min_pd(a, b) is `a < b ? a : b`: the same update as the portable kernel.
+                let d = _mm256_min_pd(cand, d0);
+                _mm256_storeu_pd(dp.add(o), d);
+                _mm256_maskstore_epi64(pp.add(o) as *mut i64, _mm256_castpd_si256(lt), iv);
+                bmin = _mm256_min_pd(bmin, d);
+                bminf = _mm256_min_pd(bminf, _mm256_add_pd(d, _mm256_loadu_pd(fp.add(o))));
+            }
+            let hit = _mm256_or_pd(
+                _mm256_cmp_pd::<_CMP_LT_OQ>(bmin, _mm256_set1_pd(out.min_all)),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(bminf, _mm256_set1_pd(out.min_free)),
+            );
+            if _mm256_movemask_pd(hit) != 0 {
+                for j in k..k + B {
+                    let d = *dp.add(j);
+                    if d < out.min_all {
+                        out.min_all = d;
+                        out.arg_all = j;
+                    }
+                    let df = d + *fp.add(j);
+                    if df < out.min_free {
+                        out.min_free = df;
+                        out.arg_free = j;
+                    }
+                }
+            }
+            k += B;
         }
-        if t.min_free < out.min_free {
-            out.min_free = t.min_free;
-            out.arg_free = mb + t.arg_free;
+        if mb < m {
+            let t = relax(
+                &row[mb..],
+                &v[mb..m],
+                &mut dk[mb..m],
+                &mut pred[mb..m],
+                &freepen[mb..m],
+                h,
+                i,
+            );
+            if t.min_all < out.min_all {
+                out.min_all = t.min_all;
+                out.arg_all = mb + t.arg_all;
+            }
+            if t.min_free < out.min_free {
+                out.min_free = t.min_free;
+                out.arg_free = mb + t.arg_free;
+            }
         }
+        out
     }
-    out
 }
 
 #[cfg(test)]
@@ -785,11 +768,8 @@ mod tests {
                 let b = scan::<true>(&row, &v, &fp);
                 let a0 = scan_portable::<false>(&row, &v, &fp);
                 let b0 = scan::<false>(&row, &v, &fp);
-                // The block scan compiled for the baseline too (the dispatched one is AVX2).
-                let c = scan_blocks::<true>(&row, &v, &fp);
-                let c0 = scan_blocks::<false>(&row, &v, &fp);
                 let valid = row.iter().all(|r| !r.is_nan() && *r != f64::NEG_INFINITY);
-                for s in [&a, &b, &a0, &b0, &c, &c0] {
+                for s in [&a, &b, &a0, &b0] {
                     assert_eq!(s.valid, valid, "{row:?}");
                 }
                 if !valid {
@@ -800,8 +780,6 @@ mod tests {
                 assert_eq!(b0.top, a.top);
                 assert_eq!((a0.min_free, b0.min_free), (f64::INFINITY, f64::INFINITY));
                 assert_eq!(a, b, "{row:?} {v:?} {fp:?}");
-                assert_eq!(a, c, "{row:?} {v:?} {fp:?}");
-                assert_eq!(c0.top, a.top);
                 assert_eq!(a.top, top2_reference(&row, &v));
                 // Reference for the free minimum: first index of the smallest finite h on a free column.
                 let mut want = (f64::INFINITY, NONE);
@@ -816,7 +794,7 @@ mod tests {
         }
     }
 
-    /// The block kernels must agree exactly with the portable one, ties and tails included.
+    /// The AVX2 kernel must agree exactly with the portable one, ties and tails included.
     #[test]
     fn kernels_agree() {
         let mut rnd = small_ints(12345, 7);
@@ -846,23 +824,18 @@ mod tests {
                 let fp: Vec<f64> = (0..m)
                     .map(|_| if rnd() > 3.0 { f64::INFINITY } else { 0.0 })
                     .collect();
-                let (mut d1, mut p1) = (dk0.clone(), vec![9u64; m]);
+                let (mut d1, mut d2) = (dk0.clone(), dk0.clone());
+                let (mut p1, mut p2) = (vec![9u64; m], vec![9u64; m]);
                 let a = relax(&row, &v, &mut d1, &mut p1, &fp, 0.5, 3);
-                // The dispatched kernel (AVX2 here) and the block kernel compiled for the
-                // baseline.
-                let kernels: [Kernel; 2] = [relax_kernel(), relax_blocks];
-                for kernel in kernels {
-                    let (mut d2, mut p2) = (dk0.clone(), vec![9u64; m]);
-                    let b = kernel(&row, &v, &mut d2, &mut p2, &fp, 0.5, 3);
-                    assert_eq!(d1, d2);
-                    assert_eq!(p1, p2);
-                    assert_eq!((a.min_all, a.min_free), (b.min_all, b.min_free));
-                    if a.min_all < f64::INFINITY {
-                        assert_eq!(a.arg_all, b.arg_all);
-                    }
-                    if a.min_free < f64::INFINITY {
-                        assert_eq!(a.arg_free, b.arg_free);
-                    }
+                let b = relax_kernel()(&row, &v, &mut d2, &mut p2, &fp, 0.5, 3);
+                assert_eq!(d1, d2);
+                assert_eq!(p1, p2);
+                assert_eq!((a.min_all, a.min_free), (b.min_all, b.min_free));
+                if a.min_all < f64::INFINITY {
+                    assert_eq!(a.arg_all, b.arg_all);
+                }
+                if a.min_free < f64::INFINITY {
+                    assert_eq!(a.arg_free, b.arg_free);
                 }
             }
         }

@@ -10,7 +10,7 @@
 //! trustworthy as `dstebz`'s; what the ratio form gets for free, a safe range, comes from scaling
 //! the pair `(p_{i−1}, p_i)` by a power of two every few steps (exact).
 
-use crate::simd::{widest_simd, Lanes};
+use crate::simd::widest_simd;
 
 /// Lanes are padded to a multiple of this (one AVX-512 register, two AVX2 registers).
 const LANES: usize = 8;
@@ -100,114 +100,294 @@ widest_simd! {
     /// `counts[j]` ← the number of eigenvalues below `x[j]` (the sign changes of the Sturm
     /// sequence), on the widest vector unit this CPU has. `x.len()` is a multiple of [`LANES`].
     fn sturm_counts(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]);
-    // 6 vectors × (x, prev, cur, count) = 24 of the 32 registers.
-    avx512 sturm_counts_avx512 => sturm_counts_in::<8, 6>(d, e2, x, counts);
-    // 3 vectors × (x, prev, cur, count) = 12 of the 16 registers.
-    avx2 sturm_counts_avx2 [] => sturm_counts_in::<4, 3>(d, e2, x, counts);
-    portable => sturm_counts_in::<4, 2>(d, e2, x, counts);
+    avx512 sturm_counts_avx512 => sturm_counts_in::<x86::Avx512>(d, e2, x, counts);
+    avx2 sturm_counts_avx2 [] => sturm_counts_in::<x86::Avx2>(d, e2, x, counts);
+    portable => sturm_counts_in::<Portable>(d, e2, x, counts);
+}
+
+/// The operations of the recurrence on one vector of lanes. Every implementation does the same
+/// IEEE operations in the same order (no FMA), so every path gives the same bits.
+trait SturmVector: Copy {
+    const WIDTH: usize;
+    /// Vectors whose recurrences run side by side, so that each one's multiply–subtract chain
+    /// waits while the others compute (as many as fit in the registers with their state).
+    const GROUP: usize;
+    type Count: Copy;
+    fn splat(v: f64) -> Self;
+    /// # Safety
+    /// `x` holds at least `WIDTH` values.
+    unsafe fn load(x: &[f64]) -> Self;
+    fn zero_count() -> Self::Count;
+    /// `(d − x)·cur − e·prev`.
+    fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self;
+    /// `count + 1` in the lanes where `p` and `cur` differ in sign.
+    fn count_change(count: Self::Count, p: Self, cur: Self) -> Self::Count;
+    /// Divides both by the power of two of the larger magnitude of the pair, lane by lane.
+    fn rescale(prev: Self, cur: Self) -> (Self, Self);
+    /// # Safety
+    /// `out` holds at least `WIDTH` values.
+    unsafe fn store(count: Self::Count, out: &mut [u64]);
 }
 
 const EXPONENT_BITS: u64 = 0x7ff0_0000_0000_0000;
 /// `2^(1023 − E)` has the biased exponent `2046 − E`.
 const INVERSE_EXPONENT: u64 = 2046 << 52;
 
-/// The vectors of `W` lanes of `x` in groups of at most `GROUP` whose recurrences run side by
-/// side (each one's multiply–subtract chain waits while the others compute; as many as fit in
-/// the registers with their state), balanced: five vectors with groups of six run as one group
-/// of five, not six and none.
+/// Plain code for CPUs without AVX2 (the compiler vectorises what it can).
+#[derive(Clone, Copy)]
+struct Portable([f64; 4]);
+
+impl SturmVector for Portable {
+    const WIDTH: usize = 4;
+    const GROUP: usize = 2;
+    type Count = [u64; 4];
+    fn splat(v: f64) -> Self {
+        Self([v; 4])
+    }
+    unsafe fn load(x: &[f64]) -> Self {
+        Self(std::array::from_fn(|l| x[l]))
+    }
+    fn zero_count() -> [u64; 4] {
+        [0; 4]
+    }
+    fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self {
+        Self(std::array::from_fn(|l| {
+            (d.0[l] - x.0[l]) * cur.0[l] - e.0[l] * prev.0[l]
+        }))
+    }
+    fn count_change(count: [u64; 4], p: Self, cur: Self) -> [u64; 4] {
+        std::array::from_fn(|l| count[l] + ((p.0[l].to_bits() ^ cur.0[l].to_bits()) >> 63))
+    }
+    fn rescale(prev: Self, cur: Self) -> (Self, Self) {
+        let f: [f64; 4] = std::array::from_fn(|l| {
+            let (a, b) = (prev.0[l].abs(), cur.0[l].abs());
+            let top = if a > b { a } else { b }.to_bits() & EXPONENT_BITS;
+            f64::from_bits(INVERSE_EXPONENT.wrapping_sub(top))
+        });
+        (
+            Self(std::array::from_fn(|l| prev.0[l] * f[l])),
+            Self(std::array::from_fn(|l| cur.0[l] * f[l])),
+        )
+    }
+    unsafe fn store(count: [u64; 4], out: &mut [u64]) {
+        out[..4].copy_from_slice(&count);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use super::{SturmVector, EXPONENT_BITS, INVERSE_EXPONENT};
+    use std::arch::x86_64::*;
+
+    #[derive(Clone, Copy)]
+    pub(super) struct Avx512(__m512d);
+
+    // SAFETY (for every method): only reached from `sturm_counts_avx512`, whose caller detected
+    // AVX-512F; the loads and stores take slices of at least 8 values (the trait's contract).
+    impl SturmVector for Avx512 {
+        const WIDTH: usize = 8;
+        // 6 vectors × (x, prev, cur, count) = 24 of the 32 registers.
+        const GROUP: usize = 6;
+        type Count = __m512i;
+        #[inline(always)]
+        fn splat(v: f64) -> Self {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
+            unsafe { Self(_mm512_set1_pd(v)) }
+        }
+        #[inline(always)]
+        unsafe fn load(x: &[f64]) -> Self {
+            unsafe {
+                // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
+                Self(_mm512_loadu_pd(x[..8].as_ptr()))
+            }
+        }
+        #[inline(always)]
+        fn zero_count() -> __m512i {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
+            unsafe { _mm512_setzero_si512() }
+        }
+        #[inline(always)]
+        fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
+            unsafe {
+                let t = _mm512_mul_pd(_mm512_sub_pd(d.0, x.0), cur.0);
+                Self(_mm512_sub_pd(t, _mm512_mul_pd(e.0, prev.0)))
+            }
+        }
+        #[inline(always)]
+        fn count_change(count: __m512i, p: Self, cur: Self) -> __m512i {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
+            unsafe {
+                let signs = _mm512_xor_si512(_mm512_castpd_si512(p.0), _mm512_castpd_si512(cur.0));
+                _mm512_add_epi64(count, _mm512_srli_epi64::<63>(signs))
+            }
+        }
+        #[inline(always)]
+        fn rescale(prev: Self, cur: Self) -> (Self, Self) {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
+            unsafe {
+                let top = _mm512_max_pd(_mm512_abs_pd(prev.0), _mm512_abs_pd(cur.0));
+                let top = _mm512_and_si512(
+                    _mm512_castpd_si512(top),
+                    _mm512_set1_epi64(EXPONENT_BITS as i64),
+                );
+                let f = _mm512_castsi512_pd(_mm512_sub_epi64(
+                    _mm512_set1_epi64(INVERSE_EXPONENT as i64),
+                    top,
+                ));
+                (
+                    Self(_mm512_mul_pd(prev.0, f)),
+                    Self(_mm512_mul_pd(cur.0, f)),
+                )
+            }
+        }
+        #[inline(always)]
+        unsafe fn store(count: __m512i, out: &mut [u64]) {
+            unsafe {
+                // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
+                _mm512_storeu_si512(out[..8].as_mut_ptr().cast(), count)
+            }
+        }
+    }
+
+    #[derive(Clone, Copy)]
+    pub(super) struct Avx2(__m256d);
+
+    // SAFETY (for every method): only reached from `sturm_counts_avx2`, whose caller detected
+    // AVX2; the loads and stores take slices of at least 4 values (the trait's contract).
+    impl SturmVector for Avx2 {
+        const WIDTH: usize = 4;
+        // 3 vectors × (x, prev, cur, count) = 12 of the 16 registers.
+        const GROUP: usize = 3;
+        type Count = __m256i;
+        #[inline(always)]
+        fn splat(v: f64) -> Self {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
+            unsafe { Self(_mm256_set1_pd(v)) }
+        }
+        #[inline(always)]
+        unsafe fn load(x: &[f64]) -> Self {
+            unsafe {
+                // SAFETY: AVX2 as above; the caller passes a full vector of values (the contract).
+                Self(_mm256_loadu_pd(x[..4].as_ptr()))
+            }
+        }
+        #[inline(always)]
+        fn zero_count() -> __m256i {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
+            unsafe { _mm256_setzero_si256() }
+        }
+        #[inline(always)]
+        fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
+            unsafe {
+                let t = _mm256_mul_pd(_mm256_sub_pd(d.0, x.0), cur.0);
+                Self(_mm256_sub_pd(t, _mm256_mul_pd(e.0, prev.0)))
+            }
+        }
+        #[inline(always)]
+        fn count_change(count: __m256i, p: Self, cur: Self) -> __m256i {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
+            unsafe {
+                let signs = _mm256_xor_si256(_mm256_castpd_si256(p.0), _mm256_castpd_si256(cur.0));
+                _mm256_add_epi64(count, _mm256_srli_epi64::<63>(signs))
+            }
+        }
+        #[inline(always)]
+        fn rescale(prev: Self, cur: Self) -> (Self, Self) {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
+            unsafe {
+                let abs = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
+                let top = _mm256_max_pd(_mm256_and_pd(prev.0, abs), _mm256_and_pd(cur.0, abs));
+                let top = _mm256_and_si256(
+                    _mm256_castpd_si256(top),
+                    _mm256_set1_epi64x(EXPONENT_BITS as i64),
+                );
+                let f = _mm256_castsi256_pd(_mm256_sub_epi64(
+                    _mm256_set1_epi64x(INVERSE_EXPONENT as i64),
+                    top,
+                ));
+                (
+                    Self(_mm256_mul_pd(prev.0, f)),
+                    Self(_mm256_mul_pd(cur.0, f)),
+                )
+            }
+        }
+        #[inline(always)]
+        unsafe fn store(count: __m256i, out: &mut [u64]) {
+            unsafe {
+                // SAFETY: AVX2 as above; the caller passes a full vector of values (the contract).
+                _mm256_storeu_si256(out[..4].as_mut_ptr().cast(), count)
+            }
+        }
+    }
+}
+
+/// The vectors of `x` in groups of at most `V::GROUP`, balanced (five vectors with groups of
+/// six run as one group of five, not six and none).
 #[inline(always)]
-fn sturm_counts_in<const W: usize, const GROUP: usize>(
-    d: &[f64],
-    e2: &[f64],
-    x: &[f64],
-    counts: &mut [u64],
-) {
-    let vectors = x.len() / W;
-    let groups = vectors.div_ceil(GROUP);
+fn sturm_counts_in<V: SturmVector>(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]) {
+    let vectors = x.len() / V::WIDTH;
+    let groups = vectors.div_ceil(V::GROUP);
     let mut start = 0;
     for g in 0..groups {
         let end = (g + 1) * vectors / groups;
-        let (xs, cs) = (&x[start * W..end * W], &mut counts[start * W..end * W]);
+        let (xs, cs) = (
+            &x[start * V::WIDTH..end * V::WIDTH],
+            &mut counts[start * V::WIDTH..end * V::WIDTH],
+        );
         match end - start {
-            1 => sturm_group::<W, 1>(d, e2, xs, cs),
-            2 => sturm_group::<W, 2>(d, e2, xs, cs),
-            3 => sturm_group::<W, 3>(d, e2, xs, cs),
-            4 => sturm_group::<W, 4>(d, e2, xs, cs),
-            5 => sturm_group::<W, 5>(d, e2, xs, cs),
-            _ => sturm_group::<W, 6>(d, e2, xs, cs),
+            1 => sturm_group::<V, 1>(d, e2, xs, cs),
+            2 => sturm_group::<V, 2>(d, e2, xs, cs),
+            3 => sturm_group::<V, 3>(d, e2, xs, cs),
+            4 => sturm_group::<V, 4>(d, e2, xs, cs),
+            5 => sturm_group::<V, 5>(d, e2, xs, cs),
+            _ => sturm_group::<V, 6>(d, e2, xs, cs),
         }
         start = end;
     }
 }
 
-/// `(d − x)·cur − e·prev`, unfused: the same bits at every width.
-#[inline(always)]
-fn step<const W: usize>(
-    d: Lanes<W>,
-    x: Lanes<W>,
-    e: Lanes<W>,
-    cur: Lanes<W>,
-    prev: Lanes<W>,
-) -> Lanes<W> {
-    (d - x) * cur - e * prev
-}
-
-/// `count + 1` in the lanes where `p` and `cur` differ in sign.
-#[inline(always)]
-fn count_change<const W: usize>(count: [u64; W], p: Lanes<W>, cur: Lanes<W>) -> [u64; W] {
-    // Wrapping (counts stay below the order): no overflow check per lane in debug builds.
-    std::array::from_fn(|l| count[l].wrapping_add((p.0[l].to_bits() ^ cur.0[l].to_bits()) >> 63))
-}
-
-/// Divides both by the power of two of the larger magnitude of the pair, lane by lane (exact).
-#[inline(always)]
-fn rescale<const W: usize>(prev: Lanes<W>, cur: Lanes<W>) -> (Lanes<W>, Lanes<W>) {
-    let f = prev.zip(cur, |a, b| {
-        let (a, b) = (a.abs(), b.abs());
-        let top = if a > b { a } else { b }.to_bits() & EXPONENT_BITS;
-        f64::from_bits(INVERSE_EXPONENT.wrapping_sub(top))
-    });
-    (prev * f, cur * f)
-}
-
 /// The recurrence for `G` vectors at once, their state in registers.
 #[inline(always)]
-fn sturm_group<const W: usize, const G: usize>(
+fn sturm_group<V: SturmVector, const G: usize>(
     d: &[f64],
     e2: &[f64],
     x: &[f64],
     counts: &mut [u64],
 ) {
     let n = d.len();
-    let x: [Lanes<W>; G] = std::array::from_fn(|g| Lanes::load(&x[g * W..]));
+    // SAFETY: the caller passes G vectors of V::WIDTH values.
+    let x: [V; G] = std::array::from_fn(|g| unsafe { V::load(&x[g * V::WIDTH..]) });
     // p₀ = 1, p₁ = d₀ − x.
-    let one = Lanes::splat(1.0);
+    let one = V::splat(1.0);
     let mut prev = [one; G];
     let mut cur = [one; G];
-    let mut cnt = [[0u64; W]; G];
-    let (d0, zero) = (Lanes::splat(d[0]), Lanes::splat(0.0));
+    let mut cnt = [V::zero_count(); G];
+    let (d0, zero) = (V::splat(d[0]), V::splat(0.0));
     for g in 0..G {
-        cur[g] = step(d0, x[g], zero, one, one);
-        cnt[g] = count_change(cnt[g], cur[g], one);
+        cur[g] = V::step(d0, x[g], zero, one, one);
+        cnt[g] = V::count_change(cnt[g], cur[g], one);
     }
     for i in 1..n {
-        let (di, ei) = (Lanes::splat(d[i]), Lanes::splat(e2[i - 1]));
+        let (di, ei) = (V::splat(d[i]), V::splat(e2[i - 1]));
         for g in 0..G {
             // An exact zero needs no special case: with e² > 0 the next term has the sign
             // opposite to the one before the zero, so the pair still counts one change.
-            let p = step(di, x[g], ei, cur[g], prev[g]);
-            cnt[g] = count_change(cnt[g], p, cur[g]);
+            let p = V::step(di, x[g], ei, cur[g], prev[g]);
+            cnt[g] = V::count_change(cnt[g], p, cur[g]);
             prev[g] = cur[g];
             cur[g] = p;
         }
         if i % RESCALE_EVERY == 0 {
             for g in 0..G {
-                (prev[g], cur[g]) = rescale(prev[g], cur[g]);
+                (prev[g], cur[g]) = V::rescale(prev[g], cur[g]);
             }
         }
     }
     for g in 0..G {
-        counts[g * W..(g + 1) * W].copy_from_slice(&cnt[g]);
+        // SAFETY: the caller passes G vectors of V::WIDTH counts.
+        unsafe { V::store(cnt[g], &mut counts[g * V::WIDTH..]) };
     }
 }
 
@@ -379,7 +559,7 @@ mod tests {
                 f(&mut counts);
                 counts
             };
-            let portable = run(&|c| sturm_counts_in::<4, 2>(&diag, &e2, &x, c));
+            let portable = run(&|c| sturm_counts_in::<Portable>(&diag, &e2, &x, c));
             assert_eq!(portable, run(&|c| sturm_counts(&diag, &e2, &x, c)));
             #[cfg(target_arch = "x86_64")]
             {

@@ -9,7 +9,7 @@
 
 use faer::{MatMut, MatRef};
 
-use crate::simd::{dot, widest_simd, Lanes};
+use crate::simd::{dot, widest_simd};
 
 /// The tridiagonal matrix of [`tridiagonalize`] and the reflectors that produced it.
 #[derive(Debug, Clone)]
@@ -221,26 +221,52 @@ widest_simd! {
     /// has. `b` has `PAD_ROWS` zero rows below the block and `COLS` zero columns after it; `u`,
     /// `w`, `v` are zero past `m`, so whole vectors can run into the padding.
     fn sweep(b: &mut [f64], ld: usize, m: usize, u: &[f64], w: &[f64], v: &[f64], y: &mut [f64]);
-    avx512 sweep_avx512 => sweep_in::<8, true>(b, ld, m, u, w, v, y);
-    avx2 sweep_avx2 ["fma"] => sweep_in::<4, true>(b, ld, m, u, w, v, y);
-    portable => sweep_in::<4, false>(b, ld, m, u, w, v, y);
+    requires {
+        let span = m + PAD_ROWS;
+        assert!(b.len() >= (m + COLS - 1) * ld + span && ld >= span);
+        assert!(u.len() >= span && w.len() >= span && v.len() >= span && y.len() >= span);
+    };
+    // SAFETY: `requires` asserted the sizes; the dispatch checked the CPU's features.
+    avx512 sweep_avx512 => unsafe { sweep_in::<x86::Avx512>(b, ld, m, u, w, v, y) };
+    // SAFETY: as above.
+    avx2 sweep_avx2 ["fma"] => unsafe { sweep_in::<x86::Avx2>(b, ld, m, u, w, v, y) };
+    // SAFETY: `requires` asserted the sizes.
+    portable => unsafe { sweep_in::<Portable>(b, ld, m, u, w, v, y) };
+}
+
+/// The vector operations of the sweep.
+trait Lanes: Copy {
+    const WIDTH: usize;
+    /// # Safety
+    /// `p` points at `WIDTH` readable values.
+    unsafe fn load(p: *const f64) -> Self;
+    /// # Safety
+    /// `p` points at `WIDTH` writable values.
+    unsafe fn store(self, p: *mut f64);
+    fn splat(v: f64) -> Self;
+    /// 1 in the lanes `l` with `l ≥ from`, 0 in the others.
+    fn lanes_from(from: usize) -> Self;
+    fn mul(a: Self, b: Self) -> Self;
+    /// `a·b + c`.
+    fn mul_add(a: Self, b: Self, c: Self) -> Self;
+    /// `c − a·b`.
+    fn neg_mul_add(a: Self, b: Self, c: Self) -> Self;
+    /// The four horizontal sums.
+    fn sum4(a: [Self; 4]) -> [f64; 4];
 }
 
 /// Columns of one pass of the sweep.
 const COLS: usize = 4;
 
-/// 1 in the lanes `l` with `l ≥ from`, 0 in the others.
+/// The sweep for a vector type, four columns `j..j+4` a pass, rows from the diagonal `j` down in
+/// whole vectors. In the first vector, the lanes above a column's diagonal (upper-triangle
+/// storage, never read) are updated too but masked out of both products, and the diagonal
+/// entry enters `y` once.
+///
+/// # Safety
+/// As asserted by [`sweep`]; the CPU has `V`'s instructions.
 #[inline(always)]
-fn lanes_from<const W: usize>(from: usize) -> Lanes<W> {
-    Lanes(std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 }))
-}
-
-/// The sweep in vectors of `W` lanes (products fused when `FMA`), four columns `j..j+4` a pass,
-/// rows from the diagonal `j` down in whole vectors. In the first vector, the lanes above a
-/// column's diagonal (upper-triangle storage, never read) are updated too but masked out of both
-/// products, and the diagonal entry enters `y` once.
-#[inline(always)]
-fn sweep_in<const W: usize, const FMA: bool>(
+unsafe fn sweep_in<V: Lanes>(
     b: &mut [f64],
     ld: usize,
     m: usize,
@@ -249,51 +275,225 @@ fn sweep_in<const W: usize, const FMA: bool>(
     v: &[f64],
     y: &mut [f64],
 ) {
-    y[..m + PAD_ROWS].fill(0.0);
-    // Lane masks of the first vector of a pass: column c takes rows j + l with l ≥ c into its
-    // dot product and rows with l > c into the symmetric half of `y`.
-    let ge: [Lanes<W>; COLS] = std::array::from_fn(lanes_from);
-    let gt: [Lanes<W>; COLS] = std::array::from_fn(|c| lanes_from(c + 1));
-    let mut j = 0;
-    while j < m {
-        // Rows j .. j + len, whole vectors running into the zero padding.
-        let len = (m - j).next_multiple_of(W);
-        let mut columns = b[j * ld + j..].chunks_mut(ld);
-        let cols: [&mut [[f64; W]]; COLS] = std::array::from_fn(|_| {
-            let col = columns.next().expect("COLS zero columns after the block");
-            col[..len].as_chunks_mut().0
-        });
-        let (us, ws, vs) = (
-            u[j..j + len].as_chunks::<W>().0,
-            w[j..j + len].as_chunks::<W>().0,
-            v[j..j + len].as_chunks::<W>().0,
-        );
-        let ys = y[j..j + len].as_chunks_mut::<W>().0;
-        let wj: [Lanes<W>; COLS] = std::array::from_fn(|c| Lanes::splat(w[j + c]));
-        let uj: [Lanes<W>; COLS] = std::array::from_fn(|c| Lanes::splat(u[j + c]));
-        let vj: [Lanes<W>; COLS] = std::array::from_fn(|c| Lanes::splat(v[j + c]));
-        let mut acc = [Lanes::splat(0.0); COLS];
-        for k in 0..len / W {
-            let (ui, wi, vi) = (Lanes(us[k]), Lanes(ws[k]), Lanes(vs[k]));
-            let mut yi = Lanes(ys[k]);
-            for c in 0..COLS {
-                let e = &mut cols[c][k];
-                let bij = wi.neg_mul_add::<FMA>(uj[c], ui.neg_mul_add::<FMA>(wj[c], Lanes(*e)));
-                *e = bij.0;
-                let (vdot, vsym) = if k == 0 {
-                    (vi * ge[c], vj[c] * gt[c])
-                } else {
-                    (vi, vj[c])
-                };
-                acc[c] = bij.mul_add::<FMA>(vdot, acc[c]);
-                yi = bij.mul_add::<FMA>(vsym, yi);
+    unsafe {
+        y[..m + PAD_ROWS].fill(0.0);
+        let bp = b.as_mut_ptr();
+        let (up, wp, vp, yp) = (u.as_ptr(), w.as_ptr(), v.as_ptr(), y.as_mut_ptr());
+        // Lane masks of the first vector of a pass: column c takes rows j + l with l ≥ c into its
+        // dot product and rows with l > c into the symmetric half of `y`.
+        let ge: [V; COLS] = std::array::from_fn(|c| V::lanes_from(c));
+        let gt: [V; COLS] = std::array::from_fn(|c| V::lanes_from(c + 1));
+        let mut j = 0;
+        while j < m {
+            let cols: [*mut f64; COLS] = std::array::from_fn(|c| bp.add((j + c) * ld));
+            let wj: [V; COLS] = std::array::from_fn(|c| V::splat(w[j + c]));
+            let uj: [V; COLS] = std::array::from_fn(|c| V::splat(u[j + c]));
+            let vj: [V; COLS] = std::array::from_fn(|c| V::splat(v[j + c]));
+            let mut acc = [V::splat(0.0); COLS];
+            let mut i = j;
+            let mut first = true;
+            while i < m {
+                let (ui, wi, vi) = (V::load(up.add(i)), V::load(wp.add(i)), V::load(vp.add(i)));
+                let mut yi = V::load(yp.add(i));
+                for c in 0..COLS {
+                    let e = cols[c].add(i);
+                    let bij = V::neg_mul_add(wi, uj[c], V::neg_mul_add(ui, wj[c], V::load(e)));
+                    bij.store(e);
+                    let (vd, vs) = if first {
+                        (V::mul(vi, ge[c]), V::mul(vj[c], gt[c]))
+                    } else {
+                        (vi, vj[c])
+                    };
+                    acc[c] = V::mul_add(bij, vd, acc[c]);
+                    yi = V::mul_add(bij, vs, yi);
+                }
+                yi.store(yp.add(i));
+                first = false;
+                i += V::WIDTH;
             }
-            ys[k] = yi.0;
+            let sums = V::sum4(acc);
+            for c in 0..COLS {
+                y[j + c] += sums[c];
+            }
+            j += COLS;
         }
-        for c in 0..COLS {
-            y[j + c] += acc[c].sum();
+    }
+}
+
+/// Plain code for CPUs without AVX2 and FMA.
+#[derive(Clone, Copy)]
+struct Portable([f64; 4]);
+
+impl Lanes for Portable {
+    const WIDTH: usize = 4;
+    unsafe fn load(p: *const f64) -> Self {
+        unsafe {
+            // SAFETY: the caller guarantees 4 readable values at `p` (the trait's contract).
+            Self(std::array::from_fn(|l| *p.add(l)))
         }
-        j += COLS;
+    }
+    unsafe fn store(self, p: *mut f64) {
+        unsafe {
+            // SAFETY: the caller guarantees 4 writable values at `p` (the trait's contract).
+            for l in 0..4 {
+                *p.add(l) = self.0[l];
+            }
+        }
+    }
+    fn splat(v: f64) -> Self {
+        Self([v; 4])
+    }
+    fn lanes_from(from: usize) -> Self {
+        Self(std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 }))
+    }
+    fn mul(a: Self, b: Self) -> Self {
+        Self(std::array::from_fn(|l| a.0[l] * b.0[l]))
+    }
+    fn mul_add(a: Self, b: Self, c: Self) -> Self {
+        Self(std::array::from_fn(|l| a.0[l] * b.0[l] + c.0[l]))
+    }
+    fn neg_mul_add(a: Self, b: Self, c: Self) -> Self {
+        Self(std::array::from_fn(|l| c.0[l] - a.0[l] * b.0[l]))
+    }
+    fn sum4(a: [Self; 4]) -> [f64; 4] {
+        a.map(|x| (x.0[0] + x.0[1]) + (x.0[2] + x.0[3]))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use super::Lanes;
+    use std::arch::x86_64::*;
+
+    #[derive(Clone, Copy)]
+    pub(super) struct Avx512(__m512d);
+
+    // SAFETY (for every method): only reached from `sweep_avx512`, whose caller detected
+    // AVX-512F; the pointers are valid for 8 values (the trait's contract).
+    impl Lanes for Avx512 {
+        const WIDTH: usize = 8;
+        #[inline(always)]
+        unsafe fn load(p: *const f64) -> Self {
+            unsafe {
+                // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
+                Self(_mm512_loadu_pd(p))
+            }
+        }
+        #[inline(always)]
+        unsafe fn store(self, p: *mut f64) {
+            unsafe {
+                // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
+                _mm512_storeu_pd(p, self.0)
+            }
+        }
+        #[inline(always)]
+        fn splat(v: f64) -> Self {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
+            unsafe { Self(_mm512_set1_pd(v)) }
+        }
+        #[inline(always)]
+        fn lanes_from(from: usize) -> Self {
+            let m: [f64; 8] = std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 });
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
+            unsafe { Self(_mm512_loadu_pd(m.as_ptr())) }
+        }
+        #[inline(always)]
+        fn mul(a: Self, b: Self) -> Self {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
+            unsafe { Self(_mm512_mul_pd(a.0, b.0)) }
+        }
+        #[inline(always)]
+        fn mul_add(a: Self, b: Self, c: Self) -> Self {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
+            unsafe { Self(_mm512_fmadd_pd(a.0, b.0, c.0)) }
+        }
+        #[inline(always)]
+        fn neg_mul_add(a: Self, b: Self, c: Self) -> Self {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
+            unsafe { Self(_mm512_fnmadd_pd(a.0, b.0, c.0)) }
+        }
+        #[inline(always)]
+        fn sum4(a: [Self; 4]) -> [f64; 4] {
+            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
+            unsafe {
+                // 8 → 4 lanes each, then the four 4-lane sums side by side.
+                let h: [__m256d; 4] = a.map(|x| {
+                    _mm256_add_pd(
+                        _mm512_castpd512_pd256(x.0),
+                        _mm512_extractf64x4_pd::<1>(x.0),
+                    )
+                });
+                let s01 = _mm256_hadd_pd(h[0], h[1]);
+                let s23 = _mm256_hadd_pd(h[2], h[3]);
+                let lo = _mm256_permute2f128_pd::<0x20>(s01, s23);
+                let hi = _mm256_permute2f128_pd::<0x31>(s01, s23);
+                let mut out = [0.0; 4];
+                _mm256_storeu_pd(out.as_mut_ptr(), _mm256_add_pd(lo, hi));
+                out
+            }
+        }
+    }
+
+    #[derive(Clone, Copy)]
+    pub(super) struct Avx2(__m256d);
+
+    // SAFETY (for every method): only reached from `sweep_avx2`, whose caller detected AVX2 and
+    // FMA; the pointers are valid for 4 values (the trait's contract).
+    impl Lanes for Avx2 {
+        const WIDTH: usize = 4;
+        #[inline(always)]
+        unsafe fn load(p: *const f64) -> Self {
+            unsafe {
+                // SAFETY: AVX2 and FMA as above; the caller passes a full vector of values (the contract).
+                Self(_mm256_loadu_pd(p))
+            }
+        }
+        #[inline(always)]
+        unsafe fn store(self, p: *mut f64) {
+            unsafe {
+                // SAFETY: AVX2 and FMA as above; the caller passes a full vector of values (the contract).
+                _mm256_storeu_pd(p, self.0)
+            }
+        }
+        #[inline(always)]
+        fn splat(v: f64) -> Self {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
+            unsafe { Self(_mm256_set1_pd(v)) }
+        }
+        #[inline(always)]
+        fn lanes_from(from: usize) -> Self {
+            let m: [f64; 4] = std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 });
+            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
+            unsafe { Self(_mm256_loadu_pd(m.as_ptr())) }
+        }
+        #[inline(always)]
+        fn mul(a: Self, b: Self) -> Self {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
+            unsafe { Self(_mm256_mul_pd(a.0, b.0)) }
+        }
+        #[inline(always)]
+        fn mul_add(a: Self, b: Self, c: Self) -> Self {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
+            unsafe { Self(_mm256_fmadd_pd(a.0, b.0, c.0)) }
+        }
+        #[inline(always)]
+        fn neg_mul_add(a: Self, b: Self, c: Self) -> Self {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
+            unsafe { Self(_mm256_fnmadd_pd(a.0, b.0, c.0)) }
+        }
+        #[inline(always)]
+        fn sum4(a: [Self; 4]) -> [f64; 4] {
+            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
+            unsafe {
+                let s01 = _mm256_hadd_pd(a[0].0, a[1].0);
+                let s23 = _mm256_hadd_pd(a[2].0, a[3].0);
+                let lo = _mm256_permute2f128_pd::<0x20>(s01, s23);
+                let hi = _mm256_permute2f128_pd::<0x31>(s01, s23);
+                let mut out = [0.0; 4];
+                _mm256_storeu_pd(out.as_mut_ptr(), _mm256_add_pd(lo, hi));
+                out
+            }
+        }
     }
 }
 
@@ -440,20 +640,21 @@ mod tests {
             };
             let mut results = vec![(
                 "portable",
-                run(&|bb, y| sweep_in::<4, false>(bb, ld, m, &u, &w, &v, y)),
+                // SAFETY: the sizes are those `sweep` asserts.
+                run(&|bb, y| unsafe { sweep_in::<Portable>(bb, ld, m, &u, &w, &v, y) }),
             )];
             results.push(("dispatched", run(&|bb, y| sweep(bb, ld, m, &u, &w, &v, y))));
             #[cfg(target_arch = "x86_64")]
             {
                 if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-                    // SAFETY: AVX2 and FMA were just detected.
+                    // SAFETY: AVX2 and FMA were just detected; the sizes are those asserted.
                     results.push((
                         "AVX2",
                         run(&|bb, y| unsafe { sweep_avx2(bb, ld, m, &u, &w, &v, y) }),
                     ));
                 }
                 if std::is_x86_feature_detected!("avx512f") {
-                    // SAFETY: AVX-512F was just detected.
+                    // SAFETY: AVX-512F was just detected; the sizes are those asserted.
                     results.push((
                         "AVX-512",
                         run(&|bb, y| unsafe { sweep_avx512(bb, ld, m, &u, &w, &v, y) }),

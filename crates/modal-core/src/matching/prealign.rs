@@ -5,7 +5,6 @@
 // Small fixed-size matrix code reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use crate::simd::{widest_simd, Lanes};
 use rayon::prelude::*;
 
 use crate::error::ModalError;
@@ -216,188 +215,364 @@ pub(crate) fn nearest_both(from: &[f64], to: &[f64], dim: usize) -> NearestBoth 
     }
 }
 
-widest_simd! {
-    /// Nearest neighbours from every point of `from` into `to` and, with `COLS`, from every point
-    /// of `to` into `from`, in one structure-of-arrays scan (ICP and the re-fit loop call this
-    /// thousands of times per pair), on the widest vector unit this CPU has. Ties go to the first
-    /// index, as in a plain scan.
-    fn nearest_soa<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) -> NearestBoth;
-    avx512 nearest_soa_avx512 => nearest_in::<D, 8, COLS>(from, to);
-    avx2 nearest_soa_avx2 [] => nearest_in::<D, 4, COLS>(from, to);
-    portable => nearest_in::<D, 4, COLS>(from, to);
+/// Nearest neighbours from every point of `from` into `to` and, with `COLS`, from every point of
+/// `to` into `from`, in one structure-of-arrays scan (ICP and the re-fit loop call this thousands
+/// of times per pair). Ties go to the first index, as in a plain scan. Planar point sets, by far
+/// the most frequent, take an AVX-512 or AVX2 kernel when the CPU has one.
+fn nearest_soa<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) -> NearestBoth {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if D == 2 && std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: AVX-512F was just detected.
+            return unsafe { nearest_planar_avx512::<COLS>(from, to) };
+        }
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 was just detected.
+            return unsafe { nearest_soa_avx2::<D, COLS>(from, to) };
+        }
+    }
+    nearest_soa_body::<D, COLS>(from, to)
 }
 
 /// Nearest neighbours one way and the other: `(index, squared distance)` per point of each set.
 pub(crate) type NearestBoth = (Vec<(usize, f64)>, Vec<(usize, f64)>);
 
-/// Planar point sets, by far the most frequent, take the planar scan in vectors of `W` lanes;
-/// others the general one.
-#[inline(always)]
-fn nearest_in<const D: usize, const W: usize, const COLS: bool>(
-    from: &[f64],
-    to: &[f64],
-) -> NearestBoth {
-    if D == 2 {
-        nearest_planar::<W, COLS>(from, to)
-    } else {
-        nearest_soa_body::<D, COLS>(from, to)
-    }
-}
-
-/// Rows of `from` that share a pass over the blocks of `to` in the planar scan: a block's
+/// Rows of `from` that share a pass over the blocks of `to` in the planar kernels: a block's
 /// column minima are then loaded and stored once per group, not once per row.
+#[cfg(target_arch = "x86_64")]
 const GROUP: usize = 4;
 
-/// Blocks of `to` that the planar scan keeps on the stack (on the heap beyond): 128 points or
-/// more, room to spare for the 40–80 of a contour in the pipeline, and no allocation.
-const STACK_BLOCKS: usize = 32;
+/// Points of `to` whose blocks a planar kernel keeps on the stack (on the heap beyond): room to
+/// spare for the 40–80 of a contour in the pipeline, and no allocation.
+#[cfg(target_arch = "x86_64")]
+const STACK_POINTS: usize = 128;
 
-/// `W` points of `to` for the planar scan, with the nearest row so far of each, as f64 (exact
-/// below 2⁵³, and the same width as the distances, so their selects vectorise alike).
+/// Four points of `to` for the AVX2 scan, with the nearest row so far of each, as f64: AVX2 has no
+/// 64-bit integer `max` (see [`rows_avx2`]), and f64 holds an index exactly.
+#[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
-struct Block<const W: usize> {
-    x: Lanes<W>,
-    y: Lanes<W>,
-    v: Lanes<W>,
-    i: Lanes<W>,
+struct Block256 {
+    x: std::arch::x86_64::__m256d,
+    y: std::arch::x86_64::__m256d,
+    v: std::arch::x86_64::__m256d,
+    i: std::arch::x86_64::__m256d,
 }
 
-/// The planar scan in vectors of `W` lanes: the points of `to` in blocks of `W`, the rows of
-/// `from` `GROUP` at a time against every block, their minima kept in registers. Separate
-/// multiply and add (no FMA) keep every distance bit-identical to the plain scan's, so ties break
-/// alike.
-#[inline(always)]
-fn nearest_planar<const W: usize, const COLS: bool>(from: &[f64], to: &[f64]) -> NearestBoth {
-    let (n, m) = (from.len() / 2, to.len() / 2);
-    if n == 0 || m == 0 {
-        return (
-            vec![(0, f64::INFINITY); n],
-            vec![(0, f64::INFINITY); if COLS { m } else { 0 }],
-        );
+/// The same scan compiled for AVX2 (three dimensions go through the auto-vectorised body); the
+/// planar case written out with intrinsics, because the auto-vectoriser mixes 128- and 256-bit
+/// halves in it. Separate multiply and add (no FMA) keep every distance bit-identical to the
+/// plain scan's, so ties break alike.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn nearest_soa_avx2<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) -> NearestBoth {
+    use std::arch::x86_64::*;
+    let (n, m) = (from.len() / D, to.len() / D);
+    if D != 2 || n == 0 || m == 0 {
+        return nearest_soa_body::<D, COLS>(from, to);
     }
-    let init = Block {
-        x: Lanes::splat(0.0),
-        y: Lanes::splat(0.0),
-        v: Lanes::splat(f64::INFINITY),
-        i: Lanes::splat(0.0),
+    let init = Block256 {
+        x: _mm256_setzero_pd(),
+        y: _mm256_setzero_pd(),
+        v: _mm256_set1_pd(f64::INFINITY),
+        i: _mm256_setzero_pd(),
     };
-    let mut stack = [init; STACK_BLOCKS];
+    let mut stack = [init; STACK_POINTS / 4];
     let mut heap = Vec::new();
-    let blocks = m.div_ceil(W);
-    let cols: &mut [Block<W>] = if blocks <= STACK_BLOCKS {
+    let blocks = m.div_ceil(4);
+    let cols: &mut [Block256] = if blocks <= stack.len() {
         &mut stack[..blocks]
     } else {
         heap.resize(blocks, init);
         &mut heap
     };
-    for (blk, q) in cols.iter_mut().zip(to.chunks(2 * W)) {
+    for (blk, q) in cols.iter_mut().zip(to.chunks(8)) {
         // NaN padding: its distances compare false, so padded lanes never hold a minimum.
-        let (mut x, mut y) = ([f64::NAN; W], [f64::NAN; W]);
+        let (mut x, mut y) = ([f64::NAN; 4], [f64::NAN; 4]);
         for (l, p) in q.chunks_exact(2).enumerate() {
             (x[l], y[l]) = (p[0], p[1]);
         }
-        (blk.x, blk.y) = (Lanes(x), Lanes(y));
+        blk.x = _mm256_setr_pd(x[0], x[1], x[2], x[3]);
+        blk.y = _mm256_setr_pd(y[0], y[1], y[2], y[3]);
     }
     let mut rows = vec![(0, 0.0); n];
     let mut groups = from
         .chunks_exact(2 * GROUP)
         .zip(rows.chunks_exact_mut(GROUP));
     for (g, (p, out)) in groups.by_ref().enumerate() {
-        planar_rows::<W, GROUP, COLS>(p, GROUP * g, cols, out);
+        rows_avx2::<GROUP, COLS>(p, GROUP * g, cols, out);
     }
     let i0 = n - n % GROUP;
-    let (p, out) = (&from[2 * i0..], &mut rows[i0..]);
-    match n % GROUP {
-        0 => {}
-        1 => planar_rows::<W, 1, COLS>(p, i0, cols, out),
-        2 => planar_rows::<W, 2, COLS>(p, i0, cols, out),
-        _ => planar_rows::<W, 3, COLS>(p, i0, cols, out),
+    for (k, (p, out)) in from[2 * i0..]
+        .chunks_exact(2)
+        .zip(&mut rows[i0..])
+        .enumerate()
+    {
+        rows_avx2::<1, COLS>(p, i0 + k, cols, std::slice::from_mut(out));
     }
     let mut back = vec![(0, 0.0); if COLS { m } else { 0 }];
-    for (blk, out) in cols.iter().zip(back.chunks_mut(W)) {
-        for (o, (&v, &i)) in out.iter_mut().zip(blk.v.0.iter().zip(&blk.i.0)) {
+    for (blk, out) in cols.iter().zip(back.chunks_mut(4)) {
+        let (v, i) = (lanes256(blk.v), lanes256(blk.i));
+        for (o, (&v, &i)) in out.iter_mut().zip(v.iter().zip(&i)) {
             *o = (i as usize, v);
         }
     }
     (rows, back)
 }
 
-/// The strict update of a running minimum and its index, lane by lane: where `d < v`, `d` and
-/// `at` replace `v` and `i` (so the first minimum stays on ties, and NaN never enters).
-#[inline(always)]
-fn keep_min<const W: usize>(v: &mut Lanes<W>, i: &mut Lanes<W>, d: Lanes<W>, at: Lanes<W>) {
-    for l in 0..W {
-        let better = d.0[l] < v.0[l];
-        i.0[l] = if better { at.0[l] } else { i.0[l] };
-        v.0[l] = if better { d.0[l] } else { v.0[l] };
-    }
-}
-
-/// Rows `i0 .. i0 + R` (the points of `p`) against every block of `W`, their minima kept in
-/// registers; the rows come in increasing order, so the column minima's strict update keeps the
-/// first row on ties.
-#[inline(always)]
-fn planar_rows<const W: usize, const R: usize, const COLS: bool>(
+/// Rows `i0 .. i0 + R` (the points of `p`) against every block of four, their minima kept in
+/// registers. A minimum is updated by `min` (`d < v ? d : v`, the strict update) and its index by
+/// `max(index, better & current)`, exact because the current block (or row) index is never below
+/// a kept one: two single-µop instructions where a blend costs two or three.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn rows_avx2<const R: usize, const COLS: bool>(
     p: &[f64],
     i0: usize,
-    cols: &mut [Block<W>],
+    cols: &mut [Block256],
     out: &mut [(usize, f64)],
 ) {
-    let px: [Lanes<W>; R] = std::array::from_fn(|r| Lanes::splat(p[2 * r]));
-    let py: [Lanes<W>; R] = std::array::from_fn(|r| Lanes::splat(p[2 * r + 1]));
-    let row: [Lanes<W>; R] = std::array::from_fn(|r| Lanes::splat((i0 + r) as f64));
-    let mut best_v = [Lanes::splat(f64::INFINITY); R];
-    let mut best_b = [Lanes::splat(0.0); R];
-    let mut b = Lanes::splat(0.0);
+    use std::arch::x86_64::*;
+    let px: [__m256d; R] = std::array::from_fn(|r| _mm256_set1_pd(p[2 * r]));
+    let py: [__m256d; R] = std::array::from_fn(|r| _mm256_set1_pd(p[2 * r + 1]));
+    let row: [__m256d; R] = std::array::from_fn(|r| _mm256_set1_pd((i0 + r) as f64));
+    let mut best_v = [_mm256_set1_pd(f64::INFINITY); R];
+    let mut best_b = [_mm256_setzero_pd(); R];
+    let mut b = _mm256_setzero_pd();
     for blk in cols.iter_mut() {
         let (mut cv, mut ci) = (blk.v, blk.i);
         for r in 0..R {
-            let (dx, dy) = (blk.x - px[r], blk.y - py[r]);
-            let d = dx * dx + dy * dy;
-            keep_min(&mut best_v[r], &mut best_b[r], d, b);
+            let dx = _mm256_sub_pd(blk.x, px[r]);
+            let dy = _mm256_sub_pd(blk.y, py[r]);
+            let d = _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy));
+            let better = _mm256_cmp_pd::<_CMP_LT_OQ>(d, best_v[r]);
+            best_v[r] = _mm256_min_pd(d, best_v[r]);
+            best_b[r] = _mm256_max_pd(best_b[r], _mm256_and_pd(better, b));
             if COLS {
-                keep_min(&mut cv, &mut ci, d, row[r]);
+                // Rows come in increasing order: strict `<` keeps the first on ties.
+                let better = _mm256_cmp_pd::<_CMP_LT_OQ>(d, cv);
+                cv = _mm256_min_pd(d, cv);
+                ci = _mm256_max_pd(ci, _mm256_and_pd(better, row[r]));
             }
         }
         if COLS {
             (blk.v, blk.i) = (cv, ci);
         }
-        b = b + Lanes::splat(1.0);
+        b = _mm256_add_pd(b, _mm256_set1_pd(1.0));
     }
     for r in 0..R {
-        out[r] = first_min(best_v[r], best_b[r]);
+        // Padded lanes keep (0, ∞), which never wins: no index bound needed.
+        out[r] = reduce_lanes(&lanes256(best_v[r]), &lanes256(best_b[r]), usize::MAX);
     }
 }
 
-/// The first nearest point among the lanes' minima `v` (lane `l` of block `b` is point
-/// `W·b + l`): each lane kept its first minimum; across lanes the smallest index among equal
-/// distances wins, as in a plain scan. Two reductions over the lanes, halving, without branches.
-/// Padded lanes and lanes never updated hold (block 0, ∞): the plain scan's answer (0, ∞) when
-/// nothing is below ∞.
-#[inline(always)]
-fn first_min<const W: usize>(v: Lanes<W>, b: Lanes<W>) -> (usize, f64) {
-    let halve = |mut x: [f64; W]| {
-        let mut w = W;
-        while w > 1 {
-            w /= 2;
-            for l in 0..w {
-                x[l] = if x[l + w] < x[l] { x[l + w] } else { x[l] };
-            }
-        }
-        x[0]
-    };
-    let min = halve(v.0);
-    let at = halve(std::array::from_fn(|l| {
-        if v.0[l] == min {
-            b.0[l] * W as f64 + l as f64
-        } else {
-            f64::INFINITY
-        }
-    }));
-    (at as usize, min)
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn lanes256(v: std::arch::x86_64::__m256d) -> [f64; 4] {
+    use std::arch::x86_64::*;
+    let (lo, hi) = (_mm256_castpd256_pd128(v), _mm256_extractf128_pd::<1>(v));
+    [
+        _mm_cvtsd_f64(lo),
+        _mm_cvtsd_f64(_mm_unpackhi_pd(lo, lo)),
+        _mm_cvtsd_f64(hi),
+        _mm_cvtsd_f64(_mm_unpackhi_pd(hi, hi)),
+    ]
 }
 
-/// The first nearest point among the lanes' minima (lane `l` of block `b` is point `LANES·b + l`):
+/// Eight points of `to` for the AVX-512 scan, with the nearest row so far of each.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct Block512 {
+    x: std::arch::x86_64::__m512d,
+    y: std::arch::x86_64::__m512d,
+    v: std::arch::x86_64::__m512d,
+    i: std::arch::x86_64::__m512i,
+}
+
+/// The planar scan in 8-lane AVX-512 vectors: a compare into a mask register and two masked moves
+/// per minimum where AVX2 needs four operations, on twice the lanes.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn nearest_planar_avx512<const COLS: bool>(from: &[f64], to: &[f64]) -> NearestBoth {
+    use std::arch::x86_64::*;
+    let (n, m) = (from.len() / 2, to.len() / 2);
+    if n == 0 || m == 0 {
+        return nearest_soa_body::<2, COLS>(from, to);
+    }
+    let init = Block512 {
+        x: _mm512_setzero_pd(),
+        y: _mm512_setzero_pd(),
+        v: _mm512_set1_pd(f64::INFINITY),
+        i: _mm512_setzero_si512(),
+    };
+    let mut stack = [init; STACK_POINTS / 8];
+    let mut heap = Vec::new();
+    let blocks = m.div_ceil(8);
+    let cols: &mut [Block512] = if blocks <= stack.len() {
+        &mut stack[..blocks]
+    } else {
+        heap.resize(blocks, init);
+        &mut heap
+    };
+    for (blk, q) in cols.iter_mut().zip(to.chunks(16)) {
+        // NaN padding: its distances compare false, so padded lanes never hold a minimum.
+        let (mut x, mut y) = ([f64::NAN; 8], [f64::NAN; 8]);
+        for (l, p) in q.chunks_exact(2).enumerate() {
+            (x[l], y[l]) = (p[0], p[1]);
+        }
+        blk.x = _mm512_setr_pd(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]);
+        blk.y = _mm512_setr_pd(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7]);
+    }
+    let mut rows = vec![(0, 0.0); n];
+    let mut groups = from
+        .chunks_exact(2 * GROUP)
+        .zip(rows.chunks_exact_mut(GROUP));
+    for (g, (p, out)) in groups.by_ref().enumerate() {
+        rows_avx512::<GROUP, COLS>(p, GROUP * g, cols, out);
+    }
+    let i0 = n - n % GROUP;
+    let (p, out) = (&from[2 * i0..], &mut rows[i0..]);
+    match n % GROUP {
+        0 => {}
+        1 => rows_avx512::<1, COLS>(p, i0, cols, out),
+        2 => rows_avx512::<2, COLS>(p, i0, cols, out),
+        _ => rows_avx512::<3, COLS>(p, i0, cols, out),
+    }
+    let mut back = vec![(0, 0.0); if COLS { m } else { 0 }];
+    for (blk, out) in cols.iter().zip(back.chunks_mut(8)) {
+        let (v, i) = (lanes512_pd(blk.v), lanes512_epi64(blk.i));
+        for (o, (&v, &i)) in out.iter_mut().zip(v.iter().zip(&i)) {
+            *o = (i as usize, v);
+        }
+    }
+    (rows, back)
+}
+
+/// Rows `i0 .. i0 + R` (the points of `p`, `R` ≤ 4) against every block of eight, their minima
+/// kept in registers and reduced across lanes together at the end.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn rows_avx512<const R: usize, const COLS: bool>(
+    p: &[f64],
+    i0: usize,
+    cols: &mut [Block512],
+    out: &mut [(usize, f64)],
+) {
+    use std::arch::x86_64::*;
+    let px: [__m512d; R] = std::array::from_fn(|r| _mm512_set1_pd(p[2 * r]));
+    let py: [__m512d; R] = std::array::from_fn(|r| _mm512_set1_pd(p[2 * r + 1]));
+    let row: [__m512i; R] = std::array::from_fn(|r| _mm512_set1_epi64((i0 + r) as i64));
+    let mut best_v = [_mm512_set1_pd(f64::INFINITY); R];
+    let mut best_j = [_mm512_setzero_si512(); R];
+    let mut j = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
+    for blk in cols.iter_mut() {
+        let (mut cv, mut ci) = (blk.v, blk.i);
+        for r in 0..R {
+            let dx = _mm512_sub_pd(blk.x, px[r]);
+            let dy = _mm512_sub_pd(blk.y, py[r]);
+            let d = _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy));
+            let better = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(d, best_v[r]);
+            best_v[r] = _mm512_mask_mov_pd(best_v[r], better, d);
+            best_j[r] = _mm512_mask_mov_epi64(best_j[r], better, j);
+            if COLS {
+                // Rows come in increasing order: strict `<` keeps the first on ties.
+                let better = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(d, cv);
+                cv = _mm512_mask_mov_pd(cv, better, d);
+                ci = _mm512_mask_mov_epi64(ci, better, row[r]);
+            }
+        }
+        if COLS {
+            (blk.v, blk.i) = (cv, ci);
+        }
+        j = _mm512_add_epi64(j, _mm512_set1_epi64(8));
+    }
+    // Each lane kept its first minimum; across lanes the lowest index among equal minima wins.
+    // Lanes never updated hold (0, ∞), the plain scan's answer when nothing is below ∞.
+    let inf = _mm512_set1_pd(f64::INFINITY);
+    let min = min4_pd(std::array::from_fn(|r| if r < R { best_v[r] } else { inf }));
+    let lane = |r: usize| _mm512_set1_epi64(2 * r as i64);
+    let first = min4_epi64(std::array::from_fn(|r| {
+        if r < R {
+            let at =
+                _mm512_cmp_pd_mask::<_CMP_EQ_OQ>(best_v[r], _mm512_permutexvar_pd(lane(r), min));
+            _mm512_mask_blend_epi64(at, _mm512_set1_epi64(i64::MAX), best_j[r])
+        } else {
+            _mm512_setzero_si512()
+        }
+    }));
+    for (r, o) in out.iter_mut().enumerate().take(R) {
+        let v = _mm512_castpd512_pd128(_mm512_permutexvar_pd(lane(r), min));
+        let j = _mm512_castsi512_si128(_mm512_permutexvar_epi64(lane(r), first));
+        *o = (_mm_cvtsi128_si64(j) as usize, _mm_cvtsd_f64(v));
+    }
+}
+
+/// The minimum of each of four vectors, in lanes 2r and 2r + 1: 11 shuffles and minima for the
+/// four, where reducing each alone takes 6 and leaves four results to gather.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn min4_pd(v: [std::arch::x86_64::__m512d; 4]) -> std::arch::x86_64::__m512d {
+    use std::arch::x86_64::*;
+    // Lanes 0–3 of a and b against lanes 4–7; then pairs; then within pairs.
+    let ab = _mm512_min_pd(
+        _mm512_shuffle_f64x2::<0b01_00_01_00>(v[0], v[1]),
+        _mm512_shuffle_f64x2::<0b11_10_11_10>(v[0], v[1]),
+    );
+    let cd = _mm512_min_pd(
+        _mm512_shuffle_f64x2::<0b01_00_01_00>(v[2], v[3]),
+        _mm512_shuffle_f64x2::<0b11_10_11_10>(v[2], v[3]),
+    );
+    let q = _mm512_min_pd(
+        _mm512_shuffle_f64x2::<0b10_00_10_00>(ab, cd),
+        _mm512_shuffle_f64x2::<0b11_01_11_01>(ab, cd),
+    );
+    _mm512_min_pd(q, _mm512_permute_pd::<0b0101_0101>(q))
+}
+
+/// [`min4_pd`] of signed 64-bit lanes.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn min4_epi64(v: [std::arch::x86_64::__m512i; 4]) -> std::arch::x86_64::__m512i {
+    use std::arch::x86_64::*;
+    let ab = _mm512_min_epi64(
+        _mm512_shuffle_i64x2::<0b01_00_01_00>(v[0], v[1]),
+        _mm512_shuffle_i64x2::<0b11_10_11_10>(v[0], v[1]),
+    );
+    let cd = _mm512_min_epi64(
+        _mm512_shuffle_i64x2::<0b01_00_01_00>(v[2], v[3]),
+        _mm512_shuffle_i64x2::<0b11_10_11_10>(v[2], v[3]),
+    );
+    let q = _mm512_min_epi64(
+        _mm512_shuffle_i64x2::<0b10_00_10_00>(ab, cd),
+        _mm512_shuffle_i64x2::<0b11_01_11_01>(ab, cd),
+    );
+    _mm512_min_epi64(q, _mm512_shuffle_epi32::<0b01_00_11_10>(q))
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn lanes512_pd(v: std::arch::x86_64::__m512d) -> [f64; 8] {
+    use std::arch::x86_64::*;
+    std::array::from_fn(|l| _mm512_cvtsd_f64(_mm512_permutexvar_pd(_mm512_set1_epi64(l as i64), v)))
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn lanes512_epi64(v: std::arch::x86_64::__m512i) -> [i64; 8] {
+    use std::arch::x86_64::*;
+    std::array::from_fn(|l| {
+        let at = _mm512_permutexvar_epi64(_mm512_set1_epi64(l as i64), v);
+        _mm_cvtsi128_si64(_mm512_castsi512_si128(at))
+    })
+}
+
+/// The first nearest point among the lanes' minima (lane `l` of block `b` is point `4b + l`):
 /// strict `<` per lane kept each lane's first minimum; across lanes the smallest index among
 /// equal distances wins, as in a plain scan.
 #[inline(always)]
@@ -412,7 +587,6 @@ fn reduce_lanes<const LANES: usize>(v: &[f64; LANES], b: &[f64; LANES], m: usize
     best
 }
 
-/// The scan in any dimension, the points of `to` in blocks of four padded far away.
 #[inline(always)]
 fn nearest_soa_body<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) -> NearestBoth {
     const LANES: usize = 4;
@@ -955,18 +1129,11 @@ mod tests {
         a: &[f64],
         b: &[f64],
     ) -> Vec<(&'static str, NearestBoth, NearestBoth)> {
-        let mut out = vec![
-            (
-                "portable",
-                nearest_in::<D, 4, true>(a, b),
-                nearest_in::<D, 4, false>(a, b),
-            ),
-            (
-                "general",
-                nearest_soa_body::<D, true>(a, b),
-                nearest_soa_body::<D, false>(a, b),
-            ),
-        ];
+        let mut out = vec![(
+            "portable",
+            nearest_soa_body::<D, true>(a, b),
+            nearest_soa_body::<D, false>(a, b),
+        )];
         #[cfg(target_arch = "x86_64")]
         {
             if std::is_x86_feature_detected!("avx2") {
@@ -979,12 +1146,12 @@ mod tests {
                 };
                 out.push(("avx2", both, one));
             }
-            if std::is_x86_feature_detected!("avx512f") {
+            if D == 2 && std::is_x86_feature_detected!("avx512f") {
                 // SAFETY: AVX-512F was just detected.
                 let (both, one) = unsafe {
                     (
-                        nearest_soa_avx512::<D, true>(a, b),
-                        nearest_soa_avx512::<D, false>(a, b),
+                        nearest_planar_avx512::<true>(a, b),
+                        nearest_planar_avx512::<false>(a, b),
                     )
                 };
                 out.push(("avx512", both, one));
