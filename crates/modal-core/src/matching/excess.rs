@@ -44,46 +44,14 @@ pub(crate) fn contour_excess(
             (vec![ap, aq], false)
         };
         let r = run.len();
-        let nc = cand.len();
         let cost = |t: usize, c: usize| z.get(cand[c], run[t]);
-        let mut pick = vec![0usize; r];
-        if monotone {
-            // d[t][c]: best cost of the first t+1 run nodes with node t on candidate c and all
-            // earlier ones on candidates ≤ c. `best[t][c]` = argmin over c' ≤ c of d[t][c'].
-            let mut d = vec![0.0; r * nc];
-            let mut best = vec![0usize; r * nc];
-            for t in 0..r {
-                for c in 0..nc {
-                    let prev = if t == 0 {
-                        0.0
-                    } else {
-                        d[(t - 1) * nc + best[(t - 1) * nc + c]]
-                    };
-                    d[t * nc + c] = cost(t, c) + prev;
-                }
-                for c in 0..nc {
-                    let bc = if c == 0 {
-                        0
-                    } else {
-                        let b = best[t * nc + c - 1];
-                        if d[t * nc + c] < d[t * nc + b] {
-                            c
-                        } else {
-                            b
-                        }
-                    };
-                    best[t * nc + c] = bc;
-                }
-            }
-            pick[r - 1] = best[(r - 1) * nc + nc - 1];
-            for t in (1..r).rev() {
-                pick[t - 1] = best[(t - 1) * nc + pick[t]];
-            }
+        let pick = if monotone {
+            cheapest_monotone(r, cand.len(), cost)
         } else {
-            for (t, pk) in pick.iter_mut().enumerate() {
-                *pk = if cost(t, 1) < cost(t, 0) { 1 } else { 0 };
-            }
-        }
+            (0..r)
+                .map(|t| if cost(t, 1) < cost(t, 0) { 1 } else { 0 })
+                .collect()
+        };
         for t in 0..r {
             if cost(t, pick[t]) <= threshold {
                 out.push((cand[pick[t]], run[t]));
@@ -91,6 +59,44 @@ pub(crate) fn contour_excess(
         }
     }
     out
+}
+
+/// The cheapest non-decreasing assignment of `r` run nodes to `nc` candidates in order
+/// (`cost(t, c)`), by dynamic programming: `d[t][c]` is the best cost of the first `t + 1` nodes
+/// with node `t` on candidate `c` and all earlier ones on candidates `≤ c`, and `best[t][c]` the
+/// argmin over `c' ≤ c` of `d[t][c']`.
+fn cheapest_monotone(r: usize, nc: usize, cost: impl Fn(usize, usize) -> f64) -> Vec<usize> {
+    let mut d = vec![0.0; r * nc];
+    let mut best = vec![0usize; r * nc];
+    for t in 0..r {
+        for c in 0..nc {
+            let prev = if t == 0 {
+                0.0
+            } else {
+                d[(t - 1) * nc + best[(t - 1) * nc + c]]
+            };
+            d[t * nc + c] = cost(t, c) + prev;
+        }
+        for c in 0..nc {
+            let bc = if c == 0 {
+                0
+            } else {
+                let b = best[t * nc + c - 1];
+                if d[t * nc + c] < d[t * nc + b] {
+                    c
+                } else {
+                    b
+                }
+            };
+            best[t * nc + c] = bc;
+        }
+    }
+    let mut pick = vec![0usize; r];
+    pick[r - 1] = best[(r - 1) * nc + nc - 1];
+    for t in (1..r).rev() {
+        pick[t - 1] = best[(t - 1) * nc + pick[t]];
+    }
+    pick
 }
 
 /// docs/method.md §6.4, generalised to unordered point sets and meshes in 2-D or 3-D.
@@ -104,8 +110,8 @@ pub(crate) fn contour_excess(
 /// decreasing number of matched neighbours, and each new match becomes usable by later ones.
 ///
 /// `nbr_a`/`nbr_b` are neighbour lists (a mesh's 1-ring or k nearest neighbours), `pos_a`/`pos_b`
-/// the aligned coordinates (row-major, `dim` per node) and `normal` the common "up" direction
-/// used for the in-plane orientation (for 2-D pass `None`).
+/// the aligned coordinates (row-major, `dim` per node); in 3-D each node's local normal defines
+/// its tangent plane.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn point_set_excess(
     z: &AffinityMatrix,
@@ -122,114 +128,158 @@ pub(crate) fn point_set_excess(
     for &(a, b) in pairs {
         mb[b] = Some(a);
     }
+    let (obj_a, obj_b) = (
+        Object::new(dim, pos_a, nbr_a),
+        Object::new(dim, pos_b, nbr_b),
+    );
     let mut out = Vec::new();
     let mut pending: Vec<usize> = (0..nb).filter(|&b| mb[b].is_none()).collect();
-    // Local normals for 3-D (least-variance direction of each node's neighbourhood), oriented
-    // consistently with the global least-variance axis so both objects agree on "up".
-    let normals_a = if dim == 3 {
-        normals(pos_a, nbr_a)
-    } else {
-        Vec::new()
-    };
-    let normals_b = if dim == 3 {
-        normals(pos_b, nbr_b)
-    } else {
-        Vec::new()
-    };
-    let pt = |pos: &[f64], i: usize| -> [f64; 3] {
-        let mut p = [0.0; 3];
-        p[..dim].copy_from_slice(&pos[i * dim..(i + 1) * dim]);
-        p
-    };
     while !pending.is_empty() {
-        // Pick the pending node with the most matched neighbours (ring grown to 2 if < 2).
-        let mut best_idx = 0;
-        let mut best_cnt = 0usize;
-        let mut best_nb: Vec<usize> = Vec::new();
-        for (idx, &e) in pending.iter().enumerate() {
-            let nbs = matched_neighbours(e, nbr_b, &mb);
-            if nbs.len() > best_cnt || idx == 0 {
-                best_cnt = nbs.len();
-                best_idx = idx;
-                best_nb = nbs;
-            }
-        }
-        let e = pending.swap_remove(best_idx);
-        if best_nb.is_empty() {
+        let (idx, anchors) = most_anchored(&pending, nbr_b, &mb);
+        let e = pending.swap_remove(idx);
+        let chosen = if anchors.is_empty() {
             // Isolated from every match: the only evidence left is Z.
-            let a = (0..z.rows()).min_by(|&x, &y| z.get(x, e).total_cmp(&z.get(y, e)));
-            if let Some(a) = a
-                && z.get(a, e) <= threshold
-            {
-                out.push((a, e));
-                mb[e] = Some(a);
-            }
-            continue;
-        }
-        let pe = pt(pos_b, e);
-        let ne = if dim == 3 {
-            normals_b[e]
+            (0..z.rows())
+                .min_by(|&x, &y| z.get(x, e).total_cmp(&z.get(y, e)))
+                .map(|a| (a, z.get(a, e)))
         } else {
-            [0.0, 0.0, 1.0]
+            let ring = obj_b.angular_ring(e, &anchors);
+            least_folding_candidate(z, &obj_a, &obj_b, e, &ring, &mb)
         };
-        // Neighbours in angular order around e in its tangent plane.
-        let (u, v) = tangent_basis(ne);
-        let mut ring: Vec<(f64, usize)> = best_nb
-            .iter()
-            .map(|&nbh| {
-                let d = sub(pt(pos_b, nbh), pe);
-                (dot(d, v).atan2(dot(d, u)), nbh)
-            })
-            .collect();
-        ring.sort_by(|x, y| x.0.total_cmp(&y.0));
-        let mut cand: Vec<usize> = Vec::new();
-        for &(_, nbh) in &ring {
-            let a = mb[nbh].expect("matched neighbour");
-            cand.push(a);
-            cand.extend(nbr_a[a].iter().copied());
-        }
-        cand.sort_unstable();
-        cand.dedup();
-        let mut best: Option<(usize, f64, usize)> = None; // (violations, z, a)
-        for &c in &cand {
-            let pc = pt(pos_a, c);
-            let nc = if dim == 3 {
-                normals_a[c]
-            } else {
-                [0.0, 0.0, 1.0]
-            };
-            let mut viol = 0;
-            if ring.len() >= 2 {
-                for k in 0..ring.len() {
-                    if ring.len() == 2 && k == 1 {
-                        break;
-                    }
-                    let (n1, n2) = (ring[k].1, ring[(k + 1) % ring.len()].1);
-                    let sb = dot(cross(sub(pt(pos_b, n1), pe), sub(pt(pos_b, n2), pe)), ne);
-                    let (a1, a2) = (mb[n1].unwrap(), mb[n2].unwrap());
-                    let sa = dot(cross(sub(pt(pos_a, a1), pc), sub(pt(pos_a, a2), pc)), nc);
-                    if sa * sb < 0.0 {
-                        viol += 1;
-                    }
-                }
-            }
-            let zc = z.get(c, e);
-            let better = match best {
-                None => true,
-                Some((bv, bz, _)) => viol < bv || (viol == bv && zc < bz),
-            };
-            if better {
-                best = Some((viol, zc, c));
-            }
-        }
-        if let Some((_, zc, c)) = best
-            && zc <= threshold
+        if let Some((a, za)) = chosen
+            && za <= threshold
         {
-            out.push((c, e));
-            mb[e] = Some(c);
+            out.push((a, e));
+            mb[e] = Some(a);
         }
     }
     out
+}
+
+/// One object of [`point_set_excess`]: its aligned positions, neighbour lists and, in 3-D, local
+/// normals (the least-variance direction of each node's neighbourhood, oriented like the global
+/// least-variance axis so that both objects agree on "up"; in 2-D "up" is `z`).
+struct Object<'a> {
+    dim: usize,
+    pos: &'a [f64],
+    nbr: &'a [Vec<usize>],
+    normals: Vec<[f64; 3]>,
+}
+
+impl<'a> Object<'a> {
+    fn new(dim: usize, pos: &'a [f64], nbr: &'a [Vec<usize>]) -> Self {
+        let normals = if dim == 3 {
+            normals(pos, nbr)
+        } else {
+            Vec::new()
+        };
+        Self {
+            dim,
+            pos,
+            nbr,
+            normals,
+        }
+    }
+
+    fn point(&self, i: usize) -> [f64; 3] {
+        let mut p = [0.0; 3];
+        p[..self.dim].copy_from_slice(&self.pos[i * self.dim..(i + 1) * self.dim]);
+        p
+    }
+
+    fn normal(&self, i: usize) -> [f64; 3] {
+        if self.dim == 3 {
+            self.normals[i]
+        } else {
+            [0.0, 0.0, 1.0]
+        }
+    }
+
+    /// `nodes` in angular order around node `e`, in its tangent plane.
+    fn angular_ring(&self, e: usize, nodes: &[usize]) -> Vec<usize> {
+        let pe = self.point(e);
+        let (u, v) = tangent_basis(self.normal(e));
+        let mut ring: Vec<(f64, usize)> = nodes
+            .iter()
+            .map(|&n| {
+                let d = sub(self.point(n), pe);
+                (dot(d, v).atan2(dot(d, u)), n)
+            })
+            .collect();
+        ring.sort_by(|x, y| x.0.total_cmp(&y.0));
+        ring.into_iter().map(|(_, n)| n).collect()
+    }
+
+    /// Signed area (along the normal of `at`) of the triangle `at`, `p`, `q`.
+    fn turn(&self, at: usize, p: [f64; 3], q: [f64; 3]) -> f64 {
+        let o = self.point(at);
+        dot(cross(sub(p, o), sub(q, o)), self.normal(at))
+    }
+}
+
+/// The pending B node with the most matched neighbours (the first on ties), its index in
+/// `pending` and those neighbours (the ring grown to 2 when it has fewer than 2).
+fn most_anchored(
+    pending: &[usize],
+    nbr_b: &[Vec<usize>],
+    mb: &[Option<usize>],
+) -> (usize, Vec<usize>) {
+    let mut best = (0, Vec::new());
+    for (idx, &e) in pending.iter().enumerate() {
+        let nbs = matched_neighbours(e, nbr_b, mb);
+        if nbs.len() > best.1.len() || idx == 0 {
+            best = (idx, nbs);
+        }
+    }
+    best
+}
+
+/// For B's node `e` with its matched neighbours `ring` (in angular order): the candidate A node
+/// (the neighbours' matches and their neighbours in A) that reverses the fewest consecutive
+/// neighbour pairs' orientation around it (fold-overs), the lowest `Z` on ties, with its `Z`.
+fn least_folding_candidate(
+    z: &AffinityMatrix,
+    obj_a: &Object<'_>,
+    obj_b: &Object<'_>,
+    e: usize,
+    ring: &[usize],
+    mb: &[Option<usize>],
+) -> Option<(usize, f64)> {
+    let matched = |n: usize| mb[n].expect("a matched neighbour");
+    let mut cand: Vec<usize> = Vec::new();
+    for &n in ring {
+        let a = matched(n);
+        cand.push(a);
+        cand.extend(obj_a.nbr[a].iter().copied());
+    }
+    cand.sort_unstable();
+    cand.dedup();
+    // Consecutive neighbour pairs around e; two neighbours make one pair, not two.
+    let links = match ring.len() {
+        0 | 1 => 0,
+        2 => 1,
+        r => r,
+    };
+    let mut best: Option<(usize, f64, usize)> = None; // (fold-overs, z, a)
+    for &c in &cand {
+        let folds = (0..links)
+            .filter(|&k| {
+                let (n1, n2) = (ring[k], ring[(k + 1) % ring.len()]);
+                let sb = obj_b.turn(e, obj_b.point(n1), obj_b.point(n2));
+                let sa = obj_a.turn(c, obj_a.point(matched(n1)), obj_a.point(matched(n2)));
+                sa * sb < 0.0
+            })
+            .count();
+        let zc = z.get(c, e);
+        let better = match best {
+            None => true,
+            Some((bf, bz, _)) => folds < bf || (folds == bf && zc < bz),
+        };
+        if better {
+            best = Some((folds, zc, c));
+        }
+    }
+    best.map(|(_, zc, c)| (c, zc))
 }
 
 fn matched_neighbours(e: usize, nbr: &[Vec<usize>], mb: &[Option<usize>]) -> Vec<usize> {
