@@ -18,7 +18,7 @@ use modal_core::{Shape, Topology};
 use spade::handles::FixedVertexHandle;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 use std::cmp::Reverse;
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::{BTreeMap, BinaryHeap};
 
 /// Laplacian smoothing as `vtkSmoothPolyDataFilter` with feature-edge smoothing off: every
 /// iteration moves each vertex by `relaxation × (mean of its neighbours − itself)` in x, y and z.
@@ -137,8 +137,10 @@ impl Surface {
     }
 }
 
-fn edge_counts(tris: &[[usize; 3]]) -> HashMap<(usize, usize), usize> {
-    let mut m = HashMap::with_capacity(tris.len() * 2);
+/// How many triangles share each edge `(low, high)`. Ordered, so that everything built from it
+/// (the smoothing's neighbour lists, hence the order of its sums) is the same on every run.
+fn edge_counts(tris: &[[usize; 3]]) -> BTreeMap<(usize, usize), usize> {
+    let mut m = BTreeMap::new();
     for t in tris {
         for k in 0..3 {
             let (a, b) = (t[k], t[(k + 1) % 3]);
