@@ -697,7 +697,8 @@ fn a_run_with_tables_only_writes_the_tables_of_a_run_with_figures() {
             &format!("full-{tables}"),
             &["--figures", "svg", "--report", "none", "--tables", tables],
         );
-        assert_eq!(lean_said.replace("lean-", "full-"), full_said);
+        let (l, f) = (format!("/lean-{tables}/"), format!("/full-{tables}/"));
+        assert_eq!(lean_said.replace(&l, &f), full_said);
         let mut files = vec!["pairs.json".to_string()];
         files.extend(
             ["pairs", "objects", "matches", "tracks", "frames"].map(|t| format!("{t}.{tables}")),
