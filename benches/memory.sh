@@ -4,7 +4,8 @@
 #
 # Usage: benches/memory.sh [PEDOMATCH] [REPEATS...]   (default target/release/pedomatch, 1 10 100;
 #        build it with `cargo build --release` first). Needs GNU time (/usr/bin/time).
-# Tables only (--figures none --report none), like benches/batch.sh. Prints a Markdown table.
+# Tables only (--figures none --report none), like benches/batch.sh; TABLES=parquet writes them
+# as Parquet (default csv). Prints a Markdown table.
 set -euo pipefail
 bin=$(realpath "${1:-target/release/pedomatch}")
 shift || true
@@ -39,9 +40,9 @@ for k in "${repeats[@]}"; do
   rec="$tmp/walk_x$k.asf"
   repeat_walk "$k" "$rec"
   /usr/bin/time -f "%e %M" -o "$tmp/time" \
-    "$bin" run "$rec" --out "$tmp/out" --figures none --report none >/dev/null
-  frames=$(grep -c '' "$tmp/out/frames.csv")
+    "$bin" run "$rec" --out "$tmp/out" --figures none --report none --tables "${TABLES:-csv}" >/dev/null
+  frames=$(grep -m1 -o '"frames": [0-9][0-9]*' "$tmp/out/summary.json" | grep -o '[0-9]*$')
   read -r wall rss <"$tmp/time"
-  printf "| %sx | %d | %.2f | %.1f |\n" "$k" "$((frames - 1))" "$wall" "$(echo "$rss / 1024" | bc -l)"
+  printf "| %sx | %d | %.2f | %.1f |\n" "$k" "$frames" "$wall" "$(echo "$rss / 1024" | bc -l)"
   rm -rf "$tmp/out"
 done

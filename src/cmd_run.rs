@@ -6,8 +6,9 @@ use crate::CliError;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use pedo_io::report::InputInfo;
-use pedo_io::sequence::{run_sequence, FrameRange, ObjectModel, RunParams, SequenceResult, Stage};
+use pedo_io::sequence::{run_sequence, FrameRange, ObjectModel, RunParams, Stage};
 use pedo_io::TableFormat;
+use serde_json::Value;
 use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::Instant;
@@ -88,6 +89,23 @@ pub struct RunOptionsArgs {
 }
 
 impl RunOptionsArgs {
+    /// What the run's folder holds besides its tables.
+    pub fn outputs(&self) -> pedo_io::study::RunOutputs<'static> {
+        let (png, svg) = self.figures.kinds();
+        pedo_io::study::RunOutputs {
+            figures: pedo_io::study::FigureKinds { png, svg },
+            report: (self.report == ReportArg::Html)
+                .then_some(&output::report_page as &pedo_io::study::ReportWriter),
+            animation: self.animation == AnimationArg::Gif,
+            tables: self.tables.unwrap_or_default(),
+        }
+    }
+
+    /// Whether the run writes its tables (and summary) only: it then streams.
+    pub fn tables_only(&self) -> bool {
+        pedo_io::study::tables_only(&self.outputs())
+    }
+
     /// These options as the library's parameters; absent ones at the library's defaults.
     pub fn params(&self) -> RunParams {
         let d = RunParams::default();
@@ -136,9 +154,22 @@ pub fn run(args: RunArgs) -> Result<(), CliError> {
     let t = Instant::now();
     let params = args.options.params();
     params.validate()?;
-    let recording = args.read.read(&args.recording)?;
+    // A run with tables only reads a Tekscan file's frames as it goes (never held whole).
+    let (recording, frames) = if args.options.tables_only() && params.streams() {
+        pedo_io::formats::read_for_streaming(&args.recording, &args.read.options())?
+    } else {
+        (args.read.read(&args.recording)?, None)
+    };
     let input = InputInfo::of_path(&args.recording)?;
-    execute(recording, &input, &args.out, &args.options, params, t)
+    execute(
+        recording,
+        frames,
+        &input,
+        &args.out,
+        &args.options,
+        params,
+        t,
+    )
 }
 
 pub fn demo(args: DemoArgs) -> Result<(), CliError> {
@@ -148,11 +179,12 @@ pub fn demo(args: DemoArgs) -> Result<(), CliError> {
     let name = "examples/data/FrasP01L.asf";
     let recording = pedo_io::parse_bytes(DEMO_RECORDING, pedo_io::Format::Asf, name)?;
     let input = InputInfo::of_bytes(name, DEMO_RECORDING);
-    execute(recording, &input, &args.out, &args.options, params, t)
+    execute(recording, None, &input, &args.out, &args.options, params, t)
 }
 
 fn execute(
     mut recording: pedo_io::Recording,
+    mut frames: Option<pedo_io::formats::FileFrames>,
     input: &InputInfo,
     out: &std::path::Path,
     o: &RunOptionsArgs,
@@ -179,44 +211,52 @@ fn execute(
         }
         bar.set_position(done as u64);
     };
-    let result = run_sequence(&recording, &options, &progress)?;
-    bar.finish_and_clear();
-
-    let run = pedo_io::study::RunRecord {
-        input,
-        recording: &recording,
-        params: &params,
-        options: &options,
-        result: &result,
+    let outputs = o.outputs();
+    let timings = [("read", read_time.as_secs_f64())];
+    let summary = if pedo_io::study::tables_only(&outputs) {
+        // Tables only: the run streams into its folder, never held whole.
+        let (summary, _) = pedo_io::study::stream_run_folder(
+            out,
+            input,
+            &recording,
+            frames
+                .as_mut()
+                .map(|f| f as &mut dyn pedo_io::sequence::FrameSource),
+            &params,
+            &options,
+            outputs.tables,
+            &timings,
+            &progress,
+        )?;
+        bar.finish_and_clear();
+        summary
+    } else {
+        let result = run_sequence(&recording, &options, &progress)?;
+        bar.finish_and_clear();
+        let run = pedo_io::study::RunRecord {
+            input,
+            recording: &recording,
+            params: &params,
+            options: &options,
+            result: &result,
+        };
+        pedo_io::study::write_run_folder(out, &run, &outputs, &timings)?
     };
-    let (png, svg) = o.figures.kinds();
-    let outputs = pedo_io::study::RunOutputs {
-        figures: pedo_io::study::FigureKinds { png, svg },
-        report: (o.report == ReportArg::Html)
-            .then_some(&output::report_page as &pedo_io::study::ReportWriter),
-        animation: o.animation == AnimationArg::Gif,
-        tables: o.tables.unwrap_or_default(),
-    };
-    let summary = pedo_io::study::write_run_folder(
-        out,
-        &run,
-        &outputs,
-        &[("read", read_time.as_secs_f64())],
-    )?;
-    let write_time = summary["timings_s"]["output"].as_f64().unwrap_or(0.0);
     if o.json {
         print!("{}", output::pretty(&summary)?);
     } else {
-        print_summary(&input.name, out, &result, outputs.tables);
+        print_summary(&input.name, out, &summary, outputs.tables);
     }
     if o.timings {
+        let t = &summary["timings_s"];
+        let s = |k: &str| t[k].as_f64().unwrap_or(0.0);
         eprintln!(
             "timings: read {:.3} s, objects {:.3} s, matching {:.3} s, tracks {:.3} s, output {:.3} s, total {:.3} s",
             read_time.as_secs_f64(),
-            result.timings.objects.as_secs_f64(),
-            result.timings.matching.as_secs_f64(),
-            result.timings.tracks.as_secs_f64(),
-            write_time,
+            s("objects"),
+            s("matching"),
+            s("tracks"),
+            s("output"),
             started.elapsed().as_secs_f64()
         );
     }
@@ -234,36 +274,39 @@ pub fn progress_bar() -> ProgressBar {
     bar
 }
 
-fn print_summary(name: &str, out: &std::path::Path, r: &SequenceResult, tables: TableFormat) {
-    let n = r.pairs.len().max(1) as f64;
-    let mean = |f: &dyn Fn(&pedo_io::sequence::PairRow) -> f64| {
-        r.pairs.iter().map(|p| f(&p.row)).sum::<f64>() / n
-    };
-    let long_tracks = r.track_lengths().filter(|&n| n >= 3).count();
+fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: TableFormat) {
+    let int = |k: &str| summary[k].as_u64().unwrap_or(0);
+    let float = |k: &str| summary[k].as_f64().unwrap_or(0.0);
     println!(
         "{name}: {} objects, {} matched pairs, {} tracks ({} spanning 3+ objects)",
-        r.objects.len(),
-        r.pairs.len(),
-        r.track_count(),
-        long_tracks
+        int("objects"),
+        int("pairs"),
+        int("tracks"),
+        int("tracks_3_or_more")
     );
     println!(
         "mean local matches {:.1} %, optimisation matches {:.1} %, mean cost {:.4}",
-        mean(&|p| p.local_percent),
-        mean(&|p| p.optimisation_percent),
-        mean(&|p| p.mean_cost)
+        float("mean_local_percent"),
+        float("mean_optimisation_percent"),
+        float("mean_cost")
     );
-    if !r.skipped_pairs.is_empty() || !r.skipped_frames.is_empty() {
-        let first = r
-            .skipped_pairs
+    let skipped = |k: &str| {
+        summary["skipped"][k]
+            .as_array()
+            .cloned()
+            .unwrap_or_default()
+    };
+    let (pairs, frames) = (skipped("pairs"), skipped("frames"));
+    if !pairs.is_empty() || !frames.is_empty() {
+        let first = pairs
             .first()
-            .map(|s| s.reason.as_str())
-            .or(r.skipped_frames.first().map(|s| s.reason.as_str()))
+            .or(frames.first())
+            .and_then(|s| s["reason"].as_str())
             .unwrap_or_default();
         println!(
             "skipped {} pairs and {} frames that could not be matched (reasons in {} and summary.json; first: {first})",
-            r.skipped_pairs.len(),
-            r.skipped_frames.len(),
+            pairs.len(),
+            frames.len(),
             tables.file_name("pairs")
         );
     }

@@ -154,9 +154,13 @@ pub struct ReadArgs {
 impl ReadArgs {
     /// Reads the recording at `path` with these settings.
     pub fn read(&self, path: &std::path::Path) -> pedo_io::Result<pedo_io::Recording> {
-        let opts = pedo_io::formats::ReadOptions {
+        pedo_io::formats::read_recording_with(path, &self.options())
+    }
+
+    /// These settings as the library's reading options.
+    pub fn options(&self) -> pedo_io::formats::ReadOptions {
+        pedo_io::formats::ReadOptions {
             layout: self.layout.clone(),
-        };
-        pedo_io::formats::read_recording_with(path, &opts)
+        }
     }
 }

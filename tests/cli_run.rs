@@ -666,3 +666,55 @@ fn run_errors_are_one_line() {
         .unwrap()
         .contains("center_stride"));
 }
+
+#[test]
+fn a_run_with_tables_only_writes_the_tables_of_a_run_with_figures() {
+    // Tables only: the run streams (the .asf read frame by frame, windows of frames matched and
+    // written as they go); with figures it is held whole. The tables are the same bytes.
+    let dir = temp_dir("lean-vs-full");
+    let walk = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let mut args = vec![
+            "run",
+            walk,
+            "--out",
+            out.to_str().unwrap(),
+            "--frames",
+            "5..140",
+        ];
+        args.extend_from_slice(extra);
+        let o = pedomatch(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (out, String::from_utf8_lossy(&o.stdout).into_owned())
+    };
+    for tables in ["csv", "parquet"] {
+        let (lean, lean_said) = run(
+            &format!("lean-{tables}"),
+            &["--figures", "none", "--report", "none", "--tables", tables],
+        );
+        let (full, full_said) = run(
+            &format!("full-{tables}"),
+            &["--figures", "svg", "--report", "none", "--tables", tables],
+        );
+        let (l, f) = (format!("/lean-{tables}/"), format!("/full-{tables}/"));
+        assert_eq!(lean_said.replace(&l, &f), full_said);
+        let mut files = vec!["pairs.json".to_string()];
+        files.extend(
+            ["pairs", "objects", "matches", "tracks", "frames"].map(|t| format!("{t}.{tables}")),
+        );
+        for f in &files {
+            let (a, b) = (
+                std::fs::read(lean.join(f)).unwrap(),
+                std::fs::read(full.join(f)).unwrap(),
+            );
+            assert!(a == b, "{f} differs");
+        }
+        let mut a = read_json(&lean.join("summary.json"));
+        let mut b = read_json(&full.join("summary.json"));
+        a.as_object_mut().unwrap().remove("timings_s");
+        b.as_object_mut().unwrap().remove("timings_s");
+        assert_eq!(a, b);
+        assert!(a["tracks"].as_u64().unwrap() > 100);
+    }
+}

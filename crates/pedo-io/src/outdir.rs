@@ -134,6 +134,26 @@ impl OutDir {
         w.flush().map_err(failed)
     }
 
+    /// Creates `rel` (which may include sub-folders) in the staging folder and returns it
+    /// behind a buffer, for a file written as its content is made (a streamed run's tables).
+    /// [`OutDir::failed`] names the file in the writer's errors.
+    pub fn create_file(&self, rel: &str) -> Result<std::io::BufWriter<std::fs::File>> {
+        if interrupted() {
+            return Err(refused(&self.root, "interrupted"));
+        }
+        let path = self.staging.join(rel);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| self.failed(rel, e))?;
+        }
+        let file = std::fs::File::create(&path).map_err(|e| self.failed(rel, e))?;
+        Ok(std::io::BufWriter::with_capacity(1 << 16, file))
+    }
+
+    /// The error of writing `rel`, named by its place in the output folder.
+    pub fn failed(&self, rel: &str, e: std::io::Error) -> IoError {
+        io_error(&self.root.join(rel), e)
+    }
+
     /// The folder this output goes to.
     pub fn root(&self) -> &Path {
         &self.root

@@ -390,11 +390,20 @@ impl Recording {
     /// Per-frame measures, counting sensors with a value strictly above `threshold` (use 0 for
     /// "any load").
     pub fn measures(&self, threshold: f64) -> Vec<FrameMeasures> {
+        self.measures_of(threshold, 0..self.n_frames)
+    }
+
+    /// [`measures`](Self::measures) of the frames `frames` (within the recording).
+    pub fn measures_of(
+        &self,
+        threshold: f64,
+        frames: std::ops::Range<usize>,
+    ) -> Vec<FrameMeasures> {
         let per = self.rows * self.cols;
         let area = self.sensel_area().unwrap_or(1.0);
         let force = self.force_factor().unwrap_or(area);
         let mut f = vec![0.0f32; per];
-        (0..self.n_frames)
+        (frames.start..frames.end.min(self.n_frames))
             .map(|t| {
                 self.frames.fill(t, per, &mut f);
                 let (mut n, mut sum, mut peak, mut sx, mut sy) = (0usize, 0.0f64, 0.0f64, 0.0, 0.0);
@@ -496,6 +505,16 @@ impl SparseFrames {
         self.starts.push(self.values.len());
     }
 
+    /// Appends a frame of zeros (frames held sparsely: not [`is_whole`](Self::is_whole)).
+    pub(crate) fn push_empty(&mut self) {
+        self.starts.push(self.values.len());
+    }
+
+    /// Whether frames are held whole (too large for positions as `u16`).
+    pub(crate) fn is_whole(&self) -> bool {
+        self.whole
+    }
+
     pub(crate) fn n_frames(&self) -> usize {
         self.starts.len() - 1
     }
@@ -572,6 +591,25 @@ impl Frames {
 }
 
 impl Recording {
+    /// A recording of `n_frames` frames of this one's size, mask and units (a window of a
+    /// recording read frame by frame): `data` holds their values.
+    pub(crate) fn like(&self, n_frames: usize, data: Vec<f32>) -> Result<Self> {
+        let mut r = Self::new(
+            n_frames,
+            self.rows,
+            self.cols,
+            data,
+            self.sensor_mask.clone(),
+        )?;
+        r.pitch_mm = self.pitch_mm;
+        r.sensel_area_mm2 = self.sensel_area_mm2;
+        r.dt_s = self.dt_s;
+        r.units = self.units.clone();
+        r.noise_threshold = self.noise_threshold;
+        r.format = self.format;
+        Ok(r)
+    }
+
     /// Builds a recording from frames appended one by one to `frames` (so that a long file is
     /// never held whole as dense values), with the checks of [`Recording::new`]: values at
     /// missing sensors are dropped and every other value must be finite.

@@ -9,7 +9,10 @@
 
 use crate::error::{IoError, Result};
 use crate::recording::{kpa_per_unit, Recording};
-use crate::sequence::{RunParams, SequenceOptions, SequenceResult};
+use crate::sequence::{
+    PairMatch, PairRow, RunCounts, RunParams, SequenceObject, SequenceOptions, SequenceResult,
+    SkippedPairRow,
+};
 use modal_core::OptionValue;
 use serde_json::{json, Map, Value};
 use sha2::{Digest, Sha256};
@@ -84,6 +87,10 @@ impl Table {
 }
 
 /// Appends one CSV line of `cells` (as [`Table::to_csv`] writes it) to `s`.
+pub fn push_csv_line(s: &mut String, cells: &[Cell]) {
+    push_csv_row(s, cells)
+}
+
 fn push_csv_row(s: &mut String, cells: &[Cell]) {
     for (k, c) in cells.iter().enumerate() {
         if k > 0 {
@@ -132,36 +139,79 @@ impl Table {
     /// `serde_json::to_string_pretty` would, one row at a time: the JSON values of a long
     /// table's cells take several times the memory of the table.
     pub fn write_json(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
-        if self.rows.is_empty() {
-            return w.write_all(b"[]\n");
+        let mut rows = JsonRows::new(&self.header);
+        for r in &self.rows {
+            rows.push(w, r)?;
         }
-        w.write_all(b"[\n")?;
-        for (k, r) in self.rows.iter().enumerate() {
-            if k > 0 {
-                w.write_all(b",\n")?;
-            }
-            // One level deeper than alone: every line indented by two spaces (strings hold no
-            // line breaks: JSON escapes them).
-            let row = serde_json::to_string_pretty(&self.row_json(r))?;
-            for (i, line) in row.lines().enumerate() {
-                if i > 0 {
-                    w.write_all(b"\n")?;
-                }
-                w.write_all(b"  ")?;
-                w.write_all(line.as_bytes())?;
-            }
+        rows.finish(w)
+    }
+}
+
+/// A JSON array of rows written one at a time, byte for byte as [`Table::write_json`] writes
+/// the whole table: for tables whose rows are never all held (a streamed run's `pairs.json`).
+pub struct JsonRows {
+    header: Vec<String>,
+    rows: usize,
+}
+
+impl JsonRows {
+    /// An array of objects keyed by these column names.
+    pub fn new(header: &[String]) -> Self {
+        Self {
+            header: header.to_vec(),
+            rows: 0,
         }
-        w.write_all(b"\n]\n")
+    }
+
+    /// Writes one row (a cell per column).
+    pub fn push(&mut self, w: &mut dyn std::io::Write, row: &[Cell]) -> std::io::Result<()> {
+        w.write_all(if self.rows == 0 { b"[\n" } else { b",\n" })?;
+        self.rows += 1;
+        let m: Map<String, Value> = self
+            .header
+            .iter()
+            .cloned()
+            .zip(row.iter().map(Cell::to_json))
+            .collect();
+        // One level deeper than alone: every line indented by two spaces (strings hold no
+        // line breaks: JSON escapes them).
+        let row = serde_json::to_string_pretty(&Value::Object(m))?;
+        for (i, line) in row.lines().enumerate() {
+            if i > 0 {
+                w.write_all(b"\n")?;
+            }
+            w.write_all(b"  ")?;
+            w.write_all(line.as_bytes())?;
+        }
+        Ok(())
+    }
+
+    /// Closes the array (with a final newline).
+    pub fn finish(self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        w.write_all(if self.rows == 0 { b"[]\n" } else { b"\n]\n" })
     }
 }
 
 /// The per-pair table: ids, frames (and their times), node counts, the local, optimisation and
 /// excess matches, the mean cost, and a status: `ok`, or `skipped` with the reason for a pair that
-/// could not be matched (its match columns empty).
+/// could not be matched (its match columns empty). The matched pairs come first, in order, then
+/// the skipped ones.
 pub fn pairs_table(recording: &Recording, r: &SequenceResult) -> Table {
-    let timed = recording.dt_s.is_some();
+    let mut t = pairs_header(recording);
+    for p in &r.pairs {
+        t.rows.push(pair_cells(recording, &p.row));
+    }
+    for s in &r.skipped_pairs {
+        t.rows
+            .push(skipped_pair_cells(recording, &SkippedPairRow::of(r, s)));
+    }
+    t
+}
+
+/// The columns of [`pairs_table`] (no rows).
+pub fn pairs_header(recording: &Recording) -> Table {
     let mut t = Table::new(&["id_a", "id_b", "frame_a", "frame_b"]);
-    if timed {
+    if recording.dt_s.is_some() {
         t.push_column("time_a_s");
         t.push_column("time_b_s");
     }
@@ -179,50 +229,52 @@ pub fn pairs_table(recording: &Recording, r: &SequenceResult) -> Table {
     ] {
         t.push_column(c);
     }
-    for p in &r.pairs {
-        let row = &p.row;
-        let mut cells = vec![
-            Cell::int(row.id_a),
-            Cell::int(row.id_b),
-            Cell::int(row.frame_a),
-            Cell::int(row.frame_b),
-        ];
-        if timed {
-            cells.push(Cell::opt(recording.time_s(row.frame_a), 6));
-            cells.push(Cell::opt(recording.time_s(row.frame_b), 6));
-        }
-        cells.extend([
-            Cell::int(row.nodes_a),
-            Cell::int(row.nodes_b),
-            Cell::int(row.local_matches),
-            Cell::Float(row.local_percent, 1),
-            Cell::int(row.optimisation_matches),
-            Cell::Float(row.optimisation_percent, 1),
-            Cell::int(row.excess_matches),
-            Cell::Float(row.mean_cost, 6),
-            Cell::Text("ok".into()),
-            Cell::Empty,
-        ]);
-        t.rows.push(cells);
-    }
-    for s in &r.skipped_pairs {
-        let (oa, ob) = (&r.objects[s.a], &r.objects[s.b]);
-        let mut cells = vec![
-            Cell::int(oa.id),
-            Cell::int(ob.id),
-            Cell::int(oa.frame),
-            Cell::int(ob.frame),
-        ];
-        if timed {
-            cells.push(Cell::opt(recording.time_s(oa.frame), 6));
-            cells.push(Cell::opt(recording.time_s(ob.frame), 6));
-        }
-        cells.extend([Cell::int(oa.shape.len()), Cell::int(ob.shape.len())]);
-        cells.extend(std::iter::repeat_n(Cell::Empty, 6));
-        cells.extend([Cell::Text("skipped".into()), Cell::Text(s.reason.clone())]);
-        t.rows.push(cells);
-    }
     t
+}
+
+/// The row of [`pairs_table`] of a matched pair.
+pub fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
+    let mut cells = vec![
+        Cell::int(row.id_a),
+        Cell::int(row.id_b),
+        Cell::int(row.frame_a),
+        Cell::int(row.frame_b),
+    ];
+    if recording.dt_s.is_some() {
+        cells.push(Cell::opt(recording.time_s(row.frame_a), 6));
+        cells.push(Cell::opt(recording.time_s(row.frame_b), 6));
+    }
+    cells.extend([
+        Cell::int(row.nodes_a),
+        Cell::int(row.nodes_b),
+        Cell::int(row.local_matches),
+        Cell::Float(row.local_percent, 1),
+        Cell::int(row.optimisation_matches),
+        Cell::Float(row.optimisation_percent, 1),
+        Cell::int(row.excess_matches),
+        Cell::Float(row.mean_cost, 6),
+        Cell::Text("ok".into()),
+        Cell::Empty,
+    ]);
+    cells
+}
+
+/// The row of [`pairs_table`] of a pair that could not be matched.
+pub fn skipped_pair_cells(recording: &Recording, s: &SkippedPairRow) -> Vec<Cell> {
+    let mut cells = vec![
+        Cell::int(s.id_a),
+        Cell::int(s.id_b),
+        Cell::int(s.frame_a),
+        Cell::int(s.frame_b),
+    ];
+    if recording.dt_s.is_some() {
+        cells.push(Cell::opt(recording.time_s(s.frame_a), 6));
+        cells.push(Cell::opt(recording.time_s(s.frame_b), 6));
+    }
+    cells.extend([Cell::int(s.nodes_a), Cell::int(s.nodes_b)]);
+    cells.extend(std::iter::repeat_n(Cell::Empty, 6));
+    cells.extend([Cell::Text("skipped".into()), Cell::Text(s.reason.clone())]);
+    cells
 }
 
 /// Appends `x, y` (pixels) and, when the pitch is known, `x_mm, y_mm` of a point.
@@ -239,37 +291,48 @@ fn push_xy(cells: &mut Vec<Cell>, recording: &Recording, x: f64, y: f64, mm: boo
 /// The objects: id (0-based, the row index), frame, time, index in the frame (or level index),
 /// node count, isobaric level, centroid of the nodes in pixels and mm.
 pub fn objects_table(recording: &Recording, r: &SequenceResult) -> Table {
-    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
+    let mut t = objects_header(recording);
+    for o in &r.objects {
+        t.rows.push(object_cells(recording, o));
+    }
+    t
+}
+
+/// The columns of [`objects_table`] (no rows).
+pub fn objects_header(recording: &Recording) -> Table {
     let mut t = Table::new(&["id", "frame"]);
-    if timed {
+    if recording.dt_s.is_some() {
         t.push_column("time_s");
     }
     for c in ["index", "nodes", "level", "centroid_x", "centroid_y"] {
         t.push_column(c);
     }
-    if mm {
+    if recording.pitch_mm.is_some() {
         t.push_column("centroid_x_mm");
         t.push_column("centroid_y_mm");
     }
-    for o in &r.objects {
-        let mut cells = vec![Cell::int(o.id), Cell::int(o.frame)];
-        if timed {
-            cells.push(Cell::opt(recording.time_s(o.frame), 6));
-        }
-        cells.extend([
-            Cell::int(o.index),
-            Cell::int(o.shape.len()),
-            Cell::opt(o.level, 3),
-        ]);
-        let n = o.shape.len().max(1) as f64;
-        let (cx, cy) = (0..o.shape.len()).fold((0.0, 0.0), |(x, y), i| {
-            let p = o.shape.point(i);
-            (x + p[0] / n, y + p[1] / n)
-        });
-        push_xy(&mut cells, recording, cx, cy, mm);
-        t.rows.push(cells);
-    }
     t
+}
+
+/// The row of [`objects_table`] of one object.
+pub fn object_cells(recording: &Recording, o: &SequenceObject) -> Vec<Cell> {
+    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
+    let mut cells = vec![Cell::int(o.id), Cell::int(o.frame)];
+    if timed {
+        cells.push(Cell::opt(recording.time_s(o.frame), 6));
+    }
+    cells.extend([
+        Cell::int(o.index),
+        Cell::int(o.shape.len()),
+        Cell::opt(o.level, 3),
+    ]);
+    let n = o.shape.len().max(1) as f64;
+    let (cx, cy) = (0..o.shape.len()).fold((0.0, 0.0), |(x, y), i| {
+        let p = o.shape.point(i);
+        (x + p[0] / n, y + p[1] / n)
+    });
+    push_xy(&mut cells, recording, cx, cy, mm);
+    cells
 }
 
 /// Every match of every pair: object ids, nodes, cost, excess flag, and the in-plane distance
@@ -301,24 +364,35 @@ pub fn matches_rows<E>(
     emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
 ) -> std::result::Result<(), E> {
     for p in &r.pairs {
-        let (oa, ob) = (&r.objects[p.a], &r.objects[p.b]);
-        for m in &p.result.pairs {
-            let (pa, pb) = (oa.shape.point(m.a), ob.shape.point(m.b));
-            let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
-            let mut cells = vec![
-                Cell::int(oa.id),
-                Cell::int(ob.id),
-                Cell::int(m.a),
-                Cell::int(m.b),
-                Cell::Float(m.cost, 6),
-                Cell::int(m.excess as usize),
-                Cell::Float(dx.hypot(dy), 4),
-            ];
-            if let Some(p) = recording.pitch_mm {
-                cells.push(Cell::Float((dx * p[0]).hypot(dy * p[1]), 4));
-            }
-            emit(cells)?;
+        pair_match_rows(recording, p, &r.objects[p.a], &r.objects[p.b], emit)?;
+    }
+    Ok(())
+}
+
+/// The rows of [`matches_table`] of one pair (`oa`, `ob` its two objects), one by one to `emit`.
+pub fn pair_match_rows<E>(
+    recording: &Recording,
+    p: &PairMatch,
+    oa: &SequenceObject,
+    ob: &SequenceObject,
+    emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
+) -> std::result::Result<(), E> {
+    for m in &p.result.pairs {
+        let (pa, pb) = (oa.shape.point(m.a), ob.shape.point(m.b));
+        let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
+        let mut cells = vec![
+            Cell::int(oa.id),
+            Cell::int(ob.id),
+            Cell::int(m.a),
+            Cell::int(m.b),
+            Cell::Float(m.cost, 6),
+            Cell::int(m.excess as usize),
+            Cell::Float(dx.hypot(dy), 4),
+        ];
+        if let Some(p) = recording.pitch_mm {
+            cells.push(Cell::Float((dx * p[0]).hypot(dy * p[1]), 4));
         }
+        emit(cells)?;
     }
     Ok(())
 }
@@ -336,8 +410,13 @@ pub fn tracks_table(recording: &Recording, r: &SequenceResult) -> Table {
 
 /// The columns of [`tracks_table`] (no rows).
 pub fn tracks_header(recording: &Recording, r: &SequenceResult) -> Table {
+    tracks_header_of(recording, r.objects.first().map_or(2, |o| o.shape.dim()))
+}
+
+/// The columns of [`tracks_table`] for objects of `dim` dimensions (those of the first object,
+/// 2 without objects).
+pub fn tracks_header_of(recording: &Recording, dim: usize) -> Table {
     let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
-    let dim = r.objects.first().map_or(2, |o| o.shape.dim());
     let mut t = Table::new(&["track", "step", "frame"]);
     if timed {
         t.push_column("time_s");
@@ -361,23 +440,37 @@ pub fn tracks_rows<E>(
     r: &SequenceResult,
     emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
 ) -> std::result::Result<(), E> {
-    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
     let dim = r.objects.first().map_or(2, |o| o.shape.dim());
     for (k, tr) in r.all_tracks().enumerate() {
-        for (s, &(o, n)) in tr.steps.iter().enumerate() {
-            let obj = &r.objects[o];
-            let p = obj.shape.point(n);
-            let mut cells = vec![Cell::int(k), Cell::int(s), Cell::int(obj.frame)];
-            if timed {
-                cells.push(Cell::opt(recording.time_s(obj.frame), 6));
-            }
-            cells.extend([Cell::int(obj.id), Cell::int(n)]);
-            push_xy(&mut cells, recording, p[0], p[1], mm);
-            if dim == 3 {
-                cells.push(Cell::Float(p[2], 4));
-            }
-            emit(cells)?;
+        let steps: Vec<(&SequenceObject, usize)> =
+            tr.steps.iter().map(|&(o, n)| (&r.objects[o], n)).collect();
+        track_rows(recording, k, &steps, dim, emit)?;
+    }
+    Ok(())
+}
+
+/// The rows of [`tracks_table`] of track `k` (its steps as object and node; `dim` that of
+/// [`tracks_header_of`]), one by one to `emit`.
+pub fn track_rows<E>(
+    recording: &Recording,
+    k: usize,
+    steps: &[(&SequenceObject, usize)],
+    dim: usize,
+    emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
+) -> std::result::Result<(), E> {
+    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
+    for (s, &(obj, n)) in steps.iter().enumerate() {
+        let p = obj.shape.point(n);
+        let mut cells = vec![Cell::int(k), Cell::int(s), Cell::int(obj.frame)];
+        if timed {
+            cells.push(Cell::opt(recording.time_s(obj.frame), 6));
         }
+        cells.extend([Cell::int(obj.id), Cell::int(n)]);
+        push_xy(&mut cells, recording, p[0], p[1], mm);
+        if dim == 3 {
+            cells.push(Cell::Float(p[2], 4));
+        }
+        emit(cells)?;
     }
     Ok(())
 }
@@ -413,10 +506,20 @@ fn measure_units(recording: &Recording) -> MeasureUnits {
 /// the pressure units and the sensel area are known), peak pressure (kPa when the units are
 /// known), centre of pressure in pixels and mm.
 pub fn frames_table(recording: &Recording, threshold: f64, start: usize, end: usize) -> Table {
-    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
+    let mut t = frames_header(recording);
+    let Ok(()) =
+        frames_rows::<std::convert::Infallible>(recording, threshold, start, end, &mut |cells| {
+            t.rows.push(cells);
+            Ok(())
+        });
+    t
+}
+
+/// The columns of [`frames_table`] (no rows).
+pub fn frames_header(recording: &Recording) -> Table {
     let u = measure_units(recording);
     let mut t = Table::new(&["frame"]);
-    if timed {
+    if recording.dt_s.is_some() {
         t.push_column("time_s");
     }
     for c in [
@@ -429,12 +532,37 @@ pub fn frames_table(recording: &Recording, threshold: f64, start: usize, end: us
     ] {
         t.push_column(c);
     }
-    if mm {
+    if recording.pitch_mm.is_some() {
         t.push_column("cop_x_mm");
         t.push_column("cop_y_mm");
     }
-    let measures = recording.measures(threshold);
-    for (f, m) in measures.iter().enumerate().take(end).skip(start) {
+    t
+}
+
+/// The rows of [`frames_table`], one by one to `emit`.
+pub fn frames_rows<E>(
+    recording: &Recording,
+    threshold: f64,
+    start: usize,
+    end: usize,
+    emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
+) -> std::result::Result<(), E> {
+    let measures = recording.measures_of(threshold, start..end);
+    measures_rows(recording, start, &measures, emit)
+}
+
+/// The rows of [`frames_table`] of frames `first..first + measures.len()` of `recording`
+/// (their measures given), one by one to `emit`.
+pub fn measures_rows<E>(
+    recording: &Recording,
+    first: usize,
+    measures: &[crate::recording::FrameMeasures],
+    emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
+) -> std::result::Result<(), E> {
+    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
+    let u = measure_units(recording);
+    for (k, m) in measures.iter().enumerate() {
+        let f = first + k;
         let mut cells = vec![Cell::int(f)];
         if timed {
             cells.push(Cell::opt(recording.time_s(f), 6));
@@ -449,9 +577,9 @@ pub fn frames_table(recording: &Recording, threshold: f64, start: usize, end: us
             Some([x, y]) => push_xy(&mut cells, recording, x, y, mm),
             None => cells.extend(std::iter::repeat_n(Cell::Empty, if mm { 4 } else { 2 })),
         }
-        t.rows.push(cells);
+        emit(cells)?;
     }
-    t
+    Ok(())
 }
 
 /// Where a recording came from: a name (the path as given) and, for files, the SHA-256 of its
@@ -613,22 +741,38 @@ pub fn run_summary(
     r: &SequenceResult,
     timings: &[(&str, f64)],
 ) -> Value {
+    run_summary_of(
+        input,
+        recording,
+        params,
+        options,
+        &RunCounts::of(r),
+        timings,
+    )
+}
+
+/// [`run_summary`] from the counts of a run ([`RunCounts`]: what a streamed run keeps).
+pub fn run_summary_of(
+    input: &InputInfo,
+    recording: &Recording,
+    params: &RunParams,
+    options: &SequenceOptions,
+    c: &RunCounts,
+    timings: &[(&str, f64)],
+) -> Value {
     let used: Map<String, Value> = params
         .used(options, recording)
         .iter()
         .map(|(k, v)| (k.to_string(), option_json(v)))
         .collect();
-    let n = r.pairs.len().max(1) as f64;
-    let mean = |f: fn(&crate::sequence::PairRow) -> f64| {
-        r.pairs.iter().map(|p| f(&p.row)).sum::<f64>() / n
-    };
     let mut stages: Map<String, Value> = timings
         .iter()
         .map(|(k, v)| (k.to_string(), json!(v)))
         .collect();
-    stages.insert("objects".into(), json!(r.timings.objects.as_secs_f64()));
-    stages.insert("matching".into(), json!(r.timings.matching.as_secs_f64()));
-    stages.insert("tracks".into(), json!(r.timings.tracks.as_secs_f64()));
+    stages.insert("objects".into(), json!(c.timings.objects.as_secs_f64()));
+    stages.insert("matching".into(), json!(c.timings.matching.as_secs_f64()));
+    stages.insert("tracks".into(), json!(c.timings.tracks.as_secs_f64()));
+    // Object ids are their indices.
     json!({
         "pedomatch_version": env!("CARGO_PKG_VERSION"),
         "input": {
@@ -645,29 +789,29 @@ pub fn run_summary(
             "pressure_units": (!recording.units.is_empty()).then_some(&recording.units),
         },
         "options": used,
-        "objects": r.objects.len(),
-        "pairs": r.pairs.len(),
-        "tracks": r.track_count(),
-        "tracks_3_or_more": r.track_lengths().filter(|&n| n >= 3).count(),
-        "splits": r.splits.iter().map(|(i, js)| json!({
-            "id": r.objects[*i].id, "into": js.iter().map(|&j| r.objects[j].id).collect::<Vec<_>>(),
+        "objects": c.objects,
+        "pairs": c.pairs,
+        "tracks": c.tracks,
+        "tracks_3_or_more": c.tracks_3_or_more,
+        "splits": c.splits.iter().map(|(i, js)| json!({
+            "id": i, "into": js,
         })).collect::<Vec<_>>(),
-        "merges": r.merges.iter().map(|(is, j)| json!({
-            "ids": is.iter().map(|&i| r.objects[i].id).collect::<Vec<_>>(), "into": r.objects[*j].id,
+        "merges": c.merges.iter().map(|(is, j)| json!({
+            "ids": is, "into": j,
         })).collect::<Vec<_>>(),
         "skipped": {
-            "frames": r.skipped_frames.iter().map(|s| json!({
+            "frames": c.skipped_frames.iter().map(|s| json!({
                 "frame": s.frame, "reason": s.reason,
             })).collect::<Vec<_>>(),
-            "pairs": r.skipped_pairs.iter().map(|s| json!({
-                "id_a": r.objects[s.a].id, "id_b": r.objects[s.b].id,
-                "frame_a": r.objects[s.a].frame, "frame_b": r.objects[s.b].frame,
+            "pairs": c.skipped_pairs.iter().map(|s| json!({
+                "id_a": s.id_a, "id_b": s.id_b,
+                "frame_a": s.frame_a, "frame_b": s.frame_b,
                 "reason": s.reason,
             })).collect::<Vec<_>>(),
         },
-        "mean_local_percent": mean(|p| p.local_percent),
-        "mean_optimisation_percent": mean(|p| p.optimisation_percent),
-        "mean_cost": mean(|p| p.mean_cost),
+        "mean_local_percent": c.mean_local_percent(),
+        "mean_optimisation_percent": c.mean_optimisation_percent(),
+        "mean_cost": c.mean_cost(),
         "timings_s": stages,
     })
 }

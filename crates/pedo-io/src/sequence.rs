@@ -233,6 +233,12 @@ impl RunParams {
         Ok(o)
     }
 
+    /// Whether a run with these parameters streams ([`streams`]): the contour and surface
+    /// models without drift correction.
+    pub fn streams(&self) -> bool {
+        self.model != ObjectModel::Isocontour && self.drift_reference < 2
+    }
+
     /// Checks every parameter that does not depend on a recording.
     pub fn validate(&self) -> std::result::Result<(), OptionError> {
         self.matching.validate()?;
@@ -641,6 +647,582 @@ impl SequenceResult {
                 (obj.frame, obj.shape.point(n).to_vec())
             })
             .collect()
+    }
+}
+
+/// A pair that could not be matched, as the pairs table and `summary.json` report it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SkippedPairRow {
+    pub id_a: usize,
+    pub id_b: usize,
+    pub frame_a: usize,
+    pub frame_b: usize,
+    pub nodes_a: usize,
+    pub nodes_b: usize,
+    pub reason: String,
+}
+
+impl SkippedPairRow {
+    /// The row of skipped pair `s` of run `r`.
+    pub fn of(r: &SequenceResult, s: &SkippedPair) -> Self {
+        Self::of_objects(&r.objects[s.a], &r.objects[s.b], &s.reason)
+    }
+
+    fn of_objects(oa: &SequenceObject, ob: &SequenceObject, reason: &str) -> Self {
+        Self {
+            id_a: oa.id,
+            id_b: ob.id,
+            frame_a: oa.frame,
+            frame_b: ob.frame,
+            nodes_a: oa.shape.len(),
+            nodes_b: ob.shape.len(),
+            reason: reason.to_string(),
+        }
+    }
+}
+
+/// What a run's summary needs of it: counts, sums and what was left out, without the objects,
+/// matches and tracks themselves. [`stream_sequence`] returns it; [`RunCounts::of`] reads it
+/// off a whole [`SequenceResult`]. Object ids are their indices.
+#[derive(Debug, Clone)]
+pub struct RunCounts {
+    pub objects: usize,
+    pub pairs: usize,
+    /// Sums over the matched pairs, in order, of the local and optimisation percentages and
+    /// of the mean costs.
+    pub local_percent_sum: f64,
+    pub optimisation_percent_sum: f64,
+    pub cost_sum: f64,
+    pub tracks: usize,
+    /// Tracks of 3 steps or more.
+    pub tracks_3_or_more: usize,
+    pub splits: Vec<(usize, Vec<usize>)>,
+    pub merges: Vec<(Vec<usize>, usize)>,
+    pub skipped_frames: Vec<SkippedFrame>,
+    pub skipped_pairs: Vec<SkippedPairRow>,
+    pub timings: StageTimings,
+}
+
+impl Default for RunCounts {
+    fn default() -> Self {
+        // The sums start as `Iterator::sum` starts, so that adding the pairs one by one gives
+        // the sum of the whole list to the last bit.
+        let zero = || std::iter::empty::<f64>().sum::<f64>();
+        Self {
+            objects: 0,
+            pairs: 0,
+            local_percent_sum: zero(),
+            optimisation_percent_sum: zero(),
+            cost_sum: zero(),
+            tracks: 0,
+            tracks_3_or_more: 0,
+            splits: Vec::new(),
+            merges: Vec::new(),
+            skipped_frames: Vec::new(),
+            skipped_pairs: Vec::new(),
+            timings: StageTimings::default(),
+        }
+    }
+}
+
+impl RunCounts {
+    /// The counts of a whole run.
+    pub fn of(r: &SequenceResult) -> Self {
+        let mut c = RunCounts {
+            objects: r.objects.len(),
+            splits: r.splits.clone(),
+            merges: r.merges.clone(),
+            skipped_frames: r.skipped_frames.clone(),
+            skipped_pairs: r
+                .skipped_pairs
+                .iter()
+                .map(|s| SkippedPairRow::of(r, s))
+                .collect(),
+            timings: r.timings,
+            ..Default::default()
+        };
+        for p in &r.pairs {
+            c.add_pair(&p.row);
+        }
+        for n in r.track_lengths() {
+            c.add_track(n);
+        }
+        c
+    }
+
+    fn add_pair(&mut self, row: &PairRow) {
+        self.pairs += 1;
+        self.local_percent_sum += row.local_percent;
+        self.optimisation_percent_sum += row.optimisation_percent;
+        self.cost_sum += row.mean_cost;
+    }
+
+    fn add_track(&mut self, steps: usize) {
+        self.tracks += 1;
+        if steps >= 3 {
+            self.tracks_3_or_more += 1;
+        }
+    }
+
+    fn mean(&self, sum: f64) -> f64 {
+        sum / self.pairs.max(1) as f64
+    }
+    /// Mean local matches over the matched pairs, in % (0 without pairs).
+    pub fn mean_local_percent(&self) -> f64 {
+        self.mean(self.local_percent_sum)
+    }
+    /// Mean optimisation matches over the matched pairs, in % (0 without pairs).
+    pub fn mean_optimisation_percent(&self) -> f64 {
+        self.mean(self.optimisation_percent_sum)
+    }
+    /// Mean over the matched pairs of their mean cost.
+    pub fn mean_cost(&self) -> f64 {
+        self.mean(self.cost_sum)
+    }
+}
+
+/// Where [`stream_sequence`] reads frames from when the recording it is given holds none of
+/// their values (see [`crate::formats::read_for_streaming`]).
+pub trait FrameSource {
+    /// Frames `w0..w1` of `recording` as a recording of `w1 - w0` frames with its size, mask
+    /// and units. Windows are asked for in order.
+    fn window(&mut self, recording: &Recording, w0: usize, w1: usize) -> Result<Recording>;
+}
+
+/// Where [`stream_sequence`] hands a run's results as they are made, each kind in the order of
+/// the [`SequenceResult`] that [`run_sequence`] would return.
+pub trait SequenceSink {
+    /// The measures of frames `first..first + measures.len()` (counting values above the
+    /// run's noise threshold, as the frames table does), in frame order, once each.
+    fn frames(&mut self, first: usize, measures: &[crate::recording::FrameMeasures]) -> Result<()>;
+    /// An object, in id order.
+    fn object(&mut self, object: &SequenceObject) -> Result<()>;
+    /// A matched pair with its two objects, in the order of [`SequenceResult::pairs`].
+    fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()>;
+    /// Track number `index` (in order from 0): its steps as object and node.
+    fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()>;
+}
+
+/// Frames whose objects are built, matched and chained at a time by [`stream_sequence`].
+pub const FRAME_WINDOW: usize = 64;
+
+/// [`run_sequence`] without holding the run: the frames go in windows of [`FRAME_WINDOW`];
+/// each window's objects are built, handed to `sink`, their pairs matched and handed over,
+/// their matches chained into tracks and each track handed over as soon as it has ended and
+/// every track before it has gone. Only the open tracks and the objects they pass through are
+/// held, so memory does not grow with the recording's length (only with its longest track).
+/// Contour and surface models without drift correction; the isocontour model (one frame) and
+/// drift correction (reference pairs across windows) run whole and are handed over after.
+/// The results handed to `sink` are those of [`run_sequence`] with the same options (with
+/// [`SequenceOptions::keep_match_details`] off: the pairs hold only their matches);
+/// `progress` reports [`Stage::Matching`] in frames done.
+pub fn stream_sequence(
+    recording: &Recording,
+    mut source: Option<&mut dyn FrameSource>,
+    options: &SequenceOptions,
+    progress: &(dyn Fn(Stage, usize, usize) + Sync),
+    sink: &mut dyn SequenceSink,
+) -> Result<RunCounts> {
+    if !streams(options) {
+        if source.is_some() {
+            return Err(IoError::invalid(
+                "this run needs the whole recording (isocontour model or drift correction)",
+            ));
+        }
+        let r = run_sequence(recording, options, progress)?;
+        let counts = replay(&r, sink)?;
+        let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
+        let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
+        sink.frames(start, &recording.measures_of(threshold, start..end))?;
+        return Ok(counts);
+    }
+    let measures_threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
+    let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
+    if start >= end || end > recording.n_frames() {
+        return Err(IoError::invalid(format!(
+            "frame range {start}..{end} is empty or beyond the {} frames of the recording",
+            recording.n_frames()
+        )));
+    }
+    let mut options = options.clone();
+    options.keep_match_details = false;
+    let options = &options;
+    let mut counts = RunCounts::default();
+    let mut held = Held::default();
+    let mut chain = Chainer::default();
+    // The last frame built: its first object and (contour model) its contours, or (surface
+    // model) its object, if any.
+    let mut last_contours: Option<(usize, Vec<Contour>)> = None;
+    let mut last_surface: Option<(usize, usize)> = None;
+    let threshold = options.surface.preprocess.threshold.unwrap_or(0.0);
+    let keep = |s: &Shape| s.len() >= options.min_nodes.max(3);
+    let mut w0 = start;
+    while w0 < end {
+        let w1 = (w0 + FRAME_WINDOW).min(end);
+        let t0 = Instant::now();
+        // The window's frames: those of `recording`, or read from `source` (numbered from w0).
+        let read = match source.as_mut() {
+            Some(s) => Some(s.window(recording, w0, w1)?),
+            None => None,
+        };
+        let (frames, offset) = match &read {
+            Some(r) => (r, w0),
+            None => (recording, 0),
+        };
+        let first_new = held.end();
+        // The window's candidate pairs (ids), splits and merges.
+        let mut candidates: Vec<(usize, usize)> = Vec::new();
+        let (mut splits, mut merges) = (Vec::new(), Vec::new());
+        match options.model {
+            ObjectModel::Contour => {
+                let per_frame: Vec<(Vec<Contour>, Vec<Shape>)> =
+                    per_frame_or_skipped(w0..w1, &mut counts.skipped_frames, |t| {
+                        frame_contours(frames, t - offset, options)
+                    });
+                for (k, (cs, shapes)) in per_frame.into_iter().enumerate() {
+                    let first = held.end();
+                    for (index, shape) in shapes.into_iter().enumerate() {
+                        held.push(SequenceObject {
+                            id: held.end(),
+                            frame: w0 + k,
+                            index,
+                            level: None,
+                            shape,
+                        });
+                    }
+                    if let Some((fa, previous)) = &last_contours {
+                        let (fa, fb) = (*fa, first);
+                        let p =
+                            crate::track::pair_contours(previous, &cs, PairingMethod::default())?;
+                        candidates.extend(p.pairs.iter().map(|&(i, j)| (fa + i, fb + j)));
+                        splits.extend(
+                            p.splits
+                                .iter()
+                                .map(|(i, js)| (fa + i, js.iter().map(|j| fb + j).collect())),
+                        );
+                        merges.extend(
+                            p.merges
+                                .iter()
+                                .map(|(is, j)| (is.iter().map(|i| fa + i).collect(), fb + j)),
+                        );
+                    }
+                    last_contours = Some((first, cs));
+                }
+            }
+            ObjectModel::Surface | ObjectModel::Isocontour => {
+                let per_frame: Vec<Option<Shape>> =
+                    per_frame_or_skipped(w0..w1, &mut counts.skipped_frames, |t| {
+                        frame_surface(frames, t - offset, threshold, options, &keep)
+                    });
+                for (k, shape) in per_frame.into_iter().enumerate() {
+                    let frame = w0 + k;
+                    match shape {
+                        Some(shape) => {
+                            let o = held.end();
+                            if let Some((p, pf)) = last_surface
+                                && pf + 1 == frame
+                            {
+                                candidates.push((p, o));
+                            }
+                            held.push(SequenceObject {
+                                id: o,
+                                frame,
+                                index: 0,
+                                level: None,
+                                shape,
+                            });
+                            last_surface = Some((o, frame));
+                        }
+                        None => last_surface = None,
+                    }
+                }
+            }
+        }
+        sink.frames(
+            w0,
+            &frames.measures_of(measures_threshold, w0 - offset..w1 - offset),
+        )?;
+        drop(read);
+        for id in first_new..held.end() {
+            sink.object(held.get(id)?)?;
+        }
+        counts.objects = held.end();
+        let t1 = Instant::now();
+
+        // The window's pairs, matched on the held objects (numbered from `held.base`).
+        let base = held.base;
+        let local = |id: usize| id - base;
+        let local_candidates: Vec<(usize, usize)> = candidates
+            .iter()
+            .map(|&(a, b)| (local(a), local(b)))
+            .collect();
+        let local_splits: Vec<(usize, Vec<usize>)> = splits
+            .iter()
+            .map(|(i, js): &(usize, Vec<usize>)| {
+                (local(*i), js.iter().map(|&j| local(j)).collect())
+            })
+            .collect();
+        let local_merges: Vec<(Vec<usize>, usize)> = merges
+            .iter()
+            .map(|(is, j): &(Vec<usize>, usize)| {
+                (is.iter().map(|&i| local(i)).collect(), local(*j))
+            })
+            .collect();
+        let parts = parts_of_wholes(&local_candidates, &local_splits, &local_merges);
+        let objects = held.objects.make_contiguous();
+        let (mut pairs, skipped) =
+            match_all(objects, &local_candidates, &parts, options, &|_, _, _| {});
+        for p in &mut pairs {
+            p.a += base;
+            p.b += base;
+        }
+        for s in skipped {
+            let (oa, ob) = (held.get(s.a + base)?, held.get(s.b + base)?);
+            counts
+                .skipped_pairs
+                .push(SkippedPairRow::of_objects(oa, ob, &s.reason));
+        }
+        for p in &pairs {
+            sink.pair(p, held.get(p.a)?, held.get(p.b)?)?;
+            counts.add_pair(&p.row);
+        }
+        counts.splits.extend(splits);
+        counts.merges.extend(merges);
+        let t2 = Instant::now();
+
+        // Every pair leaving an object before the window's last frame is known now.
+        let last_first = match options.model {
+            ObjectModel::Contour => last_contours.as_ref().map_or(held.end(), |l| l.0),
+            _ => last_surface.map_or(held.end(), |l| l.0),
+        };
+        chain.chain(
+            &held,
+            first_new..held.end(),
+            &pairs,
+            last_first,
+            &mut |k, steps| {
+                counts.add_track(steps.len());
+                sink.track(k, steps)
+            },
+        )?;
+        drop(pairs);
+        // The objects before both the first open track and the last frame are done.
+        held.drop_below(chain.first_object().unwrap_or(usize::MAX).min(last_first));
+        let t3 = Instant::now();
+        counts.timings.objects += t1 - t0;
+        counts.timings.matching += t2 - t1;
+        counts.timings.tracks += t3 - t2;
+        progress(Stage::Matching, w1 - start, end - start);
+        w0 = w1;
+    }
+    let t = Instant::now();
+    chain.finish(&held, &mut |k, steps| {
+        counts.add_track(steps.len());
+        sink.track(k, steps)
+    })?;
+    counts.timings.tracks += t.elapsed();
+    Ok(counts)
+}
+
+/// Whether [`stream_sequence`] streams a run with these options (the contour and surface
+/// models without drift correction) rather than running it whole.
+pub fn streams(options: &SequenceOptions) -> bool {
+    options.model != ObjectModel::Isocontour && options.drift_reference < 2
+}
+
+/// Hands a whole run to `sink`, as [`stream_sequence`] would have (the frames' measures
+/// aside), and returns its counts.
+pub fn replay(r: &SequenceResult, sink: &mut dyn SequenceSink) -> Result<RunCounts> {
+    for o in &r.objects {
+        sink.object(o)?;
+    }
+    for p in &r.pairs {
+        sink.pair(p, &r.objects[p.a], &r.objects[p.b])?;
+    }
+    for (k, t) in r.all_tracks().enumerate() {
+        let steps: Vec<(&SequenceObject, usize)> =
+            t.steps.iter().map(|&(o, n)| (&r.objects[o], n)).collect();
+        sink.track(k, &steps)?;
+    }
+    Ok(RunCounts::of(r))
+}
+
+/// The objects of a streamed run still needed: ids `base..base + objects.len()`.
+#[derive(Default)]
+struct Held {
+    base: usize,
+    objects: std::collections::VecDeque<SequenceObject>,
+}
+
+impl Held {
+    /// One past the last object's id.
+    fn end(&self) -> usize {
+        self.base + self.objects.len()
+    }
+    fn push(&mut self, o: SequenceObject) {
+        self.objects.push_back(o);
+    }
+    fn get(&self, id: usize) -> Result<&SequenceObject> {
+        id.checked_sub(self.base)
+            .and_then(|k| self.objects.get(k))
+            .ok_or_else(|| {
+                IoError::invalid(format!(
+                    "internal error (please report it): object {id} no longer held"
+                ))
+            })
+    }
+    /// Lets go of the objects before `id`.
+    fn drop_below(&mut self, id: usize) {
+        while self.base < id && self.objects.pop_front().is_some() {
+            self.base += 1;
+        }
+    }
+}
+
+/// [`chain_tracks_with`] fed a window at a time (see [`stream_sequence`]).
+#[derive(Default)]
+struct Chainer {
+    /// The number of the front pending track.
+    first: usize,
+    /// The tracks not handed over yet, each with whether it has ended.
+    pending: std::collections::VecDeque<(Track, bool)>,
+    /// The track of each node of the objects a pair may still leave (`NONE`: none).
+    rows: std::collections::BTreeMap<usize, Vec<u32>>,
+    /// The last object a known pair leaves each object of `rows` for.
+    last_use: HashMap<usize, usize>,
+}
+
+const NO_TRACK: u32 = u32::MAX;
+
+/// Where [`Chainer`] hands each track: its number and its steps as object and node.
+type EmitTrack<'a> = dyn FnMut(usize, &[(&SequenceObject, usize)]) -> Result<()> + 'a;
+
+impl Chainer {
+    /// The first object of the front open track (all objects before it are done with).
+    fn first_object(&self) -> Option<usize> {
+        self.pending
+            .front()
+            .and_then(|(t, _)| t.steps.first())
+            .map(|s| s.0)
+    }
+
+    /// Ends the tracks of `row` whose last step is on object `x`.
+    fn end_at(&mut self, x: usize, row: &[u32]) {
+        for &t in row {
+            let t = t as usize;
+            if t >= self.first
+                && let Some((track, ended)) = self.pending.get_mut(t - self.first)
+                && track.steps.last().map(|s| s.0) == Some(x)
+            {
+                *ended = true;
+            }
+        }
+    }
+
+    /// Chains the objects `new` (all held) through `pairs` (those that end on them, in order).
+    /// Every pair leaving an object before `settled` is among those given so far.
+    fn chain(
+        &mut self,
+        held: &Held,
+        new: std::ops::Range<usize>,
+        pairs: &[PairMatch],
+        settled: usize,
+        emit: &mut EmitTrack<'_>,
+    ) -> Result<()> {
+        let id = |t: usize| u32::try_from(t).unwrap_or(NO_TRACK - 1);
+        let mut incoming: Vec<Vec<&PairMatch>> = vec![Vec::new(); new.len()];
+        for p in pairs {
+            incoming[p.b - new.start].push(p);
+            let u = self.last_use.entry(p.a).or_insert(0);
+            *u = (*u).max(p.b);
+        }
+        // Objects of earlier windows that no pair leaves end their tracks.
+        let idle: Vec<usize> = self
+            .rows
+            .keys()
+            .copied()
+            .filter(|x| *x < new.start && !self.last_use.contains_key(x))
+            .collect();
+        for x in idle {
+            if let Some(row) = self.rows.remove(&x) {
+                self.end_at(x, &row);
+            }
+        }
+        for o in new.clone() {
+            let ob = held.get(o)?;
+            let mut row = vec![NO_TRACK; ob.shape.len()];
+            for p in &incoming[o - new.start] {
+                let oa = held.get(p.a)?;
+                let Some(from) = self.rows.get(&p.a) else {
+                    continue;
+                };
+                for mp in p.result.pairs.iter().filter(|mp| !mp.excess) {
+                    if row[mp.b] != NO_TRACK || !honest_step_of(oa, mp.a, ob, mp.b) {
+                        continue;
+                    }
+                    let t = from[mp.a] as usize;
+                    if t >= self.first
+                        && let Some((track, _)) = self.pending.get_mut(t - self.first)
+                        && track.steps.last().map(|s| s.0) == Some(p.a)
+                    {
+                        track.steps.push((o, mp.b));
+                        row[mp.b] = id(t);
+                    }
+                }
+            }
+            for (node, slot) in row.iter_mut().enumerate() {
+                if *slot == NO_TRACK {
+                    *slot = id(self.first + self.pending.len());
+                    self.pending.push_back((
+                        Track {
+                            steps: vec![(o, node)],
+                        },
+                        false,
+                    ));
+                }
+            }
+            for p in &incoming[o - new.start] {
+                if self.last_use.get(&p.a) == Some(&o) {
+                    self.last_use.remove(&p.a);
+                    if let Some(done) = self.rows.remove(&p.a) {
+                        self.end_at(p.a, &done);
+                    }
+                }
+            }
+            if o >= settled || self.last_use.get(&o).is_some_and(|&u| u > o) {
+                self.rows.insert(o, row);
+            } else {
+                self.end_at(o, &row);
+            }
+            self.emit_ended(held, emit)?;
+        }
+        Ok(())
+    }
+
+    /// Hands over the front tracks that have ended.
+    fn emit_ended(&mut self, held: &Held, emit: &mut EmitTrack<'_>) -> Result<()> {
+        while self.pending.front().is_some_and(|(_, ended)| *ended) {
+            if let Some((track, _)) = self.pending.pop_front() {
+                let steps = track
+                    .steps
+                    .iter()
+                    .map(|&(o, n)| held.get(o).map(|obj| (obj, n)))
+                    .collect::<Result<Vec<_>>>()?;
+                emit(self.first, &steps)?;
+                self.first += 1;
+            }
+        }
+        Ok(())
+    }
+
+    /// Hands over every track left.
+    fn finish(&mut self, held: &Held, emit: &mut EmitTrack<'_>) -> Result<()> {
+        for (_, ended) in &mut self.pending {
+            *ended = true;
+        }
+        self.rows.clear();
+        self.last_use.clear();
+        self.emit_ended(held, emit)
     }
 }
 
@@ -1135,7 +1717,11 @@ pub(crate) fn honest_step(
     b: usize,
     nb: usize,
 ) -> bool {
-    let (oa, ob) = (&objects[a], &objects[b]);
+    honest_step_of(&objects[a], na, &objects[b], nb)
+}
+
+/// [`honest_step`] with the two objects given.
+fn honest_step_of(oa: &SequenceObject, na: usize, ob: &SequenceObject, nb: usize) -> bool {
     oa.frame == ob.frame
         || crate::track::step_allowed(oa.shape.point(na), ob.shape.point(nb), &ob.shape)
 }

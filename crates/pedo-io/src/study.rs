@@ -12,15 +12,22 @@
 //! - [`run_recording`] is one row of that table, for callers that distribute the recordings
 //!   themselves (Python's `pymodal.batch_row`, e.g. on a Dask cluster).
 //!
-//! The folder of one run is written by [`write_run_folder`], which `pedomatch run` uses too.
+//! The folder of one run is written by [`write_run_folder`], which `pedomatch run` uses too; a
+//! run with tables only ([`tables_only`]) streams instead ([`stream_run_folder`]): its frames
+//! are read, matched, chained and written window by window, so its memory does not grow with
+//! the recording's length, and its folder is the same, byte for byte.
 
 use crate::error::{IoError, Result};
 use crate::figure::{FigureAxes, MatchFigure, ObjectLabel, TracksFigure};
 use crate::formats::{read_recording_with, sniff_format, ReadOptions, SNIFF_BYTES};
 use crate::outdir::{self, OutDir};
+use crate::recording::FrameMeasures;
 use crate::recording::{Format, Recording};
 use crate::report::{self, Cell, InputInfo, Table};
-use crate::sequence::{run_sequence, RunParams, SequenceOptions, SequenceResult, Stage};
+use crate::sequence::{
+    run_sequence, stream_sequence, FrameSource, PairMatch, RunCounts, RunParams, SequenceObject,
+    SequenceOptions, SequenceResult, SequenceSink, Stage,
+};
 use crate::tables::{self, TableFormat};
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
@@ -107,6 +114,197 @@ pub fn write_tables(
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
     let frames = report::frames_table(recording, threshold, start, end);
     tables::write_table(dir, tables, "frames", &frames)
+}
+
+/// Whether a run writes only its tables and `summary.json` (no figures, report or animation):
+/// such a run streams ([`stream_run_folder`]), and its memory does not grow with the
+/// recording's length.
+pub fn tables_only(outputs: &RunOutputs<'_>) -> bool {
+    !outputs.figures.png && !outputs.figures.svg && outputs.report.is_none() && !outputs.animation
+}
+
+/// The tables of a run folder written as [`stream_sequence`] makes them: every row goes to its
+/// file at once (the skipped pairs, few, are kept for the end of the pairs table).
+pub struct TablesSink<'a> {
+    dir: &'a OutDir,
+    recording: &'a Recording,
+    format: TableFormat,
+    pairs: tables::TableWriter,
+    pairs_json: std::io::BufWriter<std::fs::File>,
+    json_rows: report::JsonRows,
+    objects: tables::TableWriter,
+    matches: tables::TableWriter,
+    frames: tables::TableWriter,
+    /// Started with the first track: its columns depend on the objects' dimension.
+    tracks: Option<tables::TableWriter>,
+    /// The dimension of the first object.
+    dim: Option<usize>,
+}
+
+impl<'a> TablesSink<'a> {
+    /// Starts the tables of a run of `recording` in `dir`.
+    pub fn create(dir: &'a OutDir, recording: &'a Recording, format: TableFormat) -> Result<Self> {
+        let pairs_header = report::pairs_header(recording).header;
+        Ok(Self {
+            dir,
+            recording,
+            format,
+            pairs: tables::TableWriter::create(dir, format, "pairs", &pairs_header)?,
+            pairs_json: dir.create_file("pairs.json")?,
+            json_rows: report::JsonRows::new(&pairs_header),
+            objects: tables::TableWriter::create(
+                dir,
+                format,
+                "objects",
+                &report::objects_header(recording).header,
+            )?,
+            matches: tables::TableWriter::create(
+                dir,
+                format,
+                "matches",
+                &report::matches_header(recording).header,
+            )?,
+            frames: tables::TableWriter::create(
+                dir,
+                format,
+                "frames",
+                &report::frames_header(recording).header,
+            )?,
+            tracks: None,
+            dim: None,
+        })
+    }
+
+    fn pair_row(&mut self, cells: &[Cell]) -> Result<()> {
+        self.pairs.push(self.dir, cells)?;
+        self.json_rows
+            .push(&mut self.pairs_json, cells)
+            .map_err(|e| self.dir.failed("pairs.json", e))
+    }
+
+    fn tracks_writer(&mut self) -> Result<&mut tables::TableWriter> {
+        if self.tracks.is_none() {
+            let header = report::tracks_header_of(self.recording, self.dim.unwrap_or(2)).header;
+            self.tracks = Some(tables::TableWriter::create(
+                self.dir,
+                self.format,
+                "tracks",
+                &header,
+            )?);
+        }
+        self.tracks
+            .as_mut()
+            .ok_or_else(|| IoError::invalid("tracks table not started"))
+    }
+
+    /// Ends the tables: the skipped pairs of `counts` close the pairs table.
+    pub fn finish(mut self, counts: &RunCounts) -> Result<()> {
+        for s in &counts.skipped_pairs {
+            let cells = report::skipped_pair_cells(self.recording, s);
+            self.pair_row(&cells)?;
+        }
+        self.tracks_writer()?;
+        let dir = self.dir;
+        self.pairs.finish(dir)?;
+        let failed = |e| dir.failed("pairs.json", e);
+        self.json_rows
+            .finish(&mut self.pairs_json)
+            .map_err(failed)?;
+        std::io::Write::flush(&mut self.pairs_json).map_err(failed)?;
+        self.objects.finish(dir)?;
+        self.matches.finish(dir)?;
+        self.frames.finish(dir)?;
+        if let Some(t) = self.tracks {
+            t.finish(dir)?;
+        }
+        Ok(())
+    }
+}
+
+impl SequenceSink for TablesSink<'_> {
+    fn frames(&mut self, first: usize, measures: &[FrameMeasures]) -> Result<()> {
+        let (dir, frames) = (self.dir, &mut self.frames);
+        report::measures_rows(self.recording, first, measures, &mut |cells| {
+            frames.push(dir, &cells)
+        })
+    }
+
+    fn object(&mut self, object: &SequenceObject) -> Result<()> {
+        self.dim.get_or_insert(object.shape.dim());
+        self.objects
+            .push(self.dir, &report::object_cells(self.recording, object))
+    }
+
+    fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()> {
+        let cells = report::pair_cells(self.recording, &pair.row);
+        self.pair_row(&cells)?;
+        let (dir, matches) = (self.dir, &mut self.matches);
+        report::pair_match_rows(self.recording, pair, a, b, &mut |cells| {
+            matches.push(dir, &cells)
+        })
+    }
+
+    fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
+        let dim = self.dim.unwrap_or(2);
+        let (dir, recording) = (self.dir, self.recording);
+        let tracks = self.tracks_writer()?;
+        report::track_rows(recording, index, steps, dim, &mut |cells| {
+            tracks.push(dir, &cells)
+        })
+    }
+}
+
+/// A sink that keeps nothing (a run whose counts alone are wanted).
+pub struct NoSink;
+
+impl SequenceSink for NoSink {
+    fn frames(&mut self, _: usize, _: &[FrameMeasures]) -> Result<()> {
+        Ok(())
+    }
+    fn object(&mut self, _: &SequenceObject) -> Result<()> {
+        Ok(())
+    }
+    fn pair(&mut self, _: &PairMatch, _: &SequenceObject, _: &SequenceObject) -> Result<()> {
+        Ok(())
+    }
+    fn track(&mut self, _: usize, _: &[(&SequenceObject, usize)]) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// Runs `recording` as [`stream_sequence`] and writes the folder `out` of a run with tables
+/// only ([`tables_only`]), whole or not at all, byte for byte as [`write_run_folder`] writes it
+/// (the timings of `summary.json` aside): the tables are written as the run makes them, so
+/// neither the run nor its tables are ever held. `frames` reads the frames when `recording`
+/// holds none (see [`crate::formats::read_for_streaming`]). `timings` are the stages measured
+/// before (e.g. reading). Returns the summary and the run's counts.
+#[allow(clippy::too_many_arguments)]
+pub fn stream_run_folder(
+    out: &Path,
+    input: &InputInfo,
+    recording: &Recording,
+    frames: Option<&mut dyn FrameSource>,
+    params: &RunParams,
+    options: &SequenceOptions,
+    tables: TableFormat,
+    timings: &[(&str, f64)],
+    progress: &(dyn Fn(Stage, usize, usize) + Sync),
+) -> Result<(Value, RunCounts)> {
+    let started = Instant::now();
+    let dir = OutDir::create(out)?;
+    let mut sink = TablesSink::create(&dir, recording, tables)?;
+    let counts = stream_sequence(recording, frames, options, progress, &mut sink)?;
+    sink.finish(&counts)?;
+    let t = counts.timings;
+    let run = started
+        .elapsed()
+        .saturating_sub(t.objects + t.matching + t.tracks);
+    let mut stages = timings.to_vec();
+    stages.push(("output", run.as_secs_f64()));
+    let summary = report::run_summary_of(input, recording, params, options, &counts, &stages);
+    dir.write("summary.json", pretty(&summary).as_bytes())?;
+    dir.commit()?;
+    Ok((summary, counts))
 }
 
 /// Writes the match figure of every pair (in parallel on the current rayon pool) and the tracks
@@ -657,7 +855,13 @@ fn process(
     started: Instant,
 ) -> Result<StudyRow> {
     opts.params.validate()?;
-    let mut recording = read_recording_with(path, &opts.read)?;
+    // A run with tables only reads a Tekscan file's frames as it goes (never held whole).
+    let lean = tables_only(&opts.outputs) && opts.params.streams();
+    let (mut recording, mut file_frames) = if lean {
+        crate::formats::read_for_streaming(path, &opts.read)?
+    } else {
+        (read_recording_with(path, &opts.read)?, None)
+    };
     let input = InputInfo::of_path(path)?;
     opts.params.units.apply(&mut recording)?;
     let mut options = opts.params.to_options(&recording)?;
@@ -684,6 +888,38 @@ fn process(
             Stage::Matching => 0.5 + 0.5 * part,
         })
     };
+    if tables_only(&opts.outputs) {
+        // Streamed: nothing of the run is held but its counts.
+        let frames = file_frames.as_mut().map(|f| f as &mut dyn FrameSource);
+        let (summary, counts) = match folder {
+            Some(folder) => stream_run_folder(
+                &folder,
+                &input,
+                &recording,
+                frames,
+                &opts.params,
+                &options,
+                opts.outputs.tables,
+                &[("read", read_s)],
+                &on_stage,
+            )?,
+            None => {
+                let counts = stream_sequence(&recording, frames, &options, &on_stage, &mut NoSink)?;
+                let summary = report::run_summary_of(
+                    &input,
+                    &recording,
+                    &opts.params,
+                    &options,
+                    &counts,
+                    &[("read", read_s)],
+                );
+                (summary, counts)
+            }
+        };
+        let mut row = row_of_summary(path, output, &summary, started);
+        row.message = left_out(&counts);
+        return Ok(row);
+    }
     let result = run_sequence(&recording, &options, &on_stage)?;
     let run = RunRecord {
         input: &input,
@@ -704,7 +940,7 @@ fn process(
         ),
     };
     let mut row = row_of_summary(path, output, &summary, started);
-    row.message = left_out(&result);
+    row.message = left_out(&RunCounts::of(&result));
     Ok(row)
 }
 
@@ -805,7 +1041,7 @@ fn row_of_summary(
 }
 
 /// What a successful run left out, in one line (empty if nothing).
-fn left_out(r: &SequenceResult) -> String {
+fn left_out(r: &RunCounts) -> String {
     if r.skipped_pairs.is_empty() && r.skipped_frames.is_empty() {
         return String::new();
     }

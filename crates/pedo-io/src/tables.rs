@@ -106,6 +106,69 @@ pub fn write_rows(
     })
 }
 
+/// A table file of an output folder written row by row, as CSV or Parquet: the rows are never
+/// held (Parquet buffers one row group). The file is complete once [`TableWriter::finish`]
+/// returns.
+pub struct TableWriter {
+    rel: String,
+    sink: TableSink,
+}
+
+enum TableSink {
+    Csv {
+        w: std::io::BufWriter<std::fs::File>,
+        line: String,
+    },
+    Parquet(Box<ParquetWriter<std::io::BufWriter<std::fs::File>>>),
+}
+
+impl TableWriter {
+    /// Starts `{stem}.csv` or `{stem}.parquet` in `dir` with these columns.
+    pub fn create(
+        dir: &OutDir,
+        format: TableFormat,
+        stem: &str,
+        header: &[String],
+    ) -> crate::error::Result<Self> {
+        let rel = format.file_name(stem);
+        let mut w = dir.create_file(&rel)?;
+        let sink = match format {
+            TableFormat::Csv => {
+                let mut line = header.join(",");
+                line.push('\n');
+                w.write_all(line.as_bytes())
+                    .map_err(|e| dir.failed(&rel, e))?;
+                TableSink::Csv { w, line }
+            }
+            TableFormat::Parquet => TableSink::Parquet(Box::new(ParquetWriter::new(w, header))),
+        };
+        Ok(Self { rel, sink })
+    }
+
+    /// Adds one row (a cell per column).
+    pub fn push(&mut self, dir: &OutDir, cells: &[Cell]) -> crate::error::Result<()> {
+        let written = match &mut self.sink {
+            TableSink::Csv { w, line } => {
+                line.clear();
+                report::push_csv_line(line, cells);
+                w.write_all(line.as_bytes())
+            }
+            TableSink::Parquet(p) => p.push(cells),
+        };
+        written.map_err(|e| dir.failed(&self.rel, e))
+    }
+
+    /// Writes what is buffered and the end of the file.
+    pub fn finish(self, dir: &OutDir) -> crate::error::Result<()> {
+        let mut w = match self.sink {
+            TableSink::Csv { w, .. } => Ok(w),
+            TableSink::Parquet(p) => p.finish_into_inner(),
+        }
+        .map_err(|e| dir.failed(&self.rel, e))?;
+        w.flush().map_err(|e| dir.failed(&self.rel, e))
+    }
+}
+
 /// `table` as the bytes of a Parquet file.
 pub fn parquet_bytes(table: &Table) -> std::io::Result<Vec<u8>> {
     let mut bytes = Vec::new();
@@ -237,13 +300,18 @@ impl<W: Write + Send> ParquetWriter<W> {
     }
 
     /// Writes the buffered rows and the file's footer.
-    pub fn finish(mut self) -> std::io::Result<()> {
+    pub fn finish(self) -> std::io::Result<()> {
+        self.finish_into_inner().map(drop)
+    }
+
+    /// [`ParquetWriter::finish`], giving back the sink (to flush it).
+    pub fn finish_into_inner(mut self) -> std::io::Result<W> {
         if self.rows > 0 || self.writer.is_none() {
             self.write_group()?;
         }
         match self.writer.take() {
-            Some(w) => w.close().map(|_| ()).map_err(parquet_error),
-            None => Ok(()),
+            Some(w) => w.into_inner().map_err(parquet_error),
+            None => Err(invalid("parquet file not started".into())),
         }
     }
 

@@ -58,9 +58,66 @@ fn unpad(line: String) -> String {
 }
 
 fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
+    parse_tekscan_lines(latin1_lines(bytes), bytes.len(), name, csv, &mut Keep::All)
+}
+
+/// What the Tekscan parser does with each frame it has read.
+pub(crate) enum Keep<'a> {
+    /// Holds it (sparsely) in the recording.
+    All,
+    /// Holds none of its values (the recording's frames read as 0) and hands it to the
+    /// function, if any; an error from it stops the reading.
+    Handed(Option<&'a mut FrameHand<'a>>),
+}
+
+/// A function a frame read is handed to.
+pub(crate) type FrameHand<'a> = dyn FnMut(&[f32]) -> Result<()> + 'a;
+
+/// Reads a Tekscan `.asf` file or CSV export (`csv`) from `file` line by line: the file is
+/// never held in memory, only its frames (sparse). `size` is the file's length in bytes.
+pub(crate) fn read_tekscan(
+    file: impl std::io::BufRead,
+    size: usize,
+    name: &str,
+    csv: bool,
+    keep: &mut Keep<'_>,
+) -> Result<Recording> {
+    // The lines as `latin1_lines` cuts them; a read error ends them and is reported instead of
+    // what the parser makes of the cut file.
+    let failure: std::cell::Cell<Option<std::io::Error>> = std::cell::Cell::new(None);
+    let lines = file
+        .split(b'\n')
+        .map_while(|l| match l {
+            Ok(l) => Some(l),
+            Err(e) => {
+                failure.set(Some(e));
+                None
+            }
+        })
+        .enumerate()
+        .map(|(i, l)| {
+            let l = l.strip_suffix(b"\r").unwrap_or(&l);
+            (i + 1, l.iter().map(|&b| b as char).collect::<String>())
+        });
+    let parsed = parse_tekscan_lines(lines, size, name, csv, keep);
+    match failure.take() {
+        Some(source) => Err(IoError::Io {
+            path: name.to_string(),
+            source,
+        }),
+        None => parsed,
+    }
+}
+
+fn parse_tekscan_lines(
+    lines: impl Iterator<Item = (usize, String)>,
+    size: usize,
+    name: &str,
+    csv: bool,
+    keep: &mut Keep<'_>,
+) -> Result<Recording> {
     let err = |line: usize, msg: String| IoError::parse(name, line, msg);
-    let n_lines = latin1_lines(bytes).count();
-    let mut lines = latin1_lines(bytes)
+    let mut lines = lines
         .map(|(ln, l)| (ln, if csv { unpad(l) } else { l }))
         .peekable();
     let (mut rows, mut cols) = (None::<usize>, None::<usize>);
@@ -141,7 +198,7 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
     // corrupt header, refused before anything of its size is allocated.
     let per = rows
         .checked_mul(cols)
-        .filter(|&p| p <= bytes.len())
+        .filter(|&p| p <= size)
         .ok_or_else(|| {
             err(
                 data_line,
@@ -168,7 +225,7 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
     let mut last_ln = data_line;
     let mut frame_ln = data_line;
     let mut ended = false;
-    for (ln, line) in lines {
+    while let Some((ln, line)) = lines.next() {
         last_ln = ln;
         let t = line.trim();
         if ended {
@@ -250,7 +307,7 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
             k += 1;
         }
         if k != cols {
-            if ln == n_lines {
+            if lines.peek().is_none() {
                 // The file ends inside this row: reported below as a truncated frame.
                 break;
             }
@@ -259,7 +316,20 @@ fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
         row_in_frame += 1;
         if row_in_frame == rows {
             n_frames += 1;
-            frames.push(&frame);
+            match keep {
+                Keep::All => frames.push(&frame),
+                Keep::Handed(hand) => {
+                    // Frames too large to hold sparsely are held whole all the same.
+                    if frames.is_whole() {
+                        frames.push(&frame);
+                    } else {
+                        frames.push_empty();
+                    }
+                    if let Some(hand) = hand {
+                        hand(&frame)?;
+                    }
+                }
+            }
             frame.clear();
         }
     }

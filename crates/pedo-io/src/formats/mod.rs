@@ -316,6 +316,115 @@ pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording> {
     read_recording_with(path, &ReadOptions::default())
 }
 
+/// A recording read for a run that goes through it once, in order ([`crate::sequence::stream_sequence`]):
+/// a Tekscan `.asf` file or CSV export (not gzip-compressed) is read once, checked whole, and
+/// returned without its values (every frame reads as 0: only its size, sensor mask, units and
+/// number of frames are held), with a [`FileFrames`] that reads its frames again, window by
+/// window, as the run asks for them; any other recording is read whole, with no
+/// [`FileFrames`].
+pub fn read_for_streaming(
+    path: impl AsRef<Path>,
+    opts: &ReadOptions,
+) -> Result<(Recording, Option<FileFrames>)> {
+    let path = path.as_ref();
+    let name = path.display().to_string();
+    let tekscan = || -> Option<(Format, usize)> {
+        if path.is_dir() {
+            return None;
+        }
+        use std::io::Read as _;
+        let mut head = Vec::with_capacity(SNIFF_BYTES);
+        let mut file = std::fs::File::open(path).ok()?;
+        (&mut file)
+            .take(SNIFF_BYTES as u64)
+            .read_to_end(&mut head)
+            .ok()?;
+        let size = file.metadata().ok()?.len();
+        let format = sniff_format(path, &head).ok()?;
+        (matches!(format, Format::Asf | Format::TekscanCsv) && !head.starts_with(GZIP_MAGIC))
+            .then(|| (format, usize::try_from(size).unwrap_or(usize::MAX)))
+    };
+    let Some((format, size)) = tekscan() else {
+        return Ok((read_recording_with(path, opts)?, None));
+    };
+    let csv = format == Format::TekscanCsv;
+    let io = |source| IoError::Io {
+        path: name.clone(),
+        source,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let lines = std::io::BufReader::with_capacity(1 << 16, file);
+    let shape = asf::read_tekscan(lines, size, &name, csv, &mut asf::Keep::Handed(None))?;
+    let frames = FileFrames::start(path.to_path_buf(), name, size, csv);
+    Ok((shape, Some(frames)))
+}
+
+/// The frames of a Tekscan file read again, in order, by a thread of their own (see
+/// [`read_for_streaming`]); only a window's frames are held at a time.
+pub struct FileFrames {
+    frames: std::sync::mpsc::Receiver<Result<Vec<f32>>>,
+    /// The number of the next frame to come.
+    next: usize,
+    name: String,
+}
+
+impl FileFrames {
+    fn start(path: PathBuf, name: String, size: usize, csv: bool) -> Self {
+        let (send, frames) = std::sync::mpsc::sync_channel(crate::sequence::FRAME_WINDOW);
+        let thread_name = name.clone();
+        std::thread::spawn(move || {
+            let read = || -> Result<()> {
+                let file = std::fs::File::open(&path).map_err(|source| IoError::Io {
+                    path: thread_name.clone(),
+                    source,
+                })?;
+                let lines = std::io::BufReader::with_capacity(1 << 16, file);
+                let mut hand = |frame: &[f32]| -> Result<()> {
+                    send.send(Ok(frame.to_vec()))
+                        .map_err(|_| IoError::invalid("the run stopped reading"))
+                };
+                let mut keep = asf::Keep::Handed(Some(&mut hand));
+                asf::read_tekscan(lines, size, &thread_name, csv, &mut keep).map(drop)
+            };
+            if let Err(e) = read() {
+                let _ = send.send(Err(e));
+            }
+        });
+        Self {
+            frames,
+            next: 0,
+            name,
+        }
+    }
+}
+
+impl crate::sequence::FrameSource for FileFrames {
+    fn window(&mut self, recording: &Recording, w0: usize, w1: usize) -> Result<Recording> {
+        if w0 < self.next || w1 <= w0 {
+            return Err(IoError::invalid(format!(
+                "{}: frames {w0}..{w1} asked for after frame {}",
+                self.name, self.next
+            )));
+        }
+        let per = recording.rows() * recording.cols();
+        let mut data = Vec::with_capacity((w1 - w0) * per);
+        while self.next < w1 {
+            let frame = self.frames.recv().map_err(|_| {
+                IoError::invalid(format!(
+                    "{}: the file has fewer frames on a second read",
+                    self.name
+                ))
+            })??;
+            if self.next >= w0 {
+                data.extend_from_slice(&frame);
+            }
+            self.next += 1;
+        }
+        // The size, mask and units of the run's recording (its unit overrides applied).
+        recording.like(w1 - w0, data)
+    }
+}
+
 /// [`read_recording`] with reading options (a pedar layout file for `--layout FILE`).
 pub fn read_recording_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Recording> {
     let path = path.as_ref();
@@ -328,8 +437,30 @@ pub fn read_recording_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result
     {
         return images::read_numbered(s);
     }
-    let bytes = read_bytes(path)?;
     let name = path.display().to_string();
-    let format = sniff_format(path, &bytes).map_err(|what| IoError::unknown_format(&name, what))?;
+    let io = |source| IoError::Io {
+        path: name.clone(),
+        source,
+    };
+    // Tekscan files are read line by line (a long recording's file is never held whole);
+    // the other formats are read into memory first.
+    use std::io::Read as _;
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let size = file.metadata().map_err(io)?.len();
+    let mut head = Vec::with_capacity(SNIFF_BYTES);
+    (&mut file)
+        .take(SNIFF_BYTES as u64)
+        .read_to_end(&mut head)
+        .map_err(io)?;
+    let format = sniff_format(path, &head).map_err(|what| IoError::unknown_format(&name, what))?;
+    if matches!(format, Format::Asf | Format::TekscanCsv) && !head.starts_with(GZIP_MAGIC) {
+        let size = usize::try_from(size).unwrap_or(usize::MAX);
+        let lines =
+            std::io::BufReader::with_capacity(1 << 16, std::io::Cursor::new(head).chain(file));
+        let csv = format == Format::TekscanCsv;
+        return asf::read_tekscan(lines, size, &name, csv, &mut asf::Keep::All);
+    }
+    drop(file);
+    let bytes = read_bytes(path)?;
     parse_bytes_with(&bytes, format, &name, opts)
 }
