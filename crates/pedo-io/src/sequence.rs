@@ -2002,42 +2002,6 @@ mod tests {
         assert_eq!(tracks(&full), tracks(&lean));
     }
 
-    /// Tracks chained as [`chain_tracks`] did before it chained them as a stream (every node's
-    /// track held to the end).
-    fn reference_chain(objects: &[SequenceObject], pairs: &[PairMatch]) -> Vec<Track> {
-        let mut track_of: Vec<Vec<Option<usize>>> =
-            objects.iter().map(|o| vec![None; o.shape.len()]).collect();
-        let mut tracks: Vec<Track> = Vec::new();
-        let mut incoming: Vec<Vec<&PairMatch>> = vec![Vec::new(); objects.len()];
-        for p in pairs {
-            incoming[p.b].push(p);
-        }
-        for o in 0..objects.len() {
-            for p in &incoming[o] {
-                for mp in p.result.pairs.iter().filter(|mp| !mp.excess) {
-                    if track_of[o][mp.b].is_some() || !honest_step(objects, p.a, mp.a, o, mp.b) {
-                        continue;
-                    }
-                    if let Some(t) = track_of[p.a][mp.a]
-                        && tracks[t].steps.last().map(|s| s.0) == Some(p.a)
-                    {
-                        tracks[t].steps.push((o, mp.b));
-                        track_of[o][mp.b] = Some(t);
-                    }
-                }
-            }
-            for (node, slot) in track_of[o].iter_mut().enumerate() {
-                if slot.is_none() {
-                    *slot = Some(tracks.len());
-                    tracks.push(Track {
-                        steps: vec![(o, node)],
-                    });
-                }
-            }
-        }
-        tracks
-    }
-
     #[test]
     fn streamed_tracks_equal_those_chained_whole_on_a_real_walk() {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/FrasP01L.asf");
@@ -2049,7 +2013,8 @@ mod tests {
             ..Default::default()
         };
         let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
-        let want = reference_chain(&run.objects, &run.pairs);
+        // Every node's track held to the end: drift correction's chaining with no reference pairs.
+        let want = crate::drift::anchored_tracks(&run.objects, &run.pairs, &[]);
         assert!(want.len() > 100 && want.iter().any(|t| t.steps.len() >= 10));
         assert!(!run.splits.is_empty() || !run.merges.is_empty());
         assert_eq!(chain_tracks(&run.objects, &run.pairs), want);
