@@ -34,6 +34,66 @@ pub(crate) fn clear_upper_state() {
     }
 }
 
+/// A kernel written once per vector unit: [`dispatch`] runs the copy for the widest unit this
+/// CPU has, compiled by `pulp` with that unit's instructions (AVX-512: [`pulp::x86::V4`];
+/// AVX2 and FMA: [`pulp::x86::V3`]; else the baseline). The unit arrives as a token whose
+/// intrinsic-named methods are safe to call, so the kernels hold no `unsafe`. Implementations
+/// mark the three methods `#[inline(always)]`, so that their bodies are compiled inside pulp's
+/// `#[target_feature]` function.
+pub(crate) trait Kernel: Sized {
+    type Output;
+    #[cfg(target_arch = "x86_64")]
+    fn avx512(self, simd: pulp::x86::V4) -> Self::Output;
+    #[cfg(target_arch = "x86_64")]
+    fn avx2(self, simd: pulp::x86::V3) -> Self::Output;
+    fn baseline(self) -> Self::Output;
+}
+
+/// Runs `kernel` on the widest vector unit this CPU has (see [`Kernel`]).
+#[inline]
+pub(crate) fn dispatch<K: Kernel>(kernel: K) -> K::Output {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if let Some(simd) = pulp::x86::V4::try_new() {
+            return on_avx512(simd, kernel);
+        }
+        if let Some(simd) = pulp::x86::V3::try_new() {
+            return on_avx2(simd, kernel);
+        }
+    }
+    kernel.baseline()
+}
+
+/// The AVX-512 copy of `kernel` (tests run every copy the CPU has).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+pub(crate) fn on_avx512<K: Kernel>(simd: pulp::x86::V4, kernel: K) -> K::Output {
+    struct Copy512<K>(pulp::x86::V4, K);
+    impl<K: Kernel> pulp::NullaryFnOnce for Copy512<K> {
+        type Output = K::Output;
+        #[inline(always)]
+        fn call(self) -> K::Output {
+            self.1.avx512(self.0)
+        }
+    }
+    simd.vectorize(Copy512(simd, kernel))
+}
+
+/// The AVX2 copy of `kernel`.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+pub(crate) fn on_avx2<K: Kernel>(simd: pulp::x86::V3, kernel: K) -> K::Output {
+    struct Copy256<K>(pulp::x86::V3, K);
+    impl<K: Kernel> pulp::NullaryFnOnce for Copy256<K> {
+        type Output = K::Output;
+        #[inline(always)]
+        fn call(self) -> K::Output {
+            self.1.avx2(self.0)
+        }
+    }
+    simd.vectorize(Copy256(simd, kernel))
+}
+
 /// Defines `$name`, which runs its body compiled for the widest vector unit this CPU has:
 /// AVX-512F, else AVX2 (with the extra features listed, detected too), else the baseline. The
 /// two x86 copies get their own names (`$avx512`, `$avx2`) so tests can run every path. Each copy

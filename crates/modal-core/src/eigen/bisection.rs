@@ -30,6 +30,21 @@ const E2_FLOOR: f64 = 7.523_163_845_262_64e-37; // 2⁻¹²⁰
 /// the QL iteration). `k` is clamped to the order. The results do not depend on the CPU's
 /// vector width: every path does the same operations in the same order, without FMA.
 pub(crate) fn lowest_eigenvalues(diag: &[f64], off: &[f64], k: usize) -> Vec<f64> {
+    lowest_eigenvalues_by(diag, off, k, sturm_counts)
+}
+
+/// [`lowest_eigenvalues`] on the pulp kernels (side by side with the intrinsics, for the bench).
+pub(crate) fn lowest_eigenvalues_pulp(diag: &[f64], off: &[f64], k: usize) -> Vec<f64> {
+    lowest_eigenvalues_by(diag, off, k, sturm_counts_pulp)
+}
+
+#[inline(always)]
+fn lowest_eigenvalues_by(
+    diag: &[f64],
+    off: &[f64],
+    k: usize,
+    sturm_counts: fn(&[f64], &[f64], &[f64], &mut [u64]),
+) -> Vec<f64> {
     let n = diag.len();
     let k = k.min(n);
     if k == 0 {
@@ -391,6 +406,282 @@ fn sturm_group<V: SturmVector, const G: usize>(
     }
 }
 
+/// `counts[j]` ← the number of eigenvalues below `x[j]` (the sign changes of the Sturm
+/// sequence), on the widest vector unit this CPU has. `x.len()` is a multiple of [`LANES`].
+fn sturm_counts_pulp(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]) {
+    crate::simd::dispatch(SturmCounts { d, e2, x, counts })
+}
+
+/// The arguments of [`sturm_counts_pulp`], run by [`crate::simd::dispatch`].
+struct SturmCounts<'a> {
+    d: &'a [f64],
+    e2: &'a [f64],
+    x: &'a [f64],
+    counts: &'a mut [u64],
+}
+
+impl crate::simd::Kernel for SturmCounts<'_> {
+    type Output = ();
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn avx512(self, simd: pulp::x86::V4) {
+        unit_counts(simd, self.d, self.e2, self.x, self.counts)
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn avx2(self, simd: pulp::x86::V3) {
+        unit_counts(simd, self.d, self.e2, self.x, self.counts)
+    }
+    #[inline(always)]
+    fn baseline(self) {
+        unit_counts(Baseline, self.d, self.e2, self.x, self.counts)
+    }
+}
+
+/// The operations of the recurrence on one vector of lanes of the unit `Self` (a pulp token, or
+/// [`Baseline`]). Every implementation does the same IEEE operations in the same order (no FMA),
+/// so every path gives the same bits.
+trait SturmUnit: Copy {
+    const WIDTH: usize;
+    /// Vectors whose recurrences run side by side, so that each one's multiply–subtract chain
+    /// waits while the others compute (as many as fit in the registers with their state).
+    const GROUP: usize;
+    type V: Copy;
+    type Count: Copy;
+    fn splat(self, v: f64) -> Self::V;
+    /// The first `WIDTH` values of `x`.
+    fn load(self, x: &[f64]) -> Self::V;
+    fn zero_count(self) -> Self::Count;
+    /// `(d − x)·cur − e·prev`.
+    fn step(self, d: Self::V, x: Self::V, e: Self::V, cur: Self::V, prev: Self::V) -> Self::V;
+    /// `count + 1` in the lanes where `p` and `cur` differ in sign.
+    fn count_change(self, count: Self::Count, p: Self::V, cur: Self::V) -> Self::Count;
+    /// Divides both by the power of two of the larger magnitude of the pair, lane by lane.
+    fn rescale(self, prev: Self::V, cur: Self::V) -> (Self::V, Self::V);
+    /// Into the first `WIDTH` values of `out`.
+    fn store(self, count: Self::Count, out: &mut [u64]);
+}
+
+/// Plain code for CPUs without AVX2 (the compiler vectorises what it can).
+#[derive(Clone, Copy)]
+struct Baseline;
+
+impl SturmUnit for Baseline {
+    const WIDTH: usize = 4;
+    const GROUP: usize = 2;
+    type V = [f64; 4];
+    type Count = [u64; 4];
+    #[inline(always)]
+    fn splat(self, v: f64) -> [f64; 4] {
+        [v; 4]
+    }
+    #[inline(always)]
+    fn load(self, x: &[f64]) -> [f64; 4] {
+        *x.first_chunk().expect("a full vector")
+    }
+    #[inline(always)]
+    fn zero_count(self) -> [u64; 4] {
+        [0; 4]
+    }
+    #[inline(always)]
+    fn step(self, d: [f64; 4], x: [f64; 4], e: [f64; 4], cur: [f64; 4], prev: [f64; 4]) -> [f64; 4] {
+        std::array::from_fn(|l| (d[l] - x[l]) * cur[l] - e[l] * prev[l])
+    }
+    #[inline(always)]
+    fn count_change(self, count: [u64; 4], p: [f64; 4], cur: [f64; 4]) -> [u64; 4] {
+        std::array::from_fn(|l| count[l] + ((p[l].to_bits() ^ cur[l].to_bits()) >> 63))
+    }
+    #[inline(always)]
+    fn rescale(self, prev: [f64; 4], cur: [f64; 4]) -> ([f64; 4], [f64; 4]) {
+        let f: [f64; 4] = std::array::from_fn(|l| {
+            let (a, b) = (prev[l].abs(), cur[l].abs());
+            let top = if a > b { a } else { b }.to_bits() & EXPONENT_BITS;
+            f64::from_bits(INVERSE_EXPONENT.wrapping_sub(top))
+        });
+        (
+            std::array::from_fn(|l| prev[l] * f[l]),
+            std::array::from_fn(|l| cur[l] * f[l]),
+        )
+    }
+    #[inline(always)]
+    fn store(self, count: [u64; 4], out: &mut [u64]) {
+        *out.first_chunk_mut().expect("a full vector") = count;
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod units {
+    use super::{SturmUnit, EXPONENT_BITS, INVERSE_EXPONENT};
+    use core::arch::x86_64::{__m256d, __m256i, __m512d, __m512i};
+    use pulp::x86::{V3, V4};
+
+    impl SturmUnit for V4 {
+        const WIDTH: usize = 8;
+        // 6 vectors × (x, prev, cur, count) = 24 of the 32 registers.
+        const GROUP: usize = 6;
+        type V = __m512d;
+        type Count = __m512i;
+        #[inline(always)]
+        fn splat(self, v: f64) -> __m512d {
+            self.avx512f._mm512_set1_pd(v)
+        }
+        #[inline(always)]
+        fn load(self, x: &[f64]) -> __m512d {
+            pulp::cast(*x.first_chunk::<8>().expect("a full vector"))
+        }
+        #[inline(always)]
+        fn zero_count(self) -> __m512i {
+            self.avx512f._mm512_setzero_si512()
+        }
+        #[inline(always)]
+        fn step(self, d: __m512d, x: __m512d, e: __m512d, cur: __m512d, prev: __m512d) -> __m512d {
+            let f = self.avx512f;
+            let t = f._mm512_mul_pd(f._mm512_sub_pd(d, x), cur);
+            f._mm512_sub_pd(t, f._mm512_mul_pd(e, prev))
+        }
+        #[inline(always)]
+        fn count_change(self, count: __m512i, p: __m512d, cur: __m512d) -> __m512i {
+            let f = self.avx512f;
+            let signs = f._mm512_xor_si512(f._mm512_castpd_si512(p), f._mm512_castpd_si512(cur));
+            f._mm512_add_epi64(count, f._mm512_srli_epi64::<63>(signs))
+        }
+        #[inline(always)]
+        fn rescale(self, prev: __m512d, cur: __m512d) -> (__m512d, __m512d) {
+            let f = self.avx512f;
+            let top = f._mm512_max_pd(f._mm512_abs_pd(prev), f._mm512_abs_pd(cur));
+            let top = f._mm512_and_si512(
+                f._mm512_castpd_si512(top),
+                f._mm512_set1_epi64(EXPONENT_BITS as i64),
+            );
+            let s = f._mm512_castsi512_pd(
+                f._mm512_sub_epi64(f._mm512_set1_epi64(INVERSE_EXPONENT as i64), top),
+            );
+            (f._mm512_mul_pd(prev, s), f._mm512_mul_pd(cur, s))
+        }
+        #[inline(always)]
+        fn store(self, count: __m512i, out: &mut [u64]) {
+            *out.first_chunk_mut::<8>().expect("a full vector") = pulp::cast(count);
+        }
+    }
+
+    impl SturmUnit for V3 {
+        const WIDTH: usize = 4;
+        // 3 vectors × (x, prev, cur, count) = 12 of the 16 registers.
+        const GROUP: usize = 3;
+        type V = __m256d;
+        type Count = __m256i;
+        #[inline(always)]
+        fn splat(self, v: f64) -> __m256d {
+            self.avx._mm256_set1_pd(v)
+        }
+        #[inline(always)]
+        fn load(self, x: &[f64]) -> __m256d {
+            pulp::cast(*x.first_chunk::<4>().expect("a full vector"))
+        }
+        #[inline(always)]
+        fn zero_count(self) -> __m256i {
+            self.avx._mm256_setzero_si256()
+        }
+        #[inline(always)]
+        fn step(self, d: __m256d, x: __m256d, e: __m256d, cur: __m256d, prev: __m256d) -> __m256d {
+            let a = self.avx;
+            let t = a._mm256_mul_pd(a._mm256_sub_pd(d, x), cur);
+            a._mm256_sub_pd(t, a._mm256_mul_pd(e, prev))
+        }
+        #[inline(always)]
+        fn count_change(self, count: __m256i, p: __m256d, cur: __m256d) -> __m256i {
+            let (a, a2) = (self.avx, self.avx2);
+            let signs = a2._mm256_xor_si256(a._mm256_castpd_si256(p), a._mm256_castpd_si256(cur));
+            a2._mm256_add_epi64(count, a2._mm256_srli_epi64::<63>(signs))
+        }
+        #[inline(always)]
+        fn rescale(self, prev: __m256d, cur: __m256d) -> (__m256d, __m256d) {
+            let (a, a2) = (self.avx, self.avx2);
+            let abs = a._mm256_castsi256_pd(a._mm256_set1_epi64x(i64::MAX));
+            let top = a._mm256_max_pd(a._mm256_and_pd(prev, abs), a._mm256_and_pd(cur, abs));
+            let top = a2._mm256_and_si256(
+                a._mm256_castpd_si256(top),
+                a._mm256_set1_epi64x(EXPONENT_BITS as i64),
+            );
+            let s = a._mm256_castsi256_pd(
+                a2._mm256_sub_epi64(a._mm256_set1_epi64x(INVERSE_EXPONENT as i64), top),
+            );
+            (a._mm256_mul_pd(prev, s), a._mm256_mul_pd(cur, s))
+        }
+        #[inline(always)]
+        fn store(self, count: __m256i, out: &mut [u64]) {
+            *out.first_chunk_mut::<4>().expect("a full vector") = pulp::cast(count);
+        }
+    }
+}
+
+/// The vectors of `x` in groups of at most `U::GROUP`, balanced (five vectors with groups of
+/// six run as one group of five, not six and none).
+#[inline(always)]
+fn unit_counts<U: SturmUnit>(unit: U, d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]) {
+    let vectors = x.len() / U::WIDTH;
+    let groups = vectors.div_ceil(U::GROUP);
+    let mut start = 0;
+    for g in 0..groups {
+        let end = (g + 1) * vectors / groups;
+        let (xs, cs) = (
+            &x[start * U::WIDTH..end * U::WIDTH],
+            &mut counts[start * U::WIDTH..end * U::WIDTH],
+        );
+        match end - start {
+            1 => unit_group::<U, 1>(unit, d, e2, xs, cs),
+            2 => unit_group::<U, 2>(unit, d, e2, xs, cs),
+            3 => unit_group::<U, 3>(unit, d, e2, xs, cs),
+            4 => unit_group::<U, 4>(unit, d, e2, xs, cs),
+            5 => unit_group::<U, 5>(unit, d, e2, xs, cs),
+            _ => unit_group::<U, 6>(unit, d, e2, xs, cs),
+        }
+        start = end;
+    }
+}
+
+/// The recurrence for `G` vectors at once, their state in registers.
+#[inline(always)]
+fn unit_group<U: SturmUnit, const G: usize>(
+    unit: U,
+    d: &[f64],
+    e2: &[f64],
+    x: &[f64],
+    counts: &mut [u64],
+) {
+    let n = d.len();
+    let x: [U::V; G] = std::array::from_fn(|g| unit.load(&x[g * U::WIDTH..]));
+    // p₀ = 1, p₁ = d₀ − x.
+    let one = unit.splat(1.0);
+    let mut prev = [one; G];
+    let mut cur = [one; G];
+    let mut cnt = [unit.zero_count(); G];
+    let (d0, zero) = (unit.splat(d[0]), unit.splat(0.0));
+    for g in 0..G {
+        cur[g] = unit.step(d0, x[g], zero, one, one);
+        cnt[g] = unit.count_change(cnt[g], cur[g], one);
+    }
+    for i in 1..n {
+        let (di, ei) = (unit.splat(d[i]), unit.splat(e2[i - 1]));
+        for g in 0..G {
+            // An exact zero needs no special case: with e² > 0 the next term has the sign
+            // opposite to the one before the zero, so the pair still counts one change.
+            let p = unit.step(di, x[g], ei, cur[g], prev[g]);
+            cnt[g] = unit.count_change(cnt[g], p, cur[g]);
+            prev[g] = cur[g];
+            cur[g] = p;
+        }
+        if i % RESCALE_EVERY == 0 {
+            for g in 0..G {
+                (prev[g], cur[g]) = unit.rescale(prev[g], cur[g]);
+            }
+        }
+    }
+    for g in 0..G {
+        unit.store(cnt[g], &mut counts[g * U::WIDTH..]);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -561,6 +852,21 @@ mod tests {
             };
             let portable = run(&|c| sturm_counts_in::<Portable>(&diag, &e2, &x, c));
             assert_eq!(portable, run(&|c| sturm_counts(&diag, &e2, &x, c)));
+            assert_eq!(portable, run(&|c| sturm_counts_pulp(&diag, &e2, &x, c)));
+            assert_eq!(portable, run(&|c| unit_counts(Baseline, &diag, &e2, &x, c)));
+            #[cfg(target_arch = "x86_64")]
+            {
+                use crate::simd::{on_avx2, on_avx512};
+                let (d, e2, x) = (&diag[..], &e2[..], &x[..]);
+                if let Some(simd) = pulp::x86::V3::try_new() {
+                    let got = run(&|counts| on_avx2(simd, SturmCounts { d, e2, x, counts }));
+                    assert_eq!(portable, got, "pulp AVX2, {vectors} vectors");
+                }
+                if let Some(simd) = pulp::x86::V4::try_new() {
+                    let got = run(&|counts| on_avx512(simd, SturmCounts { d, e2, x, counts }));
+                    assert_eq!(portable, got, "pulp AVX-512, {vectors} vectors");
+                }
+            }
             #[cfg(target_arch = "x86_64")]
             {
                 if std::is_x86_feature_detected!("avx2") {
