@@ -650,9 +650,14 @@ fn unit_group<U: SturmUnit, const G: usize>(
     counts: &mut [u64],
 ) {
     let n = d.len();
-    let x: [U::V; G] = std::array::from_fn(|g| unit.load(&x[g * U::WIDTH..]));
-    // p₀ = 1, p₁ = d₀ − x.
+    // p₀ = 1, p₁ = d₀ − x. (Loops rather than `array::from_fn`: a closure is a function of its
+    // own, compiled without the unit's instructions unless inlined.)
     let one = unit.splat(1.0);
+    let mut xs = [one; G];
+    for (g, xg) in xs.iter_mut().enumerate() {
+        *xg = unit.load(&x[g * U::WIDTH..]);
+    }
+    let x = xs;
     let mut prev = [one; G];
     let mut cur = [one; G];
     let mut cnt = [unit.zero_count(); G];
