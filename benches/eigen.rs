@@ -109,9 +109,6 @@ fn bench_stages(c: &mut Criterion) {
         g.bench_function(format!("lowest_{k}_values/hand_bisection"), |b| {
             b.iter(|| stages::lowest_eigenvalues_bisection(black_box(&d), &e, k))
         });
-        g.bench_function(format!("lowest_{k}_values/hand_bisection_pulp"), |b| {
-            b.iter(|| stages::lowest_eigenvalues_bisection_pulp(black_box(&d), &e, k))
-        });
         g.bench_function(format!("lowest_{k}_vectors/hand_inverse_iteration"), |b| {
             b.iter(|| stages::eigenvectors_inverse_iteration(black_box(&d), &e, &lowest).unwrap())
         });

@@ -113,12 +113,6 @@ pub fn lowest_eigenvalues_bisection(diag: &[f64], off: &[f64], k: usize) -> Vec<
     bisection::lowest_eigenvalues(diag, off, k)
 }
 
-/// [`lowest_eigenvalues_bisection`] with the Sturm counts on pulp's vector types (temporary: the
-/// side-by-side measurement of the intrinsics against pulp).
-pub fn lowest_eigenvalues_bisection_pulp(diag: &[f64], off: &[f64], k: usize) -> Vec<f64> {
-    bisection::lowest_eigenvalues_pulp(diag, off, k)
-}
-
 /// Eigenvectors of the tridiagonal matrix for the given eigenvalues by hand-written inverse
 /// iteration.
 pub fn eigenvectors_inverse_iteration(
