@@ -301,6 +301,9 @@ unsafe fn sweep_in<U: Lanes>(
     v: &[f64],
     y: &mut [f64],
 ) {
+    // SAFETY: every pointer below stays within the sizes the caller guarantees (`sweep`'s
+    // assertions): rows `j..m` rounded up to whole vectors end inside the padding rows of `b`,
+    // `u`, `w`, `v` and `y`, and columns `j..j + COLS` inside the `COLS` spare columns.
     unsafe {
         y[..m + PAD_ROWS].fill(0.0);
         let bp = b.as_mut_ptr();
