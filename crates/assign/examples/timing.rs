@@ -10,6 +10,8 @@ struct Timespec {
     sec: i64,
     nsec: i64,
 }
+// SAFETY: the C library's `clock_gettime(clockid_t, struct timespec *)`, with `Timespec` laid out
+// as the 64-bit Linux `struct timespec`.
 unsafe extern "C" {
     fn clock_gettime(clk: i32, tp: *mut Timespec) -> i32;
 }
@@ -18,6 +20,7 @@ unsafe extern "C" {
 fn cpu_now() -> f64 {
     let mut t = Timespec { sec: 0, nsec: 0 };
     // CLOCK_THREAD_CPUTIME_ID = 3 on Linux.
+    // SAFETY: `t` is a valid, writable `Timespec` for the duration of the call.
     unsafe { clock_gettime(3, &mut t) };
     t.sec as f64 + t.nsec as f64 * 1e-9
 }

@@ -301,12 +301,36 @@ struct Scan {
 fn scan<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
     #[cfg(target_arch = "x86_64")]
     {
-        if row.len() >= 8 && std::is_x86_feature_detected!("avx2") {
-            // SAFETY: AVX2 was just detected.
-            return unsafe { scan_avx2::<FREE>(row, v, freepen) };
+        if row.len() >= 8
+            && let Some(simd) = pulp::x86::V3::try_new()
+        {
+            return simd.vectorize(ScanAvx2::<FREE> {
+                simd,
+                row,
+                v,
+                freepen,
+            });
         }
     }
     scan_portable::<FREE>(row, v, freepen)
+}
+
+/// The arguments of [`scan_avx2`], run by pulp compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+struct ScanAvx2<'a, const FREE: bool> {
+    simd: pulp::x86::V3,
+    row: &'a [f64],
+    v: &'a [f64],
+    freepen: &'a [f64],
+}
+
+#[cfg(target_arch = "x86_64")]
+impl<const FREE: bool> pulp::NullaryFnOnce for ScanAvx2<'_, FREE> {
+    type Output = Scan;
+    #[inline(always)]
+    fn call(self) -> Scan {
+        scan_avx2::<FREE>(self.simd, self.row, self.v, self.freepen)
+    }
 }
 
 fn scan_portable<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
@@ -336,73 +360,79 @@ fn scan_portable<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> S
 /// minimum is replayed entry by entry, in index order: exactly the portable semantics, at
 /// close to memory speed instead of a dozen blends per vector.
 ///
-/// # Safety
-/// The CPU must support AVX2 (the only requirement: the slice lengths are asserted).
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn scan_avx2<const FREE: bool>(row: &[f64], v: &[f64], freepen: &[f64]) -> Scan {
-    unsafe {
-        use std::arch::x86_64::*;
-        const B: usize = 16;
-        let m = row.len();
-        assert!(v.len() >= m && freepen.len() >= m);
-        let mb = m - m % B;
-        let ninf = _mm256_set1_pd(f64::NEG_INFINITY);
-        let mut ok = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-        let mut s = Scan {
-            top: Top2::EMPTY,
-            min_free: f64::INFINITY,
-            arg_free: NONE,
-            valid: true,
-        };
-        // SAFETY (every `.add(o)` load below): `o + 4 ≤ mb ≤ m`, and `row`, `v` and `freepen`
-        // hold at least `m` values (asserted above).
-        let (rp, vp, fp) = (row.as_ptr(), v.as_ptr(), freepen.as_ptr());
-        let replay = |s: &mut Scan, lo: usize, hi: usize| {
-            for j in lo..hi {
-                let h = row[j] - v[j];
-                if h < s.top.min2 {
-                    s.top.offer(h, j);
-                }
-                let hf = h + freepen[j];
-                if FREE && hf < s.min_free {
-                    s.min_free = hf;
-                    s.arg_free = j;
-                }
+#[inline(always)]
+fn scan_avx2<const FREE: bool>(
+    simd: pulp::x86::V3,
+    row: &[f64],
+    v: &[f64],
+    freepen: &[f64],
+) -> Scan {
+    use std::arch::x86_64::{_CMP_GT_OQ, _CMP_LT_OQ};
+    let a = simd.avx;
+    const B: usize = 16;
+    let m = row.len();
+    assert!(v.len() >= m && freepen.len() >= m);
+    let mb = m - m % B;
+    let ninf = a._mm256_set1_pd(f64::NEG_INFINITY);
+    let mut ok = a._mm256_castsi256_pd(a._mm256_set1_epi64x(-1));
+    let mut s = Scan {
+        top: Top2::EMPTY,
+        min_free: f64::INFINITY,
+        arg_free: NONE,
+        valid: true,
+    };
+    // The loads below read four values at `.add(o)` with `o + 4 ≤ mb ≤ m`: in bounds, since
+    // `row`, `v` and `freepen` hold at least `m` values (asserted above).
+    let (rp, vp, fp) = (row.as_ptr(), v.as_ptr(), freepen.as_ptr());
+    let replay = |s: &mut Scan, lo: usize, hi: usize| {
+        for j in lo..hi {
+            let h = row[j] - v[j];
+            if h < s.top.min2 {
+                s.top.offer(h, j);
             }
-        };
-        let mut k = 0;
-        while k < mb {
-            let mut bmin = _mm256_set1_pd(f64::INFINITY);
-            let mut bminf = bmin;
-            for q in 0..B / 4 {
-                let o = k + 4 * q;
-                let r = _mm256_loadu_pd(rp.add(o));
-                ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GT_OQ>(r, ninf));
-                let h = _mm256_sub_pd(r, _mm256_loadu_pd(vp.add(o)));
-                bmin = _mm256_min_pd(bmin, h);
-                if FREE {
-                    bminf = _mm256_min_pd(bminf, _mm256_add_pd(h, _mm256_loadu_pd(fp.add(o))));
-                }
+            let hf = h + freepen[j];
+            if FREE && hf < s.min_free {
+                s.min_free = hf;
+                s.arg_free = j;
             }
-            let t2 = _mm256_set1_pd(s.top.min2);
-            let tf = _mm256_set1_pd(s.min_free);
-            let hit = _mm256_or_pd(
-                _mm256_cmp_pd::<_CMP_LT_OQ>(bmin, t2),
-                _mm256_cmp_pd::<_CMP_LT_OQ>(bminf, tf),
-            );
-            if _mm256_movemask_pd(hit) != 0 {
-                replay(&mut s, k, k + B);
-            }
-            k += B;
         }
-        s.valid = _mm256_movemask_pd(ok) == 0b1111;
-        for &r in &row[mb..] {
-            s.valid &= r > f64::NEG_INFINITY;
+    };
+    let mut k = 0;
+    while k < mb {
+        let mut bmin = a._mm256_set1_pd(f64::INFINITY);
+        let mut bminf = bmin;
+        for q in 0..B / 4 {
+            let o = k + 4 * q;
+            // SAFETY: `o + 4 ≤ mb ≤ m` (see above).
+            let r = unsafe { a._mm256_loadu_pd(rp.add(o)) };
+            ok = a._mm256_and_pd(ok, a._mm256_cmp_pd::<_CMP_GT_OQ>(r, ninf));
+            // SAFETY: as above.
+            let h = a._mm256_sub_pd(r, unsafe { a._mm256_loadu_pd(vp.add(o)) });
+            bmin = a._mm256_min_pd(bmin, h);
+            if FREE {
+                // SAFETY: as above.
+                let f = unsafe { a._mm256_loadu_pd(fp.add(o)) };
+                bminf = a._mm256_min_pd(bminf, a._mm256_add_pd(h, f));
+            }
         }
-        replay(&mut s, mb, m);
-        s
+        let t2 = a._mm256_set1_pd(s.top.min2);
+        let tf = a._mm256_set1_pd(s.min_free);
+        let hit = a._mm256_or_pd(
+            a._mm256_cmp_pd::<_CMP_LT_OQ>(bmin, t2),
+            a._mm256_cmp_pd::<_CMP_LT_OQ>(bminf, tf),
+        );
+        if a._mm256_movemask_pd(hit) != 0 {
+            replay(&mut s, k, k + B);
+        }
+        k += B;
     }
+    s.valid = a._mm256_movemask_pd(ok) == 0b1111;
+    for &r in &row[mb..] {
+        s.valid &= r > f64::NEG_INFINITY;
+    }
+    replay(&mut s, mb, m);
+    s
 }
 
 /// The two smallest reduced costs `row[j] - v[j]` of a row, ordered by (value, column): ties go
@@ -535,7 +565,7 @@ type Kernel = fn(&[f64], &[f64], &mut [f64], &mut [u64], &[f64], f64, u64) -> Re
 fn relax_kernel() -> Kernel {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::is_x86_feature_detected!("avx2") {
+        if pulp::x86::V3::is_available() {
             return relax_avx2_entry;
         }
     }
@@ -592,8 +622,47 @@ fn relax_avx2_entry(
     h: f64,
     i: u64,
 ) -> Relaxed {
-    // SAFETY: only selected by `relax_kernel` after detecting AVX2.
-    unsafe { relax_avx2(row, v, dk, pred, freepen, h, i) }
+    /// The arguments of [`relax_avx2`], run by pulp compiled for AVX2.
+    struct RelaxAvx2<'a> {
+        simd: pulp::x86::V3,
+        row: &'a [f64],
+        v: &'a [f64],
+        dk: &'a mut [f64],
+        pred: &'a mut [u64],
+        freepen: &'a [f64],
+        h: f64,
+        i: u64,
+    }
+    impl pulp::NullaryFnOnce for RelaxAvx2<'_> {
+        type Output = Relaxed;
+        #[inline(always)]
+        fn call(self) -> Relaxed {
+            let Self {
+                simd,
+                row,
+                v,
+                dk,
+                pred,
+                freepen,
+                h,
+                i,
+            } = self;
+            relax_avx2(simd, row, v, dk, pred, freepen, h, i)
+        }
+    }
+    match pulp::x86::V3::try_new() {
+        Some(simd) => simd.vectorize(RelaxAvx2 {
+            simd,
+            row,
+            v,
+            dk,
+            pred,
+            freepen,
+            h,
+            i,
+        }),
+        None => relax(row, v, dk, pred, freepen, h, i),
+    }
 }
 
 /// AVX2 relaxation. The distance update is a plain vectorised min (`pred` by masked store);
@@ -601,11 +670,11 @@ fn relax_avx2_entry(
 /// a vector minimum is compared with the running minima, and only a block holding a smaller
 /// value is replayed entry by entry in index order, which gives exactly [`relax`]'s answer.
 ///
-/// # Safety
-/// The CPU must support AVX2 (the only requirement: the slice lengths are asserted).
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn relax_avx2(
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn relax_avx2(
+    simd: pulp::x86::V3,
     row: &[f64],
     v: &[f64],
     dk: &mut [f64],
@@ -614,90 +683,99 @@ unsafe fn relax_avx2(
     h: f64,
     i: u64,
 ) -> Relaxed {
-    unsafe {
-        use std::arch::x86_64::*;
-        const B: usize = 16;
-        let m = row.len();
-        assert!(v.len() >= m && dk.len() >= m && pred.len() >= m && freepen.len() >= m);
-        let mb = m - m % B;
-        let hv = _mm256_set1_pd(h);
-        let iv = _mm256_set1_epi64x(i as i64);
-        let mut out = Relaxed {
-            min_all: f64::INFINITY,
-            arg_all: 0,
-            min_free: f64::INFINITY,
-            arg_free: 0,
-        };
-        // SAFETY (every `.add(o)` / `.add(j)` access below): `o + 4 ≤ mb` and `j < mb ≤ m`, and
-        // every slice holds at least `m` values (asserted above); `dk` and `pred` are borrowed
-        // mutably, so the stores through `dp` and `pp` alias nothing else.
-        let (rp, vp, dp, pp, fp) = (
-            row.as_ptr(),
-            v.as_ptr(),
-            dk.as_mut_ptr(),
-            pred.as_mut_ptr(),
-            freepen.as_ptr(),
-        );
-        let mut k = 0;
-        while k < mb {
-            let mut bmin = _mm256_set1_pd(f64::INFINITY);
-            let mut bminf = bmin;
-            for q in 0..B / 4 {
-                let o = k + 4 * q;
-                let cand = _mm256_add_pd(
-                    _mm256_sub_pd(_mm256_loadu_pd(rp.add(o)), _mm256_loadu_pd(vp.add(o))),
-                    hv,
-                );
-                let d0 = _mm256_loadu_pd(dp.add(o));
-                let lt = _mm256_cmp_pd::<_CMP_LT_OQ>(cand, d0);
-                // min_pd(a, b) is `a < b ? a : b`: the same update as the portable kernel.
-                let d = _mm256_min_pd(cand, d0);
-                _mm256_storeu_pd(dp.add(o), d);
-                _mm256_maskstore_epi64(pp.add(o) as *mut i64, _mm256_castpd_si256(lt), iv);
-                bmin = _mm256_min_pd(bmin, d);
-                bminf = _mm256_min_pd(bminf, _mm256_add_pd(d, _mm256_loadu_pd(fp.add(o))));
+    use std::arch::x86_64::_CMP_LT_OQ;
+    let (a, a2) = (simd.avx, simd.avx2);
+    const B: usize = 16;
+    let m = row.len();
+    assert!(v.len() >= m && dk.len() >= m && pred.len() >= m && freepen.len() >= m);
+    let mb = m - m % B;
+    let hv = a._mm256_set1_pd(h);
+    let iv = a._mm256_set1_epi64x(i as i64);
+    let mut out = Relaxed {
+        min_all: f64::INFINITY,
+        arg_all: 0,
+        min_free: f64::INFINITY,
+        arg_free: 0,
+    };
+    // Every `.add(o)` / `.add(j)` access below is in bounds: `o + 4 ≤ mb` and `j < mb ≤ m`,
+    // and every slice holds at least `m` values (asserted above); `dk` and `pred` are
+    // borrowed mutably, so the stores through `dp` and `pp` alias nothing else.
+    let (rp, vp, dp, pp, fp) = (
+        row.as_ptr(),
+        v.as_ptr(),
+        dk.as_mut_ptr(),
+        pred.as_mut_ptr(),
+        freepen.as_ptr(),
+    );
+    let mut k = 0;
+    while k < mb {
+        let mut bmin = a._mm256_set1_pd(f64::INFINITY);
+        let mut bminf = bmin;
+        for q in 0..B / 4 {
+            let o = k + 4 * q;
+            // SAFETY (the loads, stores and masked store of four values at `.add(o)`): in
+            // bounds, see above.
+            let (r, vo, d0, f) = unsafe {
+                (
+                    a._mm256_loadu_pd(rp.add(o)),
+                    a._mm256_loadu_pd(vp.add(o)),
+                    a._mm256_loadu_pd(dp.add(o)),
+                    a._mm256_loadu_pd(fp.add(o)),
+                )
+            };
+            let cand = a._mm256_add_pd(a._mm256_sub_pd(r, vo), hv);
+            let lt = a._mm256_cmp_pd::<_CMP_LT_OQ>(cand, d0);
+            // min_pd(a, b) is `a < b ? a : b`: the same update as the portable kernel.
+            let d = a._mm256_min_pd(cand, d0);
+            // SAFETY: as above.
+            unsafe {
+                a._mm256_storeu_pd(dp.add(o), d);
+                a2._mm256_maskstore_epi64(pp.add(o) as *mut i64, a._mm256_castpd_si256(lt), iv);
             }
-            let hit = _mm256_or_pd(
-                _mm256_cmp_pd::<_CMP_LT_OQ>(bmin, _mm256_set1_pd(out.min_all)),
-                _mm256_cmp_pd::<_CMP_LT_OQ>(bminf, _mm256_set1_pd(out.min_free)),
-            );
-            if _mm256_movemask_pd(hit) != 0 {
-                for j in k..k + B {
-                    let d = *dp.add(j);
-                    if d < out.min_all {
-                        out.min_all = d;
-                        out.arg_all = j;
-                    }
-                    let df = d + *fp.add(j);
-                    if df < out.min_free {
-                        out.min_free = df;
-                        out.arg_free = j;
-                    }
+            bmin = a._mm256_min_pd(bmin, d);
+            bminf = a._mm256_min_pd(bminf, a._mm256_add_pd(d, f));
+        }
+        let hit = a._mm256_or_pd(
+            a._mm256_cmp_pd::<_CMP_LT_OQ>(bmin, a._mm256_set1_pd(out.min_all)),
+            a._mm256_cmp_pd::<_CMP_LT_OQ>(bminf, a._mm256_set1_pd(out.min_free)),
+        );
+        if a._mm256_movemask_pd(hit) != 0 {
+            for j in k..k + B {
+                // SAFETY: `j < mb ≤ m`, see above.
+                let (d, fj) = unsafe { (*dp.add(j), *fp.add(j)) };
+                if d < out.min_all {
+                    out.min_all = d;
+                    out.arg_all = j;
+                }
+                let df = d + fj;
+                if df < out.min_free {
+                    out.min_free = df;
+                    out.arg_free = j;
                 }
             }
-            k += B;
         }
-        if mb < m {
-            let t = relax(
-                &row[mb..],
-                &v[mb..m],
-                &mut dk[mb..m],
-                &mut pred[mb..m],
-                &freepen[mb..m],
-                h,
-                i,
-            );
-            if t.min_all < out.min_all {
-                out.min_all = t.min_all;
-                out.arg_all = mb + t.arg_all;
-            }
-            if t.min_free < out.min_free {
-                out.min_free = t.min_free;
-                out.arg_free = mb + t.arg_free;
-            }
-        }
-        out
+        k += B;
     }
+    if mb < m {
+        let t = relax(
+            &row[mb..],
+            &v[mb..m],
+            &mut dk[mb..m],
+            &mut pred[mb..m],
+            &freepen[mb..m],
+            h,
+            i,
+        );
+        if t.min_all < out.min_all {
+            out.min_all = t.min_all;
+            out.arg_all = mb + t.arg_all;
+        }
+        if t.min_free < out.min_free {
+            out.min_free = t.min_free;
+            out.arg_free = mb + t.arg_free;
+        }
+    }
+    out
 }
 
 #[cfg(test)]

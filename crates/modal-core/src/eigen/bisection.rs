@@ -10,7 +10,7 @@
 //! trustworthy as `dstebz`'s; what the ratio form gets for free, a safe range, comes from scaling
 //! the pair `(p_{i−1}, p_i)` by a power of two every few steps (exact).
 
-use crate::simd::widest_simd;
+use crate::simd::{dispatch, Kernel};
 
 /// Lanes are padded to a multiple of this (one AVX-512 register, two AVX2 registers).
 const LANES: usize = 8;
@@ -96,253 +96,246 @@ pub(crate) fn lowest_eigenvalues(diag: &[f64], off: &[f64], k: usize) -> Vec<f64
     values
 }
 
-widest_simd! {
-    /// `counts[j]` ← the number of eigenvalues below `x[j]` (the sign changes of the Sturm
-    /// sequence), on the widest vector unit this CPU has. `x.len()` is a multiple of [`LANES`].
-    fn sturm_counts(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]);
-    avx512 sturm_counts_avx512 => sturm_counts_in::<x86::Avx512>(d, e2, x, counts);
-    avx2 sturm_counts_avx2 [] => sturm_counts_in::<x86::Avx2>(d, e2, x, counts);
-    portable => sturm_counts_in::<Portable>(d, e2, x, counts);
-}
-
-/// The operations of the recurrence on one vector of lanes. Every implementation does the same
-/// IEEE operations in the same order (no FMA), so every path gives the same bits.
-trait SturmVector: Copy {
-    const WIDTH: usize;
-    /// Vectors whose recurrences run side by side, so that each one's multiply–subtract chain
-    /// waits while the others compute (as many as fit in the registers with their state).
-    const GROUP: usize;
-    type Count: Copy;
-    fn splat(v: f64) -> Self;
-    /// # Safety
-    /// `x` holds at least `WIDTH` values.
-    unsafe fn load(x: &[f64]) -> Self;
-    fn zero_count() -> Self::Count;
-    /// `(d − x)·cur − e·prev`.
-    fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self;
-    /// `count + 1` in the lanes where `p` and `cur` differ in sign.
-    fn count_change(count: Self::Count, p: Self, cur: Self) -> Self::Count;
-    /// Divides both by the power of two of the larger magnitude of the pair, lane by lane.
-    fn rescale(prev: Self, cur: Self) -> (Self, Self);
-    /// # Safety
-    /// `out` holds at least `WIDTH` values.
-    unsafe fn store(count: Self::Count, out: &mut [u64]);
-}
-
 const EXPONENT_BITS: u64 = 0x7ff0_0000_0000_0000;
 /// `2^(1023 − E)` has the biased exponent `2046 − E`.
 const INVERSE_EXPONENT: u64 = 2046 << 52;
 
+/// `counts[j]` ← the number of eigenvalues below `x[j]` (the sign changes of the Sturm
+/// sequence), on the widest vector unit this CPU has. `x.len()` is a multiple of [`LANES`].
+fn sturm_counts(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]) {
+    dispatch(SturmCounts { d, e2, x, counts })
+}
+
+/// The arguments of [`sturm_counts`], run by [`crate::simd::dispatch`].
+struct SturmCounts<'a> {
+    d: &'a [f64],
+    e2: &'a [f64],
+    x: &'a [f64],
+    counts: &'a mut [u64],
+}
+
+impl Kernel for SturmCounts<'_> {
+    type Output = ();
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn avx512(self, simd: pulp::x86::V4) {
+        sturm_counts_in(simd, self.d, self.e2, self.x, self.counts)
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn avx2(self, simd: pulp::x86::V3) {
+        sturm_counts_in(simd, self.d, self.e2, self.x, self.counts)
+    }
+    #[inline(always)]
+    fn baseline(self) {
+        sturm_counts_in(Baseline, self.d, self.e2, self.x, self.counts)
+    }
+}
+
+/// The operations of the recurrence on one vector of lanes of the unit `Self` (a pulp token, or
+/// [`Baseline`]). Every implementation does the same IEEE operations in the same order (no FMA),
+/// so every path gives the same bits.
+trait SturmUnit: Copy {
+    const WIDTH: usize;
+    /// Vectors whose recurrences run side by side, so that each one's multiply–subtract chain
+    /// waits while the others compute (as many as fit in the registers with their state).
+    const GROUP: usize;
+    type V: Copy;
+    type Count: Copy;
+    fn splat(self, v: f64) -> Self::V;
+    /// The first `WIDTH` values of `x`.
+    fn load(self, x: &[f64]) -> Self::V;
+    fn zero_count(self) -> Self::Count;
+    /// `(d − x)·cur − e·prev`.
+    fn step(self, d: Self::V, x: Self::V, e: Self::V, cur: Self::V, prev: Self::V) -> Self::V;
+    /// `count + 1` in the lanes where `p` and `cur` differ in sign.
+    fn count_change(self, count: Self::Count, p: Self::V, cur: Self::V) -> Self::Count;
+    /// Divides both by the power of two of the larger magnitude of the pair, lane by lane.
+    fn rescale(self, prev: Self::V, cur: Self::V) -> (Self::V, Self::V);
+    /// Into the first `WIDTH` values of `out`.
+    fn store(self, count: Self::Count, out: &mut [u64]);
+}
+
 /// Plain code for CPUs without AVX2 (the compiler vectorises what it can).
 #[derive(Clone, Copy)]
-struct Portable([f64; 4]);
+struct Baseline;
 
-impl SturmVector for Portable {
+impl SturmUnit for Baseline {
     const WIDTH: usize = 4;
     const GROUP: usize = 2;
+    type V = [f64; 4];
     type Count = [u64; 4];
-    fn splat(v: f64) -> Self {
-        Self([v; 4])
+    #[inline(always)]
+    fn splat(self, v: f64) -> [f64; 4] {
+        [v; 4]
     }
-    unsafe fn load(x: &[f64]) -> Self {
-        Self(std::array::from_fn(|l| x[l]))
+    #[inline(always)]
+    fn load(self, x: &[f64]) -> [f64; 4] {
+        *x.first_chunk().expect("a full vector")
     }
-    fn zero_count() -> [u64; 4] {
+    #[inline(always)]
+    fn zero_count(self) -> [u64; 4] {
         [0; 4]
     }
-    fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self {
-        Self(std::array::from_fn(|l| {
-            (d.0[l] - x.0[l]) * cur.0[l] - e.0[l] * prev.0[l]
-        }))
+    #[inline(always)]
+    fn step(
+        self,
+        d: [f64; 4],
+        x: [f64; 4],
+        e: [f64; 4],
+        cur: [f64; 4],
+        prev: [f64; 4],
+    ) -> [f64; 4] {
+        std::array::from_fn(|l| (d[l] - x[l]) * cur[l] - e[l] * prev[l])
     }
-    fn count_change(count: [u64; 4], p: Self, cur: Self) -> [u64; 4] {
-        std::array::from_fn(|l| count[l] + ((p.0[l].to_bits() ^ cur.0[l].to_bits()) >> 63))
+    #[inline(always)]
+    fn count_change(self, count: [u64; 4], p: [f64; 4], cur: [f64; 4]) -> [u64; 4] {
+        std::array::from_fn(|l| count[l] + ((p[l].to_bits() ^ cur[l].to_bits()) >> 63))
     }
-    fn rescale(prev: Self, cur: Self) -> (Self, Self) {
+    #[inline(always)]
+    fn rescale(self, prev: [f64; 4], cur: [f64; 4]) -> ([f64; 4], [f64; 4]) {
         let f: [f64; 4] = std::array::from_fn(|l| {
-            let (a, b) = (prev.0[l].abs(), cur.0[l].abs());
+            let (a, b) = (prev[l].abs(), cur[l].abs());
             let top = if a > b { a } else { b }.to_bits() & EXPONENT_BITS;
             f64::from_bits(INVERSE_EXPONENT.wrapping_sub(top))
         });
         (
-            Self(std::array::from_fn(|l| prev.0[l] * f[l])),
-            Self(std::array::from_fn(|l| cur.0[l] * f[l])),
+            std::array::from_fn(|l| prev[l] * f[l]),
+            std::array::from_fn(|l| cur[l] * f[l]),
         )
     }
-    unsafe fn store(count: [u64; 4], out: &mut [u64]) {
-        out[..4].copy_from_slice(&count);
+    #[inline(always)]
+    fn store(self, count: [u64; 4], out: &mut [u64]) {
+        *out.first_chunk_mut().expect("a full vector") = count;
     }
 }
 
 #[cfg(target_arch = "x86_64")]
-mod x86 {
-    use super::{SturmVector, EXPONENT_BITS, INVERSE_EXPONENT};
-    use std::arch::x86_64::*;
+mod units {
+    use super::{SturmUnit, EXPONENT_BITS, INVERSE_EXPONENT};
+    use core::arch::x86_64::{__m256d, __m256i, __m512d, __m512i};
+    use pulp::x86::{V3, V4};
 
-    #[derive(Clone, Copy)]
-    pub(super) struct Avx512(__m512d);
-
-    // SAFETY (for every method): only reached from `sturm_counts_avx512`, whose caller detected
-    // AVX-512F; the loads and stores take slices of at least 8 values (the trait's contract).
-    impl SturmVector for Avx512 {
+    impl SturmUnit for V4 {
         const WIDTH: usize = 8;
         // 6 vectors × (x, prev, cur, count) = 24 of the 32 registers.
         const GROUP: usize = 6;
+        type V = __m512d;
         type Count = __m512i;
         #[inline(always)]
-        fn splat(v: f64) -> Self {
-            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
-            unsafe { Self(_mm512_set1_pd(v)) }
+        fn splat(self, v: f64) -> __m512d {
+            self.avx512f._mm512_set1_pd(v)
         }
         #[inline(always)]
-        unsafe fn load(x: &[f64]) -> Self {
-            unsafe {
-                // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
-                Self(_mm512_loadu_pd(x[..8].as_ptr()))
-            }
+        fn load(self, x: &[f64]) -> __m512d {
+            pulp::cast(*x.first_chunk::<8>().expect("a full vector"))
         }
         #[inline(always)]
-        fn zero_count() -> __m512i {
-            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
-            unsafe { _mm512_setzero_si512() }
+        fn zero_count(self) -> __m512i {
+            self.avx512f._mm512_setzero_si512()
         }
         #[inline(always)]
-        fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self {
-            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
-            unsafe {
-                let t = _mm512_mul_pd(_mm512_sub_pd(d.0, x.0), cur.0);
-                Self(_mm512_sub_pd(t, _mm512_mul_pd(e.0, prev.0)))
-            }
+        fn step(self, d: __m512d, x: __m512d, e: __m512d, cur: __m512d, prev: __m512d) -> __m512d {
+            let f = self.avx512f;
+            let t = f._mm512_mul_pd(f._mm512_sub_pd(d, x), cur);
+            f._mm512_sub_pd(t, f._mm512_mul_pd(e, prev))
         }
         #[inline(always)]
-        fn count_change(count: __m512i, p: Self, cur: Self) -> __m512i {
-            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
-            unsafe {
-                let signs = _mm512_xor_si512(_mm512_castpd_si512(p.0), _mm512_castpd_si512(cur.0));
-                _mm512_add_epi64(count, _mm512_srli_epi64::<63>(signs))
-            }
+        fn count_change(self, count: __m512i, p: __m512d, cur: __m512d) -> __m512i {
+            let f = self.avx512f;
+            let signs = f._mm512_xor_si512(f._mm512_castpd_si512(p), f._mm512_castpd_si512(cur));
+            f._mm512_add_epi64(count, f._mm512_srli_epi64::<63>(signs))
         }
         #[inline(always)]
-        fn rescale(prev: Self, cur: Self) -> (Self, Self) {
-            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
-            unsafe {
-                let top = _mm512_max_pd(_mm512_abs_pd(prev.0), _mm512_abs_pd(cur.0));
-                let top = _mm512_and_si512(
-                    _mm512_castpd_si512(top),
-                    _mm512_set1_epi64(EXPONENT_BITS as i64),
-                );
-                let f = _mm512_castsi512_pd(_mm512_sub_epi64(
-                    _mm512_set1_epi64(INVERSE_EXPONENT as i64),
-                    top,
-                ));
-                (
-                    Self(_mm512_mul_pd(prev.0, f)),
-                    Self(_mm512_mul_pd(cur.0, f)),
-                )
-            }
+        fn rescale(self, prev: __m512d, cur: __m512d) -> (__m512d, __m512d) {
+            let f = self.avx512f;
+            let top = f._mm512_max_pd(f._mm512_abs_pd(prev), f._mm512_abs_pd(cur));
+            let top = f._mm512_and_si512(
+                f._mm512_castpd_si512(top),
+                f._mm512_set1_epi64(EXPONENT_BITS as i64),
+            );
+            let s = f._mm512_castsi512_pd(
+                f._mm512_sub_epi64(f._mm512_set1_epi64(INVERSE_EXPONENT as i64), top),
+            );
+            (f._mm512_mul_pd(prev, s), f._mm512_mul_pd(cur, s))
         }
         #[inline(always)]
-        unsafe fn store(count: __m512i, out: &mut [u64]) {
-            unsafe {
-                // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
-                _mm512_storeu_si512(out[..8].as_mut_ptr().cast(), count)
-            }
+        fn store(self, count: __m512i, out: &mut [u64]) {
+            *out.first_chunk_mut::<8>().expect("a full vector") = pulp::cast(count);
         }
     }
 
-    #[derive(Clone, Copy)]
-    pub(super) struct Avx2(__m256d);
-
-    // SAFETY (for every method): only reached from `sturm_counts_avx2`, whose caller detected
-    // AVX2; the loads and stores take slices of at least 4 values (the trait's contract).
-    impl SturmVector for Avx2 {
+    impl SturmUnit for V3 {
         const WIDTH: usize = 4;
         // 3 vectors × (x, prev, cur, count) = 12 of the 16 registers.
         const GROUP: usize = 3;
+        type V = __m256d;
         type Count = __m256i;
         #[inline(always)]
-        fn splat(v: f64) -> Self {
-            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
-            unsafe { Self(_mm256_set1_pd(v)) }
+        fn splat(self, v: f64) -> __m256d {
+            self.avx._mm256_set1_pd(v)
         }
         #[inline(always)]
-        unsafe fn load(x: &[f64]) -> Self {
-            unsafe {
-                // SAFETY: AVX2 as above; the caller passes a full vector of values (the contract).
-                Self(_mm256_loadu_pd(x[..4].as_ptr()))
-            }
+        fn load(self, x: &[f64]) -> __m256d {
+            pulp::cast(*x.first_chunk::<4>().expect("a full vector"))
         }
         #[inline(always)]
-        fn zero_count() -> __m256i {
-            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
-            unsafe { _mm256_setzero_si256() }
+        fn zero_count(self) -> __m256i {
+            self.avx._mm256_setzero_si256()
         }
         #[inline(always)]
-        fn step(d: Self, x: Self, e: Self, cur: Self, prev: Self) -> Self {
-            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
-            unsafe {
-                let t = _mm256_mul_pd(_mm256_sub_pd(d.0, x.0), cur.0);
-                Self(_mm256_sub_pd(t, _mm256_mul_pd(e.0, prev.0)))
-            }
+        fn step(self, d: __m256d, x: __m256d, e: __m256d, cur: __m256d, prev: __m256d) -> __m256d {
+            let a = self.avx;
+            let t = a._mm256_mul_pd(a._mm256_sub_pd(d, x), cur);
+            a._mm256_sub_pd(t, a._mm256_mul_pd(e, prev))
         }
         #[inline(always)]
-        fn count_change(count: __m256i, p: Self, cur: Self) -> __m256i {
-            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
-            unsafe {
-                let signs = _mm256_xor_si256(_mm256_castpd_si256(p.0), _mm256_castpd_si256(cur.0));
-                _mm256_add_epi64(count, _mm256_srli_epi64::<63>(signs))
-            }
+        fn count_change(self, count: __m256i, p: __m256d, cur: __m256d) -> __m256i {
+            let (a, a2) = (self.avx, self.avx2);
+            let signs = a2._mm256_xor_si256(a._mm256_castpd_si256(p), a._mm256_castpd_si256(cur));
+            a2._mm256_add_epi64(count, a2._mm256_srli_epi64::<63>(signs))
         }
         #[inline(always)]
-        fn rescale(prev: Self, cur: Self) -> (Self, Self) {
-            // SAFETY: only the Avx2 copies, run after detecting AVX2, call this impl.
-            unsafe {
-                let abs = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
-                let top = _mm256_max_pd(_mm256_and_pd(prev.0, abs), _mm256_and_pd(cur.0, abs));
-                let top = _mm256_and_si256(
-                    _mm256_castpd_si256(top),
-                    _mm256_set1_epi64x(EXPONENT_BITS as i64),
-                );
-                let f = _mm256_castsi256_pd(_mm256_sub_epi64(
-                    _mm256_set1_epi64x(INVERSE_EXPONENT as i64),
-                    top,
-                ));
-                (
-                    Self(_mm256_mul_pd(prev.0, f)),
-                    Self(_mm256_mul_pd(cur.0, f)),
-                )
-            }
+        fn rescale(self, prev: __m256d, cur: __m256d) -> (__m256d, __m256d) {
+            let (a, a2) = (self.avx, self.avx2);
+            let abs = a._mm256_castsi256_pd(a._mm256_set1_epi64x(i64::MAX));
+            let top = a._mm256_max_pd(a._mm256_and_pd(prev, abs), a._mm256_and_pd(cur, abs));
+            let top = a2._mm256_and_si256(
+                a._mm256_castpd_si256(top),
+                a._mm256_set1_epi64x(EXPONENT_BITS as i64),
+            );
+            let s = a._mm256_castsi256_pd(
+                a2._mm256_sub_epi64(a._mm256_set1_epi64x(INVERSE_EXPONENT as i64), top),
+            );
+            (a._mm256_mul_pd(prev, s), a._mm256_mul_pd(cur, s))
         }
         #[inline(always)]
-        unsafe fn store(count: __m256i, out: &mut [u64]) {
-            unsafe {
-                // SAFETY: AVX2 as above; the caller passes a full vector of values (the contract).
-                _mm256_storeu_si256(out[..4].as_mut_ptr().cast(), count)
-            }
+        fn store(self, count: __m256i, out: &mut [u64]) {
+            *out.first_chunk_mut::<4>().expect("a full vector") = pulp::cast(count);
         }
     }
 }
 
-/// The vectors of `x` in groups of at most `V::GROUP`, balanced (five vectors with groups of
+/// The vectors of `x` in groups of at most `U::GROUP`, balanced (five vectors with groups of
 /// six run as one group of five, not six and none).
 #[inline(always)]
-fn sturm_counts_in<V: SturmVector>(d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]) {
-    let vectors = x.len() / V::WIDTH;
-    let groups = vectors.div_ceil(V::GROUP);
+fn sturm_counts_in<U: SturmUnit>(unit: U, d: &[f64], e2: &[f64], x: &[f64], counts: &mut [u64]) {
+    let vectors = x.len() / U::WIDTH;
+    let groups = vectors.div_ceil(U::GROUP);
     let mut start = 0;
     for g in 0..groups {
         let end = (g + 1) * vectors / groups;
         let (xs, cs) = (
-            &x[start * V::WIDTH..end * V::WIDTH],
-            &mut counts[start * V::WIDTH..end * V::WIDTH],
+            &x[start * U::WIDTH..end * U::WIDTH],
+            &mut counts[start * U::WIDTH..end * U::WIDTH],
         );
         match end - start {
-            1 => sturm_group::<V, 1>(d, e2, xs, cs),
-            2 => sturm_group::<V, 2>(d, e2, xs, cs),
-            3 => sturm_group::<V, 3>(d, e2, xs, cs),
-            4 => sturm_group::<V, 4>(d, e2, xs, cs),
-            5 => sturm_group::<V, 5>(d, e2, xs, cs),
-            _ => sturm_group::<V, 6>(d, e2, xs, cs),
+            1 => sturm_group::<U, 1>(unit, d, e2, xs, cs),
+            2 => sturm_group::<U, 2>(unit, d, e2, xs, cs),
+            3 => sturm_group::<U, 3>(unit, d, e2, xs, cs),
+            4 => sturm_group::<U, 4>(unit, d, e2, xs, cs),
+            5 => sturm_group::<U, 5>(unit, d, e2, xs, cs),
+            _ => sturm_group::<U, 6>(unit, d, e2, xs, cs),
         }
         start = end;
     }
@@ -350,44 +343,48 @@ fn sturm_counts_in<V: SturmVector>(d: &[f64], e2: &[f64], x: &[f64], counts: &mu
 
 /// The recurrence for `G` vectors at once, their state in registers.
 #[inline(always)]
-fn sturm_group<V: SturmVector, const G: usize>(
+fn sturm_group<U: SturmUnit, const G: usize>(
+    unit: U,
     d: &[f64],
     e2: &[f64],
     x: &[f64],
     counts: &mut [u64],
 ) {
     let n = d.len();
-    // SAFETY: the caller passes G vectors of V::WIDTH values.
-    let x: [V; G] = std::array::from_fn(|g| unsafe { V::load(&x[g * V::WIDTH..]) });
-    // p₀ = 1, p₁ = d₀ − x.
-    let one = V::splat(1.0);
+    // p₀ = 1, p₁ = d₀ − x. (Loops rather than `array::from_fn`: a closure is a function of its
+    // own, compiled without the unit's instructions unless inlined.)
+    let one = unit.splat(1.0);
+    let mut xs = [one; G];
+    for (g, xg) in xs.iter_mut().enumerate() {
+        *xg = unit.load(&x[g * U::WIDTH..]);
+    }
+    let x = xs;
     let mut prev = [one; G];
     let mut cur = [one; G];
-    let mut cnt = [V::zero_count(); G];
-    let (d0, zero) = (V::splat(d[0]), V::splat(0.0));
+    let mut cnt = [unit.zero_count(); G];
+    let (d0, zero) = (unit.splat(d[0]), unit.splat(0.0));
     for g in 0..G {
-        cur[g] = V::step(d0, x[g], zero, one, one);
-        cnt[g] = V::count_change(cnt[g], cur[g], one);
+        cur[g] = unit.step(d0, x[g], zero, one, one);
+        cnt[g] = unit.count_change(cnt[g], cur[g], one);
     }
     for i in 1..n {
-        let (di, ei) = (V::splat(d[i]), V::splat(e2[i - 1]));
+        let (di, ei) = (unit.splat(d[i]), unit.splat(e2[i - 1]));
         for g in 0..G {
             // An exact zero needs no special case: with e² > 0 the next term has the sign
             // opposite to the one before the zero, so the pair still counts one change.
-            let p = V::step(di, x[g], ei, cur[g], prev[g]);
-            cnt[g] = V::count_change(cnt[g], p, cur[g]);
+            let p = unit.step(di, x[g], ei, cur[g], prev[g]);
+            cnt[g] = unit.count_change(cnt[g], p, cur[g]);
             prev[g] = cur[g];
             cur[g] = p;
         }
         if i % RESCALE_EVERY == 0 {
             for g in 0..G {
-                (prev[g], cur[g]) = V::rescale(prev[g], cur[g]);
+                (prev[g], cur[g]) = unit.rescale(prev[g], cur[g]);
             }
         }
     }
     for g in 0..G {
-        // SAFETY: the caller passes G vectors of V::WIDTH counts.
-        unsafe { V::store(cnt[g], &mut counts[g * V::WIDTH..]) };
+        unit.store(cnt[g], &mut counts[g * U::WIDTH..]);
     }
 }
 
@@ -559,25 +556,28 @@ mod tests {
                 f(&mut counts);
                 counts
             };
-            let portable = run(&|c| sturm_counts_in::<Portable>(&diag, &e2, &x, c));
-            assert_eq!(portable, run(&|c| sturm_counts(&diag, &e2, &x, c)));
+            let baseline = run(&|counts| sturm_counts_in(Baseline, &diag, &e2, &x, counts));
+            assert_eq!(
+                baseline,
+                run(&|counts| sturm_counts(&diag, &e2, &x, counts))
+            );
             #[cfg(target_arch = "x86_64")]
             {
-                if std::is_x86_feature_detected!("avx2") {
-                    // SAFETY: AVX2 was just detected.
-                    let avx2 = run(&|c| unsafe { sturm_counts_avx2(&diag, &e2, &x, c) });
-                    assert_eq!(portable, avx2, "AVX2, {vectors} vectors");
+                use crate::simd::{on_avx2, on_avx512};
+                let (d, e2, x) = (&diag[..], &e2[..], &x[..]);
+                if let Some(simd) = pulp::x86::V3::try_new() {
+                    let got = run(&|counts| on_avx2(simd, SturmCounts { d, e2, x, counts }));
+                    assert_eq!(baseline, got, "AVX2, {vectors} vectors");
                 }
-                if std::is_x86_feature_detected!("avx512f") {
-                    // SAFETY: AVX-512F was just detected.
-                    let avx512 = run(&|c| unsafe { sturm_counts_avx512(&diag, &e2, &x, c) });
-                    assert_eq!(portable, avx512, "AVX-512, {vectors} vectors");
+                if let Some(simd) = pulp::x86::V4::try_new() {
+                    let got = run(&|counts| on_avx512(simd, SturmCounts { d, e2, x, counts }));
+                    assert_eq!(baseline, got, "AVX-512, {vectors} vectors");
                 }
             }
             // The counts themselves, against the dense oracle.
             for (j, xj) in x.iter().enumerate() {
                 let want = all.iter().filter(|&&e| e < *xj).count() as u64;
-                assert_eq!(portable[j], want, "x = {xj}");
+                assert_eq!(baseline[j], want, "x = {xj}");
             }
         }
     }

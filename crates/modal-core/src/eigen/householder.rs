@@ -9,7 +9,7 @@
 
 use faer::{MatMut, MatRef};
 
-use crate::simd::{dot, widest_simd};
+use crate::simd::{dispatch, dot, Kernel};
 
 /// The tridiagonal matrix of [`tridiagonalize`] and the reflectors that produced it.
 #[derive(Debug, Clone)]
@@ -27,18 +27,36 @@ pub(crate) struct Tridiagonal {
 /// run past the last row (padding contributes nothing) instead of ending in scalar tails.
 const PAD_ROWS: usize = 8;
 
-widest_simd! {
-    /// Reduces the symmetric `a` (only its lower triangle is read) to tridiagonal form. The
-    /// O(n²) work around the sweeps (the reflectors, `w`, the copies) is compiled for the widest
-    /// vector unit too.
-    pub(crate) fn tridiagonalize(a: MatRef<'_, f64>) -> Tridiagonal;
-    avx512 tridiagonalize_avx512 => tridiagonalize_body(a);
-    avx2 tridiagonalize_avx2 [] => tridiagonalize_body(a);
-    portable => tridiagonalize_body(a);
+/// Reduces the symmetric `a` (only its lower triangle is read) to tridiagonal form, on the
+/// widest vector unit this CPU has. The O(n²) work around the sweeps (the reflectors, `w`, the
+/// copies) is compiled for that unit too.
+pub(crate) fn tridiagonalize(a: MatRef<'_, f64>) -> Tridiagonal {
+    dispatch(Tridiagonalize(a))
+}
+
+/// The argument of [`tridiagonalize`], run by [`dispatch`].
+struct Tridiagonalize<'a>(MatRef<'a, f64>);
+
+impl Kernel for Tridiagonalize<'_> {
+    type Output = Tridiagonal;
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn avx512(self, simd: pulp::x86::V4) -> Tridiagonal {
+        tridiagonalize_body(simd, self.0)
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn avx2(self, simd: pulp::x86::V3) -> Tridiagonal {
+        tridiagonalize_body(simd, self.0)
+    }
+    #[inline(always)]
+    fn baseline(self) -> Tridiagonal {
+        tridiagonalize_body(Baseline, self.0)
+    }
 }
 
 #[inline(always)]
-fn tridiagonalize_body(a: MatRef<'_, f64>) -> Tridiagonal {
+fn tridiagonalize_body<U: Lanes>(unit: U, a: MatRef<'_, f64>) -> Tridiagonal {
     let n = a.nrows();
     // Columns of whole cache lines, kept off multiples of 4 KiB apart (which alias in the store
     // buffer); `COLS` spare zero columns let the last pass of a sweep be a full one.
@@ -105,6 +123,7 @@ fn tridiagonalize_body(a: MatRef<'_, f64>) -> Tridiagonal {
         v[s + 1..n].copy_from_slice(&m[k * ld + k + 2..k * ld + n]);
         // y = B v on the trailing block, B updated by the pending reflector on the way.
         sweep(
+            unit,
             &mut m[s * ld + s..],
             ld,
             n - s,
@@ -215,44 +234,49 @@ fn householder_in_place(x: &mut [f64]) -> (f64, f64) {
     (beta, tau)
 }
 
-widest_simd! {
-    /// The fused sweep over the lower triangle of the `m × m` block `b` (leading dimension `ld`):
-    /// `b ← b − u wᵀ − w uᵀ`, then `y = b v`, in one pass, on the widest vector unit this CPU
-    /// has. `b` has `PAD_ROWS` zero rows below the block and `COLS` zero columns after it; `u`,
-    /// `w`, `v` are zero past `m`, so whole vectors can run into the padding.
-    fn sweep(b: &mut [f64], ld: usize, m: usize, u: &[f64], w: &[f64], v: &[f64], y: &mut [f64]);
-    requires {
-        let span = m + PAD_ROWS;
-        assert!(b.len() >= (m + COLS - 1) * ld + span && ld >= span);
-        assert!(u.len() >= span && w.len() >= span && v.len() >= span && y.len() >= span);
-    };
-    // SAFETY: `requires` asserted the sizes; the dispatch checked the CPU's features.
-    avx512 sweep_avx512 => unsafe { sweep_in::<x86::Avx512>(b, ld, m, u, w, v, y) };
-    // SAFETY: as above.
-    avx2 sweep_avx2 ["fma"] => unsafe { sweep_in::<x86::Avx2>(b, ld, m, u, w, v, y) };
-    // SAFETY: `requires` asserted the sizes.
-    portable => unsafe { sweep_in::<Portable>(b, ld, m, u, w, v, y) };
+/// The fused sweep over the lower triangle of the `m × m` block `b` (leading dimension `ld`):
+/// `b ← b − u wᵀ − w uᵀ`, then `y = b v`, in one pass, on the vector unit `unit`. `b` has
+/// `PAD_ROWS` zero rows below the block and `COLS` zero columns after it; `u`, `w`, `v` are zero
+/// past `m`, so whole vectors can run into the padding.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn sweep<U: Lanes>(
+    unit: U,
+    b: &mut [f64],
+    ld: usize,
+    m: usize,
+    u: &[f64],
+    w: &[f64],
+    v: &[f64],
+    y: &mut [f64],
+) {
+    let span = m + PAD_ROWS;
+    assert!(b.len() >= (m + COLS - 1) * ld + span && ld >= span);
+    assert!(u.len() >= span && w.len() >= span && v.len() >= span && y.len() >= span);
+    // SAFETY: the sizes were just asserted.
+    unsafe { sweep_in(unit, b, ld, m, u, w, v, y) }
 }
 
-/// The vector operations of the sweep.
+/// The vector operations of the sweep on the unit `Self` (a pulp token, or [`Baseline`]).
 trait Lanes: Copy {
     const WIDTH: usize;
+    type V: Copy;
     /// # Safety
     /// `p` points at `WIDTH` readable values.
-    unsafe fn load(p: *const f64) -> Self;
+    unsafe fn load(self, p: *const f64) -> Self::V;
     /// # Safety
     /// `p` points at `WIDTH` writable values.
-    unsafe fn store(self, p: *mut f64);
-    fn splat(v: f64) -> Self;
+    unsafe fn store(self, v: Self::V, p: *mut f64);
+    fn splat(self, v: f64) -> Self::V;
     /// 1 in the lanes `l` with `l ≥ from`, 0 in the others.
-    fn lanes_from(from: usize) -> Self;
-    fn mul(a: Self, b: Self) -> Self;
+    fn lanes_from(self, from: usize) -> Self::V;
+    fn mul(self, a: Self::V, b: Self::V) -> Self::V;
     /// `a·b + c`.
-    fn mul_add(a: Self, b: Self, c: Self) -> Self;
+    fn mul_add(self, a: Self::V, b: Self::V, c: Self::V) -> Self::V;
     /// `c − a·b`.
-    fn neg_mul_add(a: Self, b: Self, c: Self) -> Self;
+    fn neg_mul_add(self, a: Self::V, b: Self::V, c: Self::V) -> Self::V;
     /// The four horizontal sums.
-    fn sum4(a: [Self; 4]) -> [f64; 4];
+    fn sum4(self, a: [Self::V; 4]) -> [f64; 4];
 }
 
 /// Columns of one pass of the sweep.
@@ -264,9 +288,11 @@ const COLS: usize = 4;
 /// entry enters `y` once.
 ///
 /// # Safety
-/// As asserted by [`sweep`]; the CPU has `V`'s instructions.
+/// As asserted by [`sweep`].
 #[inline(always)]
-unsafe fn sweep_in<V: Lanes>(
+#[allow(clippy::too_many_arguments)]
+unsafe fn sweep_in<U: Lanes>(
+    unit: U,
     b: &mut [f64],
     ld: usize,
     m: usize,
@@ -275,43 +301,61 @@ unsafe fn sweep_in<V: Lanes>(
     v: &[f64],
     y: &mut [f64],
 ) {
+    // SAFETY: every pointer below stays within the sizes the caller guarantees (`sweep`'s
+    // assertions): rows `j..m` rounded up to whole vectors end inside the padding rows of `b`,
+    // `u`, `w`, `v` and `y`, and columns `j..j + COLS` inside the `COLS` spare columns.
     unsafe {
         y[..m + PAD_ROWS].fill(0.0);
         let bp = b.as_mut_ptr();
         let (up, wp, vp, yp) = (u.as_ptr(), w.as_ptr(), v.as_ptr(), y.as_mut_ptr());
         // Lane masks of the first vector of a pass: column c takes rows j + l with l ≥ c into its
         // dot product and rows with l > c into the symmetric half of `y`.
-        let ge: [V; COLS] = std::array::from_fn(|c| V::lanes_from(c));
-        let gt: [V; COLS] = std::array::from_fn(|c| V::lanes_from(c + 1));
+        // (Loops rather than `array::from_fn`: a closure is a function of its own, compiled
+        // without the unit's instructions unless inlined.)
+        let zero = unit.splat(0.0);
+        let (mut ge, mut gt) = ([zero; COLS], [zero; COLS]);
+        for c in 0..COLS {
+            (ge[c], gt[c]) = (unit.lanes_from(c), unit.lanes_from(c + 1));
+        }
         let mut j = 0;
         while j < m {
             let cols: [*mut f64; COLS] = std::array::from_fn(|c| bp.add((j + c) * ld));
-            let wj: [V; COLS] = std::array::from_fn(|c| V::splat(w[j + c]));
-            let uj: [V; COLS] = std::array::from_fn(|c| V::splat(u[j + c]));
-            let vj: [V; COLS] = std::array::from_fn(|c| V::splat(v[j + c]));
-            let mut acc = [V::splat(0.0); COLS];
+            let (mut wj, mut uj, mut vj) = ([zero; COLS], [zero; COLS], [zero; COLS]);
+            for c in 0..COLS {
+                (wj[c], uj[c], vj[c]) = (
+                    unit.splat(w[j + c]),
+                    unit.splat(u[j + c]),
+                    unit.splat(v[j + c]),
+                );
+            }
+            let mut acc = [zero; COLS];
             let mut i = j;
             let mut first = true;
             while i < m {
-                let (ui, wi, vi) = (V::load(up.add(i)), V::load(wp.add(i)), V::load(vp.add(i)));
-                let mut yi = V::load(yp.add(i));
+                let (ui, wi, vi) = (
+                    unit.load(up.add(i)),
+                    unit.load(wp.add(i)),
+                    unit.load(vp.add(i)),
+                );
+                let mut yi = unit.load(yp.add(i));
                 for c in 0..COLS {
                     let e = cols[c].add(i);
-                    let bij = V::neg_mul_add(wi, uj[c], V::neg_mul_add(ui, wj[c], V::load(e)));
-                    bij.store(e);
+                    let bij =
+                        unit.neg_mul_add(wi, uj[c], unit.neg_mul_add(ui, wj[c], unit.load(e)));
+                    unit.store(bij, e);
                     let (vd, vs) = if first {
-                        (V::mul(vi, ge[c]), V::mul(vj[c], gt[c]))
+                        (unit.mul(vi, ge[c]), unit.mul(vj[c], gt[c]))
                     } else {
                         (vi, vj[c])
                     };
-                    acc[c] = V::mul_add(bij, vd, acc[c]);
-                    yi = V::mul_add(bij, vs, yi);
+                    acc[c] = unit.mul_add(bij, vd, acc[c]);
+                    yi = unit.mul_add(bij, vs, yi);
                 }
-                yi.store(yp.add(i));
+                unit.store(yi, yp.add(i));
                 first = false;
-                i += V::WIDTH;
+                i += U::WIDTH;
             }
-            let sums = V::sum4(acc);
+            let sums = unit.sum4(acc);
             for c in 0..COLS {
                 y[j + c] += sums[c];
             }
@@ -322,177 +366,148 @@ unsafe fn sweep_in<V: Lanes>(
 
 /// Plain code for CPUs without AVX2 and FMA.
 #[derive(Clone, Copy)]
-struct Portable([f64; 4]);
+struct Baseline;
 
-impl Lanes for Portable {
+impl Lanes for Baseline {
     const WIDTH: usize = 4;
-    unsafe fn load(p: *const f64) -> Self {
-        unsafe {
-            // SAFETY: the caller guarantees 4 readable values at `p` (the trait's contract).
-            Self(std::array::from_fn(|l| *p.add(l)))
-        }
+    type V = [f64; 4];
+    #[inline(always)]
+    unsafe fn load(self, p: *const f64) -> [f64; 4] {
+        // SAFETY: the caller guarantees 4 readable values at `p` (the trait's contract).
+        std::array::from_fn(|l| unsafe { *p.add(l) })
     }
-    unsafe fn store(self, p: *mut f64) {
-        unsafe {
+    #[inline(always)]
+    unsafe fn store(self, v: [f64; 4], p: *mut f64) {
+        for (l, x) in v.into_iter().enumerate() {
             // SAFETY: the caller guarantees 4 writable values at `p` (the trait's contract).
-            for l in 0..4 {
-                *p.add(l) = self.0[l];
-            }
+            unsafe { *p.add(l) = x };
         }
     }
-    fn splat(v: f64) -> Self {
-        Self([v; 4])
+    #[inline(always)]
+    fn splat(self, v: f64) -> [f64; 4] {
+        [v; 4]
     }
-    fn lanes_from(from: usize) -> Self {
-        Self(std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 }))
+    #[inline(always)]
+    fn lanes_from(self, from: usize) -> [f64; 4] {
+        std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 })
     }
-    fn mul(a: Self, b: Self) -> Self {
-        Self(std::array::from_fn(|l| a.0[l] * b.0[l]))
+    #[inline(always)]
+    fn mul(self, a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+        std::array::from_fn(|l| a[l] * b[l])
     }
-    fn mul_add(a: Self, b: Self, c: Self) -> Self {
-        Self(std::array::from_fn(|l| a.0[l] * b.0[l] + c.0[l]))
+    #[inline(always)]
+    fn mul_add(self, a: [f64; 4], b: [f64; 4], c: [f64; 4]) -> [f64; 4] {
+        std::array::from_fn(|l| a[l] * b[l] + c[l])
     }
-    fn neg_mul_add(a: Self, b: Self, c: Self) -> Self {
-        Self(std::array::from_fn(|l| c.0[l] - a.0[l] * b.0[l]))
+    #[inline(always)]
+    fn neg_mul_add(self, a: [f64; 4], b: [f64; 4], c: [f64; 4]) -> [f64; 4] {
+        std::array::from_fn(|l| c[l] - a[l] * b[l])
     }
-    fn sum4(a: [Self; 4]) -> [f64; 4] {
-        a.map(|x| (x.0[0] + x.0[1]) + (x.0[2] + x.0[3]))
+    #[inline(always)]
+    fn sum4(self, a: [[f64; 4]; 4]) -> [f64; 4] {
+        a.map(|x| (x[0] + x[1]) + (x[2] + x[3]))
     }
 }
 
 #[cfg(target_arch = "x86_64")]
-mod x86 {
+mod units {
     use super::Lanes;
-    use std::arch::x86_64::*;
+    use core::arch::x86_64::{__m256d, __m512d};
+    use pulp::x86::{V3, V4};
 
-    #[derive(Clone, Copy)]
-    pub(super) struct Avx512(__m512d);
-
-    // SAFETY (for every method): only reached from `sweep_avx512`, whose caller detected
-    // AVX-512F; the pointers are valid for 8 values (the trait's contract).
-    impl Lanes for Avx512 {
+    impl Lanes for V4 {
         const WIDTH: usize = 8;
+        type V = __m512d;
         #[inline(always)]
-        unsafe fn load(p: *const f64) -> Self {
-            unsafe {
-                // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
-                Self(_mm512_loadu_pd(p))
+        unsafe fn load(self, p: *const f64) -> __m512d {
+            // SAFETY: the caller guarantees 8 readable values at `p` (the trait's contract).
+            unsafe { self.avx512f._mm512_loadu_pd(p) }
+        }
+        #[inline(always)]
+        unsafe fn store(self, v: __m512d, p: *mut f64) {
+            // SAFETY: the caller guarantees 8 writable values at `p` (the trait's contract).
+            unsafe { self.avx512f._mm512_storeu_pd(p, v) }
+        }
+        #[inline(always)]
+        fn splat(self, v: f64) -> __m512d {
+            self.avx512f._mm512_set1_pd(v)
+        }
+        #[inline(always)]
+        fn lanes_from(self, from: usize) -> __m512d {
+            pulp::cast::<[f64; 8], _>(std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 }))
+        }
+        #[inline(always)]
+        fn mul(self, a: __m512d, b: __m512d) -> __m512d {
+            self.avx512f._mm512_mul_pd(a, b)
+        }
+        #[inline(always)]
+        fn mul_add(self, a: __m512d, b: __m512d, c: __m512d) -> __m512d {
+            self.avx512f._mm512_fmadd_pd(a, b, c)
+        }
+        #[inline(always)]
+        fn neg_mul_add(self, a: __m512d, b: __m512d, c: __m512d) -> __m512d {
+            self.avx512f._mm512_fnmadd_pd(a, b, c)
+        }
+        #[inline(always)]
+        fn sum4(self, a: [__m512d; 4]) -> [f64; 4] {
+            let (f, x) = (self.avx512f, self.avx);
+            // 8 → 4 lanes each, then the four 4-lane sums side by side.
+            let mut h = [x._mm256_setzero_pd(); 4];
+            for (h, v) in h.iter_mut().zip(a) {
+                *h = x._mm256_add_pd(
+                    f._mm512_castpd512_pd256(v),
+                    f._mm512_extractf64x4_pd::<1>(v),
+                );
             }
-        }
-        #[inline(always)]
-        unsafe fn store(self, p: *mut f64) {
-            unsafe {
-                // SAFETY: AVX-512F as above; the caller passes a full vector of values (the contract).
-                _mm512_storeu_pd(p, self.0)
-            }
-        }
-        #[inline(always)]
-        fn splat(v: f64) -> Self {
-            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
-            unsafe { Self(_mm512_set1_pd(v)) }
-        }
-        #[inline(always)]
-        fn lanes_from(from: usize) -> Self {
-            let m: [f64; 8] = std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 });
-            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
-            unsafe { Self(_mm512_loadu_pd(m.as_ptr())) }
-        }
-        #[inline(always)]
-        fn mul(a: Self, b: Self) -> Self {
-            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
-            unsafe { Self(_mm512_mul_pd(a.0, b.0)) }
-        }
-        #[inline(always)]
-        fn mul_add(a: Self, b: Self, c: Self) -> Self {
-            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
-            unsafe { Self(_mm512_fmadd_pd(a.0, b.0, c.0)) }
-        }
-        #[inline(always)]
-        fn neg_mul_add(a: Self, b: Self, c: Self) -> Self {
-            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
-            unsafe { Self(_mm512_fnmadd_pd(a.0, b.0, c.0)) }
-        }
-        #[inline(always)]
-        fn sum4(a: [Self; 4]) -> [f64; 4] {
-            // SAFETY: only the Avx512 copies, run after detecting AVX-512F, call this impl.
-            unsafe {
-                // 8 → 4 lanes each, then the four 4-lane sums side by side.
-                let h: [__m256d; 4] = a.map(|x| {
-                    _mm256_add_pd(
-                        _mm512_castpd512_pd256(x.0),
-                        _mm512_extractf64x4_pd::<1>(x.0),
-                    )
-                });
-                let s01 = _mm256_hadd_pd(h[0], h[1]);
-                let s23 = _mm256_hadd_pd(h[2], h[3]);
-                let lo = _mm256_permute2f128_pd::<0x20>(s01, s23);
-                let hi = _mm256_permute2f128_pd::<0x31>(s01, s23);
-                let mut out = [0.0; 4];
-                _mm256_storeu_pd(out.as_mut_ptr(), _mm256_add_pd(lo, hi));
-                out
-            }
+            let s01 = x._mm256_hadd_pd(h[0], h[1]);
+            let s23 = x._mm256_hadd_pd(h[2], h[3]);
+            let lo = x._mm256_permute2f128_pd::<0x20>(s01, s23);
+            let hi = x._mm256_permute2f128_pd::<0x31>(s01, s23);
+            pulp::cast(x._mm256_add_pd(lo, hi))
         }
     }
 
-    #[derive(Clone, Copy)]
-    pub(super) struct Avx2(__m256d);
-
-    // SAFETY (for every method): only reached from `sweep_avx2`, whose caller detected AVX2 and
-    // FMA; the pointers are valid for 4 values (the trait's contract).
-    impl Lanes for Avx2 {
+    impl Lanes for V3 {
         const WIDTH: usize = 4;
+        type V = __m256d;
         #[inline(always)]
-        unsafe fn load(p: *const f64) -> Self {
-            unsafe {
-                // SAFETY: AVX2 and FMA as above; the caller passes a full vector of values (the contract).
-                Self(_mm256_loadu_pd(p))
-            }
+        unsafe fn load(self, p: *const f64) -> __m256d {
+            // SAFETY: the caller guarantees 4 readable values at `p` (the trait's contract).
+            unsafe { self.avx._mm256_loadu_pd(p) }
         }
         #[inline(always)]
-        unsafe fn store(self, p: *mut f64) {
-            unsafe {
-                // SAFETY: AVX2 and FMA as above; the caller passes a full vector of values (the contract).
-                _mm256_storeu_pd(p, self.0)
-            }
+        unsafe fn store(self, v: __m256d, p: *mut f64) {
+            // SAFETY: the caller guarantees 4 writable values at `p` (the trait's contract).
+            unsafe { self.avx._mm256_storeu_pd(p, v) }
         }
         #[inline(always)]
-        fn splat(v: f64) -> Self {
-            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
-            unsafe { Self(_mm256_set1_pd(v)) }
+        fn splat(self, v: f64) -> __m256d {
+            self.avx._mm256_set1_pd(v)
         }
         #[inline(always)]
-        fn lanes_from(from: usize) -> Self {
-            let m: [f64; 4] = std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 });
-            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
-            unsafe { Self(_mm256_loadu_pd(m.as_ptr())) }
+        fn lanes_from(self, from: usize) -> __m256d {
+            pulp::cast::<[f64; 4], _>(std::array::from_fn(|l| if l >= from { 1.0 } else { 0.0 }))
         }
         #[inline(always)]
-        fn mul(a: Self, b: Self) -> Self {
-            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
-            unsafe { Self(_mm256_mul_pd(a.0, b.0)) }
+        fn mul(self, a: __m256d, b: __m256d) -> __m256d {
+            self.avx._mm256_mul_pd(a, b)
         }
         #[inline(always)]
-        fn mul_add(a: Self, b: Self, c: Self) -> Self {
-            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
-            unsafe { Self(_mm256_fmadd_pd(a.0, b.0, c.0)) }
+        fn mul_add(self, a: __m256d, b: __m256d, c: __m256d) -> __m256d {
+            self.fma._mm256_fmadd_pd(a, b, c)
         }
         #[inline(always)]
-        fn neg_mul_add(a: Self, b: Self, c: Self) -> Self {
-            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
-            unsafe { Self(_mm256_fnmadd_pd(a.0, b.0, c.0)) }
+        fn neg_mul_add(self, a: __m256d, b: __m256d, c: __m256d) -> __m256d {
+            self.fma._mm256_fnmadd_pd(a, b, c)
         }
         #[inline(always)]
-        fn sum4(a: [Self; 4]) -> [f64; 4] {
-            // SAFETY: only the Avx2 copies, run after detecting AVX2 and FMA, call this impl.
-            unsafe {
-                let s01 = _mm256_hadd_pd(a[0].0, a[1].0);
-                let s23 = _mm256_hadd_pd(a[2].0, a[3].0);
-                let lo = _mm256_permute2f128_pd::<0x20>(s01, s23);
-                let hi = _mm256_permute2f128_pd::<0x31>(s01, s23);
-                let mut out = [0.0; 4];
-                _mm256_storeu_pd(out.as_mut_ptr(), _mm256_add_pd(lo, hi));
-                out
-            }
+        fn sum4(self, a: [__m256d; 4]) -> [f64; 4] {
+            let x = self.avx;
+            let s01 = x._mm256_hadd_pd(a[0], a[1]);
+            let s23 = x._mm256_hadd_pd(a[2], a[3]);
+            let lo = x._mm256_permute2f128_pd::<0x20>(s01, s23);
+            let hi = x._mm256_permute2f128_pd::<0x31>(s01, s23);
+            pulp::cast(x._mm256_add_pd(lo, hi))
         }
     }
 }
@@ -639,25 +654,40 @@ mod tests {
                 (bb, y)
             };
             let mut results = vec![(
-                "portable",
-                // SAFETY: the sizes are those `sweep` asserts.
-                run(&|bb, y| unsafe { sweep_in::<Portable>(bb, ld, m, &u, &w, &v, y) }),
+                "baseline",
+                run(&|bb, y| sweep(Baseline, bb, ld, m, &u, &w, &v, y)),
             )];
-            results.push(("dispatched", run(&|bb, y| sweep(bb, ld, m, &u, &w, &v, y))));
             #[cfg(target_arch = "x86_64")]
             {
-                if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-                    // SAFETY: AVX2 and FMA were just detected; the sizes are those asserted.
+                use crate::simd::{on_avx2, on_avx512};
+                /// The sweep alone, on one vector unit.
+                struct Sweep<'a>(&'a mut [f64], usize, usize, [&'a [f64]; 3], &'a mut [f64]);
+                impl Kernel for Sweep<'_> {
+                    type Output = ();
+                    fn avx512(self, simd: pulp::x86::V4) {
+                        let [u, w, v] = self.3;
+                        sweep(simd, self.0, self.1, self.2, u, w, v, self.4)
+                    }
+                    fn avx2(self, simd: pulp::x86::V3) {
+                        let [u, w, v] = self.3;
+                        sweep(simd, self.0, self.1, self.2, u, w, v, self.4)
+                    }
+                    fn baseline(self) {
+                        let [u, w, v] = self.3;
+                        sweep(Baseline, self.0, self.1, self.2, u, w, v, self.4)
+                    }
+                }
+                let uwv = [&u[..], &w[..], &v[..]];
+                if let Some(simd) = pulp::x86::V3::try_new() {
                     results.push((
                         "AVX2",
-                        run(&|bb, y| unsafe { sweep_avx2(bb, ld, m, &u, &w, &v, y) }),
+                        run(&|bb, y| on_avx2(simd, Sweep(bb, ld, m, uwv, y))),
                     ));
                 }
-                if std::is_x86_feature_detected!("avx512f") {
-                    // SAFETY: AVX-512F was just detected; the sizes are those asserted.
+                if let Some(simd) = pulp::x86::V4::try_new() {
                     results.push((
                         "AVX-512",
-                        run(&|bb, y| unsafe { sweep_avx512(bb, ld, m, &u, &w, &v, y) }),
+                        run(&|bb, y| on_avx512(simd, Sweep(bb, ld, m, uwv, y))),
                     ));
                 }
             }

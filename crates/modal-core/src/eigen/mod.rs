@@ -23,7 +23,7 @@ use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Mat, MatMut, MatRef, Par};
 
 use crate::error::ModalError;
-use crate::simd::{clear_upper_state, widest_simd};
+use crate::simd::{clear_upper_state, dispatch, Kernel};
 
 mod bisection;
 mod householder;
@@ -397,20 +397,49 @@ fn eig2(a: f64, b: f64, c: f64) -> (f64, f64) {
     }
 }
 
-widest_simd! {
-    /// Eigenvectors of the symmetric tridiagonal matrix (`diag`, `off`) for the given ascending
-    /// eigenvalues, by inverse iteration with Gram–Schmidt inside clusters (after LAPACK
-    /// `dstein`). Compiled for the widest vector unit this CPU has (the interleaved lanes fill
-    /// it); the same operations in the same order on every path, so the same vectors.
-    fn tridiagonal_inverse_iteration(
-        diag: &[f64],
-        off: &[f64],
-        values: &[f64],
-        out: MatMut<'_, f64>,
-    ) -> Result<(), ModalError>;
-    avx512 inverse_iteration_avx512 => inverse_iteration_body(diag, off, values, out);
-    avx2 inverse_iteration_avx2 [] => inverse_iteration_body(diag, off, values, out);
-    portable => inverse_iteration_body(diag, off, values, out);
+/// Eigenvectors of the symmetric tridiagonal matrix (`diag`, `off`) for the given ascending
+/// eigenvalues, by inverse iteration with Gram–Schmidt inside clusters (after LAPACK `dstein`).
+/// Compiled for the widest vector unit this CPU has (the interleaved lanes fill it); the same
+/// operations in the same order on every path, so the same vectors.
+fn tridiagonal_inverse_iteration(
+    diag: &[f64],
+    off: &[f64],
+    values: &[f64],
+    out: MatMut<'_, f64>,
+) -> Result<(), ModalError> {
+    dispatch(InverseIteration {
+        diag,
+        off,
+        values,
+        out,
+    })
+}
+
+/// The arguments of [`tridiagonal_inverse_iteration`], run by [`dispatch`]: one portable body
+/// compiled for each unit.
+struct InverseIteration<'a> {
+    diag: &'a [f64],
+    off: &'a [f64],
+    values: &'a [f64],
+    out: MatMut<'a, f64>,
+}
+
+impl Kernel for InverseIteration<'_> {
+    type Output = Result<(), ModalError>;
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn avx512(self, _: pulp::x86::V4) -> Self::Output {
+        inverse_iteration_body(self.diag, self.off, self.values, self.out)
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn avx2(self, _: pulp::x86::V3) -> Self::Output {
+        inverse_iteration_body(self.diag, self.off, self.values, self.out)
+    }
+    #[inline(always)]
+    fn baseline(self) -> Self::Output {
+        inverse_iteration_body(self.diag, self.off, self.values, self.out)
+    }
 }
 
 #[inline(always)]
@@ -1145,6 +1174,59 @@ mod tests {
             check_pairs(&c, &part, 1e-13);
             for i in 0..12 {
                 assert!((part.values[i] - (i / 4) as f64).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn every_inverse_iteration_path_gives_the_same_bits() {
+        // Singletons and a cluster (a split matrix with two equal blocks).
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let half: Vec<f64> = (0..30).map(|_| 4.0 * next()).collect();
+        let offs: Vec<f64> = (0..29).map(|_| next()).collect();
+        let diag: Vec<f64> = half.iter().chain(&half).copied().collect();
+        let off: Vec<f64> = offs.iter().chain(&[0.0]).chain(&offs).copied().collect();
+        let values = bisection::lowest_eigenvalues(&diag, &off, 25);
+        let run = |kernel: &dyn Fn(MatMut<'_, f64>) -> Result<(), ModalError>| {
+            let mut out = Mat::<f64>::zeros(diag.len(), values.len());
+            kernel(out.as_mut()).unwrap();
+            out
+        };
+        let (d, o, v) = (&diag[..], &off[..], &values[..]);
+        fn kernel<'a>(
+            diag: &'a [f64],
+            off: &'a [f64],
+            values: &'a [f64],
+            out: MatMut<'a, f64>,
+        ) -> InverseIteration<'a> {
+            InverseIteration {
+                diag,
+                off,
+                values,
+                out,
+            }
+        }
+        let baseline = run(&|out| kernel(d, o, v, out).baseline());
+        assert!(baseline.norm_max() > 0.5);
+        assert_eq!(
+            baseline,
+            run(&|out| tridiagonal_inverse_iteration(d, o, v, out))
+        );
+        #[cfg(target_arch = "x86_64")]
+        {
+            if let Some(simd) = pulp::x86::V3::try_new() {
+                let got = run(&|out| crate::simd::on_avx2(simd, kernel(d, o, v, out)));
+                assert_eq!(baseline, got, "AVX2");
+            }
+            if let Some(simd) = pulp::x86::V4::try_new() {
+                let got = run(&|out| crate::simd::on_avx512(simd, kernel(d, o, v, out)));
+                assert_eq!(baseline, got, "AVX-512");
             }
         }
     }

@@ -8,6 +8,7 @@
 use rayon::prelude::*;
 
 use crate::error::ModalError;
+use crate::simd::{dispatch, Kernel};
 
 /// How the two objects are brought into a common frame before their modes are compared.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -220,18 +221,39 @@ pub(crate) fn nearest_both(from: &[f64], to: &[f64], dim: usize) -> NearestBoth 
 /// of times per pair). Ties go to the first index, as in a plain scan. Planar point sets, by far
 /// the most frequent, take an AVX-512 or AVX2 kernel when the CPU has one.
 fn nearest_soa<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) -> NearestBoth {
+    dispatch(NearestSoa::<D, COLS> { from, to })
+}
+
+/// The arguments of [`nearest_soa`], run by [`dispatch`].
+struct NearestSoa<'a, const D: usize, const COLS: bool> {
+    from: &'a [f64],
+    to: &'a [f64],
+}
+
+impl<const D: usize, const COLS: bool> Kernel for NearestSoa<'_, D, COLS> {
+    type Output = NearestBoth;
     #[cfg(target_arch = "x86_64")]
-    {
-        if D == 2 && std::is_x86_feature_detected!("avx512f") {
-            // SAFETY: AVX-512F was just detected.
-            return unsafe { nearest_planar_avx512::<COLS>(from, to) };
+    #[inline(always)]
+    fn avx512(self, simd: pulp::x86::V4) -> NearestBoth {
+        let (n, m) = (self.from.len() / D, self.to.len() / D);
+        if D != 2 || n == 0 || m == 0 {
+            return nearest_soa_body::<D, COLS>(self.from, self.to);
         }
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: AVX2 was just detected.
-            return unsafe { nearest_soa_avx2::<D, COLS>(from, to) };
-        }
+        nearest_planar_avx512::<COLS>(simd, self.from, self.to)
     }
-    nearest_soa_body::<D, COLS>(from, to)
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn avx2(self, simd: pulp::x86::V3) -> NearestBoth {
+        let (n, m) = (self.from.len() / D, self.to.len() / D);
+        if D != 2 || n == 0 || m == 0 {
+            return nearest_soa_body::<D, COLS>(self.from, self.to);
+        }
+        nearest_planar_avx2::<COLS>(simd, self.from, self.to)
+    }
+    #[inline(always)]
+    fn baseline(self) -> NearestBoth {
+        nearest_soa_body::<D, COLS>(self.from, self.to)
+    }
 }
 
 /// Nearest neighbours one way and the other: `(index, squared distance)` per point of each set.
@@ -247,34 +269,37 @@ const GROUP: usize = 4;
 #[cfg(target_arch = "x86_64")]
 const STACK_POINTS: usize = 128;
 
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::{__m256d, __m512d, __m512i, _CMP_EQ_OQ, _CMP_LT_OQ};
+
 /// Four points of `to` for the AVX2 scan, with the nearest row so far of each, as f64: AVX2 has no
 /// 64-bit integer `max` (see [`rows_avx2`]), and f64 holds an index exactly.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
 struct Block256 {
-    x: std::arch::x86_64::__m256d,
-    y: std::arch::x86_64::__m256d,
-    v: std::arch::x86_64::__m256d,
-    i: std::arch::x86_64::__m256d,
+    x: __m256d,
+    y: __m256d,
+    v: __m256d,
+    i: __m256d,
 }
 
-/// The same scan compiled for AVX2 (three dimensions go through the auto-vectorised body); the
-/// planar case written out with intrinsics, because the auto-vectoriser mixes 128- and 256-bit
-/// halves in it. Separate multiply and add (no FMA) keep every distance bit-identical to the
-/// plain scan's, so ties break alike.
+/// The planar scan on AVX2, written out with intrinsics, because the auto-vectoriser mixes 128-
+/// and 256-bit halves in it. Separate multiply and add (no FMA) keep every distance
+/// bit-identical to the plain scan's, so ties break alike. `from` and `to` are not empty.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn nearest_soa_avx2<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) -> NearestBoth {
-    use std::arch::x86_64::*;
-    let (n, m) = (from.len() / D, to.len() / D);
-    if D != 2 || n == 0 || m == 0 {
-        return nearest_soa_body::<D, COLS>(from, to);
-    }
+#[inline(always)]
+fn nearest_planar_avx2<const COLS: bool>(
+    simd: pulp::x86::V3,
+    from: &[f64],
+    to: &[f64],
+) -> NearestBoth {
+    let a = simd.avx;
+    let (n, m) = (from.len() / 2, to.len() / 2);
     let init = Block256 {
-        x: _mm256_setzero_pd(),
-        y: _mm256_setzero_pd(),
-        v: _mm256_set1_pd(f64::INFINITY),
-        i: _mm256_setzero_pd(),
+        x: a._mm256_setzero_pd(),
+        y: a._mm256_setzero_pd(),
+        v: a._mm256_set1_pd(f64::INFINITY),
+        i: a._mm256_setzero_pd(),
     };
     let mut stack = [init; STACK_POINTS / 4];
     let mut heap = Vec::new();
@@ -291,15 +316,14 @@ fn nearest_soa_avx2<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) 
         for (l, p) in q.chunks_exact(2).enumerate() {
             (x[l], y[l]) = (p[0], p[1]);
         }
-        blk.x = _mm256_setr_pd(x[0], x[1], x[2], x[3]);
-        blk.y = _mm256_setr_pd(y[0], y[1], y[2], y[3]);
+        (blk.x, blk.y) = (pulp::cast(x), pulp::cast(y));
     }
     let mut rows = vec![(0, 0.0); n];
     let mut groups = from
         .chunks_exact(2 * GROUP)
         .zip(rows.chunks_exact_mut(GROUP));
     for (g, (p, out)) in groups.by_ref().enumerate() {
-        rows_avx2::<GROUP, COLS>(p, GROUP * g, cols, out);
+        rows_avx2::<GROUP, COLS>(simd, p, GROUP * g, cols, out);
     }
     let i0 = n - n % GROUP;
     for (k, (p, out)) in from[2 * i0..]
@@ -307,11 +331,11 @@ fn nearest_soa_avx2<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) 
         .zip(&mut rows[i0..])
         .enumerate()
     {
-        rows_avx2::<1, COLS>(p, i0 + k, cols, std::slice::from_mut(out));
+        rows_avx2::<1, COLS>(simd, p, i0 + k, cols, std::slice::from_mut(out));
     }
     let mut back = vec![(0, 0.0); if COLS { m } else { 0 }];
     for (blk, out) in cols.iter().zip(back.chunks_mut(4)) {
-        let (v, i) = (lanes256(blk.v), lanes256(blk.i));
+        let (v, i): ([f64; 4], [f64; 4]) = (pulp::cast(blk.v), pulp::cast(blk.i));
         for (o, (&v, &i)) in out.iter_mut().zip(v.iter().zip(&i)) {
             *o = (i as usize, v);
         }
@@ -324,87 +348,80 @@ fn nearest_soa_avx2<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) 
 /// `max(index, better & current)`, exact because the current block (or row) index is never below
 /// a kept one: two single-µop instructions where a blend costs two or three.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline]
+#[inline(always)]
 fn rows_avx2<const R: usize, const COLS: bool>(
+    simd: pulp::x86::V3,
     p: &[f64],
     i0: usize,
     cols: &mut [Block256],
     out: &mut [(usize, f64)],
 ) {
-    use std::arch::x86_64::*;
-    let px: [__m256d; R] = std::array::from_fn(|r| _mm256_set1_pd(p[2 * r]));
-    let py: [__m256d; R] = std::array::from_fn(|r| _mm256_set1_pd(p[2 * r + 1]));
-    let row: [__m256d; R] = std::array::from_fn(|r| _mm256_set1_pd((i0 + r) as f64));
-    let mut best_v = [_mm256_set1_pd(f64::INFINITY); R];
-    let mut best_b = [_mm256_setzero_pd(); R];
-    let mut b = _mm256_setzero_pd();
+    let a = simd.avx;
+    let zero = a._mm256_setzero_pd();
+    let (mut px, mut py, mut row) = ([zero; R], [zero; R], [zero; R]);
+    for r in 0..R {
+        px[r] = a._mm256_set1_pd(p[2 * r]);
+        py[r] = a._mm256_set1_pd(p[2 * r + 1]);
+        row[r] = a._mm256_set1_pd((i0 + r) as f64);
+    }
+    let mut best_v = [a._mm256_set1_pd(f64::INFINITY); R];
+    let mut best_b = [zero; R];
+    let mut b = zero;
     for blk in cols.iter_mut() {
         let (mut cv, mut ci) = (blk.v, blk.i);
         for r in 0..R {
-            let dx = _mm256_sub_pd(blk.x, px[r]);
-            let dy = _mm256_sub_pd(blk.y, py[r]);
-            let d = _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy));
-            let better = _mm256_cmp_pd::<_CMP_LT_OQ>(d, best_v[r]);
-            best_v[r] = _mm256_min_pd(d, best_v[r]);
-            best_b[r] = _mm256_max_pd(best_b[r], _mm256_and_pd(better, b));
+            let dx = a._mm256_sub_pd(blk.x, px[r]);
+            let dy = a._mm256_sub_pd(blk.y, py[r]);
+            let d = a._mm256_add_pd(a._mm256_mul_pd(dx, dx), a._mm256_mul_pd(dy, dy));
+            let better = a._mm256_cmp_pd::<_CMP_LT_OQ>(d, best_v[r]);
+            best_v[r] = a._mm256_min_pd(d, best_v[r]);
+            best_b[r] = a._mm256_max_pd(best_b[r], a._mm256_and_pd(better, b));
             if COLS {
                 // Rows come in increasing order: strict `<` keeps the first on ties.
-                let better = _mm256_cmp_pd::<_CMP_LT_OQ>(d, cv);
-                cv = _mm256_min_pd(d, cv);
-                ci = _mm256_max_pd(ci, _mm256_and_pd(better, row[r]));
+                let better = a._mm256_cmp_pd::<_CMP_LT_OQ>(d, cv);
+                cv = a._mm256_min_pd(d, cv);
+                ci = a._mm256_max_pd(ci, a._mm256_and_pd(better, row[r]));
             }
         }
         if COLS {
             (blk.v, blk.i) = (cv, ci);
         }
-        b = _mm256_add_pd(b, _mm256_set1_pd(1.0));
+        b = a._mm256_add_pd(b, a._mm256_set1_pd(1.0));
     }
     for r in 0..R {
         // Padded lanes keep (0, ∞), which never wins: no index bound needed.
-        out[r] = reduce_lanes(&lanes256(best_v[r]), &lanes256(best_b[r]), usize::MAX);
+        let (v, b): ([f64; 4], [f64; 4]) = (pulp::cast(best_v[r]), pulp::cast(best_b[r]));
+        out[r] = reduce_lanes(&v, &b, usize::MAX);
     }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline]
-fn lanes256(v: std::arch::x86_64::__m256d) -> [f64; 4] {
-    use std::arch::x86_64::*;
-    let (lo, hi) = (_mm256_castpd256_pd128(v), _mm256_extractf128_pd::<1>(v));
-    [
-        _mm_cvtsd_f64(lo),
-        _mm_cvtsd_f64(_mm_unpackhi_pd(lo, lo)),
-        _mm_cvtsd_f64(hi),
-        _mm_cvtsd_f64(_mm_unpackhi_pd(hi, hi)),
-    ]
 }
 
 /// Eight points of `to` for the AVX-512 scan, with the nearest row so far of each.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
 struct Block512 {
-    x: std::arch::x86_64::__m512d,
-    y: std::arch::x86_64::__m512d,
-    v: std::arch::x86_64::__m512d,
-    i: std::arch::x86_64::__m512i,
+    x: __m512d,
+    y: __m512d,
+    v: __m512d,
+    i: __m512i,
 }
 
 /// The planar scan in 8-lane AVX-512 vectors: a compare into a mask register and two masked moves
-/// per minimum where AVX2 needs four operations, on twice the lanes.
+/// per minimum where AVX2 needs four operations, on twice the lanes. `from` and `to` are not
+/// empty.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn nearest_planar_avx512<const COLS: bool>(from: &[f64], to: &[f64]) -> NearestBoth {
-    use std::arch::x86_64::*;
+#[inline(always)]
+fn nearest_planar_avx512<const COLS: bool>(
+    simd: pulp::x86::V4,
+    from: &[f64],
+    to: &[f64],
+) -> NearestBoth {
+    let f = simd.avx512f;
     let (n, m) = (from.len() / 2, to.len() / 2);
-    if n == 0 || m == 0 {
-        return nearest_soa_body::<2, COLS>(from, to);
-    }
     let init = Block512 {
-        x: _mm512_setzero_pd(),
-        y: _mm512_setzero_pd(),
-        v: _mm512_set1_pd(f64::INFINITY),
-        i: _mm512_setzero_si512(),
+        x: f._mm512_setzero_pd(),
+        y: f._mm512_setzero_pd(),
+        v: f._mm512_set1_pd(f64::INFINITY),
+        i: f._mm512_setzero_si512(),
     };
     let mut stack = [init; STACK_POINTS / 8];
     let mut heap = Vec::new();
@@ -421,27 +438,26 @@ fn nearest_planar_avx512<const COLS: bool>(from: &[f64], to: &[f64]) -> NearestB
         for (l, p) in q.chunks_exact(2).enumerate() {
             (x[l], y[l]) = (p[0], p[1]);
         }
-        blk.x = _mm512_setr_pd(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]);
-        blk.y = _mm512_setr_pd(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7]);
+        (blk.x, blk.y) = (pulp::cast(x), pulp::cast(y));
     }
     let mut rows = vec![(0, 0.0); n];
     let mut groups = from
         .chunks_exact(2 * GROUP)
         .zip(rows.chunks_exact_mut(GROUP));
     for (g, (p, out)) in groups.by_ref().enumerate() {
-        rows_avx512::<GROUP, COLS>(p, GROUP * g, cols, out);
+        rows_avx512::<GROUP, COLS>(simd, p, GROUP * g, cols, out);
     }
     let i0 = n - n % GROUP;
     let (p, out) = (&from[2 * i0..], &mut rows[i0..]);
     match n % GROUP {
         0 => {}
-        1 => rows_avx512::<1, COLS>(p, i0, cols, out),
-        2 => rows_avx512::<2, COLS>(p, i0, cols, out),
-        _ => rows_avx512::<3, COLS>(p, i0, cols, out),
+        1 => rows_avx512::<1, COLS>(simd, p, i0, cols, out),
+        2 => rows_avx512::<2, COLS>(simd, p, i0, cols, out),
+        _ => rows_avx512::<3, COLS>(simd, p, i0, cols, out),
     }
     let mut back = vec![(0, 0.0); if COLS { m } else { 0 }];
     for (blk, out) in cols.iter().zip(back.chunks_mut(8)) {
-        let (v, i) = (lanes512_pd(blk.v), lanes512_epi64(blk.i));
+        let (v, i): ([f64; 8], [i64; 8]) = (pulp::cast(blk.v), pulp::cast(blk.i));
         for (o, (&v, &i)) in out.iter_mut().zip(v.iter().zip(&i)) {
             *o = (i as usize, v);
         }
@@ -452,124 +468,105 @@ fn nearest_planar_avx512<const COLS: bool>(from: &[f64], to: &[f64]) -> NearestB
 /// Rows `i0 .. i0 + R` (the points of `p`, `R` ≤ 4) against every block of eight, their minima
 /// kept in registers and reduced across lanes together at the end.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-#[inline]
+#[inline(always)]
 fn rows_avx512<const R: usize, const COLS: bool>(
+    simd: pulp::x86::V4,
     p: &[f64],
     i0: usize,
     cols: &mut [Block512],
     out: &mut [(usize, f64)],
 ) {
-    use std::arch::x86_64::*;
-    let px: [__m512d; R] = std::array::from_fn(|r| _mm512_set1_pd(p[2 * r]));
-    let py: [__m512d; R] = std::array::from_fn(|r| _mm512_set1_pd(p[2 * r + 1]));
-    let row: [__m512i; R] = std::array::from_fn(|r| _mm512_set1_epi64((i0 + r) as i64));
-    let mut best_v = [_mm512_set1_pd(f64::INFINITY); R];
-    let mut best_j = [_mm512_setzero_si512(); R];
-    let mut j = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
+    let f = simd.avx512f;
+    let zero = f._mm512_setzero_pd();
+    let (mut px, mut py, mut row) = ([zero; R], [zero; R], [f._mm512_setzero_si512(); R]);
+    for r in 0..R {
+        px[r] = f._mm512_set1_pd(p[2 * r]);
+        py[r] = f._mm512_set1_pd(p[2 * r + 1]);
+        row[r] = f._mm512_set1_epi64((i0 + r) as i64);
+    }
+    let mut best_v = [f._mm512_set1_pd(f64::INFINITY); R];
+    let mut best_j = [f._mm512_setzero_si512(); R];
+    let mut j: __m512i = pulp::cast([0i64, 1, 2, 3, 4, 5, 6, 7]);
     for blk in cols.iter_mut() {
         let (mut cv, mut ci) = (blk.v, blk.i);
         for r in 0..R {
-            let dx = _mm512_sub_pd(blk.x, px[r]);
-            let dy = _mm512_sub_pd(blk.y, py[r]);
-            let d = _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy));
-            let better = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(d, best_v[r]);
-            best_v[r] = _mm512_mask_mov_pd(best_v[r], better, d);
-            best_j[r] = _mm512_mask_mov_epi64(best_j[r], better, j);
+            let dx = f._mm512_sub_pd(blk.x, px[r]);
+            let dy = f._mm512_sub_pd(blk.y, py[r]);
+            let d = f._mm512_add_pd(f._mm512_mul_pd(dx, dx), f._mm512_mul_pd(dy, dy));
+            let better = f._mm512_cmp_pd_mask::<_CMP_LT_OQ>(d, best_v[r]);
+            best_v[r] = f._mm512_mask_mov_pd(best_v[r], better, d);
+            best_j[r] = f._mm512_mask_mov_epi64(best_j[r], better, j);
             if COLS {
                 // Rows come in increasing order: strict `<` keeps the first on ties.
-                let better = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(d, cv);
-                cv = _mm512_mask_mov_pd(cv, better, d);
-                ci = _mm512_mask_mov_epi64(ci, better, row[r]);
+                let better = f._mm512_cmp_pd_mask::<_CMP_LT_OQ>(d, cv);
+                cv = f._mm512_mask_mov_pd(cv, better, d);
+                ci = f._mm512_mask_mov_epi64(ci, better, row[r]);
             }
         }
         if COLS {
             (blk.v, blk.i) = (cv, ci);
         }
-        j = _mm512_add_epi64(j, _mm512_set1_epi64(8));
+        j = f._mm512_add_epi64(j, f._mm512_set1_epi64(8));
     }
     // Each lane kept its first minimum; across lanes the lowest index among equal minima wins.
     // Lanes never updated hold (0, ∞), the plain scan's answer when nothing is below ∞.
-    let inf = _mm512_set1_pd(f64::INFINITY);
-    let min = min4_pd(std::array::from_fn(|r| if r < R { best_v[r] } else { inf }));
-    let lane = |r: usize| _mm512_set1_epi64(2 * r as i64);
-    let first = min4_epi64(std::array::from_fn(|r| {
-        if r < R {
-            let at =
-                _mm512_cmp_pd_mask::<_CMP_EQ_OQ>(best_v[r], _mm512_permutexvar_pd(lane(r), min));
-            _mm512_mask_blend_epi64(at, _mm512_set1_epi64(i64::MAX), best_j[r])
-        } else {
-            _mm512_setzero_si512()
-        }
-    }));
+    let inf = f._mm512_set1_pd(f64::INFINITY);
+    let mut v4 = [inf; 4];
+    v4[..R].copy_from_slice(&best_v);
+    let min = min4_pd(simd, v4);
+    let mut at_min = [f._mm512_setzero_si512(); 4];
+    for r in 0..R {
+        let lane = f._mm512_set1_epi64(2 * r as i64);
+        let at = f._mm512_cmp_pd_mask::<_CMP_EQ_OQ>(best_v[r], f._mm512_permutexvar_pd(lane, min));
+        at_min[r] = f._mm512_mask_blend_epi64(at, f._mm512_set1_epi64(i64::MAX), best_j[r]);
+    }
+    let first: [i64; 8] = pulp::cast(min4_epi64(simd, at_min));
+    let min: [f64; 8] = pulp::cast(min);
     for (r, o) in out.iter_mut().enumerate().take(R) {
-        let v = _mm512_castpd512_pd128(_mm512_permutexvar_pd(lane(r), min));
-        let j = _mm512_castsi512_si128(_mm512_permutexvar_epi64(lane(r), first));
-        *o = (_mm_cvtsi128_si64(j) as usize, _mm_cvtsd_f64(v));
+        *o = (first[2 * r] as usize, min[2 * r]);
     }
 }
 
 /// The minimum of each of four vectors, in lanes 2r and 2r + 1: 11 shuffles and minima for the
 /// four, where reducing each alone takes 6 and leaves four results to gather.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-#[inline]
-fn min4_pd(v: [std::arch::x86_64::__m512d; 4]) -> std::arch::x86_64::__m512d {
-    use std::arch::x86_64::*;
+#[inline(always)]
+fn min4_pd(simd: pulp::x86::V4, v: [__m512d; 4]) -> __m512d {
+    let f = simd.avx512f;
     // Lanes 0–3 of a and b against lanes 4–7; then pairs; then within pairs.
-    let ab = _mm512_min_pd(
-        _mm512_shuffle_f64x2::<0b01_00_01_00>(v[0], v[1]),
-        _mm512_shuffle_f64x2::<0b11_10_11_10>(v[0], v[1]),
+    let ab = f._mm512_min_pd(
+        f._mm512_shuffle_f64x2::<0b01_00_01_00>(v[0], v[1]),
+        f._mm512_shuffle_f64x2::<0b11_10_11_10>(v[0], v[1]),
     );
-    let cd = _mm512_min_pd(
-        _mm512_shuffle_f64x2::<0b01_00_01_00>(v[2], v[3]),
-        _mm512_shuffle_f64x2::<0b11_10_11_10>(v[2], v[3]),
+    let cd = f._mm512_min_pd(
+        f._mm512_shuffle_f64x2::<0b01_00_01_00>(v[2], v[3]),
+        f._mm512_shuffle_f64x2::<0b11_10_11_10>(v[2], v[3]),
     );
-    let q = _mm512_min_pd(
-        _mm512_shuffle_f64x2::<0b10_00_10_00>(ab, cd),
-        _mm512_shuffle_f64x2::<0b11_01_11_01>(ab, cd),
+    let q = f._mm512_min_pd(
+        f._mm512_shuffle_f64x2::<0b10_00_10_00>(ab, cd),
+        f._mm512_shuffle_f64x2::<0b11_01_11_01>(ab, cd),
     );
-    _mm512_min_pd(q, _mm512_permute_pd::<0b0101_0101>(q))
+    f._mm512_min_pd(q, f._mm512_permute_pd::<0b0101_0101>(q))
 }
 
 /// [`min4_pd`] of signed 64-bit lanes.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-#[inline]
-fn min4_epi64(v: [std::arch::x86_64::__m512i; 4]) -> std::arch::x86_64::__m512i {
-    use std::arch::x86_64::*;
-    let ab = _mm512_min_epi64(
-        _mm512_shuffle_i64x2::<0b01_00_01_00>(v[0], v[1]),
-        _mm512_shuffle_i64x2::<0b11_10_11_10>(v[0], v[1]),
+#[inline(always)]
+fn min4_epi64(simd: pulp::x86::V4, v: [__m512i; 4]) -> __m512i {
+    let f = simd.avx512f;
+    let ab = f._mm512_min_epi64(
+        f._mm512_shuffle_i64x2::<0b01_00_01_00>(v[0], v[1]),
+        f._mm512_shuffle_i64x2::<0b11_10_11_10>(v[0], v[1]),
     );
-    let cd = _mm512_min_epi64(
-        _mm512_shuffle_i64x2::<0b01_00_01_00>(v[2], v[3]),
-        _mm512_shuffle_i64x2::<0b11_10_11_10>(v[2], v[3]),
+    let cd = f._mm512_min_epi64(
+        f._mm512_shuffle_i64x2::<0b01_00_01_00>(v[2], v[3]),
+        f._mm512_shuffle_i64x2::<0b11_10_11_10>(v[2], v[3]),
     );
-    let q = _mm512_min_epi64(
-        _mm512_shuffle_i64x2::<0b10_00_10_00>(ab, cd),
-        _mm512_shuffle_i64x2::<0b11_01_11_01>(ab, cd),
+    let q = f._mm512_min_epi64(
+        f._mm512_shuffle_i64x2::<0b10_00_10_00>(ab, cd),
+        f._mm512_shuffle_i64x2::<0b11_01_11_01>(ab, cd),
     );
-    _mm512_min_epi64(q, _mm512_shuffle_epi32::<0b01_00_11_10>(q))
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-#[inline]
-fn lanes512_pd(v: std::arch::x86_64::__m512d) -> [f64; 8] {
-    use std::arch::x86_64::*;
-    std::array::from_fn(|l| _mm512_cvtsd_f64(_mm512_permutexvar_pd(_mm512_set1_epi64(l as i64), v)))
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-#[inline]
-fn lanes512_epi64(v: std::arch::x86_64::__m512i) -> [i64; 8] {
-    use std::arch::x86_64::*;
-    std::array::from_fn(|l| {
-        let at = _mm512_permutexvar_epi64(_mm512_set1_epi64(l as i64), v);
-        _mm_cvtsi128_si64(_mm512_castsi512_si128(at))
-    })
+    f._mm512_min_epi64(q, f._mm512_shuffle_epi32::<0b01_00_11_10>(q))
 }
 
 /// The first nearest point among the lanes' minima (lane `l` of block `b` is point `4b + l`):
@@ -1136,24 +1133,15 @@ mod tests {
         )];
         #[cfg(target_arch = "x86_64")]
         {
-            if std::is_x86_feature_detected!("avx2") {
-                // SAFETY: AVX2 was just detected.
-                let (both, one) = unsafe {
-                    (
-                        nearest_soa_avx2::<D, true>(a, b),
-                        nearest_soa_avx2::<D, false>(a, b),
-                    )
-                };
+            use crate::simd::{on_avx2, on_avx512};
+            if let Some(simd) = pulp::x86::V3::try_new() {
+                let both = on_avx2(simd, NearestSoa::<D, true> { from: a, to: b });
+                let one = on_avx2(simd, NearestSoa::<D, false> { from: a, to: b });
                 out.push(("avx2", both, one));
             }
-            if D == 2 && std::is_x86_feature_detected!("avx512f") {
-                // SAFETY: AVX-512F was just detected.
-                let (both, one) = unsafe {
-                    (
-                        nearest_planar_avx512::<true>(a, b),
-                        nearest_planar_avx512::<false>(a, b),
-                    )
-                };
+            if let Some(simd) = pulp::x86::V4::try_new() {
+                let both = on_avx512(simd, NearestSoa::<D, true> { from: a, to: b });
+                let one = on_avx512(simd, NearestSoa::<D, false> { from: a, to: b });
                 out.push(("avx512", both, one));
             }
         }
