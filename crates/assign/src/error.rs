@@ -6,9 +6,13 @@ pub enum AssignError {
     /// The cost slice does not hold `rows * cols` entries.
     #[error("cost slice has {len} entries but the shape {rows}x{cols} needs {expected}")]
     ShapeMismatch {
+        /// Rows of the shape given.
         rows: usize,
+        /// Columns of the shape given.
         cols: usize,
+        /// Entries in the cost slice.
         len: usize,
+        /// Entries the shape needs (`rows * cols`).
         expected: usize,
     },
     /// NaN, or an infinity that would make the objective unbounded (`-inf` when minimising,
@@ -16,11 +20,19 @@ pub enum AssignError {
     #[error(
         "matrix contains invalid numeric entries (NaN, or an infinity favouring the objective) at ({row}, {col})"
     )]
-    InvalidEntry { row: usize, col: usize },
+    InvalidEntry {
+        /// Row of the first invalid entry.
+        row: usize,
+        /// Its column.
+        col: usize,
+    },
     /// The forbidden pairs leave no assignment of `min(rows, cols)` pairs.
     #[error("cost matrix is infeasible")]
     Infeasible,
     /// The threshold of [`crate::solve_with_threshold`] is NaN or infinite.
     #[error("threshold must be finite, got {tau}")]
-    InvalidThreshold { tau: f64 },
+    InvalidThreshold {
+        /// The threshold given.
+        tau: f64,
+    },
 }

@@ -19,6 +19,8 @@
 //! [`solve_with_threshold`] lets rows and columns stay unassigned instead, which is what a matching
 //! with a rejection threshold needs.
 
+#![warn(missing_docs)]
+
 use std::borrow::Cow;
 
 mod error;
@@ -88,6 +90,7 @@ impl std::str::FromStr for Method {
 /// Options of [`solve`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Options {
+    /// The solver (all three give the same optimal cost).
     pub method: Method,
     /// Maximise the total instead of minimising it.
     pub maximize: bool,

@@ -25,23 +25,44 @@ pub enum ModalError {
     // ---- shape problems ------------------------------------------------------------------
     /// The points are neither 2-D nor 3-D.
     #[error("dimension must be 2 or 3, got {dim}")]
-    UnsupportedDimension { dim: usize },
+    UnsupportedDimension {
+        /// The dimension given.
+        dim: usize,
+    },
     /// The flat coordinate array does not hold whole points.
     #[error("{len} coordinates is not a multiple of the dimension {dim}")]
-    CoordinateCount { len: usize, dim: usize },
+    CoordinateCount {
+        /// Length of the coordinate array.
+        len: usize,
+        /// The dimension of a point.
+        dim: usize,
+    },
     /// A coordinate is NaN or infinite.
     #[error("coordinate {axis} of node {node} is not finite ({value})")]
     NonFiniteCoordinate {
+        /// The node (0-based).
         node: usize,
+        /// The coordinate: 0 for x, 1 for y, 2 for z.
         axis: usize,
+        /// The value found.
         value: f64,
     },
     /// The object has fewer nodes than the model or the matching needs.
     #[error("{nodes} nodes; at least {min} are needed")]
-    TooFewNodes { nodes: usize, min: usize },
+    TooFewNodes {
+        /// Nodes of the object.
+        nodes: usize,
+        /// Nodes needed.
+        min: usize,
+    },
     /// Two nodes are at the same place (an outline that touches itself, duplicated points).
     #[error("nodes {first} and {second} coincide; remove duplicate points")]
-    CoincidentNodes { first: usize, second: usize },
+    CoincidentNodes {
+        /// One of the two nodes.
+        first: usize,
+        /// The other, at the same place.
+        second: usize,
+    },
     /// All nodes lie on one line: the object has no extent across it.
     #[error("all nodes are collinear")]
     Collinear,
@@ -50,38 +71,73 @@ pub enum ModalError {
     ZeroExtent,
     /// A rigid motion of the nodes is a combination of the others (collinear nodes).
     #[error("rigid motion {motion} is not independent of the others (collinear nodes?)")]
-    DependentRigidMotion { motion: usize },
+    DependentRigidMotion {
+        /// Index of the dependent rigid motion.
+        motion: usize,
+    },
     /// A bar (axial) model that can move without deforming beyond the rigid motions.
     #[error(
         "the bar model has {zero_modes} zero-energy modes, a {dim}-D body has {expected}: the \
          structure is a mechanism (collinear/coplanar nodes, unconnected nodes or missing bracing)"
     )]
     Mechanism {
+        /// Dimension of the body.
         dim: usize,
+        /// Zero-energy modes found.
         zero_modes: usize,
+        /// Rigid motions of a body of that dimension.
         expected: usize,
     },
     /// An edge joins a node to itself or names a node that does not exist.
     #[error("invalid edge ({}, {}) for {nodes} nodes", .edge[0], .edge[1])]
-    InvalidEdge { edge: [usize; 2], nodes: usize },
+    InvalidEdge {
+        /// The edge's two nodes.
+        edge: [usize; 2],
+        /// Nodes of the object.
+        nodes: usize,
+    },
     /// An edge whose two nodes are at the same place.
     #[error("edge ({}, {}) has zero length", .edge[0], .edge[1])]
-    ZeroLengthEdge { edge: [usize; 2] },
+    ZeroLengthEdge {
+        /// The edge's two nodes.
+        edge: [usize; 2],
+    },
     /// A triangle repeats a vertex or names a node that does not exist.
     #[error("triangle {triangle:?} {}", triangle_problem(.triangle, .nodes))]
-    InvalidTriangle { triangle: [usize; 3], nodes: usize },
+    InvalidTriangle {
+        /// The triangle's three nodes.
+        triangle: [usize; 3],
+        /// Nodes of the object.
+        nodes: usize,
+    },
     /// A triangle of zero area next to a bending hinge.
     #[error("degenerate triangle at edge ({}, {})", .edge[0], .edge[1])]
-    DegenerateTriangle { edge: [usize; 2] },
+    DegenerateTriangle {
+        /// The hinge edge next to the triangle.
+        edge: [usize; 2],
+    },
     /// A node that no element holds (a mechanism of its own).
     #[error("node {node} belongs to no element; an unconnected node is a mechanism")]
-    UnconnectedNode { node: usize },
+    UnconnectedNode {
+        /// The node (0-based).
+        node: usize,
+    },
     /// The two objects of a pair have different dimensions.
     #[error("the objects have different dimensions ({a} and {b})")]
-    DimensionMismatch { a: usize, b: usize },
+    DimensionMismatch {
+        /// Dimension of the first object.
+        a: usize,
+        /// Dimension of the second object.
+        b: usize,
+    },
     /// An error about one object of a pair.
     #[error("{side}: {error}")]
-    Object { side: Side, error: Box<ModalError> },
+    Object {
+        /// Which object of the pair.
+        side: Side,
+        /// What is wrong with it.
+        error: Box<ModalError>,
+    },
 
     // ---- options -------------------------------------------------------------------------
     /// A user-facing option has a value it does not accept.
@@ -95,21 +151,37 @@ pub enum ModalError {
     /// A size that does not fit the others (`what` names the quantity).
     #[error("{what}: expected {expected}, found {found}")]
     SizeMismatch {
+        /// The quantity.
         what: &'static str,
+        /// The size it must have.
         expected: usize,
+        /// The size it has.
         found: usize,
     },
     /// More modes were asked for than the model has.
     #[error("{requested} modes requested but only {available} are available")]
-    TooFewModes { requested: usize, available: usize },
+    TooFewModes {
+        /// Modes asked for.
+        requested: usize,
+        /// Modes the model has.
+        available: usize,
+    },
     /// Skipping the rigid modes (or asking for none) leaves no mode to match with.
     #[error("no mode is kept: {skipped} skipped of the {available} available")]
-    NoModeKept { skipped: usize, available: usize },
+    NoModeKept {
+        /// Modes skipped (the rigid ones).
+        skipped: usize,
+        /// Modes available.
+        available: usize,
+    },
     /// An entry that must be finite and ≥ 0 is not.
     #[error("{what}: entry {index} is {value}; entries must be finite and >= 0")]
     InvalidEntry {
+        /// The array.
         what: &'static str,
+        /// The entry's index in it.
         index: usize,
+        /// The value found.
         value: f64,
     },
 
@@ -121,21 +193,35 @@ pub enum ModalError {
         .pivot.map(|p| format!(" (pivot {p})")).unwrap_or_default()
     )]
     NotPositiveDefinite {
+        /// The matrix.
         matrix: &'static str,
+        /// Where Cholesky stopped, when known.
         pivot: Option<usize>,
     },
     /// An iterative method did not converge.
     #[error("the {method} did not converge")]
-    NotConverged { method: &'static str },
+    NotConverged {
+        /// The method.
+        method: &'static str,
+    },
     /// A computation gave zero, infinite or NaN values where it must not.
     #[error("numerical failure in {stage}: zero or non-finite values")]
-    NonFiniteResult { stage: &'static str },
+    NonFiniteResult {
+        /// The stage of the computation.
+        stage: &'static str,
+    },
     /// The Gaussian element's interpolation matrix Γ stays ill-conditioned however small σ.
     #[error("Γ stays ill-conditioned after shrinking σ to {sigma:e}")]
-    IllConditioned { sigma: f64 },
+    IllConditioned {
+        /// The smallest σ tried.
+        sigma: f64,
+    },
     /// An internal invariant does not hold: a bug of this crate, not of the input.
     #[error("internal error: {invariant}")]
-    Internal { invariant: &'static str },
+    Internal {
+        /// The invariant that failed.
+        invariant: &'static str,
+    },
 
     /// The assignment of nodes or modes failed.
     #[error(transparent)]

@@ -11,6 +11,8 @@
 //! `matching`, and `options` (the user-facing names) on top; this file only declares them and
 //! re-exports the types a caller needs.
 
+#![warn(missing_docs)]
+
 mod eigen;
 mod error;
 mod geometry;

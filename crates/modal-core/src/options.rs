@@ -387,28 +387,51 @@ impl MatchParams {
 /// ```
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct MatchOverrides {
+    /// The finite element (`gaussian` or `bar`). `None` keeps the default.
     pub element: Option<ElementKind>,
+    /// Fraction of the modes kept. `None` keeps the default.
     pub modes: Option<f64>,
+    /// Local, global or best search. `None` keeps the default.
     pub search: Option<Search>,
+    /// Assignment solver. `None` keeps the default.
     pub solver: Option<assign::Method>,
+    /// Rejection threshold on the normalised cost. `None` keeps the default.
     pub threshold: Option<f64>,
+    /// How the threshold applies. `None` keeps the default.
     pub threshold_mode: Option<ThresholdMode>,
+    /// Match the nodes the one-to-one search leaves over. `None` keeps the default.
     pub excess: Option<bool>,
+    /// The paper's literal setting as the base. `None` keeps the default.
     pub paper: Option<bool>,
+    /// Pre-alignment. `None` keeps the default.
     pub prealign: Option<Prealign>,
+    /// Bound on the pre-alignment's rotation, in degrees. `None` keeps the default.
     pub max_rotation: Option<f64>,
+    /// Number of affine re-fits. `None` keeps the default.
     pub refits: Option<usize>,
+    /// When the re-fits stop, in node spacings. `None` keeps the default.
     pub refit_tolerance: Option<f64>,
+    /// Refinement after the re-fits (none or the modal warp). `None` keeps the default.
     pub refine: Option<Refine>,
+    /// Modes of the modal warp. `None` keeps the default.
     pub deform_modes: Option<usize>,
+    /// Stiffness of the modal warp. `None` keeps the default.
     pub deform_stiffness: Option<f64>,
+    /// Gaussian width as a multiple of the node spacing. `None` keeps the default.
     pub kappa: Option<f64>,
+    /// A Gaussian on every `center_stride`-th node. `None` keeps the default.
     pub center_stride: Option<usize>,
+    /// Weight of positions mixed into the cost. `None` keeps the default.
     pub position_weight: Option<f64>,
+    /// Power the cost is raised to. `None` keeps the default.
     pub cost_power: Option<f64>,
+    /// One Gaussian width for both objects. `None` keeps the default.
     pub common_sigma: Option<bool>,
+    /// Skip the rigid-body modes. `None` keeps the default.
     pub skip_rigid: Option<bool>,
+    /// Band of the mode reordering. `None` keeps the default.
     pub band: Option<usize>,
+    /// Elastic constants. `None` keeps the default.
     pub material: Option<Material>,
 }
 
@@ -464,8 +487,11 @@ pub const RUN_PREALIGN: Prealign = Prealign::Sensor;
 pub enum OptionValue {
     /// Not set (e.g. no threshold).
     Absent,
+    /// A switch.
     Bool(bool),
+    /// A count.
     Int(usize),
+    /// A number.
     Float(f64),
     /// An enumerated value or other text.
     Word(String),
@@ -492,10 +518,13 @@ pub enum OptionKind {
 /// default and its meaning.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OptionSpec {
+    /// The name, Python style (`x_y`).
     pub name: &'static str,
+    /// How it is given.
     pub kind: OptionKind,
     /// The documented default, as text.
     pub default: String,
+    /// Its meaning, one sentence for `--help` and docstrings.
     pub help: &'static str,
 }
 

@@ -11,7 +11,10 @@ pub enum Topology {
     /// The nodes, in order, form one closed contour (node `n-1` joins node `0`).
     ClosedContour,
     /// A triangle mesh over the nodes (indices into the point list).
-    Mesh { triangles: Vec<[usize; 3]> },
+    Mesh {
+        /// The triangles, three node indices each.
+        triangles: Vec<[usize; 3]>,
+    },
 }
 
 /// A 2-D or 3-D object: `n` nodes of dimension `dim`, stored row-major (`coords[i*dim + a]`).
@@ -68,14 +71,17 @@ impl Shape {
         Self::new(3, points.iter().flatten().copied().collect(), topology)
     }
 
+    /// Dimension of the points (2 or 3).
     pub fn dim(&self) -> usize {
         self.dim
     }
 
+    /// Number of nodes.
     pub fn len(&self) -> usize {
         self.coords.len() / self.dim
     }
 
+    /// Whether the shape has no node.
     pub fn is_empty(&self) -> bool {
         self.coords.is_empty()
     }
@@ -90,6 +96,7 @@ impl Shape {
         &self.coords[i * self.dim..(i + 1) * self.dim]
     }
 
+    /// How the nodes are connected.
     pub fn topology(&self) -> &Topology {
         &self.topology
     }

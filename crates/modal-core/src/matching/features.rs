@@ -18,8 +18,11 @@ use crate::simd::dot;
 /// in mode `p`), matching the component-major row layout of [`crate::model::ModalBasis::mode`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModalFeatures {
+    /// Dimension of the nodes (2 or 3).
     pub dim: usize,
+    /// Nodes of the object.
     pub n_nodes: usize,
+    /// Modes kept.
     pub n_modes: usize,
     data: Vec<f64>,
 }
@@ -294,14 +297,17 @@ impl AffinityMatrix {
         Self::new(n, m, data)
     }
 
+    /// Rows: nodes of the first object.
     pub fn rows(&self) -> usize {
         self.rows
     }
 
+    /// Columns: nodes of the second object.
     pub fn cols(&self) -> usize {
         self.cols
     }
 
+    /// The entry `Z[i, j]`.
     pub fn get(&self, i: usize, j: usize) -> f64 {
         self.data[i * self.cols + j]
     }
@@ -311,6 +317,7 @@ impl AffinityMatrix {
         &self.data
     }
 
+    /// The largest entry (0 for an empty matrix).
     pub fn max(&self) -> f64 {
         self.data.iter().copied().fold(0.0, f64::max)
     }

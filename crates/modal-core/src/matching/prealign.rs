@@ -36,12 +36,16 @@ impl Prealign {
 /// A `dim`-dimensional affine map `x ↦ M x + t` (only the leading `dim × dim` block is used).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Affine {
+    /// Dimension of the points (2 or 3).
     pub dim: usize,
+    /// The linear part `M`, row-major.
     pub m: [[f64; 3]; 3],
+    /// The translation `t`.
     pub t: [f64; 3],
 }
 
 impl Affine {
+    /// The identity map in `dim` dimensions.
     pub fn identity(dim: usize) -> Self {
         let mut m = [[0.0; 3]; 3];
         for (a, row) in m.iter_mut().enumerate() {
@@ -54,6 +58,7 @@ impl Affine {
         }
     }
 
+    /// The linear map `x ↦ M x` (no translation).
     pub fn linear(dim: usize, m: [[f64; 3]; 3]) -> Self {
         Self {
             dim,
@@ -87,6 +92,7 @@ impl Affine {
         r
     }
 
+    /// Determinant of the linear part's leading `dim × dim` block.
     pub fn det(&self) -> f64 {
         let m = &self.m;
         if self.dim == 2 {

@@ -17,16 +17,19 @@ pub struct MatchOptions {
     pub skip_rigid: bool,
     /// Band of the cross-object mode reordering (docs/method.md §5.4); 0 fixes signs only.
     pub band: usize,
+    /// How nodes are paired: local (mutual best), global (optimal assignment) or best.
     pub search: Search,
     /// Assignment algorithm of the global search and of the mode alignment.
     pub method: assign::Method,
     /// Reject pairs with normalised `Z` above this (in [0, 1]); `None` keeps everything.
     pub threshold: Option<f64>,
+    /// Whether the threshold applies to the pairs as found or keeps the best share of them.
     pub threshold_mode: ThresholdMode,
     /// Match the nodes the one-to-one search leaves over (global search only).
     pub excess: bool,
     /// Treat both objects as ordered closed contours; `None`: when both shapes say so.
     pub ordered: Option<bool>,
+    /// How the first object is brought into the second's frame before the modes are compared.
     pub prealign: Prealign,
     /// How the robust pre-alignment searches the rotation (starts, ICP iterations).
     pub rotation_search: RotationSearch,

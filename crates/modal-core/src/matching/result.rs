@@ -6,7 +6,9 @@ use super::prealign::Affine;
 /// One correspondence: node `a` of the first object, node `b` of the second.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MatchPair {
+    /// Node of the first object.
     pub a: usize,
+    /// Node of the second object.
     pub b: usize,
     /// The search's cost `Z[a, b]`: the max-normalised modal distance, with positions mixed in
     /// and raised to the power as [`MatchOptions::position_weight`](super::MatchOptions::position_weight) and
@@ -27,8 +29,9 @@ pub struct MatchResult {
     pub affinity: AffinityMatrix,
     /// Mutual-best (local) matches on the final affinity, under the threshold, whatever `search`.
     pub local_pairs: Vec<(usize, usize)>,
-    /// Nodes of the first / second object in no pair.
+    /// Nodes of the first object in no pair.
     pub unmatched_a: Vec<usize>,
+    /// Nodes of the second object in no pair.
     pub unmatched_b: Vec<usize>,
     /// Modes per object used in the features.
     pub n_modes: usize,

@@ -29,8 +29,11 @@ pub enum ElementKind {
 /// Parameters of [`modal_basis`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModelOptions {
+    /// The finite element: Gaussian (the method's) or bars along the object's edges.
     pub element: ElementKind,
+    /// Elastic constants.
     pub material: Material,
+    /// Plane stress or plane strain (2-D).
     pub plane: PlaneModel,
     /// Absolute Gaussian width; `None` uses `kappa × mean nearest-neighbour distance`.
     pub sigma: Option<f64>,
@@ -88,7 +91,9 @@ impl Default for ModelOptions {
 /// ```
 #[derive(Debug, Clone)]
 pub struct ModalBasis {
+    /// Dimension of the nodes (2 or 3).
     pub dim: usize,
+    /// Nodes of the object.
     pub n_nodes: usize,
     /// ω², ascending, one per retained mode.
     pub eigenvalues: Vec<f64>,
