@@ -234,19 +234,13 @@ pub fn pairs_header(recording: &Recording) -> Table {
 
 /// The row of [`pairs_table`] of a matched pair.
 pub fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
-    let mut cells = vec![
-        Cell::int(row.id_a),
-        Cell::int(row.id_b),
-        Cell::int(row.frame_a),
-        Cell::int(row.frame_b),
-    ];
-    if recording.dt_s.is_some() {
-        cells.push(Cell::opt(recording.time_s(row.frame_a), 6));
-        cells.push(Cell::opt(recording.time_s(row.frame_b), 6));
-    }
+    let mut cells = pair_identity_cells(
+        recording,
+        [row.id_a, row.id_b],
+        [row.frame_a, row.frame_b],
+        [row.nodes_a, row.nodes_b],
+    );
     cells.extend([
-        Cell::int(row.nodes_a),
-        Cell::int(row.nodes_b),
         Cell::int(row.local_matches),
         Cell::Float(row.local_percent, 1),
         Cell::int(row.optimisation_matches),
@@ -261,19 +255,30 @@ pub fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
 
 /// The row of [`pairs_table`] of a pair that could not be matched.
 pub fn skipped_pair_cells(recording: &Recording, s: &SkippedPairRow) -> Vec<Cell> {
-    let mut cells = vec![
-        Cell::int(s.id_a),
-        Cell::int(s.id_b),
-        Cell::int(s.frame_a),
-        Cell::int(s.frame_b),
-    ];
-    if recording.dt_s.is_some() {
-        cells.push(Cell::opt(recording.time_s(s.frame_a), 6));
-        cells.push(Cell::opt(recording.time_s(s.frame_b), 6));
-    }
-    cells.extend([Cell::int(s.nodes_a), Cell::int(s.nodes_b)]);
+    let mut cells = pair_identity_cells(
+        recording,
+        [s.id_a, s.id_b],
+        [s.frame_a, s.frame_b],
+        [s.nodes_a, s.nodes_b],
+    );
     cells.extend(std::iter::repeat_n(Cell::Empty, 6));
     cells.extend([Cell::Text("skipped".into()), Cell::Text(s.reason.clone())]);
+    cells
+}
+
+/// The leading cells of a [`pairs_table`] row, matched or skipped: `id_a, id_b, frame_a,
+/// frame_b`, `time_a_s, time_b_s` when the frame rate is known, `nodes_a, nodes_b`.
+fn pair_identity_cells(
+    recording: &Recording,
+    ids: [usize; 2],
+    frames: [usize; 2],
+    nodes: [usize; 2],
+) -> Vec<Cell> {
+    let mut cells: Vec<Cell> = ids.into_iter().chain(frames).map(Cell::int).collect();
+    if recording.dt_s.is_some() {
+        cells.extend(frames.map(|f| Cell::opt(recording.time_s(f), 6)));
+    }
+    cells.extend(nodes.map(Cell::int));
     cells
 }
 
