@@ -170,8 +170,9 @@ pub struct MatchParams {
     pub deform_stiffness: f64,
     /// Gaussian width factor σ = kappa × mean nearest-neighbour distance (`None`: the recipe's).
     pub kappa: Option<f64>,
-    /// Gaussian element: a Gaussian on every `center_stride`-th node only (1: every node).
-    pub center_stride: usize,
+    /// Gaussian element: a Gaussian on every `center_stride`-th node only (1: every node;
+    /// `None`: the recipe's).
+    pub center_stride: Option<usize>,
     /// Weight of aligned positions in the cost, in [0, 1] (`None`: the recipe's).
     pub position_weight: Option<f64>,
     /// Exponent of the costs the search adds up, > 0 (`None`: the recipe's).
@@ -207,7 +208,7 @@ impl Default for MatchParams {
             deform_modes: d.deform_modes,
             deform_stiffness: d.deform_stiffness,
             kappa: None,
-            center_stride: d.model.center_stride,
+            center_stride: None,
             position_weight: None,
             cost_power: None,
             common_sigma: None,
@@ -264,7 +265,7 @@ impl MatchParams {
         if let Some(k) = self.kappa {
             check(k.is_finite() && k > 0.0, "kappa", k, "a finite number > 0")?;
         }
-        if self.center_stride == 0 {
+        if self.center_stride == Some(0) {
             return Err(OptionError::new("center_stride", 0, "an integer >= 1"));
         }
         if let Some(w) = self.position_weight {
@@ -303,7 +304,9 @@ impl MatchParams {
             MatchOptions::for_input(dim, ordered)
         };
         o.model.element = self.element;
-        o.model.center_stride = self.center_stride;
+        if let Some(s) = self.center_stride {
+            o.model.center_stride = s;
+        }
         if let Some(k) = self.kappa {
             o.model.kappa = k;
         }
@@ -455,7 +458,7 @@ impl MatchOverrides {
             deform_modes: self.deform_modes.unwrap_or(base.deform_modes),
             deform_stiffness: self.deform_stiffness.unwrap_or(base.deform_stiffness),
             kappa: self.kappa.or(base.kappa),
-            center_stride: self.center_stride.unwrap_or(base.center_stride),
+            center_stride: self.center_stride.or(base.center_stride),
             position_weight: self.position_weight.or(base.position_weight),
             cost_power: self.cost_power.or(base.cost_power),
             common_sigma: self.common_sigma.or(base.common_sigma),
@@ -679,7 +682,7 @@ pub fn match_option_specs() -> Vec<OptionSpec> {
         OptionSpec::new(
             "center_stride",
             Value,
-            d.center_stride,
+            by_input(|o| o.model.center_stride),
             "Gaussian element: a Gaussian on every N-th node only (faster, less accurate under severe warps).",
         ),
         OptionSpec::new(
@@ -822,7 +825,7 @@ mod tests {
             ),
             (
                 MatchParams {
-                    center_stride: 0,
+                    center_stride: Some(0),
                     ..d()
                 },
                 "center_stride",

@@ -367,7 +367,7 @@ fn triangles(
 ///     against the fit (default 100).
 /// kappa : float > 0 — σ = kappa × mean nearest-neighbour distance (default 0.8, or 3 for
 ///     unordered 3-D points).
-/// center_stride : int ≥ 1 — Gaussians on every ``center_stride``-th node only (default 1).
+/// center_stride : int ≥ 1 — Gaussians on every ``center_stride``-th node only (default 1 for contours and 2-D points, 2 for unordered 3-D points).
 /// position_weight : float in [0, 1] — mix of aligned-position distance into the cost (default
 ///     0, or 0.7 for unordered 3-D points).
 /// cost_power : float > 0 — the assignment minimises the sum of costs to this power (default 1,

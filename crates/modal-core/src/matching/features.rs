@@ -337,8 +337,18 @@ impl AffinityMatrix {
     /// mean the same; only an optimal assignment, which adds costs up, changes. `p < 1` makes
     /// that sum favour many near-exact pairs over evenly spread errors.
     pub(crate) fn powered(mut self, p: f64) -> Self {
-        if p != 1.0 {
-            self.data.iter_mut().for_each(|v| *v = v.powf(p));
+        // Powers 1/2, 1/4 and 1/8 (the surfaces' default) as repeated square roots: monotone like
+        // `powf`, within an ulp or two of it, and several times cheaper (`powf` was 4 % of a
+        // surface pair).
+        let roots = [0.5, 0.25, 0.125].iter().position(|&r| r == p);
+        match roots {
+            Some(k) => self.data.iter_mut().for_each(|v| {
+                for _ in 0..=k {
+                    *v = v.sqrt();
+                }
+            }),
+            None if p != 1.0 => self.data.iter_mut().for_each(|v| *v = v.powf(p)),
+            None => {}
         }
         self
     }
@@ -427,6 +437,26 @@ mod tests {
     fn powered_keeps_the_order_and_the_ends() {
         let z = super::AffinityMatrix::new(1, 3, vec![0.0, 0.25, 1.0]).unwrap();
         assert_eq!(z.powered(0.5).as_slice(), &[0.0, 0.5, 1.0]);
+    }
+
+    #[test]
+    fn root_powers_agree_with_powf_and_keep_the_order() {
+        let xs: Vec<f64> = (0..=2000).map(|i| (i as f64 / 2000.0).powi(3)).collect();
+        for p in [0.5, 0.25, 0.125] {
+            let z = super::AffinityMatrix::new(1, xs.len(), xs.clone()).unwrap();
+            let got = z.powered(p);
+            for (x, y) in xs.iter().zip(got.as_slice()) {
+                let want = x.powf(p);
+                assert!(
+                    (y - want).abs() <= 4.0 * f64::EPSILON * want,
+                    "{x}^{p}: {y} vs {want}"
+                );
+            }
+            assert!(
+                got.as_slice().windows(2).all(|w| w[0] <= w[1]),
+                "order at p = {p}"
+            );
+        }
     }
 
     use super::*;

@@ -130,7 +130,10 @@ impl MatchOptions {
     /// scores 0.393 / 0.394 / 0.391 (mild / moderate / severe) — the same as aligned positions
     /// alone and above coherent point drift (0.368 / 0.369 / 0.366); modal distance alone reaches
     /// 0.29: after the affine pre-alignment these warps leave little that positions miss. See the
-    /// README, "Surfaces".
+    /// README, "Surfaces". A Gaussian on every second node only (`center_stride = 2`): with σ
+    /// three spacings wide the reduced basis spans the same smooth modes, and on those 90 cases
+    /// per severity it scores 0.393 / 0.393 / 0.391 with the solves' order halved (a surface pair
+    /// about 1.6× faster).
     pub fn for_surfaces() -> Self {
         let mut o = Self {
             refits: 0,
@@ -140,6 +143,7 @@ impl MatchOptions {
             ..Self::default()
         };
         o.model.kappa = 3.0;
+        o.model.center_stride = 2;
         o
     }
 
