@@ -67,10 +67,10 @@ fn bench_surfaces(c: &mut Criterion) {
     g.bench_function("surface_setting_search_best", |x| {
         x.iter(|| match_shapes(black_box(&a), black_box(&b), &best).unwrap())
     });
-    let mut reduced = surf.clone();
-    reduced.model.center_stride = 2;
-    g.bench_function("surface_setting_center_stride_2", |x| {
-        x.iter(|| match_shapes(black_box(&a), black_box(&b), &reduced).unwrap())
+    let mut full = surf.clone();
+    full.model.center_stride = 1;
+    g.bench_function("surface_setting_center_stride_1", |x| {
+        x.iter(|| match_shapes(black_box(&a), black_box(&b), &full).unwrap())
     });
     let positions = MatchOptions {
         position_weight: 1.0,

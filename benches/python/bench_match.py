@@ -311,7 +311,8 @@ def main():
     if not args.skip_surfaces:
         g = np.loadtxt(DATA / "mun104l.txt")
         methods = {
-            "pymodal.match 3-D (defaults: kappa=3, common sigma, positions 0.7, cost power 1/8)": modal(),
+            "pymodal.match 3-D (defaults: kappa=3, common sigma, positions 0.7, cost power 1/8, center_stride 2)": modal(),
+            "  same, center_stride=1 (a Gaussian on every node)": modal(center_stride=1),
             "  same + excess=False": modal(excess=False),
             "  same, search='best' (many-to-one, like pycpd's read-out)": modal(search="best"),
             "  same, search='best', modal distance only": modal(search="best", position_weight=0.0),

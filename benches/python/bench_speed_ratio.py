@@ -12,7 +12,14 @@ use) and prints each method's one-to-one accuracy beside its time.
 Run:  python benches/python/bench_speed_ratio.py [--cases 30] [--pause-ms 15] [--surface-cases 10]
 """
 import argparse
+import os
 import time
+
+# OpenBLAS's worker threads spin for a while after each call of pycpd's; on two cores they then
+# take half of the core pymodal runs on (a surface pair took 23 ms instead of 12). One BLAS
+# thread keeps the peers' own times within 10 % and stops them slowing the next method down.
+for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(var, "1")
 
 import numpy as np
 
