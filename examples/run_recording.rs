@@ -35,10 +35,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let r = &p.row;
         println!(
             "{:7} {:7} {:7} {:7} {:6.1} {:13.1} {:11} {:9.4}",
-            r.frame_a,
-            r.frame_b,
-            r.nodes_a,
-            r.nodes_b,
+            r.objects.frame_a,
+            r.objects.frame_b,
+            r.objects.nodes_a,
+            r.objects.nodes_b,
             r.local_percent,
             r.optimisation_percent,
             r.excess_matches,

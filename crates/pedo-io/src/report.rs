@@ -10,8 +10,8 @@
 use crate::error::{IoError, Result};
 use crate::recording::{kpa_per_unit, Recording};
 use crate::sequence::{
-    PairMatch, PairRow, RunCounts, RunParams, SequenceObject, SequenceOptions, SequenceResult,
-    SkippedPairRow,
+    PairMatch, PairObjects, PairRow, RunCounts, RunParams, SequenceObject, SequenceOptions,
+    SequenceResult, SkippedPairRow,
 };
 use modal_core::OptionValue;
 use serde_json::{json, Map, Value};
@@ -234,12 +234,7 @@ pub fn pairs_header(recording: &Recording) -> Table {
 
 /// The row of [`pairs_table`] of a matched pair.
 pub fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
-    let mut cells = pair_identity_cells(
-        recording,
-        [row.id_a, row.id_b],
-        [row.frame_a, row.frame_b],
-        [row.nodes_a, row.nodes_b],
-    );
+    let mut cells = pair_objects_cells(recording, &row.objects);
     cells.extend([
         Cell::int(row.local_matches),
         Cell::Float(row.local_percent, 1),
@@ -255,12 +250,7 @@ pub fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
 
 /// The row of [`pairs_table`] of a pair that could not be matched.
 pub fn skipped_pair_cells(recording: &Recording, s: &SkippedPairRow) -> Vec<Cell> {
-    let mut cells = pair_identity_cells(
-        recording,
-        [s.id_a, s.id_b],
-        [s.frame_a, s.frame_b],
-        [s.nodes_a, s.nodes_b],
-    );
+    let mut cells = pair_objects_cells(recording, &s.objects);
     cells.extend(std::iter::repeat_n(Cell::Empty, 6));
     cells.extend([Cell::Text("skipped".into()), Cell::Text(s.reason.clone())]);
     cells
@@ -268,17 +258,13 @@ pub fn skipped_pair_cells(recording: &Recording, s: &SkippedPairRow) -> Vec<Cell
 
 /// The leading cells of a [`pairs_table`] row, matched or skipped: `id_a, id_b, frame_a,
 /// frame_b`, `time_a_s, time_b_s` when the frame rate is known, `nodes_a, nodes_b`.
-fn pair_identity_cells(
-    recording: &Recording,
-    ids: [usize; 2],
-    frames: [usize; 2],
-    nodes: [usize; 2],
-) -> Vec<Cell> {
-    let mut cells: Vec<Cell> = ids.into_iter().chain(frames).map(Cell::int).collect();
+fn pair_objects_cells(recording: &Recording, p: &PairObjects) -> Vec<Cell> {
+    let frames = [p.frame_a, p.frame_b];
+    let mut cells: Vec<Cell> = [p.id_a, p.id_b, p.frame_a, p.frame_b].map(Cell::int).into();
     if recording.dt_s.is_some() {
         cells.extend(frames.map(|f| Cell::opt(recording.time_s(f), 6)));
     }
-    cells.extend(nodes.map(Cell::int));
+    cells.extend([p.nodes_a, p.nodes_b].map(Cell::int));
     cells
 }
 
@@ -809,8 +795,8 @@ pub fn run_summary_of(
                 "frame": s.frame, "reason": s.reason,
             })).collect::<Vec<_>>(),
             "pairs": c.skipped_pairs.iter().map(|s| json!({
-                "id_a": s.id_a, "id_b": s.id_b,
-                "frame_a": s.frame_a, "frame_b": s.frame_b,
+                "id_a": s.objects.id_a, "id_b": s.objects.id_b,
+                "frame_a": s.objects.frame_a, "frame_b": s.objects.frame_b,
                 "reason": s.reason,
             })).collect::<Vec<_>>(),
         },

@@ -450,15 +450,37 @@ pub struct SequenceObject {
     pub shape: Shape,
 }
 
-/// One row of the per-pair table: the paper's columns.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PairRow {
+/// The two objects of a pair as the pairs table and `summary.json` name them: ids, frames and
+/// node counts (the leading columns of a row, matched or skipped).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PairObjects {
     pub id_a: usize,
     pub id_b: usize,
     pub frame_a: usize,
     pub frame_b: usize,
     pub nodes_a: usize,
     pub nodes_b: usize,
+}
+
+impl PairObjects {
+    /// The pair of `oa` and `ob`.
+    pub fn of(oa: &SequenceObject, ob: &SequenceObject) -> Self {
+        Self {
+            id_a: oa.id,
+            id_b: ob.id,
+            frame_a: oa.frame,
+            frame_b: ob.frame,
+            nodes_a: oa.shape.len(),
+            nodes_b: ob.shape.len(),
+        }
+    }
+}
+
+/// One row of the per-pair table: the paper's columns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PairRow {
+    /// Which objects were matched.
+    pub objects: PairObjects,
     /// Local (mutual-best) matches and their share of `min(n, m)`.
     pub local_matches: usize,
     pub local_percent: f64,
@@ -653,12 +675,8 @@ impl SequenceResult {
 /// A pair that could not be matched, as the pairs table and `summary.json` report it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkippedPairRow {
-    pub id_a: usize,
-    pub id_b: usize,
-    pub frame_a: usize,
-    pub frame_b: usize,
-    pub nodes_a: usize,
-    pub nodes_b: usize,
+    /// Which objects could not be matched.
+    pub objects: PairObjects,
     pub reason: String,
 }
 
@@ -670,12 +688,7 @@ impl SkippedPairRow {
 
     fn of_objects(oa: &SequenceObject, ob: &SequenceObject, reason: &str) -> Self {
         Self {
-            id_a: oa.id,
-            id_b: ob.id,
-            frame_a: oa.frame,
-            frame_b: ob.frame,
-            nodes_a: oa.shape.len(),
-            nodes_b: ob.shape.len(),
+            objects: PairObjects::of(oa, ob),
             reason: reason.to_string(),
         }
     }
@@ -1412,12 +1425,7 @@ fn match_pair(
         one_to_one.iter().map(|p| p.cost).sum::<f64>() / one_to_one.len() as f64
     };
     let row = PairRow {
-        id_a: oa.id,
-        id_b: ob.id,
-        frame_a: oa.frame,
-        frame_b: ob.frame,
-        nodes_a: n,
-        nodes_b: m,
+        objects: PairObjects::of(oa, ob),
         local_matches: local,
         local_percent: 100.0 * local as f64 / min,
         optimisation_matches: optimisation,

@@ -455,7 +455,7 @@ fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo
         "peak_label": format!("peak pressure ({punits})"),
     });
     let pairs = json!({
-        "frame": result.pairs.iter().map(|p| p.row.frame_a).collect::<Vec<_>>(),
+        "frame": result.pairs.iter().map(|p| p.row.objects.frame_a).collect::<Vec<_>>(),
         "local": result.pairs.iter().map(|p| round3(p.row.local_percent)).collect::<Vec<_>>(),
         "optimisation": result.pairs.iter().map(|p| round3(p.row.optimisation_percent)).collect::<Vec<_>>(),
         "cost": result.pairs.iter().map(|p| round6(p.row.mean_cost)).collect::<Vec<_>>(),
@@ -755,7 +755,11 @@ mod tests {
                     .count()
             })
             .sum();
-        let pair = result.pairs.iter().find(|p| p.row.frame_a == 2).unwrap();
+        let pair = result
+            .pairs
+            .iter()
+            .find(|p| p.row.objects.frame_a == 2)
+            .unwrap();
         assert_eq!(drawn, 2 * pair.result.pairs.len());
         // Contours in mm: the disc's nodes lie within its mm extent.
         let xs: Vec<f64> = frame2["contours"]["x"]
