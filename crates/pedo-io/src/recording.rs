@@ -146,37 +146,13 @@ impl Recording {
         mut data: Vec<f32>,
         sensor_mask: Vec<bool>,
     ) -> Result<Self> {
-        if n_frames == 0 || rows == 0 || cols == 0 {
-            return Err(IoError::invalid(format!(
-                "a recording needs at least one frame of at least 1x1, got {n_frames} x {rows}x{cols}"
-            )));
-        }
-        let per = rows
-            .checked_mul(cols)
-            .ok_or_else(|| IoError::invalid("frame size overflows".to_string()))?;
-        if n_frames.checked_mul(per) != Some(data.len()) {
-            return Err(IoError::invalid(format!(
-                "{n_frames} frames of {rows}x{cols} need {} values, got {}",
-                n_frames.saturating_mul(per),
-                data.len()
-            )));
-        }
-        if sensor_mask.len() != per {
-            return Err(IoError::invalid(format!(
-                "sensor mask has {} entries, expected {per}",
-                sensor_mask.len()
-            )));
-        }
-        for (i, v) in data.iter_mut().enumerate() {
-            if !sensor_mask[i % per] {
-                *v = 0.0;
-            } else if !v.is_finite() {
-                return Err(IoError::invalid(format!(
-                    "frame {}, row {}, column {} is not finite ({v})",
-                    i / per,
-                    (i % per) / cols,
-                    i % cols
-                )));
+        let values = data.iter().copied().enumerate();
+        let per = validate(n_frames, rows, cols, data.len(), &sensor_mask, values)?;
+        for frame in data.chunks_exact_mut(per) {
+            for (v, &exists) in frame.iter_mut().zip(&sensor_mask) {
+                if !exists {
+                    *v = 0.0;
+                }
             }
         }
         Ok(Self {
@@ -452,6 +428,54 @@ pub fn kpa_per_unit(units: &str) -> Option<f64> {
     })
 }
 
+/// The checks of every recording, [`Recording::new`]'s and [`Recording::from_sparse`]'s, in this
+/// order: at least one frame of at least 1x1, a frame size that fits in `usize`, `n_values`
+/// values for the frames, a mask entry per sensel, and every value at an existing sensor finite.
+/// `values` yields `(position across the frames, value)`, the position of frame `t`'s value at
+/// sensel `i` being `t × rows × cols + i`; values left out (zeros of sparse frames) pass. Returns
+/// the number of values per frame.
+fn validate(
+    n_frames: usize,
+    rows: usize,
+    cols: usize,
+    n_values: usize,
+    sensor_mask: &[bool],
+    values: impl Iterator<Item = (usize, f32)>,
+) -> Result<usize> {
+    if n_frames == 0 || rows == 0 || cols == 0 {
+        return Err(IoError::invalid(format!(
+            "a recording needs at least one frame of at least 1x1, got {n_frames} x {rows}x{cols}"
+        )));
+    }
+    let per = rows
+        .checked_mul(cols)
+        .ok_or_else(|| IoError::invalid("frame size overflows".to_string()))?;
+    if n_frames.checked_mul(per) != Some(n_values) {
+        return Err(IoError::invalid(format!(
+            "{n_frames} frames of {rows}x{cols} need {} values, got {n_values}",
+            n_frames.saturating_mul(per),
+        )));
+    }
+    if sensor_mask.len() != per {
+        return Err(IoError::invalid(format!(
+            "sensor mask has {} entries, expected {per}",
+            sensor_mask.len()
+        )));
+    }
+    for (k, v) in values {
+        let i = k % per;
+        if sensor_mask[i] && !v.is_finite() {
+            return Err(IoError::invalid(format!(
+                "frame {}, row {}, column {} is not finite ({v})",
+                k / per,
+                i / cols,
+                i % cols
+            )));
+        }
+    }
+    Ok(per)
+}
+
 /// The values of every frame: all of them, or only those that are not 0 ([`SparseFrames`]),
 /// whichever takes less memory (decided from the values alone, so that equal recordings are
 /// held alike and compare equal).
@@ -469,8 +493,9 @@ pub(crate) struct SparseFrames {
     starts: Vec<usize>,
     at: Vec<u16>,
     values: Vec<f32>,
-    /// Frames larger than [`SPARSE_MAX`]: every value kept, in `values`, and no positions.
-    whole: bool,
+    /// Values per frame; frames larger than [`SPARSE_MAX`] are held whole: every value kept, in
+    /// `values`, and no positions.
+    per: usize,
 }
 
 /// The most values a frame held sparsely may have.
@@ -483,13 +508,13 @@ impl SparseFrames {
             starts: vec![0],
             at: Vec::new(),
             values: Vec::new(),
-            whole: per > SPARSE_MAX,
+            per,
         }
     }
 
     /// Appends a frame (its value at every position).
     pub(crate) fn push(&mut self, frame: &[f32]) {
-        if self.whole {
+        if self.is_whole() {
             self.values.extend_from_slice(frame);
             self.starts.push(self.values.len());
             return;
@@ -512,7 +537,7 @@ impl SparseFrames {
 
     /// Whether frames are held whole (too large for positions as `u16`).
     pub(crate) fn is_whole(&self) -> bool {
-        self.whole
+        self.per > SPARSE_MAX
     }
 
     pub(crate) fn n_frames(&self) -> usize {
@@ -620,28 +645,16 @@ impl Recording {
         sensor_mask: Vec<bool>,
     ) -> Result<Self> {
         let n_frames = frames.n_frames();
-        let per = rows.saturating_mul(cols);
-        if frames.whole {
+        if frames.is_whole() {
             return Self::new(n_frames, rows, cols, frames.values, sensor_mask);
         }
-        if n_frames == 0 || per == 0 || per > SPARSE_MAX || sensor_mask.len() != per {
-            return Err(IoError::invalid(format!(
-                "a recording needs at least one frame of at least 1x1 and a mask entry per \
-                 sensel, got {n_frames} x {rows}x{cols} with {} mask entries",
-                sensor_mask.len()
-            )));
-        }
-        for t in 0..n_frames {
-            for (i, v) in frames.entries(t) {
-                if sensor_mask[i] && !v.is_finite() {
-                    return Err(IoError::invalid(format!(
-                        "frame {t}, row {}, column {} is not finite ({v})",
-                        i / cols,
-                        i % cols
-                    )));
-                }
-            }
-        }
+        // The frames hold `frames.per` values each, of which only those not 0 are stored (0 is
+        // finite): the positions of the stored ones across the frames, as in `new`'s `data`.
+        let stride = frames.per;
+        let values =
+            (0..n_frames).flat_map(|t| frames.entries(t).map(move |(i, v)| (t * stride + i, v)));
+        let n_values = n_frames.saturating_mul(stride);
+        let per = validate(n_frames, rows, cols, n_values, &sensor_mask, values)?;
         if frames.at.iter().any(|&i| !sensor_mask[i as usize]) {
             let mut kept = SparseFrames::new(per);
             let mut frame = vec![0.0f32; per];
@@ -747,5 +760,37 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("frame 0, row 1, column 0 is not finite"), "{e}");
+        // The shape checks are `new`'s, messages included.
+        let same_as_new = |frames: SparseFrames, rows, cols, mask: Vec<bool>, message: &str| {
+            let n = frames.n_frames();
+            let dense = vec![1.0; n * frames.per];
+            let e = Recording::from_sparse(rows, cols, frames, mask.clone());
+            let e = e.unwrap_err().to_string();
+            assert!(e.contains(message), "{e}");
+            let e_new = Recording::new(n, rows, cols, dense, mask);
+            assert_eq!(e, e_new.unwrap_err().to_string());
+        };
+        let all = vec![true; 4];
+        same_as_new(
+            SparseFrames::new(4),
+            2,
+            2,
+            all.clone(),
+            "at least one frame of at least",
+        );
+        same_as_new(
+            one(&[1.0; 4]),
+            2,
+            3,
+            all,
+            "1 frames of 2x3 need 6 values, got 4",
+        );
+        same_as_new(
+            one(&[1.0; 4]),
+            2,
+            2,
+            vec![true; 3],
+            "sensor mask has 3 entries, expected 4",
+        );
     }
 }

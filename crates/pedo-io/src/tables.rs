@@ -441,6 +441,11 @@ fn push_cell(col: &mut Column, cell: &Cell, fixed: bool, text: &mut String) -> s
     Ok(())
 }
 
+/// The read-back helper the integration tests use too (one copy, not in the crate's API).
+#[cfg(test)]
+#[path = "../tests/common/parquet.rs"]
+mod parquet_read_back;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -461,29 +466,9 @@ mod tests {
         f
     }
 
+    /// The bytes as a Parquet file read back: column names, rows, row groups.
     fn read_back(bytes: Vec<u8>) -> (Vec<String>, Vec<Vec<Field>>, usize) {
-        let reader = SerializedFileReader::new(file(&bytes)).unwrap();
-        let groups = reader.metadata().num_row_groups();
-        let names = reader
-            .metadata()
-            .file_metadata()
-            .schema_descr()
-            .columns()
-            .iter()
-            .map(|c| c.name().to_string())
-            .collect();
-        let rows = reader
-            .get_row_iter(None)
-            .unwrap()
-            .map(|r| {
-                r.unwrap()
-                    .into_columns()
-                    .into_iter()
-                    .map(|(_, f)| f)
-                    .collect()
-            })
-            .collect();
-        (names, rows, groups)
+        parquet_read_back::read_back(file(&bytes))
     }
 
     #[test]

@@ -2,6 +2,9 @@
 //! study written as CSV, value for value and typed (integers INT64, numbers DOUBLE, text UTF-8,
 //! empty fields null); resuming knows which files a Parquet run writes.
 
+#[path = "common/parquet.rs"]
+mod common;
+
 use parquet::file::reader::{FileReader, SerializedFileReader};
 use parquet::record::Field;
 use pedo_io::study::{run_study, RowStatus, RunOutputs, StudyOptions, RUN_TABLES};
@@ -60,26 +63,7 @@ fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
 }
 
 fn read_parquet(path: &Path) -> (Vec<String>, Vec<Vec<Field>>) {
-    let reader = SerializedFileReader::new(std::fs::File::open(path).unwrap()).unwrap();
-    let header = reader
-        .metadata()
-        .file_metadata()
-        .schema_descr()
-        .columns()
-        .iter()
-        .map(|c| c.name().to_string())
-        .collect();
-    let rows = reader
-        .get_row_iter(None)
-        .unwrap()
-        .map(|r| {
-            r.unwrap()
-                .into_columns()
-                .into_iter()
-                .map(|(_, f)| f)
-                .collect()
-        })
-        .collect();
+    let (header, rows, _) = common::read_back(std::fs::File::open(path).unwrap());
     (header, rows)
 }
 

@@ -361,7 +361,7 @@ fn triangles(
 ///     re-fits ``refits`` times).
 /// refine : {"affine", "modal"} — after the affine re-fits, nothing more (default) or a
 ///     non-rigid warp of a by its own low-order modes onto b, then one more search (slower; for
-///     strongly non-affine deformations of contours, see the README).
+///     strongly non-affine deformations of contours; see docs/options.md and BENCHMARKS.md).
 /// deform_modes : int — ``refine="modal"``: modes of the warp, rigid ones included (default 12).
 /// deform_stiffness : float > 0 — ``refine="modal"``: weight of the modes' strain energy
 ///     against the fit (default 100).
