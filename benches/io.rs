@@ -1,7 +1,7 @@
 //! pedo-io throughput: a whole 205-frame F-Scan recording (60 × 21 sensels) read, turned into
 //! contours, brightness surfaces and isobaric contours.
 //!
-//! `cargo bench --bench io` (release, criterion); numbers in the README (pedo-io, Speed).
+//! `cargo bench --bench io` (release, criterion); numbers in BENCHMARKS.md ("I/O and object extraction").
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use pedo_io::isobar::{isocontours, IsoOptions};

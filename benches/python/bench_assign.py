@@ -12,7 +12,7 @@ table. Matrices come from numpy's PCG64 with fixed seeds, so both interpreters s
 Times are medians of CPU time (time.process_time) over --repeat runs; every solver is
 single-threaded, and CPU time is less disturbed by other processes on a shared machine.
 
-Example (the command behind the README tables):
+Example (the command behind the BENCHMARKS.md tables):
     python benches/python/bench_assign.py \
         --other-python LAPX_VENV/bin/python --sizes 1000 2000
 """

@@ -147,7 +147,7 @@ fn column_reduction(
 /// rows just bounce to the next pass. The phase is only a warm start for the exact shortest
 /// paths, so it stops after `4n` row scans, or as soon as more than a quarter of the scans ended
 /// in such a tie; the remaining free rows go to the shortest-path phase. Measured on the four
-/// benchmark classes (README, "Linear assignment"), this keeps ARR's large gain on uniform and rectangular
+/// benchmark classes (BENCHMARKS.md, "Assignment solvers"), this keeps ARR's large gain on uniform and rectangular
 /// costs and costs nothing on Euclidean and tied ones.
 ///
 /// A row whose cheapest reduced cost is shared by a free column takes that column at no price

@@ -23,7 +23,7 @@ pub(crate) fn dot(x: &[f64], y: &[f64]) -> f64 {
 /// AVX-512 kernels that return with them dirty, and until they are cleared every legacy-SSE
 /// instruction — all scalar `f64` code compiled for baseline x86-64, glibc's `exp` — pays for
 /// merging them: building a 60-node Gaussian model took 456 µs after a product instead of 126
-/// (README, "Eigensolver"). Called after each faer call on the solve path.
+/// (BENCHMARKS.md, "Eigensolver"). Called after each faer call on the solve path.
 pub(crate) fn clear_upper_state() {
     // faer runs scalar code on CPUs without AVX2 (pulp's `V3`): then nothing is dirty.
     #[cfg(target_arch = "x86_64")]

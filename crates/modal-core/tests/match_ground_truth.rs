@@ -26,7 +26,7 @@ fn contours_all_severities() {
     let opts = MatchOptions::default();
     for (sev, target) in [
         // The targets; measured 1.000 / 1.000 / 0.964 on these 36 cases (0.9998 /
-        // 0.9986 / 0.966 on 90; see the README for the Python benchmark).
+        // 0.9986 / 0.966 on 90; see BENCHMARKS.md for the Python benchmark).
         (Severity::Mild, 0.99),
         (Severity::Moderate, 0.98),
         (Severity::Severe, 0.95),

@@ -5,7 +5,7 @@
 //! four columns at a time, so the row vectors of the sweep are loaded once for four columns and
 //! the dot products of four columns are summed across lanes together. At the orders of a modal
 //! solve (100–300) faer's one-column sweep spends most of its time outside its inner loop; this
-//! one runs 3–4× faster there (README, "Eigensolver").
+//! one runs 3–4× faster there (BENCHMARKS.md, "Eigensolver").
 
 use faer::{MatMut, MatRef};
 

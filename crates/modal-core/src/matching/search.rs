@@ -17,7 +17,7 @@ pub enum Search {
     Global,
     /// Every node of the first object to its lowest-cost node of the second, under the
     /// threshold: many-to-one, no excess step. For independent samplings of one surface, where
-    /// no one-to-one answer can be right for every node (README, "Surfaces").
+    /// no one-to-one answer can be right for every node (BENCHMARKS.md, "Surfaces").
     Best,
 }
 

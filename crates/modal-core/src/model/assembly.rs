@@ -49,7 +49,7 @@ pub struct ModelOptions {
     /// freedom, its modes are evaluated at all nodes (`φ = G_nc ψ`), and the σ rule uses the
     /// centres' spacing (`stride ×` the nodes'). Modes are then mass-normalised in the reduced
     /// model (`ψᵀ Γ̃ ψ = I`); there is no nodal `K`, `M`. A stride of 2 cuts a 60-node solve of 30
-    /// modes from 0.54 to 0.19 ms; see the README for what it costs in accuracy.
+    /// modes from 0.54 to 0.19 ms; see BENCHMARKS.md ("Matching accuracy") for what it costs in accuracy.
     pub center_stride: usize,
 }
 
