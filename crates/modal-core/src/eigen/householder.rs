@@ -595,6 +595,44 @@ mod tests {
         }
     }
 
+    /// The reduction's storage is reused from the thread's previous one: a larger matrix's
+    /// leftovers must not reach a smaller one's result (the padding is read as zeros).
+    #[test]
+    fn a_reused_buffer_gives_the_bits_of_a_fresh_one() {
+        let small = random_symmetric(37, 5);
+        let on_fresh_thread = |a: Mat<f64>| {
+            std::thread::spawn(move || {
+                let t = tridiagonalize(a.as_ref());
+                let mut q = Mat::<f64>::identity(a.nrows(), a.nrows());
+                t.apply_q(q.as_mut());
+                (t.diag.clone(), t.off.clone(), t.tau.clone(), q)
+            })
+            .join()
+            .unwrap()
+        };
+        let fresh = on_fresh_thread(small.clone());
+        let reused = std::thread::spawn(move || {
+            drop(tridiagonalize(random_symmetric(130, 6).as_ref()));
+            // Whatever a spare buffer holds (here the worst: NaN everywhere) is cleared.
+            super::SPARE.with(|spare| {
+                let mut v = spare.take();
+                v.fill(f64::NAN);
+                spare.set(v);
+            });
+            let t = tridiagonalize(small.as_ref());
+            let mut q = Mat::<f64>::identity(small.nrows(), small.nrows());
+            t.apply_q(q.as_mut());
+            (t.diag.clone(), t.off.clone(), t.tau.clone(), q)
+        })
+        .join()
+        .unwrap();
+        assert_eq!(
+            (&fresh.0, &fresh.1, &fresh.2),
+            (&reused.0, &reused.1, &reused.2)
+        );
+        assert_eq!(fresh.3, reused.3);
+    }
+
     #[test]
     fn reduction_of_special_matrices() {
         // Already diagonal: every reflector is the identity (τ = 0).
