@@ -224,8 +224,9 @@ pub(crate) fn nearest_both(from: &[f64], to: &[f64], dim: usize) -> NearestBoth 
 
 /// Nearest neighbours from every point of `from` into `to` and, with `COLS`, from every point of
 /// `to` into `from`, in one structure-of-arrays scan (ICP and the re-fit loop call this thousands
-/// of times per pair). Ties go to the first index, as in a plain scan. Planar point sets, by far
-/// the most frequent, take an AVX-512 or AVX2 kernel when the CPU has one.
+/// of times per pair). Ties go to the first index, as in a plain scan. Planar and 3-D point sets
+/// take an AVX-512 kernel when the CPU has one; planar ones, by far the most frequent, an AVX2
+/// kernel otherwise.
 fn nearest_soa<const D: usize, const COLS: bool>(from: &[f64], to: &[f64]) -> NearestBoth {
     dispatch(NearestSoa::<D, COLS> { from, to })
 }
@@ -242,10 +243,10 @@ impl<const D: usize, const COLS: bool> Kernel for NearestSoa<'_, D, COLS> {
     #[inline(always)]
     fn avx512(self, simd: pulp::x86::V4) -> NearestBoth {
         let (n, m) = (self.from.len() / D, self.to.len() / D);
-        if D != 2 || n == 0 || m == 0 {
+        if !(D == 2 || D == 3) || n == 0 || m == 0 {
             return nearest_soa_body::<D, COLS>(self.from, self.to);
         }
-        nearest_planar_avx512::<COLS>(simd, self.from, self.to)
+        nearest_avx512::<D, COLS>(simd, self.from, self.to)
     }
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
@@ -401,65 +402,68 @@ fn rows_avx2<const R: usize, const COLS: bool>(
     }
 }
 
-/// Eight points of `to` for the AVX-512 scan, with the nearest row so far of each.
+/// Eight points of `to` for the AVX-512 scan (their `D` coordinates), with the nearest row so
+/// far of each.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
-struct Block512 {
-    x: __m512d,
-    y: __m512d,
+struct Block512<const D: usize> {
+    c: [__m512d; D],
     v: __m512d,
     i: __m512i,
 }
 
-/// The planar scan in 8-lane AVX-512 vectors: a compare into a mask register and two masked moves
-/// per minimum where AVX2 needs four operations, on twice the lanes. `from` and `to` are not
-/// empty.
+/// The scan of planar (`D = 2`) or 3-D point sets in 8-lane AVX-512 vectors: a compare into a
+/// mask register and two masked moves per minimum where AVX2 needs four operations, on twice the
+/// lanes. `from` and `to` are not empty.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn nearest_planar_avx512<const COLS: bool>(
+fn nearest_avx512<const D: usize, const COLS: bool>(
     simd: pulp::x86::V4,
     from: &[f64],
     to: &[f64],
 ) -> NearestBoth {
     let f = simd.avx512f;
-    let (n, m) = (from.len() / 2, to.len() / 2);
-    let init = Block512 {
-        x: f._mm512_setzero_pd(),
-        y: f._mm512_setzero_pd(),
+    let (n, m) = (from.len() / D, to.len() / D);
+    let init = Block512::<D> {
+        c: [f._mm512_setzero_pd(); D],
         v: f._mm512_set1_pd(f64::INFINITY),
         i: f._mm512_setzero_si512(),
     };
     let mut stack = [init; STACK_POINTS / 8];
     let mut heap = Vec::new();
     let blocks = m.div_ceil(8);
-    let cols: &mut [Block512] = if blocks <= stack.len() {
+    let cols: &mut [Block512<D>] = if blocks <= stack.len() {
         &mut stack[..blocks]
     } else {
         heap.resize(blocks, init);
         &mut heap
     };
-    for (blk, q) in cols.iter_mut().zip(to.chunks(16)) {
+    for (blk, q) in cols.iter_mut().zip(to.chunks(8 * D)) {
         // NaN padding: its distances compare false, so padded lanes never hold a minimum.
-        let (mut x, mut y) = ([f64::NAN; 8], [f64::NAN; 8]);
-        for (l, p) in q.chunks_exact(2).enumerate() {
-            (x[l], y[l]) = (p[0], p[1]);
+        let mut c = [[f64::NAN; 8]; D];
+        for (l, p) in q.chunks_exact(D).enumerate() {
+            for a in 0..D {
+                c[a][l] = p[a];
+            }
         }
-        (blk.x, blk.y) = (pulp::cast(x), pulp::cast(y));
+        for a in 0..D {
+            blk.c[a] = pulp::cast(c[a]);
+        }
     }
     let mut rows = vec![(0, 0.0); n];
     let mut groups = from
-        .chunks_exact(2 * GROUP)
+        .chunks_exact(D * GROUP)
         .zip(rows.chunks_exact_mut(GROUP));
     for (g, (p, out)) in groups.by_ref().enumerate() {
-        rows_avx512::<GROUP, COLS>(simd, p, GROUP * g, cols, out);
+        rows_avx512::<D, GROUP, COLS>(simd, p, GROUP * g, cols, out);
     }
     let i0 = n - n % GROUP;
-    let (p, out) = (&from[2 * i0..], &mut rows[i0..]);
+    let (p, out) = (&from[D * i0..], &mut rows[i0..]);
     match n % GROUP {
         0 => {}
-        1 => rows_avx512::<1, COLS>(simd, p, i0, cols, out),
-        2 => rows_avx512::<2, COLS>(simd, p, i0, cols, out),
-        _ => rows_avx512::<3, COLS>(simd, p, i0, cols, out),
+        1 => rows_avx512::<D, 1, COLS>(simd, p, i0, cols, out),
+        2 => rows_avx512::<D, 2, COLS>(simd, p, i0, cols, out),
+        _ => rows_avx512::<D, 3, COLS>(simd, p, i0, cols, out),
     }
     let mut back = vec![(0, 0.0); if COLS { m } else { 0 }];
     for (blk, out) in cols.iter().zip(back.chunks_mut(8)) {
@@ -475,19 +479,20 @@ fn nearest_planar_avx512<const COLS: bool>(
 /// kept in registers and reduced across lanes together at the end.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn rows_avx512<const R: usize, const COLS: bool>(
+fn rows_avx512<const D: usize, const R: usize, const COLS: bool>(
     simd: pulp::x86::V4,
     p: &[f64],
     i0: usize,
-    cols: &mut [Block512],
+    cols: &mut [Block512<D>],
     out: &mut [(usize, f64)],
 ) {
     let f = simd.avx512f;
     let zero = f._mm512_setzero_pd();
-    let (mut px, mut py, mut row) = ([zero; R], [zero; R], [f._mm512_setzero_si512(); R]);
+    let (mut pc, mut row) = ([[zero; D]; R], [f._mm512_setzero_si512(); R]);
     for r in 0..R {
-        px[r] = f._mm512_set1_pd(p[2 * r]);
-        py[r] = f._mm512_set1_pd(p[2 * r + 1]);
+        for a in 0..D {
+            pc[r][a] = f._mm512_set1_pd(p[D * r + a]);
+        }
         row[r] = f._mm512_set1_epi64((i0 + r) as i64);
     }
     let mut best_v = [f._mm512_set1_pd(f64::INFINITY); R];
@@ -496,9 +501,13 @@ fn rows_avx512<const R: usize, const COLS: bool>(
     for blk in cols.iter_mut() {
         let (mut cv, mut ci) = (blk.v, blk.i);
         for r in 0..R {
-            let dx = f._mm512_sub_pd(blk.x, px[r]);
-            let dy = f._mm512_sub_pd(blk.y, py[r]);
-            let d = f._mm512_add_pd(f._mm512_mul_pd(dx, dx), f._mm512_mul_pd(dy, dy));
+            // Summed in coordinate order, without FMA: the plain scan's bits.
+            let dx = f._mm512_sub_pd(blk.c[0], pc[r][0]);
+            let mut d = f._mm512_mul_pd(dx, dx);
+            for a in 1..D {
+                let t = f._mm512_sub_pd(blk.c[a], pc[r][a]);
+                d = f._mm512_add_pd(d, f._mm512_mul_pd(t, t));
+            }
             let better = f._mm512_cmp_pd_mask::<_CMP_LT_OQ>(d, best_v[r]);
             best_v[r] = f._mm512_mask_mov_pd(best_v[r], better, d);
             best_j[r] = f._mm512_mask_mov_epi64(best_j[r], better, j);
@@ -1215,10 +1224,17 @@ mod tests {
         let b = [1.0, 1.0, -1e200, 5.0, 0.0, f64::NAN, 2.0, 1.0, 0.0, 0.0];
         check(&a, &b, 2, "NaN and overflow");
         check(&a[..6], &b[..2], 2, "NaN and overflow, 3×1");
+        let (a3, b3) = (
+            [0.0, 0.0, f64::NAN, 1.0, 1e200, 0.0, 2.0, 1.0, 3.0],
+            [1.0, 1.0, -1e200, 5.0, 0.0, f64::NAN, 2.0, 1.0, 0.0],
+        );
+        check(&a3, &b3, 3, "NaN and overflow, 3-D");
         // Beyond the kernels' stack blocks.
-        let a: Vec<f64> = (0..2 * 70).map(|_| rnd()).collect();
-        let b: Vec<f64> = (0..2 * 300).map(|_| rnd()).collect();
-        check(&a, &b, 2, "70×300");
+        for dim in [2, 3] {
+            let a: Vec<f64> = (0..dim * 70).map(|_| rnd()).collect();
+            let b: Vec<f64> = (0..dim * 300).map(|_| rnd()).collect();
+            check(&a, &b, dim, &format!("dim {dim}, 70×300"));
+        }
         assert_eq!(nearest(&[0.0, 0.0], &[], 2), vec![(0, f64::INFINITY)]);
     }
 
