@@ -441,12 +441,7 @@ mod tests {
         v
     }
 
-    fn lcg(seed: &mut u64) -> f64 {
-        *seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-    }
+    use crate::eigen::random_start;
 
     fn assert_close(got: &[f64], want: &[f64], tnorm: f64, what: &str) {
         assert_eq!(got.len(), want.len(), "{what}");
@@ -472,8 +467,10 @@ mod tests {
     fn random_matrices_match_jacobi_at_every_k() {
         let mut seed = 11u64;
         for n in [1usize, 2, 3, 7, 8, 9, 16, 17, 40, 65] {
-            let diag: Vec<f64> = (0..n).map(|_| 4.0 * lcg(&mut seed)).collect();
-            let off: Vec<f64> = (0..n.saturating_sub(1)).map(|_| lcg(&mut seed)).collect();
+            let diag: Vec<f64> = (0..n).map(|_| 4.0 * random_start(&mut seed)).collect();
+            let off: Vec<f64> = (0..n.saturating_sub(1))
+                .map(|_| random_start(&mut seed))
+                .collect();
             let all = jacobi_eigenvalues(&diag, &off);
             let t = norm(&diag, &off);
             for k in [1, n / 4, n / 2 + 1, n] {
@@ -516,8 +513,8 @@ mod tests {
     fn extreme_scales_stay_in_range() {
         let mut seed = 5u64;
         let n = 60;
-        let diag: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
-        let off: Vec<f64> = (0..n - 1).map(|_| lcg(&mut seed)).collect();
+        let diag: Vec<f64> = (0..n).map(|_| random_start(&mut seed)).collect();
+        let off: Vec<f64> = (0..n - 1).map(|_| random_start(&mut seed)).collect();
         let want = jacobi_eigenvalues(&diag, &off);
         for s in [1e-150, 1e-30, 1e30, 1e150] {
             let d: Vec<f64> = diag.iter().map(|v| v * s).collect();
@@ -544,13 +541,15 @@ mod tests {
     fn every_vector_path_gives_the_same_bits() {
         let mut seed = 3u64;
         let n = 130;
-        let diag: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
-        let off: Vec<f64> = (0..n - 1).map(|_| lcg(&mut seed)).collect();
+        let diag: Vec<f64> = (0..n).map(|_| random_start(&mut seed)).collect();
+        let off: Vec<f64> = (0..n - 1).map(|_| random_start(&mut seed)).collect();
         let e2: Vec<f64> = off.iter().map(|o| (o * o).max(E2_FLOOR)).collect();
         let all = jacobi_eigenvalues(&diag, &off);
         // 1 … 13 vectors of 8 lanes: every group size of every path, and several groups.
         for vectors in 1..=13 {
-            let x: Vec<f64> = (0..vectors * LANES).map(|_| 2.0 * lcg(&mut seed)).collect();
+            let x: Vec<f64> = (0..vectors * LANES)
+                .map(|_| 2.0 * random_start(&mut seed))
+                .collect();
             let run = |f: &dyn Fn(&mut [u64])| {
                 let mut counts = vec![0u64; x.len()];
                 f(&mut counts);

@@ -548,19 +548,14 @@ mod tests {
     use super::*;
     use faer::Mat;
 
-    fn lcg(seed: &mut u64) -> f64 {
-        *seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-    }
+    use crate::eigen::random_start;
 
     fn random_symmetric(n: usize, seed: u64) -> Mat<f64> {
         let mut s = seed;
         let mut a = Mat::<f64>::zeros(n, n);
         for j in 0..n {
             for i in j..n {
-                let v = lcg(&mut s);
+                let v = random_start(&mut s);
                 a[(i, j)] = v;
                 a[(j, i)] = v;
             }
@@ -693,11 +688,11 @@ mod tests {
             let mut b = vec![0.0; ld * (m + COLS)];
             for j in 0..m {
                 for i in j..m {
-                    b[i + j * ld] = lcg(&mut seed);
+                    b[i + j * ld] = random_start(&mut seed);
                 }
             }
             let vec_of = |seed: &mut u64| -> Vec<f64> {
-                let mut v: Vec<f64> = (0..m).map(|_| lcg(seed)).collect();
+                let mut v: Vec<f64> = (0..m).map(|_| random_start(seed)).collect();
                 v.resize(m + PAD_ROWS, 0.0);
                 v
             };
