@@ -122,17 +122,12 @@ pub fn write_csv(
 impl Table {
     /// The rows as JSON objects keyed by column name.
     pub fn to_json(&self) -> Value {
-        Value::Array(self.rows.iter().map(|r| self.row_json(r)).collect())
-    }
-
-    fn row_json(&self, row: &[Cell]) -> Value {
-        let m: Map<String, Value> = self
-            .header
-            .iter()
-            .cloned()
-            .zip(row.iter().map(Cell::to_json))
-            .collect();
-        Value::Object(m)
+        Value::Array(
+            self.rows
+                .iter()
+                .map(|r| row_json(&self.header, r))
+                .collect(),
+        )
     }
 
     /// Writes [`Table::to_json`] pretty-printed, with a final newline, byte for byte as
@@ -145,6 +140,16 @@ impl Table {
         }
         rows.finish(w)
     }
+}
+
+/// One row as a JSON object keyed by column name.
+fn row_json(header: &[String], row: &[Cell]) -> Value {
+    let m: Map<String, Value> = header
+        .iter()
+        .cloned()
+        .zip(row.iter().map(Cell::to_json))
+        .collect();
+    Value::Object(m)
 }
 
 /// A JSON array of rows written one at a time, byte for byte as [`Table::write_json`] writes
@@ -167,15 +172,9 @@ impl JsonRows {
     pub fn push(&mut self, w: &mut dyn std::io::Write, row: &[Cell]) -> std::io::Result<()> {
         w.write_all(if self.rows == 0 { b"[\n" } else { b",\n" })?;
         self.rows += 1;
-        let m: Map<String, Value> = self
-            .header
-            .iter()
-            .cloned()
-            .zip(row.iter().map(Cell::to_json))
-            .collect();
         // One level deeper than alone: every line indented by two spaces (strings hold no
         // line breaks: JSON escapes them).
-        let row = serde_json::to_string_pretty(&Value::Object(m))?;
+        let row = serde_json::to_string_pretty(&row_json(&self.header, row))?;
         for (i, line) in row.lines().enumerate() {
             if i > 0 {
                 w.write_all(b"\n")?;
