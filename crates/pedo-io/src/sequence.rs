@@ -236,7 +236,7 @@ impl RunParams {
     /// Whether a run with these parameters streams ([`streams`]): the contour and surface
     /// models without drift correction.
     pub fn streams(&self) -> bool {
-        self.model != ObjectModel::Isocontour && self.drift_reference < 2
+        streamable(self.model, self.drift_reference)
     }
 
     /// Checks every parameter that does not depend on a recording.
@@ -836,6 +836,8 @@ pub fn stream_sequence(
     progress: &(dyn Fn(Stage, usize, usize) + Sync),
     sink: &mut dyn SequenceSink,
 ) -> Result<RunCounts> {
+    let measures_threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
+    let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
     if !streams(options) {
         if source.is_some() {
             return Err(IoError::invalid(
@@ -844,13 +846,12 @@ pub fn stream_sequence(
         }
         let r = run_sequence(recording, options, progress)?;
         let counts = replay(&r, sink)?;
-        let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
-        let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
-        sink.frames(start, &recording.measures_of(threshold, start..end))?;
+        sink.frames(
+            start,
+            &recording.measures_of(measures_threshold, start..end),
+        )?;
         return Ok(counts);
     }
-    let measures_threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
-    let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
     if start >= end || end > recording.n_frames() {
         return Err(IoError::invalid(format!(
             "frame range {start}..{end} is empty or beyond the {} frames of the recording",
@@ -1040,7 +1041,13 @@ pub fn stream_sequence(
 /// Whether [`stream_sequence`] streams a run with these options (the contour and surface
 /// models without drift correction) rather than running it whole.
 pub fn streams(options: &SequenceOptions) -> bool {
-    options.model != ObjectModel::Isocontour && options.drift_reference < 2
+    streamable(options.model, options.drift_reference)
+}
+
+/// The rule of [`streams`] and [`RunParams::streams`]: the isocontour model matches the levels
+/// of one frame, and drift correction pairs frames across windows, so both run whole.
+fn streamable(model: ObjectModel, drift_reference: usize) -> bool {
+    model != ObjectModel::Isocontour && drift_reference < 2
 }
 
 /// Hands a whole run to `sink`, as [`stream_sequence`] would have (the frames' measures
