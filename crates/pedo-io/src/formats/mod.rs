@@ -328,33 +328,23 @@ pub fn read_for_streaming(
 ) -> Result<(Recording, Option<FileFrames>)> {
     let path = path.as_ref();
     let name = path.display().to_string();
-    let tekscan = || -> Option<(Format, usize)> {
-        if path.is_dir() {
-            return None;
-        }
-        use std::io::Read as _;
-        let mut head = Vec::with_capacity(SNIFF_BYTES);
-        let mut file = std::fs::File::open(path).ok()?;
-        (&mut file)
-            .take(SNIFF_BYTES as u64)
-            .read_to_end(&mut head)
-            .ok()?;
-        let size = file.metadata().ok()?.len();
-        let format = sniff_format(path, &head).ok()?;
-        (matches!(format, Format::Asf | Format::TekscanCsv) && !head.starts_with(GZIP_MAGIC))
-            .then(|| (format, usize::try_from(size).unwrap_or(usize::MAX)))
+    // Anything else, or a file that cannot be opened or sniffed, is read (and its error
+    // reported) the usual way.
+    let tekscan = match path.is_dir() {
+        true => None,
+        false => Sniffed::open(path, &name).ok(),
     };
-    let Some((format, size)) = tekscan() else {
+    let Some((sniffed, csv)) = tekscan.and_then(|s| s.tekscan_csv().map(|csv| (s, csv))) else {
         return Ok((read_recording_with(path, opts)?, None));
     };
-    let csv = format == Format::TekscanCsv;
-    let io = |source| IoError::Io {
-        path: name.clone(),
-        source,
-    };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let lines = std::io::BufReader::with_capacity(1 << 16, file);
-    let shape = asf::read_tekscan(lines, size, &name, csv, &mut asf::Keep::Handed(None))?;
+    let size = sniffed.size;
+    let shape = asf::read_tekscan(
+        sniffed.lines(),
+        size,
+        &name,
+        csv,
+        &mut asf::Keep::Handed(None),
+    )?;
     let frames = FileFrames::start(path.to_path_buf(), name, size, csv);
     Ok((shape, Some(frames)))
 }
@@ -438,29 +428,63 @@ pub fn read_recording_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result
         return images::read_numbered(s);
     }
     let name = path.display().to_string();
-    let io = |source| IoError::Io {
-        path: name.clone(),
-        source,
-    };
     // Tekscan files are read line by line (a long recording's file is never held whole);
     // the other formats are read into memory first.
-    use std::io::Read as _;
-    let mut file = std::fs::File::open(path).map_err(io)?;
-    let size = file.metadata().map_err(io)?.len();
-    let mut head = Vec::with_capacity(SNIFF_BYTES);
-    (&mut file)
-        .take(SNIFF_BYTES as u64)
-        .read_to_end(&mut head)
-        .map_err(io)?;
-    let format = sniff_format(path, &head).map_err(|what| IoError::unknown_format(&name, what))?;
-    if matches!(format, Format::Asf | Format::TekscanCsv) && !head.starts_with(GZIP_MAGIC) {
-        let size = usize::try_from(size).unwrap_or(usize::MAX);
-        let lines =
-            std::io::BufReader::with_capacity(1 << 16, std::io::Cursor::new(head).chain(file));
-        let csv = format == Format::TekscanCsv;
-        return asf::read_tekscan(lines, size, &name, csv, &mut asf::Keep::All);
+    let sniffed = Sniffed::open(path, &name)?;
+    if let Some(csv) = sniffed.tekscan_csv() {
+        let size = sniffed.size;
+        return asf::read_tekscan(sniffed.lines(), size, &name, csv, &mut asf::Keep::All);
     }
-    drop(file);
+    let format = sniffed.format;
+    drop(sniffed);
     let bytes = read_bytes(path)?;
     parse_bytes_with(&bytes, format, &name, opts)
+}
+
+/// A recording's file opened, its first [`SNIFF_BYTES`] read and its format told from them.
+struct Sniffed {
+    file: std::fs::File,
+    head: Vec<u8>,
+    /// The file's length in bytes.
+    size: usize,
+    format: Format,
+}
+
+impl Sniffed {
+    fn open(path: &Path, name: &str) -> Result<Self> {
+        use std::io::Read as _;
+        let io = |source| IoError::Io {
+            path: name.to_string(),
+            source,
+        };
+        let mut file = std::fs::File::open(path).map_err(io)?;
+        let size = file.metadata().map_err(io)?.len();
+        let mut head = Vec::with_capacity(SNIFF_BYTES);
+        (&mut file)
+            .take(SNIFF_BYTES as u64)
+            .read_to_end(&mut head)
+            .map_err(io)?;
+        let format =
+            sniff_format(path, &head).map_err(|what| IoError::unknown_format(name, what))?;
+        Ok(Self {
+            file,
+            head,
+            size: usize::try_from(size).unwrap_or(usize::MAX),
+            format,
+        })
+    }
+
+    /// For a Tekscan `.asf` file (`false`) or CSV export (`true`) that is not gzip-compressed:
+    /// the formats read line by line.
+    fn tekscan_csv(&self) -> Option<bool> {
+        (matches!(self.format, Format::Asf | Format::TekscanCsv)
+            && !self.head.starts_with(GZIP_MAGIC))
+        .then_some(self.format == Format::TekscanCsv)
+    }
+
+    /// The whole file's lines, from the start.
+    fn lines(self) -> impl std::io::BufRead {
+        use std::io::Read as _;
+        std::io::BufReader::with_capacity(1 << 16, std::io::Cursor::new(self.head).chain(self.file))
+    }
 }
