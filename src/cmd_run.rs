@@ -101,11 +101,6 @@ impl RunOptionsArgs {
         }
     }
 
-    /// Whether the run writes its tables (and summary) only: it then streams.
-    pub fn tables_only(&self) -> bool {
-        pedo_io::study::tables_only(&self.outputs())
-    }
-
     /// These options as the library's parameters; absent ones at the library's defaults.
     pub fn params(&self) -> RunParams {
         let d = RunParams::default();
@@ -154,12 +149,12 @@ pub fn run(args: RunArgs) -> Result<(), CliError> {
     let t = Instant::now();
     let params = args.options.params();
     params.validate()?;
-    // A run with tables only reads a Tekscan file's frames as it goes (never held whole).
-    let (recording, frames) = if args.options.tables_only() && params.streams() {
-        pedo_io::formats::read_for_streaming(&args.recording, &args.read.options())?
-    } else {
-        (args.read.read(&args.recording)?, None)
-    };
+    let (recording, frames) = pedo_io::study::read_for_run(
+        &args.recording,
+        &args.read.options(),
+        &params,
+        &args.options.outputs(),
+    )?;
     let input = InputInfo::of_path(&args.recording)?;
     execute(
         recording,

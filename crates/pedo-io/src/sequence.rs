@@ -1014,9 +1014,9 @@ pub fn stream_sequence(
             first_new..held.end(),
             &pairs,
             last_first,
-            &mut |k, steps| {
-                counts.add_track(steps.len());
-                sink.track(k, steps)
+            &mut |k, track| {
+                counts.add_track(track.steps.len());
+                sink.track(k, &held_steps(&held, &track)?)
             },
         )?;
         drop(pairs);
@@ -1030,9 +1030,9 @@ pub fn stream_sequence(
         w0 = w1;
     }
     let t = Instant::now();
-    chain.finish(&held, &mut |k, steps| {
-        counts.add_track(steps.len());
-        sink.track(k, steps)
+    chain.finish(&mut |k, track| {
+        counts.add_track(track.steps.len());
+        sink.track(k, &held_steps(&held, &track)?)
     })?;
     counts.timings.tracks += t.elapsed();
     Ok(counts)
@@ -1099,14 +1099,46 @@ impl Held {
     }
 }
 
-/// [`chain_tracks_with`] fed a window at a time (see [`stream_sequence`]).
+/// A track's steps with their objects, as a [`SequenceSink`] takes them.
+fn held_steps<'h>(held: &'h Held, track: &Track) -> Result<Vec<(&'h SequenceObject, usize)>> {
+    track
+        .steps
+        .iter()
+        .map(|&(o, n)| held.get(o).map(|obj| (obj, n)))
+        .collect()
+}
+
+/// The objects [`Chainer`] reads by id: a whole run's, or the window a stream holds.
+trait ObjectsById {
+    fn object(&self, id: usize) -> Result<&SequenceObject>;
+}
+
+impl ObjectsById for Held {
+    fn object(&self, id: usize) -> Result<&SequenceObject> {
+        self.get(id)
+    }
+}
+
+impl ObjectsById for [SequenceObject] {
+    fn object(&self, id: usize) -> Result<&SequenceObject> {
+        self.get(id).ok_or_else(|| {
+            IoError::invalid(format!(
+                "a pair names object {id}, beyond the {} objects chained",
+                self.len()
+            ))
+        })
+    }
+}
+
+/// Chains pair matches into tracks ([`chain_tracks`]), fed all at once (a whole run) or a
+/// window at a time ([`stream_sequence`]); only the open tracks are held.
 #[derive(Default)]
 struct Chainer {
     /// The number of the front pending track.
     first: usize,
     /// The tracks not handed over yet, each with whether it has ended.
     pending: std::collections::VecDeque<(Track, bool)>,
-    /// The track of each node of the objects a pair may still leave (`NONE`: none).
+    /// The track of each node of the objects a pair may still leave (`NO_TRACK`: none).
     rows: std::collections::BTreeMap<usize, Vec<u32>>,
     /// The last object a known pair leaves each object of `rows` for.
     last_use: HashMap<usize, usize>,
@@ -1114,8 +1146,8 @@ struct Chainer {
 
 const NO_TRACK: u32 = u32::MAX;
 
-/// Where [`Chainer`] hands each track: its number and its steps as object and node.
-type EmitTrack<'a> = dyn FnMut(usize, &[(&SequenceObject, usize)]) -> Result<()> + 'a;
+/// Where [`Chainer`] hands each track: its number and the track.
+type EmitTrack<'a> = dyn FnMut(usize, Track) -> Result<()> + 'a;
 
 impl Chainer {
     /// The first object of the front open track (all objects before it are done with).
@@ -1139,19 +1171,26 @@ impl Chainer {
         }
     }
 
-    /// Chains the objects `new` (all held) through `pairs` (those that end on them, in order).
-    /// Every pair leaving an object before `settled` is among those given so far.
+    /// Chains the objects `new` through `pairs` (those that end on them, in order). Every pair
+    /// leaving an object before `settled` is among those given so far.
     fn chain(
         &mut self,
-        held: &Held,
+        objects: &(impl ObjectsById + ?Sized),
         new: std::ops::Range<usize>,
         pairs: &[PairMatch],
         settled: usize,
         emit: &mut EmitTrack<'_>,
     ) -> Result<()> {
-        let id = |t: usize| u32::try_from(t).unwrap_or(NO_TRACK - 1);
         let mut incoming: Vec<Vec<&PairMatch>> = vec![Vec::new(); new.len()];
         for p in pairs {
+            // Objects are in sequence order and every pair goes forward, so visiting the
+            // objects in order sees each predecessor before its successors.
+            if !new.contains(&p.b) || p.a >= p.b {
+                return Err(IoError::invalid(format!(
+                    "pair {} → {} does not lead forward onto objects {}..{}",
+                    p.a, p.b, new.start, new.end
+                )));
+            }
             incoming[p.b - new.start].push(p);
             let u = self.last_use.entry(p.a).or_insert(0);
             *u = (*u).max(p.b);
@@ -1169,38 +1208,9 @@ impl Chainer {
             }
         }
         for o in new.clone() {
-            let ob = held.get(o)?;
-            let mut row = vec![NO_TRACK; ob.shape.len()];
-            for p in &incoming[o - new.start] {
-                let oa = held.get(p.a)?;
-                let Some(from) = self.rows.get(&p.a) else {
-                    continue;
-                };
-                for mp in p.result.pairs.iter().filter(|mp| !mp.excess) {
-                    if row[mp.b] != NO_TRACK || !honest_step_of(oa, mp.a, ob, mp.b) {
-                        continue;
-                    }
-                    let t = from[mp.a] as usize;
-                    if t >= self.first
-                        && let Some((track, _)) = self.pending.get_mut(t - self.first)
-                        && track.steps.last().map(|s| s.0) == Some(p.a)
-                    {
-                        track.steps.push((o, mp.b));
-                        row[mp.b] = id(t);
-                    }
-                }
-            }
-            for (node, slot) in row.iter_mut().enumerate() {
-                if *slot == NO_TRACK {
-                    *slot = id(self.first + self.pending.len());
-                    self.pending.push_back((
-                        Track {
-                            steps: vec![(o, node)],
-                        },
-                        false,
-                    ));
-                }
-            }
+            let row = self.continue_tracks(objects, o, &incoming[o - new.start])?;
+            // A predecessor whose last pair this was ends the tracks still ending on it; so
+            // does this object when no pair leaves it.
             for p in &incoming[o - new.start] {
                 if self.last_use.get(&p.a) == Some(&o) {
                     self.last_use.remove(&p.a);
@@ -1214,35 +1224,88 @@ impl Chainer {
             } else {
                 self.end_at(o, &row);
             }
-            self.emit_ended(held, emit)?;
+            self.emit_ended(emit)?;
         }
         Ok(())
     }
 
+    /// The track of each node of object `o`: the track its one-to-one partner in a predecessor
+    /// (`incoming`, in order) is on, or a new one.
+    fn continue_tracks(
+        &mut self,
+        objects: &(impl ObjectsById + ?Sized),
+        o: usize,
+        incoming: &[&PairMatch],
+    ) -> Result<Vec<u32>> {
+        let id = |t: usize| u32::try_from(t).unwrap_or(NO_TRACK - 1);
+        let ob = objects.object(o)?;
+        let mut row = vec![NO_TRACK; ob.shape.len()];
+        for p in incoming {
+            let oa = objects.object(p.a)?;
+            let Some(from) = self.rows.get(&p.a) else {
+                continue;
+            };
+            for mp in p.result.pairs.iter().filter(|mp| !mp.excess) {
+                let (Some(&t), Some(&slot)) = (from.get(mp.a), row.get(mp.b)) else {
+                    return Err(IoError::invalid(format!(
+                        "pair {} → {} matches node {} to node {}, beyond the objects' {} and {} nodes",
+                        p.a,
+                        p.b,
+                        mp.a,
+                        mp.b,
+                        from.len(),
+                        row.len()
+                    )));
+                };
+                if slot != NO_TRACK || !honest_step_of(oa, mp.a, ob, mp.b) {
+                    continue;
+                }
+                let t = t as usize;
+                // A track can pass through one node per object only: a split keeps the first
+                // continuation. (A track already handed over has ended elsewhere.)
+                if t >= self.first
+                    && let Some((track, _)) = self.pending.get_mut(t - self.first)
+                    && track.steps.last().map(|s| s.0) == Some(p.a)
+                {
+                    track.steps.push((o, mp.b));
+                    row[mp.b] = id(t);
+                }
+            }
+        }
+        for (node, slot) in row.iter_mut().enumerate() {
+            if *slot == NO_TRACK {
+                *slot = id(self.first + self.pending.len());
+                self.pending.push_back((
+                    Track {
+                        steps: vec![(o, node)],
+                    },
+                    false,
+                ));
+            }
+        }
+        Ok(row)
+    }
+
     /// Hands over the front tracks that have ended.
-    fn emit_ended(&mut self, held: &Held, emit: &mut EmitTrack<'_>) -> Result<()> {
+    fn emit_ended(&mut self, emit: &mut EmitTrack<'_>) -> Result<()> {
         while self.pending.front().is_some_and(|(_, ended)| *ended) {
-            if let Some((track, _)) = self.pending.pop_front() {
-                let steps = track
-                    .steps
-                    .iter()
-                    .map(|&(o, n)| held.get(o).map(|obj| (obj, n)))
-                    .collect::<Result<Vec<_>>>()?;
-                emit(self.first, &steps)?;
+            if let Some((mut track, _)) = self.pending.pop_front() {
+                track.steps.shrink_to_fit();
                 self.first += 1;
+                emit(self.first - 1, track)?;
             }
         }
         Ok(())
     }
 
     /// Hands over every track left.
-    fn finish(&mut self, held: &Held, emit: &mut EmitTrack<'_>) -> Result<()> {
+    fn finish(&mut self, emit: &mut EmitTrack<'_>) -> Result<()> {
         for (_, ended) in &mut self.pending {
             *ended = true;
         }
         self.rows.clear();
         self.last_use.clear();
-        self.emit_ended(held, emit)
+        self.emit_ended(emit)
     }
 }
 
@@ -1294,16 +1357,15 @@ pub fn run_sequence(
     let (tracks, packed_tracks) = match (drift, options.keep_match_details) {
         (true, true) => (drift_tracks(), None),
         (true, false) => (Vec::new(), Some(drift_tracks().into_iter().collect())),
-        (false, true) => (chain_tracks(&objects, &pairs), None),
+        (false, true) => (chain_tracks(&objects, &pairs)?, None),
         (false, false) => {
             // Packed as they are chained: the tracks of a long run are never all held as
             // vectors of their own.
             let mut packed = PackedTracks::default();
-            let Ok(()) =
-                chain_tracks_with::<std::convert::Infallible>(&objects, &pairs, &mut |t| {
-                    packed.push(&t);
-                    Ok(())
-                });
+            chain_tracks_with(&objects, &pairs, &mut |t| {
+                packed.push(&t);
+                Ok(())
+            })?;
             packed.shrink_to_fit();
             (Vec::new(), Some(packed))
         }
@@ -1614,113 +1676,28 @@ fn in_whole_numbering(
 /// in the previous object; excess (one-to-many) matches never extend a track, since a track must
 /// stay a single path, and neither does a match between frames that moves further than
 /// [`crate::track::step_allowed`] allows. Nodes with no such predecessor start a new track.
-pub fn chain_tracks(objects: &[SequenceObject], pairs: &[PairMatch]) -> Vec<Track> {
+/// Every pair must lead forward (`a < b`) between the `objects` and name nodes they have.
+pub fn chain_tracks(objects: &[SequenceObject], pairs: &[PairMatch]) -> Result<Vec<Track>> {
     let mut tracks = Vec::new();
-    let Ok(()) = chain_tracks_with::<std::convert::Infallible>(objects, pairs, &mut |t| {
+    chain_tracks_with(objects, pairs, &mut |t| {
         tracks.push(t);
         Ok(())
-    });
-    tracks
+    })?;
+    Ok(tracks)
 }
 
 /// [`chain_tracks`], handing the tracks to `emit` one by one in order (track 0 first), each as
 /// soon as it can grow no more and every track before it has gone: only the open tracks are
 /// held (those through the last frames chained), not every track of the run.
-pub fn chain_tracks_with<E>(
+pub fn chain_tracks_with(
     objects: &[SequenceObject],
     pairs: &[PairMatch],
-    emit: &mut dyn FnMut(Track) -> std::result::Result<(), E>,
-) -> std::result::Result<(), E> {
-    // The track of each node of the objects still ahead of a pair (NONE: none yet); an
-    // object's row is dropped once the last pair leaving it is chained.
-    const NONE: u32 = u32::MAX;
-    let mut track_of: Vec<Vec<u32>> = vec![Vec::new(); objects.len()];
-    let mut last_use = vec![0usize; objects.len()];
-    // Objects are in sequence order and every pair goes forward, so visiting the objects in order
-    // sees each predecessor before its successors.
-    let mut incoming: Vec<Vec<&PairMatch>> = vec![Vec::new(); objects.len()];
-    for p in pairs {
-        incoming[p.b].push(p);
-        last_use[p.a] = last_use[p.a].max(p.b);
-    }
-    // The tracks not emitted yet, `first` the number of the front one, each with whether it
-    // has ended.
-    let mut pending: std::collections::VecDeque<(Track, bool)> = Default::default();
-    let mut first = 0usize;
-    let id = |t: usize| u32::try_from(t).unwrap_or(NONE - 1);
-    // Ends the tracks whose last step is on object `x` (its row of tracks given).
-    let end_at = |x: usize,
-                  row: &[u32],
-                  pending: &mut std::collections::VecDeque<(Track, bool)>,
-                  first: usize| {
-        for &t in row {
-            let t = t as usize;
-            if t >= first
-                && let Some((track, ended)) = pending.get_mut(t - first)
-                && track.steps.last().map(|s| s.0) == Some(x)
-            {
-                *ended = true;
-            }
-        }
-    };
-    for o in 0..objects.len() {
-        let mut row = vec![NONE; objects[o].shape.len()];
-        for p in &incoming[o] {
-            for mp in p.result.pairs.iter().filter(|mp| !mp.excess) {
-                if row[mp.b] != NONE {
-                    continue;
-                }
-                if !honest_step(objects, p.a, mp.a, o, mp.b) {
-                    continue;
-                }
-                let t = track_of[p.a][mp.a] as usize;
-                // A track can pass through one node per object only: a split keeps the first
-                // continuation. (A track already emitted has ended elsewhere.)
-                if t >= first
-                    && let Some((track, _)) = pending.get_mut(t - first)
-                    && track.steps.last().map(|s| s.0) == Some(p.a)
-                {
-                    track.steps.push((o, mp.b));
-                    row[mp.b] = id(t);
-                }
-            }
-        }
-        for (node, slot) in row.iter_mut().enumerate() {
-            if *slot == NONE {
-                *slot = id(first + pending.len());
-                pending.push_back((
-                    Track {
-                        steps: vec![(o, node)],
-                    },
-                    false,
-                ));
-            }
-        }
-        // A predecessor whose last pair this was ends the tracks still ending on it; so does
-        // this object when no pair leaves it.
-        for p in std::mem::take(&mut incoming[o]) {
-            if last_use[p.a] == o {
-                let done = std::mem::take(&mut track_of[p.a]);
-                end_at(p.a, &done, &mut pending, first);
-            }
-        }
-        if last_use[o] > o {
-            track_of[o] = row;
-        } else {
-            end_at(o, &row, &mut pending, first);
-        }
-        while pending.front().is_some_and(|(_, ended)| *ended) {
-            if let Some((mut track, _)) = pending.pop_front() {
-                track.steps.shrink_to_fit();
-                first += 1;
-                emit(track)?;
-            }
-        }
-    }
-    for (track, _) in pending {
-        emit(track)?;
-    }
-    Ok(())
+    emit: &mut dyn FnMut(Track) -> Result<()>,
+) -> Result<()> {
+    let mut chain = Chainer::default();
+    let mut emit = |_, track| emit(track);
+    chain.chain(objects, 0..objects.len(), pairs, objects.len(), &mut emit)?;
+    chain.finish(&mut emit)
 }
 
 /// Whether the match of node `na` of object `a` with node `nb` of object `b` may extend a track:
@@ -2032,9 +2009,33 @@ mod tests {
         let want = crate::drift::anchored_tracks(&run.objects, &run.pairs, &[]);
         assert!(want.len() > 100 && want.iter().any(|t| t.steps.len() >= 10));
         assert!(!run.splits.is_empty() || !run.merges.is_empty());
-        assert_eq!(chain_tracks(&run.objects, &run.pairs), want);
+        assert_eq!(chain_tracks(&run.objects, &run.pairs).unwrap(), want);
         let packed: Vec<Track> = run.all_tracks().map(|t| t.into_owned()).collect();
         assert_eq!(packed, want);
+    }
+
+    #[test]
+    fn chaining_a_pair_that_goes_back_or_names_missing_nodes_is_an_error() {
+        let rec = recording(3, |f, r, c| disc(11.0 + f as f64 * 0.5, 11.0, 6.0)(r, c));
+        let run = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
+        assert_eq!(chain_tracks(&run.objects, &run.pairs).unwrap(), run.tracks);
+        let mut back = run.pairs.clone();
+        back[1].b = 0;
+        let e = chain_tracks(&run.objects, &back).unwrap_err().to_string();
+        assert!(e.contains("pair 1 → 0 does not lead forward"), "{e}");
+        let mut beyond = run.pairs.clone();
+        beyond[0].b = 7;
+        let e = chain_tracks(&run.objects, &beyond).unwrap_err().to_string();
+        assert!(e.contains("does not lead forward onto objects 0..3"), "{e}");
+        let mut node = run.pairs.clone();
+        let n = run.objects[1].shape.len();
+        node[0].result.pairs[0].b = n;
+        node[0].result.pairs[0].excess = false;
+        let e = chain_tracks(&run.objects, &node).unwrap_err().to_string();
+        assert!(
+            e.contains("beyond the objects'") && e.contains(&format!("and {n} nodes")),
+            "{e}"
+        );
     }
 
     #[test]
@@ -2072,6 +2073,6 @@ mod tests {
             "{skipped:?}"
         );
         // The tracks of what was matched are still chained.
-        assert!(!chain_tracks(&objects, &pairs).is_empty());
+        assert!(!chain_tracks(&objects, &pairs).unwrap().is_empty());
     }
 }

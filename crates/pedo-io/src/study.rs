@@ -123,6 +123,22 @@ pub fn tables_only(outputs: &RunOutputs<'_>) -> bool {
     !outputs.figures.png && !outputs.figures.svg && outputs.report.is_none() && !outputs.animation
 }
 
+/// The recording at `path` read for a run with these parameters and outputs: a run that
+/// streams (tables only, and [`RunParams::streams`]) reads a Tekscan file's frames as it goes
+/// ([`crate::formats::read_for_streaming`]), never held whole; any other run reads it whole.
+pub fn read_for_run(
+    path: &Path,
+    read: &ReadOptions,
+    params: &RunParams,
+    outputs: &RunOutputs<'_>,
+) -> Result<(Recording, Option<crate::formats::FileFrames>)> {
+    if tables_only(outputs) && params.streams() {
+        crate::formats::read_for_streaming(path, read)
+    } else {
+        Ok((read_recording_with(path, read)?, None))
+    }
+}
+
 /// The tables of a run folder written as [`stream_sequence`] makes them: every row goes to its
 /// file at once (the skipped pairs, few, are kept for the end of the pairs table).
 pub struct TablesSink<'a> {
@@ -855,13 +871,8 @@ fn process(
     started: Instant,
 ) -> Result<StudyRow> {
     opts.params.validate()?;
-    // A run with tables only reads a Tekscan file's frames as it goes (never held whole).
-    let lean = tables_only(&opts.outputs) && opts.params.streams();
-    let (mut recording, mut file_frames) = if lean {
-        crate::formats::read_for_streaming(path, &opts.read)?
-    } else {
-        (read_recording_with(path, &opts.read)?, None)
-    };
+    let (mut recording, mut file_frames) =
+        read_for_run(path, &opts.read, &opts.params, &opts.outputs)?;
     let input = InputInfo::of_path(path)?;
     opts.params.units.apply(&mut recording)?;
     let mut options = opts.params.to_options(&recording)?;
