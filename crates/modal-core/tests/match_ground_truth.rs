@@ -25,8 +25,8 @@ fn run(sev: Severity, seeds: std::ops::Range<u64>, opts: &MatchOptions) -> (f64,
 fn contours_all_severities() {
     let opts = MatchOptions::default();
     for (sev, target) in [
-        // The targets; measured 1.000 / 1.000 / 0.964 on these 36 cases (0.9998 /
-        // 0.9986 / 0.966 on 90; see BENCHMARKS.md for the Python benchmark).
+        // The targets; measured 0.9996 / 0.9976 / 0.967 on these 36 cases (severe 0.976
+        // on 90; see BENCHMARKS.md for the Python benchmark).
         (Severity::Mild, 0.99),
         (Severity::Moderate, 0.98),
         (Severity::Severe, 0.95),
@@ -40,8 +40,9 @@ fn contours_all_severities() {
 #[test]
 fn reduced_gaussian_basis_trades_severe_accuracy_for_speed() {
     // Gaussians on every second node only (a third of the solve time). Measured on these 90
-    // cases: 1.000 / 0.992 / 0.939 against 0.9998 / 0.9986 / 0.966 for the full element — the
-    // issue's targets hold at mild and moderate warps (consecutive frames), not at severe ones.
+    // cases: 1.000 / 0.9993 / 0.965 against severe 0.976 for the full element; on the Python
+    // benchmark's cases the reduced basis has the worse tail (BENCHMARKS.md), so it is an option
+    // for the small changes between consecutive frames, not the default.
     let mut opts = MatchOptions::default();
     opts.model.center_stride = 2;
     for (sev, floor) in [
@@ -59,15 +60,51 @@ fn reduced_gaussian_basis_trades_severe_accuracy_for_speed() {
 fn dense_rotation_search_beats_the_five_spec_candidates() {
     // Rounded outlines under ±35° turns: affine ICP from the five principal-axes starts
     // (identity and principal axes) stops in a neighbouring minimum a few degrees off; the evenly
-    // spaced starts find the true one (measured 0.966 vs 0.921 on these 90 cases).
-    let spec = MatchOptions {
-        rotation_search: RotationSearch::spec(5),
+    // spaced starts find the true one (measured 0.966 vs 0.921 on these 90 cases). The search
+    // alone, without the outline fit that follows it (which lifts both: 0.976 vs 0.965).
+    let node_icp_only = RotationSearch {
+        outline_iterations: 0,
+        ..RotationSearch::default()
+    };
+    let dense = MatchOptions {
+        rotation_search: node_icp_only,
         ..MatchOptions::default()
     };
-    let (dense, _) = run(Severity::Severe, 0..90, &MatchOptions::default());
+    let spec = MatchOptions {
+        rotation_search: RotationSearch {
+            outline_iterations: 0,
+            ..RotationSearch::spec(5)
+        },
+        ..MatchOptions::default()
+    };
+    let (dense, _) = run(Severity::Severe, 0..90, &dense);
     let (five, _) = run(Severity::Severe, 0..90, &spec);
     eprintln!("severe: dense {dense:.4}, spec {five:.4}");
     assert!(dense >= five + 0.03, "dense {dense} vs spec {five}");
+}
+
+#[test]
+fn fitting_the_outlines_after_the_rotation_search_lifts_severe_pairs() {
+    // Node-to-node ICP leaves two samplings of a bent outline slid by up to a node spacing, and
+    // the modal matching then pairs nodes with their neighbours; the point-to-line fit of the
+    // outlines does not. Measured on these 90 cases: 0.976 with it, 0.966 without.
+    let without = MatchOptions {
+        rotation_search: RotationSearch {
+            outline_iterations: 0,
+            ..RotationSearch::default()
+        },
+        ..MatchOptions::default()
+    };
+    let (with, accs_with) = run(Severity::Severe, 0..90, &MatchOptions::default());
+    let (plain, accs_plain) = run(Severity::Severe, 0..90, &without);
+    let below = |a: &[f64]| a.iter().filter(|&&x| x < 0.5).count();
+    eprintln!(
+        "severe: outline fit {with:.4} ({} < 0.5), node ICP only {plain:.4} ({} < 0.5)",
+        below(&accs_with),
+        below(&accs_plain)
+    );
+    assert!(with >= plain + 0.005, "outline fit {with} vs {plain}");
+    assert!(below(&accs_with) <= below(&accs_plain));
 }
 
 #[test]

@@ -18,6 +18,7 @@ mod deform;
 pub mod excess;
 pub mod features;
 mod first_phase;
+mod outline_fit;
 pub mod prealign;
 pub mod prepare;
 mod recipe;

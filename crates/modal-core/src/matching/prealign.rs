@@ -865,6 +865,9 @@ pub struct RotationSearch {
     /// The largest turn in degrees (of the rotation part of the map, see [`rotation_angle`]) a
     /// candidate may have; `None`: any. Starts that cannot reach it are not refined.
     pub max_rotation: Option<f64>,
+    /// For two closed planar outlines: point-to-line affine ICP steps after the search, which
+    /// fit the outlines rather than their nodes (at most; fewer once converged). 0: none.
+    pub outline_iterations: usize,
 }
 
 impl Default for RotationSearch {
@@ -880,6 +883,7 @@ impl Default for RotationSearch {
             iterations: 20,
             tolerance: NEAR_TIE,
             max_rotation: None,
+            outline_iterations: 10,
         }
     }
 }
@@ -938,8 +942,27 @@ pub fn robust_prealign(
 
 /// The search after the screening: the survivors of the screened starts (in the order of
 /// [`rotation_candidates`]) run to convergence, on the rayon pool (`parallel`) or on the calling
-/// thread, and the best of them wins. The same map either way.
+/// thread, and the best of them wins; two closed planar outlines are then fitted to each other
+/// ([`RotationSearch::outline_iterations`]). The same map either way.
 pub(crate) fn finish_search(
+    a: &[f64],
+    b: &[f64],
+    dim: usize,
+    search: &RotationSearch,
+    keep_orientation: bool,
+    screened: &[(Affine, f64)],
+    parallel: bool,
+) -> Affine {
+    let picked = refine_survivors(a, b, dim, search, keep_orientation, screened, parallel);
+    if keep_orientation && dim == 2 && search.outline_iterations > 0 {
+        super::outline_fit::fit_outlines(a, b, picked, search.outline_iterations)
+    } else {
+        picked
+    }
+}
+
+/// The survivors of the screening run to convergence, and the candidate kept among them.
+fn refine_survivors(
     a: &[f64],
     b: &[f64],
     dim: usize,
