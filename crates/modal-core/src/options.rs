@@ -635,7 +635,7 @@ pub fn match_option_specs() -> Vec<OptionSpec> {
             "prealign",
             OptionKind::Word(Prealign::NAMES),
             "robust (normalize with paper; sensor for a recording's contours)",
-            "Pre-alignment: rotation search with affine ICP (robust), centroid and scale only (normalize), or the sensor coordinates as the prior, moved only by the affine re-fits (sensor: consecutive frames of one recording).",
+            "Pre-alignment: rotation search with affine ICP, then for two outlines (outside a run) a point-to-line fit of the outlines (robust), centroid and scale only (normalize), or the sensor coordinates as the prior, moved only by the affine re-fits (sensor: consecutive frames of one recording).",
         ),
         OptionSpec::new(
             "max_rotation",

@@ -352,9 +352,10 @@ fn triangles(
 ///     (default) or let the assignment itself reject them.
 /// excess : bool — match the nodes the one-to-one search leaves over (default True).
 /// paper : bool — start from the paper's literal setting (default False).
-/// prealign : {"robust", "normalize", "sensor"} — rotation search with affine ICP (default;
-///     "normalize" with ``paper``), centroid and scale only, or the coordinates as given as the
-///     prior, moved only by the affine re-fits ("sensor", :func:`run`'s default for contours).
+/// prealign : {"robust", "normalize", "sensor"} — rotation search with affine ICP, ending for
+///     two outlines with a point-to-line fit of the outlines (default; "normalize" with
+///     ``paper``), centroid and scale only, or the coordinates as given as the prior, moved
+///     only by the affine re-fits ("sensor", :func:`run`'s default for contours).
 /// refits : int — modal affine re-fits (default 2, or 0 for unordered 3-D points).
 /// refit_tolerance : float ≥ 0 — no (further) re-fit once every one-to-one pair is within this
 ///     fraction of b's node spacing of its partner under one affine map (default 0.6; 0

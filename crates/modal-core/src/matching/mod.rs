@@ -3,7 +3,8 @@
 //! 1. [`prepare`](fn@prepare) — one object checked, normalised and oriented, its own-frame modes cached:
 //!    a [`PreparedShape`] serves every pair the object takes part in;
 //! 2. [`prealign`] — the first object brought into the second's normalised frame (centroid and
-//!    scale, or the robust rotation search with affine ICP);
+//!    scale, or the robust rotation search with affine ICP, ending with the outline fit for two
+//!    closed outlines);
 //! 3. [`features`] — the modal features, the mode alignment and the cost matrix `Z`;
 //! 4. [`search`] — local, global (with the assignment of the `assign` crate) or best matches;
 //! 5. [`excess`] — the nodes the one-to-one search leaves over;
