@@ -49,6 +49,8 @@ pub struct SequenceOptions {
     pub min_nodes: usize,
     /// Frames `start..end` of the recording to use (`None`: all).
     pub frames: Option<(usize, usize)>,
+    /// How each pair is matched. Default: [`MatchOptions::default`] without the outline fit
+    /// (`rotation_search.outline_iterations` 0): a run's frames keep node-to-node ICP.
     pub matching: MatchOptions,
     /// Drift correction: reference frames every this many frames, each object also matched
     /// against its ancestor on the last reference frame ([`crate::drift`]); 0: off.
