@@ -954,45 +954,33 @@ pub(crate) fn finish_search(
     screened: &[(Affine, f64)],
     parallel: bool,
 ) -> Affine {
-    let picked = refine_survivors(a, b, dim, search, keep_orientation, screened, parallel);
+    let screen = search.screening_iterations();
+    let picked = if search.iterations <= screen {
+        select_candidate(screened, dim, search)
+    } else {
+        let order = survivor_order(screened, search);
+        let refined = |i: usize| {
+            icp_affine(
+                a,
+                b,
+                dim,
+                screened[i].0,
+                search.iterations - screen,
+                keep_orientation,
+            )
+        };
+        let cands: Vec<(Affine, f64)> = if parallel {
+            order.into_par_iter().map(refined).collect()
+        } else {
+            order.into_iter().map(refined).collect()
+        };
+        select_candidate(&cands, dim, search)
+    };
     if keep_orientation && dim == 2 && search.outline_iterations > 0 {
         super::outline_fit::fit_outlines(a, b, picked, search.outline_iterations)
     } else {
         picked
     }
-}
-
-/// The survivors of the screening run to convergence, and the candidate kept among them.
-fn refine_survivors(
-    a: &[f64],
-    b: &[f64],
-    dim: usize,
-    search: &RotationSearch,
-    keep_orientation: bool,
-    screened: &[(Affine, f64)],
-    parallel: bool,
-) -> Affine {
-    let screen = search.screening_iterations();
-    if search.iterations <= screen {
-        return select_candidate(screened, dim, search);
-    }
-    let order = survivor_order(screened, search);
-    let refined = |i: usize| {
-        icp_affine(
-            a,
-            b,
-            dim,
-            screened[i].0,
-            search.iterations - screen,
-            keep_orientation,
-        )
-    };
-    let cands: Vec<(Affine, f64)> = if parallel {
-        order.into_par_iter().map(refined).collect()
-    } else {
-        order.into_iter().map(refined).collect()
-    };
-    select_candidate(&cands, dim, search)
 }
 
 /// The screened starts that run to convergence: the identity (index 0), whatever its score (see
