@@ -39,7 +39,7 @@ pub(crate) fn fit_outlines(a: &[f64], b: &[f64], start: Affine, iterations: usiz
             break;
         }
         cur = next;
-        if is_small(&step) {
+        if step.is_within_of_identity(CONVERGED) {
             break;
         }
     }
@@ -152,13 +152,6 @@ impl LineFit {
         aff.t[1] = w[5];
         Some(aff)
     }
-}
-
-fn is_small(step: &Affine) -> bool {
-    (0..2).all(|r| {
-        step.t[r].abs() < CONVERGED
-            && (0..2).all(|c| (step.m[r][c] - if r == c { 1.0 } else { 0.0 }).abs() < CONVERGED)
-    })
 }
 
 #[cfg(test)]

@@ -92,6 +92,16 @@ impl Affine {
         r
     }
 
+    /// Whether every entry of `M − I` and of `t` is below `tol` in magnitude: an ICP step that
+    /// no longer moves anything.
+    pub(crate) fn is_within_of_identity(&self, tol: f64) -> bool {
+        (0..self.dim).all(|r| {
+            self.t[r].abs() < tol
+                && (0..self.dim)
+                    .all(|c| (self.m[r][c] - if r == c { 1.0 } else { 0.0 }).abs() < tol)
+        })
+    }
+
     /// Determinant of the linear part's leading `dim × dim` block.
     pub fn det(&self) -> f64 {
         let m = &self.m;
@@ -774,10 +784,7 @@ pub(crate) fn icp_affine(
             return (cur, chamfer_of(&ab, &ba));
         }
         // Converged: the pairs would not change any more.
-        let still = (0..dim).all(|r| {
-            step.t[r].abs() < 1e-9
-                && (0..dim).all(|c| (step.m[r][c] - if r == c { 1.0 } else { 0.0 }).abs() < 1e-9)
-        });
+        let still = step.is_within_of_identity(1e-9);
         cur = next;
         moved = cur.apply(a);
         if still {
