@@ -129,7 +129,7 @@ impl MatchOptions {
     /// weighted 0.7 beside the modal distance. On 90 cases per severity of bench_match.py this
     /// scores 0.393 / 0.394 / 0.391 (mild / moderate / severe) — the same as aligned positions
     /// alone and above coherent point drift (0.368 / 0.369 / 0.366); modal distance alone reaches
-    /// 0.29: after the affine pre-alignment these warps leave little that positions miss. See the
+    /// 0.29: after the affine pre-alignment these warps leave little that positions miss. See
     /// BENCHMARKS.md, "Surfaces". A Gaussian on every second node only (`center_stride = 2`): with σ
     /// three spacings wide the reduced basis spans the same smooth modes, and on those 90 cases
     /// per severity it scores 0.393 / 0.393 / 0.391 with the solves' order halved (a surface pair
