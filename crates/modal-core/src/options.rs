@@ -326,7 +326,13 @@ impl MatchParams {
             .max_rotation
             .filter(|&r| r < 180.0)
             .or(o.rotation_search.max_rotation);
-        o.refits = self.refits.unwrap_or(o.refits);
+        o.refits = self
+            .refits
+            .unwrap_or(if self.realigns_outlines(dim, ordered) {
+                MatchOptions::default().refits
+            } else {
+                o.refits
+            });
         o.refit_tolerance = self.refit_tolerance.unwrap_or(o.refit_tolerance);
         o.refine = self.refine;
         o.deform_modes = self.deform_modes;
@@ -335,6 +341,19 @@ impl MatchParams {
         o.cost_power = self.cost_power.unwrap_or(o.cost_power);
         o.common_sigma = self.common_sigma.unwrap_or(o.common_sigma);
         Ok(o)
+    }
+
+    /// Whether two closed planar outlines are pre-aligned otherwise than by the outline recipe's
+    /// rotation search (not in the paper's setting): the re-fits then do the aligning that the
+    /// outline fit would have done, so they default to [`MatchOptions::default`]'s, not to
+    /// [`MatchOptions::for_outlines`]' none.
+    fn realigns_outlines(&self, dim: usize, ordered: bool) -> bool {
+        dim == 2
+            && ordered
+            && !self.paper
+            && self
+                .prealign
+                .is_some_and(|p| p != MatchOptions::for_outlines().prealign)
     }
 
     /// Every option as actually used by `used` (the result of
@@ -648,7 +667,14 @@ pub fn match_option_specs() -> Vec<OptionSpec> {
         OptionSpec::new(
             "refits",
             Value,
-            by_input(|o| o.refits),
+            format!(
+                "{} for two closed outlines pre-aligned by the rotation search (match); {} with \
+                 another pre-alignment, for 2-D points and for a recording's frames; {} for \
+                 unordered 3-D points",
+                MatchOptions::for_outlines().refits,
+                MatchOptions::default().refits,
+                MatchOptions::for_surfaces().refits
+            ),
             "Maximum modal affine re-fits (stops earlier when the pairs stop changing).",
         ),
         OptionSpec::new(
@@ -763,6 +789,10 @@ mod tests {
         let d = MatchParams::default();
         assert_eq!(
             d.to_match_options(2, true).unwrap(),
+            MatchOptions::for_outlines()
+        );
+        assert_eq!(
+            d.to_match_options(2, false).unwrap(),
             MatchOptions::default()
         );
         assert_eq!(
@@ -774,6 +804,56 @@ mod tests {
             paper.to_match_options(2, true).unwrap(),
             MatchOptions::paper()
         );
+    }
+
+    #[test]
+    fn outlines_keep_the_refits_unless_the_rotation_search_aligns_them() {
+        let refits = |params: MatchParams, dim, ordered| {
+            params.to_match_options(dim, ordered).unwrap().refits
+        };
+        let d = MatchParams::default;
+        let (none, some) = (
+            MatchOptions::for_outlines().refits,
+            MatchOptions::default().refits,
+        );
+        assert_eq!((none, some), (0, 2));
+        assert_eq!(refits(d(), 2, true), none);
+        let robust = Some(Prealign::Robust);
+        assert_eq!(
+            refits(
+                MatchParams {
+                    prealign: robust,
+                    ..d()
+                },
+                2,
+                true
+            ),
+            none
+        );
+        for other in [Prealign::Normalize, Prealign::Sensor] {
+            let p = MatchParams {
+                prealign: Some(other),
+                ..d()
+            };
+            assert_eq!(refits(p.clone(), 2, true), some, "{other}");
+            // Only outlines: 2-D point sets keep their re-fits anyway, surfaces have none.
+            assert_eq!(refits(p.clone(), 2, false), some);
+            assert_eq!(refits(p, 3, false), 0);
+        }
+        // Chosen values and the paper's setting win.
+        let sensor = Some(Prealign::Sensor);
+        let chosen = MatchParams {
+            prealign: sensor,
+            refits: Some(1),
+            ..d()
+        };
+        assert_eq!(refits(chosen, 2, true), 1);
+        let paper = MatchParams {
+            paper: true,
+            prealign: sensor,
+            ..d()
+        };
+        assert_eq!(refits(paper, 2, true), 0);
     }
 
     #[test]
@@ -862,7 +942,10 @@ mod tests {
         assert_eq!(names, used);
         let excess = &match_option_specs()[6];
         assert_eq!(excess.cli_flags(), ["--no-excess"]);
-        assert!(match_option_specs()[10].default.contains("2 for contours"));
+        let refits = &match_option_specs()[10];
+        assert_eq!(refits.name, "refits");
+        assert!(refits.default.starts_with("0 for two closed outlines"));
+        assert!(refits.default.contains("; 2 with another pre-alignment"));
     }
 
     #[test]

@@ -229,7 +229,9 @@ impl RunParams {
     /// Consecutive frames hardly turn: the rotation search is bounded by
     /// [`modal_core::options::RUN_MAX_ROTATION`] unless `max_rotation` is given. Consecutive
     /// contours share the sensor's coordinates: they are pre-aligned by
-    /// [`modal_core::options::RUN_PREALIGN`] unless `prealign` or `paper` is given.
+    /// [`modal_core::options::RUN_PREALIGN`] unless `prealign` or `paper` is given. Frames keep
+    /// node-to-node ICP, not the outline fit of a pair ([`MatchOptions::for_outlines`]), and so
+    /// the default recipe's re-fits unless `refits` or `paper` is given.
     pub fn match_options(&self) -> std::result::Result<MatchOptions, OptionError> {
         let surface = self.model == ObjectModel::Surface;
         let mut o = self
@@ -243,6 +245,10 @@ impl RunParams {
             && !self.matching.paper
         {
             o.prealign = modal_core::options::RUN_PREALIGN;
+        }
+        if !surface && self.matching.refits.is_none() && !self.matching.paper {
+            // Frames are not fitted as outlines (`for_frames`): the re-fits align them.
+            o.refits = MatchOptions::default().refits;
         }
         Ok(for_frames(o))
     }

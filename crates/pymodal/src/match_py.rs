@@ -334,7 +334,8 @@ fn triangles(
 /// nodes in modal space. Every option defaults to ``None``: the documented default below, the
 /// same as ``pedomatch match`` (keyword ``x_y`` is the flag ``--x-y``; ``pymodal._options()``
 /// lists them all). The defaults are the most accurate setting measured (robust rotation
-/// pre-alignment, up to two modal affine re-fits, cross-object mode alignment, excess nodes on
+/// pre-alignment, which for two closed outlines ends in a fit of the outlines and needs no modal
+/// affine re-fits, up to two re-fits otherwise; cross-object mode alignment, excess nodes on
 /// contours; for unordered 3-D point sets the surface setting: wide common σ, no re-fits,
 /// aligned positions mixed in, powered costs); ``paper=True`` is the paper's literal setting.
 ///
@@ -356,7 +357,9 @@ fn triangles(
 ///     two outlines with a point-to-line fit of the outlines (default; "normalize" with
 ///     ``paper``), centroid and scale only, or the coordinates as given as the prior, moved
 ///     only by the affine re-fits ("sensor", :func:`run`'s default for contours).
-/// refits : int — modal affine re-fits (default 2, or 0 for unordered 3-D points).
+/// refits : int — modal affine re-fits (default 0 for two closed outlines pre-aligned by the
+///     rotation search; 2 with another ``prealign``, for 2-D point sets and for :func:`run`'s
+///     frames; 0 for unordered 3-D points).
 /// refit_tolerance : float ≥ 0 — no (further) re-fit once every one-to-one pair is within this
 ///     fraction of b's node spacing of its partner under one affine map (default 0.6; 0
 ///     re-fits ``refits`` times).

@@ -64,6 +64,25 @@ fn outline_step(moved: &[f64], b: &[f64]) -> Option<Affine> {
     fit.solve()
 }
 
+/// How far apart two closed planar outlines lie: the mean squared distance from each node of
+/// either outline to the closest point of the other's segments (a chamfer distance to the
+/// curves, not to their nodes).
+pub(crate) fn outline_distance(moved: &[f64], b: &[f64]) -> f64 {
+    let (ab, ba) = nearest_both(moved, b, 2);
+    let squared = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+    let one_way = |from: &[f64], to: &[f64], nearest: &[(usize, f64)]| -> f64 {
+        nearest
+            .iter()
+            .enumerate()
+            .map(|(i, &(k, _))| {
+                let p = point(from, i);
+                squared(p, closest_on_outline(to, k, p).0)
+            })
+            .sum()
+    };
+    (one_way(moved, b, &ab) + one_way(b, moved, &ba)) / (ab.len() + ba.len()) as f64
+}
+
 fn point(c: &[f64], i: usize) -> [f64; 2] {
     [c[2 * i], c[2 * i + 1]]
 }
@@ -209,6 +228,21 @@ mod tests {
             outline_err < 0.25 * node_err,
             "{outline_err} vs node ICP {node_err}"
         );
+    }
+
+    #[test]
+    fn outline_distance_measures_the_curves_not_their_nodes() {
+        let a = sampled(60, 0.0, &Affine::identity(2));
+        assert_eq!(outline_distance(&a, &a), 0.0);
+        // The same curve sampled half a node spacing further on: its nodes lie between A's, but
+        // on (the chords of) the same curve.
+        let b = sampled(60, 0.5, &Affine::identity(2));
+        let nodes = crate::matching::prealign::chamfer(&a, &b, 2);
+        let curves = outline_distance(&a, &b);
+        assert!(curves < 0.01 * nodes, "outlines {curves} vs nodes {nodes}");
+        // Moved off the curve, both grow.
+        let off = turned(0.0, [1.0, 1.0], [0.05, 0.0]).apply(&a);
+        assert!(outline_distance(&off, &b) > 10.0 * curves);
     }
 
     #[test]

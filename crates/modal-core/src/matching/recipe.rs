@@ -147,20 +147,39 @@ impl MatchOptions {
         o
     }
 
+    /// Measured best for two closed planar outlines (contours): the default recipe without the
+    /// modal affine re-fits. Its pre-alignment, the rotation search, ends in the point-to-line
+    /// fit of the outlines (docs/method.md §7.1), which leaves the re-fits nothing to add: on
+    /// 1620 pairs per severity from bench_match.py's held-out generator (seeds 1001-1018), no
+    /// re-fit scored 0.9998 / 0.9984 / 0.9752 (mild / moderate / severe) against 0.9998 /
+    /// 0.9982 / 0.9728 with up to 2, and a pair takes less time (BENCHMARKS.md). Any other pre-alignment
+    /// needs the re-fits to align A: [`MatchParams::to_match_options`](crate::MatchParams)
+    /// keeps the default's for it, and a recording's frames, which are not fitted as outlines,
+    /// keep them too.
+    pub fn for_outlines() -> Self {
+        Self {
+            refits: 0,
+            ..Self::default()
+        }
+    }
+
     /// The measured best setting for a kind of input: [`MatchOptions::for_surfaces`] for
-    /// unordered 3-D point sets and meshes (`dim == 3 && !ordered`), the default recipe for
-    /// contours and 2-D point sets. What `pymodal.match` and the `pedomatch` CLI start from.
+    /// unordered 3-D point sets and meshes (`dim == 3 && !ordered`),
+    /// [`MatchOptions::for_outlines`] for closed planar outlines (`dim == 2 && ordered`), the
+    /// default recipe for everything else (2-D point sets). What `pymodal.match` and the
+    /// `pedomatch` CLI start from.
     ///
     /// ```
     /// use modal_core::MatchOptions;
     /// assert_eq!(MatchOptions::for_input(3, false), MatchOptions::for_surfaces());
-    /// assert_eq!(MatchOptions::for_input(2, true), MatchOptions::default());
+    /// assert_eq!(MatchOptions::for_input(2, true), MatchOptions::for_outlines());
+    /// assert_eq!(MatchOptions::for_input(2, false), MatchOptions::default());
     /// ```
     pub fn for_input(dim: usize, ordered: bool) -> Self {
-        if dim == 3 && !ordered {
-            Self::for_surfaces()
-        } else {
-            Self::default()
+        match (dim, ordered) {
+            (3, false) => Self::for_surfaces(),
+            (2, true) => Self::for_outlines(),
+            _ => Self::default(),
         }
     }
 
