@@ -96,11 +96,9 @@ fn bench(c: &mut Criterion) {
             match_prepared(black_box(&pa), black_box(&pb), &o, Parallelism::Serial).unwrap()
         })
     });
+    // The default for two closed outlines (`pedomatch match`, `pymodal.match`): no re-fit.
     g.bench_function("recipe_no_refit", |x| {
-        let o = MatchOptions {
-            refits: 0,
-            ..MatchOptions::default()
-        };
+        let o = MatchOptions::for_outlines();
         x.iter(|| match_shapes(black_box(&a), black_box(&b), &o).unwrap())
     });
     g.bench_function("recipe_center_stride_2", |x| {
