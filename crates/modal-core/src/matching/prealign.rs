@@ -1038,13 +1038,14 @@ fn closest_outlines(fits: &[(Affine, f64)], search: &RotationSearch) -> Vec<usiz
 
 /// How much further than the closest fitted outlines a survivor's may lie and still be chosen
 /// by its nodes (a fraction). On 810 severe pairs of bench_match.py's held-out generator (seeds
-/// 1001-1003 and 1010-1015) any margin from 0.02 to 0.5 chose the same maps: the far turns' outlines lie more than 1.5 times as far.
+/// 1001-1003 and 1010-1015) any margin from 0.02 to 0.5 chose the same maps: the far turns'
+/// outlines lie more than 1.5 times as far.
 const OUTLINE_MARGIN: f64 = 0.1;
 
 /// Outline distances below this (mean squared, in B's normalised frame whose RMS radius is 1)
 /// are as close as the outline fit's steps come: [`closest_outlines`] treats them as equal. Two
 /// samplings of a real outline lie further apart (at least 1.8e-6 on 108 ground-truth pairs);
-/// an outline and its exact affine image end at 1e-8 or below.
+/// an outline and its exact affine image end at about 1e-8 or below.
 const EXACT_FIT: f64 = 1e-9;
 
 /// The screened starts that run to convergence: the identity (index 0), whatever its score (see
