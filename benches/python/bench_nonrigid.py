@@ -40,8 +40,10 @@ def main():
     ap.add_argument("--markdown", action="store_true")
     args = ap.parse_args()
     contour_methods = {
-        "pymodal.match (affine re-fits, default)": bm.modal(),
+        "pymodal.match (defaults: no re-fit)": bm.modal(),
+        "pymodal.match refits=2": bm.modal(refits=2),
         "pymodal.match refine='modal'": bm.modal(refine="modal"),
+        "pymodal.match refits=2, refine='modal'": bm.modal(refits=2, refine="modal"),
         "pycpd deformable + argmax P": bm.cpd(),
         "pycpd rigid, affine, then deformable + argmax P": bm.cpd("rigid", "affine"),
     }
