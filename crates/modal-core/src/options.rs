@@ -158,7 +158,8 @@ pub struct MatchParams {
     /// `None`: the caller's default, unbounded for a pair, [`RUN_MAX_ROTATION`] for a
     /// recording's consecutive frames).
     pub max_rotation: Option<f64>,
-    /// Maximum modal affine re-fits (`None`: the recipe's).
+    /// Maximum modal affine re-fits (`None`: the recipe's; for two closed outlines none after
+    /// the rotation search, 2 after another pre-alignment).
     pub refits: Option<usize>,
     /// Re-fit stopping tolerance in B's node spacings (`None`: the recipe's).
     pub refit_tolerance: Option<f64>,
@@ -295,7 +296,9 @@ impl MatchParams {
 
     /// The engine's options for objects of `dim` dimensions, ordered closed contours or not:
     /// the recipe for that kind of input ([`MatchOptions::for_input`], or
-    /// [`MatchOptions::paper`]) with every chosen value applied. `ordered` is left to the caller.
+    /// [`MatchOptions::paper`]) with every chosen value applied; two closed outlines given
+    /// another `prealign` than the rotation search keep the default recipe's re-fits unless
+    /// `refits` is given. `ordered` is left to the caller.
     pub fn to_match_options(&self, dim: usize, ordered: bool) -> Result<MatchOptions, OptionError> {
         self.validate()?;
         let mut o = if self.paper {
