@@ -75,8 +75,9 @@ fn main() -> Result<(), modal_core::ModalError> {
         omega2.join(" ")
     );
 
-    // Match with the defaults (rotation search, affine re-fits, excess nodes).
-    let r = match_shapes(&a, &b, &MatchOptions::default())?;
+    // Match with the setting for two outlines that `pedomatch match` uses (rotation search ending
+    // in a fit of the outlines, no affine re-fits, excess nodes).
+    let r = match_shapes(&a, &b, &MatchOptions::for_outlines())?;
     println!(
         "matches: {} local, {} one-to-one, {} excess; {} re-fits",
         r.local_count(),
