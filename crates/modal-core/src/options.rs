@@ -300,12 +300,23 @@ impl MatchParams {
     /// another `prealign` than the rotation search keep the default recipe's re-fits unless
     /// `refits` is given. `ordered` is left to the caller.
     pub fn to_match_options(&self, dim: usize, ordered: bool) -> Result<MatchOptions, OptionError> {
-        self.validate()?;
-        let mut o = if self.paper {
+        let base = if self.paper {
             MatchOptions::paper()
         } else {
             MatchOptions::for_input(dim, ordered)
         };
+        let mut o = self.applied_to(base)?;
+        if self.refits.is_none() && self.realigns_outlines(dim, ordered) {
+            o.refits = MatchOptions::default().refits;
+        }
+        Ok(o)
+    }
+
+    /// `o` with every chosen value applied, once they are checked: for a caller that starts
+    /// from a recipe of its own (a recording's frames start from [`MatchOptions::default`], not
+    /// from the pair recipe of [`MatchOptions::for_outlines`]). `paper` is the caller's to honour.
+    pub fn applied_to(&self, mut o: MatchOptions) -> Result<MatchOptions, OptionError> {
+        self.validate()?;
         o.model.element = self.element;
         if let Some(s) = self.center_stride {
             o.model.center_stride = s;
@@ -329,13 +340,7 @@ impl MatchParams {
             .max_rotation
             .filter(|&r| r < 180.0)
             .or(o.rotation_search.max_rotation);
-        o.refits = self
-            .refits
-            .unwrap_or(if self.realigns_outlines(dim, ordered) {
-                MatchOptions::default().refits
-            } else {
-                o.refits
-            });
+        o.refits = self.refits.unwrap_or(o.refits);
         o.refit_tolerance = self.refit_tolerance.unwrap_or(o.refit_tolerance);
         o.refine = self.refine;
         o.deform_modes = self.deform_modes;
@@ -729,7 +734,13 @@ pub fn match_option_specs() -> Vec<OptionSpec> {
         OptionSpec::new(
             "common_sigma",
             TriState,
-            by_input(|o| o.common_sigma),
+            format!(
+                "{} for two closed outlines (match) and {} for unordered 3-D points; {} for 2-D \
+                 points and a recording's frames",
+                MatchOptions::for_outlines().common_sigma,
+                MatchOptions::for_surfaces().common_sigma,
+                MatchOptions::default().common_sigma
+            ),
             "One Gaussian width for both objects (for independently sampled point sets).",
         ),
         OptionSpec::new(

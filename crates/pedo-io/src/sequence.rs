@@ -230,13 +230,21 @@ impl RunParams {
     /// [`modal_core::options::RUN_MAX_ROTATION`] unless `max_rotation` is given. Consecutive
     /// contours share the sensor's coordinates: they are pre-aligned by
     /// [`modal_core::options::RUN_PREALIGN`] unless `prealign` or `paper` is given. Frames keep
-    /// node-to-node ICP, not the outline fit of a pair ([`MatchOptions::for_outlines`]), and so
-    /// the default recipe's re-fits unless `refits` or `paper` is given.
+    /// node-to-node ICP, not the outline fit of a pair, and start from the default recipe
+    /// ([`MatchOptions::default`]), not from the pair recipe of two outlines
+    /// ([`MatchOptions::for_outlines`]).
     pub fn match_options(&self) -> std::result::Result<MatchOptions, OptionError> {
         let surface = self.model == ObjectModel::Surface;
-        let mut o = self
-            .matching
-            .to_match_options(if surface { 3 } else { 2 }, !surface)?;
+        let base = if self.matching.paper {
+            MatchOptions::paper()
+        } else if surface {
+            MatchOptions::for_surfaces()
+        } else {
+            // Frames are not fitted as outlines (`for_frames`): the general recipe, with its
+            // re-fits, not the pair recipe of two outlines.
+            MatchOptions::default()
+        };
+        let mut o = self.matching.applied_to(base)?;
         if self.matching.max_rotation.is_none() {
             o.rotation_search.max_rotation = Some(modal_core::options::RUN_MAX_ROTATION);
         }
@@ -245,10 +253,6 @@ impl RunParams {
             && !self.matching.paper
         {
             o.prealign = modal_core::options::RUN_PREALIGN;
-        }
-        if !surface && self.matching.refits.is_none() && !self.matching.paper {
-            // Frames are not fitted as outlines (`for_frames`): the re-fits align them.
-            o.refits = MatchOptions::default().refits;
         }
         Ok(for_frames(o))
     }

@@ -335,7 +335,8 @@ fn triangles(
 /// same as ``pedomatch match`` (keyword ``x_y`` is the flag ``--x-y``; ``pymodal._options()``
 /// lists them all). The defaults are the most accurate setting measured (robust rotation
 /// pre-alignment, which for two closed outlines ends in a fit of the outlines and needs no modal
-/// affine re-fits, up to two re-fits otherwise; cross-object mode alignment, excess nodes on
+/// affine re-fits (one σ for both outlines), up to two re-fits otherwise; cross-object mode
+/// alignment, excess nodes on
 /// contours; for unordered 3-D point sets the surface setting: wide common σ, no re-fits,
 /// aligned positions mixed in, powered costs); ``paper=True`` is the paper's literal setting.
 ///
@@ -376,7 +377,8 @@ fn triangles(
 ///     0, or 0.7 for unordered 3-D points).
 /// cost_power : float > 0 — the assignment minimises the sum of costs to this power (default 1,
 ///     or 0.125 for unordered 3-D points); costs, affinity and threshold are in powered units.
-/// common_sigma : bool — one σ for both objects (default False, True for unordered 3-D points).
+/// common_sigma : bool — one σ for both objects (default True for two closed outlines and for
+///     unordered 3-D points, False for 2-D point sets and :func:`run`'s frames).
 /// skip_rigid : bool — leave the quasi-rigid modes out (default False).
 /// band : int — band of the cross-object mode reordering (default 3).
 /// material : preset name, "E,NU,RHO", dict or (E, nu, rho) — only ν changes the matches.

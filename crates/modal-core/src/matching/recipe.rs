@@ -148,17 +148,27 @@ impl MatchOptions {
     }
 
     /// Measured best for two closed planar outlines (contours): the default recipe without the
-    /// modal affine re-fits. Its pre-alignment, the rotation search, ends in the point-to-line
-    /// fit of the outlines (docs/method.md §7.1), which leaves the re-fits nothing to add: on
-    /// 1620 pairs per severity from bench_match.py's held-out generator (seeds 1001-1018), no
-    /// re-fit scored 0.9998 / 0.9984 / 0.9752 (mild / moderate / severe) against 0.9998 /
-    /// 0.9982 / 0.9728 with up to 2, and a pair takes less time (BENCHMARKS.md). Any other pre-alignment
-    /// needs the re-fits to align A: [`MatchParams::to_match_options`](crate::MatchParams)
-    /// keeps the default's for it, and a recording's frames, which are not fitted as outlines,
-    /// keep them too.
+    /// modal affine re-fits and with one Gaussian width for both outlines.
+    ///
+    /// Its pre-alignment, the rotation search, ends in the point-to-line fit of the outlines
+    /// (docs/method.md §7.1), which leaves the re-fits nothing to add: on 1620 pairs per
+    /// severity from bench_match.py's held-out generator (seeds 1001-1018), no re-fit scored
+    /// 0.9998 / 0.9984 / 0.9752 (mild / moderate / severe) against 0.9998 / 0.9982 / 0.9728
+    /// with up to 2, and a pair takes less time (BENCHMARKS.md). Any other pre-alignment needs
+    /// the re-fits to align A: [`MatchParams::to_match_options`](crate::MatchParams) keeps the
+    /// default's for it, and a recording's frames, which are not fitted as outlines, start from
+    /// [`MatchOptions::default`].
+    ///
+    /// One width ([`MatchOptions::common_sigma`]): two samplings of one curve at different
+    /// densities otherwise get kernels of different widths along it, and their modes differ in
+    /// shape. On 810 pairs per severity of the held-out generator (seeds 1001-1003 and
+    /// 1010-1015) the worst mild pair rose from 0.939 to 1.000 and the moderate mean from
+    /// 0.9984 to 0.9990, and the severe mean held (0.9756 and 0.9755); BENCHMARKS.md has the
+    /// sets checked afterwards.
     pub fn for_outlines() -> Self {
         Self {
             refits: 0,
+            common_sigma: true,
             ..Self::default()
         }
     }
