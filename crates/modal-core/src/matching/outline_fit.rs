@@ -51,14 +51,10 @@ pub(crate) fn fit_outlines(a: &[f64], b: &[f64], start: Affine, iterations: usiz
 fn outline_step(moved: &[f64], b: &[f64]) -> Option<Affine> {
     let (ab, ba) = nearest_both(moved, b, 2);
     let mut fit = LineFit::default();
-    for (i, &(k, _)) in ab.iter().enumerate() {
-        let p = point(moved, i);
-        let (q, normal) = closest_on_outline(b, k, p);
+    for (p, q, normal) in closest_points(moved, b, &ab) {
         fit.add(p, q, normal);
     }
-    for (j, &(k, _)) in ba.iter().enumerate() {
-        let q = point(b, j);
-        let (p, normal) = closest_on_outline(moved, k, q);
+    for (q, p, normal) in closest_points(b, moved, &ba) {
         fit.add(p, q, normal);
     }
     fit.solve()
@@ -69,18 +65,26 @@ fn outline_step(moved: &[f64], b: &[f64]) -> Option<Affine> {
 /// curves, not to their nodes).
 pub(crate) fn outline_distance(moved: &[f64], b: &[f64]) -> f64 {
     let (ab, ba) = nearest_both(moved, b, 2);
-    let squared = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
-    let one_way = |from: &[f64], to: &[f64], nearest: &[(usize, f64)]| -> f64 {
-        nearest
-            .iter()
-            .enumerate()
-            .map(|(i, &(k, _))| {
-                let p = point(from, i);
-                squared(p, closest_on_outline(to, k, p).0)
-            })
-            .sum()
-    };
-    (one_way(moved, b, &ab) + one_way(b, moved, &ba)) / (ab.len() + ba.len()) as f64
+    let squared =
+        |(p, q, _): ([f64; 2], [f64; 2], [f64; 2])| (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+    let to_b: f64 = closest_points(moved, b, &ab).map(squared).sum();
+    let to_a: f64 = closest_points(b, moved, &ba).map(squared).sum();
+    (to_b + to_a) / (ab.len() + ba.len()) as f64
+}
+
+/// Each node of the outline `from` with the closest point of the outline `to` (on the two
+/// segments at its nearest node of `to`, `nearest` from [`nearest_both`]) and that segment's
+/// unit normal: the pairs of both the fit and the distance.
+fn closest_points<'a>(
+    from: &'a [f64],
+    to: &'a [f64],
+    nearest: &'a [(usize, f64)],
+) -> impl Iterator<Item = ([f64; 2], [f64; 2], [f64; 2])> + 'a {
+    nearest.iter().enumerate().map(move |(i, &(k, _))| {
+        let p = point(from, i);
+        let (q, normal) = closest_on_outline(to, k, p);
+        (p, q, normal)
+    })
 }
 
 fn point(c: &[f64], i: usize) -> [f64; 2] {

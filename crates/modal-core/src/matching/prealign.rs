@@ -1019,7 +1019,8 @@ pub(crate) fn finish_search(
 /// outlines lay clearly further from B than the true turn's. Where the outlines cannot tell
 /// fits apart (an ellipse fits its affine images at any turn) the nodes still decide.
 fn closest_outlines(fits: &[(Affine, f64)], search: &RotationSearch) -> Vec<usize> {
-    let mut pool = within_bound(fits, search);
+    let turn: Vec<f64> = fits.iter().map(|c| rotation_angle(&c.0)).collect();
+    let mut pool = within_bound(fits, &turn, search);
     if pool.is_empty() {
         pool = (0..fits.len()).collect();
     }
@@ -1081,7 +1082,7 @@ fn select_index(cands: &[(Affine, f64)], search: &RotationSearch) -> Option<usiz
     let least_turn = |ks: &mut dyn Iterator<Item = usize>| {
         ks.min_by(|&x, &y| turn[x].total_cmp(&turn[y]).then(x.cmp(&y)))
     };
-    let allowed = within_bound(cands, search);
+    let allowed = within_bound(cands, &turn, search);
     if allowed.is_empty() {
         return least_turn(&mut (0..cands.len()));
     }
@@ -1093,11 +1094,12 @@ fn select_index(cands: &[(Affine, f64)], search: &RotationSearch) -> Option<usiz
     least_turn(&mut allowed.into_iter().filter(|&k| cands[k].1 <= near))
 }
 
-/// The candidates with a finite score that turn no further than [`RotationSearch::max_rotation`].
-fn within_bound(cands: &[(Affine, f64)], search: &RotationSearch) -> Vec<usize> {
+/// The candidates with a finite score that turn (`turn`, their [`rotation_angle`]s) no further
+/// than [`RotationSearch::max_rotation`].
+fn within_bound(cands: &[(Affine, f64)], turn: &[f64], search: &RotationSearch) -> Vec<usize> {
     let bound = search.max_rotation.unwrap_or(f64::INFINITY);
     (0..cands.len())
-        .filter(|&k| rotation_angle(&cands[k].0) <= bound && cands[k].1.is_finite())
+        .filter(|&k| turn[k] <= bound && cands[k].1.is_finite())
         .collect()
 }
 
