@@ -101,6 +101,15 @@ fn bench(c: &mut Criterion) {
         let o = MatchOptions::for_outlines();
         x.iter(|| match_shapes(black_box(&a), black_box(&b), &o).unwrap())
     });
+    // On the calling thread alone: what the helper job of `Parallelism::Pair` (rotation
+    // starts, survivors, B's solve) saves one pair at a time.
+    g.bench_function("recipe_no_refit_serial", |x| {
+        let o = MatchOptions::for_outlines();
+        x.iter(|| {
+            let (pa, pb) = (prepare(&a, &o).unwrap(), prepare(&b, &o).unwrap());
+            match_prepared(black_box(&pa), black_box(&pb), &o, Parallelism::Serial).unwrap()
+        })
+    });
     g.bench_function("recipe_center_stride_2", |x| {
         let mut o = MatchOptions::default();
         o.model.center_stride = 2;

@@ -5,7 +5,10 @@
 mod match_common;
 
 use match_common::*;
-use modal_core::{match_shapes, MatchOptions, RotationSearch, Shape, Topology};
+use modal_core::{
+    match_prepared, match_shapes, prepare, MatchOptions, Parallelism, RotationSearch, Shape,
+    Topology,
+};
 
 fn run(sev: Severity, seeds: std::ops::Range<u64>, opts: &MatchOptions) -> (f64, Vec<f64>) {
     let outlines = outlines();
@@ -444,9 +447,9 @@ fn fingerprint(r: &modal_core::MatchResult) -> Fingerprint {
 #[test]
 fn the_schedule_does_not_change_the_matches() {
     // From outside the rayon pool (this test's thread) a pair runs on the calling thread with a
-    // helper job taking rotation starts and B's solve when it wakes; from inside the pool (a
-    // sequence) on both workers with rayon::join. Every result must be identical, bit for bit,
-    // whoever computed what.
+    // helper job taking rotation starts, survivors and B's solve when it wakes; from inside the
+    // pool (a sequence) on both workers; with `Parallelism::Serial` on the calling thread alone.
+    // Every result must be identical, bit for bit, whoever computed what.
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
         .build()
@@ -454,6 +457,7 @@ fn the_schedule_does_not_change_the_matches() {
     let outlines = outlines();
     let options = [
         MatchOptions::default(),
+        MatchOptions::for_outlines(),
         MatchOptions::paper(),
         MatchOptions {
             position_weight: 1.0,
@@ -480,10 +484,17 @@ fn the_schedule_does_not_change_the_matches() {
                 for (x, y) in [(&a, &b), (&pa, &pb)] {
                     let outside = match_shapes(x, y, opts).unwrap();
                     let inside = pool.install(|| match_shapes(x, y, opts)).unwrap();
+                    let (px, py) = (prepare(x, opts).unwrap(), prepare(y, opts).unwrap());
+                    let serial = match_prepared(&px, &py, opts, Parallelism::Serial).unwrap();
                     assert_eq!(
                         fingerprint(&outside),
                         fingerprint(&inside),
                         "{sev:?} seed {seed}"
+                    );
+                    assert_eq!(
+                        fingerprint(&outside),
+                        fingerprint(&serial),
+                        "{sev:?} seed {seed}, serial"
                     );
                 }
             }

@@ -4,18 +4,20 @@
 //!
 //! With a helper, this thread still does all the work itself, in an order that never waits for a
 //! helper that has not started: a pool worker can take long to wake (on a VM, after a 15 ms pause,
-//! two threads ran slower than one). The helper takes rotation starts from a shared counter and
-//! then B's solve if this thread has not claimed it yet. Whoever computes a result stores it in
-//! its slot, so the outcome does not depend on the timing. This thread waits (blocked on a
-//! condition variable, not spinning) only for a start or a solve the helper has claimed and is
-//! therefore running.
+//! two threads ran slower than one). Both threads take rotation starts from a shared counter,
+//! then the survivors of the screening from another (each survivor's convergence and outline
+//! fit is as long as five starts' screening, and A's solve waits for all of them), and the
+//! helper then takes B's solve if this thread has not claimed it yet. Whoever computes a result
+//! stores it in its slot, so the outcome does not depend on the timing. This thread waits
+//! (blocked on a condition variable, not spinning) only for a start, a survivor or a solve the
+//! helper has claimed and is therefore running.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Arc, Condvar, Mutex};
+use std::sync::{Arc, Condvar, Mutex, OnceLock};
 
 use super::features::ModalFeatures;
 use super::prealign::Prealign;
-use super::prealign::{self, Affine, RotationSearch};
+use super::prealign::{self, Affine, RotationSearch, SurvivorFit};
 use super::prepare::{Pair, PreparedShape};
 use super::refine::Start;
 use crate::error::ModalError;
@@ -106,6 +108,14 @@ struct Screening {
     keep_orientation: bool,
 }
 
+/// The screening's outcome, shared by both threads: every start's screened map and chamfer, and
+/// the survivors' indices with a slot for each one's fit.
+struct Survivors {
+    screened: Vec<(Affine, f64)>,
+    order: Option<Vec<usize>>,
+    fits: Vec<Slot<SurvivorFit>>,
+}
+
 /// A result one thread fills and the other may wait for, blocked.
 struct Slot<T> {
     value: Mutex<Option<T>>,
@@ -142,6 +152,9 @@ struct Shared {
     starts: Vec<Affine>,
     next: AtomicUsize,
     screened: Vec<Slot<(Affine, f64)>>,
+    /// Set by the first thread done screening, once every start is screened.
+    survivors: OnceLock<Survivors>,
+    next_survivor: AtomicUsize,
     solve_b: Option<SolveB>,
     b_claimed: AtomicBool,
     b_modes: Slot<Features>,
@@ -167,6 +180,41 @@ impl Shared {
             );
             // Only the thread that took index i fills slot i.
             self.screened[i].set(r);
+        }
+    }
+
+    /// The screened starts and their survivors; blocks until every start is screened, so only
+    /// called by a thread whose own [`Shared::screen`] has returned (the other thread's claimed
+    /// starts are then running or done).
+    fn survivors(&self, s: &Screening) -> &Survivors {
+        self.survivors.get_or_init(|| {
+            let screened: Vec<(Affine, f64)> = self.screened.iter().map(Slot::wait).collect();
+            let order = prealign::survivors(&screened, &s.search);
+            let fits = order.iter().flatten().map(|_| Slot::new()).collect();
+            Survivors {
+                screened,
+                order,
+                fits,
+            }
+        })
+    }
+
+    /// Runs survivors to convergence until none is left.
+    fn converge(&self) {
+        let Some(s) = &self.screening else { return };
+        let survivors = self.survivors(s);
+        let Some(order) = &survivors.order else {
+            return;
+        };
+        loop {
+            let i = self.next_survivor.fetch_add(1, Ordering::Relaxed);
+            if i >= order.len() {
+                return;
+            }
+            let start = survivors.screened[order[i]].0;
+            let fit =
+                prealign::converge(&s.a, &s.b, self.dim, &s.search, s.keep_orientation, start);
+            survivors.fits[i].set(fit);
         }
     }
 
@@ -197,6 +245,8 @@ impl FirstPhase {
             dim,
             screened: (0..starts.len()).map(|_| Slot::new()).collect(),
             starts,
+            survivors: OnceLock::new(),
+            next_survivor: AtomicUsize::new(0),
             screening,
             next: AtomicUsize::new(0),
             solve_b,
@@ -206,27 +256,33 @@ impl FirstPhase {
         let helper = Arc::clone(&shared);
         rayon::spawn(move || {
             helper.screen();
+            helper.converge();
             helper.solve_b();
         });
         Self { shared }
     }
 
-    /// The rotation search's result (`None` when no screening was given): the starts this
-    /// thread screens, then [`prealign::finish_search`] on this thread — the same candidates and
-    /// order as [`prealign::robust_prealign`], so the same map.
+    /// The rotation search's result (`None` when no screening was given): the starts and
+    /// survivors this thread takes, then [`prealign::choose`] — the same candidates and order as
+    /// [`prealign::robust_prealign`], so the same map.
     fn prealign(&self) -> Option<Affine> {
         let shared = &self.shared;
         shared.screen();
+        shared.converge();
         let s = shared.screening.as_ref()?;
-        let screened: Vec<(Affine, f64)> = shared.screened.iter().map(Slot::wait).collect();
-        Some(prealign::finish_search(
+        let survivors = shared.survivors(s);
+        let fits: Option<Vec<SurvivorFit>> = survivors
+            .order
+            .as_ref()
+            .map(|_| survivors.fits.iter().map(Slot::wait).collect());
+        Some(prealign::choose(
             &s.a,
             &s.b,
             shared.dim,
             &s.search,
             s.keep_orientation,
-            &screened,
-            false,
+            &survivors.screened,
+            fits.as_deref(),
         ))
     }
 

@@ -951,12 +951,9 @@ pub fn robust_prealign(
     finish_search(a, b, dim, search, keep_orientation, &screened, true)
 }
 
-/// The search after the screening: the survivors of the screened starts (in the order of
-/// [`rotation_candidates`]) run to convergence, on the rayon pool (`parallel`) or on the calling
-/// thread, and the best of them wins ([`select_candidate`]). Two closed planar outlines are also
-/// fitted to each other ([`RotationSearch::outline_iterations`]); every survivor is, and only
-/// those whose fitted outlines lie about as close as the closest do ([`closest_outlines`]) take
-/// part in the choice. The same map either way.
+/// The search after the screening: the survivors of the screened starts ([`survivors`]) run to
+/// convergence ([`converge`]), on the rayon pool (`parallel`) or on the calling thread, and the
+/// best of them wins ([`choose`]). The same map either way.
 pub(crate) fn finish_search(
     a: &[f64],
     b: &[f64],
@@ -966,44 +963,87 @@ pub(crate) fn finish_search(
     screened: &[(Affine, f64)],
     parallel: bool,
 ) -> Affine {
-    let screen = search.screening_iterations();
-    let outlines = keep_orientation && dim == 2 && search.outline_iterations > 0;
-    let fit_outlines =
-        |map: Affine| outline_fit::fit_outlines(a, b, map, search.outline_iterations);
-    if search.iterations <= screen {
+    let run = |&i: &usize| converge(a, b, dim, search, keep_orientation, screened[i].0);
+    let fits: Option<Vec<SurvivorFit>> = survivors(screened, search).map(|order| {
+        if parallel {
+            order.par_iter().map(run).collect()
+        } else {
+            order.iter().map(run).collect()
+        }
+    });
+    choose(
+        a,
+        b,
+        dim,
+        search,
+        keep_orientation,
+        screened,
+        fits.as_deref(),
+    )
+}
+
+/// A survivor of the screening run to convergence: its node fit `(map, chamfer)` and, for two
+/// closed planar outlines, its outline fit `(map, outline distance)`.
+pub(crate) type SurvivorFit = ((Affine, f64), Option<(Affine, f64)>);
+
+/// The screened starts that run to convergence, as indices into `screened` in the order
+/// [`choose`] expects them ([`survivor_order`]); `None` when the screening already ran every
+/// iteration.
+pub(crate) fn survivors(screened: &[(Affine, f64)], search: &RotationSearch) -> Option<Vec<usize>> {
+    (search.iterations > search.screening_iterations()).then(|| survivor_order(screened, search))
+}
+
+/// Whether the search ends with the outline fit: two closed planar outlines, and steps asked for.
+fn fits_outlines(dim: usize, search: &RotationSearch, keep_orientation: bool) -> bool {
+    keep_orientation && dim == 2 && search.outline_iterations > 0
+}
+
+/// One survivor from its screened map `start`: the remaining node ICP iterations, then, for two
+/// closed outlines, the outline fit and the distance of the fitted outlines.
+pub(crate) fn converge(
+    a: &[f64],
+    b: &[f64],
+    dim: usize,
+    search: &RotationSearch,
+    keep_orientation: bool,
+    start: Affine,
+) -> SurvivorFit {
+    let remaining = search.iterations - search.screening_iterations();
+    let node_fit = icp_affine(a, b, dim, start, remaining, keep_orientation);
+    let outline_fit = fits_outlines(dim, search, keep_orientation).then(|| {
+        let fitted = outline_fit::fit_outlines(a, b, node_fit.0, search.outline_iterations);
+        (fitted, outline_fit::outline_distance(&fitted.apply(a), b))
+    });
+    (node_fit, outline_fit)
+}
+
+/// The search's map from the screened starts and the survivors' fits (`None`: the screening ran
+/// every iteration, and the screened starts are the candidates). Two closed planar outlines
+/// choose among the survivors whose fitted outlines lie about as close as the closest do
+/// ([`closest_outlines`]); the others by [`select_candidate`].
+pub(crate) fn choose(
+    a: &[f64],
+    b: &[f64],
+    dim: usize,
+    search: &RotationSearch,
+    keep_orientation: bool,
+    screened: &[(Affine, f64)],
+    fits: Option<&[SurvivorFit]>,
+) -> Affine {
+    let outlines = fits_outlines(dim, search, keep_orientation);
+    let Some(fits) = fits else {
         let picked = select_candidate(screened, dim, search);
         return if outlines {
-            fit_outlines(picked)
+            outline_fit::fit_outlines(a, b, picked, search.outline_iterations)
         } else {
             picked
         };
-    }
-    let refined = |i: usize| {
-        let node_fit = icp_affine(
-            a,
-            b,
-            dim,
-            screened[i].0,
-            search.iterations - screen,
-            keep_orientation,
-        );
-        let outline_fit = outlines.then(|| {
-            let fitted = fit_outlines(node_fit.0);
-            (fitted, outline_fit::outline_distance(&fitted.apply(a), b))
-        });
-        (node_fit, outline_fit)
     };
-    let order = survivor_order(screened, search);
-    let cands: Vec<_> = if parallel {
-        order.into_par_iter().map(refined).collect()
-    } else {
-        order.into_iter().map(refined).collect()
-    };
-    let node_fits: Vec<(Affine, f64)> = cands.iter().map(|c| c.0).collect();
+    let node_fits: Vec<(Affine, f64)> = fits.iter().map(|c| c.0).collect();
     if !outlines {
         return select_candidate(&node_fits, dim, search);
     }
-    let outline_fits: Vec<(Affine, f64)> = cands.iter().filter_map(|c| c.1).collect();
+    let outline_fits: Vec<(Affine, f64)> = fits.iter().filter_map(|c| c.1).collect();
     let closest = closest_outlines(&outline_fits, search);
     let contenders: Vec<(Affine, f64)> = closest.iter().map(|&k| node_fits[k]).collect();
     select_index(&contenders, search)
