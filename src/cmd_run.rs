@@ -6,7 +6,7 @@ use crate::CliError;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use pedo_io::report::InputInfo;
-use pedo_io::sequence::{run_sequence, FrameRange, ObjectModel, RunParams, Stage};
+use pedo_io::sequence::{FrameRange, ObjectModel, RunParams, Stage};
 use pedo_io::TableFormat;
 use serde_json::Value;
 use std::path::PathBuf;
@@ -186,11 +186,8 @@ fn execute(
     params: RunParams,
     started: Instant,
 ) -> Result<(), CliError> {
-    params.units.apply(&mut recording)?;
+    let options = pedo_io::study::run_options(&mut recording, &params)?;
     let read_time = started.elapsed();
-    let mut options = params.to_options(&recording)?;
-    // The outputs need only each pair's matches: the affinity matrices are not kept.
-    options.keep_match_details = false;
     let bar = progress_bar();
     let bar_state = Mutex::new(None::<Stage>);
     let progress = |stage: Stage, done: usize, total: usize| {
@@ -207,36 +204,18 @@ fn execute(
         bar.set_position(done as u64);
     };
     let outputs = o.outputs();
-    let timings = [("read", read_time.as_secs_f64())];
-    let summary = if pedo_io::study::tables_only(&outputs) {
-        // Tables only: the run streams into its folder, never held whole.
-        let (summary, _) = pedo_io::study::stream_run_folder(
-            out,
-            input,
-            &recording,
-            frames
-                .as_mut()
-                .map(|f| f as &mut dyn pedo_io::sequence::FrameSource),
-            &params,
-            &options,
-            outputs.tables,
-            &timings,
-            &progress,
-        )?;
-        bar.finish_and_clear();
-        summary
-    } else {
-        let result = run_sequence(&recording, &options, &progress)?;
-        bar.finish_and_clear();
-        let run = pedo_io::study::RunRecord {
-            input,
-            recording: &recording,
-            params: &params,
-            options: &options,
-            result: &result,
-        };
-        pedo_io::study::write_run_folder(out, &run, &outputs, &timings)?
+    let plan = pedo_io::study::RunPlan {
+        input,
+        params: &params,
+        frames: frames
+            .as_mut()
+            .map(|f| f as &mut dyn pedo_io::sequence::FrameSource),
+        folder: Some(out),
+        outputs: &outputs,
+        timings: &[("read", read_time.as_secs_f64())],
     };
+    let (summary, _) = pedo_io::study::run_into_folder(&recording, &options, plan, &progress)?;
+    bar.finish_and_clear();
     if o.json {
         print!("{}", output::pretty(&summary)?);
     } else {

@@ -288,6 +288,90 @@ impl SequenceSink for NoSink {
     }
 }
 
+/// The options `recording` is run with: its units applied first (they set the frame interval
+/// and sensel size the options are read in), and no affinity matrices kept (a run's outputs
+/// need only each pair's matches).
+pub fn run_options(recording: &mut Recording, params: &RunParams) -> Result<SequenceOptions> {
+    params.units.apply(recording)?;
+    let mut options = params.to_options(recording)?;
+    options.keep_match_details = false;
+    Ok(options)
+}
+
+/// What one run is, besides its recording and options: where its frames come from, who it is
+/// for, and what it writes.
+pub struct RunPlan<'a> {
+    /// The input's name and SHA-256, for the summary.
+    pub input: &'a InputInfo,
+    /// The parameters the options came from ([`run_options`]).
+    pub params: &'a RunParams,
+    /// Reads the frames as the run goes when the recording holds none (see
+    /// [`crate::formats::read_for_streaming`]).
+    pub frames: Option<&'a mut dyn FrameSource>,
+    /// The run's folder; `None` writes nothing (the summary is still made).
+    pub folder: Option<&'a Path>,
+    pub outputs: &'a RunOutputs<'a>,
+    /// Stages measured before the run (e.g. reading), for the summary.
+    pub timings: &'a [(&'a str, f64)],
+}
+
+/// Runs `recording` and writes its folder as `plan` says: streamed when the outputs are tables
+/// only ([`tables_only`], [`stream_run_folder`]), else run whole and written by
+/// [`write_run_folder`]. Returns the summary (`summary.json`) and the run's counts. What
+/// `pedomatch run` and every recording of a study do after reading.
+pub fn run_into_folder(
+    recording: &Recording,
+    options: &SequenceOptions,
+    plan: RunPlan<'_>,
+    progress: &(dyn Fn(Stage, usize, usize) + Sync),
+) -> Result<(Value, RunCounts)> {
+    let RunPlan {
+        input,
+        params,
+        frames,
+        folder,
+        outputs,
+        timings,
+    } = plan;
+    if tables_only(outputs) {
+        // Streamed: nothing of the run is held but its counts.
+        return match folder {
+            Some(folder) => stream_run_folder(
+                folder,
+                input,
+                recording,
+                frames,
+                params,
+                options,
+                outputs.tables,
+                timings,
+                progress,
+            ),
+            None => {
+                let counts = stream_sequence(recording, frames, options, progress, &mut NoSink)?;
+                let summary =
+                    report::run_summary_of(input, recording, params, options, &counts, timings);
+                Ok((summary, counts))
+            }
+        };
+    }
+    let result = run_sequence(recording, options, progress)?;
+    let summary = match folder {
+        Some(folder) => {
+            let run = RunRecord {
+                input,
+                recording,
+                params,
+                options,
+                result: &result,
+            };
+            write_run_folder(folder, &run, outputs, timings)?
+        }
+        None => report::run_summary(input, recording, params, options, &result, timings),
+    };
+    Ok((summary, RunCounts::of(&result)))
+}
+
 /// Runs `recording` as [`stream_sequence`] and writes the folder `out` of a run with tables
 /// only ([`tables_only`]), whole or not at all, byte for byte as [`write_run_folder`] writes it
 /// (the timings of `summary.json` aside): the tables are written as the run makes them, so
@@ -874,9 +958,7 @@ fn process(
     let (mut recording, mut file_frames) =
         read_for_run(path, &opts.read, &opts.params, &opts.outputs)?;
     let input = InputInfo::of_path(path)?;
-    opts.params.units.apply(&mut recording)?;
-    let mut options = opts.params.to_options(&recording)?;
-    options.keep_match_details = false;
+    let options = run_options(&mut recording, &opts.params)?;
     let read_s = started.elapsed().as_secs_f64();
     let folder = opts.out.as_ref().zip(output).map(|(o, n)| o.join(n));
     if let Some(folder) = folder.as_deref().filter(|_| !opts.force) {
@@ -899,59 +981,17 @@ fn process(
             Stage::Matching => 0.5 + 0.5 * part,
         })
     };
-    if tables_only(&opts.outputs) {
-        // Streamed: nothing of the run is held but its counts.
-        let frames = file_frames.as_mut().map(|f| f as &mut dyn FrameSource);
-        let (summary, counts) = match folder {
-            Some(folder) => stream_run_folder(
-                &folder,
-                &input,
-                &recording,
-                frames,
-                &opts.params,
-                &options,
-                opts.outputs.tables,
-                &[("read", read_s)],
-                &on_stage,
-            )?,
-            None => {
-                let counts = stream_sequence(&recording, frames, &options, &on_stage, &mut NoSink)?;
-                let summary = report::run_summary_of(
-                    &input,
-                    &recording,
-                    &opts.params,
-                    &options,
-                    &counts,
-                    &[("read", read_s)],
-                );
-                (summary, counts)
-            }
-        };
-        let mut row = row_of_summary(path, output, &summary, started);
-        row.message = left_out(&counts);
-        return Ok(row);
-    }
-    let result = run_sequence(&recording, &options, &on_stage)?;
-    let run = RunRecord {
+    let plan = RunPlan {
         input: &input,
-        recording: &recording,
         params: &opts.params,
-        options: &options,
-        result: &result,
+        frames: file_frames.as_mut().map(|f| f as &mut dyn FrameSource),
+        folder: folder.as_deref(),
+        outputs: &opts.outputs,
+        timings: &[("read", read_s)],
     };
-    let summary = match folder {
-        Some(folder) => write_run_folder(&folder, &run, &opts.outputs, &[("read", read_s)])?,
-        None => report::run_summary(
-            &input,
-            &recording,
-            &opts.params,
-            &options,
-            &result,
-            &[("read", read_s)],
-        ),
-    };
+    let (summary, counts) = run_into_folder(&recording, &options, plan, &on_stage)?;
     let mut row = row_of_summary(path, output, &summary, started);
-    row.message = left_out(&RunCounts::of(&result));
+    row.message = left_out(&counts);
     Ok(row)
 }
 
