@@ -17,7 +17,7 @@ use std::sync::{Arc, Condvar, Mutex, OnceLock};
 
 use super::features::ModalFeatures;
 use super::prealign::Prealign;
-use super::prealign::{self, Affine, RotationSearch, SurvivorFit};
+use super::prealign::{self, Affine, RotationSearch, SearchPair, SurvivorFit};
 use super::prepare::{Pair, PreparedShape};
 use super::refine::Start;
 use crate::error::ModalError;
@@ -116,6 +116,18 @@ struct Survivors {
     fits: Vec<Slot<SurvivorFit>>,
 }
 
+impl Screening {
+    fn pair(&self, dim: usize) -> SearchPair<'_> {
+        SearchPair {
+            a: &self.a,
+            b: &self.b,
+            dim,
+            search: &self.search,
+            keep_orientation: self.keep_orientation,
+        }
+    }
+}
+
 /// A result one thread fills and the other may wait for, blocked.
 struct Slot<T> {
     value: Mutex<Option<T>>,
@@ -212,9 +224,7 @@ impl Shared {
                 return;
             }
             let start = survivors.screened[order[i]].0;
-            let fit =
-                prealign::converge(&s.a, &s.b, self.dim, &s.search, s.keep_orientation, start);
-            survivors.fits[i].set(fit);
+            survivors.fits[i].set(s.pair(self.dim).converge(start));
         }
     }
 
@@ -263,7 +273,7 @@ impl FirstPhase {
     }
 
     /// The rotation search's result (`None` when no screening was given): the starts and
-    /// survivors this thread takes, then [`prealign::choose`] — the same candidates and order as
+    /// survivors this thread takes, then [`SearchPair::choose`] — the same candidates and order as
     /// [`prealign::robust_prealign`], so the same map.
     fn prealign(&self) -> Option<Affine> {
         let shared = &self.shared;
@@ -275,15 +285,10 @@ impl FirstPhase {
             .order
             .as_ref()
             .map(|_| survivors.fits.iter().map(Slot::wait).collect());
-        Some(prealign::choose(
-            &s.a,
-            &s.b,
-            shared.dim,
-            &s.search,
-            s.keep_orientation,
-            &survivors.screened,
-            fits.as_deref(),
-        ))
+        Some(
+            s.pair(shared.dim)
+                .choose(&survivors.screened, fits.as_deref()),
+        )
     }
 
     /// B's modes (`Ok(None)` when no solve was given): solved here if the helper has not

@@ -948,38 +948,26 @@ pub fn robust_prealign(
         .with_min_len(SCREEN_CHUNK)
         .map(|c| icp_affine(a, b, dim, c, screen, keep_orientation))
         .collect();
-    finish_search(a, b, dim, search, keep_orientation, &screened, true)
-}
-
-/// The search after the screening: the survivors of the screened starts ([`survivors`]) run to
-/// convergence ([`converge`]), on the rayon pool (`parallel`) or on the calling thread, and the
-/// best of them wins ([`choose`]). The same map either way.
-pub(crate) fn finish_search(
-    a: &[f64],
-    b: &[f64],
-    dim: usize,
-    search: &RotationSearch,
-    keep_orientation: bool,
-    screened: &[(Affine, f64)],
-    parallel: bool,
-) -> Affine {
-    let run = |&i: &usize| converge(a, b, dim, search, keep_orientation, screened[i].0);
-    let fits: Option<Vec<SurvivorFit>> = survivors(screened, search).map(|order| {
-        if parallel {
-            order.par_iter().map(run).collect()
-        } else {
-            order.iter().map(run).collect()
-        }
-    });
-    choose(
+    let pair = SearchPair {
         a,
         b,
         dim,
         search,
         keep_orientation,
-        screened,
-        fits.as_deref(),
-    )
+    };
+    pair.finish(&screened, true)
+}
+
+/// Two objects' normalised points and the rotation search between them: what every stage of
+/// the search after the screening reads.
+#[derive(Clone, Copy)]
+pub(crate) struct SearchPair<'a> {
+    pub a: &'a [f64],
+    pub b: &'a [f64],
+    pub dim: usize,
+    pub search: &'a RotationSearch,
+    /// No map that reflects (ordered outlines).
+    pub keep_orientation: bool,
 }
 
 /// A survivor of the screening run to convergence: its node fit `(map, chamfer)` and, for two
@@ -987,67 +975,78 @@ pub(crate) fn finish_search(
 pub(crate) type SurvivorFit = ((Affine, f64), Option<(Affine, f64)>);
 
 /// The screened starts that run to convergence, as indices into `screened` in the order
-/// [`choose`] expects them ([`survivor_order`]); `None` when the screening already ran every
-/// iteration.
+/// [`SearchPair::choose`] expects them ([`survivor_order`]); `None` when the screening already
+/// ran every iteration.
 pub(crate) fn survivors(screened: &[(Affine, f64)], search: &RotationSearch) -> Option<Vec<usize>> {
     (search.iterations > search.screening_iterations()).then(|| survivor_order(screened, search))
 }
 
-/// Whether the search ends with the outline fit: two closed planar outlines, and steps asked for.
-fn fits_outlines(dim: usize, search: &RotationSearch, keep_orientation: bool) -> bool {
-    keep_orientation && dim == 2 && search.outline_iterations > 0
-}
-
-/// One survivor from its screened map `start`: the remaining node ICP iterations, then, for two
-/// closed outlines, the outline fit and the distance of the fitted outlines.
-pub(crate) fn converge(
-    a: &[f64],
-    b: &[f64],
-    dim: usize,
-    search: &RotationSearch,
-    keep_orientation: bool,
-    start: Affine,
-) -> SurvivorFit {
-    let remaining = search.iterations - search.screening_iterations();
-    let node_fit = icp_affine(a, b, dim, start, remaining, keep_orientation);
-    let outline_fit = fits_outlines(dim, search, keep_orientation).then(|| {
-        let fitted = outline_fit::fit_outlines(a, b, node_fit.0, search.outline_iterations);
-        (fitted, outline_fit::outline_distance(&fitted.apply(a), b))
-    });
-    (node_fit, outline_fit)
-}
-
-/// The search's map from the screened starts and the survivors' fits (`None`: the screening ran
-/// every iteration, and the screened starts are the candidates). Two closed planar outlines
-/// choose among the survivors whose fitted outlines lie about as close as the closest do
-/// ([`closest_outlines`]); the others by [`select_candidate`].
-pub(crate) fn choose(
-    a: &[f64],
-    b: &[f64],
-    dim: usize,
-    search: &RotationSearch,
-    keep_orientation: bool,
-    screened: &[(Affine, f64)],
-    fits: Option<&[SurvivorFit]>,
-) -> Affine {
-    let outlines = fits_outlines(dim, search, keep_orientation);
-    let Some(fits) = fits else {
-        let picked = select_candidate(screened, dim, search);
-        return if outlines {
-            outline_fit::fit_outlines(a, b, picked, search.outline_iterations)
-        } else {
-            picked
-        };
-    };
-    let node_fits: Vec<(Affine, f64)> = fits.iter().map(|c| c.0).collect();
-    if !outlines {
-        return select_candidate(&node_fits, dim, search);
+impl SearchPair<'_> {
+    /// The search after the screening: the survivors of the screened starts ([`survivors`]) run
+    /// to convergence ([`SearchPair::converge`]), on the rayon pool (`parallel`) or on the
+    /// calling thread, and the best of them wins ([`SearchPair::choose`]). The same map either
+    /// way.
+    pub(crate) fn finish(&self, screened: &[(Affine, f64)], parallel: bool) -> Affine {
+        let run = |&i: &usize| self.converge(screened[i].0);
+        let fits: Option<Vec<SurvivorFit>> = survivors(screened, self.search).map(|order| {
+            if parallel {
+                order.par_iter().map(run).collect()
+            } else {
+                order.iter().map(run).collect()
+            }
+        });
+        self.choose(screened, fits.as_deref())
     }
-    let outline_fits: Vec<(Affine, f64)> = fits.iter().filter_map(|c| c.1).collect();
-    let closest = closest_outlines(&outline_fits, search);
-    let contenders: Vec<(Affine, f64)> = closest.iter().map(|&k| node_fits[k]).collect();
-    select_index(&contenders, search)
-        .map_or_else(|| Affine::identity(dim), |j| outline_fits[closest[j]].0)
+
+    /// Whether the search ends with the outline fit: two closed planar outlines, and steps
+    /// asked for.
+    fn fits_outlines(&self) -> bool {
+        self.keep_orientation && self.dim == 2 && self.search.outline_iterations > 0
+    }
+
+    /// One survivor from its screened map `start`: the remaining node ICP iterations, then, for
+    /// two closed outlines, the outline fit and the distance of the fitted outlines.
+    pub(crate) fn converge(&self, start: Affine) -> SurvivorFit {
+        let (a, b) = (self.a, self.b);
+        let remaining = self.search.iterations - self.search.screening_iterations();
+        let node_fit = icp_affine(a, b, self.dim, start, remaining, self.keep_orientation);
+        let outline_fit = self.fits_outlines().then(|| {
+            let steps = self.search.outline_iterations;
+            let fitted = outline_fit::fit_outlines(a, b, node_fit.0, steps);
+            (fitted, outline_fit::outline_distance(&fitted.apply(a), b))
+        });
+        (node_fit, outline_fit)
+    }
+
+    /// The search's map from the screened starts and the survivors' fits (`None`: the screening
+    /// ran every iteration, and the screened starts are the candidates). Two closed planar
+    /// outlines choose among the survivors whose fitted outlines lie about as close as the
+    /// closest do ([`closest_outlines`]); the others by [`select_candidate`].
+    pub(crate) fn choose(
+        &self,
+        screened: &[(Affine, f64)],
+        fits: Option<&[SurvivorFit]>,
+    ) -> Affine {
+        let (dim, search) = (self.dim, self.search);
+        let outlines = self.fits_outlines();
+        let Some(fits) = fits else {
+            let picked = select_candidate(screened, dim, search);
+            return if outlines {
+                outline_fit::fit_outlines(self.a, self.b, picked, search.outline_iterations)
+            } else {
+                picked
+            };
+        };
+        let node_fits: Vec<(Affine, f64)> = fits.iter().map(|c| c.0).collect();
+        if !outlines {
+            return select_candidate(&node_fits, dim, search);
+        }
+        let outline_fits: Vec<(Affine, f64)> = fits.iter().filter_map(|c| c.1).collect();
+        let closest = closest_outlines(&outline_fits, search);
+        let contenders: Vec<(Affine, f64)> = closest.iter().map(|&k| node_fits[k]).collect();
+        select_index(&contenders, search)
+            .map_or_else(|| Affine::identity(dim), |j| outline_fits[closest[j]].0)
+    }
 }
 
 /// The survivors whose fitted outlines lie within [`OUTLINE_MARGIN`] of the closest
@@ -1205,7 +1204,14 @@ pub(crate) fn robust_prealign_serial(
         .into_iter()
         .map(|c| icp_affine(a, b, dim, c, screen, keep_orientation))
         .collect();
-    finish_search(a, b, dim, search, keep_orientation, &screened, false)
+    let pair = SearchPair {
+        a,
+        b,
+        dim,
+        search,
+        keep_orientation,
+    };
+    pair.finish(&screened, false)
 }
 
 /// A's coordinates after an affine map into B's normalised frame. A closed outline resampled by
@@ -1511,7 +1517,14 @@ mod tests {
                     .into_iter()
                     .map(|c| icp_affine(&a, &b, 2, c, screen, true))
                     .collect();
-                let seq = finish_search(&a, &b, 2, &search, true, &screened, false);
+                let pair = SearchPair {
+                    a: &a,
+                    b: &b,
+                    dim: 2,
+                    search: &search,
+                    keep_orientation: true,
+                };
+                let seq = pair.finish(&screened, false);
                 assert_eq!(par, seq, "rot {rot}");
             }
         }
