@@ -6,11 +6,11 @@
 //! helper that has not started: a pool worker can take long to wake (on a VM, after a 15 ms pause,
 //! two threads ran slower than one). Both threads take rotation starts from a shared counter,
 //! then the survivors of the screening from another (each survivor's convergence and outline
-//! fit is as long as five starts' screening, and A's solve waits for all of them), and the
-//! helper then takes B's solve if this thread has not claimed it yet. Whoever computes a result
-//! stores it in its slot, so the outcome does not depend on the timing. This thread waits
-//! (blocked on a condition variable, not spinning) only for a start, a survivor or a solve the
-//! helper has claimed and is therefore running.
+//! fit takes about as long as fifteen starts' screening, and A's solve waits for all of them),
+//! and the helper then takes B's solve if this thread has not claimed it yet. Whoever computes
+//! a result stores it in its slot, so the outcome does not depend on the timing. This thread
+//! waits (blocked on a condition variable, not spinning) only for a start, a survivor or a
+//! solve the helper has claimed and is therefore running.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex, OnceLock};
