@@ -228,7 +228,8 @@ fn explained(pair: &Pair<'_>, cur: &[f64], pairs: &[MatchPair]) -> (f64, f64, Op
 }
 
 /// Whether a map moves A at all: one this close to the identity cannot change the pairs, so the
-/// solve it would cost is skipped.
+/// solve it would cost is skipped. A map with a NaN entry does not count as moving (every
+/// comparison with NaN is false), so it ends the re-fits and the best pass so far is kept.
 fn moves(t: &Affine) -> bool {
     (0..t.dim).any(|r| {
         t.t[r].abs() > 1e-4
