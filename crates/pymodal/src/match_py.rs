@@ -336,9 +336,9 @@ fn triangles(
 /// lists them all). The defaults are the most accurate setting measured (robust rotation
 /// pre-alignment, which for two closed outlines ends in a fit of the outlines and needs no modal
 /// affine re-fits (one σ for both outlines), up to two re-fits otherwise; cross-object mode
-/// alignment, excess nodes on
-/// contours; for unordered 3-D point sets the surface setting: wide common σ, no re-fits,
-/// aligned positions mixed in, powered costs); ``paper=True`` is the paper's literal setting.
+/// alignment, excess nodes on contours; for unordered 3-D point sets the surface setting: wide
+/// common σ, no re-fits, aligned positions mixed in, powered costs); ``paper=True`` is the
+/// paper's literal setting.
 ///
 /// Parameters
 /// ----------

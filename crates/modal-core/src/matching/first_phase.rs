@@ -176,22 +176,14 @@ impl Shared {
     /// Screens starts until none is left.
     fn screen(&self) {
         let Some(s) = &self.screening else { return };
-        let iters = s.search.screening_iterations();
+        let pair = s.pair(self.dim);
         loop {
             let i = self.next.fetch_add(1, Ordering::Relaxed);
             if i >= self.starts.len() {
                 return;
             }
-            let r = prealign::icp_affine(
-                &s.a,
-                &s.b,
-                self.dim,
-                self.starts[i],
-                iters,
-                s.keep_orientation,
-            );
             // Only the thread that took index i fills slot i.
-            self.screened[i].set(r);
+            self.screened[i].set(pair.screen(self.starts[i]));
         }
     }
 
@@ -248,9 +240,9 @@ impl FirstPhase {
     /// Puts the helper on the pool: it screens rotation starts (when `screening` is given) and
     /// then solves B (when `solve_b` is given) unless this thread has claimed it.
     fn start(dim: usize, screening: Option<Screening>, solve_b: Option<SolveB>) -> Self {
-        let starts = screening.as_ref().map_or_else(Vec::new, |s| {
-            prealign::rotation_candidates(&s.a, &s.b, dim, s.search.turns)
-        });
+        let starts = screening
+            .as_ref()
+            .map_or_else(Vec::new, |s| s.pair(dim).starts());
         let shared = Arc::new(Shared {
             dim,
             screened: (0..starts.len()).map(|_| Slot::new()).collect(),

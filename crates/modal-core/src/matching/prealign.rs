@@ -940,14 +940,6 @@ pub fn robust_prealign(
     search: &RotationSearch,
     keep_orientation: bool,
 ) -> Affine {
-    let screen = search.screening_iterations();
-    // The starts are independent: screened on the rayon pool. `collect` keeps the candidates'
-    // order, so the result does not depend on the scheduling.
-    let screened: Vec<(Affine, f64)> = rotation_candidates(a, b, dim, search.turns)
-        .into_par_iter()
-        .with_min_len(SCREEN_CHUNK)
-        .map(|c| icp_affine(a, b, dim, c, screen, keep_orientation))
-        .collect();
     let pair = SearchPair {
         a,
         b,
@@ -955,11 +947,11 @@ pub fn robust_prealign(
         search,
         keep_orientation,
     };
-    pair.finish(&screened, true)
+    pair.run(true)
 }
 
 /// Two objects' normalised points and the rotation search between them: what every stage of
-/// the search after the screening reads.
+/// the search reads.
 #[derive(Clone, Copy)]
 pub(crate) struct SearchPair<'a> {
     pub a: &'a [f64],
@@ -982,6 +974,43 @@ pub(crate) fn survivors(screened: &[(Affine, f64)], search: &RotationSearch) -> 
 }
 
 impl SearchPair<'_> {
+    /// The whole search: every start screened, then [`SearchPair::finish`]; on the rayon pool
+    /// (`parallel`) or on the calling thread, the same map either way.
+    fn run(&self, parallel: bool) -> Affine {
+        let starts = self.starts();
+        // The starts are independent. `collect` keeps the candidates' order, so the result does
+        // not depend on the scheduling.
+        let screened: Vec<(Affine, f64)> = if parallel {
+            starts
+                .into_par_iter()
+                .with_min_len(SCREEN_CHUNK)
+                .map(|c| self.screen(c))
+                .collect()
+        } else {
+            starts.into_iter().map(|c| self.screen(c)).collect()
+        };
+        self.finish(&screened, parallel)
+    }
+
+    /// The starting maps of the search, in the order every stage keeps
+    /// ([`rotation_candidates`]).
+    pub(crate) fn starts(&self) -> Vec<Affine> {
+        rotation_candidates(self.a, self.b, self.dim, self.search.turns)
+    }
+
+    /// One start screened: its first ICP iterations and the chamfer they reach.
+    pub(crate) fn screen(&self, start: Affine) -> (Affine, f64) {
+        let iters = self.search.screening_iterations();
+        icp_affine(
+            self.a,
+            self.b,
+            self.dim,
+            start,
+            iters,
+            self.keep_orientation,
+        )
+    }
+
     /// The search after the screening: the survivors of the screened starts ([`survivors`]) run
     /// to convergence ([`SearchPair::converge`]), on the rayon pool (`parallel`) or on the
     /// calling thread, and the best of them wins ([`SearchPair::choose`]). The same map either
@@ -1199,11 +1228,6 @@ pub(crate) fn robust_prealign_serial(
     search: &RotationSearch,
     keep_orientation: bool,
 ) -> Affine {
-    let screen = search.screening_iterations();
-    let screened: Vec<(Affine, f64)> = rotation_candidates(a, b, dim, search.turns)
-        .into_iter()
-        .map(|c| icp_affine(a, b, dim, c, screen, keep_orientation))
-        .collect();
     let pair = SearchPair {
         a,
         b,
@@ -1211,7 +1235,7 @@ pub(crate) fn robust_prealign_serial(
         search,
         keep_orientation,
     };
-    pair.finish(&screened, false)
+    pair.run(false)
 }
 
 /// A's coordinates after an affine map into B's normalised frame. A closed outline resampled by
@@ -1512,19 +1536,7 @@ mod tests {
             // On the pool or on this thread: the same candidates in the same order, same map.
             for search in [RotationSearch::default(), RotationSearch::spec(5)] {
                 let par = robust_prealign(&a, &b, 2, &search, true);
-                let screen = search.screening_iterations();
-                let screened: Vec<(Affine, f64)> = rotation_candidates(&a, &b, 2, search.turns)
-                    .into_iter()
-                    .map(|c| icp_affine(&a, &b, 2, c, screen, true))
-                    .collect();
-                let pair = SearchPair {
-                    a: &a,
-                    b: &b,
-                    dim: 2,
-                    search: &search,
-                    keep_orientation: true,
-                };
-                let seq = pair.finish(&screened, false);
+                let seq = robust_prealign_serial(&a, &b, 2, &search, true);
                 assert_eq!(par, seq, "rot {rot}");
             }
         }
