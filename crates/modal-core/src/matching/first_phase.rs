@@ -75,6 +75,8 @@ pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<S
                     skip: pair.skip,
                     modes: pair.k + pair.band,
                 }),
+                (pair.excess() && !ordered)
+                    .then(|| [pair.a.clone().into_owned(), pair.b.clone().into_owned()]),
             );
             let t = phase.prealign().or(sensor);
             let (cur, to_cur) = prealign::start_in_b_frame(&a.pts, t, d, renormalize)?;
@@ -170,6 +172,8 @@ struct Shared {
     solve_b: Option<SolveB>,
     b_claimed: AtomicBool,
     b_modes: Slot<Features>,
+    /// The objects whose neighbour lists the point-set excess step will read.
+    neighbours: Option<[PreparedShape; 2]>,
 }
 
 impl Shared {
@@ -229,6 +233,15 @@ impl Shared {
         let out = job.b.get().own_modes(&job.model, job.skip, job.modes);
         self.b_modes.set(out.map(Some));
     }
+
+    /// Fills the objects' neighbour caches for the excess step. The cache is a `OnceLock`, so the
+    /// calling thread either finds the lists, waits for the helper computing them, or computes
+    /// them itself if the helper has not got there.
+    fn neighbours(&self) {
+        for shape in self.neighbours.iter().flatten() {
+            shape.get().neighbours();
+        }
+    }
 }
 
 /// The first phase under way: a helper job is on the pool from [`FirstPhase::start`] on.
@@ -237,9 +250,16 @@ struct FirstPhase {
 }
 
 impl FirstPhase {
-    /// Puts the helper on the pool: it screens rotation starts (when `screening` is given) and
-    /// then solves B (when `solve_b` is given) unless this thread has claimed it.
-    fn start(dim: usize, screening: Option<Screening>, solve_b: Option<SolveB>) -> Self {
+    /// Puts the helper on the pool: it screens rotation starts (when `screening` is given),
+    /// solves B (when `solve_b` is given) unless this thread has claimed it, then fills the
+    /// neighbour lists of `neighbours` while this thread runs the first pass's cost matrix and
+    /// assignment.
+    fn start(
+        dim: usize,
+        screening: Option<Screening>,
+        solve_b: Option<SolveB>,
+        neighbours: Option<[PreparedShape; 2]>,
+    ) -> Self {
         let starts = screening
             .as_ref()
             .map_or_else(Vec::new, |s| s.pair(dim).starts());
@@ -254,12 +274,14 @@ impl FirstPhase {
             solve_b,
             b_claimed: AtomicBool::new(false),
             b_modes: Slot::new(),
+            neighbours,
         });
         let helper = Arc::clone(&shared);
         rayon::spawn(move || {
             helper.screen();
             helper.converge();
             helper.solve_b();
+            helper.neighbours();
         });
         Self { shared }
     }
