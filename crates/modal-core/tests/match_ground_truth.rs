@@ -447,8 +447,9 @@ fn fingerprint(r: &modal_core::MatchResult) -> Fingerprint {
 #[test]
 fn the_schedule_does_not_change_the_matches() {
     // From outside the rayon pool (this test's thread) a pair runs on the calling thread with a
-    // helper job taking rotation starts, survivors and B's solve when it wakes; from inside the
-    // pool (a sequence) on both workers; with `Parallelism::Serial` on the calling thread alone.
+    // helper job taking rotation starts, survivors, B's solve and the neighbour lists when it
+    // wakes; from inside the pool (a sequence) on both workers; with `Parallelism::Serial` on the
+    // calling thread alone.
     // Every result must be identical, bit for bit, whoever computed what.
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
