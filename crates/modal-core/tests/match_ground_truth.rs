@@ -501,15 +501,34 @@ fn the_schedule_does_not_change_the_matches() {
             }
         }
     }
-    // A surface pair (3-D point sets, the surface setting).
+    // Surface pairs (3-D point sets, the surface setting, whose first pass mixes in a position
+    // term either thread may compute), with and without re-fits.
     let g = pressure_grid();
-    let case = surface_case(&g, Severity::Moderate, 7, 60, 66);
-    let a = Shape::new(3, case.a.concat(), Topology::None).unwrap();
-    let b = Shape::new(3, case.b.concat(), Topology::None).unwrap();
-    let opts = MatchOptions::for_surfaces();
-    let outside = match_shapes(&a, &b, &opts).unwrap();
-    let inside = pool.install(|| match_shapes(&a, &b, &opts)).unwrap();
-    assert_eq!(fingerprint(&outside), fingerprint(&inside), "surface");
+    let refitting = MatchOptions {
+        refits: 2,
+        ..MatchOptions::for_surfaces()
+    };
+    for (seed, sev) in [(7, Severity::Moderate), (8, Severity::Severe)] {
+        let case = surface_case(&g, sev, seed, 60, 66);
+        let a = Shape::new(3, case.a.concat(), Topology::None).unwrap();
+        let b = Shape::new(3, case.b.concat(), Topology::None).unwrap();
+        for opts in [MatchOptions::for_surfaces(), refitting.clone()] {
+            let outside = match_shapes(&a, &b, &opts).unwrap();
+            let inside = pool.install(|| match_shapes(&a, &b, &opts)).unwrap();
+            let (pa, pb) = (prepare(&a, &opts).unwrap(), prepare(&b, &opts).unwrap());
+            let serial = match_prepared(&pa, &pb, &opts, Parallelism::Serial).unwrap();
+            assert_eq!(
+                fingerprint(&outside),
+                fingerprint(&inside),
+                "surface {seed}"
+            );
+            assert_eq!(
+                fingerprint(&outside),
+                fingerprint(&serial),
+                "surface {seed}, serial"
+            );
+        }
+    }
 }
 
 #[test]

@@ -47,7 +47,12 @@ pub(crate) fn deform(pair: &Pair<'_>, kept: Iteration) -> Result<Iteration, Moda
     let modes_a = pair.modal().then(|| pair.modes_a(&warped)).transpose()?;
     let Pass {
         z, pairs, resid, ..
-    } = pass(pair, &warped, modes_a.as_deref().zip(modes_b.as_deref()))?;
+    } = pass(
+        pair,
+        &warped,
+        modes_a.as_deref().zip(modes_b.as_deref()),
+        None,
+    )?;
     Ok(Iteration {
         z,
         pairs,

@@ -404,6 +404,8 @@ impl AffinityMatrix {
 /// distances between A's features and B's after B's modes are aligned to A's (§5.4), or the
 /// squared distances of the aligned positions when the modes are left out (`None`), mixed with
 /// positions and raised to the power as the options say; max-normalised.
+///
+/// `positions`, when given, is [`position_term`] at `cur`, computed ahead by another thread.
 pub(crate) fn cost_matrix(
     cur: &[f64],
     b: &[f64],
@@ -411,6 +413,7 @@ pub(crate) fn cost_matrix(
     modes: Option<(&ModalFeatures, &ModalFeatures)>,
     k: usize,
     opts: &MatchOptions,
+    positions: Option<&AffinityMatrix>,
 ) -> Result<AffinityMatrix, ModalError> {
     let z = match modes {
         Some((fa, fb)) => {
@@ -428,7 +431,15 @@ pub(crate) fn cost_matrix(
         return Ok(z);
     }
     let w = opts.position_weight;
-    let p = position_costs(cur, b, d)?.powered(opts.cost_power);
+    let computed;
+    let p = match positions {
+        Some(p) => p,
+        None => {
+            computed = position_term(cur, b, d, opts)?;
+            &computed
+        }
+    };
+    debug_assert_eq!((p.rows(), p.cols()), (z.rows(), z.cols()));
     let mixed = z
         .as_slice()
         .iter()
@@ -436,6 +447,18 @@ pub(crate) fn cost_matrix(
         .map(|(x, y)| (1.0 - w) * x + w * y)
         .collect();
     Ok(AffinityMatrix::new(z.rows(), z.cols(), mixed)?.normalized())
+}
+
+/// The position term [`cost_matrix`] mixes into the modal cost at A's coordinates `cur`
+/// (`position_weight`): max-normalised squared distances to B's nodes, raised to the cost power.
+/// It needs no modes, so it can be computed while they are being solved.
+pub(crate) fn position_term(
+    cur: &[f64],
+    b: &[f64],
+    d: usize,
+    opts: &MatchOptions,
+) -> Result<AffinityMatrix, ModalError> {
+    Ok(position_costs(cur, b, d)?.powered(opts.cost_power))
 }
 
 /// Max-normalised squared distances between aligned coordinates.

@@ -7,18 +7,22 @@
 //! two threads ran slower than one). Both threads take rotation starts from a shared counter,
 //! then the survivors of the screening from another (each survivor's convergence and outline
 //! fit takes about as long as fifteen starts' screening, and A's solve waits for all of them),
-//! and the helper then takes B's solve if this thread has not claimed it yet. Whoever computes
-//! a result stores it in its slot, so the outcome does not depend on the timing. This thread
-//! waits (blocked on a condition variable, not spinning) only for a start, a survivor or a
-//! solve the helper has claimed and is therefore running.
+//! and the helper then takes B's solve if this thread has not claimed it yet. After it, the
+//! helper prepares what the first pass needs besides the modes — the neighbour lists of two
+//! point sets' excess step and the position term of the cost (which this thread computes
+//! instead if it is left waiting for B) — so the pass that follows the solves, on this thread
+//! alone, is shorter. Whoever computes a result stores it in its slot (a `OnceLock` for the
+//! last two), so the outcome does not depend on the timing. This thread waits (blocked, not
+//! spinning) only for work the helper has claimed and is therefore running.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex, OnceLock};
 
-use super::features::ModalFeatures;
+use super::features::{position_term, AffinityMatrix, ModalFeatures};
 use super::prealign::Prealign;
 use super::prealign::{self, Affine, RotationSearch, SearchPair, SurvivorFit};
 use super::prepare::{Pair, PreparedShape};
+use super::recipe::MatchOptions;
 use super::refine::Start;
 use crate::error::ModalError;
 use crate::model::ModelOptions;
@@ -29,9 +33,10 @@ pub enum Parallelism {
     /// The calling thread only. For callers that match many pairs at once, one pair per thread
     /// (a recording's pairs on the rayon pool): the pairs keep every core busy.
     Serial,
-    /// The calling thread and one helper job on the rayon pool, which takes rotation starts and
-    /// the second object's solve when it gets a core. For one pair at a time (the `pedomatch
-    /// match` command, `pymodal.match`). The result is the same as with [`Parallelism::Serial`].
+    /// The calling thread and one helper job on the rayon pool, which takes rotation starts,
+    /// survivors of the screening, the second object's solve and some of the first pass's inputs
+    /// when it gets a core. For one pair at a time (the `pedomatch match` command,
+    /// `pymodal.match`). The result is the same as with [`Parallelism::Serial`].
     #[default]
     Pair,
 }
@@ -58,6 +63,7 @@ pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<S
                 to_cur,
                 modes_b,
                 modes_a,
+                positions: None,
             })
         }
         Parallelism::Pair => {
@@ -77,16 +83,25 @@ pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<S
                 }),
                 (pair.excess() && !ordered)
                     .then(|| [pair.a.clone().into_owned(), pair.b.clone().into_owned()]),
+                (modal && pair.opts.position_weight > 0.0).then(|| StartPositions {
+                    b: b.pts.clone(),
+                    opts: pair.opts.clone(),
+                    cur: OnceLock::new(),
+                    term: OnceLock::new(),
+                }),
             );
             let t = phase.prealign().or(sensor);
             let (cur, to_cur) = prealign::start_in_b_frame(&a.pts, t, d, renormalize)?;
+            phase.publish_start(&cur);
             let modes_a = modal.then(|| pair.modes_a(&cur)).transpose()?;
-            let modes_b = phase.b_modes()?;
+            let (modes_b, positions) = phase.b_modes_and_positions();
+            let modes_b = modes_b?;
             Ok(Start {
                 cur,
                 to_cur,
                 modes_b,
                 modes_a,
+                positions,
             })
         }
     }
@@ -108,6 +123,32 @@ struct Screening {
     b: Vec<f64>,
     search: RotationSearch,
     keep_orientation: bool,
+}
+
+/// The first pass's position term at A's start coordinates (`cur`, published once the
+/// pre-alignment is done): computed by the calling thread while it waits for B's solve, or by
+/// the helper after it, whichever comes first.
+struct StartPositions {
+    b: Vec<f64>,
+    opts: MatchOptions,
+    cur: OnceLock<Vec<f64>>,
+    /// `None` when it could not be computed: the pass computes it again and reports the error.
+    term: OnceLock<Option<Arc<AffinityMatrix>>>,
+}
+
+impl StartPositions {
+    /// Computes the term unless done or under way (then waits for it); nothing before `cur` is
+    /// published.
+    fn fill(&self, dim: usize) -> Option<&Arc<AffinityMatrix>> {
+        let cur = self.cur.get()?;
+        self.term
+            .get_or_init(|| {
+                position_term(cur, &self.b, dim, &self.opts)
+                    .ok()
+                    .map(Arc::new)
+            })
+            .as_ref()
+    }
 }
 
 /// The screening's outcome, shared by both threads: every start's screened map and chamfer, and
@@ -149,6 +190,10 @@ impl<T: Clone> Slot<T> {
         self.filled.notify_all();
     }
 
+    fn is_filled(&self) -> bool {
+        self.value.lock().expect("slot").is_some()
+    }
+
     /// Blocks until the slot is filled; only called for work a running thread has claimed.
     fn wait(&self) -> T {
         let guard = self.value.lock().expect("slot");
@@ -174,6 +219,7 @@ struct Shared {
     b_modes: Slot<Features>,
     /// The objects whose neighbour lists the point-set excess step will read.
     neighbours: Option<[PreparedShape; 2]>,
+    positions: Option<StartPositions>,
 }
 
 impl Shared {
@@ -242,6 +288,13 @@ impl Shared {
             shape.get().neighbours();
         }
     }
+
+    /// Computes the first pass's position term if A's start is published and nobody has.
+    fn positions(&self) {
+        if let Some(p) = &self.positions {
+            p.fill(self.dim);
+        }
+    }
 }
 
 /// The first phase under way: a helper job is on the pool from [`FirstPhase::start`] on.
@@ -252,13 +305,14 @@ struct FirstPhase {
 impl FirstPhase {
     /// Puts the helper on the pool: it screens rotation starts (when `screening` is given),
     /// solves B (when `solve_b` is given) unless this thread has claimed it, then fills the
-    /// neighbour lists of `neighbours` while this thread runs the first pass's cost matrix and
-    /// assignment.
+    /// neighbour lists of `neighbours` and the first pass's position term (when `positions` is
+    /// given) while this thread runs the first pass's modal costs and assignment.
     fn start(
         dim: usize,
         screening: Option<Screening>,
         solve_b: Option<SolveB>,
         neighbours: Option<[PreparedShape; 2]>,
+        positions: Option<StartPositions>,
     ) -> Self {
         let starts = screening
             .as_ref()
@@ -275,6 +329,7 @@ impl FirstPhase {
             b_claimed: AtomicBool::new(false),
             b_modes: Slot::new(),
             neighbours,
+            positions,
         });
         let helper = Arc::clone(&shared);
         rayon::spawn(move || {
@@ -282,6 +337,7 @@ impl FirstPhase {
             helper.converge();
             helper.solve_b();
             helper.neighbours();
+            helper.positions();
         });
         Self { shared }
     }
@@ -305,13 +361,33 @@ impl FirstPhase {
         )
     }
 
-    /// B's modes (`Ok(None)` when no solve was given): solved here if the helper has not
-    /// claimed them yet, else waited for.
-    fn b_modes(self) -> Features {
-        if self.shared.solve_b.is_none() {
-            return Ok(None);
+    /// Publishes A's start coordinates for the first pass's position term.
+    fn publish_start(&self, cur: &[f64]) {
+        if let Some(p) = &self.shared.positions {
+            // Set once, by this thread only.
+            let _ = p.cur.set(cur.to_vec());
         }
-        self.shared.solve_b();
-        self.shared.b_modes.wait()
+    }
+
+    /// B's modes (`Ok(None)` when no solve was given): solved here if the helper has not
+    /// claimed them yet, else waited for; and the first pass's position term, which this
+    /// thread computes while the helper is still solving B (unless the helper has got to it).
+    fn b_modes_and_positions(self) -> (Features, Option<Arc<AffinityMatrix>>) {
+        let shared = &self.shared;
+        let modes = if shared.solve_b.is_none() {
+            Ok(None)
+        } else {
+            shared.solve_b();
+            if !shared.b_modes.is_filled() {
+                shared.positions();
+            }
+            shared.b_modes.wait()
+        };
+        let positions = shared
+            .positions
+            .as_ref()
+            .and_then(|p| p.fill(shared.dim))
+            .cloned();
+        (modes, positions)
     }
 }

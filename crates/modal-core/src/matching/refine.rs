@@ -37,6 +37,8 @@ pub(crate) struct Start {
     pub modes_b: Option<Arc<ModalFeatures>>,
     /// A's modes at `cur`.
     pub modes_a: Option<Arc<ModalFeatures>>,
+    /// The position term of the first pass's cost at `cur`, when another thread computed it.
+    pub positions: Option<Arc<AffinityMatrix>>,
 }
 
 /// One pass of the search loop, kept when it explains its pairs best.
@@ -68,8 +70,10 @@ pub(crate) fn refine(pair: &Pair<'_>, start: Start) -> Result<Refined, ModalErro
         mut to_cur,
         modes_b,
         modes_a,
+        positions,
     } = start;
     let mut first_modes = modes_a;
+    let mut first_positions = positions;
     let mut prev: Option<Vec<MatchPair>> = None;
     let (mut refits, mut solves) = (0, 0);
     let mut best: Option<Iteration> = None;
@@ -88,7 +92,12 @@ pub(crate) fn refine(pair: &Pair<'_>, start: Start) -> Result<Refined, ModalErro
             resid,
             worst,
             fit,
-        } = pass(pair, &cur, fa.as_deref().zip(modes_b.as_deref()))?;
+        } = pass(
+            pair,
+            &cur,
+            fa.as_deref().zip(modes_b.as_deref()),
+            first_positions.take().as_deref(),
+        )?;
         let stable = prev.as_ref().is_some_and(|p| same_pairs(p, &pairs));
         let better = !opts.keep_best_fit || best.as_ref().is_none_or(|b| resid < b.resid);
         if better {
@@ -140,11 +149,12 @@ pub(super) struct Pass {
 }
 
 /// Matches A at `aligned` (features → search → excess) with the modes of A there and of B
-/// (`None`: positions only).
+/// (`None`: positions only), and the cost's position term at `aligned` if it was computed ahead.
 pub(super) fn pass(
     pair: &Pair<'_>,
     aligned: &[f64],
     modes: Option<(&ModalFeatures, &ModalFeatures)>,
+    positions: Option<&AffinityMatrix>,
 ) -> Result<Pass, ModalError> {
     let z = cost_matrix(
         aligned,
@@ -153,6 +163,7 @@ pub(super) fn pass(
         modes,
         pair.k,
         pair.opts,
+        positions,
     )?;
     let pairs = pass_pairs(pair, &z, aligned)?;
     let (resid, worst, fit) = explained(pair, aligned, &pairs);
