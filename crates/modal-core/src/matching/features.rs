@@ -6,6 +6,7 @@
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
+use std::sync::OnceLock;
 
 use super::prealign::nearest;
 use super::recipe::MatchOptions;
@@ -405,7 +406,8 @@ impl AffinityMatrix {
 /// squared distances of the aligned positions when the modes are left out (`None`), mixed with
 /// positions and raised to the power as the options say; max-normalised.
 ///
-/// `positions`, when given, is [`position_term`] at `cur`, computed ahead by another thread.
+/// `ahead`, when given, holds the position term at `cur`, which another thread may have
+/// computed while the modes were being solved.
 pub(crate) fn cost_matrix(
     cur: &[f64],
     b: &[f64],
@@ -413,7 +415,7 @@ pub(crate) fn cost_matrix(
     modes: Option<(&ModalFeatures, &ModalFeatures)>,
     k: usize,
     opts: &MatchOptions,
-    positions: Option<&AffinityMatrix>,
+    ahead: Option<&PositionTermAhead>,
 ) -> Result<AffinityMatrix, ModalError> {
     let z = match modes {
         Some((fa, fb)) => {
@@ -432,7 +434,7 @@ pub(crate) fn cost_matrix(
     }
     let w = opts.position_weight;
     let computed;
-    let p = match positions {
+    let p = match ahead.and_then(PositionTermAhead::get) {
         Some(p) => p,
         None => {
             computed = position_term(cur, b, d, opts)?;
@@ -459,6 +461,45 @@ pub(crate) fn position_term(
     opts: &MatchOptions,
 ) -> Result<AffinityMatrix, ModalError> {
     Ok(position_costs(cur, b, d)?.powered(opts.cost_power))
+}
+
+/// The position term at A's start coordinates, computed once by whichever thread asks first
+/// (the helper of [`super::Parallelism::Pair`] after B's solve, or the first pass): the other
+/// finds it done or waits for it. The start is published when the pre-alignment ends.
+pub(crate) struct PositionTermAhead {
+    b: Vec<f64>,
+    dim: usize,
+    opts: MatchOptions,
+    start: OnceLock<Vec<f64>>,
+    /// `None` when it could not be computed: the pass computes it again and reports the error.
+    term: OnceLock<Option<AffinityMatrix>>,
+}
+
+impl PositionTermAhead {
+    /// For B's nodes `b`, before A's start is known.
+    pub(crate) fn new(b: &[f64], dim: usize, opts: &MatchOptions) -> Self {
+        Self {
+            b: b.to_vec(),
+            dim,
+            opts: opts.clone(),
+            start: OnceLock::new(),
+            term: OnceLock::new(),
+        }
+    }
+
+    /// A's start coordinates, once (later calls are ignored).
+    pub(crate) fn publish(&self, start: &[f64]) {
+        let _ = self.start.set(start.to_vec());
+    }
+
+    /// The term at the published start: computed here unless done (or under way, then waited
+    /// for); `None` before the start is published or if it could not be computed.
+    pub(crate) fn get(&self) -> Option<&AffinityMatrix> {
+        let start = self.start.get()?;
+        self.term
+            .get_or_init(|| position_term(start, &self.b, self.dim, &self.opts).ok())
+            .as_ref()
+    }
 }
 
 /// Max-normalised squared distances between aligned coordinates.

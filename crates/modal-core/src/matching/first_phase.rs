@@ -8,21 +8,20 @@
 //! then the survivors of the screening from another (each survivor's convergence and outline
 //! fit takes about as long as fifteen starts' screening, and A's solve waits for all of them),
 //! and the helper then takes B's solve if this thread has not claimed it yet. After it, the
-//! helper prepares what the first pass needs besides the modes — the neighbour lists of two
-//! point sets' excess step and the position term of the cost (which this thread computes
-//! instead if it is left waiting for B) — so the pass that follows the solves, on this thread
-//! alone, is shorter. Whoever computes a result stores it in its slot (a `OnceLock` for the
-//! last two), so the outcome does not depend on the timing. This thread waits (blocked, not
+//! helper prepares what the first pass needs besides the modes — the position term of the cost,
+//! then the neighbour lists of two point sets' excess step — while this thread builds the modal
+//! costs, so the pass that follows the solves is shorter. Whoever computes a result stores it in
+//! its slot (a `OnceLock` for the last two: the pass computes what the helper has not begun),
+//! so the outcome does not depend on the timing. This thread waits (blocked, not
 //! spinning) only for work the helper has claimed and is therefore running.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex, OnceLock};
 
-use super::features::{position_term, AffinityMatrix, ModalFeatures};
+use super::features::{ModalFeatures, PositionTermAhead};
 use super::prealign::Prealign;
 use super::prealign::{self, Affine, RotationSearch, SearchPair, SurvivorFit};
 use super::prepare::{Pair, PreparedShape};
-use super::recipe::MatchOptions;
 use super::refine::Start;
 use crate::error::ModalError;
 use crate::model::ModelOptions;
@@ -83,19 +82,14 @@ pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<S
                 }),
                 (pair.excess() && !ordered)
                     .then(|| [pair.a.clone().into_owned(), pair.b.clone().into_owned()]),
-                (modal && pair.opts.position_weight > 0.0).then(|| StartPositions {
-                    b: b.pts.clone(),
-                    opts: pair.opts.clone(),
-                    cur: OnceLock::new(),
-                    term: OnceLock::new(),
-                }),
+                (modal && pair.opts.position_weight > 0.0)
+                    .then(|| Arc::new(PositionTermAhead::new(&b.pts, d, pair.opts))),
             );
             let t = phase.prealign().or(sensor);
             let (cur, to_cur) = prealign::start_in_b_frame(&a.pts, t, d, renormalize)?;
-            phase.publish_start(&cur);
+            let positions = phase.publish_start(&cur);
             let modes_a = modal.then(|| pair.modes_a(&cur)).transpose()?;
-            let (modes_b, positions) = phase.b_modes_and_positions();
-            let modes_b = modes_b?;
+            let modes_b = phase.b_modes()?;
             Ok(Start {
                 cur,
                 to_cur,
@@ -123,32 +117,6 @@ struct Screening {
     b: Vec<f64>,
     search: RotationSearch,
     keep_orientation: bool,
-}
-
-/// The first pass's position term at A's start coordinates (`cur`, published once the
-/// pre-alignment is done): computed by the calling thread while it waits for B's solve, or by
-/// the helper after it, whichever comes first.
-struct StartPositions {
-    b: Vec<f64>,
-    opts: MatchOptions,
-    cur: OnceLock<Vec<f64>>,
-    /// `None` when it could not be computed: the pass computes it again and reports the error.
-    term: OnceLock<Option<Arc<AffinityMatrix>>>,
-}
-
-impl StartPositions {
-    /// Computes the term unless done or under way (then waits for it); nothing before `cur` is
-    /// published.
-    fn fill(&self, dim: usize) -> Option<&Arc<AffinityMatrix>> {
-        let cur = self.cur.get()?;
-        self.term
-            .get_or_init(|| {
-                position_term(cur, &self.b, dim, &self.opts)
-                    .ok()
-                    .map(Arc::new)
-            })
-            .as_ref()
-    }
 }
 
 /// The screening's outcome, shared by both threads: every start's screened map and chamfer, and
@@ -190,10 +158,6 @@ impl<T: Clone> Slot<T> {
         self.filled.notify_all();
     }
 
-    fn is_filled(&self) -> bool {
-        self.value.lock().expect("slot").is_some()
-    }
-
     /// Blocks until the slot is filled; only called for work a running thread has claimed.
     fn wait(&self) -> T {
         let guard = self.value.lock().expect("slot");
@@ -219,7 +183,7 @@ struct Shared {
     b_modes: Slot<Features>,
     /// The objects whose neighbour lists the point-set excess step will read.
     neighbours: Option<[PreparedShape; 2]>,
-    positions: Option<StartPositions>,
+    positions: Option<Arc<PositionTermAhead>>,
 }
 
 impl Shared {
@@ -292,7 +256,7 @@ impl Shared {
     /// Computes the first pass's position term if A's start is published and nobody has.
     fn positions(&self) {
         if let Some(p) = &self.positions {
-            p.fill(self.dim);
+            p.get();
         }
     }
 }
@@ -304,15 +268,15 @@ struct FirstPhase {
 
 impl FirstPhase {
     /// Puts the helper on the pool: it screens rotation starts (when `screening` is given),
-    /// solves B (when `solve_b` is given) unless this thread has claimed it, then fills the
-    /// neighbour lists of `neighbours` and the first pass's position term (when `positions` is
-    /// given) while this thread runs the first pass's modal costs and assignment.
+    /// solves B (when `solve_b` is given) unless this thread has claimed it, then computes the
+    /// first pass's position term (when `positions` is given) and fills the neighbour lists of
+    /// `neighbours` while this thread runs the first pass's modal costs and assignment.
     fn start(
         dim: usize,
         screening: Option<Screening>,
         solve_b: Option<SolveB>,
         neighbours: Option<[PreparedShape; 2]>,
-        positions: Option<StartPositions>,
+        positions: Option<Arc<PositionTermAhead>>,
     ) -> Self {
         let starts = screening
             .as_ref()
@@ -336,8 +300,8 @@ impl FirstPhase {
             helper.screen();
             helper.converge();
             helper.solve_b();
-            helper.neighbours();
             helper.positions();
+            helper.neighbours();
         });
         Self { shared }
     }
@@ -361,33 +325,21 @@ impl FirstPhase {
         )
     }
 
-    /// Publishes A's start coordinates for the first pass's position term.
-    fn publish_start(&self, cur: &[f64]) {
-        if let Some(p) = &self.shared.positions {
-            // Set once, by this thread only.
-            let _ = p.cur.set(cur.to_vec());
-        }
+    /// Publishes A's start coordinates for the first pass's position term, and hands the
+    /// term's slot to the first pass.
+    fn publish_start(&self, cur: &[f64]) -> Option<Arc<PositionTermAhead>> {
+        let ahead = self.shared.positions.as_ref()?;
+        ahead.publish(cur);
+        Some(Arc::clone(ahead))
     }
 
     /// B's modes (`Ok(None)` when no solve was given): solved here if the helper has not
-    /// claimed them yet, else waited for; and the first pass's position term, which this
-    /// thread computes while the helper is still solving B (unless the helper has got to it).
-    fn b_modes_and_positions(self) -> (Features, Option<Arc<AffinityMatrix>>) {
-        let shared = &self.shared;
-        let modes = if shared.solve_b.is_none() {
-            Ok(None)
-        } else {
-            shared.solve_b();
-            if !shared.b_modes.is_filled() {
-                shared.positions();
-            }
-            shared.b_modes.wait()
-        };
-        let positions = shared
-            .positions
-            .as_ref()
-            .and_then(|p| p.fill(shared.dim))
-            .cloned();
-        (modes, positions)
+    /// claimed them yet, else waited for.
+    fn b_modes(self) -> Features {
+        if self.shared.solve_b.is_none() {
+            return Ok(None);
+        }
+        self.shared.solve_b();
+        self.shared.b_modes.wait()
     }
 }

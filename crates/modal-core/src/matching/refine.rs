@@ -9,7 +9,7 @@
 use std::sync::Arc;
 
 use super::excess::excess_pairs;
-use super::features::{cost_matrix, AffinityMatrix, ModalFeatures};
+use super::features::{cost_matrix, AffinityMatrix, ModalFeatures, PositionTermAhead};
 use super::prealign::{fit_affine, into_b_frame, Affine};
 use super::prepare::Pair;
 use super::result::MatchPair;
@@ -37,8 +37,8 @@ pub(crate) struct Start {
     pub modes_b: Option<Arc<ModalFeatures>>,
     /// A's modes at `cur`.
     pub modes_a: Option<Arc<ModalFeatures>>,
-    /// The position term of the first pass's cost at `cur`, when another thread computed it.
-    pub positions: Option<Arc<AffinityMatrix>>,
+    /// The position term of the first pass's cost at `cur`, which another thread may compute.
+    pub positions: Option<Arc<PositionTermAhead>>,
 }
 
 /// One pass of the search loop, kept when it explains its pairs best.
@@ -149,12 +149,12 @@ pub(super) struct Pass {
 }
 
 /// Matches A at `aligned` (features → search → excess) with the modes of A there and of B
-/// (`None`: positions only), and the cost's position term at `aligned` if it was computed ahead.
+/// (`None`: positions only), and the cost's position term at `aligned` if it is computed ahead.
 pub(super) fn pass(
     pair: &Pair<'_>,
     aligned: &[f64],
     modes: Option<(&ModalFeatures, &ModalFeatures)>,
-    positions: Option<&AffinityMatrix>,
+    positions: Option<&PositionTermAhead>,
 ) -> Result<Pass, ModalError> {
     let z = cost_matrix(
         aligned,
