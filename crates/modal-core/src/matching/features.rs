@@ -356,10 +356,9 @@ impl AffinityMatrix {
     pub(crate) fn powered(mut self, p: f64) -> Self {
         // Powers 1/2, 1/4 and 1/8 (the surfaces' default) as repeated square roots: monotone like
         // `powf`, within an ulp or two of it, and several times cheaper (`powf` was 4 % of a
-        // surface pair).
-        // One sweep per root: a loop over the entries vectorises, while the roots of one entry
-        // in a row form a chain of dependent scalar square roots (a third of a surface pass's
-        // own time). The same operations on every entry, so the same values.
+        // surface pair). One sweep per root: a loop over the entries vectorises, while the roots
+        // of one entry in a row form a chain of dependent scalar square roots (a third of a
+        // surface pass's own time).
         let roots = [0.5, 0.25, 0.125].iter().position(|&r| r == p);
         match roots {
             Some(k) => {
@@ -437,7 +436,7 @@ pub(crate) fn cost_matrix(
     let p = match ahead.and_then(PositionTermAhead::get) {
         Some(p) => p,
         None => {
-            computed = position_term(cur, b, d, opts)?;
+            computed = position_term(cur, b, d, opts.cost_power)?;
             &computed
         }
     };
@@ -458,9 +457,9 @@ pub(crate) fn position_term(
     cur: &[f64],
     b: &[f64],
     d: usize,
-    opts: &MatchOptions,
+    cost_power: f64,
 ) -> Result<AffinityMatrix, ModalError> {
-    Ok(position_costs(cur, b, d)?.powered(opts.cost_power))
+    Ok(position_costs(cur, b, d)?.powered(cost_power))
 }
 
 /// The position term at A's start coordinates, computed once by whichever thread asks first
@@ -469,7 +468,7 @@ pub(crate) fn position_term(
 pub(crate) struct PositionTermAhead {
     b: Vec<f64>,
     dim: usize,
-    opts: MatchOptions,
+    cost_power: f64,
     start: OnceLock<Vec<f64>>,
     /// `None` when it could not be computed: the pass computes it again and reports the error.
     term: OnceLock<Option<AffinityMatrix>>,
@@ -477,11 +476,11 @@ pub(crate) struct PositionTermAhead {
 
 impl PositionTermAhead {
     /// For B's nodes `b`, before A's start is known.
-    pub(crate) fn new(b: &[f64], dim: usize, opts: &MatchOptions) -> Self {
+    pub(crate) fn new(b: &[f64], dim: usize, cost_power: f64) -> Self {
         Self {
             b: b.to_vec(),
             dim,
-            opts: opts.clone(),
+            cost_power,
             start: OnceLock::new(),
             term: OnceLock::new(),
         }
@@ -497,7 +496,7 @@ impl PositionTermAhead {
     pub(crate) fn get(&self) -> Option<&AffinityMatrix> {
         let start = self.start.get()?;
         self.term
-            .get_or_init(|| position_term(start, &self.b, self.dim, &self.opts).ok())
+            .get_or_init(|| position_term(start, &self.b, self.dim, self.cost_power).ok())
             .as_ref()
     }
 }

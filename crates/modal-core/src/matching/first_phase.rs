@@ -83,7 +83,7 @@ pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<S
                 (pair.excess() && !ordered)
                     .then(|| [pair.a.clone().into_owned(), pair.b.clone().into_owned()]),
                 (modal && pair.opts.position_weight > 0.0)
-                    .then(|| Arc::new(PositionTermAhead::new(&b.pts, d, pair.opts))),
+                    .then(|| Arc::new(PositionTermAhead::new(&b.pts, d, pair.opts.cost_power))),
             );
             let t = phase.prealign().or(sensor);
             let (cur, to_cur) = prealign::start_in_b_frame(&a.pts, t, d, renormalize)?;
