@@ -985,13 +985,24 @@ pub fn block_solve_lower_transpose(l: MatRef<'_, f64>, mut x: MatMut<'_, f64>, d
 /// and the first of them decides: the rule is then stable under round-off.
 pub fn canonical_signs(mut v: MatMut<'_, f64>) {
     for j in 0..v.ncols() {
-        let best = (0..v.nrows()).fold(0.0f64, |m, i| m.max(v[(i, j)].abs()));
-        let Some(first) = (0..v.nrows()).find(|&i| v[(i, j)].abs() >= best * (1.0 - 1e-6)) else {
+        let mut col = v.rb_mut().col_mut(j);
+        // A column of a column-major matrix is contiguous; any other layout takes the indexed path.
+        if let Some(slice) = col.rb_mut().try_as_col_major_mut() {
+            let slice = slice.as_slice_mut();
+            let best = crate::simd::max_abs(slice);
+            let first = slice.iter().find(|x| x.abs() >= best * (1.0 - 1e-6));
+            if first.is_some_and(|&x| x < 0.0) {
+                slice.iter_mut().for_each(|x| *x = -*x);
+            }
+            continue;
+        }
+        let best = (0..col.nrows()).fold(0.0f64, |m, i| m.max(col[i].abs()));
+        let Some(first) = (0..col.nrows()).find(|&i| col[i].abs() >= best * (1.0 - 1e-6)) else {
             continue;
         };
-        if v[(first, j)] < 0.0 {
-            for i in 0..v.nrows() {
-                v[(i, j)] = -v[(i, j)];
+        if col[first] < 0.0 {
+            for i in 0..col.nrows() {
+                col[i] = -col[i];
             }
         }
     }
@@ -1000,6 +1011,45 @@ pub fn canonical_signs(mut v: MatMut<'_, f64>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn canonical_signs_flip_by_the_first_largest_entry_in_any_layout() {
+        // Column 0: largest |·| negative, flipped. Column 1: a tie within 1e-6 whose first entry
+        // is positive, kept. Column 2: a tie whose first entry is negative, flipped. Column 3:
+        // zeros, kept.
+        let cols = [
+            [0.5, -2.0, 1.0, 0.0],
+            [2.0, -1.0, -2.0 * (1.0 - 1e-7), 0.3],
+            [0.1, -3.0, 3.0, -1.0],
+            [0.0, 0.0, 0.0, 0.0],
+        ];
+        let want = [
+            [-0.5, 2.0, -1.0, -0.0],
+            cols[1],
+            [-0.1, 3.0, -3.0, 1.0],
+            cols[3],
+        ];
+        // Column-major: contiguous columns.
+        let mut v = Mat::<f64>::from_fn(4, 4, |i, j| cols[j][i]);
+        canonical_signs(v.as_mut());
+        // The transpose of a row-major copy: columns with a stride.
+        let mut t = Mat::<f64>::from_fn(4, 4, |i, j| cols[i][j]);
+        canonical_signs(t.as_mut().transpose_mut());
+        for j in 0..4 {
+            for i in 0..4 {
+                assert_eq!(
+                    v[(i, j)].to_bits(),
+                    want[j][i].to_bits(),
+                    "contiguous ({i}, {j})"
+                );
+                assert_eq!(
+                    t[(j, i)].to_bits(),
+                    want[j][i].to_bits(),
+                    "strided ({i}, {j})"
+                );
+            }
+        }
+    }
 
     #[test]
     fn lowest_pairs_of_the_path_laplacian() {

@@ -57,24 +57,21 @@ impl ModalFeatures {
             });
         }
         let len = dim * n_nodes;
+        let cols: Vec<&[f64]> = (skip..skip + k).map(&column).collect();
+        if let Some(col) = cols.iter().find(|c| c.len() != len) {
+            return Err(ModalError::SizeMismatch {
+                what: "entries of a mode",
+                expected: len,
+                found: col.len(),
+            });
+        }
         let mut data = Vec::with_capacity(len * k);
-        for p in skip..skip + k {
-            let col = column(p);
-            if col.len() != len {
-                return Err(ModalError::SizeMismatch {
-                    what: "entries of a mode",
-                    expected: len,
-                    found: col.len(),
-                });
-            }
-            let norm = col.iter().map(|v| v * v).sum::<f64>().sqrt();
+        for (col, sum_sq) in cols.iter().zip(sums_of_squares(&cols, len)) {
+            let norm = sum_sq.sqrt();
             if !(norm.is_finite() && norm > 0.0) {
                 return Err(ModalError::NonFiniteResult { stage: "a mode" });
             }
-            let big = col
-                .iter()
-                .copied()
-                .fold(0.0f64, |acc, v| if v.abs() > acc.abs() { v } else { acc });
+            let big = crate::simd::first_largest_abs(col);
             let s = (n_nodes as f64).sqrt() / norm * if big < 0.0 { -1.0 } else { 1.0 };
             data.extend(col.iter().map(|v| v * s));
         }
@@ -92,12 +89,10 @@ impl ModalFeatures {
         skip: usize,
         k: usize,
     ) -> Result<Self, ModalError> {
-        let modes = &basis.modes;
-        let rows = modes.nrows();
-        let cols: Vec<Vec<f64>> = (0..modes.ncols().min(skip + k))
-            .map(|p| (0..rows).map(|r| modes[(r, p)]).collect())
-            .collect();
-        Self::from_columns(basis.dim, basis.n_nodes, cols.len(), skip, k, |p| &cols[p])
+        let available = basis.n_modes();
+        Self::from_columns(basis.dim, basis.n_nodes, available, skip, k, |p| {
+            basis.mode(p)
+        })
     }
 
     /// Mode `p` as a `(dim·n)` component-major vector.
@@ -120,6 +115,30 @@ impl ModalFeatures {
             data,
         }
     }
+}
+
+/// `Σ v²` of each column, each summed in order from its first entry (the bits of a plain
+/// sequential sum); four columns at a time, so that four running sums advance side by side
+/// instead of one waiting on its previous addition at every entry.
+fn sums_of_squares(cols: &[&[f64]], len: usize) -> Vec<f64> {
+    let mut out = Vec::with_capacity(cols.len());
+    let mut quads = cols.chunks_exact(4);
+    for q in &mut quads {
+        let mut s = [0.0f64; 4];
+        for r in 0..len {
+            for (c, col) in q.iter().enumerate() {
+                s[c] += col[r] * col[r];
+            }
+        }
+        out.extend(s);
+    }
+    out.extend(
+        quads
+            .remainder()
+            .iter()
+            .map(|c| c.iter().map(|v| v * v).sum::<f64>()),
+    );
+    out
 }
 
 /// Outcome of the cross-object mode alignment.

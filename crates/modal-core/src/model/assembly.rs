@@ -320,7 +320,14 @@ pub(crate) fn solve_model(
     } else {
         eigen::canonical_signs(modes.as_mut());
     }
-    if modes.col_iter().any(|c| c.iter().any(|v| !v.is_finite())) {
+    let finite = |j: usize| {
+        let col = modes
+            .col(j)
+            .try_as_col_major()
+            .expect("an owned matrix is column-major");
+        crate::simd::all_finite(col.as_slice())
+    };
+    if !(0..modes.ncols()).all(finite) {
         return Err(ModalError::NonFiniteResult { stage: "the modes" });
     }
     Ok(ModalBasis {
@@ -364,9 +371,9 @@ pub(crate) fn build_model(
     options: &ModelOptions,
 ) -> Result<SolverModel, ModalError> {
     options.material.validate()?;
-    validate_nodes(shape)?;
+    let mean_spacing = validate_nodes(shape)?;
     match options.element {
-        ElementKind::Gaussian => gaussian_model(shape, options),
+        ElementKind::Gaussian => gaussian_model(shape, mean_spacing, options),
         ElementKind::Axial => Ok(axial::axial_model(shape, &options.material)?.into()),
     }
 }
@@ -465,8 +472,9 @@ fn explicit_matrices(
     }
 }
 
-/// Too few nodes and coincident nodes make every model singular.
-fn validate_nodes(shape: &Shape) -> Result<(), ModalError> {
+/// Too few nodes and coincident nodes make every model singular: checks both, and returns the
+/// nodes' mean nearest-neighbour distance (the σ rule's spacing), which the check computes anyway.
+fn validate_nodes(shape: &Shape) -> Result<f64, ModalError> {
     let dim = shape.dim();
     let n = shape.len();
     if n < dim + 1 {
@@ -485,17 +493,22 @@ fn validate_nodes(shape: &Shape) -> Result<(), ModalError> {
             });
         extent = extent.max(hi - lo);
     }
-    let (_, min_nn, (i, j)) = nearest_neighbour_stats(shape);
+    let (mean_nn, min_nn, (i, j)) = nearest_neighbour_stats(shape);
     if min_nn.is_nan() || min_nn <= 1e-10 * extent {
         return Err(ModalError::CoincidentNodes {
             first: i.min(j),
             second: i.max(j),
         });
     }
-    Ok(())
+    Ok(mean_nn)
 }
 
-fn gaussian_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, ModalError> {
+/// The Gaussian model of `shape`, whose nodes' mean nearest-neighbour distance is `mean_spacing`.
+fn gaussian_model(
+    shape: &Shape,
+    mean_spacing: f64,
+    options: &ModelOptions,
+) -> Result<SolverModel, ModalError> {
     let dim = shape.dim();
     let stride = options.center_stride;
     let centers = reduced_centers(shape, stride)?;
@@ -512,7 +525,7 @@ fn gaussian_model(shape: &Shape, options: &ModelOptions) -> Result<SolverModel, 
             if !(options.kappa.is_finite() && options.kappa > 0.0) {
                 return Err(OptionError::new("kappa", options.kappa, "a finite number > 0").into());
             }
-            options.kappa * nearest_neighbour_stats(shape).0 * stride as f64
+            options.kappa * mean_spacing * stride as f64
         }
     };
     let rho = options.material.density;

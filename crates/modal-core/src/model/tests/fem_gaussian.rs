@@ -257,6 +257,42 @@ fn plane_strain_changes_only_lambda() {
     assert!(rel_err(&diff, &want) < 1e-12);
 }
 
+#[test]
+fn k_tilde_is_its_blocks_and_the_integrals_are_exactly_symmetric() {
+    for dim in [2, 3] {
+        let shape = random_shape(dim, 9, 17);
+        let ints = GaussianIntegrals::new(&shape, 0.7);
+        let n = ints.n;
+        for m in [&ints.g, &ints.gamma].into_iter().chain(&ints.gamma_d) {
+            for j in 0..n {
+                for i in 0..n {
+                    assert_eq!(
+                        m[(i, j)].to_bits(),
+                        m[(j, i)].to_bits(),
+                        "{dim}-D ({i}, {j})"
+                    );
+                }
+            }
+        }
+        let (lambda, mu) = Material::RUBBER.lame(dim, PlaneModel::Stress);
+        let k = ints.k_tilde(lambda, mu);
+        for a in 0..dim {
+            for b in 0..dim {
+                let block = ints.k_tilde_block(a, b, lambda, mu);
+                for j in 0..n {
+                    for i in 0..n {
+                        assert_eq!(
+                            k[(a * n + i, b * n + j)].to_bits(),
+                            block[(i, j)].to_bits(),
+                            "{dim}-D block ({a}, {b}) entry ({i}, {j})"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
 fn check_symmetric_pd(k: &Mat<f64>, m: &Mat<f64>) {
     let n = k.nrows();
     for i in 0..n {
