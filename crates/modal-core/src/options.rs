@@ -131,14 +131,15 @@ impl std::fmt::Display for Material {
 /// let params = MatchParams { search: Search::Local, refits: Some(0), ..MatchParams::default() };
 /// let options = params.to_match_options(2, true).unwrap();
 /// assert_eq!((options.search, options.refits), (Search::Local, 0));
-/// assert!(MatchParams { modes: 1.5, ..MatchParams::default() }.to_match_options(2, true).is_err());
+/// assert!(MatchParams { modes: Some(1.5), ..MatchParams::default() }.to_match_options(2, true).is_err());
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct MatchParams {
     /// Finite element of the modal model.
     pub element: ElementKind,
-    /// Fraction of the modes used as features, in (0, 1].
-    pub modes: f64,
+    /// Fraction of the `dim × min(n, m)` modes used as features, in (0, 1] (`None`: the
+    /// recipe's).
+    pub modes: Option<f64>,
     /// Which search produces the matches.
     pub search: Search,
     /// Assignment solver of the global search and of the mode alignment.
@@ -194,7 +195,7 @@ impl Default for MatchParams {
         let d = MatchOptions::default();
         Self {
             element: d.model.element,
-            modes: d.mode_fraction,
+            modes: None,
             search: d.search,
             solver: d.method,
             threshold: d.threshold,
@@ -232,12 +233,9 @@ fn check(ok: bool, option: &'static str, value: f64, expected: &str) -> Result<(
 impl MatchParams {
     /// Checks every value.
     pub fn validate(&self) -> Result<(), OptionError> {
-        check(
-            self.modes > 0.0 && self.modes <= 1.0,
-            "modes",
-            self.modes,
-            "a fraction in (0, 1]",
-        )?;
+        if let Some(m) = self.modes {
+            check(m > 0.0 && m <= 1.0, "modes", m, "a fraction in (0, 1]")?;
+        }
         if let Some(t) = self.threshold {
             check(t.is_finite() && t >= 0.0, "threshold", t, "a number >= 0")?;
         }
@@ -327,7 +325,7 @@ impl MatchParams {
         if let Some(m) = self.material {
             o.model.material = m;
         }
-        o.mode_fraction = self.modes;
+        o.mode_fraction = self.modes.unwrap_or(o.mode_fraction);
         o.search = self.search;
         o.method = self.solver;
         o.threshold = self.threshold;
@@ -470,7 +468,7 @@ impl MatchOverrides {
     pub fn apply(&self, base: MatchParams) -> MatchParams {
         MatchParams {
             element: self.element.unwrap_or(base.element),
-            modes: self.modes.unwrap_or(base.modes),
+            modes: self.modes.or(base.modes),
             search: self.search.unwrap_or(base.search),
             solver: self.solver.unwrap_or(base.solver),
             threshold: self.threshold.or(base.threshold),
@@ -625,7 +623,7 @@ pub fn match_option_specs() -> Vec<OptionSpec> {
         OptionSpec::new(
             "modes",
             Value,
-            d.modes,
+            by_input(|o| o.mode_fraction),
             "Fraction of the dim × min(n, m) vibration modes used as features, in (0, 1].",
         ),
         OptionSpec::choice(
@@ -821,6 +819,23 @@ mod tests {
     }
 
     #[test]
+    fn the_mode_fraction_is_the_recipes_unless_chosen() {
+        let fraction = |modes, dim, ordered| {
+            let params = MatchParams {
+                modes,
+                ..MatchParams::default()
+            };
+            params.to_match_options(dim, ordered).unwrap().mode_fraction
+        };
+        assert_eq!(fraction(None, 2, true), 0.25);
+        assert_eq!(fraction(None, 2, false), 0.25);
+        assert_eq!(fraction(None, 3, false), 0.125);
+        for (dim, ordered) in [(2, true), (2, false), (3, false)] {
+            assert_eq!(fraction(Some(0.3), dim, ordered), 0.3);
+        }
+    }
+
+    #[test]
     fn outlines_keep_the_refits_unless_the_rotation_search_aligns_them() {
         let refits = |params: MatchParams, dim, ordered| {
             params.to_match_options(dim, ordered).unwrap().refits
@@ -895,7 +910,13 @@ mod tests {
                 },
                 "max_rotation",
             ),
-            (MatchParams { modes: 0.0, ..d() }, "modes"),
+            (
+                MatchParams {
+                    modes: Some(0.0),
+                    ..d()
+                },
+                "modes",
+            ),
             (
                 MatchParams {
                     threshold: Some(f64::NAN),

@@ -345,7 +345,8 @@ fn triangles(
 /// a, b : (n, 2) or (n, 3) array_like — the node coordinates of the two objects.
 /// element : {"gaussian", "axial"} — Sclaroff's Gaussian element or bar elements (default
 ///     "gaussian").
-/// modes : float in (0, 1] — fraction of ``dim · min(n, m)`` modes kept (default 0.25).
+/// modes : float in (0, 1] — fraction of ``dim · min(n, m)`` modes kept (default 0.25; 0.125 for
+///     unordered 3-D points, whose model has a Gaussian on every second node only).
 /// search : {"global", "local", "best"} — optimal assignment (default), mutual best matches, or
 ///     every node of a to its best node of b (many-to-one, no excess step).
 /// solver : {"jv", "hungarian", "simplex"} — assignment algorithm (default "jv").

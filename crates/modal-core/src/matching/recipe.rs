@@ -133,9 +133,15 @@ impl MatchOptions {
     /// BENCHMARKS.md, "Surfaces". A Gaussian on every second node only (`center_stride = 2`): with σ
     /// three spacings wide the reduced basis spans the same smooth modes, and on those 90 cases
     /// per severity it scores 0.393 / 0.393 / 0.391 with the solves' order halved (a surface pair
-    /// about 1.6× faster).
+    /// about 1.6× faster). Modes: an eighth of `dim · min(n, m)`, which with a Gaussian on every
+    /// second node is a quarter of the model's own modes, the share contours use; the quarter of
+    /// `dim · min(n, m)` used before asked for half of the reduced model's modes, and on 30 held-out
+    /// cases per severity (mild / moderate / severe) both scored 0.387 / 0.382–0.384 /
+    /// 0.372–0.373 one-to-one and 0.500 / 0.493 / 0.473 many-to-one, the solves and the costs
+    /// with half the modes taking less time (BENCHMARKS.md, "Speed against CPD").
     pub fn for_surfaces() -> Self {
         let mut o = Self {
+            mode_fraction: 0.125,
             refits: 0,
             common_sigma: true,
             position_weight: 0.7,
