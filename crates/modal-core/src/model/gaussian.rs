@@ -94,8 +94,8 @@ impl GaussianIntegrals {
         let s2 = sigma * sigma;
         let v = (std::f64::consts::PI * s2).powf(dim as f64 / 2.0);
         let npairs = dim * (dim + 1) / 2;
-        // The lower triangles, column by column, in plain column-major buffers: G, Γ, then the
-        // Γ^{ab}. Writing both halves of faer matrices at once, indexed, took twice as long.
+        // The lower triangles, column by column, in plain column-major buffers (G, Γ, then the
+        // Γ^{ab}); each matrix is then built whole from its triangle.
         let mut lower = vec![0.0f64; (2 + npairs) * n * n];
         let (lower_g, rest) = lower.split_at_mut(n * n);
         let (lower_gamma, lower_d) = rest.split_at_mut(n * n);
