@@ -94,11 +94,9 @@ impl GaussianIntegrals {
         let s2 = sigma * sigma;
         let v = (std::f64::consts::PI * s2).powf(dim as f64 / 2.0);
         let npairs = dim * (dim + 1) / 2;
-        // The lower triangles, column by column, in plain column-major buffers (G, Γ, then the
-        // Γ^{ab}); each matrix is then built whole from its triangle.
-        let mut lower = vec![0.0f64; (2 + npairs) * n * n];
-        let (lower_g, rest) = lower.split_at_mut(n * n);
-        let (lower_gamma, lower_d) = rest.split_at_mut(n * n);
+        let mut g = Mat::<f64>::zeros(n, n);
+        let mut gamma = Mat::<f64>::zeros(n, n);
+        let mut gamma_d: Vec<Mat<f64>> = (0..npairs).map(|_| Mat::zeros(n, n)).collect();
         let inv4s4 = 1.0 / (4.0 * s2 * s2);
         let mut d = [0.0f64; 3];
         for j in 0..n {
@@ -113,29 +111,22 @@ impl GaussianIntegrals {
                 // G's exponent is twice Γ's: it reaches the negligible range first.
                 let gij = gaussian(2.0 * arg);
                 let gm = v * e;
-                let at = j * n + i;
-                lower_g[at] = gij;
-                lower_gamma[at] = gm;
+                g[(i, j)] = gij;
+                g[(j, i)] = gij;
+                gamma[(i, j)] = gm;
+                gamma[(j, i)] = gm;
                 let mut p = 0;
                 for a in 0..dim {
                     for b in a..dim {
                         let delta = if a == b { 2.0 * s2 } else { 0.0 };
-                        lower_d[p * n * n + at] = gm * (delta - d[a] * d[b]) * inv4s4;
+                        let val = gm * (delta - d[a] * d[b]) * inv4s4;
+                        gamma_d[p][(i, j)] = val;
+                        gamma_d[p][(j, i)] = val;
                         p += 1;
                     }
                 }
             }
         }
-        let symmetric = |l: &[f64]| {
-            Mat::from_fn(
-                n,
-                n,
-                |i, j| if i >= j { l[j * n + i] } else { l[i * n + j] },
-            )
-        };
-        let g = symmetric(lower_g);
-        let gamma = symmetric(lower_gamma);
-        let gamma_d = lower_d.chunks_exact(n * n).map(symmetric).collect();
         Self {
             dim,
             n,
