@@ -980,31 +980,47 @@ pub fn block_solve_lower_transpose(l: MatRef<'_, f64>, mut x: MatMut<'_, f64>, d
     }
 }
 
+/// Column `j` of an owned matrix as a slice (an owned faer matrix is column-major).
+pub(crate) fn column(m: &Mat<f64>, j: usize) -> &[f64] {
+    m.col(j)
+        .try_as_col_major()
+        .expect("the columns of a dense matrix are contiguous")
+        .as_slice()
+}
+
+/// Column `j` of an owned matrix as a mutable slice.
+pub(crate) fn column_mut(m: &mut Mat<f64>, j: usize) -> &mut [f64] {
+    m.col_mut(j)
+        .try_as_col_major_mut()
+        .expect("the columns of a dense matrix are contiguous")
+        .as_slice_mut()
+}
+
 /// Flips every column so that its largest-|·| entry is positive. Entries within a relative
 /// 10⁻⁶ of the largest count as ties (symmetric shapes produce exact ties up to round-off),
 /// and the first of them decides: the rule is then stable under round-off.
 pub fn canonical_signs(mut v: MatMut<'_, f64>) {
     for j in 0..v.ncols() {
         let mut col = v.rb_mut().col_mut(j);
-        // A column of a column-major matrix is contiguous; any other layout takes the indexed path.
+        // A column of a column-major matrix is contiguous; a strided one goes through a copy.
         if let Some(slice) = col.rb_mut().try_as_col_major_mut() {
-            let slice = slice.as_slice_mut();
-            let best = crate::simd::max_abs(slice);
-            let first = slice.iter().find(|x| x.abs() >= best * (1.0 - 1e-6));
-            if first.is_some_and(|&x| x < 0.0) {
-                slice.iter_mut().for_each(|x| *x = -*x);
-            }
+            canonical_sign(slice.as_slice_mut());
             continue;
         }
-        let best = (0..col.nrows()).fold(0.0f64, |m, i| m.max(col[i].abs()));
-        let Some(first) = (0..col.nrows()).find(|&i| col[i].abs() >= best * (1.0 - 1e-6)) else {
-            continue;
-        };
-        if col[first] < 0.0 {
-            for i in 0..col.nrows() {
-                col[i] = -col[i];
-            }
+        let mut copy: Vec<f64> = col.rb().iter().copied().collect();
+        canonical_sign(&mut copy);
+        for (x, c) in col.iter_mut().zip(copy) {
+            *x = c;
         }
+    }
+}
+
+/// [`canonical_signs`] of one column.
+fn canonical_sign(col: &mut [f64]) {
+    let best = crate::simd::max_abs(col);
+    let first = col.iter().find(|x| x.abs() >= best * (1.0 - 1e-6));
+    if first.is_some_and(|&x| x < 0.0) {
+        col.iter_mut().for_each(|x| *x = -*x);
     }
 }
 

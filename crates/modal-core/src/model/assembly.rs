@@ -152,11 +152,7 @@ impl ModalBasis {
     /// # Panics
     /// When `j >= n_modes()`.
     pub fn mode(&self, j: usize) -> &[f64] {
-        self.modes
-            .col(j)
-            .try_as_col_major()
-            .expect("the columns of a dense matrix are contiguous")
-            .as_slice()
+        eigen::column(&self.modes, j)
     }
 
     /// Every mode, one after the other (`n_dofs() × n_modes()` column-major).
@@ -320,14 +316,7 @@ pub(crate) fn solve_model(
     } else {
         eigen::canonical_signs(modes.as_mut());
     }
-    let finite = |j: usize| {
-        let col = modes
-            .col(j)
-            .try_as_col_major()
-            .expect("an owned matrix is column-major");
-        crate::simd::all_finite(col.as_slice())
-    };
-    if !(0..modes.ncols()).all(finite) {
+    if !(0..modes.ncols()).all(|j| crate::simd::all_finite(eigen::column(&modes, j))) {
         return Err(ModalError::NonFiniteResult { stage: "the modes" });
     }
     Ok(ModalBasis {

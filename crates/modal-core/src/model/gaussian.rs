@@ -52,22 +52,6 @@ pub fn gaussians_at(nodes: &Shape, centers: &Shape, sigma: f64) -> Mat<f64> {
     })
 }
 
-/// Column `j` of an owned (column-major) matrix as a slice.
-fn column(m: &Mat<f64>, j: usize) -> &[f64] {
-    m.col(j)
-        .try_as_col_major()
-        .expect("an owned matrix is column-major")
-        .as_slice()
-}
-
-/// Column `j` of an owned (column-major) matrix as a mutable slice.
-fn column_mut(m: &mut Mat<f64>, j: usize) -> &mut [f64] {
-    m.col_mut(j)
-        .try_as_col_major_mut()
-        .expect("an owned matrix is column-major")
-        .as_slice_mut()
-}
-
 /// Exponents beyond which a Gaussian is stored as an exact zero: `e^−600 ≈ 3·10⁻²⁶¹`, a relative
 /// perturbation no sum of these matrices can see, while the values between it and the smallest
 /// normal number (`e^−708`) are subnormal, and every product that touches a subnormal runs
@@ -141,29 +125,20 @@ impl GaussianIntegrals {
         &self.gamma_d[pair_index(self.dim, a, b)]
     }
 
-    /// The (a, b) block of `K̃`: `(λ+μ) Γ^{ab} + μ δ_ab Σ_c Γ^{cc}` (docs/method.md §2.4 without
-    /// the `A`s).
-    pub(crate) fn k_tilde_block(&self, a: usize, b: usize, lambda: f64, mu: f64) -> Mat<f64> {
-        let mut out = self.gamma_ab(a, b) * faer::Scale(lambda + mu);
-        if a == b {
-            for c in 0..self.dim {
-                out += self.gamma_ab(c, c) * faer::Scale(mu);
-            }
-        }
-        out
-    }
-
-    /// Full `K̃` (d·n × d·n, component-major): [`GaussianIntegrals::k_tilde_block`]'s entries,
-    /// summed in its order, written in place column by column (no block is formed apart).
+    /// Full `K̃` (d·n × d·n, component-major), block `(a, b)` being
+    /// `(λ+μ) Γ^{ab} + μ δ_ab Σ_c Γ^{cc}` (docs/method.md §2.4 without the `A`s), written in place
+    /// column by column.
     pub fn k_tilde(&self, lambda: f64, mu: f64) -> Mat<f64> {
         let (n, dim) = (self.n, self.dim);
         let mut k = Mat::<f64>::zeros(dim * n, dim * n);
         for j in 0..n {
-            let diagonal: Vec<&[f64]> = (0..dim).map(|c| column(self.gamma_ab(c, c), j)).collect();
+            let diagonal: Vec<&[f64]> = (0..dim)
+                .map(|c| crate::eigen::column(self.gamma_ab(c, c), j))
+                .collect();
             for b in 0..dim {
-                let col = column_mut(&mut k, b * n + j);
+                let col = crate::eigen::column_mut(&mut k, b * n + j);
                 for a in 0..dim {
-                    let ab = column(self.gamma_ab(a, b), j);
+                    let ab = crate::eigen::column(self.gamma_ab(a, b), j);
                     let out = &mut col[a * n..(a + 1) * n];
                     if a != b {
                         for (o, x) in out.iter_mut().zip(ab) {
@@ -203,12 +178,14 @@ impl GaussianIntegrals {
             })?;
         let a = llt.inverse();
         let ms = &a * (&self.gamma * faer::Scale(material.density)) * &a;
+        let k_tilde = self.k_tilde(lambda, mu);
         let mut m = Mat::<f64>::zeros(dim * n, dim * n);
         let mut k = Mat::<f64>::zeros(dim * n, dim * n);
         for p in 0..dim {
             m.as_mut().submatrix_mut(p * n, p * n, n, n).copy_from(&ms);
             for q in 0..dim {
-                let blk = &a * self.k_tilde_block(p, q, lambda, mu) * &a;
+                let block = k_tilde.submatrix(p * n, q * n, n, n).to_owned();
+                let blk = &a * block * &a;
                 k.as_mut().submatrix_mut(p * n, q * n, n, n).copy_from(&blk);
             }
         }
