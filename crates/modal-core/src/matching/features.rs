@@ -9,6 +9,7 @@ use faer::{Accum, Mat, MatRef, Par};
 use std::sync::OnceLock;
 
 use super::prealign::nearest;
+use super::prepare::PreparedShape;
 use super::recipe::MatchOptions;
 use crate::error::ModalError;
 use crate::simd::dot;
@@ -485,8 +486,7 @@ pub(crate) fn position_term(
 /// (the helper of [`super::Parallelism::Pair`] after B's solve, or the first pass): the other
 /// finds it done or waits for it. The start is published when the pre-alignment ends.
 pub(crate) struct PositionTermAhead {
-    b: Vec<f64>,
-    dim: usize,
+    b: PreparedShape,
     cost_power: f64,
     start: OnceLock<Vec<f64>>,
     /// `None` when it could not be computed: the pass computes it again and reports the error.
@@ -494,11 +494,10 @@ pub(crate) struct PositionTermAhead {
 }
 
 impl PositionTermAhead {
-    /// For B's nodes `b`, before A's start is known.
-    pub(crate) fn new(b: &[f64], dim: usize, cost_power: f64) -> Self {
+    /// For B's normalised nodes, before A's start is known.
+    pub(crate) fn new(b: PreparedShape, cost_power: f64) -> Self {
         Self {
-            b: b.to_vec(),
-            dim,
+            b,
             cost_power,
             start: OnceLock::new(),
             term: OnceLock::new(),
@@ -515,7 +514,10 @@ impl PositionTermAhead {
     pub(crate) fn get(&self) -> Option<&AffinityMatrix> {
         let start = self.start.get()?;
         self.term
-            .get_or_init(|| position_term(start, &self.b, self.dim, self.cost_power).ok())
+            .get_or_init(|| {
+                let b = self.b.get();
+                position_term(start, &b.pts, b.dim(), self.cost_power).ok()
+            })
             .as_ref()
     }
 }

@@ -69,8 +69,8 @@ pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<S
             let phase = FirstPhase::start(
                 d,
                 robust.then(|| Screening {
-                    a: a.pts.clone(),
-                    b: b.pts.clone(),
+                    a: pair.a.clone().into_owned(),
+                    b: pair.b.clone().into_owned(),
                     search,
                     keep_orientation: ordered,
                 }),
@@ -82,8 +82,12 @@ pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<S
                 }),
                 (pair.excess() && !ordered)
                     .then(|| [pair.a.clone().into_owned(), pair.b.clone().into_owned()]),
-                (modal && pair.opts.position_weight > 0.0)
-                    .then(|| Arc::new(PositionTermAhead::new(&b.pts, d, pair.opts.cost_power))),
+                (modal && pair.opts.position_weight > 0.0).then(|| {
+                    Arc::new(PositionTermAhead::new(
+                        pair.b.clone().into_owned(),
+                        pair.opts.cost_power,
+                    ))
+                }),
             );
             let t = phase.prealign().or(sensor);
             let (cur, to_cur) = prealign::start_in_b_frame(&a.pts, t, d, renormalize)?;
@@ -111,10 +115,11 @@ struct SolveB {
 
 type Features = Result<Option<Arc<ModalFeatures>>, ModalError>;
 
-/// The rotation search's screening, as the helper or the calling thread runs it.
+/// The rotation search's screening, as the helper or the calling thread runs it (on the two
+/// objects' normalised nodes).
 struct Screening {
-    a: Vec<f64>,
-    b: Vec<f64>,
+    a: PreparedShape,
+    b: PreparedShape,
     search: RotationSearch,
     keep_orientation: bool,
 }
@@ -130,8 +135,8 @@ struct Survivors {
 impl Screening {
     fn pair(&self, dim: usize) -> SearchPair<'_> {
         SearchPair {
-            a: &self.a,
-            b: &self.b,
+            a: &self.a.get().pts,
+            b: &self.b.get().pts,
             dim,
             search: &self.search,
             keep_orientation: self.keep_orientation,
