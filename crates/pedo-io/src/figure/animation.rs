@@ -4,8 +4,7 @@
 
 use super::*;
 use crate::Recording;
-use image::codecs::gif::{GifEncoder, Repeat};
-use image::{Delay, Frame, RgbaImage};
+use image::RgbaImage;
 
 /// Most frames an animation holds: a longer run keeps every `s`-th frame, `s` the smallest step
 /// that fits, and each shown frame lasts `s` frame intervals, so the playback keeps real time.
@@ -58,7 +57,8 @@ impl Animation<'_> {
     }
 
     /// The animation as GIF bytes, looping forever. Each frame after the first stores only
-    /// the rectangle that changed, which keeps the file small.
+    /// the rectangle that changed, placed at its offset over the frames before it (which are
+    /// kept, not cleared), so the file stays small and every frame shows the whole figure.
     pub fn to_gif(&self) -> Result<Vec<u8>> {
         let shown = self.shown_frames();
         if shown.is_empty() || self.frames.1 > self.recording.n_frames() {
@@ -70,25 +70,29 @@ impl Animation<'_> {
             )));
         }
         let peak = self.recording.peak_image().max();
-        let delay = Delay::from_numer_denom_ms(self.delay_cs() * 10, 1);
+        let delay = u16::try_from(self.delay_cs()).unwrap_or(u16::MAX);
+        let render = |t: usize| -> Result<RgbaImage> {
+            let (w, h, rgb) = render_rgb(&self.layout(t, peak)?)?;
+            Ok(RgbaImage::from_fn(w, h, |x, y| {
+                let i = 3 * (y as usize * w as usize + x as usize);
+                image::Rgba([rgb[i], rgb[i + 1], rgb[i + 2], 255])
+            }))
+        };
+        let first = render(shown[0])?;
         let mut out = Vec::new();
         {
-            // Speed 30: the fastest colour quantisation; the figures hold few colours.
-            let mut encoder = GifEncoder::new_with_speed(&mut out, 30);
-            encoder.set_repeat(Repeat::Infinite).map_err(figure_error)?;
-            let mut previous: Option<RgbaImage> = None;
-            for &t in &shown {
-                let (w, h, rgb) = render_rgb(&self.layout(t, peak)?)?;
-                let image = RgbaImage::from_fn(w, h, |x, y| {
-                    let i = 3 * (y as usize * w as usize + x as usize);
-                    image::Rgba([rgb[i], rgb[i + 1], rgb[i + 2], 255])
-                });
-                let frame = match &previous {
-                    Some(prev) => changed_part(prev, &image, delay),
-                    None => Frame::from_parts(image.clone(), 0, 0, delay),
-                };
-                encoder.encode_frame(frame).map_err(figure_error)?;
-                previous = Some(image);
+            let (w, h) = (gif_size(first.width())?, gif_size(first.height())?);
+            let mut encoder = gif::Encoder::new(&mut out, w, h, &[]).map_err(figure_error)?;
+            encoder
+                .set_repeat(gif::Repeat::Infinite)
+                .map_err(figure_error)?;
+            write_gif_frame(&mut encoder, 0, 0, first.clone(), delay)?;
+            let mut previous = first;
+            for &t in &shown[1..] {
+                let image = render(t)?;
+                let (x0, y0, part) = changed_part(&previous, &image);
+                write_gif_frame(&mut encoder, x0, y0, part, delay)?;
+                previous = image;
             }
         }
         Ok(out)
@@ -220,9 +224,9 @@ impl Animation<'_> {
     }
 }
 
-/// The smallest rectangle of `next` that differs from `prev` (same size), as a GIF frame placed
-/// over the previous one; one pixel when nothing changed.
-fn changed_part(prev: &RgbaImage, next: &RgbaImage, delay: Delay) -> Frame {
+/// The smallest rectangle of `next` that differs from `prev` (same size), with its top-left
+/// corner; one pixel when nothing changed.
+fn changed_part(prev: &RgbaImage, next: &RgbaImage) -> (u32, u32, RgbaImage) {
     let (w, h) = next.dimensions();
     let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
     for (x, y, p) in next.enumerate_pixels() {
@@ -235,7 +239,31 @@ fn changed_part(prev: &RgbaImage, next: &RgbaImage, delay: Delay) -> Frame {
         (x0, y0, x1, y1) = (0, 0, 1, 1);
     }
     let part = image::imageops::crop_imm(next, x0, y0, x1 - x0, y1 - y0).to_image();
-    Frame::from_parts(part, x0, y0, delay)
+    (x0, y0, part)
+}
+
+/// Writes `part` at `(left, top)` over the frames before it, which stay (disposal "keep").
+fn write_gif_frame(
+    encoder: &mut gif::Encoder<&mut Vec<u8>>,
+    left: u32,
+    top: u32,
+    part: RgbaImage,
+    delay_cs: u16,
+) -> Result<()> {
+    let (w, h) = (gif_size(part.width())?, gif_size(part.height())?);
+    let mut rgba = part.into_raw();
+    // Speed 30: the fastest colour quantisation; the figures hold few colours.
+    let mut frame = gif::Frame::from_rgba_speed(w, h, &mut rgba, 30);
+    frame.left = gif_size(left)?;
+    frame.top = gif_size(top)?;
+    frame.delay = delay_cs;
+    frame.dispose = gif::DisposalMethod::Keep;
+    encoder.write_frame(&frame).map_err(figure_error)
+}
+
+/// A GIF dimension or offset (16 bits).
+fn gif_size(v: u32) -> Result<u16> {
+    u16::try_from(v).map_err(|_| IoError::Figure(format!("{v} pixels is too large for a GIF")))
 }
 
 #[cfg(test)]
@@ -321,6 +349,37 @@ mod tests {
         }
         assert!(count(&frames[4], COLOR_A) > last_b + 30);
         assert_ne!(frames[0].buffer(), frames[1].buffer());
+        // Every decoded frame is the whole figure of its recording frame (up to the GIF's
+        // 256-colour quantisation), although frames 1-4 store only what changed.
+        let peak = rec.peak_image().max();
+        for (t, f) in frames.iter().enumerate() {
+            let (w, h, rgb) = render_rgb(&animation.layout(t, peak).unwrap()).unwrap();
+            assert_eq!(f.buffer().dimensions(), (w, h));
+            let far = f
+                .buffer()
+                .pixels()
+                .zip(rgb.chunks_exact(3))
+                .filter(|(p, q)| (0..3).any(|k| p.0[k].abs_diff(q[k]) > 48) || p.0[3] != 255)
+                .count();
+            assert!(
+                far * 200 < (w * h) as usize,
+                "frame {t}: {far} of {} pixels differ from the figure",
+                w * h
+            );
+        }
+    }
+
+    #[test]
+    fn a_frame_that_changes_a_corner_stores_that_corner_at_its_offset() {
+        let prev = RgbaImage::from_pixel(20, 10, image::Rgba([1, 2, 3, 255]));
+        let mut next = prev.clone();
+        next.put_pixel(15, 7, image::Rgba([200, 0, 0, 255]));
+        next.put_pixel(12, 4, image::Rgba([0, 200, 0, 255]));
+        let (x0, y0, part) = changed_part(&prev, &next);
+        assert_eq!((x0, y0, part.dimensions()), (12, 4, (4, 4)));
+        assert_eq!(part.get_pixel(3, 3), next.get_pixel(15, 7));
+        let (x0, y0, part) = changed_part(&prev, &prev);
+        assert_eq!((x0, y0, part.dimensions()), (0, 0, (1, 1)));
     }
 
     #[test]
