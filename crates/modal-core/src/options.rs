@@ -237,7 +237,12 @@ impl MatchParams {
             check(m > 0.0 && m <= 1.0, "modes", m, "a fraction in (0, 1]")?;
         }
         if let Some(t) = self.threshold {
-            check(t.is_finite() && t >= 0.0, "threshold", t, "a number >= 0")?;
+            check(
+                (0.0..=1.0).contains(&t),
+                "threshold",
+                t,
+                "a number in [0, 1]",
+            )?;
         }
         if let Some(r) = self.max_rotation {
             check(
@@ -888,7 +893,7 @@ mod tests {
     #[test]
     fn validation_names_the_option() {
         let d = MatchParams::default;
-        let cases: [(MatchParams, &str); 10] = [
+        let cases: [(MatchParams, &str); 11] = [
             (
                 MatchParams {
                     deform_stiffness: 0.0,
@@ -920,6 +925,13 @@ mod tests {
             (
                 MatchParams {
                     threshold: Some(f64::NAN),
+                    ..d()
+                },
+                "threshold",
+            ),
+            (
+                MatchParams {
+                    threshold: Some(1.5),
                     ..d()
                 },
                 "threshold",

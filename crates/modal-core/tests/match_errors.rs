@@ -87,11 +87,13 @@ fn degenerate_inputs_are_rejected_with_reasons() {
         };
         assert_eq!(option_of(&err(&good, &good, &o)), "mode_fraction");
     }
-    let o = MatchOptions {
-        threshold: Some(-1.0),
-        ..MatchOptions::default()
-    };
-    assert_eq!(option_of(&err(&good, &good, &o)), "threshold");
+    for t in [-1.0, 1.5, f64::NAN] {
+        let o = MatchOptions {
+            threshold: Some(t),
+            ..MatchOptions::default()
+        };
+        assert_eq!(option_of(&err(&good, &good, &o)), "threshold");
+    }
     let o = MatchOptions {
         position_weight: 2.0,
         ..MatchOptions::default()
