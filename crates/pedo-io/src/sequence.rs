@@ -633,7 +633,8 @@ pub struct SequenceResult {
     pub timings: StageTimings,
 }
 
-/// A frame left out of a run: its objects could not be built.
+/// A frame left out of a run: its objects could not be built (for isocontours, one entry per
+/// isobaric level of the frame that gives no object, the level in the reason).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkippedFrame {
     /// Frame index (0-based) in the recording.
@@ -801,19 +802,20 @@ impl RunCounts {
         }
     }
 
-    fn mean(&self, sum: f64) -> f64 {
-        sum / self.pairs.max(1) as f64
+    /// `None` without pairs: a mean over nothing is not a number to report.
+    fn mean(&self, sum: f64) -> Option<f64> {
+        (self.pairs > 0).then(|| sum / self.pairs as f64)
     }
-    /// Mean local matches over the matched pairs, in % (0 without pairs).
-    pub fn mean_local_percent(&self) -> f64 {
+    /// Mean local matches over the matched pairs, in % (`None` without pairs).
+    pub fn mean_local_percent(&self) -> Option<f64> {
         self.mean(self.local_percent_sum)
     }
-    /// Mean optimisation matches over the matched pairs, in % (0 without pairs).
-    pub fn mean_optimisation_percent(&self) -> f64 {
+    /// Mean optimisation matches over the matched pairs, in % (`None` without pairs).
+    pub fn mean_optimisation_percent(&self) -> Option<f64> {
         self.mean(self.optimisation_percent_sum)
     }
-    /// Mean over the matched pairs of their mean cost.
-    pub fn mean_cost(&self) -> f64 {
+    /// Mean over the matched pairs of their mean cost (`None` without pairs).
+    pub fn mean_cost(&self) -> Option<f64> {
         self.mean(self.cost_sum)
     }
 }
@@ -1889,27 +1891,50 @@ fn build_objects(
             for (index, &level) in levels.iter().enumerate() {
                 let cs = crate::isobar::isocontours(&frame, &[level], &iso)?;
                 // The seed models one isobaric contour per level: the largest region's outline.
-                if let Some(c) = cs.iter().max_by(|a, b| a.area().total_cmp(&b.area())) {
-                    let shape = c.to_shape()?;
-                    if keep(&shape) {
-                        let o = built.objects.len();
-                        if o > 0 {
-                            built.pairs.push((o - 1, o));
-                        }
-                        built.objects.push(SequenceObject {
-                            id: o,
-                            frame: t,
-                            index,
-                            level: Some(level),
-                            shape,
-                        });
+                let largest = cs.iter().max_by(|a, b| a.area().total_cmp(&b.area()));
+                let shape = largest.map(Contour::to_shape).transpose()?;
+                if let Some(why) = level_left_out(shape.as_ref(), options.min_nodes.max(3)) {
+                    built.skipped_frames.push(SkippedFrame {
+                        frame: t,
+                        reason: format!(
+                            "isobaric level {} of {} ({level:.1} {}): {why}",
+                            index + 1,
+                            levels.len(),
+                            recording.units
+                        ),
+                    });
+                }
+                if let Some(shape) = shape.filter(keep) {
+                    let o = built.objects.len();
+                    if o > 0 {
+                        built.pairs.push((o - 1, o));
                     }
+                    built.objects.push(SequenceObject {
+                        id: o,
+                        frame: t,
+                        index,
+                        level: Some(level),
+                        shape,
+                    });
                 }
                 tick(levels.len());
             }
         }
     }
     Ok(built)
+}
+
+/// Why an isobaric level gets no object (`None` when it does): no region reaches it, or its
+/// largest region's outline has fewer than `min_nodes` nodes.
+fn level_left_out(shape: Option<&Shape>, min_nodes: usize) -> Option<String> {
+    match shape {
+        None => Some("no region reaches this level; no object".into()),
+        Some(s) if s.len() < min_nodes => Some(format!(
+            "its largest region's outline has {} nodes, fewer than the {min_nodes} an object needs",
+            s.len()
+        )),
+        Some(_) => None,
+    }
 }
 
 /// `build(t)` for every frame of `frames`, in parallel. A frame whose objects cannot be built is

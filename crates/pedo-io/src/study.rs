@@ -349,6 +349,7 @@ pub fn run_into_folder(
             ),
             None => {
                 let counts = stream_sequence(recording, frames, options, progress, &mut NoSink)?;
+                require_objects(counts.objects, recording, options)?;
                 let summary =
                     report::run_summary_of(input, recording, params, options, &counts, timings);
                 Ok((summary, counts))
@@ -356,6 +357,7 @@ pub fn run_into_folder(
         };
     }
     let result = run_sequence(recording, options, progress)?;
+    require_objects(result.objects.len(), recording, options)?;
     let summary = match folder {
         Some(folder) => {
             let run = RunRecord {
@@ -370,6 +372,19 @@ pub fn run_into_folder(
         None => report::run_summary(input, recording, params, options, &result, timings),
     };
     Ok((summary, RunCounts::of(&result)))
+}
+
+/// A run that found no object in any of its frames has nothing to match or report: an error
+/// (no output is written), not an empty success.
+fn require_objects(objects: usize, recording: &Recording, options: &SequenceOptions) -> Result<()> {
+    if objects > 0 {
+        return Ok(());
+    }
+    let (a, b) = options.frames.unwrap_or((0, recording.n_frames()));
+    Err(IoError::no_object(format!(
+        "no object to match in frames {a}..{b}: no frame holds an object of at least {} nodes above the noise threshold (see --threshold and --frames)",
+        options.min_nodes
+    )))
 }
 
 /// Runs `recording` as [`stream_sequence`] and writes the folder `out` of a run with tables
@@ -394,6 +409,7 @@ pub fn stream_run_folder(
     let dir = OutDir::create(out)?;
     let mut sink = TablesSink::create(&dir, recording, tables)?;
     let counts = stream_sequence(recording, frames, options, progress, &mut sink)?;
+    require_objects(counts.objects, recording, options)?;
     sink.finish(&counts)?;
     let t = counts.timings;
     let run = started
@@ -970,7 +986,8 @@ fn process(
             }
             row.status = RowStatus::Skipped;
             row.message =
-                "outputs complete (same input SHA-256 and options); force re-runs it".into();
+                "outputs complete (same input SHA-256 and options); --force (force=True) runs it again"
+                    .into();
             return Ok(row);
         }
     }
