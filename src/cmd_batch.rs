@@ -76,7 +76,13 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
                 bar.set_message(format!("{n}/{} recordings", f.len()));
                 if row.status == RowStatus::Error {
                     // The bar hides itself on a non-terminal; errors are printed either way.
-                    bar.suspend(|| eprintln!("pedomatch: {}: {}", row.path, row.message));
+                    // Most errors name their file already; the others get its path.
+                    let line = if row.message.starts_with(&row.path) {
+                        row.message.clone()
+                    } else {
+                        format!("{}: {}", row.path, row.message)
+                    };
+                    bar.suspend(|| eprintln!("pedomatch: {line}"));
                 }
             }
         }

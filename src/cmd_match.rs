@@ -25,16 +25,21 @@ pub struct MatchArgs {
     pub ordered: bool,
     #[arg(long, help = "Turn --ordered off")]
     pub no_ordered: bool,
-    /// Frame (0-based) to take from a multi-frame recording.
+    /// Frame (0-based) to take from a multi-frame recording (both inputs, unless --frame-b).
     #[arg(long, default_value_t = 0)]
     pub frame: usize,
+    /// Frame (0-based) of the second input, when it differs from --frame: two frames of one
+    /// recording are `match walk.asf walk.asf --frame 40 --frame-b 41`.
+    #[arg(long)]
+    pub frame_b: Option<usize>,
     #[command(flatten)]
     pub modal: ModalArgs,
     #[command(flatten)]
     pub units: UnitArgs,
     #[command(flatten)]
     pub read: crate::modal_args::ReadArgs,
-    /// Write matches.csv, match.json and the match figure into this folder instead of printing.
+    /// Write matches.csv, match.json and the match figure into this folder instead of printing
+    /// the matches.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Format of the match figure written with --out.
@@ -64,8 +69,16 @@ struct Object {
     source: Option<(pedo_io::Recording, usize)>,
 }
 
-/// An object from a file: a point file as it is, or the largest contour of a pressure frame.
-fn load_object(path: &Path, args: &MatchArgs) -> Result<Object, CliError> {
+impl Object {
+    /// The recording frame the object was taken from (`None`: a point file).
+    fn frame(&self) -> Option<usize> {
+        self.source.as_ref().map(|(_, frame)| *frame)
+    }
+}
+
+/// An object from a file: a point file as it is, or the largest contour of frame `frame` of a
+/// pressure recording.
+fn load_object(path: &Path, frame: usize, args: &MatchArgs) -> Result<Object, CliError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -90,38 +103,31 @@ fn load_object(path: &Path, args: &MatchArgs) -> Result<Object, CliError> {
     }
     let mut rec = args.read.read(path)?;
     args.units.overrides().apply(&mut rec)?;
-    if args.frame >= rec.n_frames() {
+    if frame >= rec.n_frames() {
         return Err(CliError::Usage(format!(
-            "{}: frame = {}: expected a frame in 0..{} (0-based)",
+            "{}: frame = {frame}: expected a frame in 0..{} (0-based)",
             path.display(),
-            args.frame,
             rec.n_frames()
         )));
     }
-    let frame = rec.frame(args.frame)?;
+    let image = rec.frame(frame)?;
     let opts = pedo_io::ContourOptions {
         resample: pedo_io::Resample::Spacing(1.0),
         include_holes: false,
         ..Default::default()
     };
     let contours =
-        pedo_io::contours(&frame, &opts).map_err(|e| format!("{}: {e}", path.display()))?;
+        pedo_io::contours(&image, &opts).map_err(|e| format!("{}: {e}", path.display()))?;
     let largest = contours
         .iter()
         .max_by(|x, y| x.area().total_cmp(&y.area()))
-        .ok_or_else(|| {
-            format!(
-                "{}: frame {} has no loaded region",
-                path.display(),
-                args.frame
-            )
-        })?;
+        .ok_or_else(|| format!("{}: frame {frame} has no loaded region", path.display()))?;
     Ok(Object {
         points: largest.to_shape()?,
         pitch_mm: rec.pitch_mm,
-        time_s: rec.time_s(args.frame),
+        time_s: rec.time_s(frame),
         axes: Some(FigureAxes::of_recording(&rec)),
-        source: Some((rec, args.frame)),
+        source: Some((rec, frame)),
     })
 }
 
@@ -151,11 +157,12 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let params = args.modal.params();
     params.validate()?;
     args.units.overrides().validate()?;
-    let oa = load_object(&args.a, &args)?;
-    let ob = load_object(&args.b, &args)?;
+    let oa = load_object(&args.a, args.frame, &args)?;
+    let ob = load_object(&args.b, args.frame_b.unwrap_or(args.frame), &args)?;
     let read_time = started.elapsed().as_secs_f64();
     let ordered = tri_state(args.ordered, args.no_ordered);
     let (a, b, ordered) = with_topology(oa.points.clone(), ob.points.clone(), ordered)?;
+    warn_if_same(&a, &b, &args);
     if a.dim() != b.dim() {
         return Err(CliError::Runtime(format!(
             "{} has {}-D points but {} has {}-D points",
@@ -189,7 +196,8 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let summary = serde_json::json!({
         "pedomatch_version": env!("CARGO_PKG_VERSION"),
         "a": args.a.display().to_string(), "b": args.b.display().to_string(),
-        "frame": args.frame, "time_a_s": oa.time_s, "time_b_s": ob.time_s,
+        "frame_a": oa.frame(), "frame_b": ob.frame(),
+        "time_a_s": oa.time_s, "time_b_s": ob.time_s,
         "pitch_mm_a": oa.pitch_mm, "pitch_mm_b": ob.pitch_mm,
         "options": used,
         "search": o.search.to_string(),
@@ -224,27 +232,46 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         }
         dir.commit()?;
     }
+    let primary = if o.search == Search::Best {
+        "best (many-to-one)"
+    } else {
+        "one-to-one"
+    };
+    let counts = format!(
+        "{} × {} nodes: {} local, {} {primary}, {} excess matches",
+        a.len(),
+        b.len(),
+        r.local_count(),
+        r.one_to_one_count(),
+        r.excess_count()
+    );
     if args.json {
         print!("{}", output::pretty(&with_pairs())?);
-    } else if args.out.is_some() {
-        print!("{}", output::pretty(&summary)?);
+    } else if let Some(out) = &args.out {
+        println!("{counts}");
+        println!("results in {}", output::folder_text(out));
     } else {
         print!("{table}");
-        let primary = if o.search == Search::Best {
-            "best (many-to-one)"
-        } else {
-            "one-to-one"
-        };
-        eprintln!(
-            "{} × {} nodes: {} local, {} {primary}, {} excess matches",
-            a.len(),
-            b.len(),
-            r.local_count(),
-            r.one_to_one_count(),
-            r.excess_count()
-        );
+        eprintln!("{counts}");
     }
     Ok(())
+}
+
+/// Two inputs that are the same object give a trivial answer (every node onto itself), which
+/// is rarely what was meant: most often `--frame` without `--frame-b` on one recording.
+fn warn_if_same(a: &Shape, b: &Shape, args: &MatchArgs) {
+    if a.dim() == b.dim() && a.coords() == b.coords() {
+        eprintln!(
+            "pedomatch: warning: {} and {} are the same object{}; every node matches itself",
+            args.a.display(),
+            args.b.display(),
+            if args.frame_b.is_none() && args.a == args.b {
+                " (for two frames of one recording, give --frame-b)"
+            } else {
+                ""
+            }
+        );
+    }
 }
 
 /// What the match figure shows: the two objects and where they came from.
@@ -283,7 +310,7 @@ impl MatchFigureInput<'_> {
                 || path.display().to_string(),
                 |n| n.to_string_lossy().into_owned(),
             ),
-            frame: object.axes.is_some().then_some(self.args.frame),
+            frame: object.frame(),
         }
     }
 

@@ -258,12 +258,16 @@ fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: Tab
         int("tracks"),
         int("tracks_3_or_more")
     );
-    println!(
-        "mean local matches {:.1} %, optimisation matches {:.1} %, mean cost {:.4}",
-        float("mean_local_percent"),
-        float("mean_optimisation_percent"),
-        float("mean_cost")
-    );
+    if int("pairs") == 0 {
+        println!("no pair of objects in consecutive frames to match: no means to report");
+    } else {
+        println!(
+            "mean local matches {:.1} %, optimisation matches {:.1} %, mean cost {:.4}",
+            float("mean_local_percent"),
+            float("mean_optimisation_percent"),
+            float("mean_cost")
+        );
+    }
     let skipped = |k: &str| {
         summary["skipped"][k]
             .as_array()
@@ -284,9 +288,5 @@ fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: Tab
             tables.file_name("pairs")
         );
     }
-    println!(
-        "results in {}/ ({}, summary.json, figures/)",
-        out.display(),
-        pedo_io::study::run_table_files(tables).join(", ")
-    );
+    println!("results in {}", crate::output::folder_text(out));
 }

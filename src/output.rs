@@ -3,7 +3,8 @@
 use std::path::Path;
 
 /// Reads a dense CSV matrix of f64 (comma, semicolon, tab or space separated; `inf`, `-inf` and
-/// `nan` accepted so the solver can report them). Returns row-major values and the shape.
+/// `nan` accepted so the solver can report them). Returns row-major values and the shape; a file
+/// without a number is an error.
 pub fn read_cost_csv(path: &Path) -> Result<(Vec<f64>, usize, usize), String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let mut values = Vec::new();
@@ -38,6 +39,12 @@ pub fn read_cost_csv(path: &Path) -> Result<(Vec<f64>, usize, usize), String> {
             _ => {}
         }
         rows += 1;
+    }
+    if values.is_empty() {
+        return Err(format!(
+            "{}: no cost matrix: the file holds no numbers",
+            path.display()
+        ));
     }
     Ok((values, rows, cols.unwrap_or(0)))
 }
@@ -96,6 +103,31 @@ pub(crate) fn option_text(v: &serde_json::Value) -> String {
         serde_json::Value::String(s) => s.clone(),
         other => other.to_string(),
     }
+}
+
+/// "`DIR/` (file, file, ...)": an output folder and the files and folders it holds, for the
+/// closing line of a command (the folder as given, with one trailing slash).
+pub fn folder_text(dir: &Path) -> String {
+    let shown = dir.display().to_string();
+    let shown = shown.trim_end_matches('/');
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .map(|entries| {
+            entries
+                .flatten()
+                .filter(|e| !e.file_name().to_string_lossy().starts_with('.'))
+                .map(|e| {
+                    let name = e.file_name().to_string_lossy().into_owned();
+                    if e.path().is_dir() {
+                        name + "/"
+                    } else {
+                        name
+                    }
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    names.sort();
+    format!("{shown}/ ({})", names.join(", "))
 }
 
 /// Pretty JSON with a final newline.

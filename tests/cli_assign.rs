@@ -63,4 +63,16 @@ fn bad_input_gives_one_clear_line_and_failure() {
 
     let missing = pedomatch(&["assign", "/nonexistent/cost.csv"]);
     assert!(!missing.status.success());
+
+    // An empty file (or one of comments only) is no matrix, not an empty assignment.
+    for (name, text) in [("empty.csv", ""), ("comments.csv", "# nothing\n\n")] {
+        let path = write_temp(name, text);
+        let out = pedomatch(&["assign", path.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(1));
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert!(
+            err.contains(name) && err.contains("no cost matrix") && err.lines().count() == 1,
+            "{err}"
+        );
+    }
 }

@@ -697,8 +697,18 @@ fn a_run_with_tables_only_writes_the_tables_of_a_run_with_figures() {
             &format!("full-{tables}"),
             &["--figures", "svg", "--report", "none", "--tables", tables],
         );
-        let (l, f) = (format!("/lean-{tables}/"), format!("/full-{tables}/"));
-        assert_eq!(lean_said.replace(&l, &f), full_said);
+        // The same counts; the closing line lists what each folder holds.
+        let counts = |said: &str| said.lines().take(2).collect::<Vec<_>>().join("\n");
+        assert_eq!(counts(&lean_said), counts(&full_said));
+        let files = format!("frames.{tables}, matches.{tables}, objects.{tables}");
+        assert!(
+            lean_said.contains(&files) && !lean_said.contains("figures/"),
+            "{lean_said}"
+        );
+        assert!(
+            full_said.contains("figures/") && full_said.contains("tracks.svg"),
+            "{full_said}"
+        );
         let mut files = vec!["pairs.json".to_string()];
         files.extend(
             ["pairs", "objects", "matches", "tracks", "frames"].map(|t| format!("{t}.{tables}")),
@@ -716,5 +726,111 @@ fn a_run_with_tables_only_writes_the_tables_of_a_run_with_figures() {
         b.as_object_mut().unwrap().remove("timings_s");
         assert_eq!(a, b);
         assert!(a["tracks"].as_u64().unwrap() > 100);
+    }
+}
+
+#[test]
+fn match_takes_two_frames_of_one_recording_and_warns_of_an_object_matched_with_itself() {
+    let walk = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
+    let out = temp_dir("match-two-frames").join("out");
+    let o = pedomatch(&[
+        "match",
+        walk,
+        walk,
+        "--frame",
+        "40",
+        "--frame-b",
+        "41",
+        "--figures",
+        "none",
+        "--report",
+        "none",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8(o.stdout).unwrap();
+    // With --out (no --json): the counts and where the files are, not the JSON.
+    assert!(!stdout.contains('{'), "{stdout}");
+    assert!(
+        stdout.contains("nodes:") && stdout.contains(&format!("{}/ (", out.display())),
+        "{stdout}"
+    );
+    assert!(stdout.contains("match.json") && stdout.contains("matches.csv"));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"));
+    let summary = read_json(&out.join("match.json"));
+    assert_eq!(
+        (summary["frame_a"].as_u64(), summary["frame_b"].as_u64()),
+        (Some(40), Some(41))
+    );
+    assert_ne!(summary["time_a_s"], summary["time_b_s"]);
+
+    // The same frame twice: every node onto itself, and a warning that says how to ask for two.
+    let o = pedomatch(&["match", walk, walk, "--frame", "40"]);
+    assert!(o.status.success());
+    let err = String::from_utf8(o.stderr).unwrap();
+    assert!(
+        err.contains("warning") && err.contains("the same object") && err.contains("--frame-b"),
+        "{err}"
+    );
+    let frame = pedomatch(&["match", walk, walk, "--frame-b", "999"]);
+    assert_eq!(frame.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&frame.stderr).contains("frame = 999"));
+}
+
+#[test]
+fn a_run_whose_frames_hold_no_object_fails_and_writes_nothing() {
+    let walk = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
+    let out = temp_dir("no-object").join("out");
+    let o = pedomatch(&[
+        "run",
+        walk,
+        "--frames",
+        "204..205",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8(o.stderr).unwrap();
+    assert!(
+        err.contains("no object to match in frames 204..205") && err.lines().count() == 1,
+        "{err}"
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn an_isobaric_level_without_an_object_is_reported_not_dropped() {
+    let walk = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
+    let out = temp_dir("iso-levels").join("out");
+    let o = pedomatch(&[
+        "run",
+        walk,
+        "--model",
+        "isocontour",
+        "--iso-levels",
+        "10",
+        "--figures",
+        "none",
+        "--report",
+        "none",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = read_json(&out.join("summary.json"));
+    let skipped = summary["skipped"]["frames"].as_array().unwrap();
+    // Every level is an object or a skipped entry naming it.
+    assert_eq!(
+        summary["objects"].as_u64().unwrap() as usize + skipped.len(),
+        10
+    );
+    assert!(!skipped.is_empty(), "{summary}");
+    for s in skipped {
+        let reason = s["reason"].as_str().unwrap();
+        assert!(
+            reason.starts_with("isobaric level ") && reason.contains(" of 10 ("),
+            "{reason}"
+        );
     }
 }
