@@ -34,13 +34,13 @@ pub fn help(name: &str) -> String {
 pub struct ModalArgs {
     #[arg(long, value_parser = word::<ElementKind>(), help = help("element"))]
     pub element: Option<ElementKind>,
-    #[arg(long, help = help("modes"))]
+    #[arg(long, allow_negative_numbers = true, help = help("modes"))]
     pub modes: Option<f64>,
     #[arg(long, value_parser = word::<Search>(), help = help("search"))]
     pub search: Option<Search>,
     #[arg(long, value_parser = word::<assign::Method>(), help = help("solver"))]
     pub solver: Option<assign::Method>,
-    #[arg(long, help = help("threshold"))]
+    #[arg(long, allow_negative_numbers = true, help = help("threshold"))]
     pub threshold: Option<f64>,
     #[arg(long, value_parser = word::<ThresholdMode>(), help = help("threshold_mode"))]
     pub threshold_mode: Option<ThresholdMode>,
@@ -50,25 +50,25 @@ pub struct ModalArgs {
     pub paper: bool,
     #[arg(long, value_parser = word::<Prealign>(), help = help("prealign"))]
     pub prealign: Option<Prealign>,
-    #[arg(long, value_name = "DEGREES", help = help("max_rotation"))]
+    #[arg(long, allow_negative_numbers = true, value_name = "DEGREES", help = help("max_rotation"))]
     pub max_rotation: Option<f64>,
     #[arg(long, help = help("refits"))]
     pub refits: Option<usize>,
-    #[arg(long, help = help("refit_tolerance"))]
+    #[arg(long, allow_negative_numbers = true, help = help("refit_tolerance"))]
     pub refit_tolerance: Option<f64>,
     #[arg(long, value_parser = word::<Refine>(), help = help("refine"))]
     pub refine: Option<Refine>,
     #[arg(long, value_name = "N", help = help("deform_modes"))]
     pub deform_modes: Option<usize>,
-    #[arg(long, help = help("deform_stiffness"))]
+    #[arg(long, allow_negative_numbers = true, help = help("deform_stiffness"))]
     pub deform_stiffness: Option<f64>,
-    #[arg(long, help = help("kappa"))]
+    #[arg(long, allow_negative_numbers = true, help = help("kappa"))]
     pub kappa: Option<f64>,
     #[arg(long, value_name = "N", help = help("center_stride"))]
     pub center_stride: Option<usize>,
-    #[arg(long, help = help("position_weight"))]
+    #[arg(long, allow_negative_numbers = true, help = help("position_weight"))]
     pub position_weight: Option<f64>,
-    #[arg(long, help = help("cost_power"))]
+    #[arg(long, allow_negative_numbers = true, help = help("cost_power"))]
     pub cost_power: Option<f64>,
     #[arg(long, help = help("common_sigma"), conflicts_with = "no_common_sigma")]
     pub common_sigma: bool,
@@ -126,9 +126,9 @@ pub fn tri_state(on: bool, off: bool) -> Option<bool> {
 /// The sensor pitch and frame rate overriding a file's.
 #[derive(Args, Clone, Debug)]
 pub struct UnitArgs {
-    #[arg(long, value_name = "X[,Y]", value_parser = |s: &str| pedo_io::units::parse_pitch(s), help = help("pitch_mm"))]
+    #[arg(long, allow_negative_numbers = true, value_name = "X[,Y]", value_parser = |s: &str| pedo_io::units::parse_pitch(s), help = help("pitch_mm"))]
     pub pitch_mm: Option<[f64; 2]>,
-    #[arg(long, value_name = "HZ", value_parser = |s: &str| pedo_io::units::parse_frame_rate(s), help = help("frame_rate"))]
+    #[arg(long, allow_negative_numbers = true, value_name = "HZ", value_parser = |s: &str| pedo_io::units::parse_frame_rate(s), help = help("frame_rate"))]
     pub frame_rate: Option<f64>,
 }
 

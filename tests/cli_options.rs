@@ -310,6 +310,21 @@ fn exit_codes_are_0_ok_1_runtime_2_usage() {
     assert_eq!(code(&["run", BUNDLED, "--frames", "5..3"]), Some(2));
     assert_eq!(code(&["run", BUNDLED, "--frames", "0..999"]), Some(2));
     assert_eq!(code(&["inspect", BUNDLED, "--pitch-mm", "-1"]), Some(2));
+    // A negative number is the option's value, checked by its own rule (not an unknown flag).
+    for (flag, name) in [
+        ("--pitch-mm", "pitch"),
+        ("--frame-rate", "frame"),
+        ("--threshold", "threshold"),
+        ("--kappa", "kappa"),
+    ] {
+        let o = pedomatch(&["run", BUNDLED, flag, "-0.5"]);
+        let err = String::from_utf8(o.stderr).unwrap();
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains(name) && !err.contains("unexpected argument"),
+            "{err}"
+        );
+    }
     let help = String::from_utf8(pedomatch(&["--help"]).stdout).unwrap();
     assert!(
         help.contains("Exit status: 0 success; 1 runtime failure"),

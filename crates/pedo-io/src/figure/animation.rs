@@ -192,8 +192,10 @@ impl Animation<'_> {
         };
         let title = self.axes.frame_text(t);
         let objects = r.objects.iter().filter(|o| o.frame == t).count();
-        let subtitle =
-            format!("{objects} objects; {matched} matches ({excess} excess) into the next");
+        let subtitle = format!(
+            "{objects} object{}; {matched} matches ({excess} excess) into the next",
+            if objects == 1 { "" } else { "s" }
+        );
         let legend = vec![
             LegendEntry {
                 text: "this frame".to_string(),
