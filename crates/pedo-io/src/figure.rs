@@ -451,7 +451,7 @@ impl TracksFigure<'_> {
         );
         let legend = vec![
             LegendEntry {
-                text: "node track".to_string(),
+                text: "node track (a colour each)".to_string(),
                 glyph: Glyph::Line(TRACK_PALETTE[0]),
             },
             LegendEntry {

@@ -442,8 +442,8 @@ pub fn write_figures(
             b: &ob.shape,
             pairs: &p.result.pairs,
             axes: &axes,
-            label_a: ObjectLabel::object(oa.id, oa.frame),
-            label_b: ObjectLabel::object(ob.id, ob.frame),
+            label_a: object_label(oa, recording),
+            label_b: object_label(ob, recording),
         };
         let stem = format!("figures/pair_{:04}_{:04}", oa.id, ob.id);
         write_figure(dir, &stem, kinds, || fig.to_png(), || fig.to_svg())
@@ -457,6 +457,18 @@ pub fn write_figures(
         max_tracks: 40,
     };
     write_figure(dir, "tracks", kinds, || tracks.to_png(), || tracks.to_svg())
+}
+
+/// An object as a figure's title names it: `object 12`, and for an isocontour its level
+/// (`object 3 at 180 kPa`), the pairs of an isocontour run all being in one frame.
+fn object_label(o: &SequenceObject, recording: &Recording) -> ObjectLabel {
+    let mut label = ObjectLabel::object(o.id, o.frame);
+    if let Some(level) = o.level {
+        label.name = format!("{} at {level:.0} {}", label.name, recording.units)
+            .trim_end()
+            .to_string();
+    }
+    label
 }
 
 /// Writes `{stem}.png` and/or `{stem}.svg`.
