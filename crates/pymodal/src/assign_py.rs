@@ -1,10 +1,9 @@
 //! `pymodal.linear_sum_assignment`: a drop-in for `scipy.optimize.linear_sum_assignment`.
 
 use numpy::{PyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use crate::errors::{internal, to_py};
+use crate::errors::{input_error, internal, to_py};
 
 /// The solver from `solver=` or its deprecated alias `method=` (which warns); `None`: the
 /// default solver.
@@ -15,8 +14,8 @@ fn solver_of(
 ) -> PyResult<assign::Method> {
     let name = match (solver, method) {
         (Some(_), Some(_)) => {
-            return Err(PyValueError::new_err(
-                "give solver= only (method= is its deprecated alias)",
+            return Err(input_error(
+                "solver and method: give solver= only (method= is its deprecated alias)",
             ));
         }
         (Some(s), None) => Some(s),
@@ -31,8 +30,9 @@ fn solver_of(
 }
 
 /// Converts any 2-D array-like of numbers or bools to a C-contiguous float64 array, raising the
-/// same exceptions as scipy 1.17 (`ValueError` if not 2-D, numpy's `TypeError` if the entries
-/// cannot be cast safely to float64). Float64 C-contiguous input is used without a copy.
+/// exceptions of scipy 1.17 (if not 2-D a `ValueError`, here the `InputError` subclass; numpy's
+/// `TypeError` if the entries cannot be cast safely to float64). Float64 C-contiguous input is
+/// used without a copy.
 fn as_f64_matrix<'py>(
     py: Python<'py>,
     cost_matrix: &Bound<'py, PyAny>,
@@ -41,8 +41,8 @@ fn as_f64_matrix<'py>(
     let arr = np.call_method1("asarray", (cost_matrix,))?;
     let ndim: usize = arr.getattr("ndim")?.extract()?;
     if ndim != 2 {
-        return Err(PyValueError::new_err(format!(
-            "expected a matrix (2-D array), got a {ndim} array"
+        return Err(input_error(format!(
+            "cost_matrix: expected a matrix (2-D array), got a {ndim}-D array"
         )));
     }
     let kwargs = pyo3::types::PyDict::new(py);
@@ -104,11 +104,12 @@ fn solve_to_arrays<'py>(
 ///
 /// Raises
 /// ------
-/// ValueError
-///     if the input is not 2-D; :class:`InputError` if it contains NaN or ``-inf`` (``+inf``
-///     when maximising); :class:`InfeasibleError` if it admits no complete assignment;
-///     :class:`OptionError` for an unknown ``method``. All are ``ValueError`` subclasses, as in
-///     scipy.
+/// InputError
+///     if the input is not 2-D or contains NaN or ``-inf`` (``+inf`` when maximising), or if
+///     both ``solver`` and ``method`` are given; :class:`InfeasibleError` if it admits no
+///     complete assignment; :class:`OptionError` for an unknown ``solver``. All are
+///     ``ValueError`` subclasses, as scipy raises. ``TypeError`` (numpy's) if the entries cannot
+///     be cast safely to float64, as in scipy.
 #[pyfunction]
 #[pyo3(signature = (cost_matrix, maximize=false, *, solver=None, method=None))]
 fn linear_sum_assignment<'py>(

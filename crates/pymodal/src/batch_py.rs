@@ -7,18 +7,27 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
 
-use crate::errors::{option_error, to_py};
+use crate::errors::{argument_error, option_error, to_py};
 use crate::options_py::table_rows;
 
-/// Inputs as strings: one path or pattern, or a sequence of them (str or os.PathLike).
-fn input_strings(inputs: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
-    let one = |v: &Bound<'_, PyAny>| -> PyResult<String> {
-        Ok(v.extract::<PathBuf>()?.to_string_lossy().into_owned())
+/// Inputs as strings: one path or pattern, or a sequence of them (str or os.PathLike); anything
+/// else is an `InputError` naming the argument `name`.
+fn input_strings(inputs: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<String>> {
+    let one = |v: &Bound<'_, PyAny>| -> Option<String> {
+        Some(v.extract::<PathBuf>().ok()?.to_string_lossy().into_owned())
     };
-    if let Ok(s) = one(inputs) {
+    if let Some(s) = one(inputs) {
         return Ok(vec![s]);
     }
-    inputs.try_iter()?.map(|v| one(&v?)).collect()
+    let bad = || {
+        argument_error(
+            name,
+            "a path or glob pattern (str or os.PathLike), or a sequence of them",
+            inputs,
+        )
+    };
+    let items = inputs.try_iter().map_err(|_| bad())?;
+    items.map(|v| one(&v?).ok_or_else(bad)).collect()
 }
 
 fn figure_kinds(figures: &str) -> PyResult<FigureKinds> {
@@ -83,7 +92,7 @@ fn row_dict<'py>(py: Python<'py>, row: &StudyRow) -> PyResult<Bound<'py, PyAny>>
 /// reports it missing). Returns a list of str.
 #[pyfunction]
 fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
-    let inputs = input_strings(inputs)?;
+    let inputs = input_strings(inputs, "inputs")?;
     let found = py
         .detach(|| study::find_recordings(&inputs))
         .map_err(to_py)?;
@@ -120,7 +129,7 @@ fn batch<'py>(
     tables: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    let inputs = input_strings(paths)?;
+    let inputs = input_strings(paths, "paths")?;
     let opts = study_options(py, out, jobs, force, figures, tables, options)?;
     let rows = py
         .detach(|| {

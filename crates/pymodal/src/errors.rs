@@ -24,7 +24,9 @@
 use assign::AssignError;
 use modal_core::{ErrorKind, ModalError};
 use pedo_io::IoError;
-use pyo3::exceptions::{PyException, PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueError};
+use pyo3::exceptions::{
+    PyException, PyFileNotFoundError, PyOSError, PyRuntimeError, PyTypeError, PyValueError,
+};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyTuple, PyType};
@@ -148,6 +150,46 @@ pub fn option_error(msg: impl Into<String>) -> PyErr {
 /// An `InputError`: an argument's value is invalid or inconsistent.
 pub fn input_error(msg: impl Into<String>) -> PyErr {
     INPUT_ERROR.err(msg)
+}
+
+/// An `InputError` for an argument of the wrong type or form: "`name` must be `expected`, got
+/// <what was given>" (its `repr`, shortened; or its type when `repr` fails).
+pub fn argument_error(name: &str, expected: &str, got: &Bound<'_, PyAny>) -> PyErr {
+    const LONGEST: usize = 60;
+    let given = match got.repr() {
+        Ok(r) => {
+            let r = r.to_string_lossy().into_owned();
+            if r.chars().count() > LONGEST {
+                let short: String = r.chars().take(LONGEST).collect();
+                format!("{short}... (a {})", type_name(got))
+            } else {
+                r
+            }
+        }
+        Err(_) => format!("a {}", type_name(got)),
+    };
+    INPUT_ERROR.err(format!("{name} must be {expected}, got {given}"))
+}
+
+/// The `TypeError` pyo3 raises for a typed keyword of the wrong type ("argument 'spacing': must
+/// be a number, got 'wide'"), for keywords read by hand from `**options` so that they fail as
+/// the same keyword of `run` does.
+pub fn keyword_type_error(name: &str, expected: &str, got: &Bound<'_, PyAny>) -> PyErr {
+    let given = got
+        .repr()
+        .map(|r| r.to_string_lossy().into_owned())
+        .unwrap_or_else(|_| format!("a {}", type_name(got)));
+    PyTypeError::new_err(format!(
+        "argument '{name}': must be {expected}, got {given}"
+    ))
+}
+
+/// The name of a Python object's type (`"int"`, `"ndarray"`), or `"?"`.
+fn type_name(obj: &Bound<'_, PyAny>) -> String {
+    obj.get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "?".to_string())
 }
 
 /// A failure of the bindings' own bookkeeping (an array that cannot be reshaped to the size

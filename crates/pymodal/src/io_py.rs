@@ -15,7 +15,8 @@ use pedo_io::{
     contours as contours_rs, ContourMethod, ContourOptions, Format, Grid, Recording, Resample,
 };
 
-use crate::errors::{input_error, internal, option_error, to_py};
+use crate::errors::{argument_error, input_error, internal, option_error, to_py};
+use crate::match_py::array_text;
 use crate::pickling::{Reader, Writer};
 
 /// A plantar-pressure recording read by :func:`read_recording`.
@@ -163,7 +164,9 @@ impl PyRecording {
             None => None,
             Some(m) => {
                 let np = py.import("numpy")?;
-                let m = np.call_method1("asarray", (m, np.getattr("bool_")?))?;
+                let m = np
+                    .call_method1("asarray", (m, np.getattr("bool_")?))
+                    .map_err(|_| argument_error("mask", "an (H, W) array of bools", m))?;
                 let shape: Vec<usize> = m.getattr("shape")?.extract()?;
                 if shape != [h, w] {
                     return Err(input_error(format!(
@@ -342,14 +345,18 @@ fn frames_of(
     let np = py.import("numpy")?;
     let kw = PyDict::new(py);
     kw.set_item("dtype", np.getattr("float32")?)?;
-    let arr = np.call_method("ascontiguousarray", (frames,), Some(&kw))?;
+    const EXPECTED: &str = "a (T, H, W) or (H, W) array of pressures";
+    let arr = np
+        .call_method("ascontiguousarray", (frames,), Some(&kw))
+        .map_err(|_| argument_error("frames", EXPECTED, frames))?;
     let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
     let (t, h, w) = match shape.as_slice() {
         [h, w] => (1, *h, *w),
         [t, h, w] => (*t, *h, *w),
         _ => {
             return Err(input_error(format!(
-                "frames must be a (T, H, W) or (H, W) array, got shape {shape:?}"
+                "frames must be {EXPECTED}, got {}",
+                array_text(&shape)
             )));
         }
     };
@@ -363,11 +370,15 @@ fn grid_of(py: Python<'_>, frame: &Bound<'_, PyAny>) -> PyResult<Grid> {
     let np = py.import("numpy")?;
     let kw = PyDict::new(py);
     kw.set_item("dtype", np.getattr("float64")?)?;
-    let arr = np.call_method("ascontiguousarray", (frame,), Some(&kw))?;
-    let ndim: usize = arr.getattr("ndim")?.extract()?;
-    if ndim != 2 {
+    const EXPECTED: &str = "a 2-D (H, W) array of pressures";
+    let arr = np
+        .call_method("ascontiguousarray", (frame,), Some(&kw))
+        .map_err(|_| argument_error("frame", EXPECTED, frame))?;
+    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
+    if shape.len() != 2 {
         return Err(input_error(format!(
-            "expected a 2-D frame, got a {ndim}-D array"
+            "frame must be {EXPECTED}, got {}",
+            array_text(&shape)
         )));
     }
     let arr: PyReadonlyArray2<'_, f64> = arr.extract()?;

@@ -3,12 +3,11 @@
 use modal_core::shape::looks_like_closed_contour;
 use modal_core::Affine;
 use modal_core::{match_shapes, AffinityMatrix, MatchPair, MatchResult, Shape, Topology};
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
-use pyo3::exceptions::PyValueError;
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::errors::{internal, to_py};
+use crate::errors::{argument_error, input_error, internal, to_py};
 use crate::pickling::{Reader, Writer};
 
 /// Result of :func:`match`.
@@ -276,26 +275,41 @@ impl PyMatch {
     }
 }
 
+/// The (n, d) float64 coordinates of `obj`; anything but a 2-D array of numbers with 2 or 3
+/// columns is an `InputError` naming the argument.
 fn points(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(usize, Vec<f64>)> {
+    const EXPECTED: &str = "an (n, 2) or (n, 3) array (2 or 3 columns of coordinates)";
     let np = py.import("numpy")?;
-    let arr = np.call_method1("asarray", (obj,))?;
-    let ndim: usize = arr.getattr("ndim")?.extract()?;
-    if ndim != 2 {
-        return Err(PyValueError::new_err(format!(
-            "{name} must be a 2-D (n, 2) or (n, 3) array, got {ndim}-D"
-        )));
-    }
     let arr = np
-        .call_method1("ascontiguousarray", (arr, np.getattr("float64")?))
-        .map_err(|_| PyValueError::new_err(format!("{name} must hold numbers")))?;
-    let arr: PyReadonlyArray2<f64> = arr.extract()?;
-    let shape = arr.shape();
-    if shape[1] != 2 && shape[1] != 3 {
-        return Err(PyValueError::new_err(format!(
-            "{name} must have 2 or 3 columns, got shape {shape:?}"
+        .call_method1("asarray", (obj, np.getattr("float64")?))
+        .map_err(|_| argument_error(name, EXPECTED, obj))?;
+    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
+    if shape.len() != 2 || (shape[1] != 2 && shape[1] != 3) {
+        return Err(input_error(format!(
+            "{name} must be {EXPECTED}, got {}",
+            array_text(&shape)
         )));
     }
+    let arr = np.call_method1("ascontiguousarray", (arr,))?;
+    let arr: PyReadonlyArray2<f64> = arr.extract()?;
     Ok((shape[1], arr.as_slice().map_err(internal)?.to_vec()))
+}
+
+/// An array as the messages describe it: "a 1-D array of shape (5,)", "a 2-D array of shape
+/// (5, 4)" (the shape as numpy writes it).
+pub(crate) fn array_text(shape: &[usize]) -> String {
+    let dims = match shape {
+        [n] => format!("({n},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(|n| n.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
+    format!("a {}-D array of shape {dims}", shape.len())
 }
 
 fn triangles(
@@ -303,23 +317,27 @@ fn triangles(
     obj: Option<&Bound<'_, PyAny>>,
     name: &str,
 ) -> PyResult<Option<Vec<[usize; 3]>>> {
+    const EXPECTED: &str = "a (t, 3) array (3 columns of node indices)";
     let Some(obj) = obj else { return Ok(None) };
     if obj.is_none() {
         return Ok(None);
     }
     let np = py.import("numpy")?;
-    let arr = np.call_method1("asarray", (obj, np.getattr("int64")?))?;
-    let arr: PyReadonlyArray2<i64> = arr
-        .extract()
-        .map_err(|_| PyValueError::new_err(format!("{name} must be a (t, 3) integer array")))?;
-    if arr.shape()[1] != 3 {
-        return Err(PyValueError::new_err(format!("{name} must have 3 columns")));
+    let arr = np
+        .call_method1("asarray", (obj, np.getattr("int64")?))
+        .map_err(|_| argument_error(name, EXPECTED, obj))?;
+    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
+    if shape.len() != 2 || shape[1] != 3 {
+        return Err(input_error(format!(
+            "{name} must be {EXPECTED}, got {}",
+            array_text(&shape)
+        )));
     }
+    let arr = np.call_method1("ascontiguousarray", (arr,))?;
+    let arr: PyReadonlyArray2<i64> = arr.extract()?;
     let v = arr.as_slice().map_err(internal)?;
     if let Some(bad) = v.iter().find(|&&x| x < 0) {
-        return Err(PyValueError::new_err(format!(
-            "{name} holds a negative index {bad}"
-        )));
+        return Err(input_error(format!("{name} holds a negative index {bad}")));
     }
     Ok(Some(
         v.chunks_exact(3)
@@ -459,8 +477,9 @@ fn match_py(
     let (da, ca) = points(py, a, "a")?;
     let (db, cb) = points(py, b, "b")?;
     if da != db {
-        return Err(PyValueError::new_err(format!(
-            "a has {da} columns but b has {db}"
+        return Err(input_error(format!(
+            "a and b must have the same number of columns (both 2-D or both 3-D), got {da} and \
+             {db}"
         )));
     }
     let ta = triangles(py, triangles_a, "triangles_a")?;

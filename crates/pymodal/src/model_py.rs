@@ -11,28 +11,29 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::errors::{input_error, internal, option_error, to_py};
+use crate::errors::{argument_error, input_error, internal, option_error, to_py};
+use crate::match_py::array_text;
 use crate::pickling::{Reader, Writer};
 
+/// A 2-D float64 array of `obj`; anything else is an `InputError` naming the argument.
 fn float_matrix<'py>(
     py: Python<'py>,
     obj: &Bound<'py, PyAny>,
     name: &str,
+    expected: &str,
 ) -> PyResult<PyReadonlyArray2<'py, f64>> {
     let np = py.import("numpy")?;
     let arr = np
-        .call_method1("asarray", (obj,))
-        .map_err(|_| PyValueError::new_err(format!("{name} must be array-like")))?;
-    let ndim: usize = arr.getattr("ndim")?.extract()?;
-    if ndim != 2 {
-        return Err(PyValueError::new_err(format!(
-            "{name} must be a 2-D array, got {ndim}-D"
+        .call_method1("asarray", (obj, np.getattr("float64")?))
+        .map_err(|_| argument_error(name, expected, obj))?;
+    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
+    if shape.len() != 2 {
+        return Err(input_error(format!(
+            "{name} must be {expected}, got {}",
+            array_text(&shape)
         )));
     }
-    let arr = np
-        .call_method1("ascontiguousarray", (arr, np.getattr("float64")?))
-        .map_err(|_| PyValueError::new_err(format!("{name} must hold numbers")))?;
-    arr.extract()
+    np.call_method1("ascontiguousarray", (arr,))?.extract()
 }
 
 fn index_rows(
@@ -45,24 +46,22 @@ fn index_rows(
     if obj.is_none() {
         return Ok(None);
     }
+    let expected = format!("a (k, {cols}) array ({cols} columns of node indices)");
     let np = py.import("numpy")?;
     let arr = np
         .call_method1("asarray", (obj, np.getattr("int64")?))
-        .map_err(|_| PyValueError::new_err(format!("{name} must be an integer array")))?;
-    let arr: PyReadonlyArray2<i64> = arr.extract().map_err(|_| {
-        PyValueError::new_err(format!("{name} must be a (k, {cols}) integer array"))
-    })?;
-    if arr.shape()[1] != cols {
-        return Err(PyValueError::new_err(format!(
-            "{name} must have {cols} columns, got shape {:?}",
-            arr.shape()
+        .map_err(|_| argument_error(name, &expected, obj))?;
+    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
+    if shape.len() != 2 || shape[1] != cols {
+        return Err(input_error(format!(
+            "{name} must be {expected}, got {}",
+            array_text(&shape)
         )));
     }
+    let arr: PyReadonlyArray2<i64> = np.call_method1("ascontiguousarray", (arr,))?.extract()?;
     let v = arr.as_slice().map_err(internal)?;
     if let Some(bad) = v.iter().find(|&&x| x < 0) {
-        return Err(PyValueError::new_err(format!(
-            "{name} holds a negative index {bad}"
-        )));
+        return Err(input_error(format!("{name} holds a negative index {bad}")));
     }
     Ok(Some(v.iter().map(|&x| x as usize).collect()))
 }
@@ -81,7 +80,11 @@ pub(crate) fn parse_material(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Materia
     }
     if let Ok(d) = obj.cast::<PyDict>() {
         for key in d.keys() {
-            let k: String = key.extract()?;
+            let k: String = key.extract().map_err(|_| {
+                option_error(format!(
+                    "material's keys must be the strings young, poisson, density; got {key:?}"
+                ))
+            })?;
             if !["young", "poisson", "density"].contains(&k.as_str()) {
                 return Err(option_error(format!(
                     "unknown material key {k:?}; expected young, poisson, density"
@@ -90,7 +93,9 @@ pub(crate) fn parse_material(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Materia
         }
         let get = |k: &str, default: f64| -> PyResult<f64> {
             match d.get_item(k)? {
-                Some(v) => v.extract(),
+                Some(v) => v.extract().map_err(|_| {
+                    option_error(format!("material[{k:?}] must be a number, got {v:?}"))
+                }),
                 None => Ok(default),
             }
         };
@@ -103,7 +108,11 @@ pub(crate) fn parse_material(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Materia
         .map_err(to_py);
     }
     if let Ok(t) = obj.cast::<PyTuple>() {
-        let (e, nu, rho): (f64, f64, f64) = t.extract()?;
+        let (e, nu, rho): (f64, f64, f64) = t.extract().map_err(|_| {
+            option_error(format!(
+                "material must be an (E, nu, rho) tuple of 3 numbers, got {t:?}"
+            ))
+        })?;
         return Material::new(e, nu, rho).map_err(to_py);
     }
     Err(option_error(
@@ -195,12 +204,13 @@ impl PyModalModel {
         plane: &str,
         center_stride: usize,
     ) -> PyResult<Self> {
-        let pts = float_matrix(py, points, "points")?;
+        const EXPECTED: &str = "an (n, 2) or (n, 3) array (2 or 3 columns of coordinates)";
+        let pts = float_matrix(py, points, "points", EXPECTED)?;
         let dim = pts.shape()[1];
         if dim != 2 && dim != 3 {
-            return Err(PyValueError::new_err(format!(
-                "points must have 2 or 3 columns, got shape {:?}",
-                pts.shape()
+            return Err(input_error(format!(
+                "points must be {EXPECTED}, got {}",
+                array_text(pts.shape())
             )));
         }
         let coords = pts.as_slice().map_err(internal)?.to_vec();
@@ -504,26 +514,30 @@ fn eigh<'py>(
     m: &Bound<'py, PyAny>,
     n_modes: Option<usize>,
 ) -> PyResult<EighResult<'py>> {
-    let ka = float_matrix(py, k, "k")?;
-    let ma = float_matrix(py, m, "m")?;
+    const EXPECTED: &str = "a square 2-D array of numbers";
+    let ka = float_matrix(py, k, "k", EXPECTED)?;
+    let ma = float_matrix(py, m, "m", EXPECTED)?;
     let (kr, kc) = (ka.shape()[0], ka.shape()[1]);
     let (mr, mc) = (ma.shape()[0], ma.shape()[1]);
     if kr != kc || mr != mc || kr != mr {
-        return Err(PyValueError::new_err(format!(
-            "k and m must be square and of the same size, got {:?} and {:?}",
-            ka.shape(),
-            ma.shape()
+        return Err(input_error(format!(
+            "k and m must be square and of the same size, got shapes {:?} and {:?}",
+            (kr, kc),
+            (mr, mc)
         )));
     }
     if n_modes == Some(0) || n_modes.is_some_and(|k| k > kr) {
-        return Err(PyValueError::new_err(format!(
-            "n_modes must be in 1..={kr}"
+        return Err(option_error(format!(
+            "n_modes must be in 1..={kr} (the size of k), got {}",
+            n_modes.unwrap_or(0)
         )));
     }
     let ks = ka.as_slice().map_err(internal)?;
     let ms = ma.as_slice().map_err(internal)?;
-    if ks.iter().chain(ms).any(|v| !v.is_finite()) {
-        return Err(PyValueError::new_err("array must not contain infs or NaNs"));
+    for (name, values) in [("k", ks), ("m", ms)] {
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err(input_error(format!("{name} must not contain infs or NaNs")));
+        }
     }
     // numpy's row-major layout, as generalized_eigh reads it: the solver reads the lower
     // triangle the caller sees (like scipy.linalg.eigh), whatever the upper one holds.

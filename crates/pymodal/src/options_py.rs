@@ -8,11 +8,10 @@ use modal_core::{Choice, MatchParams, OptionKind, OptionSpec};
 use pedo_io::report::{Cell, Table};
 use pedo_io::sequence::{FrameRange, RunParams};
 use pedo_io::units::UnitOverrides;
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyBool, PyDict, PyList, PyString};
 
-use crate::errors::to_py;
+use crate::errors::{argument_error, to_py};
 
 /// A word option: `None` keeps `default`, a string is parsed by `T`'s `FromStr`.
 pub fn word<T: Choice>(value: Option<&str>, default: T) -> PyResult<T> {
@@ -150,15 +149,53 @@ pub fn pitch(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<[f64; 2]>> {
     let Some(v) = value.filter(|v| !v.is_none()) else {
         return Ok(None);
     };
-    if let Ok(x) = v.extract::<f64>() {
-        return Ok(Some([x, x]));
+    // A string would read as a sequence of characters.
+    if !v.is_instance_of::<PyString>() {
+        if let Ok(x) = v.extract::<f64>() {
+            return Ok(Some([x, x]));
+        }
+        if let Ok([x, y]) = v.extract::<Vec<f64>>().as_deref() {
+            return Ok(Some([*x, *y]));
+        }
     }
-    let (x, y): (f64, f64) = v.extract().map_err(|_| {
-        PyValueError::new_err(
-            "pitch_mm must be a number or an (x, y) pair of numbers (mm per sensel)",
+    Err(argument_error(
+        "pitch_mm",
+        "a number or an (x, y) pair of numbers (mm per sensel)",
+        v,
+    ))
+}
+
+/// `frames=`: a `(start, end)` pair of 0-based frame indices, end excluded, either `None`.
+pub fn frame_range(
+    value: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<(Option<usize>, Option<usize>)>> {
+    let Some(v) = value.filter(|v| !v.is_none()) else {
+        return Ok(None);
+    };
+    let bound = |b: Bound<'_, PyAny>| -> Option<Option<usize>> {
+        if b.is_none() {
+            Some(None)
+        } else if b.is_instance_of::<PyBool>() {
+            None
+        } else {
+            b.extract::<usize>().ok().map(Some)
+        }
+    };
+    let pair = match v.extract::<Vec<Bound<'_, PyAny>>>() {
+        Ok(items) if !v.is_instance_of::<PyString>() => match <[_; 2]>::try_from(items) {
+            Ok([start, end]) => bound(start).zip(bound(end)),
+            Err(_) => None,
+        },
+        _ => None,
+    };
+    pair.map(Some).ok_or_else(|| {
+        argument_error(
+            "frames",
+            "a (start, end) pair of 0-based frame indices (end excluded, like a slice; either \
+             may be None)",
+            v,
         )
-    })?;
-    Ok(Some([x, y]))
+    })
 }
 
 /// The unit keywords, checked.

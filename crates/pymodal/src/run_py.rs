@@ -4,13 +4,12 @@ use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods}
 use pedo_io::report::{self, InputInfo};
 use pedo_io::sequence::{run_sequence, SequenceResult};
 use pedo_io::Recording;
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::errors::to_py;
+use crate::errors::{argument_error, input_error, to_py};
 use crate::match_py::PyMatch;
-use crate::options_py::{json_to_py, table_rows, MatchKw, RecordingKw};
+use crate::options_py::{frame_range, json_to_py, table_rows, MatchKw, RecordingKw};
 
 /// A recording from a path, a (T, H, W) or (H, W) array (NaN = no sensor), or a `Recording`,
 /// and where it came from (a file's name and SHA-256).
@@ -30,21 +29,20 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
             })
             .map_err(to_py);
     }
-    let arr: PyReadonlyArrayDyn<'_, f32> = obj
-        .call_method1("astype", ("float32",))
+    const EXPECTED: &str = "a path, a Recording or a (T, H, W) or (H, W) array of pressures";
+    let np = py.import("numpy")?;
+    let arr: PyReadonlyArrayDyn<'_, f32> = np
+        .call_method1("asarray", (obj, np.getattr("float32")?))
         .and_then(|a| a.extract())
-        .map_err(|_| {
-            PyValueError::new_err(
-                "recording must be a path, a Recording or a (T, H, W) / (H, W) array",
-            )
-        })?;
+        .map_err(|_| argument_error("recording", EXPECTED, obj))?;
     let shape = arr.shape().to_vec();
     let (t, h, w) = match shape.as_slice() {
         [h, w] => (1, *h, *w),
         [t, h, w] => (*t, *h, *w),
         _ => {
-            return Err(PyValueError::new_err(format!(
-                "recording array must be 2-D or 3-D, got shape {shape:?}"
+            return Err(input_error(format!(
+                "recording must be {EXPECTED}, got {}",
+                crate::match_py::array_text(&shape)
             )));
         }
     };
@@ -118,7 +116,7 @@ fn run<'py>(
     band: Option<usize>,
     material: Option<&Bound<'py, PyAny>>,
     model: Option<&str>,
-    frames: Option<(Option<usize>, Option<usize>)>,
+    frames: Option<&Bound<'py, PyAny>>,
     noise: Option<f64>,
     smooth: Option<f64>,
     spacing: Option<f64>,
@@ -157,7 +155,7 @@ fn run<'py>(
     .params()?;
     let params = RecordingKw {
         model,
-        frames,
+        frames: frame_range(frames)?,
         noise,
         smooth,
         spacing,
@@ -290,9 +288,27 @@ pub fn run_params<'py>(
     let any = |k: &str| -> PyResult<Option<Bound<'py, PyAny>>> {
         Ok(d.get_item(k)?.filter(|v| !v.is_none()))
     };
+    // A value of the wrong type fails as the same keyword of `run` does: a `TypeError` naming it.
     macro_rules! get {
-        ($k:literal, $t:ty) => {
-            any($k)?.map(|v| v.extract::<$t>()).transpose()?
+        ($k:literal, $t:ty, $expected:literal) => {
+            any($k)?
+                .map(|v| {
+                    v.extract::<$t>()
+                        .map_err(|_| crate::errors::keyword_type_error($k, $expected, &v))
+                })
+                .transpose()?
+        };
+        ($k:literal, String) => {
+            get!($k, String, "a string")
+        };
+        ($k:literal, f64) => {
+            get!($k, f64, "a number")
+        };
+        ($k:literal, usize) => {
+            get!($k, usize, "a non-negative integer")
+        };
+        ($k:literal, bool) => {
+            get!($k, bool, "True or False")
         };
     }
     let (element, search, solver) = (
@@ -336,7 +352,7 @@ pub fn run_params<'py>(
     .params()?;
     RecordingKw {
         model: model.as_deref(),
-        frames: get!("frames", (Option<usize>, Option<usize>)),
+        frames: frame_range(any("frames")?.as_ref())?,
         noise: get!("noise", f64),
         smooth: get!("smooth", f64),
         spacing: get!("spacing", f64),

@@ -2,7 +2,6 @@
 
 use numpy::{PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pedo_io::synthetic::SyntheticWalk;
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 use crate::errors::to_py;
@@ -29,9 +28,9 @@ fn map_points<'py>(
     f: impl Fn([f64; 2]) -> [f64; 2],
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     if points.shape()[1] != 2 {
-        return Err(PyValueError::new_err(format!(
-            "points must be an (n, 2) array, got shape {:?}",
-            points.shape()
+        return Err(crate::errors::input_error(format!(
+            "points must be an (n, 2) array of (x, y) coordinates, got {}",
+            crate::match_py::array_text(points.shape())
         )));
     }
     let a = points.as_array();

@@ -124,3 +124,71 @@ def test_numerical_failure():
     with pytest.raises(pymodal.NumericalError, match="positive definite") as info:
         pymodal.eigh(k, -k)
     assert isinstance(info.value, ValueError)
+
+
+# Argument errors: every argument of the wrong form is an InputError (still a ValueError, so
+# `except ValueError` keeps working) whose message names the argument and what it takes.
+SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, 1.5]])
+
+
+@pytest.mark.parametrize(
+    "call, name, text",
+    [
+        (lambda: pymodal.match(np.zeros((5, 4)), SQUARE), "a", r"\(5, 4\)"),
+        (lambda: pymodal.match(SQUARE, np.zeros(5)), "b", r"\(5,\)"),
+        (lambda: pymodal.match(np.zeros((2, 3, 2)), SQUARE), "a", r"\(2, 3, 2\)"),
+        (lambda: pymodal.match("abc", SQUARE), "a", "'abc'"),
+        (lambda: pymodal.match(SQUARE, np.c_[SQUARE, np.ones(5)]), "a and b", "got 2 and 3"),
+        (lambda: pymodal.match(SQUARE, SQUARE, triangles_a=[[0, 1]]), "triangles_a", r"\(1, 2\)"),
+        (lambda: pymodal.run(np.zeros((3, 8, 8)), pitch_mm="abc"), "pitch_mm", "'abc'"),
+        (lambda: pymodal.run(np.zeros((3, 8, 8)), pitch_mm=(1.0, 2.0, 3.0)), "pitch_mm", "pair"),
+        (lambda: pymodal.run(np.zeros((3, 8, 8)), frames=5), "frames", r"\(start, end\) pair.*got 5"),
+        (lambda: pymodal.run(np.zeros((3, 8, 8)), frames=(1, "x")), "frames", "0-based"),
+        (lambda: pymodal.run(np.zeros((3, 8, 8)), frames=(-1, 2)), "frames", "got \\(-1, 2\\)"),
+        (lambda: pymodal.run(np.zeros((2, 2, 2, 2))), "recording", r"\(2, 2, 2, 2\)"),
+        (lambda: pymodal.run(object()), "recording", "a path, a Recording"),
+        (lambda: pymodal.batch_row("x.asf", frames=5), "frames", r"\(start, end\) pair"),
+        (lambda: pymodal.batch(42), "paths", "got 42"),
+        (lambda: pymodal.find_recordings([1, 2]), "inputs", "a path or glob pattern"),
+        (lambda: pymodal.contours(np.zeros(5)), "frame", r"\(5,\)"),
+        (lambda: pymodal.contours([["a", "b"]]), "frame", "numbers|pressures"),
+        (lambda: pymodal.Recording.from_array(np.zeros(5)), "frames", r"\(5,\)"),
+        (lambda: pymodal.ModalModel(np.zeros((4, 5))), "points", r"\(4, 5\)"),
+        (lambda: pymodal.ModalModel(SQUARE, edges=[[0, 1, 2]]), "edges", "2 columns"),
+        (lambda: pymodal.eigh(np.eye(3), np.eye(2)), "k and m", r"\(3, 3\) and \(2, 2\)"),
+        (lambda: pymodal.eigh(np.eye(2), [[np.nan, 0], [0, 1]]), "m", "NaN"),
+        (lambda: pymodal.linear_sum_assignment(np.zeros(3)), "cost_matrix", "expected a matrix"),
+        (lambda: pymodal.linear_sum_assignment(np.eye(2), solver="jv", method="jv"), "solver and method", "alias"),
+        (lambda: pymodal.SyntheticWalk().true_positions(1, np.zeros((3, 3))), "points", r"\(3, 3\)"),
+    ],
+)
+def test_argument_errors_are_input_errors_naming_the_argument(call, name, text):
+    with pytest.raises(pymodal.InputError, match=text) as info:
+        call()
+    assert isinstance(info.value, ValueError)
+    assert str(info.value).startswith(name), str(info.value)
+
+
+def test_bad_material_values_are_option_errors_naming_material():
+    for material in ({"young": "stiff"}, (1.0, 0.3), {1: 2.0}):
+        with pytest.raises(pymodal.OptionError, match="material") as info:
+            pymodal.match(outline(), outline(), material=material)
+        assert isinstance(info.value, pymodal.InputError)
+
+
+def test_scalar_keywords_of_the_wrong_type_are_type_errors_naming_them():
+    # pyo3 reads run's typed keywords; batch reads the same keywords by hand and fails alike.
+    with pytest.raises(TypeError, match="spacing"):
+        pymodal.run(np.zeros((3, 8, 8)), spacing="wide")
+    with pytest.raises(TypeError, match="argument 'spacing': must be a number, got 'wide'"):
+        pymodal.batch_row("x.asf", spacing="wide")
+
+
+def test_good_forms_of_frames_and_pitch_are_accepted():
+    frames = np.zeros((4, 12, 10), np.float32)
+    frames[:, 3:9, 3:7] = 100.0
+    for kw in (dict(frames=[1, None]), dict(frames=(None, 3)), dict(pitch_mm=[5.0, 4.0]),
+               dict(pitch_mm=np.array([5.0, 4.0])), dict(pitch_mm=np.float32(5.0))):
+        res = pymodal.run(frames, **kw)
+        assert res["summary"]["recording"]["frames"] == 4, kw
+

@@ -136,7 +136,7 @@ def test_exact_rigid_and_bar_zero_modes():
         ([[0, 0], [1, 0], [0, 1], [1, 0]], {}, "coincide"),
         ([[0, 0], [1, np.nan], [0, 1]], {}, "not finite"),
         ([[0, 0, 0, 0]] * 5, {}, "2 or 3 columns"),
-        ([0, 1, 2], {}, "2-D"),
+        ([0, 1, 2], {}, "points must be an .n, 2. or .n, 3. array.*got a 1-D array"),
         (contour(10), {"material": "jelly"}, "material = jelly"),
         (contour(10), {"material": {"young": 1, "poisson": 0.5}}, "Poisson"),
         (contour(10), {"material": {"yung": 1}}, "unknown material key"),
