@@ -445,15 +445,23 @@ fn points_array<'py, const D: usize>(
 }
 
 /// Closed contours of a pressure frame as a list of (k, 2) float64 arrays of ``(x, y)`` =
-/// (column, row) in pixels, counter-clockwise in (x, y), the first point not repeated.
+/// (column, row) in sensels, counter-clockwise in (x, y), the first point not repeated.
 ///
-/// ``level``: contour level (default: half the smallest positive value, the contact boundary).
-/// ``n_points`` / ``spacing``: resample uniformly in arc length. ``smooth``: Gaussian σ in pixels.
-/// ``threshold``: values below are set to 0 first. ``upsample``: integer factor (coordinates stay
-/// in input pixels), ``interpolation`` "bilinear" or "bicubic". ``method``: "marching" (sub-pixel
-/// marching squares) or "chain" (the paper's hysteresis + boundary tracking; ``high`` is its upper
-/// threshold). ``fully_connected``: saddle rule as in ``skimage.measure.find_contours``.
-/// ``include_holes``: keep contours around holes. ``min_area``: drop smaller contours (px²).
+/// ``level``: contour level in the frame's units (default: half the smallest positive value,
+/// the contact boundary). ``n_points`` / ``spacing``: resample uniformly in arc length, to
+/// ``n_points`` nodes or one node every ``spacing`` sensels (default: no resampling, the
+/// marching-squares vertices; ``pedomatch run``/``match`` and :func:`run` use ``spacing=1.0``,
+/// so pass it to get their nodes). ``smooth``: Gaussian σ in sensels. ``threshold``: values
+/// below it (frame's units) are set to 0 first. ``upsample``: integer factor (coordinates stay
+/// in input sensels), ``interpolation`` "bilinear" or "bicubic". ``method``: "marching"
+/// (sub-sensel marching squares) or "chain" (the paper's hysteresis + boundary tracking;
+/// ``high`` is its upper threshold). ``fully_connected``: saddle rule as in
+/// ``skimage.measure.find_contours``. ``include_holes``: keep contours around holes.
+/// ``min_area``: drop smaller contours (sensels², i.e. in units of one sensel's area).
+///
+/// Raises :class:`InputError` naming ``frame`` if it is not a 2-D array of numbers, or if both
+/// ``n_points`` and ``spacing`` are given; :class:`OptionError` for an unknown ``method``,
+/// ``interpolation`` or ``fully_connected``.
 /// NaN in the frame means no sensor (read as 0); the frame is surrounded by zeros so every
 /// contour closes.
 #[pyfunction]

@@ -377,6 +377,9 @@ fn triangles(
 ///     two outlines with a point-to-line fit of the outlines (default; "normalize" with
 ///     ``paper``), centroid and scale only, or the coordinates as given as the prior, moved
 ///     only by the affine re-fits ("sensor", :func:`run`'s default for contours).
+/// max_rotation : float in (0, 180] — the largest turn, in degrees, the robust pre-alignment
+///     may find between a and b; among turns that fit nearly as well the smallest wins (default
+///     180, any turn; :func:`run` uses 30 between consecutive frames).
 /// refits : int — modal affine re-fits (default 0 for two closed outlines pre-aligned by the
 ///     rotation search; 2 with another ``prealign``, for 2-D point sets and for :func:`run`'s
 ///     frames; 0 for unordered 3-D points).
@@ -407,9 +410,14 @@ fn triangles(
 ///
 /// Raises
 /// ------
-/// DegenerateShapeError — too few, coincident or collinear nodes, NaN;
-/// OptionError — an unknown or out-of-range option value;
-/// ValueError — arrays of the wrong shape. All three are ``ValueError`` subclasses.
+/// InputError — ``a``, ``b`` or ``triangles_a``/``triangles_b`` not arrays of the documented
+///     shape (e.g. 4 columns, 1-D), or ``a`` and ``b`` of different dimensions; the message
+///     names the argument;
+/// OptionError — an unknown or out-of-range option value (an ``InputError``);
+/// DegenerateShapeError — too few, coincident or collinear nodes, NaN or infinite coordinates;
+/// NumericalError — the eigensolver failed.
+/// All are :class:`PedomatchError` and ``ValueError`` subclasses. An option of the wrong type
+/// (``modes="many"``) raises ``TypeError`` naming it.
 #[pyfunction]
 #[pyo3(name = "match", signature = (a, b, *, element=None, modes=None, search=None, solver=None,
     threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, max_rotation=None, refits=None,

@@ -166,7 +166,8 @@ fn column_major_to_numpy<'py>(
 /// exact_rigid : bool, default False — project out the exact rigid motions (Gaussian element).
 /// center_stride : int, default 1 — Gaussians on every ``center_stride``-th node only: a reduced
 ///     basis with ``d·⌈n/stride⌉`` modes, evaluated at all nodes and mass-normalised in the
-///     reduced model; σ follows the centres' spacing; ``stiffness()``/``mass()`` raise ValueError.
+///     reduced model; σ follows the centres' spacing; ``stiffness()``/``mass()`` raise
+///     :class:`OptionError`.
 /// plane : {"stress", "strain"}, default "stress" — 2-D assumption.
 ///
 /// Attributes

@@ -57,7 +57,8 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 /// ``pymodal._options()`` lists them with their defaults and meanings) and default to ``None``,
 /// meaning the documented default: the matching options of :func:`match` (``element``,
 /// ``modes``, ``search``, ``solver``, ``threshold``, ``threshold_mode``, ``excess``, ``paper``,
-/// ``prealign``, ``refits``, ``refit_tolerance``, ``refine``, ``deform_modes``,
+/// ``prealign``, ``max_rotation`` (degrees; default 30 between consecutive frames),
+/// ``refits``, ``refit_tolerance``, ``refine``, ``deform_modes``,
 /// ``deform_stiffness``, ``kappa``, ``center_stride``,
 /// ``position_weight``, ``cost_power``, ``common_sigma``, ``skip_rigid``, ``band``,
 /// ``material``), then ``model`` ("contour", "surface", "isocontour"), ``frames`` ((start, end),
@@ -81,6 +82,20 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 ///   units allow, like ``frames.csv``);
 /// - ``summary``: the provenance and outcome of the run, as ``summary.json``;
 /// - ``timings``: seconds per stage.
+///
+/// Raises
+/// ------
+/// FileNotFoundError, OSError — ``recording`` is a path that does not exist or cannot be read;
+/// FormatError — the file is corrupt, truncated or of no known format;
+/// InputError — an argument of the wrong form, named in the message: ``recording`` not a path,
+///     a Recording or a 2-D/3-D array; ``frames`` not a ``(start, end)`` pair; ``pitch_mm``
+///     not a number or an (x, y) pair;
+/// OptionError — an unknown or out-of-range option value (e.g. ``model="mesh"``, a negative
+///     ``pitch_mm``, ``frames`` beyond the recording); an ``InputError``.
+/// All but the ``OSError`` are :class:`PedomatchError` and ``ValueError`` subclasses. An option
+/// of the wrong type (``spacing="wide"``) raises ``TypeError`` naming it. A pair or frame that
+/// cannot be processed does not raise: it is skipped, with its reason in ``summary``
+/// (``summary["skipped"]``); a recording with no object gives empty lists.
 #[pyfunction]
 #[pyo3(signature = (recording, *, element=None, modes=None, search=None, solver=None,
     threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, max_rotation=None, refits=None,

@@ -192,3 +192,15 @@ def test_good_forms_of_frames_and_pitch_are_accepted():
         res = pymodal.run(frames, **kw)
         assert res["summary"]["recording"]["frames"] == 4, kw
 
+
+def test_docstrings_name_every_keyword_and_the_exceptions():
+    doc = pymodal.match.__doc__
+    assert "max_rotation" in doc and "degrees" in doc
+    for name in ("InputError", "OptionError", "DegenerateShapeError"):
+        assert name in doc, name
+    assert "ValueError — arrays" not in doc
+    run_doc = pymodal.run.__doc__
+    assert "Raises" in run_doc and "max_rotation" in run_doc
+    for name in ("InputError", "OptionError", "FormatError", "FileNotFoundError"):
+        assert name in run_doc, name
+    assert "sensels" in pymodal.contours.__doc__ and "pixel" not in pymodal.contours.__doc__
