@@ -294,17 +294,21 @@ impl PyRecording {
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
         self.state().reduce(py, "Recording")
     }
-    fn __repr__(&self) -> String {
+    /// ``Recording(frames=TxHxW, pitch_mm=(dx, dy) or None, dt_s=... or None, units='...')``,
+    /// the values as Python writes them.
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
         let r = &self.inner;
-        format!(
-            "Recording(frames={}x{}x{}, pitch_mm={:?}, dt_s={:?}, units={:?})",
+        let repr = |v: Bound<'_, PyAny>| -> PyResult<String> { Ok(v.repr()?.to_string()) };
+        let pitch_mm = r.pitch_mm.map(|[x, y]| (x, y));
+        Ok(format!(
+            "Recording(frames={}x{}x{}, pitch_mm={}, dt_s={}, units={})",
             r.n_frames(),
             r.rows(),
             r.cols(),
-            r.pitch_mm,
-            r.dt_s,
-            r.units
-        )
+            repr(pitch_mm.into_pyobject(py)?.into_any())?,
+            repr(r.dt_s.into_pyobject(py)?.into_any())?,
+            repr(r.units.as_str().into_pyobject(py)?.into_any())?,
+        ))
     }
 }
 

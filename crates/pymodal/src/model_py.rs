@@ -354,15 +354,17 @@ impl PyModalModel {
         self.state().reduce(py, "ModalModel")
     }
 
-    fn __repr__(&self) -> String {
-        format!(
-            "ModalModel(dim={}, n_nodes={}, element={:?}, modes={}, sigma={:?})",
+    /// ``ModalModel(dim=2, n_nodes=30, element='gaussian', modes=60, sigma=0.52)``, the values
+    /// as Python writes them (``sigma=None`` for bars).
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let sigma = self.basis.sigma.into_pyobject(py)?.repr()?.to_string();
+        Ok(format!(
+            "ModalModel(dim={}, n_nodes={}, element='{}', modes={}, sigma={sigma})",
             self.basis.dim,
             self.basis.n_nodes,
             self.element(),
             self.basis.n_modes(),
-            self.basis.sigma
-        )
+        ))
     }
 }
 
