@@ -12,7 +12,6 @@ import matplotlib
 
 matplotlib.use("Agg")  # no display needed
 import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
 import numpy as np  # noqa: E402
 
 import pymodal  # noqa: E402
@@ -50,16 +49,8 @@ def main():
 
     fig, ax = plt.subplots(figsize=(4, 8))
     ax.imshow(np.nan_to_num(rec.frames[fa]), cmap="Greys", alpha=0.4)
-    plot_match(m, a, b, ax=ax)
-    ax.set_title(f"largest contours of frames {fa} and {fb}")
-    ax.set_xlabel("x (sensels)")
-    ax.set_ylabel("y (sensels)")
-    ax.legend(handles=[
-        Line2D([], [], color="tab:blue", marker=".", label=f"frame {fa}"),
-        Line2D([], [], color="0.15", marker=".", label=f"frame {fb}"),
-        Line2D([], [], color="tab:green", label="one-to-one match (by cost)"),
-        Line2D([], [], color="tab:orange", ls="--", label="excess match"),
-    ], loc="upper right", fontsize="small")
+    # Coordinates in sensels, like the image; the helper adds the legend, title and axis labels.
+    plot_match(m, a, b, ax=ax, labels=(f"frame {fa}", f"frame {fb}"))
     fig.savefig(args.out, dpi=120, bbox_inches="tight")
     print(f"wrote {args.out}")
 

@@ -163,3 +163,88 @@ def test_without_matplotlib_the_helpers_say_how_to_install_it():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert "pip install 'pymodal[plot]'" in out.stdout, out.stdout + out.stderr
+
+
+def legend_texts(ax):
+    legend = ax.get_legend()
+    assert legend is not None, "no legend"
+    return [t.get_text() for t in legend.get_texts()]
+
+
+def colour_bar_labels(ax):
+    return sorted(a.get_ylabel() for a in ax.figure.axes if a is not ax)
+
+
+def test_plot_match_explains_its_marks_with_a_legend_and_a_title():
+    a, b = ellipse(40), ellipse(30, 1.1, 0.3)
+    m = pymodal.match(a, b, excess=True)
+    ax = pymodal.plot_match(m, a, b, labels=("frame 40", "frame 41"))
+    texts = legend_texts(ax)
+    assert texts[:2] == ["frame 40", "frame 41"]
+    assert "one-to-one match (colour: cost)" in texts and "excess match" in texts
+    assert ax.get_title() == (f"frame 40 → frame 41\n{m.optimisation_count} one-to-one, "
+                              f"{m.excess_count} excess, 0 unmatched")
+    assert ax.get_xlabel() == "x (sensels)" and ax.get_ylabel() == "y (sensels)"
+    # Without excess matches, the rings of unmatched nodes are explained instead.
+    m = pymodal.match(a, b, excess=False)
+    ax = pymodal.plot_match(m, a, b, pitch_mm=(5.0, 4.0), title="mine")
+    texts = legend_texts(ax)
+    assert texts[:2] == ["A", "B"] and "unmatched" in texts and "excess match" not in texts
+    assert ax.get_title() == "mine" and ax.get_xlabel() == "x (mm)"
+    assert pymodal.plot_match(m, a, b, legend=False).get_legend() is None
+    with pytest.raises(pymodal.InputError, match="a and b must be"):
+        pymodal.plot_match(m, a, np.zeros((5, 3)))
+    with pytest.raises(pymodal.InputError, match="pitch_mm"):
+        pymodal.plot_match(m, a, b, pitch_mm=-1.0)
+
+
+def fake_tracks(n=60):
+    """n tracks of lengths 3..n+2 frames: track k starts at frame k % 5 and moves right."""
+    out = []
+    for k in range(n):
+        length = 3 + k
+        f = np.arange(length) + k % 5
+        out.append(np.c_[f, 2.0 + 0.1 * np.arange(length), 1.0 + 0.2 * k * np.ones(length)])
+    return out
+
+
+def track_collections(ax):
+    return [c for c in ax.collections if isinstance(c, LineCollection)]
+
+
+def test_plot_tracks_draws_the_longest_tracks_in_mm_with_labels_legend_and_colour_bars():
+    tracks = fake_tracks(60)
+    rec = blob_recording(frames=3, pitch_mm=(5.0, 4.0))
+    ax = pymodal.plot_tracks(tracks, background=rec)
+    lines = track_collections(ax)
+    assert len(lines) == 40, "the 40 longest by default, like the CLI's tracks.png"
+    # The longest 40 are tracks 20..59; drawn in mm (x times 5, y times 4).
+    drawn = sorted(len(c.get_segments()) + 1 for c in lines)
+    assert drawn == [len(t) for t in tracks[20:]]
+    first = max(lines, key=lambda c: len(c.get_segments())).get_segments()[0]
+    np.testing.assert_allclose(first[0], tracks[59][0, 1:3] * [5.0, 4.0])
+    assert ax.get_xlabel() == "x (mm)" and ax.get_ylabel() == "y (mm)"
+    assert ax.get_title() == "node tracks\nthe 40 longest of 60 spanning ≥ 3 frames"
+    assert colour_bar_labels(ax) == ["peak pressure (kPa)", "time (s)"]
+    assert legend_texts(ax) == ["node track (colour: time)", "track start"]
+    # Colours follow time: the recording's frame interval (50 Hz) times the frame.
+    longest = max(lines, key=lambda c: len(c.get_segments()))
+    np.testing.assert_allclose(longest.get_array(), tracks[59][:-1, 0] * 0.02)
+    image = ax.images[0]
+    assert image.get_extent() == pytest.approx((-2.5, 97.5, 118.0, -2.0))
+
+
+def test_plot_tracks_without_pitch_is_in_sensels_and_longest_none_draws_all():
+    tracks = fake_tracks(12)
+    ax = pymodal.plot_tracks(tracks, longest=None, min_length=5)
+    assert len(track_collections(ax)) == 10
+    assert ax.get_xlabel() == "x (sensels)" and ax.get_ylabel() == "y (sensels)"
+    assert ax.get_title() == "node tracks\nall 10 spanning ≥ 5 frames"
+    assert colour_bar_labels(ax) == ["frame"]
+    assert "node track (colour: time)" in legend_texts(ax)
+    assert ax.yaxis_inverted()
+    ax = pymodal.plot_tracks(tracks, longest=3, pitch_mm=2.0)
+    assert len(track_collections(ax)) == 3 and ax.get_xlabel() == "x (mm)"
+    with pytest.raises(pymodal.InputError, match=r"tracks\[1\]"):
+        pymodal.plot_tracks([tracks[0], np.zeros((4, 2))])
+

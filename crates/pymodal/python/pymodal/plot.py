@@ -38,36 +38,63 @@ def _axes(ax, projection=None):
     return fig.add_subplot(111, projection=projection)
 
 
+def _input_error(message):
+    """pymodal's InputError (a ValueError), as the compiled functions raise it."""
+    from . import _pymodal
+
+    return _pymodal.InputError(message)
+
+
 def _scale(pitch_mm):
-    """(sx, sy, unit): coordinates times (sx, sy) are in `unit`."""
+    """(sx, sy, unit): coordinates in sensels times (sx, sy) are in `unit` (mm when the pitch is
+    known, else sensels)."""
     if pitch_mm is None:
         return 1.0, 1.0, "sensels"
-    p = np.broadcast_to(np.asarray(pitch_mm, dtype=float), (2,))
-    if not np.all(np.isfinite(p)) or np.any(p <= 0):
-        raise ValueError(f"pitch_mm must be positive, got {pitch_mm!r}")
+    try:
+        p = np.broadcast_to(np.asarray(pitch_mm, dtype=float), (2,))
+    except (TypeError, ValueError):
+        p = np.array([np.nan])
+    if p.shape != (2,) or not np.all(np.isfinite(p)) or np.any(p <= 0):
+        raise _input_error(
+            f"pitch_mm must be a positive number or an (x, y) pair of them (mm per sensel), "
+            f"got {pitch_mm!r}")
     return float(p[0]), float(p[1]), "mm"
 
 
 def plot_match(m, a, b, ax=None, *, pitch_mm=None, show_excess=True, closed=None,
-               invert_y=True, cmap="RdYlGn_r"):
+               invert_y=True, cmap="RdYlGn_r", labels=("A", "B"), title=None, legend=True):
     """Draw objects ``a`` (blue) and ``b`` (black) and the matches ``m`` between them.
 
-    ``m`` is a :class:`pymodal.Match` of ``a`` onto ``b`` (``(n, 2)`` or ``(n, 3)`` arrays; 3-D
-    objects are drawn in a 3-D axes). One-to-one matches are segments coloured by their cost
-    (``cmap``, with a colour bar), excess matches dashed orange, nodes left unmatched ringed.
-    ``pitch_mm`` (a number or (x, y)) scales x and y to millimetres; the axes are labelled in
-    mm, else in sensels. ``closed`` draws the outlines as closed polygons (default: for 2-D
+    ``m`` is a :class:`pymodal.Match` of ``a`` onto ``b`` (``(n, 2)`` or ``(n, 3)`` arrays of
+    coordinates in sensels; 3-D objects are drawn in a 3-D axes). One-to-one matches are
+    segments coloured by their cost (``cmap``, with a "match cost" colour bar), excess matches
+    dashed orange, nodes left unmatched ringed. ``pitch_mm`` (a number or (x, y), mm per sensel)
+    scales x and y to millimetres and the axes are labelled "x (mm)", "y (mm)"; without it they
+    are in sensels and labelled so. ``labels`` names the two objects in the legend (e.g.
+    ``("frame 40", "frame 41")``); ``legend=False`` leaves the legend out. ``title`` replaces the
+    default title: the two labels, then the counts of one-to-one and excess matches and of
+    unmatched nodes. ``closed`` draws the outlines as closed polygons (default: for 2-D
     objects); ``invert_y`` puts row 0 at the top, as in the pressure image. Returns the axes.
+
+    Raises :class:`pymodal.InputError` (a ``ValueError``) if ``a`` or ``b`` is not an (n, 2) or
+    (n, 3) array, if they differ in dimension, if ``m`` names nodes beyond them, or for a bad
+    ``pitch_mm``.
     """
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
+    try:
+        a = np.asarray(a, dtype=float)
+        b = np.asarray(b, dtype=float)
+    except (TypeError, ValueError):
+        raise _input_error("a and b must be (n, 2) or (n, 3) arrays of coordinates") from None
     if a.ndim != 2 or b.ndim != 2 or a.shape[1] != b.shape[1] or a.shape[1] not in (2, 3):
-        raise ValueError("a and b must be (n, 2) or (n, 3) arrays of the same dimension")
+        raise _input_error(
+            f"a and b must be (n, 2) or (n, 3) arrays of the same dimension, got shapes "
+            f"{a.shape} and {b.shape}")
     pairs = np.asarray(m.pairs, dtype=np.int64).reshape(-1, 2)
     if len(pairs) and (pairs[:, 0].max() >= len(a) or pairs[:, 1].max() >= len(b)):
-        raise ValueError("the match names nodes beyond a or b: is it the match of a onto b?")
+        raise _input_error("the match m names nodes beyond a or b: is it the match of a onto b?")
     excess = np.asarray(getattr(m, "excess", np.zeros(len(pairs), bool)), dtype=bool)
     costs = np.asarray(getattr(m, "costs", np.zeros(len(pairs))), dtype=float)
+    name_a, name_b = labels
     sx, sy, unit = _scale(pitch_mm)
     s = np.array([sx, sy, 1.0][: a.shape[1]])
     a, b = a * s, b * s
@@ -81,31 +108,41 @@ def plot_match(m, a, b, ax=None, *, pitch_mm=None, show_excess=True, closed=None
         from mpl_toolkits.mplot3d.art3d import Line3DCollection as Segments
     else:
         from matplotlib.collections import LineCollection as Segments
-    for pts, colour, name in ((a, "tab:blue", "A"), (b, "0.15", "B")):
+    for pts, colour, name in ((a, "tab:blue", name_a), (b, "0.15", name_b)):
         if closed and not three_d:
             loop = np.vstack([pts, pts[:1]])
-            ax.plot(loop[:, 0], loop[:, 1], "-", color=colour, lw=1.2, label=name)
-        ax.scatter(*pts.T, s=8, color=colour, label=None if closed and not three_d else name)
+            ax.plot(loop[:, 0], loop[:, 1], "-", color=colour, lw=1.2, marker=".", ms=4,
+                    label=name)
+        else:
+            ax.scatter(*pts.T, s=8, color=colour, label=name)
     one = ~excess
     segments = np.stack([a[pairs[:, 0]], b[pairs[:, 1]]], axis=1) if len(pairs) else np.zeros((0, 2, a.shape[1]))
     finite = costs[one][np.isfinite(costs[one])]
     norm = colors.Normalize(*(finite.min(), finite.max()) if len(finite) else (0.0, 1.0))
-    matched = Segments(segments[one], cmap=cmap, norm=norm, lw=1.0, label="match")
+    matched = Segments(segments[one], cmap=cmap, norm=norm, lw=1.0,
+                       label="one-to-one match (colour: cost)")
     matched.set_array(costs[one])
     (ax.add_collection3d if three_d else ax.add_collection)(matched)
-    if show_excess and excess.any():
+    n_excess = int(excess.sum())
+    if show_excess and n_excess:
         dashed = Segments(segments[excess], colors="tab:orange", linestyles="--", lw=1.0,
                           label="excess match")
         (ax.add_collection3d if three_d else ax.add_collection)(dashed)
+    n_unmatched = 0
     for pts, idx, colour in ((a, getattr(m, "unmatched_a", []), "tab:blue"),
                              (b, getattr(m, "unmatched_b", []), "0.15")):
         idx = np.asarray(idx, dtype=np.int64)
         if len(idx):
             ax.scatter(*pts[idx].T, s=60, facecolors="none", edgecolors=colour, linewidths=1.2,
-                       label="unmatched")
+                       label="unmatched" if n_unmatched == 0 else "_unmatched")
+            n_unmatched += len(idx)
     ax.figure.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="match cost")
     ax.set_xlabel(f"x ({unit})")
     ax.set_ylabel(f"y ({unit})")
+    if title is None:
+        title = (f"{name_a} \u2192 {name_b}\n{int(one.sum())} one-to-one, {n_excess} excess, "
+                 f"{n_unmatched} unmatched")
+    ax.set_title(title)
     if three_d:
         ax.set_zlabel("z")
     else:
@@ -113,6 +150,8 @@ def plot_match(m, a, b, ax=None, *, pitch_mm=None, show_excess=True, closed=None
         ax.autoscale_view()
         if invert_y and not ax.yaxis_inverted():
             ax.invert_yaxis()
+    if legend:
+        ax.legend(loc="best", fontsize="small")
     return ax
 
 
@@ -153,28 +192,97 @@ def plot_frame(recording, i, ax=None, *, contours=True, cmap="viridis", **contou
     return ax
 
 
-def plot_tracks(tracks, ax=None, *, background=None, min_length=3, invert_y=True):
-    """Draw node tracks, each a ``(k, 3 or 4)`` array of ``(frame, x, y[, z])`` rows as returned
-    by :func:`pymodal.run`, as coloured polylines in the x-y plane, optionally over a background
-    image (e.g. the recording's peak-pressure image, NaN drawn transparent). Tracks shorter than
-    ``min_length`` steps are skipped. Returns the axes.
+def plot_tracks(tracks, ax=None, *, background=None, pitch_mm=None, units=None, dt_s=None,
+                longest=40, min_length=3, invert_y=True, cmap="plasma"):
+    """Draw node tracks, each a ``(k, 3 or 4)`` array of ``(frame, x, y[, z])`` rows in sensels
+    as returned by :func:`pymodal.run`, in the x-y plane.
+
+    Like the ``tracks.png`` of ``pedomatch run``, only the ``longest`` tracks (default 40, by
+    number of frames; ``None`` for all) among those spanning at least ``min_length`` frames are
+    drawn: thousands of overlapping tracks hide each other. The title says how many are shown
+    of how many. Each track is a line coloured by frame (``cmap``, with a colour bar in frames,
+    or in seconds when ``dt_s`` is known) with a dot where it starts.
+
+    ``background`` is an optional image under the tracks: a :class:`pymodal.Recording` (its
+    peak-pressure image; its pitch, units and frame interval are used unless given) or an
+    (H, W) array (NaN drawn transparent), with a colour bar labelled in ``units``. ``pitch_mm``
+    (a number or (x, y), mm per sensel) draws in mm, else in sensels; the axes are labelled
+    with the unit. ``invert_y`` puts row 0 at the top, as in the pressure image. Returns the
+    axes.
+
+    Raises :class:`pymodal.InputError` (a ``ValueError``) for a track that is not a
+    ``(k, 3 or 4)`` array, a background that is not 2-D, or a bad ``pitch_mm``.
     """
+    import pymodal
+
+    if isinstance(background, pymodal.Recording):
+        rec = background
+        background = rec.peak_image
+        pitch_mm = rec.pitch_mm if pitch_mm is None else pitch_mm
+        units = (rec.units or None) if units is None else units
+        dt_s = rec.dt_s if dt_s is None else dt_s
+    sx, sy, unit = _scale(pitch_mm)
+    eligible = []
+    for i, t in enumerate(tracks):
+        try:
+            t = np.asarray(t, dtype=float)
+        except (TypeError, ValueError):
+            t = np.zeros((0,))
+        if t.ndim != 2 or t.shape[1] not in (3, 4):
+            raise _input_error(
+                f"tracks[{i}] must be a (k, 3 or 4) array of (frame, x, y[, z]) rows, got "
+                f"shape {t.shape}")
+        if len(t) >= max(min_length, 2):
+            eligible.append(t)
+    # Longest first; ties by first frame, so the choice is deterministic (as the CLI's).
+    order = sorted(range(len(eligible)), key=lambda k: (-len(eligible[k]), eligible[k][0, 0]))
+    shown = [eligible[k] for k in order[: None if longest is None else max(int(longest), 0)]]
+
     ax = _axes(ax)
+    from matplotlib import colors
+    from matplotlib.collections import LineCollection
+
     if background is not None:
         bg = np.asarray(background, dtype=float)
-        ax.imshow(np.ma.masked_invalid(bg), cmap="Greys", origin="upper",
-                  extent=(-0.5, bg.shape[1] - 0.5, bg.shape[0] - 0.5, -0.5))
-    drawn = 0
-    for t in tracks:
-        t = np.asarray(t, dtype=float)
-        if t.ndim != 2 or t.shape[1] < 3:
-            raise ValueError("each track must be a (k, 3 or 4) array of (frame, x, y[, z]) rows")
-        if len(t) < min_length:
-            continue
-        line, = ax.plot(t[:, 1], t[:, 2], "-", lw=1)
-        ax.plot(t[0, 1], t[0, 2], "o", ms=2, color=line.get_color())
-        drawn += 1
+        if bg.ndim != 2:
+            raise _input_error(
+                f"background must be a Recording or an (H, W) image, got shape {bg.shape}")
+        image = ax.imshow(np.ma.masked_invalid(bg), cmap="Greys", origin="upper",
+                          interpolation="nearest",
+                          extent=(-0.5 * sx, (bg.shape[1] - 0.5) * sx,
+                                  (bg.shape[0] - 0.5) * sy, -0.5 * sy))
+        ax.figure.colorbar(image, ax=ax, label=f"peak pressure ({units or 'units unknown'})")
+    scale = 1.0 if dt_s is None else float(dt_s)
+    if shown:
+        frames = np.concatenate([t[:, 0] for t in shown]) * scale
+        norm = colors.Normalize(frames.min(), frames.max())
+    else:
+        norm = colors.Normalize(0.0, 1.0)
+    for k, t in enumerate(shown):
+        xy = t[:, 1:3] * [sx, sy]
+        segs = np.stack([xy[:-1], xy[1:]], axis=1)
+        lines = LineCollection(segs, cmap=cmap, norm=norm, lw=1.2,
+                               label="node track (colour: time)" if k == 0 else "_track")
+        lines.set_array(t[:-1, 0] * scale)
+        ax.add_collection(lines)
+    if shown:
+        starts = np.array([t[0, 1:3] * [sx, sy] for t in shown])
+        ax.scatter(starts[:, 0], starts[:, 1], s=10, c=[t[0, 0] * scale for t in shown],
+                   cmap=cmap, norm=norm, edgecolors="k", linewidths=0.4, label="track start",
+                   zorder=3)
+    from matplotlib import cm
+
+    ax.figure.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax,
+                       label="frame" if dt_s is None else "time (s)")
+    which = "all" if len(shown) == len(eligible) else f"the {len(shown)} longest of"
+    ax.set_title(f"node tracks\n{which} {len(eligible)} spanning \u2265 {max(min_length, 2)} "
+                 f"frames")
+    ax.set_xlabel(f"x ({unit})")
+    ax.set_ylabel(f"y ({unit})")
     ax.set_aspect("equal")
+    ax.autoscale_view()
+    if shown:
+        ax.legend(loc="best", fontsize="small")
     if background is None and invert_y and not ax.yaxis_inverted():
         ax.invert_yaxis()
     return ax
