@@ -111,8 +111,23 @@ impl PySyntheticWalk {
         self.inner.frames
     }
 
+    /// The constructor call that makes this walk, with the keywords' names.
     fn __repr__(&self) -> String {
-        format!("{:?}", self.inner)
+        let w = &self.inner;
+        format!(
+            "SyntheticWalk(frames={}, rows={}, cols={}, translation=({:?}, {:?}), rotation={:?}, \
+             spread={:?}, noise={:?}, pitch_mm={:?}, frame_rate={:?})",
+            w.frames,
+            w.rows,
+            w.cols,
+            w.translation[0],
+            w.translation[1],
+            w.rotation_deg,
+            w.spread,
+            w.noise_kpa,
+            w.pitch_mm,
+            w.frame_rate_hz
+        )
     }
 }
 

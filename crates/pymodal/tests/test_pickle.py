@@ -167,3 +167,13 @@ def test_recording_repr_is_python_syntax():
     model = pymodal.ModalModel(np.c_[3 * np.cos(t), 2 * np.sin(t)])
     assert repr(model).startswith("ModalModel(dim=2, n_nodes=12, element='gaussian', modes=24, sigma=")
     assert "Some(" not in repr(model)
+
+
+def test_synthetic_walk_repr_is_the_call_that_makes_it():
+    walk = pymodal.SyntheticWalk(frames=30, rotation=5.0, translation=(1.0, -2.5))
+    text = repr(walk)
+    assert text.startswith("SyntheticWalk(frames=30, ") and "rotation=5.0" in text
+    again = eval(text, {"SyntheticWalk": pymodal.SyntheticWalk})
+    assert repr(again) == text
+    assert np.array_equal(again.true_positions(7, np.array([[3.0, 4.0]])),
+                          walk.true_positions(7, np.array([[3.0, 4.0]])))
