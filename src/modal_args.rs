@@ -130,6 +130,8 @@ pub struct UnitArgs {
     pub pitch_mm: Option<[f64; 2]>,
     #[arg(long, allow_negative_numbers = true, value_name = "HZ", value_parser = |s: &str| pedo_io::units::parse_frame_rate(s), help = help("frame_rate"))]
     pub frame_rate: Option<f64>,
+    #[arg(long, value_name = "UNITS", value_parser = |s: &str| pedo_io::units::parse_units(s), help = help("units"))]
+    pub units: Option<String>,
 }
 
 impl UnitArgs {
@@ -137,6 +139,7 @@ impl UnitArgs {
         UnitOverrides {
             pitch_mm: self.pitch_mm,
             frame_rate: self.frame_rate,
+            units: self.units.clone(),
         }
     }
 }

@@ -818,3 +818,36 @@ fn an_isobaric_level_without_an_object_is_reported_not_dropped() {
         );
     }
 }
+
+#[test]
+fn units_pitch_and_rate_given_for_an_npy_give_forces_in_newtons() {
+    // 200 kPa at most on 5 × 5 mm sensels: the frames table states newtons and kPa.
+    let out = run_synthetic(
+        "npy-units",
+        &[
+            "--units",
+            "kPa",
+            "--pitch-mm",
+            "5",
+            "--frame-rate",
+            "100",
+            "--figures",
+            "none",
+        ],
+    );
+    let frames = read_csv(&out.join("frames.csv"));
+    let row = &frames[0];
+    assert!(
+        row.contains_key("total_force_n") && row.contains_key("peak_pressure_kpa"),
+        "{row:?}"
+    );
+    // Force = sum of the values (kPa) × 25 mm² × 1e-3; the area in mm².
+    let sensors = num(row, "contact_sensors");
+    assert!((num(row, "contact_area_mm2") - 25.0 * sensors).abs() < 1e-6);
+    assert!(num(row, "total_force_n") > 0.0 && num(row, "peak_pressure_kpa") <= 200.0);
+    let summary = read_json(&out.join("summary.json"));
+    assert_eq!(summary["recording"]["pressure_units"], "kPa");
+    let o = pedomatch(&["run", "x.npy", "--units", "furlongs"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("units = furlongs"));
+}

@@ -392,6 +392,14 @@ impl RunParams {
                 "frame_rate",
                 recording.dt_s.map_or(Absent, |dt| Float(1.0 / dt)),
             ),
+            (
+                "units",
+                if recording.units.is_empty() {
+                    Absent
+                } else {
+                    Word(recording.units.clone())
+                },
+            ),
         ]);
         v
     }

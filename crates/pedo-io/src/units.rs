@@ -4,14 +4,18 @@
 use crate::recording::Recording;
 use modal_core::{OptionError, OptionKind, OptionSpec};
 
-/// Sensor pitch and frame rate that replace a file's (`--pitch-mm X[,Y]`, `--frame-rate HZ`;
-/// Python `pitch_mm=`, `frame_rate=`). `None` keeps what the file says.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+/// Sensor pitch, frame rate and pressure units that replace a file's (`--pitch-mm X[,Y]`,
+/// `--frame-rate HZ`, `--units U`; Python `pitch_mm=`, `frame_rate=`, `units=`). `None` keeps
+/// what the file says.
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct UnitOverrides {
     /// Millimetres per sensel `[x, y]` = `[column spacing, row spacing]`.
     pub pitch_mm: Option<[f64; 2]>,
     /// Frames per second.
     pub frame_rate: Option<f64>,
+    /// Pressure units of the values, one [`crate::recording::kpa_per_unit`] knows (so that the
+    /// outputs can state forces in newtons): for formats that store none (`.npy`, `.npz`, CSV).
+    pub units: Option<String>,
 }
 
 impl UnitOverrides {
@@ -31,6 +35,11 @@ impl UnitOverrides {
         {
             return Err(OptionError::new("frame_rate", f, "frames per second, > 0"));
         }
+        if let Some(u) = &self.units
+            && crate::recording::kpa_per_unit(u).is_none()
+        {
+            return Err(OptionError::new("units", u, PRESSURE_UNITS));
+        }
         Ok(())
     }
 
@@ -44,6 +53,9 @@ impl UnitOverrides {
         }
         if let Some(f) = self.frame_rate {
             recording.dt_s = Some(1.0 / f);
+        }
+        if let Some(u) = &self.units {
+            recording.units = u.trim().to_string();
         }
         Ok(())
     }
@@ -70,11 +82,29 @@ pub fn parse_pitch(s: &str) -> Result<[f64; 2], OptionError> {
     };
     UnitOverrides {
         pitch_mm: Some(pitch),
-        frame_rate: None,
+        ..UnitOverrides::default()
     }
     .validate()
     .map_err(|_| bad())?;
     Ok(pitch)
+}
+
+/// The pressure units `--units` accepts (as `kpa_per_unit` reads them, case and spaces aside).
+const PRESSURE_UNITS: &str = "a pressure unit: kPa, Pa, MPa, N/cm², N/mm², psi, bar or mmHg";
+
+/// Parses pressure units (one of [`crate::recording::kpa_per_unit`]'s).
+///
+/// ```
+/// assert_eq!(pedo_io::units::parse_units("N/cm2").unwrap(), "N/cm2");
+/// assert!(pedo_io::units::parse_units("furlongs").is_err());
+/// ```
+pub fn parse_units(s: &str) -> Result<String, OptionError> {
+    let u = UnitOverrides {
+        units: Some(s.trim().to_string()),
+        ..UnitOverrides::default()
+    };
+    u.validate()?;
+    Ok(s.trim().to_string())
 }
 
 /// Parses a frame rate in Hz.
@@ -84,8 +114,8 @@ pub fn parse_frame_rate(s: &str) -> Result<f64, OptionError> {
         .parse()
         .map_err(|_| OptionError::new("frame_rate", s, "frames per second, > 0"))?;
     UnitOverrides {
-        pitch_mm: None,
         frame_rate: Some(f),
+        ..UnitOverrides::default()
     }
     .validate()?;
     Ok(f)
@@ -106,6 +136,12 @@ pub fn unit_option_specs() -> Vec<OptionSpec> {
             OptionKind::Value,
             "the file's, if it says",
             "Frames per second; overrides the file's.",
+        ),
+        OptionSpec::new(
+            "units",
+            OptionKind::Value,
+            "the file's, if it says",
+            "Pressure units of the values (kPa, Pa, MPa, N/cm², N/mm², psi, bar, mmHg), for formats that store none; overrides the file's.",
         ),
     ]
 }
@@ -131,11 +167,17 @@ mod tests {
         let mut rec = Recording::new(3, 2, 2, vec![1.0; 12], vec![true; 4]).unwrap();
         rec.sensel_area_mm2 = Some(99.0);
         assert_eq!(rec.time_s(2), None);
+        assert_eq!(rec.force_factor(), None);
         let o = UnitOverrides {
             pitch_mm: Some(parse_pitch("2,3").unwrap()),
             frame_rate: Some(parse_frame_rate("50").unwrap()),
+            units: Some(parse_units(" N/cm2 ").unwrap()),
         };
         o.apply(&mut rec).unwrap();
+        assert_eq!(rec.units, "N/cm2");
+        // N/cm² = 10 kPa; kPa × mm² × 1e-3 = N.
+        assert_eq!(rec.force_factor(), Some(10.0 * 6.0 * 1e-3));
+        assert_eq!(parse_units("stone").unwrap_err().option, "units");
         assert_eq!(rec.sensel_area(), Some(6.0));
         assert_eq!(rec.time_s(2), Some(0.04));
         assert_eq!(rec.to_mm(1.0, 2.0), Some([2.0, 6.0]));

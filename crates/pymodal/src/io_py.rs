@@ -177,7 +177,7 @@ impl PyRecording {
                 Some(flat)
             }
         };
-        let overrides = crate::options_py::units(pitch_mm, frame_rate)?;
+        let overrides = crate::options_py::units(pitch_mm, frame_rate, None)?;
         let mut rec = Recording::from_array(t, h, w, data, mask).map_err(to_py)?;
         overrides.apply(&mut rec).map_err(to_py)?;
         if let Some(u) = units {
@@ -317,22 +317,25 @@ impl PyRecording {
 /// (``"walk_%03d.png"``). The format is detected from the content and the extension.
 ///
 /// ``pitch_mm`` (mm per sensel, a number or (x, y)) and ``frame_rate`` (Hz) set or override
-/// what the file says, as ``--pitch-mm`` and ``--frame-rate`` do on the command line;
+/// what the file says, as ``--pitch-mm`` and ``--frame-rate`` do on the command line, and
+/// ``units`` the pressure units (``--units``: kPa, Pa, MPa, N/cm², N/mm², psi, bar or mmHg)
+/// for formats that store none (``.npy``, ``.npz``, CSV), so that forces come out in newtons;
 /// ``layout`` is a pedar sensor-layout table (``--layout``; default: the bundled insole).
 ///
 /// Raises ``FileNotFoundError`` (an ``OSError``) if the file does not exist, other ``OSError``
 /// subclasses if it cannot be read, and :class:`FormatError` (a ``ValueError``) naming the file
 /// (and line, for text formats) if it is corrupt, truncated or of no known format.
 #[pyfunction]
-#[pyo3(signature = (path, *, pitch_mm=None, frame_rate=None, layout=None))]
+#[pyo3(signature = (path, *, pitch_mm=None, frame_rate=None, units=None, layout=None))]
 fn read_recording(
     py: Python<'_>,
     path: PathBuf,
     pitch_mm: Option<&Bound<'_, PyAny>>,
     frame_rate: Option<f64>,
+    units: Option<String>,
     layout: Option<PathBuf>,
 ) -> PyResult<PyRecording> {
-    let units = crate::options_py::units(pitch_mm, frame_rate)?;
+    let units = crate::options_py::units(pitch_mm, frame_rate, units)?;
     let opts = pedo_io::formats::ReadOptions { layout };
     let mut rec = py
         .detach(|| pedo_io::formats::read_recording_with(&path, &opts))

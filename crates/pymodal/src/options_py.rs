@@ -202,10 +202,12 @@ pub fn frame_range(
 pub fn units(
     pitch_mm: Option<&Bound<'_, PyAny>>,
     frame_rate: Option<f64>,
+    units: Option<String>,
 ) -> PyResult<UnitOverrides> {
     let u = UnitOverrides {
         pitch_mm: pitch(pitch_mm)?,
         frame_rate,
+        units,
     };
     u.validate().map_err(to_py)?;
     Ok(u)
@@ -223,6 +225,7 @@ pub struct RecordingKw<'a, 'py> {
     pub iso_levels: Option<usize>,
     pub pitch_mm: Option<&'a Bound<'py, PyAny>>,
     pub frame_rate: Option<f64>,
+    pub units: Option<String>,
     pub drift_reference: Option<usize>,
 }
 
@@ -243,7 +246,7 @@ impl RecordingKw<'_, '_> {
             surface_nodes: self.surface_nodes.unwrap_or(d.surface_nodes),
             iso_frame: self.iso_frame.or(d.iso_frame),
             iso_levels: self.iso_levels.unwrap_or(d.iso_levels),
-            units: units(self.pitch_mm, self.frame_rate)?,
+            units: units(self.pitch_mm, self.frame_rate, self.units.clone())?,
             drift_reference: self.drift_reference.unwrap_or(d.drift_reference),
         })
     }

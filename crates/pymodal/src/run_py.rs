@@ -64,7 +64,9 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 /// ``material``), then ``model`` ("contour", "surface", "isocontour"), ``frames`` ((start, end),
 /// 0-based, end excluded like a slice; either may be None), ``noise``, ``smooth``, ``spacing``,
 /// ``surface_nodes``, ``iso_frame`` (0-based), ``iso_levels``, ``pitch_mm`` (mm per sensel, a
-/// number or (x, y); overrides the file's), ``frame_rate`` (Hz; overrides the file's) and
+/// number or (x, y); overrides the file's), ``frame_rate`` (Hz; overrides the file's), ``units``
+/// (pressure units of the values, for formats that store none: kPa, Pa, MPa, N/cm², N/mm²,
+/// psi, bar or mmHg; overrides the file's) and
 /// ``drift_reference`` (drift correction of tracks: frames between reference frames; 0: off).
 ///
 /// Returns a dict with
@@ -102,7 +104,7 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
     refit_tolerance=None, refine=None, deform_modes=None, deform_stiffness=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
     common_sigma=None, skip_rigid=None, band=None, material=None, model=None, frames=None,
     noise=None, smooth=None, spacing=None, surface_nodes=None, iso_frame=None, iso_levels=None,
-    drift_reference=None, pitch_mm=None, frame_rate=None))]
+    drift_reference=None, pitch_mm=None, frame_rate=None, units=None))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
     py: Python<'py>,
@@ -141,6 +143,7 @@ fn run<'py>(
     drift_reference: Option<usize>,
     pitch_mm: Option<&Bound<'py, PyAny>>,
     frame_rate: Option<f64>,
+    units: Option<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let matching = MatchKw::new(
         element,
@@ -179,6 +182,7 @@ fn run<'py>(
         iso_levels,
         pitch_mm,
         frame_rate,
+        units,
         drift_reference,
     }
     .params(matching)?;
@@ -376,6 +380,7 @@ pub fn run_params<'py>(
         iso_levels: get!("iso_levels", usize),
         pitch_mm: pitch_mm.as_ref(),
         frame_rate: get!("frame_rate", f64),
+        units: get!("units", String),
         drift_reference: get!("drift_reference", usize),
     }
     .params(matching)

@@ -142,6 +142,26 @@ def test_read_recording_units_override():
     assert pymodal.read_recording(BUNDLED).pitch_mm == (5.08, 5.08)
 
 
+def test_units_name_the_pressure_of_a_file_that_states_none(tmp_path):
+    path = tmp_path / "blob.npy"
+    np.save(path, moving_blob(frames=3))
+    assert pymodal.read_recording(path).units == ""
+    rec = pymodal.read_recording(path, pitch_mm=5.0, units="N/cm2")
+    assert rec.units == "N/cm2"
+    # N/cm² is 10 kPa: the force in N follows from the units and the pitch (the peak stays in
+    # the stated units).
+    raw = moving_blob(frames=3)
+    assert rec.peak_pressure[0] == pytest.approx(raw[0].max(), rel=1e-6)
+    assert rec.total_force[0] == pytest.approx(10.0 * 25.0 * 1e-3 * raw[0].sum(), rel=1e-5)
+    res = pymodal.run(str(path), units="kPa", pitch_mm=5.0)
+    assert res["summary"]["recording"]["pressure_units"] == "kPa"
+    assert res["summary"]["options"]["units"] == "kPa"
+    with pytest.raises(pymodal.OptionError, match="units"):
+        pymodal.read_recording(path, units="furlongs")
+    with pytest.raises(pymodal.OptionError, match="units"):
+        pymodal.run(str(path), units="furlongs")
+
+
 def test_run_best_search_is_accepted():
     res = pymodal.run(moving_blob(frames=3), search="best")
     assert len(res["table"]) == 2

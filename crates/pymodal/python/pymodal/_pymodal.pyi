@@ -239,6 +239,7 @@ def read_recording(
     *,
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
+    units: Optional[str] = None,
     layout: Optional[Path] = None,
 ) -> Recording: ...
 def contours(
@@ -318,6 +319,7 @@ def run(
     drift_reference: Optional[int] = None,
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
+    units: Optional[str] = None,
 ) -> dict[str, Any]: ...
 
 # A row of a study table (batch, batch_row): path, output, format, frames, pairs,
