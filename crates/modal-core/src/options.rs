@@ -230,6 +230,17 @@ fn check(ok: bool, option: &'static str, value: f64, expected: &str) -> Result<(
     }
 }
 
+/// The rejection threshold's rule, for the front ends' options and the engine's: costs are
+/// max-normalised, so a threshold above 1 would silently keep every pair.
+pub(crate) fn check_threshold(t: f64) -> Result<(), OptionError> {
+    check(
+        (0.0..=1.0).contains(&t),
+        "threshold",
+        t,
+        "a number in [0, 1]",
+    )
+}
+
 impl MatchParams {
     /// Checks every value.
     pub fn validate(&self) -> Result<(), OptionError> {
@@ -237,12 +248,7 @@ impl MatchParams {
             check(m > 0.0 && m <= 1.0, "modes", m, "a fraction in (0, 1]")?;
         }
         if let Some(t) = self.threshold {
-            check(
-                (0.0..=1.0).contains(&t),
-                "threshold",
-                t,
-                "a number in [0, 1]",
-            )?;
+            check_threshold(t)?;
         }
         if let Some(r) = self.max_rotation {
             check(

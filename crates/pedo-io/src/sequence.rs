@@ -1901,8 +1901,21 @@ fn build_objects(
                 // The seed models one isobaric contour per level: the largest region's outline.
                 let largest = cs.iter().max_by(|a, b| a.area().total_cmp(&b.area()));
                 let shape = largest.map(Contour::to_shape).transpose()?;
-                if let Some(why) = level_left_out(shape.as_ref(), options.min_nodes.max(3)) {
-                    built.skipped_frames.push(SkippedFrame {
+                match level_object(shape, options.min_nodes.max(3)) {
+                    Ok(shape) => {
+                        let o = built.objects.len();
+                        if o > 0 {
+                            built.pairs.push((o - 1, o));
+                        }
+                        built.objects.push(SequenceObject {
+                            id: o,
+                            frame: t,
+                            index,
+                            level: Some(level),
+                            shape,
+                        });
+                    }
+                    Err(why) => built.skipped_frames.push(SkippedFrame {
                         frame: t,
                         reason: format!(
                             "isobaric level {} of {} ({level:.1} {}): {why}",
@@ -1910,20 +1923,7 @@ fn build_objects(
                             levels.len(),
                             recording.units
                         ),
-                    });
-                }
-                if let Some(shape) = shape.filter(keep) {
-                    let o = built.objects.len();
-                    if o > 0 {
-                        built.pairs.push((o - 1, o));
-                    }
-                    built.objects.push(SequenceObject {
-                        id: o,
-                        frame: t,
-                        index,
-                        level: Some(level),
-                        shape,
-                    });
+                    }),
                 }
                 tick(levels.len());
             }
@@ -1932,16 +1932,16 @@ fn build_objects(
     Ok(built)
 }
 
-/// Why an isobaric level gets no object (`None` when it does): no region reaches it, or its
-/// largest region's outline has fewer than `min_nodes` nodes.
-fn level_left_out(shape: Option<&Shape>, min_nodes: usize) -> Option<String> {
+/// An isobaric level's object, its largest region's outline, or why it has none: no region
+/// reaches the level, or the outline has fewer than `min_nodes` nodes.
+fn level_object(shape: Option<Shape>, min_nodes: usize) -> std::result::Result<Shape, String> {
     match shape {
-        None => Some("no region reaches this level; no object".into()),
-        Some(s) if s.len() < min_nodes => Some(format!(
+        None => Err("no region reaches this level; no object".into()),
+        Some(s) if s.len() < min_nodes => Err(format!(
             "its largest region's outline has {} nodes, fewer than the {min_nodes} an object needs",
             s.len()
         )),
-        Some(_) => None,
+        Some(s) => Ok(s),
     }
 }
 

@@ -99,12 +99,13 @@ const PRESSURE_UNITS: &str = "a pressure unit: kPa, Pa, MPa, N/cm², N/mm², psi
 /// assert!(pedo_io::units::parse_units("furlongs").is_err());
 /// ```
 pub fn parse_units(s: &str) -> Result<String, OptionError> {
-    let u = UnitOverrides {
-        units: Some(s.trim().to_string()),
+    let units = s.trim().to_string();
+    UnitOverrides {
+        units: Some(units.clone()),
         ..UnitOverrides::default()
-    };
-    u.validate()?;
-    Ok(s.trim().to_string())
+    }
+    .validate()?;
+    Ok(units)
 }
 
 /// Parses a frame rate in Hz.

@@ -466,9 +466,8 @@ fn check_options(opts: &MatchOptions) -> Result<f64, ModalError> {
             OptionError::new("mode_fraction", opts.mode_fraction, "a fraction in (0, 1]").into(),
         );
     }
-    // Costs are max-normalised, so a threshold above 1 would silently keep every pair.
-    if let Some(t) = opts.threshold.filter(|t| !(0.0..=1.0).contains(t)) {
-        return Err(OptionError::new("threshold", t, "a number in [0, 1]").into());
+    if let Some(t) = opts.threshold {
+        crate::options::check_threshold(t)?;
     }
     let threshold = opts.threshold.unwrap_or(f64::INFINITY);
     if !(opts.refit_tolerance >= 0.0 && opts.refit_tolerance.is_finite()) {
