@@ -382,8 +382,8 @@ fn require_objects(objects: usize, recording: &Recording, options: &SequenceOpti
     }
     let (a, b) = options.frames.unwrap_or((0, recording.n_frames()));
     Err(IoError::no_object(format!(
-        "no object to match in frames {a}..{b}: no frame holds an object of at least {} nodes above the noise threshold (see --threshold and --frames)",
-        options.min_nodes
+        "no object to match in frames {a}..{b}: no frame holds an object of at least {} nodes above the noise threshold (see --noise and --frames)",
+        options.min_nodes.max(3)
     )))
 }
 
