@@ -15,8 +15,8 @@ use pedo_io::{
     contours as contours_rs, ContourMethod, ContourOptions, Format, Grid, Recording, Resample,
 };
 
+use crate::arrays::checked_array;
 use crate::errors::{argument_error, input_error, internal, option_error, to_py};
-use crate::match_py::array_text;
 use crate::pickling::{Reader, Writer};
 
 /// A plantar-pressure recording read by :func:`read_recording`.
@@ -349,23 +349,14 @@ fn frames_of(
     py: Python<'_>,
     frames: &Bound<'_, PyAny>,
 ) -> PyResult<(usize, usize, usize, Vec<f32>)> {
-    let np = py.import("numpy")?;
-    let kw = PyDict::new(py);
-    kw.set_item("dtype", np.getattr("float32")?)?;
     const EXPECTED: &str = "a (T, H, W) or (H, W) array of pressures";
-    let arr = np
-        .call_method("ascontiguousarray", (frames,), Some(&kw))
-        .map_err(|_| argument_error("frames", EXPECTED, frames))?;
+    let fits = |s: &[usize]| matches!(s.len(), 2 | 3);
+    let arr = checked_array(py, frames, "frames", EXPECTED, "float32", fits)?;
     let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
     let (t, h, w) = match shape.as_slice() {
         [h, w] => (1, *h, *w),
         [t, h, w] => (*t, *h, *w),
-        _ => {
-            return Err(input_error(format!(
-                "frames must be {EXPECTED}, got {}",
-                array_text(&shape)
-            )));
-        }
+        _ => return Err(internal("frames: a shape checked to be 2-D or 3-D")),
     };
     let flat = arr.call_method0("ravel")?;
     let flat: numpy::PyReadonlyArray1<'_, f32> = flat.extract()?;
@@ -374,20 +365,8 @@ fn frames_of(
 
 /// A 2-D array-like as a grid; NaN (no sensor) reads as 0, infinities are rejected.
 fn grid_of(py: Python<'_>, frame: &Bound<'_, PyAny>) -> PyResult<Grid> {
-    let np = py.import("numpy")?;
-    let kw = PyDict::new(py);
-    kw.set_item("dtype", np.getattr("float64")?)?;
     const EXPECTED: &str = "a 2-D (H, W) array of pressures";
-    let arr = np
-        .call_method("ascontiguousarray", (frame,), Some(&kw))
-        .map_err(|_| argument_error("frame", EXPECTED, frame))?;
-    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
-    if shape.len() != 2 {
-        return Err(input_error(format!(
-            "frame must be {EXPECTED}, got {}",
-            array_text(&shape)
-        )));
-    }
+    let arr = checked_array(py, frame, "frame", EXPECTED, "float64", |s| s.len() == 2)?;
     let arr: PyReadonlyArray2<'_, f64> = arr.extract()?;
     let (rows, cols) = (arr.shape()[0], arr.shape()[1]);
     let data: Vec<f64> = arr

@@ -3,6 +3,7 @@
 
 use pyo3::prelude::*;
 
+mod arrays;
 mod assign_py;
 mod batch_py;
 mod errors;

@@ -3,11 +3,12 @@
 use modal_core::shape::looks_like_closed_contour;
 use modal_core::Affine;
 use modal_core::{match_shapes, AffinityMatrix, MatchPair, MatchResult, Shape, Topology};
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::errors::{argument_error, input_error, internal, to_py};
+use crate::arrays::{checked_array, index_rows};
+use crate::errors::{input_error, internal, to_py};
 use crate::pickling::{Reader, Writer};
 
 /// Result of :func:`match`.
@@ -279,37 +280,10 @@ impl PyMatch {
 /// columns is an `InputError` naming the argument.
 fn points(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(usize, Vec<f64>)> {
     const EXPECTED: &str = "an (n, 2) or (n, 3) array (2 or 3 columns of coordinates)";
-    let np = py.import("numpy")?;
-    let arr = np
-        .call_method1("asarray", (obj, np.getattr("float64")?))
-        .map_err(|_| argument_error(name, EXPECTED, obj))?;
-    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
-    if shape.len() != 2 || (shape[1] != 2 && shape[1] != 3) {
-        return Err(input_error(format!(
-            "{name} must be {EXPECTED}, got {}",
-            array_text(&shape)
-        )));
-    }
-    let arr = np.call_method1("ascontiguousarray", (arr,))?;
+    let fits = |s: &[usize]| s.len() == 2 && (s[1] == 2 || s[1] == 3);
+    let arr = checked_array(py, obj, name, EXPECTED, "float64", fits)?;
     let arr: PyReadonlyArray2<f64> = arr.extract()?;
-    Ok((shape[1], arr.as_slice().map_err(internal)?.to_vec()))
-}
-
-/// An array as the messages describe it: "a 1-D array of shape (5,)", "a 2-D array of shape
-/// (5, 4)" (the shape as numpy writes it).
-pub(crate) fn array_text(shape: &[usize]) -> String {
-    let dims = match shape {
-        [n] => format!("({n},)"),
-        _ => format!(
-            "({})",
-            shape
-                .iter()
-                .map(|n| n.to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    };
-    format!("a {}-D array of shape {dims}", shape.len())
+    Ok((arr.shape()[1], arr.as_slice().map_err(internal)?.to_vec()))
 }
 
 fn triangles(
@@ -318,32 +292,8 @@ fn triangles(
     name: &str,
 ) -> PyResult<Option<Vec<[usize; 3]>>> {
     const EXPECTED: &str = "a (t, 3) array (3 columns of node indices)";
-    let Some(obj) = obj else { return Ok(None) };
-    if obj.is_none() {
-        return Ok(None);
-    }
-    let np = py.import("numpy")?;
-    let arr = np
-        .call_method1("asarray", (obj, np.getattr("int64")?))
-        .map_err(|_| argument_error(name, EXPECTED, obj))?;
-    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
-    if shape.len() != 2 || shape[1] != 3 {
-        return Err(input_error(format!(
-            "{name} must be {EXPECTED}, got {}",
-            array_text(&shape)
-        )));
-    }
-    let arr = np.call_method1("ascontiguousarray", (arr,))?;
-    let arr: PyReadonlyArray2<i64> = arr.extract()?;
-    let v = arr.as_slice().map_err(internal)?;
-    if let Some(bad) = v.iter().find(|&&x| x < 0) {
-        return Err(input_error(format!("{name} holds a negative index {bad}")));
-    }
-    Ok(Some(
-        v.chunks_exact(3)
-            .map(|t| [t[0] as usize, t[1] as usize, t[2] as usize])
-            .collect(),
-    ))
+    Ok(index_rows(py, obj, 3, name, EXPECTED)?
+        .map(|v| v.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect()))
 }
 
 /// Modal matching of two objects.

@@ -11,59 +11,20 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::errors::{argument_error, input_error, internal, option_error, to_py};
-use crate::match_py::array_text;
+use crate::arrays::{checked_array, index_rows};
+use crate::errors::{input_error, internal, option_error, to_py};
 use crate::pickling::{Reader, Writer};
 
-/// A 2-D float64 array of `obj`; anything else is an `InputError` naming the argument.
+/// A float64 array of `obj` whose shape `fits`; anything else is an `InputError` naming the
+/// argument.
 fn float_matrix<'py>(
     py: Python<'py>,
     obj: &Bound<'py, PyAny>,
     name: &str,
     expected: &str,
+    fits: impl Fn(&[usize]) -> bool,
 ) -> PyResult<PyReadonlyArray2<'py, f64>> {
-    let np = py.import("numpy")?;
-    let arr = np
-        .call_method1("asarray", (obj, np.getattr("float64")?))
-        .map_err(|_| argument_error(name, expected, obj))?;
-    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
-    if shape.len() != 2 {
-        return Err(input_error(format!(
-            "{name} must be {expected}, got {}",
-            array_text(&shape)
-        )));
-    }
-    np.call_method1("ascontiguousarray", (arr,))?.extract()
-}
-
-fn index_rows(
-    py: Python<'_>,
-    obj: Option<&Bound<'_, PyAny>>,
-    cols: usize,
-    name: &str,
-) -> PyResult<Option<Vec<usize>>> {
-    let Some(obj) = obj else { return Ok(None) };
-    if obj.is_none() {
-        return Ok(None);
-    }
-    let expected = format!("a (k, {cols}) array ({cols} columns of node indices)");
-    let np = py.import("numpy")?;
-    let arr = np
-        .call_method1("asarray", (obj, np.getattr("int64")?))
-        .map_err(|_| argument_error(name, &expected, obj))?;
-    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
-    if shape.len() != 2 || shape[1] != cols {
-        return Err(input_error(format!(
-            "{name} must be {expected}, got {}",
-            array_text(&shape)
-        )));
-    }
-    let arr: PyReadonlyArray2<i64> = np.call_method1("ascontiguousarray", (arr,))?.extract()?;
-    let v = arr.as_slice().map_err(internal)?;
-    if let Some(bad) = v.iter().find(|&&x| x < 0) {
-        return Err(input_error(format!("{name} holds a negative index {bad}")));
-    }
-    Ok(Some(v.iter().map(|&x| x as usize).collect()))
+    checked_array(py, obj, name, expected, "float64", fits)?.extract()
 }
 
 /// A material from `None` (rubber), a preset name, a dict `{young, poisson, density}` or an
@@ -206,19 +167,26 @@ impl PyModalModel {
         center_stride: usize,
     ) -> PyResult<Self> {
         const EXPECTED: &str = "an (n, 2) or (n, 3) array (2 or 3 columns of coordinates)";
-        let pts = float_matrix(py, points, "points", EXPECTED)?;
+        let fits = |s: &[usize]| s.len() == 2 && (s[1] == 2 || s[1] == 3);
+        let pts = float_matrix(py, points, "points", EXPECTED, fits)?;
         let dim = pts.shape()[1];
-        if dim != 2 && dim != 3 {
-            return Err(input_error(format!(
-                "points must be {EXPECTED}, got {}",
-                array_text(pts.shape())
-            )));
-        }
         let coords = pts.as_slice().map_err(internal)?.to_vec();
-        let edges: Option<Vec<[usize; 2]>> = index_rows(py, edges, 2, "edges")?
-            .map(|v| v.chunks_exact(2).map(|e| [e[0], e[1]]).collect());
-        let tris: Option<Vec<[usize; 3]>> = index_rows(py, triangles, 3, "triangles")?
-            .map(|v| v.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect());
+        let edges: Option<Vec<[usize; 2]>> = index_rows(
+            py,
+            edges,
+            2,
+            "edges",
+            "a (k, 2) array (2 columns of node indices)",
+        )?
+        .map(|v| v.chunks_exact(2).map(|e| [e[0], e[1]]).collect());
+        let tris: Option<Vec<[usize; 3]>> = index_rows(
+            py,
+            triangles,
+            3,
+            "triangles",
+            "a (k, 3) array (3 columns of node indices)",
+        )?
+        .map(|v| v.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect());
         if edges.is_some() && tris.is_some() {
             return Err(input_error("give edges or triangles, not both"));
         }
@@ -518,8 +486,9 @@ fn eigh<'py>(
     n_modes: Option<usize>,
 ) -> PyResult<EighResult<'py>> {
     const EXPECTED: &str = "a square 2-D array of numbers";
-    let ka = float_matrix(py, k, "k", EXPECTED)?;
-    let ma = float_matrix(py, m, "m", EXPECTED)?;
+    let matrix = |s: &[usize]| s.len() == 2;
+    let ka = float_matrix(py, k, "k", EXPECTED, matrix)?;
+    let ma = float_matrix(py, m, "m", EXPECTED, matrix)?;
     let (kr, kc) = (ka.shape()[0], ka.shape()[1]);
     let (mr, mc) = (ma.shape()[0], ma.shape()[1]);
     if kr != kc || mr != mc || kr != mr {

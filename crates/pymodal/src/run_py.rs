@@ -7,7 +7,8 @@ use pedo_io::Recording;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::errors::{argument_error, input_error, to_py};
+use crate::arrays::checked_array;
+use crate::errors::{internal, to_py};
 use crate::match_py::PyMatch;
 use crate::options_py::{frame_range, json_to_py, table_rows, MatchKw, RecordingKw};
 
@@ -30,21 +31,13 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
             .map_err(to_py);
     }
     const EXPECTED: &str = "a path, a Recording or a (T, H, W) or (H, W) array of pressures";
-    let np = py.import("numpy")?;
-    let arr: PyReadonlyArrayDyn<'_, f32> = np
-        .call_method1("asarray", (obj, np.getattr("float32")?))
-        .and_then(|a| a.extract())
-        .map_err(|_| argument_error("recording", EXPECTED, obj))?;
-    let shape = arr.shape().to_vec();
-    let (t, h, w) = match shape.as_slice() {
-        [h, w] => (1, *h, *w),
-        [t, h, w] => (*t, *h, *w),
-        _ => {
-            return Err(input_error(format!(
-                "recording must be {EXPECTED}, got {}",
-                crate::match_py::array_text(&shape)
-            )));
-        }
+    let fits = |s: &[usize]| matches!(s.len(), 2 | 3);
+    let arr: PyReadonlyArrayDyn<'_, f32> =
+        checked_array(py, obj, "recording", EXPECTED, "float32", fits)?.extract()?;
+    let (t, h, w) = match *arr.shape() {
+        [h, w] => (1, h, w),
+        [t, h, w] => (t, h, w),
+        _ => return Err(internal("recording: a shape checked to be 2-D or 3-D")),
     };
     let data = arr.as_array().iter().copied().collect();
     let rec = Recording::from_nan_frames(t, h, w, data).map_err(to_py)?;

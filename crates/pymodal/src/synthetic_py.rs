@@ -30,7 +30,7 @@ fn map_points<'py>(
     if points.shape()[1] != 2 {
         return Err(crate::errors::input_error(format!(
             "points must be an (n, 2) array of (x, y) coordinates, got {}",
-            crate::match_py::array_text(points.shape())
+            crate::arrays::array_text(points.shape())
         )));
     }
     let a = points.as_array();
