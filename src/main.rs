@@ -1,5 +1,6 @@
 //! `pedomatch`: a thin command-line shell over the pedomatch library crates.
 
+use clap::error::ErrorKind;
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
@@ -94,7 +95,20 @@ impl From<modal_core::ModalError> for CliError {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        // --help, --version and a bare `pedomatch` print as clap prints them.
+        Err(e)
+            if !e.use_stderr()
+                || e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand =>
+        {
+            e.exit()
+        }
+        Err(e) => {
+            eprintln!("pedomatch: error: {}", one_line(&e.render().to_string()));
+            return ExitCode::from(2);
+        }
+    };
     outdir::install_interrupt_handler();
     let result = match cli.command {
         Command::Run(args) => cmd_run::run(args),
@@ -118,5 +132,61 @@ fn main() -> ExitCode {
             eprintln!("pedomatch: error: {msg}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// clap's usage error (a message, indented details, tips, a usage line, a pointer to --help, on
+/// several lines) as the one line every other error of `pedomatch` is: the message and its
+/// details, then the tips, then the usage.
+fn one_line(rendered: &str) -> String {
+    let (mut message, mut tips, mut usage) = (Vec::new(), Vec::new(), None);
+    for line in rendered.lines().map(str::trim).filter(|l| !l.is_empty()) {
+        if let Some(u) = line.strip_prefix("Usage: ") {
+            usage = Some(u);
+        } else if line.starts_with("tip: ") {
+            tips.push(line);
+        } else if !line.starts_with("For more information") {
+            message.push(line.strip_prefix("error: ").unwrap_or(line));
+        }
+    }
+    let mut text = message.join(" ");
+    for tip in tips {
+        text += "; ";
+        text += tip;
+    }
+    match usage {
+        Some(u) => text + &format!(" (usage: {u}; see --help)"),
+        None => text + " (see --help)",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_usage_error_is_one_line_with_its_details_tips_and_usage() {
+        let line = |args: &[&str]| {
+            let e = Cli::try_parse_from(args).err().expect("a usage error");
+            assert!(e.use_stderr());
+            one_line(&e.render().to_string())
+        };
+        assert_eq!(
+            line(&["pedomatch", "run", "x.asf", "--search", "foo"]),
+            "invalid value 'foo' for '--search <SEARCH>' [possible values: global, local, best] \
+             (see --help)"
+        );
+        assert_eq!(
+            line(&["pedomatch", "runn"]),
+            "unrecognized subcommand 'runn'; tip: a similar subcommand exists: 'run' \
+             (usage: pedomatch <COMMAND>; see --help)"
+        );
+        let missing = line(&["pedomatch", "run"]);
+        assert!(
+            missing.starts_with("the following required arguments were not provided: <RECORDING>")
+                && missing.ends_with("(usage: pedomatch run <RECORDING>; see --help)")
+                && !missing.contains('\n'),
+            "{missing}"
+        );
     }
 }

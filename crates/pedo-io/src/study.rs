@@ -19,7 +19,9 @@
 
 use crate::error::{IoError, Result};
 use crate::figure::{FigureAxes, MatchFigure, ObjectLabel, TracksFigure};
-use crate::formats::{read_recording_with, sniff_format, ReadOptions, SNIFF_BYTES};
+use crate::formats::{
+    has_recording_extension, read_recording_with, sniff_format, ReadOptions, SNIFF_BYTES,
+};
 use crate::outdir::{self, OutDir};
 use crate::recording::FrameMeasures;
 use crate::recording::{Format, Recording};
@@ -375,14 +377,19 @@ pub fn run_into_folder(
 }
 
 /// A run that found no object in any of its frames has nothing to match or report: an error
-/// (no output is written), not an empty success.
-fn require_objects(objects: usize, recording: &Recording, options: &SequenceOptions) -> Result<()> {
+/// (no output is written), not an empty success. Every front end calls it after a run
+/// (`objects` is the number of objects the run found), so the CLI, `batch` and Python agree.
+pub fn require_objects(
+    objects: usize,
+    recording: &Recording,
+    options: &SequenceOptions,
+) -> Result<()> {
     if objects > 0 {
         return Ok(());
     }
     let (a, b) = options.frames.unwrap_or((0, recording.n_frames()));
     Err(IoError::no_object(format!(
-        "no object to match in frames {a}..{b}: no frame holds an object of at least {} nodes above the noise threshold (see --noise and --frames)",
+        "no object to match in frames {a}..{b}: no frame holds an object of at least {} nodes above the noise threshold (see the noise and frames options)",
         options.min_nodes.max(3)
     )))
 }
@@ -670,7 +677,9 @@ pub fn output_name(path: &Path) -> String {
 ///
 /// - an existing file is taken as it is (if it is no recording, its row says so);
 /// - a folder is searched recursively, in name order, for files whose content sniffs as a
-///   recording ([`sniff_format`]); PNG/TIFF images are not recordings on their own there: a
+///   recording ([`sniff_format`]) and for files with a recording format's own extension
+///   (`.asf`, `.lst`, `.apd`, `.npy`, `.npz`) whatever they hold, so that an empty or corrupt
+///   one gets its error row; PNG/TIFF images are not recordings on their own there: a
 ///   folder holding images is one image-sequence recording. Hidden folders and pedomatch output
 ///   folders are not searched;
 /// - anything else is a glob pattern (`data/**/*.asf`), each match taken as above.
@@ -735,6 +744,9 @@ fn search_folder(root: &Path, found: &mut Vec<PathBuf>) {
                 }
             }
             Some(_) => found.push(entry.into_path()),
+            // An empty, unreadable or corrupt `walk.asf` is still meant as a recording: its row
+            // says what is wrong with it instead of the file vanishing from the study.
+            None if has_recording_extension(entry.path()) => found.push(entry.into_path()),
             None => {}
         }
     }

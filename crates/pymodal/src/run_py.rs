@@ -3,6 +3,7 @@
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pedo_io::report::{self, InputInfo};
 use pedo_io::sequence::{run_sequence, SequenceResult};
+use pedo_io::study::require_objects;
 use pedo_io::Recording;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -86,11 +87,13 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 ///     a Recording or a 2-D/3-D array; ``frames`` not a ``(start, end)`` pair; ``pitch_mm``
 ///     not a number or an (x, y) pair;
 /// OptionError — an unknown or out-of-range option value (e.g. ``model="mesh"``, a negative
-///     ``pitch_mm``, ``frames`` beyond the recording); an ``InputError``.
+///     ``pitch_mm``, ``frames`` beyond the recording); an ``InputError``;
+/// DegenerateShapeError — no frame of ``frames`` holds an object (everything below ``noise``,
+///     or outlines too small to model), as ``pedomatch run`` fails on such a recording.
 /// All but the ``OSError`` are :class:`PedomatchError` and ``ValueError`` subclasses. An option
 /// of the wrong type (``spacing="wide"``) raises ``TypeError`` naming it. A pair or frame that
 /// cannot be processed does not raise: it is skipped, with its reason in ``summary``
-/// (``summary["skipped"]``); a recording with no object gives empty lists.
+/// (``summary["skipped"]``).
 #[pyfunction]
 #[pyo3(signature = (recording, *, element=None, modes=None, search=None, solver=None,
     threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, max_rotation=None, refits=None,
@@ -188,6 +191,7 @@ fn run<'py>(
     let result = py
         .detach(|| run_sequence(&rec, &options, &|_, _, _| {}))
         .map_err(to_py)?;
+    require_objects(result.objects.len(), &rec, &options).map_err(to_py)?;
 
     let out = PyDict::new(py);
     out.set_item(

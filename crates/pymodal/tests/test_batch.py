@@ -56,6 +56,24 @@ def test_find_recordings_searches_folders_and_globs(study):
     assert pymodal.find_recordings([pattern, study / "in" / "a"]) == found[:2]
 
 
+def test_a_file_named_as_a_recording_is_never_left_out(tmp_path):
+    # An empty walk.asf or a garbled .npy is meant as a recording: found, and an error row that
+    # says why; a text file that is no recording is passed over.
+    shutil.copy(DATA / "synthetic-walk.lst", tmp_path / "good.lst")
+    (tmp_path / "empty.asf").write_bytes(b"")
+    (tmp_path / "garbled.npy").write_bytes(bytes(range(1, 200)))
+    (tmp_path / "notes.txt").write_text("subject 3, left foot\n")
+    found = pymodal.find_recordings(tmp_path)
+    assert [Path(p).name for p in found] == ["empty.asf", "garbled.npy", "good.lst"]
+    rows = {Path(r["path"]).name: r for r in pymodal.batch(tmp_path, jobs=1, figures="none")}
+    assert rows["good.lst"]["status"] == "ok"
+    assert rows["empty.asf"]["status"] == "error"
+    assert "empty.asf" in rows["empty.asf"]["message"]
+    assert "empty" in rows["empty.asf"]["message"]
+    assert rows["garbled.npy"]["status"] == "error"
+    assert "garbled.npy" in rows["garbled.npy"]["message"]
+
+
 def test_batch_rows_agree_with_run_and_name_the_failure(study):
     rows = pymodal.batch(study / "in", jobs=2, figures="none")
     assert [list(r) for r in rows] == [COLUMNS] * 4

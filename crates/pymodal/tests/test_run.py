@@ -175,6 +175,15 @@ def test_run_bad_input():
         pymodal.run("/nonexistent/recording.asf")
 
 
+def test_run_without_objects_raises_like_the_cli():
+    # Frames whose pressures all lie below the noise threshold hold no object: an error naming
+    # the frames, as `pedomatch run` gives, not an empty result.
+    with pytest.raises(pymodal.DegenerateShapeError, match=r"no object to match in frames 0\.\.4"):
+        pymodal.run(np.zeros((4, 20, 20), np.float32))
+    with pytest.raises(pymodal.DegenerateShapeError, match=r"frames 1\.\.3"):
+        pymodal.run(moving_blob(frames=3), frames=(1, 3), noise=1e6)
+
+
 def test_plot_helpers_draw():
     mpl = pytest.importorskip("matplotlib")
     mpl.use("Agg")

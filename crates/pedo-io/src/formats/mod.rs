@@ -72,6 +72,16 @@ pub fn detect_format(path: &Path, head: &[u8]) -> Option<Format> {
     sniff_format(path, head).ok()
 }
 
+/// Extensions that name one of our recording formats and nothing else: a file that carries one
+/// is meant as a recording even when its content is empty or unreadable.
+const RECORDING_EXTENSIONS: [&str; 5] = ["asf", "lst", "apd", "npy", "npz"];
+
+/// Whether `path`'s extension names a recording format ([`RECORDING_EXTENSIONS`]), whatever the
+/// file holds.
+pub(crate) fn has_recording_extension(path: &Path) -> bool {
+    extension(path).is_some_and(|e| RECORDING_EXTENSIONS.contains(&e.as_str()))
+}
+
 fn extension(path: &Path) -> Option<String> {
     path.extension()
         .and_then(|e| e.to_str())
