@@ -13,7 +13,8 @@ use crate::error::{IoError, Result};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PairingMethod {
     /// Linked when the overlap of the enclosed regions is at least `min_fraction` of the smaller
-    /// region (estimated on a sub-pixel raster of `resolution` samples per unit, e.g. 4).
+    /// region (estimated on a sub-pixel raster of `resolution` samples per unit, e.g. 4); the
+    /// strongest links, which continue an object, are those of largest intersection over union.
     Overlap { min_fraction: f64, resolution: f64 },
     /// Linked when the centroids are at most `max_distance` apart (same units as the points).
     Centroid { max_distance: f64 },
@@ -48,7 +49,8 @@ pub struct Pairing {
     pub appeared: Vec<usize>,
     /// Contours of the first frame linked to nothing.
     pub vanished: Vec<usize>,
-    /// Every link `(i, j, strength)`: overlap fraction, or minus the centroid distance.
+    /// Every link `(i, j, strength)`: the regions' intersection over union (overlap pairing), or
+    /// minus the centroid distance.
     pub links: Vec<(usize, usize, f64)>,
 }
 
@@ -71,7 +73,12 @@ fn bbox(p: &[[f64; 2]]) -> [f64; 4] {
     )
 }
 
-fn overlap_fraction(a: &Contour, b: &Contour, res: f64) -> f64 {
+/// How much the regions of `a` and `b` overlap: `(fraction, iou)`, the overlap as a fraction of
+/// the smaller region (whether they are linked at all: a heel wholly inside the next frame's
+/// foot is linked) and the intersection over union (which link is the strongest: at a merge the
+/// foot and the toe blob both lie wholly inside the merged region, and the foot, which covers
+/// most of it, carries on).
+fn overlap(a: &Contour, b: &Contour, res: f64) -> (f64, f64) {
     let (ba, bb) = (bbox(&a.points), bbox(&b.points));
     let (x0, y0, x1, y1) = (
         ba[0].max(bb[0]),
@@ -80,7 +87,7 @@ fn overlap_fraction(a: &Contour, b: &Contour, res: f64) -> f64 {
         ba[3].min(bb[3]),
     );
     if x0 >= x1 || y0 >= y1 {
-        return 0.0;
+        return (0.0, 0.0);
     }
     let h = 1.0 / res;
     let mut inter = 0usize;
@@ -95,11 +102,14 @@ fn overlap_fraction(a: &Contour, b: &Contour, res: f64) -> f64 {
         }
         y += h;
     }
-    let smaller = a.area().min(b.area());
+    let (area_a, area_b) = (a.area(), b.area());
+    let smaller = area_a.min(area_b);
     if smaller <= 0.0 {
-        return 0.0;
+        return (0.0, 0.0);
     }
-    (inter as f64 * h * h / smaller).min(1.0)
+    // The raster estimate of the intersection can exceed a region's exact area by a sample.
+    let inter = (inter as f64 * h * h).min(smaller);
+    (inter / smaller, inter / (area_a + area_b - inter))
 }
 
 /// Links the contours of two consecutive frames (see [`Pairing`]).
@@ -145,9 +155,9 @@ fn pair_with_velocity(
                     min_fraction,
                     resolution,
                 } => {
-                    let f = overlap_fraction(ca, cb, resolution);
-                    if f >= min_fraction {
-                        links.push((i, j, f));
+                    let (fraction, iou) = overlap(ca, cb, resolution);
+                    if fraction >= min_fraction {
+                        links.push((i, j, iou));
                     }
                 }
                 PairingMethod::Centroid { max_distance }

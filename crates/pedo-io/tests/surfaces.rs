@@ -413,6 +413,40 @@ fn pairing_reports_pairs_splits_and_merges() {
 }
 
 #[test]
+fn at_a_merge_the_largest_region_carries_on() {
+    // A foot-sized region and a toe blob merge into one region. Both lie wholly inside it, so
+    // both overlap it by the whole of the smaller region; the foot, which covers most of the
+    // merged region, is its continuation wherever the blob lies (before or after the foot in
+    // the contours' order) and in both directions (a merge, and read backwards a split).
+    let grid = |cells: &[(std::ops::Range<usize>, std::ops::Range<usize>)]| {
+        let mut d = vec![0.0; 30 * 50];
+        for (rows, cols) in cells {
+            for r in rows.clone() {
+                for c in cols.clone() {
+                    d[r * 50 + c] = 10.0;
+                }
+            }
+        }
+        Grid::new(30, 50, d).unwrap()
+    };
+    for (foot, blob, merged) in [
+        ((5..25, 5..30), (8..12, 33..37), (5..25, 5..37)),
+        ((5..25, 15..40), (8..12, 8..12), (5..25, 8..40)),
+    ] {
+        let a = contours(&grid(&[foot.clone(), blob]), &ContourOptions::default()).unwrap();
+        let b = contours(&grid(&[merged]), &ContourOptions::default()).unwrap();
+        assert_eq!((a.len(), b.len()), (2, 1));
+        let big = if a[0].area() > a[1].area() { 0 } else { 1 };
+        let p = pair_contours(&a, &b, PairingMethod::default()).unwrap();
+        assert_eq!(p.merges.len(), 1, "{foot:?}");
+        assert_eq!(p.pairs, vec![(big, 0)], "{foot:?}");
+        let back = pair_contours(&b, &a, PairingMethod::default()).unwrap();
+        assert_eq!(back.splits.len(), 1);
+        assert_eq!(back.pairs, vec![(0, big)], "{foot:?}");
+    }
+}
+
+#[test]
 fn predicted_centroid_tracking_follows_a_fast_object() {
     // A blob accelerating to the right (steps of 2, 4, 6, 8, 10 px) and a static blob: plain
     // centroid linking with a 4.5 px gate loses the moving one from the third step, the
