@@ -95,11 +95,12 @@ fn load_object(path: &Path, frame: usize, args: &MatchArgs) -> Result<Object, Cl
     if as_points {
         return Ok(plain(pedo_io::points::read_points(path, Topology::None)?));
     }
-    // A CSV is a point file when it has 2 or 3 columns, a pressure grid otherwise.
+    // A CSV is a point file when it has 2 or 3 columns (then a bad value is a point file's
+    // error), a pressure grid otherwise.
     if ext == "csv"
-        && let Ok(shape) = pedo_io::points::read_points(path, Topology::None)
+        && std::fs::read_to_string(path).is_ok_and(|t| pedo_io::points::is_point_layout(&t))
     {
-        return Ok(plain(shape));
+        return Ok(plain(pedo_io::points::read_points(path, Topology::None)?));
     }
     let mut rec = args.read.read(path)?;
     args.units.overrides().apply(&mut rec)?;

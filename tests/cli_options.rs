@@ -309,6 +309,7 @@ fn exit_codes_are_0_ok_1_runtime_2_usage() {
     assert_eq!(code(&["run", BUNDLED, "--modes", "1.5"]), Some(2));
     assert_eq!(code(&["run", BUNDLED, "--frames", "5..3"]), Some(2));
     assert_eq!(code(&["run", BUNDLED, "--frames", "0..999"]), Some(2));
+    assert_eq!(code(&["run", BUNDLED, "--smooth", "2000"]), Some(2));
     assert_eq!(code(&["inspect", BUNDLED, "--pitch-mm", "-1"]), Some(2));
     // A negative number is the option's value, checked by its own rule (not an unknown flag).
     for (flag, name) in [

@@ -398,6 +398,31 @@ fn match_two_point_files() {
     assert!(correct >= n - 2, "{correct}/{n} correct");
     assert_png(&out.join("match.png"));
 
+    // A point file with a bad coordinate is still a point file: its error, not a pressure grid
+    // of two columns. A byte-order mark loses no point.
+    let bad = ring(1.0, 0).replacen("\n3,", "\nnan,", 1);
+    std::fs::write(dir.join("nan.csv"), &bad).unwrap();
+    let o = pedomatch(&[
+        "match",
+        dir.join("nan.csv").to_str().unwrap(),
+        dir.join("b.csv").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("nan.csv:2: coordinate NaN is not finite"),
+        "{err}"
+    );
+    std::fs::write(dir.join("bom.csv"), format!("\u{feff}{}", ring(1.0, 0))).unwrap();
+    let o = pedomatch(&[
+        "match",
+        dir.join("bom.csv").to_str().unwrap(),
+        dir.join("b.csv").to_str().unwrap(),
+        "--json",
+    ]);
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(summary["nodes_a"], n);
+
     // The report: self-contained, its header the content of match.json, every match drawn.
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert_self_contained(&html);

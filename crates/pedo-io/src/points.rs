@@ -10,15 +10,8 @@ pub fn parse_points(text: &str, name: &str, topology: Topology) -> Result<Shape>
     let mut coords = Vec::new();
     let mut dim = None;
     let mut seen_data = false;
-    for (i, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let fields: Vec<&str> = line
-            .split([',', ';', '\t', ' '])
-            .filter(|f| !f.is_empty())
-            .collect();
+    for (i, line) in data_lines(text) {
+        let fields = fields(line);
         let values: std::result::Result<Vec<f64>, _> =
             fields.iter().map(|f| f.parse::<f64>()).collect();
         let values = match values {
@@ -65,6 +58,35 @@ pub fn parse_points(text: &str, name: &str, topology: Topology) -> Result<Shape>
     Ok(Shape::new(dim, coords, topology)?)
 }
 
+/// The lines that hold something, 0-based numbers beside them: a UTF-8 byte-order mark (as
+/// spreadsheet programs write), blank lines and `#` comments left out, each line trimmed.
+fn data_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    text.lines()
+        .map(str::trim)
+        .enumerate()
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
+}
+
+fn fields(line: &str) -> Vec<&str> {
+    line.split([',', ';', '\t', ' '])
+        .filter(|f| !f.is_empty())
+        .collect()
+}
+
+/// Whether `text` is laid out as a point file — every line has 2 or 3 fields, the first may be
+/// a header — whatever the fields hold, so that a point file with a bad value gets the point
+/// file's error instead of being taken for a pressure grid.
+pub fn is_point_layout(text: &str) -> bool {
+    let mut lines = data_lines(text).map(|(_, l)| fields(l).len());
+    let Some(first) = lines.next() else {
+        return false;
+    };
+    let mut rest = lines.peekable();
+    let header_ok = (2..=3).contains(&first) || rest.peek().is_some();
+    header_ok && rest.all(|n| (2..=3).contains(&n))
+}
+
 /// Reads a point file (see the module docs).
 pub fn read_points(path: impl AsRef<Path>, topology: Topology) -> Result<Shape> {
     let path = path.as_ref();
@@ -108,5 +130,19 @@ mod tests {
         assert!(parse_points("# nothing\n", "e.csv", Topology::None).is_err());
         assert!(parse_points("1,2,3,4\n", "w.csv", Topology::None).is_err());
         assert!(parse_points("1,nan\n", "n.csv", Topology::None).is_err());
+        // A byte-order mark before a header or before the first point loses nothing.
+        for text in ["\u{feff}x,y\n1,2\n3,4\n5,7\n", "\u{feff}1,2\n3,4\n5,7\n"] {
+            let s = parse_points(text, "bom.csv", Topology::None).unwrap();
+            assert_eq!((s.len(), s.point(0)), (3, &[1.0, 2.0][..]), "{text:?}");
+        }
+        // Laid out as points: 2 or 3 fields a line after an optional header, whatever they
+        // hold; a pressure grid has more columns.
+        assert!(is_point_layout("x,y\n1,2\n3,nan\n"));
+        assert!(is_point_layout("\u{feff}1;2;3\n# c\n4;5;inf\n"));
+        assert!(is_point_layout("frame 1 of 3\n1,2\n"));
+        assert!(!is_point_layout("0,0,1,2\n0,3,4,0\n"));
+        assert!(!is_point_layout("x,y\n1,2\n0,3,4,0\n"));
+        assert!(!is_point_layout("a title of five words\n"));
+        assert!(!is_point_layout(""));
     }
 }

@@ -280,11 +280,13 @@ impl RunParams {
             self.spacing,
             "a number > 0",
         )?;
+        // The bound of `preprocess::gaussian`, checked here so that a run fails at once instead
+        // of skipping every frame.
         positive(
-            self.smooth.is_finite() && self.smooth >= 0.0,
+            self.smooth.is_finite() && (0.0..=1000.0).contains(&self.smooth),
             "smooth",
             self.smooth,
-            "a number >= 0",
+            "a number in [0, 1000] (sensels)",
         )?;
         if let Some(n) = self.noise {
             positive(n.is_finite(), "noise", n, "a finite number")?;
@@ -431,7 +433,7 @@ pub fn recording_option_specs() -> Vec<OptionSpec> {
             "smooth",
             Value,
             d.smooth,
-            "Gaussian smoothing of each frame, sigma in sensels (0: none).",
+            "Gaussian smoothing of each frame, sigma in sensels (0: none; at most 1000).",
         ),
         OptionSpec::new(
             "spacing",

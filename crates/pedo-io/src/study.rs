@@ -679,7 +679,7 @@ pub fn output_name(path: &Path) -> String {
 /// - a folder is searched recursively, in name order, for files whose content sniffs as a
 ///   recording ([`sniff_format`]) and for files with a recording format's own extension
 ///   (`.asf`, `.lst`, `.apd`, `.npy`, `.npz`) whatever they hold, so that an empty or corrupt
-///   one gets its error row; PNG/TIFF images are not recordings on their own there: a
+///   one gets its error row, as does a file that cannot be opened; PNG/TIFF images are not recordings on their own there: a
 ///   folder holding images is one image-sequence recording. Hidden folders and pedomatch output
 ///   folders are not searched;
 /// - anything else is a glob pattern (`data/**/*.asf`), each match taken as above.
@@ -744,9 +744,14 @@ fn search_folder(root: &Path, found: &mut Vec<PathBuf>) {
                 }
             }
             Some(_) => found.push(entry.into_path()),
-            // An empty, unreadable or corrupt `walk.asf` is still meant as a recording: its row
-            // says what is wrong with it instead of the file vanishing from the study.
-            None if has_recording_extension(entry.path()) => found.push(entry.into_path()),
+            // An empty or corrupt `walk.asf`, or a file that cannot be read at all, may be a
+            // recording: its row says what is wrong with it instead of the file vanishing from
+            // the study.
+            None if has_recording_extension(entry.path())
+                || std::fs::File::open(entry.path()).is_err() =>
+            {
+                found.push(entry.into_path())
+            }
             None => {}
         }
     }

@@ -277,6 +277,18 @@ fn corrupt_and_truncated_files_give_located_errors() {
         );
         assert_names(e, "cut.asf");
     }
+    // Cut inside a row, after a comma or inside a number: a truncated file, with its complete
+    // frames counted, not a bad value.
+    let row = text.find("\nFrame 72").unwrap() + 200;
+    let after_comma = row + text[row..].find(',').unwrap() + 1;
+    for cut in [after_comma, after_comma - 2, 200_000] {
+        let e = parse_bytes(&asf[..cut], Format::Asf, "cut.asf").unwrap_err();
+        let msg = e.to_string();
+        assert!(
+            msg.contains("truncated: the file ends after") && msg.contains("complete frames"),
+            "cut at {cut}: {msg}"
+        );
+    }
     // A bad value names the line.
     let bad = text.replacen("B,B,B,B,B,B,B,B,B,0,0", "B,B,B,B,B,B,B,B,B,x,0", 1);
     let e = parse_bytes(bad.as_bytes(), Format::Asf, "bad.asf").unwrap_err();

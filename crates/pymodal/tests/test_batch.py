@@ -3,6 +3,7 @@ agree with pymodal.run on each recording, a corrupt file is an error row, a seco
 rows are picklable, and the folders are those of `pedomatch run`."""
 
 import json
+import os
 import pickle
 import shutil
 from pathlib import Path
@@ -72,6 +73,23 @@ def test_a_file_named_as_a_recording_is_never_left_out(tmp_path):
     assert "empty" in rows["empty.asf"]["message"]
     assert rows["garbled.npy"]["status"] == "error"
     assert "garbled.npy" in rows["garbled.npy"]["message"]
+
+
+def test_a_file_that_cannot_be_read_gets_a_row(tmp_path):
+    shutil.copy(DATA / "synthetic-walk.lst", tmp_path / "good.lst")
+    locked = tmp_path / "locked.txt"
+    locked.write_text("1,2,3\n")
+    locked.chmod(0)
+    try:
+        if os.access(locked, os.R_OK):
+            pytest.skip("file permissions do not bind this user (root)")
+        found = pymodal.find_recordings(tmp_path)
+        assert [Path(p).name for p in found] == ["good.lst", "locked.txt"]
+        rows = {Path(r["path"]).name: r for r in pymodal.batch(tmp_path, jobs=1, figures="none")}
+        assert rows["locked.txt"]["status"] == "error"
+        assert "ermission denied" in rows["locked.txt"]["message"]
+    finally:
+        locked.chmod(0o644)
 
 
 def test_batch_rows_agree_with_run_and_name_the_failure(study):

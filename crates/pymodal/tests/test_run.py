@@ -184,6 +184,13 @@ def test_run_without_objects_raises_like_the_cli():
         pymodal.run(moving_blob(frames=3), frames=(1, 3), noise=1e6)
 
 
+def test_options_out_of_range_fail_before_the_run():
+    # A smoothing wider than the smoother takes fails at once, naming the option, instead of
+    # every frame being skipped.
+    with pytest.raises(pymodal.OptionError, match="smooth"):
+        pymodal.run(moving_blob(frames=3), smooth=2000.0)
+
+
 def test_plot_helpers_draw():
     mpl = pytest.importorskip("matplotlib")
     mpl.use("Agg")

@@ -267,6 +267,7 @@ fn parse_tekscan_lines(
             continue;
         }
         let mut k = 0usize;
+        let mut cut = false;
         for tok in t.split(',') {
             let tok = tok.trim();
             if k == cols {
@@ -278,14 +279,17 @@ fn parse_tekscan_lines(
             let idx = row_in_frame * cols + k;
             let (v, present) = if tok.eq_ignore_ascii_case("B") {
                 (0.0f32, false)
-            } else {
-                let v = parse_num(tok).ok_or_else(|| {
-                    err(
-                        ln,
-                        format!("value {} is not a number: {:?}", k + 1, trunc(tok)),
-                    )
-                })?;
+            } else if let Some(v) = parse_num(tok) {
                 (v as f32, true)
+            } else if lines.peek().is_none() {
+                // The file was cut inside this row (after a comma, or inside a number).
+                cut = true;
+                break;
+            } else {
+                return Err(err(
+                    ln,
+                    format!("value {} is not a number: {:?}", k + 1, trunc(tok)),
+                ));
             };
             match mask[idx] {
                 None => mask[idx] = Some(present),
@@ -306,7 +310,7 @@ fn parse_tekscan_lines(
             frame.push(v);
             k += 1;
         }
-        if k != cols {
+        if k != cols || cut {
             if lines.peek().is_none() {
                 // The file ends inside this row: reported below as a truncated frame.
                 break;
