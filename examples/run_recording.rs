@@ -41,7 +41,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             r.objects.nodes_b,
             r.local_percent,
             r.optimisation_percent,
-            r.excess_matches,
+            r.matches_after_excess,
             r.mean_cost
         );
     }

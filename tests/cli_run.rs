@@ -140,7 +140,7 @@ fn run_on_synthetic_motion_gives_complete_matches_and_true_tracks() {
         // brings the total to the larger one.
         assert_eq!(num(row, "optimisation_matches"), n.min(m));
         assert_eq!(num(row, "optimisation_percent"), 100.0);
-        assert_eq!(num(row, "excess_matches"), n.max(m));
+        assert_eq!(num(row, "matches_after_excess"), n.max(m));
         assert!(num(row, "local_matches") <= n.min(m));
     }
     let json = read_json(&out.join("pairs.json"));
@@ -212,10 +212,10 @@ fn demo_on_bundled_recording() {
         let ids = (num(row, "id_a") as u64, num(row, "id_b") as u64);
         if joined.contains(&ids) {
             parts += 1;
-            assert!(num(row, "excess_matches") <= n.max(m));
+            assert!(num(row, "matches_after_excess") <= n.max(m));
         } else {
             assert_eq!(num(row, "optimisation_matches"), n.min(m));
-            assert_eq!(num(row, "excess_matches"), n.max(m));
+            assert_eq!(num(row, "matches_after_excess"), n.max(m));
         }
         assert!(num(row, "frame_b") > num(row, "frame_a"));
     }

@@ -221,7 +221,7 @@ pub fn pairs_header(recording: &Recording) -> Table {
         "local_percent",
         "optimisation_matches",
         "optimisation_percent",
-        "excess_matches",
+        "matches_after_excess",
         "mean_cost",
         "status",
         "reason",
@@ -239,7 +239,7 @@ pub fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
         Cell::Float(row.local_percent, 1),
         Cell::int(row.optimisation_matches),
         Cell::Float(row.optimisation_percent, 1),
-        Cell::int(row.excess_matches),
+        Cell::int(row.matches_after_excess),
         Cell::Float(row.mean_cost, 6),
         Cell::Text("ok".into()),
         Cell::Empty,
@@ -478,11 +478,13 @@ fn measure_units(recording: &Recording) -> MeasureUnits {
             Some(_) => ("contact_area_mm2", 1.0),
             None => ("contact_area_sensels", 1.0),
         },
-        force: if recording.force_factor().is_some() {
-            "total_force_n"
-        } else {
-            // Without units and sensel area the sum of the values is all there is.
-            "total_load"
+        // Without known pressure units the load is the values' sum times the sensel area: its
+        // unit is the file's units times mm² (or times sensels without a pitch), and the name
+        // says which, so that a study mixing both never compares them in one column.
+        force: match (recording.force_factor(), recording.sensel_area()) {
+            (Some(_), _) => "total_force_n",
+            (None, Some(_)) => "total_load_mm2",
+            (None, None) => "total_load_sensels",
         },
         peak: match kpa_per_unit(&recording.units) {
             Some(k) => ("peak_pressure_kpa", k),
@@ -827,13 +829,20 @@ mod tests {
                 "frame",
                 "contact_sensors",
                 "contact_area_sensels",
-                "total_load",
+                "total_load_sensels",
                 "peak_pressure",
                 "cop_x",
                 "cop_y"
             ]
         );
         rec.pitch_mm = Some([2.0, 2.0]);
+        // A pitch without pressure units: the load in the file's units × mm² (40 × 4), named so.
+        let unitless = frames_table(&rec, 0.0, 0, 2);
+        assert_eq!(
+            unitless.header[2..4],
+            ["contact_area_mm2", "total_load_mm2"]
+        );
+        assert!(matches!(unitless.rows[0][3], Cell::Float(f, _) if f == 160.0));
         rec.dt_s = Some(0.5);
         rec.units = "N/cm2".into();
         let t = frames_table(&rec, 0.0, 0, 2);

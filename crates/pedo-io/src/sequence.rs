@@ -521,8 +521,9 @@ pub struct PairRow {
     /// One-to-one matches of the optimisation (global) search and their share of `min(n, m)`.
     pub optimisation_matches: usize,
     pub optimisation_percent: f64,
-    /// Total matches after the excess-node step (one-to-one plus excess).
-    pub excess_matches: usize,
+    /// Total matches after the excess-node step (one-to-one plus excess; the papers' "excess
+    /// nodes matching" count).
+    pub matches_after_excess: usize,
     /// Mean normalised modal cost of the one-to-one matches.
     pub mean_cost: f64,
 }
@@ -1535,7 +1536,7 @@ fn match_pair(
         local_percent: 100.0 * local as f64 / min,
         optimisation_matches: optimisation,
         optimisation_percent: 100.0 * optimisation as f64 / min,
-        excess_matches: result.pairs.len(),
+        matches_after_excess: result.pairs.len(),
         mean_cost,
     };
     let mut result = result;

@@ -199,7 +199,7 @@ fn kind_of_empty(name: &str) -> Kind {
         | "nodes_b"
         | "local_matches"
         | "optimisation_matches"
-        | "excess_matches" => Kind::Int,
+        | "matches_after_excess" => Kind::Int,
         _ => Kind::Float,
     }
 }

@@ -321,6 +321,14 @@ fn corrupt_and_truncated_files_give_located_errors() {
         other => panic!("{other}"),
     }
     assert!(csv::parse_csv(b"1,2\n3,zz\n", "z.csv").is_err());
+    // A header numbering the columns is no row of pressures; a row that only starts like one is.
+    for header in ["1,2,3,4,5", "0;1;2;3;4"] {
+        let text = format!("{header}\n0,5,7,1,0\n0,9,2,3,0\n").replace(';', ",");
+        let rec = csv::parse_csv(text.as_bytes(), "h.csv").unwrap();
+        assert_eq!((rec.rows(), rec.cols()), (2, 5), "{header}");
+    }
+    let rec = csv::parse_csv(b"1,2,3,4,4\n0,5,7,1,0\n", "d.csv").unwrap();
+    assert_eq!(rec.rows(), 2);
     assert_names(
         read_recording(data("does-not-exist.asf")).unwrap_err(),
         "does-not-exist.asf",

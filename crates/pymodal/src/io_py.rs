@@ -259,8 +259,10 @@ impl PyRecording {
             .as_any()
             .get_item("contact_area")
     }
-    /// (T,) float64 total force per frame: in N when units and sensor area are known, else the sum
-    /// of the values times the area factor.
+    /// (T,) float64 total force per frame: in N when units and sensor area are known; else the
+    /// values' sum times the sensel area in mm² (the file's units × mm²), or the plain sum when the
+    /// pitch is unknown too (``run``'s frames table names these ``total_load_mm2`` and
+    /// ``total_load_sensels``).
     #[getter]
     fn total_force<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         measures_dict(py, &self.inner, 0.0)?

@@ -24,7 +24,9 @@ use crate::pickling::{Reader, Writer};
 /// affinity : (n, m) float64 — the final affinity matrix Z the search used, in [0, 1].
 /// unmatched_a, unmatched_b : int64 arrays of nodes in no pair.
 /// local_pairs : (l, 2) int64 — mutual-best matches on the final Z (under the threshold).
-/// local_count, optimisation_count, excess_count : int — the three counts of the paper's tables.
+/// local_count, optimisation_count, excess_count : int — mutual-best, one-to-one and excess
+///     (one-to-many) matches; the papers' tables count ``optimisation_count + excess_count``
+///     (``len(pairs)``) as "excess nodes matching".
 /// n_modes : int — modes per object in the features; refits : int — affine re-fits performed.
 /// transform : (d+1, d+1) float64 — the affine map from a's coordinates to b's that produced
 ///     ``aligned_a`` (pre-alignment, then re-fits), homogeneous: ``aligned = (transform @

@@ -34,7 +34,7 @@ def test_run_on_known_motion():
         n, k = row["nodes_a"], row["nodes_b"]
         assert row["frame_b"] == row["frame_a"] + 1
         assert row["optimisation_matches"] == min(n, k)
-        assert row["excess_matches"] == max(n, k) == len(m.pairs)
+        assert row["matches_after_excess"] == max(n, k) == len(m.pairs)
         assert 0 <= row["local_matches"] <= min(n, k)
     objects = res["objects"]
     assert [o["points"].shape[0] for o in objects[:2]] == [table[0]["nodes_a"], table[0]["nodes_b"]]

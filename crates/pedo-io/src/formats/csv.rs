@@ -1,5 +1,5 @@
 //! A single frame as a delimited text grid (comma, semicolon, tab or spaces; no header, or one
-//! non-numeric header line). `-1`, `B` and `NaN` mark a missing sensor.
+//! header line: names, or the column numbers). `-1`, `B` and `NaN` mark a missing sensor.
 
 use super::asf::trunc;
 use super::{latin1_lines, parse_num};
@@ -51,7 +51,7 @@ pub fn parse_csv(bytes: &[u8], name: &str) -> Result<Recording> {
             let numeric = fields
                 .iter()
                 .any(|f| parse_num(f).is_some() || is_missing(f));
-            if !numeric {
+            if !numeric || is_column_numbers(&fields) {
                 continue; // a header line
             }
         }
@@ -86,6 +86,19 @@ pub fn parse_csv(bytes: &[u8], name: &str) -> Result<Recording> {
     let mut rec = Recording::new(1, rows, cols, values, present)?;
     rec.format = Some(Format::Csv);
     Ok(rec)
+}
+
+/// Whether a first line numbers the columns (`1,2,…,n` or `0,1,…,n−1`, as spreadsheets and
+/// `numpy.savetxt` headers do): a header, not a row of pressures — no row of five or more
+/// sensors reads as an exact count.
+fn is_column_numbers(fields: &[&str]) -> bool {
+    let numbers: Option<Vec<i64>> = fields.iter().map(|f| f.parse().ok()).collect();
+    match numbers {
+        Some(n) if n.len() >= 5 && (n[0] == 0 || n[0] == 1) => {
+            n.windows(2).all(|w| w[1] == w[0] + 1)
+        }
+        _ => false,
+    }
 }
 
 fn is_missing(f: &str) -> bool {
