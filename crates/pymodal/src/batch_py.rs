@@ -8,7 +8,7 @@ use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
 
 use crate::errors::{argument_error, option_error, to_py};
-use crate::options_py::table_rows;
+use crate::options_py::{opt_count, table_rows};
 
 /// Inputs as strings: one path or pattern, or a sequence of them (str or os.PathLike); anything
 /// else is an `InputError` naming the argument `name`.
@@ -51,12 +51,13 @@ fn figure_kinds(figures: &str) -> PyResult<FigureKinds> {
 fn study_options(
     py: Python<'_>,
     out: Option<PathBuf>,
-    jobs: Option<usize>,
+    jobs: Option<i64>,
     force: bool,
     figures: &str,
     tables: &str,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<StudyOptions<'static>> {
+    let jobs = opt_count("jobs", jobs)?;
     if jobs == Some(0) {
         return Err(option_error(
             "jobs: 0 is not a number of jobs; expected >= 1 or None (every core)",
@@ -123,7 +124,7 @@ fn batch<'py>(
     py: Python<'py>,
     paths: &Bound<'py, PyAny>,
     out: Option<PathBuf>,
-    jobs: Option<usize>,
+    jobs: Option<i64>,
     force: bool,
     figures: &str,
     tables: &str,

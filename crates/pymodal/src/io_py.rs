@@ -17,6 +17,7 @@ use pedo_io::{
 
 use crate::arrays::checked_array;
 use crate::errors::{argument_error, input_error, internal, option_error, to_py};
+use crate::options_py::{count, opt_count};
 use crate::pickling::{Reader, Writer};
 
 /// A plantar-pressure recording read by :func:`read_recording`.
@@ -461,11 +462,11 @@ fn contours<'py>(
     py: Python<'py>,
     frame: &Bound<'py, PyAny>,
     level: Option<f64>,
-    n_points: Option<usize>,
+    n_points: Option<i64>,
     spacing: Option<f64>,
     smooth: Option<f64>,
     threshold: Option<f64>,
-    upsample: Option<usize>,
+    upsample: Option<i64>,
     interpolation: &str,
     method: &str,
     high: Option<f64>,
@@ -487,9 +488,14 @@ fn contours<'py>(
     };
     let opts = ContourOptions {
         level,
-        preprocess: preprocess_of(threshold, smooth, upsample, interpolation)?,
+        preprocess: preprocess_of(
+            threshold,
+            smooth,
+            opt_count("upsample", upsample)?,
+            interpolation,
+        )?,
         method,
-        resample: resample_of(n_points, spacing)?,
+        resample: resample_of(opt_count("n_points", n_points)?, spacing)?,
         min_area,
         include_holes,
         ..Default::default()
@@ -581,15 +587,17 @@ fn surface(
     py: Python<'_>,
     frame: &Bound<'_, PyAny>,
     threshold: Option<f64>,
-    max_nodes: Option<usize>,
+    max_nodes: Option<i64>,
     smooth: Option<f64>,
-    step: usize,
+    step: i64,
     keep_hull: bool,
-    laplacian_iterations: usize,
+    laplacian_iterations: i64,
     relaxation: f64,
     z_scale: &str,
 ) -> PyResult<PySurface> {
     let grid = grid_of(py, frame)?;
+    let (max_nodes, step) = (opt_count("max_nodes", max_nodes)?, count("step", step)?);
+    let laplacian_iterations = count("laplacian_iterations", laplacian_iterations)?;
     let z_scale = match z_scale {
         "xy" => ZScale::MatchXY,
         "keep" => ZScale::Keep,
@@ -635,7 +643,7 @@ fn isocontours<'py>(
     smooth: Option<f64>,
     threshold: Option<f64>,
     three_d: bool,
-    n_points: Option<usize>,
+    n_points: Option<i64>,
     spacing: Option<f64>,
     include_holes: bool,
     fully_connected: &str,
@@ -648,7 +656,7 @@ fn isocontours<'py>(
             upsample: None,
         },
         saddle: saddle_of(fully_connected)?,
-        resample: resample_of(n_points, spacing)?,
+        resample: resample_of(opt_count("n_points", n_points)?, spacing)?,
         include_holes,
         ..Default::default()
     };

@@ -13,6 +13,7 @@ use pyo3::types::{PyDict, PyTuple};
 
 use crate::arrays::{checked_array, index_rows};
 use crate::errors::{input_error, internal, option_error, to_py};
+use crate::options_py::{count, opt_count};
 use crate::pickling::{Reader, Writer};
 
 /// A float64 array of `obj` whose shape `fits`; anything else is an `InputError` naming the
@@ -161,10 +162,10 @@ impl PyModalModel {
         edges: Option<&Bound<'_, PyAny>>,
         triangles: Option<&Bound<'_, PyAny>>,
         kappa: f64,
-        n_modes: Option<usize>,
+        n_modes: Option<i64>,
         exact_rigid: bool,
         plane: &str,
-        center_stride: usize,
+        center_stride: i64,
     ) -> PyResult<Self> {
         const EXPECTED: &str = "an (n, 2) or (n, 3) array (2 or 3 columns of coordinates)";
         let fits = |s: &[usize]| s.len() == 2 && (s[1] == 2 || s[1] == 3);
@@ -228,8 +229,8 @@ impl PyModalModel {
             sigma,
             kappa,
             exact_rigid,
-            n_modes,
-            center_stride,
+            n_modes: opt_count("n_modes", n_modes)?,
+            center_stride: count("center_stride", center_stride)?,
         };
         let shape = Shape::new(dim, coords, topology).map_err(to_py)?;
         let basis = {
@@ -295,7 +296,8 @@ impl PyModalModel {
     }
 
     /// (n, d·k) modal features: row i = [u_i(0..k), v_i(0..k), (w_i(0..k))].
-    fn features<'py>(&self, py: Python<'py>, k: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    fn features<'py>(&self, py: Python<'py>, k: i64) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let k = count("k", k)?;
         let f = self.basis.features(k).map_err(to_py)?;
         Ok(row_major_to_numpy(
             py,
@@ -483,9 +485,10 @@ fn eigh<'py>(
     py: Python<'py>,
     k: &Bound<'py, PyAny>,
     m: &Bound<'py, PyAny>,
-    n_modes: Option<usize>,
+    n_modes: Option<i64>,
 ) -> PyResult<EighResult<'py>> {
     const EXPECTED: &str = "a square 2-D array of numbers";
+    let n_modes = opt_count("n_modes", n_modes)?;
     let matrix = |s: &[usize]| s.len() == 2;
     let ka = float_matrix(py, k, "k", EXPECTED, matrix)?;
     let ma = float_matrix(py, m, "m", EXPECTED, matrix)?;

@@ -11,11 +11,30 @@ use pedo_io::units::UnitOverrides;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyList, PyString};
 
-use crate::errors::{argument_error, to_py};
+use crate::errors::{argument_error, option_error, to_py};
 
 /// A word option: `None` keeps `default`, a string is parsed by `T`'s `FromStr`.
 pub fn word<T: Choice>(value: Option<&str>, default: T) -> PyResult<T> {
     value.map_or(Ok(default), |s| T::parse_word(s).map_err(to_py))
+}
+
+/// An integer keyword (a count, a size, a frame index) as the library's `usize`.
+///
+/// Such keywords are taken from Python as `i64`, not `usize`: pyo3 refuses a negative int for a
+/// `usize` with an `OverflowError` that names neither the keyword nor the value, outside the
+/// exception hierarchy; here it is an `OptionError` (a `ValueError`) like every other
+/// out-of-range option.
+pub fn count(name: &str, value: i64) -> PyResult<usize> {
+    usize::try_from(value).map_err(|_| {
+        option_error(format!(
+            "{name} must be a non-negative integer, got {value}"
+        ))
+    })
+}
+
+/// [`count`] of a keyword that may be absent.
+pub fn opt_count(name: &str, value: Option<i64>) -> PyResult<Option<usize>> {
+    value.map(|v| count(name, v)).transpose()
 }
 
 /// The matching keywords, in the order of [`modal_core::options::match_option_specs`].
@@ -30,18 +49,18 @@ pub struct MatchKw<'a, 'py> {
     pub paper: Option<bool>,
     pub prealign: Option<&'a str>,
     pub max_rotation: Option<f64>,
-    pub refits: Option<usize>,
+    pub refits: Option<i64>,
     pub refit_tolerance: Option<f64>,
     pub refine: Option<&'a str>,
-    pub deform_modes: Option<usize>,
+    pub deform_modes: Option<i64>,
     pub deform_stiffness: Option<f64>,
     pub kappa: Option<f64>,
-    pub center_stride: Option<usize>,
+    pub center_stride: Option<i64>,
     pub position_weight: Option<f64>,
     pub cost_power: Option<f64>,
     pub common_sigma: Option<bool>,
     pub skip_rigid: Option<bool>,
-    pub band: Option<usize>,
+    pub band: Option<i64>,
     pub material: Option<&'a Bound<'py, PyAny>>,
 }
 
@@ -60,18 +79,18 @@ impl<'a, 'py> MatchKw<'a, 'py> {
         paper: Option<bool>,
         prealign: Option<&'a str>,
         max_rotation: Option<f64>,
-        refits: Option<usize>,
+        refits: Option<i64>,
         refit_tolerance: Option<f64>,
         refine: Option<&'a str>,
-        deform_modes: Option<usize>,
+        deform_modes: Option<i64>,
         deform_stiffness: Option<f64>,
         kappa: Option<f64>,
-        center_stride: Option<usize>,
+        center_stride: Option<i64>,
         position_weight: Option<f64>,
         cost_power: Option<f64>,
         common_sigma: Option<bool>,
         skip_rigid: Option<bool>,
-        band: Option<usize>,
+        band: Option<i64>,
         material: Option<&'a Bound<'py, PyAny>>,
     ) -> Self {
         Self {
@@ -121,18 +140,18 @@ impl<'a, 'py> MatchKw<'a, 'py> {
             paper: self.paper,
             prealign: parsed(self.prealign)?,
             max_rotation: self.max_rotation,
-            refits: self.refits,
+            refits: opt_count("refits", self.refits)?,
             refit_tolerance: self.refit_tolerance,
             refine: parsed(self.refine)?,
-            deform_modes: self.deform_modes,
+            deform_modes: opt_count("deform_modes", self.deform_modes)?,
             deform_stiffness: self.deform_stiffness,
             kappa: self.kappa,
-            center_stride: self.center_stride,
+            center_stride: opt_count("center_stride", self.center_stride)?,
             position_weight: self.position_weight,
             cost_power: self.cost_power,
             common_sigma: self.common_sigma,
             skip_rigid: self.skip_rigid,
-            band: self.band,
+            band: opt_count("band", self.band)?,
             material,
         }
         .params())
@@ -220,13 +239,13 @@ pub struct RecordingKw<'a, 'py> {
     pub noise: Option<f64>,
     pub smooth: Option<f64>,
     pub spacing: Option<f64>,
-    pub surface_nodes: Option<usize>,
-    pub iso_frame: Option<usize>,
-    pub iso_levels: Option<usize>,
+    pub surface_nodes: Option<i64>,
+    pub iso_frame: Option<i64>,
+    pub iso_levels: Option<i64>,
     pub pitch_mm: Option<&'a Bound<'py, PyAny>>,
     pub frame_rate: Option<f64>,
     pub units: Option<String>,
-    pub drift_reference: Option<usize>,
+    pub drift_reference: Option<i64>,
 }
 
 impl RecordingKw<'_, '_> {
@@ -243,11 +262,13 @@ impl RecordingKw<'_, '_> {
             noise: self.noise.or(d.noise),
             smooth: self.smooth.unwrap_or(d.smooth),
             spacing: self.spacing.unwrap_or(d.spacing),
-            surface_nodes: self.surface_nodes.unwrap_or(d.surface_nodes),
-            iso_frame: self.iso_frame.or(d.iso_frame),
-            iso_levels: self.iso_levels.unwrap_or(d.iso_levels),
+            surface_nodes: opt_count("surface_nodes", self.surface_nodes)?
+                .unwrap_or(d.surface_nodes),
+            iso_frame: opt_count("iso_frame", self.iso_frame)?.or(d.iso_frame),
+            iso_levels: opt_count("iso_levels", self.iso_levels)?.unwrap_or(d.iso_levels),
             units: units(self.pitch_mm, self.frame_rate, self.units.clone())?,
-            drift_reference: self.drift_reference.unwrap_or(d.drift_reference),
+            drift_reference: opt_count("drift_reference", self.drift_reference)?
+                .unwrap_or(d.drift_reference),
         })
     }
 }

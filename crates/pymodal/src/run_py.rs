@@ -115,28 +115,28 @@ fn run<'py>(
     paper: Option<bool>,
     prealign: Option<&str>,
     max_rotation: Option<f64>,
-    refits: Option<usize>,
+    refits: Option<i64>,
     refit_tolerance: Option<f64>,
     refine: Option<&str>,
-    deform_modes: Option<usize>,
+    deform_modes: Option<i64>,
     deform_stiffness: Option<f64>,
     kappa: Option<f64>,
-    center_stride: Option<usize>,
+    center_stride: Option<i64>,
     position_weight: Option<f64>,
     cost_power: Option<f64>,
     common_sigma: Option<bool>,
     skip_rigid: Option<bool>,
-    band: Option<usize>,
+    band: Option<i64>,
     material: Option<&Bound<'py, PyAny>>,
     model: Option<&str>,
     frames: Option<&Bound<'py, PyAny>>,
     noise: Option<f64>,
     smooth: Option<f64>,
     spacing: Option<f64>,
-    surface_nodes: Option<usize>,
-    iso_frame: Option<usize>,
-    iso_levels: Option<usize>,
-    drift_reference: Option<usize>,
+    surface_nodes: Option<i64>,
+    iso_frame: Option<i64>,
+    iso_levels: Option<i64>,
+    drift_reference: Option<i64>,
     pitch_mm: Option<&Bound<'py, PyAny>>,
     frame_rate: Option<f64>,
     units: Option<String>,
@@ -320,8 +320,8 @@ pub fn run_params<'py>(
         ($k:literal, f64) => {
             get!($k, f64, "a number")
         };
-        ($k:literal, usize) => {
-            get!($k, usize, "a non-negative integer")
+        ($k:literal, i64) => {
+            get!($k, i64, "an integer")
         };
         ($k:literal, bool) => {
             get!($k, bool, "True or False")
@@ -351,18 +351,18 @@ pub fn run_params<'py>(
         paper: get!("paper", bool),
         prealign: prealign.as_deref(),
         max_rotation: get!("max_rotation", f64),
-        refits: get!("refits", usize),
+        refits: get!("refits", i64),
         refit_tolerance: get!("refit_tolerance", f64),
         refine: refine.as_deref(),
-        deform_modes: get!("deform_modes", usize),
+        deform_modes: get!("deform_modes", i64),
         deform_stiffness: get!("deform_stiffness", f64),
         kappa: get!("kappa", f64),
-        center_stride: get!("center_stride", usize),
+        center_stride: get!("center_stride", i64),
         position_weight: get!("position_weight", f64),
         cost_power: get!("cost_power", f64),
         common_sigma: get!("common_sigma", bool),
         skip_rigid: get!("skip_rigid", bool),
-        band: get!("band", usize),
+        band: get!("band", i64),
         material: material.as_ref(),
     }
     .params()?;
@@ -372,13 +372,13 @@ pub fn run_params<'py>(
         noise: get!("noise", f64),
         smooth: get!("smooth", f64),
         spacing: get!("spacing", f64),
-        surface_nodes: get!("surface_nodes", usize),
-        iso_frame: get!("iso_frame", usize),
-        iso_levels: get!("iso_levels", usize),
+        surface_nodes: get!("surface_nodes", i64),
+        iso_frame: get!("iso_frame", i64),
+        iso_levels: get!("iso_levels", i64),
         pitch_mm: pitch_mm.as_ref(),
         frame_rate: get!("frame_rate", f64),
         units: get!("units", String),
-        drift_reference: get!("drift_reference", usize),
+        drift_reference: get!("drift_reference", i64),
     }
     .params(matching)
 }

@@ -6,6 +6,7 @@ use pyo3::prelude::*;
 
 use crate::errors::to_py;
 use crate::io_py::PyRecording;
+use crate::options_py::{count, opt_count};
 
 /// A foot-like pressure field warped smoothly in time (translation towards the toes, rotation,
 /// widening of the forefoot) with the true map from frame-0 coordinates to frame ``t`` known.
@@ -52,9 +53,9 @@ impl PySyntheticWalk {
         spread=None, noise=None, pitch_mm=None, frame_rate=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
-        frames: Option<usize>,
-        rows: Option<usize>,
-        cols: Option<usize>,
+        frames: Option<i64>,
+        rows: Option<i64>,
+        cols: Option<i64>,
         translation: Option<(f64, f64)>,
         rotation: Option<f64>,
         spread: Option<f64>,
@@ -64,9 +65,9 @@ impl PySyntheticWalk {
     ) -> PyResult<Self> {
         let d = SyntheticWalk::default();
         let inner = SyntheticWalk {
-            frames: frames.unwrap_or(d.frames),
-            rows: rows.unwrap_or(d.rows),
-            cols: cols.unwrap_or(d.cols),
+            frames: opt_count("frames", frames)?.unwrap_or(d.frames),
+            rows: opt_count("rows", rows)?.unwrap_or(d.rows),
+            cols: opt_count("cols", cols)?.unwrap_or(d.cols),
             translation: translation.map_or(d.translation, |(x, y)| [x, y]),
             rotation_deg: rotation.unwrap_or(d.rotation_deg),
             spread: spread.unwrap_or(d.spread),
@@ -89,9 +90,10 @@ impl PySyntheticWalk {
     fn true_positions<'py>(
         &self,
         py: Python<'py>,
-        t: usize,
+        t: i64,
         points: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let t = count("t", t)?;
         map_points(py, points, |p| self.inner.true_position(t, p))
     }
 
@@ -99,9 +101,10 @@ impl PySyntheticWalk {
     fn reference_positions<'py>(
         &self,
         py: Python<'py>,
-        t: usize,
+        t: i64,
         points: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let t = count("t", t)?;
         map_points(py, points, |p| self.inner.reference_position(t, p))
     }
 

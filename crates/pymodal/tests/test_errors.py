@@ -169,6 +169,71 @@ def test_argument_errors_are_input_errors_naming_the_argument(call, name, text):
     assert str(info.value).startswith(name), str(info.value)
 
 
+# Integer keywords (counts, sizes, frame indices): a negative value is an OptionError naming the
+# keyword and the value, not pyo3's unnamed OverflowError. The keywords come from the stubs (every
+# parameter typed int or Optional[int]), so a keyword added later is covered too.
+FRAMES = np.zeros((3, 8, 8))
+INT_KEYWORD_CALLS = {
+    "match": lambda **kw: pymodal.match(SQUARE, SQUARE, **kw),
+    "run": lambda **kw: pymodal.run(FRAMES, **kw),
+    "batch": lambda **kw: pymodal.batch([], **kw),
+    "contours": lambda **kw: pymodal.contours(np.eye(5), **kw),
+    "isocontours": lambda **kw: pymodal.isocontours(np.eye(5), [0.5], **kw),
+    "surface": lambda **kw: pymodal.surface(np.eye(5), **kw),
+    "eigh": lambda **kw: pymodal.eigh(np.eye(3), np.eye(3), **kw),
+    "ModalModel": lambda **kw: pymodal.ModalModel(SQUARE, **kw),
+    "SyntheticWalk": lambda **kw: pymodal.SyntheticWalk(**kw),
+}
+
+
+def int_keywords():
+    import ast
+
+    stub = ast.parse((pathlib.Path(pymodal.__file__).parent / "_pymodal.pyi").read_text())
+    found = []
+    for node in stub.body:
+        fn = node
+        if isinstance(node, ast.ClassDef):
+            fn = next((f for f in node.body if isinstance(f, ast.FunctionDef) and f.name == "__init__"), None)
+        if not isinstance(fn, ast.FunctionDef):
+            continue
+        for arg in fn.args.args + fn.args.kwonlyargs:
+            if ast.unparse(arg.annotation or ast.Constant(None)) in ("int", "Optional[int]"):
+                found.append((node.name, arg.arg))
+    return found
+
+
+@pytest.mark.parametrize("function, keyword", int_keywords())
+def test_negative_integer_keywords_are_option_errors_naming_them(function, keyword):
+    assert function in INT_KEYWORD_CALLS, f"add a call of {function} to INT_KEYWORD_CALLS"
+    with pytest.raises(pymodal.OptionError) as info:
+        INT_KEYWORD_CALLS[function](**{keyword: -1})
+    assert str(info.value) == f"{keyword} must be a non-negative integer, got -1"
+
+
+def test_every_integer_keyword_of_the_audit_is_covered():
+    found = set(int_keywords())
+    for keyword in ("refits", "band", "deform_modes", "center_stride"):
+        assert ("match", keyword) in found and ("run", keyword) in found, keyword
+    for keyword in ("iso_frame", "iso_levels", "surface_nodes", "drift_reference"):
+        assert ("run", keyword) in found, keyword
+
+
+@pytest.mark.parametrize(
+    "call, keyword",
+    [
+        (lambda: pymodal.batch_row("x.asf", refits=-2), "refits"),
+        (lambda: pymodal.batch([], iso_frame=-2), "iso_frame"),
+        (lambda: pymodal.SyntheticWalk().true_positions(-2, np.zeros((3, 2))), "t"),
+        (lambda: pymodal.ModalModel(SQUARE).features(-2), "k"),
+        (lambda: pymodal.run(FRAMES, band=np.int64(-2)), "band"),
+    ],
+)
+def test_negative_integers_read_by_hand_are_option_errors_too(call, keyword):
+    with pytest.raises(pymodal.OptionError, match=f"^{keyword} must be a non-negative integer, got -2$"):
+        call()
+
+
 def test_bad_material_values_are_option_errors_naming_material():
     for material in ({"young": "stiff"}, (1.0, 0.3), {1: 2.0}):
         with pytest.raises(pymodal.OptionError, match="material") as info:
