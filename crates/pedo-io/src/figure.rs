@@ -583,8 +583,23 @@ struct Layout {
 }
 
 const COLORBAR_WIDTH: u32 = 104;
-const LEGEND_WIDTH: u32 = 200;
+/// The legend column: glyphs from `LEGEND_GLYPH.0` to `.1`, text from `LEGEND_TEXT_X`, and a
+/// margin after the longest text.
+const LEGEND_GLYPH: (i32, i32) = (14, 42);
+const LEGEND_TEXT_X: i32 = 52;
+const LEGEND_MARGIN: u32 = 16;
+/// Space left and right of the title and subtitle.
+const TITLE_MARGIN: u32 = 16;
 const MAX_SIDE: u32 = 4096;
+
+/// The width in pixels of `text` in the bundled font at `size`.
+fn text_width(text: &str, size: f64) -> u32 {
+    match ab_glyph::FontRef::try_from_slice(FONT_BYTES) {
+        Ok(font) => text::text_width(&font, text, size),
+        // The font is compiled in and always parses; a generous estimate keeps text uncut.
+        Err(_) => (0.7 * size * text.chars().count() as f64).ceil() as u32,
+    }
+}
 
 impl Layout {
     fn new(
@@ -616,6 +631,13 @@ impl Layout {
         Y_LABEL_AREA + self.plot.0 + 2 * PLOT_MARGIN
     }
 
+    /// The legend column's width: its longest text measured in the bundled font, so that no
+    /// entry is cut at the figure's right edge.
+    fn legend_width(&self) -> u32 {
+        let longest = self.legend.iter().map(|e| text_width(&e.text, LEGEND_SIZE));
+        LEGEND_TEXT_X as u32 + longest.max().unwrap_or(0) + LEGEND_MARGIN
+    }
+
     fn size(&self) -> (u32, u32) {
         let bar = if self.image.is_some() {
             COLORBAR_WIDTH
@@ -624,10 +646,10 @@ impl Layout {
         };
         let legend_height = LEGEND_ROW as u32 * (self.legend.len() as u32 + 1);
         let body = (self.plot.1 + X_LABEL_AREA + PLOT_MARGIN).max(legend_height);
-        (
-            (self.chart_width() + bar + LEGEND_WIDTH).min(MAX_SIDE),
-            (TITLE_HEIGHT + body).min(MAX_SIDE),
-        )
+        let title =
+            text_width(&self.title, TITLE_SIZE).max(text_width(&self.subtitle, SUBTITLE_SIZE));
+        let width = (self.chart_width() + bar + self.legend_width()).max(title + 2 * TITLE_MARGIN);
+        (width.min(MAX_SIDE), (TITLE_HEIGHT + body).min(MAX_SIDE))
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
@@ -828,7 +850,7 @@ fn draw_legend<DB: DrawingBackend>(
     let style = TextStyle::from((FONT, LEGEND_SIZE).into_font())
         .color(&BLACK)
         .pos(Pos::new(HPos::Left, VPos::Center));
-    let (x0, x1, xt) = (14, 42, 52);
+    let ((x0, x1), xt) = (LEGEND_GLYPH, LEGEND_TEXT_X);
     for (k, entry) in entries.iter().enumerate() {
         let y = 8 + LEGEND_ROW * k as i32;
         let line = |c: &RGBColor| PathElement::new(vec![(x0, y), (x1, y)], c.stroke_width(2));
@@ -1271,6 +1293,49 @@ mod tests {
             .to_svg()
             .unwrap()
             .contains("peak pressure (units unknown)"));
+    }
+
+    /// Columns of ink (any non-white pixel) within `margin` pixels of the right edge.
+    fn ink_at_right_edge(img: &image::RgbImage, margin: u32) -> usize {
+        inked(img, img.width() - margin..img.width(), 0..img.height())
+    }
+
+    #[test]
+    fn no_text_is_cut_at_the_right_edge() {
+        // The legend column is as wide as its longest entry: "node track (a colour each)" was
+        // cut to "node track (a colour e" by a fixed-width column.
+        let (result, peak) = track_result();
+        let axes = plate_axes();
+        let tracks = TracksFigure {
+            result: &result,
+            peak: &peak,
+            axes: &axes,
+            min_steps: 3,
+            max_tracks: 10,
+        };
+        let (a, b) = (
+            ellipse(30, [10.0, 20.0], 4.0, 9.0),
+            ellipse(24, [11.0, 21.0], 4.5, 8.0),
+        );
+        let pairs = pairs();
+        let long = ObjectLabel {
+            name: "a rather long object name at 1234 kPa".to_string(),
+            frame: Some(40),
+        };
+        let matches = MatchFigure {
+            a: &a,
+            b: &b,
+            pairs: &pairs,
+            axes: &axes,
+            label_a: long.clone(),
+            label_b: long,
+        };
+        for png in [tracks.to_png().unwrap(), matches.to_png().unwrap()] {
+            let img = decode(&png);
+            assert_eq!(ink_at_right_edge(&img, 8), 0, "text reaches the right edge");
+            // ... nor the left edge (a title wider than the plots is centred in a wider figure).
+            assert_eq!(inked(&img, 0..4, 0..TITLE_HEIGHT), 0);
+        }
     }
 
     #[test]

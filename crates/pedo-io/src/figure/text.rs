@@ -22,30 +22,44 @@ pub(super) struct TextBitmap<'a> {
 type BitmapError<'a> = <BitMapBackend<'a> as DrawingBackend>::ErrorType;
 
 impl TextBitmap<'_> {
-    /// The pixel scale for plotters' font `size`, matching the SVG backend's `font-size`.
     fn scale(&self, size: f64) -> PxScale {
-        let em = size / 1.24;
-        let height = self.font.height_unscaled() as f64;
-        let per_em = self.font.units_per_em().unwrap_or(2048.0) as f64;
-        PxScale::from((em * height / per_em) as f32)
+        scale(&self.font, size)
     }
 
     /// Glyphs of `text` positioned along the baseline from x = 0, and the total advance.
     fn layout(&self, text: &str, size: f64) -> (Vec<ab_glyph::Glyph>, f32) {
-        let font = self.font.as_scaled(self.scale(size));
-        let mut glyphs = Vec::with_capacity(text.len());
-        let (mut x, mut prev) = (0.0f32, None);
-        for c in text.chars() {
-            let id = font.glyph_id(c);
-            if let Some(p) = prev {
-                x += font.kern(p, id);
-            }
-            glyphs.push(id.with_scale_and_position(font.scale(), point(x, 0.0)));
-            x += font.h_advance(id);
-            prev = Some(id);
-        }
-        (glyphs, x)
+        layout(&self.font, text, size)
     }
+}
+
+/// The pixel scale for plotters' font `size`, matching the SVG backend's `font-size`.
+fn scale(font: &FontRef<'_>, size: f64) -> PxScale {
+    let em = size / 1.24;
+    let height = font.height_unscaled() as f64;
+    let per_em = font.units_per_em().unwrap_or(2048.0) as f64;
+    PxScale::from((em * height / per_em) as f32)
+}
+
+fn layout(font: &FontRef<'_>, text: &str, size: f64) -> (Vec<ab_glyph::Glyph>, f32) {
+    let font = font.as_scaled(scale(font, size));
+    let mut glyphs = Vec::with_capacity(text.len());
+    let (mut x, mut prev) = (0.0f32, None);
+    for c in text.chars() {
+        let id = font.glyph_id(c);
+        if let Some(p) = prev {
+            x += font.kern(p, id);
+        }
+        glyphs.push(id.with_scale_and_position(font.scale(), point(x, 0.0)));
+        x += font.h_advance(id);
+        prev = Some(id);
+    }
+    (glyphs, x)
+}
+
+/// The width in pixels of `text` at plotters' font `size` in `font`, as both backends lay it
+/// out: what the figure's layout reserves for it, so that no text is cut at an edge.
+pub(super) fn text_width(font: &FontRef<'_>, text: &str, size: f64) -> u32 {
+    layout(font, text, size).1.ceil() as u32
 }
 
 impl<'a> DrawingBackend for TextBitmap<'a> {
