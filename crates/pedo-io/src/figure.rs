@@ -197,16 +197,39 @@ pub struct MatchFigure<'a> {
     pub label_b: ObjectLabel,
 }
 
-/// Node tracks over the recording's peak-pressure image, with its colour bar: one coloured line
-/// per track for the `max_tracks` longest tracks spanning at least `min_steps` objects (thousands
-/// of overlapping tracks would hide each other), a dot where each starts.
+/// Node tracks over a pressure image, with its colour bar: one line per track for the
+/// `max_tracks` longest tracks spanning at least `min_steps` objects (thousands of overlapping
+/// tracks would hide each other), a dot where each starts.
+///
+/// Tracks across frames get a colour each, over the recording's peak-pressure image. Tracks of
+/// an isocontour run (every object an isobaric level of one frame) are coloured by level, the
+/// levels marked in their colours on the pressure bar, over that frame's pressure image: the
+/// level, not the time, orders their steps. [`tracks_background`] picks the image.
 #[derive(Debug, Clone)]
 pub struct TracksFigure<'a> {
     pub result: &'a SequenceResult,
-    pub peak: &'a Grid,
+    /// The pressure image under the tracks, in the objects' coordinates (see
+    /// [`tracks_background`]).
+    pub background: &'a Grid,
     pub axes: &'a FigureAxes,
     pub min_steps: usize,
     pub max_tracks: usize,
+}
+
+/// The image a [`TracksFigure`] of run `r` is drawn over: the frame whose isobaric levels an
+/// isocontour run matched, else the recording's peak-pressure image.
+pub fn tracks_background(recording: &crate::Recording, r: &SequenceResult) -> Result<Grid> {
+    match iso_frame(r) {
+        Some(frame) => recording.frame(frame),
+        None => Ok(recording.peak_image()),
+    }
+}
+
+/// The frame of an isocontour run (every object has a level and all share one frame).
+fn iso_frame(r: &SequenceResult) -> Option<usize> {
+    let first = r.objects.first()?;
+    let one_frame = r.objects.iter().all(|o| o.frame == first.frame);
+    (one_frame && r.objects.iter().all(|o| o.level.is_some())).then_some(first.frame)
 }
 
 impl MatchFigure<'_> {
@@ -375,53 +398,102 @@ impl TracksFigure<'_> {
     }
 
     fn layout(&self) -> Result<Layout> {
-        let r = self.result;
         let eligible = self.chosen_tracks();
         let shown = &eligible[..eligible.len().min(self.max_tracks)];
-        let mut layers = Vec::new();
-        let mut starts: Vec<Vec<(f64, f64)>> = Vec::new();
+        let iso = iso_frame(self.result).map(|frame| (frame, self.level_range()));
+        let mut lines = Vec::new();
+        let mut starts = Vec::new();
         for (k, t) in shown.iter().enumerate() {
-            let points = t
-                .steps
-                .iter()
-                .map(|&(o, n)| {
-                    let obj = r.objects.get(o).filter(|obj| n < obj.shape.len());
-                    let obj = obj.ok_or_else(|| {
-                        IoError::invalid(format!("track step ({o}, {n}) names no node"))
-                    })?;
-                    let p = obj.shape.point(n);
-                    Ok(self.axes.to_plot([p[0], p[1]]))
-                })
-                .collect::<Result<Vec<_>>>()?;
-            let color = TRACK_PALETTE[k % TRACK_PALETTE.len()];
-            starts.push(vec![points[0]]);
-            layers.push(Layer::Line {
-                points,
-                color,
-                width: 2,
-            });
-        }
-        for (k, s) in starts.into_iter().enumerate() {
-            layers.push(Layer::Dots {
-                points: s,
-                color: TRACK_PALETTE[k % TRACK_PALETTE.len()],
+            let steps = self.track_steps(t)?;
+            let colour = |level: Option<f64>| match (iso, level) {
+                (Some((_, range)), Some(l)) => level_color(l, range),
+                _ => TRACK_PALETTE[k % TRACK_PALETTE.len()],
+            };
+            starts.push(Layer::Dots {
+                points: vec![steps[0].0],
+                color: colour(steps[0].1),
                 radius: 4,
             });
+            if iso.is_some() {
+                // One segment a step, in the colour of the level it leaves.
+                lines.extend(steps.windows(2).map(|w| Layer::Line {
+                    points: vec![w[0].0, w[1].0],
+                    color: colour(w[0].1),
+                    width: 2,
+                }));
+            } else {
+                lines.push(Layer::Line {
+                    points: steps.iter().map(|s| s.0).collect(),
+                    color: colour(None),
+                    width: 2,
+                });
+            }
         }
-        let (rows, cols) = (self.peak.rows(), self.peak.cols());
+        lines.extend(starts);
+        let (bounds, mut image) = self.background_image()?;
+        let (title, subtitle, legend) = match iso {
+            Some((frame, range)) => {
+                if let Some(image) = &mut image {
+                    image.label = self
+                        .axes
+                        .pressure_label(&format!("pressure, frame {frame}"));
+                    image.marks = self.level_marks(range);
+                }
+                self.iso_texts(frame, range, shown.len(), eligible.len())
+            }
+            None => self.frame_texts(shown.len(), eligible.len()),
+        };
+        Ok(Layout::new(
+            bounds, self.axes, title, subtitle, legend, image, lines,
+        ))
+    }
+
+    /// A track's steps: each node in plotted units, with its object's isobaric level.
+    fn track_steps(&self, t: &Track) -> Result<Vec<TrackStep>> {
+        t.steps
+            .iter()
+            .map(|&(o, n)| {
+                let obj = self.result.objects.get(o).filter(|obj| n < obj.shape.len());
+                let obj = obj.ok_or_else(|| {
+                    IoError::invalid(format!("track step ({o}, {n}) names no node"))
+                })?;
+                let p = obj.shape.point(n);
+                Ok((self.axes.to_plot([p[0], p[1]]), obj.level))
+            })
+            .collect()
+    }
+
+    /// The lowest and highest isobaric level of the run's objects.
+    fn level_range(&self) -> [f64; 2] {
+        let levels = self.result.objects.iter().filter_map(|o| o.level);
+        levels.fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], l| {
+            [lo.min(l), hi.max(l)]
+        })
+    }
+
+    /// Each level of the run in its colour, marked on the pressure bar.
+    fn level_marks(&self, range: [f64; 2]) -> Vec<(f64, RGBColor)> {
+        let levels = self.result.objects.iter().filter_map(|o| o.level);
+        levels.map(|l| (l, level_color(l, range))).collect()
+    }
+
+    /// The plot's extent (the whole image) and the image with its colour bar.
+    fn background_image(&self) -> Result<(Bounds, Option<PressureImage>)> {
+        let g = self.background;
+        let (rows, cols) = (g.rows(), g.cols());
         let corner = |c: f64, r: f64| self.axes.to_plot([c, r]);
         let mut bounds = Bounds::of([
             corner(-0.5, -0.5),
             corner(cols as f64 - 0.5, rows as f64 - 0.5),
         ])
-        .ok_or_else(|| IoError::invalid("the peak image has no finite extent"))?;
+        .ok_or_else(|| IoError::invalid("the pressure image has no finite extent"))?;
         bounds.pad = false;
-        let max = self.peak.max();
+        let max = g.max();
         let image = (max.is_finite() && max > 0.0).then(|| PressureImage {
             cells: (0..rows)
                 .flat_map(|row| (0..cols).map(move |col| (row, col)))
                 .filter_map(|(row, col)| {
-                    let v = self.peak.get(row, col);
+                    let v = g.get(row, col);
                     (v > 0.0).then(|| {
                         let (x0, y0) = corner(col as f64 - 0.5, row as f64 - 0.5);
                         let (x1, y1) = corner(col as f64 + 0.5, row as f64 + 0.5);
@@ -431,8 +503,14 @@ impl TracksFigure<'_> {
                 .collect(),
             max,
             label: self.axes.pressure_label("peak pressure"),
+            marks: Vec::new(),
         });
-        let frames = r.objects.iter().map(|o| o.frame);
+        Ok((bounds, image))
+    }
+
+    /// Title, subtitle and legend of tracks across frames.
+    fn frame_texts(&self, shown: usize, eligible: usize) -> (String, String, Vec<LegendEntry>) {
+        let frames = self.result.objects.iter().map(|o| o.frame);
         let title = match (frames.clone().min(), frames.max()) {
             (Some(f0), Some(f1)) => {
                 let times = match (self.axes.time_s(f0), self.axes.time_s(f1)) {
@@ -444,25 +522,86 @@ impl TracksFigure<'_> {
             _ => "Node tracks (no objects)".to_string(),
         };
         let subtitle = format!(
-            "the {} longest of {} tracks spanning \u{2265} {} objects, over the peak pressure",
-            shown.len(),
-            eligible.len(),
+            "the {shown} longest of {eligible} tracks spanning \u{2265} {} objects, over the peak \
+             pressure",
             self.min_steps.max(2)
         );
-        let legend = vec![
-            LegendEntry {
-                text: "node track (a colour each)".to_string(),
-                glyph: Glyph::Line(TRACK_PALETTE[0]),
-            },
-            LegendEntry {
-                text: "track start".to_string(),
-                glyph: Glyph::Dot(TRACK_PALETTE[0]),
-            },
-        ];
-        Ok(Layout::new(
-            bounds, self.axes, title, subtitle, legend, image, layers,
-        ))
+        (
+            title,
+            subtitle,
+            track_legend("node track (a colour each)", TRACK_PALETTE[0]),
+        )
     }
+
+    /// Title, subtitle and legend of tracks across the isobaric levels of `frame`.
+    fn iso_texts(
+        &self,
+        frame: usize,
+        [lo, hi]: [f64; 2],
+        shown: usize,
+        eligible: usize,
+    ) -> (String, String, Vec<LegendEntry>) {
+        let units = match self.axes.pressure_units.as_str() {
+            "" => String::new(),
+            u => format!(" {u}"),
+        };
+        let n = self.result.objects.len();
+        let title = format!(
+            "Node tracks across {n} isobaric levels, {}",
+            self.axes.frame_text(frame)
+        );
+        let subtitle = format!(
+            "levels {lo:.0}\u{2013}{hi:.0}{units}; the {shown} longest of {eligible} tracks \
+             spanning \u{2265} {} levels",
+            self.min_steps.max(2)
+        );
+        let mut legend = track_legend("node track (colour: level)", level_color(lo, [lo, hi]));
+        legend.push(LegendEntry {
+            text: "isobaric level (on the bar)".to_string(),
+            glyph: Glyph::Line(level_color(hi, [lo, hi])),
+        });
+        (title, subtitle, legend)
+    }
+}
+
+/// A track's node in plotted units, with its object's isobaric level (isocontour runs).
+type TrackStep = ((f64, f64), Option<f64>);
+
+/// The legend of a tracks figure: a track line described by `text`, and its start.
+fn track_legend(text: &str, color: RGBColor) -> Vec<LegendEntry> {
+    vec![
+        LegendEntry {
+            text: text.to_string(),
+            glyph: Glyph::Line(color),
+        },
+        LegendEntry {
+            text: "track start".to_string(),
+            glyph: Glyph::Dot(color),
+        },
+    ]
+}
+
+/// The colour of isobaric level `l` within `[lo, hi]`: dark purple to orange (the "plasma"
+/// scale without its pale yellow end, which would vanish on the light grey of low pressure).
+fn level_color(l: f64, [lo, hi]: [f64; 2]) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 5] = [
+        (13.0, 8.0, 135.0),
+        (126.0, 3.0, 168.0),
+        (204.0, 71.0, 120.0),
+        (237.0, 121.0, 83.0),
+        (253.0, 180.0, 47.0),
+    ];
+    let t = if hi > lo {
+        ((l - lo) / (hi - lo)).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let x = t * (STOPS.len() - 1) as f64;
+    let k = (x.floor() as usize).min(STOPS.len() - 2);
+    let f = x - k as f64;
+    let mix = |a: f64, b: f64| (a + (b - a) * f).round() as u8;
+    let (a, b) = (STOPS[k], STOPS[k + 1]);
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
 
 /// Extent of the plotted data, in plotted units.
@@ -543,6 +682,8 @@ struct PressureImage {
     cells: Vec<([(f64, f64); 2], f64)>,
     max: f64,
     label: String,
+    /// Values marked across the colour bar in their colours (the levels of isocontour tracks).
+    marks: Vec<(f64, RGBColor)>,
 }
 
 /// Light to dark grey, so that coloured lines stay visible over high pressure. The grey follows
@@ -827,6 +968,13 @@ fn draw_colorbar<DB: DrawingBackend>(
             pressure_color(v0 + 0.5 * step, image.max).filled(),
         )
     }))
+    .map_err(figure_error)?;
+    bar.draw_series(
+        image
+            .marks
+            .iter()
+            .map(|&(v, c)| PathElement::new(vec![(0.0, v), (1.0, v)], c.stroke_width(3))),
+    )
     .map_err(figure_error)?;
     bar.draw_series(std::iter::once(PathElement::new(
         vec![
@@ -1262,7 +1410,7 @@ mod tests {
         let axes = plate_axes();
         let fig = TracksFigure {
             result: &result,
-            peak: &peak,
+            background: &peak,
             axes: &axes,
             min_steps: 3,
             max_tracks: 10,
@@ -1308,7 +1456,7 @@ mod tests {
         let axes = plate_axes();
         let tracks = TracksFigure {
             result: &result,
-            peak: &peak,
+            background: &peak,
             axes: &axes,
             min_steps: 3,
             max_tracks: 10,
@@ -1336,6 +1484,46 @@ mod tests {
             // ... nor the left edge (a title wider than the plots is centred in a wider figure).
             assert_eq!(inked(&img, 0..4, 0..TITLE_HEIGHT), 0);
         }
+    }
+
+    #[test]
+    fn isocontour_tracks_are_coloured_by_level_over_their_frame() {
+        // Every object an isobaric level of frame 8: the levels, not the time, order the steps.
+        let (mut result, _) = track_result();
+        for (k, o) in result.objects.iter_mut().enumerate() {
+            o.frame = 8;
+            o.level = Some(50.0 + 60.0 * k as f64);
+        }
+        let (rows, cols) = (16, 12);
+        let frame = Grid::new(rows, cols, vec![120.0; rows * cols]).unwrap();
+        let axes = plate_axes();
+        let fig = TracksFigure {
+            result: &result,
+            background: &frame,
+            axes: &axes,
+            min_steps: 3,
+            max_tracks: 10,
+        };
+        let svg = fig.to_svg().unwrap();
+        for text in [
+            "Node tracks across 4 isobaric levels, frame 8, 0.256 s",
+            "levels 50\u{2013}230 kPa",
+            "spanning \u{2265} 3 levels",
+            "pressure, frame 8 (kPa)",
+            "node track (colour: level)",
+        ] {
+            assert!(svg.contains(text), "SVG lacks {text:?}");
+        }
+        for absent in ["frames 8\u{2013}8", "peak pressure", "objects"] {
+            assert!(!svg.contains(absent), "SVG has {absent:?}");
+        }
+        let img = decode(&fig.to_png().unwrap());
+        // The lowest and highest levels' colours: on the tracks and marked on the bar.
+        for level in [50.0, 230.0] {
+            let c = level_color(level, [50.0, 230.0]);
+            assert!(count_color(&img, c) > 10, "level {level} not drawn");
+        }
+        assert_eq!(ink_at_right_edge(&img, 8), 0);
     }
 
     #[test]

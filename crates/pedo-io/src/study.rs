@@ -18,7 +18,7 @@
 //! the recording's length, and its folder is the same, byte for byte.
 
 use crate::error::{IoError, Result};
-use crate::figure::{FigureAxes, MatchFigure, ObjectLabel, TracksFigure};
+use crate::figure::{tracks_background, FigureAxes, MatchFigure, ObjectLabel, TracksFigure};
 use crate::formats::{
     has_recording_extension, read_recording_with, sniff_format, ReadOptions, SNIFF_BYTES,
 };
@@ -455,10 +455,10 @@ pub fn write_figures(
         let stem = format!("figures/pair_{:04}_{:04}", oa.id, ob.id);
         write_figure(dir, &stem, kinds, || fig.to_png(), || fig.to_svg())
     })?;
-    let peak = recording.peak_image();
+    let background = tracks_background(recording, r)?;
     let tracks = TracksFigure {
         result: r,
-        peak: &peak,
+        background: &background,
         axes: &axes,
         min_steps: 3,
         max_tracks: 40,

@@ -189,6 +189,7 @@ impl Animation<'_> {
                 .collect(),
             max,
             label: self.axes.pressure_label("pressure"),
+            marks: Vec::new(),
         };
         let title = self.axes.frame_text(t);
         let objects = r.objects.iter().filter(|o| o.frame == t).count();
