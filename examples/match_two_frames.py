@@ -47,7 +47,7 @@ def main():
           f"{m.optimisation_count} one-to-one and {m.excess_count} excess matches, "
           f"mean cost {np.mean(m.costs):.4f}")
 
-    fig, ax = plt.subplots(figsize=(4, 8))
+    fig, ax = plt.subplots(figsize=(4, 8), layout="constrained")
     ax.imshow(np.nan_to_num(rec.frames[fa]), cmap="Greys", alpha=0.4)
     # Coordinates in sensels, like the image; the helper adds the legend, title and axis labels.
     plot_match(m, a, b, ax=ax, labels=(f"frame {fa}", f"frame {fb}"))

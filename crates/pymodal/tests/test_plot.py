@@ -172,7 +172,19 @@ def legend_texts(ax):
 
 
 def colour_bar_labels(ax):
-    return sorted(a.get_ylabel() for a in ax.figure.axes if a is not ax)
+    return sorted(a.get_ylabel() or a.get_xlabel() for a in ax.figure.axes if a is not ax)
+
+
+def extent(artist):
+    return artist.get_window_extent(artist.figure.canvas.get_renderer())
+
+
+def assert_legend_off_the_data_and_under_the_title(ax):
+    """The legend lies above the axes (never over the data), the title above the legend."""
+    ax.figure.canvas.draw()
+    legend, box = extent(ax.get_legend()), ax.get_window_extent()
+    assert legend.y0 >= box.y1 - 1, (legend, box)
+    assert extent(ax.title).y0 >= legend.y1 - 1, (extent(ax.title), legend)
 
 
 def test_plot_match_explains_its_marks_with_a_legend_and_a_title():
@@ -192,6 +204,7 @@ def test_plot_match_explains_its_marks_with_a_legend_and_a_title():
     assert texts[:2] == ["A", "B"] and "unmatched" in texts and "excess match" not in texts
     assert ax.get_title() == "mine" and ax.get_xlabel() == "x (mm)"
     assert pymodal.plot_match(m, a, b, legend=False).get_legend() is None
+    assert_legend_off_the_data_and_under_the_title(pymodal.plot_match(m, a, b))
     with pytest.raises(pymodal.InputError, match="a and b must be"):
         pymodal.plot_match(m, a, np.zeros((5, 3)))
     with pytest.raises(pymodal.InputError, match="pitch_mm"):
@@ -224,7 +237,7 @@ def test_plot_tracks_draws_the_longest_tracks_in_mm_with_labels_legend_and_colou
     first = max(lines, key=lambda c: len(c.get_segments())).get_segments()[0]
     np.testing.assert_allclose(first[0], tracks[59][0, 1:3] * [5.0, 4.0])
     assert ax.get_xlabel() == "x (mm)" and ax.get_ylabel() == "y (mm)"
-    assert ax.get_title() == "node tracks\nthe 40 longest of 60 spanning ≥ 3 frames"
+    assert ax.get_title() == "node tracks, frames 0–65\n40 longest of 60 (≥ 3 frames)"
     assert colour_bar_labels(ax) == ["peak pressure (kPa)", "time (s)"]
     assert legend_texts(ax) == ["node track (colour: time)", "track start"]
     # Colours follow time: the recording's frame interval (50 Hz) times the frame.
@@ -232,6 +245,7 @@ def test_plot_tracks_draws_the_longest_tracks_in_mm_with_labels_legend_and_colou
     np.testing.assert_allclose(longest.get_array(), tracks[59][:-1, 0] * 0.02)
     image = ax.images[0]
     assert image.get_extent() == pytest.approx((-2.5, 97.5, 118.0, -2.0))
+    assert_legend_off_the_data_and_under_the_title(ax)
 
 
 def test_plot_tracks_without_pitch_is_in_sensels_and_longest_none_draws_all():
@@ -239,7 +253,7 @@ def test_plot_tracks_without_pitch_is_in_sensels_and_longest_none_draws_all():
     ax = pymodal.plot_tracks(tracks, longest=None, min_length=5)
     assert len(track_collections(ax)) == 10
     assert ax.get_xlabel() == "x (sensels)" and ax.get_ylabel() == "y (sensels)"
-    assert ax.get_title() == "node tracks\nall 10 spanning ≥ 5 frames"
+    assert ax.get_title() == "node tracks, frames 0–15\nall 10 (≥ 5 frames)"
     assert colour_bar_labels(ax) == ["frame"]
     assert "node track (colour: time)" in legend_texts(ax)
     assert ax.yaxis_inverted()
@@ -248,3 +262,51 @@ def test_plot_tracks_without_pitch_is_in_sensels_and_longest_none_draws_all():
     with pytest.raises(pymodal.InputError, match=r"tracks\[1\]"):
         pymodal.plot_tracks([tracks[0], np.zeros((4, 2))])
 
+
+
+def test_plot_tracks_of_an_isocontour_run_are_coloured_by_level_over_its_frame():
+    rec = blob_recording(frames=3)
+    res = pymodal.run(rec, model="isocontour", iso_levels=6, spacing=1.0)
+    objects = res["objects"]
+    frame = objects[0]["frame"]
+    levels = sorted(o["level"] for o in objects)
+    ax = pymodal.plot_tracks(res, background=rec, min_length=2)
+    # The levels order the steps: the colour bar is in the pressure units, not in time.
+    assert colour_bar_labels(ax) == ["isobaric level (kPa)", f"pressure, frame {frame} (kPa)"]
+    title = ax.get_title()
+    assert f"frame {frame}" in title and f"{len(objects)} isobaric levels" in title
+    assert f"{levels[0]:.0f}–{levels[-1]:.0f} kPa" in title and "frames" not in title
+    np.testing.assert_allclose(np.ma.filled(ax.images[0].get_array(), np.nan), rec.frames[frame])
+    assert "node track (colour: level)" in legend_texts(ax)
+    lines = track_collections(ax)
+    assert lines
+    for c in lines:
+        assert set(np.round(c.get_array(), 9)) <= set(np.round(levels, 9))
+    assert_legend_off_the_data_and_under_the_title(ax)
+
+
+def test_readme_three_panels_do_not_overlap():
+    # The README's example: no two texts of different panels or colour bars overlap (titles,
+    # axis labels, tick labels, colour bar labels, legends).
+    rec = blob_recording(frames=6)
+    a = max(pymodal.contours(rec.frames[2], spacing=1.0), key=len)
+    b = max(pymodal.contours(rec.frames[3], spacing=1.0), key=len)
+    m = pymodal.match(a, b)
+    res = pymodal.run(rec)
+    fig, (left, middle, right) = plt.subplots(1, 3, figsize=(14, 8), layout="constrained")
+    pymodal.plot_frame(rec, 2, ax=left)
+    pymodal.plot_match(m, a, b, ax=middle, pitch_mm=rec.pitch_mm, labels=("frame 2", "frame 3"))
+    pymodal.plot_tracks(res, ax=right, background=rec, min_length=2)
+    fig.canvas.draw()
+    boxes = []
+    for k, ax in enumerate(fig.axes):
+        texts = [ax.title, ax.xaxis.label, ax.yaxis.label]
+        texts += [t for t in ax.get_xticklabels() + ax.get_yticklabels() if t.get_text()]
+        if ax.get_legend() is not None:
+            texts.append(ax.get_legend())
+        boxes += [(k, extent(t)) for t in texts if t.get_visible() and (
+            not hasattr(t, "get_text") or t.get_text())]
+    for i, (ka, ba) in enumerate(boxes):
+        for kb, bb in boxes[i + 1:]:
+            if ka != kb:
+                assert not ba.overlaps(bb), (fig.axes[ka], fig.axes[kb], ba, bb)

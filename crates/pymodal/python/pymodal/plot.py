@@ -34,8 +34,24 @@ def _pyplot():
 def _axes(ax, projection=None):
     if ax is not None:
         return ax
-    fig = _pyplot().figure()
+    # Constrained layout makes room for the colour bars, the legend and the title, so that
+    # none of them runs into another (as in a figure of several panels made with it).
+    fig = _pyplot().figure(layout="constrained")
     return fig.add_subplot(111, projection=projection)
+
+
+def _title_and_legend(ax, title, legend=True, ncol=2):
+    """The title, and the legend in rows between it and the axes: never over the data (a
+    legend inside the axes hides part of an outline). The title is lifted by the legend's
+    height, which is fixed in points whatever the figure's layout does later."""
+    pad = 6.0
+    if legend:
+        handles, _ = ax.get_legend_handles_labels()
+        leg = ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=min(ncol, len(handles)) or 1,
+                        fontsize="small", frameon=False, borderaxespad=0.2, handlelength=1.6,
+                        columnspacing=1.0)
+        pad += leg.get_window_extent().height * 72.0 / ax.figure.dpi
+    ax.set_title(title, pad=pad)
 
 
 def _input_error(message):
@@ -71,7 +87,8 @@ def plot_match(m, a, b, ax=None, *, pitch_mm=None, show_excess=True, closed=None
     dashed orange, nodes left unmatched ringed. ``pitch_mm`` (a number or (x, y), mm per sensel)
     scales x and y to millimetres and the axes are labelled "x (mm)", "y (mm)"; without it they
     are in sensels and labelled so. ``labels`` names the two objects in the legend (e.g.
-    ``("frame 40", "frame 41")``); ``legend=False`` leaves the legend out. ``title`` replaces the
+    ``("frame 40", "frame 41")``), which lies above the axes, off the data; ``legend=False``
+    leaves it out. ``title`` replaces the
     default title: the two labels, then the counts of one-to-one and excess matches and of
     unmatched nodes. ``closed`` draws the outlines as closed polygons (default: for 2-D
     objects); ``invert_y`` puts row 0 at the top, as in the pressure image. Returns the axes.
@@ -142,7 +159,6 @@ def plot_match(m, a, b, ax=None, *, pitch_mm=None, show_excess=True, closed=None
     if title is None:
         title = (f"{name_a} \u2192 {name_b}\n{int(one.sum())} one-to-one, {n_excess} excess, "
                  f"{n_unmatched} unmatched")
-    ax.set_title(title)
     if three_d:
         ax.set_zlabel("z")
     else:
@@ -150,8 +166,7 @@ def plot_match(m, a, b, ax=None, *, pitch_mm=None, show_excess=True, closed=None
         ax.autoscale_view()
         if invert_y and not ax.yaxis_inverted():
             ax.invert_yaxis()
-    if legend:
-        ax.legend(loc="best", fontsize="small")
+    _title_and_legend(ax, title, legend)
     return ax
 
 
@@ -194,14 +209,20 @@ def plot_frame(recording, i, ax=None, *, contours=True, cmap="viridis", **contou
 
 def plot_tracks(tracks, ax=None, *, background=None, pitch_mm=None, units=None, dt_s=None,
                 longest=40, min_length=3, invert_y=True, cmap="plasma"):
-    """Draw node tracks, each a ``(k, 3 or 4)`` array of ``(frame, x, y[, z])`` rows in sensels
-    as returned by :func:`pymodal.run`, in the x-y plane.
+    """Draw node tracks in the x-y plane: the result of :func:`pymodal.run`, or its
+    ``["tracks"]``, each a ``(k, 3 or 4)`` array of ``(frame, x, y[, z])`` rows in sensels.
 
     Like the ``tracks.png`` of ``pedomatch run``, only the ``longest`` tracks (default 40, by
-    number of frames; ``None`` for all) among those spanning at least ``min_length`` frames are
+    number of steps; ``None`` for all) among those spanning at least ``min_length`` steps are
     drawn: thousands of overlapping tracks hide each other. The title says how many are shown
     of how many. Each track is a line coloured by frame (``cmap``, with a colour bar in frames,
-    or in seconds when ``dt_s`` is known) with a dot where it starts.
+    or in seconds when ``dt_s`` is known) with a dot where it starts; the legend is above the
+    axes, off the data.
+
+    Given the result of an isocontour run (``model="isocontour"``: every object an isobaric
+    level of one frame), the tracks are coloured by level instead, with a colour bar in the
+    pressure units, the title names the frame and the levels, and a recording as
+    ``background`` is drawn as that frame's pressure image.
 
     ``background`` is an optional image under the tracks: a :class:`pymodal.Recording` (its
     peak-pressure image; its pitch, units and frame interval are used unless given) or an
@@ -215,13 +236,91 @@ def plot_tracks(tracks, ax=None, *, background=None, pitch_mm=None, units=None, 
     """
     import pymodal
 
+    objects = None
+    if isinstance(tracks, dict):
+        objects = tracks.get("objects")
+        tracks = tracks.get("tracks", [])
+    iso = _iso_levels(objects)
+    background_what = "peak pressure"
     if isinstance(background, pymodal.Recording):
         rec = background
-        background = rec.peak_image
+        if iso is None:
+            background = rec.peak_image
+        else:
+            background = np.asarray(rec.frames[iso["frame"]], dtype=float)
+            background_what = f"pressure, frame {iso['frame']}"
         pitch_mm = rec.pitch_mm if pitch_mm is None else pitch_mm
         units = (rec.units or None) if units is None else units
         dt_s = rec.dt_s if dt_s is None else dt_s
     sx, sy, unit = _scale(pitch_mm)
+    eligible = _eligible_tracks(tracks, min_length)
+    # Longest first; ties by first frame, so the choice is deterministic (as the CLI's).
+    order = sorted(range(len(eligible)), key=lambda k: (-len(eligible[k]), eligible[k][0, 0]))
+    shown = [eligible[k] for k in order[: None if longest is None else max(int(longest), 0)]]
+
+    ax = _axes(ax)
+    from matplotlib import cm, colors
+    from matplotlib.collections import LineCollection
+
+    if background is not None:
+        _draw_background(ax, background, sx, sy, f"{background_what} ({units or 'units unknown'})")
+    if iso is None:
+        scale = 1.0 if dt_s is None else float(dt_s)
+        values = [t[:, 0] * scale for t in shown]
+        what, bar_label = "time", ("frame" if dt_s is None else "time (s)")
+    else:
+        values = [np.array([iso["levels"].get((x, y), np.nan) for x, y in t[:, 1:3]])
+                  for t in shown]
+        what, bar_label = "level", f"isobaric level ({units or 'units unknown'})"
+    finite = np.concatenate(values + [np.zeros(0)])
+    finite = finite[np.isfinite(finite)]
+    norm = colors.Normalize(*(finite.min(), finite.max()) if len(finite) else (0.0, 1.0))
+    for k, (t, v) in enumerate(zip(shown, values)):
+        xy = t[:, 1:3] * [sx, sy]
+        lines = LineCollection(np.stack([xy[:-1], xy[1:]], axis=1), cmap=cmap, norm=norm, lw=1.2,
+                               label=f"node track (colour: {what})" if k == 0 else "_track")
+        lines.set_array(v[:-1])
+        ax.add_collection(lines)
+    if shown:
+        starts = np.array([t[0, 1:3] * [sx, sy] for t in shown])
+        ax.scatter(starts[:, 0], starts[:, 1], s=10, c=[v[0] for v in values], cmap=cmap,
+                   norm=norm, edgecolors="k", linewidths=0.4, label="track start", zorder=3)
+    # Without a layout engine a second bar on the right would sit between the axes and the
+    # first one, its tick labels on the first's: it goes below the axes instead.
+    below = background is not None and ax.figure.get_layout_engine() is None
+    ax.figure.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label=bar_label,
+                       location="bottom" if below else "right")
+    ax.set_xlabel(f"x ({unit})")
+    ax.set_ylabel(f"y ({unit})")
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    if background is None and invert_y and not ax.yaxis_inverted():
+        ax.invert_yaxis()
+    title = _tracks_title(shown, eligible, min_length, iso, dt_s, units)
+    _title_and_legend(ax, title, legend=bool(shown))
+    return ax
+
+
+def _iso_levels(objects):
+    """For the objects of an isocontour run (each with a level, all of one frame): the frame,
+    the levels, and the level of each node by its (x, y); else None."""
+    if not objects or any(o.get("level") is None for o in objects):
+        return None
+    frames = {o["frame"] for o in objects}
+    if len(frames) != 1:
+        return None
+    # A track's rows are its objects' nodes, the very same numbers: a node names its level.
+    by_node = {}
+    for o in objects:
+        for x, y in np.asarray(o["points"], dtype=float)[:, :2]:
+            by_node[(x, y)] = o["level"]
+    levels = [o["level"] for o in objects]
+    return {"frame": frames.pop(), "levels": by_node, "range": (min(levels), max(levels)),
+            "count": len(levels)}
+
+
+def _eligible_tracks(tracks, min_length):
+    """The tracks as float arrays, those of at least ``min_length`` (and 2) steps."""
     eligible = []
     for i, t in enumerate(tracks):
         try:
@@ -234,55 +333,33 @@ def plot_tracks(tracks, ax=None, *, background=None, pitch_mm=None, units=None, 
                 f"shape {t.shape}")
         if len(t) >= max(min_length, 2):
             eligible.append(t)
-    # Longest first; ties by first frame, so the choice is deterministic (as the CLI's).
-    order = sorted(range(len(eligible)), key=lambda k: (-len(eligible[k]), eligible[k][0, 0]))
-    shown = [eligible[k] for k in order[: None if longest is None else max(int(longest), 0)]]
+    return eligible
 
-    ax = _axes(ax)
-    from matplotlib import colors
-    from matplotlib.collections import LineCollection
 
-    if background is not None:
-        bg = np.asarray(background, dtype=float)
-        if bg.ndim != 2:
-            raise _input_error(
-                f"background must be a Recording or an (H, W) image, got shape {bg.shape}")
-        image = ax.imshow(np.ma.masked_invalid(bg), cmap="Greys", origin="upper",
-                          interpolation="nearest",
-                          extent=(-0.5 * sx, (bg.shape[1] - 0.5) * sx,
-                                  (bg.shape[0] - 0.5) * sy, -0.5 * sy))
-        ax.figure.colorbar(image, ax=ax, label=f"peak pressure ({units or 'units unknown'})")
-    scale = 1.0 if dt_s is None else float(dt_s)
-    if shown:
-        frames = np.concatenate([t[:, 0] for t in shown]) * scale
-        norm = colors.Normalize(frames.min(), frames.max())
-    else:
-        norm = colors.Normalize(0.0, 1.0)
-    for k, t in enumerate(shown):
-        xy = t[:, 1:3] * [sx, sy]
-        segs = np.stack([xy[:-1], xy[1:]], axis=1)
-        lines = LineCollection(segs, cmap=cmap, norm=norm, lw=1.2,
-                               label="node track (colour: time)" if k == 0 else "_track")
-        lines.set_array(t[:-1, 0] * scale)
-        ax.add_collection(lines)
-    if shown:
-        starts = np.array([t[0, 1:3] * [sx, sy] for t in shown])
-        ax.scatter(starts[:, 0], starts[:, 1], s=10, c=[t[0, 0] * scale for t in shown],
-                   cmap=cmap, norm=norm, edgecolors="k", linewidths=0.4, label="track start",
-                   zorder=3)
-    from matplotlib import cm
+def _draw_background(ax, background, sx, sy, label):
+    bg = np.asarray(background, dtype=float)
+    if bg.ndim != 2:
+        raise _input_error(
+            f"background must be a Recording or an (H, W) image, got shape {bg.shape}")
+    image = ax.imshow(np.ma.masked_invalid(bg), cmap="Greys", origin="upper",
+                      interpolation="nearest",
+                      extent=(-0.5 * sx, (bg.shape[1] - 0.5) * sx,
+                              (bg.shape[0] - 0.5) * sy, -0.5 * sy))
+    ax.figure.colorbar(image, ax=ax, label=label)
 
-    ax.figure.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax,
-                       label="frame" if dt_s is None else "time (s)")
-    which = "all" if len(shown) == len(eligible) else f"the {len(shown)} longest of"
-    ax.set_title(f"node tracks\n{which} {len(eligible)} spanning \u2265 {max(min_length, 2)} "
-                 f"frames")
-    ax.set_xlabel(f"x ({unit})")
-    ax.set_ylabel(f"y ({unit})")
-    ax.set_aspect("equal")
-    ax.autoscale_view()
-    if shown:
-        ax.legend(loc="best", fontsize="small")
-    if background is None and invert_y and not ax.yaxis_inverted():
-        ax.invert_yaxis()
-    return ax
+
+def _tracks_title(shown, eligible, min_length, iso, dt_s, units):
+    """Two or three short lines (a long one runs into the next panel): what, when, how many."""
+    which = "all" if len(shown) == len(eligible) else f"{len(shown)} longest of"
+    if iso is not None:
+        lo, hi = iso["range"]
+        time = f", {iso['frame'] * dt_s:.3f} s" if dt_s else ""
+        return (f"node tracks, frame {iso['frame']}{time}\n{iso['count']} isobaric levels, "
+                f"{lo:.0f}\u2013{hi:.0f} {units or ''}".rstrip()
+                + f"\n{which} {len(eligible)} (\u2265 {max(min_length, 2)} levels)")
+    frames = [t[:, 0] for t in eligible]
+    span = ""
+    if frames:
+        f0, f1 = int(min(f.min() for f in frames)), int(max(f.max() for f in frames))
+        span = f", frames {f0}\u2013{f1}"
+    return f"node tracks{span}\n{which} {len(eligible)} (\u2265 {max(min_length, 2)} frames)"
