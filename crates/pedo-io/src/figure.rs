@@ -721,6 +721,9 @@ struct Layout {
     legend: Vec<LegendEntry>,
     image: Option<PressureImage>,
     layers: Vec<Layer>,
+    /// Widen the figure to its title and subtitle when they are wider than the plot and its
+    /// columns (off for an animation, whose frames share one size while their titles vary).
+    fit_title: bool,
 }
 
 const COLORBAR_WIDTH: u32 = 104;
@@ -765,6 +768,7 @@ impl Layout {
             legend,
             image,
             layers,
+            fit_title: true,
         }
     }
 
@@ -789,7 +793,10 @@ impl Layout {
         let body = (self.plot.1 + X_LABEL_AREA + PLOT_MARGIN).max(legend_height);
         let title =
             text_width(&self.title, TITLE_SIZE).max(text_width(&self.subtitle, SUBTITLE_SIZE));
-        let width = (self.chart_width() + bar + self.legend_width()).max(title + 2 * TITLE_MARGIN);
+        let mut width = self.chart_width() + bar + self.legend_width();
+        if self.fit_title {
+            width = width.max(title + 2 * TITLE_MARGIN);
+        }
         (width.min(MAX_SIDE), (TITLE_HEIGHT + body).min(MAX_SIDE))
     }
 

@@ -215,7 +215,7 @@ impl Animation<'_> {
                 glyph: Glyph::Dashed(COLOR_EXCESS),
             },
         ];
-        Ok(Layout::new(
+        let mut layout = Layout::new(
             bounds,
             self.axes,
             title,
@@ -223,7 +223,11 @@ impl Animation<'_> {
             legend,
             Some(image),
             layers,
-        ))
+        );
+        // Every frame of the GIF has the first one's size; its title, shorter than the plot
+        // and legend anyway, must not change it.
+        layout.fit_title = false;
+        Ok(layout)
     }
 }
 
