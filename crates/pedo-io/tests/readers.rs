@@ -329,6 +329,14 @@ fn corrupt_and_truncated_files_give_located_errors() {
     }
     let rec = csv::parse_csv(b"1,2,3,4,4\n0,5,7,1,0\n", "d.csv").unwrap();
     assert_eq!(rec.rows(), 2);
+    // A European export: semicolons between values, decimal commas.
+    let rec = csv::parse_csv("p1;p2;p3\n0,5;12,25;-1\n3;0;1,0\n".as_bytes(), "eu.csv").unwrap();
+    assert_eq!((rec.rows(), rec.cols()), (2, 3));
+    assert_eq!(
+        &*rec.frame_slice(0).unwrap(),
+        &[0.5f32, 12.25, 0.0, 3.0, 0.0, 1.0][..]
+    );
+    assert!(!rec.sensor_mask()[2], "-1 is no sensor");
     assert_names(
         read_recording(data("does-not-exist.asf")).unwrap_err(),
         "does-not-exist.asf",

@@ -210,7 +210,7 @@ pub fn frame_range(
     pair.map(Some).ok_or_else(|| {
         argument_error(
             "frames",
-            "a (start, end) pair of 0-based frame indices (end excluded, like a slice; either \
+            "a (start, end) pair of 0-based frame indices, none negative (end excluded; either \
              may be None)",
             v,
         )

@@ -1,5 +1,6 @@
 //! A single frame as a delimited text grid (comma, semicolon, tab or spaces; no header, or one
-//! header line: names, or the column numbers). `-1`, `B` and `NaN` mark a missing sensor.
+//! header line: names, or the column numbers; with semicolons, decimal commas too). `-1`, `B`
+//! and `NaN` mark a missing sensor.
 
 use super::asf::trunc;
 use super::{latin1_lines, parse_num};
@@ -31,11 +32,12 @@ pub fn parse_csv(bytes: &[u8], name: &str) -> Result<Recording> {
         if t.is_empty() {
             continue;
         }
+        // `;` first: a semicolon-separated export writes decimal commas (`0,5;12,25`).
         let s = *sep.get_or_insert_with(|| {
-            if t.contains(',') {
-                Some(',')
-            } else if t.contains(';') {
+            if t.contains(';') {
                 Some(';')
+            } else if t.contains(',') {
+                Some(',')
             } else if t.contains('\t') {
                 Some('\t')
             } else {
@@ -50,7 +52,7 @@ pub fn parse_csv(bytes: &[u8], name: &str) -> Result<Recording> {
             first_content = false;
             let numeric = fields
                 .iter()
-                .any(|f| parse_num(f).is_some() || is_missing(f));
+                .any(|f| number(f, s).is_some() || is_missing(f));
             if !numeric || is_column_numbers(&fields) {
                 continue; // a header line
             }
@@ -68,7 +70,7 @@ pub fn parse_csv(bytes: &[u8], name: &str) -> Result<Recording> {
                 values.push(0.0);
                 present.push(false);
             } else {
-                let v = parse_num(f).ok_or_else(|| {
+                let v = number(f, s).ok_or_else(|| {
                     err(
                         ln,
                         format!("value {} is not a number: {:?}", k + 1, trunc(f)),
@@ -99,6 +101,15 @@ fn is_column_numbers(fields: &[&str]) -> bool {
         }
         _ => false,
     }
+}
+
+/// A value of the grid: with `;` between values a decimal comma is read as a decimal point.
+fn number(f: &str, sep: Option<char>) -> Option<f64> {
+    parse_num(f).or_else(|| {
+        (sep == Some(';') && f.contains(','))
+            .then(|| parse_num(&f.replacen(',', ".", 1)))
+            .flatten()
+    })
 }
 
 fn is_missing(f: &str) -> bool {
