@@ -98,9 +98,12 @@ fn load_object(path: &Path, frame: usize, args: &MatchArgs) -> Result<Object, Cl
     // A CSV is a point file when it has 2 or 3 columns (then a bad value is a point file's
     // error), a pressure grid otherwise.
     if ext == "csv"
-        && std::fs::read_to_string(path).is_ok_and(|t| pedo_io::points::is_point_layout(&t))
+        && let Ok(text) = std::fs::read_to_string(path)
+        && pedo_io::points::is_point_layout(&text)
     {
-        return Ok(plain(pedo_io::points::read_points(path, Topology::None)?));
+        let name = path.display().to_string();
+        let points = pedo_io::points::parse_points(&text, &name, Topology::None)?;
+        return Ok(plain(points));
     }
     let mut rec = args.read.read(path)?;
     args.units.overrides().apply(&mut rec)?;
