@@ -736,12 +736,21 @@ const LEGEND_MARGIN: u32 = 16;
 const TITLE_MARGIN: u32 = 16;
 const MAX_SIDE: u32 = 4096;
 
+/// The bundled font, parsed once for the text measures and the bitmap backend.
+fn bundled_font() -> Option<&'static ab_glyph::FontRef<'static>> {
+    static FONT_REF: std::sync::OnceLock<Option<ab_glyph::FontRef<'static>>> =
+        std::sync::OnceLock::new();
+    FONT_REF
+        .get_or_init(|| ab_glyph::FontRef::try_from_slice(FONT_BYTES).ok())
+        .as_ref()
+}
+
 /// The width in pixels of `text` in the bundled font at `size`.
 fn text_width(text: &str, size: f64) -> u32 {
-    match ab_glyph::FontRef::try_from_slice(FONT_BYTES) {
-        Ok(font) => text::text_width(&font, text, size),
+    match bundled_font() {
+        Some(font) => text::text_width(font, text, size),
         // The font is compiled in and always parses; a generous estimate keeps text uncut.
-        Err(_) => (0.7 * size * text.chars().count() as f64).ceil() as u32,
+        None => (0.7 * size * text.chars().count() as f64).ceil() as u32,
     }
 }
 
@@ -1103,8 +1112,9 @@ fn render_rgb(layout: &Layout) -> Result<(u32, u32, Vec<u8>)> {
     let (w, h) = layout.size();
     let mut pixels = vec![255u8; w as usize * h as usize * 3];
     {
-        let font = ab_glyph::FontRef::try_from_slice(FONT_BYTES)
-            .map_err(|_| IoError::Figure("the bundled font could not be read".to_string()))?;
+        let font = bundled_font()
+            .cloned()
+            .ok_or_else(|| IoError::Figure("the bundled font could not be read".to_string()))?;
         let root = text::TextBitmap {
             inner: BitMapBackend::with_buffer(&mut pixels, (w, h)),
             font,
