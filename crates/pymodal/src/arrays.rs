@@ -69,3 +69,11 @@ pub(crate) fn index_rows(
     }
     Ok(Some(v.iter().map(|&x| x as usize).collect()))
 }
+
+/// `arr` made read-only, for an attribute of a result. Attributes hand out copies of what the
+/// object holds, so a write into one would change nothing and vanish silently; read-only, numpy
+/// says so instead ("assignment destination is read-only"). `arr.copy()` gives a writable array.
+pub(crate) fn read_only<T>(arr: Bound<'_, T>) -> PyResult<Bound<'_, T>> {
+    arr.as_any().call_method1("setflags", (false,))?;
+    Ok(arr)
+}

@@ -15,7 +15,7 @@ use pedo_io::{
     contours as contours_rs, ContourMethod, ContourOptions, Format, Grid, Recording, Resample,
 };
 
-use crate::arrays::checked_array;
+use crate::arrays::{checked_array, read_only};
 use crate::errors::{argument_error, input_error, internal, option_error, to_py};
 use crate::options_py::{count, opt_count};
 use crate::pickling::{Reader, Writer};
@@ -29,7 +29,8 @@ use crate::pickling::{Reader, Writer};
 /// the pitch is unknown), ``total_force`` (N when units and pitch are known), ``peak_pressure``,
 /// ``cop`` (T, 2) centre of pressure (x = column, y = row; NaN without contact), and
 /// ``peak_image`` (H, W). Measures count every sensor above 0; ``measures(threshold)`` recomputes
-/// them above another threshold.
+/// them above another threshold. The arrays are read-only copies made at each access: read
+/// ``frames = rec.frames`` once, not ``rec.frames[i]`` in a loop.
 #[pyclass(name = "Recording", module = "pymodal", frozen)]
 pub struct PyRecording {
     inner: Recording,
@@ -193,7 +194,7 @@ impl PyRecording {
         let r = &self.inner;
         let a = Array3::from_shape_vec((r.n_frames(), r.rows(), r.cols()), r.frames_with_nan())
             .map_err(internal)?;
-        Ok(a.into_pyarray(py))
+        read_only(a.into_pyarray(py))
     }
     /// (H, W) bool, True where a sensor exists.
     #[getter]
@@ -201,7 +202,7 @@ impl PyRecording {
         let r = &self.inner;
         let a = Array2::from_shape_vec((r.rows(), r.cols()), r.sensor_mask().to_vec())
             .map_err(internal)?;
-        Ok(a.into_pyarray(py))
+        read_only(a.into_pyarray(py))
     }
     /// ``(dx, dy)`` = (column spacing, row spacing) in mm, or None when the file does not say.
     #[getter]
@@ -250,15 +251,17 @@ impl PyRecording {
         let g = self.inner.peak_image();
         let a =
             Array2::from_shape_vec((g.rows(), g.cols()), g.data().to_vec()).map_err(internal)?;
-        Ok(a.into_pyarray(py))
+        read_only(a.into_pyarray(py))
     }
     /// (T,) float64 contact area per frame: sensors above 0 times the sensor area in mm², in
     /// sensels when the area is unknown.
     #[getter]
     fn contact_area<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        measures_dict(py, &self.inner, 0.0)?
-            .as_any()
-            .get_item("contact_area")
+        read_only(
+            measures_dict(py, &self.inner, 0.0)?
+                .as_any()
+                .get_item("contact_area")?,
+        )
     }
     /// (T,) float64 total force per frame: in N when units and sensor area are known; else the
     /// values' sum times the sensel area in mm² (the file's units × mm²), or the plain sum when the
@@ -266,24 +269,30 @@ impl PyRecording {
     /// ``total_load_sensels``).
     #[getter]
     fn total_force<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        measures_dict(py, &self.inner, 0.0)?
-            .as_any()
-            .get_item("total_force")
+        read_only(
+            measures_dict(py, &self.inner, 0.0)?
+                .as_any()
+                .get_item("total_force")?,
+        )
     }
     /// (T,) float64 highest pressure per frame.
     #[getter]
     fn peak_pressure<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        measures_dict(py, &self.inner, 0.0)?
-            .as_any()
-            .get_item("peak_pressure")
+        read_only(
+            measures_dict(py, &self.inner, 0.0)?
+                .as_any()
+                .get_item("peak_pressure")?,
+        )
     }
     /// (T, 2) float64 centre of pressure ``(x, y)`` per frame in sensel units, NaN for empty
     /// frames.
     #[getter]
     fn cop<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        measures_dict(py, &self.inner, 0.0)?
-            .as_any()
-            .get_item("cop")
+        read_only(
+            measures_dict(py, &self.inner, 0.0)?
+                .as_any()
+                .get_item("cop")?,
+        )
     }
     /// Per-frame measures counting sensors strictly above ``threshold``: a dict of arrays
     /// ``contact_area``, ``total_force``, ``peak_pressure``, ``contact_sensors``, ``cop``.
@@ -550,16 +559,18 @@ impl PySurface {
     /// (n, 3) float64 nodes ``(x, y, z)``.
     #[getter]
     fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        points_array(py, &self.inner.points)
+        read_only(points_array(py, &self.inner.points)?)
     }
     /// (t, 3) int64 node indices, counter-clockwise in x-y.
     #[getter]
     fn triangles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
         let t = &self.inner.triangles;
         let flat: Vec<i64> = t.iter().flatten().map(|&i| i as i64).collect();
-        Ok(Array2::from_shape_vec((t.len(), 3), flat)
-            .map_err(internal)?
-            .into_pyarray(py))
+        read_only(
+            Array2::from_shape_vec((t.len(), 3), flat)
+                .map_err(internal)?
+                .into_pyarray(py),
+        )
     }
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
         self.state().reduce(py, "Surface")

@@ -7,7 +7,7 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArray
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::arrays::{checked_array, index_rows};
+use crate::arrays::{checked_array, index_rows, read_only};
 use crate::errors::{input_error, internal, to_py};
 use crate::pickling::{Reader, Writer};
 
@@ -33,7 +33,8 @@ use crate::pickling::{Reader, Writer};
 ///     [x, y, 1])[:d]``, i.e. ``a @ transform[:d, :d].T + transform[:d, d]``.
 /// aligned_a : (n, d) float64 — a's nodes in b's frame as the search used them.
 ///
-/// Matches pickle (``pickle``, ``multiprocessing``, Dask) and round-trip exactly.
+/// The arrays are read-only copies made at each access (``.copy()`` to change one). Matches
+/// pickle (``pickle``, ``multiprocessing``, Dask) and round-trip exactly.
 #[pyclass(name = "Match", module = "pymodal", frozen)]
 pub struct PyMatch {
     inner: MatchResult,
@@ -134,47 +135,55 @@ impl PyMatch {
 impl PyMatch {
     /// (k, 2) int64 ``(index in a, index in b)``: the search's pairs, then the excess pairs.
     #[getter]
-    fn pairs<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
-        pairs_array(py, self.inner.pairs.iter().map(|p| (p.a, p.b)))
+    fn pairs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        read_only(pairs_array(py, self.inner.pairs.iter().map(|p| (p.a, p.b))))
     }
     /// (k,) float64 cost Z[a, b] of each pair.
     #[getter]
-    fn costs<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_vec(py, self.inner.pairs.iter().map(|p| p.cost).collect())
+    fn costs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        read_only(PyArray1::from_vec(
+            py,
+            self.inner.pairs.iter().map(|p| p.cost).collect(),
+        ))
     }
     /// (k,) bool, True for the pairs added by the excess-node step.
     #[getter]
-    fn excess<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
-        PyArray1::from_vec(py, self.inner.pairs.iter().map(|p| p.excess).collect())
+    fn excess<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        read_only(PyArray1::from_vec(
+            py,
+            self.inner.pairs.iter().map(|p| p.excess).collect(),
+        ))
     }
     /// (n, m) float64 final affinity matrix Z in [0, 1].
     #[getter]
-    fn affinity<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+    fn affinity<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let z = &self.inner.affinity;
-        PyArray1::from_slice(py, z.as_slice())
-            .reshape([z.rows(), z.cols()])
-            .expect("n × m reshape")
+        read_only(
+            PyArray1::from_slice(py, z.as_slice())
+                .reshape([z.rows(), z.cols()])
+                .expect("n × m reshape"),
+        )
     }
     /// int64 nodes of ``a`` in no pair.
     #[getter]
-    fn unmatched_a<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
-        PyArray1::from_vec(
+    fn unmatched_a<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        read_only(PyArray1::from_vec(
             py,
             self.inner.unmatched_a.iter().map(|&i| i as i64).collect(),
-        )
+        ))
     }
     /// int64 nodes of ``b`` in no pair.
     #[getter]
-    fn unmatched_b<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
-        PyArray1::from_vec(
+    fn unmatched_b<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        read_only(PyArray1::from_vec(
             py,
             self.inner.unmatched_b.iter().map(|&i| i as i64).collect(),
-        )
+        ))
     }
     /// (l, 2) int64 mutual-best matches on the final Z, under the threshold.
     #[getter]
-    fn local_pairs<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
-        pairs_array(py, self.inner.local_pairs.iter().copied())
+    fn local_pairs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        read_only(pairs_array(py, self.inner.local_pairs.iter().copied()))
     }
     /// Number of mutual-best (local) matches.
     #[getter]
@@ -204,7 +213,7 @@ impl PyMatch {
     /// (d+1, d+1) float64 homogeneous affine map from a's coordinates to b's that produced
     /// ``aligned_a``: ``a @ transform[:d, :d].T + transform[:d, d]``.
     #[getter]
-    fn transform<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+    fn transform<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let t = &self.inner.transform;
         let d = t.dim;
         let mut h = vec![0.0; (d + 1) * (d + 1)];
@@ -213,17 +222,21 @@ impl PyMatch {
             h[r * (d + 1) + d] = t.t[r];
         }
         h[(d + 1) * (d + 1) - 1] = 1.0;
-        PyArray1::from_vec(py, h)
-            .reshape([d + 1, d + 1])
-            .expect("(d+1) × (d+1) reshape")
+        read_only(
+            PyArray1::from_vec(py, h)
+                .reshape([d + 1, d + 1])
+                .expect("(d+1) × (d+1) reshape"),
+        )
     }
     /// (n, d) float64 nodes of a in b's frame, as the search used them.
     #[getter]
-    fn aligned_a<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+    fn aligned_a<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let d = self.inner.transform.dim;
-        PyArray1::from_slice(py, &self.inner.aligned_a)
-            .reshape([self.inner.aligned_a.len() / d, d])
-            .expect("n × d reshape")
+        read_only(
+            PyArray1::from_slice(py, &self.inner.aligned_a)
+                .reshape([self.inner.aligned_a.len() / d, d])
+                .expect("n × d reshape"),
+        )
     }
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
         self.state().reduce(py, "Match")

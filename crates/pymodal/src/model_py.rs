@@ -11,7 +11,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::arrays::{checked_array, index_rows};
+use crate::arrays::{checked_array, index_rows, read_only};
 use crate::errors::{input_error, internal, option_error, to_py};
 use crate::options_py::{count, opt_count};
 use crate::pickling::{Reader, Writer};
@@ -251,21 +251,26 @@ impl PyModalModel {
 
     /// ω², ascending.
     #[getter]
-    fn eigenvalues<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.basis.eigenvalues)
+    fn eigenvalues<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        read_only(PyArray1::from_slice(py, &self.basis.eigenvalues))
     }
 
     /// Natural angular frequencies ω (rad/s), ascending.
     #[getter]
-    fn frequencies<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_vec(py, self.basis.frequencies())
+    fn frequencies<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        read_only(PyArray1::from_vec(py, self.basis.frequencies()))
     }
 
     /// (d·n, k) mass-normalised modes, component-major rows.
     #[getter]
-    fn modes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+    fn modes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let b = &self.basis;
-        column_major_to_numpy(py, &b.modes_column_major(), b.n_dofs(), b.n_modes())
+        read_only(column_major_to_numpy(
+            py,
+            &b.modes_column_major(),
+            b.n_dofs(),
+            b.n_modes(),
+        ))
     }
 
     /// Gaussian width σ used (after the conditioning guard), or None for bar elements.
