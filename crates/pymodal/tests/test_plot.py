@@ -81,6 +81,8 @@ def test_plot_match_rings_unmatched_nodes_and_draws_3d():
     m3 = pymodal.match(p, p + [0.1, 0.0, 0.0])
     ax3 = pymodal.plot_match(m3, p, p + [0.1, 0.0, 0.0])
     assert ax3.name == "3d" and ax3.get_zlabel() == "z"
+    ax3 = pymodal.plot_match(m3, p, p + [0.1, 0.0, 0.0], pitch_mm=5.08, zlabel="pressure (scaled)")
+    assert ax3.get_zlabel() == "pressure (scaled)" and ax3.get_xlabel() == "x (mm)"
     with pytest.raises(ValueError, match="beyond"):
         pymodal.plot_match(m, a[:5], b)
 

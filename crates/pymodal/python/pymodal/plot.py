@@ -78,7 +78,8 @@ def _scale(pitch_mm):
 
 
 def plot_match(m, a, b, ax=None, *, pitch_mm=None, show_excess=True, closed=None,
-               invert_y=True, cmap="RdYlGn_r", labels=("A", "B"), title=None, legend=True):
+               invert_y=True, cmap="RdYlGn_r", labels=("A", "B"), title=None, legend=True,
+               zlabel="z"):
     """Draw objects ``a`` (blue) and ``b`` (black) and the matches ``m`` between them.
 
     ``m`` is a :class:`pymodal.Match` of ``a`` onto ``b`` (``(n, 2)`` or ``(n, 3)`` arrays of
@@ -91,7 +92,10 @@ def plot_match(m, a, b, ax=None, *, pitch_mm=None, show_excess=True, closed=None
     leaves it out. ``title`` replaces the
     default title: the two labels, then the counts of one-to-one and excess matches and of
     unmatched nodes. ``closed`` draws the outlines as closed polygons (default: for 2-D
-    objects); ``invert_y`` puts row 0 at the top, as in the pressure image. Returns the axes.
+    objects); ``invert_y`` puts row 0 at the top, as in the pressure image. ``zlabel`` labels the
+    z axis of 3-D objects; z is not scaled by ``pitch_mm`` (for the points of
+    :func:`pymodal.surface`, z is the pressure rescaled to the x-y extent in sensels, e.g.
+    ``zlabel="pressure (scaled)"``). Returns the axes.
 
     Raises :class:`pymodal.InputError` (a ``ValueError``) if ``a`` or ``b`` is not an (n, 2) or
     (n, 3) array, if they differ in dimension, if ``m`` names nodes beyond them, or for a bad
@@ -160,7 +164,7 @@ def plot_match(m, a, b, ax=None, *, pitch_mm=None, show_excess=True, closed=None
         title = (f"{name_a} \u2192 {name_b}\n{int(one.sum())} one-to-one, {n_excess} excess, "
                  f"{n_unmatched} unmatched")
     if three_d:
-        ax.set_zlabel("z")
+        ax.set_zlabel(zlabel)
     else:
         ax.set_aspect("equal")
         ax.autoscale_view()
