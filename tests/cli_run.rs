@@ -221,6 +221,34 @@ fn demo_on_bundled_recording() {
     }
     assert!(parts > 0, "the first 70 frames hold a merge or a split");
     assert_png(&out.join("tracks.png"));
+
+    // matches.csv marks the matches node tracks follow: exactly the steps of tracks.csv.
+    let mut steps = std::collections::HashSet::new();
+    let tracks = read_csv(&out.join("tracks.csv"));
+    for w in tracks.windows(2).filter(|w| w[0]["track"] == w[1]["track"]) {
+        let node = |r: &std::collections::HashMap<String, String>| {
+            (num(r, "object_id") as u64, num(r, "node") as u64)
+        };
+        steps.insert((node(&w[0]), node(&w[1])));
+    }
+    let (mut trackable, mut refused) = (std::collections::HashSet::new(), 0);
+    for r in read_csv(&out.join("matches.csv")) {
+        let ends = (
+            (num(&r, "id_a") as u64, num(&r, "node_a") as u64),
+            (num(&r, "id_b") as u64, num(&r, "node_b") as u64),
+        );
+        match (r["excess"].as_str(), r["trackable"].as_str()) {
+            ("0", "1") => assert!(trackable.insert(ends)),
+            ("0", "0") => refused += 1,
+            ("1", t) => assert_eq!(t, "0", "an excess match is never trackable: {r:?}"),
+            other => panic!("excess, trackable = {other:?}"),
+        }
+    }
+    assert_eq!(trackable, steps);
+    assert!(
+        refused > 0,
+        "some matches of these frames step further than the rule allows"
+    );
 }
 
 #[test]

@@ -10,8 +10,8 @@
 use crate::error::{IoError, Result};
 use crate::recording::{kpa_per_unit, Recording};
 use crate::sequence::{
-    PairMatch, PairObjects, PairRow, RunCounts, RunParams, SequenceObject, SequenceOptions,
-    SequenceResult, SkippedPairRow,
+    honest_step_of, PairMatch, PairObjects, PairRow, RunCounts, RunParams, SequenceObject,
+    SequenceOptions, SequenceResult, SkippedPairRow,
 };
 use modal_core::OptionValue;
 use serde_json::{json, Map, Value};
@@ -325,8 +325,10 @@ pub fn object_cells(recording: &Recording, o: &SequenceObject) -> Vec<Cell> {
     cells
 }
 
-/// Every match of every pair: object ids, nodes, cost, excess flag, and the in-plane distance
-/// between the two nodes in sensels (and mm when the pitch is known).
+/// Every match of every pair: object ids, nodes, cost, excess flag, whether node tracks may
+/// follow it (`trackable`: one-to-one and within the step rule of
+/// [`crate::track::step_allowed`]), and the in-plane distance between the two nodes in sensels
+/// (and mm when the pitch is known).
 pub fn matches_table(recording: &Recording, r: &SequenceResult) -> Table {
     let mut t = matches_header(recording);
     let Ok(()) = matches_rows::<std::convert::Infallible>(recording, r, &mut |cells| {
@@ -339,7 +341,14 @@ pub fn matches_table(recording: &Recording, r: &SequenceResult) -> Table {
 /// The columns of [`matches_table`] (no rows).
 pub fn matches_header(recording: &Recording) -> Table {
     let mut t = Table::new(&[
-        "id_a", "id_b", "node_a", "node_b", "cost", "excess", "distance",
+        "id_a",
+        "id_b",
+        "node_a",
+        "node_b",
+        "cost",
+        "excess",
+        "trackable",
+        "distance",
     ]);
     if recording.pitch_mm.is_some() {
         t.push_column("distance_mm");
@@ -377,6 +386,7 @@ pub fn pair_match_rows<E>(
             Cell::int(m.b),
             Cell::Float(m.cost, 6),
             Cell::int(m.excess as usize),
+            Cell::int((!m.excess && honest_step_of(oa, m.a, ob, m.b)) as usize),
             Cell::Float(dx.hypot(dy), 4),
         ];
         if let Some(p) = recording.pitch_mm {

@@ -1750,7 +1750,12 @@ pub(crate) fn honest_step(
 }
 
 /// [`honest_step`] with the two objects given.
-fn honest_step_of(oa: &SequenceObject, na: usize, ob: &SequenceObject, nb: usize) -> bool {
+pub(crate) fn honest_step_of(
+    oa: &SequenceObject,
+    na: usize,
+    ob: &SequenceObject,
+    nb: usize,
+) -> bool {
     oa.frame == ob.frame
         || crate::track::step_allowed(oa.shape.point(na), ob.shape.point(nb), &ob.shape)
 }

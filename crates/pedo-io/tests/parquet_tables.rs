@@ -146,7 +146,7 @@ fn a_parquet_study_holds_the_csv_tables_value_for_value_and_resumes() {
         .map(|c| format!("{}:{:?}", c.name(), c.physical_type()))
         .collect();
     assert_eq!(
-        types[..7],
+        types[..8],
         [
             "id_a:INT64",
             "id_b:INT64",
@@ -154,6 +154,7 @@ fn a_parquet_study_holds_the_csv_tables_value_for_value_and_resumes() {
             "node_b:INT64",
             "cost:DOUBLE",
             "excess:INT64",
+            "trackable:INT64",
             "distance:DOUBLE"
         ]
     );
