@@ -221,15 +221,23 @@ impl Recording {
     }
 
     /// Sets the sensor pitch `[dx, dy]` in mm (column spacing, row spacing); both must be
-    /// finite and positive.
+    /// finite and positive. A sensel area the file stated is dropped (it belongs to the file's
+    /// pitch): areas and forces then use `dx * dy`.
     pub fn with_pitch_mm(mut self, pitch: [f64; 2]) -> Result<Self> {
         if !pitch.iter().all(|p| p.is_finite() && *p > 0.0) {
             return Err(IoError::invalid(format!(
                 "pitch must be finite and positive, got {pitch:?} mm"
             )));
         }
-        self.pitch_mm = Some(pitch);
+        self.set_pitch_mm(pitch);
         Ok(self)
+    }
+
+    /// [`with_pitch_mm`](Self::with_pitch_mm) on a checked pitch.
+    pub(crate) fn set_pitch_mm(&mut self, pitch: [f64; 2]) {
+        self.pitch_mm = Some(pitch);
+        // A stated sensel area belongs to the file's pitch, not to the one given here.
+        self.sensel_area_mm2 = None;
     }
 
     /// Sets the frame rate in Hz (stored as the time between frames); finite and positive.

@@ -47,9 +47,7 @@ impl UnitOverrides {
     pub fn apply(&self, recording: &mut Recording) -> Result<(), OptionError> {
         self.validate()?;
         if let Some(p) = self.pitch_mm {
-            recording.pitch_mm = Some(p);
-            // A stated sensel area belongs to the file's pitch, not to the one given here.
-            recording.sensel_area_mm2 = None;
+            recording.set_pitch_mm(p);
         }
         if let Some(f) = self.frame_rate {
             recording.dt_s = Some(1.0 / f);

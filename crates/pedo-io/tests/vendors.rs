@@ -761,3 +761,24 @@ fn zebris_raw_xml_variants_and_refusals() {
             .contains("XML")
     );
 }
+
+#[test]
+fn a_pitch_set_on_a_file_replaces_its_stated_sensel_area() {
+    // FrasP01L.asf states 5.08 mm sensels and their area, 25.8064 mm².
+    let rec = read_recording(&data("FrasP01L.asf")).unwrap();
+    assert_eq!(rec.sensel_area(), Some(25.8064));
+    let area = |r: &Recording| r.measures(0.0)[40].contact_area;
+    let sensels = rec.measures(0.0)[40].contact_sensors as f64;
+    assert!((area(&rec) - 25.8064 * sensels).abs() < 1e-9);
+    // Set through the builder or as a user override, the new pitch gives the area.
+    let wider = rec.clone().with_pitch_mm([10.0, 10.0]).unwrap();
+    assert_eq!(wider.sensel_area(), Some(100.0));
+    assert!((area(&wider) - 100.0 * sensels).abs() < 1e-9);
+    let mut overridden = rec.clone();
+    let units = pedo_io::units::UnitOverrides {
+        pitch_mm: Some([10.0, 10.0]),
+        ..Default::default()
+    };
+    units.apply(&mut overridden).unwrap();
+    assert_eq!(overridden.sensel_area(), Some(100.0));
+}

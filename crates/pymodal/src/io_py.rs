@@ -146,11 +146,12 @@ impl PyRecording {
     ///     (unless ``mask`` is given).
     /// pitch_mm : float or (x, y), optional — sensor pitch in mm.
     /// frame_rate : float, optional — frames per second (Hz).
-    /// units : str, optional — pressure units as written (``"kPa"``, ``"N/cm2"``, ...).
+    /// units : str, optional — pressure units (``"kPa"``, ``"N/cm2"``, ``"psi"``, ...; the units
+    ///     ``run(units=...)`` accepts); forces are in N when units and pitch are known.
     /// mask : (H, W) bool array, optional — True where a sensor exists.
     ///
-    /// Raises :class:`InputError` (a ``ValueError``) for arrays of the wrong shape, infinite
-    /// values, or a non-positive pitch or frame rate.
+    /// Raises :class:`InputError` (a ``ValueError``) for arrays of the wrong shape or infinite
+    /// values, :class:`OptionError` for a non-positive pitch or frame rate or unknown units.
     #[staticmethod]
     #[pyo3(signature = (frames, *, pitch_mm=None, frame_rate=None, units=None, mask=None))]
     fn from_array(
@@ -179,12 +180,11 @@ impl PyRecording {
                 Some(flat)
             }
         };
-        let overrides = crate::options_py::units(pitch_mm, frame_rate, None)?;
+        // Checked like `run(units=...)`: a misspelt unit would silently turn forces in N into
+        // the values' sum times mm².
+        let overrides = crate::options_py::units(pitch_mm, frame_rate, units)?;
         let mut rec = Recording::from_array(t, h, w, data, mask).map_err(to_py)?;
         overrides.apply(&mut rec).map_err(to_py)?;
-        if let Some(u) = units {
-            rec = rec.with_units(u);
-        }
         Ok(Self { inner: rec })
     }
 

@@ -202,6 +202,8 @@ def test_recording_from_array_with_an_explicit_mask_and_one_frame():
         (np.zeros((2, 3)), {"mask": np.ones((3, 2), bool)}, "mask has shape"),
         (np.zeros((2, 3)), {"pitch_mm": -1.0}, "pitch"),
         (np.zeros((2, 3)), {"frame_rate": 0.0}, "frame_rate"),
+        # A misspelt unit would turn forces in N into the values' sum times mm², silently.
+        (np.zeros((2, 3)), {"units": "kpascal"}, "units = kpascal: expected a pressure unit"),
     ],
 )
 def test_recording_from_array_refuses_bad_input(frames, kwargs, message):
