@@ -14,7 +14,8 @@ use std::time::Instant;
 
 #[derive(Args)]
 pub struct MatchArgs {
-    /// First object: a point file (`x,y[,z]` per line) or a pressure image/recording.
+    /// First object: a point file (`x,y[,z]` per line: `.xy`, `.xyz`, `.pts`, or a `.csv`/`.txt`
+    /// with 2 or 3 columns) or a pressure image/recording (its largest contour).
     pub a: PathBuf,
     /// Second object, as the first.
     pub b: PathBuf,
@@ -54,7 +55,9 @@ pub struct MatchArgs {
     pub report: crate::cmd_run::ReportArg,
 }
 
-const POINT_EXTENSIONS: [&str; 4] = ["xy", "xyz", "pts", "txt"];
+/// Extensions that always name point files; `.csv` and `.txt` are point files when laid out as
+/// points, and recordings (CSV grids, footscan and pedar text exports) otherwise.
+const POINT_EXTENSIONS: [&str; 3] = ["xy", "xyz", "pts"];
 
 /// An object read from a file, and the pitch (mm) and frame time (s) when it came from a
 /// recording that knows them.
@@ -95,9 +98,9 @@ fn load_object(path: &Path, frame: usize, args: &MatchArgs) -> Result<Object, Cl
     if as_points {
         return Ok(plain(pedo_io::points::read_points(path, Topology::None)?));
     }
-    // A CSV is a point file when it has 2 or 3 columns (then a bad value is a point file's
-    // error), a pressure grid otherwise.
-    if ext == "csv"
+    // A CSV or text file is a point file when it has 2 or 3 columns (then a bad value is a point
+    // file's error), a recording otherwise.
+    if matches!(ext.as_str(), "csv" | "txt")
         && let Ok(text) = std::fs::read_to_string(path)
         && pedo_io::points::is_point_layout(&text)
     {

@@ -904,3 +904,39 @@ fn units_pitch_and_rate_given_for_an_npy_give_forces_in_newtons() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("units = furlongs"));
 }
+
+#[test]
+fn match_reads_a_footscan_text_export_as_a_recording() {
+    // A .txt is a point file only when laid out as points: a footscan export is a recording.
+    let txt = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/crates/pedo-io/tests/data/footscan-FrasP01L-11-20.txt"
+    );
+    let o = pedomatch(&[
+        "match",
+        txt,
+        txt,
+        "--frame",
+        "0",
+        "--frame-b",
+        "1",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["one_to_one_matches"].as_u64().unwrap() >= 8, "{v}");
+    // A .txt of points is still a point file.
+    let dir = temp_dir("match-txt");
+    let ring: String = (0..30)
+        .map(|k| {
+            let t = k as f64 * std::f64::consts::TAU / 30.0;
+            format!("{} {}\n", 3.0 * t.cos(), 2.0 * t.sin())
+        })
+        .collect();
+    std::fs::write(dir.join("a.txt"), &ring).unwrap();
+    let a = dir.join("a.txt");
+    let o = pedomatch(&["match", a.to_str().unwrap(), a.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["one_to_one_matches"], 30, "{v}");
+}
