@@ -679,13 +679,16 @@ pub fn output_name(path: &Path) -> String {
 /// - a folder is searched recursively, in name order, for files whose content sniffs as a
 ///   recording ([`sniff_format`]) and for files with a recording format's own extension
 ///   (`.asf`, `.lst`, `.apd`, `.npy`, `.npz`) whatever they hold, so that an empty or corrupt
-///   one gets its error row, as does a file that cannot be opened; PNG/TIFF images are not recordings on their own there: a
+///   one gets its error row, as does a file that cannot be opened; a text sniffed as a CSV grid
+///   that reads as a table of another kind (a first line of names, rows of at most 3 values:
+///   [`crate::formats::csv::looks_like_a_table`]) is passed over; PNG/TIFF images are not
+///   recordings on their own there: a
 ///   folder holding images is one image-sequence recording. Hidden folders and pedomatch output
 ///   folders are not searched;
 /// - anything else is a glob pattern (`data/**/*.asf`), each match taken as above.
 ///
-/// A path that neither exists nor matches is kept, so that its row reports it missing.
-/// Fails on a malformed pattern.
+/// A path that does not exist is kept, so that its row reports it missing. Fails on a malformed
+/// pattern and on a pattern that matches nothing (its row would only say "No such file").
 pub fn find_recordings<S: AsRef<str>>(inputs: &[S]) -> Result<Vec<PathBuf>> {
     let mut found = Vec::new();
     for input in inputs {
@@ -699,6 +702,11 @@ pub fn find_recordings<S: AsRef<str>>(inputs: &[S]) -> Result<Vec<PathBuf>> {
             .map_err(|e| IoError::invalid(format!("input pattern {input:?}: {e}")))?;
         let matches: Vec<PathBuf> = pattern.flatten().collect();
         if matches.is_empty() {
+            if input.contains(['*', '?', '[']) {
+                return Err(IoError::invalid(format!(
+                    "input pattern {input:?} matches no file"
+                )));
+            }
             found.push(path.to_path_buf());
         }
         for m in matches {
@@ -735,7 +743,7 @@ fn search_folder(root: &Path, found: &mut Vec<PathBuf>) {
         if !entry.file_type().is_file() || entry.file_name().to_string_lossy().starts_with('.') {
             continue;
         }
-        match sniff_file(entry.path()) {
+        match sniff_found_file(entry.path()) {
             Some(Format::Png | Format::Tiff) => {
                 let folder = entry.path().parent().unwrap_or(root).to_path_buf();
                 if !image_folders.contains(&folder) {
@@ -757,8 +765,8 @@ fn search_folder(root: &Path, found: &mut Vec<PathBuf>) {
     }
 }
 
-/// The format of a file by its first bytes, if it is a recording.
-fn sniff_file(path: &Path) -> Option<Format> {
+/// The first [`SNIFF_BYTES`] of a file, if it can be read.
+fn read_head(path: &Path) -> Option<Vec<u8>> {
     use std::io::Read;
     let mut head = Vec::with_capacity(SNIFF_BYTES);
     std::fs::File::open(path)
@@ -766,7 +774,25 @@ fn sniff_file(path: &Path) -> Option<Format> {
         .take(SNIFF_BYTES as u64)
         .read_to_end(&mut head)
         .ok()?;
-    sniff_format(path, &head).ok()
+    Some(head)
+}
+
+/// The format of a file by its first bytes, if it is a recording.
+fn sniff_file(path: &Path) -> Option<Format> {
+    sniff_format(path, &read_head(path)?).ok()
+}
+
+/// [`sniff_file`] for a file met in a searched folder: a text sniffed as a CSV grid that reads
+/// as a table of another kind is not a recording there
+/// ([`crate::formats::csv::looks_like_a_table`]).
+fn sniff_found_file(path: &Path) -> Option<Format> {
+    let head = read_head(path)?;
+    match sniff_format(path, &head).ok()? {
+        Format::Csv if crate::formats::csv::looks_like_a_table(&String::from_utf8_lossy(&head)) => {
+            None
+        }
+        f => Some(f),
+    }
 }
 
 /// How a study runs.

@@ -174,6 +174,18 @@ fn npy_dtypes_and_fortran_order() {
         assert_eq!((r.n_frames(), r.rows(), r.cols()), (1, 2, 3), "{d}");
         assert_eq!(r.data(), &expect[..], "{d}");
     }
+    // A float64 beyond float32's range is named as such, not turned into an infinity.
+    let huge: Vec<u8> = [0.0f64, 1e39, 0.0, 0.0, 0.0, 0.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let e = npy::parse_npy(&npy_bytes("<f8", false, "(2, 3)", &huge), "huge.npy")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("array holds 1e39, beyond the float32 range"),
+        "{e}"
+    );
     // Fortran order: a (2, 2, 3) array a[t, r, c] = 100 t + 10 r + c stored column-major.
     let mut body = Vec::new();
     for c in 0..3 {

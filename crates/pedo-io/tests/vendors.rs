@@ -765,7 +765,7 @@ fn zebris_raw_xml_variants_and_refusals() {
 #[test]
 fn a_pitch_set_on_a_file_replaces_its_stated_sensel_area() {
     // FrasP01L.asf states 5.08 mm sensels and their area, 25.8064 mm².
-    let rec = read_recording(&data("FrasP01L.asf")).unwrap();
+    let rec = read_recording(data("FrasP01L.asf")).unwrap();
     assert_eq!(rec.sensel_area(), Some(25.8064));
     let area = |r: &Recording| r.measures(0.0)[40].contact_area;
     let sensels = rec.measures(0.0)[40].contact_sensors as f64;

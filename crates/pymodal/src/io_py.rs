@@ -372,7 +372,26 @@ fn frames_of(
     };
     let flat = arr.call_method0("ravel")?;
     let flat: numpy::PyReadonlyArray1<'_, f32> = flat.extract()?;
-    Ok((t, h, w, flat.as_slice().map_err(internal)?.to_vec()))
+    let data = flat.as_slice().map_err(internal)?.to_vec();
+    // A finite value beyond float32's range became ±inf in the cast: say so, rather than
+    // letting the recording call it "not finite".
+    if let Some(k) = data.iter().position(|v| v.is_infinite()) {
+        let np = py.import("numpy")?;
+        let given: f64 = np
+            .call_method1("asarray", (frames,))?
+            .call_method0("ravel")?
+            .get_item(k)?
+            .extract()
+            .unwrap_or(f64::INFINITY);
+        if given.is_finite() {
+            let (frame, row, col) = (k / (h * w), k / w % h, k % w);
+            return Err(input_error(format!(
+                "frames: {given:e} at frame {frame}, row {row}, column {col} is beyond the \
+                 float32 range of a recording (±3.4e38)"
+            )));
+        }
+    }
+    Ok((t, h, w, data))
 }
 
 /// A 2-D array-like as a grid; NaN (no sensor) reads as 0, infinities are rejected.

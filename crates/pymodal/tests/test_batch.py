@@ -55,6 +55,9 @@ def test_find_recordings_searches_folders_and_globs(study):
     ]
     pattern = str(study / "in" / "*" / "trial.lst")
     assert pymodal.find_recordings([pattern, study / "in" / "a"]) == found[:2]
+    # A mistyped pattern is an error, not a row saying "No such file".
+    with pytest.raises(pymodal.InputError, match="matches no file"):
+        pymodal.find_recordings(str(study / "in" / "*" / "trail.lst"))
 
 
 def test_a_file_named_as_a_recording_is_never_left_out(tmp_path):
@@ -64,8 +67,12 @@ def test_a_file_named_as_a_recording_is_never_left_out(tmp_path):
     (tmp_path / "empty.asf").write_bytes(b"")
     (tmp_path / "garbled.npy").write_bytes(bytes(range(1, 200)))
     (tmp_path / "notes.txt").write_text("subject 3, left foot\n")
+    # Tables of another kind that sniff as numbers are no recordings either.
+    (tmp_path / "anthropometrics.csv").write_text("subject,age,mass_kg,height_m\n1,34,70.2,1.78\n2,28,65.0,1.70\n")
+    (tmp_path / "forceplate.csv").write_text("time,fz\n0.00,0\n0.01,12.5\n0.02,80.1\n")
+    (tmp_path / "grid.csv").write_text("0,0,1,3,4,2\n0,4,23,5,0,0\n0,2,9,7,1,0\n")
     found = pymodal.find_recordings(tmp_path)
-    assert [Path(p).name for p in found] == ["empty.asf", "garbled.npy", "good.lst"]
+    assert [Path(p).name for p in found] == ["empty.asf", "garbled.npy", "good.lst", "grid.csv"]
     rows = {Path(r["path"]).name: r for r in pymodal.batch(tmp_path, jobs=1, figures="none")}
     assert rows["good.lst"]["status"] == "ok"
     assert rows["empty.asf"]["status"] == "error"

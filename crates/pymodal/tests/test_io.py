@@ -204,8 +204,10 @@ def test_recording_from_array_with_an_explicit_mask_and_one_frame():
         (np.zeros((2, 3)), {"frame_rate": 0.0}, "frame_rate"),
         # A misspelt unit would turn forces in N into the values' sum times mm², silently.
         (np.zeros((2, 3)), {"units": "kpascal"}, "units = kpascal: expected a pressure unit"),
+        (np.full((2, 3), 1e39), {}, "frames: 1e39 at frame 0, row 0, column 0 is beyond the float32 range"),
     ],
 )
+@pytest.mark.filterwarnings("ignore:overflow encountered in cast")  # numpy's, beside the error
 def test_recording_from_array_refuses_bad_input(frames, kwargs, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
         pymodal.Recording.from_array(frames, **kwargs)

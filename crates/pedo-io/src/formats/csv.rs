@@ -90,6 +90,33 @@ pub fn parse_csv(bytes: &[u8], name: &str) -> Result<Recording> {
     Ok(rec)
 }
 
+/// Whether a text sniffed as a CSV grid reads rather as a table of another kind: a first line
+/// of names (not column numbers) or rows of at most 3 values (a point file, a time series). A
+/// searched folder passes such files over, as it does notes and spreadsheets (a study folder
+/// also holds anthropometrics and force-plate tables); named on their own they are still read.
+pub(crate) fn looks_like_a_table(head: &str) -> bool {
+    let head = head.strip_prefix('\u{feff}').unwrap_or(head);
+    let mut lines = head.lines().map(str::trim).filter(|l| !l.is_empty());
+    let Some(first) = lines.next() else {
+        return false;
+    };
+    let sep = [';', ',', '\t'].into_iter().find(|&c| first.contains(c));
+    let fields = split_fields(first, sep);
+    let numeric = fields
+        .iter()
+        .any(|f| number(f, sep).is_some() || is_missing(f));
+    let named_header = !numeric && !is_column_numbers(&fields);
+    let row = if numeric { Some(first) } else { lines.next() };
+    let narrow = row.is_some_and(|r| {
+        let mut fields = split_fields(r, sep);
+        if sep.is_some() && fields.len() > 1 && fields.last() == Some(&"") {
+            fields.pop();
+        }
+        fields.len() <= 3
+    });
+    named_header || narrow
+}
+
 /// Whether a first line numbers the columns (`1,2,…,n` or `0,1,…,n−1`, as spreadsheets and
 /// `numpy.savetxt` headers do): a header, not a row of pressures — no row of five or more
 /// sensors reads as an exact count.
@@ -170,4 +197,26 @@ pub fn write_grid_csv(grid: &Grid, path: impl AsRef<Path>) -> Result<()> {
         vec![true; grid.rows() * grid.cols()],
     )?;
     write_csv(&rec, 0, path)
+}
+
+#[cfg(test)]
+mod table_tests {
+    use super::looks_like_a_table;
+
+    #[test]
+    fn tables_of_names_and_narrow_rows_are_not_taken_for_grids() {
+        let anthropometrics = "subject,age,mass_kg,height_m\n1,34,70.2,1.78\n2,28,65.0,1.70\n";
+        let force_plate = "0.00,0\n0.01,12.5\n0.02,80.1\n";
+        let points = "x y\n1.5 2\n3 4\n";
+        for t in [anthropometrics, force_plate, points] {
+            assert!(looks_like_a_table(t), "{t}");
+        }
+        let grid = "0,0,1,3,4,2\n0,4,23,5,0,0\n";
+        let numbered = "1;2;3;4;5\n0;0,5;12,25;0;0\n";
+        let spaced = "0 0 1 3\n0 4 23 5\n";
+        let bom = "\u{feff}0,0,1,3,4,2\n";
+        for t in [grid, numbered, spaced, bom] {
+            assert!(!looks_like_a_table(t), "{t}");
+        }
+    }
 }

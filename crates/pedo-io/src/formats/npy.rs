@@ -145,6 +145,11 @@ pub fn parse_npy(bytes: &[u8], name: &str) -> Result<Recording> {
         if v.is_infinite() {
             return Err(fail("array holds an infinite value".into()));
         }
+        if v.abs() > f32::MAX as f64 {
+            return Err(fail(format!(
+                "array holds {v:e}, beyond the float32 range of a recording (±3.4e38)"
+            )));
+        }
         vals.push(v as f32);
     }
     let data = if fortran {
