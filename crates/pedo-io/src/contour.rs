@@ -27,12 +27,22 @@ pub enum Saddle {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ContourMethod {
     /// Sub-pixel marching squares at the level (linear interpolation along cell edges).
-    MarchingSquares { saddle: Saddle },
+    MarchingSquares {
+        /// How a saddle cell is resolved.
+        saddle: Saddle,
+    },
     /// The paper's chain: regions by hysteresis (seeds above `high`, grown through pixels above the
     /// level, 8-connected), Moore tracing of each region's outer boundary, and, if `refine`, each
     /// boundary pixel moved along the gradient to the peak of the Sobel gradient magnitude (the
     /// edge-enhancement step) with a parabolic fit, at most one pixel.
-    Chain { high: Option<f64>, refine: bool },
+    Chain {
+        /// Hysteresis seed level, in the frame's pressure units (`None`: twice the contour
+        /// level); a region is kept only if some value in it is above this.
+        high: Option<f64>,
+        /// Move each boundary pixel to the gradient's peak (sub-pixel edge); off: contours run
+        /// through the centres of the region's boundary sensels.
+        refine: bool,
+    },
 }
 
 impl Default for ContourMethod {
@@ -64,12 +74,15 @@ pub struct ContourOptions {
     /// Threshold, smoothing and upsampling applied before extraction. Coordinates are always
     /// returned in pixels of the original frame, whatever the upsampling.
     pub preprocess: Preprocess,
+    /// How contours are extracted.
     pub method: ContourMethod,
+    /// How each contour is resampled; a spacing is in output units ([`units`](Self::units)).
     pub resample: Resample,
     /// Contours enclosing less than this area (px², before unit conversion) are dropped.
     pub min_area: f64,
     /// Keep contours around holes (regions below the level inside a region above it).
     pub include_holes: bool,
+    /// Units of the returned points (pixels, or millimetres by the sensor pitch).
     pub units: CoordUnits,
 }
 
@@ -560,6 +573,34 @@ pub fn default_level(g: &Grid) -> Option<f64> {
 
 /// Extracts the closed contours of a frame (see [`ContourOptions`]). A frame with nothing above
 /// the level has no contours (an empty vector, not an error).
+///
+/// # Errors
+///
+/// [`IoError::InvalidInput`] for options out of range: a pitch that is not finite and positive,
+/// a negative or non-finite `min_area`, a level or threshold that is not finite, a smoothing σ
+/// that is negative, not finite or above 1000, an upsampling factor outside 1..=64, or a
+/// resampling to fewer than 3 points or at a spacing that is not positive.
+///
+/// ```
+/// use pedo_io::{contours, ContourOptions, Grid};
+/// // A 3 × 3 loaded block (10 kPa) in a 5 × 5 frame, sensel centres at integer (x, y).
+/// let mut data = vec![0.0; 25];
+/// for r in 1..4 {
+///     for c in 1..4 {
+///         data[r * 5 + c] = 10.0;
+///     }
+/// }
+/// let frame = Grid::new(5, 5, data)?;
+/// let cs = contours(&frame, &ContourOptions::default())?;
+/// assert_eq!(cs.len(), 1);
+/// // The default level is 5 kPa, halfway between unloaded and loaded sensels: the outline runs
+/// // half a sensel outside the block's centres, its corners cut diagonally.
+/// assert_eq!(cs[0].level, 5.0);
+/// assert!((cs[0].area() - 8.5).abs() < 1e-12);
+/// assert_eq!(cs[0].centroid(), [2.0, 2.0]);
+/// assert!(!cs[0].hole);
+/// # Ok::<(), pedo_io::IoError>(())
+/// ```
 pub fn contours(frame: &Grid, opts: &ContourOptions) -> Result<Vec<Contour>> {
     opts.units.check()?;
     if !(opts.min_area.is_finite() && opts.min_area >= 0.0) {

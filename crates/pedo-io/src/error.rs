@@ -11,27 +11,42 @@ pub enum IoError {
     /// The operating system refused to read or write the file.
     #[error("{path}: {source}")]
     Io {
+        /// The file or folder the operation was on.
         path: String,
+        /// What the operating system said.
         #[source]
         source: std::io::Error,
     },
     /// A text file is malformed at a given line.
     #[error("{path}:{line}: {msg}")]
     Parse {
+        /// The file, or the name given to an in-memory parser.
         path: String,
+        /// 1-based line number.
         line: usize,
+        /// What is wrong with that line.
         msg: String,
     },
     /// A file is malformed as a whole (binary header, missing frames, unknown format).
     #[error("{path}: {msg}")]
-    Format { path: String, msg: String },
+    Format {
+        /// The file, or the name given to an in-memory parser.
+        path: String,
+        /// What is wrong with it.
+        msg: String,
+    },
     /// The file is not a recording of any supported format: `recognised` says what the content
     /// looks like (or that nothing was recognised); the message lists the supported formats.
     #[error(
         "{path}: not a supported pressure recording: {recognised}; supported: {}",
         crate::formats::SUPPORTED
     )]
-    UnknownFormat { path: String, recognised: String },
+    UnknownFormat {
+        /// The file, or the name given to an in-memory parser.
+        path: String,
+        /// What the content looks like, or that nothing was recognised.
+        recognised: String,
+    },
     /// An argument is out of range or inconsistent.
     #[error("invalid input: {0}")]
     InvalidInput(String),
@@ -48,7 +63,12 @@ pub enum IoError {
     /// An output folder cannot be written: it is not a usable name, it holds files that are not a
     /// pedomatch output, or the run was interrupted.
     #[error("{path}: {msg}")]
-    Output { path: String, msg: String },
+    Output {
+        /// The output folder (or file in it).
+        path: String,
+        /// Why it cannot be written.
+        msg: String,
+    },
     /// A figure could not be drawn or encoded.
     #[error("figure: {0}")]
     Figure(String),

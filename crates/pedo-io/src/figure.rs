@@ -163,7 +163,10 @@ impl FigureAxes {
 /// from a recording, its frame (0-based).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ObjectLabel {
+    /// What the object is called (`"object 12"`, a file name).
     pub name: String,
+    /// Its frame in the recording (0-based), shown with its time when the frame rate is known;
+    /// `None` for an object that comes from no recording.
     pub frame: Option<usize>,
 }
 
@@ -189,11 +192,17 @@ impl ObjectLabel {
 /// and the nodes left unmatched ringed.
 #[derive(Debug, Clone)]
 pub struct MatchFigure<'a> {
+    /// The first object (coordinates as [`axes`](Self::axes) describe them).
     pub a: &'a Shape,
+    /// The second object.
     pub b: &'a Shape,
+    /// The matches: node indices into `a` and `b` (as in [`modal_core::MatchResult::pairs`]).
     pub pairs: &'a [MatchPair],
+    /// Units, timing and pressure units of the objects' recording.
     pub axes: &'a FigureAxes,
+    /// How the title names the first object.
     pub label_a: ObjectLabel,
+    /// How the title names the second object.
     pub label_b: ObjectLabel,
 }
 
@@ -207,12 +216,16 @@ pub struct MatchFigure<'a> {
 /// level, not the time, orders their steps. [`tracks_background`] picks the image.
 #[derive(Debug, Clone)]
 pub struct TracksFigure<'a> {
+    /// The run whose tracks are drawn.
     pub result: &'a SequenceResult,
     /// The pressure image under the tracks, in the objects' coordinates (see
     /// [`tracks_background`]).
     pub background: &'a Grid,
+    /// Units, timing and pressure units of the run's recording.
     pub axes: &'a FigureAxes,
+    /// Tracks with fewer steps (objects) are not drawn; at least 2 is used whatever is set.
     pub min_steps: usize,
+    /// At most this many tracks are drawn, the longest first.
     pub max_tracks: usize,
 }
 

@@ -19,11 +19,26 @@ pub enum CoordUnits {
     #[default]
     Pixels,
     /// x = column index × column pitch, y = row index × row pitch, in mm.
-    Millimetres { dx_mm: f64, dy_mm: f64 },
+    Millimetres {
+        /// Column pitch: millimetres between the centres of horizontally adjacent sensels
+        /// (finite, > 0).
+        dx_mm: f64,
+        /// Row pitch: millimetres between the centres of vertically adjacent sensels
+        /// (finite, > 0).
+        dy_mm: f64,
+    },
 }
 
 impl CoordUnits {
-    /// Converts a pixel-unit point into these units.
+    /// Converts a pixel-unit point `[x, y]` into these units (no check of the pitch: the
+    /// functions that take a `CoordUnits` reject a pitch that is not finite and positive).
+    ///
+    /// ```
+    /// use pedo_io::CoordUnits;
+    /// let mm = CoordUnits::Millimetres { dx_mm: 5.08, dy_mm: 7.62 };
+    /// assert_eq!(mm.apply([2.0, 1.0]), [10.16, 7.62]);
+    /// assert_eq!(CoordUnits::Pixels.apply([2.0, 1.0]), [2.0, 1.0]);
+    /// ```
     pub fn apply(&self, p: [f64; 2]) -> [f64; 2] {
         match *self {
             CoordUnits::Pixels => p,
@@ -51,8 +66,22 @@ pub struct Grid {
 }
 
 impl Grid {
-    /// Builds a grid; every value must be finite (map "no sensor" to 0 before, see
-    /// [`crate::Recording::frame`]).
+    /// Builds a grid from `rows × cols` row-major values; every value must be finite (map "no
+    /// sensor" to 0 before, see [`crate::Recording::frame`]).
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when `rows` or `cols` is 0, when `data` does not hold exactly
+    /// `rows × cols` values, or when a value is NaN or infinite (the message names its row and
+    /// column, 0-based).
+    ///
+    /// ```
+    /// use pedo_io::Grid;
+    /// let g = Grid::new(2, 3, vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0]).unwrap();
+    /// assert_eq!(g.get(1, 0), 3.0); // row 1, column 0
+    /// assert!(Grid::new(2, 3, vec![0.0; 5]).is_err());
+    /// assert!(Grid::new(1, 1, vec![f64::NAN]).is_err());
+    /// ```
     pub fn new(rows: usize, cols: usize, data: Vec<f64>) -> Result<Self> {
         if rows == 0 || cols == 0 {
             return Err(IoError::invalid(format!("empty grid {rows}x{cols}")));
@@ -75,7 +104,7 @@ impl Grid {
         Ok(Self { rows, cols, data })
     }
 
-    /// A grid of zeros.
+    /// A `rows × cols` grid of zeros. Unlike [`Grid::new`] it does not refuse an empty size.
     pub fn zeros(rows: usize, cols: usize) -> Self {
         Self {
             rows,
@@ -95,9 +124,11 @@ impl Grid {
         )
     }
 
+    /// Number of rows (the y extent; at least 1 for a grid from [`Grid::new`]).
     pub fn rows(&self) -> usize {
         self.rows
     }
+    /// Number of columns (the x extent; at least 1 for a grid from [`Grid::new`]).
     pub fn cols(&self) -> usize {
         self.cols
     }

@@ -11,11 +11,16 @@ use crate::preprocess::Preprocess;
 /// Options of [`isocontours`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct IsoOptions {
+    /// Threshold, smoothing and upsampling of the frame before the level lines are drawn;
+    /// coordinates are returned in pixels of the original frame whatever the upsampling.
     pub preprocess: Preprocess,
+    /// How marching squares resolves a saddle cell.
     pub saddle: Saddle,
+    /// How each contour is resampled; a spacing is in output units ([`units`](Self::units)).
     pub resample: Resample,
     /// Keep contours around holes (regions below a level inside a region above it).
     pub include_holes: bool,
+    /// Units of the returned points (pixels, or millimetres by the sensor pitch).
     pub units: CoordUnits,
 }
 
@@ -49,7 +54,16 @@ pub fn isocontours(frame: &Grid, levels: &[f64], opts: &IsoOptions) -> Result<Ve
     Ok(out)
 }
 
-/// Evenly spaced levels strictly between 0 and the frame's maximum (`n` of them).
+/// Evenly spaced levels strictly between 0 and the frame's maximum (`n` of them): `max × i /
+/// (n + 1)` for `i` in `1..=n`. None when the maximum is not above 0.
+///
+/// ```
+/// use pedo_io::{isobar::even_levels, Grid};
+/// let frame = Grid::new(1, 3, vec![0.0, 100.0, 40.0])?;
+/// assert_eq!(even_levels(&frame, 3), vec![25.0, 50.0, 75.0]);
+/// assert!(even_levels(&Grid::zeros(2, 2), 3).is_empty());
+/// # Ok::<(), pedo_io::IoError>(())
+/// ```
 pub fn even_levels(frame: &Grid, n: usize) -> Vec<f64> {
     let m = frame.max();
     if m <= 0.0 {

@@ -12,6 +12,8 @@
 //! Coordinates follow the convention documented in [`grid`]: x = column, y = row, pixel units
 //! (sensel centres at integers), or millimetres via [`CoordUnits::Millimetres`].
 
+#![warn(missing_docs)]
+
 pub mod contour;
 pub mod drift;
 mod error;

@@ -125,10 +125,12 @@ pub struct FrameMeasures {
     pub contact_sensors: usize,
     /// Contact area: `contact_sensors × sensel area` in mm², or in sensels when the area is unknown.
     pub contact_area: f64,
-    /// Total force in N when units and sensel area are known ([`Recording::force_factor`]), else the
-    /// plain sum of the values times the area factor.
+    /// Total force of the contact sensors in N when units and sensel area are known
+    /// ([`Recording::force_factor`]); else their sum times the sensel area in mm² when that is
+    /// known, else their plain sum.
     pub total_force: f64,
-    /// Largest value in the frame (0 for an empty frame).
+    /// Largest value at an existing sensor, whether above the threshold or not (0 for an empty
+    /// frame; never below 0).
     pub peak_pressure: f64,
     /// Centre of pressure `(x, y)` in pixel coordinates (value-weighted mean of sensel centres);
     /// `None` when nothing is above the threshold.
@@ -138,7 +140,34 @@ pub struct FrameMeasures {
 impl Recording {
     /// Builds a recording from frames (`n_frames × rows × cols`, row-major per frame) and a
     /// sensor mask (`rows × cols`, `true` where a sensor exists). Values at masked-out sensors are
-    /// forced to 0. Every value at an existing sensor must be finite.
+    /// forced to 0. Every value at an existing sensor must be finite. Pitch, frame interval and
+    /// units start unknown.
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when `n_frames`, `rows` or `cols` is 0, when `data` does not
+    /// hold `n_frames × rows × cols` values or the mask `rows × cols` entries, or when a value
+    /// at an existing sensor is NaN or infinite (the message names its frame, row and column,
+    /// 0-based).
+    ///
+    /// ```
+    /// use pedo_io::Recording;
+    /// // 2 frames of 2 × 3 sensels; there is no sensor at row 0, column 2.
+    /// let mask = vec![true, true, false, true, true, true];
+    /// let data = vec![
+    ///     0.0, 10.0, 99.0, 0.0, 30.0, 0.0, // frame 0 (the 99 has no sensor: dropped)
+    ///     0.0, 0.0, 0.0, 0.0, 0.0, 0.0, // frame 1: no contact
+    /// ];
+    /// let rec = Recording::new(2, 2, 3, data, mask)?.with_pitch_mm([5.0, 5.0])?;
+    /// assert_eq!(rec.frame(0)?.get(0, 2), 0.0);
+    /// assert_eq!(rec.n_sensors(), 5);
+    /// let m = rec.measures(0.0);
+    /// assert_eq!(m[0].contact_sensors, 2);
+    /// assert_eq!(m[0].contact_area, 50.0); // mm², 25 mm² per sensel
+    /// assert_eq!(m[0].cop, Some([1.0, 0.75])); // (x, y) = (column, row), pressure-weighted
+    /// assert_eq!(m[1].cop, None);
+    /// # Ok::<(), pedo_io::IoError>(())
+    /// ```
     pub fn new(
         n_frames: usize,
         rows: usize,
@@ -262,12 +291,15 @@ impl Recording {
         self.dt_s.map(|dt| 1.0 / dt)
     }
 
+    /// Number of frames (at least 1); frames are numbered `0..n_frames()`.
     pub fn n_frames(&self) -> usize {
         self.n_frames
     }
+    /// Rows of every frame (the y extent, at least 1).
     pub fn rows(&self) -> usize {
         self.rows
     }
+    /// Columns of every frame (the x extent, at least 1).
     pub fn cols(&self) -> usize {
         self.cols
     }

@@ -20,9 +20,11 @@ use sha2::{Digest, Sha256};
 /// One field of a table.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Cell {
+    /// An integer: a count, an id or a frame number.
     Int(i64),
     /// A number and the decimals it is written with in CSV.
     Float(f64, usize),
+    /// Free text (quoted in CSV when it holds a comma, quote or line break).
     Text(String),
     /// No value (written as an empty CSV field, JSON `null`).
     Empty,
@@ -61,7 +63,9 @@ impl Cell {
 /// A table: named columns (units in the names) and rows of cells.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Table {
+    /// Column names, units in the names (`time_s`, `x_mm`).
     pub header: Vec<String>,
+    /// Rows, each meant to hold one cell per column of [`header`](Self::header) (not checked).
     pub rows: Vec<Vec<Cell>>,
 }
 
@@ -588,6 +592,7 @@ pub fn measures_rows<E>(
 /// bytes.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct InputInfo {
+    /// The input's name: its path as given, or the name given to in-memory data.
     pub name: String,
     /// Lower-case hex SHA-256 of the input's bytes; `None` for in-memory arrays.
     pub sha256: Option<String>,

@@ -34,20 +34,29 @@ pub enum ObjectModel {
 /// Parameters of [`run_sequence`].
 #[derive(Debug, Clone)]
 pub struct SequenceOptions {
+    /// What each frame becomes: contours, a surface, or (one frame) isobaric contours.
     pub model: ObjectModel,
     /// Contour extraction (contour model, and the isocontours' preprocessing and resampling).
     pub contour: ContourOptions,
     /// Surface construction (surface model).
     pub surface: crate::surface::SurfaceOptions,
-    /// Isocontour model: the frame whose isobaric contours are matched (`None`: the frame of
-    /// largest total load) and the levels (`None`: `iso_count` levels evenly spaced between the
-    /// noise threshold and the frame's peak).
+    /// Isocontour model: the frame (0-based index in the recording) whose isobaric contours are
+    /// matched; `None`: the frame of largest total load (sum of its values) within
+    /// [`frames`](Self::frames). A frame given here is not required to lie within `frames`, only
+    /// within the recording (else [`run_sequence`] fails).
     pub iso_frame: Option<usize>,
+    /// Isocontour model: the levels, in the recording's pressure units, in the order they are
+    /// matched (level `k` with level `k + 1`); `None`: [`iso_count`](Self::iso_count) levels
+    /// evenly spaced strictly between 0 and the peak of the thresholded frame
+    /// ([`crate::isobar::even_levels`]).
     pub iso_levels: Option<Vec<f64>>,
+    /// Isocontour model: the number of levels when [`iso_levels`](Self::iso_levels) is `None`.
     pub iso_count: usize,
-    /// Objects with fewer nodes are left out (too small to model).
+    /// Objects with fewer nodes are left out (too small to model); never fewer than 3.
     pub min_nodes: usize,
-    /// Frames `start..end` of the recording to use (`None`: all).
+    /// Frames `start..end` of the recording to use, 0-based with `end` excluded (`None`: all).
+    /// The range must be non-empty and within the recording, else [`run_sequence`] and
+    /// [`stream_sequence`] fail.
     pub frames: Option<(usize, usize)>,
     /// How each pair is matched. Default: [`MatchOptions::default`] without the outline fit
     /// (`rotation_search.outline_iterations` 0): a run's frames keep node-to-node ICP.
@@ -118,13 +127,19 @@ modal_core::choice!(ObjectModel, "model", [
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct FrameRange {
+    /// The first frame (0-based).
     pub start: usize,
     /// One past the last frame; `None`: to the end of the recording.
     pub end: Option<usize>,
 }
 
 impl FrameRange {
-    /// `(start, end)` for a recording of `n_frames`: a non-empty range within it.
+    /// `(start, end)` for a recording of `n_frames`: a non-empty range within it, `end` excluded.
+    ///
+    /// # Errors
+    ///
+    /// An [`OptionError`] on the option `frames` when the range is empty (`start >= end`) or
+    /// ends past `n_frames`.
     pub fn resolve(&self, n_frames: usize) -> std::result::Result<(usize, usize), OptionError> {
         let end = self.end.unwrap_or(n_frames);
         if self.start < end && end <= n_frames {
@@ -178,7 +193,10 @@ impl std::str::FromStr for FrameRange {
 /// them against a recording.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunParams {
+    /// How each pair is matched, as the user gave it; [`RunParams::match_options`] turns it into
+    /// the engine's options for a run.
     pub matching: MatchParams,
+    /// What each frame becomes: contours, a surface, or (one frame) isobaric contours.
     pub model: ObjectModel,
     /// Frames to use (`None`: all).
     pub frames: Option<FrameRange>,
@@ -190,10 +208,12 @@ pub struct RunParams {
     pub spacing: f64,
     /// Node budget of each brightness surface.
     pub surface_nodes: usize,
-    /// Isocontour model: the frame (0-based; `None`: the frame of largest load) and level count.
+    /// Isocontour model: the frame (0-based; `None`: the frame of largest load).
     pub iso_frame: Option<usize>,
+    /// Isocontour model: the number of levels (at least 2), evenly spaced as
+    /// [`SequenceOptions::iso_levels`] says.
     pub iso_levels: usize,
-    /// Sensor pitch and frame rate overriding the file's.
+    /// Sensor pitch, frame rate and pressure units overriding the file's.
     pub units: crate::units::UnitOverrides,
     /// Drift correction: frames between reference frames (0: off); see [`crate::drift`].
     pub drift_reference: usize,
@@ -479,8 +499,14 @@ pub struct SequenceObject {
     pub frame: usize,
     /// Index of the object within its frame (or the level index for isocontours).
     pub index: usize,
-    /// The isobaric level for isocontours.
+    /// The isobaric level for isocontours, in the recording's pressure units; `None` for the
+    /// other models.
     pub level: Option<f64>,
+    /// The object's nodes, x = column and y = row in the units of the options (sensels unless
+    /// [`ContourOptions::units`] or [`SurfaceOptions::units`](crate::surface::SurfaceOptions::units)
+    /// say otherwise; always sensels from [`RunParams`]): a closed 2-D contour (contour and
+    /// isocontour models) or a triangulated 3-D surface whose z is the rescaled pressure
+    /// (surface model, see [`crate::surface::ZScale`]).
     pub shape: Shape,
 }
 
@@ -488,11 +514,17 @@ pub struct SequenceObject {
 /// node counts (the leading columns of a row, matched or skipped).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PairObjects {
+    /// Id of the first object (its index in [`SequenceResult::objects`]).
     pub id_a: usize,
+    /// Id of the second object (larger than `id_a`).
     pub id_b: usize,
+    /// Frame of the first object (0-based).
     pub frame_a: usize,
+    /// Frame of the second object (0-based; the same frame for isocontour levels).
     pub frame_b: usize,
+    /// Number of nodes of the first object (`n`).
     pub nodes_a: usize,
+    /// Number of nodes of the second object (`m`).
     pub nodes_b: usize,
 }
 
@@ -515,39 +547,60 @@ impl PairObjects {
 pub struct PairRow {
     /// Which objects were matched.
     pub objects: PairObjects,
-    /// Local (mutual-best) matches and their share of `min(n, m)`.
+    /// Local (mutual-best) matches on the final affinity, whatever the search.
     pub local_matches: usize,
+    /// `local_matches` as a percentage (0–100) of `min(n, m)`, the node counts of the two
+    /// objects.
     pub local_percent: f64,
-    /// One-to-one matches of the optimisation (global) search and their share of `min(n, m)`.
+    /// Matches of the optimisation (global) search, excess matches aside: one-to-one except
+    /// with [`Search::Best`]. 0 when the search is [`Search::Local`], which has no optimisation
+    /// step.
     pub optimisation_matches: usize,
+    /// `optimisation_matches` as a percentage (0–100) of `min(n, m)`.
     pub optimisation_percent: f64,
     /// Total matches after the excess-node step (one-to-one plus excess; the papers' "excess
     /// nodes matching" count).
     pub matches_after_excess: usize,
-    /// Mean normalised modal cost of the one-to-one matches.
+    /// Mean normalised modal cost ([`modal_core::MatchPair::cost`], in [0, 1]) of the matches
+    /// that are not excess; 0 when there are none.
     pub mean_cost: f64,
 }
 
 /// Matches of one pair of objects (indices into [`SequenceResult::objects`]).
 #[derive(Debug, Clone)]
 pub struct PairMatch {
+    /// The first object (earlier in sequence order: `a < b`).
     pub a: usize,
+    /// The second object.
     pub b: usize,
+    /// The engine's result; its node indices are those of the two objects' shapes. Without
+    /// match details ([`SequenceOptions::keep_match_details`] off) only the pairs, unmatched
+    /// nodes and transform are kept: the affinity matrix is 0 × 0 and `aligned_a` and
+    /// `local_pairs` are empty.
     pub result: MatchResult,
+    /// The pair's row of the pairs table.
     pub row: PairRow,
 }
 
 /// One node followed across objects: `(object index, node index)` steps in sequence order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Track {
+    /// `(object index, node index)` of each step: the object an index into
+    /// [`SequenceResult::objects`], the node an index into that object's shape. Objects
+    /// increase along a track, which passes through one node per object at most; a track has
+    /// at least one step.
     pub steps: Vec<(usize, usize)>,
 }
 
 /// Wall-clock time per stage.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct StageTimings {
+    /// Building the objects of every frame (reading the frames too, when streamed).
     pub objects: Duration,
+    /// Matching the pairs (with drift correction, the pairs of consecutive frames only: the
+    /// reference pairs count as chaining).
     pub matching: Duration,
+    /// Chaining the matches into tracks.
     pub tracks: Duration,
 }
 
@@ -584,6 +637,7 @@ impl PackedTracks {
     pub fn len(&self) -> usize {
         self.starts.len() - 1
     }
+    /// Whether there is no track.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -624,7 +678,11 @@ impl FromIterator<Track> for PackedTracks {
 /// Everything [`run_sequence`] produces.
 #[derive(Debug, Clone)]
 pub struct SequenceResult {
+    /// Every object in sequence order (by frame, then by index within the frame; isocontours
+    /// by level): object `i` has id `i`.
     pub objects: Vec<SequenceObject>,
+    /// The matched pairs, in the order they were proposed (frame order); the pairs that could
+    /// not be matched are in [`skipped_pairs`](Self::skipped_pairs) instead.
     pub pairs: Vec<PairMatch>,
     /// The tracks, unless they are in [`packed_tracks`](Self::packed_tracks) (runs without
     /// match details): read them with [`all_tracks`](Self::all_tracks) to cover both.
@@ -632,15 +690,18 @@ pub struct SequenceResult {
     /// Runs without match details ([`SequenceOptions::keep_match_details`] off) hold their
     /// tracks here, packed, and leave [`tracks`](Self::tracks) empty.
     pub packed_tracks: Option<PackedTracks>,
-    /// Contour model: object `i` continues as several objects of the next frame.
+    /// Contour model: object `i` continues as several objects of the next frame (object
+    /// indices).
     pub splits: Vec<(usize, Vec<usize>)>,
-    /// Contour model: several objects continue as one object of the next frame.
+    /// Contour model: several objects continue as one object of the next frame (object
+    /// indices).
     pub merges: Vec<(Vec<usize>, usize)>,
     /// Frames whose objects could not be built, with the reason; the run goes on without them.
     pub skipped_frames: Vec<SkippedFrame>,
     /// Pairs that could not be matched (degenerate objects, a structure with too many
     /// zero-energy modes, ...), with the reason; the run goes on without them.
     pub skipped_pairs: Vec<SkippedPair>,
+    /// Wall-clock time of each stage.
     pub timings: StageTimings,
 }
 
@@ -657,16 +718,23 @@ pub struct SkippedFrame {
 /// A pair of objects (indices into [`SequenceResult::objects`]) that could not be matched.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkippedPair {
+    /// The first object.
     pub a: usize,
+    /// The second object.
     pub b: usize,
     /// The matching error, as one line.
     pub reason: String,
 }
 
-/// What [`run_sequence`] reports to a progress callback.
+/// What [`run_sequence`] and [`stream_sequence`] report to a progress callback
+/// `progress(stage, done, total)`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Stage {
+    /// Building the objects: `done` of `total` frames, or of `total` isobaric levels for the
+    /// isocontour model. Not reported by a run that [`stream_sequence`] streams ([`streams`]).
     Objects,
+    /// Matching: `done` of `total` pairs ([`run_sequence`]), or of `total` frames (a run that
+    /// [`stream_sequence`] streams, which reports no [`Stage::Objects`]).
     Matching,
 }
 
@@ -713,6 +781,7 @@ impl SequenceResult {
 pub struct SkippedPairRow {
     /// Which objects could not be matched.
     pub objects: PairObjects,
+    /// The matching error, as one line.
     pub reason: String,
 }
 
@@ -735,20 +804,29 @@ impl SkippedPairRow {
 /// off a whole [`SequenceResult`]. Object ids are their indices.
 #[derive(Debug, Clone)]
 pub struct RunCounts {
+    /// Objects built.
     pub objects: usize,
+    /// Pairs matched (the skipped ones aside).
     pub pairs: usize,
-    /// Sums over the matched pairs, in order, of the local and optimisation percentages and
-    /// of the mean costs.
+    /// Sum over the matched pairs, in order, of [`PairRow::local_percent`].
     pub local_percent_sum: f64,
+    /// Sum over the matched pairs, in order, of [`PairRow::optimisation_percent`].
     pub optimisation_percent_sum: f64,
+    /// Sum over the matched pairs, in order, of [`PairRow::mean_cost`].
     pub cost_sum: f64,
+    /// Tracks chained.
     pub tracks: usize,
     /// Tracks of 3 steps or more.
     pub tracks_3_or_more: usize,
+    /// As [`SequenceResult::splits`].
     pub splits: Vec<(usize, Vec<usize>)>,
+    /// As [`SequenceResult::merges`].
     pub merges: Vec<(Vec<usize>, usize)>,
+    /// As [`SequenceResult::skipped_frames`].
     pub skipped_frames: Vec<SkippedFrame>,
+    /// The skipped pairs as the pairs table reports them.
     pub skipped_pairs: Vec<SkippedPairRow>,
+    /// Wall-clock time of each stage.
     pub timings: StageTimings,
 }
 
@@ -1349,6 +1427,38 @@ impl Chainer {
 /// Builds the objects of the recording, matches them pair by pair (in parallel) and chains the
 /// matches into tracks. `progress(stage, done, total)` is called as work completes, possibly
 /// from several threads.
+///
+/// A frame whose objects cannot be built and a pair that cannot be matched do not fail the run:
+/// they are reported in [`SequenceResult::skipped_frames`] and
+/// [`SequenceResult::skipped_pairs`].
+///
+/// # Errors
+///
+/// [`IoError::InvalidInput`] when [`SequenceOptions::frames`] is empty or reaches past the
+/// recording, or the isocontour frame is not in the recording; errors of the isocontour
+/// model's options (levels, preprocessing) and of the contour pairing.
+///
+/// ```
+/// use pedo_io::sequence::{run_sequence, FrameRange, RunParams};
+/// use pedo_io::synthetic::SyntheticWalk;
+/// let recording = SyntheticWalk::default().recording()?;
+/// // The first 3 frames: one foot outline each, matched 0 → 1 → 2.
+/// let params = RunParams {
+///     frames: Some(FrameRange { start: 0, end: Some(3) }),
+///     ..RunParams::default()
+/// };
+/// let options = params.to_options(&recording)?;
+/// let run = run_sequence(&recording, &options, &|_, _, _| {})?;
+/// assert_eq!(run.objects.len(), 3);
+/// assert_eq!((run.pairs[0].a, run.pairs[0].b), (0, 1));
+/// assert_eq!(run.pairs.len(), 2);
+/// // Every node of frame 0 starts a track; most of them go on through frames 1 and 2.
+/// let from_0 = run.tracks.iter().filter(|t| t.steps[0].0 == 0).count();
+/// assert_eq!(from_0, run.objects[0].shape.len());
+/// let through = run.tracks.iter().filter(|t| t.steps.len() == 3).count();
+/// assert!(through * 10 >= from_0 * 9, "{through} of {from_0}");
+/// # Ok::<(), pedo_io::IoError>(())
+/// ```
 pub fn run_sequence(
     recording: &Recording,
     options: &SequenceOptions,

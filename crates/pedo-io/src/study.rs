@@ -57,16 +57,23 @@ pub fn run_table_files(tables: TableFormat) -> Vec<String> {
 /// Which figure files a run writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct FigureKinds {
+    /// Write PNG figures (`figures/pair_*.png`, `tracks.png`).
     pub png: bool,
+    /// Write SVG figures (`figures/pair_*.svg`, `tracks.svg`).
     pub svg: bool,
 }
 
 /// A finished run of one recording, as the writers of its folder see it.
 pub struct RunRecord<'a> {
+    /// The input's name and SHA-256, for the summary.
     pub input: &'a InputInfo,
+    /// The recording run, its unit overrides applied ([`run_options`]).
     pub recording: &'a Recording,
+    /// The parameters the options came from.
     pub params: &'a RunParams,
+    /// The options the run used.
     pub options: &'a SequenceOptions,
+    /// What the run produced.
     pub result: &'a SequenceResult,
 }
 
@@ -77,6 +84,7 @@ pub type ReportWriter = dyn Fn(&RunRecord<'_>, &Value) -> Result<String> + Sync;
 /// What a run folder holds besides its tables and `summary.json`.
 #[derive(Clone, Copy, Default)]
 pub struct RunOutputs<'a> {
+    /// Figures to write: a match figure per pair and the tracks figure.
     pub figures: FigureKinds,
     /// `report.html`, when given.
     pub report: Option<&'a ReportWriter>,
@@ -312,6 +320,8 @@ pub struct RunPlan<'a> {
     pub frames: Option<&'a mut dyn FrameSource>,
     /// The run's folder; `None` writes nothing (the summary is still made).
     pub folder: Option<&'a Path>,
+    /// What the folder holds besides its tables and `summary.json`; only figures, a report or
+    /// an animation make the run whole instead of streamed ([`tables_only`]).
     pub outputs: &'a RunOutputs<'a>,
     /// Stages measured before the run (e.g. reading), for the summary.
     pub timings: &'a [(&'a str, f64)],
@@ -576,15 +586,23 @@ pub struct StudyRow {
     pub output: Option<String>,
     /// The format read (also for a file that failed to parse, when its content was recognised).
     pub format: Option<String>,
+    /// Number of frames of the recording (all of them, not only those run); `None` on error.
     pub frames: Option<usize>,
     /// Matched pairs.
     pub pairs: Option<usize>,
+    /// Mean over the matched pairs of [`PairRow::local_percent`](crate::sequence::PairRow::local_percent)
+    /// (0–100); `None` without pairs or on error.
     pub mean_local_percent: Option<f64>,
+    /// Mean over the matched pairs of
+    /// [`PairRow::optimisation_percent`](crate::sequence::PairRow::optimisation_percent) (0–100);
+    /// `None` without pairs or on error.
     pub mean_optimisation_percent: Option<f64>,
+    /// Number of tracks; `None` on error.
     pub tracks: Option<usize>,
     /// Seconds from the start of this recording to its row (for a skipped one: those of the
     /// run that wrote the folder).
     pub wall_time_s: f64,
+    /// Run, skipped or failed.
     pub status: RowStatus,
     /// One line: why it failed, why it was skipped, or what the run left out.
     pub message: String,
@@ -798,7 +816,9 @@ fn sniff_found_file(path: &Path) -> Option<Format> {
 /// How a study runs.
 #[derive(Clone, Default)]
 pub struct StudyOptions<'a> {
+    /// The parameters every recording is run with (as `pedomatch run` takes them).
     pub params: RunParams,
+    /// How every recording is read.
     pub read: ReadOptions,
     /// The study folder: one folder per recording ([`output_name`]) and the study table. `None`:
     /// nothing is written, the rows are only returned.
@@ -807,6 +827,8 @@ pub struct StudyOptions<'a> {
     pub jobs: usize,
     /// Run recordings again even when their folders are complete.
     pub force: bool,
+    /// What each recording's folder holds besides its tables and `summary.json`, and the
+    /// format of every table (the study table's too).
     pub outputs: RunOutputs<'a>,
 }
 
@@ -814,10 +836,21 @@ pub struct StudyOptions<'a> {
 #[derive(Debug, Clone, Copy)]
 pub enum StudyEvent<'a> {
     /// Recording `index` is `fraction` (0 to 1) done: object building is the first half, matching
-    /// the second.
-    Progress { index: usize, fraction: f64 },
+    /// the second. A run that streams ([`tables_only`] and [`RunParams::streams`]) reports its
+    /// frames as matching alone, from 0.5 on.
+    Progress {
+        /// The recording's index in the `paths` given to [`run_study`] (0-based).
+        index: usize,
+        /// How much of it is done, from 0 to 1.
+        fraction: f64,
+    },
     /// Recording `index` is done.
-    Finished { index: usize, row: &'a StudyRow },
+    Finished {
+        /// The recording's index in the `paths` given to [`run_study`] (0-based).
+        index: usize,
+        /// Its row of the study table.
+        row: &'a StudyRow,
+    },
 }
 
 /// Runs every recording of `paths` (see the module docs) and returns one row per recording, in

@@ -29,9 +29,14 @@ use std::collections::{BTreeMap, BinaryHeap};
 /// `edge_angle_deg` (corners); without it boundary vertices do not move.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Laplacian {
+    /// Number of smoothing passes (0: none).
     pub iterations: usize,
+    /// Fraction of the way to the neighbours' mean each vertex moves per pass, in [0, 1].
     pub relaxation: f64,
+    /// Smooth the boundary too (along the boundary only); off, boundary vertices stay put.
     pub boundary_smoothing: bool,
+    /// Boundary vertices where the boundary turns by more than this angle (degrees) stay
+    /// fixed, so corners survive.
     pub edge_angle_deg: f64,
 }
 
@@ -77,6 +82,7 @@ pub struct SurfaceOptions {
     pub keep_hull: bool,
     /// Laplacian smoothing (`None`: none).
     pub laplacian: Option<Laplacian>,
+    /// How z (pressure) is finally scaled against x and y.
     pub z_scale: ZScale,
     /// Units of x and y (z is in pressure units before [`ZScale`]).
     pub units: CoordUnits,
@@ -100,7 +106,10 @@ impl Default for SurfaceOptions {
 /// A triangulated surface: points `(x, y, z)` and counter-clockwise (in x-y) triangles.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Surface {
+    /// Nodes `[x, y, z]`: x = column and y = row in [`SurfaceOptions::units`], z the
+    /// preprocessed pressure scaled as [`SurfaceOptions::z_scale`] says.
     pub points: Vec<[f64; 3]>,
+    /// Triangles as indices into [`points`](Self::points), counter-clockwise in x-y.
     pub triangles: Vec<[usize; 3]>,
 }
 

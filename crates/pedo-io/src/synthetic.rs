@@ -23,8 +23,9 @@ use crate::recording::Recording;
 pub struct SyntheticWalk {
     /// Number of frames (≥ 2).
     pub frames: usize,
-    /// Grid size.
+    /// Rows of the grid (y extent, ≥ 8).
     pub rows: usize,
+    /// Columns of the grid (x extent, ≥ 8).
     pub cols: usize,
     /// Translation `[dx, dy]` reached at the last frame (sensels).
     pub translation: [f64; 2],
@@ -34,14 +35,15 @@ pub struct SyntheticWalk {
     pub spread: f64,
     /// Noise threshold written into the recording (kPa): the loaded region's edge.
     pub noise_kpa: f64,
-    /// Sensor pitch (mm) and frame rate (Hz) written into the recording.
+    /// Sensor pitch written into the recording (mm per sensel, square sensels).
     pub pitch_mm: f64,
+    /// Frame rate written into the recording (Hz).
     pub frame_rate_hz: f64,
 }
 
 impl Default for SyntheticWalk {
-    /// 120 frames of a 40 × 84 grid: the foot (about 16 × 48 sensels) moves 10 sensels towards
-    /// the toes, turns by 12° and its forefoot widens by 15 %.
+    /// 120 frames of 84 rows × 40 columns: the foot (about 16 × 48 sensels) moves 10 sensels
+    /// towards the toes, turns by 12° and its forefoot widens by 15 %.
     fn default() -> Self {
         Self {
             frames: 120,
@@ -143,8 +145,10 @@ impl SyntheticWalk {
         [c[0] + wx / widen, c[1] + wy]
     }
 
-    /// Checks the parameters: at least 2 frames, a grid of at least 8 × 8, finite numbers, a
-    /// spread above −1 and a positive pitch and frame rate.
+    /// Checks the parameters: at least 2 frames, a grid of at least 8 × 8, a finite
+    /// translation, rotation, spread and noise threshold, a spread above −1 and a noise
+    /// threshold ≥ 0. The pitch and frame rate are checked (finite, > 0) by
+    /// [`recording`](Self::recording).
     pub fn validate(&self) -> Result<()> {
         let finite = self.translation.iter().all(|v| v.is_finite())
             && self.rotation_deg.is_finite()

@@ -15,15 +15,29 @@ pub enum PairingMethod {
     /// Linked when the overlap of the enclosed regions is at least `min_fraction` of the smaller
     /// region (estimated on a sub-pixel raster of `resolution` samples per unit, e.g. 4); the
     /// strongest links, which continue an object, are those of largest intersection over union.
-    Overlap { min_fraction: f64, resolution: f64 },
+    Overlap {
+        /// Least overlap, as a fraction of the smaller region's area, that links two contours;
+        /// in (0, 1].
+        min_fraction: f64,
+        /// Raster samples per coordinate unit along x and along y (4: 16 samples per square
+        /// sensel); in [0.1, 64].
+        resolution: f64,
+    },
     /// Linked when the centroids are at most `max_distance` apart (same units as the points).
-    Centroid { max_distance: f64 },
+    Centroid {
+        /// Largest centroid distance that links two contours, in the points' units (> 0).
+        max_distance: f64,
+    },
     /// Centroid tracking with a constant-velocity prediction (the noise-free limit of the paper's
     /// Kalman tracking of centroids): in [`track`], a contour that continued an object from the
     /// frame before is expected at `centroid + (centroid − previous centroid)`, and linked when
     /// the next frame's centroid is at most `max_distance` from that prediction. In
     /// [`pair_contours`] (no history) it equals [`PairingMethod::Centroid`].
-    PredictedCentroid { max_distance: f64 },
+    PredictedCentroid {
+        /// Largest distance from the predicted centroid that links two contours, in the
+        /// points' units (> 0).
+        max_distance: f64,
+    },
 }
 
 impl Default for PairingMethod {

@@ -23,8 +23,11 @@ pub const DEFAULT_GIF_DELAY_CS: u32 = 10;
 /// each pair leaving the frame as segments onto the next frame's objects, excess matches dashed.
 #[derive(Debug, Clone)]
 pub struct Animation<'a> {
+    /// The recording whose frames are played.
     pub recording: &'a Recording,
+    /// The run on it: its objects and pairs are drawn over the frames.
     pub result: &'a SequenceResult,
+    /// Units, timing and pressure units of the recording ([`FigureAxes::of_recording`]).
     pub axes: &'a FigureAxes,
     /// Frames `start..end` (0-based, end excluded) to play.
     pub frames: (usize, usize),

@@ -23,22 +23,27 @@ use std::sync::OnceLock;
 /// Which insole a sensor belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Insole {
+    /// The left foot's insole (`left insole:` in the export).
     Left,
+    /// The right foot's insole (`right insole:` in the export).
     Right,
 }
 
 /// One sensor's outline: `corners` in order around it, in layout units.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SensorOutline {
+    /// The insole the sensor is on.
     pub insole: Insole,
     /// pedar's 1-based sensor number (1 at the heel, 99 at the toes for a full insole).
     pub sensor: usize,
+    /// The quadrilateral's four corners `[x, y]`, in order around it, in layout units.
     pub corners: [[f64; 2]; 4],
 }
 
 /// Where every sensor of both insoles lies.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PedarLayout {
+    /// Every sensor's outline, both insoles, in the layout file's order.
     pub sensors: Vec<SensorOutline>,
     /// Millimetres per layout unit, when the layout file says (`# unit: mm`); `None` for the
     /// normalised coordinates of the bundled layout (the recording then has no pitch).
@@ -162,9 +167,11 @@ pub struct PedarData {
     pub columns: Vec<(Insole, usize)>,
     /// `n_frames × columns.len()` values.
     pub values: Vec<f32>,
+    /// Number of frames (data lines).
     pub n_frames: usize,
     /// Time between frames in seconds (from `time per frame` or `scanning rate`).
     pub dt_s: Option<f64>,
+    /// Pressure units from the `pressure values in …` line (`"kPa"`); empty when absent.
     pub units: String,
     /// The `sensor type:` line (insole model and size).
     pub sensor_type: String,
