@@ -306,6 +306,14 @@ impl PyRecording {
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
         self.state().reduce(py, "Recording")
     }
+    /// Equal when every value is the same, bit for bit (as after a pickle round trip).
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        self.state()
+            .same_as(other.cast::<Self>().ok().map(|o| o.get().state()))
+    }
+    fn __hash__(&self) -> u64 {
+        self.state().digest()
+    }
     /// ``Recording(frames=TxHxW, pitch_mm=(dx, dy) or None, dt_s=... or None, units='...')``,
     /// the values as Python writes them.
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
@@ -593,6 +601,14 @@ impl PySurface {
     }
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
         self.state().reduce(py, "Surface")
+    }
+    /// Equal when every value is the same, bit for bit (as after a pickle round trip).
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        self.state()
+            .same_as(other.cast::<Self>().ok().map(|o| o.get().state()))
+    }
+    fn __hash__(&self) -> u64 {
+        self.state().digest()
     }
     fn __repr__(&self) -> String {
         format!(

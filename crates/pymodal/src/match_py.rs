@@ -34,7 +34,8 @@ use crate::pickling::{Reader, Writer};
 /// aligned_a : (n, d) float64 — a's nodes in b's frame as the search used them.
 ///
 /// The arrays are read-only copies made at each access (``.copy()`` to change one). Matches
-/// pickle (``pickle``, ``multiprocessing``, Dask) and round-trip exactly.
+/// pickle (``pickle``, ``multiprocessing``, Dask) and round-trip exactly: ``==`` compares
+/// every value, bit for bit.
 #[pyclass(name = "Match", module = "pymodal", frozen)]
 pub struct PyMatch {
     inner: MatchResult,
@@ -240,6 +241,14 @@ impl PyMatch {
     }
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
         self.state().reduce(py, "Match")
+    }
+    /// Equal when every value is the same, bit for bit (as after a pickle round trip).
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        self.state()
+            .same_as(other.cast::<Self>().ok().map(|o| o.get().state()))
+    }
+    fn __hash__(&self) -> u64 {
+        self.state().digest()
     }
     fn __len__(&self) -> usize {
         self.inner.pairs.len()

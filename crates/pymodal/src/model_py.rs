@@ -328,6 +328,14 @@ impl PyModalModel {
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
         self.state().reduce(py, "ModalModel")
     }
+    /// Equal when every value is the same, bit for bit (as after a pickle round trip).
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        self.state()
+            .same_as(other.cast::<Self>().ok().map(|o| o.get().state()))
+    }
+    fn __hash__(&self) -> u64 {
+        self.state().digest()
+    }
 
     /// ``ModalModel(dim=2, n_nodes=30, element='gaussian', modes=60, sigma=0.52)``, the values
     /// as Python writes them (``sigma=None`` for bars).

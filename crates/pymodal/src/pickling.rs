@@ -74,6 +74,19 @@ impl Writer {
         });
         self
     }
+    /// Whether `other`, if there is one, holds the same state bit for bit: value equality of
+    /// the result classes (`__eq__`), the very equality a pickle round trip keeps.
+    pub fn same_as(&self, other: Option<Writer>) -> bool {
+        other.is_some_and(|o| o.0 == self.0)
+    }
+    /// A hash of the state, consistent with [`Self::same_as`] (`__hash__`; the classes are
+    /// immutable).
+    pub fn digest(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        self.0.hash(&mut h);
+        h.finish()
+    }
     /// `(pymodal._pymodal._restore, (class_name, state))`, what `__reduce__` returns.
     pub fn reduce<'py>(&self, py: Python<'py>, class_name: &str) -> PyResult<Bound<'py, PyTuple>> {
         let restore = py.import("pymodal._pymodal")?.getattr("_restore")?;
@@ -189,6 +202,9 @@ fn _restore(py: Python<'_>, class_name: &str, state: &[u8]) -> PyResult<Py<PyAny
         "Recording" => Py::new(py, crate::io_py::PyRecording::restore(state)?)?.into_any(),
         "Surface" => Py::new(py, crate::io_py::PySurface::restore(state)?)?.into_any(),
         "ModalModel" => Py::new(py, crate::model_py::PyModalModel::restore(state)?)?.into_any(),
+        "SyntheticWalk" => {
+            Py::new(py, crate::synthetic_py::PySyntheticWalk::restore(state)?)?.into_any()
+        }
         other => {
             return Err(PyValueError::new_err(format!(
                 "cannot unpickle unknown pymodal class {other:?}"

@@ -3,10 +3,12 @@
 use numpy::{PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pedo_io::synthetic::SyntheticWalk;
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 
 use crate::errors::to_py;
 use crate::io_py::PyRecording;
 use crate::options_py::{count, opt_count};
+use crate::pickling::{Reader, Writer};
 
 /// A foot-like pressure field warped smoothly in time (translation towards the toes, rotation,
 /// widening of the forefoot) with the true map from frame-0 coordinates to frame ``t`` known.
@@ -44,6 +46,46 @@ fn map_points<'py>(
         return Ok(PyArray2::zeros(py, [0, 2], false));
     }
     Ok(PyArray2::from_vec2(py, &out)?)
+}
+
+impl PySyntheticWalk {
+    /// Every parameter of the walk, for `__reduce__`.
+    fn state(&self) -> Writer {
+        let w = &self.inner;
+        let mut out = Writer::new();
+        out.usize(w.frames).usize(w.rows).usize(w.cols);
+        for v in [
+            w.translation[0],
+            w.translation[1],
+            w.rotation_deg,
+            w.spread,
+            w.noise_kpa,
+            w.pitch_mm,
+            w.frame_rate_hz,
+        ] {
+            out.f64(v);
+        }
+        out
+    }
+
+    /// The inverse of [`Self::state`].
+    pub(crate) fn restore(state: &[u8]) -> PyResult<Self> {
+        let mut r = Reader::new("SyntheticWalk", state)?;
+        let inner = SyntheticWalk {
+            frames: r.usize()?,
+            rows: r.usize()?,
+            cols: r.usize()?,
+            translation: [r.f64()?, r.f64()?],
+            rotation_deg: r.f64()?,
+            spread: r.f64()?,
+            noise_kpa: r.f64()?,
+            pitch_mm: r.f64()?,
+            frame_rate_hz: r.f64()?,
+        };
+        r.finish()?;
+        inner.validate().map_err(to_py)?;
+        Ok(Self { inner })
+    }
 }
 
 #[pymethods]
@@ -112,6 +154,18 @@ impl PySyntheticWalk {
     #[getter]
     fn frames(&self) -> usize {
         self.inner.frames
+    }
+
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        self.state().reduce(py, "SyntheticWalk")
+    }
+    /// Equal when every parameter is the same.
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        self.state()
+            .same_as(other.cast::<Self>().ok().map(|o| o.get().state()))
+    }
+    fn __hash__(&self) -> u64 {
+        self.state().digest()
     }
 
     /// The constructor call that makes this walk, with the keywords' names.

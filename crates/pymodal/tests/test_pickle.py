@@ -49,10 +49,16 @@ def assert_same_object(x, y):
     assert repr(x) == repr(y)
 
 
+RESULT_CLASSES = (pymodal.Match, pymodal.Recording, pymodal.Surface, pymodal.ModalModel)
+
+
 def round_trip(x):
     y = pickle.loads(pickle.dumps(x, protocol=pickle.HIGHEST_PROTOCOL))
     assert y is not x
     assert_same(x, y)
+    if isinstance(x, RESULT_CLASSES):
+        # Value equality: what a round trip keeps, checkable with == (and hashable alike).
+        assert y == x and not (y != x) and hash(y) == hash(x)
     # Protocol 2 (the oldest Dask may use) too.
     assert_same(x, pickle.loads(pickle.dumps(x, protocol=2)))
     return y
@@ -177,3 +183,24 @@ def test_synthetic_walk_repr_is_the_call_that_makes_it():
     assert repr(again) == text
     assert np.array_equal(again.true_positions(7, np.array([[3.0, 4.0]])),
                           walk.true_positions(7, np.array([[3.0, 4.0]])))
+
+
+def test_results_compare_by_value():
+    a, b = outline(30), outline(32, 0.2)
+    m = pymodal.match(a, b)
+    assert m == pymodal.match(a, b) and m != pymodal.match(b, a)
+    assert m != m.pairs and m != None  # noqa: E711  (another type is never equal)
+    assert len({m, pymodal.match(a, b), pymodal.match(b, a)}) == 2
+    assert pymodal.ModalModel(a) == pymodal.ModalModel(a) != pymodal.ModalModel(b)
+    rec = pymodal.Recording.from_array(np.ones((2, 4, 3)), pitch_mm=5.0)
+    assert rec == pymodal.Recording.from_array(np.ones((2, 4, 3)), pitch_mm=5.0)
+    assert rec != pymodal.Recording.from_array(np.ones((2, 4, 3)), pitch_mm=5.08)
+
+
+def test_synthetic_walk_round_trip():
+    walk = pymodal.SyntheticWalk(frames=30, rotation=5.0, translation=(1.0, -2.5))
+    back = pickle.loads(pickle.dumps(walk))
+    assert back == walk and hash(back) == hash(walk) and repr(back) == repr(walk)
+    assert back != pymodal.SyntheticWalk(frames=31)
+    pts = np.array([[10.0, 20.0], [15.0, 40.0]])
+    assert_same(walk.true_positions(12, pts), back.true_positions(12, pts))
