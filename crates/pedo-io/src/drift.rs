@@ -109,11 +109,19 @@ fn dist(a: &[f64], b: &[f64]) -> f64 {
 /// the object's predecessors and lies within [`JUMP_LIMIT`] spacings. The remaining nodes follow
 /// their predecessor's matches where [`crate::track::step_allowed`] allows the step, and nodes
 /// with neither start new tracks.
+///
+/// # Errors
+/// A pair (of either list) that does not lead forward (`a < b`) between the `objects`, or that
+/// names a node beyond its objects' nodes: [`IoError::InvalidInput`](crate::IoError), as
+/// [`crate::sequence::chain_tracks`] reports it.
 pub fn anchored_tracks(
     objects: &[SequenceObject],
     pairs: &[PairMatch],
     reference: &[PairMatch],
-) -> Vec<Track> {
+) -> crate::Result<Vec<Track>> {
+    for p in pairs.iter().chain(reference) {
+        check_pair(objects, p)?;
+    }
     let mut track_of: Vec<Vec<Option<usize>>> =
         objects.iter().map(|o| vec![None; o.shape.len()]).collect();
     let mut tracks: Vec<Track> = Vec::new();
@@ -173,5 +181,25 @@ pub fn anchored_tracks(
             }
         }
     }
-    tracks
+    Ok(tracks)
+}
+
+/// A pair fit to chain: forward between the objects, its matches on nodes they have.
+fn check_pair(objects: &[SequenceObject], p: &PairMatch) -> crate::Result<()> {
+    if p.a >= p.b || p.b >= objects.len() {
+        return Err(crate::IoError::invalid(format!(
+            "pair {} → {} does not lead forward onto objects 0..{}",
+            p.a,
+            p.b,
+            objects.len()
+        )));
+    }
+    let (na, nb) = (objects[p.a].shape.len(), objects[p.b].shape.len());
+    match p.result.pairs.iter().find(|m| m.a >= na || m.b >= nb) {
+        Some(m) => Err(crate::IoError::invalid(format!(
+            "pair {} → {} matches node {} to node {}, beyond the objects' {na} and {nb} nodes",
+            p.a, p.b, m.a, m.b
+        ))),
+        None => Ok(()),
+    }
 }

@@ -1502,8 +1502,8 @@ pub fn run_sequence(
         crate::drift::anchored_tracks(&objects, &pairs, &anchors)
     };
     let (tracks, packed_tracks) = match (drift, options.keep_match_details) {
-        (true, true) => (drift_tracks(), None),
-        (true, false) => (Vec::new(), Some(drift_tracks().into_iter().collect())),
+        (true, true) => (drift_tracks()?, None),
+        (true, false) => (Vec::new(), Some(drift_tracks()?.into_iter().collect())),
         (false, true) => (chain_tracks(&objects, &pairs)?, None),
         (false, false) => {
             // Packed as they are chained: the tracks of a long run are never all held as
@@ -2181,7 +2181,7 @@ mod tests {
         };
         let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
         // Every node's track held to the end: drift correction's chaining with no reference pairs.
-        let want = crate::drift::anchored_tracks(&run.objects, &run.pairs, &[]);
+        let want = crate::drift::anchored_tracks(&run.objects, &run.pairs, &[]).unwrap();
         assert!(want.len() > 100 && want.iter().any(|t| t.steps.len() >= 10));
         assert!(!run.splits.is_empty() || !run.merges.is_empty());
         assert_eq!(chain_tracks(&run.objects, &run.pairs).unwrap(), want);
@@ -2211,6 +2211,15 @@ mod tests {
             e.contains("beyond the objects'") && e.contains(&format!("and {n} nodes")),
             "{e}"
         );
+        // Drift-corrected chaining reports the same errors, as pairs or as reference pairs.
+        let anchored = |pairs: &[PairMatch], refs: &[PairMatch]| {
+            crate::drift::anchored_tracks(&run.objects, pairs, refs)
+                .unwrap_err()
+                .to_string()
+        };
+        assert!(anchored(&back, &[]).contains("pair 1 → 0 does not lead forward"));
+        assert!(anchored(&run.pairs, &beyond).contains("onto objects 0..3"));
+        assert!(anchored(&node, &[]).contains(&format!("and {n} nodes")));
     }
 
     #[test]
