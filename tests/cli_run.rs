@@ -866,10 +866,57 @@ fn an_isobaric_level_without_an_object_is_reported_not_dropped() {
     for s in skipped {
         let reason = s["reason"].as_str().unwrap();
         assert!(
-            reason.starts_with("isobaric level ") && reason.contains(" of 10 ("),
+            reason.starts_with("isobaric level ")
+                && reason.contains(" of 10 (")
+                && reason.contains(" kPa): "),
             "{reason}"
         );
     }
+    // The levels in kPa, as frames.csv's peak pressure (the file's units are kPa already).
+    let objects = read_csv(&out.join("objects.csv"));
+    let levels: Vec<f64> = objects.iter().map(|r| num(r, "level_kpa")).collect();
+    assert!(levels.windows(2).all(|w| w[0] < w[1]), "{levels:?}");
+    let peak = read_csv(&out.join("frames.csv"))
+        .iter()
+        .map(|r| num(r, "peak_pressure_kpa"))
+        .fold(0.0, f64::max);
+    assert!(
+        levels.last().is_some_and(|&l| l < peak),
+        "{levels:?} {peak}"
+    );
+}
+
+#[test]
+fn isobaric_levels_of_a_file_in_n_per_cm2_are_stated_in_kpa() {
+    let txt = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/crates/pedo-io/tests/data/footscan-FrasP01L-11-20.txt"
+    );
+    let out = temp_dir("iso-kpa").join("out");
+    let o = pedomatch(&[
+        "run",
+        txt,
+        "--model",
+        "isocontour",
+        "--figures",
+        "none",
+        "--report",
+        "none",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The file is in N/cm² (10 kPa each): the first of the evenly spaced levels is a tenth of
+    // the frame's peak less a step, in kPa like the peak of frames.csv.
+    let levels: Vec<f64> = read_csv(&out.join("objects.csv"))
+        .iter()
+        .map(|r| num(r, "level_kpa"))
+        .collect();
+    let peak = num(&read_csv(&out.join("frames.csv"))[0], "peak_pressure_kpa");
+    assert!(
+        levels[0] > 0.05 * peak && levels[0] < 0.15 * peak,
+        "{levels:?} {peak}"
+    );
 }
 
 #[test]

@@ -283,7 +283,8 @@ fn push_xy(cells: &mut Vec<Cell>, recording: &Recording, x: f64, y: f64, mm: boo
 }
 
 /// The objects: id (0-based, the row index), frame, time, index in the frame (or level index),
-/// node count, isobaric level, centroid of the nodes in pixels and mm.
+/// node count, isobaric level (`level_kpa` in kPa when the pressure units are known, else
+/// `level` in the file's units), centroid of the nodes in pixels and mm.
 pub fn objects_table(recording: &Recording, r: &SequenceResult) -> Table {
     let mut t = objects_header(recording);
     for o in &r.objects {
@@ -298,7 +299,11 @@ pub fn objects_header(recording: &Recording) -> Table {
     if recording.dt_s.is_some() {
         t.push_column("time_s");
     }
-    for c in ["index", "nodes", "level", "centroid_x", "centroid_y"] {
+    let level = match kpa_per_unit(&recording.units) {
+        Some(_) => "level_kpa",
+        None => "level",
+    };
+    for c in ["index", "nodes", level, "centroid_x", "centroid_y"] {
         t.push_column(c);
     }
     if recording.pitch_mm.is_some() {
@@ -318,7 +323,13 @@ pub fn object_cells(recording: &Recording, o: &SequenceObject) -> Vec<Cell> {
     cells.extend([
         Cell::int(o.index),
         Cell::int(o.shape.len()),
-        Cell::opt(o.level, 3),
+        // In kPa when the units say how (as frames.csv's peak pressure), so that the levels of
+        // a study mixing sensors share one unit.
+        Cell::opt(
+            o.level
+                .map(|l| l * kpa_per_unit(&recording.units).unwrap_or(1.0)),
+            3,
+        ),
     ]);
     let n = o.shape.len().max(1) as f64;
     let (cx, cy) = (0..o.shape.len()).fold((0.0, 0.0), |(x, y), i| {

@@ -1870,6 +1870,16 @@ pub(crate) fn honest_step_of(
         || crate::track::step_allowed(oa.shape.point(na), ob.shape.point(nb), &ob.shape)
 }
 
+/// A pressure of the file's `units` as the outputs state it: in kPa when the units say how,
+/// else in the file's units ("units unknown" when it names none).
+fn pressure_text(value: f64, units: &str) -> String {
+    match crate::recording::kpa_per_unit(units) {
+        Some(k) => format!("{:.1} kPa", value * k),
+        None if units.is_empty() => format!("{value:.1}, units unknown"),
+        None => format!("{value:.1} {units}"),
+    }
+}
+
 /// Objects in sequence order (numbered from 0), the pairs to match (indices into the objects)
 /// and, for contours, the splits and merges between consecutive frames.
 struct Built {
@@ -2036,10 +2046,10 @@ fn build_objects(
                     Err(why) => built.skipped_frames.push(SkippedFrame {
                         frame: t,
                         reason: format!(
-                            "isobaric level {} of {} ({level:.1} {}): {why}",
+                            "isobaric level {} of {} ({}): {why}",
                             index + 1,
                             levels.len(),
-                            recording.units
+                            pressure_text(level, &recording.units)
                         ),
                     }),
                 }
