@@ -12,7 +12,8 @@ use image::RgbaImage;
 pub const MAX_ANIMATION_FRAMES: usize = 150;
 
 /// GIF delays are whole hundredths of a second and browsers show delays under 2 cs as 10 cs:
-/// the shortest delay written (a faster recording plays slightly slower than real time).
+/// the shortest delay written. A faster recording shows every `s`-th frame, `s` the smallest
+/// step whose frames last this long, so that it still plays in real time.
 pub const MIN_GIF_DELAY_CS: u32 = 2;
 
 /// Delay of each shown frame when the recording has no frame rate: 10 frames per second.
@@ -34,10 +35,18 @@ pub struct Animation<'a> {
 }
 
 impl Animation<'_> {
-    /// Every how many frames one is shown (1 up to [`MAX_ANIMATION_FRAMES`] frames).
+    /// Every how many frames one is shown: 1, or more for a run longer than
+    /// [`MAX_ANIMATION_FRAMES`] frames or a recording faster than [`MIN_GIF_DELAY_CS`] allows
+    /// (a 100 Hz recording shows every second frame, each 2 cs).
     pub fn frame_step(&self) -> usize {
         let n = self.frames.1.saturating_sub(self.frames.0);
-        n.div_ceil(MAX_ANIMATION_FRAMES).max(1)
+        let for_length = n.div_ceil(MAX_ANIMATION_FRAMES);
+        let for_speed = match self.axes.dt_s.filter(|dt| dt.is_finite() && *dt > 0.0) {
+            // The tolerance keeps 100 Hz (0.01 s, not exactly representable) at a step of 2.
+            Some(dt) => (f64::from(MIN_GIF_DELAY_CS) / (100.0 * dt) - 1e-9).ceil() as usize,
+            None => 1,
+        };
+        for_length.max(for_speed).max(1)
     }
 
     /// The recording frames the animation shows, in order.
@@ -410,11 +419,21 @@ mod tests {
         assert_eq!(animation.delay_cs(), 3);
         let frames = decode(&animation.to_gif().unwrap());
         assert_eq!(frames.len(), 101);
-        // A recording at 1 kHz would need 0.3 cs: GIF shows 2 cs at least.
+        // 100 frames at 100 Hz: every second frame, 2 cs each, one second of playback (1 cs
+        // frames would play at half speed, as browsers stretch them).
+        animation.frames = (0, 100);
+        assert_eq!((animation.frame_step(), animation.delay_cs()), (2, 2));
+        // At 1 kHz every twentieth frame, 2 cs each: real time still.
         let fast = rec.clone().with_frame_rate(1000.0).unwrap();
         let fast_axes = FigureAxes::of_recording(&fast);
         animation.axes = &fast_axes;
-        assert_eq!(animation.delay_cs(), MIN_GIF_DELAY_CS);
+        assert_eq!((animation.frame_step(), animation.delay_cs()), (20, 2));
+        // At 31.25 Hz (32 ms) every frame, 3 cs each.
+        let slow = rec.clone().with_frame_rate(31.25).unwrap();
+        let slow_axes = FigureAxes::of_recording(&slow);
+        animation.axes = &slow_axes;
+        assert_eq!((animation.frame_step(), animation.delay_cs()), (1, 3));
+        animation.frames = (0, 301);
         // Without a frame rate: 10 shown frames per second of playback.
         let unknown = FigureAxes {
             dt_s: None,
