@@ -31,16 +31,22 @@ pub fn run(args: InspectArgs) -> Result<(), CliError> {
         println!("{}", crate::output::pretty(&d)?);
         return Ok(());
     }
-    let show = |v: &serde_json::Value| match v {
-        serde_json::Value::Null => "unknown".to_string(),
-        serde_json::Value::String(s) => s.clone(),
-        // Six decimals hide binary rounding (0.032 s × 205 frames = 6.5600000000000005 s).
-        serde_json::Value::Number(n) if n.is_f64() => {
-            let x = n.as_f64().unwrap_or(f64::NAN);
-            ((x * 1e6).round() / 1e6).to_string()
+    fn show(v: &serde_json::Value) -> String {
+        match v {
+            serde_json::Value::Null => "unknown".to_string(),
+            serde_json::Value::String(s) => s.clone(),
+            // Six decimals hide binary rounding (0.032 s × 205 frames = 6.5600000000000005 s).
+            serde_json::Value::Number(n) if n.is_f64() => {
+                let x = n.as_f64().unwrap_or(f64::NAN);
+                ((x * 1e6).round() / 1e6).to_string()
+            }
+            // A pitch: "5.08 x 5.08" (columns x rows), as the grid line writes its sizes.
+            serde_json::Value::Array(items) => {
+                items.iter().map(show).collect::<Vec<_>>().join(" x ")
+            }
+            other => other.to_string(),
         }
-        other => other.to_string(),
-    };
+    }
     println!("file            {}", args.recording.display());
     println!("sha256          {}", show(&d["sha256"]));
     println!("format          {}", show(&d["format"]));

@@ -441,7 +441,7 @@ pub fn recording_option_specs() -> Vec<OptionSpec> {
             "frames",
             Value,
             "all",
-            "Frames START..END, 0-based with END excluded like a Python slice (START.. and ..END allowed).",
+            "Frames START..END, 0-based with END excluded as in a Python slice (START.. and ..END allowed); the range must lie within the recording.",
         ),
         OptionSpec::new(
             "noise",

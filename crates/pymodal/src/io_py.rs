@@ -214,7 +214,8 @@ impl PyRecording {
     fn dt_s(&self) -> Option<f64> {
         self.inner.dt_s
     }
-    /// Pressure units as the file writes them (e.g. ``"kPa"``); ``""`` when unknown.
+    /// Pressure units as the file writes them (e.g. ``"kPa"``); ``""`` when unknown (``null``
+    /// in ``summary.json``).
     #[getter]
     fn units(&self) -> String {
         self.inner.units.clone()
@@ -275,7 +276,8 @@ impl PyRecording {
                 .get_item("total_force")?,
         )
     }
-    /// (T,) float64 highest pressure per frame.
+    /// (T,) float64 highest pressure per frame, in the file's units (``units``; ``run``'s
+    /// frames table converts it to kPa when they are known).
     #[getter]
     fn peak_pressure<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         read_only(

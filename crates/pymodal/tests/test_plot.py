@@ -118,6 +118,11 @@ def test_run_result_shows_its_summary_as_html():
     res = pymodal.run(rec)
     assert isinstance(res, dict) and isinstance(res, pymodal.RunResult)
     s = res["summary"]
+    # The plain repr is one line of counts, not every match and track.
+    text = repr(res)
+    assert "\n" not in text and len(text) < 300, text
+    assert text.startswith("RunResult(input=") and f"pairs={s['pairs']}" in text
+    assert "keys: table, matches, objects, tracks" in text
     html = res._repr_html_()
     assert html.startswith("<table") and html.endswith("</table>")
     for text in (

@@ -17,6 +17,17 @@ class RunResult(dict):
     """What :func:`run` returns: a dict (``table``, ``matches``, ``objects``, ``tracks``,
     ``frames``, ``summary``, ``timings``) that Jupyter shows as a table of its summary."""
 
+    def __repr__(self):
+        """One line: the input, the counts and the mean optimisation percentage, and the keys
+        (the dict itself holds every match and track: print ``dict(res)`` for all of it)."""
+        s = self.get("summary", {})
+        pct = s.get("mean_optimisation_percent")
+        counts = ", ".join(f"{k}={s.get(k)}" for k in ("objects", "pairs", "tracks"))
+        return (f"RunResult(input={s.get('input', {}).get('file')!r}, "
+                f"frames={s.get('recording', {}).get('frames')}, {counts}, "
+                f"mean_optimisation_percent={'None' if pct is None else format(pct, '.1f')}; "
+                f"keys: {', '.join(self)})")
+
     def _repr_html_(self):
         """The run's summary as an HTML table: input, format, frames, pairs, mean match
         percentages and cost, what was skipped, and the time per stage."""
