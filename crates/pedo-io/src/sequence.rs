@@ -2108,9 +2108,11 @@ fn frame_surface(
     if frame.max() <= threshold {
         return Ok(None);
     }
+    // Only "nothing there" is a frame without an object; a bad option or a mesh that failed is
+    // that frame's skipped reason, so a run never ends on a bare "no object" that hides it.
     match crate::surface::surface(&frame, &options.surface) {
         Ok(s) => Ok(Some(s.to_shape()?).filter(|s| keep(s))),
-        Err(IoError::InvalidInput(_) | IoError::NoObject(_)) => Ok(None),
+        Err(IoError::NoObject(_)) => Ok(None),
         Err(e) => Err(e),
     }
 }
@@ -2197,6 +2199,26 @@ mod tests {
         assert_eq!(chain_tracks(&run.objects, &run.pairs).unwrap(), want);
         let packed: Vec<Track> = run.all_tracks().map(|t| t.into_owned()).collect();
         assert_eq!(packed, want);
+    }
+
+    #[test]
+    fn a_bad_surface_option_is_each_frames_reason_not_a_frame_without_contact() {
+        let rec = recording(3, |f, r, c| disc(11.0 + f as f64 * 0.5, 11.0, 6.0)(r, c));
+        let mut options = SequenceOptions {
+            model: ObjectModel::Surface,
+            ..Default::default()
+        };
+        options.surface.max_nodes = Some(2);
+        let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+        assert!(run.objects.is_empty());
+        assert_eq!(run.skipped_frames.len(), 3);
+        for s in &run.skipped_frames {
+            assert!(
+                s.reason.contains("max_nodes must be at least 3"),
+                "{}",
+                s.reason
+            );
+        }
     }
 
     #[test]
