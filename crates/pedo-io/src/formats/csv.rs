@@ -94,7 +94,7 @@ pub fn parse_csv(bytes: &[u8], name: &str) -> Result<Recording> {
 /// of names (not column numbers) or rows of at most 3 values (a point file, a time series). A
 /// searched folder passes such files over, as it does notes and spreadsheets (a study folder
 /// also holds anthropometrics and force-plate tables); named on their own they are still read.
-pub(crate) fn looks_like_a_table(head: &str) -> bool {
+pub fn looks_like_a_table(head: &str) -> bool {
     let head = head.strip_prefix('\u{feff}').unwrap_or(head);
     let mut lines = head.lines().map(str::trim).filter(|l| !l.is_empty());
     let Some(first) = lines.next() else {
