@@ -87,6 +87,7 @@ pub fn report_page(
         options: used,
         timings,
         contact_threshold: run.options.contour.preprocess.threshold.unwrap_or(0.0),
+        frames: run.options.frames,
     };
     pedo_report::run_report(run.recording, run.result, &info).map_err(|e| {
         pedo_io::IoError::Output {

@@ -987,3 +987,95 @@ fn match_reads_a_footscan_text_export_as_a_recording() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["one_to_one_matches"], 30, "{v}");
 }
+
+#[test]
+fn the_run_report_opens_in_the_analysed_frames_and_breaks_the_cop_path_at_swings() {
+    // Frames 55..100 of the walk start in a swing (no contact until frame 64).
+    let walk = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
+    let out = temp_dir("report-frames").join("out");
+    let o = pedomatch(&[
+        "run",
+        walk,
+        "--frames",
+        "55..100",
+        "--figures",
+        "none",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(
+        html.contains("<th>frames</th><td>55–99 of 205 analysed, 60 × 21 sensels</td>"),
+        "the header does not state the analysed frames"
+    );
+    let d = embedded_json(&html);
+    assert_eq!(d["analysed"], serde_json::json!([55, 100]));
+    // The player opens on the first frame holding objects, and plays the whole recording.
+    let first = read_csv(&out.join("objects.csv"))
+        .iter()
+        .map(|r| num(r, "frame") as u64)
+        .min()
+        .unwrap();
+    assert!((64..100).contains(&first), "{first}");
+    assert_eq!(d["open_frame"], first);
+    assert_eq!(d["shown"].as_array().unwrap().len(), 205);
+    // The centre-of-pressure path: one piece per run of frames with contact, none across a swing.
+    let area: Vec<f64> = serde_json::from_value(d["series"]["area"].clone()).unwrap();
+    let frames: Vec<Option<usize>> =
+        serde_json::from_value(d["series"]["cop_path"]["frame"].clone()).unwrap();
+    let pieces: Vec<Vec<usize>> = frames
+        .split(|f| f.is_none())
+        .map(|p| p.iter().map(|f| f.unwrap()).collect())
+        .collect();
+    let contact: Vec<usize> = (0..area.len()).filter(|&f| area[f] > 0.0).collect();
+    let runs: Vec<Vec<usize>> = contact
+        .chunk_by(|a, b| b - a == 1)
+        .map(|r| r.to_vec())
+        .collect();
+    assert!(runs.len() >= 7, "{} stance phases", runs.len());
+    assert_eq!(pieces, runs);
+}
+
+#[test]
+fn the_run_reports_load_series_is_the_frames_csv_load_with_its_units() {
+    // The synthetic .npy states no units: without a pitch the load is the plain sum of the
+    // values (frames.csv `total_load_sensels`), with one × mm² (`total_load_mm2`); with kPa and
+    // a pitch it is a force in newtons (`total_force_n`).
+    for (name, extra, column, label) in [
+        (
+            "load-sensels",
+            &[][..],
+            "total_load_sensels",
+            "total load (pressure units unknown × sensels)",
+        ),
+        (
+            "load-mm2",
+            &["--pitch-mm", "5"][..],
+            "total_load_mm2",
+            "total load (pressure units unknown × mm²)",
+        ),
+        (
+            "load-n",
+            &["--pitch-mm", "5", "--units", "kPa"][..],
+            "total_force_n",
+            "total force (N)",
+        ),
+    ] {
+        let mut args = vec!["--figures", "none"];
+        args.extend_from_slice(extra);
+        let out = run_synthetic(name, &args);
+        let frames = read_csv(&out.join("frames.csv"));
+        let d = embedded_json(&std::fs::read_to_string(out.join("report.html")).unwrap());
+        assert_eq!(d["series"]["force_label"], label, "{name}");
+        for (f, row) in frames.iter().enumerate() {
+            let (csv, shown) = (num(row, column), d["series"]["force"][f].as_f64().unwrap());
+            assert!(
+                (csv - shown).abs() <= 1e-3 * csv.abs().max(1.0),
+                "{name} frame {f}"
+            );
+        }
+        let peak = d["series"]["peak_label"].as_str().unwrap();
+        assert!(!peak.contains("(units)"), "{peak}");
+    }
+}

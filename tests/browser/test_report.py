@@ -5,13 +5,17 @@ Usage: test_report.py PEDOMATCH_BINARY [SCREENSHOT.png]
 
 Checks: the three plots are drawn (plotly's SVG root exists for each), no script error and no
 blocked load was logged (the page's own error log and Chromium's console), moving the slider to
-frame k shows frame k (label, plot title and the page's state), a surface run draws its 3-D view,
-an isocontour run shows each level of its frame, `pedomatch match` reports are drawn (with a 3-D
-view for 3-D points), the pages make no network request
+frame k shows frame k (label, plot title and the page's state), the plots' titles lie below plotly's mode bar,
+a run of part of a recording (`--frames`) opens on its first frame with objects and says which
+frames were analysed, a surface run draws its 3-D view, an isocontour run shows each level of its
+frame, `pedomatch match` reports are drawn (with a 3-D view for 3-D points), file names holding
+markup are shown as written (plotly reads names as HTML-like text), near-identical shapes get one
+cost class, the pages make no network request
 (every host resolves to nothing, and the page's Content-Security-Policy would report any load),
 and `--report none` writes no report. Standard library only; needs `chromium` on PATH.
 """
 
+import html
 import json
 import math
 import os
@@ -78,12 +82,70 @@ def check_frame(report, k, failures):
     titles = re.findall(r'class="g-gtitle".*?<text[^>]*>([^<]*)<', dom)
     expect(any(re.match(rf"frame {k}\b", t) for t in titles),
            f"the player's title does not say frame {k}: {titles!r}")
+    check_titles_clear_of_the_mode_bar(dom, expect)
     return dom
+
+
+# plotly's mode bar (its buttons, shown on hover) spans the top 2 + 22 px of a plot, at the right.
+MODE_BAR_BOTTOM = 26
+
+
+def check_titles_clear_of_the_mode_bar(dom, expect):
+    """Every plot title's top lies below the mode bar, which would otherwise cover its end."""
+    titles = re.findall(r'<text class="gtitle"[^>]*?\by="([0-9.]+)"[^>]*?font-size: ([0-9.]+)px[^>]*>([^<]*)<',
+                        dom)
+    expect(titles, "no plot title found")
+    for y, size, text in titles:
+        expect(float(y) - float(size) >= MODE_BAR_BOTTOM,
+               f"the title {text!r} (baseline {y} px, {size} px font) is under the mode bar")
+
+
+def check_analysed_frames(binary, tmp, failures):
+    """A run of frames 55..100 of the walk (a swing until frame 64) opens on its first frame with
+    objects, states the analysed frames, and still plays the frames before them, marked."""
+    walk = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..",
+                        "examples", "data", "FrasP01L.asf")
+    out = os.path.join(tmp, "frames")
+    subprocess.run([binary, "run", walk, "--frames", "55..100", "--out", out, "--figures", "none"],
+                   check=True, stdout=subprocess.DEVNULL)
+    report = os.path.join(out, "report.html")
+    first = min(int(l.split(",")[1]) for l in open(os.path.join(out, "objects.csv")).readlines()[1:])
+    dom, expect = check_page(f"file://{report}", failures, "--frames 55..100")
+    expect(55 < first < 100, f"first frame with objects {first}")
+    expect(f'data-frame="{first}"' in dom, f"the page does not open on frame {first}")
+    expect("55–99 of 205 analysed" in dom, "the header does not state the analysed frames")
+    dom = check_frame(report, 10, failures)
+    label = re.search(r'id="frame-label">([^<]*)<', dom)
+    expect(label and label.group(1).endswith("not analysed"),
+           f"frame 10 is not marked as not analysed: {label.group(1) if label else None!r}")
 
 
 def write_points(path, points):
     with open(path, "w") as f:
         f.write("\n".join(",".join(f"{v:.6f}" for v in p) for p in points) + "\n")
+
+
+def check_markup_in_file_names(binary, tmp, failures):
+    """File names holding markup are shown as written in the legend (not read as HTML by plotly);
+    two identical outlines give one cost class, all costs about 0."""
+    ring = [(3 * math.cos(2 * math.pi * k / 40), 2 * math.sin(2 * math.pi * k / 40))
+            for k in range(40)]
+    names = ['a "x" <b>.csv', "b'é.csv"]
+    for n in names:
+        with open(os.path.join(tmp, n), "w") as f:
+            f.write("x,y\n" + "".join(f"{x:.6f},{y:.6f}\n" for x, y in ring))
+    out = os.path.join(tmp, "m out")
+    subprocess.run([binary, "match", *names, "--out", out, "--figures", "none"], cwd=tmp,
+                   check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    dom, expect = check_page("file://" + os.path.join(out, "report.html").replace(" ", "%20"),
+                             failures, "match report (markup in names)")
+    legend = [html.unescape(t) for t in re.findall(r'class="legendtext"[^>]*>([^<]*)<', dom)]
+    expect(names[0] in legend and names[1] in legend,
+           f"the legend does not show the file names as written: {legend!r}")
+    expect("font-weight: bold" not in " ".join(re.findall(r'class="legendtext".*?</text>', dom)),
+           "a legend entry is drawn in bold: its name was read as markup")
+    costs = [t for t in legend if "cost" in t]
+    expect(costs == ["all costs ≈ 0"], f"identical outlines: cost classes {costs!r}")
 
 
 def check_match_reports(binary, tmp, failures):
@@ -186,7 +248,9 @@ def main():
         if not re.search(r'class="legendtext"[^>]*>frame 73<', dom):
             failures.append("surface run: the 3-D view does not show the pair 72 -> 73")
         check_isocontours(binary, tmp, failures)
+        check_analysed_frames(binary, tmp, failures)
         check_match_reports(binary, tmp, failures)
+        check_markup_in_file_names(binary, tmp, failures)
         none = os.path.join(tmp, "none")
         subprocess.run([binary, "demo", "--out", none, "--figures", "none", "--report", "none"],
                        check=True, stdout=subprocess.DEVNULL)
@@ -195,9 +259,10 @@ def main():
     for f in failures:
         print("FAIL:", f)
     print(f"report.html of the demo is {size / 2**20:.1f} MB")
-    # Scenarios: size, frames 0 / 75 / 204, the clamped frame, the surface view, isocontours,
-    # two match reports, --report none.
-    scenarios = 10
+    # Scenarios: size, frames 0 / 75 / 204 (with the titles clear of the mode bar), the clamped
+    # frame, the surface view, isocontours, the analysed frames, two match reports, markup in
+    # file names, --report none.
+    scenarios = 12
     failed = min(len(failures), scenarios)
     print(f"browser: {scenarios - failed} passed, {failed} failed")
     if failures:

@@ -7,6 +7,8 @@
 //! timings, skipped frames and pairs), a player (pressure image, contours, matches into the next
 //! frame coloured by cost, excess matches, unmatched nodes, short track trails) driven by a frame
 //! slider and a play button, time series along the recording and the centre-of-pressure path.
+//! The player opens on the first frame holding objects within the frames analysed
+//! ([`ReportInfo::frames`]), which the header states.
 //! For isocontours the player draws each level of the frame, labelled with its pressure. The
 //! match page shows both objects, the matches by cost class, excess matches and unmatched nodes,
 //! and a 3-D view for 3-D points.
@@ -54,6 +56,10 @@ pub struct ReportInfo {
     pub timings: Vec<(String, f64)>,
     /// Sensors above this value count as contact in the time series (the run's noise level).
     pub contact_threshold: f64,
+    /// The frames analysed, `start..end` (0-based, `end` excluded; `None`: every frame). The
+    /// player still plays the whole recording but opens within this range, and the header and
+    /// the time series show it.
+    pub frames: Option<(usize, usize)>,
 }
 
 /// The report of one run as a complete HTML page.
@@ -186,16 +192,15 @@ fn match_data(pair: &MatchPairInput) -> Value {
         })
     };
     let r = pair.result;
-    let bounds = cost_bounds(r.pairs.iter().map(|m| m.cost).collect());
-    let class = |c: f64| bounds.iter().take_while(|&&b| c > b).count();
-    let mut by_cost: Vec<Segments> = (0..COST_CLASSES).map(|_| Segments::default()).collect();
+    let classes = cost_classes(r.pairs.iter().map(|m| m.cost).collect());
+    let mut by_cost: Vec<Segments> = (0..classes.count()).map(|_| Segments::default()).collect();
     let mut excess = Segments::default();
     for m in &r.pairs {
         let seg = [point(pair.a, m.a), point(pair.b, m.b)];
         if m.excess {
             excess.push(seg);
         } else {
-            by_cost[class(m.cost)].push(seg);
+            by_cost[classes.class(m.cost)].push(seg);
         }
     }
     let nodes = |s: &modal_core::Shape, which: &[usize]| {
@@ -210,7 +215,7 @@ fn match_data(pair: &MatchPairInput) -> Value {
         "dim": pair.a.dim(), "xy_units": xy_units,
         "label_a": pair.label_a, "label_b": pair.label_b,
         "a": object(pair.a), "b": object(pair.b),
-        "cost_bounds": bounds,
+        "cost_bounds": classes.bounds, "cost_labels": classes.labels,
         "matches": by_cost.iter().map(|s| &s.xy).collect::<Vec<_>>(),
         "matches3d": by_cost.iter().map(|s| &s.xyz).collect::<Vec<_>>(),
         "excess": excess.xy, "excess3d": excess.xyz,
@@ -250,18 +255,106 @@ impl Segments {
     }
 }
 
-/// The `COST_CLASSES - 1` bounds between cost classes: quantiles of the finite costs.
-fn cost_bounds(mut costs: Vec<f64>) -> Vec<f64> {
+/// The cost classes matches are coloured by: the bounds between them (a cost `c` is in class
+/// `k`, the number of bounds below `c`) and each class's legend name.
+#[derive(Debug, Clone, PartialEq)]
+struct CostClasses {
+    bounds: Vec<f64>,
+    labels: Vec<String>,
+}
+
+impl CostClasses {
+    fn class(&self, c: f64) -> usize {
+        self.bounds.iter().take_while(|&&b| c > b).count()
+    }
+
+    fn count(&self) -> usize {
+        self.labels.len()
+    }
+
+    /// The classes as JSON: `cost_bounds` and `cost_labels`.
+    fn to_json(&self) -> Value {
+        json!({ "cost_bounds": self.bounds, "cost_labels": self.labels })
+    }
+}
+
+/// Costs closer than this, relative to the largest (1 at least), are the same cost: bounds
+/// this close are one bound, and a bound this close to 0 is 0.
+const COST_TOLERANCE: f64 = 1e-9;
+
+/// Up to [`COST_CLASSES`] classes of the finite costs, bounded by their quantiles. Bounds that
+/// coincide (closer than [`COST_TOLERANCE`]) are one bound, and a bound with no cost
+/// meaningfully above it is dropped: near-identical costs make one class (`all costs ≈ 0` when
+/// they are all about 0). Each bound is written with the fewest significant digits (2 at least)
+/// that tell the bounds apart.
+fn cost_classes(mut costs: Vec<f64>) -> CostClasses {
     costs.retain(|c| c.is_finite());
     costs.sort_by(f64::total_cmp);
-    (1..COST_CLASSES)
-        .map(|i| {
-            costs
-                .get(i * costs.len() / COST_CLASSES)
-                .copied()
-                .unwrap_or(0.0)
+    let (Some(&lo), Some(&hi)) = (costs.first(), costs.last()) else {
+        return CostClasses {
+            bounds: vec![],
+            labels: vec!["matches".into()],
+        };
+    };
+    let tol = COST_TOLERANCE * lo.abs().max(hi.abs()).max(1.0);
+    let snap = |v: f64| if v.abs() < tol { 0.0 } else { v };
+    let mut bounds: Vec<f64> = Vec::new();
+    for i in 1..COST_CLASSES {
+        let b = costs[i * costs.len() / COST_CLASSES];
+        if hi - b >= tol && bounds.last().is_none_or(|&last| b - last >= tol) {
+            bounds.push(b);
+        }
+    }
+    if bounds.is_empty() {
+        let median = snap(costs[costs.len() / 2]);
+        let label = if median == 0.0 {
+            "all costs ≈ 0".to_string()
+        } else {
+            format!("all costs ≈ {}", significant(median, 3))
+        };
+        return CostClasses {
+            bounds,
+            labels: vec![label],
+        };
+    }
+    let digits = (2..=17)
+        .find(|&d| {
+            let t: Vec<String> = bounds.iter().map(|&b| significant(snap(b), d)).collect();
+            t.windows(2).all(|w| w[0] != w[1])
         })
-        .collect()
+        .unwrap_or(17);
+    let text: Vec<String> = bounds
+        .iter()
+        .map(|&b| significant(snap(b), digits))
+        .collect();
+    let mut labels = vec![format!("cost ≤ {}", text[0])];
+    labels.extend(
+        text.windows(2)
+            .map(|w| format!("{} < cost ≤ {}", w[0], w[1])),
+    );
+    labels.push(format!("cost > {}", text[text.len() - 1]));
+    CostClasses { bounds, labels }
+}
+
+/// `v` rounded to `digits` significant digits, as plain decimals from 1e-4 to 1e6 and in
+/// scientific notation (`1.5e-16`) beyond; never `-0`.
+fn significant(v: f64, digits: usize) -> String {
+    let r: f64 = format!("{:.*e}", digits.saturating_sub(1), v)
+        .parse()
+        .unwrap_or(v);
+    if r == 0.0 || !r.is_finite() {
+        return if r.is_finite() {
+            "0".into()
+        } else {
+            r.to_string()
+        };
+    }
+    let exponent = r.abs().log10().floor();
+    if (-4.0..6.0).contains(&exponent) {
+        format!("{r}")
+    } else {
+        format!("{r:e}")
+    }
 }
 
 /// plotly.js v3.0.1, MIT licence (`assets/LICENSE-plotly.js.txt`), vendored as a file: the
@@ -281,17 +374,73 @@ fn html_escape(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// Physical pressure units: kPa when the recording's units convert, else its own units.
-fn pressure_scale(recording: &Recording) -> (f64, String) {
+/// Physical pressure units: kPa when the recording's units convert, else its own units;
+/// `None` when the recording states none.
+fn pressure_scale(recording: &Recording) -> (f64, Option<String>) {
     match pedo_io::recording::kpa_per_unit(&recording.units) {
-        Some(k) => (k, "kPa".to_string()),
-        None if recording.units.is_empty() => (1.0, "units".to_string()),
-        None => (1.0, recording.units.clone()),
+        Some(k) => (k, Some("kPa".to_string())),
+        None => (1.0, file_units(recording)),
     }
+}
+
+/// The units the recording's values are in, as the file names them (kPa spelled so whatever
+/// the file's case); `None` when it names none.
+fn file_units(recording: &Recording) -> Option<String> {
+    let u = recording.units.trim();
+    if u.is_empty() {
+        None
+    } else if pedo_io::recording::kpa_per_unit(u) == Some(1.0) {
+        Some("kPa".to_string())
+    } else {
+        Some(u.to_string())
+    }
+}
+
+/// What the time series' load panel plots, named as frames.csv names its column
+/// (`total_force_n`, `total_load_mm2`, `total_load_sensels`): newtons when the pressure units
+/// convert and the sensel area is known; else the plain sum of the values times the sensel area
+/// (the file's units × mm²) or, without a pitch, the plain sum (the file's units × sensels).
+fn load_label(recording: &Recording) -> String {
+    if recording.force_factor().is_some() {
+        return "total force (N)".into();
+    }
+    let units = file_units(recording).unwrap_or_else(|| "pressure units unknown".into());
+    let per = if recording.sensel_area().is_some() {
+        "mm²"
+    } else {
+        "sensels"
+    };
+    format!("total load ({units} × {per})")
+}
+
+/// `1st`, `2nd`, `3rd`, `4th`, ... `11th`, `12th`, `13th`, ... `21st`, `22nd`, ...
+fn ordinal(n: usize) -> String {
+    let suffix = match (n % 10, n % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
+}
+
+/// `"1 track"`, `"2 tracks"`: a count and its noun, plural unless the count is 1.
+fn count(n: usize, singular: &str, plural: &str) -> String {
+    format!("{n} {}", if n == 1 { singular } else { plural })
 }
 
 fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo) -> String {
     let (_, punits) = pressure_scale(recording);
+    let n = recording.n_frames();
+    let frames = match info.frames {
+        Some((start, end)) if end == start + 1 && n > 1 => format!("{start} of {n} analysed"),
+        Some((start, end)) if (start, end) != (0, n) => {
+            format!("{}–{} of {n} analysed", start, end.saturating_sub(1))
+        }
+        _ if n == 1 => "the only one analysed".into(),
+        _ => format!("all {n} analysed"),
+    };
     let mut rows: Vec<(String, String)> = vec![
         ("input".into(), info.input.clone()),
         (
@@ -301,8 +450,7 @@ fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo
         (
             "frames".into(),
             format!(
-                "{} of {} × {} sensels",
-                recording.n_frames(),
+                "{frames}, {} × {} sensels",
                 recording.rows(),
                 recording.cols()
             ),
@@ -321,15 +469,18 @@ fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo
                 .map(|f| format!("{f} Hz"))
                 .unwrap_or_else(|| "unknown (time in frames)".into()),
         ),
-        ("pressure".into(), punits),
+        (
+            "pressure".into(),
+            punits.unwrap_or_else(|| "units unknown".into()),
+        ),
         ("version".into(), format!("pedomatch {}", info.version)),
         (
             "result".into(),
             format!(
-                "{} objects, {} matched pairs, {} tracks",
-                result.objects.len(),
-                result.pairs.len(),
-                result.track_count()
+                "{}, {}, {}",
+                count(result.objects.len(), "object", "objects"),
+                count(result.pairs.len(), "matched pair", "matched pairs"),
+                count(result.track_count(), "track", "tracks")
             ),
         ),
     ];
@@ -442,17 +593,18 @@ fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo
     let overlays = overlays(result, &shown, &mm, pitch[0], kpa);
 
     let measures = recording.measures(info.contact_threshold);
-    let force_known = recording.force_factor().is_some();
     let area_known = recording.sensel_area().is_some();
+    let cop: Vec<Option<[f64; 2]>> = measures.iter().map(|m| m.cop.map(|c| mm(&c))).collect();
     let series = json!({
         "frame": (0..n).collect::<Vec<_>>(),
         "area": measures.iter().map(|m| round3(m.contact_area)).collect::<Vec<_>>(),
         "force": measures.iter().map(|m| round3(m.total_force)).collect::<Vec<_>>(),
         "peak": measures.iter().map(|m| round3(m.peak_pressure * kpa)).collect::<Vec<_>>(),
-        "cop": measures.iter().map(|m| m.cop.map(|c| mm(&c))).collect::<Vec<_>>(),
+        "cop_path": cop_path(&cop),
+        "cop": cop,
         "area_label": if area_known { "contact area (mm²)" } else { "contact area (sensels)" },
-        "force_label": if force_known { "total force (N)" } else { "total load (units × sensels)" },
-        "peak_label": format!("peak pressure ({punits})"),
+        "force_label": load_label(recording),
+        "peak_label": format!("peak pressure ({})", punits.as_deref().unwrap_or("units unknown")),
     });
     let pairs = json!({
         "frame": result.pairs.iter().map(|p| p.row.objects.frame_a).collect::<Vec<_>>(),
@@ -460,17 +612,76 @@ fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo
         "optimisation": result.pairs.iter().map(|p| round3(p.row.optimisation_percent)).collect::<Vec<_>>(),
         "cost": result.pairs.iter().map(|p| round6(p.row.mean_cost)).collect::<Vec<_>>(),
     });
+    let (start, end) = info
+        .frames
+        .map(|(s, e)| (s.min(n - 1), e.clamp(s.min(n - 1) + 1, n)))
+        .unwrap_or((0, n));
+    let decimation = (step > 1).then(|| {
+        format!(
+            "The player shows every {} frame: the recording holds more than {MAX_PLAYER_VALUES} \
+             pressure values (frames × rows × cols). The time series keep every frame.",
+            ordinal(step)
+        )
+    });
     json!({
         "n_frames": n, "rows": rows, "cols": cols, "step": step, "shown": shown,
+        "analysed": [start, end], "decimation": decimation,
+        "open_frame": open_frame(result, &shown, start, end),
         "frame_rate": rate, "dx": pitch[0], "dy": pitch[1], "xy_units": xy_units,
         "pressure_units": punits, "quantum": quantum, "z": z, "peak_image": peak_image,
         "overlays": overlays, "series": series, "pairs": pairs,
         "max_player_values": MAX_PLAYER_VALUES,
         "surface": result.objects.first().is_some_and(|o| o.shape.dim() == 3),
         "isocontour": result.objects.iter().any(|o| o.level.is_some()),
-        // The player opens on the first frame holding objects (an isocontour run has one).
         "first_object_frame": result.objects.first().map(|o| o.frame),
     })
+}
+
+/// The frame the player opens on: the first frame it shows that holds objects within the
+/// analysed frames `start..end` (an isocontour run has one frame of objects: the shown frame
+/// nearest it when the player is decimated), else the first shown frame of the analysed ones.
+fn open_frame(result: &SequenceResult, shown: &[usize], start: usize, end: usize) -> usize {
+    let analysed = |f: &usize| (start..end).contains(f);
+    let with_objects: std::collections::HashSet<usize> = result
+        .objects
+        .iter()
+        .map(|o| o.frame)
+        .filter(analysed)
+        .collect();
+    let nearest = |target: usize| {
+        shown
+            .iter()
+            .copied()
+            .min_by_key(|&f| (f.abs_diff(target), f < target))
+    };
+    shown
+        .iter()
+        .copied()
+        .find(|f| with_objects.contains(f))
+        .or_else(|| with_objects.iter().min().and_then(|&f| nearest(f)))
+        .or_else(|| shown.iter().copied().find(analysed))
+        .or_else(|| nearest(start))
+        .unwrap_or(0)
+}
+
+/// The centre-of-pressure path for plotly: x, y and time (frame index) per frame with a centre
+/// of pressure, and `null` between runs of such frames, so that the stance phases are separate
+/// pieces (a swing has no contact: no line is drawn across it).
+fn cop_path(cop: &[Option<[f64; 2]>]) -> Value {
+    let (mut x, mut y, mut frame) = (Vec::new(), Vec::new(), Vec::new());
+    for (f, c) in cop.iter().enumerate() {
+        if let Some([cx, cy]) = c {
+            if f > 0 && cop[f - 1].is_none() && !x.is_empty() {
+                x.push(None);
+                y.push(None);
+                frame.push(None);
+            }
+            x.push(Some(*cx));
+            y.push(Some(*cy));
+            frame.push(Some(f));
+        }
+    }
+    json!({ "x": x, "y": y, "frame": frame })
 }
 
 fn round3(v: f64) -> f64 {
@@ -511,14 +722,13 @@ fn overlays(
     z_scale: f64,
     level_scale: f64,
 ) -> Value {
-    let bounds = cost_bounds(
+    let classes = cost_classes(
         result
             .pairs
             .iter()
             .flat_map(|p| p.result.pairs.iter().map(|m| m.cost))
             .collect(),
     );
-    let class = |c: f64| bounds.iter().take_while(|&&b| c > b).count();
 
     let mut objects_by_frame: HashMap<usize, Vec<usize>> = HashMap::new();
     for (i, o) in result.objects.iter().enumerate() {
@@ -568,7 +778,7 @@ fn overlays(
                     }
                 }
             }
-            let mut by_cost: Vec<Lines> = (0..COST_CLASSES).map(|_| Lines::default()).collect();
+            let mut by_cost: Vec<Lines> = (0..classes.count()).map(|_| Lines::default()).collect();
             let mut excess = Lines::default();
             let mut unmatched = Lines::default();
             for &pi in pairs_by_frame.get(&f).into_iter().flatten() {
@@ -579,7 +789,7 @@ fn overlays(
                     if m.excess {
                         excess.piece(seg);
                     } else {
-                        by_cost[class(m.cost)].piece(seg);
+                        by_cost[classes.class(m.cost)].piece(seg);
                     }
                 }
                 for &u in &p.result.unmatched_a {
@@ -608,7 +818,9 @@ fn overlays(
             })
         })
         .collect();
-    json!({ "cost_bounds": bounds, "frames": frames })
+    let mut out = classes.to_json();
+    out["frames"] = json!(frames);
+    out
 }
 
 /// For the 3-D view: a surface pair's two meshes (x, y in mm or sensels; z the surface's height,
@@ -710,7 +922,253 @@ mod tests {
             options: vec![("modes".into(), "0.25".into())],
             timings: vec![("matching".into(), 0.5)],
             contact_threshold: 0.0,
+            frames: None,
         }
+    }
+
+    /// A recording of `frames` frames of 4 × 5 sensels, every value 10, with `units` and an
+    /// optional pitch.
+    fn flat(frames: usize, units: &str, pitch: Option<[f64; 2]>) -> Recording {
+        let rec = Recording::from_array(frames, 4, 5, vec![10.0; frames * 20], None)
+            .unwrap()
+            .with_units(units);
+        match pitch {
+            Some(p) => rec.with_pitch_mm(p).unwrap(),
+            None => rec,
+        }
+    }
+
+    fn empty_result() -> SequenceResult {
+        SequenceResult {
+            objects: vec![],
+            pairs: vec![],
+            tracks: vec![],
+            packed_tracks: None,
+            splits: vec![],
+            merges: vec![],
+            skipped_frames: vec![],
+            skipped_pairs: vec![],
+            timings: StageTimings::default(),
+        }
+    }
+
+    #[test]
+    fn the_load_series_is_named_with_the_files_units_as_frames_csv_names_it() {
+        let cases = [
+            (
+                "kPa",
+                Some([2.0, 2.0]),
+                "total force (N)",
+                json!("kPa"),
+                "peak pressure (kPa)",
+            ),
+            // I-Scan: raw units with a pitch: the plain sum × mm² (frames.csv `total_load_mm2`).
+            (
+                "raw",
+                Some([1.27, 1.27]),
+                "total load (raw × mm²)",
+                json!("raw"),
+                "peak pressure (raw)",
+            ),
+            // pedar: kPa but no pitch (`total_load_sensels`).
+            (
+                "KPa",
+                None,
+                "total load (kPa × sensels)",
+                json!("kPa"),
+                "peak pressure (kPa)",
+            ),
+            (
+                "Pa",
+                None,
+                "total load (Pa × sensels)",
+                json!("kPa"),
+                "peak pressure (kPa)",
+            ),
+            // .npy/.npz: no units at all.
+            (
+                "",
+                Some([5.0, 5.0]),
+                "total load (pressure units unknown × mm²)",
+                Value::Null,
+                "peak pressure (units unknown)",
+            ),
+            (
+                "",
+                None,
+                "total load (pressure units unknown × sensels)",
+                Value::Null,
+                "peak pressure (units unknown)",
+            ),
+        ];
+        for (units, pitch, load, punits, peak) in cases {
+            let rec = flat(3, units, pitch);
+            let html = run_report(&rec, &empty_result(), &info()).unwrap();
+            let d = embedded_data(&html);
+            let what = format!("units {units:?}, pitch {pitch:?}");
+            assert_eq!(d["series"]["force_label"], load, "{what}");
+            assert_eq!(d["series"]["peak_label"], peak, "{what}");
+            assert_eq!(d["pressure_units"], punits, "{what}");
+            assert!(!html.contains("units × sensels"), "{what}");
+            // The values plotted are frames.csv's: 20 sensels of 10, × the sensel area if known.
+            let want = 200.0 * rec.force_factor().or(rec.sensel_area()).unwrap_or(1.0);
+            let got = d["series"]["force"][0].as_f64().unwrap();
+            assert!((got - want).abs() < 1e-3, "{what}: {got} vs {want}");
+            let header_units = punits.as_str().unwrap_or("units unknown");
+            assert!(
+                html.contains(&format!("<th>pressure</th><td>{header_units}</td>")),
+                "{what}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_player_opens_on_the_first_analysed_frame_holding_objects() {
+        // The disc walks in from frame 3 (frames 0-2 are empty).
+        let mut rec = walking_disc(14);
+        let per = rec.rows() * rec.cols();
+        let mut data: Vec<f32> = (0..14)
+            .flat_map(|t| rec.frame_slice(t).unwrap().to_vec())
+            .collect();
+        data[..3 * per].fill(0.0);
+        rec = Recording::from_array(14, rec.rows(), rec.cols(), data, None)
+            .unwrap()
+            .with_pitch_mm([5.0, 4.0])
+            .unwrap()
+            .with_units("kPa");
+        // The whole recording: the first frame with objects, 3.
+        let all = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
+        let d = embedded_data(&run_report(&rec, &all, &info()).unwrap());
+        assert_eq!(
+            (d["open_frame"].as_u64(), d["analysed"].clone()),
+            (Some(3), json!([0, 14]))
+        );
+        // --frames 6..11: opens on frame 6, the header says which frames were analysed, and the
+        // whole recording stays playable.
+        let options = SequenceOptions {
+            frames: Some((6, 11)),
+            ..Default::default()
+        };
+        let part = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+        let ranged = ReportInfo {
+            frames: Some((6, 11)),
+            ..info()
+        };
+        let html = run_report(&rec, &part, &ranged).unwrap();
+        let d = embedded_data(&html);
+        assert_eq!(d["open_frame"], 6);
+        assert_eq!(d["analysed"], json!([6, 11]));
+        assert_eq!(d["shown"].as_array().unwrap().len(), 14);
+        assert!(html.contains("<td>6–10 of 14 analysed, 16 × 24 sensels</td>"));
+        // No objects in the range: its first frame.
+        let d = embedded_data(&run_report(&rec, &empty_result(), &ranged).unwrap());
+        assert_eq!(d["open_frame"], 6);
+        // Decimated (every 2nd frame shown): the first shown frame with objects in the range.
+        assert_eq!(open_frame(&part, &[0, 2, 4, 6, 8, 10, 12], 7, 11), 8);
+        assert_eq!(open_frame(&empty_result(), &[0, 2, 4], 3, 4), 4);
+        let html = run_report(&rec, &all, &info()).unwrap();
+        assert!(html.contains("<td>all 14 analysed, 16 × 24 sensels</td>"));
+        let one = ReportInfo {
+            frames: Some((7, 8)),
+            ..info()
+        };
+        let html = run_report(&rec, &empty_result(), &one).unwrap();
+        assert!(html.contains("<td>7 of 14 analysed, 16 × 24 sensels</td>"));
+    }
+
+    #[test]
+    fn cost_classes_are_told_apart_or_collapsed() {
+        // Near-identical shapes: costs of rounding noise, one class.
+        let noise = vec![0.0, -0.0, 1.5e-16, 1.5e-16, 3e-17, 1.5e-16, 0.0, 2e-16];
+        let c = cost_classes(noise);
+        assert_eq!(c.bounds, Vec::<f64>::new());
+        assert_eq!(c.labels, ["all costs ≈ 0"]);
+        // The same non-zero cost everywhere.
+        assert_eq!(cost_classes(vec![0.25; 9]).labels, ["all costs ≈ 0.25"]);
+        // Most costs 0, a few larger: classes for what differs only, 0 written as 0 (never -0).
+        let c = cost_classes(vec![-0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.3, 0.5]);
+        assert_eq!(c.labels, ["cost ≤ 0", "0 < cost ≤ 0.3", "cost > 0.3"]);
+        assert_eq!(c.class(0.3), 1);
+        assert_eq!(c.class(-0.0), 0);
+        // Close bounds get the digits that tell them apart.
+        let costs: Vec<f64> = (0..10).map(|i| 0.1231 + 1e-4 * i as f64).collect();
+        let c = cost_classes(costs);
+        assert_eq!(c.count(), COST_CLASSES);
+        assert_eq!(
+            c.labels,
+            [
+                "cost ≤ 0.1233",
+                "0.1233 < cost ≤ 0.1235",
+                "0.1235 < cost ≤ 0.1237",
+                "0.1237 < cost ≤ 0.1239",
+                "cost > 0.1239"
+            ]
+        );
+        // Bounds apart by less than the tolerance are one bound.
+        let mut costs = vec![1.0; 6];
+        costs.extend([1.0 + 1e-12, 2.0, 3.0, 4.0]);
+        let c = cost_classes(costs);
+        assert!(c.bounds.windows(2).all(|w| w[1] - w[0] >= 1e-9), "{c:?}");
+        assert_eq!(c.labels.first().unwrap(), "cost ≤ 1");
+        // Tiny and huge bounds in scientific notation; no costs: one class.
+        assert_eq!(significant(1.5e-16, 2), "1.5e-16");
+        assert_eq!(significant(-0.0, 2), "0");
+        assert_eq!(significant(2.5e7, 3), "2.5e7");
+        assert_eq!(significant(1234.5678, 3), "1230");
+        assert_eq!(cost_classes(vec![f64::NAN]).labels, ["matches"]);
+    }
+
+    #[test]
+    fn ordinals_and_plurals() {
+        let o: Vec<String> = [1, 2, 3, 4, 11, 12, 13, 21, 22, 23, 101, 111, 112]
+            .into_iter()
+            .map(ordinal)
+            .collect();
+        assert_eq!(
+            o,
+            [
+                "1st", "2nd", "3rd", "4th", "11th", "12th", "13th", "21st", "22nd", "23rd",
+                "101st", "111th", "112th"
+            ]
+        );
+        assert_eq!(count(1, "track", "tracks"), "1 track");
+        assert_eq!(count(0, "track", "tracks"), "0 tracks");
+        // Two frames of the disc: one pair.
+        let rec = walking_disc(2);
+        let result = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
+        let html = run_report(&rec, &result, &info()).unwrap();
+        assert!(html.contains("2 objects, 1 matched pair, "));
+    }
+
+    #[test]
+    fn the_centre_of_pressure_path_has_a_gap_per_swing() {
+        // Two stance phases (frames 0-3 and 6-9) around a swing without contact (4, 5), then
+        // a single frame of contact (12).
+        let mut rec = walking_disc(13);
+        let per = rec.rows() * rec.cols();
+        let mut data: Vec<f32> = (0..13)
+            .flat_map(|t| rec.frame_slice(t).unwrap().to_vec())
+            .collect();
+        for t in [4, 5, 10, 11] {
+            data[t * per..(t + 1) * per].fill(0.0);
+        }
+        rec = Recording::from_array(13, rec.rows(), rec.cols(), data, None)
+            .unwrap()
+            .with_pitch_mm([5.0, 4.0])
+            .unwrap();
+        let d = embedded_data(&run_report(&rec, &empty_result(), &info()).unwrap());
+        let path = &d["series"]["cop_path"];
+        let frames: Vec<Option<u64>> = serde_json::from_value(path["frame"].clone()).unwrap();
+        let pieces: Vec<Vec<u64>> = frames
+            .split(|f| f.is_none())
+            .map(|p| p.iter().map(|f| f.unwrap()).collect())
+            .collect();
+        assert_eq!(pieces, [vec![0, 1, 2, 3], vec![6, 7, 8, 9], vec![12]]);
+        let x = path["x"].as_array().unwrap();
+        assert_eq!(x.len(), frames.len());
+        assert_eq!(x.iter().filter(|v| v.is_null()).count(), 2);
+        assert_eq!(x[4], Value::Null);
+        assert_eq!(x[0], d["series"]["cop"][0][0]);
     }
 
     #[test]
@@ -860,10 +1318,13 @@ mod tests {
         // Every match once, in the cost class its cost falls in; unmatched nodes listed.
         // The bounds as computed: a cost equal to a bound must not flip class through the JSON
         // round trip (serde_json's parsing may be one ulp off).
-        let bounds = cost_bounds(r.pairs.iter().map(|m| m.cost).collect());
+        let classes = cost_classes(r.pairs.iter().map(|m| m.cost).collect());
+        let bounds = &classes.bounds;
+        assert_eq!(classes.count(), COST_CLASSES);
+        assert_eq!(d["cost_labels"], json!(classes.labels));
         let shown: Vec<f64> = serde_json::from_value(d["cost_bounds"].clone()).unwrap();
         assert_eq!(shown.len(), bounds.len());
-        for (s, b) in shown.iter().zip(&bounds) {
+        for (s, b) in shown.iter().zip(bounds) {
             assert!((s - b).abs() <= 1e-12 * b.abs().max(1.0), "{s} vs {b}");
         }
         let mut per_class = [0; COST_CLASSES];
@@ -1016,6 +1477,11 @@ mod tests {
         let html = run_report(&rec, &result, &info()).unwrap();
         let d = embedded_data(&html);
         assert_eq!(d["step"], 2);
+        let note = d["decimation"].as_str().unwrap();
+        assert!(
+            note.starts_with("The player shows every 2nd frame: "),
+            "{note}"
+        );
         assert_eq!(d["shown"].as_array().unwrap().len(), 151);
         assert_eq!(d["series"]["area"].as_array().unwrap().len(), frames);
         assert!(html.len() < 25 << 20, "{} bytes", html.len());
