@@ -148,8 +148,8 @@ impl UnitArgs {
 #[derive(Args, Clone, Debug, Default)]
 pub struct ReadArgs {
     /// Sensor-layout table of a novel pedar insole (CSV lines `insole,sensor,x1,y1,...,x4,y4`,
-    /// `# unit: mm` for a pitch; default: the bundled layout of the common insole). Only pedar
-    /// exports use it.
+    /// `# unit: mm` or `cm` for a pitch; default: the bundled layout of the common insole).
+    /// Only pedar exports use it.
     #[arg(long, value_name = "FILE")]
     pub layout: Option<std::path::PathBuf>,
 }

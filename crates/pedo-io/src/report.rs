@@ -672,6 +672,22 @@ fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
+/// `n` and a noun, in the singular for one and with a plain `s` otherwise: the counts of the
+/// messages and terminal lines.
+///
+/// ```
+/// use pedo_io::report::counted;
+/// assert_eq!(counted(1, "recording"), "1 recording");
+/// assert_eq!(counted(0, "isobaric level"), "0 isobaric levels");
+/// ```
+pub fn counted(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}
+
 /// Lower-case hex SHA-256 of `bytes`.
 ///
 /// ```

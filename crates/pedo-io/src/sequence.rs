@@ -208,7 +208,9 @@ pub struct RunParams {
     pub spacing: f64,
     /// Node budget of each brightness surface.
     pub surface_nodes: usize,
-    /// Isocontour model: the frame (0-based; `None`: the frame of largest load).
+    /// Isocontour model: the frame (0-based, within [`frames`](Self::frames) when given, else
+    /// within the recording: [`RunParams::to_options`] fails otherwise; `None`: the frame of
+    /// largest load among those run).
     pub iso_frame: Option<usize>,
     /// Isocontour model: the number of levels (at least 2), evenly spaced as
     /// [`SequenceOptions::iso_levels`] says.
@@ -342,8 +344,9 @@ impl RunParams {
         let matching = self.match_options()?;
         let n = recording.n_frames();
         let frames = self.frames.map(|r| r.resolve(n)).transpose()?;
-        let iso_frame = match self.iso_frame {
-            Some(f) if f >= n => {
+        // The isocontour model's frame lies within the frames run, not only the recording.
+        let iso_frame = match (self.iso_frame, frames) {
+            (Some(f), None) if f >= n => {
                 return Err(OptionError::new(
                     "iso_frame",
                     f,
@@ -351,7 +354,15 @@ impl RunParams {
                 )
                 .into());
             }
-            other => other,
+            (Some(f), Some((start, end))) if !(start..end).contains(&f) => {
+                return Err(OptionError::new(
+                    "iso_frame",
+                    f,
+                    format!("a frame within frames {start}..{end} (0-based), the frames run"),
+                )
+                .into());
+            }
+            (other, _) => other,
         };
         let noise = self.noise.or(recording.noise_threshold).unwrap_or(0.0);
         let sigma = (self.smooth > 0.0).then_some(self.smooth);
@@ -471,7 +482,7 @@ pub fn recording_option_specs() -> Vec<OptionSpec> {
             "iso_frame",
             Value,
             "the frame of largest load",
-            "Isocontour model: the frame (0-based) whose isobaric contours are matched.",
+            "Isocontour model: the frame (0-based, within frames when given) whose isobaric contours are matched.",
         ),
         OptionSpec::new(
             "iso_levels",
@@ -969,8 +980,8 @@ pub fn stream_sequence(
     }
     if start >= end || end > recording.n_frames() {
         return Err(IoError::invalid(format!(
-            "frame range {start}..{end} is empty or beyond the {} frames of the recording",
-            recording.n_frames()
+            "frame range {start}..{end} is empty or beyond the {} of the recording",
+            crate::report::counted(recording.n_frames(), "frame")
         )));
     }
     let mut options = options.clone();
@@ -1467,8 +1478,8 @@ pub fn run_sequence(
     let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
     if start >= end || end > recording.n_frames() {
         return Err(IoError::invalid(format!(
-            "frame range {start}..{end} is empty or beyond the {} frames of the recording",
-            recording.n_frames()
+            "frame range {start}..{end} is empty or beyond the {} of the recording",
+            crate::report::counted(recording.n_frames(), "frame")
         )));
     }
     let t0 = Instant::now();

@@ -782,3 +782,65 @@ fn a_pitch_set_on_a_file_replaces_its_stated_sensel_area() {
     units.apply(&mut overridden).unwrap();
     assert_eq!(overridden.sensel_area(), Some(100.0));
 }
+
+#[test]
+fn a_pedar_layout_with_an_unknown_unit_is_an_error_naming_file_line_and_units() {
+    use pedo_io::formats::pedar::PedarLayout;
+    let sensor = "L,1,0,0,10,0,10,20,0,20\n";
+    // An unknown unit used to leave the recording without a pitch, silently.
+    let e = PedarLayout::parse(&format!("# unit: inches\n{sensor}"), "in.csv")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("in.csv:1") && e.contains("inches") && e.contains("mm") && e.contains("cm"),
+        "{e}"
+    );
+    // A later unknown unit line used to cancel an earlier `mm`.
+    let e = PedarLayout::parse(
+        &format!("# unit: mm\n{sensor}# unit: furlongs\n"),
+        "two.csv",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("two.csv:3") && e.contains("furlongs"), "{e}");
+    // Two different known units contradict each other.
+    let e = PedarLayout::parse(&format!("# unit: mm\n# unit: cm\n{sensor}"), "both.csv")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("both.csv:2") && e.contains("mm"), "{e}");
+    // The accepted units still work, in any case, repeated alike.
+    for (unit, mm) in [("mm", Some(1.0)), ("CM", Some(10.0)), ("normalised", None)] {
+        let l =
+            PedarLayout::parse(&format!("# unit: {unit}\n# unit: {unit}\n{sensor}"), "ok").unwrap();
+        assert_eq!(l.mm_per_unit, mm, "{unit}");
+    }
+    assert_eq!(PedarLayout::bundled().mm_per_unit, None);
+}
+
+#[test]
+fn iso_frame_outside_the_frames_range_is_an_option_error_naming_both() {
+    use pedo_io::sequence::{FrameRange, ObjectModel, RunParams};
+    let rec = read_recording(data("synthetic-walk.lst")).unwrap();
+    assert!(rec.n_frames() > 8);
+    let params = |iso_frame| RunParams {
+        model: ObjectModel::Isocontour,
+        frames: Some(FrameRange {
+            start: 3,
+            end: Some(6),
+        }),
+        iso_frame: Some(iso_frame),
+        ..Default::default()
+    };
+    for outside in [0, 2, 6, 8] {
+        let e = params(outside).to_options(&rec).unwrap_err().to_string();
+        assert!(
+            e.contains("iso_frame") && e.contains(&outside.to_string()) && e.contains("3..6"),
+            "{e}"
+        );
+        assert!(e.contains("frames"), "{e}");
+    }
+    for inside in 3..6 {
+        let o = params(inside).to_options(&rec).unwrap();
+        assert_eq!(o.iso_frame, Some(inside));
+    }
+}

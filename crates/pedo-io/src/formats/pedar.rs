@@ -78,20 +78,50 @@ impl PedarLayout {
     /// (`insole` is `L`/`R` or `left`/`right`; the corners go around the sensor; y grows from
     /// heel to toes); an optional header line starting with `insole`; `#` comment lines, of
     /// which `# unit: mm` (or `cm`) makes the coordinates millimetres (centimetres) so that the
-    /// recording gets a pitch.
+    /// recording gets a pitch, and `# unit: normalised` says they are not lengths (no pitch).
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::Parse`] naming the line for a malformed line, and for a `# unit:` line naming
+    /// another unit or contradicting an earlier one (a misspelt unit is not taken as no unit).
     pub fn parse(text: &str, name: &str) -> Result<Self> {
         let err = |line: usize, msg: String| IoError::parse(name, line, msg);
         let mut sensors: Vec<SensorOutline> = Vec::new();
         let mut mm_per_unit = None;
+        // The first `# unit:` line, its line number and the unit it names.
+        let mut unit_line: Option<(usize, String)> = None;
         for (i, line) in text.lines().enumerate() {
             let (ln, t) = (i + 1, line.trim());
             if let Some(c) = t.strip_prefix('#') {
                 if let Some(u) = c.trim().strip_prefix("unit:") {
-                    mm_per_unit = match u.trim().to_ascii_lowercase().as_str() {
+                    let unit = u.trim().to_ascii_lowercase();
+                    let mm = match unit.as_str() {
                         "mm" => Some(1.0),
                         "cm" => Some(10.0),
-                        _ => None,
+                        "normalised" | "normalized" => None,
+                        _ => {
+                            return Err(err(
+                                ln,
+                                format!(
+                                    "unknown unit {:?}; expected mm, cm or normalised (no pitch)",
+                                    trunc(u.trim())
+                                ),
+                            ));
+                        }
                     };
+                    if let Some((first, named)) = &unit_line {
+                        if mm != mm_per_unit {
+                            return Err(err(
+                                ln,
+                                format!(
+                                    "unit {unit:?} contradicts the unit {named:?} of line {first}"
+                                ),
+                            ));
+                        }
+                    } else {
+                        unit_line = Some((ln, unit));
+                        mm_per_unit = mm;
+                    }
                 }
                 continue;
             }
