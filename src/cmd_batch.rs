@@ -1,10 +1,12 @@
 //! `pedomatch batch`: a whole study, each recording like `pedomatch run` into a folder of its own,
 //! several at once, one row per recording in `study.csv`. The work is [`pedo_io::study`]'s.
 
-use crate::cmd_run::{progress_bar, ReportArg, RunOptionsArgs};
+use crate::cmd_run::{ReportArg, RunOptionsArgs};
 use crate::output;
 use crate::CliError;
 use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use pedo_io::report::counted;
 use pedo_io::study::{self, RowStatus, StudyEvent, StudyOptions};
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -60,20 +62,23 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
         },
     };
 
-    let bar = progress_bar();
+    // The bar moves in thousandths of a recording (so that it and its ETA advance within one),
+    // but the text counts recordings: the finished ones and how far the running ones are.
+    let bar = progress_bar_with_text();
     bar.set_length(1000 * paths.len() as u64);
-    bar.set_message(format!("0/{} recordings", paths.len()));
-    let fractions = Mutex::new(vec![0.0_f64; paths.len()]);
-    let finished = Mutex::new(0_usize);
+    bar.set_message(progress_text(&[], paths.len()));
+    // Per recording: `None` before it starts, its fraction while it runs, 1 once finished.
+    let fractions = Mutex::new(vec![None::<f64>; paths.len()]);
     let on_event = |event: StudyEvent<'_>| {
         let mut f = fractions.lock().unwrap();
         match event {
-            StudyEvent::Progress { index, fraction } => f[index] = fraction,
+            StudyEvent::Progress { index, fraction } => {
+                if f[index] != Some(1.0) {
+                    f[index] = Some(fraction.min(0.999));
+                }
+            }
             StudyEvent::Finished { index, row } => {
-                f[index] = 1.0;
-                let mut n = finished.lock().unwrap();
-                *n += 1;
-                bar.set_message(format!("{n}/{} recordings", f.len()));
+                f[index] = Some(1.0);
                 if row.status == RowStatus::Error {
                     // The bar hides itself on a non-terminal; errors are printed either way.
                     // Most errors name their file already; the others get its path.
@@ -86,7 +91,8 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
                 }
             }
         }
-        bar.set_position((1000.0 * f.iter().sum::<f64>()) as u64);
+        bar.set_message(progress_text(&f, f.len()));
+        bar.set_position((1000.0 * f.iter().flatten().sum::<f64>()) as u64);
     };
     let rows = study::run_study(&paths, &opts, &on_event)?;
     bar.finish_and_clear();
@@ -100,8 +106,8 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
         print!("{}", output::pretty(&report)?);
     } else {
         println!(
-            "{} recordings: {} ok, {} skipped, {} failed; study table in {}",
-            counts["recordings"],
+            "{}: {} ok, {} skipped, {} failed; study table in {}",
+            counted(rows.len(), "recording"),
             counts["ok"],
             counts["skipped"],
             counts["error"],
@@ -114,9 +120,57 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
     match counts["error"].as_u64().unwrap_or(0) {
         0 => Ok(()),
         n => Err(CliError::Runtime(format!(
-            "{n} of {} recordings failed (their rows in {} say why)",
-            rows.len(),
+            "{n} of {} failed (their rows in {} say why)",
+            counted(rows.len(), "recording"),
             table.display()
         ))),
+    }
+}
+
+/// A bar whose text says the progress (no internal position/length shown).
+fn progress_bar_with_text() -> ProgressBar {
+    // indicatif hides itself when stderr is not a terminal, so scripted runs stay quiet.
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("[{bar:40}] {msg} ({eta})")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    bar
+}
+
+/// The bar's text: `3/8 recordings`, and how far the running ones are: `, 1 running (45 %)` or
+/// `, 2 running (45 %, 10 %)`. `fractions` holds, per recording, `None` before it starts, its
+/// fraction while it runs and 1 once finished (empty before anything started).
+fn progress_text(fractions: &[Option<f64>], total: usize) -> String {
+    let finished = fractions.iter().filter(|f| **f == Some(1.0)).count();
+    let running: Vec<String> = fractions
+        .iter()
+        .flatten()
+        .filter(|&&f| f < 1.0)
+        .map(|f| format!("{:.0} %", 100.0 * f))
+        .collect();
+    let mut text = format!("{finished}/{}", counted(total, "recording"));
+    if !running.is_empty() {
+        text += &format!(", {} running ({})", running.len(), running.join(", "));
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::progress_text;
+
+    #[test]
+    fn progress_counts_recordings() {
+        assert_eq!(progress_text(&[], 8), "0/8 recordings");
+        let f = [Some(1.0), Some(1.0), Some(1.0), Some(0.456), None];
+        assert_eq!(progress_text(&f, 5), "3/5 recordings, 1 running (46 %)");
+        let f = [Some(1.0), Some(0.5), Some(0.1)];
+        assert_eq!(
+            progress_text(&f, 3),
+            "1/3 recordings, 2 running (50 %, 10 %)"
+        );
+        assert_eq!(progress_text(&[Some(1.0)], 1), "1/1 recording");
     }
 }

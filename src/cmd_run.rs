@@ -5,7 +5,7 @@ use crate::output;
 use crate::CliError;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use pedo_io::report::InputInfo;
+use pedo_io::report::{counted, InputInfo};
 use pedo_io::sequence::{FrameRange, ObjectModel, RunParams, Stage};
 use pedo_io::TableFormat;
 use serde_json::Value;
@@ -251,15 +251,24 @@ pub fn progress_bar() -> ProgressBar {
 fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: TableFormat) {
     let int = |k: &str| summary[k].as_u64().unwrap_or(0);
     let float = |k: &str| summary[k].as_f64().unwrap_or(0.0);
+    let count = |k: &str, noun: &str| counted(int(k) as usize, noun);
     println!(
-        "{name}: {} objects, {} matched pairs, {} tracks ({} spanning 3+ objects)",
-        int("objects"),
-        int("pairs"),
-        int("tracks"),
+        "{name}: {}, {}, {} ({} spanning 3+ objects)",
+        count("objects", "object"),
+        count("pairs", "matched pair"),
+        count("tracks", "track"),
         int("tracks_3_or_more")
     );
+    let isocontour = summary["options"]["model"] == "isocontour";
+    let skipped = |k: &str| {
+        summary["skipped"][k]
+            .as_array()
+            .cloned()
+            .unwrap_or_default()
+    };
+    let (pairs, frames) = (skipped("pairs"), skipped("frames"));
     if int("pairs") == 0 {
-        println!("no pair of objects in consecutive frames to match: no means to report");
+        println!("{}", pedo_io::study::no_pairs_note(isocontour, pairs.len()));
     } else {
         println!(
             "mean local matches {:.1} %, optimisation matches {:.1} %, mean cost {:.4}",
@@ -268,23 +277,31 @@ fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: Tab
             float("mean_cost")
         );
     }
-    let skipped = |k: &str| {
-        summary["skipped"][k]
-            .as_array()
-            .cloned()
-            .unwrap_or_default()
-    };
-    let (pairs, frames) = (skipped("pairs"), skipped("frames"));
     if !pairs.is_empty() || !frames.is_empty() {
         let first = pairs
             .first()
             .or(frames.first())
             .and_then(|s| s["reason"].as_str())
             .unwrap_or_default();
+        // For isocontours, a skipped "frame" is an isobaric level that gave no object.
+        let (frame, verb) = if isocontour {
+            ("isobaric level", "gave no object")
+        } else {
+            ("frame", "could not be matched")
+        };
+        let mut what = Vec::new();
+        if !pairs.is_empty() {
+            what.push(format!(
+                "{} that could not be matched",
+                counted(pairs.len(), "pair")
+            ));
+        }
+        if !frames.is_empty() {
+            what.push(format!("{} that {verb}", counted(frames.len(), frame)));
+        }
         println!(
-            "skipped {} pairs and {} frames that could not be matched (reasons in {} and summary.json; first: {first})",
-            pairs.len(),
-            frames.len(),
+            "skipped {} (reasons in {} and summary.json; first: {first})",
+            what.join(" and "),
             tables.file_name("pairs")
         );
     }

@@ -334,3 +334,226 @@ fn tables_parquet_writes_parquet_files_and_an_unknown_format_is_a_usage_error() 
     assert!(!never.exists());
     std::fs::remove_dir_all(&base).unwrap();
 }
+
+/// A one-frame CSV grid holding one blob, peak 100.
+fn one_frame_csv(path: &Path) {
+    let mut text = String::new();
+    for r in 0..16 {
+        let row: Vec<String> = (0..16)
+            .map(|c| {
+                let d2 = ((r as f64 - 7.5).powi(2) + (c as f64 - 7.5).powi(2)) / 12.0;
+                format!("{:.1}", 100.0 * (-d2).exp())
+            })
+            .collect();
+        text += &row.join(",");
+        text.push('\n');
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+#[test]
+fn resuming_with_an_animation_or_pair_figures_asked_for_runs_the_folder_again() {
+    let base = temp_dir("animation");
+    let input = study_inputs(&base);
+    let file = input.join("tekscan.csv");
+    let (f, out) = (file.to_str().unwrap(), base.join("study"));
+    let o = out.to_str().unwrap();
+    let (code, first, stderr) = batch_json(&[f, "--out", o]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let folder = out.join(rows(&first)[0]["output"].as_str().unwrap());
+    assert!(!folder.join("animation.gif").exists());
+    // The folder lacks the animation now asked for: not complete.
+    let (code, gif, stderr) = batch_json(&[f, "--out", o, "--animation", "gif"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert_eq!(rows(&gif)[0]["status"], "ok", "{gif}");
+    assert!(folder.join("animation.gif").is_file());
+    let summary: Value =
+        serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["options"]["animation"], "gif", "{summary}");
+    let (_, again, _) = batch_json(&[f, "--out", o, "--animation", "gif"]);
+    assert_eq!(rows(&again)[0]["status"], "skipped", "{again}");
+    // The animation is an option like the others: leaving it out runs the folder again.
+    let (_, none, _) = batch_json(&[f, "--out", o]);
+    assert_eq!(rows(&none)[0]["status"], "ok", "{none}");
+    assert!(!folder.join("animation.gif").exists());
+
+    // Pair figures: a folder missing one of them is not complete when figures are asked for.
+    let with_figures = |extra: &[&str]| {
+        let out = pedomatch(
+            &[
+                &["batch", "--json", f, "--out", o, "--report", "none"],
+                extra,
+            ]
+            .concat(),
+        );
+        serde_json::from_slice::<Value>(&out.stdout).unwrap()
+    };
+    let png = with_figures(&["--figures", "png"]);
+    assert_eq!(rows(&png)[0]["status"], "ok");
+    let pairs = rows(&png)[0]["pairs"].as_u64().unwrap();
+    let figures: Vec<PathBuf> = std::fs::read_dir(folder.join("figures"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(figures.len() as u64, pairs, "{figures:?}");
+    assert_eq!(
+        rows(&with_figures(&["--figures", "png"]))[0]["status"],
+        "skipped"
+    );
+    std::fs::remove_file(&figures[0]).unwrap();
+    let redone = with_figures(&["--figures", "png"]);
+    assert_eq!(rows(&redone)[0]["status"], "ok", "{redone}");
+    assert!(figures[0].is_file());
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+#[test]
+fn rows_say_what_they_hold_no_pairs_no_folder_and_frames_read() {
+    let base = temp_dir("rows");
+    let input = study_inputs(&base);
+    let one = base.join("one-frame.csv");
+    one_frame_csv(&one);
+    let out = base.join("study");
+    let o = out.to_str().unwrap();
+    let (code, report, stderr) = batch_json(&[one.to_str().unwrap(), "--out", o]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let r = &rows(&report)[0];
+    assert_eq!(
+        (&r["status"], &r["frames"], &r["pairs"]),
+        (&"ok".into(), &1.into(), &0.into())
+    );
+    assert!(
+        r["message"]
+            .as_str()
+            .unwrap()
+            .contains("no pair of objects in consecutive frames to match"),
+        "{r}"
+    );
+
+    // An error row: no folder named when none was written; the frames read are given.
+    let (code, report, _) = batch_json(&[input.to_str().unwrap(), "--out", o]);
+    assert_eq!(code, Some(1));
+    let bad = row(&rows(&report), "corrupt.asf").clone();
+    assert!(bad["output"].is_null(), "{bad}");
+    let frames = row(&rows(&report), "tekscan.csv")["frames"].clone();
+    let tekscan = input.join("tekscan.csv");
+    let (code, report, _) =
+        batch_json(&[tekscan.to_str().unwrap(), "--out", o, "--frames", "15..30"]);
+    assert_eq!(code, Some(1));
+    let r = &rows(&report)[0];
+    assert_eq!(r["status"], "error");
+    assert_eq!(r["frames"], frames, "{r}");
+    assert!(r["message"].as_str().unwrap().contains("15..30"), "{r}");
+
+    // iso_frame outside the frames asked for is an option error naming both.
+    let (code, report, _) = batch_json(&[
+        tekscan.to_str().unwrap(),
+        "--out",
+        o,
+        "--model",
+        "isocontour",
+        "--frames",
+        "2..5",
+        "--iso-frame",
+        "7",
+    ]);
+    assert_eq!(code, Some(1));
+    let m = rows(&report)[0]["message"].as_str().unwrap().to_string();
+    assert!(
+        m.contains("iso_frame") && m.contains("frames") && m.contains("2..5"),
+        "{m}"
+    );
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+#[test]
+fn counts_are_written_in_the_singular_for_one_and_isocontours_skip_levels() {
+    let base = temp_dir("grammar");
+    let one = base.join("one-frame.csv");
+    one_frame_csv(&one);
+    let o = base.join("study");
+    let out = pedomatch(
+        &[
+            &["batch", one.to_str().unwrap(), "--out", o.to_str().unwrap()][..],
+            &FAST,
+        ]
+        .concat(),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.starts_with("1 recording: 1 ok, 0 skipped, 0 failed"),
+        "{stdout}"
+    );
+    // Isocontours: many levels of a small blob, the highest too small to be objects.
+    let (code, report, stderr) = batch_json(&[
+        one.to_str().unwrap(),
+        "--out",
+        o.to_str().unwrap(),
+        "--model",
+        "isocontour",
+        "--iso-levels",
+        "30",
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let m = rows(&report)[0]["message"].as_str().unwrap().to_string();
+    assert!(
+        m.contains("levels skipped") || m.contains("level skipped"),
+        "{m}"
+    );
+    assert!(
+        !m.contains("frames skipped") && !m.contains(" 0 pairs"),
+        "{m}"
+    );
+    let run = pedomatch(
+        &[
+            &[
+                "run",
+                one.to_str().unwrap(),
+                "--out",
+                base.join("run").to_str().unwrap(),
+                "--model",
+                "isocontour",
+                "--iso-levels",
+                "30",
+            ][..],
+            &FAST,
+        ]
+        .concat(),
+    );
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(run.status.success(), "{stdout}");
+    assert!(stdout.contains("isobaric level"), "{stdout}");
+    assert!(
+        !stdout.contains("frames that") && !stdout.contains(" 1 tracks"),
+        "{stdout}"
+    );
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+#[test]
+fn terminal_progress_counts_recordings_not_thousandths() {
+    // Under a pseudo-terminal (util-linux `script`), where the bar is drawn.
+    if Command::new("script").arg("--version").output().is_err() {
+        eprintln!("no `script`: skipped");
+        return;
+    }
+    let base = temp_dir("progress");
+    let input = study_inputs(&base);
+    let cmd = format!(
+        "{} batch {} {} --out {} --figures none --report none",
+        env!("CARGO_BIN_EXE_pedomatch"),
+        input.join("a").display(),
+        input.join("b").display(),
+        base.join("study").display()
+    );
+    let out = Command::new("script")
+        .args(["-qfec", &cmd, "/dev/null"])
+        .env("COLUMNS", "120")
+        .output()
+        .unwrap();
+    let screen = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{screen}");
+    assert!(screen.contains("/2 recordings"), "{screen}");
+    assert!(!screen.contains("/2000"), "{screen}");
+    std::fs::remove_dir_all(&base).unwrap();
+}

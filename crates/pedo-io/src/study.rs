@@ -27,8 +27,8 @@ use crate::recording::FrameMeasures;
 use crate::recording::{Format, Recording};
 use crate::report::{self, Cell, InputInfo, Table};
 use crate::sequence::{
-    run_sequence, stream_sequence, FrameSource, PairMatch, RunCounts, RunParams, SequenceObject,
-    SequenceOptions, SequenceResult, SequenceSink, Stage,
+    run_sequence, stream_sequence, FrameSource, ObjectModel, PairMatch, RunCounts, RunParams,
+    SequenceObject, SequenceOptions, SequenceResult, SequenceSink, Stage,
 };
 use crate::tables::{self, TableFormat};
 use rayon::prelude::*;
@@ -529,7 +529,7 @@ pub fn write_run_folder(
     write_figures(&dir, run.recording, run.result, outputs.figures)?;
     let mut stages = timings.to_vec();
     stages.push(("output", started.elapsed().as_secs_f64()));
-    let summary = report::run_summary(
+    let mut summary = report::run_summary(
         run.input,
         run.recording,
         run.params,
@@ -537,6 +537,9 @@ pub fn write_run_folder(
         run.result,
         &stages,
     );
+    if let Some(options) = summary["options"].as_object_mut() {
+        record_outputs(options, outputs);
+    }
     dir.write("summary.json", pretty(&summary).as_bytes())?;
     if let Some(report) = outputs.report {
         dir.write("report.html", report(run, &summary)?.as_bytes())?;
@@ -553,6 +556,16 @@ pub fn write_run_folder(
     }
     dir.commit()?;
     Ok(summary)
+}
+
+/// Adds to the options a run records in `summary.json` the outputs that are options of their
+/// own, so that a study resumed with another choice runs the folder again ([`is_complete`]):
+/// `animation` (`"gif"`) when `animation.gif` is written. A run without an animation records
+/// nothing, so its folder reads as before (and a streamed run's is the same, byte for byte).
+fn record_outputs(options: &mut Map<String, Value>, outputs: &RunOutputs<'_>) {
+    if outputs.animation {
+        options.insert("animation".into(), json!("gif"));
+    }
 }
 
 /// What became of one recording of a study.
@@ -699,7 +712,7 @@ pub fn output_name(path: &Path) -> String {
 ///   (`.asf`, `.lst`, `.apd`, `.npy`, `.npz`) whatever they hold, so that an empty or corrupt
 ///   one gets its error row, as does a file that cannot be opened; a text sniffed as a CSV grid
 ///   that reads as a table of another kind (a first line of names, rows of at most 3 values:
-///   [`crate::formats::csv::looks_like_a_table`]) is passed over; PNG/TIFF images are not
+///   `formats::csv::looks_like_a_table`) is passed over; PNG/TIFF images are not
 ///   recordings on their own there: a
 ///   folder holding images is one image-sequence recording. Hidden folders and pedomatch output
 ///   folders are not searched;
@@ -802,7 +815,7 @@ fn sniff_file(path: &Path) -> Option<Format> {
 
 /// [`sniff_file`] for a file met in a searched folder: a text sniffed as a CSV grid that reads
 /// as a table of another kind is not a recording there
-/// ([`crate::formats::csv::looks_like_a_table`]).
+/// (`formats::csv::looks_like_a_table`).
 fn sniff_found_file(path: &Path) -> Option<Format> {
     let head = read_head(path)?;
     match sniff_format(path, &head).ok()? {
@@ -1021,8 +1034,18 @@ pub fn run_recording(
 ) -> StudyRow {
     let started = Instant::now();
     let output = opts.out.as_ref().map(|_| output_name(path));
+    // Set once the recording is read, so that an error row still says how many frames it has.
+    let mut frames = None;
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        process(path, opts, output.as_deref(), previous, progress, started)
+        process(
+            path,
+            opts,
+            output.as_deref(),
+            previous,
+            progress,
+            started,
+            &mut frames,
+        )
     }));
     let outcome = match outcome {
         Ok(r) => r,
@@ -1035,11 +1058,18 @@ pub fn run_recording(
                 .unwrap_or_default()
         ))),
     };
+    // A failed run writes nothing: its row names a folder only if an earlier run left one there
+    // (kept as it was).
+    let existing = |name: &String| {
+        opts.out
+            .as_ref()
+            .is_some_and(|out| outdir::is_output(&out.join(name)))
+    };
     outcome.unwrap_or_else(|e| StudyRow {
         path: path.display().to_string(),
-        output,
+        output: output.filter(existing),
         format: sniff_file(path).map(|f| f.name().to_string()),
-        frames: None,
+        frames,
         pairs: None,
         mean_local_percent: None,
         mean_optimisation_percent: None,
@@ -1057,10 +1087,12 @@ fn process(
     previous: Option<&StudyRow>,
     progress: &(dyn Fn(f64) + Sync),
     started: Instant,
+    frames: &mut Option<usize>,
 ) -> Result<StudyRow> {
     opts.params.validate()?;
     let (mut recording, mut file_frames) =
         read_for_run(path, &opts.read, &opts.params, &opts.outputs)?;
+    *frames = Some(recording.n_frames());
     let input = InputInfo::of_path(path)?;
     let options = run_options(&mut recording, &opts.params)?;
     let read_s = started.elapsed().as_secs_f64();
@@ -1096,7 +1128,7 @@ fn process(
     };
     let (summary, counts) = run_into_folder(&recording, &options, plan, &on_stage)?;
     let mut row = row_of_summary(path, output, &summary, started);
-    row.message = left_out(&counts);
+    row.message = run_note(&counts, options.model);
     Ok(row)
 }
 
@@ -1112,8 +1144,10 @@ fn used_options(params: &RunParams, options: &SequenceOptions, recording: &Recor
 }
 
 /// The summary of `folder` if it is complete: a pedomatch output whose `summary.json` has the
-/// input's SHA-256 and the options `used`, with every table, and the report and tracks figure
-/// that `outputs` asks for.
+/// input's SHA-256 and the options `used` (with the animation choice of `outputs`, which
+/// `summary.json` records among them), with every table, and every output that `outputs` asks
+/// for: the report, the animation, the tracks figure and the figure of every matched pair
+/// (those of `pairs.json`), in each format asked for.
 pub fn is_complete(
     folder: &Path,
     input: &InputInfo,
@@ -1135,18 +1169,38 @@ fn complete_summary(
     let summary: Value =
         serde_json::from_slice(&std::fs::read(folder.join("summary.json")).ok()?).ok()?;
     let same_input = summary["input"]["sha256"].as_str() == input.sha256.as_deref();
-    if !same_input || !json_close(&summary["options"], used) {
+    let mut used = used.clone();
+    if let Some(options) = used.as_object_mut() {
+        record_outputs(options, outputs);
+    }
+    if !same_input || !json_close(&summary["options"], &used) {
         return None;
     }
     let mut files = run_table_files(outputs.tables);
     if outputs.report.is_some() {
         files.push("report.html".into());
     }
-    if outputs.figures.png {
-        files.push("tracks.png".into());
+    if outputs.animation {
+        files.push("animation.gif".into());
     }
-    if outputs.figures.svg {
-        files.push("tracks.svg".into());
+    let extensions = [(outputs.figures.png, "png"), (outputs.figures.svg, "svg")];
+    let extensions: Vec<&str> = extensions
+        .iter()
+        .filter_map(|&(asked, ext)| asked.then_some(ext))
+        .collect();
+    if !extensions.is_empty() {
+        let pairs: Value =
+            serde_json::from_slice(&std::fs::read(folder.join("pairs.json")).ok()?).ok()?;
+        let mut stems = vec!["tracks".to_string()];
+        for pair in pairs.as_array()? {
+            if pair["status"] == "ok" {
+                let (a, b) = (pair["id_a"].as_u64()?, pair["id_b"].as_u64()?);
+                stems.push(format!("figures/pair_{a:04}_{b:04}"));
+            }
+        }
+        for stem in &stems {
+            files.extend(extensions.iter().map(|ext| format!("{stem}.{ext}")));
+        }
     }
     files
         .iter()
@@ -1196,22 +1250,53 @@ fn row_of_summary(
     }
 }
 
-/// What a successful run left out, in one line (empty if nothing).
-fn left_out(r: &RunCounts) -> String {
-    if r.skipped_pairs.is_empty() && r.skipped_frames.is_empty() {
-        return String::new();
+/// What a row of a successful run says (empty if nothing): that it had no pair to match, so no
+/// means to report (as `pedomatch run` says), and what it left out: the pairs that could not be
+/// matched and the frames (for isocontours, the isobaric levels) that gave no object.
+fn run_note(r: &RunCounts, model: ObjectModel) -> String {
+    let isocontour = model == ObjectModel::Isocontour;
+    let mut parts = Vec::new();
+    if r.pairs == 0 {
+        parts.push(no_pairs_note(isocontour, r.skipped_pairs.len()).to_string());
     }
-    let first = r
-        .skipped_pairs
-        .first()
-        .map(|s| s.reason.as_str())
-        .or(r.skipped_frames.first().map(|s| s.reason.as_str()))
-        .unwrap_or_default();
-    one_line(&format!(
-        "{} pairs and {} frames skipped (first: {first})",
-        r.skipped_pairs.len(),
-        r.skipped_frames.len()
-    ))
+    let mut skipped = Vec::new();
+    if !r.skipped_pairs.is_empty() {
+        skipped.push(report::counted(r.skipped_pairs.len(), "pair"));
+    }
+    if !r.skipped_frames.is_empty() {
+        let what = if isocontour {
+            "isobaric level"
+        } else {
+            "frame"
+        };
+        skipped.push(report::counted(r.skipped_frames.len(), what));
+    }
+    if !skipped.is_empty() {
+        let first = r
+            .skipped_pairs
+            .first()
+            .map(|s| s.reason.as_str())
+            .or(r.skipped_frames.first().map(|s| s.reason.as_str()))
+            .unwrap_or_default();
+        parts.push(format!(
+            "{} skipped (first: {first})",
+            skipped.join(" and ")
+        ));
+    }
+    one_line(&parts.join("; "))
+}
+
+/// Why a run that matched no pair reports no means (`pedomatch run` and a study's row say it):
+/// no two objects in consecutive frames (for isocontours, at consecutive isobaric levels), or,
+/// when `skipped_pairs` were tried, none that could be matched.
+pub fn no_pairs_note(isocontour: bool, skipped_pairs: usize) -> &'static str {
+    match (skipped_pairs, isocontour) {
+        (1.., _) => "no pair of objects could be matched: no means to report",
+        (0, true) => {
+            "no pair of objects at consecutive isobaric levels to match: no means to report"
+        }
+        (0, false) => "no pair of objects in consecutive frames to match: no means to report",
+    }
 }
 
 fn one_line(s: &str) -> String {

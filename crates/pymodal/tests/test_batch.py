@@ -199,3 +199,24 @@ def test_parquet_tables_load_like_the_csv(study):
     with pytest.raises(pymodal.OptionError, match="tables"):
         pymodal.batch(study / "in", study / "never", tables="xlsx")
     assert not (study / "never").exists()
+
+
+def test_rows_say_no_pairs_name_no_unwritten_folder_and_give_frames_read(study, tmp_path):
+    # A one-frame recording: ok, with no pair to match, and a row that says so.
+    blob = [[100.0 * 2.718281828 ** (-((r - 7.5) ** 2 + (c - 7.5) ** 2) / 12.0) for c in range(16)] for r in range(16)]
+    one = tmp_path / "one-frame.csv"
+    one.write_text("".join(",".join(f"{v:.1f}" for v in row) + "\n" for row in blob))
+    out = tmp_path / "out"
+    row = pymodal.batch_row(one, out=out, figures="none")
+    assert (row["status"], row["frames"], row["pairs"]) == ("ok", 1, 0)
+    assert "no pair of objects in consecutive frames to match" in row["message"]
+    # Error rows: no folder named where none was written; the frames read are given.
+    bad = pymodal.batch_row(study / "in" / "corrupt.asf", out=out, figures="none")
+    assert bad["status"] == "error" and bad["output"] is None
+    tekscan = study / "in" / "tekscan.csv"
+    row = pymodal.batch_row(tekscan, out=out, figures="none", frames=(15, 30))
+    assert row["status"] == "error" and row["output"] is None
+    assert row["frames"] == pymodal.run(tekscan)["summary"]["recording"]["frames"]
+    # iso_frame outside the frames run is an option error naming both.
+    with pytest.raises(ValueError, match="iso_frame.*frames 2..5"):
+        pymodal.run(tekscan, model="isocontour", frames=(2, 5), iso_frame=7)
