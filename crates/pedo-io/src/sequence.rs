@@ -686,8 +686,8 @@ impl FromIterator<Track> for PackedTracks {
     }
 }
 
-/// Everything [`run_sequence`] produces.
-#[derive(Debug, Clone)]
+/// Everything [`run_sequence`] produces (`Default`: a run with nothing in it).
+#[derive(Debug, Clone, Default)]
 pub struct SequenceResult {
     /// Every object in sequence order (by frame, then by index within the frame; isocontours
     /// by level): object `i` has id `i`.

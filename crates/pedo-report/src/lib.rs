@@ -16,6 +16,7 @@
 //! Size is bounded: when `frames × rows × cols` exceeds [`MAX_PLAYER_VALUES`], the player keeps
 //! every `s`-th frame only (the report says so); the time series keep every frame.
 
+use pedo_io::report::counted;
 use pedo_io::sequence::SequenceResult;
 use pedo_io::Recording;
 use serde_json::{json, Value};
@@ -425,11 +426,6 @@ fn ordinal(n: usize) -> String {
     format!("{n}{suffix}")
 }
 
-/// `"1 track"`, `"2 tracks"`: a count and its noun, plural unless the count is 1.
-fn count(n: usize, singular: &str, plural: &str) -> String {
-    format!("{n} {}", if n == 1 { singular } else { plural })
-}
-
 fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo) -> String {
     let (_, punits) = pressure_scale(recording);
     let n = recording.n_frames();
@@ -478,9 +474,9 @@ fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo
             "result".into(),
             format!(
                 "{}, {}, {}",
-                count(result.objects.len(), "object", "objects"),
-                count(result.pairs.len(), "matched pair", "matched pairs"),
-                count(result.track_count(), "track", "tracks")
+                counted(result.objects.len(), "object"),
+                counted(result.pairs.len(), "matched pair"),
+                counted(result.track_count(), "track")
             ),
         ),
     ];
@@ -882,7 +878,7 @@ const HEAD: &str = include_str!("head.html");
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pedo_io::sequence::{run_sequence, SequenceOptions, StageTimings};
+    use pedo_io::sequence::{run_sequence, SequenceOptions};
 
     /// A disc of pressure moving one sensel right per frame.
     fn walking_disc(frames: usize) -> Recording {
@@ -938,20 +934,6 @@ mod tests {
         }
     }
 
-    fn empty_result() -> SequenceResult {
-        SequenceResult {
-            objects: vec![],
-            pairs: vec![],
-            tracks: vec![],
-            packed_tracks: None,
-            splits: vec![],
-            merges: vec![],
-            skipped_frames: vec![],
-            skipped_pairs: vec![],
-            timings: StageTimings::default(),
-        }
-    }
-
     #[test]
     fn the_load_series_is_named_with_the_files_units_as_frames_csv_names_it() {
         let cases = [
@@ -1003,7 +985,7 @@ mod tests {
         ];
         for (units, pitch, load, punits, peak) in cases {
             let rec = flat(3, units, pitch);
-            let html = run_report(&rec, &empty_result(), &info()).unwrap();
+            let html = run_report(&rec, &SequenceResult::default(), &info()).unwrap();
             let d = embedded_data(&html);
             let what = format!("units {units:?}, pitch {pitch:?}");
             assert_eq!(d["series"]["force_label"], load, "{what}");
@@ -1061,18 +1043,18 @@ mod tests {
         assert_eq!(d["shown"].as_array().unwrap().len(), 14);
         assert!(html.contains("<td>6–10 of 14 analysed, 16 × 24 sensels</td>"));
         // No objects in the range: its first frame.
-        let d = embedded_data(&run_report(&rec, &empty_result(), &ranged).unwrap());
+        let d = embedded_data(&run_report(&rec, &SequenceResult::default(), &ranged).unwrap());
         assert_eq!(d["open_frame"], 6);
         // Decimated (every 2nd frame shown): the first shown frame with objects in the range.
         assert_eq!(open_frame(&part, &[0, 2, 4, 6, 8, 10, 12], 7, 11), 8);
-        assert_eq!(open_frame(&empty_result(), &[0, 2, 4], 3, 4), 4);
+        assert_eq!(open_frame(&SequenceResult::default(), &[0, 2, 4], 3, 4), 4);
         let html = run_report(&rec, &all, &info()).unwrap();
         assert!(html.contains("<td>all 14 analysed, 16 × 24 sensels</td>"));
         let one = ReportInfo {
             frames: Some((7, 8)),
             ..info()
         };
-        let html = run_report(&rec, &empty_result(), &one).unwrap();
+        let html = run_report(&rec, &SequenceResult::default(), &one).unwrap();
         assert!(html.contains("<td>7 of 14 analysed, 16 × 24 sensels</td>"));
     }
 
@@ -1131,8 +1113,8 @@ mod tests {
                 "101st", "111th", "112th"
             ]
         );
-        assert_eq!(count(1, "track", "tracks"), "1 track");
-        assert_eq!(count(0, "track", "tracks"), "0 tracks");
+        assert_eq!(counted(1, "track"), "1 track");
+        assert_eq!(counted(0, "track"), "0 tracks");
         // Two frames of the disc: one pair.
         let rec = walking_disc(2);
         let result = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
@@ -1156,7 +1138,7 @@ mod tests {
             .unwrap()
             .with_pitch_mm([5.0, 4.0])
             .unwrap();
-        let d = embedded_data(&run_report(&rec, &empty_result(), &info()).unwrap());
+        let d = embedded_data(&run_report(&rec, &SequenceResult::default(), &info()).unwrap());
         let path = &d["series"]["cop_path"];
         let frames: Vec<Option<u64>> = serde_json::from_value(path["frame"].clone()).unwrap();
         let pieces: Vec<Vec<u64>> = frames
@@ -1463,17 +1445,7 @@ mod tests {
         let (frames, rows, cols) = (301, 100, 100);
         let rec = Recording::from_array(frames, rows, cols, vec![0.0; frames * rows * cols], None)
             .unwrap();
-        let result = SequenceResult {
-            objects: vec![],
-            pairs: vec![],
-            tracks: vec![],
-            packed_tracks: None,
-            splits: vec![],
-            merges: vec![],
-            skipped_frames: vec![],
-            skipped_pairs: vec![],
-            timings: StageTimings::default(),
-        };
+        let result = SequenceResult::default();
         let html = run_report(&rec, &result, &info()).unwrap();
         let d = embedded_data(&html);
         assert_eq!(d["step"], 2);

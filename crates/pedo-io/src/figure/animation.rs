@@ -288,7 +288,7 @@ fn gif_size(v: u32) -> Result<u16> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sequence::{run_sequence, SequenceOptions, StageTimings};
+    use crate::sequence::{run_sequence, SequenceOptions};
     use image::AnimationDecoder;
 
     /// A disc of pressure moving one sensel right per frame.
@@ -306,20 +306,6 @@ mod tests {
             }
         }
         Recording::from_array(frames, rows, cols, data, None).unwrap()
-    }
-
-    fn empty_result() -> SequenceResult {
-        SequenceResult {
-            objects: vec![],
-            pairs: vec![],
-            tracks: vec![],
-            packed_tracks: None,
-            splits: vec![],
-            merges: vec![],
-            skipped_frames: vec![],
-            skipped_pairs: vec![],
-            timings: StageTimings::default(),
-        }
     }
 
     fn decode(gif: &[u8]) -> Vec<image::Frame> {
@@ -404,7 +390,7 @@ mod tests {
     #[test]
     fn long_recordings_are_decimated_and_keep_real_time() {
         let rec = moving_disc(301, 16, 24).with_frame_rate(100.0).unwrap();
-        let result = empty_result();
+        let result = SequenceResult::default();
         let axes = FigureAxes::of_recording(&rec);
         let mut animation = Animation {
             recording: &rec,
