@@ -104,13 +104,12 @@ impl Grid {
         Ok(Self { rows, cols, data })
     }
 
-    /// A `rows × cols` grid of zeros. Unlike [`Grid::new`] it does not refuse an empty size.
-    pub fn zeros(rows: usize, cols: usize) -> Self {
-        Self {
-            rows,
-            cols,
-            data: vec![0.0; rows * cols],
-        }
+    /// A `rows × cols` grid of zeros; an empty size is refused as by [`Grid::new`].
+    pub fn zeros(rows: usize, cols: usize) -> Result<Self> {
+        let len = rows.checked_mul(cols).ok_or_else(|| {
+            IoError::invalid(format!("grid {rows}x{cols} is larger than memory can hold"))
+        })?;
+        Self::new(rows, cols, vec![0.0; len])
     }
 
     /// Builds a grid from `f32` values, mapping NaN (no sensor) to 0 and rejecting infinities.
@@ -159,5 +158,23 @@ impl Grid {
             .copied()
             .filter(|&v| v > 0.0)
             .reduce(f64::min)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_empty_or_impossible_size_is_refused_by_every_constructor() {
+        for (rows, cols) in [(0, 4), (4, 0), (0, 0)] {
+            let msg = Grid::zeros(rows, cols).unwrap_err().to_string();
+            assert!(msg.contains(&format!("empty grid {rows}x{cols}")), "{msg}");
+            assert!(Grid::new(rows, cols, Vec::new()).is_err());
+        }
+        let msg = Grid::zeros(usize::MAX, 2).unwrap_err().to_string();
+        assert!(msg.contains("larger than memory"), "{msg}");
+        let g = Grid::zeros(2, 3).unwrap();
+        assert_eq!((g.rows(), g.cols(), g.max()), (2, 3, 0.0));
     }
 }

@@ -61,7 +61,7 @@ pub fn isocontours(frame: &Grid, levels: &[f64], opts: &IsoOptions) -> Result<Ve
 /// use pedo_io::{isobar::even_levels, Grid};
 /// let frame = Grid::new(1, 3, vec![0.0, 100.0, 40.0])?;
 /// assert_eq!(even_levels(&frame, 3), vec![25.0, 50.0, 75.0]);
-/// assert!(even_levels(&Grid::zeros(2, 2), 3).is_empty());
+/// assert!(even_levels(&Grid::zeros(2, 2)?, 3).is_empty());
 /// # Ok::<(), pedo_io::IoError>(())
 /// ```
 pub fn even_levels(frame: &Grid, n: usize) -> Vec<f64> {

@@ -91,7 +91,7 @@ impl Table {
 }
 
 /// Appends one CSV line of `cells` (as [`Table::to_csv`] writes it) to `s`.
-pub fn push_csv_line(s: &mut String, cells: &[Cell]) {
+pub(crate) fn push_csv_line(s: &mut String, cells: &[Cell]) {
     push_csv_row(s, cells)
 }
 
@@ -158,7 +158,7 @@ fn row_json(header: &[String], row: &[Cell]) -> Value {
 
 /// A JSON array of rows written one at a time, byte for byte as [`Table::write_json`] writes
 /// the whole table: for tables whose rows are never all held (a streamed run's `pairs.json`).
-pub struct JsonRows {
+pub(crate) struct JsonRows {
     header: Vec<String>,
     rows: usize,
 }
@@ -212,7 +212,7 @@ pub fn pairs_table(recording: &Recording, r: &SequenceResult) -> Table {
 }
 
 /// The columns of [`pairs_table`] (no rows).
-pub fn pairs_header(recording: &Recording) -> Table {
+pub(crate) fn pairs_header(recording: &Recording) -> Table {
     let mut t = Table::new(&["id_a", "id_b", "frame_a", "frame_b"]);
     if recording.dt_s.is_some() {
         t.push_column("time_a_s");
@@ -236,7 +236,7 @@ pub fn pairs_header(recording: &Recording) -> Table {
 }
 
 /// The row of [`pairs_table`] of a matched pair.
-pub fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
+pub(crate) fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
     let mut cells = pair_objects_cells(recording, &row.objects);
     cells.extend([
         Cell::int(row.local_matches),
@@ -252,7 +252,7 @@ pub fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
 }
 
 /// The row of [`pairs_table`] of a pair that could not be matched.
-pub fn skipped_pair_cells(recording: &Recording, s: &SkippedPairRow) -> Vec<Cell> {
+pub(crate) fn skipped_pair_cells(recording: &Recording, s: &SkippedPairRow) -> Vec<Cell> {
     let mut cells = pair_objects_cells(recording, &s.objects);
     cells.extend(std::iter::repeat_n(Cell::Empty, 6));
     cells.extend([Cell::Text("skipped".into()), Cell::Text(s.reason.clone())]);
@@ -294,7 +294,7 @@ pub fn objects_table(recording: &Recording, r: &SequenceResult) -> Table {
 }
 
 /// The columns of [`objects_table`] (no rows).
-pub fn objects_header(recording: &Recording) -> Table {
+pub(crate) fn objects_header(recording: &Recording) -> Table {
     let mut t = Table::new(&["id", "frame"]);
     if recording.dt_s.is_some() {
         t.push_column("time_s");
@@ -314,7 +314,7 @@ pub fn objects_header(recording: &Recording) -> Table {
 }
 
 /// The row of [`objects_table`] of one object.
-pub fn object_cells(recording: &Recording, o: &SequenceObject) -> Vec<Cell> {
+pub(crate) fn object_cells(recording: &Recording, o: &SequenceObject) -> Vec<Cell> {
     let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
     let mut cells = vec![Cell::int(o.id), Cell::int(o.frame)];
     if timed {
@@ -354,7 +354,7 @@ pub fn matches_table(recording: &Recording, r: &SequenceResult) -> Table {
 }
 
 /// The columns of [`matches_table`] (no rows).
-pub fn matches_header(recording: &Recording) -> Table {
+pub(crate) fn matches_header(recording: &Recording) -> Table {
     let mut t = Table::new(&[
         "id_a",
         "id_b",
@@ -372,7 +372,7 @@ pub fn matches_header(recording: &Recording) -> Table {
 }
 
 /// The rows of [`matches_table`], one by one to `emit`.
-pub fn matches_rows<E>(
+pub(crate) fn matches_rows<E>(
     recording: &Recording,
     r: &SequenceResult,
     emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
@@ -384,7 +384,7 @@ pub fn matches_rows<E>(
 }
 
 /// The rows of [`matches_table`] of one pair (`oa`, `ob` its two objects), one by one to `emit`.
-pub fn pair_match_rows<E>(
+pub(crate) fn pair_match_rows<E>(
     recording: &Recording,
     p: &PairMatch,
     oa: &SequenceObject,
@@ -424,13 +424,13 @@ pub fn tracks_table(recording: &Recording, r: &SequenceResult) -> Table {
 }
 
 /// The columns of [`tracks_table`] (no rows).
-pub fn tracks_header(recording: &Recording, r: &SequenceResult) -> Table {
+pub(crate) fn tracks_header(recording: &Recording, r: &SequenceResult) -> Table {
     tracks_header_of(recording, r.objects.first().map_or(2, |o| o.shape.dim()))
 }
 
 /// The columns of [`tracks_table`] for objects of `dim` dimensions (those of the first object,
 /// 2 without objects).
-pub fn tracks_header_of(recording: &Recording, dim: usize) -> Table {
+pub(crate) fn tracks_header_of(recording: &Recording, dim: usize) -> Table {
     let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
     let mut t = Table::new(&["track", "step", "frame"]);
     if timed {
@@ -450,7 +450,7 @@ pub fn tracks_header_of(recording: &Recording, dim: usize) -> Table {
 }
 
 /// The rows of [`tracks_table`], one by one to `emit`.
-pub fn tracks_rows<E>(
+pub(crate) fn tracks_rows<E>(
     recording: &Recording,
     r: &SequenceResult,
     emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
@@ -466,7 +466,7 @@ pub fn tracks_rows<E>(
 
 /// The rows of [`tracks_table`] of track `k` (its steps as object and node; `dim` that of
 /// [`tracks_header_of`]), one by one to `emit`.
-pub fn track_rows<E>(
+pub(crate) fn track_rows<E>(
     recording: &Recording,
     k: usize,
     steps: &[(&SequenceObject, usize)],
@@ -533,7 +533,7 @@ pub fn frames_table(recording: &Recording, threshold: f64, start: usize, end: us
 }
 
 /// The columns of [`frames_table`] (no rows).
-pub fn frames_header(recording: &Recording) -> Table {
+pub(crate) fn frames_header(recording: &Recording) -> Table {
     let u = measure_units(recording);
     let mut t = Table::new(&["frame"]);
     if recording.dt_s.is_some() {
@@ -557,7 +557,7 @@ pub fn frames_header(recording: &Recording) -> Table {
 }
 
 /// The rows of [`frames_table`], one by one to `emit`.
-pub fn frames_rows<E>(
+pub(crate) fn frames_rows<E>(
     recording: &Recording,
     threshold: f64,
     start: usize,
@@ -570,7 +570,7 @@ pub fn frames_rows<E>(
 
 /// The rows of [`frames_table`] of frames `first..first + measures.len()` of `recording`
 /// (their measures given), one by one to `emit`.
-pub fn measures_rows<E>(
+pub(crate) fn measures_rows<E>(
     recording: &Recording,
     first: usize,
     measures: &[crate::recording::FrameMeasures],

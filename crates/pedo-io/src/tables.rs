@@ -89,7 +89,7 @@ pub fn write_table(
 
 /// Writes a table into `dir` as `{stem}.csv` or `{stem}.parquet` from its header and a source
 /// of rows (`rows(emit)` calls `emit` for each row in order), without holding the rows.
-pub fn write_rows(
+pub(crate) fn write_rows(
     dir: &OutDir,
     format: TableFormat,
     stem: &str,
@@ -109,7 +109,7 @@ pub fn write_rows(
 /// A table file of an output folder written row by row, as CSV or Parquet: the rows are never
 /// held (Parquet buffers one row group). The file is complete once [`TableWriter::finish`]
 /// returns.
-pub struct TableWriter {
+pub(crate) struct TableWriter {
     rel: String,
     sink: TableSink,
 }
@@ -250,7 +250,7 @@ fn parquet_error(e: parquet::errors::ParquetError) -> std::io::Error {
 /// group every [`ROW_GROUP_ROWS`] rows. The columns' types are fixed when the first row group is
 /// written (see the module docs); a later value of another type is an error, except an integer
 /// in a `DOUBLE` column.
-pub struct ParquetWriter<W: Write + Send> {
+pub(crate) struct ParquetWriter<W: Write + Send> {
     columns: Vec<Column>,
     rows: usize,
     sink: Option<W>,

@@ -96,9 +96,11 @@ fn several_contours_holes_and_filters() {
     .unwrap();
     assert!(big_only.is_empty());
     // Empty frame: no contours, no error.
-    assert!(contours(&Grid::zeros(5, 5), &ContourOptions::default())
-        .unwrap()
-        .is_empty());
+    assert!(
+        contours(&Grid::zeros(5, 5).unwrap(), &ContourOptions::default())
+            .unwrap()
+            .is_empty()
+    );
 }
 
 #[test]

@@ -300,7 +300,7 @@ fn laplacian_follows_vtk_semantics() {
     }
     // Defaults keep a valid mesh.
     assert_valid(&surface(&g, &SurfaceOptions::default()).unwrap());
-    assert!(surface(&Grid::zeros(4, 4), &SurfaceOptions::default()).is_err());
+    assert!(surface(&Grid::zeros(4, 4).unwrap(), &SurfaceOptions::default()).is_err());
 }
 
 fn region_contains(cs: &[&Contour], p: [f64; 2]) -> bool {
