@@ -713,8 +713,8 @@ pub fn output_name(path: &Path) -> String {
 ///   one gets its error row, as does a file that cannot be opened; a text sniffed as a CSV grid
 ///   that reads as a table of another kind (a first line of names, rows of at most 3 values:
 ///   `formats::csv::looks_like_a_table`) is passed over; PNG/TIFF images are not
-///   recordings on their own there: a
-///   folder holding images is one image-sequence recording. Hidden folders and pedomatch output
+///   recordings on their own there: a folder holding grayscale images is one image-sequence
+///   recording, and colour images (a photograph of the foot) are passed over. Hidden folders and pedomatch output
 ///   folders are not searched;
 /// - anything else is a glob pattern (`data/**/*.asf`), each match taken as above.
 ///
@@ -775,6 +775,7 @@ fn search_folder(root: &Path, found: &mut Vec<PathBuf>) {
             continue;
         }
         match sniff_found_file(entry.path()) {
+            Some(Format::Png | Format::Tiff) if !is_pressure_image(entry.path()) => {}
             Some(Format::Png | Format::Tiff) => {
                 let folder = entry.path().parent().unwrap_or(root).to_path_buf();
                 if !image_folders.contains(&folder) {
@@ -794,6 +795,13 @@ fn search_folder(root: &Path, found: &mut Vec<PathBuf>) {
             None => {}
         }
     }
+}
+
+/// Whether an image met in a searched folder may be a pressure frame: a colour image (a
+/// photograph of the foot) is not; an image whose header cannot be read is kept, so that its
+/// folder's row says what is wrong.
+fn is_pressure_image(path: &Path) -> bool {
+    crate::formats::images::is_grayscale_image(path).unwrap_or(true)
 }
 
 /// The first [`SNIFF_BYTES`] of a file, if it can be read.

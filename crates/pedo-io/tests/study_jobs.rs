@@ -70,3 +70,38 @@ fn at_most_jobs_recordings_run_at_once_and_rows_keep_the_input_order() {
     );
     assert_eq!(rows, names);
 }
+
+/// A photograph of the foot (a colour PNG or TIFF) beside a recording is passed over, in the
+/// recording's folder as in a folder of its own; a folder of grayscale frames is one recording.
+#[test]
+fn a_search_passes_over_colour_photographs_and_keeps_grayscale_frames() {
+    use image::{ImageBuffer, ImageFormat, Luma, Rgb};
+    let dir = std::env::temp_dir().join(format!("pedo-io-photo-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    for sub in ["s01", "photos", "frames"] {
+        std::fs::create_dir_all(dir.join(sub)).unwrap();
+    }
+    let asf = recordings(1).remove(0);
+    std::fs::copy(&asf, dir.join("s01/walk.lst")).unwrap();
+    let photo: ImageBuffer<Rgb<u8>, Vec<u8>> =
+        ImageBuffer::from_fn(8, 6, |x, y| Rgb([x as u8, y as u8, 7]));
+    photo
+        .save_with_format(dir.join("s01/foot.png"), ImageFormat::Png)
+        .unwrap();
+    photo
+        .save_with_format(dir.join("photos/foot.tif"), ImageFormat::Tiff)
+        .unwrap();
+    let frame: ImageBuffer<Luma<u8>, Vec<u8>> = ImageBuffer::from_fn(8, 6, |x, _| Luma([x as u8]));
+    for k in 1..=2 {
+        frame
+            .save_with_format(dir.join(format!("frames/f{k}.png")), ImageFormat::Png)
+            .unwrap();
+    }
+    let found = pedo_io::study::find_recordings(&[dir.to_str().unwrap()]).unwrap();
+    let names: Vec<_> = found
+        .iter()
+        .map(|p| p.strip_prefix(&dir).unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, ["frames", "s01/walk.lst"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

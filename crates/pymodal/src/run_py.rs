@@ -1,6 +1,7 @@
 //! `pymodal.run`: a whole recording in; the per-pair table, the matches and the node tracks out.
 
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use pedo_io::recording::kpa_per_unit;
 use pedo_io::report::{self, InputInfo};
 use pedo_io::sequence::{run_sequence, SequenceResult};
 use pedo_io::study::require_objects;
@@ -69,9 +70,11 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 ///   ``time_a_s``/``time_b_s`` when the frame rate is known, node counts, local matches and %,
 ///   optimisation matches and %, matches after the excess step, mean cost);
 /// - ``matches``: list of :class:`Match`, aligned with ``table``;
-/// - ``objects``: list of dicts ``{id, frame, time_s, index, level, points, points_mm}``
-///   (``id`` is the index in this list; ``points`` (n, d) array in sensels, ``points_mm`` its
-///   x, y in mm or None when the pitch is unknown);
+/// - ``objects``: list of dicts ``{id, frame, time_s, index, level, level_kpa, points,
+///   points_mm}`` (``id`` is the index in this list; ``level`` the isobaric level of an
+///   isocontour run in the recording's units and ``level_kpa`` in kPa when those units are
+///   known, both None otherwise; ``points`` (n, d) array in sensels, ``points_mm`` its x, y in
+///   mm or None when the pitch is unknown);
 /// - ``tracks``: list of (k, 1 + d) float arrays of ``(frame, x, y[, z])`` rows, one per track;
 /// - ``frames``: list of dicts of per-frame measures (``frame``, ``time_s``,
 ///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
@@ -251,6 +254,9 @@ fn objects<'py>(
         d.set_item("time_s", rec.time_s(o.frame))?;
         d.set_item("index", o.index)?;
         d.set_item("level", o.level)?;
+        // kPa beside the file's units, as objects.csv states it, so levels of mixed sensors compare.
+        let kpa = kpa_per_unit(&rec.units);
+        d.set_item("level_kpa", o.level.zip(kpa).map(|(l, k)| l * k))?;
         let (n, dim) = (o.shape.len(), o.shape.dim());
         let pts = PyArray1::from_slice(py, o.shape.coords()).reshape([n, dim])?;
         d.set_item("points", pts)?;

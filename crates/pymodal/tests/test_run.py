@@ -51,6 +51,12 @@ def test_run_models_and_options():
     assert len(iso["table"]) == 4
     levels = [o["level"] for o in iso["objects"]]
     assert levels == sorted(levels)
+    assert all(o["level_kpa"] is None for o in iso["objects"]), "no units, no kPa"
+    in_n_cm2 = pymodal.run(frames, model="isocontour", iso_levels=5, units="N/cm²")
+    assert [o["level"] for o in in_n_cm2["objects"]] == levels
+    np.testing.assert_allclose([o["level_kpa"] for o in in_n_cm2["objects"]],
+                               10.0 * np.array(levels), rtol=1e-12)
+    assert all(o["level"] is None and o["level_kpa"] is None for o in pymodal.run(frames)["objects"])
     surf = pymodal.run(frames, model="surface", surface_nodes=40)
     assert len(surf["table"]) == 3
     assert all(o["points"].shape[1] == 3 and o["points"].shape[0] <= 40 for o in surf["objects"])

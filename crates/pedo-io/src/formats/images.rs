@@ -51,6 +51,23 @@ fn decode(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>, Format)> 
     Ok((h, w, data, format))
 }
 
+/// Whether the PNG or TIFF image at `path` is one this module reads (8- or 16-bit grayscale), by
+/// its header alone; `None` when the header cannot be read. A study search passes over colour
+/// images (a photograph of the foot beside a recording is no pressure frame).
+pub(crate) fn is_grayscale_image(path: &Path) -> Option<bool> {
+    use image::ImageDecoder;
+    let decoder = image::ImageReader::open(path)
+        .ok()?
+        .with_guessed_format()
+        .ok()?
+        .into_decoder()
+        .ok()?;
+    Some(matches!(
+        decoder.color_type(),
+        image::ColorType::L8 | image::ColorType::L16
+    ))
+}
+
 /// Decodes one PNG or TIFF image held in memory into a one-frame recording.
 pub fn decode_image(bytes: &[u8], name: &str) -> Result<Recording> {
     let (h, w, data, format) = decode(bytes, name)?;
