@@ -5,7 +5,7 @@ Usage: test_report.py PEDOMATCH_BINARY [SCREENSHOT.png]
 
 Checks: the three plots are drawn (plotly's SVG root exists for each), no script error and no
 blocked load was logged (the page's own error log and Chromium's console), moving the slider to
-frame k shows frame k (label, plot title and the page's state), the plots' titles lie below plotly's mode bar,
+frame k shows frame k (label, plot title and the page's state), the plots' titles and legends lie below plotly's mode bar,
 a run of part of a recording (`--frames`) opens on its first frame with objects and says which
 frames were analysed, a surface run draws its 3-D view, an isocontour run shows each level of its
 frame, `pedomatch match` reports are drawn (with a 3-D view for 3-D points), file names holding
@@ -91,13 +91,17 @@ MODE_BAR_BOTTOM = 26
 
 
 def check_titles_clear_of_the_mode_bar(dom, expect):
-    """Every plot title's top lies below the mode bar, which would otherwise cover its end."""
+    """Every plot title's and legend's top lies below the mode bar, which would otherwise cover
+    its end."""
     titles = re.findall(r'<text class="gtitle"[^>]*?\by="([0-9.]+)"[^>]*?font-size: ([0-9.]+)px[^>]*>([^<]*)<',
                         dom)
     expect(titles, "no plot title found")
     for y, size, text in titles:
         expect(float(y) - float(size) >= MODE_BAR_BOTTOM,
                f"the title {text!r} (baseline {y} px, {size} px font) is under the mode bar")
+    # A legend above the plot had its last entries under the mode bar (the time series').
+    for y in re.findall(r'<g class="legend"[^>]*?transform="translate\([0-9.]+,\s*([0-9.-]+)\)"', dom):
+        expect(float(y) >= MODE_BAR_BOTTOM, f"a legend (top {y} px) lies under the mode bar")
 
 
 def check_analysed_frames(binary, tmp, failures):
