@@ -188,18 +188,40 @@ enum Kind {
     Text,
 }
 
-/// The type of a column with no value in its first row group, by its name.
+/// The type of a column with no value in its first row group, by its name: every text and
+/// integer column of the run and study tables is named here (the rest are numbers), so that an
+/// empty table has the types of a full one (Dask takes a study's types from its first file).
 fn kind_of_empty(name: &str) -> Kind {
     match name {
-        "status" | "reason" | "path" | "output" | "format" | "message" => Kind::Text,
-        "frames"
-        | "pairs"
-        | "tracks"
+        "status" | "reason" | "path" | "output" | "format" | "message" | "pressure_units" => {
+            Kind::Text
+        }
+        // Ids, frames, nodes and counts of pairs, objects, matches, tracks, frames and the study.
+        "id"
+        | "id_a"
+        | "id_b"
+        | "object_id"
+        | "track"
+        | "step"
+        | "index"
+        | "frame"
+        | "frame_a"
+        | "frame_b"
+        | "node"
+        | "node_a"
+        | "node_b"
+        | "nodes"
         | "nodes_a"
         | "nodes_b"
+        | "excess"
+        | "trackable"
+        | "contact_sensors"
         | "local_matches"
         | "optimisation_matches"
-        | "matches_after_excess" => Kind::Int,
+        | "matches_after_excess"
+        | "frames"
+        | "pairs"
+        | "tracks" => Kind::Int,
         _ => Kind::Float,
     }
 }

@@ -193,3 +193,38 @@ fn a_parquet_study_holds_the_csv_tables_value_for_value_and_resumes() {
     assert!(pq_out.join("study.csv").is_file() && !pq_out.join("study.parquet").exists());
     std::fs::remove_dir_all(&base).unwrap();
 }
+
+/// Each column's type in `path`'s schema, by name.
+fn column_types(path: &Path) -> std::collections::BTreeMap<String, String> {
+    let reader = SerializedFileReader::new(std::fs::File::open(path).unwrap()).unwrap();
+    let schema = reader.metadata().file_metadata().schema_descr_ptr();
+    schema
+        .columns()
+        .iter()
+        .map(|c| (c.name().to_string(), format!("{:?}", c.physical_type())))
+        .collect()
+}
+
+/// A one-frame recording writes tables with no pairs, matches or tracks; their columns keep the
+/// types of a full recording's (Dask takes a study's types from its first file).
+#[test]
+fn the_empty_tables_of_a_one_frame_recording_have_the_types_of_full_ones() {
+    let out = temp_dir("empty");
+    let paths = vec![data("tekscan-FrasP01L-11-20.csv"), data("MUN104L.csv")];
+    let rows = run_study(&paths, &options(&out, TableFormat::Parquet), &|_| {}).unwrap();
+    assert_eq!(rows[1].pairs, Some(0), "{rows:?}");
+    let folder = |k: usize| out.join(rows[k].output.as_ref().unwrap());
+    for table in RUN_TABLES {
+        let file = format!("{table}.parquet");
+        let (full, empty) = (
+            column_types(&folder(0).join(&file)),
+            column_types(&folder(1).join(&file)),
+        );
+        for (name, kind) in &empty {
+            if let Some(expected) = full.get(name) {
+                assert_eq!(kind, expected, "{file} column {name}");
+            }
+        }
+    }
+    std::fs::remove_dir_all(&out).unwrap();
+}
