@@ -88,9 +88,13 @@ impl OutDir {
         let staging = parent.join(format!(".{name}.pedomatch-tmp-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&staging);
         register(&staging);
-        std::fs::create_dir(&staging).map_err(|e| io_error(&staging, e))?;
-        std::fs::write(staging.join(MARKER), b"written by pedomatch\n")
-            .map_err(|e| io_error(&staging, e))?;
+        // The staging folder is an implementation detail: its failure is the output's.
+        let unwritable = |e: std::io::Error| {
+            let parent = parent.display();
+            refused(root, &format!("cannot be written in {parent}: {e}"))
+        };
+        std::fs::create_dir(&staging).map_err(unwritable)?;
+        std::fs::write(staging.join(MARKER), b"written by pedomatch\n").map_err(unwritable)?;
         Ok(Self {
             root: root.to_path_buf(),
             staging,
@@ -202,6 +206,13 @@ pub fn is_output(root: &Path) -> bool {
 
 fn check_replaceable(root: &Path) -> Result<()> {
     match std::fs::read_dir(root) {
+        // Write-protecting a finished output is how a user keeps it; the swap by rename in the
+        // parent would otherwise replace it all the same.
+        Ok(_) if is_write_protected(root) => Err(refused(
+            root,
+            "folder is write-protected (read-only); make it writable to replace it, or choose \
+             another output folder",
+        )),
         Ok(mut entries) => {
             if entries.next().is_none() || is_output(root) {
                 Ok(())
@@ -219,6 +230,11 @@ fn check_replaceable(root: &Path) -> Result<()> {
         )),
         Err(e) => Err(io_error(root, e)),
     }
+}
+
+/// Whether the folder's permissions grant nobody write access.
+fn is_write_protected(root: &Path) -> bool {
+    std::fs::metadata(root).is_ok_and(|m| m.permissions().readonly())
 }
 
 /// Removes staging folders for `name` left by runs that were killed (their process is gone).
@@ -364,6 +380,52 @@ mod tests {
         let err = OutDir::create(&root).err().expect("refused").to_string();
         assert!(err.contains("not a pedomatch output"), "{err}");
         assert_eq!(std::fs::read(root.join("thesis.tex")).unwrap(), b"precious");
+        std::fs::remove_dir_all(&base).unwrap();
+    }
+
+    #[cfg(unix)]
+    fn set_mode(path: &Path, mode: u32) {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(path, std::fs::Permissions::from_mode(mode)).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_write_protected_output_is_never_replaced() {
+        let base = tmp("protected");
+        let root = base.join("out");
+        let first = OutDir::create(&root).unwrap();
+        first.write("a.csv", b"1").unwrap();
+        first.commit().unwrap();
+        set_mode(&root, 0o555);
+        let err = OutDir::create(&root).err().map(|e| e.to_string());
+        set_mode(&root, 0o755);
+        let err = err.expect("refused");
+        assert!(err.contains("write-protected"), "{err}");
+        assert_eq!(std::fs::read(root.join("a.csv")).unwrap(), b"1");
+        std::fs::remove_dir_all(&base).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn an_unwritable_place_is_named_by_the_output_not_its_staging_folder() {
+        let base = tmp("unwritable");
+        let parent = base.join("ro");
+        std::fs::create_dir(&parent).unwrap();
+        set_mode(&parent, 0o555);
+        let bound = std::fs::create_dir(parent.join("probe")).is_err();
+        let err = OutDir::create(&parent.join("res"))
+            .err()
+            .map(|e| e.to_string());
+        set_mode(&parent, 0o755);
+        if bound {
+            let err = err.expect("refused");
+            assert!(
+                err.contains("ro/res") && err.contains("cannot be written in"),
+                "{err}"
+            );
+            assert!(!err.contains("pedomatch-tmp"), "{err}");
+        } // else: permissions do not bind this user (root)
         std::fs::remove_dir_all(&base).unwrap();
     }
 
