@@ -299,10 +299,15 @@ fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: Tab
         if !frames.is_empty() {
             what.push(format!("{} that {verb}", counted(frames.len(), frame)));
         }
+        // Skipped pairs are rows of the pairs table; skipped frames are only in summary.json.
+        let place = if pairs.is_empty() {
+            "summary.json".to_string()
+        } else {
+            format!("{} and summary.json", tables.file_name("pairs"))
+        };
         println!(
-            "skipped {} (reasons in {} and summary.json; first: {first})",
-            what.join(" and "),
-            tables.file_name("pairs")
+            "skipped {} (reasons in {place}; first: {first})",
+            what.join(" and ")
         );
     }
     println!("results in {}", crate::output::folder_text(out));

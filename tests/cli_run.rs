@@ -294,6 +294,36 @@ fn demo_figures_have_mm_axes_times_and_a_pressure_scale() {
     );
 }
 
+/// Skipped levels (or frames) are not rows of pairs.csv: the run points to summary.json alone.
+#[test]
+fn skipped_levels_point_to_where_their_reasons_are() {
+    let dir = temp_dir("iso-skipped");
+    let walk = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/data/FrasP01L.asf");
+    let out = dir.join("iso");
+    let o = pedomatch(&[
+        "run",
+        walk.to_str().unwrap(),
+        "--model",
+        "isocontour",
+        "--figures",
+        "none",
+        "--report",
+        "none",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("skipped"))
+        .expect("a skipped level");
+    assert!(line.contains("(reasons in summary.json;"), "{line}");
+    assert!(read_csv(&out.join("pairs.csv"))
+        .iter()
+        .all(|r| r["status"] == "ok"));
+}
+
 #[test]
 fn isocontour_and_surface_models_run() {
     let dir = temp_dir("models");
