@@ -1,7 +1,7 @@
 # Developer entry points. `make test` is what CI runs (through .ci/run).
 VENV ?= .venv
 PY := $(VENV)/bin/python
-PIP_PACKAGES := maturin numpy scipy pytest scikit-image matplotlib pandas pyarrow dask[distributed]
+PIP_PACKAGES := maturin numpy scipy pytest mypy scikit-image matplotlib pandas pyarrow dask[distributed]
 # The wheel's cargo profile: release for `make wheel`; `make test` builds it with the dev profile
 # (assign and modal-core fully optimised, dependencies at opt-level 3 already compiled for
 # `cargo test`), so that CI compiles the dependency tree once instead of twice.

@@ -6,18 +6,21 @@ Python bindings of the pedomatch Rust workspace: numpy arrays in, numpy arrays o
 import functools as _functools
 import html as _html
 
+from typing import Any as _Any
+
 from ._pymodal import *  # noqa: F401,F403
-from ._pymodal import __version__  # noqa: F401
-from ._pymodal import _options  # type: ignore[attr-defined]  # noqa: F401
+from ._pymodal import __version__ as __version__
+from ._pymodal import _options as _options  # type: ignore[attr-defined]
 from ._pymodal import run as _run
-from .plot import plot_frame, plot_match, plot_tracks  # noqa: F401  (matplotlib loads lazily)
+# matplotlib loads lazily, at the first plot. "X as X": re-exported for type checkers (--strict).
+from .plot import plot_frame as plot_frame, plot_match as plot_match, plot_tracks as plot_tracks
 
 
-class RunResult(dict):
+class RunResult(dict[str, _Any]):
     """What :func:`run` returns: a dict (``table``, ``matches``, ``objects``, ``tracks``,
     ``frames``, ``summary``, ``timings``) that Jupyter shows as a table of its summary."""
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         """One line: the input, the counts and the mean optimisation percentage, and the keys
         (the dict itself holds every match and track: print ``dict(res)`` for all of it)."""
         s = self.get("summary", {})
@@ -28,7 +31,7 @@ class RunResult(dict):
                 f"mean_optimisation_percent={'None' if pct is None else format(pct, '.1f')}; "
                 f"keys: {', '.join(self)})")
 
-    def _repr_html_(self):
+    def _repr_html_(self) -> str:
         """The run's summary as an HTML table: input, format, frames, pairs, mean match
         percentages and cost, what was skipped, and the time per stage."""
         s = self.get("summary", {})
@@ -37,7 +40,7 @@ class RunResult(dict):
         skipped = s.get("skipped", {})
         timings = s.get("timings_s", {})
 
-        def num(v, fmt):
+        def num(v: _Any, fmt: str) -> str:
             return "n/a" if v is None else format(v, fmt)
 
         rows = [
@@ -67,8 +70,10 @@ class RunResult(dict):
         return f"<table class='pymodal-run'><caption>pymodal.run</caption>{body}</table>"
 
 
-@_functools.wraps(_run)
-def run(recording, **options):
+# The stub types the native run as returning RunResult, so that type checkers see this
+# function's result with every keyword of the native signature.
+@_functools.wraps(_run)  # type: ignore[no-redef]
+def run(recording: _Any, **options: _Any) -> RunResult:
     return RunResult(_run(recording, **options))
 
 

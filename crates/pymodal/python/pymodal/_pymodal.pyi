@@ -6,6 +6,9 @@ from typing import Any, Literal, Mapping, Optional, Sequence, Tuple, Union
 import numpy as np
 import numpy.typing as npt
 
+# What `pymodal.run` returns (a dict subclass defined in Python, wrapping this module's dict).
+from pymodal import RunResult
+
 __version__: str
 
 ArrayLike = npt.ArrayLike
@@ -321,7 +324,7 @@ def run(
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
     units: Optional[str] = None,
-) -> dict[str, Any]: ...
+) -> RunResult: ...
 
 # A row of a study table (batch, batch_row): path, output, format, frames, pairs,
 # mean_local_percent, mean_optimisation_percent, tracks, wall_time_s, status ("ok", "skipped",

@@ -13,7 +13,17 @@ when ``None``) and returns the axes.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any, Mapping, Optional, Sequence, Tuple, Union
+
 import numpy as np
+
+if TYPE_CHECKING:  # annotations only: matplotlib loads at the first call
+    import numpy.typing as npt
+    from matplotlib.axes import Axes
+
+    from ._pymodal import Match, Recording
+
+    Pitch = Union[float, Tuple[float, float], None]
 
 __all__ = ["plot_match", "plot_frame", "plot_tracks"]
 
@@ -77,9 +87,11 @@ def _scale(pitch_mm):
     return float(p[0]), float(p[1]), "mm"
 
 
-def plot_match(m, a, b, ax=None, *, pitch_mm=None, show_excess=True, closed=None,
-               invert_y=True, cmap="RdYlGn_r", labels=("A", "B"), title=None, legend=True,
-               zlabel="z"):
+def plot_match(m: Match, a: npt.ArrayLike, b: npt.ArrayLike, ax: Optional[Axes] = None, *,
+               pitch_mm: Pitch = None, show_excess: bool = True, closed: Optional[bool] = None,
+               invert_y: bool = True, cmap: Any = "RdYlGn_r",
+               labels: Tuple[str, str] = ("A", "B"), title: Optional[str] = None,
+               legend: bool = True, zlabel: str = "z") -> Axes:
     """Draw objects ``a`` (blue) and ``b`` (black) and the matches ``m`` between them.
 
     ``m`` is a :class:`pymodal.Match` of ``a`` onto ``b`` (``(n, 2)`` or ``(n, 3)`` arrays of
@@ -174,7 +186,8 @@ def plot_match(m, a, b, ax=None, *, pitch_mm=None, show_excess=True, closed=None
     return ax
 
 
-def plot_frame(recording, i, ax=None, *, contours=True, cmap="viridis", **contour_options):
+def plot_frame(recording: Recording, i: int, ax: Optional[Axes] = None, *,
+               contours: bool = True, cmap: Any = "viridis", **contour_options: Any) -> Axes:
     """Draw frame ``i`` (0-based) of a :class:`pymodal.Recording`: the pressure image with a
     colour bar in the recording's units, and the frame's contours (:func:`pymodal.contours`,
     with ``contour_options``; the recording's noise threshold unless one is given) in white.
@@ -211,8 +224,11 @@ def plot_frame(recording, i, ax=None, *, contours=True, cmap="viridis", **contou
     return ax
 
 
-def plot_tracks(tracks, ax=None, *, background=None, pitch_mm=None, units=None, dt_s=None,
-                longest=40, min_length=3, invert_y=True, cmap="plasma"):
+def plot_tracks(tracks: Union[Mapping[str, Any], Sequence[npt.ArrayLike]], ax: Optional[Axes] = None, *,
+                background: Union[Recording, npt.ArrayLike, None] = None,
+                pitch_mm: Pitch = None, units: Optional[str] = None,
+                dt_s: Optional[float] = None, longest: Optional[int] = 40, min_length: int = 3,
+                invert_y: bool = True, cmap: Any = "plasma") -> Axes:
     """Draw node tracks in the x-y plane: the result of :func:`pymodal.run`, or its
     ``["tracks"]``, each a ``(k, 3 or 4)`` array of ``(frame, x, y[, z])`` rows in sensels.
 
