@@ -166,6 +166,13 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     args.units.overrides().validate()?;
     let oa = load_object(&args.a, args.frame, &args)?;
     let ob = load_object(&args.b, args.frame_b.unwrap_or(args.frame), &args)?;
+    warn_if_no_frames(&oa, &args.a, args.frame, "--frame");
+    let flag_b = if args.frame_b.is_some() {
+        "--frame-b"
+    } else {
+        "--frame"
+    };
+    warn_if_no_frames(&ob, &args.b, args.frame_b.unwrap_or(args.frame), flag_b);
     let read_time = started.elapsed().as_secs_f64();
     let ordered = tri_state(args.ordered, args.no_ordered);
     let (a, b, ordered) = with_topology(oa.points.clone(), ob.points.clone(), ordered)?;
@@ -262,6 +269,18 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         eprintln!("{counts}");
     }
     Ok(())
+}
+
+/// A frame asked of a point file is ignored (it holds one object, no frames): say so rather
+/// than match what the user did not ask for without a word.
+fn warn_if_no_frames(o: &Object, path: &Path, frame: usize, flag: &str) {
+    if o.source.is_none() && frame != 0 {
+        eprintln!(
+            "pedomatch: warning: {flag} {frame} does not apply to {}: a point file is one object, \
+             not a recording of frames",
+            path.display()
+        );
+    }
 }
 
 /// Two inputs that are the same object give a trivial answer (every node onto itself), which

@@ -846,6 +846,32 @@ fn match_warns_of_an_object_matched_with_itself() {
 }
 
 #[test]
+fn match_warns_that_a_frame_does_not_apply_to_a_point_file() {
+    let dir = temp_dir("frame-points");
+    let (a, b) = (dir.join("a.xy"), dir.join("b.xy"));
+    let circle = |r: f64| -> String {
+        (0..24)
+            .map(|k| {
+                let t = k as f64 * std::f64::consts::TAU / 24.0;
+                format!("{} {}\n", r * t.cos(), 0.7 * r * t.sin())
+            })
+            .collect()
+    };
+    std::fs::write(&a, circle(10.0)).unwrap();
+    std::fs::write(&b, circle(11.0)).unwrap();
+    let (a, b) = (a.to_str().unwrap(), b.to_str().unwrap());
+    let o = pedomatch(&["match", a, b, "--frame", "3"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8(o.stderr).unwrap();
+    assert!(
+        err.contains("--frame 3 does not apply to") && err.contains("a.xy") && err.contains("b.xy"),
+        "{err}"
+    );
+    let quiet = pedomatch(&["match", a, b]);
+    assert!(!String::from_utf8_lossy(&quiet.stderr).contains("does not apply"));
+}
+
+#[test]
 fn a_run_whose_frames_hold_no_object_fails_and_writes_nothing() {
     let walk = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
     let out = temp_dir("no-object").join("out");

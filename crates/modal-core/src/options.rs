@@ -601,7 +601,16 @@ impl OptionSpec {
     /// The help text with the default appended, as the command line shows it.
     pub fn help_with_default(&self) -> String {
         match self.kind {
-            OptionKind::NegatedFlag => format!("Turn off: {} [on by default]", self.help),
+            OptionKind::NegatedFlag => {
+                // The help says what the option does when on: "Match the nodes ..." reads
+                // "turns off (on by default): match the nodes ...".
+                let mut chars = self.help.chars();
+                let help = chars
+                    .next()
+                    .map(|c| c.to_lowercase().chain(chars).collect::<String>())
+                    .unwrap_or_default();
+                format!("Turns off (on by default): {help}")
+            }
             OptionKind::Flag => format!("{} [default: off]", self.help),
             _ => format!("{} [default: {}]", self.help, self.default),
         }
@@ -795,6 +804,20 @@ mod tests {
         let e = T::parse_word("no-such-word").unwrap_err();
         assert_eq!(e.option, T::OPTION);
         assert!(e.to_string().contains(T::NAMES[0]), "{e}");
+    }
+
+    #[test]
+    fn a_negated_flag_says_what_it_turns_off_in_one_sentence() {
+        let excess = match_option_specs()
+            .into_iter()
+            .find(|s| s.name == "excess")
+            .unwrap();
+        assert_eq!(excess.cli_flags(), ["--no-excess"]);
+        let help = excess.help_with_default();
+        assert!(
+            help.starts_with("Turns off (on by default): match the nodes"),
+            "{help}"
+        );
     }
 
     #[test]

@@ -447,25 +447,48 @@ impl Recording {
     }
 }
 
-/// kPa per unit of the named pressure unit (case-insensitive), `None` if unknown.
-pub fn kpa_per_unit(units: &str) -> Option<f64> {
+/// The pressure units a recording may state: canonical name, kPa per unit, other spellings
+/// (matched case-insensitively, spaces ignored).
+const PRESSURE_UNITS: [(&str, f64, &[&str]); 8] = [
+    ("kPa", 1.0, &[]),
+    ("Pa", 1e-3, &[]),
+    ("MPa", 1e3, &[]),
+    ("N/cm²", 10.0, &["n/cm2", "n/cm^2"]),
+    ("N/mm²", 1e3, &["n/mm2", "n/mm^2"]),
+    ("psi", 6.894_757, &[]),
+    ("bar", 100.0, &[]),
+    ("mmHg", 0.133_322_4, &[]),
+];
+
+/// The entry of [`PRESSURE_UNITS`] that `units` names, if any.
+fn pressure_unit(units: &str) -> Option<(&'static str, f64)> {
     let u: String = units
-        .trim()
-        .to_ascii_lowercase()
         .chars()
         .filter(|c| !c.is_whitespace())
+        .flat_map(char::to_lowercase)
         .collect();
-    Some(match u.as_str() {
-        "kpa" => 1.0,
-        "pa" => 1e-3,
-        "mpa" => 1e3,
-        "n/cm²" | "n/cm2" | "n/cm^2" => 10.0,
-        "n/mm²" | "n/mm2" | "n/mm^2" => 1e3,
-        "psi" => 6.894_757,
-        "bar" => 100.0,
-        "mmhg" => 0.133_322_4,
-        _ => return None,
-    })
+    PRESSURE_UNITS
+        .iter()
+        .find(|(name, _, other)| name.to_lowercase() == u || other.contains(&u.as_str()))
+        .map(|&(name, kpa, _)| (name, kpa))
+}
+
+/// kPa per unit of the named pressure unit (case-insensitive), `None` if unknown.
+pub fn kpa_per_unit(units: &str) -> Option<f64> {
+    pressure_unit(units).map(|(_, kpa)| kpa)
+}
+
+/// The usual spelling of a pressure unit given in any case (`"kpa"` → `"kPa"`, `"N/cm2"` →
+/// `"N/cm²"`), `None` if unknown.
+///
+/// ```
+/// use pedo_io::recording::canonical_units;
+/// assert_eq!(canonical_units(" MMHG "), Some("mmHg"));
+/// assert_eq!(canonical_units("n/cm^2"), Some("N/cm²"));
+/// assert_eq!(canonical_units("stone"), None);
+/// ```
+pub fn canonical_units(units: &str) -> Option<&'static str> {
+    pressure_unit(units).map(|(name, _)| name)
 }
 
 /// The checks of every recording, [`Recording::new`]'s and [`Recording::from_sparse`]'s, in this

@@ -53,7 +53,10 @@ impl UnitOverrides {
             recording.dt_s = Some(1.0 / f);
         }
         if let Some(u) = &self.units {
-            recording.units = u.trim().to_string();
+            // One spelling per unit, so that summaries and studies compare ("kpa" is "kPa").
+            recording.units = crate::recording::canonical_units(u)
+                .unwrap_or(u.trim())
+                .to_string();
         }
         Ok(())
     }
@@ -93,17 +96,14 @@ const PRESSURE_UNITS: &str = "a pressure unit: kPa, Pa, MPa, N/cm², N/mm², psi
 /// Parses pressure units (one of [`crate::recording::kpa_per_unit`]'s).
 ///
 /// ```
-/// assert_eq!(pedo_io::units::parse_units("N/cm2").unwrap(), "N/cm2");
+/// assert_eq!(pedo_io::units::parse_units("N/cm2").unwrap(), "N/cm²");
+/// assert_eq!(pedo_io::units::parse_units("kpa").unwrap(), "kPa");
 /// assert!(pedo_io::units::parse_units("furlongs").is_err());
 /// ```
 pub fn parse_units(s: &str) -> Result<String, OptionError> {
-    let units = s.trim().to_string();
-    UnitOverrides {
-        units: Some(units.clone()),
-        ..UnitOverrides::default()
-    }
-    .validate()?;
-    Ok(units)
+    crate::recording::canonical_units(s)
+        .map(str::to_string)
+        .ok_or_else(|| OptionError::new("units", s.trim(), PRESSURE_UNITS))
 }
 
 /// Parses a frame rate in Hz.
@@ -173,7 +173,7 @@ mod tests {
             units: Some(parse_units(" N/cm2 ").unwrap()),
         };
         o.apply(&mut rec).unwrap();
-        assert_eq!(rec.units, "N/cm2");
+        assert_eq!(rec.units, "N/cm²");
         // N/cm² = 10 kPa; kPa × mm² × 1e-3 = N.
         assert_eq!(rec.force_factor(), Some(10.0 * 6.0 * 1e-3));
         assert_eq!(parse_units("stone").unwrap_err().option, "units");
