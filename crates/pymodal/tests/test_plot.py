@@ -271,6 +271,21 @@ def test_plot_tracks_without_pitch_is_in_sensels_and_longest_none_draws_all():
 
 
 
+def test_plot_tracks_of_a_run_uses_its_pitch_and_frame_rate_unless_given():
+    rec = blob_recording(frames=4, pitch_mm=(5.0, 4.0))
+    res = pymodal.run(rec)
+    ax = pymodal.plot_tracks(res, min_length=2)
+    assert ax.get_xlabel() == "x (mm)" and colour_bar_labels(ax) == ["time (s)"]
+    longest = max(track_collections(ax), key=lambda c: len(c.get_segments()))
+    track = max(res["tracks"], key=len)
+    np.testing.assert_allclose(longest.get_segments()[0][0], track[0, 1:3] * [5.0, 4.0])
+    np.testing.assert_allclose(longest.get_array(), track[:-1, 0] * 0.02)
+    ax = pymodal.plot_tracks(res, min_length=2, pitch_mm=1.0, dt_s=1.0)
+    assert colour_bar_labels(ax) == ["time (s)"]
+    np.testing.assert_allclose(max(track_collections(ax), key=lambda c: len(c.get_segments()))
+                               .get_segments()[0][0], track[0, 1:3])
+
+
 def test_plot_tracks_of_an_isocontour_run_are_coloured_by_level_over_its_frame():
     rec = blob_recording(frames=3)
     res = pymodal.run(rec, model="isocontour", iso_levels=6, spacing=1.0)

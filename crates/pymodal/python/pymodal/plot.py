@@ -244,6 +244,10 @@ def plot_tracks(tracks: Union[Mapping[str, Any], Sequence[npt.ArrayLike]], ax: O
     pressure units, the title names the frame and the levels, and a recording as
     ``background`` is drawn as that frame's pressure image.
 
+    Given the result of :func:`pymodal.run`, its recording's pitch, frame rate and units (from
+    its ``summary``) are used unless given, so the axes are in mm and the colours in seconds
+    when the run knew them.
+
     ``background`` is an optional image under the tracks: a :class:`pymodal.Recording` (its
     peak-pressure image; its pitch, units and frame interval are used unless given) or an
     (H, W) array (NaN drawn transparent), with a colour bar labelled in ``units``. ``pitch_mm``
@@ -259,6 +263,12 @@ def plot_tracks(tracks: Union[Mapping[str, Any], Sequence[npt.ArrayLike]], ax: O
     objects = None
     if isinstance(tracks, dict):
         objects = tracks.get("objects")
+        # A run's result knows its recording's pitch, frame rate and units (its summary).
+        known = (tracks.get("summary") or {}).get("recording") or {}
+        pitch_mm = known.get("pitch_mm") if pitch_mm is None else pitch_mm
+        units = known.get("pressure_units") if units is None else units
+        rate = known.get("frame_rate_hz")
+        dt_s = (1.0 / rate if rate else None) if dt_s is None else dt_s
         tracks = tracks.get("tracks", [])
     iso = _iso_levels(objects)
     background_what = "peak pressure"
