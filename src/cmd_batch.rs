@@ -46,6 +46,7 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
     }
     let (png, svg) = args.options.figures.kinds();
     let opts = StudyOptions {
+        inputs: args.inputs.clone(),
         params,
         read: pedo_io::ReadOptions {
             layout: args.read.layout.clone(),
@@ -94,8 +95,11 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
         bar.set_message(progress_text(&f, f.len()));
         bar.set_position((1000.0 * f.iter().flatten().sum::<f64>()) as u64);
     };
-    let rows = study::run_study(&paths, &opts, &on_event)?;
+    let study::StudyRun { rows, kept } = study::run_study(&paths, &opts, &on_event)?;
     bar.finish_and_clear();
+
+    // The counts, `--json` and the exit status are this run's recordings; the table also holds
+    // the rows it kept of earlier runs, which the closing line mentions.
 
     let counts = study::status_counts(&rows);
     let table = study::study_table_path(&args.out, opts.outputs.tables);
@@ -106,12 +110,13 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
         print!("{}", output::pretty(&report)?);
     } else {
         println!(
-            "{}: {} ok, {} skipped, {} failed; study table in {}",
+            "{}: {} ok, {} skipped, {} failed; study table in {}{}",
             counted(rows.len(), "recording"),
             counts["ok"],
             counts["skipped"],
             counts["error"],
-            table.display()
+            table.display(),
+            kept_note(kept.len())
         );
     }
     if args.options.timings {
@@ -124,6 +129,14 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
             counted(rows.len(), "recording"),
             table.display()
         ))),
+    }
+}
+
+/// What the closing line adds about the rows of earlier runs the study table kept.
+fn kept_note(kept: usize) -> String {
+    match kept {
+        0 => String::new(),
+        n => format!(" (with {} of earlier runs)", counted(n, "row")),
     }
 }
 

@@ -76,6 +76,14 @@ fn numbers(r: &Value) -> Value {
     r
 }
 
+fn read_json(path: &Path) -> Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+}
+
+fn keys(v: &Value) -> Vec<String> {
+    v.as_object().unwrap().keys().cloned().collect()
+}
+
 fn sha256_of(path: &Path) -> String {
     pedo_io::report::sha256_hex(&std::fs::read(path).unwrap())
 }
@@ -145,14 +153,32 @@ fn a_corrupt_recording_fails_alone_and_a_second_run_resumes() {
     let header = csv.lines().next().unwrap();
     assert_eq!(
         header,
-        "path,output,format,frames,pairs,mean_local_percent,mean_optimisation_percent,tracks,wall_time_s,status,message"
+        "path,output,format,frames,frame_rate_hz,pitch_x_mm,pitch_y_mm,pressure_units,pairs,mean_local_percent,mean_optimisation_percent,tracks,wall_time_s,status,message"
     );
     assert_eq!(csv.lines().count(), 5);
     let bad_line = csv.lines().find(|l| l.contains("corrupt.asf,")).unwrap();
     assert!(bad_line.contains(",error,"), "{bad_line}");
-    let study_json: Value =
-        serde_json::from_slice(&std::fs::read(out.join("study.json")).unwrap()).unwrap();
-    assert_eq!(study_json, first["rows"]);
+    // study.json: what produced the rows, their counts, and the rows.
+    let study_json = read_json(&out.join("study.json"));
+    assert_eq!(study_json["rows"], first["rows"]);
+    assert_eq!(study_json["pedomatch_version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(study_json["inputs"], serde_json::json!([i]));
+    for count in ["recordings", "ok", "skipped", "error"] {
+        assert_eq!(study_json[count], first[count], "{count}");
+    }
+    assert_eq!(study_json["kept"], 0);
+    // Every option as used, as each summary.json lists them; the values a recording fills in
+    // from its file are null (each recording's own) or the whole of it (`0..`).
+    let summary = read_json(&folders[0].join("summary.json"));
+    let (given, used) = (&study_json["options"], &summary["options"]);
+    assert_eq!(keys(given), keys(used));
+    for (key, value) in used.as_object().unwrap() {
+        match key.as_str() {
+            "frames" => assert_eq!(given[key], "0.."),
+            "noise" | "pitch_mm" | "frame_rate" | "units" => assert!(given[key].is_null(), "{key}"),
+            _ => assert_eq!(&given[key], value, "{key}"),
+        }
+    }
 
     // Second run: the complete folders are skipped with their numbers; the corrupt file fails again.
     let before = std::fs::read(folders[2].join("summary.json")).unwrap();
@@ -555,5 +581,226 @@ fn terminal_progress_counts_recordings_not_thousandths() {
     assert!(out.status.success(), "{screen}");
     assert!(screen.contains("/2 recordings"), "{screen}");
     assert!(!screen.contains("/2000"), "{screen}");
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+/// The paths of a study table's rows, in order, relative to `input`.
+fn row_paths(rows: &[Value], input: &Path) -> Vec<String> {
+    let input = input.to_str().unwrap();
+    rows.iter()
+        .map(|r| {
+            let path = r["path"].as_str().unwrap();
+            path.strip_prefix(input).unwrap_or(path).to_string()
+        })
+        .collect()
+}
+
+#[test]
+fn a_run_on_part_of_a_study_keeps_the_other_rows_while_their_folders_are_there() {
+    let base = temp_dir("subset");
+    let input = study_inputs(&base);
+    let out = base.join("study");
+    let (i, o) = (input.to_str().unwrap(), out.to_str().unwrap());
+    let (code, _, _) = batch_json(&[i, "--out", o]);
+    assert_eq!(code, Some(1), "the corrupt file fails");
+    let all = read_json(&out.join("study.json"))["rows"].clone();
+    let all = all.as_array().unwrap();
+    assert_eq!(
+        row_paths(all, &input),
+        [
+            "/a/trial.lst",
+            "/b/trial.lst",
+            "/corrupt.asf",
+            "/tekscan.csv"
+        ]
+    );
+
+    // One recording, with other options: the report, the counts and the exit status are this
+    // run's; the table keeps the other rows, as they were, after this run's.
+    let tekscan = input.join("tekscan.csv");
+    let t = tekscan.to_str().unwrap();
+    let (code, report, stderr) = batch_json(&[t, "--out", o, "--spacing", "1.5"]);
+    assert_eq!(
+        code,
+        Some(0),
+        "the kept error row is not this run's: {stderr}"
+    );
+    assert_eq!(
+        (&report["recordings"], &report["ok"]),
+        (&1.into(), &1.into())
+    );
+    assert_eq!(rows(&report).len(), 1);
+    let study = read_json(&out.join("study.json"));
+    let table = study["rows"].as_array().unwrap();
+    assert_eq!(
+        row_paths(table, &input),
+        [
+            "/tekscan.csv",
+            "/a/trial.lst",
+            "/b/trial.lst",
+            "/corrupt.asf"
+        ]
+    );
+    assert_eq!(table[0], rows(&report)[0]);
+    assert_eq!(
+        &table[1..],
+        &[all[0].clone(), all[1].clone(), all[2].clone()]
+    );
+    assert_eq!(
+        (&study["recordings"], &study["kept"]),
+        (&1.into(), &3.into())
+    );
+    assert_eq!(study["inputs"], serde_json::json!([t]));
+    assert_eq!(study["options"]["spacing"], 1.5);
+    let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 5, "{csv}");
+    // The closing line says the table holds more than this run.
+    let line = pedomatch(&[&["batch", t, "--out", o, "--spacing", "1.5"], &FAST[..]].concat());
+    let line = String::from_utf8_lossy(&line.stdout);
+    assert!(
+        line.contains("1 recording: 0 ok, 1 skipped")
+            && line.contains("(with 3 rows of earlier runs)"),
+        "{line}"
+    );
+
+    // A row goes once what it reports is gone: a deleted folder, a deleted failing recording.
+    std::fs::remove_dir_all(out.join(all[0]["output"].as_str().unwrap())).unwrap();
+    std::fs::remove_file(input.join("corrupt.asf")).unwrap();
+    let (code, _, _) = batch_json(&[t, "--out", o]);
+    assert_eq!(code, Some(0));
+    let table = read_json(&out.join("study.json"))["rows"].clone();
+    assert_eq!(
+        row_paths(table.as_array().unwrap(), &input),
+        ["/tekscan.csv", "/b/trial.lst"]
+    );
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+#[test]
+fn a_study_json_of_bare_rows_still_resumes() {
+    // study.json was a bare list of rows without units: such a study folder resumes, its rows
+    // are kept, and those it keeps get their units from their folders.
+    let base = temp_dir("old-json");
+    let input = study_inputs(&base);
+    let out = base.join("study");
+    let (i, o) = (input.to_str().unwrap(), out.to_str().unwrap());
+    let (_, first, _) = batch_json(&[i, "--out", o]);
+    let unit_columns = [
+        "frame_rate_hz",
+        "pitch_x_mm",
+        "pitch_y_mm",
+        "pressure_units",
+    ];
+    let old: Vec<Value> = rows(&first)
+        .into_iter()
+        .map(|mut r| {
+            for c in unit_columns {
+                r.as_object_mut().unwrap().remove(c);
+            }
+            r
+        })
+        .collect();
+    std::fs::write(out.join("study.json"), serde_json::to_vec(&old).unwrap()).unwrap();
+    let b = input.join("b");
+    let (code, report, _) = batch_json(&[b.to_str().unwrap(), "--out", o]);
+    assert_eq!(code, Some(0));
+    let resumed = &rows(&report)[0];
+    assert_eq!(resumed["status"], "skipped", "{resumed}");
+    let earlier = row(&rows(&first), "b/trial.lst").clone();
+    assert_eq!(resumed["wall_time_s"], earlier["wall_time_s"]);
+    assert_eq!(
+        numbers(resumed),
+        numbers(&earlier),
+        "the units come back from summary.json"
+    );
+    let table = read_json(&out.join("study.json"))["rows"].clone();
+    assert_eq!(table.as_array().unwrap().len(), 4);
+    let first_rows = rows(&first);
+    for r in table.as_array().unwrap() {
+        let before = row(&first_rows, r["path"].as_str().unwrap());
+        for c in unit_columns {
+            assert_eq!(r[c], before[c], "{c} of {}", r["path"]);
+        }
+    }
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+#[test]
+fn rows_give_each_recordings_frame_rate_pitch_and_pressure_units() {
+    // A study mixing sensors: emed (kPa), footscan (N/cm²), Tekscan CSV (kPa), and a CSV grid
+    // that says nothing of its units.
+    let base = temp_dir("units");
+    let data = base.join("in");
+    std::fs::create_dir_all(&data).unwrap();
+    for f in [
+        "emed-test-1-10.lst",
+        "footscan-FrasP01L-11-20.txt",
+        "tekscan-FrasP01L-11-20.csv",
+    ] {
+        std::fs::copy(Path::new(DATA).join(f), data.join(f)).unwrap();
+    }
+    let grid = base.join("grid.csv");
+    one_frame_csv(&grid);
+    let out = base.join("study");
+    let o = out.to_str().unwrap();
+    let (code, report, stderr) =
+        batch_json(&[data.to_str().unwrap(), grid.to_str().unwrap(), "--out", o]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let units = |r: &Value| {
+        (
+            r["frame_rate_hz"].as_f64(),
+            r["pitch_x_mm"].as_f64(),
+            r["pitch_y_mm"].as_f64(),
+            r["pressure_units"].as_str().map(str::to_string),
+        )
+    };
+    let r = rows(&report);
+    assert_eq!(
+        units(row(&r, "emed-test-1-10.lst")),
+        (Some(100.0), Some(5.0), Some(5.0), Some("kPa".into()))
+    );
+    let footscan = units(row(&r, "footscan-FrasP01L-11-20.txt"));
+    assert_eq!(footscan.3.as_deref(), Some("N/cm2"));
+    assert_eq!(units(row(&r, "grid.csv")), (None, None, None, None));
+    // As each summary.json gives them.
+    for each in &r {
+        let summary = read_json(
+            &out.join(each["output"].as_str().unwrap())
+                .join("summary.json"),
+        );
+        let rec = &summary["recording"];
+        assert_eq!(each["frame_rate_hz"], rec["frame_rate_hz"]);
+        assert_eq!(each["pitch_x_mm"], rec["pitch_mm"][0]);
+        assert_eq!(each["pitch_y_mm"], rec["pitch_mm"][1]);
+        assert_eq!(each["pressure_units"], rec["pressure_units"]);
+    }
+    // The CSV writes unknown ones empty.
+    let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
+    let grid_line = csv.lines().find(|l| l.contains("grid.csv")).unwrap();
+    assert!(grid_line.contains(",1,,,,,0,"), "{grid_line}");
+    // Skipped rows keep them.
+    let (_, again, _) = batch_json(&[data.to_str().unwrap(), grid.to_str().unwrap(), "--out", o]);
+    for (a, b) in r.iter().zip(&rows(&again)) {
+        assert_eq!(b["status"], "skipped");
+        assert_eq!(units(a), units(b));
+    }
+    // The unit options, as the run used them; an error row gives them too once the file is read.
+    let g = grid.to_str().unwrap();
+    let unit_args = [
+        "--pitch-mm",
+        "2,3",
+        "--frame-rate",
+        "50",
+        "--units",
+        "N/cm2",
+    ];
+    let (_, set, _) = batch_json(&[&[g, "--out", o][..], &unit_args].concat());
+    let expected = (Some(50.0), Some(2.0), Some(3.0), Some("N/cm2".to_string()));
+    assert_eq!(units(&rows(&set)[0]), expected);
+    let (code, failed, _) =
+        batch_json(&[&[g, "--out", o, "--frames", "3..9"][..], &unit_args].concat());
+    assert_eq!(code, Some(1));
+    assert_eq!(rows(&failed)[0]["status"], "error");
+    assert_eq!(units(&rows(&failed)[0]), expected);
     std::fs::remove_dir_all(&base).unwrap();
 }

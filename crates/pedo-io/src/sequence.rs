@@ -392,21 +392,59 @@ impl RunParams {
         options: &SequenceOptions,
         recording: &Recording,
     ) -> Vec<(&'static str, OptionValue)> {
+        let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
+        self.listed(
+            options,
+            FileValues {
+                frames: FrameRange {
+                    start,
+                    end: Some(end),
+                },
+                pitch_mm: recording.pitch_mm,
+                frame_rate: recording.dt_s.map(|dt| 1.0 / dt),
+                units: Some(recording.units.clone()).filter(|u| !u.is_empty()),
+            },
+        )
+    }
+
+    /// Every option as given to each recording of a study (`study.json`), listed as
+    /// [`RunParams::used`] lists them, defaults included, but with the values each recording
+    /// fills in from its file left as given: `frames` `0..` (to each recording's end) unless
+    /// given, and `noise`, `pitch_mm`, `frame_rate` and `units` absent unless given (each
+    /// recording's own; its `summary.json` has them).
+    pub fn given(&self) -> std::result::Result<Vec<(&'static str, OptionValue)>, OptionError> {
+        // The options `to_options` makes, but for the values that need a recording.
+        let mut options = SequenceOptions {
+            model: self.model,
+            matching: self.match_options()?,
+            iso_frame: self.iso_frame,
+            drift_reference: self.drift_reference,
+            ..Default::default()
+        };
+        options.contour.preprocess.threshold = self.noise;
+        Ok(self.listed(
+            &options,
+            FileValues {
+                frames: self.frames.unwrap_or_default(),
+                pitch_mm: self.units.pitch_mm,
+                frame_rate: self.units.frame_rate,
+                units: self.units.units.as_ref().map(|u| u.trim().to_string()),
+            },
+        ))
+    }
+
+    /// The list of [`RunParams::used`] and [`RunParams::given`]: one list of the options for
+    /// both, so that `summary.json` and `study.json` name the same options alike.
+    fn listed(
+        &self,
+        options: &SequenceOptions,
+        file: FileValues,
+    ) -> Vec<(&'static str, OptionValue)> {
         use OptionValue::{Absent, Float, Int, Numbers, Word};
         let mut v = self.matching.used(&options.matching);
-        let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
         v.extend([
             ("model", Word(options.model.to_string())),
-            (
-                "frames",
-                Word(
-                    FrameRange {
-                        start,
-                        end: Some(end),
-                    }
-                    .to_string(),
-                ),
-            ),
+            ("frames", Word(file.frames.to_string())),
             (
                 "noise",
                 options.contour.preprocess.threshold.map_or(Absent, Float),
@@ -419,23 +457,22 @@ impl RunParams {
             ("drift_reference", Int(options.drift_reference)),
             (
                 "pitch_mm",
-                recording.pitch_mm.map_or(Absent, |p| Numbers(p.to_vec())),
+                file.pitch_mm.map_or(Absent, |p| Numbers(p.to_vec())),
             ),
-            (
-                "frame_rate",
-                recording.dt_s.map_or(Absent, |dt| Float(1.0 / dt)),
-            ),
-            (
-                "units",
-                if recording.units.is_empty() {
-                    Absent
-                } else {
-                    Word(recording.units.clone())
-                },
-            ),
+            ("frame_rate", file.frame_rate.map_or(Absent, Float)),
+            ("units", file.units.map_or(Absent, Word)),
         ]);
         v
     }
+}
+
+/// The values of [`RunParams::listed`] that a recording sets: the frames run, and the pitch,
+/// frame rate and pressure units (`None`: unknown, or left to each recording).
+struct FileValues {
+    frames: FrameRange,
+    pitch_mm: Option<[f64; 2]>,
+    frame_rate: Option<f64>,
+    units: Option<String>,
 }
 
 /// The options of a recording run beyond matching (`pedomatch run`/`demo`, `pymodal.run`), in
@@ -2138,6 +2175,45 @@ fn frame_load(recording: &Recording, t: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_study_lists_the_options_a_run_uses_with_each_recordings_own_left_open() {
+        let mut params = RunParams {
+            spacing: 1.5,
+            ..RunParams::default()
+        };
+        let mut rec = recording(6, |_, r, c| (8..16).contains(&r) && (8..16).contains(&c));
+        rec.noise_threshold = Some(2.0);
+        let run = params.used(&params.to_options(&rec).unwrap(), &rec);
+        let given = params.given().unwrap();
+        let names =
+            |v: &[(&'static str, OptionValue)]| v.iter().map(|(k, _)| *k).collect::<Vec<_>>();
+        assert_eq!(
+            names(&given),
+            names(&run),
+            "the same options, in the same order"
+        );
+        let value = |v: &[(&'static str, OptionValue)], k: &str| {
+            v.iter()
+                .find(|(n, _)| *n == k)
+                .map(|(_, v)| v.clone())
+                .unwrap()
+        };
+        assert_eq!(value(&given, "spacing"), OptionValue::Float(1.5));
+        assert_eq!(value(&run, "noise"), OptionValue::Float(2.0));
+        assert_eq!(
+            value(&given, "noise"),
+            OptionValue::Absent,
+            "each file's own"
+        );
+        assert_eq!(value(&run, "frames"), OptionValue::Word("0..6".into()));
+        assert_eq!(value(&given, "frames"), OptionValue::Word("0..".into()));
+        params.noise = Some(5.0);
+        params.units.units = Some(" N/cm2 ".into());
+        let given = params.given().unwrap();
+        assert_eq!(value(&given, "noise"), OptionValue::Float(5.0));
+        assert_eq!(value(&given, "units"), OptionValue::Word("N/cm2".into()));
+    }
 
     /// A recording of `frames`, each drawn by `draw(frame, row, col) -> loaded`.
     fn recording(frames: usize, draw: impl Fn(usize, usize, usize) -> bool) -> Recording {

@@ -9,6 +9,9 @@
 //!   recording that cannot be read or matched becomes an `error` row; the others go on;
 //! - with an output folder, a recording whose folder is complete (see [`is_complete`]) is not
 //!   run again but reported as `skipped` with its previous numbers, unless `force` is set;
+//! - the study table keeps the rows of its previous version for recordings not in this run
+//!   ([`kept_rows`]), so that a run on part of a study does not drop the rest; `study.json`
+//!   says what produced it ([`study_json`]);
 //! - [`run_recording`] is one row of that table, for callers that distribute the recordings
 //!   themselves (Python's `pymodal.batch_row`, e.g. on a Dask cluster).
 //!
@@ -599,8 +602,12 @@ pub struct StudyRow {
     pub output: Option<String>,
     /// The format read (also for a file that failed to parse, when its content was recognised).
     pub format: Option<String>,
-    /// Number of frames of the recording (all of them, not only those run); `None` on error.
+    /// Number of frames of the recording (all of them, not only those run); `None` when it
+    /// could not be read.
     pub frames: Option<usize>,
+    /// The recording's frame rate, pitch and pressure units, as the run used them (the unit
+    /// options applied); unknown ones, and all of them when it could not be read, are `None`.
+    pub units: RowUnits,
     /// Matched pairs.
     pub pairs: Option<usize>,
     /// Mean over the matched pairs of [`PairRow::local_percent`](crate::sequence::PairRow::local_percent)
@@ -621,12 +628,57 @@ pub struct StudyRow {
     pub message: String,
 }
 
+/// The units a study row gives of its recording, so that the rows of a study mixing sensors
+/// can be told apart: the names and values of `summary.json`'s `recording`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RowUnits {
+    /// Frames per second (`frame_rate_hz`).
+    pub frame_rate_hz: Option<f64>,
+    /// Millimetres per sensel `[x, y]` = `[column spacing, row spacing]` (`pitch_x_mm`,
+    /// `pitch_y_mm`: sensels need not be square).
+    pub pitch_mm: Option<[f64; 2]>,
+    /// The pressure units of the values as the file (or `--units`) names them, e.g. `kPa`,
+    /// `N/cm2` (`pressure_units`).
+    pub pressure_units: Option<String>,
+}
+
+impl RowUnits {
+    /// The units of a recording read (and its unit options applied).
+    pub fn of(recording: &Recording) -> Self {
+        Self {
+            frame_rate_hz: recording.frame_rate(),
+            pitch_mm: recording.pitch_mm,
+            pressure_units: Some(recording.units.clone()).filter(|u| !u.is_empty()),
+        }
+    }
+
+    /// The units a `summary.json` records (its `recording`).
+    fn of_summary(summary: &Value) -> Self {
+        let recording = &summary["recording"];
+        let pitch = recording["pitch_mm"]
+            .as_array()
+            .and_then(|p| match p.as_slice() {
+                [x, y] => Some([x.as_f64()?, y.as_f64()?]),
+                _ => None,
+            });
+        Self {
+            frame_rate_hz: recording["frame_rate_hz"].as_f64(),
+            pitch_mm: pitch,
+            pressure_units: recording["pressure_units"].as_str().map(str::to_string),
+        }
+    }
+}
+
 /// The columns of the study table, units in the names.
-pub const STUDY_COLUMNS: [&str; 11] = [
+pub const STUDY_COLUMNS: [&str; 15] = [
     "path",
     "output",
     "format",
     "frames",
+    "frame_rate_hz",
+    "pitch_x_mm",
+    "pitch_y_mm",
+    "pressure_units",
     "pairs",
     "mean_local_percent",
     "mean_optimisation_percent",
@@ -651,6 +703,10 @@ pub fn study_table(rows: &[StudyRow]) -> Table {
                     text(&r.output),
                     text(&r.format),
                     int(r.frames),
+                    float(r.units.frame_rate_hz, 4),
+                    float(r.units.pitch_mm.map(|p| p[0]), 4),
+                    float(r.units.pitch_mm.map(|p| p[1]), 4),
+                    text(&r.units.pressure_units),
                     int(r.pairs),
                     float(r.mean_local_percent, 1),
                     float(r.mean_optimisation_percent, 1),
@@ -674,6 +730,14 @@ fn row_from_json(v: &Value) -> Option<StudyRow> {
         output: text("output"),
         format: text("format"),
         frames: int("frames"),
+        // Absent from the rows of a study written before they were columns.
+        units: RowUnits {
+            frame_rate_hz: float("frame_rate_hz"),
+            pitch_mm: float("pitch_x_mm")
+                .zip(float("pitch_y_mm"))
+                .map(|(x, y)| [x, y]),
+            pressure_units: text("pressure_units"),
+        },
         pairs: int("pairs"),
         mean_local_percent: float("mean_local_percent"),
         mean_optimisation_percent: float("mean_optimisation_percent"),
@@ -837,6 +901,9 @@ fn sniff_found_file(path: &Path) -> Option<Format> {
 /// How a study runs.
 #[derive(Clone, Default)]
 pub struct StudyOptions<'a> {
+    /// The inputs as given (files, folders, glob patterns), for `study.json`; empty: the paths
+    /// run are recorded instead.
+    pub inputs: Vec<String>,
     /// The parameters every recording is run with (as `pedomatch run` takes them).
     pub params: RunParams,
     /// How every recording is read.
@@ -874,17 +941,30 @@ pub enum StudyEvent<'a> {
     },
 }
 
+/// What [`run_study`] did: a row per recording run, and the rows of earlier runs that the study
+/// table kept.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyRun {
+    /// One row per recording of this run, in order.
+    pub rows: Vec<StudyRow>,
+    /// The rows of the previous study table that are not this run's recordings, kept after
+    /// `rows` in the table ([`kept_rows`]); none without an output folder.
+    pub kept: Vec<StudyRow>,
+}
+
 /// Runs every recording of `paths` (see the module docs) and returns one row per recording, in
 /// order. With an output folder, writes each recording's folder and `study.csv` (or
-/// `study.parquet`, see [`RunOutputs::tables`]) + `study.json`
-/// (atomically, after the last recording). Fails only before any recording runs: invalid
-/// options, or an output folder that holds other files.
+/// `study.parquet`, see [`RunOutputs::tables`]) + `study.json` (atomically, after the last
+/// recording): this run's rows, then those of earlier runs that it kept ([`kept_rows`]). Fails
+/// only before any recording runs: invalid options, or an output folder that holds other files.
 pub fn run_study(
     paths: &[PathBuf],
     opts: &StudyOptions<'_>,
     progress: &(dyn Fn(StudyEvent<'_>) + Sync),
-) -> Result<Vec<StudyRow>> {
+) -> Result<StudyRun> {
     opts.params.validate()?;
+    // Made before anything runs: options that cannot be listed would fail every recording.
+    let provenance = study_provenance(paths, opts)?;
     let previous = match &opts.out {
         Some(out) => open_study_folder(out)?,
         None => Vec::new(),
@@ -902,9 +982,7 @@ pub fn run_study(
     let worker = || loop {
         let index = next.fetch_add(1, Ordering::Relaxed);
         let Some(path) = paths.get(index) else { break };
-        let before = previous
-            .iter()
-            .find(|r| Path::new(&r.path) == path.as_path());
+        let before = previous_row(&previous, path);
         let report = |fraction| progress(StudyEvent::Progress { index, fraction });
         let row = on_one_thread(|| run_recording(path, opts, before, &report));
         progress(StudyEvent::Finished { index, row: &row });
@@ -928,12 +1006,108 @@ pub fn run_study(
         .into_iter()
         .flatten()
         .collect();
+    let kept = match &opts.out {
+        Some(out) => kept_rows(out, &previous, paths),
+        None => Vec::new(),
+    };
     if let Some(out) = &opts.out
         && !outdir::interrupted()
     {
-        write_study_table(out, &rows, opts.outputs.tables)?;
+        let json = study_json(provenance, &rows, &kept);
+        let all: Vec<StudyRow> = rows.iter().chain(&kept).cloned().collect();
+        write_study_table(out, &all, &json, opts.outputs.tables)?;
     }
-    Ok(rows)
+    Ok(StudyRun { rows, kept })
+}
+
+/// The row of recording `path` in a study's previous table: the row of its folder
+/// ([`output_name`]), however the path was spelled then (`data/x.asf`, `./data/x.asf`).
+pub fn previous_row<'a>(previous: &'a [StudyRow], path: &Path) -> Option<&'a StudyRow> {
+    let folder = output_name(path);
+    previous.iter().find(|r| row_folder(r) == folder)
+}
+
+/// The folder a row is about: its `output`, or, for a row without one (a recording that
+/// failed), the folder its recording would get.
+fn row_folder(row: &StudyRow) -> String {
+    row.output
+        .clone()
+        .unwrap_or_else(|| output_name(Path::new(&row.path)))
+}
+
+/// The rows of the previous study table (`previous`, in its order) that a run of `paths` into
+/// study folder `out` keeps: those of recordings not in this run, so that a run on part of a
+/// study does not drop the rest. A row is dropped once what it reports is gone: its folder
+/// (deleted from `out`) or, for a row without a folder (a recording that failed), its
+/// recording. Rows of a table written before the units were columns get them from their
+/// folder's `summary.json`.
+pub fn kept_rows(out: &Path, previous: &[StudyRow], paths: &[PathBuf]) -> Vec<StudyRow> {
+    let this_run: std::collections::HashSet<String> =
+        paths.iter().map(|p| output_name(p)).collect();
+    previous
+        .iter()
+        .filter(|r| !this_run.contains(&row_folder(r)))
+        .filter(|r| match &r.output {
+            Some(folder) => outdir::is_output(&out.join(folder)),
+            None => Path::new(&r.path).exists(),
+        })
+        .map(|r| with_units_of_folder(out, r))
+        .collect()
+}
+
+/// `row`, its units read from its folder's `summary.json` if it gives none.
+fn with_units_of_folder(out: &Path, row: &StudyRow) -> StudyRow {
+    let mut row = row.clone();
+    if row.units == RowUnits::default()
+        && let Some(folder) = &row.output
+        && let Some(summary) = read_json(&out.join(folder).join("summary.json"))
+    {
+        row.units = RowUnits::of_summary(&summary);
+    }
+    row
+}
+
+/// A JSON file's value (`None` if it cannot be read or parsed).
+fn read_json(path: &Path) -> Option<Value> {
+    serde_json::from_slice(&std::fs::read(path).ok()?).ok()
+}
+
+/// What produced a study table, for `study.json`: the pedomatch version, the inputs as given
+/// (the paths when [`StudyOptions::inputs`] is empty), and every option as given to each
+/// recording ([`RunParams::given`], written as `summary.json` writes the options it used, with
+/// its `animation` entry).
+pub fn study_provenance(paths: &[PathBuf], opts: &StudyOptions<'_>) -> Result<Map<String, Value>> {
+    let mut options: Map<String, Value> = opts
+        .params
+        .given()?
+        .iter()
+        .map(|(k, v)| (k.to_string(), report::option_json(v)))
+        .collect();
+    record_outputs(&mut options, &opts.outputs);
+    let inputs: Vec<String> = if opts.inputs.is_empty() {
+        paths.iter().map(|p| p.display().to_string()).collect()
+    } else {
+        opts.inputs.clone()
+    };
+    let mut provenance = Map::new();
+    provenance.insert("pedomatch_version".into(), json!(env!("CARGO_PKG_VERSION")));
+    provenance.insert("inputs".into(), json!(inputs));
+    provenance.insert("options".into(), Value::Object(options));
+    Ok(provenance)
+}
+
+/// `study.json`: `provenance` ([`study_provenance`]), the counts of this run's `rows` by status
+/// ([`status_counts`]), how many rows of earlier runs were `kept`, and every row: this run's,
+/// then the kept ones.
+pub fn study_json(provenance: Map<String, Value>, rows: &[StudyRow], kept: &[StudyRow]) -> Value {
+    let mut json = provenance;
+    if let Value::Object(counts) = status_counts(rows) {
+        json.extend(counts);
+    }
+    json.insert("kept".into(), json!(kept.len()));
+    let all: Vec<StudyRow> = rows.iter().chain(kept).cloned().collect();
+    json.insert("rows".into(), study_table(&all).to_json());
+    Value::Object(json)
 }
 
 /// Runs `f` on a rayon pool of one thread: the pairs of one recording are then matched in turn
@@ -982,19 +1156,29 @@ pub fn open_study_folder(out: &Path) -> Result<Vec<StudyRow>> {
     }
     std::fs::create_dir_all(out).map_err(io)?;
     std::fs::write(&marker, b"written by pedomatch batch\n").map_err(io)?;
-    let previous = std::fs::read(out.join("study.json"))
-        .ok()
-        .and_then(|b| serde_json::from_slice::<Value>(&b).ok());
-    Ok(previous
-        .as_ref()
-        .and_then(Value::as_array)
-        .map(|rows| rows.iter().filter_map(row_from_json).collect())
+    Ok(read_json(&out.join("study.json"))
+        .map(|json| rows_of_study_json(&json))
         .unwrap_or_default())
 }
 
-/// Writes `study.csv` (or `study.parquet`) and `study.json`, each replaced in one rename; the
-/// study table of the other format, left by an earlier run, is removed.
-fn write_study_table(out: &Path, rows: &[StudyRow], tables: TableFormat) -> Result<()> {
+/// The rows of a `study.json`: its `rows`, or, written by a pedomatch before it recorded what
+/// produced them, the bare list of rows it was (an old study folder still resumes).
+fn rows_of_study_json(json: &Value) -> Vec<StudyRow> {
+    json.get("rows")
+        .unwrap_or(json)
+        .as_array()
+        .map(|rows| rows.iter().filter_map(row_from_json).collect())
+        .unwrap_or_default()
+}
+
+/// Writes `rows` as `study.csv` (or `study.parquet`) and `json` as `study.json`, each replaced
+/// in one rename; the study table of the other format, left by an earlier run, is removed.
+fn write_study_table(
+    out: &Path,
+    rows: &[StudyRow],
+    json: &Value,
+    tables: TableFormat,
+) -> Result<()> {
     let table = study_table(rows);
     let write = |name: &str, bytes: std::io::Result<Vec<u8>>| {
         let tmp = out.join(format!(".{name}.tmp-{}", std::process::id()));
@@ -1019,7 +1203,7 @@ fn write_study_table(out: &Path, rows: &[StudyRow], tables: TableFormat) -> Resu
         TableFormat::Parquet => tables::parquet_bytes(&table),
     };
     write(name, bytes)?;
-    write("study.json", Ok(pretty(&table.to_json()).into_bytes()))?;
+    write("study.json", Ok(pretty(json).into_bytes()))?;
     let _ = std::fs::remove_file(out.join(other));
     Ok(())
 }
@@ -1042,8 +1226,8 @@ pub fn run_recording(
 ) -> StudyRow {
     let started = Instant::now();
     let output = opts.out.as_ref().map(|_| output_name(path));
-    // Set once the recording is read, so that an error row still says how many frames it has.
-    let mut frames = None;
+    // Set once the recording is read, so that an error row still says its frames and units.
+    let mut read = None;
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         process(
             path,
@@ -1052,7 +1236,7 @@ pub fn run_recording(
             previous,
             progress,
             started,
-            &mut frames,
+            &mut read,
         )
     }));
     let outcome = match outcome {
@@ -1073,11 +1257,13 @@ pub fn run_recording(
             .as_ref()
             .is_some_and(|out| outdir::is_output(&out.join(name)))
     };
+    let (frames, units) = read.unzip();
     outcome.unwrap_or_else(|e| StudyRow {
         path: path.display().to_string(),
         output: output.filter(existing),
         format: sniff_file(path).map(|f| f.name().to_string()),
         frames,
+        units: units.unwrap_or_default(),
         pairs: None,
         mean_local_percent: None,
         mean_optimisation_percent: None,
@@ -1095,14 +1281,18 @@ fn process(
     previous: Option<&StudyRow>,
     progress: &(dyn Fn(f64) + Sync),
     started: Instant,
-    frames: &mut Option<usize>,
+    read: &mut Option<(usize, RowUnits)>,
 ) -> Result<StudyRow> {
     opts.params.validate()?;
     let (mut recording, mut file_frames) =
         read_for_run(path, &opts.read, &opts.params, &opts.outputs)?;
-    *frames = Some(recording.n_frames());
+    *read = Some((recording.n_frames(), RowUnits::of(&recording)));
     let input = InputInfo::of_path(path)?;
-    let options = run_options(&mut recording, &opts.params)?;
+    // The unit options are applied even when the options fail (a frame range beyond the
+    // recording): the units an error row gives are those the run would have used.
+    let options = run_options(&mut recording, &opts.params);
+    *read = Some((recording.n_frames(), RowUnits::of(&recording)));
+    let options = options?;
     let read_s = started.elapsed().as_secs_f64();
     let folder = opts.out.as_ref().zip(output).map(|(o, n)| o.join(n));
     if let Some(folder) = folder.as_deref().filter(|_| !opts.force) {
@@ -1174,8 +1364,7 @@ fn complete_summary(
     if !outdir::is_output(folder) || input.sha256.is_none() {
         return None;
     }
-    let summary: Value =
-        serde_json::from_slice(&std::fs::read(folder.join("summary.json")).ok()?).ok()?;
+    let summary = read_json(&folder.join("summary.json"))?;
     let same_input = summary["input"]["sha256"].as_str() == input.sha256.as_deref();
     let mut used = used.clone();
     if let Some(options) = used.as_object_mut() {
@@ -1197,8 +1386,7 @@ fn complete_summary(
         .filter_map(|&(asked, ext)| asked.then_some(ext))
         .collect();
     if !extensions.is_empty() {
-        let pairs: Value =
-            serde_json::from_slice(&std::fs::read(folder.join("pairs.json")).ok()?).ok()?;
+        let pairs = read_json(&folder.join("pairs.json"))?;
         let mut stems = vec!["tracks".to_string()];
         for pair in pairs.as_array()? {
             if pair["status"] == "ok" {
@@ -1248,6 +1436,7 @@ fn row_of_summary(
         output: output.map(str::to_string),
         format: summary["input"]["format"].as_str().map(str::to_string),
         frames: int(&summary["recording"]["frames"]),
+        units: RowUnits::of_summary(summary),
         pairs: int(&summary["pairs"]),
         mean_local_percent: summary["mean_local_percent"].as_f64(),
         mean_optimisation_percent: summary["mean_optimisation_percent"].as_f64(),
@@ -1332,6 +1521,11 @@ mod tests {
             output: Some("walk.asf-0123abcd".into()),
             format: Some("asf".into()),
             frames: Some(205),
+            units: RowUnits {
+                frame_rate_hz: Some(1.0 / 0.032),
+                pitch_mm: Some([5.08, 7.62]),
+                pressure_units: Some("KPa".into()),
+            },
             pairs: Some(150),
             mean_local_percent: Some(61.25),
             mean_optimisation_percent: Some(97.5),
@@ -1372,6 +1566,33 @@ mod tests {
             csv.contains("\"data/s01, left \"\"walk\"\".asf\","),
             "free text is quoted: {csv}"
         );
+    }
+
+    #[test]
+    fn study_json_is_read_as_an_object_and_as_the_bare_list_it_was() {
+        let rows = [row(RowStatus::Ok), row(RowStatus::Error)];
+        let mut provenance = Map::new();
+        provenance.insert("inputs".into(), json!(["data/"]));
+        let json = study_json(provenance, &rows[..1], &rows[1..]);
+        assert_eq!((&json["recordings"], &json["kept"]), (&json!(1), &json!(1)));
+        assert_eq!((&json["ok"], &json["error"]), (&json!(1), &json!(0)));
+        assert_eq!(rows_of_study_json(&json), rows);
+        let bare = study_table(&rows).to_json();
+        assert_eq!(rows_of_study_json(&bare), rows);
+        // A row written before the units were columns: no units.
+        let mut old = bare[0].clone();
+        for c in [
+            "frame_rate_hz",
+            "pitch_x_mm",
+            "pitch_y_mm",
+            "pressure_units",
+        ] {
+            old.as_object_mut().unwrap().remove(c);
+        }
+        let read = row_from_json(&old).unwrap();
+        assert_eq!(read.units, RowUnits::default());
+        assert_eq!(read.frames, rows[0].frames);
+        assert!(rows_of_study_json(&json!({"rows": "?"})).is_empty());
     }
 
     #[test]

@@ -109,8 +109,12 @@ fn a_parquet_study_holds_the_csv_tables_value_for_value_and_resumes() {
         data("footscan-FrasP01L-11-20.txt"),
     ];
     let (csv_out, pq_out) = (base.join("csv"), base.join("parquet"));
-    let csv_rows = run_study(&paths, &options(&csv_out, TableFormat::Csv), &|_| {}).unwrap();
-    let pq_rows = run_study(&paths, &options(&pq_out, TableFormat::Parquet), &|_| {}).unwrap();
+    let csv_rows = run_study(&paths, &options(&csv_out, TableFormat::Csv), &|_| {})
+        .unwrap()
+        .rows;
+    let pq_rows = run_study(&paths, &options(&pq_out, TableFormat::Parquet), &|_| {})
+        .unwrap()
+        .rows;
     assert!(
         pq_rows.iter().all(|r| r.status == RowStatus::Ok),
         "{pq_rows:?}"
@@ -180,12 +184,16 @@ fn a_parquet_study_holds_the_csv_tables_value_for_value_and_resumes() {
     }
 
     // Resuming: the Parquet folders are complete for a Parquet run, not for a CSV one.
-    let again = run_study(&paths, &options(&pq_out, TableFormat::Parquet), &|_| {}).unwrap();
+    let again = run_study(&paths, &options(&pq_out, TableFormat::Parquet), &|_| {})
+        .unwrap()
+        .rows;
     assert!(
         again.iter().all(|r| r.status == RowStatus::Skipped),
         "{again:?}"
     );
-    let as_csv = run_study(&paths, &options(&pq_out, TableFormat::Csv), &|_| {}).unwrap();
+    let as_csv = run_study(&paths, &options(&pq_out, TableFormat::Csv), &|_| {})
+        .unwrap()
+        .rows;
     assert!(
         as_csv.iter().all(|r| r.status == RowStatus::Ok),
         "{as_csv:?}"

@@ -19,6 +19,7 @@ fn recordings(n: usize) -> Vec<PathBuf> {
 /// The largest number of recordings seen in flight (started, not finished) during a study.
 fn most_in_flight(jobs: usize, paths: &[PathBuf]) -> (usize, Vec<String>) {
     let opts = StudyOptions {
+        inputs: Vec::new(),
         params: Default::default(),
         read: Default::default(),
         out: None,
@@ -46,7 +47,8 @@ fn most_in_flight(jobs: usize, paths: &[PathBuf]) -> (usize, Vec<String>) {
         }
         s.2 = s.2.max(s.0.len());
     })
-    .unwrap();
+    .unwrap()
+    .rows;
     assert!(rows
         .iter()
         .all(|r| r.message.is_empty() || r.frames.is_some()));

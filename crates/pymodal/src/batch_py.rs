@@ -48,8 +48,10 @@ fn figure_kinds(figures: &str) -> PyResult<FigureKinds> {
 }
 
 /// The study options of the keywords.
+#[allow(clippy::too_many_arguments)]
 fn study_options(
     py: Python<'_>,
+    inputs: Vec<String>,
     out: Option<PathBuf>,
     jobs: Option<i64>,
     force: bool,
@@ -66,6 +68,7 @@ fn study_options(
     let params = crate::run_py::run_params(py, options)?;
     params.validate().map_err(to_py)?;
     Ok(StudyOptions {
+        inputs,
         params,
         read: ReadOptions::default(),
         out,
@@ -102,7 +105,8 @@ fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<St
 
 /// Run every recording of ``paths`` like :func:`run` and return the study table: a list of dicts,
 /// one per recording in order, with the columns of ``study.csv``: ``path``, ``output`` (its
-/// folder under ``out``, or None), ``format``, ``frames``, ``pairs``, ``mean_local_percent``,
+/// folder under ``out``, or None), ``format``, ``frames``, ``frame_rate_hz``, ``pitch_x_mm``,
+/// ``pitch_y_mm``, ``pressure_units`` (None when unknown), ``pairs``, ``mean_local_percent``,
 /// ``mean_optimisation_percent``, ``tracks``, ``wall_time_s``, ``status`` (``"ok"``,
 /// ``"skipped"`` or ``"error"``) and ``message`` (one line: why it failed or was skipped).
 /// ``pandas.DataFrame(rows)`` makes it a data frame.
@@ -110,8 +114,9 @@ fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<St
 /// ``paths``: files, folders or glob patterns (see :func:`find_recordings`). ``out``: the study
 /// folder; each recording's folder (the tables, figures and ``summary.json`` of
 /// ``pedomatch run``; ``report.html`` is the command line's) is written there atomically, with
-/// ``study.csv`` and ``study.json``; a recording whose folder is complete (same input SHA-256
-/// and options) is skipped unless ``force``. ``jobs``: recordings run at once, each on one
+/// ``study.csv`` and ``study.json`` (which also keep the rows of earlier runs' recordings that are
+/// not among ``paths``; the list returned is this run's rows only); a recording whose folder is
+/// complete (same input SHA-256 and options) is skipped unless ``force``. ``jobs``: recordings run at once, each on one
 /// thread (None: every core). ``figures``: ``"png"``, ``"svg"`` or ``"none"``. ``tables``:
 /// ``"csv"``, or ``"parquet"`` (typed, compressed columns with the CSV's names and values;
 /// ``pandas.read_parquet`` reads them; the study table is then ``study.parquet``). ``options``: the
@@ -131,14 +136,15 @@ fn batch<'py>(
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let inputs = input_strings(paths, "paths")?;
-    let opts = study_options(py, out, jobs, force, figures, tables, options)?;
-    let rows = py
+    let opts = study_options(py, inputs, out, jobs, force, figures, tables, options)?;
+    let run = py
         .detach(|| {
-            let found = study::find_recordings(&inputs)?;
+            let found = study::find_recordings(&opts.inputs)?;
             study::run_study(&found, &opts, &|_| {})
         })
         .map_err(to_py)?;
-    table_rows(py, &study::study_table(&rows))
+    // This run's rows only (the shape it always had); study.json also holds the kept ones.
+    table_rows(py, &study::study_table(&run.rows))
 }
 
 /// One row of :func:`batch`'s table: runs the recording at ``path`` (on one thread, the GIL
@@ -158,16 +164,15 @@ fn batch_row<'py>(
     tables: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let opts = study_options(py, out, Some(1), force, figures, tables, options)?;
+    let inputs = vec![path.display().to_string()];
+    let opts = study_options(py, inputs, out, Some(1), force, figures, tables, options)?;
     let row = py
         .detach(|| {
             let previous = match &opts.out {
                 Some(out) => study::open_study_folder(out)?,
                 None => Vec::new(),
             };
-            let before = previous
-                .iter()
-                .find(|r| std::path::Path::new(&r.path) == path);
+            let before = study::previous_row(&previous, &path);
             let row = study::on_one_thread(|| study::run_recording(&path, &opts, before, &|_| {}));
             Ok::<_, pedo_io::IoError>(row)
         })

@@ -18,6 +18,10 @@ COLUMNS = [
     "output",
     "format",
     "frames",
+    "frame_rate_hz",
+    "pitch_x_mm",
+    "pitch_y_mm",
+    "pressure_units",
     "pairs",
     "mean_local_percent",
     "mean_optimisation_percent",
@@ -113,6 +117,10 @@ def test_batch_rows_agree_with_run_and_name_the_failure(study):
         assert row["frames"] == summary["recording"]["frames"]
         assert row["pairs"] == summary["pairs"] > 0
         assert row["tracks"] == summary["tracks"]
+        recording = summary["recording"]
+        assert row["frame_rate_hz"] == pytest.approx(recording["frame_rate_hz"])
+        assert [row["pitch_x_mm"], row["pitch_y_mm"]] == pytest.approx(recording["pitch_mm"])
+        assert row["pressure_units"] == recording["pressure_units"]
         assert row["mean_local_percent"] == pytest.approx(summary["mean_local_percent"])
         assert row["mean_optimisation_percent"] == pytest.approx(summary["mean_optimisation_percent"])
     assert pickle.loads(pickle.dumps(rows)) == rows
@@ -123,7 +131,11 @@ def test_batch_writes_folders_and_resumes(study):
     first = pymodal.batch([study / "in"], out, figures="none")
     assert [r["status"] for r in first].count("ok") == 3
     table = json.loads((out / "study.json").read_text())
-    assert table == first
+    assert table["rows"] == first
+    assert table["inputs"] == [str(study / "in")]
+    assert table["pedomatch_version"] == pymodal.__version__
+    assert (table["recordings"], table["ok"], table["error"], table["kept"]) == (4, 3, 1, 0)
+    assert table["options"]["spacing"] == 1.0 and table["options"]["noise"] is None
     assert (out / "study.csv").read_text().splitlines()[0] == ",".join(COLUMNS)
     for r in first:
         if r["status"] == "ok":
@@ -220,3 +232,36 @@ def test_rows_say_no_pairs_name_no_unwritten_folder_and_give_frames_read(study, 
     # iso_frame outside the frames run is an option error naming both.
     with pytest.raises(ValueError, match="iso_frame.*frames 2..5"):
         pymodal.run(tekscan, model="isocontour", frames=(2, 5), iso_frame=7)
+
+
+def test_a_batch_on_part_of_a_study_keeps_the_other_rows(study):
+    out = study / "out"
+    first = pymodal.batch([study / "in"], out, figures="none")
+    tekscan = [r for r in first if r["path"].endswith("tekscan.csv")]
+    others = [r for r in first if not r["path"].endswith("tekscan.csv")]
+    again = pymodal.batch(study / "in" / "tekscan.csv", out, figures="none", spacing=1.5)
+    # The list returned is this call's; the study table keeps the others after it.
+    assert [r["path"] for r in again] == [r["path"] for r in tekscan]
+    table = json.loads((out / "study.json").read_text())
+    assert table["rows"] == again + others
+    assert (table["recordings"], table["kept"], table["options"]["spacing"]) == (1, 3, 1.5)
+    lines = (out / "study.csv").read_text().splitlines()
+    assert len(lines) == 5 and lines[1].startswith(str(study / "in" / "tekscan.csv"))
+    # batch_row finds its previous row whatever the spelling of its path (the wall time kept).
+    row = pymodal.batch_row(os.path.relpath(study / "in" / "tekscan.csv"), out, figures="none", spacing=1.5)
+    assert row["status"] == "skipped" and row["wall_time_s"] == again[0]["wall_time_s"]
+
+
+def test_units_columns_are_null_when_unknown_and_typed_in_parquet(tmp_path):
+    blob = [[100.0 * 2.718281828 ** (-((r - 7.5) ** 2 + (c - 7.5) ** 2) / 12.0) for c in range(16)] for r in range(16)]
+    grid = tmp_path / "grid.csv"
+    grid.write_text("".join(",".join(f"{v:.1f}" for v in row) + "\n" for row in blob))
+    [row] = pymodal.batch(grid, tmp_path / "out", figures="none", tables="parquet")
+    assert row["status"] == "ok"
+    assert [row[c] for c in ["frame_rate_hz", "pitch_x_mm", "pitch_y_mm", "pressure_units"]] == [None] * 4
+    [row] = pymodal.batch(grid, figures="none", pitch_mm=(2, 3), frame_rate=50, units="N/cm2")
+    assert (row["frame_rate_hz"], row["pitch_x_mm"], row["pitch_y_mm"], row["pressure_units"]) == (50, 2, 3, "N/cm2")
+    pq = pytest.importorskip("pyarrow.parquet")
+    schema = pq.read_schema(tmp_path / "out" / "study.parquet")
+    assert str(schema.field("pressure_units").type) == "string"
+    assert str(schema.field("pitch_x_mm").type) == "double"
