@@ -760,7 +760,7 @@ fn rows_give_each_recordings_frame_rate_pitch_and_pressure_units() {
         (Some(100.0), Some(5.0), Some(5.0), Some("kPa".into()))
     );
     let footscan = units(row(&r, "footscan-FrasP01L-11-20.txt"));
-    assert_eq!(footscan.3.as_deref(), Some("N/cm2"));
+    assert_eq!(footscan.3.as_deref(), Some("N/cm²"));
     assert_eq!(units(row(&r, "grid.csv")), (None, None, None, None));
     // As each summary.json gives them.
     for each in &r {
@@ -795,7 +795,7 @@ fn rows_give_each_recordings_frame_rate_pitch_and_pressure_units() {
         "N/cm2",
     ];
     let (_, set, _) = batch_json(&[&[g, "--out", o][..], &unit_args].concat());
-    let expected = (Some(50.0), Some(2.0), Some(3.0), Some("N/cm2".to_string()));
+    let expected = (Some(50.0), Some(2.0), Some(3.0), Some("N/cm²".to_string()));
     assert_eq!(units(&rows(&set)[0]), expected);
     let (code, failed, _) =
         batch_json(&[&[g, "--out", o, "--frames", "3..9"][..], &unit_args].concat());

@@ -491,6 +491,14 @@ pub fn canonical_units(units: &str) -> Option<&'static str> {
     pressure_unit(units).map(|(name, _)| name)
 }
 
+/// The units a file states, in their usual spelling when known ([`canonical_units`]), else as
+/// written: vendors write `N/cm2` or `N/cm²`, and a study's rows name one unit one way.
+pub fn stated_units(units: &str) -> String {
+    canonical_units(units)
+        .map(str::to_string)
+        .unwrap_or_else(|| units.trim().to_string())
+}
+
 /// The checks of every recording, [`Recording::new`]'s and [`Recording::from_sparse`]'s, in this
 /// order: at least one frame of at least 1x1, a frame size that fits in `usize`, `n_values`
 /// values for the frames, a mask entry per sensel, and every value at an existing sensor finite.

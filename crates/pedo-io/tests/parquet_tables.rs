@@ -219,7 +219,9 @@ fn column_types(path: &Path) -> std::collections::BTreeMap<String, String> {
 fn the_empty_tables_of_a_one_frame_recording_have_the_types_of_full_ones() {
     let out = temp_dir("empty");
     let paths = vec![data("tekscan-FrasP01L-11-20.csv"), data("MUN104L.csv")];
-    let rows = run_study(&paths, &options(&out, TableFormat::Parquet), &|_| {}).unwrap();
+    let rows = run_study(&paths, &options(&out, TableFormat::Parquet), &|_| {})
+        .unwrap()
+        .rows;
     assert_eq!(rows[1].pairs, Some(0), "{rows:?}");
     let folder = |k: usize| out.join(rows[k].output.as_ref().unwrap());
     for table in RUN_TABLES {

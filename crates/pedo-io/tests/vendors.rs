@@ -52,7 +52,7 @@ fn zebris_apd_real_sample() {
     assert_eq!(rec.format, Some(Format::Zebris));
     assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (1, 32, 15));
     assert_eq!(rec.pitch_mm, Some([8.46591, 8.46591]));
-    assert_eq!(rec.units, "N/cm2");
+    assert_eq!(rec.units, "N/cm²");
     assert_eq!(rec.dt_s, None);
     // N/cm² = 10 kPa; kPa × mm² × 1e-3 = N.
     let f = rec.force_factor().unwrap();
@@ -137,7 +137,7 @@ fn footscan_export_frames_peak_and_mask() {
     assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (10, 60, 21));
     assert_eq!(rec.pitch_mm, Some([5.08, 5.08]));
     assert_eq!(rec.dt_s, Some(0.032));
-    assert_eq!(rec.units, "N/cm2");
+    assert_eq!(rec.units, "N/cm²");
     // -1 marks exactly the sensels the Tekscan file marks B.
     assert_eq!(rec.sensor_mask(), asf.sensor_mask());
     for t in 0..10 {
@@ -612,7 +612,7 @@ fn check_zebris_raw(rec: &Recording, format: Format) {
     assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (30, 80, 30));
     assert_eq!(rec.pitch_mm, Some([5.08, 5.08]));
     assert_eq!(rec.dt_s, Some(1.0 / 31.25));
-    assert_eq!(rec.units, "N/cm2");
+    assert_eq!(rec.units, "N/cm²");
     assert_eq!(rec.n_sensors(), 80 * 30, "every sensor of a plate exists");
     let (oy, ox) = (10, 5);
     for t in 0..30 {

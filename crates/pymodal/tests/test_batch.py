@@ -260,7 +260,7 @@ def test_units_columns_are_null_when_unknown_and_typed_in_parquet(tmp_path):
     assert row["status"] == "ok"
     assert [row[c] for c in ["frame_rate_hz", "pitch_x_mm", "pitch_y_mm", "pressure_units"]] == [None] * 4
     [row] = pymodal.batch(grid, figures="none", pitch_mm=(2, 3), frame_rate=50, units="N/cm2")
-    assert (row["frame_rate_hz"], row["pitch_x_mm"], row["pitch_y_mm"], row["pressure_units"]) == (50, 2, 3, "N/cm2")
+    assert (row["frame_rate_hz"], row["pitch_x_mm"], row["pitch_y_mm"], row["pressure_units"]) == (50, 2, 3, "N/cm²")
     pq = pytest.importorskip("pyarrow.parquet")
     schema = pq.read_schema(tmp_path / "out" / "study.parquet")
     assert str(schema.field("pressure_units").type) == "string"

@@ -153,7 +153,7 @@ def test_units_name_the_pressure_of_a_file_that_states_none(tmp_path):
     np.save(path, moving_blob(frames=3))
     assert pymodal.read_recording(path).units == ""
     rec = pymodal.read_recording(path, pitch_mm=5.0, units="N/cm2")
-    assert rec.units == "N/cm2"
+    assert rec.units == "N/cm²"
     # N/cm² is 10 kPa: the force in N follows from the units and the pitch (the peak stays in
     # the stated units).
     raw = moving_blob(frames=3)

@@ -9,6 +9,7 @@
 
 use super::{latin1_lines, parse_num};
 use crate::error::{IoError, Result};
+use crate::recording::stated_units;
 use crate::recording::{Format, Recording, SparseFrames};
 
 /// A length with its unit (`5.08 mm`, `0.2 in`) in mm.
@@ -377,7 +378,7 @@ fn parse_tekscan_lines(
     };
     rec.sensel_area_mm2 = area;
     rec.dt_s = dt;
-    rec.units = units;
+    rec.units = stated_units(&units);
     rec.noise_threshold = noise;
     rec.format = Some(if csv { Format::TekscanCsv } else { Format::Asf });
     Ok(rec)

@@ -16,6 +16,7 @@
 use super::asf::trunc;
 use super::{latin1_lines, parse_num, read_bytes};
 use crate::error::{IoError, Result};
+use crate::recording::stated_units;
 use crate::recording::{Format, Recording};
 use std::path::Path;
 use std::sync::OnceLock;
@@ -564,7 +565,7 @@ fn to_recording(
     let mut rec = Recording::new(d.n_frames, r.rows, r.cols, data, mask)?;
     rec.pitch_mm = r.pitch;
     rec.dt_s = d.dt_s;
-    rec.units = d.units.clone();
+    rec.units = stated_units(&d.units);
     rec.format = Some(Format::Pedar);
     Ok(rec)
 }

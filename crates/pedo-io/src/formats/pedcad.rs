@@ -16,6 +16,7 @@
 use super::asf::trunc;
 use super::{latin1_lines, parse_num};
 use crate::error::{IoError, Result};
+use crate::recording::stated_units;
 use crate::recording::{Format, Recording};
 
 /// One `[Data]` or `[Data<k>]` grid as read.
@@ -303,7 +304,7 @@ fn build(h: Header, grids: Vec<Grid>, name: &str, last_ln: usize) -> Result<Reco
         })?;
         rec.dt_s = Some(td * s);
     }
-    rec.units = h.unit_pressure.unwrap_or_default();
+    rec.units = stated_units(h.unit_pressure.as_deref().unwrap_or_default());
     let zebris = h.source.to_ascii_lowercase().contains("zebris");
     rec.format = Some(
         if zebris || (h.min_idx.is_none() && h.time_diff.is_none()) {

@@ -31,6 +31,7 @@
 
 use super::parse_num;
 use crate::error::{IoError, Result};
+use crate::recording::stated_units;
 use crate::recording::{Format, Recording};
 use quick_xml::events::Event;
 use quick_xml::Reader;
@@ -171,7 +172,7 @@ impl<'a> Frames<'a> {
             rec.pitch_mm = Some([dx, dy]);
         }
         rec.dt_s = h.frequency.filter(|f| *f > 0.0).map(|f| 1.0 / f);
-        rec.units = h.units.clone().unwrap_or_default();
+        rec.units = stated_units(h.units.as_deref().unwrap_or_default());
         Ok(rec)
     }
 }
