@@ -637,8 +637,9 @@ pub struct RowUnits {
     /// Millimetres per sensel `[x, y]` = `[column spacing, row spacing]` (`pitch_x_mm`,
     /// `pitch_y_mm`: sensels need not be square).
     pub pitch_mm: Option<[f64; 2]>,
-    /// The pressure units of the values as the file (or `--units`) names them, e.g. `kPa`,
-    /// `N/cm2` (`pressure_units`).
+    /// The pressure units of the values as the file (or `--units`) names them, in their usual
+    /// spelling ([`canonical_units`](crate::recording::canonical_units)), e.g. `kPa`, `N/cm²`
+    /// (`pressure_units`).
     pub pressure_units: Option<String>,
 }
 
