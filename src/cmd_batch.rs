@@ -100,7 +100,6 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
 
     // The counts, `--json` and the exit status are this run's recordings; the table also holds
     // the rows it kept of earlier runs, which the closing line mentions.
-
     let counts = study::status_counts(&rows);
     let table = study::study_table_path(&args.out, opts.outputs.tables);
     if args.options.json {

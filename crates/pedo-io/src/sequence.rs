@@ -428,7 +428,12 @@ impl RunParams {
                 frames: self.frames.unwrap_or_default(),
                 pitch_mm: self.units.pitch_mm,
                 frame_rate: self.units.frame_rate,
-                units: self.units.units.as_ref().map(|u| u.trim().to_string()),
+                // Spelled as the recordings will state them (`summary.json`).
+                units: self
+                    .units
+                    .units
+                    .as_deref()
+                    .map(crate::recording::stated_units),
             },
         ))
     }
@@ -2212,7 +2217,7 @@ mod tests {
         params.units.units = Some(" N/cm2 ".into());
         let given = params.given().unwrap();
         assert_eq!(value(&given, "noise"), OptionValue::Float(5.0));
-        assert_eq!(value(&given, "units"), OptionValue::Word("N/cm2".into()));
+        assert_eq!(value(&given, "units"), OptionValue::Word("N/cm²".into()));
     }
 
     /// A recording of `frames`, each drawn by `draw(frame, row, col) -> loaded`.
