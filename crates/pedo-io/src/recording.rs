@@ -469,7 +469,9 @@ fn pressure_unit(units: &str) -> Option<(&'static str, f64)> {
         .collect();
     PRESSURE_UNITS
         .iter()
-        .find(|(name, _, other)| name.to_lowercase() == u || other.contains(&u.as_str()))
+        .find(|(name, _, other)| {
+            name.chars().flat_map(char::to_lowercase).eq(u.chars()) || other.contains(&u.as_str())
+        })
         .map(|&(name, kpa, _)| (name, kpa))
 }
 

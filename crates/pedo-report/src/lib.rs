@@ -272,11 +272,6 @@ impl CostClasses {
     fn count(&self) -> usize {
         self.labels.len()
     }
-
-    /// The classes as JSON: `cost_bounds` and `cost_labels`.
-    fn to_json(&self) -> Value {
-        json!({ "cost_bounds": self.bounds, "cost_labels": self.labels })
-    }
 }
 
 /// Costs closer than this, relative to the largest (1 at least), are the same cost: bounds
@@ -384,17 +379,10 @@ fn pressure_scale(recording: &Recording) -> (f64, Option<String>) {
     }
 }
 
-/// The units the recording's values are in, as the file names them (kPa spelled so whatever
-/// the file's case); `None` when it names none.
+/// The units the recording's values are in, as the file names them (a known unit in its usual
+/// spelling, [`pedo_io::recording::stated_units`]); `None` when it names none.
 fn file_units(recording: &Recording) -> Option<String> {
-    let u = recording.units.trim();
-    if u.is_empty() {
-        None
-    } else if pedo_io::recording::kpa_per_unit(u) == Some(1.0) {
-        Some("kPa".to_string())
-    } else {
-        Some(u.to_string())
-    }
+    Some(pedo_io::recording::stated_units(&recording.units)).filter(|u| !u.is_empty())
 }
 
 /// What the time series' load panel plots, named as frames.csv names its column
@@ -814,9 +802,7 @@ fn overlays(
             })
         })
         .collect();
-    let mut out = classes.to_json();
-    out["frames"] = json!(frames);
-    out
+    json!({ "cost_bounds": classes.bounds, "cost_labels": classes.labels, "frames": frames })
 }
 
 /// For the 3-D view: a surface pair's two meshes (x, y in mm or sensels; z the surface's height,
