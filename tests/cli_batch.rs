@@ -652,6 +652,15 @@ fn a_run_on_part_of_a_study_keeps_the_other_rows_while_their_folders_are_there()
     );
     assert_eq!(study["inputs"], serde_json::json!([t]));
     assert_eq!(study["options"]["spacing"], 1.5);
+    // The kept rows say which run made them, with its own options.
+    let earlier = study["earlier_runs"].as_array().unwrap();
+    assert_eq!(earlier.len(), 1, "{earlier:?}");
+    assert_eq!(earlier[0]["inputs"], serde_json::json!([i]));
+    assert_eq!(earlier[0]["options"]["spacing"], 1.0);
+    assert_eq!(
+        earlier[0]["paths"],
+        serde_json::json!([&all[0]["path"], &all[1]["path"], &all[2]["path"]])
+    );
     let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
     assert_eq!(csv.lines().count(), 5, "{csv}");
     // The closing line says the table holds more than this run.
@@ -668,10 +677,18 @@ fn a_run_on_part_of_a_study_keeps_the_other_rows_while_their_folders_are_there()
     std::fs::remove_file(input.join("corrupt.asf")).unwrap();
     let (code, _, _) = batch_json(&[t, "--out", o]);
     assert_eq!(code, Some(0));
-    let table = read_json(&out.join("study.json"))["rows"].clone();
+    let study = read_json(&out.join("study.json"));
     assert_eq!(
-        row_paths(table.as_array().unwrap(), &input),
+        row_paths(study["rows"].as_array().unwrap(), &input),
         ["/tekscan.csv", "/b/trial.lst"]
+    );
+    // b/trial.lst is still the first run's (with spacing 1.0); the second run's only row is
+    // this run's again (found complete), so that run is no longer listed.
+    let earlier = study["earlier_runs"].as_array().unwrap();
+    assert_eq!(earlier.len(), 1, "{earlier:?}");
+    assert_eq!(
+        (&earlier[0]["options"]["spacing"], &earlier[0]["paths"]),
+        (&1.0.into(), &serde_json::json!([&all[1]["path"]]))
     );
     std::fs::remove_dir_all(&base).unwrap();
 }
@@ -713,8 +730,14 @@ fn a_study_json_of_bare_rows_still_resumes() {
         numbers(&earlier),
         "the units come back from summary.json"
     );
-    let table = read_json(&out.join("study.json"))["rows"].clone();
+    let study = read_json(&out.join("study.json"));
+    let table = study["rows"].clone();
     assert_eq!(table.as_array().unwrap().len(), 4);
+    // The three kept rows come from a run that recorded nothing of itself.
+    let earlier = &study["earlier_runs"];
+    assert_eq!(earlier.as_array().unwrap().len(), 1, "{earlier}");
+    assert_eq!(earlier[0]["options"], Value::Null);
+    assert_eq!(earlier[0]["paths"].as_array().unwrap().len(), 3);
     let first_rows = rows(&first);
     for r in table.as_array().unwrap() {
         let before = row(&first_rows, r["path"].as_str().unwrap());

@@ -966,10 +966,14 @@ pub fn run_study(
     opts.params.validate()?;
     // Made before anything runs: options that cannot be listed would fail every recording.
     let provenance = study_provenance(paths, opts)?;
-    let previous = match &opts.out {
-        Some(out) => open_study_folder(out)?,
-        None => Vec::new(),
+    let previous_json = match &opts.out {
+        Some(out) => prepare_study_folder(out)?,
+        None => None,
     };
+    let previous = previous_json
+        .as_ref()
+        .map(rows_of_study_json)
+        .unwrap_or_default();
     let jobs = if opts.jobs == 0 {
         std::thread::available_parallelism().map_or(1, |n| n.get())
     } else {
@@ -1014,7 +1018,8 @@ pub fn run_study(
     if let Some(out) = &opts.out
         && !outdir::interrupted()
     {
-        let json = study_json(provenance, &rows, &kept);
+        let earlier = earlier_runs(previous_json.as_ref(), &kept);
+        let json = study_json(provenance, &rows, &kept, earlier);
         let all: Vec<StudyRow> = rows.iter().chain(&kept).cloned().collect();
         write_study_table(out, &all, &json, opts.outputs.tables)?;
     }
@@ -1098,17 +1103,85 @@ pub fn study_provenance(paths: &[PathBuf], opts: &StudyOptions<'_>) -> Result<Ma
 }
 
 /// `study.json`: `provenance` ([`study_provenance`]), the counts of this run's `rows` by status
-/// ([`status_counts`]), how many rows of earlier runs were `kept`, and every row: this run's,
-/// then the kept ones.
-pub fn study_json(provenance: Map<String, Value>, rows: &[StudyRow], kept: &[StudyRow]) -> Value {
+/// ([`status_counts`]), how many rows of earlier runs were `kept`, what produced those
+/// (`earlier`, see [`earlier_runs`]), and every row: this run's, then the kept ones.
+pub fn study_json(
+    provenance: Map<String, Value>,
+    rows: &[StudyRow],
+    kept: &[StudyRow],
+    earlier: Vec<Value>,
+) -> Value {
     let mut json = provenance;
     if let Value::Object(counts) = status_counts(rows) {
         json.extend(counts);
     }
     json.insert("kept".into(), json!(kept.len()));
+    json.insert("earlier_runs".into(), Value::Array(earlier));
     let all: Vec<StudyRow> = rows.iter().chain(kept).cloned().collect();
     json.insert("rows".into(), study_table(&all).to_json());
     Value::Object(json)
+}
+
+/// What produced the `kept` rows, from the previous `study.json`: its own run and the earlier
+/// runs it listed, most recent first, each with its `pedomatch_version`, `inputs` and `options`
+/// (as [`study_provenance`] gives them) and the `paths` of the kept rows it produced. A row is
+/// listed under the most recent run that ran it or found it complete with the same options; a
+/// run none of whose rows is kept is left out. Rows of a `study.json` written before runs were
+/// recorded (a bare list of rows) are listed under a run whose version, inputs and options are
+/// `null`.
+pub fn earlier_runs(previous: Option<&Value>, kept: &[StudyRow]) -> Vec<Value> {
+    let Some(previous) = previous else {
+        return Vec::new();
+    };
+    let mut runs: Vec<Value> = Vec::new();
+    match previous {
+        Value::Object(json) => {
+            // The previous run's own rows come first in its `rows`: `recordings` of them.
+            let own = json.get("recordings").and_then(Value::as_u64).unwrap_or(0) as usize;
+            let mut run = Map::new();
+            for key in ["pedomatch_version", "inputs", "options"] {
+                run.insert(key.into(), json.get(key).cloned().unwrap_or(Value::Null));
+            }
+            run.insert(
+                "paths".into(),
+                row_paths(&rows_of_study_json(previous)[..], own),
+            );
+            runs.push(Value::Object(run));
+            if let Some(Value::Array(older)) = json.get("earlier_runs") {
+                runs.extend(older.iter().filter(|r| r.is_object()).cloned());
+            }
+        }
+        Value::Array(_) => {
+            let rows = rows_of_study_json(previous);
+            runs.push(json!({
+                "pedomatch_version": null, "inputs": null, "options": null,
+                "paths": row_paths(&rows, rows.len()),
+            }));
+        }
+        _ => {}
+    }
+    let mut unlisted: std::collections::HashSet<&str> =
+        kept.iter().map(|r| r.path.as_str()).collect();
+    runs.into_iter()
+        .filter_map(|mut run| {
+            let paths: Vec<Value> = run["paths"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .filter(|p| p.as_str().is_some_and(|p| unlisted.remove(p)))
+                .cloned()
+                .collect();
+            (!paths.is_empty()).then(|| {
+                run["paths"] = Value::Array(paths);
+                run
+            })
+        })
+        .collect()
+}
+
+/// The paths of the first `n` of `rows`, as a JSON list.
+fn row_paths(rows: &[StudyRow], n: usize) -> Value {
+    rows.iter().take(n).map(|r| json!(r.path)).collect()
 }
 
 /// Runs `f` on a rayon pool of one thread: the pairs of one recording are then matched in turn
@@ -1131,6 +1204,14 @@ pub fn on_one_thread<T: Send>(f: impl FnOnce() -> T + Send) -> T {
 /// Creates the study folder `out` (marking it as one) or checks that it is one; returns the rows
 /// of its previous table (none if it has none). Fails if `out` holds files and is not a study.
 pub fn open_study_folder(out: &Path) -> Result<Vec<StudyRow>> {
+    Ok(prepare_study_folder(out)?
+        .map(|json| rows_of_study_json(&json))
+        .unwrap_or_default())
+}
+
+/// [`open_study_folder`], returning the previous `study.json` as it is (`None` if there is
+/// none or it cannot be read).
+fn prepare_study_folder(out: &Path) -> Result<Option<Value>> {
     let io = |e| IoError::Io {
         path: out.display().to_string(),
         source: e,
@@ -1157,9 +1238,7 @@ pub fn open_study_folder(out: &Path) -> Result<Vec<StudyRow>> {
     }
     std::fs::create_dir_all(out).map_err(io)?;
     std::fs::write(&marker, b"written by pedomatch batch\n").map_err(io)?;
-    Ok(read_json(&out.join("study.json"))
-        .map(|json| rows_of_study_json(&json))
-        .unwrap_or_default())
+    Ok(read_json(&out.join("study.json")))
 }
 
 /// The rows of a `study.json`: its `rows`, or, written by a pedomatch before it recorded what
@@ -1574,7 +1653,7 @@ mod tests {
         let rows = [row(RowStatus::Ok), row(RowStatus::Error)];
         let mut provenance = Map::new();
         provenance.insert("inputs".into(), json!(["data/"]));
-        let json = study_json(provenance, &rows[..1], &rows[1..]);
+        let json = study_json(provenance, &rows[..1], &rows[1..], Vec::new());
         assert_eq!((&json["recordings"], &json["kept"]), (&json!(1), &json!(1)));
         assert_eq!((&json["ok"], &json["error"]), (&json!(1), &json!(0)));
         assert_eq!(rows_of_study_json(&json), rows);
@@ -1594,6 +1673,38 @@ mod tests {
         assert_eq!(read.units, RowUnits::default());
         assert_eq!(read.frames, rows[0].frames);
         assert!(rows_of_study_json(&json!({"rows": "?"})).is_empty());
+    }
+
+    #[test]
+    fn kept_rows_are_listed_under_the_latest_run_that_made_them() {
+        let at = |path: &str| StudyRow {
+            path: path.into(),
+            ..row(RowStatus::Ok)
+        };
+        let (x, y, z, w) = (at("x"), at("y"), at("z"), at("w"));
+        let mut provenance = Map::new();
+        provenance.insert("options".into(), json!({"spacing": 1.5}));
+        // The previous run ran x and y; before it, a run with spacing 1 made y (since re-run),
+        // z and w.
+        let older = json!([{"options": {"spacing": 1.0}, "paths": ["y", "z", "w"]}, "?"]);
+        let mut previous = study_json(provenance, &[x.clone(), y.clone()], &[z.clone(), w], vec![]);
+        previous["earlier_runs"] = older;
+        // This run keeps x and z (it re-ran y; w's folder is gone).
+        let earlier = earlier_runs(Some(&previous), &[x, z]);
+        assert_eq!(
+            earlier,
+            [
+                json!({"pedomatch_version": null, "inputs": null, "options": {"spacing": 1.5}, "paths": ["x"]}),
+                json!({"options": {"spacing": 1.0}, "paths": ["z"]}),
+            ]
+        );
+        // A bare list of rows: one run of which nothing is known.
+        let bare = study_table(&[at("x"), at("y")]).to_json();
+        assert_eq!(
+            earlier_runs(Some(&bare), &[at("y")]),
+            [json!({"pedomatch_version": null, "inputs": null, "options": null, "paths": ["y"]})]
+        );
+        assert!(earlier_runs(None, &[at("y")]).is_empty());
     }
 
     #[test]
