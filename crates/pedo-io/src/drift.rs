@@ -184,22 +184,13 @@ pub fn anchored_tracks(
     Ok(tracks)
 }
 
-/// A pair fit to chain: forward between the objects, its matches on nodes they have.
+/// A pair fit to chain: forward between the objects, its matches on nodes they have (the
+/// checks and messages of the streaming chaining).
 fn check_pair(objects: &[SequenceObject], p: &PairMatch) -> crate::Result<()> {
-    if p.a >= p.b || p.b >= objects.len() {
-        return Err(crate::IoError::invalid(format!(
-            "pair {} → {} does not lead forward onto objects 0..{}",
-            p.a,
-            p.b,
-            objects.len()
-        )));
-    }
+    p.check_forward(0..objects.len())?;
     let (na, nb) = (objects[p.a].shape.len(), objects[p.b].shape.len());
     match p.result.pairs.iter().find(|m| m.a >= na || m.b >= nb) {
-        Some(m) => Err(crate::IoError::invalid(format!(
-            "pair {} → {} matches node {} to node {}, beyond the objects' {na} and {nb} nodes",
-            p.a, p.b, m.a, m.b
-        ))),
+        Some(m) => Err(p.beyond_nodes(m, na, nb)),
         None => Ok(()),
     }
 }

@@ -635,6 +635,34 @@ pub struct PairMatch {
     pub row: PairRow,
 }
 
+impl PairMatch {
+    /// Fails unless the pair leads forward (`a < b`) onto an object of `onto`: the chaining of
+    /// tracks visits objects in sequence order.
+    pub(crate) fn check_forward(&self, onto: std::ops::Range<usize>) -> Result<()> {
+        if self.a < self.b && onto.contains(&self.b) {
+            return Ok(());
+        }
+        Err(IoError::invalid(format!(
+            "pair {} → {} does not lead forward onto objects {}..{}",
+            self.a, self.b, onto.start, onto.end
+        )))
+    }
+
+    /// The error for match `m`, whose nodes lie beyond the two objects' `len_a` and `len_b`
+    /// nodes.
+    pub(crate) fn beyond_nodes(
+        &self,
+        m: &modal_core::MatchPair,
+        len_a: usize,
+        len_b: usize,
+    ) -> IoError {
+        IoError::invalid(format!(
+            "pair {} → {} matches node {} to node {}, beyond the objects' {len_a} and {len_b} nodes",
+            self.a, self.b, m.a, m.b
+        ))
+    }
+}
+
 /// One node followed across objects: `(object index, node index)` steps in sequence order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Track {
@@ -1353,12 +1381,7 @@ impl Chainer {
         for p in pairs {
             // Objects are in sequence order and every pair goes forward, so visiting the
             // objects in order sees each predecessor before its successors.
-            if !new.contains(&p.b) || p.a >= p.b {
-                return Err(IoError::invalid(format!(
-                    "pair {} → {} does not lead forward onto objects {}..{}",
-                    p.a, p.b, new.start, new.end
-                )));
-            }
+            p.check_forward(new.clone())?;
             incoming[p.b - new.start].push(p);
             let u = self.last_use.entry(p.a).or_insert(0);
             *u = (*u).max(p.b);
@@ -1415,15 +1438,7 @@ impl Chainer {
             };
             for mp in p.result.pairs.iter().filter(|mp| !mp.excess) {
                 let (Some(&t), Some(&slot)) = (from.get(mp.a), row.get(mp.b)) else {
-                    return Err(IoError::invalid(format!(
-                        "pair {} → {} matches node {} to node {}, beyond the objects' {} and {} nodes",
-                        p.a,
-                        p.b,
-                        mp.a,
-                        mp.b,
-                        from.len(),
-                        row.len()
-                    )));
+                    return Err(p.beyond_nodes(mp, from.len(), row.len()));
                 };
                 if slot != NO_TRACK || !honest_step_of(oa, mp.a, ob, mp.b) {
                     continue;
