@@ -1406,6 +1406,7 @@ mod tests {
                 index: 0,
                 level: None,
                 shape: ellipse(16, [6.0 + f as f64 * 0.5, 8.0], 3.0, 5.0),
+                measures: None,
             })
             .collect();
         let tracks = (0..16)

@@ -416,34 +416,94 @@ impl Recording {
         frames: std::ops::Range<usize>,
     ) -> Vec<FrameMeasures> {
         let per = self.rows * self.cols;
-        let area = self.sensel_area().unwrap_or(1.0);
-        let force = self.force_factor().unwrap_or(area);
         let mut f = vec![0.0f32; per];
         (frames.start..frames.end.min(self.n_frames))
             .map(|t| {
                 self.frames.fill(t, per, &mut f);
-                let (mut n, mut sum, mut peak, mut sx, mut sy) = (0usize, 0.0f64, 0.0f64, 0.0, 0.0);
+                let mut sum = MeasureSum::default();
                 for (i, &v) in f.iter().enumerate() {
-                    let v = v as f64;
-                    if self.sensor_mask[i] && v > threshold {
-                        n += 1;
-                        sum += v;
-                        sx += v * (i % self.cols) as f64;
-                        sy += v * (i / self.cols) as f64;
-                    }
                     if self.sensor_mask[i] {
-                        peak = peak.max(v);
+                        sum.add(v as f64, i / self.cols, i % self.cols, threshold);
                     }
                 }
-                FrameMeasures {
-                    contact_sensors: n,
-                    contact_area: n as f64 * area,
-                    total_force: sum * force,
-                    peak_pressure: peak,
-                    cop: (sum > 0.0).then(|| [sx / sum, sy / sum]),
-                }
+                sum.measures(self)
             })
             .collect()
+    }
+
+    /// The [`measures`](Self::measures) of one region of `frame` (a frame of this recording):
+    /// the existing sensors whose centre lies inside the closed `outline` (x = column, y = row,
+    /// in sensels), such as one foot's outline in a recording of both feet. An outline of fewer
+    /// than three points holds no sensor.
+    pub fn region_measures(
+        &self,
+        frame: &Grid,
+        threshold: f64,
+        outline: &[[f64; 2]],
+    ) -> FrameMeasures {
+        let mut sum = MeasureSum::default();
+        if outline.len() >= 3 && frame.rows() == self.rows && frame.cols() == self.cols {
+            let (lo, hi) = outline.iter().fold(
+                ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+                |(lo, hi), p| {
+                    (
+                        [lo[0].min(p[0]), lo[1].min(p[1])],
+                        [hi[0].max(p[0]), hi[1].max(p[1])],
+                    )
+                },
+            );
+            let span = |lo: f64, hi: f64, n: usize| {
+                let first = lo.ceil().max(0.0) as usize;
+                let last = (hi.floor().max(-1.0) + 1.0).min(n as f64) as usize;
+                first..last.max(first)
+            };
+            for r in span(lo[1], hi[1], self.rows) {
+                for c in span(lo[0], hi[0], self.cols) {
+                    if self.sensor_mask[r * self.cols + c]
+                        && crate::contour::point_in_polygon([c as f64, r as f64], outline)
+                    {
+                        sum.add(frame.get(r, c), r, c, threshold);
+                    }
+                }
+            }
+        }
+        sum.measures(self)
+    }
+}
+
+/// The sums behind [`FrameMeasures`], sensor by sensor.
+#[derive(Default)]
+struct MeasureSum {
+    contact: usize,
+    load: f64,
+    peak: f64,
+    moment: [f64; 2],
+}
+
+impl MeasureSum {
+    /// Adds an existing sensor's value `v` at row `r`, column `c`.
+    fn add(&mut self, v: f64, r: usize, c: usize, threshold: f64) {
+        if v > threshold {
+            self.contact += 1;
+            self.load += v;
+            self.moment[0] += v * c as f64;
+            self.moment[1] += v * r as f64;
+        }
+        self.peak = self.peak.max(v);
+    }
+
+    /// The measures in `recording`'s units (see [`FrameMeasures`]).
+    fn measures(&self, recording: &Recording) -> FrameMeasures {
+        let area = recording.sensel_area().unwrap_or(1.0);
+        let force = recording.force_factor().unwrap_or(area);
+        FrameMeasures {
+            contact_sensors: self.contact,
+            contact_area: self.contact as f64 * area,
+            total_force: self.load * force,
+            peak_pressure: self.peak,
+            cop: (self.load > 0.0)
+                .then(|| [self.moment[0] / self.load, self.moment[1] / self.load]),
+        }
     }
 }
 
@@ -819,6 +879,46 @@ mod tests {
         assert_eq!(
             rec,
             Recording::new(1, rows, cols, frame, vec![true; rows * cols]).unwrap()
+        );
+    }
+
+    #[test]
+    fn a_region_measures_the_sensors_inside_its_outline() {
+        // 4 × 5, a missing sensor at (1, 1); the outline encloses rows 1..=2, columns 0..=2.
+        let (rows, cols) = (4, 5);
+        let data: Vec<f32> = (0..20).map(|i| i as f32).collect();
+        let mut mask = vec![true; 20];
+        mask[6] = false;
+        let mut rec = Recording::new(1, rows, cols, data, mask).unwrap();
+        rec.pitch_mm = Some([2.0, 3.0]);
+        rec.units = "kPa".into();
+        let frame = rec.frame(0).unwrap();
+        let outline = [[-0.5, 0.5], [2.5, 0.5], [2.5, 2.5], [-0.5, 2.5]];
+        let m = rec.region_measures(&frame, 5.0, &outline);
+        // Sensors 5, 7, 10, 11, 12 (6 is missing); 5 is not above the threshold.
+        let inside = [7.0, 10.0, 11.0, 12.0];
+        let load: f64 = inside.iter().sum();
+        assert_eq!(m.contact_sensors, 4);
+        assert_eq!(m.contact_area, 4.0 * 6.0);
+        assert!(
+            (m.total_force - load * 6e-3).abs() < 1e-12,
+            "kPa × mm² in N"
+        );
+        assert_eq!(m.peak_pressure, 12.0);
+        let cop_x = (7.0 * 2.0 + 11.0 + 12.0 * 2.0) / load;
+        let cop_y = (7.0 + 2.0 * (10.0 + 11.0 + 12.0)) / load;
+        let cop = m.cop.unwrap();
+        assert!((cop[0] - cop_x).abs() < 1e-12 && (cop[1] - cop_y).abs() < 1e-12);
+        // The whole sensor inside one outline: the frame's measures, to the bit.
+        let all = [[-1.0, -1.0], [5.0, -1.0], [5.0, 4.0], [-1.0, 4.0]];
+        assert_eq!(rec.region_measures(&frame, 5.0, &all), rec.measures(5.0)[0]);
+        // Outside the sensor, or fewer than three points: nothing.
+        let none = rec.region_measures(&frame, 0.0, &[[10.0, 10.0], [12.0, 10.0], [11.0, 12.0]]);
+        assert_eq!((none.contact_sensors, none.cop), (0, None));
+        assert_eq!(
+            rec.region_measures(&frame, 0.0, &outline[..2])
+                .contact_sensors,
+            0
         );
     }
 

@@ -284,7 +284,9 @@ fn push_xy(cells: &mut Vec<Cell>, recording: &Recording, x: f64, y: f64, mm: boo
 
 /// The objects: id (0-based, the row index), frame, time, index in the frame (or level index),
 /// node count, isobaric level (`level_kpa` in kPa when the pressure units are known, else
-/// `level` in the file's units), centroid of the nodes in pixels and mm.
+/// `level` in the file's units), centroid of the nodes in pixels and mm, and the measures of
+/// the sensors inside the outline ([`SequenceObject::measures`], the columns of
+/// [`frames_table`]; empty for surfaces).
 pub fn objects_table(recording: &Recording, r: &SequenceResult) -> Table {
     let mut t = objects_header(recording);
     for o in &r.objects {
@@ -310,6 +312,7 @@ pub(crate) fn objects_header(recording: &Recording) -> Table {
         t.push_column("centroid_x_mm");
         t.push_column("centroid_y_mm");
     }
+    push_measure_columns(&mut t, recording);
     t
 }
 
@@ -337,6 +340,7 @@ pub(crate) fn object_cells(recording: &Recording, o: &SequenceObject) -> Vec<Cel
         (x + p[0] / n, y + p[1] / n)
     });
     push_xy(&mut cells, recording, cx, cy, mm);
+    push_measures(&mut cells, recording, o.measures.as_ref());
     cells
 }
 
@@ -534,11 +538,17 @@ pub fn frames_table(recording: &Recording, threshold: f64, start: usize, end: us
 
 /// The columns of [`frames_table`] (no rows).
 pub(crate) fn frames_header(recording: &Recording) -> Table {
-    let u = measure_units(recording);
     let mut t = Table::new(&["frame"]);
     if recording.dt_s.is_some() {
         t.push_column("time_s");
     }
+    push_measure_columns(&mut t, recording);
+    t
+}
+
+/// The columns of [`FrameMeasures`](crate::recording::FrameMeasures), named by their units.
+fn push_measure_columns(t: &mut Table, recording: &Recording) {
+    let u = measure_units(recording);
     for c in [
         "contact_sensors",
         u.area.0,
@@ -553,7 +563,31 @@ pub(crate) fn frames_header(recording: &Recording) -> Table {
         t.push_column("cop_x_mm");
         t.push_column("cop_y_mm");
     }
-    t
+}
+
+/// The cells of [`push_measure_columns`]'s columns: `m`'s, or empty cells without measures.
+fn push_measures(
+    cells: &mut Vec<Cell>,
+    recording: &Recording,
+    m: Option<&crate::recording::FrameMeasures>,
+) {
+    let mm = recording.pitch_mm.is_some();
+    let xy = if mm { 4 } else { 2 };
+    let Some(m) = m else {
+        cells.extend(std::iter::repeat_n(Cell::Empty, 4 + xy));
+        return;
+    };
+    let u = measure_units(recording);
+    cells.extend([
+        Cell::int(m.contact_sensors),
+        Cell::Float(m.contact_area * u.area.1, 4),
+        Cell::Float(m.total_force, 4),
+        Cell::Float(m.peak_pressure * u.peak.1, 4),
+    ]);
+    match m.cop {
+        Some([x, y]) => push_xy(cells, recording, x, y, mm),
+        None => cells.extend(std::iter::repeat_n(Cell::Empty, xy)),
+    }
 }
 
 /// The rows of [`frames_table`], one by one to `emit`.
@@ -576,24 +610,13 @@ pub(crate) fn measures_rows<E>(
     measures: &[crate::recording::FrameMeasures],
     emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
 ) -> std::result::Result<(), E> {
-    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
-    let u = measure_units(recording);
     for (k, m) in measures.iter().enumerate() {
         let f = first + k;
         let mut cells = vec![Cell::int(f)];
-        if timed {
+        if recording.dt_s.is_some() {
             cells.push(Cell::opt(recording.time_s(f), 6));
         }
-        cells.extend([
-            Cell::int(m.contact_sensors),
-            Cell::Float(m.contact_area * u.area.1, 4),
-            Cell::Float(m.total_force, 4),
-            Cell::Float(m.peak_pressure * u.peak.1, 4),
-        ]);
-        match m.cop {
-            Some([x, y]) => push_xy(&mut cells, recording, x, y, mm),
-            None => cells.extend(std::iter::repeat_n(Cell::Empty, if mm { 4 } else { 2 })),
-        }
+        push_measures(&mut cells, recording, Some(m));
         emit(cells)?;
     }
     Ok(())

@@ -7,7 +7,7 @@
 
 use crate::contour::{contours, Contour, ContourOptions, Resample};
 use crate::error::{IoError, Result};
-use crate::recording::Recording;
+use crate::recording::{FrameMeasures, Recording};
 use crate::track::PairingMethod;
 use modal_core::{
     match_prepared, match_shapes, prepare, AffinityMatrix, MatchOptions, MatchParams, MatchResult,
@@ -561,6 +561,11 @@ pub struct SequenceObject {
     /// isocontour models) or a triangulated 3-D surface whose z is the rescaled pressure
     /// (surface model, see [`crate::surface::ZScale`]).
     pub shape: Shape,
+    /// The measures of the sensors inside the object's outline (contour and isocontour models,
+    /// [`Recording::region_measures`] with the contour threshold): one foot's contact area,
+    /// force, peak pressure and centre of pressure in a recording of both feet. `None` for the
+    /// surface model, whose one object per frame has the frame's measures.
+    pub measures: Option<FrameMeasures>,
 }
 
 /// The two objects of a pair as the pairs table and `summary.json` name them: ids, frames and
@@ -1085,19 +1090,20 @@ pub fn stream_sequence(
         let (mut splits, mut merges) = (Vec::new(), Vec::new());
         match options.model {
             ObjectModel::Contour => {
-                let per_frame: Vec<(Vec<Contour>, Vec<Shape>)> =
+                let per_frame: Vec<FrameObjects> =
                     per_frame_or_skipped(w0..w1, &mut counts.skipped_frames, |t| {
                         frame_contours(frames, t - offset, options)
                     });
                 for (k, (cs, shapes)) in per_frame.into_iter().enumerate() {
                     let first = held.end();
-                    for (index, shape) in shapes.into_iter().enumerate() {
+                    for (index, (shape, measures)) in shapes.into_iter().enumerate() {
                         held.push(SequenceObject {
                             id: held.end(),
                             frame: w0 + k,
                             index,
                             level: None,
                             shape,
+                            measures: Some(measures),
                         });
                     }
                     if let Some((fa, previous)) = &last_contours {
@@ -1140,6 +1146,7 @@ pub fn stream_sequence(
                                 index: 0,
                                 level: None,
                                 shape,
+                                measures: None,
                             });
                             last_surface = Some((o, frame));
                         }
@@ -1960,15 +1967,42 @@ struct Built {
 
 /// The outer contours of a frame worth modelling, largest first (so object 0 of a frame is its
 /// main region), with their shapes: only contours that make a valid shape become objects.
+/// A contour's points in sensels (x = column, y = row), whatever units it was extracted in.
+fn outline_in_sensels(c: &Contour, units: crate::grid::CoordUnits) -> Vec<[f64; 2]> {
+    match units {
+        crate::grid::CoordUnits::Pixels => c.points.clone(),
+        crate::grid::CoordUnits::Millimetres { dx_mm, dy_mm } => c
+            .points
+            .iter()
+            .map(|p| [p[0] / dx_mm, p[1] / dy_mm])
+            .collect(),
+    }
+}
+
+/// An object's shape and the measures of the sensors inside its outline.
+type MeasuredShape = (Shape, FrameMeasures);
+
+/// A frame's outlines that make objects, and their shapes and measures.
+type FrameObjects = (Vec<Contour>, Vec<MeasuredShape>);
+
+/// The outlines of frame `t` that make objects, largest first, each with its shape and the
+/// measures of the sensors inside it.
 fn frame_contours(
     recording: &Recording,
     t: usize,
     options: &SequenceOptions,
-) -> Result<(Vec<Contour>, Vec<Shape>)> {
-    let mut cs: Vec<(Contour, Shape)> = contours(&recording.frame(t)?, &options.contour)?
+) -> Result<FrameObjects> {
+    let frame = recording.frame(t)?;
+    let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
+    let mut cs: Vec<(Contour, MeasuredShape)> = contours(&frame, &options.contour)?
         .into_iter()
         .filter(|c| !c.hole && c.points.len() >= options.min_nodes.max(3))
-        .filter_map(|c| c.to_shape().ok().map(|s| (c, s)))
+        .filter_map(|c| {
+            let shape = c.to_shape().ok()?;
+            let outline = outline_in_sensels(&c, options.contour.units);
+            let measures = recording.region_measures(&frame, threshold, &outline);
+            Some((c, (shape, measures)))
+        })
         .collect();
     cs.sort_by(|a, b| b.0.area().total_cmp(&a.0.area()));
     Ok(cs.into_iter().unzip())
@@ -1999,7 +2033,7 @@ fn build_objects(
     };
     match options.model {
         ObjectModel::Contour => {
-            let (per_frame, shapes): (Vec<Vec<Contour>>, Vec<Vec<Shape>>) =
+            let (per_frame, shapes): (Vec<Vec<Contour>>, Vec<Vec<MeasuredShape>>) =
                 per_frame_or_skipped(start..end, &mut built.skipped_frames, |t| {
                     let cs = frame_contours(recording, t, options);
                     tick(end - start);
@@ -2011,7 +2045,7 @@ fn build_objects(
             let mut first = Vec::with_capacity(per_frame.len());
             for (k, frame_shapes) in shapes.into_iter().enumerate() {
                 first.push(built.objects.len());
-                for (index, shape) in frame_shapes.into_iter().enumerate() {
+                for (index, (shape, measures)) in frame_shapes.into_iter().enumerate() {
                     let id = built.objects.len();
                     built.objects.push(SequenceObject {
                         id,
@@ -2019,6 +2053,7 @@ fn build_objects(
                         index,
                         level: None,
                         shape,
+                        measures: Some(measures),
                     });
                 }
             }
@@ -2063,6 +2098,7 @@ fn build_objects(
                             index: 0,
                             level: None,
                             shape,
+                            measures: None,
                         });
                         previous = Some(o);
                     }
@@ -2103,12 +2139,18 @@ fn build_objects(
                         if o > 0 {
                             built.pairs.push((o - 1, o));
                         }
+                        let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
+                        let measures = largest.map(|c| {
+                            let outline = outline_in_sensels(c, options.contour.units);
+                            recording.region_measures(&frame, threshold, &outline)
+                        });
                         built.objects.push(SequenceObject {
                             id: o,
                             frame: t,
                             index,
                             level: Some(level),
                             shape,
+                            measures,
                         });
                     }
                     Err(why) => built.skipped_frames.push(SkippedFrame {
@@ -2251,6 +2293,81 @@ mod tests {
 
     fn disc(cx: f64, cy: f64, radius: f64) -> impl Fn(usize, usize) -> bool {
         move |r, c| (r as f64 - cy).hypot(c as f64 - cx) <= radius
+    }
+
+    #[test]
+    fn each_foot_of_a_recording_of_both_has_its_own_measures() {
+        // Two feet side by side, unevenly loaded: each object's measures are those of its own
+        // sensors, and together they are the frame's.
+        let (left, right) = (disc(6.0, 11.0, 4.0), disc(17.0, 12.0, 5.0));
+        let mut rec = recording(3, |_, r, c| left(r, c) || right(r, c));
+        let mut data = rec.data().to_vec();
+        for (i, v) in data.iter_mut().enumerate() {
+            let (r, c) = ((i % 576) / 24, i % 24);
+            if right(r, c) {
+                *v = 40.0 + c as f32;
+            }
+        }
+        rec = Recording::new(3, 24, 24, data, vec![true; 576]).unwrap();
+        for options in [
+            SequenceOptions::default(),
+            SequenceOptions {
+                model: ObjectModel::Isocontour,
+                ..SequenceOptions::default()
+            },
+        ] {
+            let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+            if options.model == ObjectModel::Isocontour {
+                // The largest region of the lowest level: both feet are one level's regions, so
+                // the object is the larger foot alone.
+                let m = run.objects[0].measures.as_ref().unwrap();
+                let n = (0..576).filter(|&i| right(i / 24, i % 24)).count();
+                assert_eq!(m.contact_sensors, n);
+                continue;
+            }
+            let frame = &rec.measures(0.0)[0];
+            let objects: Vec<_> = run.objects.iter().filter(|o| o.frame == 0).collect();
+            assert_eq!(objects.len(), 2);
+            let m: Vec<&FrameMeasures> = objects
+                .iter()
+                .map(|o| o.measures.as_ref().unwrap())
+                .collect();
+            let foot = |inside: &dyn Fn(usize, usize) -> bool| {
+                let cells = (0..576).filter(|&i| inside(i / 24, i % 24));
+                let (n, load, peak, x) = cells.fold((0, 0.0, 0.0f64, 0.0), |(n, l, p, x), i| {
+                    let v = f64::from(rec.data()[i]);
+                    (n + 1, l + v, p.max(v), x + v * (i % 24) as f64)
+                });
+                (n, load, peak, x / load)
+            };
+            // The larger (right) foot comes first.
+            for (m, inside) in m
+                .iter()
+                .zip([&right as &dyn Fn(usize, usize) -> bool, &left])
+            {
+                let (n, load, peak, cop_x) = foot(inside);
+                assert_eq!(m.contact_sensors, n);
+                assert!((m.total_force - load).abs() < 1e-9 * load);
+                assert_eq!(m.peak_pressure, peak);
+                assert!((m.cop.unwrap()[0] - cop_x).abs() < 1e-9);
+            }
+            assert_eq!(
+                m[0].contact_sensors + m[1].contact_sensors,
+                frame.contact_sensors
+            );
+            assert!((m[0].total_force + m[1].total_force - frame.total_force).abs() < 1e-9);
+            assert_eq!(
+                m[0].peak_pressure.max(m[1].peak_pressure),
+                frame.peak_pressure
+            );
+        }
+        // Surfaces: one object per frame, the frame's measures.
+        let surface = SequenceOptions {
+            model: ObjectModel::Surface,
+            ..SequenceOptions::default()
+        };
+        let run = run_sequence(&rec, &surface, &|_, _, _| {}).unwrap();
+        assert!(run.objects.iter().all(|o| o.measures.is_none()));
     }
 
     #[test]

@@ -279,16 +279,21 @@ pub fn table_rows<'py>(py: Python<'py>, t: &Table) -> PyResult<Bound<'py, PyList
     for r in &t.rows {
         let d = PyDict::new(py);
         for (k, c) in t.header.iter().zip(r) {
-            match c {
-                Cell::Int(v) => d.set_item(k, v)?,
-                Cell::Float(v, _) => d.set_item(k, v)?,
-                Cell::Text(s) => d.set_item(k, s)?,
-                Cell::Empty => d.set_item(k, py.None())?,
-            }
+            d.set_item(k, cell_to_py(py, c)?)?;
         }
         rows.append(d)?;
     }
     Ok(rows)
+}
+
+/// A table cell as a Python int, float, str or None.
+pub fn cell_to_py<'py>(py: Python<'py>, c: &Cell) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match c {
+        Cell::Int(v) => v.into_pyobject(py)?.into_any(),
+        Cell::Float(v, _) => v.into_pyobject(py)?.into_any(),
+        Cell::Text(s) => s.into_pyobject(py)?.into_any(),
+        Cell::Empty => py.None().into_bound(py),
+    })
 }
 
 /// A JSON value as the equivalent Python object (dicts, lists, numbers, strings, None).

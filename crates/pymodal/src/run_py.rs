@@ -12,7 +12,7 @@ use pyo3::types::{PyDict, PyList};
 use crate::arrays::checked_array;
 use crate::errors::{internal, to_py};
 use crate::match_py::PyMatch;
-use crate::options_py::{frame_range, json_to_py, table_rows, MatchKw, RecordingKw};
+use crate::options_py::{cell_to_py, frame_range, json_to_py, table_rows, MatchKw, RecordingKw};
 
 /// A recording from a path, a (T, H, W) or (H, W) array (NaN = no sensor), or a `Recording`,
 /// and where it came from (a file's name and SHA-256).
@@ -74,7 +74,10 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 ///   points_mm}`` (``id`` is the index in this list; ``level`` the isobaric level of an
 ///   isocontour run in the recording's units and ``level_kpa`` in kPa when those units are
 ///   known, both None otherwise; ``points`` (n, d) array in sensels, ``points_mm`` its x, y in
-///   mm or None when the pitch is unknown);
+///   mm or None when the pitch is unknown) and the other columns of ``objects.csv``: the
+///   centroid and the measures of the sensors inside the outline (``contact_sensors``,
+///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
+///   units allow, like ``frames``; None for surfaces);
 /// - ``tracks``: list of (k, 1 + d) float arrays of ``(frame, x, y[, z])`` rows, one per track;
 /// - ``frames``: list of dicts of per-frame measures (``frame``, ``time_s``,
 ///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
@@ -247,7 +250,10 @@ fn objects<'py>(
     result: &SequenceResult,
 ) -> PyResult<Bound<'py, PyList>> {
     let objects = PyList::empty(py);
-    for o in &result.objects {
+    // The columns of objects.csv besides those set below (centroids, the measures inside each
+    // outline), written as that table writes them.
+    let table = report::objects_table(rec, result);
+    for (o, row) in result.objects.iter().zip(&table.rows) {
         let d = PyDict::new(py);
         d.set_item("id", o.id)?;
         d.set_item("frame", o.frame)?;
@@ -271,6 +277,11 @@ fn objects<'py>(
                 d.set_item("points_mm", PyArray1::from_vec(py, mm).reshape([n, 2])?)?;
             }
             None => d.set_item("points_mm", py.None())?,
+        }
+        for (k, c) in table.header.iter().zip(row) {
+            if !d.contains(k)? {
+                d.set_item(k, cell_to_py(py, c)?)?;
+            }
         }
         objects.append(d)?;
     }

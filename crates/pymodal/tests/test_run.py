@@ -45,6 +45,29 @@ def test_run_on_known_motion():
     assert max(len(t) for t in res["tracks"]) == len(frames)
 
 
+def test_each_foot_has_its_own_measures():
+    # Two feet side by side: each object measures the sensors inside its own outline (as
+    # objects.csv), and the feet together are the frame (frames.csv).
+    left, right = moving_blob(frames=3, cols=26), moving_blob(frames=3, cols=26)
+    both = np.concatenate([left, 0.5 * right], axis=2)
+    res = pymodal.run(both, pitch_mm=5.0, units="kPa")
+    first = [o for o in res["objects"] if o["frame"] == 0]
+    assert len(first) == 2
+    loads = [o["total_force_n"] for o in first]
+    np.testing.assert_allclose(sum(loads), res["frames"][0]["total_force_n"], rtol=1e-9)
+    np.testing.assert_allclose(loads[1] / loads[0], 0.5, rtol=1e-6)
+    frame0 = both[0].astype(np.float64)
+    assert first[0]["contact_sensors"] == np.count_nonzero(frame0[:, :26])
+    assert first[0]["peak_pressure_kpa"] == pytest.approx(frame0[:, :26].max(), rel=1e-6)
+    r, c = np.mgrid[0:40, 0:26]
+    w = frame0[:, :26]
+    assert first[0]["cop_x_mm"] == pytest.approx(5.0 * (w * c).sum() / w.sum(), rel=1e-9)
+    assert first[1]["cop_x_mm"] == pytest.approx(5.0 * ((w * c).sum() / w.sum() + 26), rel=1e-9)
+    assert first[0]["centroid_x_mm"] == pytest.approx(5.0 * first[0]["centroid_x"])
+    surf = pymodal.run(both, model="surface", surface_nodes=40)
+    assert all(o["contact_sensors"] is None for o in surf["objects"])
+
+
 def test_run_models_and_options():
     frames = moving_blob(frames=4)
     iso = pymodal.run(frames, model="isocontour", iso_levels=5)
