@@ -61,8 +61,8 @@ pub fn run(args: InspectArgs) -> Result<(), CliError> {
     println!("pressure units  {}", show(&d["pressure_units"]));
     println!("noise threshold {}", show(&d["noise_threshold"]));
     println!(
-        "per-frame measures above {threshold} ({} loaded frames):",
-        d["loaded_frames"]
+        "per-frame measures over all {} frames ({} with contact), values of at least {threshold}:",
+        d["frames"], d["loaded_frames"]
     );
     if let Some(m) = d["measures"].as_object() {
         for (name, s) in m {

@@ -121,7 +121,9 @@ pub struct Recording {
 /// The per-frame measures of a recording (see [`Recording::measures`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameMeasures {
-    /// Number of existing sensors with a value above the contact threshold.
+    /// Number of existing sensors in contact: a value above 0 and at or above the contact
+    /// threshold (the noise threshold sets values below it to 0, so a value equal to it is a
+    /// contact, as in the outlines).
     pub contact_sensors: usize,
     /// Contact area: `contact_sensors × sensel area` in mm², or in sensels when the area is unknown.
     pub contact_area: f64,
@@ -403,8 +405,8 @@ impl Recording {
         Grid::new(self.rows, self.cols, out).expect("finite values")
     }
 
-    /// Per-frame measures, counting sensors with a value strictly above `threshold` (use 0 for
-    /// "any load").
+    /// Per-frame measures, counting sensors with a value above 0 and at or above `threshold`
+    /// (values below the noise threshold are no contact; use 0 for "any load").
     pub fn measures(&self, threshold: f64) -> Vec<FrameMeasures> {
         self.measures_of(threshold, 0..self.n_frames)
     }
@@ -483,7 +485,7 @@ struct MeasureSum {
 impl MeasureSum {
     /// Adds an existing sensor's value `v` at row `r`, column `c`.
     fn add(&mut self, v: f64, r: usize, c: usize, threshold: f64) {
-        if v > threshold {
+        if v > 0.0 && v >= threshold {
             self.contact += 1;
             self.load += v;
             self.moment[0] += v * c as f64;
@@ -894,8 +896,8 @@ mod tests {
         rec.units = "kPa".into();
         let frame = rec.frame(0).unwrap();
         let outline = [[-0.5, 0.5], [2.5, 0.5], [2.5, 2.5], [-0.5, 2.5]];
-        let m = rec.region_measures(&frame, 5.0, &outline);
-        // Sensors 5, 7, 10, 11, 12 (6 is missing); 5 is not above the threshold.
+        let m = rec.region_measures(&frame, 6.0, &outline);
+        // Sensors 5, 7, 10, 11, 12 (6 is missing); 5 is below the threshold.
         let inside = [7.0, 10.0, 11.0, 12.0];
         let load: f64 = inside.iter().sum();
         assert_eq!(m.contact_sensors, 4);
@@ -909,9 +911,13 @@ mod tests {
         let cop_y = (7.0 + 2.0 * (10.0 + 11.0 + 12.0)) / load;
         let cop = m.cop.unwrap();
         assert!((cop[0] - cop_x).abs() < 1e-12 && (cop[1] - cop_y).abs() < 1e-12);
+        // A value equal to the noise threshold is a contact, as in the outlines (the noise
+        // threshold sets only the values below it to 0); 0 never is.
+        assert_eq!(rec.measures(7.0)[0].contact_sensors, 13);
+        assert_eq!(rec.measures(0.0)[0].contact_sensors, 18);
         // The whole sensor inside one outline: the frame's measures, to the bit.
         let all = [[-1.0, -1.0], [5.0, -1.0], [5.0, 4.0], [-1.0, 4.0]];
-        assert_eq!(rec.region_measures(&frame, 5.0, &all), rec.measures(5.0)[0]);
+        assert_eq!(rec.region_measures(&frame, 6.0, &all), rec.measures(6.0)[0]);
         // Outside the sensor, or fewer than three points: nothing.
         let none = rec.region_measures(&frame, 0.0, &[[10.0, 10.0], [12.0, 10.0], [11.0, 12.0]]);
         assert_eq!((none.contact_sensors, none.cop), (0, None));

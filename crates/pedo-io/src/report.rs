@@ -522,7 +522,8 @@ fn measure_units(recording: &Recording) -> MeasureUnits {
     }
 }
 
-/// The per-frame measures of frames `start..end` counting values above `threshold`: frame,
+/// The per-frame measures of frames `start..end` counting values at or above `threshold` (and
+/// above 0, [`Recording::measures`]): frame,
 /// time, contact sensors, contact area (mm² when the sensel area is known), total force (N when
 /// the pressure units and the sensel area are known), peak pressure (kPa when the units are
 /// known), centre of pressure in pixels and mm.
@@ -746,7 +747,7 @@ fn min_mean_max(values: impl Iterator<Item = f64>) -> Value {
 }
 
 /// What a recording holds: format, size, pitch, frame rate, units, noise threshold and the
-/// min / mean / max over frames of the per-frame measures above `threshold` (as in
+/// min / mean / max over all frames of the per-frame measures at or above `threshold` (as in
 /// [`frames_table`]; the unit is in each measure's name).
 pub fn describe(recording: &Recording, input: &InputInfo, threshold: f64) -> Value {
     let u = measure_units(recording);
