@@ -9,6 +9,7 @@ use clap::Args;
 use modal_core::shape::looks_like_closed_contour;
 use modal_core::{Search, Shape, Topology};
 use pedo_io::figure::{FigureAxes, MatchFigure, ObjectLabel};
+use pedo_io::sequence::SenselAspect;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -190,7 +191,16 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let mut o = params.to_match_options(a.dim(), ordered)?;
     o.ordered = Some(ordered);
     let t_match = Instant::now();
-    let r = modal_core::match_shapes(&a, &b, &o)?;
+    // Two frames of one sensor are matched in its true proportions, as `run` matches them.
+    let aspect = match (oa.frame(), ob.frame()) {
+        (Some(_), Some(_)) if oa.pitch_mm == ob.pitch_mm => SenselAspect::of_pitch(oa.pitch_mm),
+        _ => SenselAspect::SQUARE,
+    };
+    let r = aspect.back(modal_core::match_shapes(
+        &aspect.shape(&a),
+        &aspect.shape(&b),
+        &o,
+    )?);
     let match_time = t_match.elapsed().as_secs_f64();
     let rows = r.pairs.iter().map(|p| {
         vec![

@@ -1135,3 +1135,71 @@ fn the_run_reports_load_series_is_the_frames_csv_load_with_its_units() {
         assert!(!peak.contains("(units)"), "{peak}");
     }
 }
+
+#[test]
+fn two_frames_of_oblong_sensels_are_matched_in_their_true_proportions() {
+    // footscan's sensels are 7.62 mm tall and 5.08 mm wide: `match` on two frames of such a
+    // grid gives the matches of the two outlines with y scaled by 1.5, as `run` does.
+    let walk = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
+    let dir = temp_dir("match-oblong");
+    let rec = pedo_io::formats::read_recording(Path::new(walk)).unwrap();
+    let opts = pedo_io::ContourOptions {
+        resample: pedo_io::Resample::Spacing(1.0),
+        include_holes: false,
+        ..Default::default()
+    };
+    for (frame, name) in [(40, "a.xy"), (41, "b.xy")] {
+        let cs = pedo_io::contours(&rec.frame(frame).unwrap(), &opts).unwrap();
+        let largest = cs
+            .iter()
+            .max_by(|x, y| x.area().total_cmp(&y.area()))
+            .unwrap();
+        let text: String = largest
+            .points
+            .iter()
+            .map(|p| format!("{:?} {:?}\n", p[0], p[1] * 1.5))
+            .collect();
+        std::fs::write(dir.join(name), text).unwrap();
+    }
+    let matches = |args: &[&str], out: &str| {
+        let out = dir.join(out);
+        let o = pedomatch(
+            &[
+                args,
+                &[
+                    "--report",
+                    "none",
+                    "--figures",
+                    "none",
+                    "--out",
+                    out.to_str().unwrap(),
+                ],
+            ]
+            .concat(),
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let csv = std::fs::read_to_string(out.join("matches.csv")).unwrap();
+        // node_a, node_b and excess (the costs are normalised alike, but written rounded).
+        csv.lines()
+            .map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                format!("{},{},{}", f[0], f[1], f[3])
+            })
+            .collect::<Vec<_>>()
+    };
+    let (a, b) = (dir.join("a.xy"), dir.join("b.xy"));
+    let scaled = matches(
+        &["match", a.to_str().unwrap(), b.to_str().unwrap()],
+        "scaled",
+    );
+    let frames = ["match", walk, walk, "--frame", "40", "--frame-b", "41"];
+    let oblong = matches(
+        &[&frames[..], &["--pitch-mm", "5.08,7.62"]].concat(),
+        "oblong",
+    );
+    assert!(scaled.len() > 50);
+    assert_eq!(oblong, scaled);
+    let square = matches(&frames, "square");
+    assert_ne!(square, scaled, "the proportions change the matches");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -69,6 +69,12 @@ pub struct SequenceOptions {
     /// transform): the affinity matrix alone is `n × m` numbers per pair, the bulk of a long
     /// recording's memory. On by default; the CLI and batch runs turn it off.
     pub keep_match_details: bool,
+    /// The sensor's row pitch over its column pitch (1 for square sensels; 1.5 for footscan's
+    /// 7.62 × 5.08 mm). Pairs are matched with y scaled by it, in the sensor's true proportions,
+    /// so that the rotation search, the Gaussian widths and the modes see the foot's true shape;
+    /// the objects, the outputs and the matches' transforms stay in sensels. [`RunParams`] sets it
+    /// from the recording's pitch; default 1.
+    pub sensel_aspect: f64,
 }
 
 impl Default for SequenceOptions {
@@ -92,6 +98,7 @@ impl Default for SequenceOptions {
             matching: for_frames(MatchOptions::default()),
             drift_reference: 0,
             keep_match_details: true,
+            sensel_aspect: 1.0,
         }
     }
 }
@@ -381,6 +388,7 @@ impl RunParams {
         o.surface.preprocess.threshold = Some(noise);
         o.surface.preprocess.sigma = sigma;
         o.surface.max_nodes = Some(self.surface_nodes);
+        o.sensel_aspect = SenselAspect::of_pitch(recording.pitch_mm).0;
         Ok(o)
     }
 
@@ -1626,7 +1634,12 @@ fn match_all(
     let mut pairs = Vec::with_capacity(candidates.len());
     let mut skipped = Vec::new();
     for window in candidates.chunks(MATCH_WINDOW) {
-        let prepared = prepare_objects(objects, window, &options.matching);
+        let prepared = prepare_objects(
+            objects,
+            window,
+            &options.matching,
+            SenselAspect::of(options),
+        );
         let outcomes: Vec<std::result::Result<PairMatch, SkippedPair>> = window
             .par_iter()
             .map(|&(a, b)| {
@@ -1667,13 +1680,86 @@ fn prepare_objects(
     objects: &[SequenceObject],
     window: &[(usize, usize)],
     options: &MatchOptions,
+    aspect: SenselAspect,
 ) -> Prepared {
     let mut ids: Vec<usize> = window.iter().flat_map(|&(a, b)| [a, b]).collect();
     ids.sort_unstable();
     ids.dedup();
     ids.into_par_iter()
-        .map(|o| (o, prepare(&objects[o].shape, options)))
+        .map(|o| (o, prepare(&aspect.shape(&objects[o].shape), options)))
         .collect()
+}
+
+/// The coordinates pairs are matched in: y scaled by the sensor's row pitch over its column
+/// pitch ([`SequenceOptions::sensel_aspect`]), x in sensels, so that a grid of oblong sensels
+/// is matched in its true proportions. Square sensels (1) leave every shape as it is.
+///
+/// ```
+/// use pedo_io::sequence::SenselAspect;
+/// use modal_core::{Shape, Topology};
+/// let aspect = SenselAspect::of_pitch(Some([5.08, 7.62])); // footscan: 1.5
+/// let s = Shape::new(2, vec![0.0, 0.0, 2.0, 0.0, 0.0, 2.0], Topology::ClosedContour)?;
+/// assert_eq!(aspect.shape(&s).coords(), &[0.0, 0.0, 2.0, 0.0, 0.0, 3.0]);
+/// # Ok::<(), modal_core::ModalError>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SenselAspect(f64);
+
+impl SenselAspect {
+    /// Square sensels: shapes are matched as they are.
+    pub const SQUARE: Self = Self(1.0);
+
+    /// The aspect of a sensor whose pitch is `pitch_mm` (x, y); square when unknown.
+    pub fn of_pitch(pitch_mm: Option<[f64; 2]>) -> Self {
+        Self::checked(pitch_mm.map_or(1.0, |[x, y]| y / x))
+    }
+
+    fn of(options: &SequenceOptions) -> Self {
+        Self::checked(options.sensel_aspect)
+    }
+
+    fn checked(a: f64) -> Self {
+        Self(if a.is_finite() && a > 0.0 { a } else { 1.0 })
+    }
+
+    /// `shape` in matching coordinates.
+    pub fn shape<'s>(self, shape: &'s Shape) -> std::borrow::Cow<'s, Shape> {
+        if self.0 == 1.0 {
+            return std::borrow::Cow::Borrowed(shape);
+        }
+        let d = shape.dim();
+        let mut coords = shape.coords().to_vec();
+        coords
+            .iter_mut()
+            .skip(1)
+            .step_by(d)
+            .for_each(|y| *y *= self.0);
+        // Scaling one axis keeps a valid shape valid (finite, distinct points).
+        let scaled = Shape::new(d, coords, shape.topology().clone()).expect("a scaled valid shape");
+        std::borrow::Cow::Owned(scaled)
+    }
+
+    /// A result matched in matching coordinates, with its transform and aligned nodes back in
+    /// sensels (the pairs are node indices, the same in both).
+    pub fn back(self, mut r: MatchResult) -> MatchResult {
+        if self.0 == 1.0 {
+            return r;
+        }
+        let d = r.transform.dim;
+        let s = |i: usize| if i == 1 { self.0 } else { 1.0 };
+        for i in 0..d {
+            for j in 0..d {
+                r.transform.m[i][j] *= s(j) / s(i);
+            }
+            r.transform.t[i] /= s(i);
+        }
+        r.aligned_a
+            .iter_mut()
+            .skip(1)
+            .step_by(d)
+            .for_each(|y| *y /= self.0);
+        r
+    }
 }
 
 fn match_pair(
@@ -1685,15 +1771,23 @@ fn match_pair(
     options: &SequenceOptions,
 ) -> Result<PairMatch> {
     let (oa, ob) = (&objects[a], &objects[b]);
+    let aspect = SenselAspect::of(options);
     // The pairs run in parallel on the pool, so each pair runs on one thread.
     let result = match (part, prepared.get(&a), prepared.get(&b)) {
-        (Some(part), _, _) => match_part_with_whole(objects, prepared, part, b, &options.matching),
+        (Some(part), _, _) => {
+            match_part_with_whole(objects, prepared, part, b, &options.matching, aspect)
+        }
         (None, Some(Ok(pa)), Some(Ok(pb))) => {
             match_prepared(pa, pb, &options.matching, Parallelism::Serial)
         }
         // The error names the object's role in the pair, as the one-call form words it.
-        _ => match_shapes(&oa.shape, &ob.shape, &options.matching),
+        _ => match_shapes(
+            &aspect.shape(&oa.shape),
+            &aspect.shape(&ob.shape),
+            &options.matching,
+        ),
     }
+    .map(|r| aspect.back(r))
     .map_err(|e| {
         IoError::invalid(format!(
             "matching object {} (frame {}) with object {} (frame {}): {e}",
@@ -1805,10 +1899,17 @@ fn match_part_with_whole(
     part: &PartOfWhole,
     b: usize,
     opts: &MatchOptions,
+    aspect: SenselAspect,
 ) -> std::result::Result<MatchResult, ModalError> {
-    let whole = &objects[part.whole].shape;
-    let siblings: Vec<&Shape> = part.siblings.iter().map(|&s| &objects[s].shape).collect();
-    let own = &objects[part.part].shape;
+    let whole = aspect.shape(&objects[part.whole].shape);
+    let siblings: Vec<_> = part
+        .siblings
+        .iter()
+        .map(|&s| aspect.shape(&objects[s].shape))
+        .collect();
+    let siblings: Vec<&Shape> = siblings.iter().map(|s| s.as_ref()).collect();
+    let own = aspect.shape(&objects[part.part].shape);
+    let (whole, own) = (whole.as_ref(), own.as_ref());
     let portion = portion_of_whole(own, whole, &siblings);
     let whole_is_b = part.whole == b;
     if portion.len() < 3 {
@@ -2293,6 +2394,42 @@ mod tests {
 
     fn disc(cx: f64, cy: f64, radius: f64) -> impl Fn(usize, usize) -> bool {
         move |r, c| (r as f64 - cy).hypot(c as f64 - cx) <= radius
+    }
+
+    #[test]
+    fn oblong_sensels_are_matched_in_their_true_proportions() {
+        // An ellipse turning by 4° a frame on 7.62 × 5.08 mm sensels (footscan's).
+        let mut rec = recording(5, |f, r, c| {
+            let t = (4.0 * f as f64).to_radians();
+            let (x, y) = (c as f64 - 11.5, (r as f64 - 11.5) * 1.5);
+            let (u, v) = (x * t.cos() + y * t.sin(), -x * t.sin() + y * t.cos());
+            (u / 9.0).powi(2) + (v / 15.0).powi(2) <= 1.0
+        });
+        rec.pitch_mm = Some([5.08, 7.62]);
+        let options = RunParams::default().to_options(&rec).unwrap();
+        assert!((options.sensel_aspect - 1.5).abs() < 1e-12);
+        let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+        assert_eq!(run.pairs.len(), 4);
+        let scaled = |s: &Shape| SenselAspect(1.5).shape(s).into_owned();
+        for p in &run.pairs {
+            let (a, b) = (&run.objects[p.a].shape, &run.objects[p.b].shape);
+            // The pairs of the shapes in true proportions, to the bit.
+            let truth = match_shapes(&scaled(a), &scaled(b), &options.matching).unwrap();
+            assert_eq!(p.result.pairs, truth.pairs);
+            // The transform and the aligned nodes are in sensels, and agree.
+            let moved = p.result.transform.apply(a.coords());
+            for (m, q) in moved.iter().zip(&p.result.aligned_a) {
+                assert!((m - q).abs() < 1e-9, "{m} {q}");
+            }
+            let back = SenselAspect(1.5).back(truth);
+            assert_eq!(back.transform, p.result.transform);
+        }
+        // Square sensels are matched as they are.
+        rec.pitch_mm = Some([5.08, 5.08]);
+        assert_eq!(
+            RunParams::default().to_options(&rec).unwrap().sensel_aspect,
+            1.0
+        );
     }
 
     #[test]
