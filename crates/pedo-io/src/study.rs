@@ -401,9 +401,18 @@ pub fn require_objects(
         return Ok(());
     }
     let (a, b) = options.frames.unwrap_or((0, recording.n_frames()));
+    let min = options.min_nodes.max(3);
+    if options.model == ObjectModel::Isocontour {
+        let frame = match options.iso_frame {
+            Some(f) => format!("frame {f}"),
+            None => format!("the frame of largest load in {a}..{b}"),
+        };
+        return Err(IoError::no_object(format!(
+            "no isobaric level of {frame} gives an object of at least {min} nodes: the levels run up to that frame's peak, so a single hot or stuck sensel can put them all above the foot (see the iso_frame and iso_levels options)"
+        )));
+    }
     Err(IoError::no_object(format!(
-        "no object to match in frames {a}..{b}: no frame holds an object of at least {} nodes above the noise threshold (see the noise and frames options)",
-        options.min_nodes.max(3)
+        "no object to match in frames {a}..{b}: no frame holds an object of at least {min} nodes above the noise threshold (see the noise and frames options)"
     )))
 }
 
@@ -1673,6 +1682,38 @@ mod tests {
         assert_eq!(read.units, RowUnits::default());
         assert_eq!(read.frames, rows[0].frames);
         assert!(rows_of_study_json(&json!({"rows": "?"})).is_empty());
+    }
+
+    #[test]
+    fn an_isocontour_run_without_objects_says_why() {
+        // A foot of 100 kPa with one stuck sensel at 5000: the levels, up to the peak, all lie
+        // above the foot.
+        let (rows, cols) = (24, 16);
+        let mut data: Vec<f32> = (0..rows * cols)
+            .map(|i| {
+                let (r, c) = ((i / cols) as f64 - 12.0, (i % cols) as f64 - 8.0);
+                if (r / 9.0).powi(2) + (c / 5.0).powi(2) <= 1.0 {
+                    100.0
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        data[0] = 5000.0;
+        let rec = Recording::new(1, rows, cols, data, vec![true; rows * cols]).unwrap();
+        let options = SequenceOptions {
+            model: ObjectModel::Isocontour,
+            ..SequenceOptions::default()
+        };
+        let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+        assert!(run.objects.is_empty());
+        let e = require_objects(0, &rec, &options).unwrap_err().to_string();
+        assert!(
+            e.contains("no isobaric level of the frame of largest load")
+                && e.contains("hot or stuck sensel")
+                && e.contains("iso_levels"),
+            "{e}"
+        );
     }
 
     #[test]
