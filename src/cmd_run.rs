@@ -271,9 +271,10 @@ fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: Tab
         println!("{}", pedo_io::study::no_pairs_note(isocontour, pairs.len()));
     } else {
         println!(
-            "mean local matches {:.1} %, optimisation matches {:.1} %, mean cost {:.4}",
+            "mean local matches {:.1} %, optimisation matches {:.1} % ({:.1} % trackable), mean cost {:.4}",
             float("mean_local_percent"),
             float("mean_optimisation_percent"),
+            float("mean_trackable_percent"),
             float("mean_cost")
         );
     }

@@ -245,6 +245,18 @@ fn demo_on_bundled_recording() {
         }
     }
     assert_eq!(trackable, steps);
+    // pairs.csv counts them per pair.
+    let mut per_pair = std::collections::HashMap::new();
+    for ((a, _), (b, _)) in &trackable {
+        *per_pair.entry((*a, *b)).or_insert(0.0) += 1.0;
+    }
+    for row in &rows {
+        let ids = (num(row, "id_a") as u64, num(row, "id_b") as u64);
+        let n = per_pair.get(&ids).copied().unwrap_or(0.0);
+        assert_eq!(num(row, "trackable_matches"), n, "{ids:?}");
+        let min = num(row, "nodes_a").min(num(row, "nodes_b"));
+        assert!((num(row, "trackable_percent") - 100.0 * n / min).abs() <= 0.05);
+    }
     assert!(
         refused > 0,
         "some matches of these frames step further than the rule allows"

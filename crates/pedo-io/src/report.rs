@@ -227,6 +227,8 @@ pub(crate) fn pairs_header(recording: &Recording) -> Table {
         "optimisation_percent",
         "matches_after_excess",
         "mean_cost",
+        "trackable_matches",
+        "trackable_percent",
         "status",
         "reason",
     ] {
@@ -245,6 +247,8 @@ pub(crate) fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
         Cell::Float(row.optimisation_percent, 1),
         Cell::int(row.matches_after_excess),
         Cell::Float(row.mean_cost, 6),
+        Cell::int(row.trackable_matches),
+        Cell::Float(row.trackable_percent, 1),
         Cell::Text("ok".into()),
         Cell::Empty,
     ]);
@@ -254,7 +258,7 @@ pub(crate) fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
 /// The row of [`pairs_table`] of a pair that could not be matched.
 pub(crate) fn skipped_pair_cells(recording: &Recording, s: &SkippedPairRow) -> Vec<Cell> {
     let mut cells = pair_objects_cells(recording, &s.objects);
-    cells.extend(std::iter::repeat_n(Cell::Empty, 6));
+    cells.extend(std::iter::repeat_n(Cell::Empty, 8));
     cells.extend([Cell::Text("skipped".into()), Cell::Text(s.reason.clone())]);
     cells
 }
@@ -870,6 +874,7 @@ pub fn run_summary_of(
         "mean_local_percent": c.mean_local_percent(),
         "mean_optimisation_percent": c.mean_optimisation_percent(),
         "mean_cost": c.mean_cost(),
+        "mean_trackable_percent": c.mean_trackable_percent(),
         "timings_s": stages,
     })
 }

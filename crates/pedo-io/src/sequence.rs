@@ -630,6 +630,13 @@ pub struct PairRow {
     /// Mean normalised modal cost ([`modal_core::MatchPair::cost`], in [0, 1]) of the matches
     /// that are not excess; 0 when there are none.
     pub mean_cost: f64,
+    /// One-to-one matches that node tracks may follow: within the step rule of
+    /// [`crate::track::step_allowed`] (`matches.csv`'s `trackable`). A one-to-one assignment
+    /// pairs every node of the smaller object, so `optimisation_percent` is near 100 by
+    /// construction; this says how many of those pairs a track may take.
+    pub trackable_matches: usize,
+    /// `trackable_matches` as a percentage (0–100) of `min(n, m)`.
+    pub trackable_percent: f64,
 }
 
 /// Matches of one pair of objects (indices into [`SequenceResult::objects`]).
@@ -908,6 +915,8 @@ pub struct RunCounts {
     pub optimisation_percent_sum: f64,
     /// Sum over the matched pairs, in order, of [`PairRow::mean_cost`].
     pub cost_sum: f64,
+    /// Sum over the matched pairs, in order, of [`PairRow::trackable_percent`].
+    pub trackable_percent_sum: f64,
     /// Tracks chained.
     pub tracks: usize,
     /// Tracks of 3 steps or more.
@@ -935,6 +944,7 @@ impl Default for RunCounts {
             local_percent_sum: zero(),
             optimisation_percent_sum: zero(),
             cost_sum: zero(),
+            trackable_percent_sum: zero(),
             tracks: 0,
             tracks_3_or_more: 0,
             splits: Vec::new(),
@@ -976,6 +986,7 @@ impl RunCounts {
         self.local_percent_sum += row.local_percent;
         self.optimisation_percent_sum += row.optimisation_percent;
         self.cost_sum += row.mean_cost;
+        self.trackable_percent_sum += row.trackable_percent;
     }
 
     fn add_track(&mut self, steps: usize) {
@@ -1000,6 +1011,10 @@ impl RunCounts {
     /// Mean over the matched pairs of their mean cost (`None` without pairs).
     pub fn mean_cost(&self) -> Option<f64> {
         self.mean(self.cost_sum)
+    }
+    /// Mean trackable matches over the matched pairs, in % (`None` without pairs).
+    pub fn mean_trackable_percent(&self) -> Option<f64> {
+        self.mean(self.trackable_percent_sum)
     }
 }
 
@@ -1804,6 +1819,10 @@ fn match_pair(
     } else {
         one_to_one.len()
     };
+    let trackable = one_to_one
+        .iter()
+        .filter(|p| honest_step_of(oa, p.a, ob, p.b))
+        .count();
     let mean_cost = if one_to_one.is_empty() {
         0.0
     } else {
@@ -1817,6 +1836,8 @@ fn match_pair(
         optimisation_percent: 100.0 * optimisation as f64 / min,
         matches_after_excess: result.pairs.len(),
         mean_cost,
+        trackable_matches: trackable,
+        trackable_percent: 100.0 * trackable as f64 / min,
     };
     let mut result = result;
     if !options.keep_match_details {

@@ -217,6 +217,7 @@ fn kind_of_empty(name: &str) -> Kind {
         | "trackable"
         | "contact_sensors"
         | "local_matches"
+        | "trackable_matches"
         | "optimisation_matches"
         | "matches_after_excess"
         | "frames"

@@ -68,7 +68,8 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 ///
 /// - ``table``: list of dicts, one per matched pair (ids, 0-based frames, their times
 ///   ``time_a_s``/``time_b_s`` when the frame rate is known, node counts, local matches and %,
-///   optimisation matches and %, matches after the excess step, mean cost);
+///   optimisation matches and %, matches after the excess step, mean cost, trackable matches
+///   and %, as ``pairs.csv``);
 /// - ``matches``: list of :class:`Match`, aligned with ``table``;
 /// - ``objects``: list of dicts ``{id, frame, time_s, index, level, level_kpa, points,
 ///   points_mm}`` (``id`` is the index in this list; ``level`` the isobaric level of an

@@ -36,6 +36,8 @@ def test_run_on_known_motion():
         assert row["optimisation_matches"] == min(n, k)
         assert row["matches_after_excess"] == max(n, k) == len(m.pairs)
         assert 0 <= row["local_matches"] <= min(n, k)
+        # A blob moving half a sensel a frame: every one-to-one match is a track step.
+        assert row["trackable_matches"] == int((~m.excess).sum()) == min(n, k)
     objects = res["objects"]
     assert [o["points"].shape[0] for o in objects[:2]] == [table[0]["nodes_a"], table[0]["nodes_b"]]
     steps = np.concatenate([np.diff(t, axis=0) for t in res["tracks"] if len(t) > 1])
@@ -43,6 +45,7 @@ def test_run_on_known_motion():
     median = np.median(steps[:, 1:3], axis=0)
     np.testing.assert_allclose(median, VELOCITY, atol=0.25)
     assert max(len(t) for t in res["tracks"]) == len(frames)
+    assert res["summary"]["mean_trackable_percent"] == pytest.approx(100.0)
 
 
 def test_each_foot_has_its_own_measures():

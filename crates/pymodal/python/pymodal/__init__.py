@@ -56,6 +56,7 @@ class RunResult(dict[str, _Any]):
             ("tracks", s.get("tracks")),
             ("mean local matches", num(s.get("mean_local_percent"), ".1f") + " %"),
             ("mean optimisation matches", num(s.get("mean_optimisation_percent"), ".1f") + " %"),
+            ("mean trackable matches", num(s.get("mean_trackable_percent"), ".1f") + " %"),
             ("mean cost", num(s.get("mean_cost"), ".4f")),
             ("skipped", f"{len(skipped.get('frames', []))} frames, "
                         f"{len(skipped.get('pairs', []))} pairs"),
