@@ -50,7 +50,8 @@ pub struct RunOptionsArgs {
     pub model: Option<ObjectModel>,
     #[command(flatten)]
     pub modal: ModalArgs,
-    #[arg(long, value_name = "START..END", value_parser = |s: &str| s.parse::<FrameRange>(), help = help("frames"))]
+    // A range may start with a negative index (`--frames -50..`: the last 50 frames).
+    #[arg(long, allow_hyphen_values = true, value_name = "START..END", value_parser = |s: &str| s.parse::<FrameRange>(), help = help("frames"))]
     pub frames: Option<FrameRange>,
     #[arg(long, help = help("noise"))]
     pub noise: Option<f64>,

@@ -201,6 +201,58 @@ fn run_on_the_bundled_recording_reports_time_mm_and_provenance() {
 }
 
 #[test]
+fn negative_frames_count_back_from_the_end_of_the_recording() {
+    // The bundled walk has 205 frames, the foot on the plate until frame 195.
+    let dir = temp_dir("negative-frames");
+    let run = |frames: &[&str], out: &str| {
+        let mut args = vec!["run", BUNDLED];
+        args.extend(frames);
+        let out = dir.join(out);
+        args.extend(["--figures", "none", "--report", "none", "--json", "--out"]);
+        args.push(out.to_str().unwrap());
+        pedomatch(&args)
+    };
+    // `--frames=-13..-10` and `--frames -13..-10` (a value may start with a minus), and the
+    // same frames written from the start, give one run: frames 192..195.
+    let summaries: Vec<_> = [
+        (vec!["--frames=-13..-10"], "equals"),
+        (vec!["--frames", "-13..-10"], "space"),
+        (vec!["--frames", "192..-10"], "mixed"),
+        (vec!["--frames", "192..195"], "positive"),
+    ]
+    .iter()
+    .map(|(frames, out)| stdout_json(&run(frames, out)))
+    .collect();
+    for s in &summaries {
+        assert_eq!(
+            s["options"]["frames"], "192..195",
+            "the frames run, resolved"
+        );
+        assert_eq!(s["pairs"], summaries[3]["pairs"]);
+        assert_eq!(s["tracks"], summaries[3]["tracks"]);
+    }
+    let frames = read_csv(&dir.join("equals").join("frames.csv"));
+    let numbers: Vec<f64> = frames.iter().map(|r| r["frame"]).collect();
+    assert_eq!(numbers, [192.0, 193.0, 194.0]);
+    // Out of range once resolved: a usage error naming the range and the frame count.
+    for (frames, resolved) in [
+        ("--frames=-300..", "-95..205"),
+        ("--frames=10..-200", "10..5"),
+    ] {
+        let o = run(&[frames], "bad");
+        let err = String::from_utf8(o.stderr).unwrap();
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains(&frames["--frames=".len()..])
+                && err.contains("205 frames")
+                && err.contains(resolved),
+            "{err}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn pitch_and_frame_rate_override_the_file() {
     let d = stdout_json(&pedomatch(&[
         "inspect",

@@ -122,44 +122,74 @@ modal_core::choice!(ObjectModel, "model", [
 ]);
 
 /// Frames `start..end` of a recording: 0-based and half-open like a Python slice (`10..60` is
-/// frames 10 to 59); an open end runs to the last frame. Written `START..END`, `START..` or
-/// `..END`.
+/// frames 10 to 59); an open end runs to the last frame, and a negative index counts back from
+/// the end of the recording, as in Python (`-50..` is the last 50 frames, `0..-1` every frame
+/// but the last). Written `START..END`, `START..` or `..END`. Negative indices are resolved by
+/// [`FrameRange::resolve`] once the frame count is known.
 ///
 /// ```
 /// use pedo_io::sequence::FrameRange;
 /// let r: FrameRange = "10..".parse().unwrap();
 /// assert_eq!(r.resolve(100).unwrap(), (10, 100));
 /// assert_eq!("..60".parse::<FrameRange>().unwrap().to_string(), "0..60");
+/// assert_eq!("-50..".parse::<FrameRange>().unwrap().resolve(205).unwrap(), (155, 205));
+/// assert_eq!("0..-1".parse::<FrameRange>().unwrap().resolve(205).unwrap(), (0, 204));
 /// assert!("5..3".parse::<FrameRange>().unwrap().resolve(100).is_err());
+/// assert!("-300..".parse::<FrameRange>().unwrap().resolve(205).is_err());
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct FrameRange {
-    /// The first frame (0-based).
-    pub start: usize,
-    /// One past the last frame; `None`: to the end of the recording.
-    pub end: Option<usize>,
+    /// The first frame (0-based; negative: counted back from the end, `-1` the last frame).
+    pub start: isize,
+    /// One past the last frame (negative: counted back from the end); `None`: to the end of the
+    /// recording.
+    pub end: Option<isize>,
 }
 
 impl FrameRange {
-    /// `(start, end)` for a recording of `n_frames`: a non-empty range within it, `end` excluded.
+    /// The frames `start..end` of a recording (0-based, `end` excluded), as a range.
+    pub fn new(start: usize, end: usize) -> Self {
+        // A frame count fits an `isize` (no allocation holds more than `isize::MAX` bytes).
+        let index = |i: usize| isize::try_from(i).unwrap_or(isize::MAX);
+        Self {
+            start: index(start),
+            end: Some(index(end)),
+        }
+    }
+
+    /// `(start, end)` for a recording of `n_frames`: negative indices counted back from
+    /// `n_frames`, then a non-empty range within the recording, `end` excluded. The one place
+    /// where a range given to the CLI, to Python or to a study becomes frames.
     ///
     /// # Errors
     ///
-    /// An [`OptionError`] on the option `frames` when the range is empty (`start >= end`) or
-    /// ends past `n_frames`.
+    /// An [`OptionError`] on the option `frames`, naming the range and the frame count, when the
+    /// resolved range is empty (`start >= end`), starts before the first frame or ends past
+    /// `n_frames`.
     pub fn resolve(&self, n_frames: usize) -> std::result::Result<(usize, usize), OptionError> {
-        let end = self.end.unwrap_or(n_frames);
-        if self.start < end && end <= n_frames {
-            Ok((self.start, end))
-        } else {
-            Err(OptionError::new(
-                "frames",
-                self,
-                format!(
-                    "a non-empty range START..END within the recording's 0..{n_frames} (0-based, END excluded)"
-                ),
-            ))
+        let n = isize::try_from(n_frames).unwrap_or(isize::MAX);
+        // n >= 0 and i < 0: no overflow.
+        let at = |i: isize| if i < 0 { n + i } else { i };
+        let (start, end) = (at(self.start), self.end.map_or(n, at));
+        if 0 <= start && start < end && end <= n {
+            // Both within 0..=n: non-negative.
+            return Ok((start.unsigned_abs(), end.unsigned_abs()));
         }
+        let negative = self.start < 0 || self.end.is_some_and(|e| e < 0);
+        let resolved = if negative {
+            format!("; here {self} is {start}..{end}")
+        } else {
+            String::new()
+        };
+        Err(OptionError::new(
+            "frames",
+            self,
+            format!(
+                "a non-empty range START..END within the recording's {n_frames} frames \
+                 (0..{n_frames}, 0-based, END excluded; a negative index counts back from the \
+                 end){resolved}"
+            ),
+        ))
     }
 }
 
@@ -179,11 +209,12 @@ impl std::str::FromStr for FrameRange {
             OptionError::new(
                 "frames",
                 s,
-                "START..END, 0-based with END excluded (START.. and ..END allowed)",
+                "START..END, 0-based with END excluded (START.. and ..END allowed; a negative \
+                 index counts back from the end: -50.. is the last 50 frames)",
             )
         };
         let (a, b) = s.split_once("..").ok_or_else(bad)?;
-        let number = |x: &str| x.trim().parse::<usize>().map_err(|_| bad());
+        let number = |x: &str| x.trim().parse::<isize>().map_err(|_| bad());
         Ok(Self {
             start: if a.trim().is_empty() { 0 } else { number(a)? },
             end: if b.trim().is_empty() {
@@ -205,7 +236,8 @@ pub struct RunParams {
     pub matching: MatchParams,
     /// What each frame becomes: contours, a surface, or (one frame) isobaric contours.
     pub model: ObjectModel,
-    /// Frames to use (`None`: all).
+    /// Frames to use (`None`: all); negative indices count back from the end of each recording
+    /// ([`FrameRange::resolve`], called by [`RunParams::to_options`]).
     pub frames: Option<FrameRange>,
     /// Noise threshold in the recording's units (`None`: the file's own, else 0).
     pub noise: Option<f64>,
@@ -362,10 +394,19 @@ impl RunParams {
                 .into());
             }
             (Some(f), Some((start, end))) if !(start..end).contains(&f) => {
+                // The range as resolved for this recording, and as given when that differs
+                // (negative indices, an open end).
+                let given = self.frames.map(|r| r.to_string()).unwrap_or_default();
+                let resolved = format!("{start}..{end}");
+                let as_given = if given == resolved {
+                    String::new()
+                } else {
+                    format!(" (frames {given} of {n})")
+                };
                 return Err(OptionError::new(
                     "iso_frame",
                     f,
-                    format!("a frame within frames {start}..{end} (0-based), the frames run"),
+                    format!("a frame within frames {resolved}{as_given} (0-based), the frames run"),
                 )
                 .into());
             }
@@ -404,10 +445,7 @@ impl RunParams {
         self.listed(
             options,
             FileValues {
-                frames: FrameRange {
-                    start,
-                    end: Some(end),
-                },
+                frames: FrameRange::new(start, end),
                 pitch_mm: recording.pitch_mm,
                 frame_rate: recording.dt_s.map(|dt| 1.0 / dt),
                 units: Some(recording.units.clone()).filter(|u| !u.is_empty()),
@@ -502,7 +540,7 @@ pub fn recording_option_specs() -> Vec<OptionSpec> {
             "frames",
             Value,
             "all",
-            "Frames START..END, 0-based with END excluded as in a Python slice (START.. and ..END allowed); the range must lie within the recording.",
+            "Frames START..END, 0-based with END excluded as in a Python slice (START.. and ..END allowed; a negative index counts back from the end: -50.. is the last 50 frames, 0..-1 all but the last); the range must lie within the recording.",
         ),
         OptionSpec::new(
             "noise",
@@ -2359,6 +2397,90 @@ fn frame_load(recording: &Recording, t: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn negative_frame_indices_count_back_from_the_end_as_in_a_python_slice() {
+        let resolve = |s: &str, n: usize| s.parse::<FrameRange>().unwrap().resolve(n);
+        assert_eq!(resolve("-50..", 205), Ok((155, 205)), "the last 50 frames");
+        assert_eq!(resolve("0..-1", 205), Ok((0, 204)), "all but the last");
+        assert_eq!(resolve("..-1", 205), Ok((0, 204)));
+        assert_eq!(resolve("-10..-5", 205), Ok((195, 200)));
+        assert_eq!(
+            resolve("-205..", 205),
+            Ok((0, 205)),
+            "as far back as frame 0"
+        );
+        assert_eq!(resolve("3..-2", 6), Ok((3, 4)));
+        assert_eq!(
+            "-50..-1".parse::<FrameRange>().unwrap().to_string(),
+            "-50..-1"
+        );
+        // Still out of range once resolved: an error naming the range, the frame count and
+        // what the negative indices came to.
+        let e = resolve("-300..", 205).unwrap_err();
+        assert_eq!(e.option, "frames");
+        assert_eq!(e.value, "-300..");
+        assert!(
+            e.expected.contains("205 frames") && e.expected.contains("-300.. is -95..205"),
+            "{e}"
+        );
+        let e = resolve("0..-205", 205).unwrap_err().to_string();
+        assert!(
+            e.contains("0..-205 is 0..0") && e.contains("205 frames"),
+            "{e}"
+        );
+        let e = resolve("-3..-5", 205).unwrap_err().to_string();
+        assert!(e.contains("-3..-5 is 202..200"), "{e}");
+        // Positive ranges are checked as before, their message with no resolution.
+        let e = resolve("0..999", 205).unwrap_err().to_string();
+        assert!(e.contains("205 frames") && !e.contains(" is "), "{e}");
+        assert!(resolve("5..5", 205).is_err() && resolve("0..0", 0).is_err());
+        assert!("x..-1".parse::<FrameRange>().is_err());
+        assert!("--1..".parse::<FrameRange>().is_err());
+    }
+
+    #[test]
+    fn a_run_resolves_negative_frames_once_for_the_range_the_iso_frame_and_the_summary() {
+        let rec = recording(6, |_, r, c| (8..16).contains(&r) && (8..16).contains(&c));
+        let params = |frames: &str, iso_frame| RunParams {
+            model: ObjectModel::Isocontour,
+            frames: Some(frames.parse().unwrap()),
+            iso_frame,
+            ..RunParams::default()
+        };
+        let negative = params("-3..-1", None);
+        let o = negative.to_options(&rec).unwrap();
+        assert_eq!(o.frames, Some((3, 5)));
+        assert_eq!(
+            o.frames,
+            params("3..5", None).to_options(&rec).unwrap().frames
+        );
+        // summary.json records the frames run, resolved.
+        let used = negative.used(&o, &rec);
+        let frames = used.iter().find(|(k, _)| *k == "frames").unwrap();
+        assert_eq!(frames.1, OptionValue::Word("3..5".into()));
+        // iso_frame lies within the resolved range; the error names it both ways.
+        assert_eq!(
+            params("-3..-1", Some(4))
+                .to_options(&rec)
+                .unwrap()
+                .iso_frame,
+            Some(4)
+        );
+        let e = params("-3..-1", Some(5))
+            .to_options(&rec)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("iso_frame") && e.contains("3..5") && e.contains("frames -3..-1 of 6"),
+            "{e}"
+        );
+        let e = params("-9..", None)
+            .to_options(&rec)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("-9..") && e.contains("6 frames"), "{e}");
+    }
 
     #[test]
     fn a_study_lists_the_options_a_run_uses_with_each_recordings_own_left_open() {

@@ -205,10 +205,7 @@ fn a_streamed_run_that_fails_half_way_leaves_no_folder() {
     let (recording, _) = read_for_streaming(walk(), &ReadOptions::default()).unwrap();
     let mut source = FailingSource(read_recording(walk()).unwrap());
     let params = RunParams {
-        frames: Some(FrameRange {
-            start: 0,
-            end: Some(FRAME_WINDOW + 10),
-        }),
+        frames: Some(FrameRange::new(0, FRAME_WINDOW + 10)),
         ..Default::default()
     };
     let options = params.to_options(&recording).unwrap();

@@ -184,20 +184,20 @@ pub fn pitch(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<[f64; 2]>> {
     ))
 }
 
-/// `frames=`: a `(start, end)` pair of 0-based frame indices, end excluded, either `None`.
-pub fn frame_range(
-    value: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Option<(Option<usize>, Option<usize>)>> {
+/// `frames=`: a `(start, end)` pair of 0-based frame indices, end excluded, either `None`; a
+/// negative index counts back from the end of the recording, as in a Python slice (resolved
+/// with the frame count by [`FrameRange::resolve`], as the CLI's `--frames`).
+pub fn frame_range(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<FrameRange>> {
     let Some(v) = value.filter(|v| !v.is_none()) else {
         return Ok(None);
     };
-    let bound = |b: Bound<'_, PyAny>| -> Option<Option<usize>> {
+    let bound = |b: Bound<'_, PyAny>| -> Option<Option<isize>> {
         if b.is_none() {
             Some(None)
         } else if b.is_instance_of::<PyBool>() {
             None
         } else {
-            b.extract::<usize>().ok().map(Some)
+            b.extract::<isize>().ok().map(Some)
         }
     };
     let pair = match v.extract::<Vec<Bound<'_, PyAny>>>() {
@@ -207,14 +207,18 @@ pub fn frame_range(
         },
         _ => None,
     };
-    pair.map(Some).ok_or_else(|| {
+    let (start, end) = pair.ok_or_else(|| {
         argument_error(
             "frames",
-            "a (start, end) pair of 0-based frame indices, none negative (end excluded; either \
-             may be None)",
+            "a (start, end) pair of 0-based frame indices, end excluded (either may be None; a \
+             negative index counts back from the end, as in a slice)",
             v,
         )
-    })
+    })?;
+    Ok(Some(FrameRange {
+        start: start.unwrap_or(0),
+        end,
+    }))
 }
 
 /// The unit keywords, checked.
@@ -235,7 +239,7 @@ pub fn units(
 /// The recording keywords of `pymodal.run`.
 pub struct RecordingKw<'a, 'py> {
     pub model: Option<&'a str>,
-    pub frames: Option<(Option<usize>, Option<usize>)>,
+    pub frames: Option<FrameRange>,
     pub noise: Option<f64>,
     pub smooth: Option<f64>,
     pub spacing: Option<f64>,
@@ -255,10 +259,7 @@ impl RecordingKw<'_, '_> {
         Ok(RunParams {
             matching,
             model: word(self.model, d.model)?,
-            frames: self.frames.map(|(start, end)| FrameRange {
-                start: start.unwrap_or(0),
-                end,
-            }),
+            frames: self.frames,
             noise: self.noise.or(d.noise),
             smooth: self.smooth.unwrap_or(d.smooth),
             spacing: self.spacing.unwrap_or(d.spacing),

@@ -57,7 +57,9 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 /// ``deform_stiffness``, ``kappa``, ``center_stride``,
 /// ``position_weight``, ``cost_power``, ``common_sigma``, ``skip_rigid``, ``band``,
 /// ``material``), then ``model`` ("contour", "surface", "isocontour"), ``frames`` ((start, end),
-/// 0-based, end excluded like a slice; either may be None), ``noise``, ``smooth``, ``spacing``,
+/// 0-based, end excluded like a slice; either may be None; a negative index counts back from the
+/// end: ``(-50, None)`` is the last 50 frames, ``(0, -1)`` all but the last), ``noise``,
+/// ``smooth``, ``spacing``,
 /// ``surface_nodes``, ``iso_frame`` (0-based), ``iso_levels``, ``pitch_mm`` (mm per sensel, a
 /// number or (x, y); overrides the file's), ``frame_rate`` (Hz; overrides the file's), ``units``
 /// (pressure units of the values, for formats that store none: kPa, Pa, MPa, N/cm², N/mm²,
@@ -94,7 +96,9 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 ///     a Recording or a 2-D/3-D array; ``frames`` not a ``(start, end)`` pair; ``pitch_mm``
 ///     not a number or an (x, y) pair;
 /// OptionError — an unknown or out-of-range option value (e.g. ``model="mesh"``, a negative
-///     ``pitch_mm``, ``frames`` beyond the recording); an ``InputError``;
+///     ``pitch_mm``, ``frames`` empty or beyond the recording once negative indices are
+///     counted from its end; the message names the range and the frame count); an
+///     ``InputError``;
 /// DegenerateShapeError — no frame of ``frames`` holds an object (everything below ``noise``,
 ///     or outlines too small to model), as ``pedomatch run`` fails on such a recording.
 /// All but the ``OSError`` are :class:`PedomatchError` and ``ValueError`` subclasses. An option

@@ -154,6 +154,27 @@ def test_batch_writes_folders_and_resumes(study):
     assert [r["status"] for r in forced] == [r["status"] for r in first]
 
 
+def test_negative_frames_are_resolved_for_each_recording_of_a_study(study):
+    out = study / "out"
+    rows = pymodal.batch([study / "in"], out, figures="none", frames=(-3, None))
+    assert [r["status"] for r in rows].count("ok") == 3
+    assert json.loads((out / "study.json").read_text())["options"]["frames"] == "-3.."
+    for r in rows:
+        if r["status"] != "ok":
+            continue
+        n = r["frames"]
+        summary = json.loads((out / r["output"] / "summary.json").read_text())
+        assert summary["options"]["frames"] == f"{n - 3}..{n}", r["path"]
+        run = pymodal.run(r["path"], frames=(n - 3, n))["summary"]
+        assert (r["pairs"], r["tracks"]) == (run["pairs"], run["tracks"])
+    # A second run finds each folder complete: the same frames, however they were written.
+    again = pymodal.batch([study / "in"], out, figures="none", frames=(-3, None))
+    assert [r["status"] for r in again].count("skipped") == 3
+    row = pymodal.batch_row(study / "in" / "tekscan.csv", frames=(-300, None), figures="none")
+    assert row["status"] == "error" and "frames = -300.." in row["message"]
+    assert f"{row['frames']} frames" in row["message"]
+
+
 def test_batch_row_is_one_row_of_batch(study):
     paths = pymodal.find_recordings(study / "in")
     rows = [pymodal.batch_row(p, spacing=1.5, figures="none") for p in paths]

@@ -122,6 +122,36 @@ def test_run_bad_options_raise_value_error(kwargs):
         pymodal.run(moving_blob(frames=3), **kwargs)
 
 
+def test_negative_frames_count_back_from_the_end_like_a_slice():
+    frames = moving_blob(frames=8)
+    last = pymodal.run(frames, frames=(-3, None))
+    assert last["summary"]["options"]["frames"] == "5..8", "the frames run, resolved"
+    assert [r["frame"] for r in last["frames"]] == [5, 6, 7]
+    assert timeless(last["table"]) == timeless(pymodal.run(frames, frames=(5, 8))["table"])
+    all_but_last = pymodal.run(frames, frames=(0, -1))
+    assert [r["frame"] for r in all_but_last["frames"]] == list(range(7))
+    both = pymodal.run(frames, frames=[np.int64(-4), -2])
+    assert both["summary"]["options"]["frames"] == "4..6"
+    # Still out of range once counted from the end: the message names the range, the frame
+    # count and what the negative index came to.
+    with pytest.raises(pymodal.OptionError, match=r"^frames = -9\.\.: expected .*8 frames.*-9\.\. is -1\.\.8$"):
+        pymodal.run(frames, frames=(-9, None))
+    with pytest.raises(pymodal.OptionError, match=r"frames = 6\.\.-3: .*8 frames.* is 6\.\.5"):
+        pymodal.run(frames, frames=(6, -3))
+    # iso_frame lies within the range as resolved; the error names it both ways.
+    iso = pymodal.run(frames, model="isocontour", iso_levels=3, frames=(-3, None), iso_frame=6)
+    assert {o["frame"] for o in iso["objects"]} == {6}
+    with pytest.raises(pymodal.OptionError, match=r"iso_frame = 2: .*frames 5\.\.8 \(frames -3\.\. of 8\)"):
+        pymodal.run(frames, model="isocontour", frames=(-3, None), iso_frame=2)
+    # The largest load among the frames run, not the whole recording.
+    iso = pymodal.run(frames, model="isocontour", iso_levels=3, frames=(-2, None))
+    assert {o["frame"] for o in iso["objects"]} <= {6, 7}
+
+
+def timeless(rows):
+    return [{k: v for k, v in r.items() if not k.endswith("_s")} for r in rows]
+
+
 def test_frames_objects_and_tracks_are_zero_based():
     frames = moving_blob(frames=6)
     res = pymodal.run(frames, frames=(2, None))
