@@ -8,7 +8,7 @@ use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
 
 use crate::errors::{argument_error, option_error, to_py};
-use crate::options_py::{opt_count, table_rows};
+use crate::options_py::{count_keyword, table_rows};
 
 /// Inputs as strings: one path or pattern, or a sequence of them (str or os.PathLike); anything
 /// else is an `InputError` naming the argument `name`.
@@ -53,13 +53,12 @@ fn study_options(
     py: Python<'_>,
     inputs: Vec<String>,
     out: Option<PathBuf>,
-    jobs: Option<i64>,
+    jobs: Option<usize>,
     force: bool,
     figures: &str,
     tables: &str,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<StudyOptions<'static>> {
-    let jobs = opt_count("jobs", jobs)?;
     if jobs == Some(0) {
         return Err(option_error(
             "jobs: 0 is not a number of jobs; expected >= 1 or None (every core)",
@@ -129,13 +128,14 @@ fn batch<'py>(
     py: Python<'py>,
     paths: &Bound<'py, PyAny>,
     out: Option<PathBuf>,
-    jobs: Option<i64>,
+    jobs: Option<&Bound<'py, PyAny>>,
     force: bool,
     figures: &str,
     tables: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let inputs = input_strings(paths, "paths")?;
+    let jobs = count_keyword("jobs", jobs)?;
     let opts = study_options(py, inputs, out, jobs, force, figures, tables, options)?;
     let run = py
         .detach(|| {

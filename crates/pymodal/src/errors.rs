@@ -152,9 +152,24 @@ pub fn input_error(msg: impl Into<String>) -> PyErr {
     INPUT_ERROR.err(msg)
 }
 
-/// An `InputError` for an argument of the wrong type or form: "`name` must be `expected`, got
-/// <what was given>" (its `repr`, shortened; or its type when `repr` fails).
+/// An `InputError` for an argument of the wrong form: "`name` must be `expected`, got <what was
+/// given>" (the wording of [`keyword_type_error`]).
 pub fn argument_error(name: &str, expected: &str, got: &Bound<'_, PyAny>) -> PyErr {
+    INPUT_ERROR.err(must_be(name, expected, got))
+}
+
+/// The `TypeError` of a keyword of the wrong type (`run(noise="high")`): "noise must be a number,
+/// got 'high'", the message itself naming the keyword and the type it takes, worded as
+/// [`argument_error`]. pyo3's own error for a typed parameter names neither (its note "while
+/// processing 'noise'" is shown by tracebacks only); the option keywords are read through
+/// [`crate::options_py::keyword`], which raises this one.
+pub fn keyword_type_error(name: &str, expected: &str, got: &Bound<'_, PyAny>) -> PyErr {
+    PyTypeError::new_err(must_be(name, expected, got))
+}
+
+/// "`name` must be `expected`, got <what was given>" (its `repr`, shortened; or its type when
+/// `repr` fails): the one wording of every argument and keyword error.
+fn must_be(name: &str, expected: &str, got: &Bound<'_, PyAny>) -> String {
     const LONGEST: usize = 60;
     let given = match got.repr() {
         Ok(r) => {
@@ -168,20 +183,7 @@ pub fn argument_error(name: &str, expected: &str, got: &Bound<'_, PyAny>) -> PyE
         }
         Err(_) => format!("a {}", type_name(got)),
     };
-    INPUT_ERROR.err(format!("{name} must be {expected}, got {given}"))
-}
-
-/// The `TypeError` pyo3 raises for a typed keyword of the wrong type ("argument 'spacing': must
-/// be a number, got 'wide'"), for keywords read by hand from `**options` so that they fail as
-/// the same keyword of `run` does.
-pub fn keyword_type_error(name: &str, expected: &str, got: &Bound<'_, PyAny>) -> PyErr {
-    let given = got
-        .repr()
-        .map(|r| r.to_string_lossy().into_owned())
-        .unwrap_or_else(|_| format!("a {}", type_name(got)));
-    PyTypeError::new_err(format!(
-        "argument '{name}': must be {expected}, got {given}"
-    ))
+    format!("{name} must be {expected}, got {given}")
 }
 
 /// The name of a Python object's type (`"int"`, `"ndarray"`), or `"?"`.

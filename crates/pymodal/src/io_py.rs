@@ -158,8 +158,8 @@ impl PyRecording {
         py: Python<'_>,
         frames: &Bound<'_, PyAny>,
         pitch_mm: Option<&Bound<'_, PyAny>>,
-        frame_rate: Option<f64>,
-        units: Option<String>,
+        frame_rate: Option<&Bound<'_, PyAny>>,
+        units: Option<&Bound<'_, PyAny>>,
         mask: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let (t, h, w, data) = frames_of(py, frames)?;
@@ -353,8 +353,8 @@ fn read_recording(
     py: Python<'_>,
     path: PathBuf,
     pitch_mm: Option<&Bound<'_, PyAny>>,
-    frame_rate: Option<f64>,
-    units: Option<String>,
+    frame_rate: Option<&Bound<'_, PyAny>>,
+    units: Option<&Bound<'_, PyAny>>,
     layout: Option<PathBuf>,
 ) -> PyResult<PyRecording> {
     let units = crate::options_py::units(pitch_mm, frame_rate, units)?;

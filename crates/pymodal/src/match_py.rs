@@ -391,7 +391,8 @@ fn triangles(
 /// DegenerateShapeError — too few, coincident or collinear nodes, NaN or infinite coordinates;
 /// NumericalError — the eigensolver failed.
 /// All are :class:`PedomatchError` and ``ValueError`` subclasses. An option of the wrong type
-/// (``modes="many"``) raises ``TypeError`` naming it.
+/// raises ``TypeError`` naming it and the type it takes (``modes="many"``: "modes must be a
+/// number, got 'many'").
 #[pyfunction]
 #[pyo3(name = "match", signature = (a, b, *, element=None, modes=None, search=None, solver=None,
     threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, max_rotation=None, refits=None,
@@ -403,30 +404,30 @@ fn match_py(
     py: Python<'_>,
     a: &Bound<'_, PyAny>,
     b: &Bound<'_, PyAny>,
-    element: Option<&str>,
-    modes: Option<f64>,
-    search: Option<&str>,
-    solver: Option<&str>,
-    threshold: Option<f64>,
-    threshold_mode: Option<&str>,
-    excess: Option<bool>,
-    paper: Option<bool>,
-    prealign: Option<&str>,
-    max_rotation: Option<f64>,
-    refits: Option<i64>,
-    refit_tolerance: Option<f64>,
-    refine: Option<&str>,
-    deform_modes: Option<i64>,
-    deform_stiffness: Option<f64>,
-    kappa: Option<f64>,
-    center_stride: Option<i64>,
-    position_weight: Option<f64>,
-    cost_power: Option<f64>,
-    common_sigma: Option<bool>,
-    skip_rigid: Option<bool>,
-    band: Option<i64>,
+    element: Option<&Bound<'_, PyAny>>,
+    modes: Option<&Bound<'_, PyAny>>,
+    search: Option<&Bound<'_, PyAny>>,
+    solver: Option<&Bound<'_, PyAny>>,
+    threshold: Option<&Bound<'_, PyAny>>,
+    threshold_mode: Option<&Bound<'_, PyAny>>,
+    excess: Option<&Bound<'_, PyAny>>,
+    paper: Option<&Bound<'_, PyAny>>,
+    prealign: Option<&Bound<'_, PyAny>>,
+    max_rotation: Option<&Bound<'_, PyAny>>,
+    refits: Option<&Bound<'_, PyAny>>,
+    refit_tolerance: Option<&Bound<'_, PyAny>>,
+    refine: Option<&Bound<'_, PyAny>>,
+    deform_modes: Option<&Bound<'_, PyAny>>,
+    deform_stiffness: Option<&Bound<'_, PyAny>>,
+    kappa: Option<&Bound<'_, PyAny>>,
+    center_stride: Option<&Bound<'_, PyAny>>,
+    position_weight: Option<&Bound<'_, PyAny>>,
+    cost_power: Option<&Bound<'_, PyAny>>,
+    common_sigma: Option<&Bound<'_, PyAny>>,
+    skip_rigid: Option<&Bound<'_, PyAny>>,
+    band: Option<&Bound<'_, PyAny>>,
     material: Option<&Bound<'_, PyAny>>,
-    ordered: Option<bool>,
+    ordered: Option<&Bound<'_, PyAny>>,
     triangles_a: Option<&Bound<'_, PyAny>>,
     triangles_b: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyMatch> {
@@ -466,7 +467,7 @@ fn match_py(
     }
     let ta = triangles(py, triangles_a, "triangles_a")?;
     let tb = triangles(py, triangles_b, "triangles_b")?;
-    let ordered = match ordered {
+    let ordered = match crate::options_py::keyword::<bool>("ordered", ordered)? {
         Some(o) => o,
         None => {
             ta.is_none()

@@ -11,11 +11,64 @@ use pedo_io::units::UnitOverrides;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyList, PyString};
 
-use crate::errors::{argument_error, option_error, to_py};
+use crate::errors::{argument_error, keyword_type_error, option_error, to_py};
 
 /// A word option: `None` keeps `default`, a string is parsed by `T`'s `FromStr`.
 pub fn word<T: Choice>(value: Option<&str>, default: T) -> PyResult<T> {
     value.map_or(Ok(default), |s| T::parse_word(s).map_err(to_py))
+}
+
+/// The Python type of a scalar keyword, as its `TypeError` names it.
+pub trait KeywordType: Sized {
+    /// What the keyword takes: "a number", "an integer", ...
+    const EXPECTED: &'static str;
+    /// The value, if `v` is of the type (as pyo3 reads a parameter of this Rust type).
+    fn from_py(v: &Bound<'_, PyAny>) -> Option<Self>;
+}
+
+impl KeywordType for f64 {
+    const EXPECTED: &'static str = "a number";
+    fn from_py(v: &Bound<'_, PyAny>) -> Option<Self> {
+        v.extract().ok()
+    }
+}
+
+impl KeywordType for i64 {
+    const EXPECTED: &'static str = "an integer";
+    fn from_py(v: &Bound<'_, PyAny>) -> Option<Self> {
+        v.extract().ok()
+    }
+}
+
+impl KeywordType for bool {
+    const EXPECTED: &'static str = "True or False";
+    fn from_py(v: &Bound<'_, PyAny>) -> Option<Self> {
+        v.extract().ok()
+    }
+}
+
+impl KeywordType for String {
+    const EXPECTED: &'static str = "a string";
+    fn from_py(v: &Bound<'_, PyAny>) -> Option<Self> {
+        v.extract().ok()
+    }
+}
+
+/// A scalar option keyword, taken from Python as any object: `None` (or absent) is `None`, a
+/// value of the type is read as pyo3 reads a typed parameter, anything else is the `TypeError`
+/// of [`keyword_type_error`] ("noise must be a number, got 'high'"). Every option keyword of
+/// `match`, `run`, `batch`, `batch_row`, `read_recording` and `Recording.from_array` is read here,
+/// so that the message itself names the keyword and its type, in one wording.
+pub fn keyword<T: KeywordType>(
+    name: &str,
+    value: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<T>> {
+    match value.filter(|v| !v.is_none()) {
+        None => Ok(None),
+        Some(v) => T::from_py(v)
+            .map(Some)
+            .ok_or_else(|| keyword_type_error(name, T::EXPECTED, v)),
+    }
 }
 
 /// An integer keyword (a count, a size, a frame index) as the library's `usize`.
@@ -37,31 +90,47 @@ pub fn opt_count(name: &str, value: Option<i64>) -> PyResult<Option<usize>> {
     value.map(|v| count(name, v)).transpose()
 }
 
-/// The matching keywords, in the order of [`modal_core::options::match_option_specs`].
+/// An integer option [`keyword`] as a [`count`].
+pub fn count_keyword(name: &str, value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
+    opt_count(name, keyword(name, value)?)
+}
+
+/// A word option [`keyword`], parsed by `T`'s `FromStr` (`None` when absent).
+fn word_keyword<T: Choice>(name: &str, value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<T>> {
+    keyword::<String>(name, value)?
+        .map(|s| T::parse_word(&s).map_err(to_py))
+        .transpose()
+}
+
+/// A keyword as given: the object, or `None` when absent.
+type Kw<'a, 'py> = Option<&'a Bound<'py, PyAny>>;
+
+/// The matching keywords, in the order of [`modal_core::options::match_option_specs`], as given
+/// (read by [`MatchKw::params`]).
 pub struct MatchKw<'a, 'py> {
-    pub element: Option<&'a str>,
-    pub modes: Option<f64>,
-    pub search: Option<&'a str>,
-    pub solver: Option<&'a str>,
-    pub threshold: Option<f64>,
-    pub threshold_mode: Option<&'a str>,
-    pub excess: Option<bool>,
-    pub paper: Option<bool>,
-    pub prealign: Option<&'a str>,
-    pub max_rotation: Option<f64>,
-    pub refits: Option<i64>,
-    pub refit_tolerance: Option<f64>,
-    pub refine: Option<&'a str>,
-    pub deform_modes: Option<i64>,
-    pub deform_stiffness: Option<f64>,
-    pub kappa: Option<f64>,
-    pub center_stride: Option<i64>,
-    pub position_weight: Option<f64>,
-    pub cost_power: Option<f64>,
-    pub common_sigma: Option<bool>,
-    pub skip_rigid: Option<bool>,
-    pub band: Option<i64>,
-    pub material: Option<&'a Bound<'py, PyAny>>,
+    pub element: Kw<'a, 'py>,
+    pub modes: Kw<'a, 'py>,
+    pub search: Kw<'a, 'py>,
+    pub solver: Kw<'a, 'py>,
+    pub threshold: Kw<'a, 'py>,
+    pub threshold_mode: Kw<'a, 'py>,
+    pub excess: Kw<'a, 'py>,
+    pub paper: Kw<'a, 'py>,
+    pub prealign: Kw<'a, 'py>,
+    pub max_rotation: Kw<'a, 'py>,
+    pub refits: Kw<'a, 'py>,
+    pub refit_tolerance: Kw<'a, 'py>,
+    pub refine: Kw<'a, 'py>,
+    pub deform_modes: Kw<'a, 'py>,
+    pub deform_stiffness: Kw<'a, 'py>,
+    pub kappa: Kw<'a, 'py>,
+    pub center_stride: Kw<'a, 'py>,
+    pub position_weight: Kw<'a, 'py>,
+    pub cost_power: Kw<'a, 'py>,
+    pub common_sigma: Kw<'a, 'py>,
+    pub skip_rigid: Kw<'a, 'py>,
+    pub band: Kw<'a, 'py>,
+    pub material: Kw<'a, 'py>,
 }
 
 impl<'a, 'py> MatchKw<'a, 'py> {
@@ -69,29 +138,29 @@ impl<'a, 'py> MatchKw<'a, 'py> {
     /// call.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
-        element: Option<&'a str>,
-        modes: Option<f64>,
-        search: Option<&'a str>,
-        solver: Option<&'a str>,
-        threshold: Option<f64>,
-        threshold_mode: Option<&'a str>,
-        excess: Option<bool>,
-        paper: Option<bool>,
-        prealign: Option<&'a str>,
-        max_rotation: Option<f64>,
-        refits: Option<i64>,
-        refit_tolerance: Option<f64>,
-        refine: Option<&'a str>,
-        deform_modes: Option<i64>,
-        deform_stiffness: Option<f64>,
-        kappa: Option<f64>,
-        center_stride: Option<i64>,
-        position_weight: Option<f64>,
-        cost_power: Option<f64>,
-        common_sigma: Option<bool>,
-        skip_rigid: Option<bool>,
-        band: Option<i64>,
-        material: Option<&'a Bound<'py, PyAny>>,
+        element: Kw<'a, 'py>,
+        modes: Kw<'a, 'py>,
+        search: Kw<'a, 'py>,
+        solver: Kw<'a, 'py>,
+        threshold: Kw<'a, 'py>,
+        threshold_mode: Kw<'a, 'py>,
+        excess: Kw<'a, 'py>,
+        paper: Kw<'a, 'py>,
+        prealign: Kw<'a, 'py>,
+        max_rotation: Kw<'a, 'py>,
+        refits: Kw<'a, 'py>,
+        refit_tolerance: Kw<'a, 'py>,
+        refine: Kw<'a, 'py>,
+        deform_modes: Kw<'a, 'py>,
+        deform_stiffness: Kw<'a, 'py>,
+        kappa: Kw<'a, 'py>,
+        center_stride: Kw<'a, 'py>,
+        position_weight: Kw<'a, 'py>,
+        cost_power: Kw<'a, 'py>,
+        common_sigma: Kw<'a, 'py>,
+        skip_rigid: Kw<'a, 'py>,
+        band: Kw<'a, 'py>,
+        material: Kw<'a, 'py>,
     ) -> Self {
         Self {
             element,
@@ -120,6 +189,35 @@ impl<'a, 'py> MatchKw<'a, 'py> {
         }
     }
 
+    /// The keywords of `get` (a keyword's value by name: `**options`).
+    pub fn from_lookup(get: impl Fn(&str) -> Kw<'a, 'py>) -> Self {
+        Self::new(
+            get("element"),
+            get("modes"),
+            get("search"),
+            get("solver"),
+            get("threshold"),
+            get("threshold_mode"),
+            get("excess"),
+            get("paper"),
+            get("prealign"),
+            get("max_rotation"),
+            get("refits"),
+            get("refit_tolerance"),
+            get("refine"),
+            get("deform_modes"),
+            get("deform_stiffness"),
+            get("kappa"),
+            get("center_stride"),
+            get("position_weight"),
+            get("cost_power"),
+            get("common_sigma"),
+            get("skip_rigid"),
+            get("band"),
+            get("material"),
+        )
+    }
+
     /// The library's parameters; `None` keywords at their defaults. Not yet validated.
     pub fn params(&self) -> PyResult<MatchParams> {
         let material = match self.material.filter(|m| !m.is_none()) {
@@ -130,41 +228,36 @@ impl<'a, 'py> MatchKw<'a, 'py> {
             }),
         };
         Ok(MatchOverrides {
-            element: parsed(self.element)?,
-            modes: self.modes,
-            search: parsed(self.search)?,
-            solver: parsed(self.solver)?,
-            threshold: self.threshold,
-            threshold_mode: parsed(self.threshold_mode)?,
-            excess: self.excess,
-            paper: self.paper,
-            prealign: parsed(self.prealign)?,
-            max_rotation: self.max_rotation,
-            refits: opt_count("refits", self.refits)?,
-            refit_tolerance: self.refit_tolerance,
-            refine: parsed(self.refine)?,
-            deform_modes: opt_count("deform_modes", self.deform_modes)?,
-            deform_stiffness: self.deform_stiffness,
-            kappa: self.kappa,
-            center_stride: opt_count("center_stride", self.center_stride)?,
-            position_weight: self.position_weight,
-            cost_power: self.cost_power,
-            common_sigma: self.common_sigma,
-            skip_rigid: self.skip_rigid,
-            band: opt_count("band", self.band)?,
+            element: word_keyword("element", self.element)?,
+            modes: keyword("modes", self.modes)?,
+            search: word_keyword("search", self.search)?,
+            solver: word_keyword("solver", self.solver)?,
+            threshold: keyword("threshold", self.threshold)?,
+            threshold_mode: word_keyword("threshold_mode", self.threshold_mode)?,
+            excess: keyword("excess", self.excess)?,
+            paper: keyword("paper", self.paper)?,
+            prealign: word_keyword("prealign", self.prealign)?,
+            max_rotation: keyword("max_rotation", self.max_rotation)?,
+            refits: count_keyword("refits", self.refits)?,
+            refit_tolerance: keyword("refit_tolerance", self.refit_tolerance)?,
+            refine: word_keyword("refine", self.refine)?,
+            deform_modes: count_keyword("deform_modes", self.deform_modes)?,
+            deform_stiffness: keyword("deform_stiffness", self.deform_stiffness)?,
+            kappa: keyword("kappa", self.kappa)?,
+            center_stride: count_keyword("center_stride", self.center_stride)?,
+            position_weight: keyword("position_weight", self.position_weight)?,
+            cost_power: keyword("cost_power", self.cost_power)?,
+            common_sigma: keyword("common_sigma", self.common_sigma)?,
+            skip_rigid: keyword("skip_rigid", self.skip_rigid)?,
+            band: count_keyword("band", self.band)?,
             material,
         }
         .params())
     }
 }
 
-/// A word option as given: `None` when absent, else parsed by `T`'s `FromStr`.
-fn parsed<T: Choice>(value: Option<&str>) -> PyResult<Option<T>> {
-    value.map(|s| T::parse_word(s).map_err(to_py)).transpose()
-}
-
 /// `pitch_mm=`: a number (square sensels) or an `(x, y)` pair.
-pub fn pitch(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<[f64; 2]>> {
+pub fn pitch(value: Kw<'_, '_>) -> PyResult<Option<[f64; 2]>> {
     let Some(v) = value.filter(|v| !v.is_none()) else {
         return Ok(None);
     };
@@ -187,7 +280,7 @@ pub fn pitch(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<[f64; 2]>> {
 /// `frames=`: a `(start, end)` pair of 0-based frame indices, end excluded, either `None`; a
 /// negative index counts back from the end of the recording, as in a Python slice (resolved
 /// with the frame count by [`FrameRange::resolve`], as the CLI's `--frames`).
-pub fn frame_range(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<FrameRange>> {
+pub fn frame_range(value: Kw<'_, '_>) -> PyResult<Option<FrameRange>> {
     let Some(v) = value.filter(|v| !v.is_none()) else {
         return Ok(None);
     };
@@ -223,52 +316,70 @@ pub fn frame_range(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<FrameRan
 
 /// The unit keywords, checked.
 pub fn units(
-    pitch_mm: Option<&Bound<'_, PyAny>>,
-    frame_rate: Option<f64>,
-    units: Option<String>,
+    pitch_mm: Kw<'_, '_>,
+    frame_rate: Kw<'_, '_>,
+    units: Kw<'_, '_>,
 ) -> PyResult<UnitOverrides> {
     let u = UnitOverrides {
         pitch_mm: pitch(pitch_mm)?,
-        frame_rate,
-        units,
+        frame_rate: keyword("frame_rate", frame_rate)?,
+        units: keyword("units", units)?,
     };
     u.validate().map_err(to_py)?;
     Ok(u)
 }
 
-/// The recording keywords of `pymodal.run`.
+/// The recording keywords of `pymodal.run`, as given (read by [`RecordingKw::params`]).
 pub struct RecordingKw<'a, 'py> {
-    pub model: Option<&'a str>,
-    pub frames: Option<FrameRange>,
-    pub noise: Option<f64>,
-    pub smooth: Option<f64>,
-    pub spacing: Option<f64>,
-    pub surface_nodes: Option<i64>,
-    pub iso_frame: Option<i64>,
-    pub iso_levels: Option<i64>,
-    pub pitch_mm: Option<&'a Bound<'py, PyAny>>,
-    pub frame_rate: Option<f64>,
-    pub units: Option<String>,
-    pub drift_reference: Option<i64>,
+    pub model: Kw<'a, 'py>,
+    pub frames: Kw<'a, 'py>,
+    pub noise: Kw<'a, 'py>,
+    pub smooth: Kw<'a, 'py>,
+    pub spacing: Kw<'a, 'py>,
+    pub surface_nodes: Kw<'a, 'py>,
+    pub iso_frame: Kw<'a, 'py>,
+    pub iso_levels: Kw<'a, 'py>,
+    pub pitch_mm: Kw<'a, 'py>,
+    pub frame_rate: Kw<'a, 'py>,
+    pub units: Kw<'a, 'py>,
+    pub drift_reference: Kw<'a, 'py>,
 }
 
-impl RecordingKw<'_, '_> {
+impl<'a, 'py> RecordingKw<'a, 'py> {
+    /// The keywords of `get` (a keyword's value by name: `**options`).
+    pub fn from_lookup(get: impl Fn(&str) -> Kw<'a, 'py>) -> Self {
+        Self {
+            model: get("model"),
+            frames: get("frames"),
+            noise: get("noise"),
+            smooth: get("smooth"),
+            spacing: get("spacing"),
+            surface_nodes: get("surface_nodes"),
+            iso_frame: get("iso_frame"),
+            iso_levels: get("iso_levels"),
+            pitch_mm: get("pitch_mm"),
+            frame_rate: get("frame_rate"),
+            units: get("units"),
+            drift_reference: get("drift_reference"),
+        }
+    }
+
     /// The library's run parameters with `matching`; `None` keywords at their defaults.
     pub fn params(&self, matching: MatchParams) -> PyResult<RunParams> {
         let d = RunParams::default();
         Ok(RunParams {
             matching,
-            model: word(self.model, d.model)?,
-            frames: self.frames,
-            noise: self.noise.or(d.noise),
-            smooth: self.smooth.unwrap_or(d.smooth),
-            spacing: self.spacing.unwrap_or(d.spacing),
-            surface_nodes: opt_count("surface_nodes", self.surface_nodes)?
+            model: word_keyword("model", self.model)?.unwrap_or(d.model),
+            frames: frame_range(self.frames)?,
+            noise: keyword("noise", self.noise)?.or(d.noise),
+            smooth: keyword("smooth", self.smooth)?.unwrap_or(d.smooth),
+            spacing: keyword("spacing", self.spacing)?.unwrap_or(d.spacing),
+            surface_nodes: count_keyword("surface_nodes", self.surface_nodes)?
                 .unwrap_or(d.surface_nodes),
-            iso_frame: opt_count("iso_frame", self.iso_frame)?.or(d.iso_frame),
-            iso_levels: opt_count("iso_levels", self.iso_levels)?.unwrap_or(d.iso_levels),
-            units: units(self.pitch_mm, self.frame_rate, self.units.clone())?,
-            drift_reference: opt_count("drift_reference", self.drift_reference)?
+            iso_frame: count_keyword("iso_frame", self.iso_frame)?.or(d.iso_frame),
+            iso_levels: count_keyword("iso_levels", self.iso_levels)?.unwrap_or(d.iso_levels),
+            units: units(self.pitch_mm, self.frame_rate, self.units)?,
+            drift_reference: count_keyword("drift_reference", self.drift_reference)?
                 .unwrap_or(d.drift_reference),
         })
     }

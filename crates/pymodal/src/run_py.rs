@@ -12,7 +12,7 @@ use pyo3::types::{PyDict, PyList};
 use crate::arrays::checked_array;
 use crate::errors::{internal, to_py};
 use crate::match_py::PyMatch;
-use crate::options_py::{cell_to_py, frame_range, json_to_py, table_rows, MatchKw, RecordingKw};
+use crate::options_py::{cell_to_py, json_to_py, table_rows, MatchKw, RecordingKw};
 
 /// A recording from a path, a (T, H, W) or (H, W) array (NaN = no sensor), or a `Recording`,
 /// and where it came from (a file's name and SHA-256).
@@ -102,7 +102,8 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 /// DegenerateShapeError — no frame of ``frames`` holds an object (everything below ``noise``,
 ///     or outlines too small to model), as ``pedomatch run`` fails on such a recording.
 /// All but the ``OSError`` are :class:`PedomatchError` and ``ValueError`` subclasses. An option
-/// of the wrong type (``spacing="wide"``) raises ``TypeError`` naming it. A pair or frame that
+/// of the wrong type raises ``TypeError`` naming it and the type it takes
+/// (``spacing="wide"``: "spacing must be a number, got 'wide'"). A pair or frame that
 /// cannot be processed does not raise: it is skipped, with its reason in ``summary``
 /// (``summary["skipped"]``).
 #[pyfunction]
@@ -116,41 +117,41 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 fn run<'py>(
     py: Python<'py>,
     recording: &Bound<'py, PyAny>,
-    element: Option<&str>,
-    modes: Option<f64>,
-    search: Option<&str>,
-    solver: Option<&str>,
-    threshold: Option<f64>,
-    threshold_mode: Option<&str>,
-    excess: Option<bool>,
-    paper: Option<bool>,
-    prealign: Option<&str>,
-    max_rotation: Option<f64>,
-    refits: Option<i64>,
-    refit_tolerance: Option<f64>,
-    refine: Option<&str>,
-    deform_modes: Option<i64>,
-    deform_stiffness: Option<f64>,
-    kappa: Option<f64>,
-    center_stride: Option<i64>,
-    position_weight: Option<f64>,
-    cost_power: Option<f64>,
-    common_sigma: Option<bool>,
-    skip_rigid: Option<bool>,
-    band: Option<i64>,
+    element: Option<&Bound<'py, PyAny>>,
+    modes: Option<&Bound<'py, PyAny>>,
+    search: Option<&Bound<'py, PyAny>>,
+    solver: Option<&Bound<'py, PyAny>>,
+    threshold: Option<&Bound<'py, PyAny>>,
+    threshold_mode: Option<&Bound<'py, PyAny>>,
+    excess: Option<&Bound<'py, PyAny>>,
+    paper: Option<&Bound<'py, PyAny>>,
+    prealign: Option<&Bound<'py, PyAny>>,
+    max_rotation: Option<&Bound<'py, PyAny>>,
+    refits: Option<&Bound<'py, PyAny>>,
+    refit_tolerance: Option<&Bound<'py, PyAny>>,
+    refine: Option<&Bound<'py, PyAny>>,
+    deform_modes: Option<&Bound<'py, PyAny>>,
+    deform_stiffness: Option<&Bound<'py, PyAny>>,
+    kappa: Option<&Bound<'py, PyAny>>,
+    center_stride: Option<&Bound<'py, PyAny>>,
+    position_weight: Option<&Bound<'py, PyAny>>,
+    cost_power: Option<&Bound<'py, PyAny>>,
+    common_sigma: Option<&Bound<'py, PyAny>>,
+    skip_rigid: Option<&Bound<'py, PyAny>>,
+    band: Option<&Bound<'py, PyAny>>,
     material: Option<&Bound<'py, PyAny>>,
-    model: Option<&str>,
+    model: Option<&Bound<'py, PyAny>>,
     frames: Option<&Bound<'py, PyAny>>,
-    noise: Option<f64>,
-    smooth: Option<f64>,
-    spacing: Option<f64>,
-    surface_nodes: Option<i64>,
-    iso_frame: Option<i64>,
-    iso_levels: Option<i64>,
-    drift_reference: Option<i64>,
+    noise: Option<&Bound<'py, PyAny>>,
+    smooth: Option<&Bound<'py, PyAny>>,
+    spacing: Option<&Bound<'py, PyAny>>,
+    surface_nodes: Option<&Bound<'py, PyAny>>,
+    iso_frame: Option<&Bound<'py, PyAny>>,
+    iso_levels: Option<&Bound<'py, PyAny>>,
+    drift_reference: Option<&Bound<'py, PyAny>>,
     pitch_mm: Option<&Bound<'py, PyAny>>,
-    frame_rate: Option<f64>,
-    units: Option<String>,
+    frame_rate: Option<&Bound<'py, PyAny>>,
+    units: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let matching = MatchKw::new(
         element,
@@ -180,7 +181,7 @@ fn run<'py>(
     .params()?;
     let params = RecordingKw {
         model,
-        frames: frame_range(frames)?,
+        frames,
         noise,
         smooth,
         spacing,
@@ -323,84 +324,13 @@ pub fn run_params<'py>(
             )));
         }
     }
-    let any = |k: &str| -> PyResult<Option<Bound<'py, PyAny>>> {
-        Ok(d.get_item(k)?.filter(|v| !v.is_none()))
-    };
-    // A value of the wrong type fails as the same keyword of `run` does: a `TypeError` naming it.
-    macro_rules! get {
-        ($k:literal, $t:ty, $expected:literal) => {
-            any($k)?
-                .map(|v| {
-                    v.extract::<$t>()
-                        .map_err(|_| crate::errors::keyword_type_error($k, $expected, &v))
-                })
-                .transpose()?
-        };
-        ($k:literal, String) => {
-            get!($k, String, "a string")
-        };
-        ($k:literal, f64) => {
-            get!($k, f64, "a number")
-        };
-        ($k:literal, i64) => {
-            get!($k, i64, "an integer")
-        };
-        ($k:literal, bool) => {
-            get!($k, bool, "True or False")
-        };
+    // Read exactly as `run` reads its keywords: a value of the wrong type is the same
+    // `TypeError` naming it.
+    let mut given = std::collections::HashMap::new();
+    for (key, value) in d.iter() {
+        given.insert(key.extract::<String>()?, value);
     }
-    let (element, search, solver) = (
-        get!("element", String),
-        get!("search", String),
-        get!("solver", String),
-    );
-    let (threshold_mode, prealign, model) = (
-        get!("threshold_mode", String),
-        get!("prealign", String),
-        get!("model", String),
-    );
-    let refine = get!("refine", String);
-    let material = any("material")?;
-    let pitch_mm = any("pitch_mm")?;
-    let matching = MatchKw {
-        element: element.as_deref(),
-        modes: get!("modes", f64),
-        search: search.as_deref(),
-        solver: solver.as_deref(),
-        threshold: get!("threshold", f64),
-        threshold_mode: threshold_mode.as_deref(),
-        excess: get!("excess", bool),
-        paper: get!("paper", bool),
-        prealign: prealign.as_deref(),
-        max_rotation: get!("max_rotation", f64),
-        refits: get!("refits", i64),
-        refit_tolerance: get!("refit_tolerance", f64),
-        refine: refine.as_deref(),
-        deform_modes: get!("deform_modes", i64),
-        deform_stiffness: get!("deform_stiffness", f64),
-        kappa: get!("kappa", f64),
-        center_stride: get!("center_stride", i64),
-        position_weight: get!("position_weight", f64),
-        cost_power: get!("cost_power", f64),
-        common_sigma: get!("common_sigma", bool),
-        skip_rigid: get!("skip_rigid", bool),
-        band: get!("band", i64),
-        material: material.as_ref(),
-    }
-    .params()?;
-    RecordingKw {
-        model: model.as_deref(),
-        frames: frame_range(any("frames")?.as_ref())?,
-        noise: get!("noise", f64),
-        smooth: get!("smooth", f64),
-        spacing: get!("spacing", f64),
-        surface_nodes: get!("surface_nodes", i64),
-        iso_frame: get!("iso_frame", i64),
-        iso_levels: get!("iso_levels", i64),
-        pitch_mm: pitch_mm.as_ref(),
-        frame_rate: get!("frame_rate", f64),
-        units: get!("units", String),
-        drift_reference: get!("drift_reference", i64),
-    }
-    .params(matching)
+    let get = |k: &str| given.get(k);
+    let matching = MatchKw::from_lookup(get).params()?;
+    RecordingKw::from_lookup(get).params(matching)
 }

@@ -242,12 +242,71 @@ def test_bad_material_values_are_option_errors_naming_material():
         assert isinstance(info.value, pymodal.InputError)
 
 
-def test_scalar_keywords_of_the_wrong_type_are_type_errors_naming_them():
-    # pyo3 reads run's typed keywords; batch reads the same keywords by hand and fails alike.
-    with pytest.raises(TypeError, match="spacing"):
-        pymodal.run(np.zeros((3, 8, 8)), spacing="wide")
-    with pytest.raises(TypeError, match="argument 'spacing': must be a number, got 'wide'"):
-        pymodal.batch_row("x.asf", spacing="wide")
+# Option keywords of the wrong type: a TypeError whose message itself names the keyword and the
+# type it takes (pyo3's own names neither: "must be real number, not str", the keyword only in a
+# note), one wording for every function that takes them, batch's **options included. The
+# keywords and their types come from the stubs, so an option added later is covered too.
+WRONG = {  # annotation -> (a value of another type, what the message says is expected)
+    "Optional[float]": ("high", "a number"),
+    "Optional[int]": (2.5, "an integer"),
+    "Optional[bool]": ("yes", "True or False"),
+    "Optional[str]": (3, "a string"),
+}
+for _alias in ("Element", "Solver", "Search", "Prealign", "ThresholdMode",
+               "Literal['contour', 'surface', 'isocontour']"):
+    WRONG[f"Optional[{_alias}]"] = (3, "a string")
+OPTION_CALLS = {
+    "match": lambda **kw: pymodal.match(SQUARE, SQUARE, **kw),
+    "run": lambda **kw: pymodal.run(FRAMES, **kw),
+    "read_recording": lambda **kw: pymodal.read_recording(ASF, **kw),
+    "Recording.from_array": lambda **kw: pymodal.Recording.from_array(FRAMES, **kw),
+    "batch": lambda **kw: pymodal.batch([], **kw),
+}
+
+
+def option_keywords():
+    import ast
+
+    stub = ast.parse((pathlib.Path(pymodal.__file__).parent / "_pymodal.pyi").read_text())
+    functions = {n.name: n for n in stub.body if isinstance(n, ast.FunctionDef)}
+    recording = next(n for n in stub.body if isinstance(n, ast.ClassDef) and n.name == "Recording")
+    functions["Recording.from_array"] = next(f for f in recording.body if getattr(f, "name", "") == "from_array")
+    found = []
+    for name in OPTION_CALLS:
+        fn = functions[name]
+        for arg in fn.args.args + fn.args.kwonlyargs:
+            annotation = ast.unparse(arg.annotation or ast.Constant(None))
+            if annotation in WRONG:
+                found.append((name, arg.arg, *WRONG[annotation]))
+    # batch and batch_row take run's keywords as **options.
+    for _, keyword, value, expected in [f for f in found if f[0] == "run"]:
+        found.append(("batch", keyword, value, expected))
+        found.append(("batch_row", keyword, value, expected))
+    return found
+
+
+OPTION_CALLS["batch_row"] = lambda **kw: pymodal.batch_row("x.asf", **kw)
+
+
+@pytest.mark.parametrize("function, keyword, value, expected", option_keywords())
+def test_option_keywords_of_the_wrong_type_are_type_errors_naming_them(function, keyword, value, expected):
+    with pytest.raises(TypeError) as info:
+        OPTION_CALLS[function](**{keyword: value})
+    assert str(info.value) == f"{keyword} must be {expected}, got {value!r}"
+    assert not getattr(info.value, "__notes__", None), info.value.__notes__
+
+
+def test_every_option_keyword_is_audited_for_its_type():
+    audited = {(f, k) for f, k, _, _ in option_keywords()}
+    specs = pymodal._options()
+    for table, functions in [("match", ["match", "run", "batch_row"]), ("pair", ["match"]),
+                             ("recording", ["run", "batch", "batch_row"]), ("units", ["read_recording"])]:
+        for spec in specs[table]:
+            if spec["name"] in ("material", "pitch_mm", "frames"):
+                continue  # not scalars: a wrong form is an InputError naming it (above)
+            for f in functions:
+                assert (f, spec["name"]) in audited, (f, spec["name"])
+    assert ("batch", "jobs") in audited and ("Recording.from_array", "frame_rate") in audited
 
 
 def test_good_forms_of_frames_and_pitch_are_accepted():
