@@ -378,6 +378,13 @@ impl Recording {
         out
     }
 
+    /// The pressure units the file states ([`Recording::units`]), `None` when it states none:
+    /// the value of `summary.json`'s `pressure_units`, the study table's and Python's
+    /// `Recording.units`.
+    pub fn known_units(&self) -> Option<&str> {
+        Some(self.units.as_str()).filter(|u| !u.is_empty())
+    }
+
     /// Area of one sensor in mm²: the stated area, else the pitch product, else `None`.
     pub fn sensel_area(&self) -> Option<f64> {
         self.sensel_area_mm2.or(self.pitch_mm.map(|p| p[0] * p[1]))

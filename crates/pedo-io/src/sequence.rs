@@ -448,7 +448,7 @@ impl RunParams {
                 frames: FrameRange::new(start, end),
                 pitch_mm: recording.pitch_mm,
                 frame_rate: recording.dt_s.map(|dt| 1.0 / dt),
-                units: Some(recording.units.clone()).filter(|u| !u.is_empty()),
+                units: recording.known_units().map(str::to_string),
             },
         )
     }

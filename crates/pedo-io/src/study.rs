@@ -658,7 +658,7 @@ impl RowUnits {
         Self {
             frame_rate_hz: recording.frame_rate(),
             pitch_mm: recording.pitch_mm,
-            pressure_units: Some(recording.units.clone()).filter(|u| !u.is_empty()),
+            pressure_units: recording.known_units().map(str::to_string),
         }
     }
 

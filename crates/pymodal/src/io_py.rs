@@ -24,7 +24,7 @@ use crate::pickling::{Reader, Writer};
 ///
 /// Attributes: ``frames`` (T, H, W) float32 with NaN where there is no sensor, ``pitch_mm``
 /// ``(dx, dy)`` = (column spacing, row spacing) or None, ``dt_s`` (seconds per frame or None),
-/// ``units`` (e.g. "kPa", "" if unknown), ``sensel_area_mm2``, ``noise_threshold``, ``format``,
+/// ``units`` (e.g. "kPa", None if unknown), ``sensel_area_mm2``, ``noise_threshold``, ``format``,
 /// ``sensor_mask`` (H, W) bool, and the per-frame measures ``contact_area`` (mm², or sensels when
 /// the pitch is unknown), ``total_force`` (N when units and pitch are known), ``peak_pressure``,
 /// ``cop`` (T, 2) centre of pressure (x = column, y = row; NaN without contact), and
@@ -214,11 +214,11 @@ impl PyRecording {
     fn dt_s(&self) -> Option<f64> {
         self.inner.dt_s
     }
-    /// Pressure units as the file writes them (e.g. ``"kPa"``); ``""`` when unknown (``null``
-    /// in ``summary.json``).
+    /// Pressure units as the file states them (e.g. ``"kPa"``, ``"N/cm²"``), or None when it
+    /// states none (as ``summary.json``'s ``pressure_units`` and the study table).
     #[getter]
-    fn units(&self) -> String {
-        self.inner.units.clone()
+    fn units(&self) -> Option<&str> {
+        self.inner.known_units()
     }
     /// Area of one sensor in mm²: the stated area, else ``dx * dy``, else None.
     #[getter]
@@ -316,7 +316,7 @@ impl PyRecording {
     fn __hash__(&self) -> u64 {
         self.state().digest()
     }
-    /// ``Recording(frames=TxHxW, pitch_mm=(dx, dy) or None, dt_s=... or None, units='...')``,
+    /// ``Recording(frames=TxHxW, pitch_mm=(dx, dy) or None, dt_s=... or None, units='...' or None)``,
     /// the values as Python writes them.
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
         let r = &self.inner;
@@ -329,7 +329,7 @@ impl PyRecording {
             r.cols(),
             repr(pitch_mm.into_pyobject(py)?.into_any())?,
             repr(r.dt_s.into_pyobject(py)?.into_any())?,
-            repr(r.units.as_str().into_pyobject(py)?.into_any())?,
+            repr(r.known_units().into_pyobject(py)?.into_any())?,
         ))
     }
 }

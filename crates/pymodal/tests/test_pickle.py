@@ -168,7 +168,7 @@ def test_recording_repr_is_python_syntax():
                                        frame_rate=50.0, units="kPa")
     assert repr(rec) == "Recording(frames=3x30x20, pitch_mm=(5.08, 5.08), dt_s=0.02, units='kPa')"
     bare = pymodal.Recording.from_array(np.zeros((2, 4, 3)))
-    assert repr(bare) == "Recording(frames=2x4x3, pitch_mm=None, dt_s=None, units='')"
+    assert repr(bare) == "Recording(frames=2x4x3, pitch_mm=None, dt_s=None, units=None)"
     t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
     model = pymodal.ModalModel(np.c_[3 * np.cos(t), 2 * np.sin(t)])
     assert repr(model).startswith("ModalModel(dim=2, n_nodes=12, element='gaussian', modes=24, sigma=")

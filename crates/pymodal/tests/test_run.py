@@ -2,6 +2,7 @@
 and the pymodal.plot helpers."""
 
 import hashlib
+import pickle
 from pathlib import Path
 
 import numpy as np
@@ -207,7 +208,12 @@ def test_read_recording_units_override():
 def test_units_name_the_pressure_of_a_file_that_states_none(tmp_path):
     path = tmp_path / "blob.npy"
     np.save(path, moving_blob(frames=3))
-    assert pymodal.read_recording(path).units == ""
+    bare = pymodal.read_recording(path)
+    # Unknown units are None, as summary.json's null (not ''): the same value everywhere.
+    assert bare.units is None
+    assert pymodal.run(bare)["summary"]["recording"]["pressure_units"] is None
+    assert pymodal.Recording.from_array(moving_blob(frames=2)).units is None
+    assert pickle.loads(pickle.dumps(bare)).units is None
     rec = pymodal.read_recording(path, pitch_mm=5.0, units="N/cm2")
     assert rec.units == "N/cm²"
     # N/cm² is 10 kPa: the force in N follows from the units and the pitch (the peak stays in

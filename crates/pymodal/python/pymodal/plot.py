@@ -280,7 +280,7 @@ def plot_tracks(tracks: Union[Mapping[str, Any], Sequence[npt.ArrayLike]], ax: O
             background = np.asarray(rec.frames[iso["frame"]], dtype=float)
             background_what = f"pressure, frame {iso['frame']}"
         pitch_mm = rec.pitch_mm if pitch_mm is None else pitch_mm
-        units = (rec.units or None) if units is None else units
+        units = rec.units if units is None else units
         dt_s = rec.dt_s if dt_s is None else dt_s
     sx, sy, unit = _scale(pitch_mm)
     eligible = _eligible_tracks(tracks, min_length)
