@@ -82,6 +82,10 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 ///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
 ///   units allow, like ``frames``; None for surfaces);
 /// - ``tracks``: list of (k, 1 + d) float arrays of ``(frame, x, y[, z])`` rows, one per track;
+/// - ``track_steps``: list of (k, 2) int arrays of ``(object_id, node)`` rows, aligned with
+///   ``tracks`` (row for row): the object each step is on (an index into ``objects``, which
+///   gives its frame and, for an isocontour run, its level) and the node within it, as
+///   ``tracks.csv``'s ``object_id`` and ``node``;
 /// - ``frames``: list of dicts of per-frame measures (``frame``, ``time_s``,
 ///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
 ///   units allow, like ``frames.csv``);
@@ -217,7 +221,16 @@ fn run<'py>(
     out.set_item("matches", matches)?;
     out.set_item("objects", objects(py, &rec, &result)?)?;
     let tracks = PyList::empty(py);
+    // Each track's steps as (object id, node): the object (an index into `objects`) says which
+    // frame, object and isobaric level a step is on, as tracks.csv's object_id and node.
+    let track_steps = PyList::empty(py);
     for t in &result.tracks {
+        let ids: Vec<i64> = t
+            .steps
+            .iter()
+            .flat_map(|&(o, n)| [o as i64, n as i64])
+            .collect();
+        track_steps.append(PyArray1::from_vec(py, ids).reshape([t.steps.len(), 2])?)?;
         let pts = result.track_points(t);
         let width = 1 + pts.first().map_or(2, |(_, p)| p.len());
         let flat: Vec<f64> = pts
@@ -227,6 +240,7 @@ fn run<'py>(
         tracks.append(PyArray1::from_vec(py, flat).reshape([pts.len(), width])?)?;
     }
     out.set_item("tracks", tracks)?;
+    out.set_item("track_steps", track_steps)?;
     let (start, end) = options.frames.unwrap_or((0, rec.n_frames()));
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
     let measures = report::frames_table(&rec, threshold, start, end);

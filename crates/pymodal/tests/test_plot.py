@@ -307,6 +307,29 @@ def test_plot_tracks_of_an_isocontour_run_are_coloured_by_level_over_its_frame()
     assert_legend_off_the_data_and_under_the_title(ax)
 
 
+def test_plot_tracks_takes_each_steps_level_from_its_object_not_its_position():
+    rec = blob_recording(frames=3)
+    res = pymodal.run(rec, model="isocontour", iso_levels=6, spacing=1.0)
+    level = {o["id"]: o["level"] for o in res["objects"]}
+    expected = {}
+    for t, s in zip(res["tracks"], res["track_steps"]):
+        if len(t) >= 2:
+            expected[tuple(map(tuple, t[:, 1:3]))] = [level[o] for o in s[:-1, 0]]
+    # Points moved off the tracks' positions (e.g. re-sampled for a figure) change nothing:
+    # the levels come from the steps' objects.
+    moved = pymodal.RunResult(res)
+    moved["objects"] = [dict(o, points=o["points"] + 0.25) for o in res["objects"]]
+    ax = pymodal.plot_tracks(moved, min_length=2, longest=None, pitch_mm=1.0)
+    lines = track_collections(ax)
+    assert len(lines) == len(expected)
+    for c in lines:
+        xy = np.concatenate([c.get_segments()[0][:1], np.asarray(c.get_segments())[:, 1]])
+        np.testing.assert_allclose(c.get_array(), expected[tuple(map(tuple, xy))])
+    # Without its track_steps (tracks alone), a result's tracks are coloured by time.
+    ax = pymodal.plot_tracks(res["tracks"], min_length=2)
+    assert colour_bar_labels(ax) == ["frame"]
+
+
 def test_readme_three_panels_do_not_overlap():
     # The README's example: no two texts of different panels or colour bars overlap (titles,
     # axis labels, tick labels, colour bar labels, legends).

@@ -153,6 +153,21 @@ def timeless(rows):
     return [{k: v for k, v in r.items() if not k.endswith("_s")} for r in rows]
 
 
+def test_track_steps_name_the_object_and_node_of_every_track_step():
+    for model in ("contour", "isocontour", "surface"):
+        res = pymodal.run(moving_blob(frames=5), model=model, iso_levels=4, surface_nodes=30)
+        objects = res["objects"]
+        assert len(res["track_steps"]) == len(res["tracks"]) > 0
+        for t, s in zip(res["tracks"], res["track_steps"]):
+            assert s.shape == (len(t), 2) and s.dtype == np.int64
+            for (frame, *xyz), (o, n) in zip(t, s):
+                assert objects[o]["frame"] == frame
+                np.testing.assert_array_equal(objects[o]["points"][n], xyz)
+        # Every node of every object is on exactly one track.
+        nodes = sorted((int(o), int(n)) for s in res["track_steps"] for o, n in s)
+        assert nodes == [(o["id"], n) for o in objects for n in range(len(o["points"]))]
+
+
 def test_frames_objects_and_tracks_are_zero_based():
     frames = moving_blob(frames=6)
     res = pymodal.run(frames, frames=(2, None))

@@ -18,7 +18,8 @@ from .plot import plot_frame as plot_frame, plot_match as plot_match, plot_track
 
 class RunResult(dict[str, _Any]):
     """What :func:`run` returns: a dict (``table``, ``matches``, ``objects``, ``tracks``,
-    ``frames``, ``summary``, ``timings``) that Jupyter shows as a table of its summary."""
+    ``track_steps``, ``frames``, ``summary``, ``timings``) that Jupyter shows as a table of its
+    summary."""
 
     def __repr__(self) -> str:
         """One line: the input, the counts and the mean optimisation percentage, and the keys

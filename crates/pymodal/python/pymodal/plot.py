@@ -240,9 +240,10 @@ def plot_tracks(tracks: Union[Mapping[str, Any], Sequence[npt.ArrayLike]], ax: O
     axes, off the data.
 
     Given the result of an isocontour run (``model="isocontour"``: every object an isobaric
-    level of one frame), the tracks are coloured by level instead, with a colour bar in the
-    pressure units, the title names the frame and the levels, and a recording as
-    ``background`` is drawn as that frame's pressure image.
+    level of one frame), the tracks are coloured by level instead (each step's level is that of
+    its object, from the result's ``track_steps``), with a colour bar in the pressure units, the
+    title names the frame and the levels, and a recording as ``background`` is drawn as that
+    frame's pressure image.
 
     Given the result of :func:`pymodal.run`, its recording's pitch, frame rate and units (from
     its ``summary``) are used unless given, so the axes are in mm and the colours in seconds
@@ -260,9 +261,10 @@ def plot_tracks(tracks: Union[Mapping[str, Any], Sequence[npt.ArrayLike]], ax: O
     """
     import pymodal
 
-    objects = None
+    objects = steps = None
     if isinstance(tracks, dict):
         objects = tracks.get("objects")
+        steps = tracks.get("track_steps")
         # A run's result knows its recording's pitch, frame rate and units (its summary).
         known = (tracks.get("summary") or {}).get("recording") or {}
         pitch_mm = known.get("pitch_mm") if pitch_mm is None else pitch_mm
@@ -270,7 +272,7 @@ def plot_tracks(tracks: Union[Mapping[str, Any], Sequence[npt.ArrayLike]], ax: O
         rate = known.get("frame_rate_hz")
         dt_s = (1.0 / rate if rate else None) if dt_s is None else dt_s
         tracks = tracks.get("tracks", [])
-    iso = _iso_levels(objects)
+    iso = _iso_levels(objects, steps)
     background_what = "peak pressure"
     if isinstance(background, pymodal.Recording):
         rec = background
@@ -283,10 +285,11 @@ def plot_tracks(tracks: Union[Mapping[str, Any], Sequence[npt.ArrayLike]], ax: O
         units = rec.units if units is None else units
         dt_s = rec.dt_s if dt_s is None else dt_s
     sx, sy, unit = _scale(pitch_mm)
-    eligible = _eligible_tracks(tracks, min_length)
+    eligible, which = _eligible_tracks(tracks, min_length)
     # Longest first; ties by first frame, so the choice is deterministic (as the CLI's).
     order = sorted(range(len(eligible)), key=lambda k: (-len(eligible[k]), eligible[k][0, 0]))
-    shown = [eligible[k] for k in order[: None if longest is None else max(int(longest), 0)]]
+    order = order[: None if longest is None else max(int(longest), 0)]
+    shown = [eligible[k] for k in order]
 
     ax = _axes(ax)
     from matplotlib import cm, colors
@@ -299,8 +302,8 @@ def plot_tracks(tracks: Union[Mapping[str, Any], Sequence[npt.ArrayLike]], ax: O
         values = [t[:, 0] * scale for t in shown]
         what, bar_label = "time", ("frame" if dt_s is None else "time (s)")
     else:
-        values = [np.array([iso["levels"].get((x, y), np.nan) for x, y in t[:, 1:3]])
-                  for t in shown]
+        # Each step's object (track_steps: object id, node) gives its level.
+        values = [iso["levels"][np.asarray(steps[which[k]], dtype=np.int64)[:, 0]] for k in order]
         what, bar_label = "level", f"isobaric level ({units or 'units unknown'})"
     finite = np.concatenate(values + [np.zeros(0)])
     finite = finite[np.isfinite(finite)]
@@ -331,27 +334,24 @@ def plot_tracks(tracks: Union[Mapping[str, Any], Sequence[npt.ArrayLike]], ax: O
     return ax
 
 
-def _iso_levels(objects):
-    """For the objects of an isocontour run (each with a level, all of one frame): the frame,
-    the levels, and the level of each node by its (x, y); else None."""
-    if not objects or any(o.get("level") is None for o in objects):
+def _iso_levels(objects, steps):
+    """For an isocontour run (its objects each with a level, all of one frame; ``steps`` the
+    object id and node of each track step): the frame, every object's level by id, the range
+    and count of the levels; else None."""
+    if steps is None or not objects or any(o.get("level") is None for o in objects):
         return None
     frames = {o["frame"] for o in objects}
     if len(frames) != 1:
         return None
-    # A track's rows are its objects' nodes, the very same numbers: a node names its level.
-    by_node = {}
-    for o in objects:
-        for x, y in np.asarray(o["points"], dtype=float)[:, :2]:
-            by_node[(x, y)] = o["level"]
-    levels = [o["level"] for o in objects]
-    return {"frame": frames.pop(), "levels": by_node, "range": (min(levels), max(levels)),
+    levels = np.array([o["level"] for o in objects], dtype=float)
+    return {"frame": frames.pop(), "levels": levels, "range": (levels.min(), levels.max()),
             "count": len(levels)}
 
 
 def _eligible_tracks(tracks, min_length):
-    """The tracks as float arrays, those of at least ``min_length`` (and 2) steps."""
-    eligible = []
+    """The tracks as float arrays, those of at least ``min_length`` (and 2) steps, and the
+    index of each in ``tracks``."""
+    eligible, which = [], []
     for i, t in enumerate(tracks):
         try:
             t = np.asarray(t, dtype=float)
@@ -363,7 +363,8 @@ def _eligible_tracks(tracks, min_length):
                 f"shape {t.shape}")
         if len(t) >= max(min_length, 2):
             eligible.append(t)
-    return eligible
+            which.append(i)
+    return eligible, which
 
 
 def _draw_background(ax, background, sx, sy, label):
