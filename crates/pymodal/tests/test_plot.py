@@ -355,3 +355,71 @@ def test_readme_three_panels_do_not_overlap():
         for kb, bb in boxes[i + 1:]:
             if ka != kb:
                 assert not ba.overlaps(bb), (fig.axes[ka], fig.axes[kb], ba, bb)
+
+
+def tall_and_wide_plots(shape):
+    """Each helper on its own figure, for an object 4 times taller than wide (a foot's outline)
+    or 4 times wider than tall; with the data's extent in mm, (width, height)."""
+    t = np.linspace(0, 2 * np.pi, 48, endpoint=False)
+    long, short = 40.0 + 12.0 * np.sin(t), 15.0 + 3.0 * np.cos(t)
+    a = np.c_[short, long] if shape == "tall" else np.c_[long, short]
+    b = a + 0.6 * np.c_[np.sin(3 * t), np.cos(5 * t)]
+    rows, cols = (60, 30) if shape == "tall" else (30, 60)
+    frames = np.zeros((2, rows, cols), np.float32)
+    r, c = np.mgrid[0:rows, 0:cols]
+    q = ((c - cols / 2) / (0.1 * cols if shape == "tall" else 0.4 * cols)) ** 2 + (
+        (r - rows / 2) / (0.4 * rows if shape == "tall" else 0.1 * rows)) ** 2
+    frames[:] = np.maximum(0.0, 100.0 * (1.0 - q))
+    rec = pymodal.Recording.from_array(frames, pitch_mm=5.0, units="kPa")
+    tracks = [np.c_[np.arange(3), a[k] + [[0, 0], [0.2, 0.1], [0.4, 0.2]]] for k in range(0, 48, 4)]
+    m = pymodal.match(a, b)
+    span = lambda p: np.ptp(p, axis=0) * 5.0  # noqa: E731
+    return [
+        (pymodal.plot_match(m, a, b, pitch_mm=5.0), span(np.r_[a, b])),
+        (pymodal.plot_tracks(tracks, pitch_mm=5.0), span(np.concatenate([t[:, 1:] for t in tracks]))),
+        (pymodal.plot_frame(rec, 0, contours=False), np.array([cols, rows]) * 5.0),
+    ]
+
+
+@pytest.mark.parametrize("shape", ["tall", "wide"])
+def test_a_figure_the_helpers_make_is_sized_to_the_data(shape):
+    for ax, (data_w, data_h) in tall_and_wide_plots(shape):
+        fig = ax.figure
+        fig.canvas.draw()
+        w, h = fig.get_size_inches()
+        assert (h > w) if shape == "tall" else (w > h), (ax.get_title(), w, h)
+        # No band of blank space beside the axes: they fill the room the layout gives them (the
+        # limits keep the aspect), and the colour bars stand against them.
+        box, drawn = ax.get_position(original=True), ax.get_position()
+        assert drawn.bounds == pytest.approx(box.bounds), ax.get_title()
+        bars = [b for b in fig.axes if b is not ax]
+        gap = (min(b.get_position().x0 for b in bars) - drawn.x1) * w
+        assert 0 < gap < 0.5, (ax.get_title(), gap)
+        # Along its long side the data span the axes (autoscale's margins); across, the axes are
+        # no wider than the data or than the title and legend above them need, and a wide
+        # object's axes stay tall enough for a readable colour bar.
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        mm_per_inch = abs(y1 - y0) / (drawn.height * h)
+        assert abs(x1 - x0) / (drawn.width * w) == pytest.approx(mm_per_inch, rel=1e-3), "equal aspect"
+        above = max(extent(t).width / fig.dpi for t in (ax.title, ax.get_legend()) if t is not None)
+        if shape == "tall":
+            assert abs(y1 - y0) <= 1.15 * data_h, ax.get_title()
+            assert drawn.width * w <= max(1.15 * data_w / mm_per_inch, above) + 0.1, ax.get_title()
+        else:
+            assert abs(x1 - x0) <= 1.15 * data_w, ax.get_title()
+            assert drawn.height * h <= max(1.15 * data_h / mm_per_inch, 2.5) + 0.1, ax.get_title()
+            assert drawn.height * h >= 2.5 - 0.1, ax.get_title()
+        plt.close(fig)
+
+
+def test_the_callers_axes_and_figure_are_left_as_they_are():
+    a = ellipse(40) * [1, 4]
+    m = pymodal.match(a, a + 0.2)
+    fig, ax = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
+    assert pymodal.plot_match(m, a, a + 0.2, ax=ax) is ax
+    fig.canvas.draw()
+    assert tuple(fig.get_size_inches()) == (6.4, 4.8)
+    assert ax.get_adjustable() == "box" and ax.get_legend()._ncols == 2
+    fig, ax = plt.subplots()
+    pymodal.plot_tracks(fake_tracks(5), ax=ax)
+    assert tuple(fig.get_size_inches()) == (6.4, 4.8) and ax.get_adjustable() == "box"

@@ -2,7 +2,9 @@
 
 matplotlib is imported only when a function is called; without it the call raises an
 ImportError that says how to install it. Every function draws into ``ax`` (a new figure's axes
-when ``None``) and returns the axes.
+when ``None``) and returns the axes. A figure a function makes itself is sized to the aspect of
+its data (a foot's outline gets a portrait figure, without bands of blank space beside the axes);
+axes passed in, and their figure, are left as they are.
 
 >>> import numpy as np, pymodal
 >>> t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
@@ -48,6 +50,73 @@ def _axes(ax, projection=None):
     # none of them runs into another (as in a figure of several panels made with it).
     fig = _pyplot().figure(layout="constrained")
     return fig.add_subplot(111, projection=projection)
+
+
+# A figure a helper makes for itself is fitted to its data (_fit_figure): the axes may grow by
+# this factor along the data's long side, and a colour bar stays at least this tall (inches).
+_GROW = 1.3
+_MIN_HEIGHT_IN = 2.5
+
+
+def _layout(fig):
+    """Run the layout engine and the axes' aspect, as a draw does, without rendering."""
+    draw = getattr(fig, "draw_without_rendering", None)  # matplotlib >= 3.6
+    (draw or fig.canvas.draw)()
+
+
+def _fit_figure(ax, title, legend):
+    """Size a figure made by :func:`_axes` to the aspect of its equal-aspect data: a tall object
+    (a foot's outline) in the default landscape figure left bands of blank space beside the
+    axes, a wide one above and below.
+
+    The axes keep the data's aspect by their limits (``adjustable="datalim"``), not by shrinking
+    inside the room the layout gave them, so the colour bars, labels, title and legend sit
+    against the axes. The axes grow (by at most ``_GROW``) along the data's long side and shrink
+    along the other to the data's aspect, never narrower than the title and the legend above
+    them (the legend in one column when two are wider than the data) nor lower than
+    ``_MIN_HEIGHT_IN`` (a shorter colour bar is unreadable); what the data cannot fill is a
+    margin of the limits. Axes the caller made are never touched."""
+    if getattr(ax, "name", "") == "3d":
+        return
+    fig = ax.figure
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    if x1 == x0 or y1 == y0:
+        return
+    aspect = abs(x1 - x0) / abs(y1 - y0)  # equal aspect: the data's width over its height
+    ax.set_adjustable("datalim")
+
+    def box():
+        """The axes' size in inches and the room around them, after a layout."""
+        _layout(fig)
+        # The layout widened one range to the box's aspect: back to the data's.
+        ax.autoscale_view()
+        w, h = fig.get_size_inches()
+        pos = ax.get_position()
+        return pos.width * w, pos.height * h, w - pos.width * w, h - pos.height * h
+
+    def text_width():
+        return max((t.get_window_extent().width / fig.dpi
+                    for t in (ax.title, ax.get_legend()) if t is not None and t.get_visible()),
+                   default=0.0)
+
+    box_w, box_h, room_w, room_h = box()
+    if box_w <= 0 or box_h <= 0:
+        return
+    if aspect < box_w / box_h:  # tall: blank beside the data
+        leg = ax.get_legend()
+        if legend and leg is not None and leg.get_window_extent().width / fig.dpi > aspect * box_h:
+            _title_and_legend(ax, title, legend, ncol=1)
+            box_w, box_h, room_w, room_h = box()
+        text = text_width()
+        new_h = min(max(box_h, text / aspect), _GROW * box_h)
+        new_w = max(aspect * new_h, text)
+    else:  # wide: blank above and below
+        new_w = min(max(box_w, _MIN_HEIGHT_IN * aspect), _GROW * box_w)
+        new_h = max(new_w / aspect, min(_MIN_HEIGHT_IN, box_h))
+    # The room around the axes (colour bars) changes a little with their size: a second pass.
+    for _ in range(2):
+        fig.set_size_inches(new_w + room_w, new_h + room_h)
+        box_w, box_h, room_w, room_h = box()
 
 
 def _title_and_legend(ax, title, legend=True, ncol=2):
@@ -132,6 +201,7 @@ def plot_match(m: Match, a: npt.ArrayLike, b: npt.ArrayLike, ax: Optional[Axes] 
     s = np.array([sx, sy, 1.0][: a.shape[1]])
     a, b = a * s, b * s
     three_d = a.shape[1] == 3
+    own = ax is None
     ax = _axes(ax, "3d" if three_d else None)
     if closed is None:
         closed = not three_d
@@ -183,6 +253,8 @@ def plot_match(m: Match, a: npt.ArrayLike, b: npt.ArrayLike, ax: Optional[Axes] 
         if invert_y and not ax.yaxis_inverted():
             ax.invert_yaxis()
     _title_and_legend(ax, title, legend)
+    if own:
+        _fit_figure(ax, title, legend)
     return ax
 
 
@@ -203,6 +275,7 @@ def plot_frame(recording: Recording, i: int, ax: Optional[Axes] = None, *,
     frame = np.asarray(recording.frames[i], dtype=float)
     sx, sy, unit = _scale(recording.pitch_mm)
     rows, cols = frame.shape
+    own = ax is None
     ax = _axes(ax)
     image = ax.imshow(np.ma.masked_invalid(frame), cmap=cmap, origin="upper",
                       extent=(-0.5 * sx, (cols - 0.5) * sx, (rows - 0.5) * sy, -0.5 * sy),
@@ -221,6 +294,8 @@ def plot_frame(recording: Recording, i: int, ax: Optional[Axes] = None, *,
     ax.set_xlabel(f"x ({unit})")
     ax.set_ylabel(f"y ({unit})")
     ax.set_aspect("equal")
+    if own:
+        _fit_figure(ax, ax.get_title(), legend=False)
     return ax
 
 
@@ -291,6 +366,7 @@ def plot_tracks(tracks: Union[Mapping[str, Any], Sequence[npt.ArrayLike]], ax: O
     order = order[: None if longest is None else max(int(longest), 0)]
     shown = [eligible[k] for k in order]
 
+    own = ax is None
     ax = _axes(ax)
     from matplotlib import cm, colors
     from matplotlib.collections import LineCollection
@@ -331,6 +407,8 @@ def plot_tracks(tracks: Union[Mapping[str, Any], Sequence[npt.ArrayLike]], ax: O
         ax.invert_yaxis()
     title = _tracks_title(shown, eligible, min_length, iso, dt_s, units)
     _title_and_legend(ax, title, legend=bool(shown))
+    if own:
+        _fit_figure(ax, title, legend=bool(shown))
     return ax
 
 
