@@ -26,33 +26,24 @@ pub trait KeywordType: Sized {
     fn from_py(v: &Bound<'_, PyAny>) -> Option<Self>;
 }
 
-impl KeywordType for f64 {
-    const EXPECTED: &'static str = "a number";
-    fn from_py(v: &Bound<'_, PyAny>) -> Option<Self> {
-        v.extract().ok()
-    }
+/// `KeywordType` for a type pyo3 reads as a parameter, named `$expected` in errors.
+macro_rules! keyword_type {
+    ($($t:ty => $expected:literal),* $(,)?) => {$(
+        impl KeywordType for $t {
+            const EXPECTED: &'static str = $expected;
+            fn from_py(v: &Bound<'_, PyAny>) -> Option<Self> {
+                v.extract().ok()
+            }
+        }
+    )*};
 }
 
-impl KeywordType for i64 {
-    const EXPECTED: &'static str = "an integer";
-    fn from_py(v: &Bound<'_, PyAny>) -> Option<Self> {
-        v.extract().ok()
-    }
-}
-
-impl KeywordType for bool {
-    const EXPECTED: &'static str = "True or False";
-    fn from_py(v: &Bound<'_, PyAny>) -> Option<Self> {
-        v.extract().ok()
-    }
-}
-
-impl KeywordType for String {
-    const EXPECTED: &'static str = "a string";
-    fn from_py(v: &Bound<'_, PyAny>) -> Option<Self> {
-        v.extract().ok()
-    }
-}
+keyword_type!(
+    f64 => "a number",
+    i64 => "an integer",
+    bool => "True or False",
+    String => "a string",
+);
 
 /// A scalar option keyword, taken from Python as any object: `None` (or absent) is `None`, a
 /// value of the type is read as pyo3 reads a typed parameter, anything else is the `TypeError`
