@@ -197,8 +197,8 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         _ => SenselAspect::SQUARE,
     };
     let r = aspect.back(modal_core::match_shapes(
-        &aspect.shape(&a),
-        &aspect.shape(&b),
+        aspect.shape(&a)?.as_ref(),
+        aspect.shape(&b)?.as_ref(),
         &o,
     )?);
     let match_time = t_match.elapsed().as_secs_f64();

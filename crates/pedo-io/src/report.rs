@@ -323,6 +323,7 @@ pub(crate) fn objects_header(recording: &Recording) -> Table {
 /// The row of [`objects_table`] of one object.
 pub(crate) fn object_cells(recording: &Recording, o: &SequenceObject) -> Vec<Cell> {
     let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
+    let u = measure_units(recording);
     let mut cells = vec![Cell::int(o.id), Cell::int(o.frame)];
     if timed {
         cells.push(Cell::opt(recording.time_s(o.frame), 6));
@@ -332,11 +333,7 @@ pub(crate) fn object_cells(recording: &Recording, o: &SequenceObject) -> Vec<Cel
         Cell::int(o.shape.len()),
         // In kPa when the units say how (as frames.csv's peak pressure), so that the levels of
         // a study mixing sensors share one unit.
-        Cell::opt(
-            o.level
-                .map(|l| l * kpa_per_unit(&recording.units).unwrap_or(1.0)),
-            3,
-        ),
+        Cell::opt(o.level.map(|l| l * u.peak.1), 3),
     ]);
     let n = o.shape.len().max(1) as f64;
     let (cx, cy) = (0..o.shape.len()).fold((0.0, 0.0), |(x, y), i| {
@@ -344,7 +341,7 @@ pub(crate) fn object_cells(recording: &Recording, o: &SequenceObject) -> Vec<Cel
         (x + p[0] / n, y + p[1] / n)
     });
     push_xy(&mut cells, recording, cx, cy, mm);
-    push_measures(&mut cells, recording, o.measures.as_ref());
+    push_measures(&mut cells, recording, &u, o.measures.as_ref());
     cells
 }
 
@@ -574,6 +571,7 @@ fn push_measure_columns(t: &mut Table, recording: &Recording) {
 fn push_measures(
     cells: &mut Vec<Cell>,
     recording: &Recording,
+    u: &MeasureUnits,
     m: Option<&crate::recording::FrameMeasures>,
 ) {
     let mm = recording.pitch_mm.is_some();
@@ -582,7 +580,6 @@ fn push_measures(
         cells.extend(std::iter::repeat_n(Cell::Empty, 4 + xy));
         return;
     };
-    let u = measure_units(recording);
     cells.extend([
         Cell::int(m.contact_sensors),
         Cell::Float(m.contact_area * u.area.1, 4),
@@ -615,13 +612,14 @@ pub(crate) fn measures_rows<E>(
     measures: &[crate::recording::FrameMeasures],
     emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
 ) -> std::result::Result<(), E> {
+    let u = measure_units(recording);
     for (k, m) in measures.iter().enumerate() {
         let f = first + k;
         let mut cells = vec![Cell::int(f)];
         if recording.dt_s.is_some() {
             cells.push(Cell::opt(recording.time_s(f), 6));
         }
-        push_measures(&mut cells, recording, Some(m));
+        push_measures(&mut cells, recording, &u, Some(m));
         emit(cells)?;
     }
     Ok(())

@@ -1739,7 +1739,10 @@ fn prepare_objects(
     ids.sort_unstable();
     ids.dedup();
     ids.into_par_iter()
-        .map(|o| (o, prepare(&aspect.shape(&objects[o].shape), options)))
+        .map(|o| {
+            let shape = aspect.shape(&objects[o].shape);
+            (o, shape.and_then(|s| prepare(&s, options)))
+        })
         .collect()
 }
 
@@ -1752,7 +1755,7 @@ fn prepare_objects(
 /// use modal_core::{Shape, Topology};
 /// let aspect = SenselAspect::of_pitch(Some([5.08, 7.62])); // footscan: 1.5
 /// let s = Shape::new(2, vec![0.0, 0.0, 2.0, 0.0, 0.0, 2.0], Topology::ClosedContour)?;
-/// assert_eq!(aspect.shape(&s).coords(), &[0.0, 0.0, 2.0, 0.0, 0.0, 3.0]);
+/// assert_eq!(aspect.shape(&s)?.coords(), &[0.0, 0.0, 2.0, 0.0, 0.0, 3.0]);
 /// # Ok::<(), modal_core::ModalError>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -1775,10 +1778,14 @@ impl SenselAspect {
         Self(if a.is_finite() && a > 0.0 { a } else { 1.0 })
     }
 
-    /// `shape` in matching coordinates.
-    pub fn shape<'s>(self, shape: &'s Shape) -> std::borrow::Cow<'s, Shape> {
+    /// `shape` in matching coordinates (an error only if scaling took a coordinate beyond
+    /// the range of `f64`).
+    pub fn shape<'s>(
+        self,
+        shape: &'s Shape,
+    ) -> std::result::Result<std::borrow::Cow<'s, Shape>, ModalError> {
         if self.0 == 1.0 {
-            return std::borrow::Cow::Borrowed(shape);
+            return Ok(std::borrow::Cow::Borrowed(shape));
         }
         let d = shape.dim();
         let mut coords = shape.coords().to_vec();
@@ -1787,9 +1794,8 @@ impl SenselAspect {
             .skip(1)
             .step_by(d)
             .for_each(|y| *y *= self.0);
-        // Scaling one axis keeps a valid shape valid (finite, distinct points).
-        let scaled = Shape::new(d, coords, shape.topology().clone()).expect("a scaled valid shape");
-        std::borrow::Cow::Owned(scaled)
+        let scaled = Shape::new(d, coords, shape.topology().clone())?;
+        Ok(std::borrow::Cow::Owned(scaled))
     }
 
     /// A result matched in matching coordinates, with its transform and aligned nodes back in
@@ -1834,11 +1840,9 @@ fn match_pair(
             match_prepared(pa, pb, &options.matching, Parallelism::Serial)
         }
         // The error names the object's role in the pair, as the one-call form words it.
-        _ => match_shapes(
-            &aspect.shape(&oa.shape),
-            &aspect.shape(&ob.shape),
-            &options.matching,
-        ),
+        _ => aspect
+            .shape(&oa.shape)
+            .and_then(|sa| match_shapes(&sa, aspect.shape(&ob.shape)?.as_ref(), &options.matching)),
     }
     .map(|r| aspect.back(r))
     .map_err(|e| {
@@ -1960,14 +1964,14 @@ fn match_part_with_whole(
     opts: &MatchOptions,
     aspect: SenselAspect,
 ) -> std::result::Result<MatchResult, ModalError> {
-    let whole = aspect.shape(&objects[part.whole].shape);
-    let siblings: Vec<_> = part
+    let whole = aspect.shape(&objects[part.whole].shape)?;
+    let siblings = part
         .siblings
         .iter()
         .map(|&s| aspect.shape(&objects[s].shape))
-        .collect();
+        .collect::<std::result::Result<Vec<_>, _>>()?;
     let siblings: Vec<&Shape> = siblings.iter().map(|s| s.as_ref()).collect();
-    let own = aspect.shape(&objects[part.part].shape);
+    let own = aspect.shape(&objects[part.part].shape)?;
     let (whole, own) = (whole.as_ref(), own.as_ref());
     let portion = portion_of_whole(own, whole, &siblings);
     let whole_is_b = part.whole == b;
@@ -2125,12 +2129,13 @@ struct Built {
     skipped_frames: Vec<SkippedFrame>,
 }
 
-/// The outer contours of a frame worth modelling, largest first (so object 0 of a frame is its
-/// main region), with their shapes: only contours that make a valid shape become objects.
 /// A contour's points in sensels (x = column, y = row), whatever units it was extracted in.
-fn outline_in_sensels(c: &Contour, units: crate::grid::CoordUnits) -> Vec<[f64; 2]> {
+fn outline_in_sensels(
+    c: &Contour,
+    units: crate::grid::CoordUnits,
+) -> std::borrow::Cow<'_, [[f64; 2]]> {
     match units {
-        crate::grid::CoordUnits::Pixels => c.points.clone(),
+        crate::grid::CoordUnits::Pixels => std::borrow::Cow::Borrowed(&c.points),
         crate::grid::CoordUnits::Millimetres { dx_mm, dy_mm } => c
             .points
             .iter()
@@ -2145,8 +2150,9 @@ type MeasuredShape = (Shape, FrameMeasures);
 /// A frame's outlines that make objects, and their shapes and measures.
 type FrameObjects = (Vec<Contour>, Vec<MeasuredShape>);
 
-/// The outlines of frame `t` that make objects, largest first, each with its shape and the
-/// measures of the sensors inside it.
+/// The outer contours of frame `t` worth modelling, largest first (so object 0 of a frame is its
+/// main region), each with its shape and the measures of the sensors inside it: only contours
+/// that make a valid shape become objects.
 fn frame_contours(
     recording: &Recording,
     t: usize,
@@ -2553,7 +2559,7 @@ mod tests {
         assert!((options.sensel_aspect - 1.5).abs() < 1e-12);
         let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
         assert_eq!(run.pairs.len(), 4);
-        let scaled = |s: &Shape| SenselAspect(1.5).shape(s).into_owned();
+        let scaled = |s: &Shape| SenselAspect(1.5).shape(s).unwrap().into_owned();
         for p in &run.pairs {
             let (a, b) = (&run.objects[p.a].shape, &run.objects[p.b].shape);
             // The pairs of the shapes in true proportions, to the bit.
