@@ -626,6 +626,10 @@ pub struct StudyRow {
     /// [`PairRow::optimisation_percent`](crate::sequence::PairRow::optimisation_percent) (0–100);
     /// `None` without pairs or on error.
     pub mean_optimisation_percent: Option<f64>,
+    /// Mean over the matched pairs of
+    /// [`PairRow::trackable_percent`](crate::sequence::PairRow::trackable_percent) (0–100);
+    /// `None` without pairs or on error, and on a row of a study written before it was a column.
+    pub mean_trackable_percent: Option<f64>,
     /// Number of tracks; `None` on error.
     pub tracks: Option<usize>,
     /// Seconds from the start of this recording to its row (for a skipped one: those of the
@@ -680,7 +684,7 @@ impl RowUnits {
 }
 
 /// The columns of the study table, units in the names.
-pub const STUDY_COLUMNS: [&str; 15] = [
+pub const STUDY_COLUMNS: [&str; 16] = [
     "path",
     "output",
     "format",
@@ -692,6 +696,7 @@ pub const STUDY_COLUMNS: [&str; 15] = [
     "pairs",
     "mean_local_percent",
     "mean_optimisation_percent",
+    "mean_trackable_percent",
     "tracks",
     "wall_time_s",
     "status",
@@ -720,6 +725,7 @@ pub fn study_table(rows: &[StudyRow]) -> Table {
                     int(r.pairs),
                     float(r.mean_local_percent, 1),
                     float(r.mean_optimisation_percent, 1),
+                    float(r.mean_trackable_percent, 1),
                     int(r.tracks),
                     Cell::Float(r.wall_time_s, 3),
                     Cell::Text(r.status.name().into()),
@@ -751,6 +757,7 @@ fn row_from_json(v: &Value) -> Option<StudyRow> {
         pairs: int("pairs"),
         mean_local_percent: float("mean_local_percent"),
         mean_optimisation_percent: float("mean_optimisation_percent"),
+        mean_trackable_percent: float("mean_trackable_percent"),
         tracks: int("tracks"),
         wall_time_s: float("wall_time_s")?,
         status: match text("status")?.as_str() {
@@ -1356,6 +1363,7 @@ pub fn run_recording(
         pairs: None,
         mean_local_percent: None,
         mean_optimisation_percent: None,
+        mean_trackable_percent: None,
         tracks: None,
         wall_time_s: started.elapsed().as_secs_f64(),
         status: RowStatus::Error,
@@ -1529,6 +1537,7 @@ fn row_of_summary(
         pairs: int(&summary["pairs"]),
         mean_local_percent: summary["mean_local_percent"].as_f64(),
         mean_optimisation_percent: summary["mean_optimisation_percent"].as_f64(),
+        mean_trackable_percent: summary["mean_trackable_percent"].as_f64(),
         tracks: int(&summary["tracks"]),
         wall_time_s: started.elapsed().as_secs_f64(),
         status: RowStatus::Ok,
@@ -1618,6 +1627,7 @@ mod tests {
             pairs: Some(150),
             mean_local_percent: Some(61.25),
             mean_optimisation_percent: Some(97.5),
+            mean_trackable_percent: Some(88.5),
             tracks: Some(900),
             wall_time_s: 1.5,
             status,

@@ -25,6 +25,7 @@ COLUMNS = [
     "pairs",
     "mean_local_percent",
     "mean_optimisation_percent",
+    "mean_trackable_percent",
     "tracks",
     "wall_time_s",
     "status",
@@ -123,6 +124,7 @@ def test_batch_rows_agree_with_run_and_name_the_failure(study):
         assert row["pressure_units"] == recording["pressure_units"]
         assert row["mean_local_percent"] == pytest.approx(summary["mean_local_percent"])
         assert row["mean_optimisation_percent"] == pytest.approx(summary["mean_optimisation_percent"])
+        assert row["mean_trackable_percent"] == pytest.approx(summary["mean_trackable_percent"])
     assert pickle.loads(pickle.dumps(rows)) == rows
 
 

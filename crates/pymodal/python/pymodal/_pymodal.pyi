@@ -328,8 +328,8 @@ def run(
 
 # A row of a study table (batch, batch_row): path, output, format, frames, frame_rate_hz,
 # pitch_x_mm, pitch_y_mm, pressure_units, pairs, mean_local_percent, mean_optimisation_percent,
-# tracks, wall_time_s, status ("ok", "skipped", "error") and message, the columns of study.csv
-# (or study.parquet).
+# mean_trackable_percent, tracks, wall_time_s, status ("ok", "skipped", "error") and message,
+# the columns of study.csv (or study.parquet).
 StudyRow = dict[str, Any]
 
 def find_recordings(inputs: Union[Path, Sequence[Path]]) -> list[str]:
