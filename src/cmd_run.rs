@@ -150,13 +150,10 @@ pub fn run(args: RunArgs) -> Result<(), CliError> {
     let t = Instant::now();
     let params = args.options.params();
     params.validate()?;
-    let (recording, frames) = pedo_io::study::read_for_run(
-        &args.recording,
-        &args.read.options(),
-        &params,
-        &args.options.outputs(),
-    )?;
-    let input = InputInfo::of_path(&args.recording)?;
+    let read = args.read.options();
+    let (recording, frames) =
+        pedo_io::study::read_for_run(&args.recording, &read, &params, &args.options.outputs())?;
+    let input = InputInfo::of_path(&args.recording)?.with_layout(&read, recording.format)?;
     execute(
         recording,
         frames,

@@ -827,3 +827,61 @@ fn rows_give_each_recordings_frame_rate_pitch_and_pressure_units() {
     assert_eq!(units(&rows(&failed)[0]), expected);
     std::fs::remove_dir_all(&base).unwrap();
 }
+
+#[test]
+fn a_pedar_recording_read_with_another_layout_file_is_run_again() {
+    let base = temp_dir("layout");
+    let input = base.join("in");
+    std::fs::create_dir_all(&input).unwrap();
+    let asc = input.join("insoles.asc");
+    std::fs::copy(Path::new(DATA).join("pedar-example-3.01-4.00.asc"), &asc).unwrap();
+    let bundled = Path::new(DATA).join("../../layouts/pedar-pressuRe.csv");
+    let text = std::fs::read_to_string(&bundled).unwrap();
+    let (layout_a, layout_b) = (base.join("layout-a.csv"), base.join("layout-b.csv"));
+    std::fs::write(&layout_a, &text).unwrap();
+    // The same insole with the places of sensors 1 and 2 swapped.
+    let swapped = text
+        .replacen("R,1,", "R,#,", 1)
+        .replacen("R,2,", "R,1,", 1)
+        .replacen("R,#,", "R,2,", 1);
+    assert_ne!(swapped, text);
+    std::fs::write(&layout_b, swapped).unwrap();
+    let out = base.join("study");
+    let (a, o) = (asc.to_str().unwrap(), out.to_str().unwrap());
+    let with = |layout: &Path| {
+        let (code, json, stderr) =
+            batch_json(&[a, "--out", o, "--layout", layout.to_str().unwrap()]);
+        assert_eq!(code, Some(0), "{stderr}");
+        rows(&json)[0].clone()
+    };
+    let first = with(&layout_a);
+    assert_eq!(first["status"], "ok", "{first}");
+    let summary = read_json(
+        &out.join(first["output"].as_str().unwrap())
+            .join("summary.json"),
+    );
+    assert_eq!(
+        summary["input"]["layout"]["file"],
+        layout_a.to_str().unwrap()
+    );
+    assert_eq!(summary["input"]["layout"]["sha256"], sha256_of(&layout_a));
+    assert_eq!(with(&layout_a)["status"], "skipped");
+    // Another layout file, or none (the bundled layout), is another input: it runs again.
+    let other = with(&layout_b);
+    assert_eq!(other["status"], "ok", "{other}");
+    let summary = read_json(
+        &out.join(other["output"].as_str().unwrap())
+            .join("summary.json"),
+    );
+    assert_eq!(summary["input"]["layout"]["sha256"], sha256_of(&layout_b));
+    let (code, json, _) = batch_json(&[a, "--out", o]);
+    assert_eq!(
+        (code, &rows(&json)[0]["status"]),
+        (Some(0), &Value::from("ok"))
+    );
+    let summary = read_json(
+        &out.join(rows(&json)[0]["output"].as_str().unwrap())
+            .join("summary.json"),
+    );
+    assert_eq!(summary["input"]["layout"], Value::Null);
+}

@@ -8,7 +8,8 @@
 //! 0-based.
 
 use crate::error::{IoError, Result};
-use crate::recording::{kpa_per_unit, Recording};
+use crate::formats::ReadOptions;
+use crate::recording::{kpa_per_unit, Format, Recording};
 use crate::sequence::{
     honest_step_of, PairMatch, PairObjects, PairRow, RunCounts, RunParams, SequenceObject,
     SequenceOptions, SequenceResult, SkippedPairRow,
@@ -633,6 +634,9 @@ pub struct InputInfo {
     pub name: String,
     /// Lower-case hex SHA-256 of the input's bytes; `None` for in-memory arrays.
     pub sha256: Option<String>,
+    /// The pedar sensor-layout file a pedar recording was read with (`--layout`), its name and
+    /// SHA-256 ([`InputInfo::with_layout`]); `None` for the bundled layout and other formats.
+    pub layout: Option<Box<InputInfo>>,
 }
 
 impl InputInfo {
@@ -641,7 +645,19 @@ impl InputInfo {
         Self {
             name: name.to_string(),
             sha256: Some(sha256_hex(bytes)),
+            layout: None,
         }
+    }
+
+    /// This input with the layout file of `read` when the recording read is a pedar one
+    /// (`format`): its sensors' places, and so every result, depend on that file's content.
+    pub fn with_layout(mut self, read: &ReadOptions, format: Option<Format>) -> Result<Self> {
+        if format == Some(Format::Pedar)
+            && let Some(layout) = &read.layout
+        {
+            self.layout = Some(Box::new(Self::of_path(layout)?));
+        }
+        Ok(self)
     }
 
     /// The name and hash of a file, or of every file of a folder in name order (an image
@@ -651,7 +667,7 @@ impl InputInfo {
         if !path.exists() {
             return Ok(Self {
                 name: path.display().to_string(),
-                sha256: None,
+                ..Self::default()
             });
         }
         let io = |e| IoError::Io {
@@ -675,6 +691,7 @@ impl InputInfo {
         Ok(Self {
             name: path.display().to_string(),
             sha256: Some(hex(&hasher.finalize())),
+            layout: None,
         })
     }
 }
@@ -839,6 +856,7 @@ pub fn run_summary_of(
             "file": input.name,
             "sha256": input.sha256,
             "format": recording.format.map(|f| f.name()),
+            "layout": input.layout.as_ref().map(|l| json!({"file": l.name, "sha256": l.sha256})),
         },
         "recording": {
             "frames": recording.n_frames(),

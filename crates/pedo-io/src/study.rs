@@ -1384,7 +1384,7 @@ fn process(
     let (mut recording, mut file_frames) =
         read_for_run(path, &opts.read, &opts.params, &opts.outputs)?;
     *read = Some((recording.n_frames(), RowUnits::of(&recording)));
-    let input = InputInfo::of_path(path)?;
+    let input = InputInfo::of_path(path)?.with_layout(&opts.read, recording.format)?;
     // The unit options are applied even when the options fail (a frame range beyond the
     // recording): the units an error row gives are those the run would have used.
     let options = run_options(&mut recording, &opts.params);
@@ -1462,7 +1462,10 @@ fn complete_summary(
         return None;
     }
     let summary = read_json(&folder.join("summary.json"))?;
-    let same_input = summary["input"]["sha256"].as_str() == input.sha256.as_deref();
+    // A pedar recording read with another layout file (or with none) is another input.
+    let layout = input.layout.as_ref().and_then(|l| l.sha256.as_deref());
+    let same_input = summary["input"]["sha256"].as_str() == input.sha256.as_deref()
+        && summary["input"]["layout"]["sha256"].as_str() == layout;
     let mut used = used.clone();
     if let Some(options) = used.as_object_mut() {
         record_outputs(options, outputs);

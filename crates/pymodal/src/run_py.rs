@@ -19,7 +19,7 @@ use crate::options_py::{cell_to_py, json_to_py, table_rows, MatchKw, RecordingKw
 fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording, InputInfo)> {
     let unnamed = |name: &str| InputInfo {
         name: name.to_string(),
-        sha256: None,
+        ..InputInfo::default()
     };
     if let Ok(rec) = obj.cast::<crate::io_py::PyRecording>() {
         return Ok((rec.get().recording().clone(), unnamed("Recording")));
