@@ -642,9 +642,25 @@ fn a_run_on_part_of_a_study_keeps_the_other_rows_while_their_folders_are_there()
         ]
     );
     assert_eq!(table[0], rows(&report)[0]);
+    // Kept as they were, their messages saying so.
+    let kept = |r: &Value| {
+        let mut r = r.clone();
+        let message = r["message"].as_str().unwrap();
+        r["message"] = pedo_io::study::kept_message(message, true).into();
+        r
+    };
+    assert_eq!(&table[1..], &[kept(&all[0]), kept(&all[1]), kept(&all[2])]);
     assert_eq!(
-        &table[1..],
-        &[all[0].clone(), all[1].clone(), all[2].clone()]
+        table[1]["message"],
+        "kept from an earlier run (not among this run's inputs)"
+    );
+    assert!(
+        table[3]["message"]
+            .as_str()
+            .unwrap()
+            .starts_with("kept from an earlier run (not among this run's inputs); /"),
+        "{}",
+        table[3]
     );
     assert_eq!(
         (&study["recordings"], &study["kept"]),
@@ -884,4 +900,105 @@ fn a_pedar_recording_read_with_another_layout_file_is_run_again() {
             .join("summary.json"),
     );
     assert_eq!(summary["input"]["layout"], Value::Null);
+}
+
+#[test]
+fn a_renamed_recording_or_a_moved_study_leaves_one_row_per_recording() {
+    let base = temp_dir("moved");
+    let project = base.join("project");
+    let input = project.join("in");
+    std::fs::create_dir_all(&input).unwrap();
+    for (from, to) in [
+        ("emed-test-1-10.lst", "s01.lst"),
+        ("tekscan-FrasP01L-11-20.csv", "s02.csv"),
+    ] {
+        std::fs::copy(Path::new(DATA).join(from), input.join(to)).unwrap();
+    }
+    let in_project = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_pedomatch"))
+            .current_dir(&project)
+            .args([&["batch", "--json"], args, &FAST].concat())
+            .output()
+            .unwrap();
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice::<Value>(&out.stdout).unwrap()
+    };
+    let table = |project: &Path| read_json(&project.join("study/study.json"))["rows"].clone();
+    in_project(&["in", "--out", "study"]);
+    assert_eq!(table(&project).as_array().unwrap().len(), 2);
+    // A run interrupted before it wrote the study table: the folders it finished are skipped
+    // with the wall time their summaries timed, not the time it took to find them complete.
+    std::fs::remove_file(project.join("study/study.json")).unwrap();
+    let again = in_project(&["in", "--out", "study"]);
+    for row in rows(&again) {
+        assert_eq!(row["status"], "skipped");
+        let summary = read_json(
+            &project
+                .join("study")
+                .join(row["output"].as_str().unwrap())
+                .join("summary.json"),
+        );
+        let timed: f64 = summary["timings_s"]
+            .as_object()
+            .unwrap()
+            .values()
+            .map(|v| v.as_f64().unwrap())
+            .sum();
+        assert_eq!(row["wall_time_s"].as_f64().unwrap(), timed, "{row}");
+    }
+
+    // A renamed recording: its old row goes, its new one is this run's.
+    std::fs::rename(input.join("s01.lst"), input.join("s01-left.lst")).unwrap();
+    in_project(&["in/s01-left.lst", "--out", "study"]);
+    let rows = table(&project);
+    let paths: Vec<&str> = rows
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["path"].as_str().unwrap())
+        .collect();
+    assert_eq!(paths, ["in/s01-left.lst", "in/s02.csv"]);
+    assert_eq!(
+        rows[1]["message"],
+        "kept from an earlier run (not among this run's inputs)"
+    );
+
+    // A deleted recording's row is kept (its folder holds its results) and says so.
+    std::fs::remove_file(input.join("s02.csv")).unwrap();
+    in_project(&["in/s01-left.lst", "--out", "study"]);
+    let rows = table(&project);
+    assert_eq!(
+        rows[1]["message"],
+        "kept from an earlier run (its input is no longer at this path)"
+    );
+    std::fs::copy(
+        Path::new(DATA).join("tekscan-FrasP01L-11-20.csv"),
+        input.join("s02.csv"),
+    )
+    .unwrap();
+
+    // The study moved with its recordings: every recording runs again (its folder name is a
+    // hash of its absolute path), each once in the table.
+    let moved = base.join("moved");
+    std::fs::rename(&project, &moved).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_pedomatch"))
+        .current_dir(&moved)
+        .args([&["batch", "--json", "in", "--out", "study"], &FAST[..]].concat())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let rows = table(&moved);
+    let paths: Vec<&str> = rows
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["path"].as_str().unwrap())
+        .collect();
+    assert_eq!(paths, ["in/s01-left.lst", "in/s02.csv"], "{rows}");
+    std::fs::remove_dir_all(&base).unwrap();
 }

@@ -1028,7 +1028,7 @@ pub fn run_study(
         .flatten()
         .collect();
     let kept = match &opts.out {
-        Some(out) => kept_rows(out, &previous, paths),
+        Some(out) => kept_rows(out, &previous, paths, &rows),
         None => Vec::new(),
     };
     if let Some(out) = &opts.out
@@ -1061,20 +1061,80 @@ fn row_folder(row: &StudyRow) -> String {
 /// study folder `out` keeps: those of recordings not in this run, so that a run on part of a
 /// study does not drop the rest. A row is dropped once what it reports is gone: its folder
 /// (deleted from `out`) or, for a row without a folder (a recording that failed), its
-/// recording. Rows of a table written before the units were columns get them from their
-/// folder's `summary.json`.
-pub fn kept_rows(out: &Path, previous: &[StudyRow], paths: &[PathBuf]) -> Vec<StudyRow> {
-    let this_run: std::collections::HashSet<String> =
-        paths.iter().map(|p| output_name(p)).collect();
+/// recording. It is also dropped when this run has its recording under another folder name: the
+/// same file (a study moved with its recordings: the folder names, hashes of absolute paths,
+/// changed), or, its own path gone, the same input (a recording renamed or moved: same SHA-256
+/// and layout file as one of this run's `rows`). A kept row's message says it was kept
+/// ([`kept_message`]). Rows of a table written before the units were columns get them from
+/// their folder's `summary.json`.
+pub fn kept_rows(
+    out: &Path,
+    previous: &[StudyRow],
+    paths: &[PathBuf],
+    rows: &[StudyRow],
+) -> Vec<StudyRow> {
+    use std::collections::HashSet;
+    let this_run: HashSet<String> = paths.iter().map(|p| output_name(p)).collect();
+    let files: HashSet<PathBuf> = paths.iter().filter_map(|p| p.canonicalize().ok()).collect();
+    let inputs: HashSet<Value> = rows.iter().filter_map(|r| folder_input(out, r)).collect();
     previous
         .iter()
         .filter(|r| !this_run.contains(&row_folder(r)))
-        .filter(|r| match &r.output {
-            Some(folder) => outdir::is_output(&out.join(folder)),
-            None => Path::new(&r.path).exists(),
+        .filter(|r| {
+            let file = Path::new(&r.path).canonicalize().ok();
+            match (&r.output, &file) {
+                (_, Some(f)) if files.contains(f) => false,
+                (Some(folder), _) if !outdir::is_output(&out.join(folder)) => false,
+                (Some(_), None) => !folder_input(out, r).is_some_and(|i| inputs.contains(&i)),
+                (Some(_), Some(_)) => true,
+                (None, found) => found.is_some(),
+            }
         })
-        .map(|r| with_units_of_folder(out, r))
+        .map(|r| {
+            let mut row = with_units_of_folder(out, r);
+            let found = Path::new(&r.path).exists();
+            // A skipped row's message is the earlier run's "outputs complete": not carried on.
+            let earlier = if r.status == RowStatus::Skipped {
+                ""
+            } else {
+                &r.message
+            };
+            row.message = kept_message(earlier, found);
+            row
+        })
         .collect()
+}
+
+/// What a row's folder under `out` says its input was (`summary.json`'s `input` without its
+/// name: the SHA-256 and layout file's SHA-256), `None` without a folder or a SHA-256.
+fn folder_input(out: &Path, row: &StudyRow) -> Option<Value> {
+    let summary = read_json(&out.join(row.output.as_ref()?).join("summary.json"))?;
+    let input = &summary["input"];
+    input["sha256"].as_str()?;
+    Some(json!([input["sha256"], input["layout"]["sha256"]]))
+}
+
+/// How a kept row's message begins.
+const KEPT: &str = "kept from an earlier run (";
+
+/// The message of a row kept from an earlier run: that it was kept and why (not among this
+/// run's inputs, or its input no longer `found` at its path), then the message of the run that
+/// made it.
+pub fn kept_message(message: &str, found: bool) -> String {
+    let earlier = message
+        .strip_prefix(KEPT)
+        .and_then(|m| m.split_once(')'))
+        .map_or(message, |(_, rest)| rest.trim_start_matches("; "));
+    let why = if found {
+        "not among this run's inputs"
+    } else {
+        "its input is no longer at this path"
+    };
+    if earlier.is_empty() {
+        format!("{KEPT}{why})")
+    } else {
+        format!("{KEPT}{why}); {earlier}")
+    }
 }
 
 /// `row`, its units read from its folder's `summary.json` if it gives none.
@@ -1396,9 +1456,16 @@ fn process(
         let used = used_options(&opts.params, &options, &recording);
         if let Some(summary) = complete_summary(folder, &input, &used, &opts.outputs) {
             let mut row = row_of_summary(path, output, &summary, started);
-            if let Some(p) = previous {
-                row.wall_time_s = p.wall_time_s;
-            }
+            // The wall time of the run that wrote the folder: its row, or (a run interrupted
+            // before it wrote the study table) the stages its summary timed.
+            row.wall_time_s = match previous {
+                Some(p) => p.wall_time_s,
+                None => summary["timings_s"]
+                    .as_object()
+                    .map_or(row.wall_time_s, |t| {
+                        t.values().filter_map(Value::as_f64).sum()
+                    }),
+            };
             row.status = RowStatus::Skipped;
             row.message =
                 "outputs complete (same input SHA-256 and options); --force (force=True) runs it again"
@@ -1726,6 +1793,28 @@ mod tests {
                 && e.contains("hot or stuck sensel")
                 && e.contains("iso_levels"),
             "{e}"
+        );
+    }
+
+    #[test]
+    fn a_kept_rows_message_says_so_once_and_keeps_the_earlier_message() {
+        let once = kept_message("2 pairs skipped", true);
+        assert_eq!(
+            once,
+            "kept from an earlier run (not among this run's inputs); 2 pairs skipped"
+        );
+        assert_eq!(kept_message(&once, true), once);
+        assert_eq!(
+            kept_message(&once, false),
+            "kept from an earlier run (its input is no longer at this path); 2 pairs skipped"
+        );
+        assert_eq!(
+            kept_message("", true),
+            "kept from an earlier run (not among this run's inputs)"
+        );
+        assert_eq!(
+            kept_message(&kept_message("", false), true),
+            kept_message("", true)
         );
     }
 
