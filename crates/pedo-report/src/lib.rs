@@ -385,6 +385,18 @@ fn file_units(recording: &Recording) -> Option<String> {
     Some(pedo_io::recording::stated_units(&recording.units)).filter(|u| !u.is_empty())
 }
 
+/// The header's pressure units, `shown` those of the report's pressures: a file's units that
+/// convert are shown in kPa, as the tables give them, and the header says from what.
+fn pressure_header(recording: &Recording, shown: Option<String>) -> String {
+    match (shown, file_units(recording)) {
+        (Some(shown), Some(file)) if shown != file => {
+            format!("{shown} (the file's {file}, converted)")
+        }
+        (Some(shown), _) => shown,
+        (None, _) => "units unknown".into(),
+    }
+}
+
 /// What the time series' load panel plots, named as frames.csv names its column
 /// (`total_force_n`, `total_load_mm2`, `total_load_sensels`): newtons when the pressure units
 /// convert and the sensel area is known; else the plain sum of the values times the sensel area
@@ -453,10 +465,7 @@ fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo
                 .map(|f| format!("{f} Hz"))
                 .unwrap_or_else(|| "unknown (time in frames)".into()),
         ),
-        (
-            "pressure".into(),
-            punits.unwrap_or_else(|| "units unknown".into()),
-        ),
+        ("pressure".into(), pressure_header(recording, punits)),
         ("version".into(), format!("pedomatch {}", info.version)),
         (
             "result".into(),
@@ -921,6 +930,18 @@ mod tests {
     }
 
     #[test]
+    fn the_header_names_the_files_pressure_units_when_it_shows_them_converted() {
+        let header = |units: &str| {
+            let rec = flat(2, units, Some([2.0, 2.0]));
+            pressure_header(&rec, pressure_scale(&rec).1)
+        };
+        assert_eq!(header("N/cm2"), "kPa (the file's N/cm², converted)");
+        assert_eq!(header("KPa"), "kPa");
+        assert_eq!(header("raw"), "raw");
+        assert_eq!(header(""), "units unknown");
+    }
+
+    #[test]
     fn the_load_series_is_named_with_the_files_units_as_frames_csv_names_it() {
         let cases = [
             (
@@ -982,7 +1003,7 @@ mod tests {
             let want = 200.0 * rec.force_factor().or(rec.sensel_area()).unwrap_or(1.0);
             let got = d["series"]["force"][0].as_f64().unwrap();
             assert!((got - want).abs() < 1e-3, "{what}: {got} vs {want}");
-            let header_units = punits.as_str().unwrap_or("units unknown");
+            let header_units = pressure_header(&rec, punits.as_str().map(str::to_string));
             assert!(
                 html.contains(&format!("<th>pressure</th><td>{header_units}</td>")),
                 "{what}"
