@@ -29,7 +29,7 @@ use crate::pickling::{Reader, Writer};
 /// the pitch is unknown), ``total_force`` (N when units and pitch are known), ``peak_pressure``,
 /// ``cop`` (T, 2) centre of pressure (x = column, y = row; NaN without contact), and
 /// ``peak_image`` (H, W). Measures count every sensor above 0; ``measures(threshold)`` recomputes
-/// them above another threshold. The arrays are read-only copies made at each access: read
+/// them at or above another threshold. The arrays are read-only copies made at each access: read
 /// ``frames = rec.frames`` once, not ``rec.frames[i]`` in a loop.
 #[pyclass(name = "Recording", module = "pymodal", frozen)]
 pub struct PyRecording {
@@ -296,8 +296,10 @@ impl PyRecording {
                 .get_item("cop")?,
         )
     }
-    /// Per-frame measures counting sensors strictly above ``threshold``: a dict of arrays
-    /// ``contact_area``, ``total_force``, ``peak_pressure``, ``contact_sensors``, ``cop``.
+    /// Per-frame measures of the sensors in contact at ``threshold``: those with a value above 0
+    /// and at or above ``threshold`` (as ``frames.csv`` counts them). A dict of arrays
+    /// ``contact_sensors``, ``contact_area``, ``total_force`` and ``cop`` over those sensors, and
+    /// ``peak_pressure`` (each frame's highest value, whatever the threshold).
     #[pyo3(signature = (threshold=0.0))]
     fn measures<'py>(&self, py: Python<'py>, threshold: f64) -> PyResult<Bound<'py, PyDict>> {
         measures_dict(py, &self.inner, threshold)

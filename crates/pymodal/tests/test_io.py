@@ -221,3 +221,18 @@ def test_read_recording_takes_a_pedar_layout(tmp_path):
     np.testing.assert_array_equal(np.nan_to_num(same.frames), np.nan_to_num(bundled.frames))
     with pytest.raises(FileNotFoundError):
         pymodal.read_recording(asc, layout=tmp_path / "missing.csv")
+
+
+def test_measures_count_sensors_at_the_threshold():
+    # As the docstring and frames.csv say: above 0 and at or above the threshold (not strictly
+    # above it); the peak is the frame's whatever the threshold.
+    f = np.zeros((2, 10, 10))
+    f[:, 3:7, 3:7] = 5.0
+    f[:, 4:6, 4:6] = 10.0
+    rec = pymodal.Recording.from_array(f, pitch_mm=5.0, frame_rate=100, units="kPa")
+    assert rec.measures(5.0)["contact_sensors"].tolist() == [16, 16]
+    assert rec.measures(5.1)["contact_sensors"].tolist() == [4, 4]
+    assert rec.measures(11.0)["contact_sensors"].tolist() == [0, 0]
+    assert rec.measures(11.0)["peak_pressure"].tolist() == [10.0, 10.0]
+    assert "at or above" in pymodal.Recording.measures.__doc__
+    assert "strictly" not in pymodal.Recording.measures.__doc__
