@@ -204,3 +204,33 @@ def test_synthetic_walk_round_trip():
     assert back != pymodal.SyntheticWalk(frames=31)
     pts = np.array([[10.0, 20.0], [15.0, 40.0]])
     assert_same(walk.true_positions(12, pts), back.true_positions(12, pts))
+
+
+def test_run_result_compares_by_value():
+    # A RunResult holds numpy arrays: == compared them as dict values and raised ("The truth
+    # value of an array ... is ambiguous").
+    import copy
+
+    t = np.arange(6)[:, None, None]
+    r, c = np.mgrid[0:30, 0:20]
+    frames = np.maximum(0.0, 100.0 * (1 - ((c - 8 - 0.5 * t) / 5.0) ** 2 - ((r - 12 - t) / 8.0) ** 2))
+    res = pymodal.run(frames.astype(np.float32))
+    assert res["tracks"] and res["objects"]
+    for same in (pickle.loads(pickle.dumps(res)), copy.deepcopy(res)):
+        assert type(same) is type(res)
+        assert same == res and res == same and not (same != res)
+    assert res == dict(res)  # a dict with the same content is equal, as for any dict
+    with pytest.raises(TypeError, match="unhashable"):
+        hash(res)
+
+    one_element = copy.deepcopy(res)
+    one_element["tracks"][0][0, 1] += 1.0
+    one_key = copy.deepcopy(res)
+    one_key["extra"] = one_key.pop("timings")
+    nested = copy.deepcopy(res)
+    nested["summary"]["recording"]["frames"] += 1
+    dtype = copy.deepcopy(res)
+    dtype["track_steps"][0] = dtype["track_steps"][0].astype(np.int32)
+    for other in (one_element, one_key, nested, dtype):
+        assert other != res and res != other and not (other == res)
+    assert res != [res] and res != None  # noqa: E711

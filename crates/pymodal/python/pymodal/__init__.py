@@ -8,6 +8,8 @@ import html as _html
 
 from typing import Any as _Any
 
+import numpy as _np
+
 from ._pymodal import *  # noqa: F401,F403
 from ._pymodal import __version__ as __version__
 from ._pymodal import _options as _options  # type: ignore[attr-defined]
@@ -16,10 +18,46 @@ from ._pymodal import run as _run
 from .plot import plot_frame as plot_frame, plot_match as plot_match, plot_tracks as plot_tracks
 
 
+def _same(a: _Any, b: _Any) -> bool:
+    """Whether two values of a result are equal: dicts by keys and values, lists and tuples
+    element by element, numpy arrays by shape, dtype and values, floats and float arrays with NaN
+    equal to NaN, anything else by ``==``."""
+    if isinstance(a, _np.ndarray) or isinstance(b, _np.ndarray):
+        return (isinstance(a, _np.ndarray) and isinstance(b, _np.ndarray)
+                and a.shape == b.shape and a.dtype == b.dtype
+                and bool(_np.array_equal(a, b, equal_nan=a.dtype.kind in "fc")))
+    if isinstance(a, dict) or isinstance(b, dict):
+        return (isinstance(a, dict) and isinstance(b, dict) and a.keys() == b.keys()
+                and all(_same(a[k], b[k]) for k in a))
+    for seq in (list, tuple):
+        if isinstance(a, seq) or isinstance(b, seq):
+            return (isinstance(a, seq) and isinstance(b, seq) and len(a) == len(b)
+                    and all(_same(x, y) for x, y in zip(a, b)))
+    if isinstance(a, float) and isinstance(b, float) and a != a and b != b:
+        return True  # NaN: a result equals its copy
+    return bool(a == b)
+
+
 class RunResult(dict[str, _Any]):
     """What :func:`run` returns: a dict (``table``, ``matches``, ``objects``, ``tracks``,
     ``track_steps``, ``frames``, ``summary``, ``timings``) that Jupyter shows as a table of its
-    summary."""
+    summary.
+
+    Compares by value with ``==``: the same keys, and values equal recursively (lists element by
+    element, numpy arrays in shape, dtype and values), NaN equal to NaN, so that a result equals
+    its pickled or deep copy. Unhashable, as a dict."""
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, dict):
+            return NotImplemented
+        return _same(dict(self), dict(other))
+
+    def __ne__(self, other: object) -> bool:
+        if not isinstance(other, dict):
+            return NotImplemented
+        return not _same(dict(self), dict(other))
+
+    __hash__ = None
 
     def __repr__(self) -> str:
         """One line: the input, the counts and the mean optimisation percentage, and the keys
