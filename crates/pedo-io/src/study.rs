@@ -1266,14 +1266,39 @@ fn row_paths(rows: &[StudyRow], n: usize) -> Value {
 /// glibc gives each new thread a new malloc arena that keeps the memory of its recording, so a
 /// study's peak memory grew with its number of recordings (about 19 MB per walk). Falls back to
 /// the current thread if no thread can be started.
+///
+/// The pool is also the process's: a child forked after the pool was made (Python's
+/// `multiprocessing` on Linux) inherits it without its thread (a fork copies only the calling
+/// thread), so work sent to it would wait forever. The pool records the process id it was made
+/// in, and a child makes its own.
 pub fn on_one_thread<T: Send>(f: impl FnOnce() -> T + Send) -> T {
+    /// The pool (`None`: no thread could be started) and the process it belongs to.
+    type Owned = (u32, Option<rayon::ThreadPool>);
     thread_local! {
-        static POOL: Option<rayon::ThreadPool> =
-            rayon::ThreadPoolBuilder::new().num_threads(1).build().ok();
+        static POOL: std::cell::RefCell<Option<Owned>> = const { std::cell::RefCell::new(None) };
     }
-    POOL.with(|pool| match pool {
-        Some(pool) => pool.install(f),
-        None => f(),
+    let pid = std::process::id();
+    POOL.with(|cell| {
+        if cell
+            .borrow()
+            .as_ref()
+            .is_none_or(|(owner, _)| *owner != pid)
+        {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().ok();
+            // A pool inherited through a fork is never dropped: dropping it would signal a thread
+            // that this process does not have.
+            if let Some(inherited) = cell.replace(Some((pid, pool))) {
+                std::mem::forget(inherited);
+            }
+        }
+        let owned = cell.borrow();
+        match owned.as_ref() {
+            Some((_, Some(pool))) => pool.install(f),
+            _ => {
+                drop(owned);
+                f()
+            }
+        }
     })
 }
 

@@ -76,9 +76,7 @@ fn solve_to_arrays<'py>(
     let shape = arr.shape();
     let (rows, cols) = (shape[0], shape[1]);
     let cost = arr.as_slice().map_err(internal)?;
-    let result = py
-        .detach(|| solve(cost, rows, cols, &options))
-        .map_err(to_py)?;
+    let result = crate::pool::detach(py, || solve(cost, rows, cols, &options)).map_err(to_py)?;
     let (r, c): (Vec<i64>, Vec<i64>) = result
         .pairs()
         .into_iter()

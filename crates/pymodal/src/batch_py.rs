@@ -96,9 +96,7 @@ fn row_dict<'py>(py: Python<'py>, row: &StudyRow) -> PyResult<Bound<'py, PyAny>>
 #[pyfunction]
 fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
     let inputs = input_strings(inputs, "inputs")?;
-    let found = py
-        .detach(|| study::find_recordings(&inputs))
-        .map_err(to_py)?;
+    let found = crate::pool::detach(py, || study::find_recordings(&inputs)).map_err(to_py)?;
     Ok(found.iter().map(|p| p.display().to_string()).collect())
 }
 
@@ -138,12 +136,11 @@ fn batch<'py>(
     let inputs = input_strings(paths, "paths")?;
     let jobs = count_keyword("jobs", jobs)?;
     let opts = study_options(py, inputs, out, jobs, force, figures, tables, options)?;
-    let run = py
-        .detach(|| {
-            let found = study::find_recordings(&opts.inputs)?;
-            study::run_study(&found, &opts, &|_| {})
-        })
-        .map_err(to_py)?;
+    let run = crate::pool::detach(py, || {
+        let found = study::find_recordings(&opts.inputs)?;
+        study::run_study(&found, &opts, &|_| {})
+    })
+    .map_err(to_py)?;
     // This run's rows only (the shape it always had); study.json also holds the kept ones.
     table_rows(py, &study::study_table(&run.rows))
 }
@@ -167,17 +164,16 @@ fn batch_row<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let inputs = vec![path.display().to_string()];
     let opts = study_options(py, inputs, out, Some(1), force, figures, tables, options)?;
-    let row = py
-        .detach(|| {
-            let previous = match &opts.out {
-                Some(out) => study::open_study_folder(out)?,
-                None => Vec::new(),
-            };
-            let before = study::previous_row(&previous, &path);
-            let row = study::on_one_thread(|| study::run_recording(&path, &opts, before, &|_| {}));
-            Ok::<_, pedo_io::IoError>(row)
-        })
-        .map_err(to_py)?;
+    let row = crate::pool::detach(py, || {
+        let previous = match &opts.out {
+            Some(out) => study::open_study_folder(out)?,
+            None => Vec::new(),
+        };
+        let before = study::previous_row(&previous, &path);
+        let row = study::on_one_thread(|| study::run_recording(&path, &opts, before, &|_| {}));
+        Ok::<_, pedo_io::IoError>(row)
+    })
+    .map_err(to_py)?;
     row_dict(py, &row)
 }
 

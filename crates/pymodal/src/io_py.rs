@@ -361,8 +361,7 @@ fn read_recording(
 ) -> PyResult<PyRecording> {
     let units = crate::options_py::units(pitch_mm, frame_rate, units)?;
     let opts = pedo_io::formats::ReadOptions { layout };
-    let mut rec = py
-        .detach(|| pedo_io::formats::read_recording_with(&path, &opts))
+    let mut rec = crate::pool::detach(py, || pedo_io::formats::read_recording_with(&path, &opts))
         .map_err(to_py)?;
     units.apply(&mut rec).map_err(to_py)?;
     Ok(PyRecording { inner: rec })
@@ -540,7 +539,7 @@ fn contours<'py>(
         include_holes,
         ..Default::default()
     };
-    let cs = py.detach(|| contours_rs(&grid, &opts)).map_err(to_py)?;
+    let cs = crate::pool::detach(py, || contours_rs(&grid, &opts)).map_err(to_py)?;
     cs.iter().map(|c| points_array(py, &c.points)).collect()
 }
 
@@ -675,7 +674,7 @@ fn surface(
         z_scale,
         ..Default::default()
     };
-    let s = py.detach(|| surface_rs(&grid, &opts)).map_err(to_py)?;
+    let s = crate::pool::detach(py, || surface_rs(&grid, &opts)).map_err(to_py)?;
     Ok(PySurface { inner: s })
 }
 
@@ -710,7 +709,7 @@ fn isocontours<'py>(
         include_holes,
         ..Default::default()
     };
-    let cs = py.detach(|| iso_rs(&grid, &levels, &opts)).map_err(to_py)?;
+    let cs = crate::pool::detach(py, || iso_rs(&grid, &levels, &opts)).map_err(to_py)?;
     cs.iter()
         .map(|c| {
             let arr = if three_d {

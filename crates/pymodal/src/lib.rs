@@ -12,6 +12,7 @@ mod match_py;
 mod model_py;
 mod options_py;
 mod pickling;
+mod pool;
 mod run_py;
 mod synthetic_py;
 

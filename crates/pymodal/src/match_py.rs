@@ -485,13 +485,12 @@ fn match_py(
         None => Topology::None,
     };
     let (topo_a, topo_b) = (topo(ta), topo(tb));
-    let inner = py
-        .detach(move || {
-            let sa = Shape::new(da, ca, topo_a)?;
-            let sb = Shape::new(db, cb, topo_b)?;
-            match_shapes(&sa, &sb, &opts)
-        })
-        .map_err(to_py)?;
+    let inner = crate::pool::detach(py, move || {
+        let sa = Shape::new(da, ca, topo_a)?;
+        let sb = Shape::new(db, cb, topo_b)?;
+        match_shapes(&sa, &sb, &opts)
+    })
+    .map_err(to_py)?;
     Ok(PyMatch { inner })
 }
 

@@ -235,7 +235,7 @@ impl PyModalModel {
         let shape = Shape::new(dim, coords, topology).map_err(to_py)?;
         let basis = {
             let (shape, options, edges) = (&shape, &options, &edges);
-            py.detach(move || match edges {
+            crate::pool::detach(py, move || match edges {
                 Some(e) => modal_basis_with_edges(shape, e, options),
                 None => modal_basis(shape, options),
             })
@@ -476,7 +476,7 @@ impl PyModalModel {
 
     fn matrices(&self, py: Python<'_>) -> PyResult<ModelMatrices> {
         let (shape, options, edges) = (&self.shape, &self.options, &self.edges);
-        py.detach(move || match edges {
+        crate::pool::detach(py, move || match edges {
             Some(e) => model_matrices_with_edges(shape, e, options),
             None => model_matrices(shape, options),
         })
@@ -529,8 +529,7 @@ fn eigh<'py>(
     }
     // numpy's row-major layout, as generalized_eigh reads it: the solver reads the lower
     // triangle the caller sees (like scipy.linalg.eigh), whatever the upper one holds.
-    let e = py
-        .detach(|| modal_core::generalized_eigh(ks, ms, kr, n_modes))
+    let e = crate::pool::detach(py, || modal_core::generalized_eigh(ks, ms, kr, n_modes))
         .map_err(to_py)?;
     Ok((
         PyArray1::from_slice(py, &e.values),

@@ -25,12 +25,11 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
         return Ok((rec.get().recording().clone(), unnamed("Recording")));
     }
     if let Ok(path) = obj.extract::<std::path::PathBuf>() {
-        return py
-            .detach(|| {
-                let rec = pedo_io::read_recording(&path)?;
-                Ok::<_, pedo_io::IoError>((rec, InputInfo::of_path(&path)?))
-            })
-            .map_err(to_py);
+        return crate::pool::detach(py, || {
+            let rec = pedo_io::read_recording(&path)?;
+            Ok::<_, pedo_io::IoError>((rec, InputInfo::of_path(&path)?))
+        })
+        .map_err(to_py);
     }
     const EXPECTED: &str = "a path, a Recording or a (T, H, W) or (H, W) array of pressures";
     let fits = |s: &[usize]| matches!(s.len(), 2 | 3);
@@ -204,9 +203,8 @@ fn run<'py>(
     params.units.apply(&mut rec).map_err(to_py)?;
     let read_time = started.elapsed().as_secs_f64();
     let options = params.to_options(&rec).map_err(to_py)?;
-    let result = py
-        .detach(|| run_sequence(&rec, &options, &|_, _, _| {}))
-        .map_err(to_py)?;
+    let result =
+        crate::pool::detach(py, || run_sequence(&rec, &options, &|_, _, _| {})).map_err(to_py)?;
     require_objects(result.objects.len(), &rec, &options).map_err(to_py)?;
 
     let out = PyDict::new(py);

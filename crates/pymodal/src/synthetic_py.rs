@@ -124,7 +124,7 @@ impl PySyntheticWalk {
     /// The synthetic recording (kPa, with pitch, frame rate and noise threshold).
     fn recording(&self, py: Python<'_>) -> PyResult<PyRecording> {
         let w = self.inner.clone();
-        let rec = py.detach(move || w.recording()).map_err(to_py)?;
+        let rec = crate::pool::detach(py, move || w.recording()).map_err(to_py)?;
         Ok(PyRecording::wrap(rec))
     }
 
