@@ -54,6 +54,7 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
         out: Some(args.out.clone()),
         jobs: args.jobs.map_or(0, |j| j as usize),
         force: args.force,
+        cancel: None,
         outputs: study::RunOutputs {
             figures: study::FigureKinds { png, svg },
             report: (args.options.report == ReportArg::Html)

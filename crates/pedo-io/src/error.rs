@@ -72,6 +72,9 @@ pub enum IoError {
     /// A figure could not be drawn or encoded.
     #[error("figure: {0}")]
     Figure(String),
+    /// The run was stopped through its [`crate::cancel::Cancel`] before it finished.
+    #[error("cancelled")]
+    Cancelled,
 }
 
 impl IoError {

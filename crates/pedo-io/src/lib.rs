@@ -14,6 +14,7 @@
 
 #![warn(missing_docs)]
 
+pub mod cancel;
 pub mod contour;
 pub mod drift;
 mod error;

@@ -7,7 +7,9 @@
 //! that finishes last wins, whole.
 //!
 //! The library never installs a signal handler: a program that wants Ctrl-C to leave no staging
-//! folder behind calls [`interrupt`] from its own handler (the `pedomatch` CLI does).
+//! folder behind calls [`interrupt`] from its own handler and exits (the `pedomatch` CLI does),
+//! or, to go on afterwards, cancels its runs through a [`crate::cancel::Cancel`] (the Python
+//! bindings do): a cancelled run commits no folder and removes its staging folder.
 
 use crate::error::{IoError, Result};
 use std::path::{Path, PathBuf};

@@ -5,6 +5,7 @@
 //! isobaric contours of one frame are matched level after level (docs/method.md §9). Each matched pair
 //! yields one [`PairRow`] with the paper's columns, and the matches are chained into [`Track`]s.
 
+use crate::cancel::Cancel;
 use crate::contour::{contours, Contour, ContourOptions, Resample};
 use crate::error::{IoError, Result};
 use crate::recording::{FrameMeasures, Recording};
@@ -75,6 +76,10 @@ pub struct SequenceOptions {
     /// the objects, the outputs and the matches' transforms stay in sensels. [`RunParams`] sets it
     /// from the recording's pitch; default 1.
     pub sensel_aspect: f64,
+    /// Stops the run at its next progress step once cancelled (a frame built, a pair matched):
+    /// [`run_sequence`] and [`stream_sequence`] then fail with [`IoError::Cancelled`]
+    /// ([`crate::cancel`]). `None`: the run goes to its end.
+    pub cancel: Option<Cancel>,
 }
 
 impl Default for SequenceOptions {
@@ -99,6 +104,7 @@ impl Default for SequenceOptions {
             drift_reference: 0,
             keep_match_details: true,
             sensel_aspect: 1.0,
+            cancel: None,
         }
     }
 }
@@ -1151,10 +1157,12 @@ pub fn stream_sequence(
         let (mut splits, mut merges) = (Vec::new(), Vec::new());
         match options.model {
             ObjectModel::Contour => {
-                let per_frame: Vec<FrameObjects> =
-                    per_frame_or_skipped(w0..w1, &mut counts.skipped_frames, |t| {
-                        frame_contours(frames, t - offset, options)
-                    });
+                let per_frame: Vec<FrameObjects> = per_frame_or_skipped(
+                    w0..w1,
+                    &mut counts.skipped_frames,
+                    options.cancel.as_ref(),
+                    |t| frame_contours(frames, t - offset, options),
+                )?;
                 for (k, (cs, shapes)) in per_frame.into_iter().enumerate() {
                     let first = held.end();
                     for (index, (shape, measures)) in shapes.into_iter().enumerate() {
@@ -1187,10 +1195,12 @@ pub fn stream_sequence(
                 }
             }
             ObjectModel::Surface | ObjectModel::Isocontour => {
-                let per_frame: Vec<Option<Shape>> =
-                    per_frame_or_skipped(w0..w1, &mut counts.skipped_frames, |t| {
-                        frame_surface(frames, t - offset, threshold, options, &keep)
-                    });
+                let per_frame: Vec<Option<Shape>> = per_frame_or_skipped(
+                    w0..w1,
+                    &mut counts.skipped_frames,
+                    options.cancel.as_ref(),
+                    |t| frame_surface(frames, t - offset, threshold, options, &keep),
+                )?;
                 for (k, shape) in per_frame.into_iter().enumerate() {
                     let frame = w0 + k;
                     match shape {
@@ -1250,6 +1260,7 @@ pub fn stream_sequence(
         let objects = held.objects.make_contiguous();
         let (mut pairs, skipped) =
             match_all(objects, &local_candidates, &parts, options, &|_, _, _| {});
+        crate::cancel::check(options.cancel.as_ref())?;
         for p in &mut pairs {
             p.a += base;
             p.b += base;
@@ -1619,6 +1630,8 @@ pub fn run_sequence(
 
     let parts = parts_of_wholes(&candidate_pairs, &splits, &merges);
     let (pairs, skipped_pairs) = match_all(&objects, &candidate_pairs, &parts, options, progress);
+    // A cancelled run's pairs are incomplete (those not matched are skipped as "cancelled").
+    crate::cancel::check(options.cancel.as_ref())?;
     let t2 = Instant::now();
     let drift = options.drift_reference >= 2 && options.model != ObjectModel::Isocontour;
     let drift_tracks = || {
@@ -1653,6 +1666,8 @@ pub fn run_sequence(
             (Vec::new(), Some(packed))
         }
     };
+    // Drift correction matches its reference pairs after the run's pairs.
+    crate::cancel::check(options.cancel.as_ref())?;
     let timings = StageTimings {
         objects: t1 - t0,
         matching: t2 - t1,
@@ -1687,6 +1702,9 @@ fn match_all(
     let mut pairs = Vec::with_capacity(candidates.len());
     let mut skipped = Vec::new();
     for window in candidates.chunks(MATCH_WINDOW) {
+        if crate::cancel::cancelled(options.cancel.as_ref()) {
+            break;
+        }
         let prepared = prepare_objects(
             objects,
             window,
@@ -1696,6 +1714,14 @@ fn match_all(
         let outcomes: Vec<std::result::Result<PairMatch, SkippedPair>> = window
             .par_iter()
             .map(|&(a, b)| {
+                if crate::cancel::cancelled(options.cancel.as_ref()) {
+                    // Not matched: the run fails once the window is done.
+                    return Err(SkippedPair {
+                        a,
+                        b,
+                        reason: "cancelled".into(),
+                    });
+                }
                 let part = parts.get(&(a, b));
                 let r =
                     match_pair(objects, &prepared, a, b, part, options).map_err(|e| SkippedPair {
@@ -2200,11 +2226,16 @@ fn build_objects(
     match options.model {
         ObjectModel::Contour => {
             let (per_frame, shapes): (Vec<Vec<Contour>>, Vec<Vec<MeasuredShape>>) =
-                per_frame_or_skipped(start..end, &mut built.skipped_frames, |t| {
-                    let cs = frame_contours(recording, t, options);
-                    tick(end - start);
-                    cs
-                })
+                per_frame_or_skipped(
+                    start..end,
+                    &mut built.skipped_frames,
+                    options.cancel.as_ref(),
+                    |t| {
+                        let cs = frame_contours(recording, t, options);
+                        tick(end - start);
+                        cs
+                    },
+                )?
                 .into_iter()
                 .unzip();
             let pairings = crate::track::track(&per_frame, PairingMethod::default())?;
@@ -2242,12 +2273,16 @@ fn build_objects(
         }
         ObjectModel::Surface => {
             let threshold = options.surface.preprocess.threshold.unwrap_or(0.0);
-            let per_frame: Vec<Option<Shape>> =
-                per_frame_or_skipped(start..end, &mut built.skipped_frames, |t| {
+            let per_frame: Vec<Option<Shape>> = per_frame_or_skipped(
+                start..end,
+                &mut built.skipped_frames,
+                options.cancel.as_ref(),
+                |t| {
                     let shape = frame_surface(recording, t, threshold, options, &keep);
                     tick(end - start);
                     shape
-                });
+                },
+            )?;
             let mut previous: Option<usize> = None;
             for (k, shape) in per_frame.into_iter().enumerate() {
                 match shape {
@@ -2351,13 +2386,24 @@ fn level_object(shape: Option<Shape>, min_nodes: usize) -> std::result::Result<S
 
 /// `build(t)` for every frame of `frames`, in parallel. A frame whose objects cannot be built is
 /// recorded in `skipped` with its reason and gets no objects (`T::default()`); the run goes on.
+/// Once `cancel` is cancelled the frames not started are not built, and the whole fails with
+/// [`IoError::Cancelled`].
 fn per_frame_or_skipped<T: Send + Default>(
     frames: std::ops::Range<usize>,
     skipped: &mut Vec<SkippedFrame>,
+    cancel: Option<&Cancel>,
     build: impl Fn(usize) -> Result<T> + Sync,
-) -> Vec<T> {
-    let outcomes: Vec<Result<T>> = frames.clone().into_par_iter().map(&build).collect();
-    frames
+) -> Result<Vec<T>> {
+    let outcomes: Vec<Result<T>> = frames
+        .clone()
+        .into_par_iter()
+        .map(|t| {
+            crate::cancel::check(cancel)?;
+            build(t)
+        })
+        .collect();
+    crate::cancel::check(cancel)?;
+    Ok(frames
         .zip(outcomes)
         .map(|(frame, outcome)| {
             outcome.unwrap_or_else(|e| {
@@ -2368,7 +2414,7 @@ fn per_frame_or_skipped<T: Send + Default>(
                 T::default()
             })
         })
-        .collect()
+        .collect())
 }
 
 /// The brightness surface of frame `t`, or `None` when the frame has no contact or too few

@@ -20,6 +20,7 @@
 //! are read, matched, chained and written window by window, so its memory does not grow with
 //! the recording's length, and its folder is the same, byte for byte.
 
+use crate::cancel::Cancel;
 use crate::error::{IoError, Result};
 use crate::figure::{tracks_background, FigureAxes, MatchFigure, ObjectLabel, TracksFigure};
 use crate::formats::{
@@ -448,23 +449,27 @@ pub fn stream_run_folder(
     stages.push(("output", run.as_secs_f64()));
     let summary = report::run_summary_of(input, recording, params, options, &counts, &stages);
     dir.write("summary.json", pretty(&summary).as_bytes())?;
+    crate::cancel::check(options.cancel.as_ref())?;
     dir.commit()?;
     Ok((summary, counts))
 }
 
 /// Writes the match figure of every pair (in parallel on the current rayon pool) and the tracks
-/// figure, as PNG and/or SVG, under `figures/` and as `tracks.*`.
+/// figure, as PNG and/or SVG, under `figures/` and as `tracks.*`. Fails with
+/// [`IoError::Cancelled`] at the next figure once `cancel` is cancelled.
 pub fn write_figures(
     dir: &OutDir,
     recording: &Recording,
     r: &SequenceResult,
     kinds: FigureKinds,
+    cancel: Option<&Cancel>,
 ) -> Result<()> {
     if !kinds.png && !kinds.svg {
         return Ok(());
     }
     let axes = FigureAxes::of_recording(recording);
     r.pairs.par_iter().try_for_each(|p| -> Result<()> {
+        crate::cancel::check(cancel)?;
         let (oa, ob) = (&r.objects[p.a], &r.objects[p.b]);
         let fig = MatchFigure {
             a: &oa.shape,
@@ -477,6 +482,7 @@ pub fn write_figures(
         let stem = format!("figures/pair_{:04}_{:04}", oa.id, ob.id);
         write_figure(dir, &stem, kinds, || fig.to_png(), || fig.to_svg())
     })?;
+    crate::cancel::check(cancel)?;
     let background = tracks_background(recording, r)?;
     let tracks = TracksFigure {
         result: r,
@@ -538,7 +544,8 @@ pub fn write_run_folder(
     let started = Instant::now();
     let dir = OutDir::create(out)?;
     write_tables(&dir, run.recording, run.options, run.result, outputs.tables)?;
-    write_figures(&dir, run.recording, run.result, outputs.figures)?;
+    let cancel = run.options.cancel.as_ref();
+    write_figures(&dir, run.recording, run.result, outputs.figures, cancel)?;
     let mut stages = timings.to_vec();
     stages.push(("output", started.elapsed().as_secs_f64()));
     let mut summary = report::run_summary(
@@ -566,6 +573,8 @@ pub fn write_run_folder(
         };
         dir.write("animation.gif", &animation.to_gif()?)?;
     }
+    // A cancelled run leaves the previous folder (or none), as if it had not run.
+    crate::cancel::check(cancel)?;
     dir.commit()?;
     Ok(summary)
 }
@@ -935,6 +944,11 @@ pub struct StudyOptions<'a> {
     /// What each recording's folder holds besides its tables and `summary.json`, and the
     /// format of every table (the study table's too).
     pub outputs: RunOutputs<'a>,
+    /// Stops the study once cancelled ([`crate::cancel`]): no recording starts after it, the ones
+    /// running stop at their next progress step without committing their folders, and
+    /// [`run_study`] fails with [`IoError::Cancelled`] without writing the study table; the
+    /// folders of the recordings finished before stay. `None`: the study goes to its end.
+    pub cancel: Option<Cancel>,
 }
 
 /// What [`run_study`] reports as it goes (possibly from several threads).
@@ -973,7 +987,8 @@ pub struct StudyRun {
 /// order. With an output folder, writes each recording's folder and `study.csv` (or
 /// `study.parquet`, see [`RunOutputs::tables`]) + `study.json` (atomically, after the last
 /// recording): this run's rows, then those of earlier runs that it kept ([`kept_rows`]). Fails
-/// only before any recording runs: invalid options, or an output folder that holds other files.
+/// before any recording runs (invalid options, or an output folder that holds other files), or
+/// with [`IoError::Cancelled`] when [`StudyOptions::cancel`] stopped it.
 pub fn run_study(
     paths: &[PathBuf],
     opts: &StudyOptions<'_>,
@@ -1000,7 +1015,11 @@ pub fn run_study(
     // would start it on the same busy pool (or, with a new pool, run more than `jobs` at once).
     let next = AtomicUsize::new(0);
     let done: Mutex<Vec<Option<StudyRow>>> = Mutex::new(vec![None; paths.len()]);
+    let cancel = opts.cancel.as_ref();
     let worker = || loop {
+        if crate::cancel::cancelled(cancel) {
+            break;
+        }
         let index = next.fetch_add(1, Ordering::Relaxed);
         let Some(path) = paths.get(index) else { break };
         let before = previous_row(&previous, path);
@@ -1021,6 +1040,8 @@ pub fn run_study(
             worker();
         }
     });
+    // The rows are incomplete (the recording that was stopped is an error row): no table.
+    crate::cancel::check(cancel)?;
     let rows: Vec<StudyRow> = done
         .into_inner()
         .unwrap_or_else(|e| e.into_inner())
@@ -1474,7 +1495,8 @@ fn process(
     // recording): the units an error row gives are those the run would have used.
     let options = run_options(&mut recording, &opts.params);
     *read = Some((recording.n_frames(), RowUnits::of(&recording)));
-    let options = options?;
+    let mut options = options?;
+    options.cancel = opts.cancel.clone();
     let read_s = started.elapsed().as_secs_f64();
     let folder = opts.out.as_ref().zip(output).map(|(o, n)| o.join(n));
     if let Some(folder) = folder.as_deref().filter(|_| !opts.force) {

@@ -28,6 +28,7 @@ fn options(out: &Path, tables: TableFormat) -> StudyOptions<'static> {
     StudyOptions {
         out: Some(out.to_path_buf()),
         jobs: 2,
+        cancel: None,
         outputs: RunOutputs {
             tables,
             ..Default::default()

@@ -25,6 +25,7 @@ fn most_in_flight(jobs: usize, paths: &[PathBuf]) -> (usize, Vec<String>) {
         out: None,
         jobs,
         force: false,
+        cancel: None,
         outputs: RunOutputs {
             figures: Default::default(),
             report: None,

@@ -1,6 +1,7 @@
 //! `pymodal.batch`, `pymodal.batch_row` and `pymodal.find_recordings`: a whole study, with the
 //! library's study code ([`pedo_io::study`]) that `pedomatch batch` runs.
 
+use pedo_io::cancel::Cancel;
 use pedo_io::study::{self, FigureKinds, RunOutputs, StudyOptions, StudyRow};
 use pedo_io::{ReadOptions, TableFormat};
 use pyo3::prelude::*;
@@ -73,6 +74,7 @@ fn study_options(
         out,
         jobs: jobs.unwrap_or(0),
         force,
+        cancel: None,
         outputs: RunOutputs {
             figures: figure_kinds(figures)?,
             report: None,
@@ -120,6 +122,10 @@ fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<St
 /// ``pandas.read_parquet`` reads them; the study table is then ``study.parquet``). ``options``: the
 /// keywords of :func:`run`. A recording that fails is an ``"error"`` row; the others go on. Bad
 /// options or an ``out`` folder holding other files raise. The GIL is released throughout.
+/// Ctrl-C raises ``KeyboardInterrupt`` at the running recordings' next progress step (a frame,
+/// a pair or a figure), as ``pedomatch batch`` stops: the recordings finished keep their
+/// folders, those running or not started leave none (a folder of an earlier run stays as it
+/// was), and the study table is not written.
 #[pyfunction]
 #[pyo3(signature = (paths, out=None, jobs=None, *, force=false, figures="png", tables="csv", **options))]
 #[allow(clippy::too_many_arguments)]
@@ -135,11 +141,15 @@ fn batch<'py>(
 ) -> PyResult<Bound<'py, PyList>> {
     let inputs = input_strings(paths, "paths")?;
     let jobs = count_keyword("jobs", jobs)?;
-    let opts = study_options(py, inputs, out, jobs, force, figures, tables, options)?;
-    let run = crate::pool::detach(py, || {
+    let mut opts = study_options(py, inputs, out, jobs, force, figures, tables, options)?;
+    // Ctrl-C stops the study as the command line's does (the recordings finished keep their
+    // folders, no study table is written) and raises KeyboardInterrupt.
+    let cancel = Cancel::new();
+    opts.cancel = Some(cancel.clone());
+    let run = crate::pool::detach_cancellable(py, &cancel, || {
         let found = study::find_recordings(&opts.inputs)?;
         study::run_study(&found, &opts, &|_| {})
-    })
+    })?
     .map_err(to_py)?;
     // This run's rows only (the shape it always had); study.json also holds the kept ones.
     table_rows(py, &study::study_table(&run.rows))
@@ -163,8 +173,10 @@ fn batch_row<'py>(
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let inputs = vec![path.display().to_string()];
-    let opts = study_options(py, inputs, out, Some(1), force, figures, tables, options)?;
-    let row = crate::pool::detach(py, || {
+    let mut opts = study_options(py, inputs, out, Some(1), force, figures, tables, options)?;
+    let cancel = Cancel::new();
+    opts.cancel = Some(cancel.clone());
+    let row = crate::pool::detach_cancellable(py, &cancel, || {
         let previous = match &opts.out {
             Some(out) => study::open_study_folder(out)?,
             None => Vec::new(),
@@ -172,7 +184,7 @@ fn batch_row<'py>(
         let before = study::previous_row(&previous, &path);
         let row = study::on_one_thread(|| study::run_recording(&path, &opts, before, &|_| {}));
         Ok::<_, pedo_io::IoError>(row)
-    })
+    })?
     .map_err(to_py)?;
     row_dict(py, &row)
 }

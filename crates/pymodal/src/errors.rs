@@ -25,7 +25,8 @@ use assign::AssignError;
 use modal_core::{ErrorKind, ModalError};
 use pedo_io::IoError;
 use pyo3::exceptions::{
-    PyException, PyFileNotFoundError, PyOSError, PyRuntimeError, PyTypeError, PyValueError,
+    PyException, PyFileNotFoundError, PyKeyboardInterrupt, PyOSError, PyRuntimeError, PyTypeError,
+    PyValueError,
 };
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
@@ -262,6 +263,9 @@ impl LibraryError for IoError {
             }
             e @ IoError::NoObject(_) => DEGENERATE_SHAPE_ERROR.err(e.to_string()),
             IoError::Shape(e) => e.into_py_err(),
+            // pymodal cancels a run only when a signal handler raised (Ctrl-C), and then raises
+            // that exception itself (`pool::detach_cancellable`).
+            IoError::Cancelled => PyKeyboardInterrupt::new_err("cancelled"),
         }
     }
 }

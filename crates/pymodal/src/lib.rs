@@ -16,8 +16,22 @@ mod pool;
 mod run_py;
 mod synthetic_py;
 
+/// Loads numpy's C API and rust-numpy's borrow checking now, at import. rust-numpy loads them at
+/// their first use otherwise, running Python code that a pending signal interrupts, and then
+/// panics: Ctrl-C during the first `pymodal.run` of a process raised a `PanicException`
+/// ("Failed to access NumPy array API capsule: ... KeyboardInterrupt") that
+/// `except KeyboardInterrupt` does not catch.
+fn load_numpy_api(py: Python<'_>) -> PyResult<()> {
+    // An ImportError naming numpy if it is missing or broken, rather than a panic below.
+    py.import("numpy")?;
+    let probe = numpy::PyArray1::<f64>::zeros(py, 1, false);
+    drop(numpy::PyArrayMethods::readonly(&probe));
+    Ok(())
+}
+
 #[pymodule]
 fn _pymodal(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    load_numpy_api(m.py())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     errors::register(m)?;
     pickling::register(m)?;

@@ -1,6 +1,7 @@
 //! `pymodal.run`: a whole recording in; the per-pair table, the matches and the node tracks out.
 
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use pedo_io::cancel::Cancel;
 use pedo_io::recording::kpa_per_unit;
 use pedo_io::report::{self, InputInfo};
 use pedo_io::sequence::{run_sequence, SequenceResult};
@@ -104,7 +105,8 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 ///     ``InputError``;
 /// DegenerateShapeError — no frame of ``frames`` holds an object (everything below ``noise``,
 ///     or outlines too small to model), as ``pedomatch run`` fails on such a recording.
-/// All but the ``OSError`` are :class:`PedomatchError` and ``ValueError`` subclasses. An option
+/// All but the ``OSError`` are :class:`PedomatchError` and ``ValueError`` subclasses. Ctrl-C
+/// raises ``KeyboardInterrupt`` at the run's next frame or pair. An option
 /// of the wrong type raises ``TypeError`` naming it and the type it takes
 /// (``spacing="wide"``: "spacing must be a number, got 'wide'"). A pair or frame that
 /// cannot be processed does not raise: it is skipped, with its reason in ``summary``
@@ -202,9 +204,14 @@ fn run<'py>(
     let (mut rec, input) = recording_from(py, recording)?;
     params.units.apply(&mut rec).map_err(to_py)?;
     let read_time = started.elapsed().as_secs_f64();
-    let options = params.to_options(&rec).map_err(to_py)?;
-    let result =
-        crate::pool::detach(py, || run_sequence(&rec, &options, &|_, _, _| {})).map_err(to_py)?;
+    let mut options = params.to_options(&rec).map_err(to_py)?;
+    // Ctrl-C stops the run at its next frame or pair and raises KeyboardInterrupt.
+    let cancel = Cancel::new();
+    options.cancel = Some(cancel.clone());
+    let result = crate::pool::detach_cancellable(py, &cancel, || {
+        run_sequence(&rec, &options, &|_, _, _| {})
+    })?
+    .map_err(to_py)?;
     require_objects(result.objects.len(), &rec, &options).map_err(to_py)?;
 
     let out = PyDict::new(py);
