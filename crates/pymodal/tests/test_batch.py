@@ -266,7 +266,10 @@ def test_a_batch_on_part_of_a_study_keeps_the_other_rows(study):
     # The list returned is this call's; the study table keeps the others after it.
     assert [r["path"] for r in again] == [r["path"] for r in tekscan]
     table = json.loads((out / "study.json").read_text())
-    assert table["rows"] == again + others
+    # Kept as they were, their messages saying so.
+    note = "kept from an earlier run (not among this run's inputs)"
+    kept = [dict(r, message=note + (f"; {r['message']}" if r["message"] else "")) for r in others]
+    assert table["rows"] == again + kept
     assert (table["recordings"], table["kept"], table["options"]["spacing"]) == (1, 3, 1.5)
     lines = (out / "study.csv").read_text().splitlines()
     assert len(lines) == 5 and lines[1].startswith(str(study / "in" / "tekscan.csv"))
