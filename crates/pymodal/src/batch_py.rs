@@ -119,15 +119,16 @@ fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<St
 /// complete (same input SHA-256 and options) is skipped unless ``force``. ``jobs``: recordings run at once, each on one
 /// thread (None: every core). ``figures``: ``"png"``, ``"svg"`` or ``"none"``. ``tables``:
 /// ``"csv"``, or ``"parquet"`` (typed, compressed columns with the CSV's names and values;
-/// ``pandas.read_parquet`` reads them; the study table is then ``study.parquet``). ``options``: the
-/// keywords of :func:`run`. A recording that fails is an ``"error"`` row; the others go on. Bad
+/// ``pandas.read_parquet`` reads them; the study table is then ``study.parquet``). ``layout``: a
+/// pedar sensor-layout table for the pedar recordings (``--layout``; default: the bundled
+/// insole), recorded in their ``summary.json``. ``options``: the keywords of :func:`run`. A recording that fails is an ``"error"`` row; the others go on. Bad
 /// options or an ``out`` folder holding other files raise. The GIL is released throughout.
 /// Ctrl-C raises ``KeyboardInterrupt`` at the running recordings' next progress step (a frame,
 /// a pair or a figure), as ``pedomatch batch`` stops: the recordings finished keep their
 /// folders, those running or not started leave none (a folder of an earlier run stays as it
 /// was), and the study table is not written.
 #[pyfunction]
-#[pyo3(signature = (paths, out=None, jobs=None, *, force=false, figures="png", tables="csv", **options))]
+#[pyo3(signature = (paths, out=None, jobs=None, *, force=false, figures="png", tables="csv", layout=None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn batch<'py>(
     py: Python<'py>,
@@ -137,11 +138,13 @@ fn batch<'py>(
     force: bool,
     figures: &str,
     tables: &str,
+    layout: Option<PathBuf>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let inputs = input_strings(paths, "paths")?;
     let jobs = count_keyword("jobs", jobs)?;
     let mut opts = study_options(py, inputs, out, jobs, force, figures, tables, options)?;
+    opts.read.layout = layout;
     // Ctrl-C stops the study as the command line's does (the recordings finished keep their
     // folders, no study table is written) and raises KeyboardInterrupt.
     let cancel = Cancel::new();
@@ -160,9 +163,10 @@ fn batch<'py>(
 /// ``force``), but no study table. For distributing a study yourself (a Dask cluster, a job
 /// queue): ``[batch_row(p, out) for p in find_recordings(inputs)]`` equals
 /// ``batch(inputs, out)`` but for ``wall_time_s``. Never raises for a bad recording (its row says
-/// what went wrong); bad options raise. ``tables`` as for :func:`batch`.
+/// what went wrong); bad options raise. ``tables`` and ``layout`` as for :func:`batch`.
 #[pyfunction]
-#[pyo3(signature = (path, out=None, *, force=false, figures="png", tables="csv", **options))]
+#[pyo3(signature = (path, out=None, *, force=false, figures="png", tables="csv", layout=None, **options))]
+#[allow(clippy::too_many_arguments)]
 fn batch_row<'py>(
     py: Python<'py>,
     path: PathBuf,
@@ -170,10 +174,12 @@ fn batch_row<'py>(
     force: bool,
     figures: &str,
     tables: &str,
+    layout: Option<PathBuf>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let inputs = vec![path.display().to_string()];
     let mut opts = study_options(py, inputs, out, Some(1), force, figures, tables, options)?;
+    opts.read.layout = layout;
     let cancel = Cancel::new();
     opts.cancel = Some(cancel.clone());
     let row = crate::pool::detach_cancellable(py, &cancel, || {

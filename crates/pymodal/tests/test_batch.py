@@ -291,3 +291,21 @@ def test_units_columns_are_null_when_unknown_and_typed_in_parquet(tmp_path):
     schema = pq.read_schema(tmp_path / "out" / "study.parquet")
     assert str(schema.field("pressure_units").type) == "string"
     assert str(schema.field("pitch_x_mm").type) == "double"
+
+
+def test_a_pedar_study_records_its_layout_file_and_runs_again_with_another(tmp_path):
+    asc = tmp_path / "insoles.asc"
+    shutil.copy(DATA / "pedar-example-3.01-4.00.asc", asc)
+    text = (DATA.parents[1] / "layouts" / "pedar-pressuRe.csv").read_text()
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    a.write_text(text)
+    # The same insole with the places of sensors 1 and 2 swapped.
+    b.write_text(text.replace("R,1,", "R,#,", 1).replace("R,2,", "R,1,", 1).replace("R,#,", "R,2,", 1))
+    out = tmp_path / "study"
+    [row] = pymodal.batch(asc, out, figures="none", layout=a)
+    summary = json.loads((out / row["output"] / "summary.json").read_text())
+    assert summary["input"]["layout"]["file"] == str(a)
+    assert pymodal.batch(asc, out, figures="none", layout=a)[0]["status"] == "skipped"
+    assert pymodal.batch_row(asc, out, figures="none", layout=b)["status"] == "ok"
+    summary = json.loads((out / row["output"] / "summary.json").read_text())
+    assert summary["input"]["layout"]["file"] == str(b)

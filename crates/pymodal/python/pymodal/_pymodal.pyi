@@ -344,6 +344,7 @@ def batch(
     force: bool = False,
     figures: Literal["png", "svg", "none"] = "png",
     tables: Tables = "csv",
+    layout: Optional[Path] = None,
     **options: Any,
 ) -> list[StudyRow]:
     """Run every recording like :func:`run` (several at once); return the study table, one dict per recording."""
@@ -356,6 +357,7 @@ def batch_row(
     force: bool = False,
     figures: Literal["png", "svg", "none"] = "png",
     tables: Tables = "csv",
+    layout: Optional[Path] = None,
     **options: Any,
 ) -> StudyRow:
     """One row of :func:`batch`'s table: one recording on one thread (for Dask or a job queue)."""
