@@ -914,21 +914,25 @@ fn a_renamed_recording_or_a_moved_study_leaves_one_row_per_recording() {
     ] {
         std::fs::copy(Path::new(DATA).join(from), input.join(to)).unwrap();
     }
-    let in_project = |args: &[&str]| {
+    // `batch --json ARGS` run in folder `dir`.
+    let batch_in = |dir: &Path, args: &[&str]| {
         let out = Command::new(env!("CARGO_BIN_EXE_pedomatch"))
-            .current_dir(&project)
+            .current_dir(dir)
             .args([&["batch", "--json"], args, &FAST].concat())
             .output()
             .unwrap();
-        assert_eq!(
-            out.status.code(),
-            Some(0),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{stderr}");
         serde_json::from_slice::<Value>(&out.stdout).unwrap()
     };
+    let in_project = |args: &[&str]| batch_in(&project, args);
     let table = |project: &Path| read_json(&project.join("study/study.json"))["rows"].clone();
+    let paths = |rows: &Value| -> Vec<String> {
+        let rows = rows.as_array().unwrap();
+        rows.iter()
+            .map(|r| r["path"].as_str().unwrap().to_string())
+            .collect()
+    };
     in_project(&["in", "--out", "study"]);
     assert_eq!(table(&project).as_array().unwrap().len(), 2);
     // A run interrupted before it wrote the study table: the folders it finished are skipped
@@ -956,13 +960,7 @@ fn a_renamed_recording_or_a_moved_study_leaves_one_row_per_recording() {
     std::fs::rename(input.join("s01.lst"), input.join("s01-left.lst")).unwrap();
     in_project(&["in/s01-left.lst", "--out", "study"]);
     let rows = table(&project);
-    let paths: Vec<&str> = rows
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|r| r["path"].as_str().unwrap())
-        .collect();
-    assert_eq!(paths, ["in/s01-left.lst", "in/s02.csv"]);
+    assert_eq!(paths(&rows), ["in/s01-left.lst", "in/s02.csv"]);
     assert_eq!(
         rows[1]["message"],
         "kept from an earlier run (not among this run's inputs)"
@@ -986,19 +984,8 @@ fn a_renamed_recording_or_a_moved_study_leaves_one_row_per_recording() {
     // hash of its absolute path), each once in the table.
     let moved = base.join("moved");
     std::fs::rename(&project, &moved).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_pedomatch"))
-        .current_dir(&moved)
-        .args([&["batch", "--json", "in", "--out", "study"], &FAST[..]].concat())
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(0));
+    batch_in(&moved, &["in", "--out", "study"]);
     let rows = table(&moved);
-    let paths: Vec<&str> = rows
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|r| r["path"].as_str().unwrap())
-        .collect();
-    assert_eq!(paths, ["in/s01-left.lst", "in/s02.csv"], "{rows}");
+    assert_eq!(paths(&rows), ["in/s01-left.lst", "in/s02.csv"], "{rows}");
     std::fs::remove_dir_all(&base).unwrap();
 }
