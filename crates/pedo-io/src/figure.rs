@@ -1417,6 +1417,7 @@ mod tests {
         let result = SequenceResult {
             objects,
             pairs: Vec::new(),
+            reference_pairs: Vec::new(),
             tracks,
             packed_tracks: None,
             splits: Vec::new(),

@@ -14,7 +14,7 @@ use crate::sequence::{
     honest_step_of, PairMatch, PairObjects, PairRow, RunCounts, RunParams, SequenceObject,
     SequenceOptions, SequenceResult, SkippedPairRow,
 };
-use modal_core::OptionValue;
+use modal_core::{MatchPair, OptionValue};
 use serde_json::{json, Map, Value};
 use sha2::{Digest, Sha256};
 
@@ -351,7 +351,7 @@ pub(crate) fn object_cells(recording: &Recording, o: &SequenceObject) -> Vec<Cel
 /// [`crate::track::step_allowed`]), and the in-plane distance between the two nodes in sensels
 /// (and mm when the pitch is known).
 pub fn matches_table(recording: &Recording, r: &SequenceResult) -> Table {
-    let mut t = matches_header(recording);
+    let mut t = matches_header(recording, "trackable");
     let Ok(()) = matches_rows::<std::convert::Infallible>(recording, r, &mut |cells| {
         t.rows.push(cells);
         Ok(())
@@ -359,17 +359,24 @@ pub fn matches_table(recording: &Recording, r: &SequenceResult) -> Table {
     t
 }
 
-/// The columns of [`matches_table`] (no rows).
-pub(crate) fn matches_header(recording: &Recording) -> Table {
+/// Every match of every reference pair of drift correction
+/// ([`SequenceResult::reference_pairs`]; no rows without drift correction), with the columns of
+/// [`matches_table`] but for `trackable` (a rule for consecutive frames), which is `tracked`
+/// instead: 1 when a track took the match ([`SequenceResult::reference_tracked`]), else 0.
+pub fn reference_matches_table(recording: &Recording, r: &SequenceResult) -> Table {
+    let mut t = matches_header(recording, "tracked");
+    let Ok(()) = reference_matches_rows::<std::convert::Infallible>(recording, r, &mut |cells| {
+        t.rows.push(cells);
+        Ok(())
+    });
+    t
+}
+
+/// The columns of [`matches_table`] (`flag` `trackable`) and [`reference_matches_table`]
+/// (`flag` `tracked`), no rows.
+pub(crate) fn matches_header(recording: &Recording, flag: &str) -> Table {
     let mut t = Table::new(&[
-        "id_a",
-        "id_b",
-        "node_a",
-        "node_b",
-        "cost",
-        "excess",
-        "trackable",
-        "distance",
+        "id_a", "id_b", "node_a", "node_b", "cost", "excess", flag, "distance",
     ]);
     if recording.pitch_mm.is_some() {
         t.push_column("distance_mm");
@@ -389,6 +396,34 @@ pub(crate) fn matches_rows<E>(
     Ok(())
 }
 
+/// The rows of [`reference_matches_table`], one by one to `emit`.
+pub(crate) fn reference_matches_rows<E>(
+    recording: &Recording,
+    r: &SequenceResult,
+    emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
+) -> std::result::Result<(), E> {
+    for (p, tracked) in r.reference_pairs.iter().zip(r.reference_tracked()) {
+        let (oa, ob) = (&r.objects[p.a], &r.objects[p.b]);
+        reference_pair_rows(recording, p, oa, ob, &tracked, emit)?;
+    }
+    Ok(())
+}
+
+/// The rows of [`reference_matches_table`] of one reference pair (`oa`, `ob` its two objects,
+/// `tracked` its matches' flags as [`SequenceResult::reference_tracked`] gives them), one by one
+/// to `emit`.
+pub(crate) fn reference_pair_rows<E>(
+    recording: &Recording,
+    p: &PairMatch,
+    oa: &SequenceObject,
+    ob: &SequenceObject,
+    tracked: &[bool],
+    emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
+) -> std::result::Result<(), E> {
+    let tracked = |k: usize, _: &MatchPair| tracked.get(k).copied().unwrap_or(false);
+    flagged_match_rows(recording, p, oa, ob, &tracked, emit)
+}
+
 /// The rows of [`matches_table`] of one pair (`oa`, `ob` its two objects), one by one to `emit`.
 pub(crate) fn pair_match_rows<E>(
     recording: &Recording,
@@ -397,7 +432,21 @@ pub(crate) fn pair_match_rows<E>(
     ob: &SequenceObject,
     emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
 ) -> std::result::Result<(), E> {
-    for m in &p.result.pairs {
+    let trackable = |_, m: &MatchPair| !m.excess && honest_step_of(oa, m.a, ob, m.b);
+    flagged_match_rows(recording, p, oa, ob, &trackable, emit)
+}
+
+/// The rows of one pair's matches as [`matches_header`] lays them out, the flag column of
+/// match `k` (in `p.result.pairs`) `flag(k, match)`.
+fn flagged_match_rows<E>(
+    recording: &Recording,
+    p: &PairMatch,
+    oa: &SequenceObject,
+    ob: &SequenceObject,
+    flag: &dyn Fn(usize, &MatchPair) -> bool,
+    emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
+) -> std::result::Result<(), E> {
+    for (k, m) in p.result.pairs.iter().enumerate() {
         let (pa, pb) = (oa.shape.point(m.a), ob.shape.point(m.b));
         let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
         let mut cells = vec![
@@ -407,7 +456,7 @@ pub(crate) fn pair_match_rows<E>(
             Cell::int(m.b),
             Cell::Float(m.cost, 6),
             Cell::int(m.excess as usize),
-            Cell::int((!m.excess && honest_step_of(oa, m.a, ob, m.b)) as usize),
+            Cell::int(flag(k, m) as usize),
             Cell::Float(dx.hypot(dy), 4),
         ];
         if let Some(p) = recording.pitch_mm {

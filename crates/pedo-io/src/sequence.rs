@@ -82,6 +82,15 @@ pub struct SequenceOptions {
     pub cancel: Option<Cancel>,
 }
 
+impl SequenceOptions {
+    /// Whether the run corrects the drift of its tracks: reference frames every
+    /// [`drift_reference`](Self::drift_reference) ≥ 2 frames, for the contour and surface
+    /// models (the isocontour model matches the levels of one frame, which have no drift).
+    pub fn drift_corrected(&self) -> bool {
+        self.drift_reference >= 2 && self.model != ObjectModel::Isocontour
+    }
+}
+
 impl Default for SequenceOptions {
     fn default() -> Self {
         Self {
@@ -829,6 +838,16 @@ pub struct SequenceResult {
     /// The matched pairs, in the order they were proposed (frame order); the pairs that could
     /// not be matched are in [`skipped_pairs`](Self::skipped_pairs) instead.
     pub pairs: Vec<PairMatch>,
+    /// With drift correction ([`SequenceOptions::drift_corrected`]): the reference pairs
+    /// matched, each object against its ancestor on the last reference frame
+    /// ([`crate::drift::reference_pairs`]), in object order; a track steps through their
+    /// matches first ([`crate::drift::anchored_tracks`]), so a step of a track need not be a
+    /// match of [`pairs`](Self::pairs). [`reference_tracked`](Self::reference_tracked) says
+    /// which matches a track took. Their rows ([`PairMatch::row`]) count trackable matches by
+    /// the step rule of consecutive frames, which tracks do not apply to them. A reference pair
+    /// that cannot be matched is left out (the tracks follow the predecessors there). Empty
+    /// without drift correction.
+    pub reference_pairs: Vec<PairMatch>,
     /// The tracks, unless they are in [`packed_tracks`](Self::packed_tracks) (runs without
     /// match details): read them with [`all_tracks`](Self::all_tracks) to cover both.
     pub tracks: Vec<Track>,
@@ -906,6 +925,53 @@ impl SequenceResult {
             Some(p) => Box::new((0..p.len()).map(|k| p.steps_of(k))),
             None => Box::new(self.tracks.iter().map(|t| t.steps.len())),
         }
+    }
+
+    /// For each of the [`reference_pairs`](Self::reference_pairs), in order, and each of its
+    /// matches (`result.pairs`, in order): whether a track took it, i.e. the match is not an
+    /// excess match and its two nodes are on the same track. Such a track reached the node of
+    /// the second object through this match, from its step on the first object (an earlier
+    /// step of the same track, on the reference frame).
+    pub fn reference_tracked(&self) -> Vec<Vec<bool>> {
+        if self.reference_pairs.is_empty() {
+            return Vec::new();
+        }
+        let track_of = self.track_of_nodes();
+        let on = |o: usize, n: usize| {
+            track_of
+                .get(o)
+                .and_then(|row| row.get(n))
+                .copied()
+                .flatten()
+        };
+        self.reference_pairs
+            .iter()
+            .map(|p| {
+                p.result
+                    .pairs
+                    .iter()
+                    .map(|m| !m.excess && on(p.a, m.a).is_some_and(|t| Some(t) == on(p.b, m.b)))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The track of every node, by object and node (`None`: on no track, which a run's own
+    /// tracks never leave).
+    fn track_of_nodes(&self) -> Vec<Vec<Option<usize>>> {
+        let mut track_of: Vec<Vec<Option<usize>>> = self
+            .objects
+            .iter()
+            .map(|o| vec![None; o.shape.len()])
+            .collect();
+        for (k, t) in self.all_tracks().enumerate() {
+            for &(o, n) in &t.steps {
+                if let Some(slot) = track_of.get_mut(o).and_then(|row| row.get_mut(n)) {
+                    *slot = Some(k);
+                }
+            }
+        }
+        track_of
     }
 
     /// Coordinates of the steps of `track` as `(frame, x, y[, z])` rows.
@@ -1082,6 +1148,17 @@ pub trait SequenceSink {
     fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()>;
     /// Track number `index` (in order from 0): its steps as object and node.
     fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()>;
+    /// A reference pair of drift correction with its two objects, in the order of
+    /// [`SequenceResult::reference_pairs`], after every track; `tracked` as
+    /// [`SequenceResult::reference_tracked`] gives it for this pair. A run without drift
+    /// correction hands none.
+    fn reference_pair(
+        &mut self,
+        pair: &PairMatch,
+        a: &SequenceObject,
+        b: &SequenceObject,
+        tracked: &[bool],
+    ) -> Result<()>;
 }
 
 /// Frames whose objects are built, matched and chained at a time by [`stream_sequence`].
@@ -1326,7 +1403,7 @@ fn streamable(model: ObjectModel, drift_reference: usize) -> bool {
 }
 
 /// Hands a whole run to `sink`, as [`stream_sequence`] would have (the frames' measures
-/// aside), and returns its counts.
+/// aside), its reference pairs last, and returns its counts.
 pub fn replay(r: &SequenceResult, sink: &mut dyn SequenceSink) -> Result<RunCounts> {
     for o in &r.objects {
         sink.object(o)?;
@@ -1338,6 +1415,9 @@ pub fn replay(r: &SequenceResult, sink: &mut dyn SequenceSink) -> Result<RunCoun
         let steps: Vec<(&SequenceObject, usize)> =
             t.steps.iter().map(|&(o, n)| (&r.objects[o], n)).collect();
         sink.track(k, &steps)?;
+    }
+    for (p, tracked) in r.reference_pairs.iter().zip(r.reference_tracked()) {
+        sink.reference_pair(p, &r.objects[p.a], &r.objects[p.b], &tracked)?;
     }
     Ok(RunCounts::of(r))
 }
@@ -1633,24 +1713,13 @@ pub fn run_sequence(
     // A cancelled run's pairs are incomplete (those not matched are skipped as "cancelled").
     crate::cancel::check(options.cancel.as_ref())?;
     let t2 = Instant::now();
-    let drift = options.drift_reference >= 2 && options.model != ObjectModel::Isocontour;
-    let drift_tracks = || {
-        let refs = crate::drift::reference_pairs(
-            &objects,
-            &candidate_pairs,
-            start,
-            options.drift_reference,
-        );
-        // Reference pairs lie frames apart: the sensor prior is for consecutive frames.
-        let mut apart = options.clone();
-        if apart.matching.prealign == Prealign::Sensor {
-            apart.matching.prealign = Prealign::Robust;
-        }
-        let none = HashMap::new();
-        let (anchors, _) = match_all(&objects, &refs, &none, &apart, &|_, _, _| {});
-        crate::drift::anchored_tracks(&objects, &pairs, &anchors)
+    let reference_pairs = if options.drift_corrected() {
+        reference_matches(&objects, &candidate_pairs, start, options)
+    } else {
+        Vec::new()
     };
-    let (tracks, packed_tracks) = match (drift, options.keep_match_details) {
+    let drift_tracks = || crate::drift::anchored_tracks(&objects, &pairs, &reference_pairs);
+    let (tracks, packed_tracks) = match (options.drift_corrected(), options.keep_match_details) {
         (true, true) => (drift_tracks()?, None),
         (true, false) => (Vec::new(), Some(drift_tracks()?.into_iter().collect())),
         (false, true) => (chain_tracks(&objects, &pairs)?, None),
@@ -1676,6 +1745,7 @@ pub fn run_sequence(
     Ok(SequenceResult {
         objects,
         pairs,
+        reference_pairs,
         tracks,
         packed_tracks,
         splits,
@@ -1684,6 +1754,24 @@ pub fn run_sequence(
         skipped_pairs,
         timings,
     })
+}
+
+/// The reference pairs of drift correction ([`crate::drift::reference_pairs`] for frames from
+/// `start`) matched; those that cannot be matched are left out.
+fn reference_matches(
+    objects: &[SequenceObject],
+    candidates: &[(usize, usize)],
+    start: usize,
+    options: &SequenceOptions,
+) -> Vec<PairMatch> {
+    let refs = crate::drift::reference_pairs(objects, candidates, start, options.drift_reference);
+    // Reference pairs lie frames apart: the sensor prior is for consecutive frames.
+    let mut apart = options.clone();
+    if apart.matching.prealign == Prealign::Sensor {
+        apart.matching.prealign = Prealign::Robust;
+    }
+    let (matched, _) = match_all(objects, &refs, &HashMap::new(), &apart, &|_, _, _| {});
+    matched
 }
 
 /// Matches every candidate pair (in parallel). One pair that cannot be matched never sinks the

@@ -50,10 +50,27 @@ const STUDY_MARKER: &str = ".pedomatch-study";
 /// written as `NAME.csv` or `NAME.parquet` ([`TableFormat`]).
 pub const RUN_TABLES: [&str; 5] = ["pairs", "objects", "matches", "tracks", "frames"];
 
-/// The table files of a run folder whose tables are written as `tables`: those of
-/// [`RUN_TABLES`] and `pairs.json`.
-pub fn run_table_files(tables: TableFormat) -> Vec<String> {
-    let mut files: Vec<String> = RUN_TABLES.iter().map(|t| tables.file_name(t)).collect();
+/// The table a run with drift correction ([`SequenceOptions::drift_corrected`]) writes besides
+/// [`RUN_TABLES`]: the matches of its reference pairs ([`report::reference_matches_table`]).
+pub const REFERENCE_MATCHES: &str = "reference_matches";
+
+/// The tables a run with these options writes, by name: [`RUN_TABLES`], and
+/// [`REFERENCE_MATCHES`] with drift correction.
+pub fn run_tables(options: &SequenceOptions) -> Vec<&'static str> {
+    let mut names = RUN_TABLES.to_vec();
+    if options.drift_corrected() {
+        names.push(REFERENCE_MATCHES);
+    }
+    names
+}
+
+/// The table files of a run folder whose tables are written as `tables` by a run with these
+/// options: those of [`run_tables`] and `pairs.json`.
+pub fn run_table_files(tables: TableFormat, options: &SequenceOptions) -> Vec<String> {
+    let mut files: Vec<String> = run_tables(options)
+        .iter()
+        .map(|t| tables.file_name(t))
+        .collect();
     files.insert(1, "pairs.json".into());
     files
 }
@@ -99,7 +116,8 @@ pub struct RunOutputs<'a> {
 }
 
 /// Writes every table of a sequence run as `tables` (CSV or Parquet): pairs (and pairs.json),
-/// objects, matches, tracks, and frames (the per-frame measures of the frames used).
+/// objects, matches, tracks, frames (the per-frame measures of the frames used) and, with drift
+/// correction, reference_matches.
 pub fn write_tables(
     dir: &OutDir,
     recording: &Recording,
@@ -116,7 +134,7 @@ pub fn write_tables(
     tables::write_table(dir, tables, "objects", &objects)?;
     drop(objects);
     // The two large tables go to disk row by row (a long recording has millions of rows).
-    let header = report::matches_header(recording).header;
+    let header = report::matches_header(recording, "trackable").header;
     tables::write_rows(dir, tables, "matches", &header, |emit| {
         report::matches_rows(recording, r, emit)
     })?;
@@ -127,7 +145,14 @@ pub fn write_tables(
     let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
     let frames = report::frames_table(recording, threshold, start, end);
-    tables::write_table(dir, tables, "frames", &frames)
+    tables::write_table(dir, tables, "frames", &frames)?;
+    if options.drift_corrected() {
+        let header = report::matches_header(recording, "tracked").header;
+        tables::write_rows(dir, tables, REFERENCE_MATCHES, &header, |emit| {
+            report::reference_matches_rows(recording, r, emit)
+        })?;
+    }
+    Ok(())
 }
 
 /// Whether a run writes only its tables and `summary.json` (no figures, report or animation):
@@ -165,6 +190,8 @@ pub struct TablesSink<'a> {
     objects: tables::TableWriter,
     matches: tables::TableWriter,
     frames: tables::TableWriter,
+    /// With drift correction: the matches of the reference pairs.
+    reference_matches: Option<tables::TableWriter>,
     /// Started with the first track: its columns depend on the objects' dimension.
     tracks: Option<tables::TableWriter>,
     /// The dimension of the first object.
@@ -172,9 +199,19 @@ pub struct TablesSink<'a> {
 }
 
 impl<'a> TablesSink<'a> {
-    /// Starts the tables of a run of `recording` in `dir`.
-    pub fn create(dir: &'a OutDir, recording: &'a Recording, format: TableFormat) -> Result<Self> {
+    /// Starts the tables of a run of `recording` with `options` in `dir` ([`run_tables`]).
+    pub fn create(
+        dir: &'a OutDir,
+        recording: &'a Recording,
+        options: &SequenceOptions,
+        format: TableFormat,
+    ) -> Result<Self> {
         let pairs_header = report::pairs_header(recording).header;
+        let reference_header = report::matches_header(recording, "tracked").header;
+        let reference_matches = options
+            .drift_corrected()
+            .then(|| tables::TableWriter::create(dir, format, REFERENCE_MATCHES, &reference_header))
+            .transpose()?;
         Ok(Self {
             dir,
             recording,
@@ -192,7 +229,7 @@ impl<'a> TablesSink<'a> {
                 dir,
                 format,
                 "matches",
-                &report::matches_header(recording).header,
+                &report::matches_header(recording, "trackable").header,
             )?,
             frames: tables::TableWriter::create(
                 dir,
@@ -200,6 +237,7 @@ impl<'a> TablesSink<'a> {
                 "frames",
                 &report::frames_header(recording).header,
             )?,
+            reference_matches,
             tracks: None,
             dim: None,
         })
@@ -247,6 +285,9 @@ impl<'a> TablesSink<'a> {
         if let Some(t) = self.tracks {
             t.finish(dir)?;
         }
+        if let Some(t) = self.reference_matches {
+            t.finish(dir)?;
+        }
         Ok(())
     }
 }
@@ -282,6 +323,24 @@ impl SequenceSink for TablesSink<'_> {
             tracks.push(dir, &cells)
         })
     }
+
+    fn reference_pair(
+        &mut self,
+        pair: &PairMatch,
+        a: &SequenceObject,
+        b: &SequenceObject,
+        tracked: &[bool],
+    ) -> Result<()> {
+        let (dir, recording) = (self.dir, self.recording);
+        let Some(writer) = self.reference_matches.as_mut() else {
+            return Err(IoError::invalid(
+                "a reference pair handed to the tables of a run without drift correction",
+            ));
+        };
+        report::reference_pair_rows(recording, pair, a, b, tracked, &mut |cells| {
+            writer.push(dir, &cells)
+        })
+    }
 }
 
 /// A sink that keeps nothing (a run whose counts alone are wanted).
@@ -298,6 +357,15 @@ impl SequenceSink for NoSink {
         Ok(())
     }
     fn track(&mut self, _: usize, _: &[(&SequenceObject, usize)]) -> Result<()> {
+        Ok(())
+    }
+    fn reference_pair(
+        &mut self,
+        _: &PairMatch,
+        _: &SequenceObject,
+        _: &SequenceObject,
+        _: &[bool],
+    ) -> Result<()> {
         Ok(())
     }
 }
@@ -437,7 +505,7 @@ pub fn stream_run_folder(
 ) -> Result<(Value, RunCounts)> {
     let started = Instant::now();
     let dir = OutDir::create(out)?;
-    let mut sink = TablesSink::create(&dir, recording, tables)?;
+    let mut sink = TablesSink::create(&dir, recording, options, tables)?;
     let counts = stream_sequence(recording, frames, options, progress, &mut sink)?;
     require_objects(counts.objects, recording, options)?;
     sink.finish(&counts)?;
@@ -1501,7 +1569,7 @@ fn process(
     let folder = opts.out.as_ref().zip(output).map(|(o, n)| o.join(n));
     if let Some(folder) = folder.as_deref().filter(|_| !opts.force) {
         let used = used_options(&opts.params, &options, &recording);
-        if let Some(summary) = complete_summary(folder, &input, &used, &opts.outputs) {
+        if let Some(summary) = complete_summary(folder, &input, &used, &options, &opts.outputs) {
             let mut row = row_of_summary(path, output, &summary, started);
             // The wall time of the run that wrote the folder: its row, or (a run interrupted
             // before it wrote the study table) the stages its summary timed.
@@ -1554,22 +1622,25 @@ fn used_options(params: &RunParams, options: &SequenceOptions, recording: &Recor
 
 /// The summary of `folder` if it is complete: a pedomatch output whose `summary.json` has the
 /// input's SHA-256 and the options `used` (with the animation choice of `outputs`, which
-/// `summary.json` records among them), with every table, and every output that `outputs` asks
-/// for: the report, the animation, the tracks figure and the figure of every matched pair
-/// (those of `pairs.json`), in each format asked for.
+/// `summary.json` records among them), with every table a run with `options` writes
+/// ([`run_table_files`]: reference_matches too with drift correction), and every output that
+/// `outputs` asks for: the report, the animation, the tracks figure and the figure of every
+/// matched pair (those of `pairs.json`), in each format asked for.
 pub fn is_complete(
     folder: &Path,
     input: &InputInfo,
     used: &Value,
+    options: &SequenceOptions,
     outputs: &RunOutputs<'_>,
 ) -> bool {
-    complete_summary(folder, input, used, outputs).is_some()
+    complete_summary(folder, input, used, options, outputs).is_some()
 }
 
 fn complete_summary(
     folder: &Path,
     input: &InputInfo,
     used: &Value,
+    options: &SequenceOptions,
     outputs: &RunOutputs<'_>,
 ) -> Option<Value> {
     if !outdir::is_output(folder) || input.sha256.is_none() {
@@ -1587,7 +1658,7 @@ fn complete_summary(
     if !same_input || !json_close(&summary["options"], &used) {
         return None;
     }
-    let mut files = run_table_files(outputs.tables);
+    let mut files = run_table_files(outputs.tables, options);
     if outputs.report.is_some() {
         files.push("report.html".into());
     }

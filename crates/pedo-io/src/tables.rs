@@ -61,7 +61,7 @@ impl TableFormat {
 pub fn output_option_specs() -> Vec<OptionSpec> {
     vec![OptionSpec::choice(
         TableFormat::default(),
-        "File format of the tables (pairs, objects, matches, tracks, frames; a batch's study table): csv, or parquet (typed, snappy-compressed columns with the CSV's names and values, for pandas, polars or Dask).",
+        "File format of the tables (pairs, objects, matches, tracks, frames, and reference_matches with drift correction; a batch's study table): csv, or parquet (typed, snappy-compressed columns with the CSV's names and values, for pandas, polars or Dask).",
     )]
 }
 
@@ -215,6 +215,7 @@ fn kind_of_empty(name: &str) -> Kind {
         | "nodes_b"
         | "excess"
         | "trackable"
+        | "tracked"
         | "contact_sensors"
         | "local_matches"
         | "trackable_matches"
