@@ -73,6 +73,13 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 ///   optimisation matches and %, matches after the excess step, mean cost, trackable matches
 ///   and %, as ``pairs.csv``);
 /// - ``matches``: list of :class:`Match`, aligned with ``table``;
+/// - ``reference_matches``: with drift correction (``drift_reference`` >= 2, not for the
+///   isocontour model), one dict per reference pair, each object matched against its ancestor
+///   on the last reference frame: ``id_a`` (the ancestor), ``id_b``, ``frame_a``, ``frame_b``
+///   (0-based), ``match`` (a :class:`Match`) and ``tracked``, a (k,) bool array aligned with
+///   ``match.pairs``: True when a track took that match (its two nodes are on the same track:
+///   a step of ``track_steps`` onto node ``b`` that is no match of ``matches``), as
+///   ``reference_matches.csv``'s ``tracked``; an empty list without drift correction;
 /// - ``objects``: list of dicts ``{id, frame, time_s, index, level, level_kpa, points,
 ///   points_mm}`` (``id`` is the index in this list; ``level`` the isobaric level of an
 ///   isocontour run in the recording's units and ``level_kpa`` in kPa when those units are
@@ -224,6 +231,7 @@ fn run<'py>(
         matches.append(Py::new(py, PyMatch::from_result(p.result.clone()))?)?;
     }
     out.set_item("matches", matches)?;
+    out.set_item("reference_matches", reference_matches(py, &result)?)?;
     out.set_item("objects", objects(py, &rec, &result)?)?;
     let tracks = PyList::empty(py);
     // Each track's steps as (object id, node): the object (an index into `objects`) says which
@@ -265,6 +273,34 @@ fn run<'py>(
     timings.set_item("matching", result.timings.matching.as_secs_f64())?;
     timings.set_item("tracks", result.timings.tracks.as_secs_f64())?;
     out.set_item("timings", timings)?;
+    Ok(out)
+}
+
+/// The reference pairs of drift correction as dicts: the two objects, their frames, the
+/// :class:`Match` and which of its matches a track took.
+fn reference_matches<'py>(
+    py: Python<'py>,
+    result: &SequenceResult,
+) -> PyResult<Bound<'py, PyList>> {
+    let out = PyList::empty(py);
+    for (p, tracked) in result
+        .reference_pairs
+        .iter()
+        .zip(result.reference_tracked())
+    {
+        let (oa, ob) = (&result.objects[p.a], &result.objects[p.b]);
+        let d = PyDict::new(py);
+        d.set_item("id_a", oa.id)?;
+        d.set_item("id_b", ob.id)?;
+        d.set_item("frame_a", oa.frame)?;
+        d.set_item("frame_b", ob.frame)?;
+        d.set_item(
+            "match",
+            Py::new(py, PyMatch::from_result(p.result.clone()))?,
+        )?;
+        d.set_item("tracked", PyArray1::from_vec(py, tracked))?;
+        out.append(d)?;
+    }
     Ok(out)
 }
 

@@ -168,6 +168,48 @@ def test_track_steps_name_the_object_and_node_of_every_track_step():
         assert nodes == [(o["id"], n) for o in objects for n in range(len(o["points"]))]
 
 
+def test_reference_matches_explain_the_track_steps_drift_correction_makes():
+    res = pymodal.run(str(BUNDLED), frames=(0, 40), drift_reference=10)
+    objects, refs = res["objects"], res["reference_matches"]
+    assert refs, "40 frames with a reference frame every 10 have reference pairs"
+    # The one-to-one matches of the frame-to-frame pairs, and the tracked reference matches
+    # (node of the second object -> node of its ancestor on the reference frame).
+    direct = set()
+    for row, m in zip(res["table"], res["matches"]):
+        for (a, b), excess in zip(m.pairs, m.excess):
+            if not excess:
+                direct.add(((row["id_a"], int(a)), (row["id_b"], int(b))))
+    tracked = {}
+    for r in refs:
+        assert objects[r["id_a"]]["frame"] == r["frame_a"] < r["frame_b"] - 1
+        assert objects[r["id_b"]]["frame"] == r["frame_b"]
+        m = r["match"]
+        assert r["tracked"].shape == (len(m.pairs),) and r["tracked"].dtype == np.bool_
+        assert not (r["tracked"] & m.excess).any()
+        for (a, b) in m.pairs[r["tracked"]]:
+            tracked[(r["id_b"], int(b))] = (r["id_a"], int(a))
+    assert tracked
+    # Every step is a frame-to-frame match or a tracked reference match from an earlier step of
+    # its track; every tracked reference match is such a step.
+    through_reference, reached = 0, set()
+    for steps in res["track_steps"]:
+        steps = [(int(o), int(n)) for o, n in steps]
+        for k in range(1, len(steps)):
+            step = (steps[k - 1], steps[k])
+            anchored = tracked.get(steps[k]) in steps[:k]
+            assert step in direct or anchored, step
+            if anchored:
+                reached.add(steps[k])
+                through_reference += step not in direct
+    assert reached == set(tracked)
+    assert through_reference > 0, "no step needs a reference match"
+
+    plain = pymodal.run(str(BUNDLED), frames=(0, 40))
+    assert plain["reference_matches"] == []
+    assert pymodal.run(str(BUNDLED), frames=(0, 40), drift_reference=10,
+                       model="isocontour")["reference_matches"] == []
+
+
 def test_frames_objects_and_tracks_are_zero_based():
     frames = moving_blob(frames=6)
     res = pymodal.run(frames, frames=(2, None))

@@ -286,6 +286,13 @@ def surface(
     relaxation: float = 0.01,
     z_scale: Literal["xy", "keep"] = "xy",
 ) -> Surface: ...
+# run's result (RunResult, a dict) holds, besides table, matches, objects, tracks, track_steps,
+# frames, summary and timings, "reference_matches": with drift correction, one ReferenceMatch
+# per reference pair (an empty list without).
+# A reference pair of drift correction: id_a, id_b and frame_a, frame_b (int), match (Match) and
+# tracked (BoolArray aligned with match.pairs: True where a track took the match).
+ReferenceMatch = dict[str, Any]
+
 def run(
     recording: Union[Recording, Path, ArrayLike],
     *,
