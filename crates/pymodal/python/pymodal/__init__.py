@@ -39,9 +39,9 @@ def _same(a: _Any, b: _Any) -> bool:
 
 
 class RunResult(dict[str, _Any]):
-    """What :func:`run` returns: a dict (``table``, ``matches``, ``objects``, ``tracks``,
-    ``track_steps``, ``frames``, ``summary``, ``timings``) that Jupyter shows as a table of its
-    summary.
+    """What :func:`run` returns: a dict (``table``, ``matches``, ``reference_matches``,
+    ``objects``, ``tracks``, ``track_steps``, ``frames``, ``summary``, ``timings``) that Jupyter
+    shows as a table of its summary.
 
     Compares by value with ``==``: the same keys, and values equal recursively (lists element by
     element, numpy arrays in shape, dtype and values), NaN equal to NaN, so that a result equals
