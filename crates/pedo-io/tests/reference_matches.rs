@@ -115,7 +115,7 @@ fn both_folders(
 ) -> (PathBuf, PathBuf) {
     let input = InputInfo {
         name: "walk".into(),
-        sha256: None,
+        ..InputInfo::default()
     };
     let mut options = params.to_options(recording).unwrap();
     options.keep_match_details = false;
