@@ -122,7 +122,7 @@ def test_run_result_shows_its_summary_as_html():
     text = repr(res)
     assert "\n" not in text and len(text) < 300, text
     assert text.startswith("RunResult(input=") and f"pairs={s['pairs']}" in text
-    assert "keys: table, matches, objects, tracks" in text
+    assert "keys: table, matches, reference_matches, objects, tracks" in text
     html = res._repr_html_()
     assert html.startswith("<table") and html.endswith("</table>")
     for text in (
