@@ -9,20 +9,11 @@ use parquet::file::reader::{FileReader, SerializedFileReader};
 use parquet::record::Field;
 use pedo_io::study::{run_study, RowStatus, RunOutputs, StudyOptions, RUN_TABLES};
 use pedo_io::TableFormat;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pedo-parquet-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+#[path = "common/files.rs"]
+mod files;
+use files::{data, temp_dir};
 
 fn options(out: &Path, tables: TableFormat) -> StudyOptions<'static> {
     StudyOptions {

@@ -2,13 +2,10 @@
 
 use pedo_io::formats::{csv, images, lst, npy};
 use pedo_io::{parse_bytes, read_recording, Format, IoError, Recording};
-use std::path::PathBuf;
 
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
-}
+#[path = "common/files.rs"]
+mod files;
+use files::data;
 
 #[test]
 fn fscan_asf_header_shape_and_values() {

@@ -18,18 +18,9 @@ use pedo_io::{read_recording, Recording, TableFormat};
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pedo-refmatches-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+#[path = "common/files.rs"]
+mod files;
+use files::{data, temp_dir};
 
 /// A CSV table (no quoted fields: the tables read here hold numbers only) as rows of column →
 /// integer; the non-integer columns are left out.

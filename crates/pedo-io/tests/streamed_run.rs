@@ -12,15 +12,12 @@ use pedo_io::study::{stream_run_folder, write_run_folder, RunOutputs, RunRecord}
 use pedo_io::{read_recording, Recording, TableFormat};
 use std::path::{Path, PathBuf};
 
+#[path = "common/files.rs"]
+mod files;
+use files::temp_dir;
+
 fn walk() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/FrasP01L.asf")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pedo-streamed-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 /// The folder of the run held whole, as `pedomatch run` with figures writes its tables.

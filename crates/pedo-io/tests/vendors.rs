@@ -5,11 +5,9 @@ use pedo_io::formats::{asf, npz, pedcad};
 use pedo_io::{parse_bytes, read_recording, sniff_format, Format, IoError, Recording};
 use std::path::{Path, PathBuf};
 
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
-}
+#[path = "common/files.rs"]
+mod files;
+use files::data;
 
 fn bytes(name: &str) -> Vec<u8> {
     std::fs::read(data(name)).unwrap()
