@@ -1165,23 +1165,29 @@ pub fn kept_rows(
     use std::collections::HashSet;
     let this_run: HashSet<String> = paths.iter().map(|p| output_name(p)).collect();
     let files: HashSet<PathBuf> = paths.iter().filter_map(|p| p.canonicalize().ok()).collect();
-    let inputs: HashSet<Value> = rows.iter().filter_map(|r| folder_input(out, r)).collect();
+    // This run's inputs are read from their folders only if a kept row's path is gone.
+    let inputs: std::cell::OnceCell<HashSet<Value>> = std::cell::OnceCell::new();
+    let in_this_run = |input: Value| {
+        let inputs =
+            inputs.get_or_init(|| rows.iter().filter_map(|r| folder_input(out, r)).collect());
+        inputs.contains(&input)
+    };
     previous
         .iter()
         .filter(|r| !this_run.contains(&row_folder(r)))
-        .filter(|r| {
+        .filter_map(|r| {
             let file = Path::new(&r.path).canonicalize().ok();
-            match (&r.output, &file) {
+            let kept = match (&r.output, &file) {
                 (_, Some(f)) if files.contains(f) => false,
                 (Some(folder), _) if !outdir::is_output(&out.join(folder)) => false,
-                (Some(_), None) => !folder_input(out, r).is_some_and(|i| inputs.contains(&i)),
+                (Some(_), None) => !folder_input(out, r).is_some_and(&in_this_run),
                 (Some(_), Some(_)) => true,
                 (None, found) => found.is_some(),
-            }
+            };
+            kept.then_some((r, file.is_some()))
         })
-        .map(|r| {
+        .map(|(r, found)| {
             let mut row = with_units_of_folder(out, r);
-            let found = Path::new(&r.path).exists();
             // A skipped row's message is the earlier run's "outputs complete": not carried on.
             let earlier = if r.status == RowStatus::Skipped {
                 ""
