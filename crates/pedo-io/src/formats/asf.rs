@@ -11,6 +11,7 @@ use super::{latin1_lines, parse_num};
 use crate::error::{IoError, Result};
 use crate::recording::stated_units;
 use crate::recording::{Format, Recording, SparseFrames};
+use std::iter::Peekable;
 
 /// A length with its unit (`5.08 mm`, `0.2 in`) in mm.
 fn length_mm(v: &str) -> Option<f64> {
@@ -110,41 +111,42 @@ pub(crate) fn read_tekscan(
     }
 }
 
-fn parse_tekscan_lines(
-    lines: impl Iterator<Item = (usize, String)>,
-    size: usize,
-    name: &str,
-    csv: bool,
-    keep: &mut Keep<'_>,
-) -> Result<Recording> {
-    let err = |line: usize, msg: String| IoError::parse(name, line, msg);
-    let mut lines = lines
-        .map(|(ln, l)| (ln, if csv { unpad(l) } else { l }))
-        .peekable();
-    let (mut rows, mut cols) = (None::<usize>, None::<usize>);
-    let (mut dy, mut dx, mut area, mut dt, mut noise) = (None, None, None, None, None);
-    let (mut start, mut end) = (None::<i64>, None::<i64>);
-    let mut units = String::new();
-    let mut data_line = None;
-    while let Some((ln, line)) = lines.peek() {
-        let (ln, t) = (*ln, line.trim().to_string());
-        if csv && t.starts_with("Frame") {
-            data_line = Some(ln);
-            break;
-        }
-        lines.next();
-        if t.starts_with("ASCII_DATA") {
-            data_line = Some(ln);
-            break;
-        }
-        let t = t.as_str();
-        let split = |c: char| c.is_whitespace() || (csv && c == ',');
-        let (key, val) = match t.split_once(split) {
-            Some((k, v)) => (k, v.trim()),
-            None => (t, ""),
-        };
+/// The header fields as read, before they are checked against each other.
+#[derive(Default)]
+struct HeaderFields {
+    rows: Option<usize>,
+    cols: Option<usize>,
+    dx: Option<f64>,
+    dy: Option<f64>,
+    area: Option<f64>,
+    dt: Option<f64>,
+    noise: Option<f64>,
+    start: Option<i64>,
+    end: Option<i64>,
+    units: String,
+}
+
+/// The header: everything before the first frame.
+struct Header {
+    rows: usize,
+    cols: usize,
+    pitch_mm: Option<[f64; 2]>,
+    sensel_area_mm2: Option<f64>,
+    dt_s: Option<f64>,
+    noise_threshold: Option<f64>,
+    units: String,
+    /// The frame count START_FRAME..END_FRAME states, when both are given.
+    stated_frames: Option<usize>,
+    /// The line of `ASCII_DATA` (of the first `Frame` line in a CSV export).
+    data_line: usize,
+}
+
+impl HeaderFields {
+    /// Takes one `KEY value` line; unknown keys are ignored. `bad` makes the error for a value
+    /// that cannot be read.
+    fn set(&mut self, key: &str, val: &str, bad: impl Fn(&str) -> IoError) -> Result<()> {
+        let positive = |v: Option<f64>| v.filter(|&v| v > 0.0).ok_or_else(|| bad(key));
         let num = || parse_num(val.split_whitespace().next().unwrap_or(""));
-        let bad = |what: &str| err(ln, format!("cannot read {what} from {val:?}"));
         match key {
             "ROWS" | "COLS" => {
                 let n = val
@@ -152,234 +154,333 @@ fn parse_tekscan_lines(
                     .ok()
                     .filter(|&n| n > 0 && n <= 100_000)
                     .ok_or_else(|| bad(key))?;
-                if key == "ROWS" {
-                    rows = Some(n)
+                *if key == "ROWS" {
+                    &mut self.rows
                 } else {
-                    cols = Some(n)
-                }
+                    &mut self.cols
+                } = Some(n);
             }
-            "ROW_SPACING" => {
-                dy = Some(
-                    length_mm(val)
-                        .filter(|&v| v > 0.0)
-                        .ok_or_else(|| bad(key))?,
-                )
-            }
-            "COL_SPACING" => {
-                dx = Some(
-                    length_mm(val)
-                        .filter(|&v| v > 0.0)
-                        .ok_or_else(|| bad(key))?,
-                )
-            }
-            "SENSEL_AREA" => {
-                area = Some(area_mm2(val).filter(|&v| v > 0.0).ok_or_else(|| bad(key))?)
-            }
-            "SECONDS_PER_FRAME" => dt = Some(num().filter(|&v| v > 0.0).ok_or_else(|| bad(key))?),
-            "NOISE_THRESHOLD" => noise = Some(num().ok_or_else(|| bad(key))?),
-            "START_FRAME" => start = Some(val.parse::<i64>().map_err(|_| bad(key))?),
-            "END_FRAME" => end = Some(val.parse::<i64>().map_err(|_| bad(key))?),
-            "UNITS" => units = normalise_units(val),
+            "ROW_SPACING" => self.dy = Some(positive(length_mm(val))?),
+            "COL_SPACING" => self.dx = Some(positive(length_mm(val))?),
+            "SENSEL_AREA" => self.area = Some(positive(area_mm2(val))?),
+            "SECONDS_PER_FRAME" => self.dt = Some(positive(num())?),
+            "NOISE_THRESHOLD" => self.noise = Some(num().ok_or_else(|| bad(key))?),
+            "START_FRAME" => self.start = Some(val.parse::<i64>().map_err(|_| bad(key))?),
+            "END_FRAME" => self.end = Some(val.parse::<i64>().map_err(|_| bad(key))?),
+            "UNITS" => self.units = normalise_units(val),
             _ => {}
         }
+        Ok(())
     }
-    let data_line = data_line.ok_or_else(|| {
-        IoError::format(
-            name,
-            if csv {
-                "no `Frame` line: not a Tekscan CSV export or truncated header"
-            } else {
-                "no ASCII_DATA line: not a Tekscan ASCII file or truncated header"
-            },
-        )
-    })?;
-    let rows = rows.ok_or_else(|| err(data_line, "header has no ROWS".into()))?;
-    let cols = cols.ok_or_else(|| err(data_line, "header has no COLS".into()))?;
-    // Every sensel takes at least two bytes in the file, so a frame larger than the file is a
-    // corrupt header, refused before anything of its size is allocated.
-    let per = rows
-        .checked_mul(cols)
-        .filter(|&p| p <= size)
-        .ok_or_else(|| {
-            err(
-                data_line,
-                format!("ROWS x COLS = {rows} x {cols} is more than the file can hold"),
-            )
-        })?;
-    let expected = match (start, end) {
-        (Some(s), Some(e)) if e >= s => Some((e - s + 1) as usize),
-        (Some(s), Some(e)) => {
-            return Err(err(
-                data_line,
-                format!("END_FRAME {e} before START_FRAME {s}"),
-            ));
-        }
-        _ => None,
-    };
 
-    // Frames are kept sparse as they are read: a long recording is never held as dense values.
-    let mut frames = SparseFrames::new(per);
-    let mut frame: Vec<f32> = Vec::with_capacity(per);
-    let mut mask: Vec<Option<bool>> = vec![None; per];
-    let mut n_frames = 0usize;
-    let mut row_in_frame = rows; // `rows` = not inside a frame
-    let mut last_ln = data_line;
-    let mut frame_ln = data_line;
-    let mut ended = false;
-    while let Some((ln, line)) = lines.next() {
-        last_ln = ln;
-        let t = line.trim();
-        if ended {
-            if t.is_empty() {
-                continue;
-            }
-            return Err(err(ln, "data after the closing @@".into()));
+    /// Checks the fields once the data begin at `data_line`; `size` is the file's length in
+    /// bytes.
+    fn check(self, data_line: usize, size: usize, name: &str) -> Result<Header> {
+        let err = |msg: String| IoError::parse(name, data_line, msg);
+        let rows = self.rows.ok_or_else(|| err("header has no ROWS".into()))?;
+        let cols = self.cols.ok_or_else(|| err("header has no COLS".into()))?;
+        // Every sensel takes at least two bytes in the file, so a frame larger than the file is a
+        // corrupt header, refused before anything of its size is allocated.
+        if rows.checked_mul(cols).is_none_or(|per| per > size) {
+            return Err(err(format!(
+                "ROWS x COLS = {rows} x {cols} is more than the file can hold"
+            )));
         }
-        if row_in_frame == rows {
-            if t.is_empty() {
-                continue;
-            }
-            if t == "@@" {
-                ended = true;
-                continue;
-            }
-            let rest = t
-                .strip_prefix("Frame")
-                .ok_or_else(|| err(ln, format!("expected `Frame N`, found {:?}", trunc(t))))?;
-            // I-Scan exports follow the number with the frame's time and raw sum:
-            // `Frame 1, 0,, 12/2/2019 6:21:52.34PM,,,Raw Sum=,,310`.
-            rest.split(',')
-                .next()
-                .unwrap_or("")
-                .trim()
-                .parse::<i64>()
-                .map_err(|_| err(ln, format!("bad frame number in {:?}", trunc(t))))?;
-            if expected.is_some_and(|e| n_frames >= e) {
-                return Err(err(
-                    ln,
-                    format!(
-                        "more frames than END_FRAME - START_FRAME + 1 = {}",
-                        expected.unwrap_or(0)
-                    ),
-                ));
-            }
-            frame_ln = ln;
-            row_in_frame = 0;
-            continue;
+        let stated_frames = match (self.start, self.end) {
+            (Some(s), Some(e)) if e >= s => Some((e - s + 1) as usize),
+            (Some(s), Some(e)) => return Err(err(format!("END_FRAME {e} before START_FRAME {s}"))),
+            _ => None,
+        };
+        Ok(Header {
+            rows,
+            cols,
+            pitch_mm: match (self.dx, self.dy) {
+                (Some(x), Some(y)) => Some([x, y]),
+                (Some(x), None) => Some([x, x]),
+                (None, Some(y)) => Some([y, y]),
+                _ => None,
+            },
+            sensel_area_mm2: self.area,
+            dt_s: self.dt,
+            noise_threshold: self.noise,
+            units: self.units,
+            stated_frames,
+            data_line,
+        })
+    }
+}
+
+/// Reads the header up to `ASCII_DATA` (the `.asf`, which consumes that line) or up to the
+/// first `Frame` line (the CSV export, which leaves it to be read as the first frame's).
+fn read_header(
+    lines: &mut Peekable<impl Iterator<Item = (usize, String)>>,
+    size: usize,
+    name: &str,
+    csv: bool,
+) -> Result<Header> {
+    let mut fields = HeaderFields::default();
+    while let Some((ln, line)) = lines.peek() {
+        let (ln, t) = (*ln, line.trim().to_string());
+        if csv && t.starts_with("Frame") {
+            return fields.check(ln, size, name);
         }
+        lines.next();
+        if t.starts_with("ASCII_DATA") {
+            return fields.check(ln, size, name);
+        }
+        let split = |c: char| c.is_whitespace() || (csv && c == ',');
+        let (key, val) = match t.split_once(split) {
+            Some((k, v)) => (k, v.trim()),
+            None => (t.as_str(), ""),
+        };
+        fields.set(key, val, |what| {
+            IoError::parse(name, ln, format!("cannot read {what} from {val:?}"))
+        })?;
+    }
+    Err(IoError::format(
+        name,
+        if csv {
+            "no `Frame` line: not a Tekscan CSV export or truncated header"
+        } else {
+            "no ASCII_DATA line: not a Tekscan ASCII file or truncated header"
+        },
+    ))
+}
+
+/// The frames as they are read, row by row, kept sparse (a long recording is never held as
+/// dense values) or handed on ([`Keep`]).
+struct FrameReader<'k, 'a> {
+    rows: usize,
+    cols: usize,
+    stated_frames: Option<usize>,
+    frames: SparseFrames,
+    /// The values of the frame being read.
+    frame: Vec<f32>,
+    /// Whether each sensel holds a value (`false`: `B`), as the first frame says.
+    mask: Vec<Option<bool>>,
+    n_frames: usize,
+    /// Rows of the current frame read so far; `rows` between frames.
+    row: usize,
+    /// The line of the current frame's `Frame N`.
+    frame_line: usize,
+    keep: &'k mut Keep<'a>,
+}
+
+/// How a row of values ended.
+enum RowEnd {
+    Complete,
+    /// The file ends inside this row.
+    Cut,
+}
+
+impl<'k, 'a> FrameReader<'k, 'a> {
+    fn new(header: &Header, keep: &'k mut Keep<'a>) -> Self {
+        let per = header.rows * header.cols;
+        Self {
+            rows: header.rows,
+            cols: header.cols,
+            stated_frames: header.stated_frames,
+            frames: SparseFrames::new(per),
+            frame: Vec::with_capacity(per),
+            mask: vec![None; per],
+            n_frames: 0,
+            row: header.rows,
+            frame_line: header.data_line,
+            keep,
+        }
+    }
+
+    fn between_frames(&self) -> bool {
+        self.row == self.rows
+    }
+
+    /// Starts a frame at its `Frame N` line `t` (line `ln`).
+    fn start_frame(&mut self, ln: usize, t: &str, err: impl Fn(String) -> IoError) -> Result<()> {
+        let rest = t
+            .strip_prefix("Frame")
+            .ok_or_else(|| err(format!("expected `Frame N`, found {:?}", trunc(t))))?;
+        // I-Scan exports follow the number with the frame's time and raw sum:
+        // `Frame 1, 0,, 12/2/2019 6:21:52.34PM,,,Raw Sum=,,310`.
+        rest.split(',')
+            .next()
+            .unwrap_or("")
+            .trim()
+            .parse::<i64>()
+            .map_err(|_| err(format!("bad frame number in {:?}", trunc(t))))?;
+        if let Some(e) = self.stated_frames.filter(|&e| self.n_frames >= e) {
+            return Err(err(format!(
+                "more frames than END_FRAME - START_FRAME + 1 = {e}"
+            )));
+        }
+        self.frame_line = ln;
+        self.row = 0;
+        Ok(())
+    }
+
+    /// Reads one row of values, `t`; `last` says whether it is the file's last line.
+    fn read_row(&mut self, t: &str, last: bool, err: impl Fn(String) -> IoError) -> Result<RowEnd> {
         let mut k = 0usize;
-        let mut cut = false;
         for tok in t.split(',') {
             let tok = tok.trim();
-            if k == cols {
+            if k == self.cols {
                 if tok.is_empty() {
                     continue; // tolerate a trailing comma
                 }
-                return Err(err(ln, format!("more than COLS = {cols} values")));
+                return Err(err(format!("more than COLS = {} values", self.cols)));
             }
-            let idx = row_in_frame * cols + k;
             let (v, present) = if tok.eq_ignore_ascii_case("B") {
                 (0.0f32, false)
             } else if let Some(v) = parse_num(tok) {
                 (v as f32, true)
-            } else if lines.peek().is_none() {
+            } else if last {
                 // The file was cut inside this row (after a comma, or inside a number).
-                cut = true;
-                break;
+                return Ok(RowEnd::Cut);
             } else {
-                return Err(err(
-                    ln,
-                    format!("value {} is not a number: {:?}", k + 1, trunc(tok)),
-                ));
+                return Err(err(format!(
+                    "value {} is not a number: {:?}",
+                    k + 1,
+                    trunc(tok)
+                )));
             };
-            match mask[idx] {
-                None => mask[idx] = Some(present),
-                Some(m) if m != present => {
-                    return Err(err(
-                        ln,
-                        format!(
-                            "sensel (row {}, column {}) is {} here but was {} in an earlier frame",
-                            row_in_frame + 1,
-                            k + 1,
-                            if present { "a value" } else { "B" },
-                            if m { "a value" } else { "B" }
-                        ),
-                    ));
-                }
-                _ => {}
-            }
-            frame.push(v);
+            self.check_mask(k, present, &err)?;
+            self.frame.push(v);
             k += 1;
         }
-        if k != cols || cut {
-            if lines.peek().is_none() {
-                // The file ends inside this row: reported below as a truncated frame.
-                break;
-            }
-            return Err(err(ln, format!("{k} values, expected COLS = {cols}")));
+        if k != self.cols {
+            return if last {
+                Ok(RowEnd::Cut)
+            } else {
+                Err(err(format!("{k} values, expected COLS = {}", self.cols)))
+            };
         }
-        row_in_frame += 1;
-        if row_in_frame == rows {
-            n_frames += 1;
-            match keep {
-                Keep::All => frames.push(&frame),
-                Keep::Handed(hand) => {
-                    // Frames too large to hold sparsely are held whole all the same.
-                    if frames.is_whole() {
-                        frames.push(&frame);
-                    } else {
-                        frames.push_empty();
-                    }
-                    if let Some(hand) = hand {
-                        hand(&frame)?;
-                    }
+        self.row += 1;
+        if self.row == self.rows {
+            self.end_frame()?;
+        }
+        Ok(RowEnd::Complete)
+    }
+
+    /// Checks that sensel `k` of the current row is a value or `B` as in the earlier frames.
+    fn check_mask(
+        &mut self,
+        k: usize,
+        present: bool,
+        err: impl Fn(String) -> IoError,
+    ) -> Result<()> {
+        let what = |p: bool| if p { "a value" } else { "B" };
+        match &mut self.mask[self.row * self.cols + k] {
+            m @ None => *m = Some(present),
+            Some(m) if *m != present => {
+                return Err(err(format!(
+                    "sensel (row {}, column {}) is {} here but was {} in an earlier frame",
+                    self.row + 1,
+                    k + 1,
+                    what(present),
+                    what(*m)
+                )));
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn end_frame(&mut self) -> Result<()> {
+        self.n_frames += 1;
+        match self.keep {
+            Keep::All => self.frames.push(&self.frame),
+            Keep::Handed(hand) => {
+                // Frames too large to hold sparsely are held whole all the same.
+                if self.frames.is_whole() {
+                    self.frames.push(&self.frame);
+                } else {
+                    self.frames.push_empty();
+                }
+                if let Some(hand) = hand {
+                    hand(&self.frame)?;
                 }
             }
-            frame.clear();
+        }
+        self.frame.clear();
+        Ok(())
+    }
+
+    /// Checks that the file held every frame it states, the last one whole; `closed`: the
+    /// `.asf`'s closing `@@` was read (the CSV export has none).
+    fn finish(
+        self,
+        last_line: usize,
+        closed: bool,
+        csv: bool,
+        name: &str,
+    ) -> Result<(SparseFrames, Vec<bool>)> {
+        let err = |msg: String| IoError::parse(name, last_line, msg);
+        let partial = if self.between_frames() {
+            String::new()
+        } else {
+            format!(
+                " (the frame at line {} has {} of {} rows)",
+                self.frame_line, self.row, self.rows
+            )
+        };
+        if let Some(e) = self.stated_frames.filter(|&e| self.n_frames < e) {
+            return Err(err(format!(
+                "truncated: the file ends after {} complete frames, its header \
+                 (START_FRAME..END_FRAME) states {e}{partial}",
+                self.n_frames
+            )));
+        }
+        if !self.between_frames() {
+            return Err(err(format!("truncated{partial}")));
+        }
+        if self.n_frames == 0 {
+            return Err(err("no frames".into()));
+        }
+        if !closed && !csv {
+            // The export closes its data with `@@`; without it the file was cut, possibly inside
+            // a number of the last row, which would otherwise pass unnoticed.
+            return Err(err("truncated: no closing @@ after the last frame".into()));
+        }
+        let mask = self.mask.into_iter().map(|m| m.unwrap_or(true)).collect();
+        Ok((self.frames, mask))
+    }
+}
+
+fn parse_tekscan_lines(
+    lines: impl Iterator<Item = (usize, String)>,
+    size: usize,
+    name: &str,
+    csv: bool,
+    keep: &mut Keep<'_>,
+) -> Result<Recording> {
+    let mut lines = lines
+        .map(|(ln, l)| (ln, if csv { unpad(l) } else { l }))
+        .peekable();
+    let header = read_header(&mut lines, size, name, csv)?;
+    let mut reader = FrameReader::new(&header, keep);
+    let mut last_line = header.data_line;
+    let mut closed = false;
+    while let Some((ln, line)) = lines.next() {
+        last_line = ln;
+        let t = line.trim();
+        let err = |msg: String| IoError::parse(name, ln, msg);
+        if reader.between_frames() || closed {
+            match t {
+                "" => {}
+                _ if closed => return Err(err("data after the closing @@".into())),
+                "@@" => closed = true,
+                _ => reader.start_frame(ln, t, err)?,
+            }
+        } else if let RowEnd::Cut = reader.read_row(t, lines.peek().is_none(), err)? {
+            break; // reported by `finish` as a truncated frame
         }
     }
-    let partial = if row_in_frame != rows {
-        format!(" (the frame at line {frame_ln} has {row_in_frame} of {rows} rows)")
-    } else {
-        String::new()
-    };
-    if let Some(e) = expected
-        && n_frames < e
-    {
-        return Err(err(
-            last_ln,
-            format!(
-                "truncated: the file ends after {n_frames} complete frames, its header \
-                     (START_FRAME..END_FRAME) states {e}{partial}"
-            ),
-        ));
-    }
-    if row_in_frame != rows {
-        return Err(err(last_ln, format!("truncated{partial}")));
-    }
-    if n_frames == 0 {
-        return Err(err(last_ln, "no frames".into()));
-    }
-    if !ended && !csv {
-        // The export closes its data with `@@`; without it the file was cut, possibly inside a
-        // number of the last row, which would otherwise pass unnoticed.
-        return Err(err(
-            last_ln,
-            "truncated: no closing @@ after the last frame".into(),
-        ));
-    }
-    let mask: Vec<bool> = mask.into_iter().map(|m| m.unwrap_or(true)).collect();
-    let mut rec = Recording::from_sparse(rows, cols, frames, mask)?;
-    rec.pitch_mm = match (dx, dy) {
-        (Some(x), Some(y)) => Some([x, y]),
-        (Some(x), None) => Some([x, x]),
-        (None, Some(y)) => Some([y, y]),
-        _ => None,
-    };
-    rec.sensel_area_mm2 = area;
-    rec.dt_s = dt;
-    rec.units = stated_units(&units);
-    rec.noise_threshold = noise;
+    let (frames, mask) = reader.finish(last_line, closed, csv, name)?;
+    let mut rec = Recording::from_sparse(header.rows, header.cols, frames, mask)?;
+    rec.pitch_mm = header.pitch_mm;
+    rec.sensel_area_mm2 = header.sensel_area_mm2;
+    rec.dt_s = header.dt_s;
+    rec.units = stated_units(&header.units);
+    rec.noise_threshold = header.noise_threshold;
     rec.format = Some(if csv { Format::TekscanCsv } else { Format::Asf });
     Ok(rec)
 }
