@@ -2295,7 +2295,6 @@ fn build_objects(
     end: usize,
     progress: &(dyn Fn(Stage, usize, usize) + Sync),
 ) -> Result<Built> {
-    let keep = |s: &Shape| s.len() >= options.min_nodes.max(3);
     let mut built = Built {
         objects: Vec::new(),
         pairs: Vec::new(),
@@ -2311,152 +2310,185 @@ fn build_objects(
             total,
         )
     };
-    match options.model {
-        ObjectModel::Contour => {
-            let (per_frame, shapes): (Vec<Vec<Contour>>, Vec<Vec<MeasuredShape>>) =
-                per_frame_or_skipped(
-                    start..end,
-                    &mut built.skipped_frames,
-                    options.cancel.as_ref(),
-                    |t| {
-                        let cs = frame_contours(recording, t, options);
-                        tick(end - start);
-                        cs
-                    },
-                )?
-                .into_iter()
-                .unzip();
-            let pairings = crate::track::track(&per_frame, PairingMethod::default())?;
-            let mut first = Vec::with_capacity(per_frame.len());
-            for (k, frame_shapes) in shapes.into_iter().enumerate() {
-                first.push(built.objects.len());
-                for (index, (shape, measures)) in frame_shapes.into_iter().enumerate() {
-                    let id = built.objects.len();
-                    built.objects.push(SequenceObject {
-                        id,
-                        frame: start + k,
-                        index,
-                        level: None,
-                        shape,
-                        measures: Some(measures),
-                    });
-                }
-            }
-            for (k, p) in pairings.iter().enumerate() {
-                let (fa, fb) = (first[k], first[k + 1]);
-                built
-                    .pairs
-                    .extend(p.pairs.iter().map(|&(i, j)| (fa + i, fb + j)));
-                built.splits.extend(
-                    p.splits
-                        .iter()
-                        .map(|(i, js)| (fa + i, js.iter().map(|j| fb + j).collect())),
-                );
-                built.merges.extend(
-                    p.merges
-                        .iter()
-                        .map(|(is, j)| (is.iter().map(|i| fa + i).collect(), fb + j)),
-                );
-            }
-        }
-        ObjectModel::Surface => {
-            let threshold = options.surface.preprocess.threshold.unwrap_or(0.0);
-            let per_frame: Vec<Option<Shape>> = per_frame_or_skipped(
-                start..end,
-                &mut built.skipped_frames,
-                options.cancel.as_ref(),
-                |t| {
-                    let shape = frame_surface(recording, t, threshold, options, &keep);
-                    tick(end - start);
-                    shape
-                },
-            )?;
-            let mut previous: Option<usize> = None;
-            for (k, shape) in per_frame.into_iter().enumerate() {
-                match shape {
-                    Some(shape) => {
-                        let o = built.objects.len();
-                        if let Some(p) = previous
-                            && built.objects[p].frame + 1 == start + k
-                        {
-                            built.pairs.push((p, o));
-                        }
-                        built.objects.push(SequenceObject {
-                            id: o,
-                            frame: start + k,
-                            index: 0,
-                            level: None,
-                            shape,
-                            measures: None,
-                        });
-                        previous = Some(o);
-                    }
-                    None => previous = None,
-                }
-            }
-        }
-        ObjectModel::Isocontour => {
-            let t = match options.iso_frame {
-                Some(t) => t,
-                None => (start..end)
-                    .max_by(|&a, &b| frame_load(recording, a).total_cmp(&frame_load(recording, b)))
-                    .unwrap_or(start),
-            };
-            let frame = recording.frame(t)?;
-            let base = match options.contour.preprocess.threshold {
-                Some(th) => crate::preprocess::threshold(&frame, th)?,
-                None => frame.clone(),
-            };
-            let levels = match &options.iso_levels {
-                Some(l) => l.clone(),
-                None => crate::isobar::even_levels(&base, options.iso_count),
-            };
-            let iso = crate::isobar::IsoOptions {
-                preprocess: options.contour.preprocess,
-                resample: options.contour.resample,
-                include_holes: false,
-                ..Default::default()
-            };
-            for (index, &level) in levels.iter().enumerate() {
-                let cs = crate::isobar::isocontours(&frame, &[level], &iso)?;
-                // The seed models one isobaric contour per level: the largest region's outline.
-                let largest = cs.iter().max_by(|a, b| a.area().total_cmp(&b.area()));
-                let shape = largest.map(Contour::to_shape).transpose()?;
-                match level_object(shape, options.min_nodes.max(3)) {
-                    Ok(shape) => {
-                        let o = built.objects.len();
-                        if o > 0 {
-                            built.pairs.push((o - 1, o));
-                        }
-                        let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
-                        let measures = largest.map(|c| {
-                            let outline = outline_in_sensels(c, options.contour.units);
-                            recording.region_measures(&frame, threshold, &outline)
-                        });
-                        built.objects.push(SequenceObject {
-                            id: o,
-                            frame: t,
-                            index,
-                            level: Some(level),
-                            shape,
-                            measures,
-                        });
-                    }
-                    Err(why) => built.skipped_frames.push(SkippedFrame {
-                        frame: t,
-                        reason: format!(
-                            "isobaric level {} of {} ({}): {why}",
-                            index + 1,
-                            levels.len(),
-                            pressure_text(level, &recording.units)
-                        ),
-                    }),
-                }
-                tick(levels.len());
-            }
+    let build = match options.model {
+        ObjectModel::Contour => contour_objects,
+        ObjectModel::Surface => surface_objects,
+        ObjectModel::Isocontour => isocontour_objects,
+    };
+    build(&mut built, recording, options, (start, end), &tick)?;
+    Ok(built)
+}
+
+/// Every frame's contours as objects, paired across consecutive frames by overlap (with their
+/// splits and merges); `tick(total)` reports each frame done.
+fn contour_objects(
+    built: &mut Built,
+    recording: &Recording,
+    options: &SequenceOptions,
+    (start, end): (usize, usize),
+    tick: &(dyn Fn(usize) + Sync),
+) -> Result<()> {
+    let (per_frame, shapes): (Vec<Vec<Contour>>, Vec<Vec<MeasuredShape>>) = per_frame_or_skipped(
+        start..end,
+        &mut built.skipped_frames,
+        options.cancel.as_ref(),
+        |t| {
+            let cs = frame_contours(recording, t, options);
+            tick(end - start);
+            cs
+        },
+    )?
+    .into_iter()
+    .unzip();
+    let pairings = crate::track::track(&per_frame, PairingMethod::default())?;
+    let mut first = Vec::with_capacity(per_frame.len());
+    for (k, frame_shapes) in shapes.into_iter().enumerate() {
+        first.push(built.objects.len());
+        for (index, (shape, measures)) in frame_shapes.into_iter().enumerate() {
+            let id = built.objects.len();
+            built.objects.push(SequenceObject {
+                id,
+                frame: start + k,
+                index,
+                level: None,
+                shape,
+                measures: Some(measures),
+            });
         }
     }
-    Ok(built)
+    for (k, p) in pairings.iter().enumerate() {
+        let (fa, fb) = (first[k], first[k + 1]);
+        built
+            .pairs
+            .extend(p.pairs.iter().map(|&(i, j)| (fa + i, fb + j)));
+        built.splits.extend(
+            p.splits
+                .iter()
+                .map(|(i, js)| (fa + i, js.iter().map(|j| fb + j).collect())),
+        );
+        built.merges.extend(
+            p.merges
+                .iter()
+                .map(|(is, j)| (is.iter().map(|i| fa + i).collect(), fb + j)),
+        );
+    }
+    Ok(())
+}
+
+/// Every frame's pressure surface as an object, paired with the previous frame's.
+fn surface_objects(
+    built: &mut Built,
+    recording: &Recording,
+    options: &SequenceOptions,
+    (start, end): (usize, usize),
+    tick: &(dyn Fn(usize) + Sync),
+) -> Result<()> {
+    let keep = |s: &Shape| s.len() >= options.min_nodes.max(3);
+    let threshold = options.surface.preprocess.threshold.unwrap_or(0.0);
+    let per_frame: Vec<Option<Shape>> = per_frame_or_skipped(
+        start..end,
+        &mut built.skipped_frames,
+        options.cancel.as_ref(),
+        |t| {
+            let shape = frame_surface(recording, t, threshold, options, &keep);
+            tick(end - start);
+            shape
+        },
+    )?;
+    let mut previous: Option<usize> = None;
+    for (k, shape) in per_frame.into_iter().enumerate() {
+        match shape {
+            Some(shape) => {
+                let o = built.objects.len();
+                if let Some(p) = previous
+                    && built.objects[p].frame + 1 == start + k
+                {
+                    built.pairs.push((p, o));
+                }
+                built.objects.push(SequenceObject {
+                    id: o,
+                    frame: start + k,
+                    index: 0,
+                    level: None,
+                    shape,
+                    measures: None,
+                });
+                previous = Some(o);
+            }
+            None => previous = None,
+        }
+    }
+    Ok(())
+}
+
+/// The isobaric contours of one frame (the `iso_frame`, else the most loaded one) as objects,
+/// each level paired with the next.
+fn isocontour_objects(
+    built: &mut Built,
+    recording: &Recording,
+    options: &SequenceOptions,
+    (start, end): (usize, usize),
+    tick: &(dyn Fn(usize) + Sync),
+) -> Result<()> {
+    let t = match options.iso_frame {
+        Some(t) => t,
+        None => (start..end)
+            .max_by(|&a, &b| frame_load(recording, a).total_cmp(&frame_load(recording, b)))
+            .unwrap_or(start),
+    };
+    let frame = recording.frame(t)?;
+    let base = match options.contour.preprocess.threshold {
+        Some(th) => crate::preprocess::threshold(&frame, th)?,
+        None => frame.clone(),
+    };
+    let levels = match &options.iso_levels {
+        Some(l) => l.clone(),
+        None => crate::isobar::even_levels(&base, options.iso_count),
+    };
+    let iso = crate::isobar::IsoOptions {
+        preprocess: options.contour.preprocess,
+        resample: options.contour.resample,
+        include_holes: false,
+        ..Default::default()
+    };
+    for (index, &level) in levels.iter().enumerate() {
+        let cs = crate::isobar::isocontours(&frame, &[level], &iso)?;
+        // The seed models one isobaric contour per level: the largest region's outline.
+        let largest = cs.iter().max_by(|a, b| a.area().total_cmp(&b.area()));
+        let shape = largest.map(Contour::to_shape).transpose()?;
+        match level_object(shape, options.min_nodes.max(3)) {
+            Ok(shape) => {
+                let o = built.objects.len();
+                if o > 0 {
+                    built.pairs.push((o - 1, o));
+                }
+                let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
+                let measures = largest.map(|c| {
+                    let outline = outline_in_sensels(c, options.contour.units);
+                    recording.region_measures(&frame, threshold, &outline)
+                });
+                built.objects.push(SequenceObject {
+                    id: o,
+                    frame: t,
+                    index,
+                    level: Some(level),
+                    shape,
+                    measures,
+                });
+            }
+            Err(why) => built.skipped_frames.push(SkippedFrame {
+                frame: t,
+                reason: format!(
+                    "isobaric level {} of {} ({}): {why}",
+                    index + 1,
+                    levels.len(),
+                    pressure_text(level, &recording.units)
+                ),
+            }),
+        }
+        tick(levels.len());
+    }
+    Ok(())
 }
 
 /// An isobaric level's object, its largest region's outline, or why it has none: no region
