@@ -22,24 +22,31 @@ fn header_value<'a>(h: &'a str, key: &str) -> Option<&'a str> {
     Some(rest.trim_start())
 }
 
-/// Parses a `.npy` file held in memory into a recording.
-pub fn parse_npy(bytes: &[u8], name: &str) -> Result<Recording> {
-    let fail = |msg: String| IoError::format(name, msg);
+/// What the header says of the array.
+struct NpyHeader {
+    /// The dtype as written (`<f4`), for messages.
+    descr: String,
+    kind: Kind,
+    /// Bytes per value.
+    size: usize,
+    big_endian: bool,
+    fortran: bool,
+    shape: Vec<usize>,
+}
+
+/// Reads the magic, version and header dictionary; returns the header and where the data
+/// begin.
+fn read_header(bytes: &[u8], fail: &impl Fn(String) -> IoError) -> Result<(NpyHeader, usize)> {
     if bytes.len() < 10 || !bytes.starts_with(b"\x93NUMPY") {
         return Err(fail("not a .npy file (bad magic)".into()));
     }
-    let major = bytes[6];
-    let (hlen, start) = match major {
+    let (hlen, start) = match bytes[6] {
         1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10usize),
-        2 | 3 => {
-            if bytes.len() < 12 {
-                return Err(fail("truncated header".into()));
-            }
-            (
-                u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
-                12usize,
-            )
-        }
+        2 | 3 if bytes.len() >= 12 => (
+            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+            12usize,
+        ),
+        2 | 3 => return Err(fail("truncated header".into())),
         v => return Err(fail(format!("unsupported .npy version {v}"))),
     };
     let end = start
@@ -48,7 +55,26 @@ pub fn parse_npy(bytes: &[u8], name: &str) -> Result<Recording> {
         .ok_or_else(|| fail("truncated header".into()))?;
     let header =
         std::str::from_utf8(&bytes[start..end]).map_err(|_| fail("header is not text".into()))?;
+    let (descr, kind, size, big_endian) = dtype(header, fail)?;
+    let fortran = match header_value(header, "fortran_order") {
+        Some(v) if v.starts_with("True") => true,
+        Some(v) if v.starts_with("False") => false,
+        _ => return Err(fail("header has no valid 'fortran_order'".into())),
+    };
+    let shape = shape(header, fail)?;
+    let header = NpyHeader {
+        descr,
+        kind,
+        size,
+        big_endian,
+        fortran,
+        shape,
+    };
+    Ok((header, end))
+}
 
+/// The header's `descr`: the dtype as written, its kind, bytes per value and byte order.
+fn dtype(header: &str, fail: &impl Fn(String) -> IoError) -> Result<(String, Kind, usize, bool)> {
     let descr =
         header_value(header, "descr").ok_or_else(|| fail("header has no 'descr'".into()))?;
     let q = descr
@@ -57,11 +83,12 @@ pub fn parse_npy(bytes: &[u8], name: &str) -> Result<Recording> {
         .filter(|&c| c == '\'' || c == '"')
         .ok_or_else(|| fail("bad 'descr'".into()))?;
     let descr = descr[1..].split(q).next().unwrap_or("");
+    let unsupported = || fail(format!("unsupported dtype {descr:?}"));
     let (order, code) = descr.split_at(descr.len().min(1));
     let big = match order {
         "<" | "|" | "=" => false,
         ">" => true,
-        _ => return Err(fail(format!("unsupported dtype {descr:?}"))),
+        _ => return Err(unsupported()),
     };
     let (kind, size) = match code {
         "f4" => (Kind::F, 4),
@@ -73,30 +100,54 @@ pub fn parse_npy(bytes: &[u8], name: &str) -> Result<Recording> {
         "u1" | "b1" => (Kind::U, 1),
         "u2" => (Kind::U, 2),
         "u4" => (Kind::U, 4),
-        _ => return Err(fail(format!("unsupported dtype {descr:?}"))),
+        _ => return Err(unsupported()),
     };
-    let fortran = match header_value(header, "fortran_order") {
-        Some(v) if v.starts_with("True") => true,
-        Some(v) if v.starts_with("False") => false,
-        _ => return Err(fail("header has no valid 'fortran_order'".into())),
-    };
-    let shape_s =
-        header_value(header, "shape").ok_or_else(|| fail("header has no 'shape'".into()))?;
-    let shape_s = shape_s
-        .strip_prefix('(')
-        .ok_or_else(|| fail("bad 'shape'".into()))?;
-    let shape_s = shape_s
-        .split(')')
-        .next()
-        .ok_or_else(|| fail("bad 'shape'".into()))?;
-    let mut shape = Vec::new();
-    for tok in shape_s.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        shape.push(
+    Ok((descr.to_string(), kind, size, big))
+}
+
+/// The header's `shape` tuple.
+fn shape(header: &str, fail: &impl Fn(String) -> IoError) -> Result<Vec<usize>> {
+    let bad = || fail("bad 'shape'".into());
+    let s = header_value(header, "shape").ok_or_else(|| fail("header has no 'shape'".into()))?;
+    let s = s.strip_prefix('(').ok_or_else(bad)?;
+    let s = s.split(')').next().ok_or_else(bad)?;
+    s.split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|tok| {
             tok.trim_end_matches('L')
                 .parse::<usize>()
-                .map_err(|_| fail(format!("bad 'shape' entry {tok:?}")))?,
-        );
+                .map_err(|_| fail(format!("bad 'shape' entry {tok:?}")))
+        })
+        .collect()
+}
+
+/// One value of `h`'s dtype from its `h.size` bytes.
+fn decode(chunk: &[u8], h: &NpyHeader) -> f64 {
+    let size = h.size;
+    let mut b = [0u8; 8];
+    b[..size].copy_from_slice(chunk);
+    if h.big_endian {
+        b[..size].reverse();
     }
+    match (h.kind, size) {
+        (Kind::F, 4) => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        (Kind::F, _) => f64::from_le_bytes(b),
+        (Kind::I, 1) => b[0] as i8 as f64,
+        (Kind::I, 2) => i16::from_le_bytes([b[0], b[1]]) as f64,
+        (Kind::I, 4) => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        (Kind::I, _) => i64::from_le_bytes(b) as f64,
+        (Kind::U, 1) => b[0] as f64,
+        (Kind::U, 2) => u16::from_le_bytes([b[0], b[1]]) as f64,
+        (Kind::U, _) => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+    }
+}
+
+/// Parses a `.npy` file held in memory into a recording.
+pub fn parse_npy(bytes: &[u8], name: &str) -> Result<Recording> {
+    let fail = |msg: String| IoError::format(name, msg);
+    let (h, data_start) = read_header(bytes, &fail)?;
+    let shape = &h.shape;
     let (t, r, c) = match shape[..] {
         [r, c] => (1, r, c),
         [t, r, c] => (t, r, c),
@@ -111,37 +162,23 @@ pub fn parse_npy(bytes: &[u8], name: &str) -> Result<Recording> {
         .and_then(|x| x.checked_mul(c))
         .filter(|&n| n > 0 && n <= 1 << 31)
         .ok_or_else(|| fail(format!("unusable shape {shape:?}")))?;
-    let body = &bytes[end..];
-    let need = n * size;
+    let body = &bytes[data_start..];
+    let need = n * h.size;
     if body.len() != need {
+        let cut = if body.len() < need {
+            " (truncated)"
+        } else {
+            ""
+        };
         return Err(fail(format!(
-            "data holds {} bytes, shape {shape:?} of {descr} needs {need}{}",
+            "data holds {} bytes, shape {shape:?} of {} needs {need}{cut}",
             body.len(),
-            if body.len() < need {
-                " (truncated)"
-            } else {
-                ""
-            }
+            h.descr
         )));
     }
     let mut vals = Vec::with_capacity(n);
-    for chunk in body.chunks_exact(size) {
-        let mut b = [0u8; 8];
-        b[..size].copy_from_slice(chunk);
-        if big {
-            b[..size].reverse();
-        }
-        let v: f64 = match (kind, size) {
-            (Kind::F, 4) => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-            (Kind::F, _) => f64::from_le_bytes(b),
-            (Kind::I, 1) => b[0] as i8 as f64,
-            (Kind::I, 2) => i16::from_le_bytes([b[0], b[1]]) as f64,
-            (Kind::I, 4) => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-            (Kind::I, _) => i64::from_le_bytes(b) as f64,
-            (Kind::U, 1) => b[0] as f64,
-            (Kind::U, 2) => u16::from_le_bytes([b[0], b[1]]) as f64,
-            (Kind::U, _) => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-        };
+    for chunk in body.chunks_exact(h.size) {
+        let v = decode(chunk, &h);
         if v.is_infinite() {
             return Err(fail("array holds an infinite value".into()));
         }
@@ -152,7 +189,7 @@ pub fn parse_npy(bytes: &[u8], name: &str) -> Result<Recording> {
         }
         vals.push(v as f32);
     }
-    let data = if fortran {
+    let data = if h.fortran {
         // Fortran layout: index (i, j, k) of shape (t, r, c) sits at i + t * (j + r * k).
         let mut out = vec![0.0f32; n];
         for i in 0..t {
