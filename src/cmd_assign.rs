@@ -43,16 +43,16 @@ pub fn run(args: AssignArgs) -> Result<(), CliError> {
             "pairs": pairs,
             "total_cost": result.cost,
         });
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?
         );
     } else {
-        println!("row\tcol\tcost");
+        outln!("row\tcol\tcost");
         for &(i, j) in &pairs {
-            println!("{i}\t{j}\t{}", cost[i * cols + j]);
+            outln!("{i}\t{j}\t{}", cost[i * cols + j]);
         }
-        println!("total cost: {} ({} pairs)", result.cost, pairs.len());
+        outln!("total cost: {} ({} pairs)", result.cost, pairs.len());
     }
     Ok(())
 }

@@ -107,9 +107,9 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
         let mut report = counts.clone();
         report["study"] = table.display().to_string().into();
         report["rows"] = study::study_table(&rows).to_json();
-        print!("{}", output::pretty(&report)?);
+        out!("{}", output::pretty(&report)?);
     } else {
-        println!(
+        outln!(
             "{}: {} ok, {} skipped, {} failed; study table in {}{}",
             counted(rows.len(), "recording"),
             counts["ok"],

@@ -28,7 +28,7 @@ pub fn run(args: InspectArgs) -> Result<(), CliError> {
     let threshold = args.noise.or(rec.noise_threshold).unwrap_or(0.0);
     let d = describe(&rec, &input, threshold);
     if args.json {
-        println!("{}", crate::output::pretty(&d)?);
+        outln!("{}", crate::output::pretty(&d)?);
         return Ok(());
     }
     fn show(v: &serde_json::Value) -> String {
@@ -47,27 +47,30 @@ pub fn run(args: InspectArgs) -> Result<(), CliError> {
             other => other.to_string(),
         }
     }
-    println!("file            {}", args.recording.display());
-    println!("sha256          {}", show(&d["sha256"]));
-    println!("format          {}", show(&d["format"]));
-    println!("frames          {}", d["frames"]);
-    println!(
+    outln!("file            {}", args.recording.display());
+    outln!("sha256          {}", show(&d["sha256"]));
+    outln!("format          {}", show(&d["format"]));
+    outln!("frames          {}", d["frames"]);
+    outln!(
         "grid            {} rows x {} cols, {} sensors",
-        d["rows"], d["cols"], d["sensors"]
+        d["rows"],
+        d["cols"],
+        d["sensors"]
     );
-    println!("pitch (mm)      {}", show(&d["pitch_mm"]));
-    println!("frame rate (Hz) {}", show(&d["frame_rate_hz"]));
-    println!("duration (s)    {}", show(&d["duration_s"]));
-    println!("pressure units  {}", show(&d["pressure_units"]));
-    println!("noise threshold {}", show(&d["noise_threshold"]));
-    println!(
+    outln!("pitch (mm)      {}", show(&d["pitch_mm"]));
+    outln!("frame rate (Hz) {}", show(&d["frame_rate_hz"]));
+    outln!("duration (s)    {}", show(&d["duration_s"]));
+    outln!("pressure units  {}", show(&d["pressure_units"]));
+    outln!("noise threshold {}", show(&d["noise_threshold"]));
+    outln!(
         "per-frame measures over all {} frames ({} with contact), values of at least {threshold}:",
-        d["frames"], d["loaded_frames"]
+        d["frames"],
+        d["loaded_frames"]
     );
     if let Some(m) = d["measures"].as_object() {
         for (name, s) in m {
             let f = |k: &str| s[k].as_f64().map_or("-".into(), |v| format!("{v:.3}"));
-            println!(
+            outln!(
                 "  {name:<22} min {}  mean {}  max {}",
                 f("min"),
                 f("mean"),

@@ -227,8 +227,8 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         "search": o.search.to_string(),
         "matches": r.pairs.len(),
         "nodes_a": a.len(), "nodes_b": b.len(),
-        "local_matches": r.local_count(), "one_to_one_matches": r.one_to_one_count(),
-        "excess_matches": r.excess_count(), "modes": r.n_modes, "refits": r.refits,
+        "local_matches": r.local_count(), "optimisation_matches": r.one_to_one_count(),
+        "excess_matches": r.excess_count(), "n_modes": r.n_modes, "refits": r.refits,
         "unmatched_a": r.unmatched_a, "unmatched_b": r.unmatched_b,
         "timings_s": { "read": read_time, "matching": match_time },
     });
@@ -270,12 +270,12 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         r.excess_count()
     );
     if args.json {
-        print!("{}", output::pretty(&with_pairs())?);
+        out!("{}", output::pretty(&with_pairs())?);
     } else if let Some(out) = &args.out {
-        println!("{counts}");
-        println!("results in {}", output::folder_text(out));
+        outln!("{counts}");
+        outln!("results in {}", output::folder_text(out));
     } else {
-        print!("{table}");
+        out!("{table}");
         eprintln!("{counts}");
     }
     Ok(())

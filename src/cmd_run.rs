@@ -215,7 +215,7 @@ fn execute(
     let (summary, _) = pedo_io::study::run_into_folder(&recording, &options, plan, &progress)?;
     bar.finish_and_clear();
     if o.json {
-        print!("{}", output::pretty(&summary)?);
+        out!("{}", output::pretty(&summary)?);
     } else {
         print_summary(&input.name, out, &summary, outputs.tables);
     }
@@ -250,7 +250,7 @@ fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: Tab
     let int = |k: &str| summary[k].as_u64().unwrap_or(0);
     let float = |k: &str| summary[k].as_f64().unwrap_or(0.0);
     let count = |k: &str, noun: &str| counted(int(k) as usize, noun);
-    println!(
+    outln!(
         "{name}: {}, {}, {} ({} spanning 3+ objects)",
         count("objects", "object"),
         count("pairs", "matched pair"),
@@ -266,9 +266,9 @@ fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: Tab
     };
     let (pairs, frames) = (skipped("pairs"), skipped("frames"));
     if int("pairs") == 0 {
-        println!("{}", pedo_io::study::no_pairs_note(isocontour, pairs.len()));
+        outln!("{}", pedo_io::study::no_pairs_note(isocontour, pairs.len()));
     } else {
-        println!(
+        outln!(
             "mean local matches {:.1} %, optimisation matches {:.1} % ({:.1} % trackable), mean cost {:.4}",
             float("mean_local_percent"),
             float("mean_optimisation_percent"),
@@ -304,10 +304,10 @@ fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: Tab
         } else {
             format!("{} and summary.json", tables.file_name("pairs"))
         };
-        println!(
+        outln!(
             "skipped {} (reasons in {place}; first: {first})",
             what.join(" and ")
         );
     }
-    println!("results in {}", crate::output::folder_text(out));
+    outln!("results in {}", crate::output::folder_text(out));
 }

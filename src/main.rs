@@ -4,6 +4,16 @@ use clap::error::ErrorKind;
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+/// `print!` that survives a reader which has gone: see [`output::write_stdout`].
+macro_rules! out {
+    ($($arg:tt)*) => { $crate::output::write_stdout(format_args!($($arg)*)) };
+}
+
+/// `println!` that survives a reader which has gone: see [`output::write_stdout`].
+macro_rules! outln {
+    ($($arg:tt)*) => { $crate::output::write_stdout(format_args!("{}\n", format_args!($($arg)*))) };
+}
+
 mod cmd_assign;
 mod cmd_batch;
 mod cmd_inspect;

@@ -2,6 +2,22 @@
 
 use std::path::Path;
 
+/// Writes to standard output. Every subcommand prints only once its outputs are complete, so a
+/// reader that has gone (`pedomatch inspect … | head -3`) leaves nothing undone: the process
+/// ends quietly with success, as `head` expects, instead of panicking. Any other failure to
+/// write is a runtime error (exit code 1).
+pub fn write_stdout(args: std::fmt::Arguments) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_fmt(args).and_then(|()| out.flush()) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("pedomatch: error: cannot write to standard output: {e}");
+        std::process::exit(1);
+    }
+}
+
 /// Reads a dense CSV matrix of f64 (comma, semicolon, tab or space separated; `inf`, `-inf` and
 /// `nan` accepted so the solver can report them). Returns row-major values and the shape; a file
 /// without a number is an error.

@@ -170,3 +170,60 @@ fn two_runs_into_one_folder_never_interleave_their_files() {
     }
     std::fs::remove_dir_all(&base).unwrap();
 }
+
+/// A reader that stops early (`pedomatch inspect … | head -1`) closes the pipe before pedomatch
+/// writes: each subcommand then ends quietly with success, its outputs whole, instead of
+/// panicking with exit code 101.
+#[test]
+fn a_reader_that_has_gone_ends_the_output_quietly() {
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
+    let cost = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/cost.csv");
+    let out = temp_dir("closed-reader");
+    let out_s = out.to_str().unwrap();
+    let commands: [&[&str]; 4] = [
+        &["inspect", data],
+        &["assign", cost, "--json"],
+        &[
+            "match",
+            data,
+            data,
+            "--frame",
+            "40",
+            "--frame-b",
+            "41",
+            "--json",
+            "--figures",
+            "none",
+            "--report",
+            "none",
+        ],
+        &[
+            "run",
+            data,
+            "--frames",
+            "40..45",
+            "--out",
+            out_s,
+            "--figures",
+            "none",
+            "--report",
+            "none",
+            "--json",
+        ],
+    ];
+    for args in commands {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_pedomatch"))
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start pedomatch");
+        drop(child.stdout.take()); // the reader is gone before anything is written
+        let o = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {stderr}");
+    }
+    assert!(out.join("summary.json").is_file() && out.join("tracks.csv").is_file());
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -1039,7 +1039,7 @@ fn match_reads_a_footscan_text_export_as_a_recording() {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert!(v["one_to_one_matches"].as_u64().unwrap() >= 8, "{v}");
+    assert!(v["optimisation_matches"].as_u64().unwrap() >= 8, "{v}");
     // A .txt of points is still a point file.
     let dir = temp_dir("match-txt");
     let ring: String = (0..30)
@@ -1053,7 +1053,7 @@ fn match_reads_a_footscan_text_export_as_a_recording() {
     let o = pedomatch(&["match", a.to_str().unwrap(), a.to_str().unwrap(), "--json"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(v["one_to_one_matches"], 30, "{v}");
+    assert_eq!(v["optimisation_matches"], 30, "{v}");
 }
 
 #[test]

@@ -2,7 +2,7 @@
 
 use modal_core::shape::looks_like_closed_contour;
 use modal_core::Affine;
-use modal_core::{match_shapes, AffinityMatrix, MatchPair, MatchResult, Shape, Topology};
+use modal_core::{match_shapes, AffinityMatrix, MatchPair, MatchResult, Shape, Side, Topology};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
@@ -486,8 +486,8 @@ fn match_py(
     };
     let (topo_a, topo_b) = (topo(ta), topo(tb));
     let inner = crate::pool::detach(py, move || {
-        let sa = Shape::new(da, ca, topo_a)?;
-        let sb = Shape::new(db, cb, topo_b)?;
+        let sa = Shape::new(da, ca, topo_a).map_err(|e| e.of(Side::A))?;
+        let sb = Shape::new(db, cb, topo_b).map_err(|e| e.of(Side::B))?;
         match_shapes(&sa, &sb, &opts)
     })
     .map_err(to_py)?;

@@ -86,6 +86,10 @@ def test_degenerate_shape(points, text):
     with pytest.raises(pymodal.DegenerateShapeError, match=text) as info:
         pymodal.match(points, outline())
     assert isinstance(info.value, ValueError)
+    # The message names the object, whichever side is degenerate.
+    assert str(info.value).startswith("object A: ")
+    with pytest.raises(pymodal.DegenerateShapeError, match=f"^object B: .*{text}"):
+        pymodal.match(outline(), points)
 
 
 def test_degenerate_model():

@@ -462,9 +462,7 @@ pub(crate) fn check_dims(a: &Shape, b: &Shape) -> Result<(), ModalError> {
 /// Checks the options no single object can check; returns the threshold (`∞` for none).
 fn check_options(opts: &MatchOptions) -> Result<f64, ModalError> {
     if !(opts.mode_fraction > 0.0 && opts.mode_fraction <= 1.0) {
-        return Err(
-            OptionError::new("mode_fraction", opts.mode_fraction, "a fraction in (0, 1]").into(),
-        );
+        return Err(OptionError::new("modes", opts.mode_fraction, "a fraction in (0, 1]").into());
     }
     if let Some(t) = opts.threshold {
         crate::options::check_threshold(t)?;

@@ -11,7 +11,8 @@ pub struct MatchOptions {
     /// Element, material (only ν matters, E and ρ do not change matches), σ rule, exact-rigid
     /// option. `n_modes` is ignored: the pipeline requests exactly the modes it needs.
     pub model: ModelOptions,
-    /// Fraction of the `dim · min(n, m)` modes kept: `k = ⌊fraction · dim · min(n, m)⌋`.
+    /// Fraction of the `dim · min(n, m)` modes kept: `k = ⌊fraction · dim · min(n, m)⌋` (the
+    /// option `modes`: Python keyword and CLI `--modes`).
     pub mode_fraction: f64,
     /// Skip the first 3 (2-D) or 6 (3-D) quasi-rigid modes.
     pub skip_rigid: bool,

@@ -55,7 +55,8 @@ impl MatchResult {
         self.local_pairs.len()
     }
     /// Number of matches from the primary search (the paper's "optimisation" column): one-to-one
-    /// except with [`Search::Best`](super::Search::Best), whose pairs are many-to-one.
+    /// except with [`Search::Best`](super::Search::Best), whose pairs are many-to-one. The tables
+    /// and `pedomatch match --json` call it `optimisation_matches`, Python `optimisation_count`.
     pub fn one_to_one_count(&self) -> usize {
         self.pairs.iter().filter(|p| !p.excess).count()
     }
