@@ -8,7 +8,9 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct InspectArgs {
-    /// The recording: .asf, .lst, .npy, .csv, a PNG/TIFF image, a folder or numbered sequence.
+    /// The recording: Tekscan .asf or CSV export, emed .lst, pedar .asc, Zebris .apd or raw-data
+    /// XML/JSON, footscan export, .npy/.npz, a CSV grid, a PNG/TIFF image, a folder of images or a
+    /// numbered pattern (`walk_%03d.png`); the format is detected from the content.
     pub recording: PathBuf,
     #[command(flatten)]
     pub read: crate::modal_args::ReadArgs,
