@@ -445,16 +445,61 @@ pub fn chain_contours(g: &Grid, low: f64, high: f64, refine: bool) -> Result<Vec
         ));
     }
     let (rows, cols) = (g.rows(), g.cols());
+    let (label, components) = hysteresis_components(g, low, high);
+    let edges = refine.then(|| EdgeStrength::new(g));
+    let mut out = Vec::new();
+    for (id, &(strong, s)) in components.iter().enumerate() {
+        if !strong {
+            continue;
+        }
+        let inside = |r: isize, c: isize| {
+            r >= 0
+                && c >= 0
+                && (r as usize) < rows
+                && (c as usize) < cols
+                && label[r as usize * cols + c as usize] == id
+        };
+        let chain = moore_trace(
+            ((s / cols) as isize, (s % cols) as isize),
+            rows * cols,
+            inside,
+        );
+        let mut pts: Vec<[f64; 2]> = chain.iter().map(|&(r, c)| [c as f64, r as f64]).collect();
+        if pts.len() < 3 {
+            continue;
+        }
+        if let Some(edges) = &edges {
+            pts.iter_mut().for_each(|q| edges.move_to_edge(q));
+        }
+        if signed_area(&pts) < 0.0 {
+            pts.reverse();
+        }
+        if signed_area(&pts).abs() <= 0.0 {
+            continue;
+        }
+        out.push(Contour {
+            points: pts,
+            hole: false,
+            level: low,
+        });
+    }
+    Ok(out)
+}
+
+/// Hysteresis: the 8-connected components of the sensels above `low`, each sensel's component
+/// (`usize::MAX` for none) and, per component, whether it holds a value above `high` and its
+/// first sensel in raster order.
+fn hysteresis_components(g: &Grid, low: f64, high: f64) -> (Vec<usize>, Vec<(bool, usize)>) {
+    let (rows, cols) = (g.rows(), g.cols());
     let fg: Vec<bool> = g.data().iter().map(|&v| v > low).collect();
-    // Hysteresis: 8-connected components of `fg` that hold at least one value above `high`.
     let mut label = vec![usize::MAX; rows * cols];
-    let mut keep = Vec::new();
+    let mut components = Vec::new();
     let mut stack = Vec::new();
     for s in 0..rows * cols {
         if !fg[s] || label[s] != usize::MAX {
             continue;
         }
-        let id = keep.len();
+        let id = components.len();
         let mut strong = false;
         label[s] = id;
         stack.push(s);
@@ -472,98 +517,99 @@ pub fn chain_contours(g: &Grid, low: f64, high: f64, refine: bool) -> Result<Vec
                 }
             }
         }
-        keep.push((strong, s));
+        components.push((strong, s));
     }
-    let (gx, gy) = if refine {
-        sobel(g)
-    } else {
-        (Vec::new(), Vec::new())
-    };
-    let mag: Vec<f64> = gx
-        .iter()
-        .zip(&gy)
-        .map(|(a, b)| (a * a + b * b).sqrt())
-        .collect();
-    let inside = |r: isize, c: isize, id: usize| {
-        r >= 0
-            && c >= 0
-            && (r as usize) < rows
-            && (c as usize) < cols
-            && label[r as usize * cols + c as usize] == id
-    };
-    let mut out = Vec::new();
-    for (id, &(strong, s)) in keep.iter().enumerate() {
-        if !strong {
-            continue;
-        }
-        // Moore-neighbour tracing from the component's first pixel in raster order, whose west
-        // neighbour is outside; stops when the first move repeats (Jacob's criterion).
-        let start = ((s / cols) as isize, (s % cols) as isize);
-        let mut p = start;
-        let mut back = 0usize;
-        let mut chain = vec![p];
-        let mut first_move: Option<(isize, isize)> = None;
-        let cap = 4 * rows * cols + 16;
-        for _ in 0..cap {
-            let mut found = None;
-            for k in 1..=8 {
-                let d = (back + k) % 8;
-                let q = (p.0 + DIRS[d].1, p.1 + DIRS[d].0);
-                if inside(q.0, q.1, id) {
-                    found = Some((q, (back + k - 1) % 8));
-                    break;
-                }
-            }
-            let Some((q, prev)) = found else { break };
-            if p == start {
-                if first_move == Some(q) {
-                    break;
-                }
-                first_move.get_or_insert(q);
-            }
-            let bpos = (p.0 + DIRS[prev].1, p.1 + DIRS[prev].0);
-            let delta = (bpos.1 - q.1, bpos.0 - q.0);
-            back = DIRS.iter().position(|&d| d == delta).unwrap_or(0);
-            p = q;
-            chain.push(p);
-        }
-        if chain.last() == Some(&start) {
-            chain.pop();
-        }
-        let mut pts: Vec<[f64; 2]> = chain.iter().map(|&(r, c)| [c as f64, r as f64]).collect();
-        if pts.len() < 3 {
-            continue;
-        }
-        if refine {
-            for q in pts.iter_mut() {
-                let i = q[1] as usize * cols + q[0] as usize;
-                let m = mag[i];
-                if m <= 0.0 {
-                    continue;
-                }
-                let n = [gx[i] / m, gy[i] / m];
-                let f = |t: f64| bilinear(&mag, rows, cols, q[0] + t * n[0], q[1] + t * n[1]);
-                let (a, b, c) = (f(-1.0), m, f(1.0));
-                let den = a - 2.0 * b + c;
-                if den < 0.0 {
-                    let d = (0.5 * (a - c) / den).clamp(-1.0, 1.0);
-                    *q = [q[0] + d * n[0], q[1] + d * n[1]];
-                }
-            }
-        }
-        if signed_area(&pts) < 0.0 {
-            pts.reverse();
-        }
-        if signed_area(&pts).abs() <= 0.0 {
-            continue;
-        }
-        out.push(Contour {
-            points: pts,
-            hole: false,
-            level: low,
+    (label, components)
+}
+
+/// Moore-neighbour tracing of the component `inside` says holds a (row, column), from its first
+/// sensel in raster order, `start`, whose west neighbour is outside; stops when the first move
+/// repeats (Jacob's criterion). `cells` (the grid's size) bounds the walk.
+fn moore_trace(
+    start: (isize, isize),
+    cells: usize,
+    inside: impl Fn(isize, isize) -> bool,
+) -> Vec<(isize, isize)> {
+    let mut p = start;
+    let mut back = 0usize;
+    let mut chain = vec![p];
+    let mut first_move: Option<(isize, isize)> = None;
+    for _ in 0..4 * cells + 16 {
+        let found = (1..=8).find_map(|k| {
+            let d = (back + k) % 8;
+            let q = (p.0 + DIRS[d].1, p.1 + DIRS[d].0);
+            inside(q.0, q.1).then_some((q, (back + k - 1) % 8))
         });
+        let Some((q, prev)) = found else { break };
+        if p == start {
+            if first_move == Some(q) {
+                break;
+            }
+            first_move.get_or_insert(q);
+        }
+        let bpos = (p.0 + DIRS[prev].1, p.1 + DIRS[prev].0);
+        let delta = (bpos.1 - q.1, bpos.0 - q.0);
+        back = DIRS.iter().position(|&d| d == delta).unwrap_or(0);
+        p = q;
+        chain.push(p);
     }
-    Ok(out)
+    if chain.last() == Some(&start) {
+        chain.pop();
+    }
+    chain
+}
+
+/// The Sobel gradient of a grid and its magnitude, to move chain points onto the edge.
+struct EdgeStrength {
+    gx: Vec<f64>,
+    gy: Vec<f64>,
+    mag: Vec<f64>,
+    rows: usize,
+    cols: usize,
+}
+
+impl EdgeStrength {
+    fn new(g: &Grid) -> Self {
+        let (gx, gy) = sobel(g);
+        let mag = gx
+            .iter()
+            .zip(&gy)
+            .map(|(a, b)| (a * a + b * b).sqrt())
+            .collect();
+        Self {
+            gx,
+            gy,
+            mag,
+            rows: g.rows(),
+            cols: g.cols(),
+        }
+    }
+
+    /// Moves sensel centre `q` along the gradient to the parabola-fitted maximum of the gradient
+    /// magnitude, at most one sensel away.
+    fn move_to_edge(&self, q: &mut [f64; 2]) {
+        let i = q[1] as usize * self.cols + q[0] as usize;
+        let m = self.mag[i];
+        if m <= 0.0 {
+            return;
+        }
+        let n = [self.gx[i] / m, self.gy[i] / m];
+        let f = |t: f64| {
+            bilinear(
+                &self.mag,
+                self.rows,
+                self.cols,
+                q[0] + t * n[0],
+                q[1] + t * n[1],
+            )
+        };
+        let (a, b, c) = (f(-1.0), m, f(1.0));
+        let den = a - 2.0 * b + c;
+        if den < 0.0 {
+            let d = (0.5 * (a - c) / den).clamp(-1.0, 1.0);
+            *q = [q[0] + d * n[0], q[1] + d * n[1]];
+        }
+    }
 }
 
 /// The default level: half the smallest positive value of `g` (`None` if nothing is positive).
