@@ -17,8 +17,17 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
 /// Marks a folder as a pedomatch output, which a later run may replace as a whole. A non-empty
-/// folder without it is never replaced (it may hold the user's own files).
+/// folder without it is never replaced (it may hold the user's own files). Its first line is
+/// [`MARKER_HEAD`]; the others list the files the output holds (relative, `/`-separated), so a
+/// file saved into the folder afterwards (notes, an edited copy) stops it from being replaced.
 const MARKER: &str = ".pedomatch-output";
+
+/// The marker's first line.
+const MARKER_HEAD: &str = "written by pedomatch";
+
+/// Files a file manager leaves in a folder it shows (thumbnails, view settings): they are not the
+/// user's work, so they never stop an output from being replaced.
+const FILE_MANAGER_LITTER: [&str; 3] = [".DS_Store", "Thumbs.db", "desktop.ini"];
 
 /// Staging folders of this process, removed by the interrupt handler.
 static STAGING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
@@ -96,7 +105,7 @@ impl OutDir {
             refused(root, &format!("cannot be written in {parent}: {e}"))
         };
         std::fs::create_dir(&staging).map_err(unwritable)?;
-        std::fs::write(staging.join(MARKER), b"written by pedomatch\n").map_err(unwritable)?;
+        std::fs::write(staging.join(MARKER), format!("{MARKER_HEAD}\n")).map_err(unwritable)?;
         Ok(Self {
             root: root.to_path_buf(),
             staging,
@@ -171,6 +180,13 @@ impl OutDir {
             return Err(refused(&self.root, "interrupted"));
         }
         check_replaceable(&self.root)?;
+        // The marker lists what this output holds (see MARKER).
+        let files = files_under(&self.staging).map_err(|e| io_error(&self.root, e))?;
+        let listing: String = std::iter::once(MARKER_HEAD)
+            .chain(files.iter().map(String::as_str).filter(|f| *f != MARKER))
+            .map(|line| format!("{line}\n"))
+            .collect();
+        std::fs::write(self.staging.join(MARKER), listing).map_err(|e| io_error(&self.root, e))?;
         swap_into_place(&self.staging, &self.root).map_err(|e| io_error(&self.root, e))?;
         // The staging path now holds the previous output (or nothing).
         let _ = std::fs::remove_dir_all(&self.staging);
@@ -216,8 +232,10 @@ fn check_replaceable(root: &Path) -> Result<()> {
              another output folder",
         )),
         Ok(mut entries) => {
-            if entries.next().is_none() || is_output(root) {
+            if entries.next().is_none() {
                 Ok(())
+            } else if is_output(root) {
+                check_only_outputs(root)
             } else {
                 Err(refused(
                     root,
@@ -232,6 +250,64 @@ fn check_replaceable(root: &Path) -> Result<()> {
         )),
         Err(e) => Err(io_error(root, e)),
     }
+}
+
+/// Refuses an earlier output that holds files it did not write (the user's notes, an edited
+/// copy saved beside the tables): replacing the folder would delete them. A marker without a
+/// listing (written before the listing existed) cannot tell, and is replaced as before.
+fn check_only_outputs(root: &Path) -> Result<()> {
+    let marker = std::fs::read_to_string(root.join(MARKER)).map_err(|e| io_error(root, e))?;
+    let mut lines = marker.lines();
+    let listed: std::collections::HashSet<&str> = lines.by_ref().skip(1).collect();
+    if listed.is_empty() {
+        return Ok(());
+    }
+    let foreign: Vec<String> = files_under(root)
+        .map_err(|e| io_error(root, e))?
+        .into_iter()
+        .filter(|f| f != MARKER && !listed.contains(f.as_str()))
+        .filter(|f| {
+            let name = f.rsplit('/').next().unwrap_or(f);
+            !FILE_MANAGER_LITTER.contains(&name) && !name.starts_with("._")
+        })
+        .collect();
+    if foreign.is_empty() {
+        return Ok(());
+    }
+    let shown: Vec<&str> = foreign.iter().take(3).map(String::as_str).collect();
+    let more = match foreign.len() {
+        n if n > 3 => format!(" and {} more", n - 3),
+        _ => String::new(),
+    };
+    Err(refused(
+        root,
+        &format!(
+            "this earlier pedomatch output now holds files it did not write ({}{more}), which \
+             replacing it would delete; move them out, or choose another output folder",
+            shown.join(", ")
+        ),
+    ))
+}
+
+/// Every file under `dir` (following no links), relative and `/`-separated, sorted.
+fn files_under(dir: &Path) -> std::io::Result<Vec<String>> {
+    fn walk(dir: &Path, prefix: &str, out: &mut Vec<String>) -> std::io::Result<()> {
+        for entry in std::fs::read_dir(dir)? {
+            let entry = entry?;
+            let name = entry.file_name().to_string_lossy().into_owned();
+            let rel = format!("{prefix}{name}");
+            if entry.file_type()?.is_dir() {
+                walk(&entry.path(), &format!("{rel}/"), out)?;
+            } else {
+                out.push(rel);
+            }
+        }
+        Ok(())
+    }
+    let mut out = Vec::new();
+    walk(dir, "", &mut out)?;
+    out.sort();
+    Ok(out)
 }
 
 /// Whether the folder's permissions grant nobody write access.
@@ -382,6 +458,58 @@ mod tests {
         let err = OutDir::create(&root).err().expect("refused").to_string();
         assert!(err.contains("not a pedomatch output"), "{err}");
         assert_eq!(std::fs::read(root.join("thesis.tex")).unwrap(), b"precious");
+        std::fs::remove_dir_all(&base).unwrap();
+    }
+
+    #[test]
+    fn an_output_holding_the_users_own_files_is_never_replaced() {
+        let base = tmp("users-files");
+        let root = base.join("out");
+        let first = OutDir::create(&root).unwrap();
+        first.write("a.csv", b"1").unwrap();
+        first.write("figures/f.png", b"x").unwrap();
+        first.commit().unwrap();
+        // File-manager litter does not count; a re-run replaces the output.
+        std::fs::write(root.join(".DS_Store"), b"").unwrap();
+        std::fs::write(root.join("figures/Thumbs.db"), b"").unwrap();
+        let second = OutDir::create(&root).unwrap();
+        second.write("a.csv", b"2").unwrap();
+        second.write("figures/f.png", b"y").unwrap();
+        second.commit().unwrap();
+        assert_eq!(std::fs::read(root.join("a.csv")).unwrap(), b"2");
+        // Notes and an edited copy saved into it afterwards stop the next run, at its start.
+        std::fs::write(root.join("notes.txt"), b"precious").unwrap();
+        std::fs::write(root.join("figures/f_edited.png"), b"mine").unwrap();
+        let err = OutDir::create(&root).err().expect("refused").to_string();
+        assert!(
+            err.contains("did not write (figures/f_edited.png, notes.txt)"),
+            "{err}"
+        );
+        assert_eq!(std::fs::read(root.join("notes.txt")).unwrap(), b"precious");
+        // ... and at its commit, if they were saved while the run was working.
+        std::fs::remove_file(root.join("notes.txt")).unwrap();
+        std::fs::remove_file(root.join("figures/f_edited.png")).unwrap();
+        let third = OutDir::create(&root).unwrap();
+        std::fs::write(root.join("notes.txt"), b"precious").unwrap();
+        assert!(third.commit().is_err());
+        assert_eq!(std::fs::read(root.join("notes.txt")).unwrap(), b"precious");
+        assert_eq!(std::fs::read(root.join("a.csv")).unwrap(), b"2");
+        std::fs::remove_dir_all(&base).unwrap();
+    }
+
+    #[test]
+    fn an_output_whose_marker_lists_no_files_is_replaced_as_before() {
+        let base = tmp("legacy-marker");
+        let root = base.join("out");
+        std::fs::create_dir_all(&root).unwrap();
+        std::fs::write(root.join(MARKER), b"written by pedomatch\n").unwrap();
+        std::fs::write(root.join("a.csv"), b"1").unwrap();
+        let out = OutDir::create(&root).unwrap();
+        out.write("b.csv", b"2").unwrap();
+        out.commit().unwrap();
+        assert!(!root.join("a.csv").exists());
+        let marker = std::fs::read_to_string(root.join(MARKER)).unwrap();
+        assert_eq!(marker, "written by pedomatch\nb.csv\n");
         std::fs::remove_dir_all(&base).unwrap();
     }
 
