@@ -93,6 +93,27 @@ fn emed_lst_pages_and_forces() {
     assert_eq!(read, rec);
 }
 
+/// German exports write decimal commas in the header too: `Time/picture:12,5 ms` is 12.5 ms (it
+/// was read as 12 ms, a frame rate 4 % off), `Sensor area: 0,25` 0.25 cm²; a value that cannot be
+/// read is named in the error.
+#[test]
+fn emed_lst_header_with_decimal_commas() {
+    let text = String::from_utf8_lossy(&std::fs::read(data("synthetic-walk.lst")).unwrap())
+        .into_owned();
+    let german = text
+        .replace("Time/picture:10.0 ms", "Time/picture:12,5 ms")
+        .replace("Sensor area: 0.25", "Sensor area: 0,25")
+        .replace("Sensor size: 0.500x0.500", "Sensor size: 0,500x0,500");
+    assert_ne!(german, text);
+    let (rec, _) = lst::parse_lst(german.as_bytes(), "german.lst").unwrap();
+    assert_eq!(rec.dt_s, Some(0.0125));
+    assert_eq!(rec.sensel_area(), Some(25.0));
+    assert_eq!(rec.pitch_mm, Some([5.0, 5.0]));
+    let bad = text.replacen("Sensor area: 0.25", "Sensor area: n/a", 1);
+    let err = lst::parse_lst(bad.as_bytes(), "bad.lst").unwrap_err().to_string();
+    assert!(err.contains("bad Sensor area \"n/a"), "{err}");
+}
+
 #[test]
 fn mun104_csv() {
     let rec = read_recording(data("MUN104L.csv")).unwrap();

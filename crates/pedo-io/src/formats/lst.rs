@@ -34,13 +34,15 @@ fn after<'a>(line: &'a str, key: &str) -> Option<&'a str> {
     line.find(key).map(|i| line[i + key.len()..].trim_start())
 }
 
+/// The number at the start of `s` (`12.5 ms`, or with a decimal comma `12,5 ms`, as German
+/// exports write it; a comma right after the number separates the next field).
 fn leading_num(s: &str) -> Option<f64> {
     let end = s
         .char_indices()
-        .find(|&(_, c)| !(c.is_ascii_digit() || c == '.' || c == '-' || c == '+'))
+        .find(|&(_, c)| !(c.is_ascii_digit() || matches!(c, '.' | ',' | '-' | '+')))
         .map(|(i, _)| i)
         .unwrap_or(s.len());
-    parse_num(&s[..end])
+    parse_num(s[..end].trim_end_matches(','))
 }
 
 /// Where a page's reading is: its header, its rows of values, or after its closing `Force`
@@ -88,16 +90,21 @@ impl Page {
         }
         let positive = |v: Option<f64>| v.filter(|&a| a > 0.0);
         if let Some(v) = after(t, "Sensor area:") {
-            self.area_cm2 =
-                Some(positive(leading_num(v)).ok_or_else(|| err("bad Sensor area".into()))?);
+            self.area_cm2 = Some(
+                positive(leading_num(v))
+                    .ok_or_else(|| err(format!("bad Sensor area {:?}", trunc(v))))?,
+            );
         }
         if let Some(v) = after(t, "Time/picture:") {
-            self.dt_ms =
-                Some(positive(leading_num(v)).ok_or_else(|| err("bad Time/picture".into()))?);
+            self.dt_ms = Some(
+                positive(leading_num(v))
+                    .ok_or_else(|| err(format!("bad Time/picture {:?}", trunc(v))))?,
+            );
         }
         if let Some(v) = after(t, "Sensor size:") {
             let size = pair(&first_token(v), |s| positive(parse_num(s)));
-            self.size_cm = Some(size.ok_or_else(|| err("bad Sensor size".into()))?);
+            self.size_cm =
+                Some(size.ok_or_else(|| err(format!("bad Sensor size {:?}", trunc(v))))?);
         }
         // The column index line: integers (tab separated), optionally ending with `Force`.
         let toks: Vec<&str> = t.split(['\t', ' ']).filter(|s| !s.is_empty()).collect();
