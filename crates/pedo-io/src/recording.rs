@@ -564,10 +564,32 @@ pub fn canonical_units(units: &str) -> Option<&'static str> {
 
 /// The units a file states, in their usual spelling when known ([`canonical_units`]), else as
 /// written: vendors write `N/cm2` or `N/cm²`, and a study's rows name one unit one way.
+///
+/// Text exports are read as Latin-1, the vendors' encoding; a file re-saved as UTF-8 (what
+/// Windows Notepad now writes) turns `²` into the two characters `Â²`, which are read back here:
+/// ```
+/// use pedo_io::recording::stated_units;
+/// assert_eq!(stated_units("N/cm\u{b2}"), "N/cm²"); // Latin-1
+/// assert_eq!(stated_units("N/cm\u{c2}\u{b2}"), "N/cm²"); // UTF-8 read as Latin-1
+/// ```
 pub fn stated_units(units: &str) -> String {
-    canonical_units(units)
+    let units = utf8_read_as_latin1(units).unwrap_or_else(|| units.to_string());
+    canonical_units(&units)
         .map(str::to_string)
         .unwrap_or_else(|| units.trim().to_string())
+}
+
+/// `text` decoded as UTF-8, when it is UTF-8 text that was read as Latin-1 (every character a
+/// byte, some above 0x7F, and those bytes valid UTF-8); else `None`.
+fn utf8_read_as_latin1(text: &str) -> Option<String> {
+    let bytes: Vec<u8> = text
+        .chars()
+        .map(|c| u8::try_from(u32::from(c)).ok())
+        .collect::<Option<_>>()?;
+    if bytes.is_ascii() {
+        return None;
+    }
+    String::from_utf8(bytes).ok()
 }
 
 /// The checks of every recording, [`Recording::new`]'s and [`Recording::from_sparse`]'s, in this

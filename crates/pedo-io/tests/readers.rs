@@ -1,6 +1,6 @@
 //! Reading the real recordings in tests/data and round-tripping the writable formats.
 
-use pedo_io::formats::{csv, images, lst, npy};
+use pedo_io::formats::{asf, csv, images, lst, npy};
 use pedo_io::{parse_bytes, read_recording, Format, IoError, Recording};
 
 #[path = "common/files.rs"]
@@ -98,8 +98,8 @@ fn emed_lst_pages_and_forces() {
 /// read is named in the error.
 #[test]
 fn emed_lst_header_with_decimal_commas() {
-    let text = String::from_utf8_lossy(&std::fs::read(data("synthetic-walk.lst")).unwrap())
-        .into_owned();
+    let text =
+        String::from_utf8_lossy(&std::fs::read(data("synthetic-walk.lst")).unwrap()).into_owned();
     let german = text
         .replace("Time/picture:10.0 ms", "Time/picture:12,5 ms")
         .replace("Sensor area: 0.25", "Sensor area: 0,25")
@@ -110,8 +110,34 @@ fn emed_lst_header_with_decimal_commas() {
     assert_eq!(rec.sensel_area(), Some(25.0));
     assert_eq!(rec.pitch_mm, Some([5.0, 5.0]));
     let bad = text.replacen("Sensor area: 0.25", "Sensor area: n/a", 1);
-    let err = lst::parse_lst(bad.as_bytes(), "bad.lst").unwrap_err().to_string();
+    let err = lst::parse_lst(bad.as_bytes(), "bad.lst")
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("bad Sensor area \"n/a"), "{err}");
+}
+
+/// `UNITS N/cm²` reads the same from a Latin-1 export and from one re-saved as UTF-8.
+#[test]
+fn units_read_the_same_in_latin1_and_utf8() {
+    let bytes = std::fs::read(data("FrasP01L.asf")).unwrap();
+    let with_units = |units: &[u8]| {
+        let text = bytes.split(|&b| b == b'\n').map(|line| {
+            if line.starts_with(b"UNITS") {
+                [b"UNITS ".as_slice(), units].concat()
+            } else {
+                line.to_vec()
+            }
+        });
+        let file: Vec<u8> = text.collect::<Vec<_>>().join(&b'\n');
+        asf::parse_asf(&file, "units.asf").unwrap()
+    };
+    let latin1 = with_units(b"N/cm\xb2");
+    let utf8 = with_units("N/cm\u{b2}".as_bytes());
+    assert_eq!(
+        (latin1.units.as_str(), utf8.units.as_str()),
+        ("N/cm²", "N/cm²")
+    );
+    assert_eq!(utf8.force_factor(), latin1.force_factor());
 }
 
 #[test]
