@@ -140,6 +140,49 @@ fn units_read_the_same_in_latin1_and_utf8() {
     assert_eq!(utf8.force_factor(), latin1.force_factor());
 }
 
+/// A frame lost from the middle of a file is named where the numbering jumps, with or without a
+/// frame count in the header (without one, every later frame's time was silently early).
+#[test]
+fn a_gap_in_the_frame_numbers_is_named_where_it_is() {
+    let text = String::from_utf8_lossy(&std::fs::read(data("FrasP01L.asf")).unwrap())
+        .replace("\r\n", "\n");
+    let (start, end) = (
+        text.find("\nFrame 51\n").unwrap(),
+        text.find("\nFrame 52\n").unwrap(),
+    );
+    let line_of = |pos: usize| text[..pos].matches('\n').count() + 2;
+    let dropped = format!("{}{}", &text[..start], &text[end..]);
+    let no_count: String = dropped
+        .lines()
+        .filter(|l| !l.starts_with("START_FRAME") && !l.starts_with("END_FRAME"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    for file in [&dropped, &no_count] {
+        let err = asf::parse_asf(file.as_bytes(), "gap.asf")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("Frame 52 follows Frame 50") && err.contains("frame 51 is missing"),
+            "{err}"
+        );
+    }
+    let err = asf::parse_asf(dropped.as_bytes(), "gap.asf")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with(&format!("gap.asf:{}:", line_of(start))),
+        "{err}"
+    );
+    let renumbered = text.replace("\nFrame 51\n", "\nFrame 7\n");
+    let err = asf::parse_asf(renumbered.as_bytes(), "renumbered.asf")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("Frame 7 follows Frame 50") && err.contains("expected Frame 51"),
+        "{err}"
+    );
+}
+
 #[test]
 fn mun104_csv() {
     let rec = read_recording(data("MUN104L.csv")).unwrap();

@@ -259,6 +259,8 @@ struct FrameReader<'k, 'a> {
     /// Whether each sensel holds a value (`false`: `B`), as the first frame says.
     mask: Vec<Option<bool>>,
     n_frames: usize,
+    /// The number of the last `Frame N` line, and its line.
+    last_number: Option<(i64, usize)>,
     /// Rows of the current frame read so far; `rows` between frames.
     row: usize,
     /// The line of the current frame's `Frame N`.
@@ -284,6 +286,7 @@ impl<'k, 'a> FrameReader<'k, 'a> {
             frame: Vec::with_capacity(per),
             mask: vec![None; per],
             n_frames: 0,
+            last_number: None,
             row: header.rows,
             frame_line: header.data_line,
             keep,
@@ -301,12 +304,27 @@ impl<'k, 'a> FrameReader<'k, 'a> {
             .ok_or_else(|| err(format!("expected `Frame N`, found {:?}", trunc(t))))?;
         // I-Scan exports follow the number with the frame's time and raw sum:
         // `Frame 1, 0,, 12/2/2019 6:21:52.34PM,,,Raw Sum=,,310`.
-        rest.split(',')
+        let number = rest
+            .split(',')
             .next()
             .unwrap_or("")
             .trim()
             .parse::<i64>()
             .map_err(|_| err(format!("bad frame number in {:?}", trunc(t))))?;
+        // Frames are numbered one after the other: a gap is a frame lost from the file, which
+        // would shift the time of every later frame.
+        if let Some((last, last_line)) = self.last_number
+            && last.checked_add(1) != Some(number)
+        {
+            let what = match last.checked_add(2) {
+                Some(n) if n == number => format!("frame {} is missing", last + 1),
+                _ => format!("expected Frame {}", last.saturating_add(1)),
+            };
+            return Err(err(format!(
+                "Frame {number} follows Frame {last} (line {last_line}): {what}"
+            )));
+        }
+        self.last_number = Some((number, ln));
         if let Some(e) = self.stated_frames.filter(|&e| self.n_frames >= e) {
             return Err(err(format!(
                 "more frames than END_FRAME - START_FRAME + 1 = {e}"
