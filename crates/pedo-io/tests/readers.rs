@@ -183,6 +183,29 @@ fn a_gap_in_the_frame_numbers_is_named_where_it_is() {
     );
 }
 
+/// A header line above a grid is passed over whatever it holds (a title, names with another
+/// separator, a name that is also a missing-sensor mark): the separator is the data's; a tab
+/// or space grid may have decimal commas from its first row on.
+#[test]
+fn a_grid_header_does_not_choose_the_separator() {
+    let grid = std::fs::read_to_string(data("MUN104L.csv")).unwrap();
+    let plain = csv::parse_csv(grid.as_bytes(), "plain.csv").unwrap();
+    for header in ["pressure", "Patient: Mueller", "subject;foot", "a\tb\tc"] {
+        let with = format!("{header}\n{grid}");
+        let rec = csv::parse_csv(with.as_bytes(), "with-header.csv")
+            .unwrap_or_else(|e| panic!("{header:?}: {e}"));
+        assert_eq!(rec, plain, "{header:?}");
+    }
+    for sep in ["\t", " "] {
+        let german = ["0|12,5|30,25", "7,5|40,5|0"].join("\n").replace('|', sep);
+        let rec = csv::parse_csv(german.as_bytes(), "german.txt").unwrap();
+        assert_eq!(
+            &rec.frame_slice(0).unwrap()[..],
+            [0.0, 12.5, 30.25, 7.5, 40.5, 0.0]
+        );
+    }
+}
+
 #[test]
 fn mun104_csv() {
     let rec = read_recording(data("MUN104L.csv")).unwrap();

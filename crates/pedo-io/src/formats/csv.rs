@@ -1,6 +1,6 @@
-//! A single frame as a delimited text grid (comma, semicolon, tab or spaces; no header, or one
-//! header line: names, or the column numbers; with semicolons, decimal commas too). `-1`, `B`
-//! and `NaN` mark a missing sensor.
+//! A single frame as a delimited text grid (comma, semicolon, tab or spaces, as the first data
+//! row shows; no header, or one header line: names, or the column numbers; unless commas
+//! separate, decimal commas too). `-1`, `B` and `NaN` mark a missing sensor.
 
 use super::asf::trunc;
 use super::{latin1_lines, parse_num};
@@ -32,29 +32,14 @@ pub fn parse_csv(bytes: &[u8], name: &str) -> Result<Recording> {
         if t.is_empty() {
             continue;
         }
-        // `;` first: a semicolon-separated export writes decimal commas (`0,5;12,25`).
-        let s = *sep.get_or_insert_with(|| {
-            if t.contains(';') {
-                Some(';')
-            } else if t.contains(',') {
-                Some(',')
-            } else if t.contains('\t') {
-                Some('\t')
-            } else {
-                None
-            }
-        });
-        let mut fields = split_fields(t, s);
-        if s.is_some() && fields.len() > 1 && fields.last() == Some(&"") {
-            fields.pop(); // trailing separator
-        }
+        let s = *sep.get_or_insert_with(|| guess_separator(t));
+        let fields = row_fields(t, s);
         if first_content {
             first_content = false;
-            let numeric = fields
-                .iter()
-                .any(|f| number(f, s).is_some() || is_missing(f));
-            if !numeric || is_column_numbers(&fields) {
-                continue; // a header line
+            if is_header(&fields, s) {
+                // The data may use another separator than the header (or the header none).
+                sep = None;
+                continue;
             }
         }
         if cols == 0 {
@@ -88,6 +73,41 @@ pub fn parse_csv(bytes: &[u8], name: &str) -> Result<Recording> {
     let mut rec = Recording::new(1, rows, cols, values, present)?;
     rec.format = Some(Format::Csv);
     Ok(rec)
+}
+
+/// The fields of a row, without the empty field a trailing separator leaves.
+fn row_fields(t: &str, sep: Option<char>) -> Vec<&str> {
+    let mut fields = split_fields(t, sep);
+    if sep.is_some() && fields.len() > 1 && fields.last() == Some(&"") {
+        fields.pop();
+    }
+    fields
+}
+
+/// The separator of a row: the first of `;`, tab, `,` and spaces that splits it into two or
+/// more values (a value may have a decimal comma unless commas separate: `0,5;12,25`,
+/// `0<TAB>12,5`); for a row of names, the first of `;`, `,` and tab it contains.
+fn guess_separator(t: &str) -> Option<char> {
+    let splits_into_values = |s: Option<char>| {
+        let fields = row_fields(t, s);
+        s.is_none_or(|c| t.contains(c))
+            && fields.len() > 1
+            && fields
+                .iter()
+                .all(|f| number(f, s).is_some() || is_missing(f))
+    };
+    [Some(';'), Some('\t'), Some(','), None]
+        .into_iter()
+        .find(|&s| splits_into_values(s))
+        .unwrap_or_else(|| [';', ',', '\t'].into_iter().find(|&c| t.contains(c)))
+}
+
+/// Whether a first row is a header: names (no field is a number, and not every field marks a
+/// missing sensor, as a first row of `NaN` may), or the column numbers.
+fn is_header(fields: &[&str], sep: Option<char>) -> bool {
+    let any_number = fields.iter().any(|f| number(f, sep).is_some());
+    let all_missing = fields.iter().all(|f| is_missing(f));
+    (!any_number && !all_missing) || is_column_numbers(fields)
 }
 
 /// Whether a text sniffed as a CSV grid reads rather as a table of another kind: a first line
