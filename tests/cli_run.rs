@@ -898,7 +898,9 @@ fn a_run_whose_frames_hold_no_object_fails_and_writes_nothing() {
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8(o.stderr).unwrap();
     assert!(
-        err.contains("no object to match in frames 204..205") && err.lines().count() == 1,
+        err.starts_with(&format!(
+            "pedomatch: error: {walk}: no object to match in frames 204..205"
+        )) && err.lines().count() == 1,
         "{err}"
     );
     assert!(!out.exists());

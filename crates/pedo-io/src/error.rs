@@ -55,7 +55,7 @@ pub enum IoError {
     Option(#[from] modal_core::OptionError),
     /// The input holds no object that can be modelled (a frame with too few non-collinear
     /// samples above the level for a surface).
-    #[error("invalid input: {0}")]
+    #[error("{0}")]
     NoObject(String),
     /// A produced object could not be turned into a modal-core shape.
     #[error(transparent)]

@@ -309,6 +309,14 @@ def test_run_without_objects_raises_like_the_cli():
         pymodal.run(moving_blob(frames=3), frames=(1, 3), noise=1e6)
 
 
+def test_a_recording_without_objects_is_named(tmp_path):
+    path = tmp_path / "empty.npy"
+    np.save(path, np.zeros((3, 10, 10), np.float32))
+    with pytest.raises(pymodal.DegenerateShapeError) as info:
+        pymodal.run(str(path))
+    assert str(info.value).startswith(f"{path}: no object to match in frames 0..3"), info.value
+
+
 def test_options_out_of_range_fail_before_the_run():
     # A smoothing wider than the smoother takes fails at once, naming the option, instead of
     # every frame being skipped.
