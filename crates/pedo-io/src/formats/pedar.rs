@@ -222,128 +222,159 @@ fn after_key(line: &str, key: &str) -> Option<f64> {
     parse_num(line[i..].split_whitespace().next()?)
 }
 
-/// Parses the export itself (no layout needed).
-pub fn parse_pedar_data(bytes: &[u8], name: &str) -> Result<PedarData> {
-    let err = |line: usize, msg: String| IoError::parse(name, line, msg);
-    let n_lines = latin1_lines(bytes).count();
-    let mut lines = latin1_lines(bytes);
-    let (mut total, mut dt, mut rate) = (None, None, None);
-    let (mut left, mut right) = (None, None);
-    let (mut units, mut sensor_type) = (String::new(), String::new());
-    let mut header_line = None;
-    for (ln, line) in lines.by_ref() {
-        let t = line.trim();
-        let lower = t.to_ascii_lowercase();
-        if lower.starts_with("time[") || lower.starts_with("time [") {
-            header_line = Some((ln, line));
-            break;
+/// What the header lines before the `time[secs]` column header say.
+#[derive(Default)]
+struct PedarHeader {
+    total_s: Option<f64>,
+    dt_s: Option<f64>,
+    rate_hz: Option<f64>,
+    left: Option<Vec<usize>>,
+    right: Option<Vec<usize>>,
+    units: String,
+    sensor_type: String,
+}
+
+impl PedarHeader {
+    /// Reads the header up to the column header line, which it returns with its number.
+    fn read(
+        lines: &mut impl Iterator<Item = (usize, String)>,
+        name: &str,
+    ) -> Result<(Self, (usize, String))> {
+        let mut h = PedarHeader::default();
+        for (ln, line) in lines.by_ref() {
+            let t = line.trim();
+            let lower = t.to_ascii_lowercase();
+            if lower.starts_with("time[") || lower.starts_with("time [") {
+                return Ok((h, (ln, line)));
+            }
+            h.total_s = h.total_s.or(after_key(t, "total time [secs]:"));
+            h.dt_s = h.dt_s.or(after_key(t, "time per frame [secs]:"));
+            h.rate_hz = h.rate_hz.or(after_key(t, "scanning rate [Hz]:"));
+            if let Some(v) = t.strip_prefix("sensor type:") {
+                h.sensor_type = v.trim().to_string();
+            }
+            if let Some(v) = t.strip_prefix("pressure values in") {
+                h.units = v.trim().to_string();
+            }
+            for (side, key, list) in [
+                ("left", "left insole:", &mut h.left),
+                ("right", "right insole:", &mut h.right),
+            ] {
+                if let Some(v) = t.strip_prefix(key) {
+                    let bad = || IoError::parse(name, ln, format!("bad {side} insole sensor list"));
+                    *list = Some(sensor_list(v).ok_or_else(bad)?);
+                }
+            }
         }
-        total = total.or(after_key(t, "total time [secs]:"));
-        dt = dt.or(after_key(t, "time per frame [secs]:"));
-        rate = rate.or(after_key(t, "scanning rate [Hz]:"));
-        if let Some(v) = t.strip_prefix("sensor type:") {
-            sensor_type = v.trim().to_string();
-        }
-        if let Some(v) = t.strip_prefix("pressure values in") {
-            units = v.trim().to_string();
-        }
-        if let Some(v) = t.strip_prefix("left insole:") {
-            left =
-                Some(sensor_list(v).ok_or_else(|| err(ln, "bad left insole sensor list".into()))?);
-        }
-        if let Some(v) = t.strip_prefix("right insole:") {
-            right =
-                Some(sensor_list(v).ok_or_else(|| err(ln, "bad right insole sensor list".into()))?);
-        }
-    }
-    let (hl, header) = header_line.ok_or_else(|| {
-        IoError::format(
+        Err(IoError::format(
             name,
             "no `time[secs]` column header: not a pedar ASCII export or truncated",
-        )
-    })?;
-    let n_cols = header.split_whitespace().count().saturating_sub(1);
-    let all: Vec<usize> = (1..=99).collect();
-    let (left, right) = match (left, right) {
-        (Some(l), Some(r)) => (l, r),
-        (None, None) if n_cols == 198 => (all.clone(), all),
-        _ => {
-            return Err(err(
-                hl,
-                format!("{n_cols} sensor columns and no `left insole:` / `right insole:` lists"),
-            ));
-        }
-    };
-    let columns: Vec<(Insole, usize)> = left
-        .iter()
-        .map(|&s| (Insole::Left, s))
-        .chain(right.iter().map(|&s| (Insole::Right, s)))
-        .collect();
-    if n_cols != columns.len() {
-        return Err(err(
-            hl,
-            format!(
+        ))
+    }
+
+    /// The sensor of each value column, from the insoles' lists (all 99 of each insole when
+    /// neither is given and the column header has 198), checked against the column header
+    /// `header` at line `hl`.
+    fn columns(&mut self, hl: usize, header: &str, name: &str) -> Result<Vec<(Insole, usize)>> {
+        let err = |msg: String| IoError::parse(name, hl, msg);
+        let n_cols = header.split_whitespace().count().saturating_sub(1);
+        let all: Vec<usize> = (1..=99).collect();
+        let (left, right) = match (self.left.take(), self.right.take()) {
+            (Some(l), Some(r)) => (l, r),
+            (None, None) if n_cols == 198 => (all.clone(), all),
+            _ => {
+                return Err(err(format!(
+                    "{n_cols} sensor columns and no `left insole:` / `right insole:` lists"
+                )));
+            }
+        };
+        let columns: Vec<(Insole, usize)> = left
+            .iter()
+            .map(|&s| (Insole::Left, s))
+            .chain(right.iter().map(|&s| (Insole::Right, s)))
+            .collect();
+        if n_cols != columns.len() {
+            return Err(err(format!(
                 "{n_cols} sensor columns, the mask definition lists {}",
                 columns.len()
-            ),
-        ));
+            )));
+        }
+        Ok(columns)
     }
-    let dt = dt
-        .or(rate.filter(|&r| r > 0.0).map(|r| 1.0 / r))
-        .filter(|&d| d > 0.0);
-    let expected = match (total, dt) {
-        (Some(t), Some(d)) if t >= 0.0 && t / d < 1e12 => Some((t / d).round() as u64),
-        _ => None,
-    };
+
+    /// Time between frames: `time per frame`, else 1 / `scanning rate`.
+    fn dt_s(&self) -> Option<f64> {
+        self.dt_s
+            .or(self.rate_hz.filter(|&r| r > 0.0).map(|r| 1.0 / r))
+            .filter(|&d| d > 0.0)
+    }
+
+    /// The frame count `total time / time per frame` states.
+    fn stated_frames(&self) -> Option<u64> {
+        match (self.total_s, self.dt_s()) {
+            (Some(t), Some(d)) if t >= 0.0 && t / d < 1e12 => Some((t / d).round() as u64),
+            _ => None,
+        }
+    }
+}
+
+/// Reads the data lines (a time, then one value per column); a last line cut short is left
+/// out. Returns the values, frame after frame, and the number of frames.
+fn read_pedar_rows(
+    lines: impl Iterator<Item = (usize, String)>,
+    n_columns: usize,
+    last_line: usize,
+    name: &str,
+) -> Result<(Vec<f32>, usize)> {
     let mut values: Vec<f32> = Vec::new();
     let mut n_frames = 0usize;
     for (ln, line) in lines {
+        let err = |msg: String| IoError::parse(name, ln, msg);
         let mut f = line.split_whitespace();
         let Some(time) = f.next() else { continue };
-        parse_num(time)
-            .ok_or_else(|| err(ln, format!("time {:?} is not a number", trunc(time))))?;
+        parse_num(time).ok_or_else(|| err(format!("time {:?} is not a number", trunc(time))))?;
         let mut k = 0;
         for tok in f {
-            if k == columns.len() {
-                return Err(err(
-                    ln,
-                    format!("more than {} sensor values", columns.len()),
-                ));
+            if k == n_columns {
+                return Err(err(format!("more than {n_columns} sensor values")));
             }
-            let v = parse_num(tok).ok_or_else(|| {
-                err(
-                    ln,
-                    format!("value {} is not a number: {:?}", k + 1, trunc(tok)),
-                )
-            })?;
+            let v = parse_num(tok)
+                .ok_or_else(|| err(format!("value {} is not a number: {:?}", k + 1, trunc(tok))))?;
             values.push(v as f32);
             k += 1;
         }
-        if k != columns.len() {
-            if ln == n_lines {
+        if k != n_columns {
+            if ln == last_line {
                 values.truncate(values.len() - k); // cut inside the last line
                 break;
             }
-            return Err(err(
-                ln,
-                format!("{k} sensor values, expected {}", columns.len()),
-            ));
+            return Err(err(format!("{k} sensor values, expected {n_columns}")));
         }
         n_frames += 1;
     }
-    if let Some(e) = expected
+    Ok((values, n_frames))
+}
+
+/// Parses the export itself (no layout needed).
+pub fn parse_pedar_data(bytes: &[u8], name: &str) -> Result<PedarData> {
+    let n_lines = latin1_lines(bytes).count();
+    let mut lines = latin1_lines(bytes);
+    let (mut header, (hl, column_header)) = PedarHeader::read(&mut lines, name)?;
+    let columns = header.columns(hl, &column_header, name)?;
+    let (values, n_frames) = read_pedar_rows(lines, columns.len(), n_lines, name)?;
+    if let Some(e) = header.stated_frames()
         && n_frames as u64 != e
     {
+        let what = if (n_frames as u64) < e {
+            "truncated"
+        } else {
+            "too many frames"
+        };
         return Err(IoError::format(
             name,
             format!(
-                "{}: the file ends after {n_frames} frames, its header (total time / time per \
-                     frame) states {e}",
-                if (n_frames as u64) < e {
-                    "truncated"
-                } else {
-                    "too many frames"
-                }
+                "{what}: the file ends after {n_frames} frames, its header (total time / time per \
+                 frame) states {e}"
             ),
         ));
     }
@@ -354,9 +385,9 @@ pub fn parse_pedar_data(bytes: &[u8], name: &str) -> Result<PedarData> {
         columns,
         values,
         n_frames,
-        dt_s: dt,
-        units,
-        sensor_type,
+        dt_s: header.dt_s(),
+        units: header.units,
+        sensor_type: header.sensor_type,
     })
 }
 
