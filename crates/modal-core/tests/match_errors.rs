@@ -85,7 +85,7 @@ fn degenerate_inputs_are_rejected_with_reasons() {
             mode_fraction: bad,
             ..MatchOptions::default()
         };
-        assert_eq!(option_of(&err(&good, &good, &o)), "mode_fraction");
+        assert_eq!(option_of(&err(&good, &good, &o)), "modes");
     }
     for t in [-1.0, 1.5, f64::NAN] {
         let o = MatchOptions {
