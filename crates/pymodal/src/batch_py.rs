@@ -122,7 +122,9 @@ fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<St
 /// ``pandas.read_parquet`` reads them; the study table is then ``study.parquet``). ``layout``: a
 /// pedar sensor-layout table for the pedar recordings (``--layout``; default: the bundled
 /// insole), recorded in their ``summary.json``. ``options``: the keywords of :func:`run`. A recording that fails is an ``"error"`` row; the others go on. Bad
-/// options or an ``out`` folder holding other files raise. The GIL is released throughout.
+/// options or an ``out`` folder holding other files raise; ``paths`` naming no recording at all
+/// raise :class:`InputError` (``no recordings found in ...``, as ``pedomatch batch`` exits 1) and
+/// nothing is written. The GIL is released throughout.
 /// Ctrl-C raises ``KeyboardInterrupt`` at the running recordings' next progress step (a frame,
 /// a pair or a figure), as ``pedomatch batch`` stops: the recordings finished keep their
 /// folders, those running or not started leave none (a folder of an earlier run stays as it
@@ -151,6 +153,13 @@ fn batch<'py>(
     opts.cancel = Some(cancel.clone());
     let run = crate::pool::detach_cancellable(py, &cancel, || {
         let found = study::find_recordings(&opts.inputs)?;
+        // As `pedomatch batch`: nothing to run is an error, and nothing is written.
+        if found.is_empty() {
+            return Err(pedo_io::IoError::InvalidInput(format!(
+                "no recordings found in {}",
+                opts.inputs.join(" ")
+            )));
+        }
         study::run_study(&found, &opts, &|_| {})
     })?
     .map_err(to_py)?;

@@ -309,3 +309,15 @@ def test_a_pedar_study_records_its_layout_file_and_runs_again_with_another(tmp_p
     assert pymodal.batch_row(asc, out, figures="none", layout=b)["status"] == "ok"
     summary = json.loads((out / row["output"] / "summary.json").read_text())
     assert summary["input"]["layout"]["file"] == str(b)
+
+
+def test_batch_over_a_folder_without_recordings_raises_and_writes_nothing(tmp_path):
+    # As `pedomatch batch` exits 1: "no recordings found", and no empty study is written.
+    inputs = tmp_path / "notes"
+    inputs.mkdir()
+    (inputs / "notes.txt").write_text("subject 3, left foot\n")
+    out = tmp_path / "study"
+    with pytest.raises(pymodal.InputError, match="no recordings found in"):
+        pymodal.batch(inputs, out, figures="none")
+    assert not out.exists()
+    assert pymodal.find_recordings(inputs) == []

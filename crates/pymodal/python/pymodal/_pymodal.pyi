@@ -354,7 +354,9 @@ def batch(
     layout: Optional[Path] = None,
     **options: Any,
 ) -> list[StudyRow]:
-    """Run every recording like :func:`run` (several at once); return the study table, one dict per recording."""
+    """Run every recording like :func:`run` (several at once); return the study table, one dict per recording.
+
+    Raises :class:`InputError` when ``paths`` name no recording at all (nothing is written)."""
     ...
 
 def batch_row(
