@@ -989,3 +989,120 @@ fn a_renamed_recording_or_a_moved_study_leaves_one_row_per_recording() {
     assert_eq!(paths(&rows), ["in/s01-left.lst", "in/s02.csv"], "{rows}");
     std::fs::remove_dir_all(&base).unwrap();
 }
+
+/// A zip archive whose members are `names` (stored, as Office files hold their XML).
+fn zip_with(names: &[&str]) -> Vec<u8> {
+    let mut local = Vec::new();
+    let mut central = Vec::new();
+    for name in names {
+        let data = b"<x/>";
+        let offset = local.len() as u32;
+        let header = |sig: &[u8], central: bool| {
+            let mut h = sig.to_vec();
+            if central {
+                h.extend_from_slice(&20u16.to_le_bytes());
+            }
+            h.extend_from_slice(&[20, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+            h.extend_from_slice(&(data.len() as u32).to_le_bytes());
+            h.extend_from_slice(&(data.len() as u32).to_le_bytes());
+            h.extend_from_slice(&(name.len() as u16).to_le_bytes());
+            h.extend_from_slice(&0u16.to_le_bytes());
+            if central {
+                h.extend_from_slice(&[0; 8]);
+                h.extend_from_slice(&[0; 4]);
+                h.extend_from_slice(&offset.to_le_bytes());
+            }
+            h.extend_from_slice(name.as_bytes());
+            h
+        };
+        local.extend(header(b"PK\x03\x04", false));
+        local.extend_from_slice(data);
+        central.extend(header(b"PK\x01\x02", true));
+    }
+    let (at, size) = (local.len() as u32, central.len() as u32);
+    local.extend(central);
+    local.extend_from_slice(b"PK\x05\x06\0\0\0\0");
+    local.extend_from_slice(&(names.len() as u16).to_le_bytes());
+    local.extend_from_slice(&(names.len() as u16).to_le_bytes());
+    local.extend_from_slice(&size.to_le_bytes());
+    local.extend_from_slice(&at.to_le_bytes());
+    local.extend_from_slice(&[0, 0]);
+    local
+}
+
+#[test]
+fn office_files_and_readmes_describing_the_formats_are_passed_over() {
+    let base = temp_dir("office");
+    let input = base.join("subject");
+    std::fs::create_dir_all(&input).unwrap();
+    let asf = std::fs::read(Path::new(DATA).join("FrasP01L.asf")).unwrap();
+    std::fs::write(input.join("walk.asf"), &asf).unwrap();
+    std::fs::write(input.join("cut.asf"), &asf[..asf.len() / 50]).unwrap();
+    std::fs::write(
+        input.join("subjects.xlsx"),
+        zip_with(&["[Content_Types].xml", "xl/workbook.xml"]),
+    )
+    .unwrap();
+    std::fs::write(
+        input.join("protocol.docx"),
+        zip_with(&["[Content_Types].xml", "word/document.xml"]),
+    )
+    .unwrap();
+    std::fs::write(
+        input.join("README.md"),
+        "# Data\n\nExported with F-Scan: File > Save ASCII (ASCII_DATA format).\n\
+         A header of `ROWS`, `COLS` up to\nASCII_DATA @@\nthen blocks\nFrame 1\nof numbers.\n\
+         The emed pages: a `Page k` line and `Matrix: 64x95`.\nPage 1\n",
+    )
+    .unwrap();
+    let found = pedo_io::study::find_recordings(&[input.to_str().unwrap()]).unwrap();
+    let names: Vec<_> = found.iter().map(|p| p.file_name().unwrap()).collect();
+    assert_eq!(names, ["cut.asf", "walk.asf"]);
+    let o = base.join("out");
+    let (code, report, stderr) = batch_json(&[
+        input.to_str().unwrap(),
+        "--out",
+        o.to_str().unwrap(),
+        "--frames",
+        "0..20",
+    ]);
+    assert_eq!(code, Some(1), "{stderr}");
+    let rows = rows(&report);
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    assert_eq!(row(&rows, "walk.asf")["status"], "ok");
+    assert_eq!(row(&rows, "cut.asf")["status"], "error");
+    for other in ["README.md", "docx", "xlsx"] {
+        assert!(!stderr.contains(other), "{other}: {stderr}");
+    }
+    // A zip of .npy members is still an .npz, found whatever its name.
+    let npz = std::fs::read(Path::new(DATA).join("numpy-MUN104L-stored.npz")).unwrap();
+    std::fs::write(input.join("plate.data"), npz).unwrap();
+    let found = pedo_io::study::find_recordings(&[input.to_str().unwrap()]).unwrap();
+    assert!(found.iter().any(|p| p.ends_with("plate.data")), "{found:?}");
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+#[test]
+fn the_test_data_folder_with_its_readme_is_only_recordings() {
+    // Its README.md describes the .asf and .lst formats (ASCII_DATA, Matrix:, Page).
+    let found = pedo_io::study::find_recordings(&[DATA]).unwrap();
+    let names: Vec<_> = found
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        !names
+            .iter()
+            .any(|n| n.ends_with(".md") || n.ends_with(".py")),
+        "{names:?}"
+    );
+    assert!(names.contains(&"FrasP01L.asf".to_string()), "{names:?}");
+    assert!(
+        names.contains(&"numpy-MUN104L-stored.npz".to_string()),
+        "{names:?}"
+    );
+    assert!(
+        names.contains(&"emed-test-1-10.lst".to_string()),
+        "{names:?}"
+    );
+}

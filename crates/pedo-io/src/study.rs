@@ -979,12 +979,14 @@ fn sniff_file(path: &Path) -> Option<Format> {
     sniff_format(path, &read_head(path)?).ok()
 }
 
-/// [`sniff_file`] for a file met in a searched folder: a text sniffed as a CSV grid that reads
-/// as a table of another kind is not a recording there
-/// (`formats::csv::looks_like_a_table`).
+/// [`sniff_file`] for a file met in a searched folder: a file whose content has only its format's
+/// marker words, not its structure (a `.docx` for an `.npz`, a README mentioning `ASCII_DATA`:
+/// [`crate::formats::looks_like_recording`]), and a text sniffed as a CSV grid that reads as a
+/// table of another kind (`formats::csv::looks_like_a_table`), are not recordings there.
 fn sniff_found_file(path: &Path) -> Option<Format> {
     let head = read_head(path)?;
     match sniff_format(path, &head).ok()? {
+        f if !crate::formats::looks_like_recording(f, &head) => None,
         Format::Csv if crate::formats::csv::looks_like_a_table(&String::from_utf8_lossy(&head)) => {
             None
         }

@@ -184,6 +184,154 @@ fn sniff_text(text: &str) -> Option<Format> {
     looks_like_grid(&lines).then_some(Format::Csv)
 }
 
+/// Whether a file that [`sniff_format`] took for `format` from its first bytes (`head`) has that
+/// format's structure, not only its marker words: what a folder search asks before taking a
+/// file for a recording (an explicitly named file is read by its sniffed format whatever this
+/// says, so that a corrupt one gets its parser's error). A zip is a NumPy `.npz` only with
+/// `.npy` members; a text is a Tekscan `.asf` only with an `ASCII_DATA` line after at least two
+/// Tekscan header keys (`ROWS 60`, `COLS 21`, ...), a Tekscan CSV export only with those keys and
+/// a `Frame N` line, an emed `.lst` only with a `Page N` (or `Pict-No.`) line and a
+/// `Matrix: CxR`; so that a Word or Excel file, or a README describing these formats, is no
+/// recording. Whether the file then parses is not asked: a corrupt recording still looks like one.
+pub fn looks_like_recording(format: Format, head: &[u8]) -> bool {
+    let head = &head[..head.len().min(SNIFF_BYTES)];
+    if head.starts_with(GZIP_MAGIC) {
+        use std::io::Read;
+        let mut inner = Vec::new();
+        let _ = flate2::read::GzDecoder::new(head)
+            .take(SNIFF_BYTES as u64)
+            .read_to_end(&mut inner);
+        return looks_like_recording(format, &inner);
+    }
+    let text = || {
+        let head = head.strip_prefix(b"\xef\xbb\xbf").unwrap_or(head);
+        head.iter().map(|&b| b as char).collect::<String>()
+    };
+    match format {
+        Format::Npz => zip_member_names(head)
+            .iter()
+            .any(|n| n.to_ascii_lowercase().ends_with(".npy")),
+        Format::Asf => {
+            let text = text();
+            let lines: Vec<&str> = text.lines().map(str::trim).collect();
+            lines
+                .iter()
+                .position(|l| l.starts_with("ASCII_DATA"))
+                .is_some_and(|at| tekscan_key_lines(&lines[..at]) >= 2)
+        }
+        Format::TekscanCsv => {
+            let text = text();
+            let lines: Vec<&str> = text.lines().map(str::trim).collect();
+            lines
+                .iter()
+                .position(|l| is_frame_line(l))
+                .is_some_and(|at| tekscan_key_lines(&lines[..at]) >= 2)
+        }
+        Format::Lst => {
+            let text = text();
+            let lines: Vec<&str> = text.lines().map(str::trim).collect();
+            let page = lines.iter().any(|l| {
+                l.strip_prefix("Page")
+                    .is_some_and(|n| n.trim().parse::<u64>().is_ok())
+                    || l.starts_with("Pict-No")
+            });
+            let matrix = text.split("Matrix:").skip(1).any(|rest| {
+                let t = rest.trim_start();
+                let (c, r) = t.split_once(['x', 'X']).unwrap_or(("", ""));
+                !c.is_empty()
+                    && c.bytes().all(|b| b.is_ascii_digit())
+                    && r.bytes().next().is_some_and(|b| b.is_ascii_digit())
+            });
+            page && matrix
+        }
+        _ => true,
+    }
+}
+
+/// The Tekscan header keys a file's header lines hold (`ROWS 60`, `ROWS,60`), each counted once.
+fn tekscan_key_lines(lines: &[&str]) -> usize {
+    const KEYS: [&str; 12] = [
+        "DATA_TYPE",
+        "VERSION",
+        "ROWS",
+        "COLS",
+        "ROW_SPACING",
+        "COL_SPACING",
+        "SENSEL_AREA",
+        "NOISE_THRESHOLD",
+        "SECONDS_PER_FRAME",
+        "START_FRAME",
+        "END_FRAME",
+        "UNITS",
+    ];
+    KEYS.iter()
+        .filter(|k| {
+            lines.iter().any(|l| {
+                l.strip_prefix(*k)
+                    .is_some_and(|rest| rest.starts_with([' ', '\t', ',', ';']))
+            })
+        })
+        .count()
+}
+
+/// A Tekscan frame line: `Frame 12` (the CSV export follows it with commas).
+fn is_frame_line(line: &str) -> bool {
+    line.strip_prefix("Frame").is_some_and(|rest| {
+        let n = rest.trim_start_matches([' ', '\t', ',', ';']);
+        rest.len() > n.len() && n.bytes().next().is_some_and(|b| b.is_ascii_digit())
+    })
+}
+
+/// The member names a zip archive's first bytes show: its local file headers from the start
+/// (as far as their sizes are known) and any central-directory entries within `head`.
+fn zip_member_names(head: &[u8]) -> Vec<String> {
+    let u16_at = |i: usize| -> Option<usize> {
+        head.get(i..i + 2)
+            .map(|b| usize::from(u16::from_le_bytes([b[0], b[1]])))
+    };
+    let u32_at = |i: usize| -> Option<usize> {
+        head.get(i..i + 4)
+            .and_then(|b| usize::try_from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])).ok())
+    };
+    let name = |at: usize, len: usize| {
+        head.get(at..at + len)
+            .map(|n| String::from_utf8_lossy(n).into_owned())
+    };
+    let mut names = Vec::new();
+    let mut at = 0;
+    while head.get(at..at + 4) == Some(b"PK\x03\x04") {
+        let (Some(flags), Some(size), Some(n), Some(extra)) = (
+            u16_at(at + 6),
+            u32_at(at + 18),
+            u16_at(at + 26),
+            u16_at(at + 28),
+        ) else {
+            break;
+        };
+        match name(at + 30, n) {
+            Some(member) => names.push(member),
+            None => break,
+        }
+        // With a data descriptor (flag bit 3) the size follows the data: no further header.
+        if flags & 8 != 0 {
+            break;
+        }
+        at += 30 + n + extra + size;
+    }
+    let mut from = 0;
+    while let Some(i) = head[from..]
+        .windows(4)
+        .position(|w| w == b"PK\x01\x02")
+        .map(|i| from + i)
+    {
+        if let Some(member) = u16_at(i + 28).and_then(|n| name(i + 46, n)) {
+            names.push(member);
+        }
+        from = i + 4;
+    }
+    names
+}
+
 /// A delimited grid: after at most one header line, the first lines are all numbers (or the
 /// no-sensor marks `-1`, `B`, `NaN`).
 fn looks_like_grid(lines: &[&str]) -> bool {
