@@ -1106,3 +1106,53 @@ fn the_test_data_folder_with_its_readme_is_only_recordings() {
         "{names:?}"
     );
 }
+
+#[cfg(unix)]
+#[test]
+fn symlinked_recordings_and_folders_are_followed_and_a_broken_link_is_an_error_row() {
+    use std::os::unix::fs::symlink;
+    let base = temp_dir("symlinks");
+    let store = base.join("store");
+    let study = base.join("study");
+    std::fs::create_dir_all(&store).unwrap();
+    std::fs::create_dir_all(study.join("s01")).unwrap();
+    std::fs::copy(
+        Path::new(DATA).join("emed-test-1-10.lst"),
+        store.join("raw.lst"),
+    )
+    .unwrap();
+    symlink(store.join("raw.lst"), study.join("s01/walk.lst")).unwrap();
+    symlink(&store, study.join("s02")).unwrap();
+    // A link back up is a loop: passed over, not searched forever.
+    symlink(&study, study.join("s01/up")).unwrap();
+    symlink(base.join("gone/raw.asf"), study.join("s01/dangling.asf")).unwrap();
+    symlink(base.join("gone/notes.txt"), study.join("s01/dangling.txt")).unwrap();
+    let found = pedo_io::study::find_recordings(&[study.to_str().unwrap()]).unwrap();
+    let names: Vec<_> = found
+        .iter()
+        .map(|p| {
+            p.strip_prefix(&study)
+                .unwrap()
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    // The same file by two links is found once.
+    assert_eq!(names, ["s01/dangling.asf", "s01/walk.lst"]);
+    // The symlinked folder alone.
+    let found = pedo_io::study::find_recordings(&[study.join("s02").to_str().unwrap()]).unwrap();
+    assert_eq!(found, [study.join("s02/raw.lst")]);
+    let o = base.join("out");
+    let (code, report, stderr) =
+        batch_json(&[study.to_str().unwrap(), "--out", o.to_str().unwrap()]);
+    assert_eq!(code, Some(1), "{stderr}");
+    let rows = rows(&report);
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    assert_eq!(row(&rows, "walk.lst")["status"], "ok");
+    let dangling = row(&rows, "dangling.asf");
+    assert_eq!(dangling["status"], "error");
+    let message = dangling["message"].as_str().unwrap();
+    assert!(message.contains("broken symbolic link"), "{message}");
+    assert!(message.contains("gone/raw.asf"), "{message}");
+    std::fs::remove_dir_all(&base).unwrap();
+}

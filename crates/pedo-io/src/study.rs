@@ -873,7 +873,9 @@ pub fn output_name(path: &Path) -> String {
 ///   `formats::csv::looks_like_a_table`) is passed over; PNG/TIFF images are not
 ///   recordings on their own there: a folder holding grayscale images is one image-sequence
 ///   recording, and colour images (a photograph of the foot) are passed over. Hidden folders and pedomatch output
-///   folders are not searched;
+///   folders are not searched. Symbolic links to files and folders are followed (a link back
+///   to a folder being searched is passed over); a broken link named as a recording is kept,
+///   so that its row says the link is broken;
 /// - anything else is a glob pattern (`data/**/*.asf`), each match taken as above.
 ///
 /// A path that does not exist is kept, so that its row reports it missing. Fails on a malformed
@@ -923,12 +925,33 @@ fn search_folder(root: &Path, found: &mut Vec<PathBuf>) {
                 || outdir::is_output(e.path())
                 || e.path().join(STUDY_MARKER).is_file())
     };
+    // Symbolic links are followed (a study folder's recordings are often links into a raw-data
+    // store); a link back to a folder being searched is a loop walkdir reports, and is passed
+    // over. The same file reached twice is found once (`find_recordings` keeps one path per
+    // canonical path).
     let walk = walkdir::WalkDir::new(root)
+        .follow_links(true)
         .sort_by_file_name()
         .into_iter()
         .filter_entry(|e| !is_skipped_dir(e));
     let mut image_folders = Vec::new();
-    for entry in walk.flatten() {
+    for entry in walk {
+        let entry = match entry {
+            Ok(entry) => entry,
+            // A broken link named as a recording gets its error row (the link is broken).
+            Err(e) => {
+                if let Some(path) = e.path().filter(|p| is_broken_link(p))
+                    && e.loop_ancestor().is_none()
+                    && has_recording_extension(path)
+                    && !path
+                        .file_name()
+                        .is_some_and(|n| n.to_string_lossy().starts_with('.'))
+                {
+                    found.push(path.to_path_buf());
+                }
+                continue;
+            }
+        };
         if !entry.file_type().is_file() || entry.file_name().to_string_lossy().starts_with('.') {
             continue;
         }
@@ -953,6 +976,30 @@ fn search_folder(root: &Path, found: &mut Vec<PathBuf>) {
             None => {}
         }
     }
+}
+
+/// Whether `path` is a symbolic link whose target does not exist.
+fn is_broken_link(path: &Path) -> bool {
+    path.symlink_metadata()
+        .is_ok_and(|m| m.file_type().is_symlink())
+        && std::fs::metadata(path).is_err()
+}
+
+/// The error of reading a broken symbolic link: it names the missing target.
+fn broken_link_error(path: &Path) -> Option<IoError> {
+    if !is_broken_link(path) {
+        return None;
+    }
+    let target = std::fs::read_link(path)
+        .map(|t| format!(" to {}", t.display()))
+        .unwrap_or_default();
+    Some(IoError::Io {
+        path: path.display().to_string(),
+        source: std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            format!("broken symbolic link{target} (its target does not exist)"),
+        ),
+    })
 }
 
 /// Whether an image met in a searched folder may be a pressure frame: a colour image (a
@@ -1563,6 +1610,9 @@ fn process(
     read: &mut Option<(usize, RowUnits)>,
 ) -> Result<StudyRow> {
     opts.params.validate()?;
+    if let Some(e) = broken_link_error(path) {
+        return Err(e);
+    }
     let (mut recording, mut file_frames) =
         read_for_run(path, &opts.read, &opts.params, &opts.outputs)?;
     *read = Some((recording.n_frames(), RowUnits::of(&recording)));
