@@ -1156,3 +1156,72 @@ fn symlinked_recordings_and_folders_are_followed_and_a_broken_link_is_an_error_r
     assert!(message.contains("gone/raw.asf"), "{message}");
     std::fs::remove_dir_all(&base).unwrap();
 }
+
+/// `text` as UTF-16 with its byte-order mark, little- or big-endian.
+fn utf16(text: &[u8], little: bool) -> Vec<u8> {
+    let text = String::from_utf8_lossy(text);
+    let mut out = if little {
+        vec![0xff, 0xfe]
+    } else {
+        vec![0xfe, 0xff]
+    };
+    for unit in text.encode_utf16() {
+        out.extend(if little {
+            unit.to_le_bytes()
+        } else {
+            unit.to_be_bytes()
+        });
+    }
+    out
+}
+
+#[test]
+fn utf16_text_reads_as_its_utf8_form() {
+    let base = temp_dir("utf16");
+    let (asfs, grids) = (base.join("asf"), base.join("grid"));
+    std::fs::create_dir_all(&asfs).unwrap();
+    std::fs::create_dir_all(&grids).unwrap();
+    let asf = std::fs::read(Path::new(DATA).join("FrasP01L.asf")).unwrap();
+    let grid = std::fs::read(Path::new(DATA).join("MUN104L.csv")).unwrap();
+    std::fs::write(asfs.join("a_walk.asf"), &asf).unwrap();
+    std::fs::write(asfs.join("b_walk16.asf"), utf16(&asf, true)).unwrap();
+    std::fs::write(grids.join("c_grid.csv"), &grid).unwrap();
+    std::fs::write(grids.join("d_grid16le.csv"), utf16(&grid, true)).unwrap();
+    std::fs::write(grids.join("e_grid16be.txt"), utf16(&grid, false)).unwrap();
+    let o = base.join("out");
+    let (code, report, stderr) = batch_json(&[
+        asfs.to_str().unwrap(),
+        "--out",
+        o.to_str().unwrap(),
+        "--frames",
+        "0..20",
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let mut rows = rows(&report);
+    let (code, report, stderr) =
+        batch_json(&[grids.to_str().unwrap(), "--out", o.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{stderr}");
+    rows.extend(self::rows(&report));
+    assert_eq!(rows.len(), 5, "{rows:?}");
+    let frames = |name: &str| {
+        let r = row(&rows, name);
+        assert_eq!(r["status"], "ok", "{r}");
+        std::fs::read(o.join(r["output"].as_str().unwrap()).join("frames.csv")).unwrap()
+    };
+    assert_eq!(frames("b_walk16.asf"), frames("a_walk.asf"));
+    assert_eq!(frames("d_grid16le.csv"), frames("c_grid.csv"));
+    assert_eq!(frames("e_grid16be.txt"), frames("c_grid.csv"));
+    assert_eq!(
+        row(&rows, "b_walk16.asf")["format"],
+        row(&rows, "a_walk.asf")["format"]
+    );
+    // Named on its own (`inspect`): read as well.
+    let out = pedomatch(&["inspect", asfs.join("b_walk16.asf").to_str().unwrap()]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::remove_dir_all(&base).unwrap();
+}

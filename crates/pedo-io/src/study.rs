@@ -1034,7 +1034,11 @@ fn sniff_found_file(path: &Path) -> Option<Format> {
     let head = read_head(path)?;
     match sniff_format(path, &head).ok()? {
         f if !crate::formats::looks_like_recording(f, &head) => None,
-        Format::Csv if crate::formats::csv::looks_like_a_table(&String::from_utf8_lossy(&head)) => {
+        Format::Csv
+            if crate::formats::csv::looks_like_a_table(&String::from_utf8_lossy(
+                &crate::formats::utf16_to_utf8(&head).unwrap_or_else(|| head.clone()),
+            )) =>
+        {
             None
         }
         f => Some(f),

@@ -44,6 +44,27 @@ pub(crate) fn parse_num(tok: &str) -> Option<f64> {
     v.is_finite().then_some(v)
 }
 
+/// The text of a file written as UTF-16 with its byte-order mark (`FF FE`: little-endian, as
+/// Windows Notepad's "Unicode" and Excel's "Unicode Text" write it; `FE FF`: big-endian), as
+/// UTF-8 without the mark, so that it reads exactly as its UTF-8 form; `None` for any other
+/// file. A unit that is no UTF-16 (a lone surrogate, an odd last byte) becomes U+FFFD.
+pub(crate) fn utf16_to_utf8(bytes: &[u8]) -> Option<Vec<u8>> {
+    let little = match bytes.get(..2)? {
+        b"\xff\xfe" => true,
+        b"\xfe\xff" => false,
+        _ => return None,
+    };
+    let units = bytes[2..].chunks(2).map(|c| match (c, little) {
+        ([a, b], true) => u16::from_le_bytes([*a, *b]),
+        ([a, b], false) => u16::from_be_bytes([*a, *b]),
+        _ => 0xFFFD,
+    });
+    let text: String = char::decode_utf16(units)
+        .map(|c| c.unwrap_or(char::REPLACEMENT_CHARACTER))
+        .collect();
+    Some(text.into_bytes())
+}
+
 pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     std::fs::read(path).map_err(|source| IoError::Io {
         path: path.display().to_string(),
@@ -96,6 +117,9 @@ pub fn sniff_format(path: &Path, head: &[u8]) -> std::result::Result<Format, Str
     let head = &head[..head.len().min(SNIFF_BYTES)];
     if head.is_empty() {
         return Err("the file is empty".into());
+    }
+    if let Some(text) = utf16_to_utf8(head) {
+        return sniff_format(path, &text).map_err(|what| format!("UTF-16 text: {what}"));
     }
     let magic: [(&[u8], Format); 5] = [
         (b"\x93NUMPY", Format::Npy),
@@ -195,6 +219,9 @@ fn sniff_text(text: &str) -> Option<Format> {
 /// recording. Whether the file then parses is not asked: a corrupt recording still looks like one.
 pub fn looks_like_recording(format: Format, head: &[u8]) -> bool {
     let head = &head[..head.len().min(SNIFF_BYTES)];
+    if let Some(text) = utf16_to_utf8(head) {
+        return looks_like_recording(format, &text);
+    }
     if head.starts_with(GZIP_MAGIC) {
         use std::io::Read;
         let mut inner = Vec::new();
@@ -424,10 +451,14 @@ fn gunzip(bytes: &[u8], name: &str) -> Result<Vec<u8>> {
 }
 
 /// Parses an in-memory file of a known format; `name` is used in error messages. A
-/// gzip-compressed file is decompressed first.
+/// gzip-compressed file is decompressed first, and UTF-16 text ([`utf16_to_utf8`]) read as its
+/// UTF-8 form.
 pub fn parse_bytes(bytes: &[u8], format: Format, name: &str) -> Result<Recording> {
     if bytes.starts_with(GZIP_MAGIC) {
         return parse_bytes(&gunzip(bytes, name)?, format, name);
+    }
+    if let Some(text) = utf16_to_utf8(bytes) {
+        return parse_bytes(&text, format, name);
     }
     let mut rec = match format {
         Format::Asf => asf::parse_asf(bytes, name)?,
@@ -455,6 +486,9 @@ pub fn parse_bytes_with(
     name: &str,
     opts: &ReadOptions,
 ) -> Result<Recording> {
+    if let Some(text) = utf16_to_utf8(bytes) {
+        return parse_bytes_with(&text, format, name, opts);
+    }
     match (format, &opts.layout) {
         (Format::Pedar, Some(layout)) => {
             pedar::parse_pedar(bytes, name, &pedar::PedarLayout::from_file(layout)?)
@@ -632,11 +666,12 @@ impl Sniffed {
         })
     }
 
-    /// For a Tekscan `.asf` file (`false`) or CSV export (`true`) that is not gzip-compressed:
-    /// the formats read line by line.
+    /// For a Tekscan `.asf` file (`false`) or CSV export (`true`) that is not gzip-compressed
+    /// nor UTF-16 (both are read whole into memory): the formats read line by line.
     fn tekscan_csv(&self) -> Option<bool> {
         (matches!(self.format, Format::Asf | Format::TekscanCsv)
-            && !self.head.starts_with(GZIP_MAGIC))
+            && !self.head.starts_with(GZIP_MAGIC)
+            && utf16_to_utf8(&self.head[..self.head.len().min(2)]).is_none())
         .then_some(self.format == Format::TekscanCsv)
     }
 
