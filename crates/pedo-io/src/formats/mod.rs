@@ -451,8 +451,8 @@ fn gunzip(bytes: &[u8], name: &str) -> Result<Vec<u8>> {
 }
 
 /// Parses an in-memory file of a known format; `name` is used in error messages. A
-/// gzip-compressed file is decompressed first, and UTF-16 text (with its byte-order mark) read as its
-/// UTF-8 form.
+/// gzip-compressed file is decompressed first, and UTF-16 text (with its byte-order mark) read as
+/// its UTF-8 form.
 pub fn parse_bytes(bytes: &[u8], format: Format, name: &str) -> Result<Recording> {
     if bytes.starts_with(GZIP_MAGIC) {
         return parse_bytes(&gunzip(bytes, name)?, format, name);
