@@ -291,21 +291,15 @@ fn check_only_outputs(root: &Path) -> Result<()> {
 
 /// Every file under `dir` (following no links), relative and `/`-separated, sorted.
 fn files_under(dir: &Path) -> std::io::Result<Vec<String>> {
-    fn walk(dir: &Path, prefix: &str, out: &mut Vec<String>) -> std::io::Result<()> {
-        for entry in std::fs::read_dir(dir)? {
-            let entry = entry?;
-            let name = entry.file_name().to_string_lossy().into_owned();
-            let rel = format!("{prefix}{name}");
-            if entry.file_type()?.is_dir() {
-                walk(&entry.path(), &format!("{rel}/"), out)?;
-            } else {
-                out.push(rel);
-            }
-        }
-        Ok(())
-    }
     let mut out = Vec::new();
-    walk(dir, "", &mut out)?;
+    for entry in walkdir::WalkDir::new(dir).min_depth(1) {
+        let entry = entry.map_err(std::io::Error::from)?;
+        if !entry.file_type().is_dir() {
+            let rel = entry.path().strip_prefix(dir).unwrap_or(entry.path());
+            let parts: Vec<_> = rel.iter().map(|p| p.to_string_lossy()).collect();
+            out.push(parts.join("/"));
+        }
+    }
     out.sort();
     Ok(out)
 }
