@@ -215,11 +215,7 @@ fn execute(
         timings: &[("read", read_time.as_secs_f64())],
     };
     let (summary, _) = pedo_io::study::run_into_folder(&recording, &options, plan, &progress)
-        .map_err(|e| match e {
-            // A recording without an object is a fact about the file: name it, as a read error does.
-            e @ pedo_io::IoError::NoObject(_) => CliError::Runtime(format!("{}: {e}", input.name)),
-            e => e.into(),
-        })?;
+        .map_err(|e| e.of_input(&input.name))?;
     bar.finish_and_clear();
     if o.json {
         out!("{}", output::pretty(&summary)?);

@@ -103,6 +103,16 @@ impl IoError {
     pub(crate) fn no_object(msg: impl Into<String>) -> Self {
         IoError::NoObject(msg.into())
     }
+
+    /// This error as one about the input `name` (a recording's path): a recording without an
+    /// object is a fact about the file, named as a read error names it. Other errors are
+    /// returned as they are (they name their file already, or are not about it).
+    pub fn of_input(self, name: &str) -> Self {
+        match self {
+            IoError::NoObject(msg) => IoError::NoObject(format!("{name}: {msg}")),
+            e => e,
+        }
+    }
 }
 
 /// Result alias of the crate.

@@ -6,7 +6,7 @@ use pedo_io::recording::kpa_per_unit;
 use pedo_io::report::{self, InputInfo};
 use pedo_io::sequence::{run_sequence, SequenceResult};
 use pedo_io::study::require_objects;
-use pedo_io::{IoError, Recording};
+use pedo_io::Recording;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -219,13 +219,8 @@ fn run<'py>(
         run_sequence(&rec, &options, &|_, _, _| {})
     })?
     .map_err(to_py)?;
-    // A recording without an object is a fact about the file: named as a read error is.
     require_objects(result.objects.len(), &rec, &options)
-        .map_err(|e| match e {
-            IoError::NoObject(msg) => IoError::NoObject(format!("{}: {msg}", input.name)),
-            e => e,
-        })
-        .map_err(to_py)?;
+        .map_err(|e| to_py(e.of_input(&input.name)))?;
 
     let out = PyDict::new(py);
     out.set_item(
