@@ -127,13 +127,7 @@ pub fn looks_like_a_table(head: &str) -> bool {
         .any(|f| number(f, sep).is_some() || is_missing(f));
     let named_header = !numeric && !is_column_numbers(&fields);
     let row = if numeric { Some(first) } else { lines.next() };
-    let narrow = row.is_some_and(|r| {
-        let mut fields = split_fields(r, sep);
-        if sep.is_some() && fields.len() > 1 && fields.last() == Some(&"") {
-            fields.pop();
-        }
-        fields.len() <= 3
-    });
+    let narrow = row.is_some_and(|r| row_fields(r, sep).len() <= 3);
     named_header || narrow
 }
 
