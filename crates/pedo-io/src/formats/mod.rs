@@ -49,11 +49,7 @@ pub(crate) fn parse_num(tok: &str) -> Option<f64> {
 /// UTF-8 without the mark, so that it reads exactly as its UTF-8 form; `None` for any other
 /// file. A unit that is no UTF-16 (a lone surrogate, an odd last byte) becomes U+FFFD.
 pub(crate) fn utf16_to_utf8(bytes: &[u8]) -> Option<Vec<u8>> {
-    let little = match bytes.get(..2)? {
-        b"\xff\xfe" => true,
-        b"\xfe\xff" => false,
-        _ => return None,
-    };
+    let little = utf16_little_endian(bytes)?;
     let units = bytes[2..].chunks(2).map(|c| match (c, little) {
         ([a, b], true) => u16::from_le_bytes([*a, *b]),
         ([a, b], false) => u16::from_be_bytes([*a, *b]),
@@ -63,6 +59,15 @@ pub(crate) fn utf16_to_utf8(bytes: &[u8]) -> Option<Vec<u8>> {
         .map(|c| c.unwrap_or(char::REPLACEMENT_CHARACTER))
         .collect();
     Some(text.into_bytes())
+}
+
+/// For bytes that begin with a UTF-16 byte-order mark, whether they are little-endian.
+fn utf16_little_endian(bytes: &[u8]) -> Option<bool> {
+    match bytes.get(..2)? {
+        b"\xff\xfe" => Some(true),
+        b"\xfe\xff" => Some(false),
+        _ => None,
+    }
 }
 
 pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
@@ -230,33 +235,28 @@ pub fn looks_like_recording(format: Format, head: &[u8]) -> bool {
             .read_to_end(&mut inner);
         return looks_like_recording(format, &inner);
     }
-    let text = || {
-        let head = head.strip_prefix(b"\xef\xbb\xbf").unwrap_or(head);
-        head.iter().map(|&b| b as char).collect::<String>()
-    };
     match format {
-        Format::Npz => zip_member_names(head)
+        Format::Npz => {
+            return zip_member_names(head)
+                .iter()
+                .any(|n| n.to_ascii_lowercase().ends_with(".npy"));
+        }
+        Format::Asf | Format::TekscanCsv | Format::Lst => {}
+        _ => return true,
+    }
+    let head = head.strip_prefix(b"\xef\xbb\xbf").unwrap_or(head);
+    let text: String = head.iter().map(|&b| b as char).collect();
+    let lines: Vec<&str> = text.lines().map(str::trim).collect();
+    match format {
+        Format::Asf => lines
             .iter()
-            .any(|n| n.to_ascii_lowercase().ends_with(".npy")),
-        Format::Asf => {
-            let text = text();
-            let lines: Vec<&str> = text.lines().map(str::trim).collect();
-            lines
-                .iter()
-                .position(|l| l.starts_with("ASCII_DATA"))
-                .is_some_and(|at| tekscan_key_lines(&lines[..at]) >= 2)
-        }
-        Format::TekscanCsv => {
-            let text = text();
-            let lines: Vec<&str> = text.lines().map(str::trim).collect();
-            lines
-                .iter()
-                .position(|l| is_frame_line(l))
-                .is_some_and(|at| tekscan_key_lines(&lines[..at]) >= 2)
-        }
+            .position(|l| l.starts_with("ASCII_DATA"))
+            .is_some_and(|at| tekscan_key_lines(&lines[..at]) >= 2),
+        Format::TekscanCsv => lines
+            .iter()
+            .position(|l| is_frame_line(l))
+            .is_some_and(|at| tekscan_key_lines(&lines[..at]) >= 2),
         Format::Lst => {
-            let text = text();
-            let lines: Vec<&str> = text.lines().map(str::trim).collect();
             let page = lines.iter().any(|l| {
                 l.strip_prefix("Page")
                     .is_some_and(|n| n.trim().parse::<u64>().is_ok())
@@ -671,7 +671,7 @@ impl Sniffed {
     fn tekscan_csv(&self) -> Option<bool> {
         (matches!(self.format, Format::Asf | Format::TekscanCsv)
             && !self.head.starts_with(GZIP_MAGIC)
-            && utf16_to_utf8(&self.head[..self.head.len().min(2)]).is_none())
+            && utf16_little_endian(&self.head).is_none())
         .then_some(self.format == Format::TekscanCsv)
     }
 
