@@ -4,7 +4,7 @@
 //!
 //! Run: `cargo run --release --example run_recording [-- FILE]`
 
-use pedo_io::sequence::{run_sequence, RunParams};
+use pedo_track::{run_sequence, RunParams};
 use std::path::PathBuf;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -1,13 +1,13 @@
 //! `pedomatch batch`: a whole study, each recording like `pedomatch run` into a folder of its own,
-//! several at once, one row per recording in `study.csv`. The work is [`pedo_io::study`]'s.
+//! several at once, one row per recording in `study.csv`. The work is [`pedo_study`]'s.
 
-use crate::cmd_run::{ReportArg, RunOptionsArgs};
+use crate::cmd_run::RunOptionsArgs;
 use crate::output;
 use crate::CliError;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use pedo_io::report::counted;
-use pedo_io::study::{self, RowStatus, StudyEvent, StudyOptions};
+use pedo_io::counted;
+use pedo_study::{RowStatus, StudyEvent, StudyOptions};
 use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::Instant;
@@ -37,14 +37,13 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
     let started = Instant::now();
     let params = args.options.params();
     params.validate()?;
-    let paths = study::find_recordings(&args.inputs)?;
+    let paths = pedo_study::find_recordings(&args.inputs)?;
     if paths.is_empty() {
         return Err(CliError::Runtime(format!(
             "no recordings found in {}",
             args.inputs.join(" ")
         )));
     }
-    let (png, svg) = args.options.figures.kinds();
     let opts = StudyOptions {
         inputs: args.inputs.clone(),
         params,
@@ -55,13 +54,7 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
         jobs: args.jobs.map_or(0, |j| j as usize),
         force: args.force,
         cancel: None,
-        outputs: study::RunOutputs {
-            figures: study::FigureKinds { png, svg },
-            report: (args.options.report == ReportArg::Html)
-                .then_some(&output::report_page as &study::ReportWriter),
-            animation: args.options.animation == crate::cmd_run::AnimationArg::Gif,
-            tables: args.options.tables.unwrap_or_default(),
-        },
+        outputs: args.options.outputs(),
     };
 
     // The bar moves in thousandths of a recording (so that it and its ETA advance within one),
@@ -96,17 +89,17 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
         bar.set_message(progress_text(&f, f.len()));
         bar.set_position((1000.0 * f.iter().flatten().sum::<f64>()) as u64);
     };
-    let study::StudyRun { rows, kept } = study::run_study(&paths, &opts, &on_event)?;
+    let pedo_study::StudyRun { rows, kept } = pedo_study::run_study(&paths, &opts, &on_event)?;
     bar.finish_and_clear();
 
     // The counts, `--json` and the exit status are this run's recordings; the table also holds
     // the rows it kept of earlier runs, which the closing line mentions.
-    let counts = study::status_counts(&rows);
-    let table = study::study_table_path(&args.out, opts.outputs.tables);
+    let counts = pedo_study::status_counts(&rows);
+    let table = pedo_study::study_table_path(&args.out, opts.outputs.tables);
     if args.options.json {
         let mut report = counts.clone();
         report["study"] = table.display().to_string().into();
-        report["rows"] = study::study_table(&rows).to_json();
+        report["rows"] = pedo_study::study_table(&rows).to_json();
         out!("{}", output::pretty(&report)?);
     } else {
         outln!(

@@ -3,7 +3,7 @@
 use crate::modal_args::{help, UnitArgs};
 use crate::CliError;
 use clap::Args;
-use pedo_io::report::{describe, InputInfo};
+use pedo_output::{describe, InputInfo};
 use std::path::PathBuf;
 
 #[derive(Args)]

@@ -1,15 +1,14 @@
 //! `pedomatch match A B`: correspondences between two objects given as images or point files.
 
-use crate::cmd_run::ReportArg;
-use crate::modal_args::{help, tri_state, ModalArgs, UnitArgs};
-use crate::output::option_text;
+use crate::modal_args::{help, tri_state, word, ModalArgs, UnitArgs};
 use crate::output::{self, OutDir};
 use crate::CliError;
 use clap::Args;
 use modal_core::shape::looks_like_closed_contour;
 use modal_core::{Search, Shape, Topology};
-use pedo_io::figure::{FigureAxes, MatchFigure, ObjectLabel};
-use pedo_io::sequence::SenselAspect;
+use pedo_output::figure::{FigureAxes, MatchFigure, ObjectLabel};
+use pedo_output::{option_text, FigureFormat, ReportFormat};
+use pedo_track::SenselAspect;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -44,16 +43,16 @@ pub struct MatchArgs {
     /// the matches.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Format of the match figure written with --out.
-    #[arg(long, value_enum, default_value = "png")]
-    pub figures: crate::cmd_run::FigureArg,
+    /// Format of the match figure written with --out: png, svg or none (default: png).
+    #[arg(long, value_parser = word::<FigureFormat>())]
+    pub figures: Option<FigureFormat>,
     /// Print the match result as one JSON object (with its pairs) instead of a table.
     #[arg(long)]
     pub json: bool,
-    /// The interactive report written with --out: `html` writes a self-contained `report.html`
-    /// (opens offline).
-    #[arg(long, value_enum, default_value = "html")]
-    pub report: crate::cmd_run::ReportArg,
+    /// The interactive report written with --out: html writes a self-contained report.html
+    /// that opens offline; none writes none (default: html).
+    #[arg(long, value_parser = word::<ReportFormat>())]
+    pub report: Option<ReportFormat>,
 }
 
 /// Extensions that always name point files; `.csv` and `.txt` are point files when laid out as
@@ -214,7 +213,7 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let used: serde_json::Map<String, serde_json::Value> = params
         .used(&o)
         .iter()
-        .map(|(k, v)| (k.to_string(), pedo_io::report::option_json(v)))
+        .map(|(k, v)| (k.to_string(), pedo_output::option_json(v)))
         .chain([("ordered".to_string(), serde_json::json!(ordered))])
         .collect();
     let summary = serde_json::json!({
@@ -250,8 +249,13 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
             shapes: (&a, &b),
             objects: (&oa, &ob),
         };
-        write_match_figure(&dir, &figure, &r.pairs, args.figures.kinds())?;
-        if args.report == ReportArg::Html {
+        write_match_figure(
+            &dir,
+            &figure,
+            &r.pairs,
+            args.figures.unwrap_or_default().into(),
+        )?;
+        if args.report.unwrap_or_default() == ReportFormat::Html {
             write_match_report(&dir, &figure, &r, &summary)?;
         }
         dir.commit()?;
@@ -323,7 +327,7 @@ fn write_match_figure(
     dir: &OutDir,
     input: &MatchFigureInput,
     pairs: &[modal_core::MatchPair],
-    kinds: (bool, bool),
+    kinds: pedo_output::FigureKinds,
 ) -> Result<(), String> {
     let (oa, ob) = input.objects;
     let axes = input.axes();
@@ -383,7 +387,7 @@ fn write_match_report(
         }
     };
     let (label_a, label_b) = (name(&input.args.a, oa), name(&input.args.b, ob));
-    let pair = pedo_report::MatchPairInput {
+    let pair = pedo_output::html_report::MatchPairInput {
         a: input.shapes.0,
         b: input.shapes.1,
         result: r,
@@ -392,12 +396,12 @@ fn write_match_report(
         label_a: &label_a,
         label_b: &label_b,
         underlays: [oa, ob].map(|o| {
-            o.source
-                .as_ref()
-                .map(|(recording, frame)| pedo_report::FrameUnderlay {
+            o.source.as_ref().map(
+                |(recording, frame)| pedo_output::html_report::FrameUnderlay {
                     recording,
                     frame: *frame,
-                })
+                },
+            )
         }),
     };
     let entries = |key: &str| -> Vec<(String, serde_json::Value)> {
@@ -406,7 +410,7 @@ fn write_match_report(
             .map(|m| m.iter().map(|(k, v)| (k.clone(), v.clone())).collect())
             .unwrap_or_default()
     };
-    let info = pedo_report::ReportInfo {
+    let info = pedo_output::html_report::ReportInfo {
         input: format!("{label_a} \u{2192} {label_b}"),
         version: env!("CARGO_PKG_VERSION").to_string(),
         options: entries("options")
@@ -454,6 +458,7 @@ fn write_match_report(
         ("modes", format!("{} (refits {})", r.n_modes, r.refits)),
     ]
     .map(|(k, v)| (k.to_string(), v));
-    let html = pedo_report::match_report(&pair, &info, &facts).map_err(|e| e.to_string())?;
+    let html =
+        pedo_output::html_report::match_report(&pair, &info, &facts).map_err(|e| e.to_string())?;
     dir.write("report.html", html.as_bytes())
 }

@@ -3,45 +3,16 @@
 use crate::modal_args::{help, word, ModalArgs, UnitArgs};
 use crate::output;
 use crate::CliError;
-use clap::{Args, ValueEnum};
+use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use pedo_io::report::{counted, InputInfo};
-use pedo_io::sequence::{FrameRange, ObjectModel, RunParams, Stage};
-use pedo_io::TableFormat;
+use pedo_io::counted;
+use pedo_output::InputInfo;
+use pedo_output::{AnimationFormat, FigureFormat, ReportFormat, TableFormat};
+use pedo_track::{FrameRange, ObjectModel, RunParams, Stage};
 use serde_json::Value;
 use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::Instant;
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum ReportArg {
-    Html,
-    None,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum AnimationArg {
-    Gif,
-    None,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum FigureArg {
-    Png,
-    Svg,
-    None,
-}
-
-impl FigureArg {
-    /// Whether PNG and SVG files are written.
-    pub fn kinds(self) -> (bool, bool) {
-        match self {
-            FigureArg::Png => (true, false),
-            FigureArg::Svg => (false, true),
-            FigureArg::None => (false, false),
-        }
-    }
-}
 
 /// Options shared by `run` and `demo`.
 #[derive(Args, Clone)]
@@ -69,9 +40,8 @@ pub struct RunOptionsArgs {
     pub drift_reference: Option<usize>,
     #[command(flatten)]
     pub units: UnitArgs,
-    /// Figures of every pair and of the tracks.
-    #[arg(long, value_enum, default_value = "png")]
-    pub figures: FigureArg,
+    #[arg(long, value_parser = word::<FigureFormat>(), help = help("figures"))]
+    pub figures: Option<FigureFormat>,
     #[arg(long, value_parser = word::<TableFormat>(), help = help("tables"))]
     pub tables: Option<TableFormat>,
     /// Print the time spent in each stage.
@@ -80,26 +50,16 @@ pub struct RunOptionsArgs {
     /// Print the run's summary (summary.json) on stdout instead of text.
     #[arg(long)]
     pub json: bool,
-    /// The interactive report: `html` writes a self-contained `report.html` (opens offline).
-    #[arg(long, value_enum, default_value = "html")]
-    pub report: ReportArg,
-    /// The recording played back: `gif` writes `animation.gif` (pressure frames with their
-    /// contours and matches; long runs decimated to at most 150 frames).
-    #[arg(long, value_enum, default_value = "none")]
-    pub animation: AnimationArg,
+    #[arg(long, value_parser = word::<ReportFormat>(), help = help("report"))]
+    pub report: Option<ReportFormat>,
+    #[arg(long, value_parser = word::<AnimationFormat>(), help = help("animation"))]
+    pub animation: Option<AnimationFormat>,
 }
 
 impl RunOptionsArgs {
     /// What the run's folder holds besides its tables.
-    pub fn outputs(&self) -> pedo_io::study::RunOutputs<'static> {
-        let (png, svg) = self.figures.kinds();
-        pedo_io::study::RunOutputs {
-            figures: pedo_io::study::FigureKinds { png, svg },
-            report: (self.report == ReportArg::Html)
-                .then_some(&output::report_page as &pedo_io::study::ReportWriter),
-            animation: self.animation == AnimationArg::Gif,
-            tables: self.tables.unwrap_or_default(),
-        }
+    pub fn outputs(&self) -> pedo_output::RunOutputs {
+        pedo_output::RunOutputs::of(self.figures, self.tables, self.report, self.animation)
     }
 
     /// These options as the library's parameters; absent ones at the library's defaults.
@@ -154,7 +114,7 @@ pub fn run(args: RunArgs) -> Result<(), CliError> {
     params.validate()?;
     let read = args.read.options();
     let (recording, frames) =
-        pedo_io::study::read_for_run(&args.recording, &read, &params, &args.options.outputs())?;
+        pedo_output::read_for_run(&args.recording, &read, &params, &args.options.outputs())?;
     let input = InputInfo::of_path(&args.recording)?.with_layout(&read, recording.format)?;
     execute(
         recording,
@@ -186,7 +146,7 @@ fn execute(
     params: RunParams,
     started: Instant,
 ) -> Result<(), CliError> {
-    let options = pedo_io::study::run_options(&mut recording, &params)?;
+    let options = pedo_track::run_options(&mut recording, &params)?;
     let read_time = started.elapsed();
     let bar = progress_bar();
     let bar_state = Mutex::new(None::<Stage>);
@@ -204,17 +164,15 @@ fn execute(
         bar.set_position(done as u64);
     };
     let outputs = o.outputs();
-    let plan = pedo_io::study::RunPlan {
+    let plan = pedo_output::RunPlan {
         input,
         params: &params,
-        frames: frames
-            .as_mut()
-            .map(|f| f as &mut dyn pedo_io::sequence::FrameSource),
+        frames: frames.as_mut().map(|f| f as &mut dyn pedo_io::FrameSource),
         folder: Some(out),
         outputs: &outputs,
         timings: &[("read", read_time.as_secs_f64())],
     };
-    let (summary, _) = pedo_io::study::run_into_folder(&recording, &options, plan, &progress)
+    let (summary, _) = pedo_output::run_into_folder(&recording, &options, plan, &progress)
         .map_err(|e| e.of_input(&input.name))?;
     bar.finish_and_clear();
     if o.json {
@@ -269,7 +227,7 @@ fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: Tab
     };
     let (pairs, frames) = (skipped("pairs"), skipped("frames"));
     if int("pairs") == 0 {
-        outln!("{}", pedo_io::study::no_pairs_note(isocontour, pairs.len()));
+        outln!("{}", pedo_study::no_pairs_note(isocontour, pairs.len()));
     } else {
         outln!(
             "mean local matches {:.1} %, optimisation matches {:.1} % ({:.1} % trackable), mean cost {:.4}",

@@ -1,5 +1,5 @@
 //! The options `match`, `run` and `demo` share, read from the one definition of each option in
-//! the library crates ([`modal_core::options`], [`pedo_io::sequence`], [`pedo_io::units`]):
+//! the library crates ([`modal_core::options`], [`pedo_track`], [`pedo_io::units`]):
 //! the same names as Python's keywords (`--x-y` for `x_y`), the same words, the same defaults
 //! (an absent option is the library's default) and the same help text.
 
@@ -22,8 +22,8 @@ pub fn help(name: &str) -> String {
     modal_core::options::match_option_specs()
         .into_iter()
         .chain(modal_core::options::pair_option_specs())
-        .chain(pedo_io::sequence::recording_option_specs())
-        .chain(pedo_io::tables::output_option_specs())
+        .chain(pedo_track::recording_option_specs())
+        .chain(pedo_output::output_option_specs())
         .find(|s| s.name == name)
         .map(|s| s.help_with_default())
         .unwrap_or_else(|| panic!("option {name} is not in the library's option tables"))

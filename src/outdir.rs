@@ -1,4 +1,4 @@
-//! The CLI's side of the library's atomic output folders ([`pedo_io::outdir`]): the Ctrl-C
+//! The CLI's side of the library's atomic output folders ([`pedo_output::outdir`]): the Ctrl-C
 //! handler, and the folder type with the subcommands' `String` errors.
 
 use std::path::Path;
@@ -12,7 +12,7 @@ pub fn install_interrupt_handler() {
     // Failing to install (another handler exists) only loses the clean-up; the next run sweeps
     // stale staging folders anyway.
     let _ = ctrlc::set_handler(|| {
-        pedo_io::outdir::interrupt();
+        pedo_output::outdir::interrupt();
         eprintln!("pedomatch: interrupted");
         std::process::exit(EXIT_INTERRUPTED as i32);
     });
@@ -22,7 +22,7 @@ pub fn install_interrupt_handler() {
 /// error caused by the interruption must not exit on its own before the clean-up is done, so it
 /// calls [`wait_for_interrupt_exit`].
 pub fn interrupted() -> bool {
-    pedo_io::outdir::interrupted()
+    pedo_output::outdir::interrupted()
 }
 
 /// Blocks until the interrupt handler ends the process with [`EXIT_INTERRUPTED`].
@@ -32,14 +32,14 @@ pub fn wait_for_interrupt_exit() -> ! {
     }
 }
 
-/// An output folder being written (see [`pedo_io::outdir`]), with `String` errors.
-pub struct OutDir(pub pedo_io::outdir::OutDir);
+/// An output folder being written (see [`pedo_output::outdir`]), with `String` errors.
+pub struct OutDir(pub pedo_output::outdir::OutDir);
 
 impl OutDir {
     /// Starts an output into `root`. Fails if `root` is a file, or a non-empty folder that is not
     /// a pedomatch output.
     pub fn create(root: &Path) -> Result<Self, String> {
-        pedo_io::outdir::OutDir::create(root)
+        pedo_output::outdir::OutDir::create(root)
             .map(Self)
             .map_err(|e| e.to_string())
     }

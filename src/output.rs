@@ -78,50 +78,6 @@ pub fn csv_table(header: &[&str], rows: impl IntoIterator<Item = Vec<String>>) -
     s
 }
 
-/// `report.html`, the self-contained interactive report of a run (the library's
-/// [`pedo_io::study::ReportWriter`]), with the options and timings of its summary.
-pub fn report_page(
-    run: &pedo_io::study::RunRecord<'_>,
-    summary: &serde_json::Value,
-) -> pedo_io::Result<String> {
-    let timings = summary["timings_s"]
-        .as_object()
-        .map(|m| {
-            m.iter()
-                .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(0.0)))
-                .collect()
-        })
-        .unwrap_or_default();
-    let used = summary["options"]
-        .as_object()
-        .map(|m| m.iter().map(|(k, v)| (k.clone(), option_text(v))).collect())
-        .unwrap_or_default();
-    let info = pedo_report::ReportInfo {
-        input: run.input.name.clone(),
-        format: run.recording.format.map(|f| f.name().to_string()),
-        version: env!("CARGO_PKG_VERSION").to_string(),
-        options: used,
-        timings,
-        contact_threshold: run.options.contour.preprocess.threshold.unwrap_or(0.0),
-        frames: run.options.frames,
-    };
-    pedo_report::run_report(run.recording, run.result, &info).map_err(|e| {
-        pedo_io::IoError::Output {
-            path: "report.html".into(),
-            msg: e.to_string(),
-        }
-    })
-}
-
-/// An option's value as the report's header shows it (`none` for an unset one).
-pub(crate) fn option_text(v: &serde_json::Value) -> String {
-    match v {
-        serde_json::Value::Null => "none".into(),
-        serde_json::Value::String(s) => s.clone(),
-        other => other.to_string(),
-    }
-}
-
 /// "`DIR/` (file, file, ...)": an output folder and the files and folders it holds, for the
 /// closing line of a command (the folder as given, with one trailing slash).
 pub fn folder_text(dir: &Path) -> String {
@@ -160,10 +116,9 @@ pub fn pretty<T: serde::Serialize>(v: &T) -> Result<String, String> {
 pub fn write_figure(
     dir: &OutDir,
     stem: &str,
-    (png, svg): (bool, bool),
+    kinds: pedo_output::FigureKinds,
     to_png: impl FnOnce() -> pedo_io::Result<Vec<u8>>,
     to_svg: impl FnOnce() -> pedo_io::Result<String>,
 ) -> Result<(), String> {
-    let kinds = pedo_io::study::FigureKinds { png, svg };
-    pedo_io::study::write_figure(&dir.0, stem, kinds, to_png, to_svg).map_err(|e| e.to_string())
+    pedo_output::write_figure(&dir.0, stem, kinds, to_png, to_svg).map_err(|e| e.to_string())
 }

@@ -85,7 +85,7 @@ fn keys(v: &Value) -> Vec<String> {
 }
 
 fn sha256_of(path: &Path) -> String {
-    pedo_io::report::sha256_hex(&std::fs::read(path).unwrap())
+    pedo_output::sha256_hex(&std::fs::read(path).unwrap())
 }
 
 #[test]
@@ -646,7 +646,7 @@ fn a_run_on_part_of_a_study_keeps_the_other_rows_while_their_folders_are_there()
     let kept = |r: &Value| {
         let mut r = r.clone();
         let message = r["message"].as_str().unwrap();
-        r["message"] = pedo_io::study::kept_message(message, true).into();
+        r["message"] = pedo_study::kept_message(message, true).into();
         r
     };
     assert_eq!(&table[1..], &[kept(&all[0]), kept(&all[1]), kept(&all[2])]);
@@ -1055,7 +1055,7 @@ fn office_files_and_readmes_describing_the_formats_are_passed_over() {
          The emed pages: a `Page k` line and `Matrix: 64x95`.\nPage 1\n",
     )
     .unwrap();
-    let found = pedo_io::study::find_recordings(&[input.to_str().unwrap()]).unwrap();
+    let found = pedo_study::find_recordings(&[input.to_str().unwrap()]).unwrap();
     let names: Vec<_> = found.iter().map(|p| p.file_name().unwrap()).collect();
     assert_eq!(names, ["cut.asf", "walk.asf"]);
     let o = base.join("out");
@@ -1077,7 +1077,7 @@ fn office_files_and_readmes_describing_the_formats_are_passed_over() {
     // A zip of .npy members is still an .npz, found whatever its name.
     let npz = std::fs::read(Path::new(DATA).join("numpy-MUN104L-stored.npz")).unwrap();
     std::fs::write(input.join("plate.data"), npz).unwrap();
-    let found = pedo_io::study::find_recordings(&[input.to_str().unwrap()]).unwrap();
+    let found = pedo_study::find_recordings(&[input.to_str().unwrap()]).unwrap();
     assert!(found.iter().any(|p| p.ends_with("plate.data")), "{found:?}");
     std::fs::remove_dir_all(&base).unwrap();
 }
@@ -1085,7 +1085,7 @@ fn office_files_and_readmes_describing_the_formats_are_passed_over() {
 #[test]
 fn the_test_data_folder_with_its_readme_is_only_recordings() {
     // Its README.md describes the .asf and .lst formats (ASCII_DATA, Matrix:, Page).
-    let found = pedo_io::study::find_recordings(&[DATA]).unwrap();
+    let found = pedo_study::find_recordings(&[DATA]).unwrap();
     let names: Vec<_> = found
         .iter()
         .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
@@ -1127,7 +1127,7 @@ fn symlinked_recordings_and_folders_are_followed_and_a_broken_link_is_an_error_r
     symlink(&study, study.join("s01/up")).unwrap();
     symlink(base.join("gone/raw.asf"), study.join("s01/dangling.asf")).unwrap();
     symlink(base.join("gone/notes.txt"), study.join("s01/dangling.txt")).unwrap();
-    let found = pedo_io::study::find_recordings(&[study.to_str().unwrap()]).unwrap();
+    let found = pedo_study::find_recordings(&[study.to_str().unwrap()]).unwrap();
     let names: Vec<_> = found
         .iter()
         .map(|p| {
@@ -1140,7 +1140,7 @@ fn symlinked_recordings_and_folders_are_followed_and_a_broken_link_is_an_error_r
     // The same file by two links is found once.
     assert_eq!(names, ["s01/dangling.asf", "s01/walk.lst"]);
     // The symlinked folder alone.
-    let found = pedo_io::study::find_recordings(&[study.join("s02").to_str().unwrap()]).unwrap();
+    let found = pedo_study::find_recordings(&[study.join("s02").to_str().unwrap()]).unwrap();
     assert_eq!(found, [study.join("s02/raw.lst")]);
     let o = base.join("out");
     let (code, report, stderr) =

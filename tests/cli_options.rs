@@ -69,7 +69,7 @@ fn flags_of(specs: &[modal_core::OptionSpec]) -> BTreeSet<String> {
 #[test]
 fn run_and_match_flags_are_the_library_option_tables() {
     let matching = modal_core::options::match_option_specs();
-    let recording = pedo_io::sequence::recording_option_specs();
+    let recording = pedo_track::recording_option_specs();
     let units = pedo_io::units::unit_option_specs();
     let pair = modal_core::options::pair_option_specs();
     let own =
@@ -77,16 +77,8 @@ fn run_and_match_flags_are_the_library_option_tables() {
 
     let mut expected = flags_of(&matching);
     expected.extend(flags_of(&recording));
-    expected.extend(flags_of(&pedo_io::tables::output_option_specs()));
-    expected.extend(own(&[
-        "out",
-        "figures",
-        "report",
-        "animation",
-        "timings",
-        "json",
-        "help",
-    ]));
+    expected.extend(flags_of(&pedo_output::output_option_specs()));
+    expected.extend(own(&["out", "timings", "json", "help"]));
     assert_eq!(long_flags("demo"), expected);
     expected.extend(own(&["layout"]));
     assert_eq!(long_flags("run"), expected);
@@ -128,7 +120,7 @@ fn run_on_the_bundled_recording_reports_time_mm_and_provenance() {
         .unwrap()
     );
     assert_eq!(summary["pedomatch_version"], env!("CARGO_PKG_VERSION"));
-    let sha = pedo_io::report::sha256_hex(&std::fs::read(BUNDLED).unwrap());
+    let sha = pedo_output::sha256_hex(&std::fs::read(BUNDLED).unwrap());
     assert_eq!(summary["input"]["sha256"], sha);
     assert!(summary["input"]["file"]
         .as_str()
@@ -144,7 +136,7 @@ fn run_on_the_bundled_recording_reports_time_mm_and_provenance() {
     let options = summary["options"].as_object().unwrap();
     for spec in modal_core::options::match_option_specs()
         .iter()
-        .chain(&pedo_io::sequence::recording_option_specs())
+        .chain(&pedo_track::recording_option_specs())
     {
         assert!(
             options.contains_key(spec.name),

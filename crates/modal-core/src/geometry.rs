@@ -68,20 +68,6 @@ pub(crate) fn rows3(m: &Matrix3<f64>) -> [[f64; 3]; 3] {
     std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]))
 }
 
-/// Flips an eigenvector so that its largest-|·| entry (the first of equal ones) is positive:
-/// the eigensolver's sign is arbitrary, this makes it reproducible.
-fn canonical_sign<const N: usize>(v: &mut [f64; N]) {
-    let mut best = 0;
-    for i in 1..N {
-        if v[i].abs() > v[best].abs() {
-            best = i;
-        }
-    }
-    if v[best] < 0.0 {
-        v.iter_mut().for_each(|x| *x = -*x);
-    }
-}
-
 /// Eigenvalues and eigenvectors (columns, `vecs[row][k]` for eigenvalue `k`) of a symmetric 3×3
 /// matrix, unsorted; each vector has its largest entry positive.
 pub(crate) fn sym_eigen3(a: &[[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
@@ -89,7 +75,7 @@ pub(crate) fn sym_eigen3(a: &[[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
     let mut vecs = [[0.0; 3]; 3];
     for k in 0..3 {
         let mut v: [f64; 3] = std::array::from_fn(|r| eig.eigenvectors[(r, k)]);
-        canonical_sign(&mut v);
+        crate::eigen::canonical_sign(&mut v);
         for r in 0..3 {
             vecs[r][k] = v[r];
         }
@@ -104,7 +90,7 @@ pub(crate) fn sym_eigen2_padded(a: &[[f64; 3]; 3], pad: f64) -> ([f64; 3], [[f64
     let mut vecs = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
     for k in 0..2 {
         let mut v = [eig.eigenvectors[(0, k)], eig.eigenvectors[(1, k)]];
-        canonical_sign(&mut v);
+        crate::eigen::canonical_sign(&mut v);
         vecs[0][k] = v[0];
         vecs[1][k] = v[1];
     }

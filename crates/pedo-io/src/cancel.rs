@@ -1,11 +1,11 @@
 //! Stopping a run early from another thread.
 //!
 //! A [`Cancel`] is a shared flag: the caller sets it ([`Cancel::cancel`]) and the run, given it in
-//! [`SequenceOptions::cancel`](crate::sequence::SequenceOptions::cancel) or
-//! [`StudyOptions::cancel`](crate::study::StudyOptions::cancel), checks it at its progress steps
+//! `pedo_track::SequenceOptions::cancel` or `pedo_study::StudyOptions::cancel`, checks it at its
+//! progress steps
 //! (a frame built, a pair matched, a figure drawn, before an output folder is committed) and then
 //! fails with [`IoError::Cancelled`]: the frames and pairs not started are not processed and no
-//! output folder of the run is committed. Unlike [`crate::outdir::interrupt`] (a process-wide
+//! output folder of the run is committed. Unlike `pedo_output::outdir::interrupt` (a process-wide
 //! latch for a program that exits), it concerns only the runs it is given, so a program can go on
 //! and run again (the Python bindings cancel a run on Ctrl-C this way).
 
@@ -35,12 +35,12 @@ impl Cancel {
 }
 
 /// Whether `cancel` is given and was cancelled.
-pub(crate) fn cancelled(cancel: Option<&Cancel>) -> bool {
+pub fn cancelled(cancel: Option<&Cancel>) -> bool {
     cancel.is_some_and(Cancel::is_cancelled)
 }
 
 /// [`IoError::Cancelled`] if `cancel` is given and was cancelled.
-pub(crate) fn check(cancel: Option<&Cancel>) -> Result<()> {
+pub fn check(cancel: Option<&Cancel>) -> Result<()> {
     if cancelled(cancel) {
         Err(IoError::Cancelled)
     } else {

@@ -1,4 +1,5 @@
-//! The error type of pedo-io.
+//! The error type of the pipeline crates (pedo-io, pedo-track, pedo-output, pedo-study), and
+//! the wording of counts in their messages.
 
 use modal_core::ModalError;
 
@@ -78,29 +79,34 @@ pub enum IoError {
 }
 
 impl IoError {
-    pub(crate) fn parse(path: &str, line: usize, msg: impl Into<String>) -> Self {
+    /// A [`IoError::Parse`]: `path` is malformed at 1-based `line`.
+    pub fn parse(path: &str, line: usize, msg: impl Into<String>) -> Self {
         IoError::Parse {
             path: path.to_string(),
             line,
             msg: msg.into(),
         }
     }
-    pub(crate) fn format(path: &str, msg: impl Into<String>) -> Self {
+    /// A [`IoError::Format`]: `path` is malformed as a whole.
+    pub fn format(path: &str, msg: impl Into<String>) -> Self {
         IoError::Format {
             path: path.to_string(),
             msg: msg.into(),
         }
     }
-    pub(crate) fn unknown_format(path: &str, recognised: impl Into<String>) -> Self {
+    /// An [`IoError::UnknownFormat`]: `path` looks like `recognised`, no supported format.
+    pub fn unknown_format(path: &str, recognised: impl Into<String>) -> Self {
         IoError::UnknownFormat {
             path: path.to_string(),
             recognised: recognised.into(),
         }
     }
-    pub(crate) fn invalid(msg: impl Into<String>) -> Self {
+    /// An [`IoError::InvalidInput`].
+    pub fn invalid(msg: impl Into<String>) -> Self {
         IoError::InvalidInput(msg.into())
     }
-    pub(crate) fn no_object(msg: impl Into<String>) -> Self {
+    /// An [`IoError::NoObject`].
+    pub fn no_object(msg: impl Into<String>) -> Self {
         IoError::NoObject(msg.into())
     }
 
@@ -117,3 +123,19 @@ impl IoError {
 
 /// Result alias of the crate.
 pub type Result<T> = std::result::Result<T, IoError>;
+
+/// `n` and a noun, in the singular for one and with a plain `s` otherwise: the counts of the
+/// messages and terminal lines.
+///
+/// ```
+/// use pedo_io::counted;
+/// assert_eq!(counted(1, "recording"), "1 recording");
+/// assert_eq!(counted(0, "isobaric level"), "0 isobaric levels");
+/// ```
+pub fn counted(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}

@@ -849,6 +849,19 @@ impl Recording {
     }
 }
 
+/// Where a streamed run reads frames from when the recording it is given holds none of their
+/// values: a header-only [`Recording`] (its size, mask, units and frame count) whose frames are
+/// read as the run goes (see [`crate::formats::read_for_streaming`]). The run engine
+/// (`pedo_track::stream_sequence`) asks for them window by window.
+pub trait FrameSource {
+    /// Frames `w0..w1` of `recording` as a recording of `w1 - w0` frames with its size, mask
+    /// and units. Windows are asked for in order.
+    fn window(&mut self, recording: &Recording, w0: usize, w1: usize) -> Result<Recording>;
+}
+
+/// Frames a streamed run holds at a time: a [`FrameSource`] reads at most this many ahead.
+pub const FRAME_WINDOW: usize = 64;
+
 #[cfg(test)]
 mod tests {
     use super::*;

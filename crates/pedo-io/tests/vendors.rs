@@ -814,31 +814,3 @@ fn a_pedar_layout_with_an_unknown_unit_is_an_error_naming_file_line_and_units() 
     }
     assert_eq!(PedarLayout::bundled().mm_per_unit, None);
 }
-
-#[test]
-fn iso_frame_outside_the_frames_range_is_an_option_error_naming_both() {
-    use pedo_io::sequence::{FrameRange, ObjectModel, RunParams};
-    let rec = read_recording(data("synthetic-walk.lst")).unwrap();
-    assert!(rec.n_frames() > 8);
-    let params = |iso_frame| RunParams {
-        model: ObjectModel::Isocontour,
-        frames: Some(FrameRange {
-            start: 3,
-            end: Some(6),
-        }),
-        iso_frame: Some(iso_frame),
-        ..Default::default()
-    };
-    for outside in [0, 2, 6, 8] {
-        let e = params(outside).to_options(&rec).unwrap_err().to_string();
-        assert!(
-            e.contains("iso_frame") && e.contains(&outside.to_string()) && e.contains("3..6"),
-            "{e}"
-        );
-        assert!(e.contains("frames"), "{e}");
-    }
-    for inside in 3..6 {
-        let o = params(inside).to_options(&rec).unwrap();
-        assert_eq!(o.iso_frame, Some(inside));
-    }
-}

@@ -1,9 +1,11 @@
 //! `pymodal.batch`, `pymodal.batch_row` and `pymodal.find_recordings`: a whole study, with the
-//! library's study code ([`pedo_io::study`]) that `pedomatch batch` runs.
+//! library's study code ([`pedo_study`]) that `pedomatch batch` runs.
 
+use modal_core::Choice;
 use pedo_io::cancel::Cancel;
-use pedo_io::study::{self, FigureKinds, RunOutputs, StudyOptions, StudyRow};
-use pedo_io::{ReadOptions, TableFormat};
+use pedo_io::ReadOptions;
+use pedo_output::RunOutputs;
+use pedo_study::{StudyOptions, StudyRow};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
@@ -31,35 +33,38 @@ fn input_strings(inputs: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<String>>
     items.map(|v| one(&v?).ok_or_else(bad)).collect()
 }
 
-fn figure_kinds(figures: &str) -> PyResult<FigureKinds> {
-    match figures {
-        "png" => Ok(FigureKinds {
-            png: true,
-            svg: false,
-        }),
-        "svg" => Ok(FigureKinds {
-            png: false,
-            svg: true,
-        }),
-        "none" => Ok(FigureKinds::default()),
-        other => Err(option_error(format!(
-            "figures: unknown value {other:?}; expected one of png, svg, none"
-        ))),
-    }
+/// What a run's folder holds, from the keywords ``figures``, ``tables``, ``report`` and
+/// ``animation`` (each None at its default): the output options of ``pedomatch run`` and
+/// ``batch``, declared once in `pedo_output::output_option_specs`.
+pub(crate) fn run_outputs(
+    figures: Option<&str>,
+    tables: Option<&str>,
+    report: Option<&str>,
+    animation: Option<&str>,
+) -> PyResult<RunOutputs> {
+    Ok(RunOutputs::of(
+        choice(figures)?,
+        choice(tables)?,
+        choice(report)?,
+        choice(animation)?,
+    ))
+}
+
+/// An option word, if given, as its choice (an `OptionError` naming the values when unknown).
+fn choice<T: Choice>(value: Option<&str>) -> PyResult<Option<T>> {
+    value.map(T::parse_word).transpose().map_err(to_py)
 }
 
 /// The study options of the keywords.
-#[allow(clippy::too_many_arguments)]
 fn study_options(
     py: Python<'_>,
     inputs: Vec<String>,
     out: Option<PathBuf>,
     jobs: Option<usize>,
     force: bool,
-    figures: &str,
-    tables: &str,
+    outputs: RunOutputs,
     options: Option<&Bound<'_, PyDict>>,
-) -> PyResult<StudyOptions<'static>> {
+) -> PyResult<StudyOptions> {
     if jobs == Some(0) {
         return Err(option_error(
             "jobs: 0 is not a number of jobs; expected >= 1 or None (every core)",
@@ -75,17 +80,12 @@ fn study_options(
         jobs: jobs.unwrap_or(0),
         force,
         cancel: None,
-        outputs: RunOutputs {
-            figures: figure_kinds(figures)?,
-            report: None,
-            animation: false,
-            tables: crate::options_py::word(Some(tables), TableFormat::default())?,
-        },
+        outputs,
     })
 }
 
 fn row_dict<'py>(py: Python<'py>, row: &StudyRow) -> PyResult<Bound<'py, PyAny>> {
-    let rows = table_rows(py, &study::study_table(std::slice::from_ref(row)))?;
+    let rows = table_rows(py, &pedo_study::study_table(std::slice::from_ref(row)))?;
     rows.get_item(0)
 }
 
@@ -98,7 +98,7 @@ fn row_dict<'py>(py: Python<'py>, row: &StudyRow) -> PyResult<Bound<'py, PyAny>>
 #[pyfunction]
 fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
     let inputs = input_strings(inputs, "inputs")?;
-    let found = crate::pool::detach(py, || study::find_recordings(&inputs)).map_err(to_py)?;
+    let found = crate::pool::detach(py, || pedo_study::find_recordings(&inputs)).map_err(to_py)?;
     Ok(found.iter().map(|p| p.display().to_string()).collect())
 }
 
@@ -112,12 +112,14 @@ fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<St
 /// ``pandas.DataFrame(rows)`` makes it a data frame.
 ///
 /// ``paths``: files, folders or glob patterns (see :func:`find_recordings`). ``out``: the study
-/// folder; each recording's folder (the tables, figures and ``summary.json`` of
-/// ``pedomatch run``; ``report.html`` is the command line's) is written there atomically, with
+/// folder; each recording's folder (the tables, figures, ``summary.json`` and ``report.html`` of
+/// ``pedomatch run``) is written there atomically, with
 /// ``study.csv`` and ``study.json`` (which also keep the rows of earlier runs' recordings that are
 /// not among ``paths``; the list returned is this run's rows only); a recording whose folder is
 /// complete (same input SHA-256 and options) is skipped unless ``force``. ``jobs``: recordings run at once, each on one
-/// thread (None: every core). ``figures``: ``"png"``, ``"svg"`` or ``"none"``. ``tables``:
+/// thread (None: every core). ``figures``: ``"png"``, ``"svg"`` or ``"none"``. ``report``: ``"html"`` (the
+/// self-contained ``report.html``) or ``"none"``. ``animation``: ``"gif"`` (``animation.gif``) or
+/// ``"none"``. ``tables``:
 /// ``"csv"``, or ``"parquet"`` (typed, compressed columns with the CSV's names and values;
 /// ``pandas.read_parquet`` reads them; the study table is then ``study.parquet``). ``layout``: a
 /// pedar sensor-layout table for the pedar recordings (``--layout``; default: the bundled
@@ -130,7 +132,7 @@ fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<St
 /// folders, those running or not started leave none (a folder of an earlier run stays as it
 /// was), and the study table is not written.
 #[pyfunction]
-#[pyo3(signature = (paths, out=None, jobs=None, *, force=false, figures="png", tables="csv", layout=None, **options))]
+#[pyo3(signature = (paths, out=None, jobs=None, *, force=false, figures=None, tables=None, report=None, animation=None, layout=None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn batch<'py>(
     py: Python<'py>,
@@ -138,21 +140,24 @@ fn batch<'py>(
     out: Option<PathBuf>,
     jobs: Option<&Bound<'py, PyAny>>,
     force: bool,
-    figures: &str,
-    tables: &str,
+    figures: Option<&str>,
+    tables: Option<&str>,
+    report: Option<&str>,
+    animation: Option<&str>,
     layout: Option<PathBuf>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let inputs = input_strings(paths, "paths")?;
     let jobs = count_keyword("jobs", jobs)?;
-    let mut opts = study_options(py, inputs, out, jobs, force, figures, tables, options)?;
+    let outputs = run_outputs(figures, tables, report, animation)?;
+    let mut opts = study_options(py, inputs, out, jobs, force, outputs, options)?;
     opts.read.layout = layout;
     // Ctrl-C stops the study as the command line's does (the recordings finished keep their
     // folders, no study table is written) and raises KeyboardInterrupt.
     let cancel = Cancel::new();
     opts.cancel = Some(cancel.clone());
     let run = crate::pool::detach_cancellable(py, &cancel, || {
-        let found = study::find_recordings(&opts.inputs)?;
+        let found = pedo_study::find_recordings(&opts.inputs)?;
         // As `pedomatch batch`: nothing to run is an error, and nothing is written.
         if found.is_empty() {
             return Err(pedo_io::IoError::InvalidInput(format!(
@@ -160,11 +165,11 @@ fn batch<'py>(
                 opts.inputs.join(" ")
             )));
         }
-        study::run_study(&found, &opts, &|_| {})
+        pedo_study::run_study(&found, &opts, &|_| {})
     })?
     .map_err(to_py)?;
     // This run's rows only (the shape it always had); study.json also holds the kept ones.
-    table_rows(py, &study::study_table(&run.rows))
+    table_rows(py, &pedo_study::study_table(&run.rows))
 }
 
 /// One row of :func:`batch`'s table: runs the recording at ``path`` (on one thread, the GIL
@@ -172,32 +177,37 @@ fn batch<'py>(
 /// ``force``), but no study table. For distributing a study yourself (a Dask cluster, a job
 /// queue): ``[batch_row(p, out) for p in find_recordings(inputs)]`` equals
 /// ``batch(inputs, out)`` but for ``wall_time_s``. Never raises for a bad recording (its row says
-/// what went wrong); bad options raise. ``tables`` and ``layout`` as for :func:`batch`.
+/// what went wrong); bad options raise. ``figures``, ``tables``, ``report``, ``animation`` and
+/// ``layout`` as for :func:`batch`.
 #[pyfunction]
-#[pyo3(signature = (path, out=None, *, force=false, figures="png", tables="csv", layout=None, **options))]
+#[pyo3(signature = (path, out=None, *, force=false, figures=None, tables=None, report=None, animation=None, layout=None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn batch_row<'py>(
     py: Python<'py>,
     path: PathBuf,
     out: Option<PathBuf>,
     force: bool,
-    figures: &str,
-    tables: &str,
+    figures: Option<&str>,
+    tables: Option<&str>,
+    report: Option<&str>,
+    animation: Option<&str>,
     layout: Option<PathBuf>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let inputs = vec![path.display().to_string()];
-    let mut opts = study_options(py, inputs, out, Some(1), force, figures, tables, options)?;
+    let outputs = run_outputs(figures, tables, report, animation)?;
+    let mut opts = study_options(py, inputs, out, Some(1), force, outputs, options)?;
     opts.read.layout = layout;
     let cancel = Cancel::new();
     opts.cancel = Some(cancel.clone());
     let row = crate::pool::detach_cancellable(py, &cancel, || {
         let previous = match &opts.out {
-            Some(out) => study::open_study_folder(out)?,
+            Some(out) => pedo_study::open_study_folder(out)?,
             None => Vec::new(),
         };
-        let before = study::previous_row(&previous, &path);
-        let row = study::on_one_thread(|| study::run_recording(&path, &opts, before, &|_| {}));
+        let before = pedo_study::previous_row(&previous, &path);
+        let row =
+            pedo_study::on_one_thread(|| pedo_study::run_recording(&path, &opts, before, &|_| {}));
         Ok::<_, pedo_io::IoError>(row)
     })?
     .map_err(to_py)?;

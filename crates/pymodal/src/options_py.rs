@@ -5,9 +5,9 @@
 
 use modal_core::options::MatchOverrides;
 use modal_core::{Choice, MatchParams, OptionKind, OptionSpec};
-use pedo_io::report::{Cell, Table};
-use pedo_io::sequence::{FrameRange, RunParams};
 use pedo_io::units::UnitOverrides;
+use pedo_output::{Cell, Table};
+use pedo_track::{FrameRange, RunParams};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyList, PyString};
 
@@ -442,7 +442,7 @@ fn _options<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
     )?;
     d.set_item(
         "recording",
-        spec_dicts(py, &pedo_io::sequence::recording_option_specs())?,
+        spec_dicts(py, &pedo_track::recording_option_specs())?,
     )?;
     d.set_item(
         "units",
@@ -450,7 +450,7 @@ fn _options<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
     )?;
     d.set_item(
         "output",
-        spec_dicts(py, &pedo_io::tables::output_option_specs())?,
+        spec_dicts(py, &pedo_output::output_option_specs())?,
     )?;
     Ok(d)
 }

@@ -3,12 +3,13 @@
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pedo_io::cancel::Cancel;
 use pedo_io::recording::kpa_per_unit;
-use pedo_io::report::{self, InputInfo};
-use pedo_io::sequence::{run_sequence, SequenceResult};
-use pedo_io::study::require_objects;
 use pedo_io::Recording;
+use pedo_output::{write_run_folder, InputInfo, RunRecord};
+use pedo_track::require_objects;
+use pedo_track::{run_sequence, SequenceResult};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use std::path::PathBuf;
 
 use crate::arrays::checked_array;
 use crate::errors::{internal, to_py};
@@ -65,6 +66,12 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
 /// (pressure units of the values, for formats that store none: kPa, Pa, MPa, N/cm², N/mm²,
 /// psi, bar or mmHg; overrides the file's) and
 /// ``drift_reference`` (drift correction of tracks: frames between reference frames; 0: off).
+///
+/// ``out``: a folder to write the run into, exactly as ``pedomatch run --out`` writes it (the
+/// tables, ``pairs.json``, ``summary.json``, the figures and ``report.html``), whole or not at
+/// all; None (the default) writes nothing. ``figures`` (``"png"``, ``"svg"``, ``"none"``),
+/// ``tables`` (``"csv"``, ``"parquet"``), ``report`` (``"html"``, ``"none"``) and ``animation``
+/// (``"gif"``, ``"none"``) say what the folder holds, with the defaults of ``pedomatch run``.
 ///
 /// Returns a dict with
 ///
@@ -124,7 +131,8 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
     refit_tolerance=None, refine=None, deform_modes=None, deform_stiffness=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
     common_sigma=None, skip_rigid=None, band=None, material=None, model=None, frames=None,
     noise=None, smooth=None, spacing=None, surface_nodes=None, iso_frame=None, iso_levels=None,
-    drift_reference=None, pitch_mm=None, frame_rate=None, units=None))]
+    drift_reference=None, pitch_mm=None, frame_rate=None, units=None, out=None, figures=None,
+    tables=None, report=None, animation=None))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
     py: Python<'py>,
@@ -164,7 +172,13 @@ fn run<'py>(
     pitch_mm: Option<&Bound<'py, PyAny>>,
     frame_rate: Option<&Bound<'py, PyAny>>,
     units: Option<&Bound<'py, PyAny>>,
+    out: Option<PathBuf>,
+    figures: Option<&str>,
+    tables: Option<&str>,
+    report: Option<&str>,
+    animation: Option<&str>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let outputs = crate::batch_py::run_outputs(figures, tables, report, animation)?;
     let matching = MatchKw::new(
         element,
         modes,
@@ -222,10 +236,11 @@ fn run<'py>(
     require_objects(result.objects.len(), &rec, &options)
         .map_err(|e| to_py(e.of_input(&input.name)))?;
 
+    let folder = out;
     let out = PyDict::new(py);
     out.set_item(
         "table",
-        table_rows(py, &report::pairs_table(&rec, &result))?,
+        table_rows(py, &pedo_output::pairs_table(&rec, &result))?,
     )?;
     let matches = PyList::empty(py);
     for p in &result.pairs {
@@ -257,16 +272,33 @@ fn run<'py>(
     out.set_item("track_steps", track_steps)?;
     let (start, end) = options.frames.unwrap_or((0, rec.n_frames()));
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
-    let measures = report::frames_table(&rec, threshold, start, end);
+    let measures = pedo_output::frames_table(&rec, threshold, start, end);
     out.set_item("frames", table_rows(py, &measures)?)?;
-    let summary = report::run_summary(
-        &input,
-        &rec,
-        &params,
-        &options,
-        &result,
-        &[("read", read_time)],
-    );
+    let summary = match folder {
+        // The folder `pedomatch run` writes, by the same writer, whole or not at all.
+        Some(folder) => {
+            let run = RunRecord {
+                input: &input,
+                recording: &rec,
+                params: &params,
+                options: &options,
+                result: &result,
+            };
+            let stages = [("read", read_time)];
+            crate::pool::detach_cancellable(py, &cancel, || {
+                write_run_folder(&folder, &run, &outputs, &stages)
+            })?
+            .map_err(to_py)?
+        }
+        None => pedo_output::run_summary(
+            &input,
+            &rec,
+            &params,
+            &options,
+            &result,
+            &[("read", read_time)],
+        ),
+    };
     out.set_item("summary", json_to_py(py, &summary)?)?;
     let timings = PyDict::new(py);
     timings.set_item("read", read_time)?;
@@ -314,7 +346,7 @@ fn objects<'py>(
     let objects = PyList::empty(py);
     // The columns of objects.csv besides those set below (centroids, the measures inside each
     // outline), written as that table writes them.
-    let table = report::objects_table(rec, result);
+    let table = pedo_output::objects_table(rec, result);
     for (o, row) in result.objects.iter().zip(&table.rows) {
         let d = PyDict::new(py);
         d.set_item("id", o.id)?;
@@ -359,7 +391,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// recording options (units included), as the option tables define them.
 fn run_keywords() -> Vec<&'static str> {
     let matching = modal_core::options::match_option_specs();
-    let recording = pedo_io::sequence::recording_option_specs();
+    let recording = pedo_track::recording_option_specs();
     matching.iter().chain(&recording).map(|s| s.name).collect()
 }
 
@@ -368,7 +400,7 @@ fn run_keywords() -> Vec<&'static str> {
 pub fn run_params<'py>(
     py: Python<'py>,
     options: Option<&Bound<'py, PyDict>>,
-) -> PyResult<pedo_io::sequence::RunParams> {
+) -> PyResult<pedo_track::RunParams> {
     let d = options.cloned().unwrap_or_else(|| PyDict::new(py));
     let keywords = run_keywords();
     for key in d.keys() {

@@ -24,8 +24,14 @@ def test_match_keywords_are_the_match_and_pair_options():
     assert keywords(pymodal.match) == names("match", "pair") + extra
 
 
-def test_run_keywords_are_the_match_and_recording_options():
-    assert keywords(pymodal.run) == names("match", "recording")
+def test_run_keywords_are_the_match_recording_and_output_options():
+    # `out` is the folder written (pedomatch run --out), the output options what it holds.
+    assert keywords(pymodal.run) == names("match", "recording") + ["out"] + names("output")
+
+
+def test_batch_keywords_are_the_output_options():
+    for fn in (pymodal.batch, pymodal.batch_row):
+        assert [k for k in keywords(fn) if k in names("output")] == names("output"), fn.__name__
 
 
 def test_read_recording_keywords_are_the_unit_options():

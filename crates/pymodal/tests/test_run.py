@@ -344,3 +344,46 @@ def test_plot_helpers_draw():
     assert len(drawn) == min(40, sum(len(tr) >= 4 for tr in res["tracks"]))
     with pytest.raises(ValueError):
         plot_match(m, a, np.zeros((5, 3)))
+
+
+def _files(folder):
+    return sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file())
+
+
+@pytest.mark.parametrize(
+    "outputs",
+    [{}, {"tables": "parquet", "figures": "none", "report": "none"}],
+    ids=["defaults", "parquet-lean"],
+)
+def test_run_with_out_writes_the_folder_of_pedomatch_run(tmp_path, outputs):
+    """`run(out=...)` writes the folder `pedomatch run` writes (the same writer as a study's
+    recording folder, `batch_row`): the same files, `report.html` included by default, the same
+    bytes but for the timings; and it returns the summary it wrote."""
+    import json
+
+    options = dict(frames=(30, 60), **outputs)
+    res = pymodal.run(BUNDLED, out=tmp_path / "run", **options)
+    row = pymodal.batch_row(BUNDLED, tmp_path / "study", **options)
+    assert row["status"] == "ok", row["message"]
+    mine, study = tmp_path / "run", tmp_path / "study" / row["output"]
+    assert _files(mine) == _files(study)
+    assert ("report.html" in _files(mine)) == ("report" not in outputs)
+    tables = "parquet" if outputs else "csv"
+    assert {f"pairs.{tables}", f"tracks.{tables}", "pairs.json", "summary.json"} <= set(_files(mine))
+    for f in _files(mine):
+        if f in ("summary.json", "report.html"):
+            continue  # both hold the run's timings
+        assert (mine / f).read_bytes() == (study / f).read_bytes(), f
+    summary = json.loads((mine / "summary.json").read_text())
+    assert res["summary"] == summary
+    timeless = lambda s: {k: v for k, v in s.items() if k != "timings_s"}
+    assert timeless(summary) == timeless(json.loads((study / "summary.json").read_text()))
+
+
+def test_run_without_out_writes_nothing_and_bad_output_values_raise(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    pymodal.run(moving_blob(4))
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(pymodal.OptionError, match="report"):
+        pymodal.run(moving_blob(4), out=tmp_path / "x", report="pdf")
+    assert not (tmp_path / "x").exists()

@@ -1015,8 +1015,10 @@ pub fn canonical_signs(mut v: MatMut<'_, f64>) {
     }
 }
 
-/// [`canonical_signs`] of one column.
-fn canonical_sign(col: &mut [f64]) {
+/// [`canonical_signs`] of one column: the sign rule of every eigenvector this crate returns
+/// (the dense solver's and the 3 × 3 principal axes' of `geometry`), so that a vector's sign is
+/// reproducible however it was computed.
+pub(crate) fn canonical_sign(col: &mut [f64]) {
     let best = crate::simd::max_abs(col);
     let first = col.iter().find(|x| x.abs() >= best * (1.0 - 1e-6));
     if first.is_some_and(|&x| x < 0.0) {

@@ -54,7 +54,7 @@ fn decode(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>, Format)> 
 /// Whether the PNG or TIFF image at `path` is one this module reads (8- or 16-bit grayscale), by
 /// its header alone; `None` when the header cannot be read. A study search passes over colour
 /// images (a photograph of the foot beside a recording is no pressure frame).
-pub(crate) fn is_grayscale_image(path: &Path) -> Option<bool> {
+pub fn is_grayscale_image(path: &Path) -> Option<bool> {
     use image::ImageDecoder;
     let decoder = image::ImageReader::open(path)
         .ok()?

@@ -48,7 +48,7 @@ pub(crate) fn parse_num(tok: &str) -> Option<f64> {
 /// Windows Notepad's "Unicode" and Excel's "Unicode Text" write it; `FE FF`: big-endian), as
 /// UTF-8 without the mark, so that it reads exactly as its UTF-8 form; `None` for any other
 /// file. A unit that is no UTF-16 (a lone surrogate, an odd last byte) becomes U+FFFD.
-pub(crate) fn utf16_to_utf8(bytes: &[u8]) -> Option<Vec<u8>> {
+pub fn utf16_to_utf8(bytes: &[u8]) -> Option<Vec<u8>> {
     let little = utf16_little_endian(bytes)?;
     let units = bytes[2..].chunks(2).map(|c| match (c, little) {
         ([a, b], true) => u16::from_le_bytes([*a, *b]),
@@ -100,11 +100,11 @@ pub fn detect_format(path: &Path, head: &[u8]) -> Option<Format> {
 
 /// Extensions that name one of our recording formats and nothing else: a file that carries one
 /// is meant as a recording even when its content is empty or unreadable.
-const RECORDING_EXTENSIONS: [&str; 5] = ["asf", "lst", "apd", "npy", "npz"];
+pub const RECORDING_EXTENSIONS: [&str; 5] = ["asf", "lst", "apd", "npy", "npz"];
 
 /// Whether `path`'s extension names a recording format ([`RECORDING_EXTENSIONS`]), whatever the
 /// file holds.
-pub(crate) fn has_recording_extension(path: &Path) -> bool {
+pub fn has_recording_extension(path: &Path) -> bool {
     extension(path).is_some_and(|e| RECORDING_EXTENSIONS.contains(&e.as_str()))
 }
 
@@ -508,7 +508,7 @@ pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording> {
     read_recording_with(path, &ReadOptions::default())
 }
 
-/// A recording read for a run that goes through it once, in order ([`crate::sequence::stream_sequence`]):
+/// A recording read for a run that goes through it once, in order (`pedo_track::stream_sequence`):
 /// a Tekscan `.asf` file or CSV export (not gzip-compressed) is read once, checked whole, and
 /// returned without its values (every frame reads as 0: only its size, sensor mask, units and
 /// number of frames are held), with a [`FileFrames`] that reads its frames again, window by
@@ -552,7 +552,7 @@ pub struct FileFrames {
 
 impl FileFrames {
     fn start(path: PathBuf, name: String, size: usize, csv: bool) -> Self {
-        let (send, frames) = std::sync::mpsc::sync_channel(crate::sequence::FRAME_WINDOW);
+        let (send, frames) = std::sync::mpsc::sync_channel(crate::recording::FRAME_WINDOW);
         let thread_name = name.clone();
         std::thread::spawn(move || {
             let read = || -> Result<()> {
@@ -580,7 +580,7 @@ impl FileFrames {
     }
 }
 
-impl crate::sequence::FrameSource for FileFrames {
+impl crate::recording::FrameSource for FileFrames {
     fn window(&mut self, recording: &Recording, w0: usize, w1: usize) -> Result<Recording> {
         if w0 < self.next || w1 <= w0 {
             return Err(IoError::invalid(format!(

@@ -331,6 +331,11 @@ def run(
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
     units: Optional[str] = None,
+    out: Optional[Path] = None,
+    figures: Optional[Literal["png", "svg", "none"]] = None,
+    tables: Optional[Tables] = None,
+    report: Optional[Literal["html", "none"]] = None,
+    animation: Optional[Literal["gif", "none"]] = None,
 ) -> RunResult: ...
 
 # A row of a study table (batch, batch_row): path, output, format, frames, frame_rate_hz,
@@ -349,8 +354,10 @@ def batch(
     jobs: Optional[int] = None,
     *,
     force: bool = False,
-    figures: Literal["png", "svg", "none"] = "png",
-    tables: Tables = "csv",
+    figures: Optional[Literal["png", "svg", "none"]] = None,
+    tables: Optional[Tables] = None,
+    report: Optional[Literal["html", "none"]] = None,
+    animation: Optional[Literal["gif", "none"]] = None,
     layout: Optional[Path] = None,
     **options: Any,
 ) -> list[StudyRow]:
@@ -364,8 +371,10 @@ def batch_row(
     out: Optional[Path] = None,
     *,
     force: bool = False,
-    figures: Literal["png", "svg", "none"] = "png",
-    tables: Tables = "csv",
+    figures: Optional[Literal["png", "svg", "none"]] = None,
+    tables: Optional[Tables] = None,
+    report: Optional[Literal["html", "none"]] = None,
+    animation: Optional[Literal["gif", "none"]] = None,
     layout: Optional[Path] = None,
     **options: Any,
 ) -> StudyRow:

@@ -1,0 +1,1475 @@
+//! Self-contained interactive HTML reports: of a whole-recording run ([`run_report`]) and of
+//! one matched pair ([`match_report`]).
+//!
+//! The page embeds plotly.js (from the `plotly` crate's `plotly_embed_js` resources) and the
+//! run's data as JSON, so it opens offline from the output folder and makes no network request
+//! (a Content-Security-Policy forbids any). It holds a header (input, format, units, options,
+//! timings, skipped frames and pairs), a player (pressure image, contours, matches into the next
+//! frame coloured by cost, excess matches, unmatched nodes, short track trails) driven by a frame
+//! slider and a play button, time series along the recording and the centre-of-pressure path.
+//! The player opens on the first frame holding objects within the frames analysed
+//! ([`ReportInfo::frames`]), which the header states.
+//! For isocontours the player draws each level of the frame, labelled with its pressure. The
+//! match page shows both objects, the matches by cost class, excess matches and unmatched nodes,
+//! and a 3-D view for 3-D points.
+//!
+//! Size is bounded: when `frames × rows × cols` exceeds [`MAX_PLAYER_VALUES`], the player keeps
+//! every `s`-th frame only (the report says so); the time series keep every frame.
+
+use pedo_io::counted;
+use pedo_io::{IoError, Recording, Result};
+use pedo_track::SequenceResult;
+use serde_json::{json, Value};
+use std::collections::HashMap;
+
+/// Most pressure values the player embeds (frames × rows × cols); beyond it frames are
+/// decimated. At most 5 bytes each: 12.5 MB, plus plotly.js (4.6 MB) and the overlays, under 25 MB.
+pub const MAX_PLAYER_VALUES: usize = 2_500_000;
+
+/// Frames of history drawn as a trail behind each track's node.
+const TRAIL_FRAMES: usize = 4;
+
+/// Number of cost classes the matches are coloured by (quantiles of all costs).
+const COST_CLASSES: usize = 5;
+
+/// A report that cannot be built: an [`IoError::Output`] on `report.html`.
+fn report_error(msg: impl std::fmt::Display) -> IoError {
+    IoError::Output {
+        path: "report.html".into(),
+        msg: msg.to_string(),
+    }
+}
+
+/// What the report's header states about the run (besides what the recording itself holds:
+/// its pitch, frame rate and pressure units).
+#[derive(Debug, Clone, Default)]
+pub struct ReportInfo {
+    /// The input's name as the user gave it.
+    pub input: String,
+    /// The detected file format (e.g. "asf"), if known.
+    pub format: Option<String>,
+    /// The pedomatch version.
+    pub version: String,
+    /// Every option used, as (name, value) text.
+    pub options: Vec<(String, String)>,
+    /// Time spent per stage, (stage, seconds).
+    pub timings: Vec<(String, f64)>,
+    /// Sensors above this value count as contact in the time series (the run's noise level).
+    pub contact_threshold: f64,
+    /// The frames analysed, `start..end` (0-based, `end` excluded; `None`: every frame). The
+    /// player still plays the whole recording but opens within this range, and the header and
+    /// the time series show it.
+    pub frames: Option<(usize, usize)>,
+}
+
+/// The report of one run as a complete HTML page.
+pub fn run_report(
+    recording: &Recording,
+    result: &SequenceResult,
+    info: &ReportInfo,
+) -> Result<String> {
+    if recording.n_frames() == 0 {
+        return Err(report_error("the recording has no frames"));
+    }
+    let data = report_data(recording, result, info);
+    let data = serde_json::to_string(&data)
+        .map_err(|e| report_error(format!("cannot encode the report data: {e}")))?;
+    Ok(page(
+        TEMPLATE,
+        &info.input,
+        &header_html(recording, result, info),
+        &data,
+    ))
+}
+
+/// A template filled in: title, header, the shared head, plotly.js and the data.
+fn page(template: &str, title: &str, header: &str, data: &str) -> String {
+    template
+        .replace("{{TITLE}}", &html_escape(title))
+        .replace("{{HEADER}}", header)
+        .replace("{{HEAD}}", HEAD)
+        .replace("{{PLOTLY}}", &plotly_js())
+        // `</` cannot end the script element early: JSON never needs a raw `</`.
+        .replace("{{DATA}}", &data.replace("</", "<\\/"))
+}
+
+/// One matched pair of objects, for [`match_report`].
+#[derive(Debug, Clone, Copy)]
+pub struct MatchPairInput<'a> {
+    /// Object A, in its coordinate units.
+    pub a: &'a modal_core::Shape,
+    /// Object B, in the same units as A.
+    pub b: &'a modal_core::Shape,
+    /// The match of A with B.
+    pub result: &'a modal_core::MatchResult,
+    /// Millimetres per coordinate unit along x and y; `None`: the axes are in `data_unit`.
+    pub pitch_mm: Option<[f64; 2]>,
+    /// The coordinates' own unit when the pitch is unknown (`"sensels"`, `"file units"`, ...).
+    pub data_unit: &'a str,
+    /// How the objects are named in the legend (e.g. their file names and frames).
+    pub label_a: &'a str,
+    /// B's name in the legend.
+    pub label_b: &'a str,
+    /// The pressure frames A and B were taken from (`None` for a point file), drawn under the
+    /// objects of a 2-D pair; their sensels must be the objects' coordinate units.
+    pub underlays: [Option<FrameUnderlay<'a>>; 2],
+}
+
+/// A frame of a recording, drawn as a pressure image under the objects taken from it.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameUnderlay<'a> {
+    /// The recording the frame belongs to.
+    pub recording: &'a Recording,
+    /// 0-based frame index.
+    pub frame: usize,
+}
+
+impl FrameUnderlay<'_> {
+    /// The frame as JSON: `rows`, `cols`, `units` and the pressure as integers of `quantum`
+    /// (three significant digits at the frame's peak), row after row, `null` where there is no
+    /// sensor; `None` when the frame does not exist.
+    fn to_json(self) -> Option<Value> {
+        let r = self.recording;
+        let values = r.frame_slice(self.frame)?;
+        let (kpa, units) = pressure_scale(r);
+        let peak = values
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold(0.0f64, |m, &v| m.max(v as f64))
+            * kpa;
+        let quantum = if peak > 0.0 {
+            10f64.powf((peak / 1000.0).log10().floor())
+        } else {
+            1.0
+        };
+        let z: Vec<Option<i64>> = values
+            .iter()
+            .zip(r.sensor_mask())
+            .map(|(&v, &m)| (m && v.is_finite()).then(|| (v as f64 * kpa / quantum).round() as i64))
+            .collect();
+        Some(json!({
+            "rows": r.rows(), "cols": r.cols(), "units": units, "quantum": quantum,
+            "peak": peak, "frame": self.frame, "z": z,
+        }))
+    }
+}
+
+/// The report of one match (`pedomatch match`) as a complete HTML page: a header with `facts`
+/// (inputs, result, ... as (name, value) rows), the options and timings of `info`, then both
+/// objects in physical units with their matches coloured by cost, excess matches and unmatched
+/// nodes, and a rotatable 3-D view for 3-D objects.
+pub fn match_report(
+    pair: &MatchPairInput,
+    info: &ReportInfo,
+    facts: &[(String, String)],
+) -> Result<String> {
+    let data = serde_json::to_string(&match_data(pair))
+        .map_err(|e| report_error(format!("cannot encode the report data: {e}")))?;
+    let mut rows = facts.to_vec();
+    rows.push(("version".into(), format!("pedomatch {}", info.version)));
+    if !info.timings.is_empty() {
+        rows.push(("timings".into(), timings_text(&info.timings)));
+    }
+    let header = facts_html(&rows) + &options_html(&info.options);
+    Ok(page(MATCH_TEMPLATE, &info.input, &header, &data))
+}
+
+/// What the match page draws, as JSON.
+fn match_data(pair: &MatchPairInput) -> Value {
+    let ([dx, dy], xy_units) = match pair.pitch_mm {
+        Some(p) if p.iter().all(|v| v.is_finite() && *v > 0.0) => (p, "mm"),
+        _ => ([1.0, 1.0], pair.data_unit),
+    };
+    let point = |s: &modal_core::Shape, i: usize| -> [f64; 3] {
+        let p = s.point(i);
+        let z = if s.dim() == 3 { p[2] } else { 0.0 };
+        [round6(p[0] * dx), round6(p[1] * dy), round6(z)]
+    };
+    let object = |s: &modal_core::Shape| {
+        let closed = matches!(s.topology(), modal_core::Topology::ClosedContour);
+        let mut pts: Vec<[f64; 3]> = (0..s.len()).map(|i| point(s, i)).collect();
+        if closed {
+            pts.extend(pts.first().copied());
+        }
+        json!({
+            "closed": closed,
+            "x": pts.iter().map(|p| p[0]).collect::<Vec<_>>(),
+            "y": pts.iter().map(|p| p[1]).collect::<Vec<_>>(),
+            "z": pts.iter().map(|p| p[2]).collect::<Vec<_>>(),
+        })
+    };
+    let r = pair.result;
+    let classes = cost_classes(r.pairs.iter().map(|m| m.cost).collect());
+    let mut by_cost: Vec<Segments> = (0..classes.count()).map(|_| Segments::default()).collect();
+    let mut excess = Segments::default();
+    for m in &r.pairs {
+        let seg = [point(pair.a, m.a), point(pair.b, m.b)];
+        if m.excess {
+            excess.push(seg);
+        } else {
+            by_cost[classes.class(m.cost)].push(seg);
+        }
+    }
+    let nodes = |s: &modal_core::Shape, which: &[usize]| {
+        let mut l = Lines::default();
+        for &i in which {
+            let p = point(s, i);
+            l.piece([[p[0], p[1]]]);
+        }
+        l
+    };
+    json!({
+        "dim": pair.a.dim(), "xy_units": xy_units,
+        "label_a": pair.label_a, "label_b": pair.label_b,
+        "a": object(pair.a), "b": object(pair.b),
+        "cost_bounds": classes.bounds, "cost_labels": classes.labels,
+        "matches": by_cost.iter().map(|s| &s.xy).collect::<Vec<_>>(),
+        "matches3d": by_cost.iter().map(|s| &s.xyz).collect::<Vec<_>>(),
+        "excess": excess.xy, "excess3d": excess.xyz,
+        "unmatched_a": nodes(pair.a, &r.unmatched_a),
+        "unmatched_b": nodes(pair.b, &r.unmatched_b),
+        "pitch": [dx, dy],
+        // Pressure images only under 2-D objects (a 3-D object's x-y plane is not a frame's).
+        "images": pair.underlays.map(|u| u.filter(|_| pair.a.dim() == 2).and_then(|u| u.to_json())),
+    })
+}
+
+/// Segments for plotly: in the x-y plane and in 3-D, `null` between segments.
+struct Segments {
+    xy: Lines,
+    xyz: Value,
+}
+
+impl Default for Segments {
+    fn default() -> Self {
+        Self {
+            xy: Lines::default(),
+            xyz: json!({ "x": [], "y": [], "z": [] }),
+        }
+    }
+}
+
+impl Segments {
+    fn push(&mut self, [p, q]: [[f64; 3]; 2]) {
+        self.xy.piece([[p[0], p[1]], [q[0], q[1]]]);
+        for (axis, k) in ["x", "y", "z"].into_iter().zip(0..) {
+            let v = self.xyz[axis].as_array_mut().expect("built above");
+            if !v.is_empty() {
+                v.push(Value::Null);
+            }
+            v.extend([json!(p[k]), json!(q[k])]);
+        }
+    }
+}
+
+/// The cost classes matches are coloured by: the bounds between them (a cost `c` is in class
+/// `k`, the number of bounds below `c`) and each class's legend name.
+#[derive(Debug, Clone, PartialEq)]
+struct CostClasses {
+    bounds: Vec<f64>,
+    labels: Vec<String>,
+}
+
+impl CostClasses {
+    fn class(&self, c: f64) -> usize {
+        self.bounds.iter().take_while(|&&b| c > b).count()
+    }
+
+    fn count(&self) -> usize {
+        self.labels.len()
+    }
+}
+
+/// Costs closer than this, relative to the largest (1 at least), are the same cost: bounds
+/// this close are one bound, and a bound this close to 0 is 0.
+const COST_TOLERANCE: f64 = 1e-9;
+
+/// Up to [`COST_CLASSES`] classes of the finite costs, bounded by their quantiles. Bounds that
+/// coincide (closer than [`COST_TOLERANCE`]) are one bound, and a bound with no cost
+/// meaningfully above it is dropped: near-identical costs make one class (`all costs ≈ 0` when
+/// they are all about 0). Each bound is written with the fewest significant digits (2 at least)
+/// that tell the bounds apart.
+fn cost_classes(mut costs: Vec<f64>) -> CostClasses {
+    costs.retain(|c| c.is_finite());
+    costs.sort_by(f64::total_cmp);
+    let (Some(&lo), Some(&hi)) = (costs.first(), costs.last()) else {
+        return CostClasses {
+            bounds: vec![],
+            labels: vec!["matches".into()],
+        };
+    };
+    let tol = COST_TOLERANCE * lo.abs().max(hi.abs()).max(1.0);
+    let snap = |v: f64| if v.abs() < tol { 0.0 } else { v };
+    let mut bounds: Vec<f64> = Vec::new();
+    for i in 1..COST_CLASSES {
+        let b = costs[i * costs.len() / COST_CLASSES];
+        if hi - b >= tol && bounds.last().is_none_or(|&last| b - last >= tol) {
+            bounds.push(b);
+        }
+    }
+    if bounds.is_empty() {
+        let median = snap(costs[costs.len() / 2]);
+        let label = if median == 0.0 {
+            "all costs ≈ 0".to_string()
+        } else {
+            format!("all costs ≈ {}", significant(median, 3))
+        };
+        return CostClasses {
+            bounds,
+            labels: vec![label],
+        };
+    }
+    let digits = (2..=17)
+        .find(|&d| {
+            let t: Vec<String> = bounds.iter().map(|&b| significant(snap(b), d)).collect();
+            t.windows(2).all(|w| w[0] != w[1])
+        })
+        .unwrap_or(17);
+    let text: Vec<String> = bounds
+        .iter()
+        .map(|&b| significant(snap(b), digits))
+        .collect();
+    let mut labels = vec![format!("cost ≤ {}", text[0])];
+    labels.extend(
+        text.windows(2)
+            .map(|w| format!("{} < cost ≤ {}", w[0], w[1])),
+    );
+    labels.push(format!("cost > {}", text[text.len() - 1]));
+    CostClasses { bounds, labels }
+}
+
+/// `v` rounded to `digits` significant digits, as plain decimals from 1e-4 to 1e6 and in
+/// scientific notation (`1.5e-16`) beyond; never `-0`.
+fn significant(v: f64, digits: usize) -> String {
+    let r: f64 = format!("{:.*e}", digits.saturating_sub(1), v)
+        .parse()
+        .unwrap_or(v);
+    if r == 0.0 || !r.is_finite() {
+        return if r.is_finite() {
+            "0".into()
+        } else {
+            r.to_string()
+        };
+    }
+    let exponent = r.abs().log10().floor();
+    if (-4.0..6.0).contains(&exponent) {
+        format!("{r}")
+    } else {
+        format!("{r:e}")
+    }
+}
+
+/// plotly.js v3.0.1, MIT licence (`assets/LICENSE-plotly.js.txt`), vendored as a file: the
+/// `plotly` crate that ships it needs a template engine and a dozen proc-macro crates at build
+/// time, for a string.
+const PLOTLY_JS: &str = include_str!("../assets/plotly.min.js");
+
+/// The script element every report embeds, so that it opens offline.
+fn plotly_js() -> String {
+    format!("<script type=\"text/javascript\">{PLOTLY_JS}</script>")
+}
+
+fn html_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// Physical pressure units: kPa when the recording's units convert, else its own units;
+/// `None` when the recording states none.
+fn pressure_scale(recording: &Recording) -> (f64, Option<String>) {
+    match pedo_io::recording::kpa_per_unit(&recording.units) {
+        Some(k) => (k, Some("kPa".to_string())),
+        None => (1.0, file_units(recording)),
+    }
+}
+
+/// The units the recording's values are in, as the file names them (a known unit in its usual
+/// spelling, [`pedo_io::recording::stated_units`]); `None` when it names none.
+fn file_units(recording: &Recording) -> Option<String> {
+    Some(pedo_io::recording::stated_units(&recording.units)).filter(|u| !u.is_empty())
+}
+
+/// The header's pressure units, `shown` those of the report's pressures: a file's units that
+/// convert are shown in kPa, as the tables give them, and the header says from what.
+fn pressure_header(recording: &Recording, shown: Option<String>) -> String {
+    match (shown, file_units(recording)) {
+        (Some(shown), Some(file)) if shown != file => {
+            format!("{shown} (the file's {file}, converted)")
+        }
+        (Some(shown), _) => shown,
+        (None, _) => "units unknown".into(),
+    }
+}
+
+/// What the time series' load panel plots, named as frames.csv names its column
+/// (`total_force_n`, `total_load_mm2`, `total_load_sensels`): newtons when the pressure units
+/// convert and the sensel area is known; else the plain sum of the values times the sensel area
+/// (the file's units × mm²) or, without a pitch, the plain sum (the file's units × sensels).
+fn load_label(recording: &Recording) -> String {
+    if recording.force_factor().is_some() {
+        return "total force (N)".into();
+    }
+    let units = file_units(recording).unwrap_or_else(|| "pressure units unknown".into());
+    let per = if recording.sensel_area().is_some() {
+        "mm²"
+    } else {
+        "sensels"
+    };
+    format!("total load ({units} × {per})")
+}
+
+/// `1st`, `2nd`, `3rd`, `4th`, ... `11th`, `12th`, `13th`, ... `21st`, `22nd`, ...
+fn ordinal(n: usize) -> String {
+    let suffix = match (n % 10, n % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
+}
+
+fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo) -> String {
+    let (_, punits) = pressure_scale(recording);
+    let n = recording.n_frames();
+    let frames = match info.frames {
+        Some((start, end)) if end == start + 1 && n > 1 => format!("{start} of {n} analysed"),
+        Some((start, end)) if (start, end) != (0, n) => {
+            format!("{}–{} of {n} analysed", start, end.saturating_sub(1))
+        }
+        _ if n == 1 => "the only one analysed".into(),
+        _ => format!("all {n} analysed"),
+    };
+    let mut rows: Vec<(String, String)> = vec![
+        ("input".into(), info.input.clone()),
+        (
+            "format".into(),
+            info.format.clone().unwrap_or_else(|| "unknown".into()),
+        ),
+        (
+            "frames".into(),
+            format!(
+                "{frames}, {} × {} sensels",
+                recording.rows(),
+                recording.cols()
+            ),
+        ),
+        (
+            "pitch".into(),
+            recording
+                .pitch_mm
+                .map(|p| format!("{} × {} mm", p[0], p[1]))
+                .unwrap_or_else(|| "unknown (axes in sensels)".into()),
+        ),
+        (
+            "frame rate".into(),
+            recording
+                .frame_rate()
+                .map(|f| format!("{f} Hz"))
+                .unwrap_or_else(|| "unknown (time in frames)".into()),
+        ),
+        ("pressure".into(), pressure_header(recording, punits)),
+        ("version".into(), format!("pedomatch {}", info.version)),
+        (
+            "result".into(),
+            format!(
+                "{}, {}, {}",
+                counted(result.objects.len(), "object"),
+                counted(result.pairs.len(), "matched pair"),
+                counted(result.track_count(), "track")
+            ),
+        ),
+    ];
+    if !info.timings.is_empty() {
+        rows.push(("timings".into(), timings_text(&info.timings)));
+    }
+    let mut out = facts_html(&rows) + &options_html(&info.options);
+    let skipped: Vec<String> = result
+        .skipped_frames
+        .iter()
+        .map(|s| format!("frame {}: {}", s.frame, s.reason))
+        .chain(result.skipped_pairs.iter().map(|s| {
+            let (a, b) = (&result.objects[s.a], &result.objects[s.b]);
+            format!(
+                "pair {}→{} (frames {}→{}): {}",
+                a.id, b.id, a.frame, b.frame, s.reason
+            )
+        }))
+        .map(|s| format!("<li>{}</li>", html_escape(&s)))
+        .collect();
+    if !skipped.is_empty() {
+        out += &format!(
+            "<details open class=\"skipped\"><summary>skipped ({})</summary><ul>{}</ul></details>",
+            skipped.len(),
+            skipped.join("")
+        );
+    }
+    out
+}
+
+/// `"read 0.012 s, matching 0.300 s"`.
+fn timings_text(timings: &[(String, f64)]) -> String {
+    let t: Vec<String> = timings
+        .iter()
+        .map(|(s, v)| format!("{s} {v:.3} s"))
+        .collect();
+    t.join(", ")
+}
+
+/// (name, value) rows as an HTML table, escaped.
+fn table_rows(rows: &[(String, String)]) -> String {
+    rows.iter()
+        .map(|(k, v)| {
+            format!(
+                "<tr><th>{}</th><td>{}</td></tr>",
+                html_escape(k),
+                html_escape(v)
+            )
+        })
+        .collect()
+}
+
+fn facts_html(rows: &[(String, String)]) -> String {
+    format!("<table class=\"facts\">{}</table>", table_rows(rows))
+}
+
+/// Every option used, folded away under a summary line.
+fn options_html(options: &[(String, String)]) -> String {
+    if options.is_empty() {
+        return String::new();
+    }
+    format!(
+        "<details><summary>options used ({})</summary><table class=\"facts\">{}</table></details>",
+        options.len(),
+        table_rows(options)
+    )
+}
+
+/// Everything the page's script draws, as JSON.
+fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo) -> Value {
+    let (n, rows, cols) = (recording.n_frames(), recording.rows(), recording.cols());
+    let step = (n * rows * cols).div_ceil(MAX_PLAYER_VALUES).max(1);
+    let shown: Vec<usize> = (0..n).step_by(step).collect();
+    let (kpa, punits) = pressure_scale(recording);
+    let (pitch, xy_units) = match recording.pitch_mm {
+        Some(p) => (p, "mm"),
+        None => ([1.0, 1.0], "sensels"),
+    };
+    let rate = recording.frame_rate();
+
+    // Pressure as integers of a fixed quantum: compact JSON and 3 significant digits at the peak.
+    // The largest value of any frame (0 at least), frame by frame: a long recording is held
+    // sparsely and never built whole.
+    let peak = recording.peak_image().max().max(0.0) * kpa;
+    let quantum = if peak > 0.0 {
+        10f64.powf((peak / 1000.0).log10().floor())
+    } else {
+        1.0
+    };
+    let mask = recording.sensor_mask();
+    let encode = |values: &[f32]| -> Vec<Option<i64>> {
+        values
+            .iter()
+            .zip(mask)
+            .map(|(&v, &m)| (m && v.is_finite()).then(|| (v as f64 * kpa / quantum).round() as i64))
+            .collect()
+    };
+    let z: Vec<Vec<Option<i64>>> = shown
+        .iter()
+        .map(|&t| encode(&recording.frame_slice(t).unwrap_or_default()))
+        .collect();
+    let peak_image: Vec<Option<i64>> = {
+        let g = recording.peak_image();
+        let v: Vec<f32> = g.data().iter().map(|&v| v as f32).collect();
+        encode(&v)
+    };
+
+    let mm = |p: &[f64]| -> [f64; 2] { [round3(p[0] * pitch[0]), round3(p[1] * pitch[1])] };
+    // Surfaces' heights are pressure rescaled to the footprint's extent (in sensels): same units as x.
+    let overlays = overlays(result, &shown, &mm, pitch[0], kpa);
+
+    let measures = recording.measures(info.contact_threshold);
+    let area_known = recording.sensel_area().is_some();
+    let cop: Vec<Option<[f64; 2]>> = measures.iter().map(|m| m.cop.map(|c| mm(&c))).collect();
+    let series = json!({
+        "frame": (0..n).collect::<Vec<_>>(),
+        "area": measures.iter().map(|m| round3(m.contact_area)).collect::<Vec<_>>(),
+        "force": measures.iter().map(|m| round3(m.total_force)).collect::<Vec<_>>(),
+        "peak": measures.iter().map(|m| round3(m.peak_pressure * kpa)).collect::<Vec<_>>(),
+        "cop_path": cop_path(&cop),
+        "cop": cop,
+        "area_label": if area_known { "contact area (mm²)" } else { "contact area (sensels)" },
+        "force_label": load_label(recording),
+        "peak_label": format!("peak pressure ({})", punits.as_deref().unwrap_or("units unknown")),
+    });
+    let pairs = json!({
+        "frame": result.pairs.iter().map(|p| p.row.objects.frame_a).collect::<Vec<_>>(),
+        "local": result.pairs.iter().map(|p| round3(p.row.local_percent)).collect::<Vec<_>>(),
+        "optimisation": result.pairs.iter().map(|p| round3(p.row.optimisation_percent)).collect::<Vec<_>>(),
+        "cost": result.pairs.iter().map(|p| round6(p.row.mean_cost)).collect::<Vec<_>>(),
+    });
+    let (start, end) = info
+        .frames
+        .map(|(s, e)| (s.min(n - 1), e.clamp(s.min(n - 1) + 1, n)))
+        .unwrap_or((0, n));
+    let decimation = (step > 1).then(|| {
+        format!(
+            "The player shows every {} frame: the recording holds more than {MAX_PLAYER_VALUES} \
+             pressure values (frames × rows × cols). The time series keep every frame.",
+            ordinal(step)
+        )
+    });
+    json!({
+        "n_frames": n, "rows": rows, "cols": cols, "step": step, "shown": shown,
+        "analysed": [start, end], "decimation": decimation,
+        "open_frame": open_frame(result, &shown, start, end),
+        "frame_rate": rate, "dx": pitch[0], "dy": pitch[1], "xy_units": xy_units,
+        "pressure_units": punits, "quantum": quantum, "z": z, "peak_image": peak_image,
+        "overlays": overlays, "series": series, "pairs": pairs,
+        "max_player_values": MAX_PLAYER_VALUES,
+        "surface": result.objects.first().is_some_and(|o| o.shape.dim() == 3),
+        "isocontour": result.objects.iter().any(|o| o.level.is_some()),
+        "first_object_frame": result.objects.first().map(|o| o.frame),
+    })
+}
+
+/// The frame the player opens on: the first frame it shows that holds objects within the
+/// analysed frames `start..end` (an isocontour run has one frame of objects: the shown frame
+/// nearest it when the player is decimated), else the first shown frame of the analysed ones.
+fn open_frame(result: &SequenceResult, shown: &[usize], start: usize, end: usize) -> usize {
+    let analysed = |f: &usize| (start..end).contains(f);
+    let with_objects: std::collections::HashSet<usize> = result
+        .objects
+        .iter()
+        .map(|o| o.frame)
+        .filter(analysed)
+        .collect();
+    let nearest = |target: usize| {
+        shown
+            .iter()
+            .copied()
+            .min_by_key(|&f| (f.abs_diff(target), f < target))
+    };
+    shown
+        .iter()
+        .copied()
+        .find(|f| with_objects.contains(f))
+        .or_else(|| with_objects.iter().min().and_then(|&f| nearest(f)))
+        .or_else(|| shown.iter().copied().find(analysed))
+        .or_else(|| nearest(start))
+        .unwrap_or(0)
+}
+
+/// The centre-of-pressure path for plotly: x, y and time (frame index) per frame with a centre
+/// of pressure, and `null` between runs of such frames, so that the stance phases are separate
+/// pieces (a swing has no contact: no line is drawn across it).
+fn cop_path(cop: &[Option<[f64; 2]>]) -> Value {
+    let (mut x, mut y, mut frame) = (Vec::new(), Vec::new(), Vec::new());
+    for (f, c) in cop.iter().enumerate() {
+        if let Some([cx, cy]) = c {
+            if f > 0 && cop[f - 1].is_none() && !x.is_empty() {
+                x.push(None);
+                y.push(None);
+                frame.push(None);
+            }
+            x.push(Some(*cx));
+            y.push(Some(*cy));
+            frame.push(Some(f));
+        }
+    }
+    json!({ "x": x, "y": y, "frame": frame })
+}
+
+fn round3(v: f64) -> f64 {
+    (v * 1e3).round() / 1e3
+}
+
+fn round6(v: f64) -> f64 {
+    (v * 1e6).round() / 1e6
+}
+
+/// Polylines as plotly wants them: x and y lists with `null` between pieces.
+#[derive(Default, serde::Serialize)]
+struct Lines {
+    x: Vec<Option<f64>>,
+    y: Vec<Option<f64>>,
+}
+
+impl Lines {
+    fn piece(&mut self, points: impl IntoIterator<Item = [f64; 2]>) {
+        if !self.x.is_empty() {
+            self.x.push(None);
+            self.y.push(None);
+        }
+        for p in points {
+            self.x.push(Some(p[0]));
+            self.y.push(Some(p[1]));
+        }
+    }
+}
+
+/// Per shown frame: contours (isocontours: one outline per level, with the level in the
+/// report's pressure units, `level_scale` per recording unit), matches into the next frame by
+/// cost class, excess matches, unmatched nodes, and track trails; plus the cost-class bounds.
+fn overlays(
+    result: &SequenceResult,
+    shown: &[usize],
+    mm: &dyn Fn(&[f64]) -> [f64; 2],
+    z_scale: f64,
+    level_scale: f64,
+) -> Value {
+    let classes = cost_classes(
+        result
+            .pairs
+            .iter()
+            .flat_map(|p| p.result.pairs.iter().map(|m| m.cost))
+            .collect(),
+    );
+
+    let mut objects_by_frame: HashMap<usize, Vec<usize>> = HashMap::new();
+    for (i, o) in result.objects.iter().enumerate() {
+        objects_by_frame.entry(o.frame).or_default().push(i);
+    }
+    let mut pairs_by_frame: HashMap<usize, Vec<usize>> = HashMap::new();
+    for (i, p) in result.pairs.iter().enumerate() {
+        pairs_by_frame
+            .entry(result.objects[p.a].frame)
+            .or_default()
+            .push(i);
+    }
+    // Track steps by frame: (track, step index).
+    let mut steps_by_frame: HashMap<usize, Vec<(usize, usize)>> = HashMap::new();
+    let tracks: Vec<_> = result.all_tracks().collect();
+    for (t, track) in tracks.iter().enumerate() {
+        for (s, &(o, _)) in track.steps.iter().enumerate() {
+            steps_by_frame
+                .entry(result.objects[o].frame)
+                .or_default()
+                .push((t, s));
+        }
+    }
+    let frames: Vec<Value> = shown
+        .iter()
+        .map(|&f| {
+            let mut contours = Lines::default();
+            let mut levels = Vec::new();
+            for &o in objects_by_frame.get(&f).into_iter().flatten() {
+                let shape = &result.objects[o].shape;
+                let mut pts: Vec<[f64; 2]> = (0..shape.len()).map(|i| mm(shape.point(i))).collect();
+                if let Some(&first) = pts.first() {
+                    if let Some(level) = result.objects[o].level {
+                        pts.push(first);
+                        let mut outline = Lines::default();
+                        outline.piece(pts);
+                        let level = round6(level * level_scale);
+                        levels.push(json!({ "level": level, "x": outline.x, "y": outline.y }));
+                    } else if shape.dim() == 2 {
+                        pts.push(first);
+                        contours.piece(pts);
+                    } else {
+                        // Surfaces: nodes only, as separate one-point pieces (markers).
+                        for p in pts {
+                            contours.piece([p]);
+                        }
+                    }
+                }
+            }
+            let mut by_cost: Vec<Lines> = (0..classes.count()).map(|_| Lines::default()).collect();
+            let mut excess = Lines::default();
+            let mut unmatched = Lines::default();
+            for &pi in pairs_by_frame.get(&f).into_iter().flatten() {
+                let p = &result.pairs[pi];
+                let (sa, sb) = (&result.objects[p.a].shape, &result.objects[p.b].shape);
+                for m in &p.result.pairs {
+                    let seg = [mm(sa.point(m.a)), mm(sb.point(m.b))];
+                    if m.excess {
+                        excess.piece(seg);
+                    } else {
+                        by_cost[classes.class(m.cost)].piece(seg);
+                    }
+                }
+                for &u in &p.result.unmatched_a {
+                    unmatched.piece([mm(sa.point(u))]);
+                }
+            }
+            let mut trails = Lines::default();
+            for &(t, s) in steps_by_frame.get(&f).into_iter().flatten() {
+                let steps = &tracks[t].steps;
+                let from = s.saturating_sub(TRAIL_FRAMES);
+                if s > from {
+                    trails.piece(
+                        steps[from..=s]
+                            .iter()
+                            .map(|&(o, node)| mm(result.objects[o].shape.point(node))),
+                    );
+                }
+            }
+            let surfaces = pairs_by_frame
+                .get(&f)
+                .and_then(|ps| ps.first())
+                .map(|&pi| surface_pair(result, &result.pairs[pi], mm, z_scale));
+            json!({
+                "contours": contours, "levels": levels, "matches": by_cost, "excess": excess,
+                "unmatched": unmatched, "trails": trails, "surfaces": surfaces,
+            })
+        })
+        .collect();
+    json!({ "cost_bounds": classes.bounds, "cost_labels": classes.labels, "frames": frames })
+}
+
+/// For the 3-D view: a surface pair's two meshes (x, y in mm or sensels; z the surface's height,
+/// pressure rescaled to the footprint, times `z_scale`) and its matches as segments; `None` for
+/// 2-D objects.
+fn surface_pair(
+    result: &SequenceResult,
+    pair: &pedo_track::PairMatch,
+    mm: &dyn Fn(&[f64]) -> [f64; 2],
+    z_scale: f64,
+) -> Option<Value> {
+    let (sa, sb) = (&result.objects[pair.a].shape, &result.objects[pair.b].shape);
+    if sa.dim() != 3 || sb.dim() != 3 {
+        return None;
+    }
+    let point = |s: &modal_core::Shape, i: usize| {
+        let p = s.point(i);
+        let [x, y] = mm(p);
+        [x, y, round3(p[2] * z_scale)]
+    };
+    let mesh = |s: &modal_core::Shape| {
+        let pts: Vec<[f64; 3]> = (0..s.len()).map(|i| point(s, i)).collect();
+        let tris: &[[usize; 3]] = match s.topology() {
+            modal_core::Topology::Mesh { triangles } => triangles,
+            _ => &[],
+        };
+        json!({
+            "x": pts.iter().map(|p| p[0]).collect::<Vec<_>>(),
+            "y": pts.iter().map(|p| p[1]).collect::<Vec<_>>(),
+            "z": pts.iter().map(|p| p[2]).collect::<Vec<_>>(),
+            "i": tris.iter().map(|t| t[0]).collect::<Vec<_>>(),
+            "j": tris.iter().map(|t| t[1]).collect::<Vec<_>>(),
+            "k": tris.iter().map(|t| t[2]).collect::<Vec<_>>(),
+        })
+    };
+    let mut seg: [Vec<Option<f64>>; 3] = Default::default();
+    for m in &pair.result.pairs {
+        for p in [point(sa, m.a), point(sb, m.b)] {
+            for (axis, v) in seg.iter_mut().zip(p) {
+                axis.push(Some(v));
+            }
+        }
+        for axis in &mut seg {
+            axis.push(None);
+        }
+    }
+    Some(json!({
+        "a": mesh(sa), "b": mesh(sb),
+        "frames": [result.objects[pair.a].frame, result.objects[pair.b].frame],
+        "matches": { "x": seg[0], "y": seg[1], "z": seg[2] },
+    }))
+}
+
+const TEMPLATE: &str = include_str!("html/report.html");
+const MATCH_TEMPLATE: &str = include_str!("html/match.html");
+/// The security policy, style and error log both pages share.
+const HEAD: &str = include_str!("html/head.html");
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pedo_track::{run_sequence, SequenceOptions};
+
+    /// A disc of pressure moving one sensel right per frame.
+    fn walking_disc(frames: usize) -> Recording {
+        let (rows, cols) = (16, 24);
+        let mut data = vec![0.0f32; frames * rows * cols];
+        for t in 0..frames {
+            for r in 0..rows {
+                for c in 0..cols {
+                    let (dy, dx) = (r as f64 - 8.0, c as f64 - 6.0 - t as f64);
+                    let d2 = dx * dx + dy * dy;
+                    if d2 < 20.0 {
+                        data[(t * rows + r) * cols + c] = (100.0 - 4.0 * d2) as f32;
+                    }
+                }
+            }
+        }
+        Recording::from_array(frames, rows, cols, data, None)
+            .unwrap()
+            .with_pitch_mm([5.0, 4.0])
+            .unwrap()
+            .with_frame_rate(50.0)
+            .unwrap()
+            .with_units("kPa")
+    }
+
+    fn embedded_data(html: &str) -> Value {
+        let start = html.find("id=\"report-data\">").unwrap() + "id=\"report-data\">".len();
+        let end = start + html[start..].find("</script>").unwrap();
+        serde_json::from_str(&html[start..end]).unwrap()
+    }
+
+    fn info() -> ReportInfo {
+        ReportInfo {
+            input: "walk </script><b>.npy".into(),
+            format: Some("npy".into()),
+            version: "9.9.9".into(),
+            options: vec![("modes".into(), "0.25".into())],
+            timings: vec![("matching".into(), 0.5)],
+            contact_threshold: 0.0,
+            frames: None,
+        }
+    }
+
+    /// A recording of `frames` frames of 4 × 5 sensels, every value 10, with `units` and an
+    /// optional pitch.
+    fn flat(frames: usize, units: &str, pitch: Option<[f64; 2]>) -> Recording {
+        let rec = Recording::from_array(frames, 4, 5, vec![10.0; frames * 20], None)
+            .unwrap()
+            .with_units(units);
+        match pitch {
+            Some(p) => rec.with_pitch_mm(p).unwrap(),
+            None => rec,
+        }
+    }
+
+    #[test]
+    fn the_header_names_the_files_pressure_units_when_it_shows_them_converted() {
+        let header = |units: &str| {
+            let rec = flat(2, units, Some([2.0, 2.0]));
+            pressure_header(&rec, pressure_scale(&rec).1)
+        };
+        assert_eq!(header("N/cm2"), "kPa (the file's N/cm², converted)");
+        assert_eq!(header("KPa"), "kPa");
+        assert_eq!(header("raw"), "raw");
+        assert_eq!(header(""), "units unknown");
+    }
+
+    #[test]
+    fn the_load_series_is_named_with_the_files_units_as_frames_csv_names_it() {
+        let cases = [
+            (
+                "kPa",
+                Some([2.0, 2.0]),
+                "total force (N)",
+                json!("kPa"),
+                "peak pressure (kPa)",
+            ),
+            // I-Scan: raw units with a pitch: the plain sum × mm² (frames.csv `total_load_mm2`).
+            (
+                "raw",
+                Some([1.27, 1.27]),
+                "total load (raw × mm²)",
+                json!("raw"),
+                "peak pressure (raw)",
+            ),
+            // pedar: kPa but no pitch (`total_load_sensels`).
+            (
+                "KPa",
+                None,
+                "total load (kPa × sensels)",
+                json!("kPa"),
+                "peak pressure (kPa)",
+            ),
+            (
+                "Pa",
+                None,
+                "total load (Pa × sensels)",
+                json!("kPa"),
+                "peak pressure (kPa)",
+            ),
+            // .npy/.npz: no units at all.
+            (
+                "",
+                Some([5.0, 5.0]),
+                "total load (pressure units unknown × mm²)",
+                Value::Null,
+                "peak pressure (units unknown)",
+            ),
+            (
+                "",
+                None,
+                "total load (pressure units unknown × sensels)",
+                Value::Null,
+                "peak pressure (units unknown)",
+            ),
+        ];
+        for (units, pitch, load, punits, peak) in cases {
+            let rec = flat(3, units, pitch);
+            let html = run_report(&rec, &SequenceResult::default(), &info()).unwrap();
+            let d = embedded_data(&html);
+            let what = format!("units {units:?}, pitch {pitch:?}");
+            assert_eq!(d["series"]["force_label"], load, "{what}");
+            assert_eq!(d["series"]["peak_label"], peak, "{what}");
+            assert_eq!(d["pressure_units"], punits, "{what}");
+            assert!(!html.contains("units × sensels"), "{what}");
+            // The values plotted are frames.csv's: 20 sensels of 10, × the sensel area if known.
+            let want = 200.0 * rec.force_factor().or(rec.sensel_area()).unwrap_or(1.0);
+            let got = d["series"]["force"][0].as_f64().unwrap();
+            assert!((got - want).abs() < 1e-3, "{what}: {got} vs {want}");
+            let header_units = pressure_header(&rec, punits.as_str().map(str::to_string));
+            assert!(
+                html.contains(&format!("<th>pressure</th><td>{header_units}</td>")),
+                "{what}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_player_opens_on_the_first_analysed_frame_holding_objects() {
+        // The disc walks in from frame 3 (frames 0-2 are empty).
+        let mut rec = walking_disc(14);
+        let per = rec.rows() * rec.cols();
+        let mut data: Vec<f32> = (0..14)
+            .flat_map(|t| rec.frame_slice(t).unwrap().to_vec())
+            .collect();
+        data[..3 * per].fill(0.0);
+        rec = Recording::from_array(14, rec.rows(), rec.cols(), data, None)
+            .unwrap()
+            .with_pitch_mm([5.0, 4.0])
+            .unwrap()
+            .with_units("kPa");
+        // The whole recording: the first frame with objects, 3.
+        let all = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
+        let d = embedded_data(&run_report(&rec, &all, &info()).unwrap());
+        assert_eq!(
+            (d["open_frame"].as_u64(), d["analysed"].clone()),
+            (Some(3), json!([0, 14]))
+        );
+        // --frames 6..11: opens on frame 6, the header says which frames were analysed, and the
+        // whole recording stays playable.
+        let options = SequenceOptions {
+            frames: Some((6, 11)),
+            ..Default::default()
+        };
+        let part = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+        let ranged = ReportInfo {
+            frames: Some((6, 11)),
+            ..info()
+        };
+        let html = run_report(&rec, &part, &ranged).unwrap();
+        let d = embedded_data(&html);
+        assert_eq!(d["open_frame"], 6);
+        assert_eq!(d["analysed"], json!([6, 11]));
+        assert_eq!(d["shown"].as_array().unwrap().len(), 14);
+        assert!(html.contains("<td>6–10 of 14 analysed, 16 × 24 sensels</td>"));
+        // No objects in the range: its first frame.
+        let d = embedded_data(&run_report(&rec, &SequenceResult::default(), &ranged).unwrap());
+        assert_eq!(d["open_frame"], 6);
+        // Decimated (every 2nd frame shown): the first shown frame with objects in the range.
+        assert_eq!(open_frame(&part, &[0, 2, 4, 6, 8, 10, 12], 7, 11), 8);
+        assert_eq!(open_frame(&SequenceResult::default(), &[0, 2, 4], 3, 4), 4);
+        let html = run_report(&rec, &all, &info()).unwrap();
+        assert!(html.contains("<td>all 14 analysed, 16 × 24 sensels</td>"));
+        let one = ReportInfo {
+            frames: Some((7, 8)),
+            ..info()
+        };
+        let html = run_report(&rec, &SequenceResult::default(), &one).unwrap();
+        assert!(html.contains("<td>7 of 14 analysed, 16 × 24 sensels</td>"));
+    }
+
+    #[test]
+    fn cost_classes_are_told_apart_or_collapsed() {
+        // Near-identical shapes: costs of rounding noise, one class.
+        let noise = vec![0.0, -0.0, 1.5e-16, 1.5e-16, 3e-17, 1.5e-16, 0.0, 2e-16];
+        let c = cost_classes(noise);
+        assert_eq!(c.bounds, Vec::<f64>::new());
+        assert_eq!(c.labels, ["all costs ≈ 0"]);
+        // The same non-zero cost everywhere.
+        assert_eq!(cost_classes(vec![0.25; 9]).labels, ["all costs ≈ 0.25"]);
+        // Most costs 0, a few larger: classes for what differs only, 0 written as 0 (never -0).
+        let c = cost_classes(vec![-0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.3, 0.5]);
+        assert_eq!(c.labels, ["cost ≤ 0", "0 < cost ≤ 0.3", "cost > 0.3"]);
+        assert_eq!(c.class(0.3), 1);
+        assert_eq!(c.class(-0.0), 0);
+        // Close bounds get the digits that tell them apart.
+        let costs: Vec<f64> = (0..10).map(|i| 0.1231 + 1e-4 * i as f64).collect();
+        let c = cost_classes(costs);
+        assert_eq!(c.count(), COST_CLASSES);
+        assert_eq!(
+            c.labels,
+            [
+                "cost ≤ 0.1233",
+                "0.1233 < cost ≤ 0.1235",
+                "0.1235 < cost ≤ 0.1237",
+                "0.1237 < cost ≤ 0.1239",
+                "cost > 0.1239"
+            ]
+        );
+        // Bounds apart by less than the tolerance are one bound.
+        let mut costs = vec![1.0; 6];
+        costs.extend([1.0 + 1e-12, 2.0, 3.0, 4.0]);
+        let c = cost_classes(costs);
+        assert!(c.bounds.windows(2).all(|w| w[1] - w[0] >= 1e-9), "{c:?}");
+        assert_eq!(c.labels.first().unwrap(), "cost ≤ 1");
+        // Tiny and huge bounds in scientific notation; no costs: one class.
+        assert_eq!(significant(1.5e-16, 2), "1.5e-16");
+        assert_eq!(significant(-0.0, 2), "0");
+        assert_eq!(significant(2.5e7, 3), "2.5e7");
+        assert_eq!(significant(1234.5678, 3), "1230");
+        assert_eq!(cost_classes(vec![f64::NAN]).labels, ["matches"]);
+    }
+
+    #[test]
+    fn ordinals_and_plurals() {
+        let o: Vec<String> = [1, 2, 3, 4, 11, 12, 13, 21, 22, 23, 101, 111, 112]
+            .into_iter()
+            .map(ordinal)
+            .collect();
+        assert_eq!(
+            o,
+            [
+                "1st", "2nd", "3rd", "4th", "11th", "12th", "13th", "21st", "22nd", "23rd",
+                "101st", "111th", "112th"
+            ]
+        );
+        assert_eq!(counted(1, "track"), "1 track");
+        assert_eq!(counted(0, "track"), "0 tracks");
+        // Two frames of the disc: one pair.
+        let rec = walking_disc(2);
+        let result = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
+        let html = run_report(&rec, &result, &info()).unwrap();
+        assert!(html.contains("2 objects, 1 matched pair, "));
+    }
+
+    #[test]
+    fn the_centre_of_pressure_path_has_a_gap_per_swing() {
+        // Two stance phases (frames 0-3 and 6-9) around a swing without contact (4, 5), then
+        // a single frame of contact (12).
+        let mut rec = walking_disc(13);
+        let per = rec.rows() * rec.cols();
+        let mut data: Vec<f32> = (0..13)
+            .flat_map(|t| rec.frame_slice(t).unwrap().to_vec())
+            .collect();
+        for t in [4, 5, 10, 11] {
+            data[t * per..(t + 1) * per].fill(0.0);
+        }
+        rec = Recording::from_array(13, rec.rows(), rec.cols(), data, None)
+            .unwrap()
+            .with_pitch_mm([5.0, 4.0])
+            .unwrap();
+        let d = embedded_data(&run_report(&rec, &SequenceResult::default(), &info()).unwrap());
+        let path = &d["series"]["cop_path"];
+        let frames: Vec<Option<u64>> = serde_json::from_value(path["frame"].clone()).unwrap();
+        let pieces: Vec<Vec<u64>> = frames
+            .split(|f| f.is_none())
+            .map(|p| p.iter().map(|f| f.unwrap()).collect())
+            .collect();
+        assert_eq!(pieces, [vec![0, 1, 2, 3], vec![6, 7, 8, 9], vec![12]]);
+        let x = path["x"].as_array().unwrap();
+        assert_eq!(x.len(), frames.len());
+        assert_eq!(x.iter().filter(|v| v.is_null()).count(), 2);
+        assert_eq!(x[4], Value::Null);
+        assert_eq!(x[0], d["series"]["cop"][0][0]);
+    }
+
+    #[test]
+    fn report_embeds_frames_matches_and_measures_in_physical_units() {
+        let rec = walking_disc(6);
+        let result = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
+        assert_eq!(result.pairs.len(), 5);
+        let html = run_report(&rec, &result, &info()).unwrap();
+        // Self-contained: plotly.js inline, nothing loaded from elsewhere, loads forbidden.
+        assert!(html.contains("default-src 'none'"));
+        assert!(!html.contains("<script src"));
+        assert!(!html.contains("tex-svg") && html.contains("plotly.js"));
+        // The header, escaped.
+        assert!(html.contains("walk &lt;/script&gt;&lt;b&gt;.npy"));
+        assert!(html.contains("5 × 4 mm") && html.contains("50 Hz") && html.contains("npy"));
+        let d = embedded_data(&html);
+        assert_eq!(d["step"], 1);
+        assert_eq!(d["shown"], json!([0, 1, 2, 3, 4, 5]));
+        assert_eq!(d["xy_units"], "mm");
+        // Pressure decodes back to the recording within half a quantum.
+        let q = d["quantum"].as_f64().unwrap();
+        let (r, c, t) = (8, 9, 3);
+        let coded = d["z"][t][r * 24 + c].as_f64().unwrap();
+        let value = rec.frame_slice(t).unwrap()[r * 24 + c] as f64;
+        assert!(
+            (coded * q - value).abs() <= q / 2.0,
+            "{coded} × {q} vs {value}"
+        );
+        // Every match of the pair leaving frame 2 is drawn as one segment (two points).
+        let frame2 = &d["overlays"]["frames"][2];
+        let drawn: usize = frame2["matches"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .chain([&frame2["excess"]])
+            .map(|l| {
+                l["x"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .filter(|v| !v.is_null())
+                    .count()
+            })
+            .sum();
+        let pair = result
+            .pairs
+            .iter()
+            .find(|p| p.row.objects.frame_a == 2)
+            .unwrap();
+        assert_eq!(drawn, 2 * pair.result.pairs.len());
+        // Contours in mm: the disc's nodes lie within its mm extent.
+        let xs: Vec<f64> = frame2["contours"]["x"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|v| v.as_f64())
+            .collect();
+        assert!(
+            xs.iter().all(|&x| (5.0 * 3.0..=5.0 * 13.0).contains(&x)),
+            "{xs:?}"
+        );
+        // Time series: the contact area of frame 0 in mm² (20 mm² per sensel).
+        let sensels = rec.measures(0.0)[0].contact_sensors as f64;
+        assert_eq!(d["series"]["area"][0].as_f64().unwrap(), sensels * 20.0);
+    }
+
+    #[test]
+    fn isocontour_runs_show_each_level_of_the_frame_with_its_pressure() {
+        let rec = walking_disc(6);
+        let options = SequenceOptions {
+            model: pedo_track::ObjectModel::Isocontour,
+            iso_frame: Some(3),
+            iso_count: 4,
+            ..Default::default()
+        };
+        let result = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+        let expected: Vec<f64> = result.objects.iter().filter_map(|o| o.level).collect();
+        assert!(expected.len() >= 3, "{expected:?}");
+        let d = embedded_data(&run_report(&rec, &result, &info()).unwrap());
+        assert_eq!(d["isocontour"], true);
+        assert_eq!(d["first_object_frame"], 3);
+        let frame3 = &d["overlays"]["frames"][3];
+        let levels = frame3["levels"].as_array().unwrap();
+        // One closed outline per level, in increasing pressure, none drawn as a plain contour.
+        assert_eq!(levels.len(), expected.len());
+        for (l, want) in levels.iter().zip(&expected) {
+            assert!((l["level"].as_f64().unwrap() - want).abs() < 1e-6);
+            let (x, y) = (l["x"].as_array().unwrap(), l["y"].as_array().unwrap());
+            assert!(x.len() > 8 && x.first() == x.last() && y.first() == y.last());
+            // Inside the disc (radius √20 sensels around column 9, row 8; 5 × 4 mm sensels).
+            for (x, y) in x.iter().zip(y) {
+                let (c, r) = (x.as_f64().unwrap() / 5.0, y.as_f64().unwrap() / 4.0);
+                assert!((c - 9.0).hypot(r - 8.0) <= 20f64.sqrt() + 0.5, "{c} {r}");
+            }
+        }
+        assert!(expected.windows(2).all(|w| w[0] < w[1]));
+        assert!(frame3["contours"]["x"].as_array().unwrap().is_empty());
+        assert!(d["overlays"]["frames"][2]["levels"]
+            .as_array()
+            .unwrap()
+            .is_empty());
+    }
+
+    fn ellipse(n: usize, scale: f64) -> modal_core::Shape {
+        let pts: Vec<[f64; 2]> = (0..n)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / n as f64;
+                [10.0 + 3.0 * scale * t.cos(), 8.0 + 2.0 * scale * t.sin()]
+            })
+            .collect();
+        modal_core::Shape::from_points_2d(&pts, modal_core::Topology::ClosedContour).unwrap()
+    }
+
+    #[test]
+    fn match_report_draws_every_match_in_mm_with_its_facts() {
+        let (a, b) = (ellipse(40, 1.0), ellipse(32, 1.1));
+        let opts = modal_core::MatchOptions {
+            excess: false,
+            ..Default::default()
+        };
+        let r = modal_core::match_shapes(&a, &b, &opts).unwrap();
+        assert_eq!((r.pairs.len(), r.unmatched_a.len()), (32, 8));
+        let pair = MatchPairInput {
+            a: &a,
+            b: &b,
+            result: &r,
+            pitch_mm: Some([2.0, 3.0]),
+            data_unit: "sensels",
+            label_a: "a.xy",
+            label_b: "b.xy",
+            underlays: [None, None],
+        };
+        let facts = [("A".to_string(), "a.xy <1>".to_string())];
+        let html = match_report(&pair, &info(), &facts).unwrap();
+        assert!(html.contains("default-src 'none'") && !html.contains("<script src"));
+        assert!(html.contains("a.xy &lt;1&gt;") && html.contains("pedomatch 9.9.9"));
+        assert!(html.contains("matching 0.500 s") && html.contains("<th>modes</th>"));
+        let d = embedded_data(&html);
+        assert_eq!(
+            (d["dim"].as_u64(), d["xy_units"].as_str()),
+            (Some(2), Some("mm"))
+        );
+        // Closed outlines: A's 40 nodes and its first again, in mm.
+        assert_eq!(d["a"]["x"].as_array().unwrap().len(), 41);
+        assert_eq!(d["a"]["x"][0].as_f64().unwrap(), 2.0 * a.point(0)[0]);
+        assert_eq!(d["a"]["y"][0].as_f64().unwrap(), 3.0 * a.point(0)[1]);
+        // Every match once, in the cost class its cost falls in; unmatched nodes listed.
+        // The bounds as computed: a cost equal to a bound must not flip class through the JSON
+        // round trip (serde_json's parsing may be one ulp off).
+        let classes = cost_classes(r.pairs.iter().map(|m| m.cost).collect());
+        let bounds = &classes.bounds;
+        assert_eq!(classes.count(), COST_CLASSES);
+        assert_eq!(d["cost_labels"], json!(classes.labels));
+        let shown: Vec<f64> = serde_json::from_value(d["cost_bounds"].clone()).unwrap();
+        assert_eq!(shown.len(), bounds.len());
+        for (s, b) in shown.iter().zip(bounds) {
+            assert!((s - b).abs() <= 1e-12 * b.abs().max(1.0), "{s} vs {b}");
+        }
+        let mut per_class = [0; COST_CLASSES];
+        for m in &r.pairs {
+            per_class[bounds.iter().take_while(|&&b| m.cost > b).count()] += 1;
+        }
+        for (k, n) in per_class.iter().enumerate() {
+            let drawn = d["matches"][k]["x"].as_array().unwrap();
+            assert_eq!(drawn.iter().filter(|v| !v.is_null()).count(), 2 * n);
+        }
+        let unmatched = d["unmatched_a"]["x"].as_array().unwrap();
+        assert_eq!(unmatched.iter().filter(|v| !v.is_null()).count(), 8);
+        assert!(d["excess"]["x"].as_array().unwrap().is_empty());
+    }
+
+    #[test]
+    fn match_report_draws_the_frames_under_2d_objects() {
+        // Two frames of 4 × 5 sensels, kPa; one sensel without a sensor (NaN in every frame).
+        let (rows, cols) = (4, 5);
+        let mut data: Vec<f32> = (0..2 * rows * cols).map(|i| i as f32 * 1.5).collect();
+        data[3] = f32::NAN;
+        data[rows * cols + 3] = f32::NAN;
+        let mut rec = Recording::from_array(2, rows, cols, data.clone(), None).unwrap();
+        rec.units = "kPa".into();
+        let (a, b) = (ellipse(40, 1.0), ellipse(32, 1.1));
+        let r = modal_core::match_shapes(&a, &b, &Default::default()).unwrap();
+        let pair = MatchPairInput {
+            a: &a,
+            b: &b,
+            result: &r,
+            pitch_mm: Some([2.0, 3.0]),
+            data_unit: "sensels",
+            label_a: "a",
+            label_b: "b",
+            underlays: [
+                Some(FrameUnderlay {
+                    recording: &rec,
+                    frame: 0,
+                }),
+                Some(FrameUnderlay {
+                    recording: &rec,
+                    frame: 1,
+                }),
+            ],
+        };
+        let d = embedded_data(&match_report(&pair, &info(), &[]).unwrap());
+        assert_eq!(d["pitch"], json!([2.0, 3.0]));
+        for (k, img) in d["images"].as_array().unwrap().iter().enumerate() {
+            assert_eq!(
+                (img["rows"].as_u64(), img["cols"].as_u64()),
+                (Some(4), Some(5))
+            );
+            assert_eq!(
+                (img["units"].as_str(), img["frame"].as_u64()),
+                (Some("kPa"), Some(k as u64))
+            );
+            let q = img["quantum"].as_f64().unwrap();
+            let z = img["z"].as_array().unwrap();
+            assert_eq!(z.len(), rows * cols);
+            assert!(z[3].is_null(), "no sensor: no value");
+            // Every other sensel decodes back to the frame within half a quantum.
+            for (i, v) in z.iter().enumerate().filter(|(i, _)| *i != 3) {
+                let want = data[k * rows * cols + i] as f64;
+                assert!(
+                    (v.as_f64().unwrap() * q - want).abs() <= 0.5 * q,
+                    "sensel {i}"
+                );
+            }
+        }
+        // A frame that does not exist draws nothing; 3-D objects get no image.
+        let missing = MatchPairInput {
+            underlays: [
+                Some(FrameUnderlay {
+                    recording: &rec,
+                    frame: 7,
+                }),
+                None,
+            ],
+            ..pair
+        };
+        let d = embedded_data(&match_report(&missing, &info(), &[]).unwrap());
+        assert_eq!(d["images"], json!([null, null]));
+    }
+
+    #[test]
+    fn match_report_of_3d_points_carries_the_third_coordinate() {
+        let coords: Vec<f64> = (0..30)
+            .flat_map(|k| {
+                let (x, y) = ((k % 6) as f64, (k / 6) as f64);
+                [x, y, (-(x - 2.5).powi(2) - (y - 2.0).powi(2)).exp()]
+            })
+            .collect();
+        let a = modal_core::Shape::new(3, coords.clone(), modal_core::Topology::None).unwrap();
+        let shifted: Vec<f64> = coords
+            .chunks(3)
+            .flat_map(|p| [p[0] + 0.2, p[1], p[2]])
+            .collect();
+        let b = modal_core::Shape::new(3, shifted, modal_core::Topology::None).unwrap();
+        let r = modal_core::match_shapes(&a, &b, &Default::default()).unwrap();
+        let pair = MatchPairInput {
+            a: &a,
+            b: &b,
+            result: &r,
+            pitch_mm: None,
+            data_unit: "file units",
+            label_a: "a",
+            label_b: "b",
+            underlays: [None, None],
+        };
+        let d = embedded_data(&match_report(&pair, &info(), &[]).unwrap());
+        assert_eq!(d["dim"], 3);
+        assert_eq!(d["xy_units"], "file units");
+        assert_eq!(d["a"]["closed"], false);
+        let z: Vec<f64> = serde_json::from_value(d["b"]["z"].clone()).unwrap();
+        assert_eq!(z.len(), 30);
+        assert!((z[14] - b.point(14)[2]).abs() < 1e-6);
+        let segments: usize = d["matches3d"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .chain([&d["excess3d"]])
+            .map(|m| {
+                m["z"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .filter(|v| !v.is_null())
+                    .count()
+            })
+            .sum();
+        assert_eq!(segments, 2 * r.pairs.len());
+    }
+
+    #[test]
+    fn long_recordings_are_decimated_below_the_bound() {
+        let (frames, rows, cols) = (301, 100, 100);
+        let rec = Recording::from_array(frames, rows, cols, vec![0.0; frames * rows * cols], None)
+            .unwrap();
+        let result = SequenceResult::default();
+        let html = run_report(&rec, &result, &info()).unwrap();
+        let d = embedded_data(&html);
+        assert_eq!(d["step"], 2);
+        let note = d["decimation"].as_str().unwrap();
+        assert!(
+            note.starts_with("The player shows every 2nd frame: "),
+            "{note}"
+        );
+        assert_eq!(d["shown"].as_array().unwrap().len(), 151);
+        assert_eq!(d["series"]["area"].as_array().unwrap().len(), frames);
+        assert!(html.len() < 25 << 20, "{} bytes", html.len());
+        assert_eq!(d["xy_units"], "sensels");
+    }
+}

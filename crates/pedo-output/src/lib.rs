@@ -1,0 +1,30 @@
+//! Everything a pedomatch run writes. The third pipeline crate (docs/architecture.md): it
+//! implements the run engine's sink (`pedo_track::SequenceSink`) and draws what needs a whole run.
+//!
+//! | module | what it writes |
+//! |---|---|
+//! | [`table`] | a table of [`Cell`]s as CSV or JSON |
+//! | [`table_files`] | a table file as CSV or Parquet ([`TableFormat`]), whole or row by row |
+//! | [`run_tables`] | the tables of a run: pairs, objects, matches, tracks, frames, reference matches |
+//! | [`summary`] | `summary.json`: the input's provenance, the options used, the counts and timings |
+//! | [`figure`] | PNG/SVG figures (a matched pair, a run's tracks) and the GIF animation |
+//! | [`html_report`] | the self-contained interactive `report.html` of a run or of one pair |
+//! | [`outdir`] | output folders written whole or not at all |
+//! | [`run_folder`] | the folder of one run, streamed or whole, through one writer ([`TablesSink`]) |
+
+#![warn(missing_docs)]
+
+pub mod figure;
+pub mod html_report;
+pub mod outdir;
+pub mod run_folder;
+pub mod run_tables;
+pub mod summary;
+pub mod table;
+pub mod table_files;
+
+pub use run_folder::*;
+pub use run_tables::*;
+pub use summary::*;
+pub use table::*;
+pub use table_files::*;

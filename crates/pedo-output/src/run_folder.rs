@@ -1,0 +1,668 @@
+//! The folder of one run: its tables, `pairs.json`, figures, `summary.json`, `report.html` and
+//! `animation.gif`, written whole or not at all ([`crate::outdir`]). A run is written by one path
+//! whether it was held whole or streamed: the tables go through [`TablesSink`], handed the run's
+//! events by `pedo_track::stream_sequence` as they are made, or by `pedo_track::replay` from a
+//! whole result; the figures, the report and the animation need the whole run and are drawn
+//! from it after.
+
+use crate::figure::{tracks_background, FigureAxes, MatchFigure, ObjectLabel, TracksFigure};
+use crate::outdir::OutDir;
+use crate::TableFormat;
+use crate::{Cell, InputInfo};
+use modal_core::OptionSpec;
+use pedo_io::cancel::Cancel;
+use pedo_io::formats::{read_recording_with, ReadOptions};
+use pedo_io::recording::FrameMeasures;
+use pedo_io::recording::Recording;
+use pedo_io::FrameSource;
+use pedo_io::{IoError, Result};
+use pedo_track::{
+    replay, require_objects, run_sequence, stream_sequence, NoSink, PairMatch, RunCounts,
+    RunParams, SequenceObject, SequenceOptions, SequenceResult, SequenceSink, Stage,
+};
+use rayon::prelude::*;
+use serde_json::{json, Map, Value};
+use std::path::Path;
+use std::time::Instant;
+
+/// The tables every run folder holds (besides `summary.json` and `pairs.json`), by name: each
+/// written as `NAME.csv` or `NAME.parquet` ([`TableFormat`]).
+pub const RUN_TABLES: [&str; 5] = ["pairs", "objects", "matches", "tracks", "frames"];
+
+/// The table a run with drift correction ([`SequenceOptions::drift_corrected`]) writes besides
+/// [`RUN_TABLES`]: the matches of its reference pairs ([`crate::reference_matches_table`]).
+pub const REFERENCE_MATCHES: &str = "reference_matches";
+
+/// The tables a run with these options writes, by name: [`RUN_TABLES`], and
+/// [`REFERENCE_MATCHES`] with drift correction.
+pub fn run_tables(options: &SequenceOptions) -> Vec<&'static str> {
+    let mut names = RUN_TABLES.to_vec();
+    if options.drift_corrected() {
+        names.push(REFERENCE_MATCHES);
+    }
+    names
+}
+
+/// The table files of a run folder whose tables are written as `tables` by a run with these
+/// options: those of [`run_tables`] and `pairs.json`.
+pub fn run_table_files(tables: TableFormat, options: &SequenceOptions) -> Vec<String> {
+    let mut files: Vec<String> = run_tables(options)
+        .iter()
+        .map(|t| tables.file_name(t))
+        .collect();
+    files.insert(1, "pairs.json".into());
+    files
+}
+
+/// The figures of a run (`--figures`, `figures=`): a match figure per pair and the tracks figure.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FigureFormat {
+    /// PNG images.
+    #[default]
+    Png,
+    /// SVG drawings.
+    Svg,
+    /// No figures.
+    None,
+}
+
+modal_core::choice!(FigureFormat, "figures", [
+    "png" => FigureFormat::Png,
+    "svg" => FigureFormat::Svg,
+    "none" => FigureFormat::None,
+]);
+
+/// The interactive report of a run (`--report`, `report=`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ReportFormat {
+    /// A self-contained `report.html` that opens offline.
+    #[default]
+    Html,
+    /// No report.
+    None,
+}
+
+modal_core::choice!(ReportFormat, "report", [
+    "html" => ReportFormat::Html,
+    "none" => ReportFormat::None,
+]);
+
+/// The recording played back (`--animation`, `animation=`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AnimationFormat {
+    /// `animation.gif`: the pressure frames with their contours and matches.
+    Gif,
+    /// No animation.
+    #[default]
+    None,
+}
+
+modal_core::choice!(AnimationFormat, "animation", [
+    "gif" => AnimationFormat::Gif,
+    "none" => AnimationFormat::None,
+]);
+
+/// The output options of a run or study (`pedomatch run`/`demo`/`batch`, `pymodal.run(out=...)`,
+/// `pymodal.batch`; `pedomatch match` takes `figures` and `report`), in the order the front ends
+/// list them: what a run folder holds besides its tables and `summary.json`, and the tables'
+/// format.
+pub fn output_option_specs() -> Vec<OptionSpec> {
+    vec![
+        OptionSpec::choice(
+            FigureFormat::default(),
+            "Figures of every matched pair and of the tracks: png, svg or none.",
+        ),
+        OptionSpec::choice(
+            TableFormat::default(),
+            "File format of the tables (pairs, objects, matches, tracks, frames, and reference_matches with drift correction; a batch's study table): csv, or parquet (typed, snappy-compressed columns with the CSV's names and values, for pandas, polars or Dask).",
+        ),
+        OptionSpec::choice(
+            ReportFormat::default(),
+            "The interactive report: html writes a self-contained report.html that opens offline; none writes none.",
+        ),
+        OptionSpec::choice(
+            AnimationFormat::default(),
+            "The recording played back: gif writes animation.gif (pressure frames with their contours and matches; long runs decimated to at most 150 frames); none writes none.",
+        ),
+    ]
+}
+
+/// Which figure files a run writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct FigureKinds {
+    /// Write PNG figures (`figures/pair_*.png`, `tracks.png`).
+    pub png: bool,
+    /// Write SVG figures (`figures/pair_*.svg`, `tracks.svg`).
+    pub svg: bool,
+}
+
+impl From<FigureFormat> for FigureKinds {
+    fn from(f: FigureFormat) -> Self {
+        Self {
+            png: f == FigureFormat::Png,
+            svg: f == FigureFormat::Svg,
+        }
+    }
+}
+
+/// A finished run of one recording, as the writers of its folder see it.
+pub struct RunRecord<'a> {
+    /// The input's name and SHA-256, for the summary.
+    pub input: &'a InputInfo,
+    /// The recording run, its unit overrides applied ([`run_options`]).
+    pub recording: &'a Recording,
+    /// The parameters the options came from.
+    pub params: &'a RunParams,
+    /// The options the run used.
+    pub options: &'a SequenceOptions,
+    /// What the run produced.
+    pub result: &'a SequenceResult,
+}
+
+/// What a run folder holds besides its tables and `summary.json`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RunOutputs {
+    /// Figures to write: a match figure per pair and the tracks figure.
+    pub figures: FigureKinds,
+    /// Write `report.html`, the interactive report ([`report_page`]).
+    pub report: bool,
+    /// `animation.gif`: the frames with their contours and matches (`--animation gif`).
+    pub animation: bool,
+    /// The file format of the tables (and of a study's table).
+    pub tables: TableFormat,
+}
+
+impl RunOutputs {
+    /// The outputs the option values name, each `None` at its default
+    /// ([`output_option_specs`]): the one place a front end's words become outputs.
+    pub fn of(
+        figures: Option<FigureFormat>,
+        tables: Option<TableFormat>,
+        report: Option<ReportFormat>,
+        animation: Option<AnimationFormat>,
+    ) -> Self {
+        Self {
+            figures: figures.unwrap_or_default().into(),
+            report: report.unwrap_or_default() == ReportFormat::Html,
+            animation: animation.unwrap_or_default() == AnimationFormat::Gif,
+            tables: tables.unwrap_or_default(),
+        }
+    }
+}
+
+/// Whether a run writes only its tables and `summary.json` (no figures, report or animation):
+/// such a run streams ([`stream_run_folder`]), and its memory does not grow with the
+/// recording's length.
+pub fn tables_only(outputs: &RunOutputs) -> bool {
+    !outputs.figures.png && !outputs.figures.svg && !outputs.report && !outputs.animation
+}
+
+/// The recording at `path` read for a run with these parameters and outputs: a run that
+/// streams (tables only, and [`RunParams::streams`]) reads a Tekscan file's frames as it goes
+/// ([`pedo_io::formats::read_for_streaming`]), never held whole; any other run reads it whole.
+pub fn read_for_run(
+    path: &Path,
+    read: &ReadOptions,
+    params: &RunParams,
+    outputs: &RunOutputs,
+) -> Result<(Recording, Option<pedo_io::formats::FileFrames>)> {
+    if tables_only(outputs) && params.streams() {
+        pedo_io::formats::read_for_streaming(path, read)
+    } else {
+        Ok((read_recording_with(path, read)?, None))
+    }
+}
+
+/// The tables of a run folder written as [`stream_sequence`] makes them: every row goes to its
+/// file at once (the skipped pairs, few, are kept for the end of the pairs table).
+pub struct TablesSink<'a> {
+    dir: &'a OutDir,
+    recording: &'a Recording,
+    format: TableFormat,
+    pairs: crate::TableWriter,
+    pairs_json: std::io::BufWriter<std::fs::File>,
+    json_rows: crate::JsonRows,
+    objects: crate::TableWriter,
+    matches: crate::TableWriter,
+    frames: crate::TableWriter,
+    /// With drift correction: the matches of the reference pairs.
+    reference_matches: Option<crate::TableWriter>,
+    /// Started with the first track: its columns depend on the objects' dimension.
+    tracks: Option<crate::TableWriter>,
+    /// The dimension of the first object.
+    dim: Option<usize>,
+}
+
+impl<'a> TablesSink<'a> {
+    /// Starts the tables of a run of `recording` with `options` in `dir` ([`run_tables`]).
+    pub fn create(
+        dir: &'a OutDir,
+        recording: &'a Recording,
+        options: &SequenceOptions,
+        format: TableFormat,
+    ) -> Result<Self> {
+        let pairs_header = crate::pairs_header(recording).header;
+        let reference_header = crate::matches_header(recording, "tracked").header;
+        let reference_matches = options
+            .drift_corrected()
+            .then(|| crate::TableWriter::create(dir, format, REFERENCE_MATCHES, &reference_header))
+            .transpose()?;
+        Ok(Self {
+            dir,
+            recording,
+            format,
+            pairs: crate::TableWriter::create(dir, format, "pairs", &pairs_header)?,
+            pairs_json: dir.create_file("pairs.json")?,
+            json_rows: crate::JsonRows::new(&pairs_header),
+            objects: crate::TableWriter::create(
+                dir,
+                format,
+                "objects",
+                &crate::objects_header(recording).header,
+            )?,
+            matches: crate::TableWriter::create(
+                dir,
+                format,
+                "matches",
+                &crate::matches_header(recording, "trackable").header,
+            )?,
+            frames: crate::TableWriter::create(
+                dir,
+                format,
+                "frames",
+                &crate::frames_header(recording).header,
+            )?,
+            reference_matches,
+            tracks: None,
+            dim: None,
+        })
+    }
+
+    fn pair_row(&mut self, cells: &[Cell]) -> Result<()> {
+        self.pairs.push(self.dir, cells)?;
+        self.json_rows
+            .push(&mut self.pairs_json, cells)
+            .map_err(|e| self.dir.failed("pairs.json", e))
+    }
+
+    fn tracks_writer(&mut self) -> Result<&mut crate::TableWriter> {
+        if self.tracks.is_none() {
+            let header = crate::tracks_header_of(self.recording, self.dim.unwrap_or(2)).header;
+            self.tracks = Some(crate::TableWriter::create(
+                self.dir,
+                self.format,
+                "tracks",
+                &header,
+            )?);
+        }
+        self.tracks
+            .as_mut()
+            .ok_or_else(|| IoError::invalid("tracks table not started"))
+    }
+
+    /// Ends the tables: the skipped pairs of `counts` close the pairs table.
+    pub fn finish(mut self, counts: &RunCounts) -> Result<()> {
+        for s in &counts.skipped_pairs {
+            let cells = crate::skipped_pair_cells(self.recording, s);
+            self.pair_row(&cells)?;
+        }
+        self.tracks_writer()?;
+        let dir = self.dir;
+        self.pairs.finish(dir)?;
+        let failed = |e| dir.failed("pairs.json", e);
+        self.json_rows
+            .finish(&mut self.pairs_json)
+            .map_err(failed)?;
+        std::io::Write::flush(&mut self.pairs_json).map_err(failed)?;
+        self.objects.finish(dir)?;
+        self.matches.finish(dir)?;
+        self.frames.finish(dir)?;
+        if let Some(t) = self.tracks {
+            t.finish(dir)?;
+        }
+        if let Some(t) = self.reference_matches {
+            t.finish(dir)?;
+        }
+        Ok(())
+    }
+}
+
+impl SequenceSink for TablesSink<'_> {
+    fn frames(&mut self, first: usize, measures: &[FrameMeasures]) -> Result<()> {
+        let (dir, frames) = (self.dir, &mut self.frames);
+        crate::measures_rows(self.recording, first, measures, &mut |cells| {
+            frames.push(dir, &cells)
+        })
+    }
+
+    fn object(&mut self, object: &SequenceObject) -> Result<()> {
+        self.dim.get_or_insert(object.shape.dim());
+        self.objects
+            .push(self.dir, &crate::object_cells(self.recording, object))
+    }
+
+    fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()> {
+        let cells = crate::pair_cells(self.recording, &pair.row);
+        self.pair_row(&cells)?;
+        let (dir, matches) = (self.dir, &mut self.matches);
+        crate::pair_match_rows(self.recording, pair, a, b, &mut |cells| {
+            matches.push(dir, &cells)
+        })
+    }
+
+    fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
+        let dim = self.dim.unwrap_or(2);
+        let (dir, recording) = (self.dir, self.recording);
+        let tracks = self.tracks_writer()?;
+        crate::track_rows(recording, index, steps, dim, &mut |cells| {
+            tracks.push(dir, &cells)
+        })
+    }
+
+    fn reference_pair(
+        &mut self,
+        pair: &PairMatch,
+        a: &SequenceObject,
+        b: &SequenceObject,
+        tracked: &[bool],
+    ) -> Result<()> {
+        let (dir, recording) = (self.dir, self.recording);
+        let Some(writer) = self.reference_matches.as_mut() else {
+            return Err(IoError::invalid(
+                "a reference pair handed to the tables of a run without drift correction",
+            ));
+        };
+        crate::reference_pair_rows(recording, pair, a, b, tracked, &mut |cells| {
+            writer.push(dir, &cells)
+        })
+    }
+}
+
+/// What one run is, besides its recording and options: where its frames come from, who it is
+/// for, and what it writes.
+pub struct RunPlan<'a> {
+    /// The input's name and SHA-256, for the summary.
+    pub input: &'a InputInfo,
+    /// The parameters the options came from ([`run_options`]).
+    pub params: &'a RunParams,
+    /// Reads the frames as the run goes when the recording holds none (see
+    /// [`pedo_io::formats::read_for_streaming`]).
+    pub frames: Option<&'a mut dyn FrameSource>,
+    /// The run's folder; `None` writes nothing (the summary is still made).
+    pub folder: Option<&'a Path>,
+    /// What the folder holds besides its tables and `summary.json`; only figures, a report or
+    /// an animation make the run whole instead of streamed ([`tables_only`]).
+    pub outputs: &'a RunOutputs,
+    /// Stages measured before the run (e.g. reading), for the summary.
+    pub timings: &'a [(&'a str, f64)],
+}
+
+/// Runs `recording` and writes its folder as `plan` says: streamed when the outputs are tables
+/// only ([`tables_only`], [`stream_run_folder`]), else run whole and written by
+/// [`write_run_folder`]. Returns the summary (`summary.json`) and the run's counts. What
+/// `pedomatch run` and every recording of a study do after reading.
+pub fn run_into_folder(
+    recording: &Recording,
+    options: &SequenceOptions,
+    plan: RunPlan<'_>,
+    progress: &(dyn Fn(Stage, usize, usize) + Sync),
+) -> Result<(Value, RunCounts)> {
+    let RunPlan {
+        input,
+        params,
+        frames,
+        folder,
+        outputs,
+        timings,
+    } = plan;
+    if tables_only(outputs) {
+        // Streamed: nothing of the run is held but its counts.
+        return match folder {
+            Some(folder) => stream_run_folder(
+                folder,
+                input,
+                recording,
+                frames,
+                params,
+                options,
+                outputs.tables,
+                timings,
+                progress,
+            ),
+            None => {
+                let counts = stream_sequence(recording, frames, options, progress, &mut NoSink)?;
+                require_objects(counts.objects, recording, options)?;
+                let summary =
+                    crate::run_summary_of(input, recording, params, options, &counts, timings);
+                Ok((summary, counts))
+            }
+        };
+    }
+    let result = run_sequence(recording, options, progress)?;
+    require_objects(result.objects.len(), recording, options)?;
+    let summary = match folder {
+        Some(folder) => {
+            let run = RunRecord {
+                input,
+                recording,
+                params,
+                options,
+                result: &result,
+            };
+            write_run_folder(folder, &run, outputs, timings)?
+        }
+        None => crate::run_summary(input, recording, params, options, &result, timings),
+    };
+    Ok((summary, RunCounts::of(&result)))
+}
+
+/// Runs `recording` as [`stream_sequence`] and writes the folder `out` of a run with tables
+/// only ([`tables_only`]), whole or not at all, byte for byte as [`write_run_folder`] writes it
+/// (the timings of `summary.json` aside): the tables are written as the run makes them, so
+/// neither the run nor its tables are ever held. `frames` reads the frames when `recording`
+/// holds none (see [`pedo_io::formats::read_for_streaming`]). `timings` are the stages measured
+/// before (e.g. reading). Returns the summary and the run's counts.
+#[allow(clippy::too_many_arguments)]
+pub fn stream_run_folder(
+    out: &Path,
+    input: &InputInfo,
+    recording: &Recording,
+    frames: Option<&mut dyn FrameSource>,
+    params: &RunParams,
+    options: &SequenceOptions,
+    tables: TableFormat,
+    timings: &[(&str, f64)],
+    progress: &(dyn Fn(Stage, usize, usize) + Sync),
+) -> Result<(Value, RunCounts)> {
+    let started = Instant::now();
+    let dir = OutDir::create(out)?;
+    let mut sink = TablesSink::create(&dir, recording, options, tables)?;
+    let counts = stream_sequence(recording, frames, options, progress, &mut sink)?;
+    require_objects(counts.objects, recording, options)?;
+    sink.finish(&counts)?;
+    let t = counts.timings;
+    let run = started
+        .elapsed()
+        .saturating_sub(t.objects + t.matching + t.tracks);
+    let mut stages = timings.to_vec();
+    stages.push(("output", run.as_secs_f64()));
+    let summary = crate::run_summary_of(input, recording, params, options, &counts, &stages);
+    dir.write("summary.json", pretty(&summary).as_bytes())?;
+    pedo_io::cancel::check(options.cancel.as_ref())?;
+    dir.commit()?;
+    Ok((summary, counts))
+}
+
+/// Writes the match figure of every pair (in parallel on the current rayon pool) and the tracks
+/// figure, as PNG and/or SVG, under `figures/` and as `tracks.*`. Fails with
+/// [`IoError::Cancelled`] at the next figure once `cancel` is cancelled.
+pub fn write_figures(
+    dir: &OutDir,
+    recording: &Recording,
+    r: &SequenceResult,
+    kinds: FigureKinds,
+    cancel: Option<&Cancel>,
+) -> Result<()> {
+    if !kinds.png && !kinds.svg {
+        return Ok(());
+    }
+    let axes = FigureAxes::of_recording(recording);
+    r.pairs.par_iter().try_for_each(|p| -> Result<()> {
+        pedo_io::cancel::check(cancel)?;
+        let (oa, ob) = (&r.objects[p.a], &r.objects[p.b]);
+        let fig = MatchFigure {
+            a: &oa.shape,
+            b: &ob.shape,
+            pairs: &p.result.pairs,
+            axes: &axes,
+            label_a: object_label(oa, recording),
+            label_b: object_label(ob, recording),
+        };
+        let stem = format!("figures/pair_{:04}_{:04}", oa.id, ob.id);
+        write_figure(dir, &stem, kinds, || fig.to_png(), || fig.to_svg())
+    })?;
+    pedo_io::cancel::check(cancel)?;
+    let background = tracks_background(recording, r)?;
+    let tracks = TracksFigure {
+        result: r,
+        background: &background,
+        axes: &axes,
+        min_steps: 3,
+        max_tracks: 40,
+    };
+    write_figure(dir, "tracks", kinds, || tracks.to_png(), || tracks.to_svg())
+}
+
+/// An object as a figure's title names it: `object 12`, and for an isocontour its level
+/// (`object 3 at 180 kPa`), the pairs of an isocontour run all being in one frame.
+fn object_label(o: &SequenceObject, recording: &Recording) -> ObjectLabel {
+    let mut label = ObjectLabel::object(o.id, o.frame);
+    if let Some(level) = o.level {
+        label.name = format!("{} at {level:.0} {}", label.name, recording.units)
+            .trim_end()
+            .to_string();
+    }
+    label
+}
+
+/// Writes `{stem}.png` and/or `{stem}.svg`.
+pub fn write_figure(
+    dir: &OutDir,
+    stem: &str,
+    kinds: FigureKinds,
+    to_png: impl FnOnce() -> Result<Vec<u8>>,
+    to_svg: impl FnOnce() -> Result<String>,
+) -> Result<()> {
+    let named = |e: IoError| IoError::Figure(format!("{stem}: {e}"));
+    if kinds.png {
+        dir.write(&format!("{stem}.png"), &to_png().map_err(named)?)?;
+    }
+    if kinds.svg {
+        dir.write(&format!("{stem}.svg"), to_svg().map_err(named)?.as_bytes())?;
+    }
+    Ok(())
+}
+
+/// Pretty JSON with a final newline.
+pub fn pretty(v: &Value) -> String {
+    let mut s = serde_json::to_string_pretty(v).unwrap_or_else(|_| v.to_string());
+    s.push('\n');
+    s
+}
+
+/// Writes the folder `out` of a run, whole or not at all (see [`crate::outdir`]): the tables, the
+/// figures, `summary.json` and, when asked, `report.html`. `timings` are the stages measured
+/// before the sequence run (e.g. reading); the time spent here is added as `output`. Returns
+/// the summary.
+pub fn write_run_folder(
+    out: &Path,
+    run: &RunRecord<'_>,
+    outputs: &RunOutputs,
+    timings: &[(&str, f64)],
+) -> Result<Value> {
+    let started = Instant::now();
+    let dir = OutDir::create(out)?;
+    // The tables as a streamed run writes them: the same sink, handed the whole run.
+    let mut tables = TablesSink::create(&dir, run.recording, run.options, outputs.tables)?;
+    let counts = replay(run.recording, run.options, run.result, &mut tables)?;
+    tables.finish(&counts)?;
+    let cancel = run.options.cancel.as_ref();
+    write_figures(&dir, run.recording, run.result, outputs.figures, cancel)?;
+    let mut stages = timings.to_vec();
+    stages.push(("output", started.elapsed().as_secs_f64()));
+    let mut summary = crate::run_summary(
+        run.input,
+        run.recording,
+        run.params,
+        run.options,
+        run.result,
+        &stages,
+    );
+    if let Some(options) = summary["options"].as_object_mut() {
+        record_outputs(options, outputs);
+    }
+    dir.write("summary.json", pretty(&summary).as_bytes())?;
+    if outputs.report {
+        dir.write("report.html", report_page(run, &summary)?.as_bytes())?;
+    }
+    if outputs.animation {
+        let axes = crate::figure::FigureAxes::of_recording(run.recording);
+        let animation = crate::figure::Animation {
+            recording: run.recording,
+            result: run.result,
+            axes: &axes,
+            frames: run.options.frames.unwrap_or((0, run.recording.n_frames())),
+        };
+        dir.write("animation.gif", &animation.to_gif()?)?;
+    }
+    // A cancelled run leaves the previous folder (or none), as if it had not run.
+    pedo_io::cancel::check(cancel)?;
+    dir.commit()?;
+    Ok(summary)
+}
+
+/// Adds to the options a run records in `summary.json` the outputs that are options of their
+/// own, so that a study resumed with another choice runs the folder again (`pedo_study::is_complete`):
+/// `animation` (`"gif"`) when `animation.gif` is written. A run without an animation records
+/// nothing, so its folder reads as before (and a streamed run's is the same, byte for byte).
+pub fn record_outputs(options: &mut Map<String, Value>, outputs: &RunOutputs) {
+    if outputs.animation {
+        options.insert("animation".into(), json!("gif"));
+    }
+}
+
+/// The HTML page `report.html` of a run, its header stating what `summary` (`summary.json`)
+/// records: the options used and the time spent per stage.
+pub fn report_page(run: &RunRecord<'_>, summary: &Value) -> Result<String> {
+    let timings = summary["timings_s"]
+        .as_object()
+        .map(|m| {
+            m.iter()
+                .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(0.0)))
+                .collect()
+        })
+        .unwrap_or_default();
+    let used = summary["options"]
+        .as_object()
+        .map(|m| m.iter().map(|(k, v)| (k.clone(), option_text(v))).collect())
+        .unwrap_or_default();
+    let info = crate::html_report::ReportInfo {
+        input: run.input.name.clone(),
+        format: run.recording.format.map(|f| f.name().to_string()),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        options: used,
+        timings,
+        contact_threshold: run.options.contour.preprocess.threshold.unwrap_or(0.0),
+        frames: run.options.frames,
+    };
+    crate::html_report::run_report(run.recording, run.result, &info)
+}
+
+/// An option's value as a report's header shows it (`none` for an unset one).
+pub fn option_text(v: &Value) -> String {
+    match v {
+        Value::Null => "none".into(),
+        Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}

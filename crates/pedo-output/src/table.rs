@@ -1,0 +1,227 @@
+//! A table as the outputs hold it: named columns of [`Cell`]s, written as CSV or as a JSON array
+//! of rows (Parquet: [`crate::table_files`]).
+
+use serde_json::{json, Map, Value};
+
+/// One field of a table.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Cell {
+    /// An integer: a count, an id or a frame number.
+    Int(i64),
+    /// A number and the decimals it is written with in CSV.
+    Float(f64, usize),
+    /// Free text (quoted in CSV when it holds a comma, quote or line break).
+    Text(String),
+    /// No value (written as an empty CSV field, JSON `null`).
+    Empty,
+}
+
+impl Cell {
+    pub(crate) fn int(v: usize) -> Self {
+        Cell::Int(v as i64)
+    }
+    pub(crate) fn opt(v: Option<f64>, decimals: usize) -> Self {
+        v.map_or(Cell::Empty, |v| Cell::Float(v, decimals))
+    }
+    /// The value as JSON.
+    pub fn to_json(&self) -> Value {
+        match self {
+            Cell::Int(v) => json!(v),
+            Cell::Float(v, _) => json!(v),
+            Cell::Text(s) => json!(s),
+            Cell::Empty => Value::Null,
+        }
+    }
+    fn to_csv(&self) -> String {
+        match self {
+            Cell::Int(v) => v.to_string(),
+            Cell::Float(v, d) => format!("{v:.d$}"),
+            Cell::Text(s) if s.contains([',', '"', '\n', '\r']) => {
+                // RFC 4180: free text (an error message) in double quotes, inner quotes doubled.
+                format!("\"{}\"", s.replace('"', "\"\""))
+            }
+            Cell::Text(s) => s.clone(),
+            Cell::Empty => String::new(),
+        }
+    }
+}
+
+/// A table: named columns (units in the names) and rows of cells.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Table {
+    /// Column names, units in the names (`time_s`, `x_mm`).
+    pub header: Vec<String>,
+    /// Rows, each meant to hold one cell per column of [`header`](Self::header) (not checked).
+    pub rows: Vec<Vec<Cell>>,
+}
+
+impl Table {
+    pub(crate) fn new(header: &[&str]) -> Self {
+        Self {
+            header: header.iter().map(|s| s.to_string()).collect(),
+            rows: Vec::new(),
+        }
+    }
+    pub(crate) fn push_column(&mut self, name: &str) {
+        self.header.push(name.to_string());
+    }
+    /// The table as CSV with a header line (free text quoted as RFC 4180 says).
+    pub fn to_csv(&self) -> String {
+        let mut s = self.header.join(",");
+        s.push('\n');
+        for r in &self.rows {
+            push_csv_row(&mut s, r);
+        }
+        s
+    }
+}
+
+/// Appends one CSV line of `cells` (as [`Table::to_csv`] writes it) to `s`.
+pub(crate) fn push_csv_line(s: &mut String, cells: &[Cell]) {
+    push_csv_row(s, cells)
+}
+
+fn push_csv_row(s: &mut String, cells: &[Cell]) {
+    for (k, c) in cells.iter().enumerate() {
+        if k > 0 {
+            s.push(',');
+        }
+        s.push_str(&c.to_csv());
+    }
+    s.push('\n');
+}
+
+/// Writes a table as CSV, byte for byte as [`Table::to_csv`] would, from its header and a source
+/// of rows (`rows(emit)` calls `emit` for each row in order), without holding the rows: the
+/// large tables of a long recording (matches, tracks) go to disk as they are produced.
+pub fn write_csv(
+    w: &mut dyn std::io::Write,
+    header: &[String],
+    rows: impl FnOnce(&mut dyn FnMut(Vec<Cell>) -> std::io::Result<()>) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let mut line = header.join(",");
+    line.push('\n');
+    w.write_all(line.as_bytes())?;
+    rows(&mut |cells| {
+        line.clear();
+        push_csv_row(&mut line, &cells);
+        w.write_all(line.as_bytes())
+    })
+}
+
+impl Table {
+    /// The rows as JSON objects keyed by column name.
+    pub fn to_json(&self) -> Value {
+        Value::Array(
+            self.rows
+                .iter()
+                .map(|r| row_json(&self.header, r))
+                .collect(),
+        )
+    }
+
+    /// Writes [`Table::to_json`] pretty-printed, with a final newline, byte for byte as
+    /// `serde_json::to_string_pretty` would, one row at a time: the JSON values of a long
+    /// table's cells take several times the memory of the table.
+    pub fn write_json(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        let mut rows = JsonRows::new(&self.header);
+        for r in &self.rows {
+            rows.push(w, r)?;
+        }
+        rows.finish(w)
+    }
+}
+
+/// One row as a JSON object keyed by column name.
+fn row_json(header: &[String], row: &[Cell]) -> Value {
+    let m: Map<String, Value> = header
+        .iter()
+        .cloned()
+        .zip(row.iter().map(Cell::to_json))
+        .collect();
+    Value::Object(m)
+}
+
+/// A JSON array of rows written one at a time, byte for byte as [`Table::write_json`] writes
+/// the whole table: for tables whose rows are never all held (a streamed run's `pairs.json`).
+pub(crate) struct JsonRows {
+    header: Vec<String>,
+    rows: usize,
+}
+
+impl JsonRows {
+    /// An array of objects keyed by these column names.
+    pub fn new(header: &[String]) -> Self {
+        Self {
+            header: header.to_vec(),
+            rows: 0,
+        }
+    }
+
+    /// Writes one row (a cell per column).
+    pub fn push(&mut self, w: &mut dyn std::io::Write, row: &[Cell]) -> std::io::Result<()> {
+        w.write_all(if self.rows == 0 { b"[\n" } else { b",\n" })?;
+        self.rows += 1;
+        // One level deeper than alone: every line indented by two spaces (strings hold no
+        // line breaks: JSON escapes them).
+        let row = serde_json::to_string_pretty(&row_json(&self.header, row))?;
+        for (i, line) in row.lines().enumerate() {
+            if i > 0 {
+                w.write_all(b"\n")?;
+            }
+            w.write_all(b"  ")?;
+            w.write_all(line.as_bytes())?;
+        }
+        Ok(())
+    }
+
+    /// Closes the array (with a final newline).
+    pub fn finish(self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        w.write_all(if self.rows == 0 { b"[]\n" } else { b"\n]\n" })
+    }
+}
+
+#[cfg(test)]
+mod csv_tests {
+    use super::*;
+
+    #[test]
+    fn streamed_csv_equals_the_whole_table() {
+        let mut t = Table::new(&["a", "b", "c"]);
+        t.rows
+            .push(vec![Cell::Int(1), Cell::Float(2.5, 3), Cell::Empty]);
+        t.rows.push(vec![
+            Cell::Text("x, \"y\"".into()),
+            Cell::Int(-4),
+            Cell::Float(0.1, 1),
+        ]);
+        let mut out = Vec::new();
+        write_csv(&mut out, &t.header, |emit| {
+            t.rows.iter().try_for_each(|r| emit(r.clone()))
+        })
+        .unwrap();
+        assert_eq!(String::from_utf8(out).unwrap(), t.to_csv());
+        assert_eq!(t.to_csv(), "a,b,c\n1,2.500,\n\"x, \"\"y\"\"\",-4,0.1\n");
+    }
+
+    #[test]
+    fn streamed_json_equals_the_whole_table_pretty_printed() {
+        let whole = |t: &Table| serde_json::to_string_pretty(&t.to_json()).unwrap() + "\n";
+        let streamed = |t: &Table| {
+            let mut out = Vec::new();
+            t.write_json(&mut out).unwrap();
+            String::from_utf8(out).unwrap()
+        };
+        let mut t = Table::new(&["a", "b", "c"]);
+        assert_eq!(streamed(&t), whole(&t));
+        t.rows
+            .push(vec![Cell::Int(1), Cell::Float(2.5, 3), Cell::Empty]);
+        t.rows.push(vec![
+            Cell::Text("two\nlines, \"quoted\"".into()),
+            Cell::Int(-4),
+            Cell::Float(0.1, 1),
+        ]);
+        assert_eq!(streamed(&t), whole(&t));
+        assert!(streamed(&t).starts_with("[\n  {\n    \"a\": 1,"));
+    }
+}

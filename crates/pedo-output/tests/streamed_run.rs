@@ -1,0 +1,247 @@
+//! A run with tables only streams (`stream_run_folder`: frames read, matched, chained and
+//! written window by window) and writes, file for file and byte for byte, the folder of the same
+//! run held whole (`run_sequence` + `write_run_folder`); only the timings of `summary.json`
+//! differ. A run that fails half-way leaves no folder.
+
+use pedo_io::formats::{read_for_streaming, ReadOptions};
+use pedo_io::{read_recording, FrameSource, Recording, FRAME_WINDOW};
+use pedo_output::InputInfo;
+use pedo_output::TableFormat;
+use pedo_output::{stream_run_folder, write_run_folder, RunOutputs, RunRecord};
+use pedo_track::{run_sequence, FrameRange, ObjectModel, RunParams};
+use std::path::{Path, PathBuf};
+
+#[path = "../../pedo-io/tests/common/files.rs"]
+mod files;
+use files::temp_dir;
+
+fn walk() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/FrasP01L.asf")
+}
+
+/// The folder of the run held whole, as `pedomatch run` with figures writes its tables.
+fn whole_folder(out: &Path, params: &RunParams, tables: TableFormat) -> serde_json::Value {
+    let recording = read_recording(walk()).unwrap();
+    let input = InputInfo::of_path(&walk()).unwrap();
+    let mut options = params.to_options(&recording).unwrap();
+    options.keep_match_details = false;
+    let result = run_sequence(&recording, &options, &|_, _, _| {}).unwrap();
+    let run = RunRecord {
+        input: &input,
+        recording: &recording,
+        params,
+        options: &options,
+        result: &result,
+    };
+    let outputs = RunOutputs {
+        tables,
+        ..Default::default()
+    };
+    write_run_folder(out, &run, &outputs, &[("read", 0.0)]).unwrap()
+}
+
+/// Every file under `dir`, by path relative to it.
+fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out: Vec<(String, Vec<u8>)> = walkdir(dir)
+        .into_iter()
+        .map(|p| {
+            let rel = p.strip_prefix(dir).unwrap().display().to_string();
+            (rel, std::fs::read(&p).unwrap())
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+fn walkdir(dir: &Path) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            found.extend(walkdir(&p));
+        } else {
+            found.push(p);
+        }
+    }
+    found
+}
+
+fn without_timings(bytes: &[u8]) -> serde_json::Value {
+    let mut v: serde_json::Value = serde_json::from_slice(bytes).unwrap();
+    v.as_object_mut().unwrap().remove("timings_s");
+    v
+}
+
+/// The same files, byte for byte (`summary.json` but for its timings).
+fn assert_same_folders(whole: &Path, streamed: &Path) {
+    let (a, b) = (files(whole), files(streamed));
+    let names = |f: &[(String, Vec<u8>)]| f.iter().map(|x| x.0.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&a), names(&b));
+    for ((name, x), (_, y)) in a.iter().zip(&b) {
+        if name == "summary.json" {
+            assert_eq!(without_timings(x), without_timings(y));
+        } else {
+            assert!(
+                x == y,
+                "{name} differs between the whole and the streamed run"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_streamed_run_writes_the_folder_of_the_whole_run() {
+    // Frames 10..150: windows of FRAME_WINDOW frames, tracks and pairs across their edges.
+    const { assert!(140 > 2 * FRAME_WINDOW) };
+    let cases = [
+        (
+            ObjectModel::Contour,
+            (10, 150),
+            TableFormat::Csv,
+            "contour-csv",
+        ),
+        (
+            ObjectModel::Contour,
+            (10, 150),
+            TableFormat::Parquet,
+            "contour-parquet",
+        ),
+        (
+            ObjectModel::Surface,
+            (20, 100),
+            TableFormat::Csv,
+            "surface-csv",
+        ),
+    ];
+    for (model, (start, end), tables, name) in cases {
+        let dir = temp_dir(name);
+        let params = RunParams {
+            model,
+            frames: Some(FrameRange {
+                start,
+                end: Some(end),
+            }),
+            ..Default::default()
+        };
+        let whole = dir.join("whole");
+        let summary = whole_folder(&whole, &params, tables);
+        let pairs = summary["pairs"].as_u64().unwrap();
+        assert!(pairs > 20, "{name}: {pairs} pairs");
+        assert!(summary["tracks_3_or_more"].as_u64().unwrap() > 10, "{name}");
+
+        // Read from the file frame by frame, and held whole.
+        let (recording, mut frames) = read_for_streaming(walk(), &ReadOptions::default()).unwrap();
+        assert!(frames.is_some(), "a .asf file is read as the run goes");
+        let held = read_recording(walk()).unwrap();
+        let input = InputInfo::of_path(&walk()).unwrap();
+        let sources: [(&Recording, Option<&mut dyn FrameSource>); 2] = [
+            (
+                &recording,
+                frames.as_mut().map(|f| f as &mut dyn FrameSource),
+            ),
+            (&held, None),
+        ];
+        for (k, (rec, source)) in sources.into_iter().enumerate() {
+            let mut options = params.to_options(rec).unwrap();
+            options.keep_match_details = false;
+            let out = dir.join(format!("streamed-{k}"));
+            let (streamed, counts) = stream_run_folder(
+                &out,
+                &input,
+                rec,
+                source,
+                &params,
+                &options,
+                tables,
+                &[("read", 0.0)],
+                &|_, _, _| {},
+            )
+            .unwrap();
+            assert_eq!(streamed["tracks"], summary["tracks"]);
+            assert_eq!(counts.pairs as u64, summary["pairs"].as_u64().unwrap());
+            assert_same_folders(&whole, &out);
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+/// Frames of a held recording, failing from the second window on.
+struct FailingSource(Recording);
+
+impl FrameSource for FailingSource {
+    fn window(
+        &mut self,
+        recording: &Recording,
+        w0: usize,
+        w1: usize,
+    ) -> pedo_io::Result<Recording> {
+        if w0 >= FRAME_WINDOW {
+            return Err(pedo_io::IoError::InvalidInput("the disk went away".into()));
+        }
+        let data: Vec<f32> = (w0..w1)
+            .flat_map(|t| self.0.frame_slice(t).unwrap().into_owned())
+            .collect();
+        let mut r = Recording::new(
+            w1 - w0,
+            recording.rows(),
+            recording.cols(),
+            data,
+            recording.sensor_mask().to_vec(),
+        )?;
+        r.pitch_mm = recording.pitch_mm;
+        r.dt_s = recording.dt_s;
+        r.units = recording.units.clone();
+        Ok(r)
+    }
+}
+
+#[test]
+fn a_streamed_run_that_fails_half_way_leaves_no_folder() {
+    let dir = temp_dir("fails");
+    let (recording, _) = read_for_streaming(walk(), &ReadOptions::default()).unwrap();
+    let mut source = FailingSource(read_recording(walk()).unwrap());
+    let params = RunParams {
+        frames: Some(FrameRange::new(0, FRAME_WINDOW + 10)),
+        ..Default::default()
+    };
+    let options = params.to_options(&recording).unwrap();
+    let out = dir.join("out");
+    let err = stream_run_folder(
+        &out,
+        &InputInfo::default(),
+        &recording,
+        Some(&mut source),
+        &params,
+        &options,
+        TableFormat::Csv,
+        &[],
+        &|_, _, _| {},
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("disk went away"), "{err}");
+    assert!(!out.exists());
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+    assert!(left.is_empty(), "no staging folder left: {left:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_recording_read_for_streaming_holds_no_values_but_its_shape() {
+    let (shape, frames) = read_for_streaming(walk(), &ReadOptions::default()).unwrap();
+    let held = read_recording(walk()).unwrap();
+    assert!(frames.is_some());
+    assert_eq!(shape.n_frames(), held.n_frames());
+    assert_eq!(
+        (shape.rows(), shape.cols(), shape.sensor_mask()),
+        (held.rows(), held.cols(), held.sensor_mask())
+    );
+    assert_eq!((shape.pitch_mm, shape.dt_s), (held.pitch_mm, held.dt_s));
+    assert_eq!(shape.units, held.units);
+    assert!(shape.frames_bytes() * 20 < held.frames_bytes());
+    // Other formats are read whole.
+    let npy = temp_dir("npy").join("walk.npy");
+    pedo_io::formats::npy::write_npy(&held, &npy).unwrap();
+    let (whole, none) = read_for_streaming(&npy, &ReadOptions::default()).unwrap();
+    assert!(none.is_none());
+    assert_eq!(whole.data(), held.data());
+}

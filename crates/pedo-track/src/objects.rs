@@ -1,0 +1,355 @@
+//! The objects of every frame: contours, brightness surfaces or isobaric contours, each with
+//! its frame's measures, or the reason a frame has none.
+
+use crate::pairing::PairingMethod;
+use crate::*;
+use modal_core::Shape;
+use pedo_io::cancel::Cancel;
+use pedo_io::contour::{contours, Contour};
+use pedo_io::recording::{FrameMeasures, Recording};
+use pedo_io::{IoError, Result};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// A pressure of the file's `units` as the outputs state it: in kPa when the units say how,
+/// else in the file's units ("units unknown" when it names none).
+fn pressure_text(value: f64, units: &str) -> String {
+    match pedo_io::recording::kpa_per_unit(units) {
+        Some(k) => format!("{:.1} kPa", value * k),
+        None if units.is_empty() => format!("{value:.1}, units unknown"),
+        None => format!("{value:.1} {units}"),
+    }
+}
+
+/// Objects in sequence order (numbered from 0), the pairs to match (indices into the objects)
+/// and, for contours, the splits and merges between consecutive frames.
+pub(crate) struct Built {
+    pub(crate) objects: Vec<SequenceObject>,
+    pub(crate) pairs: Vec<(usize, usize)>,
+    pub(crate) splits: Vec<(usize, Vec<usize>)>,
+    pub(crate) merges: Vec<(Vec<usize>, usize)>,
+    pub(crate) skipped_frames: Vec<SkippedFrame>,
+}
+
+/// A contour's points in sensels (x = column, y = row), whatever units it was extracted in.
+fn outline_in_sensels(
+    c: &Contour,
+    units: pedo_io::grid::CoordUnits,
+) -> std::borrow::Cow<'_, [[f64; 2]]> {
+    match units {
+        pedo_io::grid::CoordUnits::Pixels => std::borrow::Cow::Borrowed(&c.points),
+        pedo_io::grid::CoordUnits::Millimetres { dx_mm, dy_mm } => c
+            .points
+            .iter()
+            .map(|p| [p[0] / dx_mm, p[1] / dy_mm])
+            .collect(),
+    }
+}
+
+/// An object's shape and the measures of the sensors inside its outline.
+type MeasuredShape = (Shape, FrameMeasures);
+
+/// A frame's outlines that make objects, and their shapes and measures.
+pub(crate) type FrameObjects = (Vec<Contour>, Vec<MeasuredShape>);
+
+/// The outer contours of frame `t` worth modelling, largest first (so object 0 of a frame is its
+/// main region), each with its shape and the measures of the sensors inside it: only contours
+/// that make a valid shape become objects.
+pub(crate) fn frame_contours(
+    recording: &Recording,
+    t: usize,
+    options: &SequenceOptions,
+) -> Result<FrameObjects> {
+    let frame = recording.frame(t)?;
+    let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
+    let mut cs: Vec<(Contour, MeasuredShape)> = contours(&frame, &options.contour)?
+        .into_iter()
+        .filter(|c| !c.hole && c.points.len() >= options.min_nodes.max(3))
+        .filter_map(|c| {
+            let shape = c.to_shape().ok()?;
+            let outline = outline_in_sensels(&c, options.contour.units);
+            let measures = recording.region_measures(&frame, threshold, &outline);
+            Some((c, (shape, measures)))
+        })
+        .collect();
+    cs.sort_by(|a, b| b.0.area().total_cmp(&a.0.area()));
+    Ok(cs.into_iter().unzip())
+}
+
+pub(crate) fn build_objects(
+    recording: &Recording,
+    options: &SequenceOptions,
+    start: usize,
+    end: usize,
+    progress: &(dyn Fn(Stage, usize, usize) + Sync),
+) -> Result<Built> {
+    let mut built = Built {
+        objects: Vec::new(),
+        pairs: Vec::new(),
+        splits: Vec::new(),
+        merges: Vec::new(),
+        skipped_frames: Vec::new(),
+    };
+    let done = AtomicUsize::new(0);
+    let tick = |total: usize| {
+        progress(
+            Stage::Objects,
+            done.fetch_add(1, Ordering::Relaxed) + 1,
+            total,
+        )
+    };
+    let build = match options.model {
+        ObjectModel::Contour => contour_objects,
+        ObjectModel::Surface => surface_objects,
+        ObjectModel::Isocontour => isocontour_objects,
+    };
+    build(&mut built, recording, options, (start, end), &tick)?;
+    Ok(built)
+}
+
+/// Every frame's contours as objects, paired across consecutive frames by overlap (with their
+/// splits and merges); `tick(total)` reports each frame done.
+fn contour_objects(
+    built: &mut Built,
+    recording: &Recording,
+    options: &SequenceOptions,
+    (start, end): (usize, usize),
+    tick: &(dyn Fn(usize) + Sync),
+) -> Result<()> {
+    let (per_frame, shapes): (Vec<Vec<Contour>>, Vec<Vec<MeasuredShape>>) = per_frame_or_skipped(
+        start..end,
+        &mut built.skipped_frames,
+        options.cancel.as_ref(),
+        |t| {
+            let cs = frame_contours(recording, t, options);
+            tick(end - start);
+            cs
+        },
+    )?
+    .into_iter()
+    .unzip();
+    let pairings = crate::pairing::track(&per_frame, PairingMethod::default())?;
+    let mut first = Vec::with_capacity(per_frame.len());
+    for (k, frame_shapes) in shapes.into_iter().enumerate() {
+        first.push(built.objects.len());
+        for (index, (shape, measures)) in frame_shapes.into_iter().enumerate() {
+            let id = built.objects.len();
+            built.objects.push(SequenceObject {
+                id,
+                frame: start + k,
+                index,
+                level: None,
+                shape,
+                measures: Some(measures),
+            });
+        }
+    }
+    for (k, p) in pairings.iter().enumerate() {
+        let (fa, fb) = (first[k], first[k + 1]);
+        built
+            .pairs
+            .extend(p.pairs.iter().map(|&(i, j)| (fa + i, fb + j)));
+        built.splits.extend(
+            p.splits
+                .iter()
+                .map(|(i, js)| (fa + i, js.iter().map(|j| fb + j).collect())),
+        );
+        built.merges.extend(
+            p.merges
+                .iter()
+                .map(|(is, j)| (is.iter().map(|i| fa + i).collect(), fb + j)),
+        );
+    }
+    Ok(())
+}
+
+/// Every frame's pressure surface as an object, paired with the previous frame's.
+fn surface_objects(
+    built: &mut Built,
+    recording: &Recording,
+    options: &SequenceOptions,
+    (start, end): (usize, usize),
+    tick: &(dyn Fn(usize) + Sync),
+) -> Result<()> {
+    let keep = |s: &Shape| s.len() >= options.min_nodes.max(3);
+    let threshold = options.surface.preprocess.threshold.unwrap_or(0.0);
+    let per_frame: Vec<Option<Shape>> = per_frame_or_skipped(
+        start..end,
+        &mut built.skipped_frames,
+        options.cancel.as_ref(),
+        |t| {
+            let shape = frame_surface(recording, t, threshold, options, &keep);
+            tick(end - start);
+            shape
+        },
+    )?;
+    let mut previous: Option<usize> = None;
+    for (k, shape) in per_frame.into_iter().enumerate() {
+        match shape {
+            Some(shape) => {
+                let o = built.objects.len();
+                if let Some(p) = previous
+                    && built.objects[p].frame + 1 == start + k
+                {
+                    built.pairs.push((p, o));
+                }
+                built.objects.push(SequenceObject {
+                    id: o,
+                    frame: start + k,
+                    index: 0,
+                    level: None,
+                    shape,
+                    measures: None,
+                });
+                previous = Some(o);
+            }
+            None => previous = None,
+        }
+    }
+    Ok(())
+}
+
+/// The isobaric contours of one frame (the `iso_frame`, else the most loaded one) as objects,
+/// each level paired with the next.
+fn isocontour_objects(
+    built: &mut Built,
+    recording: &Recording,
+    options: &SequenceOptions,
+    (start, end): (usize, usize),
+    tick: &(dyn Fn(usize) + Sync),
+) -> Result<()> {
+    let t = match options.iso_frame {
+        Some(t) => t,
+        None => (start..end)
+            .max_by(|&a, &b| frame_load(recording, a).total_cmp(&frame_load(recording, b)))
+            .unwrap_or(start),
+    };
+    let frame = recording.frame(t)?;
+    let base = match options.contour.preprocess.threshold {
+        Some(th) => pedo_io::preprocess::threshold(&frame, th)?,
+        None => frame.clone(),
+    };
+    let levels = match &options.iso_levels {
+        Some(l) => l.clone(),
+        None => pedo_io::isobar::even_levels(&base, options.iso_count),
+    };
+    let iso = pedo_io::isobar::IsoOptions {
+        preprocess: options.contour.preprocess,
+        resample: options.contour.resample,
+        include_holes: false,
+        ..Default::default()
+    };
+    for (index, &level) in levels.iter().enumerate() {
+        let cs = pedo_io::isobar::isocontours(&frame, &[level], &iso)?;
+        // The seed models one isobaric contour per level: the largest region's outline.
+        let largest = cs.iter().max_by(|a, b| a.area().total_cmp(&b.area()));
+        let shape = largest.map(Contour::to_shape).transpose()?;
+        match level_object(shape, options.min_nodes.max(3)) {
+            Ok(shape) => {
+                let o = built.objects.len();
+                if o > 0 {
+                    built.pairs.push((o - 1, o));
+                }
+                let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
+                let measures = largest.map(|c| {
+                    let outline = outline_in_sensels(c, options.contour.units);
+                    recording.region_measures(&frame, threshold, &outline)
+                });
+                built.objects.push(SequenceObject {
+                    id: o,
+                    frame: t,
+                    index,
+                    level: Some(level),
+                    shape,
+                    measures,
+                });
+            }
+            Err(why) => built.skipped_frames.push(SkippedFrame {
+                frame: t,
+                reason: format!(
+                    "isobaric level {} of {} ({}): {why}",
+                    index + 1,
+                    levels.len(),
+                    pressure_text(level, &recording.units)
+                ),
+            }),
+        }
+        tick(levels.len());
+    }
+    Ok(())
+}
+
+/// An isobaric level's object, its largest region's outline, or why it has none: no region
+/// reaches the level, or the outline has fewer than `min_nodes` nodes.
+fn level_object(shape: Option<Shape>, min_nodes: usize) -> std::result::Result<Shape, String> {
+    match shape {
+        None => Err("no region reaches this level; no object".into()),
+        Some(s) if s.len() < min_nodes => Err(format!(
+            "its largest region's outline has {} nodes, fewer than the {min_nodes} an object needs",
+            s.len()
+        )),
+        Some(s) => Ok(s),
+    }
+}
+
+/// `build(t)` for every frame of `frames`, in parallel. A frame whose objects cannot be built is
+/// recorded in `skipped` with its reason and gets no objects (`T::default()`); the run goes on.
+/// Once `cancel` is cancelled the frames not started are not built, and the whole fails with
+/// [`IoError::Cancelled`].
+pub(crate) fn per_frame_or_skipped<T: Send + Default>(
+    frames: std::ops::Range<usize>,
+    skipped: &mut Vec<SkippedFrame>,
+    cancel: Option<&Cancel>,
+    build: impl Fn(usize) -> Result<T> + Sync,
+) -> Result<Vec<T>> {
+    let outcomes: Vec<Result<T>> = frames
+        .clone()
+        .into_par_iter()
+        .map(|t| {
+            pedo_io::cancel::check(cancel)?;
+            build(t)
+        })
+        .collect();
+    pedo_io::cancel::check(cancel)?;
+    Ok(frames
+        .zip(outcomes)
+        .map(|(frame, outcome)| {
+            outcome.unwrap_or_else(|e| {
+                skipped.push(SkippedFrame {
+                    frame,
+                    reason: e.to_string(),
+                });
+                T::default()
+            })
+        })
+        .collect())
+}
+
+/// The brightness surface of frame `t`, or `None` when the frame has no contact or too few
+/// loaded sensels to triangulate (like a frame with no contact).
+pub(crate) fn frame_surface(
+    recording: &Recording,
+    t: usize,
+    threshold: f64,
+    options: &SequenceOptions,
+    keep: &dyn Fn(&Shape) -> bool,
+) -> Result<Option<Shape>> {
+    let frame = recording.frame(t)?;
+    if frame.max() <= threshold {
+        return Ok(None);
+    }
+    // Only "nothing there" is a frame without an object; a bad option or a mesh that failed is
+    // that frame's skipped reason, so a run never ends on a bare "no object" that hides it.
+    match pedo_io::surface::surface(&frame, &options.surface) {
+        Ok(s) => Ok(Some(s.to_shape()?).filter(|s| keep(s))),
+        Err(IoError::NoObject(_)) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+/// Sum of the frame's values: the load the isocontour model picks its frame by.
+fn frame_load(recording: &Recording, t: usize) -> f64 {
+    recording
+        .frame_slice(t)
+        .map_or(0.0, |f| f.iter().map(|&v| v as f64).sum())
+}

@@ -1,0 +1,402 @@
+//! Unit tests of the run engine that reach into its parts.
+
+use crate::*;
+use modal_core::{match_shapes, OptionValue, Shape};
+use pedo_io::recording::{FrameMeasures, Recording};
+use std::collections::HashMap;
+
+#[test]
+fn negative_frame_indices_count_back_from_the_end_as_in_a_python_slice() {
+    let resolve = |s: &str, n: usize| s.parse::<FrameRange>().unwrap().resolve(n);
+    assert_eq!(resolve("-50..", 205), Ok((155, 205)), "the last 50 frames");
+    assert_eq!(resolve("0..-1", 205), Ok((0, 204)), "all but the last");
+    assert_eq!(resolve("..-1", 205), Ok((0, 204)));
+    assert_eq!(resolve("-10..-5", 205), Ok((195, 200)));
+    assert_eq!(
+        resolve("-205..", 205),
+        Ok((0, 205)),
+        "as far back as frame 0"
+    );
+    assert_eq!(resolve("3..-2", 6), Ok((3, 4)));
+    assert_eq!(
+        "-50..-1".parse::<FrameRange>().unwrap().to_string(),
+        "-50..-1"
+    );
+    // Still out of range once resolved: an error naming the range, the frame count and
+    // what the negative indices came to.
+    let e = resolve("-300..", 205).unwrap_err();
+    assert_eq!(e.option, "frames");
+    assert_eq!(e.value, "-300..");
+    assert!(
+        e.expected.contains("205 frames") && e.expected.contains("-300.. is -95..205"),
+        "{e}"
+    );
+    let e = resolve("0..-205", 205).unwrap_err().to_string();
+    assert!(
+        e.contains("0..-205 is 0..0") && e.contains("205 frames"),
+        "{e}"
+    );
+    let e = resolve("-3..-5", 205).unwrap_err().to_string();
+    assert!(e.contains("-3..-5 is 202..200"), "{e}");
+    // Positive ranges are checked as before, their message with no resolution.
+    let e = resolve("0..999", 205).unwrap_err().to_string();
+    assert!(e.contains("205 frames") && !e.contains(" is "), "{e}");
+    assert!(resolve("5..5", 205).is_err() && resolve("0..0", 0).is_err());
+    assert!("x..-1".parse::<FrameRange>().is_err());
+    assert!("--1..".parse::<FrameRange>().is_err());
+}
+
+#[test]
+fn a_run_resolves_negative_frames_once_for_the_range_the_iso_frame_and_the_summary() {
+    let rec = recording(6, |_, r, c| (8..16).contains(&r) && (8..16).contains(&c));
+    let params = |frames: &str, iso_frame| RunParams {
+        model: ObjectModel::Isocontour,
+        frames: Some(frames.parse().unwrap()),
+        iso_frame,
+        ..RunParams::default()
+    };
+    let negative = params("-3..-1", None);
+    let o = negative.to_options(&rec).unwrap();
+    assert_eq!(o.frames, Some((3, 5)));
+    assert_eq!(
+        o.frames,
+        params("3..5", None).to_options(&rec).unwrap().frames
+    );
+    // summary.json records the frames run, resolved.
+    let used = negative.used(&o, &rec);
+    let frames = used.iter().find(|(k, _)| *k == "frames").unwrap();
+    assert_eq!(frames.1, OptionValue::Word("3..5".into()));
+    // iso_frame lies within the resolved range; the error names it both ways.
+    assert_eq!(
+        params("-3..-1", Some(4))
+            .to_options(&rec)
+            .unwrap()
+            .iso_frame,
+        Some(4)
+    );
+    let e = params("-3..-1", Some(5))
+        .to_options(&rec)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("iso_frame") && e.contains("3..5") && e.contains("frames -3..-1 of 6"),
+        "{e}"
+    );
+    let e = params("-9..", None)
+        .to_options(&rec)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("-9..") && e.contains("6 frames"), "{e}");
+}
+
+#[test]
+fn a_study_lists_the_options_a_run_uses_with_each_recordings_own_left_open() {
+    let mut params = RunParams {
+        spacing: 1.5,
+        ..RunParams::default()
+    };
+    let mut rec = recording(6, |_, r, c| (8..16).contains(&r) && (8..16).contains(&c));
+    rec.noise_threshold = Some(2.0);
+    let run = params.used(&params.to_options(&rec).unwrap(), &rec);
+    let given = params.given().unwrap();
+    let names = |v: &[(&'static str, OptionValue)]| v.iter().map(|(k, _)| *k).collect::<Vec<_>>();
+    assert_eq!(
+        names(&given),
+        names(&run),
+        "the same options, in the same order"
+    );
+    let value = |v: &[(&'static str, OptionValue)], k: &str| {
+        v.iter()
+            .find(|(n, _)| *n == k)
+            .map(|(_, v)| v.clone())
+            .unwrap()
+    };
+    assert_eq!(value(&given, "spacing"), OptionValue::Float(1.5));
+    assert_eq!(value(&run, "noise"), OptionValue::Float(2.0));
+    assert_eq!(
+        value(&given, "noise"),
+        OptionValue::Absent,
+        "each file's own"
+    );
+    assert_eq!(value(&run, "frames"), OptionValue::Word("0..6".into()));
+    assert_eq!(value(&given, "frames"), OptionValue::Word("0..".into()));
+    params.noise = Some(5.0);
+    params.units.units = Some(" N/cm2 ".into());
+    let given = params.given().unwrap();
+    assert_eq!(value(&given, "noise"), OptionValue::Float(5.0));
+    assert_eq!(value(&given, "units"), OptionValue::Word("N/cm²".into()));
+}
+
+/// A recording of `frames`, each drawn by `draw(frame, row, col) -> loaded`.
+fn recording(frames: usize, draw: impl Fn(usize, usize, usize) -> bool) -> Recording {
+    let (rows, cols) = (24, 24);
+    let mut data = Vec::with_capacity(frames * rows * cols);
+    for f in 0..frames {
+        for r in 0..rows {
+            for c in 0..cols {
+                data.push(if draw(f, r, c) { 100.0 } else { 0.0 });
+            }
+        }
+    }
+    Recording::new(frames, rows, cols, data, vec![true; rows * cols]).unwrap()
+}
+
+fn disc(cx: f64, cy: f64, radius: f64) -> impl Fn(usize, usize) -> bool {
+    move |r, c| (r as f64 - cy).hypot(c as f64 - cx) <= radius
+}
+
+#[test]
+fn oblong_sensels_are_matched_in_their_true_proportions() {
+    // An ellipse turning by 4° a frame on 7.62 × 5.08 mm sensels (footscan's).
+    let mut rec = recording(5, |f, r, c| {
+        let t = (4.0 * f as f64).to_radians();
+        let (x, y) = (c as f64 - 11.5, (r as f64 - 11.5) * 1.5);
+        let (u, v) = (x * t.cos() + y * t.sin(), -x * t.sin() + y * t.cos());
+        (u / 9.0).powi(2) + (v / 15.0).powi(2) <= 1.0
+    });
+    rec.pitch_mm = Some([5.08, 7.62]);
+    let options = RunParams::default().to_options(&rec).unwrap();
+    assert!((options.sensel_aspect - 1.5).abs() < 1e-12);
+    let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+    assert_eq!(run.pairs.len(), 4);
+    let scaled = |s: &Shape| SenselAspect(1.5).shape(s).unwrap().into_owned();
+    for p in &run.pairs {
+        let (a, b) = (&run.objects[p.a].shape, &run.objects[p.b].shape);
+        // The pairs of the shapes in true proportions, to the bit.
+        let truth = match_shapes(&scaled(a), &scaled(b), &options.matching).unwrap();
+        assert_eq!(p.result.pairs, truth.pairs);
+        // The transform and the aligned nodes are in sensels, and agree.
+        let moved = p.result.transform.apply(a.coords());
+        for (m, q) in moved.iter().zip(&p.result.aligned_a) {
+            assert!((m - q).abs() < 1e-9, "{m} {q}");
+        }
+        let back = SenselAspect(1.5).back(truth);
+        assert_eq!(back.transform, p.result.transform);
+    }
+    // Square sensels are matched as they are.
+    rec.pitch_mm = Some([5.08, 5.08]);
+    assert_eq!(
+        RunParams::default().to_options(&rec).unwrap().sensel_aspect,
+        1.0
+    );
+}
+
+#[test]
+fn each_foot_of_a_recording_of_both_has_its_own_measures() {
+    // Two feet side by side, unevenly loaded: each object's measures are those of its own
+    // sensors, and together they are the frame's.
+    let (left, right) = (disc(6.0, 11.0, 4.0), disc(17.0, 12.0, 5.0));
+    let mut rec = recording(3, |_, r, c| left(r, c) || right(r, c));
+    let mut data = rec.data().to_vec();
+    for (i, v) in data.iter_mut().enumerate() {
+        let (r, c) = ((i % 576) / 24, i % 24);
+        if right(r, c) {
+            *v = 40.0 + c as f32;
+        }
+    }
+    rec = Recording::new(3, 24, 24, data, vec![true; 576]).unwrap();
+    for options in [
+        SequenceOptions::default(),
+        SequenceOptions {
+            model: ObjectModel::Isocontour,
+            ..SequenceOptions::default()
+        },
+    ] {
+        let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+        if options.model == ObjectModel::Isocontour {
+            // The largest region of the lowest level: both feet are one level's regions, so
+            // the object is the larger foot alone.
+            let m = run.objects[0].measures.as_ref().unwrap();
+            let n = (0..576).filter(|&i| right(i / 24, i % 24)).count();
+            assert_eq!(m.contact_sensors, n);
+            continue;
+        }
+        let frame = &rec.measures(0.0)[0];
+        let objects: Vec<_> = run.objects.iter().filter(|o| o.frame == 0).collect();
+        assert_eq!(objects.len(), 2);
+        let m: Vec<&FrameMeasures> = objects
+            .iter()
+            .map(|o| o.measures.as_ref().unwrap())
+            .collect();
+        let foot = |inside: &dyn Fn(usize, usize) -> bool| {
+            let cells = (0..576).filter(|&i| inside(i / 24, i % 24));
+            let (n, load, peak, x) = cells.fold((0, 0.0, 0.0f64, 0.0), |(n, l, p, x), i| {
+                let v = f64::from(rec.data()[i]);
+                (n + 1, l + v, p.max(v), x + v * (i % 24) as f64)
+            });
+            (n, load, peak, x / load)
+        };
+        // The larger (right) foot comes first.
+        for (m, inside) in m
+            .iter()
+            .zip([&right as &dyn Fn(usize, usize) -> bool, &left])
+        {
+            let (n, load, peak, cop_x) = foot(inside);
+            assert_eq!(m.contact_sensors, n);
+            assert!((m.total_force - load).abs() < 1e-9 * load);
+            assert_eq!(m.peak_pressure, peak);
+            assert!((m.cop.unwrap()[0] - cop_x).abs() < 1e-9);
+        }
+        assert_eq!(
+            m[0].contact_sensors + m[1].contact_sensors,
+            frame.contact_sensors
+        );
+        assert!((m[0].total_force + m[1].total_force - frame.total_force).abs() < 1e-9);
+        assert_eq!(
+            m[0].peak_pressure.max(m[1].peak_pressure),
+            frame.peak_pressure
+        );
+    }
+    // Surfaces: one object per frame, the frame's measures.
+    let surface = SequenceOptions {
+        model: ObjectModel::Surface,
+        ..SequenceOptions::default()
+    };
+    let run = run_sequence(&rec, &surface, &|_, _, _| {}).unwrap();
+    assert!(run.objects.iter().all(|o| o.measures.is_none()));
+}
+
+#[test]
+fn a_run_without_match_details_has_the_same_matches_rows_and_tracks() {
+    let rec = recording(6, |f, r, c| {
+        disc(9.0 + f as f64 * 0.7, 11.0, 5.0 + 0.2 * f as f64)(r, c)
+    });
+    let full = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
+    let lean_options = SequenceOptions {
+        keep_match_details: false,
+        ..Default::default()
+    };
+    let lean = run_sequence(&rec, &lean_options, &|_, _, _| {}).unwrap();
+    assert_eq!(full.pairs.len(), 5);
+    assert_eq!(lean.pairs.len(), full.pairs.len());
+    for (f, l) in full.pairs.iter().zip(&lean.pairs) {
+        assert_eq!(f.row, l.row);
+        assert_eq!(f.result.pairs, l.result.pairs);
+        assert_eq!(f.result.unmatched_a, l.result.unmatched_a);
+        assert!(f.result.affinity.rows() > 0);
+        assert_eq!(l.result.affinity.rows(), 0);
+        assert!(l.result.aligned_a.is_empty());
+    }
+    assert!(full.packed_tracks.is_none() && lean.tracks.is_empty());
+    assert!(full.tracks.len() > 5);
+    assert_eq!(lean.track_count(), full.tracks.len());
+    let unpacked: Vec<Track> = lean.all_tracks().map(|t| t.into_owned()).collect();
+    assert_eq!(unpacked, full.tracks);
+    assert!(lean
+        .track_lengths()
+        .eq(full.tracks.iter().map(|t| t.steps.len())));
+}
+
+#[test]
+fn streamed_tracks_equal_those_chained_whole_on_a_real_walk() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../pedo-io/tests/data/FrasP01L.asf"
+    );
+    let rec = pedo_io::read_recording(path).unwrap();
+    let options = SequenceOptions {
+        // Stance and swing, with the splits and merges of heel strike and toe-off.
+        frames: Some((0, 120)),
+        keep_match_details: false,
+        ..Default::default()
+    };
+    let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+    // Every node's track held to the end: drift correction's chaining with no reference pairs.
+    let want = crate::drift::anchored_tracks(&run.objects, &run.pairs, &[]).unwrap();
+    assert!(want.len() > 100 && want.iter().any(|t| t.steps.len() >= 10));
+    assert!(!run.splits.is_empty() || !run.merges.is_empty());
+    assert_eq!(chain_tracks(&run.objects, &run.pairs).unwrap(), want);
+    let packed: Vec<Track> = run.all_tracks().map(|t| t.into_owned()).collect();
+    assert_eq!(packed, want);
+}
+
+#[test]
+fn a_bad_surface_option_is_each_frames_reason_not_a_frame_without_contact() {
+    let rec = recording(3, |f, r, c| disc(11.0 + f as f64 * 0.5, 11.0, 6.0)(r, c));
+    let mut options = SequenceOptions {
+        model: ObjectModel::Surface,
+        ..Default::default()
+    };
+    options.surface.max_nodes = Some(2);
+    let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+    assert!(run.objects.is_empty());
+    assert_eq!(run.skipped_frames.len(), 3);
+    for s in &run.skipped_frames {
+        assert!(
+            s.reason.contains("max_nodes must be at least 3"),
+            "{}",
+            s.reason
+        );
+    }
+}
+
+#[test]
+fn chaining_a_pair_that_goes_back_or_names_missing_nodes_is_an_error() {
+    let rec = recording(3, |f, r, c| disc(11.0 + f as f64 * 0.5, 11.0, 6.0)(r, c));
+    let run = run_sequence(&rec, &SequenceOptions::default(), &|_, _, _| {}).unwrap();
+    assert_eq!(chain_tracks(&run.objects, &run.pairs).unwrap(), run.tracks);
+    let mut back = run.pairs.clone();
+    back[1].b = 0;
+    let e = chain_tracks(&run.objects, &back).unwrap_err().to_string();
+    assert!(e.contains("pair 1 → 0 does not lead forward"), "{e}");
+    let mut beyond = run.pairs.clone();
+    beyond[0].b = 7;
+    let e = chain_tracks(&run.objects, &beyond).unwrap_err().to_string();
+    assert!(e.contains("does not lead forward onto objects 0..3"), "{e}");
+    let mut node = run.pairs.clone();
+    let n = run.objects[1].shape.len();
+    node[0].result.pairs[0].b = n;
+    node[0].result.pairs[0].excess = false;
+    let e = chain_tracks(&run.objects, &node).unwrap_err().to_string();
+    assert!(
+        e.contains("beyond the objects'") && e.contains(&format!("and {n} nodes")),
+        "{e}"
+    );
+    // Drift-corrected chaining reports the same errors, as pairs or as reference pairs.
+    let anchored = |pairs: &[PairMatch], refs: &[PairMatch]| {
+        crate::drift::anchored_tracks(&run.objects, pairs, refs)
+            .unwrap_err()
+            .to_string()
+    };
+    assert!(anchored(&back, &[]).contains("pair 1 → 0 does not lead forward"));
+    assert!(anchored(&run.pairs, &beyond).contains("onto objects 0..3"));
+    assert!(anchored(&node, &[]).contains(&format!("and {n} nodes")));
+}
+
+#[test]
+fn a_pair_that_cannot_be_matched_is_skipped_with_its_reason() {
+    let rec = recording(4, |f, r, c| disc(11.0 + f as f64 * 0.5, 11.0, 6.0)(r, c));
+    let options = SequenceOptions::default();
+    let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+    assert_eq!(run.pairs.len(), 3);
+    assert!(run.skipped_pairs.is_empty() && run.skipped_frames.is_empty());
+    // Object 2 gets two coincident nodes, as an outline touching itself has.
+    let mut objects = run.objects.clone();
+    let shape = &objects[2].shape;
+    let mut coords = shape.coords().to_vec();
+    coords[2] = coords[0];
+    coords[3] = coords[1];
+    objects[2].shape = Shape::new(2, coords, shape.topology().clone()).unwrap();
+    let candidates = [(0, 1), (1, 2), (2, 3)];
+    let (pairs, skipped) = match_all(
+        &objects,
+        &candidates,
+        &HashMap::new(),
+        &options,
+        &|_, _, _| {},
+    );
+    assert_eq!(
+        pairs.iter().map(|p| (p.a, p.b)).collect::<Vec<_>>(),
+        vec![(0, 1)]
+    );
+    assert_eq!(
+        skipped.iter().map(|s| (s.a, s.b)).collect::<Vec<_>>(),
+        vec![(1, 2), (2, 3)]
+    );
+    assert!(
+        skipped.iter().all(|s| s.reason.contains("coincide")),
+        "{skipped:?}"
+    );
+    // The tracks of what was matched are still chained.
+    assert!(!chain_tracks(&objects, &pairs).unwrap().is_empty());
+}
