@@ -1,6 +1,6 @@
 //! `pedomatch assign`: solve a linear assignment problem read from a CSV cost matrix.
 
-use crate::modal_args::{help, word};
+use crate::option_args::{help, word};
 use crate::output;
 use crate::CliError;
 use clap::Args;

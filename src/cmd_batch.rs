@@ -28,7 +28,7 @@ pub struct BatchArgs {
     #[arg(long)]
     pub force: bool,
     #[command(flatten)]
-    pub read: crate::modal_args::ReadArgs,
+    pub read: crate::option_args::ReadArgs,
     #[command(flatten)]
     pub options: RunOptionsArgs,
 }

@@ -1,6 +1,6 @@
 //! `pedomatch inspect FILE`: what a recording holds, in its physical units.
 
-use crate::modal_args::{help, UnitArgs};
+use crate::option_args::{help, UnitArgs};
 use crate::CliError;
 use clap::Args;
 use pedo_output::{describe, InputInfo};
@@ -13,7 +13,7 @@ pub struct InspectArgs {
     /// numbered pattern (`walk_%03d.png`); the format is detected from the content.
     pub recording: PathBuf,
     #[command(flatten)]
-    pub read: crate::modal_args::ReadArgs,
+    pub read: crate::option_args::ReadArgs,
     #[command(flatten)]
     pub units: UnitArgs,
     #[arg(long, help = help("noise"))]

@@ -1,6 +1,6 @@
 //! `pedomatch match A B`: correspondences between two objects given as images or point files.
 
-use crate::modal_args::{help, tri_state, word, ModalArgs, UnitArgs};
+use crate::option_args::{help, tri_state, word, ModalArgs, UnitArgs};
 use crate::output::{self, OutDir};
 use crate::CliError;
 use clap::Args;
@@ -38,7 +38,7 @@ pub struct MatchArgs {
     #[command(flatten)]
     pub units: UnitArgs,
     #[command(flatten)]
-    pub read: crate::modal_args::ReadArgs,
+    pub read: crate::option_args::ReadArgs,
     /// Write matches.csv, match.json and the match figure into this folder instead of printing
     /// the matches.
     #[arg(long)]

@@ -1,6 +1,6 @@
 //! `pedomatch run` and `pedomatch demo`: a whole recording in; tables, figures and tracks out.
 
-use crate::modal_args::{help, word, ModalArgs, UnitArgs};
+use crate::option_args::{help, word, ModalArgs, UnitArgs};
 use crate::output;
 use crate::CliError;
 use clap::Args;
@@ -91,7 +91,7 @@ pub struct RunArgs {
     #[arg(long, default_value = "pedomatch-out")]
     pub out: PathBuf,
     #[command(flatten)]
-    pub read: crate::modal_args::ReadArgs,
+    pub read: crate::option_args::ReadArgs,
     #[command(flatten)]
     pub options: RunOptionsArgs,
 }

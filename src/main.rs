@@ -19,8 +19,8 @@ mod cmd_batch;
 mod cmd_inspect;
 mod cmd_match;
 mod cmd_run;
-mod modal_args;
-mod outdir;
+mod interrupt;
+mod option_args;
 mod output;
 
 const EXIT_CODES: &str = "Exit status: 0 success; 1 runtime failure (unreadable or malformed \
@@ -119,7 +119,7 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    outdir::install_interrupt_handler();
+    interrupt::install_interrupt_handler();
     let result = match cli.command {
         Command::Run(args) => cmd_run::run(args),
         Command::Batch(args) => cmd_batch::run(args),
@@ -128,9 +128,9 @@ fn main() -> ExitCode {
         Command::Assign(args) => cmd_assign::run(args),
         Command::Inspect(args) => cmd_inspect::run(args),
     };
-    if outdir::interrupted() {
+    if interrupt::interrupted() {
         // The Ctrl-C handler is removing the staging folders and exits with 130 when done.
-        outdir::wait_for_interrupt_exit();
+        interrupt::wait_for_interrupt_exit();
     }
     match result {
         Ok(()) => ExitCode::SUCCESS,

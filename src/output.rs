@@ -65,7 +65,28 @@ pub fn read_cost_csv(path: &Path) -> Result<(Vec<f64>, usize, usize), String> {
     Ok((values, rows, cols.unwrap_or(0)))
 }
 
-pub use crate::outdir::OutDir;
+/// An output folder being written (see [`pedo_output::outdir`]), with `String` errors.
+pub struct OutDir(pub pedo_output::outdir::OutDir);
+
+impl OutDir {
+    /// Starts an output into `root`. Fails if `root` is a file, or a non-empty folder that is not
+    /// a pedomatch output.
+    pub fn create(root: &Path) -> Result<Self, String> {
+        pedo_output::outdir::OutDir::create(root)
+            .map(Self)
+            .map_err(|e| e.to_string())
+    }
+
+    /// Writes `rel` (which may include sub-folders) into the staging folder.
+    pub fn write(&self, rel: &str, contents: &[u8]) -> Result<(), String> {
+        self.0.write(rel, contents).map_err(|e| e.to_string())
+    }
+
+    /// Puts the complete folder in place of the previous one in one step.
+    pub fn commit(self) -> Result<(), String> {
+        self.0.commit().map_err(|e| e.to_string())
+    }
+}
 
 /// Formats a CSV table; fields are numbers or identifiers, so no quoting is needed.
 pub fn csv_table(header: &[&str], rows: impl IntoIterator<Item = Vec<String>>) -> String {

@@ -1,13 +1,7 @@
 //! End-to-end tests of `pedomatch assign`.
 
-use std::process::Command;
-
-fn pedomatch(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_pedomatch"))
-        .args(args)
-        .output()
-        .expect("run pedomatch")
-}
+mod common;
+use common::pedomatch;
 
 fn write_temp(name: &str, contents: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("pedomatch-cli-{}", std::process::id()));

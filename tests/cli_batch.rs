@@ -1,6 +1,8 @@
 //! End-to-end tests of `pedomatch batch`: a folder of recordings with a corrupt one, resuming,
 //! `--force`, glob and folder inputs, and the same table whatever the number of jobs.
 
+mod common;
+use common::{pedomatch, read_json, temp_dir};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -16,20 +18,6 @@ const TABLES: [&str; 7] = [
     "frames.csv",
     "summary.json",
 ];
-
-fn pedomatch(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_pedomatch"))
-        .args(args)
-        .output()
-        .expect("run pedomatch")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("pedomatch-batch-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// A study folder: two recordings of the same file name in different folders, a third beside
 /// them, and an F-Scan file cut after its header (it sniffs as ASF but cannot be read).
@@ -74,10 +62,6 @@ fn numbers(r: &Value) -> Value {
     r.as_object_mut().unwrap().remove("status");
     r.as_object_mut().unwrap().remove("message");
     r
-}
-
-fn read_json(path: &Path) -> Value {
-    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }
 
 fn keys(v: &Value) -> Vec<String> {

@@ -1,34 +1,15 @@
 //! The command line against the library's option tables, units and provenance of a run on the
 //! bundled recording, `--json`, `inspect` and the exit codes.
 
+mod common;
+use common::{pedomatch, stdout_json, temp_dir};
 use std::collections::{BTreeSet, HashMap};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
 
 const BUNDLED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
 /// What the bundled file's header says.
 const PITCH_MM: f64 = 5.08;
 const DT_S: f64 = 0.032;
-
-fn pedomatch(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pedomatch"))
-        .args(args)
-        .output()
-        .expect("run pedomatch")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("pedomatch-opts-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn stdout_json(o: &Output) -> serde_json::Value {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    serde_json::from_slice(&o.stdout)
-        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stdout)))
-}
 
 fn read_csv(path: &Path) -> Vec<HashMap<String, f64>> {
     let text = std::fs::read_to_string(path).unwrap();

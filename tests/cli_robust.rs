@@ -1,16 +1,11 @@
 //! Runs that survive what goes wrong: bad pairs are skipped, interrupted and killed runs leave a
 //! whole output or none.
 
-use std::path::{Path, PathBuf};
+mod common;
+use common::temp_dir;
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("pedomatch-robust-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn demo(out: &Path, extra: &[&str]) -> Child {
     Command::new(env!("CARGO_BIN_EXE_pedomatch"))

@@ -1,28 +1,8 @@
 //! End-to-end tests of `pedomatch run`, `demo` and `match`.
 
+mod common;
+use common::{pedomatch, read_json, temp_dir};
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn pedomatch(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_pedomatch"))
-        .args(args)
-        .output()
-        .expect("run pedomatch")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("pedomatch-e2e-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn read_json(path: &Path) -> serde_json::Value {
-    serde_json::from_slice(
-        &std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
-    )
-    .unwrap()
-}
 
 /// Reads a CSV with a header into rows of (column name → field).
 fn read_csv(path: &Path) -> Vec<std::collections::HashMap<String, String>> {

@@ -57,6 +57,17 @@ macro_rules! choice {
                 }
             }
         }
+        impl $crate::options::OptionField for $ty {
+            fn python_type() -> String {
+                $crate::options::literal_type(<$ty as $crate::options::Choice>::NAMES)
+            }
+            fn read<I: $crate::options::OptionInput + ?Sized>(
+                input: &I,
+                option: &'static str,
+            ) -> ::std::result::Result<Self, I::Error> {
+                Ok(<$ty as $crate::options::Choice>::parse_word(&input.text(option)?)?)
+            }
+        }
     };
 }
 
@@ -80,6 +91,15 @@ choice!(ThresholdMode, "threshold_mode", [
 impl Choice for assign::Method {
     const OPTION: &'static str = "solver";
     const NAMES: &'static [&'static str] = &assign::Method::NAMES;
+}
+
+impl OptionField for assign::Method {
+    fn python_type() -> String {
+        literal_type(<Self as Choice>::NAMES)
+    }
+    fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
+        Ok(Self::parse_word(&input.text(option)?)?)
+    }
 }
 
 impl std::str::FromStr for Material {
@@ -121,104 +141,335 @@ impl std::fmt::Display for Material {
     }
 }
 
-/// The matching options a user chooses, with the documented defaults ([`Default`]). A field that
-/// is an `Option` defaults to `None`: the measured recipe's value for the kind of input
-/// (contours and 2-D points, or unordered 3-D points such as brightness surfaces; see
-/// [`MatchOptions::for_input`]).
-///
-/// ```
-/// use modal_core::{MatchParams, Search};
-/// let params = MatchParams { search: Search::Local, refits: Some(0), ..MatchParams::default() };
-/// let options = params.to_match_options(2, true).unwrap();
-/// assert_eq!((options.search, options.refits), (Search::Local, 0));
-/// assert!(MatchParams { modes: Some(1.5), ..MatchParams::default() }.to_match_options(2, true).is_err());
-/// ```
-#[derive(Debug, Clone, PartialEq)]
-pub struct MatchParams {
-    /// Finite element of the modal model.
-    pub element: ElementKind,
-    /// Fraction of the `dim × min(n, m)` modes used as features, in (0, 1] (`None`: the
-    /// recipe's).
-    pub modes: Option<f64>,
-    /// Which search produces the matches.
-    pub search: Search,
-    /// Assignment solver of the global search and of the mode alignment.
-    pub solver: assign::Method,
-    /// Reject pairs whose max-normalised cost exceeds this (in [0, 1]); `None` keeps all.
-    pub threshold: Option<f64>,
-    /// Whether pairs above the threshold are dropped after the assignment or by it.
-    pub threshold_mode: ThresholdMode,
-    /// Match the nodes the one-to-one search leaves over (global search).
-    pub excess: bool,
-    /// Start from the paper's literal setting (centroid and scale pre-alignment, no re-fits).
-    pub paper: bool,
-    /// Pre-alignment (`None`: robust, or normalize with `paper`; a recording's contours use
-    /// [`RUN_PREALIGN`]).
-    pub prealign: Option<Prealign>,
-    /// Largest turn in degrees the robust pre-alignment may find, in (0, 180] (180: any turn;
-    /// `None`: the caller's default, unbounded for a pair, [`RUN_MAX_ROTATION`] for a
-    /// recording's consecutive frames).
-    pub max_rotation: Option<f64>,
-    /// Maximum modal affine re-fits (`None`: the recipe's; for two closed outlines none after
-    /// the rotation search, 2 after another pre-alignment).
-    pub refits: Option<usize>,
-    /// Re-fit stopping tolerance in B's node spacings (`None`: the recipe's).
-    pub refit_tolerance: Option<f64>,
-    /// What follows the affine re-fits: nothing (`affine`) or the modal non-rigid warp (`modal`).
-    pub refine: Refine,
-    /// Modes of the non-rigid warp, rigid ones included (`refine = modal` only).
-    pub deform_modes: usize,
-    /// Strain-energy weight of the non-rigid warp, > 0 (`refine = modal` only).
-    pub deform_stiffness: f64,
-    /// Gaussian width factor σ = kappa × mean nearest-neighbour distance (`None`: the recipe's).
-    pub kappa: Option<f64>,
-    /// Gaussian element: a Gaussian on every `center_stride`-th node only (1: every node;
-    /// `None`: the recipe's).
-    pub center_stride: Option<usize>,
-    /// Weight of aligned positions in the cost, in [0, 1] (`None`: the recipe's).
-    pub position_weight: Option<f64>,
-    /// Exponent of the costs the search adds up, > 0 (`None`: the recipe's).
-    pub cost_power: Option<f64>,
-    /// One Gaussian width for both objects (`None`: the recipe's).
-    pub common_sigma: Option<bool>,
-    /// Skip the quasi-rigid modes.
-    pub skip_rigid: bool,
-    /// Band of the cross-object mode reordering (0: signs only).
-    pub band: usize,
-    /// Material of the model; only Poisson's ratio changes matches (`None`: the recipe's).
-    pub material: Option<Material>,
+/// A value of one option as a front end holds it (a command-line word, a Python object), read as
+/// the option's type asks: [`OptionField::read`] calls the one method its type needs, so each
+/// front end says once how it reads a number, a count, a switch or a word.
+pub trait OptionInput {
+    /// What reading fails with: [`OptionError`] on the command line, an exception in Python
+    /// (where a value of the wrong type is a `TypeError`, not a `ValueError`).
+    type Error: From<OptionError>;
+    /// A number.
+    fn number(&self, option: &'static str) -> Result<f64, Self::Error>;
+    /// A non-negative integer.
+    fn count(&self, option: &'static str) -> Result<usize, Self::Error>;
+    /// A switch.
+    fn switch(&self, option: &'static str) -> Result<bool, Self::Error>;
+    /// A word or other text.
+    fn text(&self, option: &'static str) -> Result<String, Self::Error>;
+    /// A [`Material`]: its text (`rubber`, `E,NU,RHO`) unless a front end has its own form.
+    fn material(&self, option: &'static str) -> Result<Material, Self::Error> {
+        Ok(self.text(option)?.parse()?)
+    }
 }
 
-impl Default for MatchParams {
-    /// Every default is the engine's own ([`MatchOptions::default`]), so it is written once.
-    fn default() -> Self {
-        let d = MatchOptions::default();
-        Self {
-            element: d.model.element,
-            modes: None,
-            search: d.search,
-            solver: d.method,
-            threshold: d.threshold,
-            threshold_mode: d.threshold_mode,
-            excess: d.excess,
-            paper: false,
-            prealign: None,
-            max_rotation: None,
-            refits: None,
-            refit_tolerance: None,
-            refine: d.refine,
-            deform_modes: d.deform_modes,
-            deform_stiffness: d.deform_stiffness,
-            kappa: None,
-            center_stride: None,
-            position_weight: None,
-            cost_power: None,
-            common_sigma: None,
-            skip_rigid: d.skip_rigid,
-            band: d.band,
-            material: None,
+/// The command line's form of an option value: its text (`--modes 0.5`), or a switch given
+/// (`--paper` is `Switch(true)`, `--no-excess` is `Switch(false)`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum OptionText<'a> {
+    /// The value as written.
+    Text(&'a str),
+    /// A switch turned on or off.
+    Switch(bool),
+}
+
+impl OptionText<'_> {
+    fn parsed<T: std::str::FromStr>(
+        &self,
+        option: &'static str,
+        expected: &str,
+    ) -> Result<T, OptionError> {
+        match self {
+            OptionText::Text(s) => s
+                .trim()
+                .parse()
+                .map_err(|_| OptionError::new(option, s, expected)),
+            OptionText::Switch(b) => Err(OptionError::new(option, b, expected)),
         }
     }
+}
+
+impl OptionInput for OptionText<'_> {
+    type Error = OptionError;
+    fn number(&self, option: &'static str) -> Result<f64, OptionError> {
+        self.parsed(option, "a number")
+    }
+    fn count(&self, option: &'static str) -> Result<usize, OptionError> {
+        self.parsed(option, "a non-negative integer")
+    }
+    fn switch(&self, option: &'static str) -> Result<bool, OptionError> {
+        match self {
+            OptionText::Switch(b) => Ok(*b),
+            OptionText::Text(_) => self.parsed(option, "true or false"),
+        }
+    }
+    fn text(&self, option: &'static str) -> Result<String, OptionError> {
+        match self {
+            OptionText::Text(s) => Ok(s.to_string()),
+            OptionText::Switch(b) => Err(OptionError::new(option, b, "a word")),
+        }
+    }
+}
+
+/// The type of an option's field: how it is read from an [`OptionInput`], and how Python's type
+/// stubs name it.
+pub trait OptionField: Sized {
+    /// The type in Python's stubs (`float`, `int`, `bool`, `Literal["a", "b"]`, ...).
+    fn python_type() -> String;
+    /// The value of option `option` from `input`.
+    fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error>;
+}
+
+impl OptionField for f64 {
+    fn python_type() -> String {
+        "float".into()
+    }
+    fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
+        input.number(option)
+    }
+}
+
+impl OptionField for usize {
+    fn python_type() -> String {
+        "int".into()
+    }
+    fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
+        input.count(option)
+    }
+}
+
+impl OptionField for bool {
+    fn python_type() -> String {
+        "bool".into()
+    }
+    fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
+        input.switch(option)
+    }
+}
+
+impl OptionField for Material {
+    fn python_type() -> String {
+        "Material".into()
+    }
+    fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
+        input.material(option)
+    }
+}
+
+/// An optional field (`None`: a default that depends on the input) reads as its value.
+impl<T: OptionField> OptionField for Option<T> {
+    fn python_type() -> String {
+        T::python_type()
+    }
+    fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
+        T::read(input, option).map(Some)
+    }
+}
+
+/// The `python_type` of an enumerated option: `Literal["a", "b"]` of its words.
+pub fn literal_type(names: &[&str]) -> String {
+    let words: Vec<String> = names.iter().map(|n| format!("\"{n}\"")).collect();
+    format!("Literal[{}]", words.join(", "))
+}
+
+/// Declares a set of user-facing options once: for each, its field (name, type and default), how
+/// it is given on the command line ([`OptionKind`]), its documented default and its meaning. It
+/// makes the struct, its [`Default`], `specs()` (the [`OptionSpec`]s every front end, help text,
+/// type stub and documentation table is made or checked from) and `set(name, input)`, which
+/// reads one option from a front end's [`OptionInput`] by name. A front end thus names no option:
+/// it walks the specs.
+#[macro_export]
+macro_rules! option_set {
+    (
+        $(#[$meta:meta])*
+        $name:ident {
+            let $d:ident = $dinit:expr;
+            $(
+                $(#[doc = $doc:literal])*
+                $field:ident: $ty:ty = $default:expr;
+                    $kind:expr, $default_text:expr, $help:literal;
+            )*
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, PartialEq)]
+        pub struct $name {
+            $($(#[doc = $doc])* pub $field: $ty,)*
+        }
+
+        impl Default for $name {
+            fn default() -> Self {
+                let $d = $dinit;
+                Self { $($field: $default,)* }
+            }
+        }
+
+        impl $name {
+            /// Every option of the set, in field order: its one declaration.
+            pub fn specs() -> Vec<$crate::options::OptionSpec> {
+                #[allow(unused_imports)]
+                use $crate::options::OptionKind::*;
+                #[allow(unused_variables)]
+                let $d = $dinit;
+                vec![$(
+                    $crate::options::OptionSpec::new(stringify!($field), $kind, $default_text, $help)
+                        .with_python_type(<$ty as $crate::options::OptionField>::python_type()),
+                )*]
+            }
+
+            /// Sets option `name` from a front end's `input` (not validated here); `Ok(false)` when
+            /// `name` is none of this set's.
+            pub fn set<I: $crate::options::OptionInput + ?Sized>(
+                &mut self,
+                name: &str,
+                input: &I,
+            ) -> Result<bool, I::Error> {
+                match name {
+                    $(stringify!($field) => {
+                        self.$field = <$ty as $crate::options::OptionField>::read(input, stringify!($field))?;
+                    })*
+                    _ => return Ok(false),
+                }
+                Ok(true)
+            }
+        }
+    };
+}
+
+option_set! {
+    /// The matching options a user chooses, with the documented defaults ([`Default`]). A field that
+    /// is an `Option` defaults to `None`: the measured recipe's value for the kind of input
+    /// (contours and 2-D points, or unordered 3-D points such as brightness surfaces; see
+    /// [`MatchOptions::for_input`]).
+    ///
+    /// ```
+    /// use modal_core::{MatchParams, Search};
+    /// let params = MatchParams { search: Search::Local, refits: Some(0), ..MatchParams::default() };
+    /// let options = params.to_match_options(2, true).unwrap();
+    /// assert_eq!((options.search, options.refits), (Search::Local, 0));
+    /// assert!(MatchParams { modes: Some(1.5), ..MatchParams::default() }.to_match_options(2, true).is_err());
+    /// ```
+    MatchParams {
+        let d = MatchOptions::default();
+        /// Finite element of the modal model.
+        element: ElementKind = d.model.element;
+            Word(ElementKind::NAMES), d.model.element,
+            "Finite element of the modal model: Sclaroff's Gaussian element or bar elements along contour or mesh edges.";
+        /// Fraction of the `dim × min(n, m)` modes used as features, in (0, 1] (`None`: the
+        /// recipe's).
+        modes: Option<f64> = None;
+            Value, by_input(|o| o.mode_fraction),
+            "Fraction of the dim × min(n, m) vibration modes used as features, in (0, 1].";
+        /// Which search produces the matches.
+        search: Search = d.search;
+            Word(Search::NAMES), d.search,
+            "Search: the optimal one-to-one assignment (global), mutual best matches (local), or every node of the first object to its cheapest node of the second (best: many-to-one, no excess step).";
+        /// Assignment solver of the global search and of the mode alignment.
+        solver: assign::Method = d.method;
+            Word(<assign::Method as Choice>::NAMES), d.method,
+            "Assignment solver: Jonker-Volgenant, Kuhn-Munkres or network simplex (same optimum).";
+        /// Reject pairs whose max-normalised cost exceeds this (in [0, 1]); `None` keeps all.
+        threshold: Option<f64> = d.threshold;
+            Value, "none",
+            "Reject pairs whose max-normalised cost exceeds this number in [0, 1]; none keeps all.";
+        /// Whether pairs above the threshold are dropped after the assignment or by it.
+        threshold_mode: ThresholdMode = d.threshold_mode;
+            Word(ThresholdMode::NAMES), d.threshold_mode,
+            "Threshold applied after the optimal assignment (after) or by the assignment itself, which may then keep other pairs under it (during).";
+        /// Match the nodes the one-to-one search leaves over (global search).
+        excess: bool = d.excess;
+            NegatedFlag, d.excess,
+            "Match the nodes the one-to-one search leaves over (excess-node step, global search).";
+        /// Start from the paper's literal setting (centroid and scale pre-alignment, no re-fits).
+        paper: bool = false;
+            Flag, false,
+            "Start from the paper's literal setting: centroid and scale pre-alignment, no affine re-fits.";
+        /// Pre-alignment (`None`: robust, or normalize with `paper`; a recording's contours use
+        /// [`RUN_PREALIGN`]).
+        prealign: Option<Prealign> = None;
+            Word(Prealign::NAMES), "robust (normalize with paper; sensor for a recording's contours)",
+            "Pre-alignment: rotation search with affine ICP, then for two outlines (outside a run) a point-to-line fit of the outlines (robust), centroid and scale only (normalize), or the sensor coordinates as the prior, moved only by the affine re-fits (sensor: consecutive frames of one recording).";
+        /// Largest turn in degrees the robust pre-alignment may find, in (0, 180] (180: any turn;
+        /// `None`: the caller's default, unbounded for a pair, [`RUN_MAX_ROTATION`] for a
+        /// recording's consecutive frames).
+        max_rotation: Option<f64> = None;
+            Value, format!("180 (any turn) for a pair, {RUN_MAX_ROTATION} for a recording's consecutive frames"),
+            "Largest turn in degrees, in (0, 180], the robust pre-alignment may find between two objects; among turns that fit nearly as well the smallest always wins.";
+        /// Maximum modal affine re-fits (`None`: the recipe's; for two closed outlines none after
+        /// the rotation search, 2 after another pre-alignment).
+        refits: Option<usize> = None;
+            Value,
+            format!(
+                "{} for two closed outlines pre-aligned by the rotation search (match); {} with \
+                 another pre-alignment, for 2-D points and for a recording's frames; {} for \
+                 unordered 3-D points",
+                MatchOptions::for_outlines().refits,
+                MatchOptions::default().refits,
+                MatchOptions::for_surfaces().refits
+            ),
+            "Maximum modal affine re-fits (stops earlier when the pairs stop changing).";
+        /// Re-fit stopping tolerance in B's node spacings (`None`: the recipe's).
+        refit_tolerance: Option<f64> = None;
+            Value, by_input(|o| o.refit_tolerance),
+            "No further re-fit once every one-to-one pair lies within this fraction of the second object's node spacing of its partner under one affine map; 0 always re-fits.";
+        /// What follows the affine re-fits: nothing (`affine`) or the modal non-rigid warp (`modal`).
+        refine: Refine = d.refine;
+            Word(Refine::NAMES), d.refine,
+            "After the affine re-fits: nothing more (affine) or a non-rigid warp of the first object by its own low-order modes, fitted to soft correspondences with the modes' strain energy as regulariser, then one more search (modal; slower, for strongly non-affine deformations).";
+        /// Modes of the non-rigid warp, rigid ones included (`refine = modal` only).
+        deform_modes: usize = d.deform_modes;
+            Value, d.deform_modes,
+            "refine=modal: modes of the warp's displacement field, the rigid ones included; at most the rigid count leaves the affine result unchanged.";
+        /// Strain-energy weight of the non-rigid warp, > 0 (`refine = modal` only).
+        deform_stiffness: f64 = d.deform_stiffness;
+            Value, d.deform_stiffness,
+            "refine=modal: weight > 0 of the modes' strain energy against the fit; larger keeps the warp closer to the affine alignment.";
+        /// Gaussian width factor σ = kappa × mean nearest-neighbour distance (`None`: the recipe's).
+        kappa: Option<f64> = None;
+            Value, by_input(|o| o.model.kappa),
+            "Gaussian width sigma = kappa × mean nearest-neighbour distance.";
+        /// Gaussian element: a Gaussian on every `center_stride`-th node only (1: every node;
+        /// `None`: the recipe's).
+        center_stride: Option<usize> = None;
+            Value, by_input(|o| o.model.center_stride),
+            "Gaussian element: a Gaussian on every N-th node only (faster, less accurate under severe warps).";
+        /// Weight of aligned positions in the cost, in [0, 1] (`None`: the recipe's).
+        position_weight: Option<f64> = None;
+            Value, by_input(|o| o.position_weight),
+            "Weight in [0, 1] of the aligned positions' distance mixed into the modal cost (1: positions only).";
+        /// Exponent of the costs the search adds up, > 0 (`None`: the recipe's).
+        cost_power: Option<f64> = None;
+            Value, by_input(|o| o.cost_power),
+            "Exponent > 0 of the costs the search adds up (below 1 favours many near-exact pairs).";
+        /// One Gaussian width for both objects (`None`: the recipe's).
+        common_sigma: Option<bool> = None;
+            TriState,
+            format!(
+                "{} for two closed outlines (match) and {} for unordered 3-D points; {} for 2-D \
+                 points and a recording's frames",
+                MatchOptions::for_outlines().common_sigma,
+                MatchOptions::for_surfaces().common_sigma,
+                MatchOptions::default().common_sigma
+            ),
+            "One Gaussian width for both objects (for independently sampled point sets).";
+        /// Skip the quasi-rigid modes.
+        skip_rigid: bool = d.skip_rigid;
+            Flag, d.skip_rigid,
+            "Leave the quasi-rigid modes out of the features.";
+        /// Band of the cross-object mode reordering (0: signs only).
+        band: usize = d.band;
+            Value, d.band,
+            "Band of the cross-object mode reordering (0: signs only).";
+        /// Material of the model; only Poisson's ratio changes matches (`None`: the recipe's).
+        material: Option<Material> = None;
+            Value, by_input(|o| o.model.material),
+            "Material: a preset (rubber, steel, aluminium, cork, unit) or E,NU,RHO; only Poisson's ratio changes the matches.";
+    }
+}
+
+/// Every matching option of `pedomatch match`, `pedomatch run`, `pymodal.match` and
+/// `pymodal.run`, in the order of [`MatchParams`]' fields: its one declaration.
+pub fn match_option_specs() -> Vec<OptionSpec> {
+    MatchParams::specs()
 }
 
 /// `Err` unless `ok`, naming the option, the value and what is expected.
@@ -412,104 +663,6 @@ impl MatchParams {
     }
 }
 
-/// The options a user set, each `None` when left at its default: what the command line and the
-/// Python keywords read, overlaid on [`MatchParams::default`] by [`MatchOverrides::apply`] (one
-/// overlay for both front ends). Not validated here: [`MatchParams::to_match_options`] checks.
-///
-/// ```
-/// use modal_core::options::MatchOverrides;
-/// use modal_core::{MatchParams, Search};
-/// let set = MatchOverrides { search: Some(Search::Local), excess: Some(false), ..Default::default() };
-/// let params = set.params();
-/// assert_eq!((params.search, params.excess), (Search::Local, false));
-/// assert_eq!(params.modes, MatchParams::default().modes);
-/// ```
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct MatchOverrides {
-    /// The finite element (`gaussian` or `bar`). `None` keeps the default.
-    pub element: Option<ElementKind>,
-    /// Fraction of the modes kept. `None` keeps the default.
-    pub modes: Option<f64>,
-    /// Local, global or best search. `None` keeps the default.
-    pub search: Option<Search>,
-    /// Assignment solver. `None` keeps the default.
-    pub solver: Option<assign::Method>,
-    /// Rejection threshold on the normalised cost. `None` keeps the default.
-    pub threshold: Option<f64>,
-    /// How the threshold applies. `None` keeps the default.
-    pub threshold_mode: Option<ThresholdMode>,
-    /// Match the nodes the one-to-one search leaves over. `None` keeps the default.
-    pub excess: Option<bool>,
-    /// The paper's literal setting as the base. `None` keeps the default.
-    pub paper: Option<bool>,
-    /// Pre-alignment. `None` keeps the default.
-    pub prealign: Option<Prealign>,
-    /// Bound on the pre-alignment's rotation, in degrees. `None` keeps the default.
-    pub max_rotation: Option<f64>,
-    /// Number of affine re-fits. `None` keeps the default.
-    pub refits: Option<usize>,
-    /// When the re-fits stop, in node spacings. `None` keeps the default.
-    pub refit_tolerance: Option<f64>,
-    /// Refinement after the re-fits (none or the modal warp). `None` keeps the default.
-    pub refine: Option<Refine>,
-    /// Modes of the modal warp. `None` keeps the default.
-    pub deform_modes: Option<usize>,
-    /// Stiffness of the modal warp. `None` keeps the default.
-    pub deform_stiffness: Option<f64>,
-    /// Gaussian width as a multiple of the node spacing. `None` keeps the default.
-    pub kappa: Option<f64>,
-    /// A Gaussian on every `center_stride`-th node. `None` keeps the default.
-    pub center_stride: Option<usize>,
-    /// Weight of positions mixed into the cost. `None` keeps the default.
-    pub position_weight: Option<f64>,
-    /// Power the cost is raised to. `None` keeps the default.
-    pub cost_power: Option<f64>,
-    /// One Gaussian width for both objects. `None` keeps the default.
-    pub common_sigma: Option<bool>,
-    /// Skip the rigid-body modes. `None` keeps the default.
-    pub skip_rigid: Option<bool>,
-    /// Band of the mode reordering. `None` keeps the default.
-    pub band: Option<usize>,
-    /// Elastic constants. `None` keeps the default.
-    pub material: Option<Material>,
-}
-
-impl MatchOverrides {
-    /// `base` with every set option replaced.
-    pub fn apply(&self, base: MatchParams) -> MatchParams {
-        MatchParams {
-            element: self.element.unwrap_or(base.element),
-            modes: self.modes.or(base.modes),
-            search: self.search.unwrap_or(base.search),
-            solver: self.solver.unwrap_or(base.solver),
-            threshold: self.threshold.or(base.threshold),
-            threshold_mode: self.threshold_mode.unwrap_or(base.threshold_mode),
-            excess: self.excess.unwrap_or(base.excess),
-            paper: self.paper.unwrap_or(base.paper),
-            prealign: self.prealign.or(base.prealign),
-            max_rotation: self.max_rotation.or(base.max_rotation),
-            refits: self.refits.or(base.refits),
-            refit_tolerance: self.refit_tolerance.or(base.refit_tolerance),
-            refine: self.refine.unwrap_or(base.refine),
-            deform_modes: self.deform_modes.unwrap_or(base.deform_modes),
-            deform_stiffness: self.deform_stiffness.unwrap_or(base.deform_stiffness),
-            kappa: self.kappa.or(base.kappa),
-            center_stride: self.center_stride.or(base.center_stride),
-            position_weight: self.position_weight.or(base.position_weight),
-            cost_power: self.cost_power.or(base.cost_power),
-            common_sigma: self.common_sigma.or(base.common_sigma),
-            skip_rigid: self.skip_rigid.unwrap_or(base.skip_rigid),
-            band: self.band.unwrap_or(base.band),
-            material: self.material.or(base.material),
-        }
-    }
-
-    /// The defaults with every set option replaced.
-    pub fn params(&self) -> MatchParams {
-        self.apply(MatchParams::default())
-    }
-}
-
 /// The default [`MatchParams::max_rotation`] of a recording run (`pedomatch run`, `pymodal.run`):
 /// consecutive frames hardly turn (a foot rolls over, it does not spin between two frames at
 /// 30-500 Hz), while the rotation search's starts lie 10° apart, so the bound keeps the two
@@ -565,6 +718,8 @@ pub struct OptionSpec {
     pub default: String,
     /// Its meaning, one sentence for `--help` and docstrings.
     pub help: &'static str,
+    /// Its type in Python's stubs (`float`, `int`, `bool`, `Literal["a", "b"]`, ...).
+    pub python: String,
 }
 
 impl OptionSpec {
@@ -575,12 +730,24 @@ impl OptionSpec {
         default: impl ToString,
         help: &'static str,
     ) -> Self {
+        let python = match kind {
+            OptionKind::Flag | OptionKind::NegatedFlag | OptionKind::TriState => "bool".into(),
+            OptionKind::Word(names) => literal_type(names),
+            OptionKind::Value => "float".into(),
+        };
         Self {
             name,
             kind,
             default: default.to_string(),
             help,
+            python,
         }
+    }
+
+    /// This description with the Python type `python` (an integer option: `int`).
+    pub fn with_python_type(mut self, python: impl Into<String>) -> Self {
+        self.python = python.into();
+        self
     }
 
     /// An enumerated option of type `T`, with its default value.
@@ -628,158 +795,6 @@ fn by_input<T: std::fmt::Display + PartialEq>(f: impl Fn(&MatchOptions) -> T) ->
     } else {
         format!("{c} for contours and 2-D points, {s} for unordered 3-D points")
     }
-}
-
-/// Every matching option of `pedomatch match`, `pedomatch run`, `pymodal.match` and
-/// `pymodal.run`, in the order of [`MatchParams`]' fields.
-pub fn match_option_specs() -> Vec<OptionSpec> {
-    use OptionKind::{Flag, NegatedFlag, TriState, Value};
-    let d = MatchParams::default();
-    vec![
-        OptionSpec::choice(
-            d.element,
-            "Finite element of the modal model: Sclaroff's Gaussian element or bar elements along contour or mesh edges.",
-        ),
-        OptionSpec::new(
-            "modes",
-            Value,
-            by_input(|o| o.mode_fraction),
-            "Fraction of the dim × min(n, m) vibration modes used as features, in (0, 1].",
-        ),
-        OptionSpec::choice(
-            d.search,
-            "Search: the optimal one-to-one assignment (global), mutual best matches (local), or every node of the first object to its cheapest node of the second (best: many-to-one, no excess step).",
-        ),
-        OptionSpec::choice(
-            d.solver,
-            "Assignment solver: Jonker-Volgenant, Kuhn-Munkres or network simplex (same optimum).",
-        ),
-        OptionSpec::new(
-            "threshold",
-            Value,
-            "none",
-            "Reject pairs whose max-normalised cost exceeds this number in [0, 1]; none keeps all.",
-        ),
-        OptionSpec::choice(
-            d.threshold_mode,
-            "Threshold applied after the optimal assignment (after) or by the assignment itself, which may then keep other pairs under it (during).",
-        ),
-        OptionSpec::new(
-            "excess",
-            NegatedFlag,
-            d.excess,
-            "Match the nodes the one-to-one search leaves over (excess-node step, global search).",
-        ),
-        OptionSpec::new(
-            "paper",
-            Flag,
-            d.paper,
-            "Start from the paper's literal setting: centroid and scale pre-alignment, no affine re-fits.",
-        ),
-        OptionSpec::new(
-            "prealign",
-            OptionKind::Word(Prealign::NAMES),
-            "robust (normalize with paper; sensor for a recording's contours)",
-            "Pre-alignment: rotation search with affine ICP, then for two outlines (outside a run) a point-to-line fit of the outlines (robust), centroid and scale only (normalize), or the sensor coordinates as the prior, moved only by the affine re-fits (sensor: consecutive frames of one recording).",
-        ),
-        OptionSpec::new(
-            "max_rotation",
-            Value,
-            format!(
-                "180 (any turn) for a pair, {RUN_MAX_ROTATION} for a recording's consecutive frames"
-            ),
-            "Largest turn in degrees, in (0, 180], the robust pre-alignment may find between two objects; among turns that fit nearly as well the smallest always wins.",
-        ),
-        OptionSpec::new(
-            "refits",
-            Value,
-            format!(
-                "{} for two closed outlines pre-aligned by the rotation search (match); {} with \
-                 another pre-alignment, for 2-D points and for a recording's frames; {} for \
-                 unordered 3-D points",
-                MatchOptions::for_outlines().refits,
-                MatchOptions::default().refits,
-                MatchOptions::for_surfaces().refits
-            ),
-            "Maximum modal affine re-fits (stops earlier when the pairs stop changing).",
-        ),
-        OptionSpec::new(
-            "refit_tolerance",
-            Value,
-            by_input(|o| o.refit_tolerance),
-            "No further re-fit once every one-to-one pair lies within this fraction of the second object's node spacing of its partner under one affine map; 0 always re-fits.",
-        ),
-        OptionSpec::choice(
-            d.refine,
-            "After the affine re-fits: nothing more (affine) or a non-rigid warp of the first object by its own low-order modes, fitted to soft correspondences with the modes' strain energy as regulariser, then one more search (modal; slower, for strongly non-affine deformations).",
-        ),
-        OptionSpec::new(
-            "deform_modes",
-            Value,
-            d.deform_modes,
-            "refine=modal: modes of the warp's displacement field, the rigid ones included; at most the rigid count leaves the affine result unchanged.",
-        ),
-        OptionSpec::new(
-            "deform_stiffness",
-            Value,
-            d.deform_stiffness,
-            "refine=modal: weight > 0 of the modes' strain energy against the fit; larger keeps the warp closer to the affine alignment.",
-        ),
-        OptionSpec::new(
-            "kappa",
-            Value,
-            by_input(|o| o.model.kappa),
-            "Gaussian width sigma = kappa × mean nearest-neighbour distance.",
-        ),
-        OptionSpec::new(
-            "center_stride",
-            Value,
-            by_input(|o| o.model.center_stride),
-            "Gaussian element: a Gaussian on every N-th node only (faster, less accurate under severe warps).",
-        ),
-        OptionSpec::new(
-            "position_weight",
-            Value,
-            by_input(|o| o.position_weight),
-            "Weight in [0, 1] of the aligned positions' distance mixed into the modal cost (1: positions only).",
-        ),
-        OptionSpec::new(
-            "cost_power",
-            Value,
-            by_input(|o| o.cost_power),
-            "Exponent > 0 of the costs the search adds up (below 1 favours many near-exact pairs).",
-        ),
-        OptionSpec::new(
-            "common_sigma",
-            TriState,
-            format!(
-                "{} for two closed outlines (match) and {} for unordered 3-D points; {} for 2-D \
-                 points and a recording's frames",
-                MatchOptions::for_outlines().common_sigma,
-                MatchOptions::for_surfaces().common_sigma,
-                MatchOptions::default().common_sigma
-            ),
-            "One Gaussian width for both objects (for independently sampled point sets).",
-        ),
-        OptionSpec::new(
-            "skip_rigid",
-            Flag,
-            d.skip_rigid,
-            "Leave the quasi-rigid modes out of the features.",
-        ),
-        OptionSpec::new(
-            "band",
-            Value,
-            d.band,
-            "Band of the cross-object mode reordering (0: signs only).",
-        ),
-        OptionSpec::new(
-            "material",
-            Value,
-            by_input(|o| o.model.material),
-            "Material: a preset (rubber, steel, aluminium, cork, unit) or E,NU,RHO; only Poisson's ratio changes the matches.",
-        ),
-    ]
 }
 
 /// Options describing how a pair of objects is read, for `pedomatch match` and `pymodal.match`.

@@ -129,7 +129,8 @@ pub fn unit_option_specs() -> Vec<OptionSpec> {
             OptionKind::Value,
             "the file's, if it says",
             "Sensor pitch X[,Y] in mm per sensel (X alone: square sensels); overrides the file's.",
-        ),
+        )
+        .with_python_type("Pitch"),
         OptionSpec::new(
             "frame_rate",
             OptionKind::Value,
@@ -141,7 +142,8 @@ pub fn unit_option_specs() -> Vec<OptionSpec> {
             OptionKind::Value,
             "the file's, if it says",
             "Pressure units of the values (kPa, Pa, MPa, N/cm², N/mm², psi, bar, mmHg), for formats that store none; overrides the file's.",
-        ),
+        )
+        .with_python_type("str"),
     ]
 }
 

@@ -545,7 +545,8 @@ pub fn recording_option_specs() -> Vec<OptionSpec> {
             Value,
             "all",
             "Frames START..END, 0-based with END excluded as in a Python slice (START.. and ..END allowed; a negative index counts back from the end: -50.. is the last 50 frames, 0..-1 all but the last); the range must lie within the recording.",
-        ),
+        )
+        .with_python_type("Tuple[Optional[int], Optional[int]]"),
         OptionSpec::new(
             "noise",
             Value,
@@ -569,25 +570,29 @@ pub fn recording_option_specs() -> Vec<OptionSpec> {
             Value,
             d.surface_nodes,
             "Node budget of each brightness surface.",
-        ),
+        )
+        .with_python_type("int"),
         OptionSpec::new(
             "iso_frame",
             Value,
             "the frame of largest load",
             "Isocontour model: the frame (0-based, within frames when given) whose isobaric contours are matched.",
-        ),
+        )
+        .with_python_type("int"),
         OptionSpec::new(
             "iso_levels",
             Value,
             d.iso_levels,
             "Isocontour model: the number of isobaric levels.",
-        ),
+        )
+        .with_python_type("int"),
         OptionSpec::new(
             "drift_reference",
             Value,
             d.drift_reference,
             "Drift correction of tracks: every this many frames is a reference frame, and each object is also matched against its ancestor on the last one; tracks follow those matches first (0: off).",
-        ),
+        )
+        .with_python_type("int"),
     ];
     specs.extend(pedo_io::units::unit_option_specs());
     specs

@@ -1,7 +1,6 @@
 //! `pymodal.batch`, `pymodal.batch_row` and `pymodal.find_recordings`: a whole study, with the
 //! library's study code ([`pedo_study`]) that `pedomatch batch` runs.
 
-use modal_core::Choice;
 use pedo_io::cancel::Cancel;
 use pedo_io::ReadOptions;
 use pedo_output::RunOutputs;
@@ -37,22 +36,18 @@ fn input_strings(inputs: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<String>>
 /// ``animation`` (each None at its default): the output options of ``pedomatch run`` and
 /// ``batch``, declared once in `pedo_output::output_option_specs`.
 pub(crate) fn run_outputs(
-    figures: Option<&str>,
-    tables: Option<&str>,
-    report: Option<&str>,
-    animation: Option<&str>,
+    figures: Option<&Bound<'_, PyAny>>,
+    tables: Option<&Bound<'_, PyAny>>,
+    report: Option<&Bound<'_, PyAny>>,
+    animation: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<RunOutputs> {
+    use crate::options_py::word_keyword;
     Ok(RunOutputs::of(
-        choice(figures)?,
-        choice(tables)?,
-        choice(report)?,
-        choice(animation)?,
+        word_keyword("figures", figures)?,
+        word_keyword("tables", tables)?,
+        word_keyword("report", report)?,
+        word_keyword("animation", animation)?,
     ))
-}
-
-/// An option word, if given, as its choice (an `OptionError` naming the values when unknown).
-fn choice<T: Choice>(value: Option<&str>) -> PyResult<Option<T>> {
-    value.map(T::parse_word).transpose().map_err(to_py)
 }
 
 /// The study options of the keywords.
@@ -140,10 +135,10 @@ fn batch<'py>(
     out: Option<PathBuf>,
     jobs: Option<&Bound<'py, PyAny>>,
     force: bool,
-    figures: Option<&str>,
-    tables: Option<&str>,
-    report: Option<&str>,
-    animation: Option<&str>,
+    figures: Option<&Bound<'py, PyAny>>,
+    tables: Option<&Bound<'py, PyAny>>,
+    report: Option<&Bound<'py, PyAny>>,
+    animation: Option<&Bound<'py, PyAny>>,
     layout: Option<PathBuf>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
@@ -187,10 +182,10 @@ fn batch_row<'py>(
     path: PathBuf,
     out: Option<PathBuf>,
     force: bool,
-    figures: Option<&str>,
-    tables: Option<&str>,
-    report: Option<&str>,
-    animation: Option<&str>,
+    figures: Option<&Bound<'py, PyAny>>,
+    tables: Option<&Bound<'py, PyAny>>,
+    report: Option<&Bound<'py, PyAny>>,
+    animation: Option<&Bound<'py, PyAny>>,
     layout: Option<PathBuf>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {

@@ -8,6 +8,8 @@ mod assign_py;
 mod batch_py;
 mod errors;
 mod io_py;
+#[rustfmt::skip]
+mod keywords;
 mod match_py;
 mod model_py;
 mod options_py;

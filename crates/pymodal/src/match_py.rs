@@ -320,143 +320,77 @@ fn triangles(
         .map(|v| v.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect()))
 }
 
-/// Modal matching of two objects.
-///
-/// Builds a finite-element model of each object, computes its vibration modes and matches the
-/// nodes in modal space. Every option defaults to ``None``: the documented default below, the
-/// same as ``pedomatch match`` (keyword ``x_y`` is the flag ``--x-y``; ``pymodal._options()``
-/// lists them all). The defaults are the most accurate setting measured (robust rotation
-/// pre-alignment, which for two closed outlines ends in a fit of the outlines and needs no modal
-/// affine re-fits (one σ for both outlines), up to two re-fits otherwise; cross-object mode
-/// alignment, excess nodes on contours; for unordered 3-D point sets the surface setting: wide
-/// common σ, no re-fits, aligned positions mixed in, powered costs); ``paper=True`` is the
-/// paper's literal setting.
-///
-/// Parameters
-/// ----------
-/// a, b : (n, 2) or (n, 3) array_like — the node coordinates of the two objects.
-/// element : {"gaussian", "axial"} — Sclaroff's Gaussian element or bar elements (default
-///     "gaussian").
-/// modes : float in (0, 1] — fraction of ``dim · min(n, m)`` modes kept (default 0.25; 0.125 for
-///     unordered 3-D points, whose model has a Gaussian on every second node only).
-/// search : {"global", "local", "best"} — optimal assignment (default), mutual best matches, or
-///     every node of a to its best node of b (many-to-one, no excess step).
-/// solver : {"jv", "hungarian", "simplex"} — assignment algorithm (default "jv").
-/// threshold : float or None — reject pairs with normalised cost above it (default: keep all).
-/// threshold_mode : {"after", "during"} — drop pairs above the threshold after the assignment
-///     (default) or let the assignment itself reject them.
-/// excess : bool — match the nodes the one-to-one search leaves over (default True).
-/// paper : bool — start from the paper's literal setting (default False).
-/// prealign : {"robust", "normalize", "sensor"} — rotation search with affine ICP, ending for
-///     two outlines with a point-to-line fit of the outlines (default; "normalize" with
-///     ``paper``), centroid and scale only, or the coordinates as given as the prior, moved
-///     only by the affine re-fits ("sensor", :func:`run`'s default for contours).
-/// max_rotation : float in (0, 180] — the largest turn, in degrees, the robust pre-alignment
-///     may find between a and b; among turns that fit nearly as well the smallest wins (default
-///     180, any turn; :func:`run` uses 30 between consecutive frames).
-/// refits : int — modal affine re-fits (default 0 for two closed outlines pre-aligned by the
-///     rotation search; 2 with another ``prealign``, for 2-D point sets and for :func:`run`'s
-///     frames; 0 for unordered 3-D points).
-/// refit_tolerance : float ≥ 0 — no (further) re-fit once every one-to-one pair is within this
-///     fraction of b's node spacing of its partner under one affine map (default 0.6; 0
-///     re-fits ``refits`` times).
-/// refine : {"affine", "modal"} — after the affine re-fits, nothing more (default) or a
-///     non-rigid warp of a by its own low-order modes onto b, then one more search (slower; for
-///     strongly non-affine deformations of contours; see docs/options.md and BENCHMARKS.md).
-/// deform_modes : int — ``refine="modal"``: modes of the warp, rigid ones included (default 12).
-/// deform_stiffness : float > 0 — ``refine="modal"``: weight of the modes' strain energy
-///     against the fit (default 100).
-/// kappa : float > 0 — σ = kappa × mean nearest-neighbour distance (default 0.8, or 3 for
-///     unordered 3-D points).
-/// center_stride : int ≥ 1 — Gaussians on every ``center_stride``-th node only (default 1 for contours and 2-D points, 2 for unordered 3-D points).
-/// position_weight : float in [0, 1] — mix of aligned-position distance into the cost (default
-///     0, or 0.7 for unordered 3-D points).
-/// cost_power : float > 0 — the assignment minimises the sum of costs to this power (default 1,
-///     or 0.125 for unordered 3-D points); costs, affinity and threshold are in powered units.
-/// common_sigma : bool — one σ for both objects (default True for two closed outlines and for
-///     unordered 3-D points, False for 2-D point sets and :func:`run`'s frames).
-/// skip_rigid : bool — leave the quasi-rigid modes out (default False).
-/// band : int — band of the cross-object mode reordering (default 3).
-/// material : preset name, "E,NU,RHO", dict or (E, nu, rho) — only ν changes the matches.
-/// ordered : bool — treat the inputs as ordered closed contours (default: decided from the data,
-///     2-D arrays whose consecutive points are nearest-neighbour close).
-/// triangles_a, triangles_b : (t, 3) int arrays — meshes (for ``element="axial"``).
-///
-/// Raises
-/// ------
-/// InputError — ``a``, ``b`` or ``triangles_a``/``triangles_b`` not arrays of the documented
-///     shape (e.g. 4 columns, 1-D), or ``a`` and ``b`` of different dimensions; the message
-///     names the argument;
-/// OptionError — an unknown or out-of-range option value (an ``InputError``);
-/// DegenerateShapeError — too few, coincident or collinear nodes, NaN or infinite coordinates;
-/// NumericalError — the eigensolver failed.
-/// All are :class:`PedomatchError` and ``ValueError`` subclasses. An option of the wrong type
-/// raises ``TypeError`` naming it and the type it takes (``modes="many"``: "modes must be a
-/// number, got 'many'").
-#[pyfunction]
-#[pyo3(name = "match", signature = (a, b, *, element=None, modes=None, search=None, solver=None,
-    threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, max_rotation=None, refits=None,
-    refit_tolerance=None, refine=None, deform_modes=None, deform_stiffness=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
-    common_sigma=None, skip_rigid=None, band=None, material=None, ordered=None, triangles_a=None,
-    triangles_b=None))]
-#[allow(clippy::too_many_arguments)]
-fn match_py(
-    py: Python<'_>,
-    a: &Bound<'_, PyAny>,
-    b: &Bound<'_, PyAny>,
-    element: Option<&Bound<'_, PyAny>>,
-    modes: Option<&Bound<'_, PyAny>>,
-    search: Option<&Bound<'_, PyAny>>,
-    solver: Option<&Bound<'_, PyAny>>,
-    threshold: Option<&Bound<'_, PyAny>>,
-    threshold_mode: Option<&Bound<'_, PyAny>>,
-    excess: Option<&Bound<'_, PyAny>>,
-    paper: Option<&Bound<'_, PyAny>>,
-    prealign: Option<&Bound<'_, PyAny>>,
-    max_rotation: Option<&Bound<'_, PyAny>>,
-    refits: Option<&Bound<'_, PyAny>>,
-    refit_tolerance: Option<&Bound<'_, PyAny>>,
-    refine: Option<&Bound<'_, PyAny>>,
-    deform_modes: Option<&Bound<'_, PyAny>>,
-    deform_stiffness: Option<&Bound<'_, PyAny>>,
-    kappa: Option<&Bound<'_, PyAny>>,
-    center_stride: Option<&Bound<'_, PyAny>>,
-    position_weight: Option<&Bound<'_, PyAny>>,
-    cost_power: Option<&Bound<'_, PyAny>>,
-    common_sigma: Option<&Bound<'_, PyAny>>,
-    skip_rigid: Option<&Bound<'_, PyAny>>,
-    band: Option<&Bound<'_, PyAny>>,
-    material: Option<&Bound<'_, PyAny>>,
-    ordered: Option<&Bound<'_, PyAny>>,
-    triangles_a: Option<&Bound<'_, PyAny>>,
-    triangles_b: Option<&Bound<'_, PyAny>>,
-) -> PyResult<PyMatch> {
-    let params = crate::options_py::MatchKw::new(
-        element,
-        modes,
-        search,
-        solver,
-        threshold,
-        threshold_mode,
-        excess,
-        paper,
-        prealign,
-        max_rotation,
-        refits,
-        refit_tolerance,
-        refine,
-        deform_modes,
-        deform_stiffness,
-        kappa,
-        center_stride,
-        position_weight,
-        cost_power,
-        common_sigma,
-        skip_rigid,
-        band,
-        material,
-    )
-    .params()?;
+macro_rules! define_match {
+    (
+        match: [$($m:ident),*], match_doc: $match_doc:literal,
+        pair: [$($p:ident),*], pair_doc: $pair_doc:literal,
+        $($rest:tt)*
+    ) => {
+        /// Modal matching of two objects.
+        ///
+        /// Builds a finite-element model of each object, computes its vibration modes and matches the
+        /// nodes in modal space. Every option defaults to ``None``: the documented default below, the
+        /// same as ``pedomatch match`` (keyword ``x_y`` is the flag ``--x-y``; ``pymodal._options()``
+        /// lists them all). The defaults are the most accurate setting measured (robust rotation
+        /// pre-alignment, which for two closed outlines ends in a fit of the outlines and needs no modal
+        /// affine re-fits (one σ for both outlines), up to two re-fits otherwise; cross-object mode
+        /// alignment, excess nodes on contours; for unordered 3-D point sets the surface setting: wide
+        /// common σ, no re-fits, aligned positions mixed in, powered costs); ``paper=True`` is the
+        /// paper's literal setting.
+        ///
+        /// Parameters
+        /// ----------
+        /// a, b : (n, 2) or (n, 3) array_like — the node coordinates of the two objects.
+        #[doc = $match_doc]
+        #[doc = $pair_doc]
+        /// triangles_a, triangles_b : (t, 3) int arrays — meshes (for ``element="axial"``).
+        ///
+        /// Raises
+        /// ------
+        /// InputError — ``a``, ``b`` or ``triangles_a``/``triangles_b`` not arrays of the documented
+        ///     shape (e.g. 4 columns, 1-D), or ``a`` and ``b`` of different dimensions; the message
+        ///     names the argument;
+        /// OptionError — an unknown or out-of-range option value (an ``InputError``);
+        /// DegenerateShapeError — too few, coincident or collinear nodes, NaN or infinite coordinates;
+        /// NumericalError — the eigensolver failed.
+        /// All are :class:`PedomatchError` and ``ValueError`` subclasses. An option of the wrong type
+        /// raises ``TypeError`` naming it and the type it takes (``modes="many"``: "modes must be a
+        /// number, got 'many'").
+        #[pyfunction]
+        #[pyo3(name = "match", signature = (a, b, *, $($m = None,)* $($p = None,)* triangles_a = None, triangles_b = None))]
+        #[allow(clippy::too_many_arguments)]
+        fn match_py(
+            py: Python<'_>,
+            a: &Bound<'_, PyAny>,
+            b: &Bound<'_, PyAny>,
+            $($m: Option<&Bound<'_, PyAny>>,)*
+            $($p: Option<&Bound<'_, PyAny>>,)*
+            triangles_a: Option<&Bound<'_, PyAny>>,
+            triangles_b: Option<&Bound<'_, PyAny>>,
+        ) -> PyResult<PyMatch> {
+            let given = [$((stringify!($m), $m),)* $((stringify!($p), $p),)*];
+            let get = |name: &str| given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v);
+            match_objects(py, a, b, &get, triangles_a, triangles_b)
+        }
+    };
+}
+
+crate::keywords::with_option_keywords!(define_match);
+
+/// [`match_py`] with its option keywords by name (`get`).
+fn match_objects<'a, 'py>(
+    py: Python<'py>,
+    a: &Bound<'py, PyAny>,
+    b: &Bound<'py, PyAny>,
+    get: &dyn Fn(&str) -> Option<&'a Bound<'py, PyAny>>,
+    triangles_a: Option<&Bound<'py, PyAny>>,
+    triangles_b: Option<&Bound<'py, PyAny>>,
+) -> PyResult<PyMatch>
+where
+    'py: 'a,
+{
+    let params = crate::options_py::match_params(get)?;
+    let ordered = get("ordered");
     let (da, ca) = points(py, a, "a")?;
     let (db, cb) = points(py, b, "b")?;
     if da != db {

@@ -3,8 +3,9 @@
 //! fills in ([`MatchParams::default`], [`RunParams::default`]); words are parsed by the Rust
 //! types' `FromStr`, so Python and the CLI accept the same values.
 
-use modal_core::options::MatchOverrides;
+use modal_core::options::OptionInput;
 use modal_core::{Choice, MatchParams, OptionKind, OptionSpec};
+use modal_core::{Material, OptionError};
 use pedo_io::units::UnitOverrides;
 use pedo_output::{Cell, Table};
 use pedo_track::{FrameRange, RunParams};
@@ -87,7 +88,10 @@ pub fn count_keyword(name: &str, value: Option<&Bound<'_, PyAny>>) -> PyResult<O
 }
 
 /// A word option [`keyword`], parsed by `T`'s `FromStr` (`None` when absent).
-fn word_keyword<T: Choice>(name: &str, value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<T>> {
+pub(crate) fn word_keyword<T: Choice>(
+    name: &str,
+    value: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<T>> {
     keyword::<String>(name, value)?
         .map(|s| T::parse_word(&s).map_err(to_py))
         .transpose()
@@ -96,155 +100,67 @@ fn word_keyword<T: Choice>(name: &str, value: Option<&Bound<'_, PyAny>>) -> PyRe
 /// A keyword as given: the object, or `None` when absent.
 type Kw<'a, 'py> = Option<&'a Bound<'py, PyAny>>;
 
-/// The matching keywords, in the order of [`modal_core::options::match_option_specs`], as given
-/// (read by [`MatchKw::params`]).
-pub struct MatchKw<'a, 'py> {
-    pub element: Kw<'a, 'py>,
-    pub modes: Kw<'a, 'py>,
-    pub search: Kw<'a, 'py>,
-    pub solver: Kw<'a, 'py>,
-    pub threshold: Kw<'a, 'py>,
-    pub threshold_mode: Kw<'a, 'py>,
-    pub excess: Kw<'a, 'py>,
-    pub paper: Kw<'a, 'py>,
-    pub prealign: Kw<'a, 'py>,
-    pub max_rotation: Kw<'a, 'py>,
-    pub refits: Kw<'a, 'py>,
-    pub refit_tolerance: Kw<'a, 'py>,
-    pub refine: Kw<'a, 'py>,
-    pub deform_modes: Kw<'a, 'py>,
-    pub deform_stiffness: Kw<'a, 'py>,
-    pub kappa: Kw<'a, 'py>,
-    pub center_stride: Kw<'a, 'py>,
-    pub position_weight: Kw<'a, 'py>,
-    pub cost_power: Kw<'a, 'py>,
-    pub common_sigma: Kw<'a, 'py>,
-    pub skip_rigid: Kw<'a, 'py>,
-    pub band: Kw<'a, 'py>,
-    pub material: Kw<'a, 'py>,
+/// A keyword's value as the library's option declarations read it ([`OptionInput`]): each type
+/// read as [`keyword`] reads it, so that a value of the wrong type is the `TypeError` naming the
+/// keyword and an out-of-range one an `OptionError`.
+struct PyKeyword<'a, 'py>(&'a Bound<'py, PyAny>);
+
+/// The error of reading a [`PyKeyword`]: the Python exception to raise.
+struct KeywordError(PyErr);
+
+impl From<OptionError> for KeywordError {
+    fn from(e: OptionError) -> Self {
+        KeywordError(to_py(e))
+    }
 }
 
-impl<'a, 'py> MatchKw<'a, 'py> {
-    /// The keywords in the order of the `match` and `run` signatures, so both read them with one
-    /// call.
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        element: Kw<'a, 'py>,
-        modes: Kw<'a, 'py>,
-        search: Kw<'a, 'py>,
-        solver: Kw<'a, 'py>,
-        threshold: Kw<'a, 'py>,
-        threshold_mode: Kw<'a, 'py>,
-        excess: Kw<'a, 'py>,
-        paper: Kw<'a, 'py>,
-        prealign: Kw<'a, 'py>,
-        max_rotation: Kw<'a, 'py>,
-        refits: Kw<'a, 'py>,
-        refit_tolerance: Kw<'a, 'py>,
-        refine: Kw<'a, 'py>,
-        deform_modes: Kw<'a, 'py>,
-        deform_stiffness: Kw<'a, 'py>,
-        kappa: Kw<'a, 'py>,
-        center_stride: Kw<'a, 'py>,
-        position_weight: Kw<'a, 'py>,
-        cost_power: Kw<'a, 'py>,
-        common_sigma: Kw<'a, 'py>,
-        skip_rigid: Kw<'a, 'py>,
-        band: Kw<'a, 'py>,
-        material: Kw<'a, 'py>,
-    ) -> Self {
-        Self {
-            element,
-            modes,
-            search,
-            solver,
-            threshold,
-            threshold_mode,
-            excess,
-            paper,
-            prealign,
-            max_rotation,
-            refits,
-            refit_tolerance,
-            refine,
-            deform_modes,
-            deform_stiffness,
-            kappa,
-            center_stride,
-            position_weight,
-            cost_power,
-            common_sigma,
-            skip_rigid,
-            band,
-            material,
+impl From<PyErr> for KeywordError {
+    fn from(e: PyErr) -> Self {
+        KeywordError(e)
+    }
+}
+
+impl PyKeyword<'_, '_> {
+    fn read<T: KeywordType>(&self, option: &'static str) -> Result<T, KeywordError> {
+        keyword::<T>(option, Some(self.0))?
+            .ok_or_else(|| KeywordError(keyword_type_error(option, T::EXPECTED, self.0)))
+    }
+}
+
+impl OptionInput for PyKeyword<'_, '_> {
+    type Error = KeywordError;
+    fn number(&self, option: &'static str) -> Result<f64, KeywordError> {
+        self.read(option)
+    }
+    fn count(&self, option: &'static str) -> Result<usize, KeywordError> {
+        Ok(count(option, self.read(option)?)?)
+    }
+    fn switch(&self, option: &'static str) -> Result<bool, KeywordError> {
+        self.read(option)
+    }
+    fn text(&self, option: &'static str) -> Result<String, KeywordError> {
+        self.read(option)
+    }
+    /// A preset name or `E,NU,RHO`, a dict or an `(E, nu, rho)` tuple, or a `Material`.
+    fn material(&self, _option: &'static str) -> Result<Material, KeywordError> {
+        Ok(match self.0.extract::<String>() {
+            Ok(s) => s.parse()?,
+            Err(_) => crate::model_py::parse_material(Some(self.0))?,
+        })
+    }
+}
+
+/// The matching options among the keywords `get` gives (a keyword's value by name; `None`
+/// when absent or None), each read as its declaration says; the others at their defaults. Not
+/// yet validated.
+pub fn match_params<'a, 'py: 'a>(get: impl Fn(&str) -> Kw<'a, 'py>) -> PyResult<MatchParams> {
+    let mut params = MatchParams::default();
+    for spec in MatchParams::specs() {
+        if let Some(v) = get(spec.name).filter(|v| !v.is_none()) {
+            params.set(spec.name, &PyKeyword(v)).map_err(|e| e.0)?;
         }
     }
-
-    /// The keywords of `get` (a keyword's value by name: `**options`).
-    pub fn from_lookup(get: impl Fn(&str) -> Kw<'a, 'py>) -> Self {
-        Self::new(
-            get("element"),
-            get("modes"),
-            get("search"),
-            get("solver"),
-            get("threshold"),
-            get("threshold_mode"),
-            get("excess"),
-            get("paper"),
-            get("prealign"),
-            get("max_rotation"),
-            get("refits"),
-            get("refit_tolerance"),
-            get("refine"),
-            get("deform_modes"),
-            get("deform_stiffness"),
-            get("kappa"),
-            get("center_stride"),
-            get("position_weight"),
-            get("cost_power"),
-            get("common_sigma"),
-            get("skip_rigid"),
-            get("band"),
-            get("material"),
-        )
-    }
-
-    /// The library's parameters; `None` keywords at their defaults. Not yet validated.
-    pub fn params(&self) -> PyResult<MatchParams> {
-        let material = match self.material.filter(|m| !m.is_none()) {
-            None => None,
-            Some(m) => Some(match m.extract::<String>() {
-                Ok(s) => s.parse().map_err(to_py)?,
-                Err(_) => crate::model_py::parse_material(Some(m))?,
-            }),
-        };
-        Ok(MatchOverrides {
-            element: word_keyword("element", self.element)?,
-            modes: keyword("modes", self.modes)?,
-            search: word_keyword("search", self.search)?,
-            solver: word_keyword("solver", self.solver)?,
-            threshold: keyword("threshold", self.threshold)?,
-            threshold_mode: word_keyword("threshold_mode", self.threshold_mode)?,
-            excess: keyword("excess", self.excess)?,
-            paper: keyword("paper", self.paper)?,
-            prealign: word_keyword("prealign", self.prealign)?,
-            max_rotation: keyword("max_rotation", self.max_rotation)?,
-            refits: count_keyword("refits", self.refits)?,
-            refit_tolerance: keyword("refit_tolerance", self.refit_tolerance)?,
-            refine: word_keyword("refine", self.refine)?,
-            deform_modes: count_keyword("deform_modes", self.deform_modes)?,
-            deform_stiffness: keyword("deform_stiffness", self.deform_stiffness)?,
-            kappa: keyword("kappa", self.kappa)?,
-            center_stride: count_keyword("center_stride", self.center_stride)?,
-            position_weight: keyword("position_weight", self.position_weight)?,
-            cost_power: keyword("cost_power", self.cost_power)?,
-            common_sigma: keyword("common_sigma", self.common_sigma)?,
-            skip_rigid: keyword("skip_rigid", self.skip_rigid)?,
-            band: count_keyword("band", self.band)?,
-            material,
-        }
-        .params())
-    }
+    Ok(params)
 }
 
 /// `pitch_mm=`: a number (square sensels) or an `(x, y)` pair.

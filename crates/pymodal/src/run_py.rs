@@ -14,7 +14,7 @@ use std::path::PathBuf;
 use crate::arrays::checked_array;
 use crate::errors::{internal, to_py};
 use crate::match_py::PyMatch;
-use crate::options_py::{cell_to_py, json_to_py, table_rows, MatchKw, RecordingKw};
+use crate::options_py::{cell_to_py, json_to_py, table_rows, RecordingKw};
 
 /// A recording from a path, a (T, H, W) or (H, W) array (NaN = no sensor), or a `Recording`,
 /// and where it came from (a file's name and SHA-256).
@@ -47,179 +47,113 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
     Ok((rec, unnamed("array")))
 }
 
-/// Match the objects of a whole recording, frame after frame (or level after level).
-///
-/// The options are those of ``pedomatch run`` (keyword ``x_y`` is the flag ``--x-y``;
-/// ``pymodal._options()`` lists them with their defaults and meanings) and default to ``None``,
-/// meaning the documented default: the matching options of :func:`match` (``element``,
-/// ``modes``, ``search``, ``solver``, ``threshold``, ``threshold_mode``, ``excess``, ``paper``,
-/// ``prealign``, ``max_rotation`` (degrees; default 30 between consecutive frames),
-/// ``refits``, ``refit_tolerance``, ``refine``, ``deform_modes``,
-/// ``deform_stiffness``, ``kappa``, ``center_stride``,
-/// ``position_weight``, ``cost_power``, ``common_sigma``, ``skip_rigid``, ``band``,
-/// ``material``), then ``model`` ("contour", "surface", "isocontour"), ``frames`` ((start, end),
-/// 0-based, end excluded like a slice; either may be None; a negative index counts back from the
-/// end: ``(-50, None)`` is the last 50 frames, ``(0, -1)`` all but the last), ``noise``,
-/// ``smooth``, ``spacing``,
-/// ``surface_nodes``, ``iso_frame`` (0-based), ``iso_levels``, ``pitch_mm`` (mm per sensel, a
-/// number or (x, y); overrides the file's), ``frame_rate`` (Hz; overrides the file's), ``units``
-/// (pressure units of the values, for formats that store none: kPa, Pa, MPa, N/cm², N/mm²,
-/// psi, bar or mmHg; overrides the file's) and
-/// ``drift_reference`` (drift correction of tracks: frames between reference frames; 0: off).
-///
-/// ``out``: a folder to write the run into, exactly as ``pedomatch run --out`` writes it (the
-/// tables, ``pairs.json``, ``summary.json``, the figures and ``report.html``), whole or not at
-/// all; None (the default) writes nothing. ``figures`` (``"png"``, ``"svg"``, ``"none"``),
-/// ``tables`` (``"csv"``, ``"parquet"``), ``report`` (``"html"``, ``"none"``) and ``animation``
-/// (``"gif"``, ``"none"``) say what the folder holds, with the defaults of ``pedomatch run``.
-///
-/// Returns a dict with
-///
-/// - ``table``: list of dicts, one per matched pair (ids, 0-based frames, their times
-///   ``time_a_s``/``time_b_s`` when the frame rate is known, node counts, local matches and %,
-///   optimisation matches and %, matches after the excess step, mean cost, trackable matches
-///   and %, as ``pairs.csv``);
-/// - ``matches``: list of :class:`Match`, aligned with ``table``;
-/// - ``reference_matches``: with drift correction (``drift_reference`` >= 2, not for the
-///   isocontour model), one dict per reference pair, each object matched against its ancestor
-///   on the last reference frame: ``id_a`` (the ancestor), ``id_b``, ``frame_a``, ``frame_b``
-///   (0-based), ``match`` (a :class:`Match`) and ``tracked``, a (k,) bool array aligned with
-///   ``match.pairs``: True when a track took that match (its two nodes are on the same track:
-///   a step of ``track_steps`` onto node ``b`` that is no match of ``matches``), as
-///   ``reference_matches.csv``'s ``tracked``; an empty list without drift correction;
-/// - ``objects``: list of dicts ``{id, frame, time_s, index, level, level_kpa, points,
-///   points_mm}`` (``id`` is the index in this list; ``level`` the isobaric level of an
-///   isocontour run in the recording's units and ``level_kpa`` in kPa when those units are
-///   known, both None otherwise; ``points`` (n, d) array in sensels, ``points_mm`` its x, y in
-///   mm or None when the pitch is unknown) and the other columns of ``objects.csv``: the
-///   centroid and the measures of the sensors inside the outline (``contact_sensors``,
-///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
-///   units allow, like ``frames``; None for surfaces);
-/// - ``tracks``: list of (k, 1 + d) float arrays of ``(frame, x, y[, z])`` rows, one per track;
-/// - ``track_steps``: list of (k, 2) int arrays of ``(object_id, node)`` rows, aligned with
-///   ``tracks`` (row for row): the object each step is on (an index into ``objects``, which
-///   gives its frame and, for an isocontour run, its level) and the node within it, as
-///   ``tracks.csv``'s ``object_id`` and ``node``;
-/// - ``frames``: list of dicts of per-frame measures (``frame``, ``time_s``,
-///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
-///   units allow, like ``frames.csv``);
-/// - ``summary``: the provenance and outcome of the run, as ``summary.json``;
-/// - ``timings``: seconds per stage.
-///
-/// Raises
-/// ------
-/// FileNotFoundError, OSError — ``recording`` is a path that does not exist or cannot be read;
-/// FormatError — the file is corrupt, truncated or of no known format;
-/// InputError — an argument of the wrong form, named in the message: ``recording`` not a path,
-///     a Recording or a 2-D/3-D array; ``frames`` not a ``(start, end)`` pair; ``pitch_mm``
-///     not a number or an (x, y) pair;
-/// OptionError — an unknown or out-of-range option value (e.g. ``model="mesh"``, a negative
-///     ``pitch_mm``, ``frames`` empty or beyond the recording once negative indices are
-///     counted from its end; the message names the range and the frame count); an
-///     ``InputError``;
-/// DegenerateShapeError — no frame of ``frames`` holds an object (everything below ``noise``,
-///     or outlines too small to model), as ``pedomatch run`` fails on such a recording.
-/// All but the ``OSError`` are :class:`PedomatchError` and ``ValueError`` subclasses. Ctrl-C
-/// raises ``KeyboardInterrupt`` at the run's next frame or pair. An option
-/// of the wrong type raises ``TypeError`` naming it and the type it takes
-/// (``spacing="wide"``: "spacing must be a number, got 'wide'"). A pair or frame that
-/// cannot be processed does not raise: it is skipped, with its reason in ``summary``
-/// (``summary["skipped"]``).
-#[pyfunction]
-#[pyo3(signature = (recording, *, element=None, modes=None, search=None, solver=None,
-    threshold=None, threshold_mode=None, excess=None, paper=None, prealign=None, max_rotation=None, refits=None,
-    refit_tolerance=None, refine=None, deform_modes=None, deform_stiffness=None, kappa=None, center_stride=None, position_weight=None, cost_power=None,
-    common_sigma=None, skip_rigid=None, band=None, material=None, model=None, frames=None,
-    noise=None, smooth=None, spacing=None, surface_nodes=None, iso_frame=None, iso_levels=None,
-    drift_reference=None, pitch_mm=None, frame_rate=None, units=None, out=None, figures=None,
-    tables=None, report=None, animation=None))]
-#[allow(clippy::too_many_arguments)]
-fn run<'py>(
+macro_rules! define_run {
+    (
+        match: [$($m:ident),*], match_doc: $match_doc:literal,
+        pair: [$($p:ident),*], pair_doc: $pair_doc:literal,
+        recording: [$($r:ident),*], recording_doc: $recording_doc:literal,
+        output: [$($o:ident),*], output_doc: $output_doc:literal,
+    ) => {
+        /// Match the objects of a whole recording, frame after frame (or level after level).
+        ///
+        /// The options are those of ``pedomatch run`` (keyword ``x_y`` is the flag ``--x-y``;
+        /// ``pymodal._options()`` lists them) and default to ``None``, meaning the documented default.
+        /// ``out``: a folder to write the run into, exactly as ``pedomatch run --out`` writes it (the
+        /// tables, ``pairs.json``, ``summary.json``, the figures and ``report.html``), whole or not at
+        /// all; None (the default) writes nothing; the output options say what it holds.
+        ///
+        /// Parameters
+        /// ----------
+        /// recording : Recording, path or array_like — a :class:`Recording`, a file or folder to read,
+        ///     or a (frames, rows, cols) or (rows, cols) array of pressures.
+        #[doc = $match_doc]
+        #[doc = $recording_doc]
+        /// out : path or None — the folder to write (see above).
+        #[doc = $output_doc]
+        ///
+        /// Returns a dict with
+        ///
+        /// - ``table``: list of dicts, one per matched pair (ids, 0-based frames, their times
+        ///   ``time_a_s``/``time_b_s`` when the frame rate is known, node counts, local matches and %,
+        ///   optimisation matches and %, matches after the excess step, mean cost, trackable matches
+        ///   and %, as ``pairs.csv``);
+        /// - ``matches``: list of :class:`Match`, aligned with ``table``;
+        /// - ``reference_matches``: with drift correction (``drift_reference`` >= 2, not for the
+        ///   isocontour model), one dict per reference pair, each object matched against its ancestor
+        ///   on the last reference frame: ``id_a`` (the ancestor), ``id_b``, ``frame_a``, ``frame_b``
+        ///   (0-based), ``match`` (a :class:`Match`) and ``tracked``, a (k,) bool array aligned with
+        ///   ``match.pairs``: True when a track took that match (its two nodes are on the same track:
+        ///   a step of ``track_steps`` onto node ``b`` that is no match of ``matches``), as
+        ///   ``reference_matches.csv``'s ``tracked``; an empty list without drift correction;
+        /// - ``objects``: list of dicts ``{id, frame, time_s, index, level, level_kpa, points,
+        ///   points_mm}`` (``id`` is the index in this list; ``level`` the isobaric level of an
+        ///   isocontour run in the recording's units and ``level_kpa`` in kPa when those units are
+        ///   known, both None otherwise; ``points`` (n, d) array in sensels, ``points_mm`` its x, y in
+        ///   mm or None when the pitch is unknown) and the other columns of ``objects.csv``: the
+        ///   centroid and the measures of the sensors inside the outline (``contact_sensors``,
+        ///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
+        ///   units allow, like ``frames``; None for surfaces);
+        /// - ``tracks``: list of (k, 1 + d) float arrays of ``(frame, x, y[, z])`` rows, one per track;
+        /// - ``track_steps``: list of (k, 2) int arrays of ``(object_id, node)`` rows, aligned with
+        ///   ``tracks`` (row for row): the object each step is on (an index into ``objects``, which
+        ///   gives its frame and, for an isocontour run, its level) and the node within it, as
+        ///   ``tracks.csv``'s ``object_id`` and ``node``;
+        /// - ``frames``: list of dicts of per-frame measures (``frame``, ``time_s``,
+        ///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
+        ///   units allow, like ``frames.csv``);
+        /// - ``summary``: the provenance and outcome of the run, as ``summary.json``;
+        /// - ``timings``: seconds per stage.
+        ///
+        /// Raises
+        /// ------
+        /// FileNotFoundError, OSError — ``recording`` is a path that does not exist or cannot be read;
+        /// FormatError — the file is corrupt, truncated or of no known format;
+        /// InputError — an argument of the wrong form, named in the message: ``recording`` not a path,
+        ///     a Recording or a 2-D/3-D array; ``frames`` not a ``(start, end)`` pair; ``pitch_mm``
+        ///     not a number or an (x, y) pair;
+        /// OptionError — an unknown or out-of-range option value (e.g. ``model="mesh"``, a negative
+        ///     ``pitch_mm``, ``frames`` empty or beyond the recording once negative indices are
+        ///     counted from its end; the message names the range and the frame count); an
+        ///     ``InputError``;
+        /// DegenerateShapeError — no frame of ``frames`` holds an object (everything below ``noise``,
+        ///     or outlines too small to model), as ``pedomatch run`` fails on such a recording.
+        /// All but the ``OSError`` are :class:`PedomatchError` and ``ValueError`` subclasses. Ctrl-C
+        /// raises ``KeyboardInterrupt`` at the run's next frame or pair. An option
+        /// of the wrong type raises ``TypeError`` naming it and the type it takes
+        /// (``spacing="wide"``: "spacing must be a number, got 'wide'"). A pair or frame that
+        /// cannot be processed does not raise: it is skipped, with its reason in ``summary``
+        /// (``summary["skipped"]``).
+        #[pyfunction]
+        #[pyo3(signature = (recording, *, $($m = None,)* $($r = None,)* out = None, $($o = None),*))]
+        #[allow(clippy::too_many_arguments)]
+        fn run<'py>(
+            py: Python<'py>,
+            recording: &Bound<'py, PyAny>,
+            $($m: Option<&Bound<'py, PyAny>>,)*
+            $($r: Option<&Bound<'py, PyAny>>,)*
+            out: Option<PathBuf>,
+            $($o: Option<&Bound<'py, PyAny>>,)*
+        ) -> PyResult<Bound<'py, PyDict>> {
+            let given = [$((stringify!($m), $m),)* $((stringify!($r), $r),)*];
+            let get = |name: &str| given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v);
+            let outputs = crate::batch_py::run_outputs($($o),*)?;
+            let params = crate::options_py::match_params(get)?;
+            let params = RecordingKw::from_lookup(get).params(params)?;
+            run_recording(py, recording, params, out, outputs)
+        }
+    };
+}
+
+crate::keywords::with_option_keywords!(define_run);
+
+/// [`run`] with its options read.
+fn run_recording<'py>(
     py: Python<'py>,
     recording: &Bound<'py, PyAny>,
-    element: Option<&Bound<'py, PyAny>>,
-    modes: Option<&Bound<'py, PyAny>>,
-    search: Option<&Bound<'py, PyAny>>,
-    solver: Option<&Bound<'py, PyAny>>,
-    threshold: Option<&Bound<'py, PyAny>>,
-    threshold_mode: Option<&Bound<'py, PyAny>>,
-    excess: Option<&Bound<'py, PyAny>>,
-    paper: Option<&Bound<'py, PyAny>>,
-    prealign: Option<&Bound<'py, PyAny>>,
-    max_rotation: Option<&Bound<'py, PyAny>>,
-    refits: Option<&Bound<'py, PyAny>>,
-    refit_tolerance: Option<&Bound<'py, PyAny>>,
-    refine: Option<&Bound<'py, PyAny>>,
-    deform_modes: Option<&Bound<'py, PyAny>>,
-    deform_stiffness: Option<&Bound<'py, PyAny>>,
-    kappa: Option<&Bound<'py, PyAny>>,
-    center_stride: Option<&Bound<'py, PyAny>>,
-    position_weight: Option<&Bound<'py, PyAny>>,
-    cost_power: Option<&Bound<'py, PyAny>>,
-    common_sigma: Option<&Bound<'py, PyAny>>,
-    skip_rigid: Option<&Bound<'py, PyAny>>,
-    band: Option<&Bound<'py, PyAny>>,
-    material: Option<&Bound<'py, PyAny>>,
-    model: Option<&Bound<'py, PyAny>>,
-    frames: Option<&Bound<'py, PyAny>>,
-    noise: Option<&Bound<'py, PyAny>>,
-    smooth: Option<&Bound<'py, PyAny>>,
-    spacing: Option<&Bound<'py, PyAny>>,
-    surface_nodes: Option<&Bound<'py, PyAny>>,
-    iso_frame: Option<&Bound<'py, PyAny>>,
-    iso_levels: Option<&Bound<'py, PyAny>>,
-    drift_reference: Option<&Bound<'py, PyAny>>,
-    pitch_mm: Option<&Bound<'py, PyAny>>,
-    frame_rate: Option<&Bound<'py, PyAny>>,
-    units: Option<&Bound<'py, PyAny>>,
+    params: pedo_track::RunParams,
     out: Option<PathBuf>,
-    figures: Option<&str>,
-    tables: Option<&str>,
-    report: Option<&str>,
-    animation: Option<&str>,
+    outputs: pedo_output::RunOutputs,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let outputs = crate::batch_py::run_outputs(figures, tables, report, animation)?;
-    let matching = MatchKw::new(
-        element,
-        modes,
-        search,
-        solver,
-        threshold,
-        threshold_mode,
-        excess,
-        paper,
-        prealign,
-        max_rotation,
-        refits,
-        refit_tolerance,
-        refine,
-        deform_modes,
-        deform_stiffness,
-        kappa,
-        center_stride,
-        position_weight,
-        cost_power,
-        common_sigma,
-        skip_rigid,
-        band,
-        material,
-    )
-    .params()?;
-    let params = RecordingKw {
-        model,
-        frames,
-        noise,
-        smooth,
-        spacing,
-        surface_nodes,
-        iso_frame,
-        iso_levels,
-        pitch_mm,
-        frame_rate,
-        units,
-        drift_reference,
-    }
-    .params(matching)?;
     params.validate().map_err(to_py)?;
     let started = std::time::Instant::now();
     let (mut rec, input) = recording_from(py, recording)?;
@@ -419,6 +353,6 @@ pub fn run_params<'py>(
         given.insert(key.extract::<String>()?, value);
     }
     let get = |k: &str| given.get(k);
-    let matching = MatchKw::from_lookup(get).params()?;
+    let matching = crate::options_py::match_params(get)?;
     RecordingKw::from_lookup(get).params(matching)
 }

@@ -280,7 +280,10 @@ def option_keywords():
         fn = functions[name]
         for arg in fn.args.args + fn.args.kwonlyargs:
             annotation = ast.unparse(arg.annotation or ast.Constant(None))
-            if annotation in WRONG:
+            if annotation.startswith("Optional[Literal["):
+                # A word option (the generated stubs spell out its words).
+                found.append((name, arg.arg, 3, "a string"))
+            elif annotation in WRONG:
                 found.append((name, arg.arg, *WRONG[annotation]))
     # batch and batch_row take run's keywords as **options.
     for _, keyword, value, expected in [f for f in found if f[0] == "run"]:

@@ -193,19 +193,20 @@ def match(
     a: ArrayLike,
     b: ArrayLike,
     *,
-    element: Optional[Element] = None,
+    # @generated keywords of match: tests/generated.rs, from the option tables
+    element: Optional[Literal["gaussian", "axial"]] = None,
     modes: Optional[float] = None,
-    search: Optional[Search] = None,
-    solver: Optional[Solver] = None,
+    search: Optional[Literal["global", "local", "best"]] = None,
+    solver: Optional[Literal["jv", "hungarian", "simplex"]] = None,
     threshold: Optional[float] = None,
-    threshold_mode: Optional[ThresholdMode] = None,
+    threshold_mode: Optional[Literal["after", "during"]] = None,
     excess: Optional[bool] = None,
     paper: Optional[bool] = None,
-    prealign: Optional[Prealign] = None,
+    prealign: Optional[Literal["robust", "normalize", "sensor"]] = None,
     max_rotation: Optional[float] = None,
     refits: Optional[int] = None,
     refit_tolerance: Optional[float] = None,
-    refine: Optional[str] = None,
+    refine: Optional[Literal["affine", "modal"]] = None,
     deform_modes: Optional[int] = None,
     deform_stiffness: Optional[float] = None,
     kappa: Optional[float] = None,
@@ -215,8 +216,9 @@ def match(
     common_sigma: Optional[bool] = None,
     skip_rigid: Optional[bool] = None,
     band: Optional[int] = None,
-    material: Material = None,
+    material: Optional[Material] = None,
     ordered: Optional[bool] = None,
+    # @end generated
     triangles_a: Optional[ArrayLike] = None,
     triangles_b: Optional[ArrayLike] = None,
 ) -> Match: ...
@@ -296,19 +298,20 @@ ReferenceMatch = dict[str, Any]
 def run(
     recording: Union[Recording, Path, ArrayLike],
     *,
-    element: Optional[Element] = None,
+    # @generated keywords of run: tests/generated.rs, from the option tables
+    element: Optional[Literal["gaussian", "axial"]] = None,
     modes: Optional[float] = None,
-    search: Optional[Search] = None,
-    solver: Optional[Solver] = None,
+    search: Optional[Literal["global", "local", "best"]] = None,
+    solver: Optional[Literal["jv", "hungarian", "simplex"]] = None,
     threshold: Optional[float] = None,
-    threshold_mode: Optional[ThresholdMode] = None,
+    threshold_mode: Optional[Literal["after", "during"]] = None,
     excess: Optional[bool] = None,
     paper: Optional[bool] = None,
-    prealign: Optional[Prealign] = None,
+    prealign: Optional[Literal["robust", "normalize", "sensor"]] = None,
     max_rotation: Optional[float] = None,
     refits: Optional[int] = None,
     refit_tolerance: Optional[float] = None,
-    refine: Optional[str] = None,
+    refine: Optional[Literal["affine", "modal"]] = None,
     deform_modes: Optional[int] = None,
     deform_stiffness: Optional[float] = None,
     kappa: Optional[float] = None,
@@ -318,7 +321,7 @@ def run(
     common_sigma: Optional[bool] = None,
     skip_rigid: Optional[bool] = None,
     band: Optional[int] = None,
-    material: Material = None,
+    material: Optional[Material] = None,
     model: Optional[Literal["contour", "surface", "isocontour"]] = None,
     frames: Optional[Tuple[Optional[int], Optional[int]]] = None,
     noise: Optional[float] = None,
@@ -331,11 +334,14 @@ def run(
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
     units: Optional[str] = None,
+    # @end generated
     out: Optional[Path] = None,
+    # @generated keywords of run output: tests/generated.rs, from the option tables
     figures: Optional[Literal["png", "svg", "none"]] = None,
-    tables: Optional[Tables] = None,
+    tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
+    # @end generated
 ) -> RunResult: ...
 
 # A row of a study table (batch, batch_row): path, output, format, frames, frame_rate_hz,
@@ -354,10 +360,12 @@ def batch(
     jobs: Optional[int] = None,
     *,
     force: bool = False,
+    # @generated keywords of batch output: tests/generated.rs, from the option tables
     figures: Optional[Literal["png", "svg", "none"]] = None,
-    tables: Optional[Tables] = None,
+    tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
+    # @end generated
     layout: Optional[Path] = None,
     **options: Any,
 ) -> list[StudyRow]:
@@ -371,10 +379,12 @@ def batch_row(
     out: Optional[Path] = None,
     *,
     force: bool = False,
+    # @generated keywords of batch_row output: tests/generated.rs, from the option tables
     figures: Optional[Literal["png", "svg", "none"]] = None,
-    tables: Optional[Tables] = None,
+    tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
+    # @end generated
     layout: Optional[Path] = None,
     **options: Any,
 ) -> StudyRow:

@@ -1,7 +1,5 @@
-//! The CLI's side of the library's atomic output folders ([`pedo_output::outdir`]): the Ctrl-C
-//! handler, and the folder type with the subcommands' `String` errors.
-
-use std::path::Path;
+//! Ctrl-C and SIGTERM: the handler that removes this process's staging output folders
+//! ([`pedo_output::outdir`]) and exits with [`EXIT_INTERRUPTED`].
 
 /// Exit code of a run stopped by SIGINT or SIGTERM (128 + SIGINT, the shell convention).
 pub const EXIT_INTERRUPTED: u8 = 130;
@@ -29,28 +27,5 @@ pub fn interrupted() -> bool {
 pub fn wait_for_interrupt_exit() -> ! {
     loop {
         std::thread::park();
-    }
-}
-
-/// An output folder being written (see [`pedo_output::outdir`]), with `String` errors.
-pub struct OutDir(pub pedo_output::outdir::OutDir);
-
-impl OutDir {
-    /// Starts an output into `root`. Fails if `root` is a file, or a non-empty folder that is not
-    /// a pedomatch output.
-    pub fn create(root: &Path) -> Result<Self, String> {
-        pedo_output::outdir::OutDir::create(root)
-            .map(Self)
-            .map_err(|e| e.to_string())
-    }
-
-    /// Writes `rel` (which may include sub-folders) into the staging folder.
-    pub fn write(&self, rel: &str, contents: &[u8]) -> Result<(), String> {
-        self.0.write(rel, contents).map_err(|e| e.to_string())
-    }
-
-    /// Puts the complete folder in place of the previous one in one step.
-    pub fn commit(self) -> Result<(), String> {
-        self.0.commit().map_err(|e| e.to_string())
     }
 }

@@ -1,0 +1,40 @@
+//! What the command-line tests share: running the built `pedomatch`, scratch folders, JSON.
+//! Each test file includes it (`mod common;`); not every file uses every helper.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs the built `pedomatch` with `args`.
+#[allow(dead_code)]
+pub fn pedomatch(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pedomatch"))
+        .args(args)
+        .output()
+        .expect("run pedomatch")
+}
+
+/// An empty scratch folder `name` of this test process (emptied if a run before left it).
+#[allow(dead_code)]
+pub fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("pedomatch-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The JSON a successful run printed.
+#[allow(dead_code)]
+pub fn stdout_json(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout)
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stdout)))
+}
+
+/// A JSON file.
+#[allow(dead_code)]
+pub fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_slice(
+        &std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
+    )
+    .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
