@@ -35,7 +35,7 @@ pub const REFERENCE_MATCHES: &str = "reference_matches";
 
 /// The tables a run with these options writes, by name: [`RUN_TABLES`], and
 /// [`REFERENCE_MATCHES`] with drift correction.
-pub fn run_tables(options: &SequenceOptions) -> Vec<&'static str> {
+pub fn run_table_names(options: &SequenceOptions) -> Vec<&'static str> {
     let mut names = RUN_TABLES.to_vec();
     if options.drift_corrected() {
         names.push(REFERENCE_MATCHES);
@@ -44,9 +44,9 @@ pub fn run_tables(options: &SequenceOptions) -> Vec<&'static str> {
 }
 
 /// The table files of a run folder whose tables are written as `tables` by a run with these
-/// options: those of [`run_tables`] and `pairs.json`.
+/// options: those of [`run_table_names`] and `pairs.json`.
 pub fn run_table_files(tables: TableFormat, options: &SequenceOptions) -> Vec<String> {
-    let mut files: Vec<String> = run_tables(options)
+    let mut files: Vec<String> = run_table_names(options)
         .iter()
         .map(|t| tables.file_name(t))
         .collect();
@@ -149,7 +149,7 @@ impl From<FigureFormat> for FigureKinds {
 pub struct RunRecord<'a> {
     /// The input's name and SHA-256, for the summary.
     pub input: &'a InputInfo,
-    /// The recording run, its unit overrides applied ([`run_options`]).
+    /// The recording run, its unit overrides applied ([`pedo_track::run_options`]).
     pub recording: &'a Recording,
     /// The parameters the options came from.
     pub params: &'a RunParams,
@@ -234,7 +234,7 @@ pub struct TablesSink<'a> {
 }
 
 impl<'a> TablesSink<'a> {
-    /// Starts the tables of a run of `recording` with `options` in `dir` ([`run_tables`]).
+    /// Starts the tables of a run of `recording` with `options` in `dir` ([`run_table_names`]).
     pub fn create(
         dir: &'a OutDir,
         recording: &'a Recording,
@@ -383,7 +383,7 @@ impl SequenceSink for TablesSink<'_> {
 pub struct RunPlan<'a> {
     /// The input's name and SHA-256, for the summary.
     pub input: &'a InputInfo,
-    /// The parameters the options came from ([`run_options`]).
+    /// The parameters the options came from ([`pedo_track::run_options`]).
     pub params: &'a RunParams,
     /// Reads the frames as the run goes when the recording holds none (see
     /// [`pedo_io::formats::read_for_streaming`]).

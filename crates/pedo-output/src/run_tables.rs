@@ -166,7 +166,7 @@ pub(crate) fn object_cells(recording: &Recording, o: &SequenceObject) -> Vec<Cel
 
 /// Every match of every pair: object ids, nodes, cost, excess flag, whether node tracks may
 /// follow it (`trackable`: one-to-one and within the step rule of
-/// [`crate::track::step_allowed`]), and the in-plane distance between the two nodes in sensels
+/// [`pedo_track::pairing::step_allowed`]), and the in-plane distance between the two nodes in sensels
 /// (and mm when the pitch is known).
 pub fn matches_table(recording: &Recording, r: &SequenceResult) -> Table {
     let mut t = matches_header(recording, "trackable");

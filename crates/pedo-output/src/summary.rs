@@ -104,7 +104,7 @@ fn hex(bytes: &[u8]) -> String {
 ///
 /// ```
 /// assert_eq!(
-///     pedo_io::crate::sha256_hex(b"abc"),
+///     pedo_output::sha256_hex(b"abc"),
 ///     "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
 /// );
 /// ```

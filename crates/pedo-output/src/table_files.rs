@@ -2,7 +2,7 @@
 //!
 //! Every table of a run (pairs, objects, matches, tracks, frames) and a study's table is written
 //! in one of two formats, with the same columns (the same names, units in the names: see
-//! [`crate::report`]) and the same rows:
+//! [`crate::table`]) and the same rows:
 //!
 //! - **CSV** (`NAME.csv`): a header line, then one line per row; an empty field is no value.
 //! - **Parquet** (`NAME.parquet`): one typed, nullable column per CSV column. Integers are

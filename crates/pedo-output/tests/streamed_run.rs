@@ -16,7 +16,7 @@ mod files;
 use files::temp_dir;
 
 fn walk() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/FrasP01L.asf")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../pedo-io/tests/data/FrasP01L.asf")
 }
 
 /// The folder of the run held whole, as `pedomatch run` with figures writes its tables.

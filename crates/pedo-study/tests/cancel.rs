@@ -40,7 +40,7 @@ fn a_run_stops_at_its_next_progress_step() {
 
 #[test]
 fn a_cancelled_study_keeps_finished_folders_and_writes_no_table() {
-    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../pedo-io/tests/data");
     let dir = std::env::temp_dir().join(format!("pedo-io-cancel-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 fn recordings(n: usize) -> Vec<PathBuf> {
-    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../pedo-io/tests/data");
     let files = [
         "emed-test-1-10.lst",
         "tekscan-FrasP01L-11-20.csv",

@@ -54,7 +54,7 @@ pub struct SequenceOptions {
     /// Drift correction: reference frames every this many frames, each object also matched
     /// against its ancestor on the last reference frame ([`crate::drift`]); 0: off.
     pub drift_reference: usize,
-    /// Keep each pair's whole [`MatchResult`] (affinity matrix, aligned nodes, local pairs).
+    /// Keep each pair's whole [`MatchResult`](modal_core::MatchResult) (affinity matrix, aligned nodes, local pairs).
     /// Off, a pair keeps only what the run's outputs use (its matches, unmatched nodes and
     /// transform): the affinity matrix alone is `n × m` numbers per pair, the bulk of a long
     /// recording's memory. On by default; the CLI and batch runs turn it off.
@@ -66,7 +66,7 @@ pub struct SequenceOptions {
     /// from the recording's pitch; default 1.
     pub sensel_aspect: f64,
     /// Stops the run at its next progress step once cancelled (a frame built, a pair matched):
-    /// [`run_sequence`] and [`stream_sequence`] then fail with [`IoError::Cancelled`]
+    /// [`run_sequence`] and [`stream_sequence`] then fail with [`IoError::Cancelled`](pedo_io::IoError::Cancelled)
     /// ([`pedo_io::cancel`]). `None`: the run goes to its end.
     pub cancel: Option<Cancel>,
 }

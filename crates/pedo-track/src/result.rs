@@ -19,13 +19,13 @@ pub struct SequenceObject {
     /// other models.
     pub level: Option<f64>,
     /// The object's nodes, x = column and y = row in the units of the options (sensels unless
-    /// [`ContourOptions::units`] or [`SurfaceOptions::units`](pedo_io::surface::SurfaceOptions::units)
-    /// say otherwise; always sensels from [`RunParams`]): a closed 2-D contour (contour and
+    /// [`ContourOptions::units`](pedo_io::ContourOptions::units) or [`SurfaceOptions::units`](pedo_io::surface::SurfaceOptions::units)
+    /// say otherwise; always sensels from [`RunParams`](crate::RunParams)): a closed 2-D contour (contour and
     /// isocontour models) or a triangulated 3-D surface whose z is the rescaled pressure
     /// (surface model, see [`pedo_io::surface::ZScale`]).
     pub shape: Shape,
     /// The measures of the sensors inside the object's outline (contour and isocontour models,
-    /// [`Recording::region_measures`] with the contour threshold): one foot's contact area,
+    /// [`Recording::region_measures`](pedo_io::Recording::region_measures) with the contour threshold): one foot's contact area,
     /// force, peak pressure and centre of pressure in a recording of both feet. `None` for the
     /// surface model, whose one object per frame has the frame's measures.
     pub measures: Option<FrameMeasures>,
@@ -74,7 +74,7 @@ pub struct PairRow {
     /// objects.
     pub local_percent: f64,
     /// Matches of the optimisation (global) search, excess matches aside: one-to-one except
-    /// with [`Search::Best`]. 0 when the search is [`Search::Local`], which has no optimisation
+    /// with [`Search::Best`](modal_core::Search::Best). 0 when the search is [`Search::Local`](modal_core::Search::Local), which has no optimisation
     /// step.
     pub optimisation_matches: usize,
     /// `optimisation_matches` as a percentage (0–100) of `min(n, m)`.
@@ -102,7 +102,7 @@ pub struct PairMatch {
     /// The second object.
     pub b: usize,
     /// The engine's result; its node indices are those of the two objects' shapes. Without
-    /// match details ([`SequenceOptions::keep_match_details`] off) only the pairs, unmatched
+    /// match details ([`SequenceOptions::keep_match_details`](crate::SequenceOptions::keep_match_details) off) only the pairs, unmatched
     /// nodes and transform are kept: the affinity matrix is 0 × 0 and `aligned_a` and
     /// `local_pairs` are empty.
     pub result: MatchResult,
@@ -161,7 +161,7 @@ pub struct StageTimings {
 }
 
 /// The tracks of a run held compactly: the steps of every track one after the other, object and
-/// node numbers as `u32`. A run without match details ([`SequenceOptions::keep_match_details`]
+/// node numbers as `u32`. A run without match details ([`SequenceOptions::keep_match_details`](crate::SequenceOptions::keep_match_details)
 /// off: the CLI's and batch runs) keeps its tracks so, in [`SequenceResult::packed_tracks`]:
 /// a long recording has hundreds of thousands of short tracks, each a vector of its own in
 /// [`SequenceResult::tracks`].
@@ -231,7 +231,7 @@ impl FromIterator<Track> for PackedTracks {
     }
 }
 
-/// Everything [`run_sequence`] produces (`Default`: a run with nothing in it).
+/// Everything [`run_sequence`](crate::run_sequence) produces (`Default`: a run with nothing in it).
 #[derive(Debug, Clone, Default)]
 pub struct SequenceResult {
     /// Every object in sequence order (by frame, then by index within the frame; isocontours
@@ -240,7 +240,7 @@ pub struct SequenceResult {
     /// The matched pairs, in the order they were proposed (frame order); the pairs that could
     /// not be matched are in [`skipped_pairs`](Self::skipped_pairs) instead.
     pub pairs: Vec<PairMatch>,
-    /// With drift correction ([`SequenceOptions::drift_corrected`]): the reference pairs
+    /// With drift correction ([`SequenceOptions::drift_corrected`](crate::SequenceOptions::drift_corrected)): the reference pairs
     /// matched, each object against its ancestor on the last reference frame
     /// ([`crate::drift::reference_pairs`]), in object order; a track steps through their
     /// matches first ([`crate::drift::anchored_tracks`]), so a step of a track need not be a
@@ -253,7 +253,7 @@ pub struct SequenceResult {
     /// The tracks, unless they are in [`packed_tracks`](Self::packed_tracks) (runs without
     /// match details): read them with [`all_tracks`](Self::all_tracks) to cover both.
     pub tracks: Vec<Track>,
-    /// Runs without match details ([`SequenceOptions::keep_match_details`] off) hold their
+    /// Runs without match details ([`SequenceOptions::keep_match_details`](crate::SequenceOptions::keep_match_details) off) hold their
     /// tracks here, packed, and leave [`tracks`](Self::tracks) empty.
     pub packed_tracks: Option<PackedTracks>,
     /// Contour model: object `i` continues as several objects of the next frame (object
@@ -292,15 +292,15 @@ pub struct SkippedPair {
     pub reason: String,
 }
 
-/// What [`run_sequence`] and [`stream_sequence`] report to a progress callback
+/// What [`run_sequence`](crate::run_sequence) and [`stream_sequence`](crate::stream_sequence) report to a progress callback
 /// `progress(stage, done, total)`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Stage {
     /// Building the objects: `done` of `total` frames, or of `total` isobaric levels for the
-    /// isocontour model. Not reported by a run that [`stream_sequence`] streams ([`streams`]).
+    /// isocontour model. Not reported by a run that [`stream_sequence`](crate::stream_sequence) streams ([`streams`](crate::streams)).
     Objects,
-    /// Matching: `done` of `total` pairs ([`run_sequence`]), or of `total` frames (a run that
-    /// [`stream_sequence`] streams, which reports no [`Stage::Objects`]).
+    /// Matching: `done` of `total` pairs ([`run_sequence`](crate::run_sequence)), or of `total` frames (a run that
+    /// [`stream_sequence`](crate::stream_sequence) streams, which reports no [`Stage::Objects`]).
     Matching,
 }
 
@@ -413,7 +413,7 @@ impl SkippedPairRow {
 }
 
 /// What a run's summary needs of it: counts, sums and what was left out, without the objects,
-/// matches and tracks themselves. [`stream_sequence`] returns it; [`RunCounts::of`] reads it
+/// matches and tracks themselves. [`stream_sequence`](crate::stream_sequence) returns it; [`RunCounts::of`] reads it
 /// off a whole [`SequenceResult`]. Object ids are their indices.
 #[derive(Debug, Clone)]
 pub struct RunCounts {

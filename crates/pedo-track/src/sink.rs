@@ -1,4 +1,4 @@
-//! The events of a run as [`stream_sequence`](crate::stream_sequence) hands them over: the
+//! The events of a run as [`stream_sequence`] hands them over: the
 //! [`SequenceSink`] trait that every writer of a run implements (tables, in `pedo-output`), and
 //! [`replay`], which hands a whole [`SequenceResult`] to a sink in the same order, so that a whole
 //! run and a streamed one are written by the same code.

@@ -13,7 +13,7 @@ use pedo_track::{run_sequence, FrameRange, RunParams, SequenceResult};
 fn merge_and_split() -> (RunParams, SequenceResult) {
     let rec = read_recording(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/FrasP01L.asf"
+        "/../pedo-io/tests/data/FrasP01L.asf"
     ))
     .unwrap();
     let params = RunParams {

@@ -11,7 +11,7 @@ use std::collections::HashMap;
 fn fscan() -> Recording {
     read_recording(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/FrasP01L.asf"
+        "/../pedo-io/tests/data/FrasP01L.asf"
     ))
     .unwrap()
 }
