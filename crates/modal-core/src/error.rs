@@ -1,9 +1,10 @@
 //! The error type of modal-core: each variant says what was wrong, with the values.
 //!
 //! The variants fall into four groups ([`ModalError::kind`]): problems of a shape (too few,
-//! coincident or collinear nodes, bad connectivity), option values or combinations the method does
-//! not accept ([`OptionError`], [`Unsupported`]), inconsistent arguments of the lower-level API
-//! (sizes that do not fit), and numerical failures (a matrix that should be positive definite is
+//! coincident or collinear nodes, bad connectivity; the same of the matches a correspondence
+//! field is fitted to), option values or combinations the method does not accept
+//! ([`OptionError`], [`Unsupported`]), inconsistent arguments of the lower-level API (sizes that
+//! do not fit), and numerical failures (a matrix that should be positive definite is
 //! not, an eigensolver that did not converge).
 
 use std::fmt;
@@ -139,6 +140,55 @@ pub enum ModalError {
         error: Box<ModalError>,
     },
 
+    // ---- the matches a correspondence field is fitted to ---------------------------------
+    /// Fewer matches than a correspondence field needs.
+    #[error("{matches} one-to-one matches; a correspondence field needs at least {min}")]
+    TooFewMatches {
+        /// One-to-one matches given.
+        matches: usize,
+        /// Matches needed.
+        min: usize,
+    },
+    /// A node is in two matches, or two matched nodes of one object are at one place.
+    #[error("{side}: {}; a field sends each point to one place", coincident_matches(.first, .second))]
+    CoincidentMatches {
+        /// The object.
+        side: Side,
+        /// One of the two nodes (0-based, the object's numbering).
+        first: usize,
+        /// The other (equal to `first` for a node in two matches).
+        second: usize,
+    },
+    /// The matched nodes of one object lie on one line.
+    #[error(
+        "{side}: the matched nodes are collinear; a plane field needs matches that span an area"
+    )]
+    CollinearMatches {
+        /// The object.
+        side: Side,
+    },
+    /// A match names a node the object does not have.
+    #[error("match {pair} names node {node} of {side}, which has {nodes} nodes")]
+    MatchOutOfRange {
+        /// The match's index among the pairs given.
+        pair: usize,
+        /// The object.
+        side: Side,
+        /// The node named.
+        node: usize,
+        /// Nodes of the object.
+        nodes: usize,
+    },
+    /// A correspondence field of objects that are not 2-D.
+    #[error(
+        "the correspondence field maps the plane: got {dim}-D objects (fit a brightness \
+         surface's nodes by their x and y)"
+    )]
+    FieldDimension {
+        /// The dimension of the objects.
+        dim: usize,
+    },
+
     // ---- options -------------------------------------------------------------------------
     /// A user-facing option has a value it does not accept.
     #[error(transparent)]
@@ -228,6 +278,14 @@ pub enum ModalError {
     Assign(#[from] assign::AssignError),
 }
 
+fn coincident_matches(first: &usize, second: &usize) -> String {
+    if first == second {
+        format!("node {first} is in two matches")
+    } else {
+        format!("matched nodes {first} and {second} coincide")
+    }
+}
+
 fn triangle_problem(t: &[usize; 3], nodes: &usize) -> String {
     if t.iter().any(|v| v >= nodes) {
         format!("refers to a node beyond the {nodes} nodes")
@@ -241,7 +299,8 @@ fn triangle_problem(t: &[usize; 3], nodes: &usize) -> String {
 #[non_exhaustive]
 pub enum ErrorKind {
     /// The object cannot be modelled: too few, coincident or collinear nodes, NaN coordinates,
-    /// bad connectivity, objects of different dimensions.
+    /// bad connectivity, objects of different dimensions; too few, coincident or collinear
+    /// matches for a correspondence field.
     Shape,
     /// An option's value or a combination of options is not accepted.
     Option,
@@ -276,13 +335,18 @@ impl ModalError {
             | Self::InvalidTriangle { .. }
             | Self::DegenerateTriangle { .. }
             | Self::UnconnectedNode { .. }
-            | Self::DimensionMismatch { .. } => ErrorKind::Shape,
+            | Self::DimensionMismatch { .. }
+            | Self::TooFewMatches { .. }
+            | Self::CoincidentMatches { .. }
+            | Self::CollinearMatches { .. } => ErrorKind::Shape,
             Self::Object { error, .. } => error.kind(),
             Self::Option(_) | Self::Unsupported(_) => ErrorKind::Option,
             Self::SizeMismatch { .. }
             | Self::TooFewModes { .. }
             | Self::NoModeKept { .. }
-            | Self::InvalidEntry { .. } => ErrorKind::Input,
+            | Self::InvalidEntry { .. }
+            | Self::MatchOutOfRange { .. }
+            | Self::FieldDimension { .. } => ErrorKind::Input,
             Self::NotPositiveDefinite { .. }
             | Self::NotConverged { .. }
             | Self::NonFiniteResult { .. }

@@ -5,16 +5,18 @@
 //! the generalized eigenproblem `K φ = ω² M φ` (the `eigen` module; [`generalized_eigh`] solves a
 //! dense one), and nodes of two shapes are put in
 //! correspondence in modal space ([`matching`], one file per stage: prepare → prealign → features
-//! → search → excess → refine).
+//! → search → excess → refine). A [`CorrespondenceField`] carries any point of the first object's
+//! plane to the second's, fitted to the matches (`field`).
 //!
 //! Modules depend downwards only: `shape` and `error` at the bottom, then `eigen`, `model`,
-//! `matching`, and `options` (the user-facing names) on top; this file only declares them and
+//! `matching`, `field` (on the matches' pairs), and `options` (the user-facing names) on top; this file only declares them and
 //! re-exports the types a caller needs.
 
 #![warn(missing_docs)]
 
 mod eigen;
 mod error;
+mod field;
 mod geometry;
 pub mod matching;
 pub mod model;
@@ -24,6 +26,7 @@ mod simd;
 
 pub use eigen::{generalized_eigh, EigenSolution};
 pub use error::{ErrorKind, ModalError, OptionError, Side, Unsupported};
+pub use field::{CorrespondenceField, FieldParts};
 pub use matching::features::{AffinityMatrix, ModalFeatures};
 pub use matching::prealign::{Affine, RotationSearch};
 pub use matching::search::ThresholdMode;

@@ -7,6 +7,7 @@ mod arrays;
 mod assign_py;
 mod batch_py;
 mod errors;
+mod field_py;
 mod io_py;
 #[rustfmt::skip]
 mod keywords;
@@ -40,6 +41,7 @@ fn _pymodal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     assign_py::register(m)?;
     model_py::register(m)?;
     match_py::register(m)?;
+    field_py::register(m)?;
     io_py::register(m)?;
     run_py::register(m)?;
     batch_py::register(m)?;

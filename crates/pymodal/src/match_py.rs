@@ -9,6 +9,7 @@ use pyo3::types::PyTuple;
 
 use crate::arrays::{checked_array, index_rows, read_only};
 use crate::errors::{input_error, internal, to_py};
+use crate::field_py::PyField;
 use crate::pickling::{Reader, Writer};
 
 /// Result of :func:`match`.
@@ -239,6 +240,20 @@ impl PyMatch {
                 .expect("n × d reshape"),
         )
     }
+    /// The correspondence field of this match: a :class:`Field` fitted to its one-to-one pairs
+    /// between ``a`` and ``b`` (the coordinates the match was made from), with ``smoothing`` λ.
+    /// The excess pairs are left out: they match one node to several, and a map sends each
+    /// point to one place. Raises as :class:`Field` does.
+    #[pyo3(signature = (a, b, *, smoothing = 0.0))]
+    fn field(
+        &self,
+        py: Python<'_>,
+        a: &Bound<'_, PyAny>,
+        b: &Bound<'_, PyAny>,
+        smoothing: f64,
+    ) -> PyResult<PyField> {
+        crate::field_py::fit(py, a, b, self.inner.pairs.clone(), smoothing)
+    }
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
         self.state().reduce(py, "Match")
     }
@@ -302,7 +317,11 @@ impl PyMatch {
 
 /// The (n, d) float64 coordinates of `obj`; anything but a 2-D array of numbers with 2 or 3
 /// columns is an `InputError` naming the argument.
-fn points(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(usize, Vec<f64>)> {
+pub(crate) fn points(
+    py: Python<'_>,
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+) -> PyResult<(usize, Vec<f64>)> {
     const EXPECTED: &str = "an (n, 2) or (n, 3) array (2 or 3 columns of coordinates)";
     let fits = |s: &[usize]| s.len() == 2 && (s[1] == 2 || s[1] == 3);
     let arr = checked_array(py, obj, name, EXPECTED, "float64", fits)?;

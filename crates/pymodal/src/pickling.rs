@@ -199,6 +199,7 @@ impl<'a> Reader<'a> {
 fn _restore(py: Python<'_>, class_name: &str, state: &[u8]) -> PyResult<Py<PyAny>> {
     let obj = match class_name {
         "Match" => Py::new(py, crate::match_py::PyMatch::restore(state)?)?.into_any(),
+        "Field" => Py::new(py, crate::field_py::PyField::restore(state)?)?.into_any(),
         "Recording" => Py::new(py, crate::io_py::PyRecording::restore(state)?)?.into_any(),
         "Surface" => Py::new(py, crate::io_py::PySurface::restore(state)?)?.into_any(),
         "ModalModel" => Py::new(py, crate::model_py::PyModalModel::restore(state)?)?.into_any(),

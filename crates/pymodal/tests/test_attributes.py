@@ -22,6 +22,7 @@ def results():
     frame = rec.frames[int(np.argmax(rec.peak_pressure))]
     return {
         "Match": pymodal.match(outline(30), outline(32, 0.1)),
+        "Field": pymodal.match(outline(30), outline(32, 0.1)).field(outline(30), outline(32, 0.1)),
         "Recording": rec,
         "Surface": pymodal.surface(frame, threshold=1.0, max_nodes=60),
         "ModalModel": pymodal.ModalModel(outline(12)),
@@ -36,7 +37,7 @@ def array_attributes(obj):
     return {k: getattr(obj, k) for k in names if isinstance(getattr(obj, k), np.ndarray)}
 
 
-@pytest.mark.parametrize("kind", ["Match", "Recording", "Surface", "ModalModel"])
+@pytest.mark.parametrize("kind", ["Match", "Field", "Recording", "Surface", "ModalModel"])
 def test_array_attributes_refuse_writes(kind):
     obj = results()[kind]
     arrays = array_attributes(obj)
@@ -63,5 +64,6 @@ def test_methods_return_arrays_the_caller_owns():
     model = pymodal.ModalModel(outline(12))
     for arr in (model.features(3), model.mass(), model.stiffness()):
         assert arr.flags.writeable
+    assert results()["Field"].apply(outline(5)).flags.writeable
     rec = results()["Recording"]
     assert all(v.flags.writeable for v in rec.measures().values())

@@ -33,7 +33,7 @@ def assert_same(x, y, where="value"):
         assert len(x) == len(y), where
         for i, (a, b) in enumerate(zip(x, y)):
             assert_same(a, b, f"{where}[{i}]")
-    elif isinstance(x, (pymodal.Match, pymodal.Recording, pymodal.Surface, pymodal.ModalModel)):
+    elif isinstance(x, (pymodal.Match, pymodal.Field, pymodal.Recording, pymodal.Surface, pymodal.ModalModel)):
         assert_same_object(x, y)
     else:
         assert x == y or (x != x and y != y), where
@@ -49,7 +49,7 @@ def assert_same_object(x, y):
     assert repr(x) == repr(y)
 
 
-RESULT_CLASSES = (pymodal.Match, pymodal.Recording, pymodal.Surface, pymodal.ModalModel)
+RESULT_CLASSES = (pymodal.Match, pymodal.Field, pymodal.Recording, pymodal.Surface, pymodal.ModalModel)
 
 
 def round_trip(x):
@@ -78,6 +78,16 @@ def test_match_3d_round_trip():
     a = rng.normal(size=(40, 3))
     y = round_trip(pymodal.match(a, a[::-1] * 1.2))
     assert y.transform.shape == (4, 4) and y.aligned_a.shape == (40, 3)
+
+
+@pytest.mark.parametrize("smoothing", [0.0, 2.5])
+def test_field_round_trip(smoothing):
+    a, b = outline(40), outline(44, 0.3) * 1.1 + 2.0
+    field = pymodal.match(a, b).field(a, b, smoothing=smoothing)
+    y = round_trip(field)
+    probe = outline(30) * 0.5
+    assert_same(field.apply(probe), y.apply(probe))
+    assert_same(field.inverse(), y.inverse())
 
 
 def test_recording_round_trip(tmp_path):

@@ -19,6 +19,9 @@ SCRIPT = textwrap.dedent(
     b = max(pymodal.contours(rec.frames[41], spacing=1.0), key=len)
     m = pymodal.match(a, b, max_rotation=30.0)
     pairs: np.ndarray[Any, Any] = m.pairs
+    field = m.field(a, b, smoothing=0.0)
+    moved: np.ndarray[Any, Any] = field.inverse().apply(field.apply(a))
+    same: bool = field == pymodal.Field(a, b, field.pairs, smoothing=field.smoothing)
     res = pymodal.run("walk.asf", frames=(40, 80), pitch_mm=5.08, drift_reference=0)
     page: str = res._repr_html_()
     first: dict[str, Any] = res["table"][0]
