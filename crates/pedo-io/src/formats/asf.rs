@@ -407,12 +407,7 @@ impl<'k, 'a> FrameReader<'k, 'a> {
         match self.keep {
             Keep::All => self.frames.push(&self.frame),
             Keep::Handed(hand) => {
-                // Frames too large to hold sparsely are held whole all the same.
-                if self.frames.is_whole() {
-                    self.frames.push(&self.frame);
-                } else {
-                    self.frames.push_empty();
-                }
+                self.frames.push_empty();
                 if let Some(hand) = hand {
                     hand(&self.frame)?;
                 }
