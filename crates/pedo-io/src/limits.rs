@@ -7,6 +7,8 @@
 //! (only their values that are not 0), compressed files are read as a stream, and a refusal is an
 //! [`IoError`] naming the file and the claim. Each limit is far above the largest real export.
 
+use crate::error::{IoError, Result};
+
 /// Sensors of one frame (rows × columns): 1,048,576, a 1024 × 1024 grid. The largest plates hold
 /// tens of thousands (emed-xl 25,344 sensors, Zebris platforms about 12,000, a Tekscan walkway of
 /// several tiles some 10⁴–10⁵); a frame's contours and surfaces are computed on the whole grid.
@@ -61,6 +63,12 @@ pub fn frame_count(n_frames: usize, per: usize) -> std::result::Result<(), Strin
         ));
     }
     Ok(())
+}
+
+/// [`frame_count`] as a reader's error about the file `name`: a reader asks before it adds a
+/// frame (`n_frames` counting it).
+pub(crate) fn check_frames(name: &str, n_frames: usize, per: usize) -> Result<()> {
+    frame_count(n_frames, per).map_err(|msg| IoError::format(name, msg))
 }
 
 /// An empty vector with room for `n` elements, or `None` when the memory cannot be had: an
