@@ -885,6 +885,30 @@ impl Recording {
     }
 }
 
+impl Recording {
+    /// [`Recording::from_nan_frames`] of frames appended one by one to `frames`: a sensor is
+    /// missing when it is NaN in every frame; NaN in only some frames is an error.
+    pub(crate) fn from_sparse_nan(rows: usize, cols: usize, frames: SparseFrames) -> Result<Self> {
+        let (n_frames, per) = (frames.n_frames(), frames.per);
+        let mut nans = vec![0usize; per];
+        for (k, v) in frames.values.iter().enumerate() {
+            if v.is_nan() {
+                nans[frames.position(k)] += 1;
+            }
+        }
+        if let Some(i) = nans.iter().position(|&n| n > 0 && n < n_frames) {
+            return Err(IoError::invalid(format!(
+                "row {}, column {} is NaN in {} of {n_frames} frames only",
+                i / cols,
+                i % cols,
+                nans[i]
+            )));
+        }
+        let mask = nans.iter().map(|&n| n == 0).collect();
+        Self::from_sparse(rows, cols, frames, mask)
+    }
+}
+
 /// Where a streamed run reads frames from when the recording it is given holds none of their
 /// values: a header-only [`Recording`] (its size, mask, units and frame count) whose frames are
 /// read as the run goes (see [`crate::formats::read_for_streaming`]). The run engine
