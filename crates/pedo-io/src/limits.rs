@@ -65,6 +65,11 @@ pub fn frame_count(n_frames: usize, per: usize) -> std::result::Result<(), Strin
     Ok(())
 }
 
+/// [`frame_sensors`] as a reader's error about the file `name`.
+pub(crate) fn check_frame(name: &str, what: &str, rows: usize, cols: usize) -> Result<usize> {
+    frame_sensors(what, rows, cols).map_err(|msg| IoError::format(name, msg))
+}
+
 /// [`frame_count`] as a reader's error about the file `name`: a reader asks before it adds a
 /// frame (`n_frames` counting it).
 pub(crate) fn check_frames(name: &str, n_frames: usize, per: usize) -> Result<()> {
