@@ -586,7 +586,11 @@ mod tests {
         );
         let err = "xlsx".parse::<TableFormat>().unwrap_err().to_string();
         assert!(err.contains("tables") && err.contains("parquet"), "{err}");
-        assert_eq!(output_option_specs()[0].name, "tables");
+        let names: Vec<_> = crate::output_option_specs()
+            .iter()
+            .map(|s| s.name)
+            .collect();
+        assert_eq!(names, ["figures", "tables", "report", "animation"]);
         assert_eq!(TableFormat::default().file_name("matches"), "matches.csv");
     }
 }
