@@ -711,6 +711,20 @@ impl SparseFrames {
         self.values.push(v);
     }
 
+    /// Appends a frame given by its values at some positions, every other value 0:
+    /// `entries` as `(position, value)`, a later entry at a position replacing an earlier one
+    /// (so that a page printing a window of the plate costs its window, not the plate).
+    pub(crate) fn push_entries(&mut self, entries: &mut [(usize, f32)]) {
+        entries.sort_by_key(|e| e.0);
+        for (k, &(i, v)) in entries.iter().enumerate() {
+            let replaced = entries.get(k + 1).is_some_and(|next| next.0 == i);
+            if !replaced && v.to_bits() != 0 {
+                self.push_entry(i, v);
+            }
+        }
+        self.starts.push(self.values.len());
+    }
+
     /// Appends a frame of zeros.
     pub(crate) fn push_empty(&mut self) {
         self.starts.push(self.values.len());

@@ -224,9 +224,9 @@ impl Page {
         Ok(())
     }
 
-    /// Checks that the page is whole and within the `cols` x `rows` plate, and writes its cells
-    /// into `frame`.
-    fn fill(&self, frame: &mut [f32], cols: usize, rows: usize, name: &str) -> Result<()> {
+    /// Checks that the page is whole and within the `cols` x `rows` plate; returns its cells as
+    /// `(position in the frame, value)`.
+    fn entries(&self, cols: usize, rows: usize, name: &str) -> Result<Vec<(usize, f32)>> {
         let err = |line: usize, msg: String| IoError::parse(name, line, msg);
         if let Some((c, r, ln)) = self.matrix
             && (c, r) != (cols, rows)
@@ -248,6 +248,7 @@ impl Page {
                 "page without its closing Force line (truncated?)".into(),
             ));
         }
+        let mut entries = Vec::with_capacity(self.cells.len());
         for &(r, c, v, ln) in &self.cells {
             if r > rows || c > cols {
                 return Err(err(
@@ -255,9 +256,9 @@ impl Page {
                     format!("cell (row {r}, column {c}) outside the {cols}x{rows} matrix"),
                 ));
             }
-            frame[(r - 1) * cols + (c - 1)] = v as f32;
+            entries.push(((r - 1) * cols + (c - 1), v as f32));
         }
-        Ok(())
+        Ok(entries)
     }
 }
 
@@ -298,7 +299,6 @@ struct Pages<'a> {
     plate: Option<(usize, usize)>,
     pending: Vec<Page>,
     frames: Option<SparseFrames>,
-    frame: Vec<f32>,
     forces: Vec<LstPageForces>,
     n_pages: usize,
     area_cm2: Option<f64>,
@@ -313,7 +313,6 @@ impl<'a> Pages<'a> {
             plate: None,
             pending: Vec::new(),
             frames: None,
-            frame: Vec::new(),
             forces: Vec::new(),
             n_pages: 0,
             area_cm2: None,
@@ -337,7 +336,6 @@ impl<'a> Pages<'a> {
         {
             self.plate = Some((c, r));
             self.frames = Some(SparseFrames::new(r * c));
-            self.frame = vec![0.0; r * c];
             for earlier in std::mem::take(&mut self.pending) {
                 self.place(&earlier)?;
             }
@@ -363,9 +361,7 @@ impl<'a> Pages<'a> {
             return Ok(());
         };
         crate::limits::check_frames(self.name, frames.n_frames() + 1, rows * cols)?;
-        self.frame.fill(0.0);
-        pg.fill(&mut self.frame, cols, rows, self.name)?;
-        frames.push(&self.frame);
+        frames.push_entries(&mut pg.entries(cols, rows, self.name)?);
         Ok(())
     }
 

@@ -74,7 +74,7 @@ impl<R: Read> Read for Bounded<R> {
             return Ok(n);
         };
         let end = stretch.end();
-        self.run = match buf[..n].iter().rposition(|&b| b == end) {
+        self.run = match memchr::memrchr(end, &buf[..n]) {
             Some(i) => n - 1 - i,
             None => self.run + n,
         };
@@ -141,7 +141,11 @@ impl<R: BufRead> Iterator for Lines<R> {
                 let mut l = self.buf.strip_suffix(b"\n").unwrap_or(&self.buf);
                 l = l.strip_suffix(b"\r").unwrap_or(l);
                 self.n += 1;
-                Some((self.n, l.iter().map(|&b| b as char).collect()))
+                let text = match std::str::from_utf8(l) {
+                    Ok(ascii) if l.is_ascii() => ascii.to_string(),
+                    _ => l.iter().map(|&b| b as char).collect(),
+                };
+                Some((self.n, text))
             }
             Err(e) => {
                 self.failure = Some(e);

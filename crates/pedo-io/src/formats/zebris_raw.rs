@@ -44,6 +44,10 @@ mod json;
 /// Zebris platforms and treadmills hold about 12,000, and every frame costs the whole plate.
 const MAX_PLATE_SENSORS: usize = 1 << 16;
 
+/// Elements nested deeper than this are refused: the export nests about eight deep, and each
+/// open element's name is held.
+const MAX_DEPTH: usize = 256;
+
 /// What the header states, as read.
 #[derive(Default, Debug)]
 struct Header {
@@ -69,12 +73,10 @@ struct Frames<'a> {
     /// `(cols, rows)` once known.
     plate: Option<(usize, usize)>,
     placed: SparseFrames,
-    /// One frame of the plate, 0 outside the window being placed.
-    frame: Vec<f32>,
-    /// Frames read before the plate's size (a JSON export whose `samples` come before its
-    /// `cell_count`): each window `[x, y, w, h]` (0 × 0 for an unloaded frame), its values in
-    /// `waiting_values`.
-    waiting: Vec<[u32; 4]>,
+    /// The loaded frames read before the plate's size (a JSON export whose `samples` come
+    /// before its `cell_count`): each frame's number and window `[x, y, w, h]`, its values in
+    /// `waiting_values`; the frames between are unloaded.
+    waiting: Vec<(u32, [u32; 4])>,
     waiting_values: Vec<f32>,
     n: usize,
 }
@@ -86,7 +88,6 @@ impl<'a> Frames<'a> {
             name,
             plate: None,
             placed: SparseFrames::new(0),
-            frame: Vec::new(),
             waiting: Vec::new(),
             waiting_values: Vec::new(),
             n: 0,
@@ -117,14 +118,19 @@ impl<'a> Frames<'a> {
         crate::limits::check_frames(self.name, self.n, cols * rows)?;
         self.plate = Some((cols, rows));
         self.placed = SparseFrames::new(cols * rows);
-        self.frame = vec![0.0; cols * rows];
         let waiting = std::mem::take(&mut self.waiting);
         let values = std::mem::take(&mut self.waiting_values);
         let mut at = 0;
-        for (k, &[x, y, w, h]) in waiting.iter().enumerate() {
-            let [x, y, w, h] = [x, y, w, h].map(|v| v as usize);
+        for &(k, [x, y, w, h]) in &waiting {
+            let [k, x, y, w, h] = [k, x, y, w, h].map(|v| v as usize);
+            while self.placed.n_frames() < k {
+                self.placed.push_empty();
+            }
             self.place(k, [x, y], [w, h], &values[at..at + w * h])?;
             at += w * h;
+        }
+        while self.placed.n_frames() < self.n {
+            self.placed.push_empty();
         }
         Ok(())
     }
@@ -168,16 +174,16 @@ impl<'a> Frames<'a> {
                 origin[0], origin[1]
             )));
         };
-        self.waiting.push([x, y, w, h]);
+        // Frames are numbered within `limits::MAX_FRAMES`, far below `u32::MAX`.
+        self.waiting.push((k as u32, [x, y, w, h]));
         self.waiting_values.extend_from_slice(&v);
         Ok(())
     }
 
     fn push_empty(&mut self) -> Result<()> {
         self.count_frame()?;
-        match self.plate {
-            Some(_) => self.placed.push_empty(),
-            None => self.waiting.push([0; 4]),
+        if self.plate.is_some() {
+            self.placed.push_empty();
         }
         Ok(())
     }
@@ -208,14 +214,18 @@ impl<'a> Frames<'a> {
             self.placed.push_empty();
             return Ok(());
         }
-        let rows_of = |j: usize| (rows - 1 - (origin[1] + j)) * cols + origin[0];
-        for (j, line) in v.chunks(w).enumerate() {
-            self.frame[rows_of(j)..][..w].copy_from_slice(line);
-        }
-        self.placed.push(&self.frame);
-        for j in 0..h {
-            self.frame[rows_of(j)..][..w].fill(0.0);
-        }
+        // The window's rows, from the plate's far end (row 0).
+        let row_start = |j: usize| (rows - 1 - (origin[1] + j)) * cols + origin[0];
+        let mut entries: Vec<(usize, f32)> = v
+            .chunks(w)
+            .enumerate()
+            .flat_map(|(j, line)| {
+                line.iter()
+                    .enumerate()
+                    .map(move |(i, &x)| (row_start(j) + i, x))
+            })
+            .collect();
+        self.placed.push_entries(&mut entries);
         Ok(())
     }
 
@@ -320,6 +330,11 @@ pub(crate) fn read_zebris_xml(source: impl std::io::BufRead, name: &str) -> Resu
         let fail = |msg: String| IoError::parse(name, at, msg);
         match event {
             Event::Start(e) => {
+                if path.len() == MAX_DEPTH {
+                    return Err(fail(format!(
+                        "more than {MAX_DEPTH} nested elements: not a Zebris export"
+                    )));
+                }
                 let tag = e.local_name().as_ref().to_string();
                 if tag == "clip" {
                     clip = Some(Clip {
