@@ -82,7 +82,7 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
                     } else {
                         format!("{}: {}", row.path, row.message)
                     };
-                    bar.suspend(|| eprintln!("pedomatch: {line}"));
+                    bar.suspend(|| output::error_line(&format!("pedomatch: {line}")));
                 }
             }
         }

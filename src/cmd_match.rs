@@ -289,11 +289,11 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
 /// than match what the user did not ask for without a word.
 fn warn_if_no_frames(o: &Object, path: &Path, frame: usize, flag: &str) {
     if o.source.is_none() && frame != 0 {
-        eprintln!(
+        output::error_line(&format!(
             "pedomatch: warning: {flag} {frame} does not apply to {}: a point file is one object, \
              not a recording of frames",
             path.display()
-        );
+        ));
     }
 }
 
@@ -301,7 +301,7 @@ fn warn_if_no_frames(o: &Object, path: &Path, frame: usize, flag: &str) {
 /// is rarely what was meant: most often `--frame` without `--frame-b` on one recording.
 fn warn_if_same(a: &Shape, b: &Shape, args: &MatchArgs) {
     if a.dim() == b.dim() && a.coords() == b.coords() {
-        eprintln!(
+        output::error_line(&format!(
             "pedomatch: warning: {} and {} are the same object{}; every node matches itself",
             args.a.display(),
             args.b.display(),
@@ -310,7 +310,7 @@ fn warn_if_same(a: &Shape, b: &Shape, args: &MatchArgs) {
             } else {
                 ""
             }
-        );
+        ));
     }
 }
 

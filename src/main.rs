@@ -115,7 +115,10 @@ fn main() -> ExitCode {
             e.exit()
         }
         Err(e) => {
-            eprintln!("pedomatch: error: {}", one_line(&e.render().to_string()));
+            output::error_line(&format!(
+                "pedomatch: error: {}",
+                one_line(&e.render().to_string())
+            ));
             return ExitCode::from(2);
         }
     };
@@ -135,11 +138,11 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(CliError::Usage(msg)) => {
-            eprintln!("pedomatch: error: {msg}");
+            output::error_line(&format!("pedomatch: error: {msg}"));
             ExitCode::from(2)
         }
         Err(CliError::Runtime(msg)) => {
-            eprintln!("pedomatch: error: {msg}");
+            output::error_line(&format!("pedomatch: error: {msg}"));
             ExitCode::FAILURE
         }
     }

@@ -6,16 +6,45 @@ use std::path::Path;
 /// reader that has gone (`pedomatch inspect … | head -3`) leaves nothing undone: the process
 /// ends quietly with success, as `head` expects, instead of panicking. Any other failure to
 /// write is a runtime error (exit code 1).
+///
+/// Control characters other than line breaks and tabs are escaped ([`terminal_safe`]).
 pub fn write_stdout(args: std::fmt::Arguments) {
     use std::io::Write;
+    let text = args.to_string();
     let mut out = std::io::stdout().lock();
-    if let Err(e) = out.write_fmt(args).and_then(|()| out.flush()) {
+    let text = terminal_safe(&text, true);
+    if let Err(e) = out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
         if e.kind() == std::io::ErrorKind::BrokenPipe {
             std::process::exit(0);
         }
         eprintln!("pedomatch: error: cannot write to standard output: {e}");
         std::process::exit(1);
     }
+}
+
+/// `text` with its control characters escaped as Rust escapes them (`\u{1b}`, `\r`; line breaks
+/// and tabs too unless `multiline`): a file name (or a message quoting one) printed to a
+/// terminal cannot move the cursor, recolour, retitle or clear it.
+pub fn terminal_safe(text: &str, multiline: bool) -> std::borrow::Cow<'_, str> {
+    let kept = |c: char| multiline && (c == '\n' || c == '\t');
+    if !text.chars().any(|c| c.is_control() && !kept(c)) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 16);
+    for c in text.chars() {
+        if c.is_control() && !kept(c) {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
+/// Writes one line to standard error (a message, an error naming a file), its control
+/// characters escaped ([`terminal_safe`]).
+pub fn error_line(line: &str) {
+    eprintln!("{}", terminal_safe(line, false));
 }
 
 /// Reads a dense CSV matrix of f64 (comma, semicolon, tab or space separated; `inf`, `-inf` and

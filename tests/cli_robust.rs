@@ -222,3 +222,269 @@ fn a_reader_that_has_gone_ends_the_output_quietly() {
     assert!(out.join("summary.json").is_file() && out.join("tracks.csv").is_file());
     let _ = std::fs::remove_dir_all(&out);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Hostile inputs: small files that claim huge recordings, expand a thousandfold or nest without
+// end are a one-line error (exit 1), never an abort (134) or a panic (101), within a memory
+// and time budget measured on the process.
+
+use std::io::{Read as _, Write as _};
+
+/// What a run of `pedomatch` gave: its exit code, standard error, peak resident memory and time.
+struct Bounded {
+    code: Option<i32>,
+    stderr: String,
+    peak_kb: i64,
+    took: Duration,
+}
+
+/// The address space a run may take (`prlimit --as`, when the tool is there): a failed
+/// allocation beyond it would abort the process, which the exit code then shows.
+const ADDRESS_SPACE: u64 = 2 << 30;
+
+/// Runs `pedomatch args`, bounded as [`ADDRESS_SPACE`] says, and measures it (wait4's rusage).
+// The child is reaped by `wait4`, which gives its rusage, not by `Child::wait`.
+#[allow(clippy::zombie_processes)]
+fn bounded(args: &[&std::ffi::OsStr]) -> Bounded {
+    let bin = env!("CARGO_BIN_EXE_pedomatch");
+    let prlimit = Command::new("prlimit").arg("--version").output().is_ok();
+    let mut command = match prlimit {
+        true => {
+            let mut c = Command::new("prlimit");
+            c.arg(format!("--as={ADDRESS_SPACE}")).arg(bin);
+            c
+        }
+        false => Command::new(bin),
+    };
+    let start = Instant::now();
+    let mut child = command
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start pedomatch");
+    let mut stderr = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
+    // SAFETY: `rusage` is plain integers, for which all zeros is a value.
+    let (mut status, mut usage) = (0, unsafe { std::mem::zeroed::<libc::rusage>() });
+    // SAFETY: `child` is this process's child, not yet waited for (its `Child` is never waited
+    // on after this), and `status` and `usage` are valid for writes.
+    let pid = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, 0, &mut usage) };
+    assert_eq!(pid, child.id() as libc::pid_t, "wait4");
+    let code = libc::WIFEXITED(status).then(|| libc::WEXITSTATUS(status));
+    Bounded {
+        code,
+        stderr,
+        peak_kb: usage.ru_maxrss,
+        took: start.elapsed(),
+    }
+}
+
+/// Checks that `pedomatch run FILE` refuses `file` with one line naming it and saying `says`,
+/// within 512 MB and 10 s.
+fn refused(file: &Path, says: &str) {
+    let out = temp_dir("hostile-out").join("run");
+    let r = bounded(&[
+        "run".as_ref(),
+        file.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    let name = file.display().to_string();
+    eprintln!(
+        "{name}: exit {:?}, peak {} MB, {:.2?}: {}",
+        r.code,
+        r.peak_kb / 1024,
+        r.took,
+        r.stderr.trim_end()
+    );
+    assert_eq!(r.code, Some(1), "{name}: {}", r.stderr);
+    let line = format!("pedomatch: error: {name}");
+    assert!(
+        r.stderr.starts_with(&line) && r.stderr.contains(says),
+        "{}",
+        r.stderr
+    );
+    assert_eq!(r.stderr.lines().count(), 1, "{}", r.stderr);
+    assert!(r.peak_kb <= 512 << 10, "{name}: peak {} kB", r.peak_kb);
+    assert!(r.took <= Duration::from_secs(10), "{name}: {:?}", r.took);
+    assert!(!out.exists(), "no output for a refused recording");
+}
+
+fn gzip_of(parts: &[(&[u8], usize)]) -> Vec<u8> {
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::new(6));
+    for &(part, times) in parts {
+        for _ in 0..times {
+            gz.write_all(part).unwrap();
+        }
+    }
+    gz.finish().unwrap()
+}
+
+/// A PNG of `side` × `side` 8-bit zeros, compressed as it is written.
+fn png_of_zeros(side: u32) -> Vec<u8> {
+    let chunk = |out: &mut Vec<u8>, kind: &[u8], data: &[u8]| {
+        let mut crc = flate2::Crc::new();
+        crc.update(kind);
+        crc.update(data);
+        out.extend_from_slice(&(data.len() as u32).to_be_bytes());
+        out.extend_from_slice(kind);
+        out.extend_from_slice(data);
+        out.extend_from_slice(&crc.sum().to_be_bytes());
+    };
+    let mut header = [side.to_be_bytes(), side.to_be_bytes()].concat();
+    header.extend_from_slice(&[8, 0, 0, 0, 0]);
+    let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::best());
+    let row = vec![0u8; side as usize + 1];
+    for _ in 0..side {
+        z.write_all(&row).unwrap();
+    }
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    chunk(&mut png, b"IHDR", &header);
+    chunk(&mut png, b"IDAT", &z.finish().unwrap());
+    chunk(&mut png, b"IEND", &[]);
+    png
+}
+
+const ZEBRIS_HEAD: &[u8] = b"<measurement><cell_count><x>256</x><y>256</y></cell_count>\
+    <movements><movement><clips><clip><cell_size><x>8.467</x><y>8.467</y></cell_size>\
+    <frequency>100</frequency><data>";
+const ZEBRIS_TAIL: &[u8] = b"</data></clip></clips></movement></movements></measurement>";
+
+#[test]
+fn hostile_files_are_one_line_errors_within_memory_and_time() {
+    let dir = temp_dir("hostile");
+    let write = |name: &str, bytes: &[u8]| {
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p
+    };
+    // 11.9 KB: 10⁶ empty frames on a 256 × 256 plate (262 GB as dense frames).
+    let xml = gzip_of(&[(ZEBRIS_HEAD, 1), (b"<quant/>", 1_000_000), (ZEBRIS_TAIL, 1)]);
+    let says = "values a recording may hold";
+    refused(&write("million.xml.gz", &xml), says);
+    // Nested 10⁶ deep: minutes of quadratic work before.
+    let deep = gzip_of(&[(ZEBRIS_HEAD, 1), (b"<a>", 1_000_000), (b"</a>", 1_000_000)]);
+    refused(&write("deep.xml.gz", &deep), "nested elements");
+    // A 57 KB emed .lst asking 30 GB.
+    let page = b"Page 1\nMatrix: 10000x10000\n\t1\tForce\n1\t0\t0\nForce\t0\n\x0c";
+    let lst = gzip_of(&[(page, 75), (b"\n", 60_000_000)]);
+    refused(&write("walk.lst.gz", &lst), "sensors a frame may have");
+    // A 261 KB PNG of 16384² zeros, which aborted in marching squares.
+    refused(
+        &write("zeros.png", &png_of_zeros(16384)),
+        "an image of 16384 x 16384",
+    );
+    // A 1 GiB one-line CSV (a sparse file: its head is values, the rest a hole).
+    let csv = dir.join("line.csv");
+    let mut f = std::fs::File::create(&csv).unwrap();
+    f.write_all(&b"0,".repeat(8192)).unwrap();
+    f.set_len(1 << 30).unwrap();
+    drop(f);
+    refused(&csv, "a line longer than");
+    // A gzipped JSON of 2 × 10⁷ samples.
+    let head = b"{\"cell_count\": {\"x\": 256, \"y\": 256}, \"samples\": [";
+    let json = gzip_of(&[(head, 1), (b"{},", 20_000_000), (b"{}]}", 1)]);
+    refused(&write("walk.json.gz", &json), says);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_batch_with_a_hostile_file_beside_good_ones_has_one_error_row() {
+    let dir = temp_dir("hostile-batch");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/pedo-io/tests/data");
+    let inputs = dir.join("inputs");
+    std::fs::create_dir_all(&inputs).unwrap();
+    std::fs::copy(data.join("emed-test-1-10.lst"), inputs.join("a.lst")).unwrap();
+    let xml = gzip_of(&[(ZEBRIS_HEAD, 1), (b"<quant/>", 1_000_000), (ZEBRIS_TAIL, 1)]);
+    std::fs::write(inputs.join("b.xml.gz"), xml).unwrap();
+    std::fs::copy(data.join("emed-test-1-10.lst"), inputs.join("c.lst")).unwrap();
+    let study = dir.join("study");
+    let r = bounded(&[
+        "batch".as_ref(),
+        inputs.as_os_str(),
+        "--out".as_ref(),
+        study.as_os_str(),
+        "--figures".as_ref(),
+        "none".as_ref(),
+        "--report".as_ref(),
+        "none".as_ref(),
+    ]);
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(r.peak_kb <= 512 << 10, "peak {} kB", r.peak_kb);
+    let table = std::fs::read_to_string(study.join("study.csv")).unwrap();
+    let statuses: Vec<&str> = table
+        .lines()
+        .skip(1)
+        .map(|l| if l.contains(",error,") { "error" } else { "ok" })
+        .collect();
+    assert_eq!(statuses, ["ok", "error", "ok"], "{table}");
+    assert!(table.contains("values a recording may hold"), "{table}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn names_reach_the_terminal_with_their_control_characters_escaped() {
+    let dir = temp_dir("names");
+    let name = dir.join("\u{1b}[31mred\u{1b}]0;title\u{7}.asf");
+    std::fs::write(&name, b"not a recording").unwrap();
+    let out = dir.join("out");
+    let r = bounded(&[
+        "run".as_ref(),
+        name.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(!r.stderr.contains(['\u{1b}', '\u{7}']), "{:?}", r.stderr);
+    assert!(
+        r.stderr.contains("\\u{1b}[31mred\\u{1b}]0;title\\u{7}.asf"),
+        "{}",
+        r.stderr
+    );
+    // A batch's error lines too.
+    let study = dir.join("study");
+    let r = bounded(&[
+        "batch".as_ref(),
+        dir.as_os_str(),
+        "--out".as_ref(),
+        study.as_os_str(),
+    ]);
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(!r.stderr.contains(['\u{1b}', '\u{7}']), "{:?}", r.stderr);
+    assert!(r.stderr.contains("\\u{1b}[31mred"), "{}", r.stderr);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_unit_a_spreadsheet_would_run_is_text_in_the_study_table() {
+    let dir = temp_dir("formula");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/pedo-io/tests/data");
+    let asf = std::fs::read_to_string(data.join("tekscan-FrasP01L-11-20.csv")).unwrap();
+    let units = "=HYPERLINK(\"http://example.com\",\"x\")";
+    let file = dir.join("walk.csv");
+    std::fs::write(&file, asf.replace("UNITS KPa", &format!("UNITS {units}"))).unwrap();
+    let study = dir.join("study");
+    let r = bounded(&[
+        "batch".as_ref(),
+        file.as_os_str(),
+        "--out".as_ref(),
+        study.as_os_str(),
+        "--figures".as_ref(),
+        "none".as_ref(),
+        "--report".as_ref(),
+        "none".as_ref(),
+    ]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let table = std::fs::read_to_string(study.join("study.csv")).unwrap();
+    assert!(
+        table.contains("\"'=HYPERLINK(\"\"http://example.com\"\",\"\"x\"\")\""),
+        "{table}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -322,8 +322,18 @@ pub fn marching_squares(grid: &Grid, level: f64, saddle: Saddle) -> Result<Vec<C
             [j as f64 - 1.0 + t, i as f64 - 1.0]
         }
     };
-    let nkeys = 2 * h * w;
-    let mut next = vec![usize::MAX; nkeys];
+    // Two edges per cell: a grid larger than memory allows is an error, not an abort (a
+    // recording's frames are within `limits::MAX_FRAME_SENSORS`, an upsampled one may not be).
+    let too_large = || {
+        IoError::invalid(format!(
+            "a grid of {rows} x {cols} is too large for its contours in memory"
+        ))
+    };
+    let nkeys = h
+        .checked_mul(w)
+        .and_then(|n| n.checked_mul(2))
+        .ok_or_else(too_large)?;
+    let mut next = crate::limits::try_filled(nkeys, usize::MAX).ok_or_else(too_large)?;
     let mut starts = Vec::new();
     for i in 0..h - 1 {
         for j in 0..w - 1 {
@@ -347,7 +357,7 @@ pub fn marching_squares(grid: &Grid, level: f64, saddle: Saddle) -> Result<Vec<C
             }
         }
     }
-    let mut seen = vec![false; nkeys];
+    let mut seen = crate::limits::try_filled(nkeys, false).ok_or_else(too_large)?;
     let mut out = Vec::new();
     for &s in &starts {
         if seen[s] {

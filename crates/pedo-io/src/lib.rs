@@ -26,6 +26,7 @@ mod error;
 pub mod formats;
 pub mod grid;
 pub mod isobar;
+pub mod limits;
 pub mod points;
 pub mod preprocess;
 pub mod recording;

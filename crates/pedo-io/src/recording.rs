@@ -594,7 +594,8 @@ fn utf8_read_as_latin1(text: &str) -> Option<String> {
 
 /// The checks of every recording, [`Recording::new`]'s and [`Recording::from_sparse`]'s, in this
 /// order: at least one frame of at least 1x1, a frame size that fits in `usize`, `n_values`
-/// values for the frames, a mask entry per sensel, and every value at an existing sensor finite.
+/// values for the frames, frames and values within [`crate::limits`], a mask entry per sensel,
+/// and every value at an existing sensor finite.
 /// `values` yields `(position across the frames, value)`, the position of frame `t`'s value at
 /// sensel `i` being `t × rows × cols + i`; values left out (zeros of sparse frames) pass. Returns
 /// the number of values per frame.
@@ -620,6 +621,8 @@ fn validate(
             n_frames.saturating_mul(per),
         )));
     }
+    crate::limits::frame_sensors("a frame", rows, cols).map_err(IoError::invalid)?;
+    crate::limits::frame_count(n_frames, per).map_err(IoError::invalid)?;
     if sensor_mask.len() != per {
         return Err(IoError::invalid(format!(
             "sensor mask has {} entries, expected {per}",
@@ -650,82 +653,128 @@ enum Frames {
 }
 
 /// The values of each frame that are not 0 (bit for bit: `-0.0` is kept), with their positions
-/// in the frame (`u16`: frames of up to 65,536 sensels, every plate and insole there is); frame
-/// `t` holds the entries `starts[t]..starts[t + 1]`.
+/// in the frame (`u16` for frames of up to 65,536 sensels, every plate and insole there is;
+/// `u32` for larger ones, images); frame `t` holds the entries `starts[t]..starts[t + 1]`.
+/// A frame of zeros takes the room of one index whatever its size, so that the memory of a
+/// recording follows the values its file holds, not the size its header claims.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct SparseFrames {
     starts: Vec<usize>,
+    /// Positions in frames of at most [`NARROW_MAX`] values.
     at: Vec<u16>,
+    /// Positions in larger frames.
+    wide: Vec<u32>,
     values: Vec<f32>,
-    /// Values per frame; frames larger than [`SPARSE_MAX`] are held whole: every value kept, in
-    /// `values`, and no positions.
+    /// Values per frame.
     per: usize,
 }
 
-/// The most values a frame held sparsely may have.
-const SPARSE_MAX: usize = u16::MAX as usize + 1;
+/// The most values a frame with `u16` positions may have.
+const NARROW_MAX: usize = u16::MAX as usize + 1;
 
 impl SparseFrames {
-    /// No frames yet; frames will have `per` values.
+    /// No frames yet; frames will have `per` values (at most
+    /// [`MAX_FRAME_SENSORS`](crate::limits::MAX_FRAME_SENSORS)).
     pub(crate) fn new(per: usize) -> Self {
         Self {
             starts: vec![0],
             at: Vec::new(),
+            wide: Vec::new(),
             values: Vec::new(),
             per,
         }
     }
 
+    fn is_wide(&self) -> bool {
+        self.per > NARROW_MAX
+    }
+
     /// Appends a frame (its value at every position).
     pub(crate) fn push(&mut self, frame: &[f32]) {
-        if self.is_whole() {
-            self.values.extend_from_slice(frame);
-            self.starts.push(self.values.len());
-            return;
-        }
         for (i, &v) in frame.iter().enumerate() {
-            if v.to_bits() != 0
-                && let Ok(i) = u16::try_from(i)
-            {
-                self.at.push(i);
-                self.values.push(v);
+            if v.to_bits() != 0 {
+                self.push_entry(i, v);
             }
         }
         self.starts.push(self.values.len());
     }
 
-    /// Appends a frame of zeros (frames held sparsely: not [`is_whole`](Self::is_whole)).
-    pub(crate) fn push_empty(&mut self) {
+    /// Adds the value `v` at position `i` to the frame being built (ended by
+    /// [`push_empty`](Self::push_empty)), positions in increasing order.
+    fn push_entry(&mut self, i: usize, v: f32) {
+        // Positions fit: `per` is within the frame limit, far below `u32::MAX`.
+        if self.is_wide() {
+            self.wide.push(i as u32);
+        } else {
+            self.at.push(i as u16);
+        }
+        self.values.push(v);
+    }
+
+    /// Appends a frame given by its values at some positions, every other value 0:
+    /// `entries` as `(position, value)`, a later entry at a position replacing an earlier one
+    /// (so that a page printing a window of the plate costs its window, not the plate).
+    pub(crate) fn push_entries(&mut self, entries: &mut [(usize, f32)]) {
+        entries.sort_by_key(|e| e.0);
+        for (k, &(i, v)) in entries.iter().enumerate() {
+            let replaced = entries.get(k + 1).is_some_and(|next| next.0 == i);
+            if !replaced && v.to_bits() != 0 {
+                self.push_entry(i, v);
+            }
+        }
         self.starts.push(self.values.len());
     }
 
-    /// Whether frames are held whole (too large for positions as `u16`).
-    pub(crate) fn is_whole(&self) -> bool {
-        self.per > SPARSE_MAX
+    /// Appends a frame of zeros.
+    pub(crate) fn push_empty(&mut self) {
+        self.starts.push(self.values.len());
     }
 
     pub(crate) fn n_frames(&self) -> usize {
         self.starts.len() - 1
     }
 
+    /// The position of stored value `k`.
+    fn position(&self, k: usize) -> usize {
+        if self.is_wide() {
+            self.wide[k] as usize
+        } else {
+            self.at[k] as usize
+        }
+    }
+
     fn entries(&self, t: usize) -> impl Iterator<Item = (usize, f32)> + '_ {
-        let r = self.starts[t]..self.starts[t + 1];
-        self.at[r.clone()]
-            .iter()
-            .zip(&self.values[r])
-            .map(|(&i, &v)| (i as usize, v))
+        (self.starts[t]..self.starts[t + 1]).map(|k| (self.position(k), self.values[k]))
+    }
+
+    /// Bytes per stored value: the value and its position.
+    fn entry_bytes(per: usize) -> usize {
+        if per > NARROW_MAX {
+            8
+        } else {
+            6
+        }
     }
 
     fn bytes(&self) -> usize {
-        self.starts.len() * std::mem::size_of::<usize>() + self.values.len() * 6
+        self.starts.len() * std::mem::size_of::<usize>()
+            + self.values.len() * Self::entry_bytes(self.per)
     }
 
     /// Whether `n_frames` frames of `per` values, `stored` of them not 0, take less memory held
     /// sparsely than whole.
     fn pays(n_frames: usize, per: usize, stored: usize) -> bool {
-        per <= SPARSE_MAX
-            && stored.saturating_mul(6).saturating_add((n_frames + 1) * 8)
-                < n_frames.saturating_mul(per).saturating_mul(4)
+        stored
+            .saturating_mul(Self::entry_bytes(per))
+            .saturating_add((n_frames + 1) * 8)
+            < n_frames.saturating_mul(per).saturating_mul(4)
+    }
+
+    fn shrink_to_fit(&mut self) {
+        self.at.shrink_to_fit();
+        self.wide.shrink_to_fit();
+        self.values.shrink_to_fit();
+        self.starts.shrink_to_fit();
     }
 }
 
@@ -738,7 +787,11 @@ impl Frames {
             return Frames::Dense(data);
         }
         let mut s = SparseFrames::new(per);
-        s.at.reserve_exact(stored);
+        if s.is_wide() {
+            s.wide.reserve_exact(stored);
+        } else {
+            s.at.reserve_exact(stored);
+        }
         s.values.reserve_exact(stored);
         s.starts.reserve_exact(n);
         for frame in data.chunks_exact(per) {
@@ -747,13 +800,12 @@ impl Frames {
         Frames::Sparse(s)
     }
 
-    /// Frames appended one by one, held whole instead when that takes less memory.
+    /// Frames appended one by one, held whole instead when that takes less memory (then no more
+    /// than they take held sparsely).
     fn from_sparse(mut s: SparseFrames, per: usize) -> Self {
         let n = s.n_frames();
         if SparseFrames::pays(n, per, s.values.len()) {
-            s.at.shrink_to_fit();
-            s.values.shrink_to_fit();
-            s.starts.shrink_to_fit();
+            s.shrink_to_fit();
             return Frames::Sparse(s);
         }
         let mut d = vec![0.0f32; n * per];
@@ -809,9 +861,6 @@ impl Recording {
         sensor_mask: Vec<bool>,
     ) -> Result<Self> {
         let n_frames = frames.n_frames();
-        if frames.is_whole() {
-            return Self::new(n_frames, rows, cols, frames.values, sensor_mask);
-        }
         // The frames hold `frames.per` values each, of which only those not 0 are stored (0 is
         // finite): the positions of the stored ones across the frames, as in `new`'s `data`.
         let stride = frames.per;
@@ -819,7 +868,8 @@ impl Recording {
             (0..n_frames).flat_map(|t| frames.entries(t).map(move |(i, v)| (t * stride + i, v)));
         let n_values = n_frames.saturating_mul(stride);
         let per = validate(n_frames, rows, cols, n_values, &sensor_mask, values)?;
-        if frames.at.iter().any(|&i| !sensor_mask[i as usize]) {
+        let dropped = (0..frames.values.len()).any(|k| !sensor_mask[frames.position(k)]);
+        if dropped {
             let mut kept = SparseFrames::new(per);
             let mut frame = vec![0.0f32; per];
             for t in 0..n_frames {
@@ -846,6 +896,30 @@ impl Recording {
             noise_threshold: None,
             format: None,
         })
+    }
+}
+
+impl Recording {
+    /// [`Recording::from_nan_frames`] of frames appended one by one to `frames`: a sensor is
+    /// missing when it is NaN in every frame; NaN in only some frames is an error.
+    pub(crate) fn from_sparse_nan(rows: usize, cols: usize, frames: SparseFrames) -> Result<Self> {
+        let (n_frames, per) = (frames.n_frames(), frames.per);
+        let mut nans = vec![0usize; per];
+        for (k, v) in frames.values.iter().enumerate() {
+            if v.is_nan() {
+                nans[frames.position(k)] += 1;
+            }
+        }
+        if let Some(i) = nans.iter().position(|&n| n > 0 && n < n_frames) {
+            return Err(IoError::invalid(format!(
+                "row {}, column {} is NaN in {} of {n_frames} frames only",
+                i / cols,
+                i % cols,
+                nans[i]
+            )));
+        }
+        let mask = nans.iter().map(|&n| n == 0).collect();
+        Self::from_sparse(rows, cols, frames, mask)
     }
 }
 
@@ -907,23 +981,43 @@ mod tests {
     }
 
     #[test]
-    fn frames_too_large_for_sparse_positions_are_held_whole() {
+    fn frames_larger_than_u16_positions_are_held_sparsely_with_wide_positions() {
         let (rows, cols) = (300, 300);
         let mut frame = vec![0.0f32; rows * cols];
         frame[rows * cols - 1] = 4.0;
-        let rec = Recording::from_sparse(
-            rows,
-            cols,
-            sparse_of(&frame, rows * cols),
-            vec![true; rows * cols],
-        );
+        let mut frames = frame.clone();
+        frames.extend(vec![0.0f32; rows * cols]);
+        let mask = vec![true; rows * cols];
+        let rec = Recording::from_sparse(rows, cols, sparse_of(&frames, rows * cols), mask.clone());
         let rec = rec.unwrap();
-        assert!(!rec.is_sparse());
+        assert!(rec.is_sparse());
+        assert!(rec.frames_bytes() < 64, "{}", rec.frames_bytes());
         assert_eq!(rec.frame(0).unwrap().get(rows - 1, cols - 1), 4.0);
-        assert_eq!(
-            rec,
-            Recording::new(1, rows, cols, frame, vec![true; rows * cols]).unwrap()
+        assert_eq!(rec, Recording::new(2, rows, cols, frames, mask).unwrap());
+    }
+
+    #[test]
+    fn recordings_beyond_the_limits_are_refused() {
+        use crate::limits::{MAX_FRAME_SENSORS, MAX_RECORDING_VALUES};
+        let side = 1 << 11;
+        assert!(side * side > MAX_FRAME_SENSORS);
+        let mut one = SparseFrames::new(side * side);
+        one.push_empty();
+        let e = Recording::from_sparse(side, side, one, vec![])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("more than the 1048576 sensors a frame may have"),
+            "{e}"
         );
+        let mut empty = SparseFrames::new(1 << 20);
+        for _ in 0..(MAX_RECORDING_VALUES >> 20) + 1 {
+            empty.push_empty();
+        }
+        let e = Recording::from_sparse(1 << 10, 1 << 10, empty, vec![true; 1 << 20])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("values a recording may hold"), "{e}");
     }
 
     #[test]

@@ -82,15 +82,53 @@ pub fn run_report(
     ))
 }
 
-/// A template filled in: title, header, the shared head, plotly.js and the data.
+/// A template filled in: title, header, the shared head, plotly.js and the data, in one pass (a
+/// file name holding `{{DATA}}` stays text).
 fn page(template: &str, title: &str, header: &str, data: &str) -> String {
-    template
-        .replace("{{TITLE}}", &html_escape(title))
-        .replace("{{HEADER}}", header)
-        .replace("{{HEAD}}", HEAD)
-        .replace("{{PLOTLY}}", &plotly_js())
-        // `</` cannot end the script element early: JSON never needs a raw `</`.
-        .replace("{{DATA}}", &data.replace("</", "<\\/"))
+    let values = [
+        ("{{TITLE}}", html_escape(title)),
+        ("{{HEADER}}", header.to_string()),
+        ("{{HEAD}}", HEAD.to_string()),
+        ("{{PLOTLY}}", plotly_js()),
+        ("{{DATA}}", script_safe(data)),
+    ];
+    let mut out = String::with_capacity(template.len() + PLOTLY_JS.len() + data.len());
+    let mut rest = template;
+    while let Some(at) = rest.find("{{") {
+        out.push_str(&rest[..at]);
+        rest = &rest[at..];
+        match values.iter().find(|(key, _)| rest.starts_with(key)) {
+            Some((key, value)) => {
+                out.push_str(value);
+                rest = &rest[key.len()..];
+            }
+            None => {
+                out.push_str("{{");
+                rest = &rest[2..];
+            }
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+/// JSON made safe inside an HTML `<script>` element: `<`, `>` and `&` (which JSON holds only
+/// inside strings) as `\u` escapes, so that no file name or unit can end the element or open a
+/// comment (`</script>`, `<!--`), and U+2028/U+2029, line ends to older JavaScript, too. The JSON
+/// reads back the same.
+fn script_safe(json: &str) -> String {
+    let mut out = String::with_capacity(json.len());
+    for c in json.chars() {
+        match c {
+            '<' => out.push_str("\\u003c"),
+            '>' => out.push_str("\\u003e"),
+            '&' => out.push_str("\\u0026"),
+            '\u{2028}' => out.push_str("\\u2028"),
+            '\u{2029}' => out.push_str("\\u2029"),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// One matched pair of objects, for [`match_report`].
@@ -1164,6 +1202,29 @@ mod tests {
         assert_eq!(x.iter().filter(|v| v.is_null()).count(), 2);
         assert_eq!(x[4], Value::Null);
         assert_eq!(x[0], d["series"]["cop"][0][0]);
+    }
+
+    #[test]
+    fn names_and_units_cannot_break_out_of_the_page_or_its_script() {
+        let units = "</script><!--\u{2028}<script>&\u{2029}x";
+        let rec = flat(2, units, None);
+        let mut hostile = info();
+        hostile.input = "<!--<script>{{DATA}}</script>".into();
+        let html = run_report(&rec, &SequenceResult::default(), &hostile).unwrap();
+        // The data's script element holds no markup character and no JavaScript line end ...
+        let start = html.find("id=\"report-data\">").unwrap() + "id=\"report-data\">".len();
+        let data = &html[start..start + html[start..].find("</script>").unwrap()];
+        assert!(
+            !data.contains(['<', '>', '&', '\u{2028}', '\u{2029}']),
+            "{data}"
+        );
+        // ... and reads back to the very units.
+        assert_eq!(embedded_data(&html)["pressure_units"], units);
+        // The title is text, its placeholder-like part kept as written (filled in one pass).
+        assert!(html.contains(
+            "<title>pedomatch report: &lt;!--&lt;script&gt;{{DATA}}&lt;/script&gt;</title>"
+        ));
+        assert_eq!(html.matches("id=\"report-data\"").count(), 1);
     }
 
     #[test]

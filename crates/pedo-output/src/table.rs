@@ -36,13 +36,28 @@ impl Cell {
         match self {
             Cell::Int(v) => v.to_string(),
             Cell::Float(v, d) => format!("{v:.d$}"),
-            Cell::Text(s) if s.contains([',', '"', '\n', '\r']) => {
-                // RFC 4180: free text (an error message) in double quotes, inner quotes doubled.
-                format!("\"{}\"", s.replace('"', "\"\""))
-            }
-            Cell::Text(s) => s.clone(),
+            Cell::Text(s) => csv_text(s),
             Cell::Empty => String::new(),
         }
+    }
+}
+
+/// A text cell as CSV. Text a spreadsheet would run as a formula (its first character `=`, `+`,
+/// `-`, `@`, a tab or a carriage return: a file name or a unit such as `=HYPERLINK(...)`) is
+/// neutralised by a leading `'`, as OWASP recommends; numbers are never text cells, so a
+/// negative number stays a number. Then, as RFC 4180 says, text holding a comma, quote or line
+/// break (an error message) goes in double quotes, inner quotes doubled.
+fn csv_text(s: &str) -> String {
+    let formula = s.starts_with(['=', '+', '-', '@', '\t', '\r']);
+    let s = if formula {
+        std::borrow::Cow::Owned(format!("'{s}"))
+    } else {
+        std::borrow::Cow::Borrowed(s)
+    };
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.into_owned()
     }
 }
 
@@ -202,6 +217,31 @@ mod csv_tests {
         .unwrap();
         assert_eq!(String::from_utf8(out).unwrap(), t.to_csv());
         assert_eq!(t.to_csv(), "a,b,c\n1,2.500,\n\"x, \"\"y\"\"\",-4,0.1\n");
+    }
+
+    #[test]
+    fn text_a_spreadsheet_would_run_is_neutralised_numbers_never() {
+        let mut t = Table::new(&["name", "value"]);
+        for text in [
+            "=HYPERLINK(\"http://x\")",
+            "+1",
+            "-2",
+            "@SUM(A1)",
+            "\tx",
+            "\rx",
+            "walk",
+        ] {
+            t.rows
+                .push(vec![Cell::Text(text.into()), Cell::Float(-1.5, 1)]);
+        }
+        t.rows.push(vec![Cell::Int(-3), Cell::Empty]);
+        assert_eq!(
+            t.to_csv(),
+            "name,value\n\"'=HYPERLINK(\"\"http://x\"\")\",-1.5\n'+1,-1.5\n'-2,-1.5\n\
+             '@SUM(A1),-1.5\n'\tx,-1.5\n\"'\rx\",-1.5\nwalk,-1.5\n-3,\n"
+        );
+        // JSON keeps the text as it is.
+        assert_eq!(t.to_json()[0]["name"], "=HYPERLINK(\"http://x\")");
     }
 
     #[test]

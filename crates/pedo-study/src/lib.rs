@@ -257,7 +257,9 @@ pub fn output_name(path: &Path) -> String {
 ///   recording, and colour images (a photograph of the foot) are passed over. Hidden folders and pedomatch output
 ///   folders are not searched. Symbolic links to files and folders are followed (a link back
 ///   to a folder being searched is passed over); a broken link named as a recording is kept,
-///   so that its row says the link is broken;
+///   so that its row says the link is broken. Only regular files are read (no device, FIFO or
+///   socket), each its first [`SNIFF_BYTES`] without waiting, and the system's own trees
+///   (`/proc`, `/sys`, `/dev`) are never entered;
 /// - anything else is a glob pattern (`data/**/*.asf`), each match taken as above.
 ///
 /// A path that does not exist is kept, so that its row reports it missing. Fails on a malformed
@@ -307,6 +309,9 @@ fn search_folder(root: &Path, found: &mut Vec<PathBuf>) {
                 || outdir::is_output(e.path())
                 || e.path().join(STUDY_MARKER).is_file())
     };
+    // The root, and whatever a link leads to, may be in the system's own trees.
+    let is_system =
+        |e: &walkdir::DirEntry| (e.depth() == 0 || e.path_is_symlink()) && in_system_tree(e.path());
     // Symbolic links are followed (a study folder's recordings are often links into a raw-data
     // store); a link back to a folder being searched is a loop walkdir reports, and is passed
     // over. The same file reached twice is found once (`find_recordings` keeps one path per
@@ -315,7 +320,7 @@ fn search_folder(root: &Path, found: &mut Vec<PathBuf>) {
         .follow_links(true)
         .sort_by_file_name()
         .into_iter()
-        .filter_entry(|e| !is_skipped_dir(e));
+        .filter_entry(|e| !is_skipped_dir(e) && !is_system(e));
     let mut image_folders = Vec::new();
     for entry in walk {
         let entry = match entry {
@@ -334,6 +339,8 @@ fn search_folder(root: &Path, found: &mut Vec<PathBuf>) {
                 continue;
             }
         };
+        // Regular files only: a device, FIFO or socket is no recording (and reading one may
+        // block forever).
         if !entry.file_type().is_file() || entry.file_name().to_string_lossy().starts_with('.') {
             continue;
         }
@@ -391,16 +398,33 @@ fn is_pressure_image(path: &Path) -> bool {
     pedo_io::formats::images::is_grayscale_image(path).unwrap_or(true)
 }
 
-/// The first [`SNIFF_BYTES`] of a file, if it can be read.
+/// Whether `path` leads into the system's own trees (`/proc`, `/sys`, `/dev`): files that are
+/// no recordings, some of which block a reader forever (`/proc/kmsg`), and a folder search
+/// never enters them.
+fn in_system_tree(path: &Path) -> bool {
+    std::fs::canonicalize(path).is_ok_and(|p| {
+        ["/proc", "/sys", "/dev"]
+            .iter()
+            .any(|system| p.starts_with(system))
+    })
+}
+
+/// The first [`SNIFF_BYTES`] of a file, if it can be read: at most that many bytes, and without
+/// waiting (a file that has nothing to read yet, such as a FIFO named as an input, reads as
+/// empty).
 fn read_head(path: &Path) -> Option<Vec<u8>> {
     use std::io::Read;
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
     let mut head = Vec::with_capacity(SNIFF_BYTES);
-    std::fs::File::open(path)
-        .ok()?
-        .take(SNIFF_BYTES as u64)
-        .read_to_end(&mut head)
-        .ok()?;
-    Some(head)
+    let file = options.open(path).ok()?;
+    match file.take(SNIFF_BYTES as u64).read_to_end(&mut head) {
+        Ok(_) => Some(head),
+        Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => Some(head),
+        Err(_) => None,
+    }
 }
 
 /// The format of a file by its first bytes, if it is a recording.

@@ -109,3 +109,35 @@ fn a_search_passes_over_colour_photographs_and_keeps_grayscale_frames() {
     assert_eq!(names, ["frames", "s01/walk.lst"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[cfg(unix)]
+#[test]
+fn a_search_reads_regular_files_only_and_never_enters_the_system_trees() {
+    use std::os::unix::fs::symlink;
+    let dir = std::env::temp_dir().join(format!("pedo-io-special-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(&recordings(1)[0], dir.join("walk.lst")).unwrap();
+    // A FIFO (reading it waits for a writer), a socket, a device, and links into /proc (whose
+    // /proc/kmsg blocks a reader) and /sys.
+    let fifo = std::process::Command::new("mkfifo")
+        .arg(dir.join("pipe.asf"))
+        .status();
+    let _socket = std::os::unix::net::UnixListener::bind(dir.join("socket.asf")).unwrap();
+    symlink("/dev/zero", dir.join("zero.asf")).unwrap();
+    symlink("/proc", dir.join("proc")).unwrap();
+    symlink("/sys", dir.join("sys")).unwrap();
+    symlink("/proc/kmsg", dir.join("kmsg.asf")).unwrap();
+    let (send, found) = std::sync::mpsc::channel();
+    let input = dir.to_str().unwrap().to_string();
+    std::thread::spawn(move || send.send(pedo_study::find_recordings(&[input])));
+    let found = found
+        .recv_timeout(std::time::Duration::from_secs(20))
+        .expect("the search ends")
+        .unwrap();
+    assert_eq!(found, [dir.join("walk.lst")], "mkfifo: {fifo:?}");
+    // A search of the system trees themselves finds nothing, at once.
+    let proc = pedo_study::find_recordings(&["/proc/self"]).unwrap();
+    assert!(proc.is_empty(), "{proc:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -7,7 +7,7 @@
 //! line (the layout the CSV parser of the public `jiwooba/HSS-TAP` repository,
 //! `additionalFiles/onfly_tekscan_2mat.m`, reads).
 
-use super::{latin1_lines, parse_num};
+use super::parse_num;
 use crate::error::{IoError, Result};
 use crate::recording::stated_units;
 use crate::recording::{Format, Recording, SparseFrames};
@@ -60,7 +60,8 @@ fn unpad(line: String) -> String {
 }
 
 fn parse_tekscan(bytes: &[u8], name: &str, csv: bool) -> Result<Recording> {
-    parse_tekscan_lines(latin1_lines(bytes), bytes.len(), name, csv, &mut Keep::All)
+    let lines = super::stream::bounded(bytes, false, super::stream::Stretch::Line);
+    read_tekscan(lines, bytes.len(), name, csv, &mut Keep::All)
 }
 
 /// What the Tekscan parser does with each frame it has read.
@@ -84,31 +85,9 @@ pub(crate) fn read_tekscan(
     csv: bool,
     keep: &mut Keep<'_>,
 ) -> Result<Recording> {
-    // The lines as `latin1_lines` cuts them; a read error ends them and is reported instead of
-    // what the parser makes of the cut file.
-    let failure: std::cell::Cell<Option<std::io::Error>> = std::cell::Cell::new(None);
-    let lines = file
-        .split(b'\n')
-        .map_while(|l| match l {
-            Ok(l) => Some(l),
-            Err(e) => {
-                failure.set(Some(e));
-                None
-            }
-        })
-        .enumerate()
-        .map(|(i, l)| {
-            let l = l.strip_suffix(b"\r").unwrap_or(&l);
-            (i + 1, l.iter().map(|&b| b as char).collect::<String>())
-        });
-    let parsed = parse_tekscan_lines(lines, size, name, csv, keep);
-    match failure.take() {
-        Some(source) => Err(IoError::Io {
-            path: name.to_string(),
-            source,
-        }),
-        None => parsed,
-    }
+    super::stream::parse_lines(file, name, |lines| {
+        parse_tekscan_lines(lines, size, name, csv, keep)
+    })
 }
 
 /// The header fields as read, before they are checked against each other.
@@ -186,6 +165,7 @@ impl HeaderFields {
                 "ROWS x COLS = {rows} x {cols} is more than the file can hold"
             )));
         }
+        crate::limits::frame_sensors("ROWS x COLS", rows, cols).map_err(err)?;
         let stated_frames = match (self.start, self.end) {
             (Some(s), Some(e)) if e >= s => Some((e - s + 1) as usize),
             (Some(s), Some(e)) => return Err(err(format!("END_FRAME {e} before START_FRAME {s}"))),
@@ -330,6 +310,7 @@ impl<'k, 'a> FrameReader<'k, 'a> {
                 "more frames than END_FRAME - START_FRAME + 1 = {e}"
             )));
         }
+        crate::limits::frame_count(self.n_frames + 1, self.rows * self.cols).map_err(&err)?;
         self.frame_line = ln;
         self.row = 0;
         Ok(())
@@ -407,12 +388,7 @@ impl<'k, 'a> FrameReader<'k, 'a> {
         match self.keep {
             Keep::All => self.frames.push(&self.frame),
             Keep::Handed(hand) => {
-                // Frames too large to hold sparsely are held whole all the same.
-                if self.frames.is_whole() {
-                    self.frames.push(&self.frame);
-                } else {
-                    self.frames.push_empty();
-                }
+                self.frames.push_empty();
                 if let Some(hand) = hand {
                     hand(&self.frame)?;
                 }

@@ -3,31 +3,48 @@
 //! separate, decimal commas too). `-1`, `B` and `NaN` mark a missing sensor.
 
 use super::asf::trunc;
-use super::{latin1_lines, parse_num};
+use super::parse_num;
 use crate::error::{IoError, Result};
 use crate::grid::Grid;
+use crate::limits::MAX_FRAME_SENSORS;
 use crate::recording::{Format, Recording};
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// The fields of a line; at most one more than a frame may have sensors (a longer row is
+/// refused, and never split whole).
 fn split_fields(line: &str, sep: Option<char>) -> Vec<&str> {
+    let most = MAX_FRAME_SENSORS + 1;
     match sep {
-        Some(c) => line.split(c).map(str::trim).collect(),
-        None => line.split_whitespace().collect(),
+        Some(c) => line.split(c).map(str::trim).take(most).collect(),
+        None => line.split_whitespace().take(most).collect(),
     }
 }
 
 /// Parses a CSV grid held in memory into a one-frame recording.
 pub fn parse_csv(bytes: &[u8], name: &str) -> Result<Recording> {
+    let lines = super::stream::bounded(bytes, false, super::stream::Stretch::Line);
+    super::stream::parse_lines(lines, name, |l| read_csv(l, name))
+}
+
+/// Parses a CSV grid from its lines (see [`super::stream::Lines`]).
+pub(crate) fn read_csv(
+    lines: impl Iterator<Item = (usize, String)>,
+    name: &str,
+) -> Result<Recording> {
     let err = |line: usize, msg: String| IoError::parse(name, line, msg);
-    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     let mut sep: Option<Option<char>> = None;
     let mut cols = 0usize;
     let mut values: Vec<f32> = Vec::new();
     let mut present: Vec<bool> = Vec::new();
     let mut rows = 0usize;
     let mut first_content = true;
-    for (ln, line) in latin1_lines(bytes) {
+    for (ln, line) in lines {
+        // A byte-order mark (read as Latin-1) starts a file saved as UTF-8 by Windows tools.
+        let line = match ln {
+            1 => line.strip_prefix("\u{ef}\u{bb}\u{bf}").unwrap_or(&line),
+            _ => &line,
+        };
         let t = line.trim();
         if t.is_empty() {
             continue;
@@ -50,6 +67,8 @@ pub fn parse_csv(bytes: &[u8], name: &str) -> Result<Recording> {
                 format!("{} values, the first row has {cols}", fields.len()),
             ));
         }
+        // A grid is one frame: refused as soon as it has more sensors than a frame may have.
+        crate::limits::frame_sensors("a grid", rows + 1, cols).map_err(|m| err(ln, m))?;
         for (k, f) in fields.iter().enumerate() {
             if is_missing(f) {
                 values.push(0.0);

@@ -4,8 +4,8 @@
 
 use super::read_bytes;
 use crate::error::{IoError, Result};
-use crate::recording::{Format, Recording};
-use image::{DynamicImage, ImageBuffer, ImageFormat, Luma};
+use crate::recording::{Format, Recording, SparseFrames};
+use image::{DynamicImage, ImageBuffer, ImageDecoder as _, ImageFormat, Luma};
 use std::path::{Path, PathBuf};
 
 fn decode(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>, Format)> {
@@ -28,11 +28,20 @@ fn decode(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>, Format)> 
         Some((16u64 << 20).saturating_add(1032u64.saturating_mul(bytes.len() as u64)));
     let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), fmt);
     reader.limits(limits);
-    let img = reader
-        .decode()
-        .map_err(|e| IoError::format(name, format!("cannot decode image: {e}")))?;
-    let (w, h) = (img.width() as usize, img.height() as usize);
-    let data: Vec<f32> = match img {
+    let cannot = |e: image::ImageError| IoError::format(name, format!("cannot decode image: {e}"));
+    // The header's size and colour are checked before anything is decoded.
+    let decoder = reader.into_decoder().map_err(cannot)?;
+    let (w, h) = decoder.dimensions();
+    let (w, h) = (w as usize, h as usize);
+    crate::limits::check_frame(name, "an image", h, w)?;
+    let color = decoder.color_type();
+    if !matches!(color, image::ColorType::L8 | image::ColorType::L16) {
+        return Err(IoError::format(
+            name,
+            format!("expected an 8- or 16-bit grayscale image, got {color:?}"),
+        ));
+    }
+    let data: Vec<f32> = match DynamicImage::from_decoder(decoder).map_err(cannot)? {
         DynamicImage::ImageLuma8(b) => b.into_raw().into_iter().map(f32::from).collect(),
         DynamicImage::ImageLuma16(b) => b.into_raw().into_iter().map(f32::from).collect(),
         other => {
@@ -55,7 +64,6 @@ fn decode(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>, Format)> 
 /// its header alone; `None` when the header cannot be read. A study search passes over colour
 /// images (a photograph of the foot beside a recording is no pressure frame).
 pub fn is_grayscale_image(path: &Path) -> Option<bool> {
-    use image::ImageDecoder;
     let decoder = image::ImageReader::open(path)
         .ok()?
         .with_guessed_format()
@@ -81,10 +89,12 @@ pub fn read_image_sequence<P: AsRef<Path>>(paths: &[P]) -> Result<Recording> {
     if paths.is_empty() {
         return Err(IoError::invalid("no images given"));
     }
-    let mut all = Vec::new();
+    // Frames are held sparsely as they are decoded: a folder of large, mostly empty images
+    // takes the memory of their loaded pixels.
+    let mut frames: Option<SparseFrames> = None;
     let mut dims = None;
     let mut fmt = None;
-    for p in paths {
+    for (k, p) in paths.iter().enumerate() {
         let p = p.as_ref();
         let name = p.display().to_string();
         let (h, w, data, f) = decode(&read_bytes(p)?, &name)?;
@@ -98,11 +108,16 @@ pub fn read_image_sequence<P: AsRef<Path>>(paths: &[P]) -> Result<Recording> {
             }
             _ => {}
         }
+        crate::limits::check_frames(&name, k + 1, h * w)?;
         fmt.get_or_insert(f);
-        all.extend(data);
+        frames
+            .get_or_insert_with(|| SparseFrames::new(h * w))
+            .push(&data);
     }
-    let (h, w) = dims.expect("at least one image");
-    let mut rec = Recording::new(paths.len(), h, w, all, vec![true; h * w])?;
+    let ((h, w), Some(frames)) = (dims.expect("at least one image"), frames) else {
+        return Err(IoError::invalid("no images given"));
+    };
+    let mut rec = Recording::from_sparse(h, w, frames, vec![true; h * w])?;
     rec.format = fmt;
     Ok(rec)
 }

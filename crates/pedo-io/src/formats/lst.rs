@@ -4,7 +4,8 @@
 use super::asf::trunc;
 use super::parse_num;
 use crate::error::{IoError, Result};
-use crate::recording::{Format, Recording};
+use crate::limits::MAX_FRAME_SENSORS;
+use crate::recording::{Format, Recording, SparseFrames};
 
 /// What a `.lst` page prints besides the pressures: the forces the export computed itself.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -18,6 +19,7 @@ pub struct LstPageForces {
 #[derive(Default)]
 struct Page {
     first_line: usize,
+    part: PagePart,
     matrix: Option<(usize, usize, usize)>, // (cols, rows, line)
     area_cm2: Option<f64>,
     dt_ms: Option<f64>,
@@ -47,27 +49,12 @@ fn leading_num(s: &str) -> Option<f64> {
 
 /// Where a page's reading is: its header, its rows of values, or after its closing `Force`
 /// line.
-#[derive(Clone, Copy, PartialEq)]
+#[derive(Clone, Copy, PartialEq, Default)]
 enum PagePart {
+    #[default]
     Header,
     Rows,
     Closed,
-}
-
-/// The text split into pages at form feeds, each line with its 1-based number in the file.
-fn split_pages(text: &str) -> Vec<Vec<(usize, &str)>> {
-    let mut pages: Vec<Vec<(usize, &str)>> = vec![Vec::new()];
-    for (i, raw) in text.split('\n').enumerate() {
-        let raw = raw.strip_suffix('\r').unwrap_or(raw);
-        let mut parts = raw.split('\x0c');
-        if let Some(first) = parts.next() {
-            pages.last_mut().expect("non-empty").push((i + 1, first));
-        }
-        for p in parts {
-            pages.push(vec![(i + 1, p)]);
-        }
-    }
-    pages
 }
 
 /// A `CxR` pair (`Matrix: 64x32`, `Sensor size: 0.5x0.5`) read with `parse`.
@@ -86,6 +73,7 @@ impl Page {
             let dim = |s: &str| s.parse::<usize>().ok().filter(|&n| n > 0 && n <= 10_000);
             let (c, r) =
                 pair(&tok, dim).ok_or_else(|| err(format!("bad Matrix {:?}", trunc(&tok))))?;
+            crate::limits::frame_sensors("the Matrix", r, c).map_err(&err)?;
             self.matrix = Some((c, r, ln));
         }
         let positive = |v: Option<f64>| v.filter(|&a| a > 0.0);
@@ -173,6 +161,12 @@ impl Page {
                 fields.len() - 1
             )));
         }
+        // A page prints a window of the plate: never more cells than a frame may have.
+        if self.cells.len() + self.columns.len() > MAX_FRAME_SENSORS {
+            return Err(err(format!(
+                "the page holds more than the {MAX_FRAME_SENSORS} sensors a frame may have"
+            )));
+        }
         for (k, v) in fields[1..].iter().enumerate() {
             let x =
                 parse_num(v).ok_or_else(|| err(format!("value {:?} is not a number", trunc(v))))?;
@@ -185,53 +179,54 @@ impl Page {
         Ok(())
     }
 
-    /// Reads one page's lines.
-    fn read(lines: &[(usize, &str)], name: &str) -> Result<Page> {
-        let mut pg = Page {
-            first_line: lines.first().map(|l| l.0).unwrap_or(1),
+    /// A page whose first line is line `first_line` of the file.
+    fn starting_at(first_line: usize) -> Page {
+        Page {
+            first_line,
             ..Default::default()
-        };
-        let mut part = PagePart::Header;
-        for &(ln, line) in lines {
-            let err = |msg: String| IoError::parse(name, ln, msg);
-            let t = line.trim();
-            if t.is_empty() {
-                continue;
+        }
+    }
+
+    /// Reads the page's next line, line `ln` of the file.
+    fn line(&mut self, ln: usize, line: &str, name: &str) -> Result<()> {
+        let err = |msg: String| IoError::parse(name, ln, msg);
+        let t = line.trim();
+        if t.is_empty() {
+            return Ok(());
+        }
+        self.has_content = true;
+        match self.part {
+            PagePart::Header => {
+                if self.header_line(ln, t, err)? {
+                    self.part = PagePart::Rows;
+                }
             }
-            pg.has_content = true;
-            match part {
-                PagePart::Header => {
-                    if pg.header_line(ln, t, err)? {
-                        part = PagePart::Rows;
-                    }
-                }
-                PagePart::Closed => {
-                    return Err(err(format!(
-                        "unexpected text after the Force line: {:?}",
-                        trunc(t)
-                    )));
-                }
-                PagePart::Rows => {
-                    let fields: Vec<&str> = line.split('\t').map(str::trim).collect();
-                    let fields: &[&str] = match fields.split_last() {
-                        Some((&"", rest)) => rest,
-                        _ => &fields,
-                    };
-                    if fields.first() == Some(&"Force") {
-                        pg.force_line(&fields[1..], err)?;
-                        part = PagePart::Closed;
-                    } else {
-                        pg.data_row(ln, t, fields, err)?;
-                    }
+            PagePart::Closed => {
+                return Err(err(format!(
+                    "unexpected text after the Force line: {:?}",
+                    trunc(t)
+                )));
+            }
+            PagePart::Rows => {
+                let fields: Vec<&str> = line.split('\t').map(str::trim).collect();
+                let fields: &[&str] = match fields.split_last() {
+                    Some((&"", rest)) => rest,
+                    _ => &fields,
+                };
+                if fields.first() == Some(&"Force") {
+                    self.force_line(&fields[1..], err)?;
+                    self.part = PagePart::Closed;
+                } else {
+                    self.data_row(ln, t, fields, err)?;
                 }
             }
         }
-        Ok(pg)
+        Ok(())
     }
 
-    /// Checks that the page is whole and within the `cols` x `rows` plate, and writes its cells
-    /// into `frame`.
-    fn fill(&self, frame: &mut [f32], cols: usize, rows: usize, name: &str) -> Result<()> {
+    /// Checks that the page is whole and within the `cols` x `rows` plate; returns its cells as
+    /// `(position in the frame, value)`.
+    fn entries(&self, cols: usize, rows: usize, name: &str) -> Result<Vec<(usize, f32)>> {
         let err = |line: usize, msg: String| IoError::parse(name, line, msg);
         if let Some((c, r, ln)) = self.matrix
             && (c, r) != (cols, rows)
@@ -253,6 +248,7 @@ impl Page {
                 "page without its closing Force line (truncated?)".into(),
             ));
         }
+        let mut entries = Vec::with_capacity(self.cells.len());
         for &(r, c, v, ln) in &self.cells {
             if r > rows || c > cols {
                 return Err(err(
@@ -260,56 +256,128 @@ impl Page {
                     format!("cell (row {r}, column {c}) outside the {cols}x{rows} matrix"),
                 ));
             }
-            frame[(r - 1) * cols + (c - 1)] = v as f32;
+            entries.push(((r - 1) * cols + (c - 1), v as f32));
         }
-        Ok(())
+        Ok(entries)
     }
 }
 
 /// Parses a `.lst` file held in memory; returns the recording and, per picture, the forces the
 /// export printed (to check against). `name` appears in error messages.
 pub fn parse_lst(bytes: &[u8], name: &str) -> Result<(Recording, Vec<LstPageForces>)> {
-    let text: String = bytes.iter().map(|&b| b as char).collect();
-    let mut parsed = Vec::new();
-    for lines in split_pages(&text) {
-        let pg = Page::read(&lines, name)?;
-        if pg.has_content {
-            parsed.push(pg);
+    let lines = super::stream::bounded(bytes, false, super::stream::Stretch::Line);
+    super::stream::parse_lines(lines, name, |l| read_lst(l, name))
+}
+
+/// [`parse_lst`] from the file's lines (see [`super::stream::Lines`]): pages are cut at form
+/// feeds and each is placed on the plate as soon as it ends, so that only its frame is held.
+pub(crate) fn read_lst(
+    lines: impl Iterator<Item = (usize, String)>,
+    name: &str,
+) -> Result<(Recording, Vec<LstPageForces>)> {
+    let mut pages = Pages::new(name);
+    let mut page = Page::starting_at(1);
+    for (ln, raw) in lines {
+        let mut parts = raw.split('\x0c');
+        if let Some(first) = parts.next() {
+            page.line(ln, first, name)?;
+        }
+        for part in parts {
+            pages.add(std::mem::replace(&mut page, Page::starting_at(ln)))?;
+            page.line(ln, part, name)?;
         }
     }
-    if parsed.is_empty() {
-        return Err(IoError::format(name, "no pages"));
-    }
-    let (cols, rows, _) = parsed
-        .iter()
-        .find_map(|p| p.matrix)
-        .ok_or_else(|| IoError::format(name, "no `Matrix: CxR` line"))?;
-    let per = rows * cols;
-    // Pages print windows of the plate, so the plate may be larger than the text; but not
-    // hundreds of times: a larger claim is a corrupt header, refused before allocating it.
-    let cells = per.saturating_mul(parsed.len());
-    if cells > bytes.len().saturating_mul(256).max(1 << 16) {
-        return Err(IoError::format(
+    pages.add(page)?;
+    pages.finish()
+}
+
+/// The pages read so far: placed on the plate (the first page's `Matrix`) as frames, or, before
+/// a page has stated the plate, kept until one does.
+struct Pages<'a> {
+    name: &'a str,
+    /// The plate, `(cols, rows)`, once a page has stated it.
+    plate: Option<(usize, usize)>,
+    pending: Vec<Page>,
+    frames: Option<SparseFrames>,
+    forces: Vec<LstPageForces>,
+    n_pages: usize,
+    area_cm2: Option<f64>,
+    dt_ms: Option<f64>,
+    size_cm: Option<(f64, f64)>,
+}
+
+impl<'a> Pages<'a> {
+    fn new(name: &'a str) -> Self {
+        Pages {
             name,
-            format!(
-                "{} pages of a {cols}x{rows} matrix are far more than the file holds",
-                parsed.len()
-            ),
-        ));
+            plate: None,
+            pending: Vec::new(),
+            frames: None,
+            forces: Vec::new(),
+            n_pages: 0,
+            area_cm2: None,
+            dt_ms: None,
+            size_cm: None,
+        }
     }
-    let mut data = vec![0.0f32; cells];
-    for (pg, frame) in parsed.iter().zip(data.chunks_exact_mut(per)) {
-        pg.fill(frame, cols, rows, name)?;
+
+    /// Adds a page that has ended (one without content is no picture).
+    fn add(&mut self, mut pg: Page) -> Result<()> {
+        if !pg.has_content {
+            return Ok(());
+        }
+        self.n_pages += 1;
+        self.area_cm2 = self.area_cm2.or(pg.area_cm2);
+        self.dt_ms = self.dt_ms.or(pg.dt_ms);
+        self.size_cm = self.size_cm.or(pg.size_cm);
+        self.forces.push(std::mem::take(&mut pg.forces));
+        if self.plate.is_none()
+            && let Some((c, r, _)) = pg.matrix
+        {
+            self.plate = Some((c, r));
+            self.frames = Some(SparseFrames::new(r * c));
+            for earlier in std::mem::take(&mut self.pending) {
+                self.place(&earlier)?;
+            }
+        }
+        if self.plate.is_some() {
+            return self.place(&pg);
+        }
+        // Pages before the first `Matrix` line wait for it, within one frame's worth of cells.
+        let waiting: usize = self.pending.iter().map(|p| p.cells.len()).sum();
+        if waiting + pg.cells.len() > MAX_FRAME_SENSORS {
+            return Err(IoError::format(
+                self.name,
+                format!("more than {MAX_FRAME_SENSORS} values before a `Matrix: CxR` line"),
+            ));
+        }
+        self.pending.push(pg);
+        Ok(())
     }
-    let forces = parsed.iter().map(|p| p.forces.clone()).collect();
-    let mut rec = Recording::new(parsed.len(), rows, cols, data, vec![true; per])?;
-    rec.sensel_area_mm2 = parsed.iter().find_map(|p| p.area_cm2).map(|a| a * 100.0);
-    rec.dt_s = parsed.iter().find_map(|p| p.dt_ms).map(|ms| ms / 1000.0);
-    rec.pitch_mm = parsed
-        .iter()
-        .find_map(|p| p.size_cm)
-        .map(|(x, y)| [x * 10.0, y * 10.0]);
-    rec.units = "kPa".to_string();
-    rec.format = Some(Format::Lst);
-    Ok((rec, forces))
+
+    /// Places a page on the plate as the next frame.
+    fn place(&mut self, pg: &Page) -> Result<()> {
+        let ((cols, rows), Some(frames)) = (self.plate.expect("set"), self.frames.as_mut()) else {
+            return Ok(());
+        };
+        crate::limits::check_frames(self.name, frames.n_frames() + 1, rows * cols)?;
+        frames.push_entries(&mut pg.entries(cols, rows, self.name)?);
+        Ok(())
+    }
+
+    fn finish(self) -> Result<(Recording, Vec<LstPageForces>)> {
+        if self.n_pages == 0 {
+            return Err(IoError::format(self.name, "no pages"));
+        }
+        let (Some((cols, rows)), Some(frames)) = (self.plate, self.frames) else {
+            return Err(IoError::format(self.name, "no `Matrix: CxR` line"));
+        };
+        let mut rec = Recording::from_sparse(rows, cols, frames, vec![true; rows * cols])?;
+        rec.sensel_area_mm2 = self.area_cm2.map(|a| a * 100.0);
+        rec.dt_s = self.dt_ms.map(|ms| ms / 1000.0);
+        rec.pitch_mm = self.size_cm.map(|(x, y)| [x * 10.0, y * 10.0]);
+        rec.units = "kPa".to_string();
+        rec.format = Some(Format::Lst);
+        Ok((rec, self.forces))
+    }
 }

@@ -8,28 +8,12 @@ pub mod npy;
 pub mod npz;
 pub mod pedar;
 pub mod pedcad;
+mod stream;
 pub mod zebris_raw;
 
 use crate::error::{IoError, Result};
 use crate::recording::{Format, Recording};
 use std::path::{Path, PathBuf};
-
-/// Text lines of a Latin-1 (or ASCII/UTF-8 treated bytewise) file with their 1-based numbers and
-/// without the line end (`\n` or `\r\n`).
-pub(crate) fn latin1_lines(bytes: &[u8]) -> impl Iterator<Item = (usize, String)> + '_ {
-    let mut s: &[u8] = bytes;
-    if s.last() == Some(&b'\n') {
-        s = &s[..s.len() - 1];
-    }
-    let empty = bytes.is_empty();
-    s.split(|&b| b == b'\n')
-        .enumerate()
-        .filter(move |_| !empty)
-        .map(|(i, l)| {
-            let l = l.strip_suffix(b"\r").unwrap_or(l);
-            (i + 1, l.iter().map(|&b| b as char).collect())
-        })
-}
 
 /// Parses a finite number (accepting a decimal comma only when it is the sole separator).
 pub(crate) fn parse_num(tok: &str) -> Option<f64> {
@@ -70,11 +54,23 @@ fn utf16_little_endian(bytes: &[u8]) -> Option<bool> {
     }
 }
 
+/// The whole file, its memory reserved for the length the system states (a failed allocation is
+/// an error naming the file, not an abort).
 pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|source| IoError::Io {
-        path: path.display().to_string(),
+    use std::io::Read as _;
+    let name = path.display().to_string();
+    let io = |source| IoError::Io {
+        path: name.clone(),
         source,
-    })
+    };
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let len = file.metadata().map_err(io)?.len();
+    let len = usize::try_from(len).unwrap_or(usize::MAX);
+    let mut bytes = crate::limits::try_with_capacity(len).ok_or_else(|| {
+        IoError::format(&name, format!("cannot allocate memory for its {len} bytes"))
+    })?;
+    file.read_to_end(&mut bytes).map_err(io)?;
+    Ok(bytes)
 }
 
 /// The formats [`read_recording`] understands, as listed in [`IoError::UnknownFormat`].
@@ -414,9 +410,6 @@ fn describe_text(text: &str) -> String {
 /// The first bytes of a gzip stream.
 const GZIP_MAGIC: &[u8] = b"\x1f\x8b";
 
-/// The most a gzip-compressed recording may expand to (a larger claim is refused, not allocated).
-const MAX_GUNZIPPED: u64 = 1 << 31;
-
 /// The format of the content of a gzip-compressed file, from the part of it `head` holds.
 fn sniff_gzip(path: &Path, head: &[u8]) -> std::result::Result<Format, String> {
     use std::io::Read;
@@ -433,50 +426,11 @@ fn sniff_gzip(path: &Path, head: &[u8]) -> std::result::Result<Format, String> {
     }
 }
 
-/// Decompresses a gzip-compressed file, refusing more than [`MAX_GUNZIPPED`] bytes.
-fn gunzip(bytes: &[u8], name: &str) -> Result<Vec<u8>> {
-    use std::io::Read;
-    let mut out = Vec::new();
-    flate2::read::GzDecoder::new(bytes)
-        .take(MAX_GUNZIPPED + 1)
-        .read_to_end(&mut out)
-        .map_err(|e| IoError::format(name, format!("gzip stream: {e}")))?;
-    if out.len() as u64 > MAX_GUNZIPPED {
-        return Err(IoError::format(
-            name,
-            format!("decompresses to more than {MAX_GUNZIPPED} bytes"),
-        ));
-    }
-    Ok(out)
-}
-
 /// Parses an in-memory file of a known format; `name` is used in error messages. A
-/// gzip-compressed file is decompressed first, and UTF-16 text (with its byte-order mark) read as
-/// its UTF-8 form.
+/// gzip-compressed file is decompressed as it is parsed (within [`crate::limits`]), and UTF-16
+/// text (with its byte-order mark) read as its UTF-8 form.
 pub fn parse_bytes(bytes: &[u8], format: Format, name: &str) -> Result<Recording> {
-    if bytes.starts_with(GZIP_MAGIC) {
-        return parse_bytes(&gunzip(bytes, name)?, format, name);
-    }
-    if let Some(text) = utf16_to_utf8(bytes) {
-        return parse_bytes(&text, format, name);
-    }
-    let mut rec = match format {
-        Format::Asf => asf::parse_asf(bytes, name)?,
-        Format::Lst => lst::parse_lst(bytes, name)?.0,
-        Format::Csv => csv::parse_csv(bytes, name)?,
-        Format::Npy => npy::parse_npy(bytes, name)?,
-        Format::Png | Format::Tiff => images::decode_image(bytes, name)?,
-        Format::TekscanCsv => asf::parse_tekscan_csv(bytes, name)?,
-        Format::Zebris | Format::Footscan => pedcad::parse_pedcad(bytes, name)?,
-        Format::Npz => npz::parse_npz(bytes, name)?,
-        Format::Pedar => pedar::parse_pedar(bytes, name, pedar::PedarLayout::bundled())?,
-        Format::ZebrisXml => zebris_raw::parse_zebris_xml(bytes, name)?,
-        Format::ZebrisJson => zebris_raw::parse_zebris_json(bytes, name)?,
-    };
-    if matches!(format, Format::Png | Format::Tiff) {
-        rec.format = Some(format);
-    }
-    Ok(rec)
+    parse_bytes_with(bytes, format, name, &ReadOptions::default())
 }
 
 /// [`parse_bytes`] with reading options (a pedar layout file).
@@ -486,14 +440,102 @@ pub fn parse_bytes_with(
     name: &str,
     opts: &ReadOptions,
 ) -> Result<Recording> {
-    if let Some(text) = utf16_to_utf8(bytes) {
-        return parse_bytes_with(&text, format, name, opts);
+    let gzip = bytes.starts_with(GZIP_MAGIC);
+    if is_binary(format) && !gzip {
+        return parse_binary(bytes, format, name);
     }
-    match (format, &opts.layout) {
-        (Format::Pedar, Some(layout)) => {
-            pedar::parse_pedar(bytes, name, &pedar::PedarLayout::from_file(layout)?)
+    parse_source(bytes, gzip, bytes.len(), format, name, opts)
+}
+
+/// Whether `format` is parsed from its bytes whole (a zip's directory is at its end, an image
+/// decodes whole); the text formats are parsed as a stream.
+fn is_binary(format: Format) -> bool {
+    matches!(
+        format,
+        Format::Npy | Format::Npz | Format::Png | Format::Tiff
+    )
+}
+
+fn parse_binary(bytes: &[u8], format: Format, name: &str) -> Result<Recording> {
+    match format {
+        Format::Npy => npy::parse_npy(bytes, name),
+        Format::Npz => npz::parse_npz(bytes, name),
+        _ => images::decode_image(bytes, name),
+    }
+}
+
+/// Parses a recording of `format` from `source`, its file's bytes from the start, decompressed
+/// as they are parsed when `gzip` (never whole first, and at most
+/// [`MAX_DECOMPRESSED`](crate::limits::MAX_DECOMPRESSED) bytes); `size` is the length of a file
+/// that is not compressed. UTF-16 text, and a compressed binary format, are read whole first.
+fn parse_source(
+    source: impl std::io::Read,
+    gzip: bool,
+    size: usize,
+    format: Format,
+    name: &str,
+    opts: &ReadOptions,
+) -> Result<Recording> {
+    use std::io::BufRead as _;
+    let mut decoded: Box<dyn std::io::BufRead> = if gzip {
+        Box::new(std::io::BufReader::new(stream::Gunzip::new(source)))
+    } else {
+        Box::new(std::io::BufReader::new(source))
+    };
+    let size = match gzip {
+        true => usize::try_from(crate::limits::MAX_DECOMPRESSED).unwrap_or(usize::MAX),
+        false => size,
+    };
+    let head = decoded
+        .fill_buf()
+        .map_err(|e| stream::read_error(name, e))?;
+    if utf16_little_endian(head).is_some() || is_binary(format) {
+        let bytes = stream::read_all(decoded, gzip, name)?;
+        let text = utf16_to_utf8(&bytes);
+        return parse_bytes_with(text.as_deref().unwrap_or(&bytes), format, name, opts);
+    }
+    parse_text(decoded, gzip, size, format, name, opts)
+}
+
+/// Parses a text format from `decoded` (see [`parse_source`]), each stretch of text bounded
+/// ([`stream::Bounded`]).
+fn parse_text(
+    decoded: impl std::io::Read,
+    gzip: bool,
+    size: usize,
+    format: Format,
+    name: &str,
+    opts: &ReadOptions,
+) -> Result<Recording> {
+    use stream::{bounded, parse_lines, Stretch};
+    let lines = |stretch| bounded(decoded, gzip, stretch);
+    match format {
+        Format::Asf | Format::TekscanCsv => {
+            let csv = format == Format::TekscanCsv;
+            let mut keep = asf::Keep::All;
+            asf::read_tekscan(lines(Stretch::Line), size, name, csv, &mut keep)
         }
-        _ => parse_bytes(bytes, format, name),
+        Format::Lst => {
+            parse_lines(lines(Stretch::Line), name, |l| lst::read_lst(l, name)).map(|(r, _)| r)
+        }
+        Format::Csv => parse_lines(lines(Stretch::Line), name, |l| csv::read_csv(l, name)),
+        Format::Zebris | Format::Footscan => {
+            parse_lines(lines(Stretch::Line), name, |l| pedcad::read_pedcad(l, name))
+        }
+        Format::Pedar => {
+            let layout = match &opts.layout {
+                Some(file) => std::borrow::Cow::Owned(pedar::PedarLayout::from_file(file)?),
+                None => std::borrow::Cow::Borrowed(pedar::PedarLayout::bundled()),
+            };
+            parse_lines(lines(Stretch::Line), name, |l| {
+                pedar::read_pedar(l, name, &layout)
+            })
+        }
+        Format::ZebrisXml => zebris_raw::read_zebris_xml(lines(Stretch::Xml), name),
+        Format::ZebrisJson => zebris_raw::read_zebris_json(lines(Stretch::Json), name),
+        Format::Npy | Format::Npz | Format::Png | Format::Tiff => Err(IoError::invalid(format!(
+            "{name}: {format} is not a text format"
+        ))),
     }
 }
 
@@ -560,7 +602,7 @@ impl FileFrames {
                     path: thread_name.clone(),
                     source,
                 })?;
-                let lines = std::io::BufReader::with_capacity(1 << 16, file);
+                let lines = stream::bounded(file, false, stream::Stretch::Line);
                 let mut hand = |frame: &[f32]| -> Result<()> {
                     send.send(Ok(frame.to_vec()))
                         .map_err(|_| IoError::invalid("the run stopped reading"))
@@ -620,17 +662,16 @@ pub fn read_recording_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result
         return images::read_numbered(s);
     }
     let name = path.display().to_string();
-    // Tekscan files are read line by line (a long recording's file is never held whole);
-    // the other formats are read into memory first.
+    // Every text format is parsed as it is read (a long recording's file is never held whole,
+    // a compressed one never decompressed whole); zip archives and images are read whole.
     let sniffed = Sniffed::open(path, &name)?;
-    if let Some(csv) = sniffed.tekscan_csv() {
-        let size = sniffed.size;
-        return asf::read_tekscan(sniffed.lines(), size, &name, csv, &mut asf::Keep::All);
-    }
     let format = sniffed.format;
-    drop(sniffed);
-    let bytes = read_bytes(path)?;
-    parse_bytes_with(&bytes, format, &name, opts)
+    if is_binary(format) && !sniffed.is_gzip() {
+        drop(sniffed);
+        return parse_binary(&read_bytes(path)?, format, &name);
+    }
+    let (size, gzip) = (sniffed.size, sniffed.is_gzip());
+    parse_source(sniffed.bytes(), gzip, size, format, &name, opts)
 }
 
 /// A recording's file opened, its first [`SNIFF_BYTES`] read and its format told from them.
@@ -666,18 +707,28 @@ impl Sniffed {
         })
     }
 
+    /// Whether the file is gzip-compressed.
+    fn is_gzip(&self) -> bool {
+        self.head.starts_with(GZIP_MAGIC)
+    }
+
     /// For a Tekscan `.asf` file (`false`) or CSV export (`true`) that is not gzip-compressed
-    /// nor UTF-16 (both are read whole into memory): the formats read line by line.
+    /// nor UTF-16: the formats a run may read again, frame by frame.
     fn tekscan_csv(&self) -> Option<bool> {
         (matches!(self.format, Format::Asf | Format::TekscanCsv)
-            && !self.head.starts_with(GZIP_MAGIC)
+            && !self.is_gzip()
             && utf16_little_endian(&self.head).is_none())
         .then_some(self.format == Format::TekscanCsv)
     }
 
+    /// The whole file's bytes, from the start.
+    fn bytes(self) -> impl std::io::Read {
+        use std::io::Read as _;
+        std::io::Cursor::new(self.head).chain(self.file)
+    }
+
     /// The whole file's lines, from the start.
     fn lines(self) -> impl std::io::BufRead {
-        use std::io::Read as _;
-        std::io::BufReader::with_capacity(1 << 16, std::io::Cursor::new(self.head).chain(self.file))
+        stream::bounded(self.bytes(), false, stream::Stretch::Line)
     }
 }

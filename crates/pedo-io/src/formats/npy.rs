@@ -3,7 +3,8 @@
 //! sensor (it must then be NaN in every frame).
 
 use crate::error::{IoError, Result};
-use crate::recording::{Format, Recording};
+use crate::recording::{Format, Recording, SparseFrames};
+use std::io::Read;
 use std::path::Path;
 
 #[derive(Clone, Copy)]
@@ -147,6 +148,58 @@ fn decode(chunk: &[u8], h: &NpyHeader) -> f64 {
 pub fn parse_npy(bytes: &[u8], name: &str) -> Result<Recording> {
     let fail = |msg: String| IoError::format(name, msg);
     let (h, data_start) = read_header(bytes, &fail)?;
+    let dims = dims(&h, &fail)?;
+    check_body(&h, (bytes.len() - data_start) as u64, &fail)?;
+    read_body(&h, dims, Body::Bytes(&bytes[data_start..]), name)
+}
+
+/// The most bytes a Fortran-order array read as a stream may hold: its frames are spread over
+/// all of it, so it is read whole.
+const MAX_FORTRAN_STREAM: usize = 256 << 20;
+
+/// Parses a `.npy` array as it is read from `source` (a `.npz` member), whose stated length is
+/// `size` bytes: only its frames (sparse) are held, not its data.
+pub(crate) fn read_npy(source: &mut dyn Read, size: u64, name: &str) -> Result<Recording> {
+    let fail = |msg: String| IoError::format(name, msg);
+    let mut some = |n: usize| -> Result<Vec<u8>> {
+        let mut v = Vec::new();
+        (&mut *source)
+            .take(n as u64)
+            .read_to_end(&mut v)
+            .map_err(|e| fail(format!("cannot read the array: {e}")))?;
+        Ok(v)
+    };
+    let mut head = some(10)?;
+    if matches!(head.get(6), Some(2 | 3)) {
+        head.extend(some(2)?);
+    }
+    // NumPy writes a header of about a hundred bytes.
+    let end = header_end(&head).filter(|&e| e <= (1 << 20) && e as u64 <= size);
+    let Some(end) = end else {
+        read_header(&head, &fail)?;
+        return Err(fail("truncated header".into()));
+    };
+    head.extend(some(end.saturating_sub(head.len()))?);
+    let (h, data_start) = read_header(&head, &fail)?;
+    let dims = dims(&h, &fail)?;
+    check_body(&h, size.saturating_sub(data_start as u64), &fail)?;
+    read_body(&h, dims, Body::Stream(source), name)
+}
+
+/// Where the header of a `.npy` whose first bytes are `b` ends, when they show it.
+fn header_end(b: &[u8]) -> Option<usize> {
+    if !b.starts_with(b"\x93NUMPY") {
+        return None;
+    }
+    match *b.get(6)? {
+        1 => Some(10 + usize::from(u16::from_le_bytes([*b.get(8)?, *b.get(9)?]))),
+        2 | 3 => Some(12 + u32::from_le_bytes(b.get(8..12)?.try_into().ok()?) as usize),
+        _ => None,
+    }
+}
+
+/// The array's frames, rows and columns, within the limits of a recording.
+fn dims(h: &NpyHeader, fail: &impl Fn(String) -> IoError) -> Result<(usize, usize, usize)> {
     let shape = &h.shape;
     let (t, r, c) = match shape[..] {
         [r, c] => (1, r, c),
@@ -157,55 +210,119 @@ pub fn parse_npy(bytes: &[u8], name: &str) -> Result<Recording> {
             )));
         }
     };
-    let n = t
-        .checked_mul(r)
+    t.checked_mul(r)
         .and_then(|x| x.checked_mul(c))
         .filter(|&n| n > 0 && n <= 1 << 31)
         .ok_or_else(|| fail(format!("unusable shape {shape:?}")))?;
-    let body = &bytes[data_start..];
-    let need = n * h.size;
-    if body.len() != need {
-        let cut = if body.len() < need {
-            " (truncated)"
-        } else {
-            ""
-        };
+    let per = crate::limits::frame_sensors("a frame", r, c).map_err(fail)?;
+    crate::limits::frame_count(t, per).map_err(fail)?;
+    Ok((t, r, c))
+}
+
+/// Checks that the data hold `body` bytes, what the shape and dtype need.
+fn check_body(h: &NpyHeader, body: u64, fail: &impl Fn(String) -> IoError) -> Result<()> {
+    let need = (h.shape.iter().product::<usize>() * h.size) as u64;
+    if body != need {
+        let cut = if body < need { " (truncated)" } else { "" };
         return Err(fail(format!(
-            "data holds {} bytes, shape {shape:?} of {} needs {need}{cut}",
-            body.len(),
-            h.descr
+            "data holds {body} bytes, shape {:?} of {} needs {need}{cut}",
+            h.shape, h.descr
         )));
     }
-    let mut vals = Vec::with_capacity(n);
-    for chunk in body.chunks_exact(h.size) {
-        let v = decode(chunk, &h);
-        if v.is_infinite() {
-            return Err(fail("array holds an infinite value".into()));
-        }
-        if v.abs() > f32::MAX as f64 {
-            return Err(fail(format!(
-                "array holds {v:e}, beyond the float32 range of a recording (±3.4e38)"
-            )));
-        }
-        vals.push(v as f32);
+    Ok(())
+}
+
+/// The data of an array: in memory, or a stream read as the frames need it.
+enum Body<'a> {
+    Bytes(&'a [u8]),
+    Stream(&'a mut dyn Read),
+}
+
+/// One value as a recording holds it: finite, within float32's range.
+fn value(chunk: &[u8], h: &NpyHeader, fail: &impl Fn(String) -> IoError) -> Result<f32> {
+    let v = decode(chunk, h);
+    if v.is_infinite() {
+        return Err(fail("array holds an infinite value".into()));
     }
-    let data = if h.fortran {
-        // Fortran layout: index (i, j, k) of shape (t, r, c) sits at i + t * (j + r * k).
-        let mut out = vec![0.0f32; n];
-        for i in 0..t {
-            for j in 0..r {
-                for k in 0..c {
-                    out[(i * r + j) * c + k] = vals[i + t * (j + r * k)];
-                }
+    if v.abs() > f32::MAX as f64 {
+        return Err(fail(format!(
+            "array holds {v:e}, beyond the float32 range of a recording (±3.4e38)"
+        )));
+    }
+    Ok(v as f32)
+}
+
+/// Reads the data (checked to hold the array) into sparse frames, frame by frame; NaN marks
+/// a missing sensor.
+fn read_body(
+    h: &NpyHeader,
+    (t, r, c): (usize, usize, usize),
+    body: Body,
+    name: &str,
+) -> Result<Recording> {
+    let fail = |msg: String| IoError::format(name, msg);
+    let (per, size) = (r * c, h.size);
+    let mut frames = SparseFrames::new(per);
+    let mut frame = vec![0.0f32; per];
+    if h.fortran {
+        let owned;
+        let bytes = match body {
+            Body::Bytes(b) => b,
+            Body::Stream(source) => {
+                owned = read_whole(source, t * per * size, name)?;
+                &owned[..]
             }
+        };
+        // Fortran layout: index (i, j, k) of shape (t, r, c) sits at i + t * (j + r * k).
+        for i in 0..t {
+            for (p, v) in frame.iter_mut().enumerate() {
+                let (j, k) = (p / c, p % c);
+                *v = value(&bytes[(i + t * (j + r * k)) * size..][..size], h, &fail)?;
+            }
+            frames.push(&frame);
         }
-        out
     } else {
-        vals
-    };
-    let mut rec = Recording::from_nan_frames(t, r, c, data).map_err(|e| fail(e.to_string()))?;
+        let source: &mut dyn Read = match body {
+            Body::Bytes(b) => &mut &b[..],
+            Body::Stream(s) => s,
+        };
+        let mut raw = vec![0u8; per * size];
+        for _ in 0..t {
+            source
+                .read_exact(&mut raw)
+                .map_err(|e| fail(format!("cannot read the array: {e}")))?;
+            for (v, chunk) in frame.iter_mut().zip(raw.chunks_exact(size)) {
+                *v = value(chunk, h, &fail)?;
+            }
+            frames.push(&frame);
+        }
+    }
+    let mut rec = Recording::from_sparse_nan(r, c, frames).map_err(|e| fail(e.to_string()))?;
     rec.format = Some(Format::Npy);
     Ok(rec)
+}
+
+/// `n` bytes of `source` (a Fortran-order array's data).
+fn read_whole(source: &mut dyn Read, n: usize, name: &str) -> Result<Vec<u8>> {
+    if n > MAX_FORTRAN_STREAM {
+        return Err(IoError::format(
+            name,
+            format!(
+                "a Fortran-order array of {n} bytes in an archive: more than the \
+                 {MAX_FORTRAN_STREAM} read whole (save it in C order)"
+            ),
+        ));
+    }
+    let mut v = crate::limits::try_filled(n, 0u8).ok_or_else(|| {
+        IoError::format(
+            name,
+            format!("cannot allocate memory for an array of {n} bytes"),
+        )
+    })?;
+    source
+        .read_exact(&mut v)
+        .map_err(|e| IoError::format(name, format!("cannot read the array: {e}")))?;
+    Ok(v)
 }
 
 /// Encodes a recording as a 3-D little-endian `f4` array (T, rows, cols) in C order, NaN at

@@ -3,12 +3,13 @@
 //! is read as the recording; the archive's central directory is authoritative.
 //!
 //! Sizes come from the archive and are checked against its length before anything is
-//! allocated; a deflated member is inflated with a limit equal to its stated size, and its CRC-32
-//! is verified, so a corrupt or hostile archive is an error, never a huge allocation.
+//! allocated; a member is parsed as it is inflated (its array's frames held sparsely, never its
+//! data whole), within its stated size, and its CRC-32 is verified, so a corrupt or hostile
+//! archive is an error, never a huge allocation.
 
-use super::npy::parse_npy;
 use crate::error::{IoError, Result};
 use crate::recording::{Format, Recording};
+use std::io::Read;
 
 /// A member as listed by the central directory.
 struct Member {
@@ -117,8 +118,9 @@ fn apply_zip64(m: &mut Member, mut extra: &[u8]) {
     }
 }
 
-/// The bytes of one member, inflated and CRC-checked.
-fn member_bytes(b: &[u8], m: &Member, name: &str) -> Result<Vec<u8>> {
+/// Where a member's data lie in the archive, its size checked against the archive's length
+/// and, deflated, its stated size against what deflate can expand to.
+fn member_data<'b>(b: &'b [u8], m: &Member, name: &str) -> Result<&'b [u8]> {
     let fail = |msg: String| IoError::format(name, format!("zip member {}: {msg}", m.name));
     let at = usize::try_from(m.local_offset).map_err(|_| fail("bad offset".into()))?;
     let local = b
@@ -137,43 +139,104 @@ fn member_bytes(b: &[u8], m: &Member, name: &str) -> Result<Vec<u8>> {
                 "truncated: {size} bytes stated, the archive ends first"
             ))
         })?;
-    let out = match m.method {
-        0 => data.to_vec(),
-        8 => {
-            // Inflating can expand ~1000:1; the stated size bounds it, and the stated size itself
-            // is bounded by that ratio so a lying header cannot reserve gigabytes.
-            let limit = usize::try_from(m.uncompressed)
-                .ok()
-                .filter(|&u| u <= data.len().saturating_mul(1032).max(1 << 16))
-                .ok_or_else(|| fail("uncompressed size out of proportion".into()))?;
-            miniz_oxide::inflate::decompress_to_vec_with_limit(data, limit)
-                .map_err(|e| fail(format!("deflate stream is corrupt ({:?})", e.status)))?
-        }
+    match m.method {
+        0 | 8 => {}
         other => return Err(fail(format!("compression method {other} is not supported"))),
-    };
-    if out.len() as u64 != m.uncompressed {
-        return Err(fail(format!(
-            "{} bytes, the directory states {}",
-            out.len(),
-            m.uncompressed
-        )));
     }
-    let mut h = crc32fast::Hasher::new();
-    h.update(&out);
-    if h.finalize() != m.crc {
-        return Err(fail("CRC mismatch".into()));
+    // Inflating can expand ~1000:1: a stated size beyond that is a lying header.
+    if m.method == 8 && m.uncompressed > (data.len() as u64).saturating_mul(1032).max(1 << 16) {
+        return Err(fail("uncompressed size out of proportion".into()));
     }
-    Ok(out)
+    Ok(data)
+}
+
+/// A member's bytes as they are read, inflated when deflated (never whole), with their count
+/// and CRC-32 checked against the directory once all are read.
+struct MemberReader<'b> {
+    inner: Box<dyn Read + 'b>,
+    crc: crc32fast::Hasher,
+    read: u64,
+    stated: u64,
+    stated_crc: u32,
+    /// What went wrong reading the member, if anything.
+    failure: Option<String>,
+}
+
+impl<'b> MemberReader<'b> {
+    fn new(data: &'b [u8], m: &Member) -> Self {
+        let inner: Box<dyn Read + 'b> = match m.method {
+            8 => Box::new(flate2::read::DeflateDecoder::new(data)),
+            _ => Box::new(data),
+        };
+        MemberReader {
+            // One byte more than stated, so that a longer member shows.
+            inner: Box::new(inner.take(m.uncompressed.saturating_add(1))),
+            crc: crc32fast::Hasher::new(),
+            read: 0,
+            stated: m.uncompressed,
+            stated_crc: m.crc,
+            failure: None,
+        }
+    }
+
+    fn fail(&mut self, msg: String) -> std::io::Error {
+        self.failure = Some(msg.clone());
+        std::io::Error::new(std::io::ErrorKind::InvalidData, msg)
+    }
+
+    /// Reads what is left and checks the member whole: `Err` says what is wrong with it.
+    fn finish(&mut self) -> std::result::Result<(), String> {
+        let _ = std::io::copy(self, &mut std::io::sink());
+        match self.failure.take() {
+            Some(msg) => Err(msg),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Read for MemberReader<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        if self.failure.is_some() {
+            return Err(std::io::Error::other("the member is corrupt"));
+        }
+        let n = match self.inner.read(buf) {
+            Ok(n) => n,
+            Err(e) => return Err(self.fail(format!("deflate stream is corrupt ({e})"))),
+        };
+        self.read += n as u64;
+        self.crc.update(&buf[..n]);
+        if self.read > self.stated || (n == 0 && self.read < self.stated) {
+            let (read, stated) = (self.read, self.stated);
+            return Err(self.fail(format!("{read} bytes, the directory states {stated}")));
+        }
+        if n == 0 && self.crc.clone().finalize() != self.stated_crc {
+            return Err(self.fail("CRC mismatch".into()));
+        }
+        Ok(n)
+    }
 }
 
 /// Parses a `.npz` archive held in memory: the first `.npy` member that is a 2-D or 3-D
-/// numeric array becomes the recording.
+/// numeric array becomes the recording. Each member is parsed as it is inflated.
 pub fn parse_npz(bytes: &[u8], name: &str) -> Result<Recording> {
     let list = members(bytes, name)?;
     let mut tried = Vec::new();
     for m in list.iter().filter(|m| m.name.ends_with(".npy")) {
-        let raw = member_bytes(bytes, m, name)?;
-        match parse_npy(&raw, &format!("{name}:{}", m.name)) {
+        let data = member_data(bytes, m, name)?;
+        let mut reader = MemberReader::new(data, m);
+        let parsed =
+            super::npy::read_npy(&mut reader, m.uncompressed, &format!("{name}:{}", m.name));
+        // A corrupt member is the archive's error, whatever its array looked like so far.
+        if let Err(msg) = reader.finish() {
+            return Err(IoError::format(
+                name,
+                format!("zip member {}: {msg}", m.name),
+            ));
+        }
+        match parsed {
             Ok(mut rec) => {
                 rec.format = Some(Format::Npz);
                 return Ok(rec);

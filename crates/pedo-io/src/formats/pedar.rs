@@ -14,10 +14,10 @@
 //! each insole as a recording of its own. Row 0 is the toe end.
 
 use super::asf::trunc;
-use super::{latin1_lines, parse_num, read_bytes};
+use super::{parse_num, read_bytes};
 use crate::error::{IoError, Result};
 use crate::recording::stated_units;
-use crate::recording::{Format, Recording};
+use crate::recording::{Format, Recording, SparseFrames};
 use std::path::Path;
 use std::sync::OnceLock;
 
@@ -323,12 +323,12 @@ impl PedarHeader {
 fn read_pedar_rows(
     lines: impl Iterator<Item = (usize, String)>,
     n_columns: usize,
-    last_line: usize,
     name: &str,
 ) -> Result<(Vec<f32>, usize)> {
     let mut values: Vec<f32> = Vec::new();
     let mut n_frames = 0usize;
-    for (ln, line) in lines {
+    let mut lines = lines.peekable();
+    while let Some((ln, line)) = lines.next() {
         let err = |msg: String| IoError::parse(name, ln, msg);
         let mut f = line.split_whitespace();
         let Some(time) = f.next() else { continue };
@@ -344,12 +344,13 @@ fn read_pedar_rows(
             k += 1;
         }
         if k != n_columns {
-            if ln == last_line {
+            if lines.peek().is_none() {
                 values.truncate(values.len() - k); // cut inside the last line
                 break;
             }
             return Err(err(format!("{k} sensor values, expected {n_columns}")));
         }
+        crate::limits::frame_count(n_frames + 1, 1).map_err(err)?;
         n_frames += 1;
     }
     Ok((values, n_frames))
@@ -357,11 +358,18 @@ fn read_pedar_rows(
 
 /// Parses the export itself (no layout needed).
 pub fn parse_pedar_data(bytes: &[u8], name: &str) -> Result<PedarData> {
-    let n_lines = latin1_lines(bytes).count();
-    let mut lines = latin1_lines(bytes);
+    let lines = super::stream::bounded(bytes, false, super::stream::Stretch::Line);
+    super::stream::parse_lines(lines, name, |l| read_pedar_data(l, name))
+}
+
+/// [`parse_pedar_data`] from the export's lines (see [`super::stream::Lines`]).
+fn read_pedar_data(
+    mut lines: impl Iterator<Item = (usize, String)>,
+    name: &str,
+) -> Result<PedarData> {
     let (mut header, (hl, column_header)) = PedarHeader::read(&mut lines, name)?;
     let columns = header.columns(hl, &column_header, name)?;
-    let (values, n_frames) = read_pedar_rows(lines, columns.len(), n_lines, name)?;
+    let (values, n_frames) = read_pedar_rows(lines, columns.len(), name)?;
     if let Some(e) = header.stated_frames()
         && n_frames as u64 != e
     {
@@ -574,26 +582,23 @@ fn to_recording(
     }
     let r = rasterise(&groups, layout.mm_per_unit, name)?;
     let per = r.rows * r.cols;
+    crate::limits::check_frames(name, d.n_frames, per)?;
     let mut mask = vec![false; per];
     r.cells.iter().flatten().for_each(|&i| mask[i] = true);
     let nc = d.columns.len();
     let src: Vec<usize> = sources.concat();
-    let mut data = vec![
-        0.0f32;
-        d.n_frames
-            .checked_mul(per)
-            .ok_or_else(|| IoError::format(name, "too large"))?
-    ];
-    for t in 0..d.n_frames {
-        let row = &d.values[t * nc..(t + 1) * nc];
-        let frame = &mut data[t * per..(t + 1) * per];
+    // Frame by frame into sparse frames: a frame of the image takes many cells per sensor.
+    let mut frames = SparseFrames::new(per);
+    let mut frame = vec![0.0f32; per];
+    for row in d.values.chunks_exact(nc).take(d.n_frames) {
         for (cells, &k) in r.cells.iter().zip(&src) {
             for &i in cells {
                 frame[i] = row[k];
             }
         }
+        frames.push(&frame);
     }
-    let mut rec = Recording::new(d.n_frames, r.rows, r.cols, data, mask)?;
+    let mut rec = Recording::from_sparse(r.rows, r.cols, frames, mask)?;
     rec.pitch_mm = r.pitch;
     rec.dt_s = d.dt_s;
     rec.units = stated_units(&d.units);
@@ -604,7 +609,17 @@ fn to_recording(
 /// Parses a pedar export onto a layout: both insoles in one image (left insole on the left,
 /// two empty columns between), so that each insole is an object of its own.
 pub fn parse_pedar(bytes: &[u8], name: &str, layout: &PedarLayout) -> Result<Recording> {
-    let d = parse_pedar_data(bytes, name)?;
+    let lines = super::stream::bounded(bytes, false, super::stream::Stretch::Line);
+    super::stream::parse_lines(lines, name, |l| read_pedar(l, name, layout))
+}
+
+/// [`parse_pedar`] from the export's lines (see [`super::stream::Lines`]).
+pub(crate) fn read_pedar(
+    lines: impl Iterator<Item = (usize, String)>,
+    name: &str,
+    layout: &PedarLayout,
+) -> Result<Recording> {
+    let d = read_pedar_data(lines, name)?;
     let sides: Vec<Insole> = [Insole::Left, Insole::Right]
         .into_iter()
         .filter(|s| d.columns.iter().any(|c| c.0 == *s))

@@ -14,7 +14,7 @@
 //! frame.
 
 use super::asf::trunc;
-use super::{latin1_lines, parse_num};
+use super::parse_num;
 use crate::error::{IoError, Result};
 use crate::recording::stated_units;
 use crate::recording::{Format, Recording};
@@ -73,13 +73,22 @@ fn data_section(name: &str) -> Option<Option<i64>> {
 
 /// Parses a Zebris `.apd` or footscan export held in memory; `name` appears in error messages.
 pub fn parse_pedcad(bytes: &[u8], name: &str) -> Result<Recording> {
+    let lines = super::stream::bounded(bytes, false, super::stream::Stretch::Line);
+    super::stream::parse_lines(lines, name, |l| read_pedcad(l, name))
+}
+
+/// Parses a Zebris `.apd` or footscan export from its lines (see [`super::stream::Lines`]).
+pub(crate) fn read_pedcad(
+    lines: impl Iterator<Item = (usize, String)>,
+    name: &str,
+) -> Result<Recording> {
     let err = |line: usize, msg: String| IoError::parse(name, line, msg);
     let mut h = Header::default();
     let mut grids: Vec<Grid> = Vec::new();
     let mut in_data = false;
     let mut last_ln = 0;
-    let n_lines = latin1_lines(bytes).count();
-    for (ln, line) in latin1_lines(bytes) {
+    let mut lines = lines.peekable();
+    while let Some((ln, line)) = lines.next() {
         last_ln = ln;
         let t = line.trim();
         if t.is_empty() {
@@ -91,12 +100,15 @@ pub fn parse_pedcad(bytes: &[u8], name: &str) -> Result<Recording> {
             }
             in_data = false;
             if let Some(index) = data_section(sec.trim()) {
-                if h.rows.is_none() || h.cols.is_none() {
+                let (Some(rows), Some(cols)) = (h.rows, h.cols) else {
                     return Err(err(
                         ln,
                         "a [Data] section before SensCountX and SensCountY".into(),
                     ));
-                }
+                };
+                let per = crate::limits::frame_sensors("SensCountX x SensCountY", rows, cols)
+                    .map_err(|m| err(ln, m))?;
+                crate::limits::frame_count(grids.len() + 1, per).map_err(|m| err(ln, m))?;
                 // A grid grows row by row as the file holds it, so a header claiming a huge
                 // size allocates nothing it does not read.
                 grids.push(Grid {
@@ -140,7 +152,7 @@ pub fn parse_pedcad(bytes: &[u8], name: &str) -> Result<Recording> {
                 k += 1;
             }
             if k != cols {
-                if ln == n_lines {
+                if lines.peek().is_none() {
                     // The file ends inside this row: reported as a truncated section.
                     g.values.truncate(g.values.len() - k);
                     break;

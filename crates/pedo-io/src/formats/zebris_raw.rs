@@ -30,15 +30,23 @@
 //! plate seen from above with the walking direction up. Every sensor of the plate exists.
 
 use super::parse_num;
+use super::stream::{bounded, read_error, Stretch};
 use crate::error::{IoError, Result};
+use crate::limits::MAX_TOKEN_BYTES;
 use crate::recording::stated_units;
-use crate::recording::{Format, Recording};
+use crate::recording::{Format, Recording, SparseFrames};
 use quick_xml::events::Event;
 use quick_xml::Reader;
+
+mod json;
 
 /// Plates larger than this many sensors are refused before anything is allocated: the largest
 /// Zebris platforms and treadmills hold about 12,000, and every frame costs the whole plate.
 const MAX_PLATE_SENSORS: usize = 1 << 16;
+
+/// Elements nested deeper than this are refused: the export nests about eight deep, and each
+/// open element's name is held.
+const MAX_DEPTH: usize = 256;
 
 /// What the header states, as read.
 #[derive(Default, Debug)]
@@ -58,81 +66,176 @@ struct Window {
     cells: Option<String>,
 }
 
-/// One frame as read: its window (`origin`, `size` as `[x, y]`) and values x fastest; `None` for
-/// an unloaded frame. Frames stay sparse until the recording is built.
-type Sparse = Option<([usize; 2], [usize; 2], Vec<f32>)>;
-
-/// The frames of one clip as they are read.
+/// The frames of one clip as they are read, placed on the plate (held sparsely) as soon as its
+/// size is known: so that a frame costs the values its window holds, not the whole plate.
 struct Frames<'a> {
     name: &'a str,
-    cols: usize,
-    rows: usize,
-    frames: Vec<Sparse>,
+    /// `(cols, rows)` once known.
+    plate: Option<(usize, usize)>,
+    placed: SparseFrames,
+    /// The loaded frames read before the plate's size (a JSON export whose `samples` come
+    /// before its `cell_count`): each frame's number and window `[x, y, w, h]`, its values in
+    /// `waiting_values`; the frames between are unloaded.
+    waiting: Vec<(u32, [u32; 4])>,
+    waiting_values: Vec<f32>,
+    n: usize,
 }
 
 impl<'a> Frames<'a> {
+    /// Frames on a plate whose size is not known yet.
+    fn unplaced(name: &'a str) -> Self {
+        Frames {
+            name,
+            plate: None,
+            placed: SparseFrames::new(0),
+            waiting: Vec::new(),
+            waiting_values: Vec::new(),
+            n: 0,
+        }
+    }
+
+    /// Frames on the plate of `plate` (`[x, y]` sensors, as read).
     fn new(name: &'a str, plate: [Option<usize>; 2]) -> Result<Self> {
+        let mut f = Frames::unplaced(name);
+        f.set_plate(plate)?;
+        Ok(f)
+    }
+
+    /// The plate's size, `[x, y]` as read: the frames read so far are placed on it.
+    fn set_plate(&mut self, plate: [Option<usize>; 2]) -> Result<()> {
         let [Some(cols), Some(rows)] = plate else {
             return Err(IoError::format(
-                name,
+                self.name,
                 "a frame before the plate's <cell_count> (x and y)",
             ));
         };
         if cols == 0 || rows == 0 || cols.saturating_mul(rows) > MAX_PLATE_SENSORS {
             return Err(IoError::format(
-                name,
+                self.name,
                 format!("a plate of {cols} x {rows} sensors is not a pressure plate"),
             ));
         }
-        Ok(Frames {
-            name,
-            cols,
-            rows,
-            frames: Vec::new(),
-        })
+        crate::limits::check_frames(self.name, self.n, cols * rows)?;
+        self.plate = Some((cols, rows));
+        self.placed = SparseFrames::new(cols * rows);
+        let waiting = std::mem::take(&mut self.waiting);
+        let values = std::mem::take(&mut self.waiting_values);
+        let mut at = 0;
+        for &(k, [x, y, w, h]) in &waiting {
+            let [k, x, y, w, h] = [k, x, y, w, h].map(|v| v as usize);
+            while self.placed.n_frames() < k {
+                self.placed.push_empty();
+            }
+            self.place(k, [x, y], [w, h], &values[at..at + w * h])?;
+            at += w * h;
+        }
+        while self.placed.n_frames() < self.n {
+            self.placed.push_empty();
+        }
+        Ok(())
     }
 
     /// Adds one frame (`values` x fastest in the window of `size` at `origin`).
     fn push(&mut self, origin: [usize; 2], size: [usize; 2], values: &[f64]) -> Result<()> {
-        let k = self.frames.len();
+        let k = self.n;
         let err = |msg: String| IoError::format(self.name, format!("frame {k}: {msg}"));
         let [w, h] = size;
-        if origin[0].saturating_add(w) > self.cols || origin[1].saturating_add(h) > self.rows {
+        if let Some((cols, rows)) = self.plate
+            && (origin[0].saturating_add(w) > cols || origin[1].saturating_add(h) > rows)
+        {
             return Err(err(format!(
-                "the window at ({}, {}) of {w} x {h} sensors leaves the {} x {} plate",
-                origin[0], origin[1], self.cols, self.rows
+                "the window at ({}, {}) of {w} x {h} sensors leaves the {cols} x {rows} plate",
+                origin[0], origin[1]
             )));
         }
-        if values.len() != w * h {
+        if values.len() != w.saturating_mul(h) {
             return Err(err(format!(
                 "{} values for a window of {w} x {h} = {} sensors",
                 values.len(),
-                w * h
+                w.saturating_mul(h)
             )));
         }
         if let Some(i) = values.iter().position(|v| *v < 0.0) {
             return Err(err(format!("value {i} is negative ({})", values[i])));
         }
         if w == 0 || h == 0 {
-            self.frames.push(None);
-            return Ok(());
+            return self.push_empty();
         }
-        let v = values.iter().map(|&x| x as f32).collect();
-        self.frames.push(Some((origin, size, v)));
+        self.count_frame()?;
+        let v: Vec<f32> = values.iter().map(|&x| x as f32).collect();
+        if self.plate.is_some() {
+            return self.place(k, origin, size, &v);
+        }
+        // No window of a plate's sensors is larger than the largest plate.
+        let window = [origin[0], origin[1], w, h].map(|v| u32::try_from(v).ok());
+        let [Some(x), Some(y), Some(w), Some(h)] = window else {
+            return Err(err(format!(
+                "the window at ({}, {}) of {w} x {h} sensors leaves any plate",
+                origin[0], origin[1]
+            )));
+        };
+        // Frames are numbered within `limits::MAX_FRAMES`, far below `u32::MAX`.
+        self.waiting.push((k as u32, [x, y, w, h]));
+        self.waiting_values.extend_from_slice(&v);
         Ok(())
     }
 
-    fn push_empty(&mut self) {
-        self.frames.push(None);
+    fn push_empty(&mut self) -> Result<()> {
+        self.count_frame()?;
+        if self.plate.is_some() {
+            self.placed.push_empty();
+        }
+        Ok(())
+    }
+
+    /// Counts a frame more, within the limits of a recording.
+    fn count_frame(&mut self) -> Result<()> {
+        let per = self.plate.map_or(1, |(c, r)| c * r);
+        crate::limits::check_frames(self.name, self.n + 1, per)?;
+        self.n += 1;
+        Ok(())
+    }
+
+    /// Places frame `k` on the plate: its window's values, row 0 at the plate's far end.
+    fn place(&mut self, k: usize, origin: [usize; 2], size: [usize; 2], v: &[f32]) -> Result<()> {
+        let (cols, rows) = self.plate.expect("placed on a known plate");
+        let [w, h] = size;
+        if origin[0].saturating_add(w) > cols || origin[1].saturating_add(h) > rows {
+            return Err(IoError::format(
+                self.name,
+                format!(
+                    "frame {k}: the window at ({}, {}) of {w} x {h} sensors leaves the {cols} x \
+                     {rows} plate",
+                    origin[0], origin[1]
+                ),
+            ));
+        }
+        if w == 0 || h == 0 {
+            self.placed.push_empty();
+            return Ok(());
+        }
+        // The window's rows, from the plate's far end (row 0).
+        let row_start = |j: usize| (rows - 1 - (origin[1] + j)) * cols + origin[0];
+        let mut entries: Vec<(usize, f32)> = v
+            .chunks(w)
+            .enumerate()
+            .flat_map(|(j, line)| {
+                line.iter()
+                    .enumerate()
+                    .map(move |(i, &x)| (row_start(j) + i, x))
+            })
+            .collect();
+        self.placed.push_entries(&mut entries);
+        Ok(())
     }
 
     fn n(&self) -> usize {
-        self.frames.len()
+        self.n
     }
 
-    /// The dense recording: every frame the whole plate, row 0 at the plate's far end.
+    /// The recording: every frame the whole plate, row 0 at the plate's far end.
     fn finish(self, h: &Header) -> Result<Recording> {
-        let n = self.frames.len();
+        let n = self.n;
         if let Some(stated) = h.count
             && stated != n
         {
@@ -147,24 +250,10 @@ impl<'a> Frames<'a> {
         if n == 0 {
             return Err(IoError::format(self.name, "no frames in the pressure clip"));
         }
-        let per = self.rows * self.cols;
-        let mut data = vec![
-            0.0f32;
-            n.checked_mul(per).ok_or_else(|| {
-                IoError::format(self.name, format!("{n} frames of {per} sensors overflow"))
-            })?
-        ];
-        for (frame, sparse) in data.chunks_mut(per).zip(&self.frames) {
-            let Some((origin, [w, _], values)) = sparse else {
-                continue;
-            };
-            for (j, line) in values.chunks(*w).enumerate() {
-                let row = self.rows - 1 - (origin[1] + j);
-                frame[row * self.cols + origin[0]..][..*w].copy_from_slice(line);
-            }
-        }
-        let mask = vec![true; per];
-        let mut rec = Recording::new(n, self.rows, self.cols, data, mask)?;
+        let Some((cols, rows)) = self.plate else {
+            return Err(IoError::format(self.name, "no plate size (cell_count)"));
+        };
+        let mut rec = Recording::from_sparse(rows, cols, self.placed, vec![true; rows * cols])?;
         if let [Some(dx), Some(dy)] = h.cell_size
             && dx > 0.0
             && dy > 0.0
@@ -190,10 +279,9 @@ fn count(text: &str, what: &str) -> std::result::Result<usize, String> {
         .map_err(|_| format!("{what} is not a count: {:?}", text.trim()))
 }
 
-/// 1-based line of a byte offset.
-fn line_of(bytes: &[u8], pos: u64) -> usize {
-    let end = (pos as usize).min(bytes.len());
-    1 + bytes[..end].iter().filter(|&&b| b == b'\n').count()
+/// The line breaks in what an XML event was read from (its markup or text).
+fn newlines(event: &Event) -> usize {
+    event.bytes().filter(|&b| b == b'\n').count()
 }
 
 /// One `<clip>` as read: its header, its frames, and whether it is a pressure clip (it has a
@@ -207,25 +295,46 @@ struct Clip<'a> {
 
 /// Parses the XML raw-data export held in memory; `name` appears in error messages.
 pub fn parse_zebris_xml(bytes: &[u8], name: &str) -> Result<Recording> {
-    let mut reader = Reader::from_reader(bytes);
+    read_zebris_xml(bounded(bytes, false, Stretch::Xml), name)
+}
+
+/// Parses the XML raw-data export as it is read from `source`: only the open elements' names,
+/// the element being read and the frames (sparse) are held; the work per element does not grow
+/// with the depth of nesting.
+pub(crate) fn read_zebris_xml(source: impl std::io::BufRead, name: &str) -> Result<Recording> {
+    let mut reader = Reader::from_reader(source);
     let mut path: Vec<String> = Vec::new();
     let mut text = String::new();
     let mut plate: [Option<usize>; 2] = [None, None];
     let mut clip: Option<Clip> = None;
     let mut pressure: Option<(Frames, Header)> = None;
     let mut buf = Vec::new();
+    // The line the next event starts on: 1 and the line breaks of the events before it.
+    let mut line = 1;
     loop {
-        let pos = reader.buffer_position();
-        let line = || line_of(bytes, pos);
-        let event = reader.read_event_into(&mut buf).map_err(|e| {
-            IoError::parse(
-                name,
-                line_of(bytes, reader.error_position()),
-                format!("malformed or truncated XML: {e}"),
-            )
-        })?;
+        let event = match reader.read_event_into(&mut buf) {
+            Ok(event) => event,
+            Err(quick_xml::Error::Io(e)) => {
+                return Err(read_error(
+                    name,
+                    std::io::Error::new(e.kind(), e.to_string()),
+                ));
+            }
+            Err(e) => {
+                let msg = format!("malformed or truncated XML: {e}");
+                return Err(IoError::parse(name, line, msg));
+            }
+        };
+        let at = line;
+        line += newlines(&event);
+        let fail = |msg: String| IoError::parse(name, at, msg);
         match event {
             Event::Start(e) => {
+                if path.len() == MAX_DEPTH {
+                    return Err(fail(format!(
+                        "more than {MAX_DEPTH} nested elements: not a Zebris export"
+                    )));
+                }
                 let tag = e.local_name().as_ref().to_string();
                 if tag == "clip" {
                     clip = Some(Clip {
@@ -244,7 +353,7 @@ pub fn parse_zebris_xml(bytes: &[u8], name: &str) -> Result<Recording> {
             }
             Event::Empty(e) => {
                 if let ("quant", Some(c)) = (e.local_name().as_ref(), clip.as_mut()) {
-                    frames_of(&mut c.frames, name, plate)?.push_empty();
+                    frames_of(&mut c.frames, name, plate)?.push_empty()?;
                 }
             }
             Event::Text(t) => text.push_str(&t),
@@ -252,14 +361,13 @@ pub fn parse_zebris_xml(bytes: &[u8], name: &str) -> Result<Recording> {
             Event::GeneralRef(r) => text.push_str(&resolve_ref(&r)),
             Event::End(_) => {
                 let Some(tag) = path.pop() else {
-                    return Err(IoError::parse(
-                        name,
-                        line(),
-                        "a closing tag without an opening one",
-                    ));
+                    return Err(fail("a closing tag without an opening one".into()));
                 };
-                let parent: Vec<&str> = path.iter().map(String::as_str).collect();
-                let fail = |msg: String| IoError::parse(name, line(), msg);
+                // The two enclosing elements are all a closed element's meaning depends on.
+                let parent: Vec<&str> = path[path.len().saturating_sub(2)..]
+                    .iter()
+                    .map(String::as_str)
+                    .collect();
                 match clip.as_mut() {
                     None => on_plate(&tag, &parent, &text, &mut plate).map_err(fail)?,
                     Some(_) if tag == "clip" => {
@@ -273,7 +381,7 @@ pub fn parse_zebris_xml(bytes: &[u8], name: &str) -> Result<Recording> {
                         }
                     }
                     Some(c) => {
-                        on_clip(&tag, &parent, &text, c).map_err(&fail)?;
+                        on_clip(&tag, &parent, &text, c).map_err(fail)?;
                         if tag == "quant" && parent.last() == Some(&"data") {
                             let f = frames_of(&mut c.frames, name, plate)?;
                             push_window(f, &c.window).map_err(|e| match e {
@@ -288,13 +396,18 @@ pub fn parse_zebris_xml(bytes: &[u8], name: &str) -> Result<Recording> {
             Event::Eof => break,
             _ => {}
         }
+        if text.len() > MAX_TOKEN_BYTES {
+            return Err(fail(format!(
+                "an element holds more than {MAX_TOKEN_BYTES} bytes of text"
+            )));
+        }
         buf.clear();
     }
     if !path.is_empty() {
         return Err(IoError::parse(
             name,
-            line_of(bytes, bytes.len() as u64),
-            format!("truncated: the file ends inside <{}>", path.join("><")),
+            line,
+            format!("truncated: the file ends inside {}", open_elements(&path)),
         ));
     }
     match pressure {
@@ -308,6 +421,21 @@ pub fn parse_zebris_xml(bytes: &[u8], name: &str) -> Result<Recording> {
             "no pressure clip (<clip> with <cell_size> or windowed <quant> frames)",
         )),
     }
+}
+
+/// The elements open at the end of a cut file, outermost first (`<measurement><movements>`);
+/// of a deep nesting the outermost and innermost few, and how many.
+fn open_elements(path: &[String]) -> String {
+    let tags = |p: &[String]| p.iter().map(|t| format!("<{t}>")).collect::<String>();
+    if path.len() <= 8 {
+        return tags(path);
+    }
+    let n = path.len();
+    format!(
+        "{}…{} ({n} elements)",
+        tags(&path[..4]),
+        tags(&path[n - 2..])
+    )
 }
 
 /// The text an entity or character reference stands for.
@@ -352,10 +480,7 @@ fn push_window(
             "frame {}: <cells> without its window (<cell_begin> and <cell_count>, x and y)",
             f.n()
         ))),
-        _ => {
-            f.push_empty();
-            Ok(())
-        }
+        _ => f.push_empty().map_err(Err),
     }
 }
 
@@ -420,55 +545,12 @@ fn on_clip(
 
 /// Parses TRIPOD's JSON form of the export (already decompressed).
 pub fn parse_zebris_json(bytes: &[u8], name: &str) -> Result<Recording> {
-    let v: serde_json::Value = serde_json::from_slice(bytes)
-        .map_err(|e| IoError::parse(name, e.line(), format!("not valid JSON: {e}")))?;
-    let bad = |what: &str| IoError::format(name, format!("{what} is missing or not a number"));
-    let int =
-        |v: &serde_json::Value, what: &str| v.as_u64().map(|u| u as usize).ok_or_else(|| bad(what));
-    let mut h = Header {
-        plate: [
-            Some(int(&v["cell_count"]["x"], "cell_count.x")?),
-            Some(int(&v["cell_count"]["y"], "cell_count.y")?),
-        ],
-        cell_size: [v["cell_size"]["x"].as_f64(), v["cell_size"]["y"].as_f64()],
-        frequency: v["frequency"].as_f64(),
-        units: v["pressure_unit"].as_str().map(str::to_string),
-        count: None,
-    };
-    if !v["sample_count"].is_null() {
-        h.count = Some(int(&v["sample_count"], "sample_count")?);
-    }
-    let samples = v["samples"].as_array().ok_or_else(|| bad("samples"))?;
-    let mut frames = Frames::new(name, h.plate)?;
-    for s in samples {
-        let p = s["pressure"].as_array().map(Vec::as_slice).unwrap_or(&[]);
-        if p.is_empty() {
-            frames.push_empty();
-            continue;
-        }
-        let k = frames.n();
-        let field = |v: &serde_json::Value, f: &str| int(v, &format!("frame {k}: {f}"));
-        let origin = [
-            field(&s["origin"]["x"], "origin.x")?,
-            field(&s["origin"]["y"], "origin.y")?,
-        ];
-        let size = [
-            field(&s["size"]["x"], "size.x")?,
-            field(&s["size"]["y"], "size.y")?,
-        ];
-        let values: Vec<f64> = p
-            .iter()
-            .enumerate()
-            .map(|(i, x)| {
-                x.as_f64()
-                    .ok_or_else(|| bad(&format!("frame {k}: pressure value {i}")))
-            })
-            .collect::<Result<_>>()?;
-        frames.push(origin, size, &values)?;
-    }
-    let mut rec = frames.finish(&h)?;
-    rec.format = Some(Format::ZebrisJson);
-    Ok(rec)
+    read_zebris_json(bounded(bytes, false, Stretch::Json), name)
+}
+
+/// Parses TRIPOD's JSON form as it is read from `source` (decompressed already).
+pub(crate) fn read_zebris_json(source: impl std::io::Read, name: &str) -> Result<Recording> {
+    json::read(source, name)
 }
 
 /// Whether a text head looks like the XML export (`<measurement>` with Zebris clips).
