@@ -75,7 +75,10 @@ fn refused(path: &Path, msg: &str) -> IoError {
 
 /// An output folder being written; see the module docs.
 pub struct OutDir {
+    /// The folder as the caller named it (errors name it).
     root: PathBuf,
+    /// Where it is written: `root`, or the folder a symbolic link `root` points to.
+    place: PathBuf,
     staging: PathBuf,
     committed: bool,
 }
@@ -84,13 +87,14 @@ impl OutDir {
     /// Starts an output into `root`. Fails if `root` is a file, or a non-empty folder that is not
     /// a pedomatch output.
     pub fn create(root: &Path) -> Result<Self> {
-        let name = root
+        let place = through_links(root)?;
+        let name = place
             .file_name()
             .and_then(|n| n.to_str())
             .filter(|n| *n != "." && *n != "..")
             .ok_or_else(|| refused(root, "not a usable output folder name"))?;
-        check_replaceable(root)?;
-        let parent = match root.parent() {
+        check_replaceable(&place)?;
+        let parent = match place.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
@@ -108,6 +112,7 @@ impl OutDir {
         std::fs::write(staging.join(MARKER), format!("{MARKER_HEAD}\n")).map_err(unwritable)?;
         Ok(Self {
             root: root.to_path_buf(),
+            place,
             staging,
             committed: false,
         })
@@ -179,7 +184,7 @@ impl OutDir {
         if interrupted() {
             return Err(refused(&self.root, "interrupted"));
         }
-        check_replaceable(&self.root)?;
+        check_replaceable(&self.place)?;
         // The marker lists what this output holds (see MARKER).
         let files = files_under(&self.staging).map_err(|e| io_error(&self.root, e))?;
         let listing: String = std::iter::once(MARKER_HEAD)
@@ -187,7 +192,7 @@ impl OutDir {
             .map(|line| format!("{line}\n"))
             .collect();
         std::fs::write(self.staging.join(MARKER), listing).map_err(|e| io_error(&self.root, e))?;
-        swap_into_place(&self.staging, &self.root).map_err(|e| io_error(&self.root, e))?;
+        swap_into_place(&self.staging, &self.place).map_err(|e| io_error(&self.root, e))?;
         // The staging path now holds the previous output (or nothing).
         let _ = std::fs::remove_dir_all(&self.staging);
         unregister(&self.staging);
@@ -203,6 +208,28 @@ impl Drop for OutDir {
             unregister(&self.staging);
         }
     }
+}
+
+/// Where an output named `root` is written: `root` itself, or, when `root` is a symbolic link
+/// (followed through a chain of links), the folder it points to, which need not exist yet. The
+/// link is kept and its target replaced: a user who links `results` to another disk wants the
+/// results there, not a folder in place of the link.
+fn through_links(root: &Path) -> Result<PathBuf> {
+    let mut place = root.to_path_buf();
+    // As the kernel's own bound on a chain of links.
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&place) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let target = std::fs::read_link(&place).map_err(|e| io_error(root, e))?;
+                place = match place.parent() {
+                    Some(parent) => parent.join(target),
+                    None => target,
+                };
+            }
+            _ => return Ok(place),
+        }
+    }
+    Err(refused(root, "a loop of symbolic links"))
 }
 
 fn register(staging: &Path) {
@@ -395,6 +422,51 @@ mod tests {
         let _ = std::fs::remove_dir_all(&d);
         std::fs::create_dir_all(&d).unwrap();
         d
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn an_output_named_by_a_link_is_written_where_the_link_points_and_the_link_is_kept() {
+        let d = tmp("link");
+        let (disk, link) = (d.join("other-disk/results"), d.join("results"));
+        std::fs::create_dir_all(disk.parent().unwrap()).unwrap();
+        // A link to a folder that does not exist yet, then to the output it holds.
+        std::os::unix::fs::symlink("other-disk/results", &link).unwrap();
+        for round in ["first", "second"] {
+            let out = OutDir::create(&link).unwrap();
+            out.write("pairs.csv", round.as_bytes()).unwrap();
+            out.commit().unwrap();
+            let kept = std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink();
+            assert!(kept, "{round}: the link was replaced by a folder");
+            assert_eq!(
+                std::fs::read_to_string(disk.join("pairs.csv")).unwrap(),
+                round
+            );
+            assert_eq!(
+                std::fs::read_to_string(link.join("pairs.csv")).unwrap(),
+                round
+            );
+        }
+        // Nothing was staged beside the link, on the wrong disk.
+        let beside: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name())
+            .collect();
+        assert_eq!(beside.len(), 2, "{beside:?}");
+        // A loop of links is an error, not a hang.
+        let (a, b) = (d.join("a"), d.join("b"));
+        std::os::unix::fs::symlink(&b, &a).unwrap();
+        std::os::unix::fs::symlink(&a, &b).unwrap();
+        let e = OutDir::create(&a)
+            .err()
+            .expect("a loop of links")
+            .to_string();
+        assert!(e.contains("loop"), "{e}");
+        let _ = std::fs::remove_dir_all(&d);
     }
 
     #[test]
