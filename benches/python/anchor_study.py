@@ -1,4 +1,4 @@
-"""Design study for issue #42 (drift-free tracks): anchored dense fields, measured with the
+"""Design study for drift-free tracks: anchored dense fields, measured with the
 benchmark's synthetic stances (benches/python/stance.py) and bench_field.py's metrics.
 
     python benches/python/anchor_study.py            # everything (about 25 min on 2 cores)

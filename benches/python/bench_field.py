@@ -1,4 +1,4 @@
-"""Tracks that follow the foot (issue #42): outline nodes, interior points and a region carried
+"""Tracks that follow the foot: outline nodes, interior points and a region carried
 through a whole stance, against ground truth, beside chained nearest neighbour, chained CPD and
 chained dense optical flow.
 
@@ -132,7 +132,7 @@ def pedomatch_outline_positions(result, obj0, n_frames):
 
 
 def pedomatch_field(result, points):
-    """HOOK (issue #42, item 1): carry frame-0 points through every frame with pedomatch's own
+    """HOOK (the dense field): carry frame-0 points through every frame with pedomatch's own
     dense correspondence field. Takes the run result and (n, 2) frame-0 points (x, y in
     sensels); returns (T, n, 2) carried positions (NaN where the chain of pairs breaks), or None
     while pymodal has no field.
