@@ -7,7 +7,7 @@ use clap::Args;
 use modal_core::shape::looks_like_closed_contour;
 use modal_core::{Search, Shape, Topology};
 use pedo_output::figure::{FigureAxes, MatchFigure, ObjectLabel};
-use pedo_output::{option_text, FigureFormat, ReportFormat};
+use pedo_output::{FigureFormat, ReportFormat};
 use pedo_track::SenselAspect;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -404,25 +404,10 @@ fn write_match_report(
             )
         }),
     };
-    let entries = |key: &str| -> Vec<(String, serde_json::Value)> {
-        summary[key]
-            .as_object()
-            .map(|m| m.iter().map(|(k, v)| (k.clone(), v.clone())).collect())
-            .unwrap_or_default()
-    };
-    let info = pedo_output::html_report::ReportInfo {
-        input: format!("{label_a} \u{2192} {label_b}"),
-        version: env!("CARGO_PKG_VERSION").to_string(),
-        options: entries("options")
-            .iter()
-            .map(|(k, v)| (k.clone(), option_text(v)))
-            .collect(),
-        timings: entries("timings_s")
-            .iter()
-            .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(0.0)))
-            .collect(),
-        ..Default::default()
-    };
+    let info = pedo_output::html_report::ReportInfo::of_summary(
+        format!("{label_a} \u{2192} {label_b}"),
+        summary,
+    );
     let pitch = match axes.pitch_mm {
         Some(p) => format!("{} × {} mm", p[0], p[1]),
         None => format!("unknown (axes in {})", axes.data_unit),

@@ -62,6 +62,35 @@ pub struct ReportInfo {
     pub frames: Option<(usize, usize)>,
 }
 
+impl ReportInfo {
+    /// The header of a report on `input` whose summary (`summary.json` of a run, `match.json` of
+    /// a pair) is `summary`: every option it records, as text, and its time per stage; this
+    /// version. The rest at its default.
+    pub fn of_summary(input: String, summary: &Value) -> Self {
+        let entries = |key: &str| summary[key].as_object().into_iter().flatten();
+        Self {
+            input,
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            options: entries("options")
+                .map(|(k, v)| (k.clone(), option_text(v)))
+                .collect(),
+            timings: entries("timings_s")
+                .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(0.0)))
+                .collect(),
+            ..Default::default()
+        }
+    }
+}
+
+/// An option's value as a report's header shows it (`none` for an unset one).
+fn option_text(v: &Value) -> String {
+    match v {
+        Value::Null => "none".into(),
+        Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
 /// The report of one run as a complete HTML page.
 pub fn run_report(
     recording: &Recording,

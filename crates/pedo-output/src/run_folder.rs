@@ -634,35 +634,11 @@ pub fn record_outputs(options: &mut Map<String, Value>, outputs: &RunOutputs) {
 /// The HTML page `report.html` of a run, its header stating what `summary` (`summary.json`)
 /// records: the options used and the time spent per stage.
 pub fn report_page(run: &RunRecord<'_>, summary: &Value) -> Result<String> {
-    let timings = summary["timings_s"]
-        .as_object()
-        .map(|m| {
-            m.iter()
-                .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(0.0)))
-                .collect()
-        })
-        .unwrap_or_default();
-    let used = summary["options"]
-        .as_object()
-        .map(|m| m.iter().map(|(k, v)| (k.clone(), option_text(v))).collect())
-        .unwrap_or_default();
     let info = crate::html_report::ReportInfo {
-        input: run.input.name.clone(),
         format: run.recording.format.map(|f| f.name().to_string()),
-        version: env!("CARGO_PKG_VERSION").to_string(),
-        options: used,
-        timings,
         contact_threshold: run.options.contour.preprocess.threshold.unwrap_or(0.0),
         frames: run.options.frames,
+        ..crate::html_report::ReportInfo::of_summary(run.input.name.clone(), summary)
     };
     crate::html_report::run_report(run.recording, run.result, &info)
-}
-
-/// An option's value as a report's header shows it (`none` for an unset one).
-pub fn option_text(v: &Value) -> String {
-    match v {
-        Value::Null => "none".into(),
-        Value::String(s) => s.clone(),
-        other => other.to_string(),
-    }
 }
