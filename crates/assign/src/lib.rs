@@ -2,7 +2,10 @@
 //!
 //! Three independent solvers of the same problem — [`Method::JonkerVolgenant`],
 //! [`Method::Hungarian`] and [`Method::NetworkSimplex`] — that always agree on the optimal cost.
-//! Costs are dense `f64`, row-major; `+inf` marks a forbidden pair.
+//! Costs are dense `f64`, row-major; `+inf` marks a forbidden pair. A fourth,
+//! [`Method::Ordered`], solves a constrained problem: rows and columns are two closed (cyclic)
+//! sequences and the matches must keep their cyclic order; [`cyclic_crossings`] counts how far any
+//! assignment is from that.
 //!
 //! ```
 //! use assign::{solve, Options};
@@ -27,8 +30,10 @@ mod error;
 mod hungarian;
 mod jv;
 mod network_simplex;
+mod ordered;
 
 pub use error::AssignError;
+pub use ordered::cyclic_crossings;
 
 /// Which algorithm solves the assignment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -40,12 +45,19 @@ pub enum Method {
     Hungarian,
     /// Primal network simplex on the bipartite min-cost-flow graph.
     NetworkSimplex,
+    /// The rows and the columns are two closed sequences (the nodes of two closed contours, in
+    /// the same direction) and the matches keep their cyclic order: no two cross. Exact, by
+    /// dynamic programming over the `m` possible partners of row 0 (matches may wrap past the
+    /// last column), in `O(n · m · (m − n + 1))` for `n ≤ m` (`O(n · m²)` with
+    /// [`solve_with_threshold`]). Its optimum is never below the other solvers', and equal to
+    /// theirs when their optimum happens to keep the order. No duals.
+    Ordered,
 }
 
 impl Method {
     /// The solvers' names as the CLI (`--solver`) and Python (`solver=`) spell them, in the order
-    /// of the variants: `jv`, `hungarian`, `simplex`.
-    pub const NAMES: [&'static str; 3] = ["jv", "hungarian", "simplex"];
+    /// of the variants: `jv`, `hungarian`, `simplex`, `ordered`.
+    pub const NAMES: [&'static str; 4] = ["jv", "hungarian", "simplex", "ordered"];
 
     /// This solver's name (one of [`Method::NAMES`]).
     pub fn name(self) -> &'static str {
@@ -53,6 +65,7 @@ impl Method {
             Method::JonkerVolgenant => Self::NAMES[0],
             Method::Hungarian => Self::NAMES[1],
             Method::NetworkSimplex => Self::NAMES[2],
+            Method::Ordered => Self::NAMES[3],
         }
     }
 }
@@ -65,13 +78,13 @@ impl std::fmt::Display for Method {
 
 /// A solver name that is not one of [`Method::NAMES`].
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown solver {0:?}; expected one of jv, hungarian, simplex")]
+#[error("unknown solver {0:?}; expected one of jv, hungarian, simplex, ordered")]
 pub struct UnknownMethod(pub String);
 
 impl std::str::FromStr for Method {
     type Err = UnknownMethod;
 
-    /// Parses `jv`, `hungarian` or `simplex`.
+    /// Parses `jv`, `hungarian`, `simplex` or `ordered`.
     ///
     /// ```
     /// assert_eq!("simplex".parse::<assign::Method>(), Ok(assign::Method::NetworkSimplex));
@@ -82,6 +95,7 @@ impl std::str::FromStr for Method {
             "jv" => Ok(Method::JonkerVolgenant),
             "hungarian" => Ok(Method::Hungarian),
             "simplex" => Ok(Method::NetworkSimplex),
+            "ordered" => Ok(Method::Ordered),
             other => Err(UnknownMethod(other.to_string())),
         }
     }
@@ -90,7 +104,8 @@ impl std::str::FromStr for Method {
 /// Options of [`solve`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Options {
-    /// The solver (all three give the same optimal cost).
+    /// The solver (the first three give the same optimal cost; [`Method::Ordered`] the optimum
+    /// under its order constraint).
     pub method: Method,
     /// Maximise the total instead of minimising it.
     pub maximize: bool,
@@ -111,7 +126,7 @@ pub struct Assignment {
     /// assigned pairs, and `sum(u) + sum(v)` equals the optimal cost. On a rectangular matrix the
     /// duals of the longer side are `<= 0` and zero on its unassigned entries. For a maximisation
     /// every inequality is reversed (`>=`, and `>= 0` on the longer side).
-    /// [`solve_with_threshold`] does not report duals.
+    /// [`solve_with_threshold`] and [`Method::Ordered`] do not report duals.
     pub duals: Option<(Vec<f64>, Vec<f64>)>,
 }
 
@@ -142,6 +157,7 @@ fn run_method(method: Method, c: &[f64], n: usize, m: usize) -> Result<Solution,
         Method::JonkerVolgenant => jv::solve(c, n, m),
         Method::Hungarian => hungarian::solve(c, n, m),
         Method::NetworkSimplex => network_simplex::solve(c, n, m),
+        Method::Ordered => ordered::solve(c, n, m),
     }
 }
 
@@ -232,7 +248,9 @@ fn check_shape(cost: &[f64], rows: usize, cols: usize) -> Result<(), AssignError
 /// - [`AssignError::InvalidEntry`] on NaN, or on `-inf` (`+inf` when maximising);
 /// - [`AssignError::Infeasible`] if the forbidden pairs leave no complete assignment.
 ///
-/// An empty matrix (`rows == 0` or `cols == 0`) gives an empty assignment of cost 0.
+/// An empty matrix (`rows == 0` or `cols == 0`) gives an empty assignment of cost 0, as does any
+/// method. With [`Method::Ordered`] a tall matrix (`rows > cols`) is solved transposed (the order
+/// constraint is the same read from either side), and [`Assignment::duals`] is `None`.
 pub fn solve(
     cost: &[f64],
     rows: usize,
@@ -293,7 +311,7 @@ pub fn solve(
         row_to_col,
         col_to_row,
         cost: total,
-        duals: Some((flip(u), flip(v))),
+        duals: (options.method != Method::Ordered).then(|| (flip(u), flip(v))),
     })
 }
 
@@ -309,6 +327,9 @@ pub fn solve(
 /// This is the `(n + m) × (n + m)` padding with dummy cost `τ` of docs/method.md §6.2 (dummy rows
 /// and columns at `τ/2` each), solved without building the padded matrix: the smaller side gets one
 /// private dummy partner each, `min(n, m) × (n + m)` entries in total.
+///
+/// With [`Method::Ordered`] the kept pairs also keep the cyclic order of rows and columns (the
+/// cyclic alignment of the two sequences, `O(n · m²)`).
 ///
 /// # Errors
 /// As [`solve`], plus [`AssignError::InvalidThreshold`] if `tau` is not finite. The problem is
@@ -331,6 +352,17 @@ pub fn solve_with_threshold(
         (rows, cols)
     };
     let t = if options.maximize { -tau } else { tau };
+    if options.method == Method::Ordered {
+        let sol = match n {
+            0 => Vec::new(),
+            _ => ordered::solve_with_threshold(&c, n, m, t),
+        };
+        let pairs = sol
+            .iter()
+            .enumerate()
+            .filter_map(|(a, b)| b.map(|b| (a, b)));
+        return Ok(assignment_of(cost, rows, cols, transposed, pairs));
+    }
     let w = m + n;
     let mut aug = vec![f64::INFINITY; n * w];
     for i in 0..n {
@@ -353,12 +385,23 @@ pub fn solve_with_threshold(
     } else {
         run_method(options.method, &aug, n, w)?
     };
+    let pairs = sol.row_to_col.iter().enumerate().filter(|&(_, &b)| b < m);
+    let pairs = pairs.map(|(a, &b)| (a, b));
+    Ok(assignment_of(cost, rows, cols, transposed, pairs))
+}
+
+/// The assignment (without duals) of the `(a, b)` pairs of the normalised problem, in the
+/// caller's orientation, with its cost in the caller's matrix.
+fn assignment_of(
+    cost: &[f64],
+    rows: usize,
+    cols: usize,
+    transposed: bool,
+    pairs: impl Iterator<Item = (usize, usize)>,
+) -> Assignment {
     let mut row_to_col = vec![None; rows];
     let mut col_to_row = vec![None; cols];
-    for (a, &b) in sol.row_to_col.iter().enumerate() {
-        if b >= m {
-            continue;
-        }
+    for (a, b) in pairs {
         let (i, j) = if transposed { (b, a) } else { (a, b) };
         row_to_col[i] = Some(j);
         col_to_row[j] = Some(i);
@@ -368,10 +411,10 @@ pub fn solve_with_threshold(
         .enumerate()
         .filter_map(|(i, j)| j.map(|j| cost[i * cols + j]))
         .sum();
-    Ok(Assignment {
+    Assignment {
         row_to_col,
         col_to_row,
         cost: total,
         duals: None,
-    })
+    }
 }

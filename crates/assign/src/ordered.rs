@@ -1,0 +1,310 @@
+//! The order-preserving assignment of two cyclic sequences (closed contours), by dynamic
+//! programming, and the count of crossed matches of any assignment between them.
+//!
+//! Rows and columns are the nodes of two closed sequences, in order. A match `f` is
+//! *order-preserving* when the partners of the matched rows, read in row order, go once round the
+//! columns in their order: cutting the columns just before the first row's partner makes `f`
+//! increasing. Matches may therefore *wrap* (pass from the last column to column 0): a closed
+//! contour's numbering starts at an arbitrary node, so only the cyclic order means anything. Both
+//! sequences are read in one direction; a caller whose sequences may run opposite ways reverses
+//! one of them first (modal-core orients both contours counter-clockwise).
+//!
+//! **Saturating** ([`solve`], every row matched, `n ≤ m`): for each of the `m` partners `r` of
+//! row 0, the rows `1 … n−1` go increasingly into the columns after `r`; row `i` can only take
+//! the `i`-th to `(i + m − n)`-th column after `r`, a band of `w = m − n + 1` offsets, and
+//! `E[i][k] = c[i][r+i+k] + min_{k' ≤ k} E[i−1][k']` (prefix minima). Time `O(n · m · (m − n +
+//! 1))`, `O(n²)`-like only when the counts are equal (`O(n · m)`), memory `O(n · (m − n + 1))`.
+//!
+//! **With a threshold** ([`solve_with_threshold`], any row or column unmatched at `τ/2`): the
+//! cyclic alignment of the two sequences, the linear alignment (`D[i][j] = min(D[i−1][j],
+//! D[i][j−1], D[i−1][j−1] + c − τ)`) of the rows with the columns cut before each of the `m`
+//! columns in turn: time `O(n · m²)`, memory `O(n · m)`.
+
+use crate::{AssignError, Solution};
+
+/// Best saturating order-preserving match of the normalised problem (`1 ≤ n ≤ m`, minimisation,
+/// entries finite or `+inf`): the partner of every row.
+///
+/// # Errors
+/// [`AssignError::Infeasible`] when every order-preserving match uses a forbidden entry.
+pub(crate) fn solve(c: &[f64], n: usize, m: usize) -> Result<Solution, AssignError> {
+    debug_assert!(1 <= n && n <= m && c.len() == n * m);
+    let w = m - n + 1;
+    let mut prev = vec![f64::INFINITY; w];
+    let mut cur = vec![f64::INFINITY; w];
+    let (mut best, mut best_r) = (f64::INFINITY, 0);
+    for r in 0..m {
+        let total = band_pass(c, n, m, r, &mut prev, &mut cur, None);
+        // Strictly better only: ties keep the lowest start, so the result is deterministic.
+        if total < best {
+            (best, best_r) = (total, r);
+        }
+    }
+    if best == f64::INFINITY {
+        return Err(AssignError::Infeasible);
+    }
+    let mut table = vec![f64::INFINITY; n * w];
+    band_pass(c, n, m, best_r, &mut prev, &mut cur, Some(&mut table));
+    Ok(Solution {
+        row_to_col: band_traceback(&table, n, m, w, best_r),
+        u: Vec::new(),
+        v: Vec::new(),
+    })
+}
+
+/// One start `r` of the saturating recurrence: the cheapest total with row 0 on column `r`.
+/// `table`, when given (`n × w`), keeps every row of `E` for the traceback.
+fn band_pass(
+    c: &[f64],
+    n: usize,
+    m: usize,
+    r: usize,
+    prev: &mut Vec<f64>,
+    cur: &mut Vec<f64>,
+    mut table: Option<&mut [f64]>,
+) -> f64 {
+    let w = prev.len();
+    prev.fill(f64::INFINITY);
+    prev[0] = c[r];
+    if let Some(t) = table.as_deref_mut() {
+        t[..w].copy_from_slice(prev);
+    }
+    for i in 1..n {
+        let row = &c[i * m..(i + 1) * m];
+        let mut j = (r + i) % m;
+        let mut run_min = f64::INFINITY;
+        for k in 0..w {
+            run_min = run_min.min(prev[k]);
+            cur[k] = row[j] + run_min;
+            j += 1;
+            if j == m {
+                j = 0;
+            }
+        }
+        std::mem::swap(prev, cur);
+        if let Some(t) = table.as_deref_mut() {
+            t[i * w..(i + 1) * w].copy_from_slice(prev);
+        }
+    }
+    prev.iter().copied().fold(f64::INFINITY, f64::min)
+}
+
+/// The partners of the optimum of start `r` from its table of `E`: the last row's best offset,
+/// then for each earlier row the offset at or before the next row's that gave its prefix minimum.
+fn band_traceback(table: &[f64], n: usize, m: usize, w: usize, r: usize) -> Vec<usize> {
+    let argmin = |row: &[f64]| (1..row.len()).fold(0, |b, k| if row[k] < row[b] { k } else { b });
+    let mut offsets = vec![0; n];
+    offsets[n - 1] = argmin(&table[(n - 1) * w..n * w]);
+    for i in (0..n - 1).rev() {
+        let row = &table[i * w..(i + 1) * w];
+        offsets[i] = argmin(&row[..=offsets[i + 1]]);
+    }
+    (0..n).map(|i| (r + i + offsets[i]) % m).collect()
+}
+
+/// Best order-preserving partial match of the normalised problem (`1 ≤ n ≤ m`, minimisation,
+/// entries finite or `+inf`) where every unmatched row or column costs `t/2`: `None` for an
+/// unmatched row. Never infeasible.
+pub(crate) fn solve_with_threshold(c: &[f64], n: usize, m: usize, t: f64) -> Vec<Option<usize>> {
+    debug_assert!(1 <= n && n <= m && c.len() == n * m);
+    // A pair pays `c − t` against leaving both its nodes out; only savings (< 0) are worth taking.
+    let saving: Vec<f64> = c.iter().map(|&x| (x - t).min(0.0)).collect();
+    let (mut best, mut best_r) = (0.0, None);
+    let mut table = vec![0.0; (n + 1) * (m + 1)];
+    for r in 0..m {
+        let total = alignment(&saving, n, m, r, &mut table);
+        if total < best {
+            (best, best_r) = (total, Some(r));
+        }
+    }
+    let mut row_to_col = vec![None; n];
+    if let Some(r) = best_r {
+        alignment(&saving, n, m, r, &mut table);
+        alignment_traceback(&saving, &table, n, m, r, &mut row_to_col);
+    }
+    row_to_col
+}
+
+/// The linear alignment of the rows with the columns cut before column `r`: `table[i][j]` is the
+/// best total saving of rows `< i` with the first `j` columns after the cut.
+fn alignment(s: &[f64], n: usize, m: usize, r: usize, table: &mut [f64]) -> f64 {
+    let w = m + 1;
+    table[..w].fill(0.0);
+    for i in 1..=n {
+        let row = &s[(i - 1) * m..i * m];
+        table[i * w] = 0.0;
+        let mut col = r;
+        for j in 1..=w - 1 {
+            let diag = table[(i - 1) * w + j - 1] + row[col];
+            let skip = table[(i - 1) * w + j].min(table[i * w + j - 1]);
+            table[i * w + j] = diag.min(skip);
+            col += 1;
+            if col == m {
+                col = 0;
+            }
+        }
+    }
+    table[n * w + m]
+}
+
+/// The pairs of the alignment in `table` (cut before column `r`), written into `row_to_col`.
+fn alignment_traceback(
+    s: &[f64],
+    table: &[f64],
+    n: usize,
+    m: usize,
+    r: usize,
+    row_to_col: &mut [Option<usize>],
+) {
+    let w = m + 1;
+    let (mut i, mut j) = (n, m);
+    while i > 0 && j > 0 {
+        let here = table[i * w + j];
+        if here == table[(i - 1) * w + j] {
+            i -= 1;
+        } else if here == table[i * w + j - 1] {
+            j -= 1;
+        } else {
+            // Neither skip reaches this value, so the diagonal (a pair) does.
+            let col = (r + j - 1) % m;
+            debug_assert!(here == table[(i - 1) * w + j - 1] + s[(i - 1) * m + col]);
+            row_to_col[i - 1] = Some(col);
+            i -= 1;
+            j -= 1;
+        }
+    }
+}
+
+/// The number of crossed pairs of matches between two closed sequences: the fewest pairs of
+/// matches `(i, j)`, `(i', j')` with `i < i'` but `j > j'` over every choice of the node each
+/// sequence's numbering starts at (both read in the same direction). 0 exactly when the matches
+/// preserve the cyclic order (one-to-one or not); a match that shares its row or its column with
+/// another never crosses it.
+///
+/// Any matches of any solver, in any order. Time `O(g · (k + s))` for `k` matches over `g`
+/// distinct rows, `s` the sum of the squared numbers of matches sharing a column (`k` when
+/// one-to-one); memory `O(k)`.
+///
+/// ```
+/// // Partners in cyclic order (wrapping from column 3 to 0): no crossing.
+/// assert_eq!(assign::cyclic_crossings(&[(0, 2), (1, 3), (2, 0), (3, 1)]), 0);
+/// // Rows 1 and 2 swapped: one crossed pair, whatever the start.
+/// assert_eq!(assign::cyclic_crossings(&[(0, 0), (1, 2), (2, 1), (3, 3)]), 1);
+/// ```
+pub fn cyclic_crossings(pairs: &[(usize, usize)]) -> usize {
+    let k = pairs.len();
+    if k < 2 {
+        return 0;
+    }
+    let (ri, ga) = dense_ranks(pairs.iter().map(|p| p.0));
+    let (rj, gb) = dense_ranks(pairs.iter().map(|p| p.1));
+    let count_by = |r: &[usize], g: usize| {
+        let mut c = vec![0usize; g];
+        r.iter().for_each(|&x| c[x] += 1);
+        c
+    };
+    let (per_i, per_j) = (count_by(&ri, ga), count_by(&rj, gb));
+    // `below_i[x]`: matches whose row rank is `< x` (and likewise for columns).
+    let prefix = |c: &[usize]| -> Vec<usize> {
+        std::iter::once(0)
+            .chain(c.iter().scan(0, |s, &x| {
+                *s += x;
+                Some(*s)
+            }))
+            .collect()
+    };
+    let (below_i, below_j) = (prefix(&per_i), prefix(&per_j));
+    let groups = |r: &[usize], g: usize| {
+        let mut v: Vec<Vec<usize>> = vec![Vec::new(); g];
+        r.iter().enumerate().for_each(|(p, &x)| v[x].push(p));
+        v
+    };
+    let (rows_of, cols_of) = (groups(&ri, ga), groups(&rj, gb));
+    let mut at_cut_a = straight_inversions(&ri, &rj) as i64;
+    let mut best = at_cut_a;
+    for a in 0..ga {
+        // Every start of the columns with the rows starting at their `a`-th distinct node.
+        let mut f = at_cut_a;
+        for group in &cols_of {
+            f += column_to_end(group, &ri, a, ga, &below_i, k);
+            best = best.min(f);
+        }
+        // The rows' start moves past row group `a` (columns starting at column rank 0).
+        at_cut_a += group_to_end(&rows_of[a], &rj, &below_j, k);
+    }
+    best as usize
+}
+
+/// Inversions of the matches as numbered: pairs with `i < i'` and `j > j'`.
+fn straight_inversions(ri: &[usize], rj: &[usize]) -> usize {
+    let k = ri.len();
+    (0..k)
+        .map(|p| {
+            (p + 1..k)
+                .filter(|&q| (ri[p] < ri[q] && rj[p] > rj[q]) || (ri[p] > ri[q] && rj[p] < rj[q]))
+                .count()
+        })
+        .sum()
+}
+
+/// The change in inversions when the matches of `group` (one row rank, currently the first)
+/// become the last rows: each loses its inversions with later-numbered columns' smaller ones and
+/// gains one with every larger column outside its row.
+fn group_to_end(group: &[usize], rj: &[usize], below_j: &[usize], k: usize) -> i64 {
+    let mut delta = 0i64;
+    for &p in group {
+        let inside_below = group.iter().filter(|&&q| rj[q] < rj[p]).count();
+        let inside_equal = group.iter().filter(|&&q| rj[q] == rj[p]).count();
+        let below = below_j[rj[p]] - inside_below;
+        let equal = below_j[rj[p] + 1] - below_j[rj[p]] - inside_equal;
+        let above = k - group.len() - below - equal;
+        delta += above as i64 - below as i64;
+    }
+    delta
+}
+
+/// The change in inversions when the matches of `group` (one column rank, currently the first
+/// after the cut) become the last columns, rows starting at their rank `a` of `ga`.
+fn column_to_end(
+    group: &[usize],
+    ri: &[usize],
+    a: usize,
+    ga: usize,
+    below_i: &[usize],
+    k: usize,
+) -> i64 {
+    let shifted = |p: usize| (ri[p] + ga - a) % ga;
+    // Matches whose shifted row rank is below `x`: the ranks a … a + x − 1, cyclically.
+    let below_shifted = |x: usize| {
+        let end = a + x;
+        if end <= ga {
+            below_i[end] - below_i[a]
+        } else {
+            below_i[ga] - below_i[a] + below_i[end - ga]
+        }
+    };
+    let mut delta = 0i64;
+    for &p in group {
+        let x = shifted(p);
+        let inside_below = group.iter().filter(|&&q| shifted(q) < x).count();
+        let inside_equal = group.iter().filter(|&&q| shifted(q) == x).count();
+        let below = below_shifted(x) - inside_below;
+        let equal = below_i[ri[p] + 1] - below_i[ri[p]] - inside_equal;
+        let above = k - group.len() - below - equal;
+        delta += above as i64 - below as i64;
+    }
+    delta
+}
+
+/// Each value's rank among the distinct values, and how many distinct values there are.
+fn dense_ranks(values: impl Iterator<Item = usize>) -> (Vec<usize>, usize) {
+    let v: Vec<usize> = values.collect();
+    let mut sorted = v.clone();
+    sorted.sort_unstable();
+    sorted.dedup();
+    let ranks = v
+        .iter()
+        .map(|x| sorted.partition_point(|y| y < x))
+        .collect();
+    (ranks, sorted.len())
+}
