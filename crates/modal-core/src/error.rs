@@ -417,6 +417,12 @@ pub enum Unsupported {
     /// `ordered` on triangle meshes.
     #[error("meshes cannot be treated as ordered contours")]
     OrderedMesh,
+    /// The order-preserving solver on objects that are not two ordered closed contours.
+    #[error(
+        "solver = ordered keeps the cyclic order of two closed contours; use jv, hungarian or \
+         simplex for surfaces, meshes, point sets and unordered contours"
+    )]
+    OrderedSolverNeedsContours,
 }
 
 /// An option value that is not allowed: which option, the value given, what was expected.

@@ -363,10 +363,11 @@ option_set! {
         search: Search = d.search;
             Word(Search::NAMES), d.search,
             "Search: the optimal one-to-one assignment (global), mutual best matches (local), or every node of the first object to its cheapest node of the second (best: many-to-one, no excess step).";
-        /// Assignment solver of the global search and of the mode alignment.
+        /// Assignment solver of the global search and of the mode alignment (`ordered`: of the
+        /// global search only, on closed contours).
         solver: assign::Method = d.method;
             Word(<assign::Method as Choice>::NAMES), d.method,
-            "Assignment solver: Jonker-Volgenant, Kuhn-Munkres or network simplex (same optimum).";
+            "Assignment solver: Jonker-Volgenant, Kuhn-Munkres or network simplex (same optimum), or ordered: the best assignment whose matches keep the contours' cyclic order (no crossings; closed contours only).";
         /// Reject pairs whose max-normalised cost exceeds this (in [0, 1]); `None` keeps all.
         threshold: Option<f64> = d.threshold;
             Value, "none",

@@ -210,6 +210,12 @@ pub(crate) fn align_modes(
             cost[p * kb + q] = -c.abs();
         }
     }
+    // Modes have no cyclic order: the order-preserving solver is for the nodes of contours, and
+    // the modes are then aligned by the default solver (all others give the same optimum).
+    let method = match method {
+        assign::Method::Ordered => assign::Method::default(),
+        other => other,
+    };
     let sol = assign::solve(
         &cost,
         ka,

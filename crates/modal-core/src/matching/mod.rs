@@ -66,7 +66,10 @@ pub use self::search::Search;
 /// wrapped in [`ModalError::Object`] naming the object; [`ModalError::Option`] for a mode
 /// fraction outside (0, 1], a negative or NaN threshold and the other values
 /// [`MatchOptions`] bounds; [`Unsupported::OrderedMesh`](crate::Unsupported::OrderedMesh) for
-/// `ordered` on meshes; model and assignment failures are passed through.
+/// `ordered` on meshes;
+/// [`Unsupported::OrderedSolverNeedsContours`](crate::Unsupported::OrderedSolverNeedsContours)
+/// for the ordered solver on anything but two closed contours; model and assignment failures are
+/// passed through.
 pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchResult, ModalError> {
     prepare::check_dims(a, b)?;
     let a = prepare_as(a, opts, Some(Side::A))?;
@@ -133,7 +136,9 @@ fn in_callers_terms(pair: &Pair<'_>, refined: Refined) -> MatchResult {
     {
         aligned_a[sa.perm[t] * d..(sa.perm[t] + 1) * d].copy_from_slice(p);
     }
+    let crossings = contour_crossings(pair.a.shape(), pair.b.shape(), &out);
     MatchResult {
+        crossings,
         pairs: out,
         affinity,
         local_pairs,
@@ -147,6 +152,31 @@ fn in_callers_terms(pair: &Pair<'_>, refined: Refined) -> MatchResult {
             .compose(&sa.to_normalized),
         aligned_a,
     }
+}
+
+/// The crossed pairs of `pairs` (callers' numbering) when both objects are closed contours, each
+/// read counter-clockwise (in the x-y plane) whatever the direction of its numbering.
+fn contour_crossings(a: &Shape, b: &Shape, pairs: &[MatchPair]) -> Option<usize> {
+    let contour = |s: &Shape| matches!(s.topology(), Topology::ClosedContour);
+    if !(contour(a) && contour(b)) {
+        return None;
+    }
+    let counter_clockwise = |s: &Shape| {
+        let d = s.dim();
+        let xy: Vec<f64> = s
+            .coords()
+            .chunks_exact(d)
+            .flat_map(|p| [p[0], p[1]])
+            .collect();
+        prealign::signed_area(&xy) >= 0.0
+    };
+    let along = |s: &Shape| {
+        let (ccw, n) = (counter_clockwise(s), s.len());
+        move |i: usize| if ccw { i } else { n - 1 - i }
+    };
+    let (fa, fb) = (along(a), along(b));
+    let oriented: Vec<(usize, usize)> = pairs.iter().map(|p| (fa(p.a), fb(p.b))).collect();
+    Some(assign::cyclic_crossings(&oriented))
 }
 
 /// The inverse of a `normalizing_map` (prepare.rs): `y ↦ y / scale + centroid`.

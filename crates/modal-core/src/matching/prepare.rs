@@ -352,6 +352,8 @@ impl<'p> Pair<'p> {
     /// [`ModalError::Option`] for a mode fraction outside (0, 1], a negative or NaN threshold, a
     /// negative or non-finite re-fit tolerance, a cost power ≤ 0, a position weight outside
     /// [0, 1]; [`Unsupported::OrderedMesh`] for `ordered` on meshes;
+    /// [`Unsupported::OrderedSolverNeedsContours`] for the ordered solver on anything but two
+    /// closed contours matched as ordered;
     /// [`ModalError::NoModeKept`] for a skip that leaves no mode.
     pub fn new(
         a: &'p PreparedShape,
@@ -369,6 +371,11 @@ impl<'p> Pair<'p> {
                 || matches!(sb.topology(), Topology::Mesh { .. }))
         {
             return Err(Unsupported::OrderedMesh.into());
+        }
+        // The order-preserving solver reads the node numbering as each contour's cyclic order;
+        // only ordered contours have one, oriented alike (both counter-clockwise).
+        if opts.method == assign::Method::Ordered && !(both_contours && ordered) {
+            return Err(Unsupported::OrderedSolverNeedsContours.into());
         }
         let d = sa.dim();
         let (n, m) = (sa.len(), sb.len());

@@ -47,6 +47,11 @@ pub struct MatchResult {
     /// The first object's nodes in the second's frame as the search used them (row-major,
     /// `n × dim`, the callers' node order and units).
     pub aligned_a: Vec<f64>,
+    /// When both objects are closed contours: how many pairs of matches cross, read along the
+    /// two contours in one direction (both counter-clockwise) from the starts that make the
+    /// count smallest ([`assign::cyclic_crossings`]); 0 exactly when the matches keep the
+    /// contours' cyclic order, as the `ordered` solver's always do. `None` for other objects.
+    pub crossings: Option<usize>,
 }
 
 impl MatchResult {
