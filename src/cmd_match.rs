@@ -227,7 +227,8 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         "matches": r.pairs.len(),
         "nodes_a": a.len(), "nodes_b": b.len(),
         "local_matches": r.local_count(), "optimisation_matches": r.one_to_one_count(),
-        "excess_matches": r.excess_count(), "n_modes": r.n_modes, "refits": r.refits,
+        "excess_matches": r.excess_count(), "crossings": r.crossings,
+        "n_modes": r.n_modes, "refits": r.refits,
         "unmatched_a": r.unmatched_a, "unmatched_b": r.unmatched_b,
         "timings_s": { "read": read_time, "matching": match_time },
     });

@@ -1197,3 +1197,43 @@ fn two_frames_of_oblong_sensels_are_matched_in_their_true_proportions() {
     assert_ne!(square, scaled, "the proportions change the matches");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn the_ordered_solver_runs_contours_without_crossings_and_refuses_surfaces() {
+    let out = run_synthetic("ordered", &["--solver", "ordered", "--figures", "none"]);
+    let rows = read_csv(&out.join("pairs.csv"));
+    assert_eq!(rows.len(), 9);
+    for row in &rows {
+        assert_eq!(row["status"], "ok");
+        assert_eq!(num(row, "crossings"), 0.0);
+        assert_eq!(
+            num(row, "optimisation_matches"),
+            num(row, "nodes_a").min(num(row, "nodes_b"))
+        );
+    }
+    assert_tracks_follow_the_motion(&read_csv(&out.join("tracks.csv")));
+    // The default solver's pairs carry the count too.
+    let jv = run_synthetic("ordered-jv", &["--figures", "none"]);
+    assert!(read_csv(&jv.join("pairs.csv"))
+        .iter()
+        .all(|r| r["crossings"].parse::<usize>().is_ok()));
+
+    let dir = temp_dir("ordered-surface");
+    let rec = synthetic_recording(&dir);
+    let args = [
+        "run",
+        rec.to_str().unwrap(),
+        "--model",
+        "surface",
+        "--solver",
+        "ordered",
+    ];
+    let o = pedomatch(&args);
+    assert!(!o.status.success());
+    let err = String::from_utf8(o.stderr).unwrap();
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("solver") && err.contains("closed contours"),
+        "{err}"
+    );
+}

@@ -15,7 +15,8 @@ use pedo_track::{
 };
 
 /// The per-pair table: ids, frames (and their times), node counts, the local, optimisation and
-/// excess matches, the mean cost, and a status: `ok`, or `skipped` with the reason for a pair that
+/// excess matches, the mean cost, the trackable matches, the crossed pairs of matches (closed
+/// contours), and a status: `ok`, or `skipped` with the reason for a pair that
 /// could not be matched (its match columns empty). The matched pairs come first, in order, then
 /// the skipped ones.
 pub fn pairs_table(recording: &Recording, r: &SequenceResult) -> Table {
@@ -48,6 +49,7 @@ pub(crate) fn pairs_header(recording: &Recording) -> Table {
         "mean_cost",
         "trackable_matches",
         "trackable_percent",
+        "crossings",
         "status",
         "reason",
     ] {
@@ -68,6 +70,7 @@ pub(crate) fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
         Cell::Float(row.mean_cost, 6),
         Cell::int(row.trackable_matches),
         Cell::Float(row.trackable_percent, 1),
+        row.crossings.map_or(Cell::Empty, Cell::int),
         Cell::Text("ok".into()),
         Cell::Empty,
     ]);
@@ -77,7 +80,7 @@ pub(crate) fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
 /// The row of [`pairs_table`] of a pair that could not be matched.
 pub(crate) fn skipped_pair_cells(recording: &Recording, s: &SkippedPairRow) -> Vec<Cell> {
     let mut cells = pair_objects_cells(recording, &s.objects);
-    cells.extend(std::iter::repeat_n(Cell::Empty, 8));
+    cells.extend(std::iter::repeat_n(Cell::Empty, 9));
     cells.extend([Cell::Text("skipped".into()), Cell::Text(s.reason.clone())]);
     cells
 }

@@ -192,6 +192,7 @@ fn kind_of_empty(name: &str) -> Kind {
         | "trackable_matches"
         | "optimisation_matches"
         | "matches_after_excess"
+        | "crossings"
         | "frames"
         | "pairs"
         | "tracks" => Kind::Int,

@@ -232,6 +232,7 @@ pub(crate) fn match_pair(
         mean_cost,
         trackable_matches: trackable,
         trackable_percent: 100.0 * trackable as f64 / min,
+        crossings: result.crossings,
     };
     let mut result = result;
     if !options.keep_match_details {

@@ -370,6 +370,16 @@ impl RunParams {
                 "0 (off) or an integer >= 2",
             ));
         }
+        // The order-preserving solver needs closed contours: refused here rather than every
+        // pair of a run skipped for it.
+        if self.matching.solver == assign::Method::Ordered && self.model == ObjectModel::Surface {
+            return Err(OptionError::new(
+                "solver",
+                "ordered",
+                "jv, hungarian or simplex with the surface model (ordered keeps the cyclic order \
+                 of closed contours)",
+            ));
+        }
         if self.surface_nodes < 8 {
             return Err(OptionError::new(
                 "surface_nodes",

@@ -92,6 +92,10 @@ pub struct PairRow {
     pub trackable_matches: usize,
     /// `trackable_matches` as a percentage (0–100) of `min(n, m)`.
     pub trackable_percent: f64,
+    /// Crossed pairs of matches along the two closed contours
+    /// ([`MatchResult::crossings`](modal_core::MatchResult::crossings)): 0 when the matches keep
+    /// the contours' cyclic order; `None` for surfaces.
+    pub crossings: Option<usize>,
 }
 
 /// Matches of one pair of objects (indices into [`SequenceResult::objects`]).

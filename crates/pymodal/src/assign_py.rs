@@ -95,9 +95,12 @@ fn solve_to_arrays<'py>(
 /// ----------
 /// cost_matrix : array_like, 2-D, numbers or bools
 /// maximize : bool, default False
-/// solver : {"jv", "hungarian", "simplex"}, keyword-only, default "jv"
+/// solver : {"jv", "hungarian", "simplex", "ordered"}, keyword-only, default "jv"
 ///     Jonker–Volgenant shortest augmenting paths, Kuhn–Munkres, or network simplex. All give
-///     the same optimal total (the ``--solver`` of ``pedomatch assign``).
+///     the same optimal total (the ``--solver`` of ``pedomatch assign``). ``"ordered"`` solves
+///     another problem: rows and columns are two closed (cyclic) sequences and the pairs keep
+///     their cyclic order (no crossings; they may wrap past the last column); the best such
+///     assignment, in ``O(n·m·(m−n+1))`` for ``n ≤ m``.
 /// method : deprecated alias of ``solver``.
 ///
 /// Raises

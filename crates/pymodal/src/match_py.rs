@@ -28,6 +28,10 @@ use crate::pickling::{Reader, Writer};
 /// local_count, optimisation_count, excess_count : int — mutual-best, one-to-one and excess
 ///     (one-to-many) matches; the papers' tables count ``optimisation_count + excess_count``
 ///     (``len(pairs)``) as "excess nodes matching".
+/// crossings : int or None — crossed pairs of matches along the two closed contours (both read
+///     counter-clockwise, from the starts that make the count smallest): 0 when the matches keep
+///     the contours' cyclic order, as ``solver="ordered"``'s always do; None unless both objects
+///     are closed contours.
 /// n_modes : int — modes per object in the features; refits : int — affine re-fits performed.
 /// transform : (d+1, d+1) float64 — the affine map from a's coordinates to b's that produced
 ///     ``aligned_a`` (pre-alignment, then re-fits), homogeneous: ``aligned = (transform @
@@ -88,6 +92,8 @@ impl PyMatch {
             w.f64(v);
         });
         w.f64s(&r.aligned_a);
+        w.bool(r.crossings.is_some())
+            .usize(r.crossings.unwrap_or(0));
         w
     }
 
@@ -117,6 +123,8 @@ impl PyMatch {
             *v = r.f64()?;
         }
         let aligned_a = r.f64s()?;
+        let counted = r.bool()?;
+        let crossings = Some(r.usize()?).filter(|_| counted);
         r.finish()?;
         Ok(Self::from_result(MatchResult {
             pairs,
@@ -129,6 +137,7 @@ impl PyMatch {
             solves,
             transform,
             aligned_a,
+            crossings,
         }))
     }
 }
@@ -201,6 +210,12 @@ impl PyMatch {
     #[getter]
     fn excess_count(&self) -> usize {
         self.inner.excess_count()
+    }
+    /// Crossed pairs of matches along the two closed contours (0: the cyclic order is kept); None
+    /// unless both objects are closed contours.
+    #[getter]
+    fn crossings(&self) -> Option<usize> {
+        self.inner.crossings
     }
     /// Modes per object in the features.
     #[getter]

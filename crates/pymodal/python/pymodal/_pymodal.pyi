@@ -24,7 +24,7 @@ Material = Union[
 ]
 Path = Union[str, os.PathLike]
 Element = Literal["gaussian", "axial"]
-Solver = Literal["jv", "hungarian", "simplex"]
+Solver = Literal["jv", "hungarian", "simplex", "ordered"]
 Search = Literal["global", "local", "best"]
 Prealign = Literal["robust", "normalize", "sensor"]
 ThresholdMode = Literal["after", "during"]
@@ -98,6 +98,8 @@ class Match:
     def optimisation_count(self) -> int: ...
     @property
     def excess_count(self) -> int: ...
+    @property
+    def crossings(self) -> Optional[int]: ...
     @property
     def n_modes(self) -> int: ...
     @property
@@ -224,7 +226,7 @@ def match(
     element: Optional[Literal["gaussian", "axial"]] = None,
     modes: Optional[float] = None,
     search: Optional[Literal["global", "local", "best"]] = None,
-    solver: Optional[Literal["jv", "hungarian", "simplex"]] = None,
+    solver: Optional[Literal["jv", "hungarian", "simplex", "ordered"]] = None,
     threshold: Optional[float] = None,
     threshold_mode: Optional[Literal["after", "during"]] = None,
     excess: Optional[bool] = None,
@@ -329,7 +331,7 @@ def run(
     element: Optional[Literal["gaussian", "axial"]] = None,
     modes: Optional[float] = None,
     search: Optional[Literal["global", "local", "best"]] = None,
-    solver: Optional[Literal["jv", "hungarian", "simplex"]] = None,
+    solver: Optional[Literal["jv", "hungarian", "simplex", "ordered"]] = None,
     threshold: Optional[float] = None,
     threshold_mode: Optional[Literal["after", "during"]] = None,
     excess: Optional[bool] = None,
