@@ -1,9 +1,12 @@
 //! Dense linear assignment: the three `assign` methods and two other Rust crates
-//! (`pathfinding::kuhn_munkres`, `lapjv`) on four cost classes.
+//! (`pathfinding::kuhn_munkres`, `lapjv`) on four cost classes, and the order-preserving solver
+//! (`ordered`, a constrained problem: its optimum is not the others') beside them, also on a fifth
+//! class, `contour`, the matrices of two closed contours (`n × 1.1 n`).
 //!
-//! `cargo bench --bench assign` (filter with e.g. `-- euclidean/2000`). Sample size 10 and short
-//! measurement times keep a full run to a few minutes; the O(n³) peer with the largest constant
-//! (pathfinding) stops at n = 1000.
+//! `cargo bench --bench assign` (filter with e.g. `-- euclidean/2000` or `-- contour`). Sample
+//! size 10 and short measurement times keep a full run to a few minutes; the O(n³) peer with the
+//! largest constant (pathfinding) stops at n = 1000, and `ordered`, `O(n · m · (m − n + 1))`, at
+//! 500 × 1000 on `rect`.
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -46,20 +49,36 @@ fn case(class: &'static str, n: usize) -> Case {
             2 * n,
             (0..2 * n * n).map(|_| rng.random::<f64>()).collect(),
         ),
+        // Two closed contours sampled with n and 1.1 n nodes, B's numbering started elsewhere:
+        // the squared distance of the nodes' positions along the contour, plus noise.
+        "contour" => {
+            let m = n + n / 10;
+            let shift = rng.random_range(0..m);
+            let mut c = Vec::with_capacity(n * m);
+            for i in 0..n {
+                for j in 0..m {
+                    let d =
+                        (i as f64 / n as f64 - ((j + shift) % m) as f64 / m as f64).rem_euclid(1.0);
+                    c.push(d.min(1.0 - d).powi(2) + 0.01 * rng.random::<f64>());
+                }
+            }
+            (n, m, c)
+        }
         _ => unreachable!(),
     };
     Case { rows, cols, cost }
 }
 
 fn bench(c: &mut Criterion) {
-    for class in ["uniform", "euclidean", "int1-100", "rect"] {
+    for class in ["uniform", "euclidean", "int1-100", "rect", "contour"] {
         let mut group = c.benchmark_group(format!("assign/{class}"));
         group.sample_size(10);
         group.warm_up_time(Duration::from_millis(500));
-        let sizes: &[usize] = if class == "rect" {
-            &[100, 500, 1000]
-        } else {
-            &[100, 500, 1000, 2000]
+        let sizes: &[usize] = match class {
+            "rect" => &[100, 500, 1000],
+            // Contours of pressure frames have 50–300 nodes.
+            "contour" => &[100, 200, 500, 1000],
+            _ => &[100, 500, 1000, 2000],
         };
         for &n in sizes {
             let k = case(class, n);
@@ -69,7 +88,11 @@ fn bench(c: &mut Criterion) {
                 ("jv", Method::JonkerVolgenant),
                 ("hungarian", Method::Hungarian),
                 ("simplex", Method::NetworkSimplex),
+                ("ordered", Method::Ordered),
             ] {
+                if method == Method::Ordered && class == "rect" && n > 500 {
+                    continue;
+                }
                 let opts = Options {
                     method,
                     maximize: false,
