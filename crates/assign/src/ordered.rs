@@ -16,10 +16,11 @@
 //! 1))`: `O(n²)` for equal counts, `O(n · m²)` at worst; memory `O(n · (m − n + 1))`. Maes'
 //! divide and conquer over `r` (the optimal paths of different starts do not cross) would bring
 //! the worst case to `O(n · m · log m)`; contours of consecutive frames differ by a few nodes, so
-//! the band is narrow and the plain recurrence is already faster than JV there.
+//! the band is narrow and the plain recurrence keeps a pair's time at JV's (BENCHMARKS.md).
 //!
-//! No cheap certificate of optimality is known for the constrained problem (the assignment
-//! duals do not bound it); the tests check it against enumeration of every order-preserving map.
+//! No cheap certificate of optimality is known for the constrained problem (the assignment duals
+//! certify the unconstrained optimum, only a lower bound here); the tests check it against
+//! enumeration of every order-preserving map.
 //!
 //! **With a threshold** ([`solve_with_threshold`], any row or column unmatched at `τ/2`): the
 //! cyclic alignment of the two sequences, the linear alignment (`D[i][j] = min(D[i−1][j],

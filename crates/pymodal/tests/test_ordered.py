@@ -39,6 +39,10 @@ def test_ordered_matches_keep_the_cyclic_order(contours):
     # The ordered optimum is never cheaper than the unconstrained one.
     assert m.costs[~m.excess].sum() >= jv.costs[~jv.excess].sum() - 1e-9
     assert pickle.loads(pickle.dumps(m)).crossings == 0
+    # With the threshold inside the optimiser: the cyclic alignment with gaps, still in order.
+    gaps = pymodal.match(a, b, solver="ordered", threshold=0.05, threshold_mode="during")
+    assert gaps.crossings == 0 and gaps.optimisation_count < 60
+    assert (gaps.costs[~gaps.excess] <= 0.05).all()
 
 
 def test_crossings_counted_where_the_free_assignment_crosses():
