@@ -80,9 +80,9 @@ fn band_pass(
         let row = &c[i * m..(i + 1) * m];
         let mut j = (r + i) % m;
         let mut run_min = f64::INFINITY;
-        for k in 0..w {
-            run_min = run_min.min(prev[k]);
-            cur[k] = row[j] + run_min;
+        for (e, &before) in cur.iter_mut().zip(prev.iter()) {
+            run_min = run_min.min(before);
+            *e = row[j] + run_min;
             j += 1;
             if j == m {
                 j = 0;
@@ -229,7 +229,7 @@ pub fn cyclic_crossings(pairs: &[(usize, usize)]) -> usize {
     let (rows_of, cols_of) = (groups(&ri, ga), groups(&rj, gb));
     let mut at_cut_a = straight_inversions(&ri, &rj) as i64;
     let mut best = at_cut_a;
-    for a in 0..ga {
+    for (a, first_rows) in rows_of.iter().enumerate() {
         // Every start of the columns with the rows starting at their `a`-th distinct node.
         let mut f = at_cut_a;
         for group in &cols_of {
@@ -237,7 +237,7 @@ pub fn cyclic_crossings(pairs: &[(usize, usize)]) -> usize {
             best = best.min(f);
         }
         // The rows' start moves past row group `a` (columns starting at column rank 0).
-        at_cut_a += group_to_end(&rows_of[a], &rj, &below_j, k);
+        at_cut_a += group_to_end(first_rows, &rj, &below_j, k);
     }
     best as usize
 }

@@ -98,9 +98,8 @@ fn brute_force_crossings(pairs: &[(usize, usize)], n: usize, m: usize) -> usize 
                 .map(|&(i, j)| ((i + n - s) % n, (j + m - t) % m))
                 .collect();
             let mut inv = 0;
-            for p in 0..r.len() {
-                for q in p + 1..r.len() {
-                    let (a, b) = (r[p], r[q]);
+            for (p, &a) in r.iter().enumerate() {
+                for &b in &r[p + 1..] {
                     if (a.0 < b.0 && a.1 > b.1) || (a.0 > b.0 && a.1 < b.1) {
                         inv += 1;
                     }
