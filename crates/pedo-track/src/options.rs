@@ -48,6 +48,10 @@ pub struct SequenceOptions {
     /// The range must be non-empty and within the recording, else [`run_sequence`] and
     /// [`stream_sequence`] fail.
     pub frames: Option<(usize, usize)>,
+    /// Frame stride: every this many-th frame of [`frames`](Self::frames) is run, from its
+    /// first ([`SequenceOptions::kept_frames`]); 1 runs every frame (0 counts as 1). Objects keep
+    /// the recording's own frame numbers; pairs join consecutive kept frames.
+    pub every: usize,
     /// How each pair is matched. Default: [`MatchOptions::default`] without the outline fit
     /// (`rotation_search.outline_iterations` 0): a run's frames keep node-to-node ICP.
     pub matching: MatchOptions,
@@ -78,6 +82,17 @@ impl SequenceOptions {
     pub fn drift_corrected(&self) -> bool {
         self.drift_reference >= 2 && self.model != ObjectModel::Isocontour
     }
+
+    /// The frame stride, at least 1 ([`every`](Self::every)).
+    pub fn frame_step(&self) -> usize {
+        self.every.max(1)
+    }
+
+    /// The frames a run over `start..end` builds objects on: every
+    /// [`frame_step`](Self::frame_step)-th from `start`.
+    pub fn kept_frames(&self, start: usize, end: usize) -> Vec<usize> {
+        (start..end).step_by(self.frame_step()).collect()
+    }
 }
 
 impl Default for SequenceOptions {
@@ -98,6 +113,7 @@ impl Default for SequenceOptions {
             iso_count: 10,
             min_nodes: 8,
             frames: None,
+            every: 1,
             matching: for_frames(MatchOptions::default()),
             drift_reference: 0,
             keep_match_details: true,
@@ -289,6 +305,11 @@ modal_core::option_set! {
         frames: Option<FrameRange> = None;
             Value, "all",
             "Frames START..END, 0-based with END excluded as in a Python slice (START.. and ..END allowed; a negative index counts back from the end: -50.. is the last 50 frames, 0..-1 all but the last); the range must lie within the recording.";
+        /// Frame stride: every this many-th frame of [`frames`](Self::frames), from its first
+        /// ([`SequenceOptions::every`]).
+        every: usize = d.every;
+            Value, d.every,
+            "Keep every N-th frame of the frames run, from the first (1: every frame); pairs join consecutive kept frames, and the tables give the recording's own frame numbers and times (frames.csv keeps every frame of the range).";
         /// Noise threshold in the recording's units (`None`: the file's own, else 0).
         noise: Option<f64> = None;
             Value, "the file's noise threshold, else 0",
@@ -360,7 +381,7 @@ impl RunParams {
     /// Whether a run with these parameters streams ([`streams`]): the contour and surface
     /// models without drift correction.
     pub fn streams(&self) -> bool {
-        streamable(self.model, self.drift_reference)
+        streamable(self.model, self.drift_reference) && self.every <= 1
     }
 
     /// Checks every parameter that does not depend on a recording.
@@ -403,6 +424,20 @@ impl RunParams {
                 "drift_reference",
                 self.drift_reference,
                 "0 (off) or an integer >= 2",
+            ));
+        }
+        if self.every == 0 {
+            return Err(OptionError::new("every", self.every, "an integer >= 1"));
+        }
+        // Reference frames must be frames the run keeps, or no object would reach one.
+        if self.drift_reference >= 2 && !self.drift_reference.is_multiple_of(self.every) {
+            return Err(OptionError::new(
+                "drift_reference",
+                self.drift_reference,
+                format!(
+                    "0 (off) or a multiple of every ({}), so that reference frames are frames run",
+                    self.every
+                ),
             ));
         }
         if self.surface_nodes < 8 {
@@ -457,6 +492,7 @@ impl RunParams {
             model: self.model,
             matching,
             frames,
+            every: self.every,
             iso_frame,
             iso_count: self.iso_levels,
             drift_reference: self.drift_reference,
@@ -502,6 +538,7 @@ impl RunParams {
         let mut options = SequenceOptions {
             model: self.model,
             matching: self.match_options()?,
+            every: self.every,
             iso_frame: self.iso_frame,
             drift_reference: self.drift_reference,
             ..Default::default()
@@ -535,6 +572,7 @@ impl RunParams {
         v.extend([
             ("model", Word(options.model.to_string())),
             ("frames", Word(file.frames.to_string())),
+            ("every", Int(options.every)),
             (
                 "noise",
                 options.contour.preprocess.threshold.map_or(Absent, Float),
