@@ -231,7 +231,7 @@ fn pitch_and_frame_rate_override_the_file() {
         "inspect",
         BUNDLED,
         "--pitch-mm",
-        "2,3",
+        "2x3",
         "--frame-rate",
         "100",
         "--json",
@@ -336,6 +336,21 @@ fn exit_codes_are_0_ok_1_runtime_2_usage() {
     assert_eq!(code(&["run", BUNDLED, "--frames", "0..999"]), Some(2));
     assert_eq!(code(&["run", BUNDLED, "--smooth", "2000"]), Some(2));
     assert_eq!(code(&["inspect", BUNDLED, "--pitch-mm", "-1"]), Some(2));
+    // A decimal comma is not read as two pitches: refused, with both readings offered.
+    for command in ["inspect", "run"] {
+        let o = pedomatch(&[command, BUNDLED, "--pitch-mm", "5,08"]);
+        let err = String::from_utf8(o.stderr).unwrap();
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains("5.08") && err.contains("5x08"), "{err}");
+    }
+    let two = stdout_json(&pedomatch(&[
+        "inspect",
+        BUNDLED,
+        "--pitch-mm",
+        "7.62x5.08",
+        "--json",
+    ]));
+    assert_eq!(two["pitch_mm"], serde_json::json!([7.62, 5.08]));
     // A negative number is the option's value, checked by its own rule (not an unknown flag).
     for (flag, name) in [
         ("--pitch-mm", "pitch"),

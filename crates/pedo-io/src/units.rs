@@ -5,7 +5,7 @@ use crate::recording::Recording;
 use modal_core::{OptionError, OptionSpec};
 
 modal_core::option_set! {
-    /// Sensor pitch, frame rate and pressure units that replace a file's (`--pitch-mm X[,Y]`,
+    /// Sensor pitch, frame rate and pressure units that replace a file's (`--pitch-mm X[xY]`,
     /// `--frame-rate HZ`, `--units U`; Python `pitch_mm=`, `frame_rate=`, `units=`). `None` keeps
     /// what the file says.
     UnitOverrides {
@@ -13,7 +13,7 @@ modal_core::option_set! {
         /// Millimetres per sensel `[x, y]` = `[column spacing, row spacing]`.
         pitch_mm: Option<Pitch> = None;
             Value, "the file's, if it says",
-            "Sensor pitch X[,Y] in mm per sensel (X alone: square sensels); overrides the file's.";
+            "Sensor pitch in mm per sensel: X (square sensels) or XxY (columns x rows, e.g. 7.62x5.08); overrides the file's. A comma is refused: 5,08 could be 5.08 or 5x8.";
         /// Frames per second.
         frame_rate: Option<f64> = None;
             Value, "the file's, if it says",
@@ -67,19 +67,23 @@ impl UnitOverrides {
 }
 
 /// A sensor pitch in mm per sensel, `[x, y]` = `[column spacing, row spacing]`: written `X`
-/// (square sensels) or `X,Y`.
+/// (square sensels) or `XxY` (`7.62x5.08`; `×` too). A comma is refused rather than guessed:
+/// `5,08` is 5.08 mm with a decimal comma and 5 × 8 mm as a list, and either misreading would
+/// scale every millimetre, area and force of a run without a word; the message offers both.
 ///
 /// ```
 /// use pedo_io::units::Pitch;
 /// assert_eq!("5.08".parse::<Pitch>().unwrap(), Pitch([5.08, 5.08]));
-/// assert_eq!("5,7.5".parse::<Pitch>().unwrap(), Pitch([5.0, 7.5]));
+/// assert_eq!("7.62x5.08".parse::<Pitch>().unwrap(), Pitch([7.62, 5.08]));
+/// let e = "5,08".parse::<Pitch>().unwrap_err().to_string();
+/// assert!(e.contains("5.08") && e.contains("5x08"), "{e}");
 /// assert!("-1".parse::<Pitch>().is_err());
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pitch(pub [f64; 2]);
 
 /// What `--pitch-mm` takes, for its errors.
-const PITCH_FORM: &str = "X[,Y]: millimetres per sensel, > 0";
+const PITCH_FORM: &str = "X or XxY: millimetres per sensel, > 0 (XxY: columns x rows)";
 
 impl Pitch {
     /// Checks that both spacings are positive and finite.
@@ -94,7 +98,12 @@ impl Pitch {
 
 impl std::fmt::Display for Pitch {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{},{}", self.0[0], self.0[1])
+        let [x, y] = self.0;
+        if x == y {
+            write!(f, "{x}")
+        } else {
+            write!(f, "{x}x{y}")
+        }
     }
 }
 
@@ -102,16 +111,30 @@ impl std::str::FromStr for Pitch {
     type Err = OptionError;
 
     fn from_str(s: &str) -> Result<Self, OptionError> {
+        let s = s.trim();
+        if let Some((a, b)) = s.split_once(',') {
+            let (a, b) = (a.trim(), b.trim());
+            let digits = |t: &str| !t.is_empty() && t.bytes().all(|c| c.is_ascii_digit());
+            // Only digits either side: both readings are plausible, and the message names both.
+            let readings = if digits(a) && digits(b) {
+                format!("{a}.{b} for one pitch with a decimal point, or {a}x{b} for columns x rows")
+            } else {
+                PITCH_FORM.to_string()
+            };
+            return Err(OptionError::new(
+                "pitch_mm",
+                s,
+                format!("no comma (a decimal comma or a list?): {readings}"),
+            ));
+        }
         let bad = || OptionError::new("pitch_mm", s, PITCH_FORM);
-        let v: Vec<f64> = s
-            .split(',')
-            .map(|x| x.trim().parse::<f64>())
-            .collect::<Result<_, _>>()
-            .map_err(|_| bad())?;
-        let pitch = match v.as_slice() {
-            [x] => Pitch([*x, *x]),
-            [x, y] => Pitch([*x, *y]),
-            _ => return Err(bad()),
+        let number = |x: &str| x.trim().parse::<f64>().map_err(|_| bad());
+        let pitch = match s.split_once(['x', 'X', '×']) {
+            Some((x, y)) => Pitch([number(x)?, number(y)?]),
+            None => {
+                let x = number(s)?;
+                Pitch([x, x])
+            }
         };
         pitch.validate().map_err(|_| bad())?;
         Ok(pitch)
@@ -123,7 +146,7 @@ impl modal_core::options::OptionField for Pitch {
         "Pitch".into()
     }
     fn value_name() -> Option<&'static str> {
-        Some("X[,Y]")
+        Some("X[xY]")
     }
     fn read<I: modal_core::options::OptionInput + ?Sized>(
         input: &I,
@@ -171,7 +194,7 @@ mod tests {
         assert_eq!(rec.time_s(2), None);
         assert_eq!(rec.force_factor(), None);
         let o = UnitOverrides {
-            pitch_mm: Some("2,3".parse().unwrap()),
+            pitch_mm: Some("2x3".parse().unwrap()),
             frame_rate: Some(50.0),
             units: Some(" N/cm2 ".into()),
         };
@@ -195,8 +218,27 @@ mod tests {
     }
 
     #[test]
-    fn a_pitch_reads_one_or_two_numbers() {
-        assert_eq!("1,2,3".parse::<Pitch>().unwrap_err().option, "pitch_mm");
+    fn a_pitch_with_a_comma_is_refused_with_both_readings() {
+        for (written, one, two) in [("5,08", "5.08", "5x08"), ("2,3", "2.3", "2x3")] {
+            let e = written.parse::<Pitch>().unwrap_err();
+            assert_eq!(e.option, "pitch_mm");
+            let message = e.to_string();
+            assert!(message.contains(one) && message.contains(two), "{message}");
+        }
+        // The two-value form with a comma, as it was once written: refused too, saying how.
+        let e = "7.62,5.08".parse::<Pitch>().unwrap_err().to_string();
+        assert!(e.contains("XxY"), "{e}");
+        assert_eq!("5.08".parse::<Pitch>().unwrap(), Pitch([5.08, 5.08]));
+        assert_eq!("7.62x5.08".parse::<Pitch>().unwrap(), Pitch([7.62, 5.08]));
+        assert_eq!(" 2 × 3 ".parse::<Pitch>().unwrap(), Pitch([2.0, 3.0]));
+        assert_eq!("2X3".parse::<Pitch>().unwrap(), Pitch([2.0, 3.0]));
+        for bad in ["1x2x3", "x", "0", "-1", "2x-3", "inf", "five"] {
+            assert_eq!(
+                bad.parse::<Pitch>().unwrap_err().option,
+                "pitch_mm",
+                "{bad}"
+            );
+        }
         // Printed back in the form it is read.
         for p in [Pitch([5.08, 5.08]), Pitch([7.62, 5.08])] {
             assert_eq!(p.to_string().parse::<Pitch>().unwrap(), p);
