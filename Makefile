@@ -42,13 +42,13 @@ $(VENV)/.ready:
 	$(VENV)/bin/uv pip install -q --python $(PY) $(PIP_PACKAGES)
 	touch $@
 
-# Builds the pymodal wheel (abi3: one wheel for CPython >= 3.9) into dist/ and installs it into
-# the venv. Cargo rebuilds nothing when the sources have not changed.
+# Builds the wheel of the distribution `pedomatch` (import name `pymodal`; abi3: one wheel for
+# CPython >= 3.9) into dist/ and installs it into the venv. Cargo rebuilds nothing when the sources have not changed.
 wheel: venv
-	rm -f dist/pymodal-*.whl
+	rm -f dist/pedomatch-*.whl
 	$(CARGO_ENV) $(VENV)/bin/maturin build --profile $(WHEEL_PROFILE) --strip --quiet -i $(PY) \
 		-m crates/pymodal/Cargo.toml -o dist
-	$(PY) -m pip install -q --force-reinstall --no-deps dist/pymodal-*.whl
+	$(PY) -m pip install -q --force-reinstall --no-deps dist/pedomatch-*.whl
 
 # The Python tests run against the installed wheel: from outside the source tree, so that
 # `import pymodal` cannot resolve to crates/pymodal/python.
@@ -57,8 +57,9 @@ test-python: wheel
 		sys.exit(0 if "site-packages" in pymodal.__file__ else "pymodal not imported from the wheel: " + pymodal.__file__)'
 	cd $(VENV) && ./bin/python -m pytest -q -p no:cacheprovider $(abspath crates/pymodal/tests)
 
-# The wheel on its own: a throw-away venv, pip (numpy from PyPI as a binary wheel), and a small
-# real match, with every directory holding cargo or rustc removed from PATH.
+# The wheel on its own: a throw-away venv, pip (numpy from PyPI as a binary wheel), its metadata
+# (distribution `pedomatch`, not the index's unrelated `pymodal`) and a small real match, with
+# every directory holding cargo or rustc removed from PATH.
 PYTHON3 := $(shell command -v python3)
 NO_RUST_PATH = $(shell p=; for d in $$(echo "$$PATH" | tr : ' '); do \
 	[ -x "$$d/cargo" ] || [ -x "$$d/rustc" ] || p="$$p$$d:"; done; echo "$${p%:}")
@@ -67,7 +68,7 @@ wheel-check: wheel
 	export PATH="$(NO_RUST_PATH)" CARGO_HOME="$$tmp/none" RUSTUP_HOME="$$tmp/none"; \
 	if command -v cargo || command -v rustc; then echo "Rust is still on PATH" >&2; exit 1; fi; \
 	$(PYTHON3) -m venv "$$tmp/venv"; \
-	"$$tmp/venv/bin/python" -m pip install -q --only-binary=:all: dist/pymodal-*-cp39-abi3-*.whl; \
+	"$$tmp/venv/bin/python" -m pip install -q --only-binary=:all: dist/pedomatch-*-cp39-abi3-*.whl; \
 	cd "$$tmp" && "$$tmp/venv/bin/python" $(abspath crates/pymodal/tests/smoke_installed_wheel.py)
 
 # Every example: one Rust example per crate (plus the assignment timing harness on small

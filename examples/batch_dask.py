@@ -5,7 +5,7 @@ Run:  python examples/batch_dask.py INPUTS... [--out DIR] [--workers 2] [--sched
 
 INPUTS are recordings, folders or glob patterns. Without --scheduler, a LocalCluster of
 --workers processes is started (one thread each: a task is one recording on one core). Needs
-`pip install pymodal[dask]` (dask[distributed] and pandas).
+`pip install 'pedomatch[dask]'` (dask[distributed] and pandas).
 """
 
 import argparse

@@ -25,7 +25,7 @@ pub struct InspectArgs {
 
 pub fn run(args: InspectArgs) -> Result<(), CliError> {
     let mut rec = args.read.read(&args.recording)?;
-    args.units.overrides().apply(&mut rec)?;
+    args.units.params().apply(&mut rec)?;
     let input = InputInfo::of_path(&args.recording)?;
     let threshold = args.noise.or(rec.noise_threshold).unwrap_or(0.0);
     let d = describe(&rec, &input, threshold);

@@ -89,7 +89,7 @@ fn load_object(path: &Path, frame: usize, args: &MatchArgs) -> Result<Object, Cl
         .to_ascii_lowercase();
     let plain = |points| Object {
         points,
-        pitch_mm: args.units.pitch_mm,
+        pitch_mm: args.units.params().pitch_mm.map(|p| p.0),
         time_s: None,
         axes: None,
         source: None,
@@ -109,7 +109,7 @@ fn load_object(path: &Path, frame: usize, args: &MatchArgs) -> Result<Object, Cl
         return Ok(plain(points));
     }
     let mut rec = args.read.read(path)?;
-    args.units.overrides().apply(&mut rec)?;
+    args.units.params().apply(&mut rec)?;
     if frame >= rec.n_frames() {
         return Err(CliError::Usage(format!(
             "{}: frame = {frame}: expected a frame in 0..{} (0-based)",
@@ -163,7 +163,7 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let started = Instant::now();
     let params = args.modal.params();
     params.validate()?;
-    args.units.overrides().validate()?;
+    args.units.params().validate()?;
     let oa = load_object(&args.a, args.frame, &args)?;
     let ob = load_object(&args.b, args.frame_b.unwrap_or(args.frame), &args)?;
     warn_if_no_frames(&oa, &args.a, args.frame, "--frame");

@@ -1,83 +1,45 @@
 //! `pedomatch run` and `pedomatch demo`: a whole recording in; tables, figures and tracks out.
 
-use crate::option_args::{help, word, ModalArgs, UnitArgs};
+use crate::option_args::OptionArgs;
 use crate::output;
 use crate::CliError;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use pedo_io::counted;
 use pedo_output::InputInfo;
-use pedo_output::{AnimationFormat, FigureFormat, ReportFormat, TableFormat};
-use pedo_track::{FrameRange, ObjectModel, RunParams, Stage};
+use pedo_output::TableFormat;
+use pedo_track::{RunParams, Stage};
 use serde_json::Value;
 use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::Instant;
 
-/// Options shared by `run` and `demo`.
+/// Options shared by `run`, `demo` and `batch`.
 #[derive(Args, Clone)]
 pub struct RunOptionsArgs {
-    #[arg(long, value_parser = word::<ObjectModel>(), help = help("model"))]
-    pub model: Option<ObjectModel>,
+    /// The run's options: the recording, matching and unit options.
     #[command(flatten)]
-    pub modal: ModalArgs,
-    // A range may start with a negative index (`--frames -50..`: the last 50 frames).
-    #[arg(long, allow_hyphen_values = true, value_name = "START..END", value_parser = |s: &str| s.parse::<FrameRange>(), help = help("frames"))]
-    pub frames: Option<FrameRange>,
-    #[arg(long, help = help("noise"))]
-    pub noise: Option<f64>,
-    #[arg(long, help = help("smooth"))]
-    pub smooth: Option<f64>,
-    #[arg(long, help = help("spacing"))]
-    pub spacing: Option<f64>,
-    #[arg(long, help = help("surface_nodes"))]
-    pub surface_nodes: Option<usize>,
-    #[arg(long, help = help("iso_frame"))]
-    pub iso_frame: Option<usize>,
-    #[arg(long, help = help("iso_levels"))]
-    pub iso_levels: Option<usize>,
-    #[arg(long, help = help("drift_reference"))]
-    pub drift_reference: Option<usize>,
+    pub run: OptionArgs<RunParams>,
+    /// What the run's folder holds besides its tables.
     #[command(flatten)]
-    pub units: UnitArgs,
-    #[arg(long, value_parser = word::<FigureFormat>(), help = help("figures"))]
-    pub figures: Option<FigureFormat>,
-    #[arg(long, value_parser = word::<TableFormat>(), help = help("tables"))]
-    pub tables: Option<TableFormat>,
+    pub output: OptionArgs<pedo_output::OutputOptions>,
     /// Print the time spent in each stage.
     #[arg(long)]
     pub timings: bool,
     /// Print the run's summary (summary.json) on stdout instead of text.
     #[arg(long)]
     pub json: bool,
-    #[arg(long, value_parser = word::<ReportFormat>(), help = help("report"))]
-    pub report: Option<ReportFormat>,
-    #[arg(long, value_parser = word::<AnimationFormat>(), help = help("animation"))]
-    pub animation: Option<AnimationFormat>,
 }
 
 impl RunOptionsArgs {
     /// What the run's folder holds besides its tables.
     pub fn outputs(&self) -> pedo_output::RunOutputs {
-        pedo_output::RunOutputs::of(self.figures, self.tables, self.report, self.animation)
+        pedo_output::RunOutputs::of(&self.output.params())
     }
 
     /// These options as the library's parameters; absent ones at the library's defaults.
     pub fn params(&self) -> RunParams {
-        let d = RunParams::default();
-        RunParams {
-            matching: self.modal.params(),
-            model: self.model.unwrap_or(d.model),
-            frames: self.frames.or(d.frames),
-            noise: self.noise.or(d.noise),
-            smooth: self.smooth.unwrap_or(d.smooth),
-            spacing: self.spacing.unwrap_or(d.spacing),
-            surface_nodes: self.surface_nodes.unwrap_or(d.surface_nodes),
-            iso_frame: self.iso_frame.or(d.iso_frame),
-            iso_levels: self.iso_levels.unwrap_or(d.iso_levels),
-            units: self.units.overrides(),
-            drift_reference: self.drift_reference.unwrap_or(d.drift_reference),
-        }
+        self.run.params()
     }
 }
 

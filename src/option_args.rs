@@ -1,12 +1,13 @@
 //! The command-line options, made from the one declaration of each option in
-//! the library crates ([`modal_core::options`], [`pedo_track`], [`pedo_io::units`]):
+//! the library crates ([`modal_core::options`], [`pedo_track`], [`pedo_io::units`],
+//! [`pedo_output`]):
 //! the same names as Python's keywords (`--x-y` for `x_y`), the same words, the same defaults
 //! (an absent option is the library's default) and the same help text.
 
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 use modal_core::options::{OptionSpec, OptionText};
-use modal_core::{Choice, MatchParams, OptionError, OptionKind};
+use modal_core::{Choice, MatchParams, OptionError, OptionKind, OptionSet};
 use pedo_io::units::UnitOverrides;
 
 /// A clap parser for an enumerated option: the possible values are the Rust type's words, the
@@ -27,43 +28,56 @@ pub fn help(name: &str) -> String {
         .unwrap_or_else(|| panic!("option {name} is not in the library's option tables"))
 }
 
-/// Every matching option (`pedomatch match`, `run` and `demo`; `pymodal.match` and `run`), as
-/// the library declares it ([`modal_core::options::match_option_specs`]): the flags are made
-/// from that table, so this file names no option.
+/// The flags of every option of a set declared by `option_set!` ([`OptionSet`]): the matching
+/// options ([`MatchParams`]), a run's ([`pedo_track::RunParams`], which holds the matching and
+/// unit options), the units ([`UnitOverrides`]) and the outputs
+/// ([`pedo_output::OutputOptions`]). The flags are made from the set's specs, so this file names
+/// no option; an absent option is the set's default, so defaults are resolved in one step.
 #[derive(Clone, Debug, Default)]
-pub struct ModalArgs {
-    params: MatchParams,
+pub struct OptionArgs<T> {
+    params: T,
 }
 
-impl ModalArgs {
+/// The matching options of `pedomatch match`.
+pub type ModalArgs = OptionArgs<MatchParams>;
+/// The unit options of `pedomatch match` and `inspect`.
+pub type UnitArgs = OptionArgs<UnitOverrides>;
+
+impl<T: OptionSet> OptionArgs<T> {
     /// These options as the library's parameters; absent ones at the library's defaults.
-    pub fn params(&self) -> MatchParams {
+    pub fn params(&self) -> T {
         self.params.clone()
     }
 }
 
-impl clap::Args for ModalArgs {
+/// An option's value checked while the command line is parsed: read as its type asks, then the
+/// set's rule (a pitch > 0), so that a bad value is a usage error naming the flag.
+fn check_value<T: OptionSet>(name: &'static str, text: OptionText<'_>) -> Result<(), OptionError> {
+    let mut params = T::default();
+    params.set_option(name, &text)?;
+    params.check()
+}
+
+impl<T: OptionSet> clap::Args for OptionArgs<T> {
     fn augment_args(cmd: clap::Command) -> clap::Command {
-        option_args(cmd, &MatchParams::specs(), |name, text| {
-            MatchParams::default().set(name, &text).map(drop)
-        })
+        option_args(cmd, &T::option_specs(), check_value::<T>)
     }
     fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
         Self::augment_args(cmd)
     }
 }
 
-impl clap::FromArgMatches for ModalArgs {
+impl<T: OptionSet> clap::FromArgMatches for OptionArgs<T> {
     fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
         let mut args = Self::default();
         args.update_from_arg_matches(m)?;
         Ok(args)
     }
     fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
-        for (name, text) in given_options(m, &MatchParams::specs()) {
+        for (name, text) in given_options(m, &T::option_specs()) {
             // Checked as it was parsed (`option_args`), so this only stores the value.
             self.params
-                .set(name, &text)
+                .set_option(name, &text)
                 .map_err(|e| clap::Error::raw(clap::error::ErrorKind::InvalidValue, e))?;
         }
         Ok(())
@@ -84,36 +98,42 @@ fn option_args(
     for spec in specs {
         let name = spec.name;
         let long = flag(name.replace('_', "-"));
+        let value_name = spec.value_name.unwrap_or_else(|| flag(name.to_uppercase()));
         let arg = Arg::new(name)
             .help(spec.help_with_default())
-            .value_name(flag(name.to_uppercase()));
-        let args =
-            match spec.kind {
-                OptionKind::Flag => vec![arg.long(long).action(ArgAction::SetTrue)],
-                OptionKind::NegatedFlag => {
-                    vec![arg
-                        .long(flag(format!("no-{long}")))
-                        .action(ArgAction::SetTrue)]
-                }
-                OptionKind::TriState => vec![
-                    arg.long(long).action(ArgAction::SetTrue),
-                    Arg::new(flag(format!("no_{name}")))
-                        .long(flag(format!("no-{long}")))
-                        .action(ArgAction::SetTrue)
-                        .help(format!("Turn --{long} off"))
-                        .conflicts_with(name),
-                ],
-                OptionKind::Word(words) => {
-                    vec![arg
-                        .long(long)
-                        .value_parser(PossibleValuesParser::new(words))]
-                }
-                OptionKind::Value => {
-                    vec![arg.long(long).allow_negative_numbers(true).value_parser(
-                        move |s: &str| check(name, OptionText::Text(s)).map(|()| s.to_string()),
-                    )]
-                }
-            };
+            .value_name(value_name);
+        let args = match spec.kind {
+            OptionKind::Flag => vec![arg.long(long).action(ArgAction::SetTrue)],
+            OptionKind::NegatedFlag => {
+                vec![arg
+                    .long(flag(format!("no-{long}")))
+                    .action(ArgAction::SetTrue)]
+            }
+            OptionKind::TriState => vec![
+                arg.long(long).action(ArgAction::SetTrue),
+                Arg::new(flag(format!("no_{name}")))
+                    .long(flag(format!("no-{long}")))
+                    .action(ArgAction::SetTrue)
+                    .help(format!("Turn --{long} off"))
+                    .conflicts_with(name),
+            ],
+            OptionKind::Word(words) => {
+                vec![arg
+                    .long(long)
+                    .value_parser(PossibleValuesParser::new(words))]
+            }
+            OptionKind::Value => {
+                let parse = move |s: &str| check(name, OptionText::Text(s)).map(|()| s.to_string());
+                // A value with a text form of its own may start with a hyphen (`-50..`);
+                // a number may be negative (refused by its rule, not as an unknown flag).
+                let arg = if spec.value_name.is_some() {
+                    arg.allow_hyphen_values(true)
+                } else {
+                    arg.allow_negative_numbers(true)
+                };
+                vec![arg.long(long).value_parser(parse)]
+            }
+        };
         cmd = cmd.args(args);
     }
     cmd
@@ -150,27 +170,6 @@ pub fn tri_state(on: bool, off: bool) -> Option<bool> {
         (true, _) => Some(true),
         (_, true) => Some(false),
         _ => None,
-    }
-}
-
-/// The sensor pitch and frame rate overriding a file's.
-#[derive(Args, Clone, Debug)]
-pub struct UnitArgs {
-    #[arg(long, allow_negative_numbers = true, value_name = "X[,Y]", value_parser = |s: &str| pedo_io::units::parse_pitch(s), help = help("pitch_mm"))]
-    pub pitch_mm: Option<[f64; 2]>,
-    #[arg(long, allow_negative_numbers = true, value_name = "HZ", value_parser = |s: &str| pedo_io::units::parse_frame_rate(s), help = help("frame_rate"))]
-    pub frame_rate: Option<f64>,
-    #[arg(long, value_name = "UNITS", value_parser = |s: &str| pedo_io::units::parse_units(s), help = help("units"))]
-    pub units: Option<String>,
-}
-
-impl UnitArgs {
-    pub fn overrides(&self) -> UnitOverrides {
-        UnitOverrides {
-            pitch_mm: self.pitch_mm,
-            frame_rate: self.frame_rate,
-            units: self.units.clone(),
-        }
     }
 }
 

@@ -811,7 +811,7 @@ fn rows_give_each_recordings_frame_rate_pitch_and_pressure_units() {
     let g = grid.to_str().unwrap();
     let unit_args = [
         "--pitch-mm",
-        "2,3",
+        "2x3",
         "--frame-rate",
         "50",
         "--units",

@@ -2,7 +2,7 @@
 //! bundled recording, `--json`, `inspect` and the exit codes.
 
 mod common;
-use common::{pedomatch, stdout_json, temp_dir};
+use common::{pedomatch, read_json, stdout_json, temp_dir};
 use std::collections::{BTreeSet, HashMap};
 use std::path::Path;
 
@@ -231,7 +231,7 @@ fn pitch_and_frame_rate_override_the_file() {
         "inspect",
         BUNDLED,
         "--pitch-mm",
-        "2,3",
+        "2x3",
         "--frame-rate",
         "100",
         "--json",
@@ -336,6 +336,21 @@ fn exit_codes_are_0_ok_1_runtime_2_usage() {
     assert_eq!(code(&["run", BUNDLED, "--frames", "0..999"]), Some(2));
     assert_eq!(code(&["run", BUNDLED, "--smooth", "2000"]), Some(2));
     assert_eq!(code(&["inspect", BUNDLED, "--pitch-mm", "-1"]), Some(2));
+    // A decimal comma is not read as two pitches: refused, with both readings offered.
+    for command in ["inspect", "run"] {
+        let o = pedomatch(&[command, BUNDLED, "--pitch-mm", "5,08"]);
+        let err = String::from_utf8(o.stderr).unwrap();
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains("5.08") && err.contains("5x08"), "{err}");
+    }
+    let two = stdout_json(&pedomatch(&[
+        "inspect",
+        BUNDLED,
+        "--pitch-mm",
+        "7.62x5.08",
+        "--json",
+    ]));
+    assert_eq!(two["pitch_mm"], serde_json::json!([7.62, 5.08]));
     // A negative number is the option's value, checked by its own rule (not an unknown flag).
     for (flag, name) in [
         ("--pitch-mm", "pitch"),
@@ -381,4 +396,77 @@ fn inspect_reads_a_pedar_export_with_a_given_layout() {
     ]);
     assert_eq!(missing.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("nonexistent.csv"));
+}
+
+/// Reads a CSV's rows as (column name → field text).
+fn read_text_csv(path: &Path) -> Vec<HashMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn every_second_frame_is_matched_with_the_recordings_own_frame_numbers() {
+    let dir = temp_dir("every");
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let mut args = vec!["run", BUNDLED, "--figures", "none", "--report", "none"];
+        args.extend_from_slice(extra);
+        args.extend(["--out", out.to_str().unwrap()]);
+        let o = pedomatch(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        out
+    };
+    let (all, strided) = (run("all", &[]), run("every2", &["--every", "2"]));
+
+    // Pairs join consecutive kept frames: 0 → 2 → 4 …, each at its own time.
+    let pairs = read_csv(&strided.join("pairs.csv"));
+    assert!(pairs.len() > 50, "{} pairs", pairs.len());
+    for p in &pairs {
+        let (a, b) = (p["frame_a"], p["frame_b"]);
+        assert!(a % 2.0 == 0.0 && b == a + 2.0, "{a} → {b}");
+        assert!((p["time_a_s"] - a * DT_S).abs() < 1e-9 && (p["time_b_s"] - b * DT_S).abs() < 1e-9);
+    }
+    assert_eq!(pairs[0]["frame_a"], 0.0);
+    for step in read_csv(&strided.join("tracks.csv")) {
+        assert_eq!(step["frame"] % 2.0, 0.0);
+        assert!((step["time_s"] - step["frame"] * DT_S).abs() < 1e-9);
+    }
+    // The kept frames' objects are those of the full run's even frames, with the same frame
+    // numbers; frames.csv keeps every frame of the range.
+    let key = |r: &HashMap<String, String>| {
+        ["frame", "index", "nodes", "centroid_x", "centroid_y"].map(|k| r[k].clone())
+    };
+    let even: Vec<_> = read_text_csv(&all.join("objects.csv"))
+        .iter()
+        .filter(|r| r["frame"].parse::<usize>().unwrap() % 2 == 0)
+        .map(key)
+        .collect();
+    let kept: Vec<_> = read_text_csv(&strided.join("objects.csv"))
+        .iter()
+        .map(key)
+        .collect();
+    assert!(!kept.is_empty());
+    assert_eq!(kept, even);
+    assert_eq!(read_csv(&strided.join("frames.csv")).len(), 205);
+    // Recorded with the other options; 1 (every frame) by default.
+    let every = |out: &Path| read_json(&out.join("summary.json"))["options"]["every"].clone();
+    assert_eq!((every(&strided), every(&all)), (2.into(), 1.into()));
+
+    // 0 is no stride, and reference frames of drift correction must be frames run.
+    let code = |args: &[&str]| pedomatch(args).status.code();
+    assert_eq!(code(&["run", BUNDLED, "--every", "0"]), Some(2));
+    let o = pedomatch(&["run", BUNDLED, "--every", "2", "--drift-reference", "25"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("multiple of every"));
+    std::fs::remove_dir_all(&dir).unwrap();
 }

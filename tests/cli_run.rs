@@ -1188,7 +1188,7 @@ fn two_frames_of_oblong_sensels_are_matched_in_their_true_proportions() {
     );
     let frames = ["match", walk, walk, "--frame", "40", "--frame-b", "41"];
     let oblong = matches(
-        &[&frames[..], &["--pitch-mm", "5.08,7.62"]].concat(),
+        &[&frames[..], &["--pitch-mm", "5.08x7.62"]].concat(),
         "oblong",
     );
     assert!(scaled.len() > 50);

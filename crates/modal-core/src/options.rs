@@ -160,6 +160,23 @@ pub trait OptionInput {
     fn material(&self, option: &'static str) -> Result<Material, Self::Error> {
         Ok(self.text(option)?.parse()?)
     }
+    /// The value as the user wrote it, where a front end holds text (the command line): a type
+    /// with a text form of its own (a frame range `10..60`, a pitch `7.62x5.08`) parses it.
+    /// `None` where values come typed (Python), read by [`OptionInput::bounds`] and
+    /// [`OptionInput::one_or_two`].
+    fn written(&self) -> Option<&str> {
+        None
+    }
+    /// Two integer bounds, either open (Python's `(10, None)`); `expected` describes the form in
+    /// the error.
+    fn bounds(
+        &self,
+        option: &'static str,
+        expected: &str,
+    ) -> Result<[Option<isize>; 2], Self::Error>;
+    /// One number or a pair of numbers (Python's `5.08` or `(7.62, 5.08)`), as a pair; `expected`
+    /// describes the form in the error.
+    fn one_or_two(&self, option: &'static str, expected: &str) -> Result<[f64; 2], Self::Error>;
 }
 
 /// The command line's form of an option value: its text (`--modes 0.5`), or a switch given
@@ -208,6 +225,33 @@ impl OptionInput for OptionText<'_> {
             OptionText::Switch(b) => Err(OptionError::new(option, b, "a word")),
         }
     }
+    fn written(&self) -> Option<&str> {
+        match self {
+            OptionText::Text(s) => Some(s),
+            OptionText::Switch(_) => None,
+        }
+    }
+    // Text is read by `written`: only a switch reaches these two.
+    fn bounds(
+        &self,
+        option: &'static str,
+        expected: &str,
+    ) -> Result<[Option<isize>; 2], OptionError> {
+        Err(OptionError::new(option, self.as_shown(), expected))
+    }
+    fn one_or_two(&self, option: &'static str, expected: &str) -> Result<[f64; 2], OptionError> {
+        Err(OptionError::new(option, self.as_shown(), expected))
+    }
+}
+
+impl OptionText<'_> {
+    /// The value as an error message shows it.
+    fn as_shown(&self) -> String {
+        match self {
+            OptionText::Text(s) => s.to_string(),
+            OptionText::Switch(b) => b.to_string(),
+        }
+    }
 }
 
 /// The type of an option's field: how it is read from an [`OptionInput`], and how Python's type
@@ -215,6 +259,11 @@ impl OptionInput for OptionText<'_> {
 pub trait OptionField: Sized {
     /// The type in Python's stubs (`float`, `int`, `bool`, `Literal["a", "b"]`, ...).
     fn python_type() -> String;
+    /// The value's name in the command line's help (`START..END`) for a type with a text form
+    /// of its own, which may start with a hyphen (`-50..`); `None`: the option's name.
+    fn value_name() -> Option<&'static str> {
+        None
+    }
     /// The value of option `option` from `input`.
     fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error>;
 }
@@ -246,6 +295,15 @@ impl OptionField for bool {
     }
 }
 
+impl OptionField for String {
+    fn python_type() -> String {
+        "str".into()
+    }
+    fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
+        input.text(option)
+    }
+}
+
 impl OptionField for Material {
     fn python_type() -> String {
         "Material".into()
@@ -259,6 +317,9 @@ impl OptionField for Material {
 impl<T: OptionField> OptionField for Option<T> {
     fn python_type() -> String {
         T::python_type()
+    }
+    fn value_name() -> Option<&'static str> {
+        T::value_name()
     }
     fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
         T::read(input, option).map(Some)
@@ -275,13 +336,19 @@ pub fn literal_type(names: &[&str]) -> String {
 /// it is given on the command line ([`OptionKind`]), its documented default and its meaning. It
 /// makes the struct, its [`Default`], `specs()` (the [`OptionSpec`]s every front end, help text,
 /// type stub and documentation table is made or checked from) and `set(name, input)`, which
-/// reads one option from a front end's [`OptionInput`] by name. A front end thus names no option:
-/// it walks the specs.
+/// reads one option from a front end's [`OptionInput`] by name, and implements [`OptionSet`]
+/// (the set must have a `validate(&self) -> Result<(), OptionError>` of its own). A front end
+/// thus names no option: it walks the specs.
+///
+/// A set may hold other sets, declared first (`nested(units: UnitOverrides);`): fields of the
+/// struct whose options `set` reads by name too and [`OptionSet::option_specs`] lists after the
+/// set's own, so that one value carries every option of a command.
 #[macro_export]
 macro_rules! option_set {
     (
         $(#[$meta:meta])*
         $name:ident {
+            $(nested($($(#[doc = $ndoc:literal])* $nfield:ident: $nty:ty),+ $(,)?);)?
             let $d:ident = $dinit:expr;
             $(
                 $(#[doc = $doc:literal])*
@@ -293,18 +360,23 @@ macro_rules! option_set {
         $(#[$meta])*
         #[derive(Debug, Clone, PartialEq)]
         pub struct $name {
+            $($($(#[doc = $ndoc])* pub $nfield: $nty,)+)?
             $($(#[doc = $doc])* pub $field: $ty,)*
         }
 
         impl Default for $name {
             fn default() -> Self {
                 let $d = $dinit;
-                Self { $($field: $default,)* }
+                Self {
+                    $($($nfield: <$nty as Default>::default(),)+)?
+                    $($field: $default,)*
+                }
             }
         }
 
         impl $name {
-            /// Every option of the set, in field order: its one declaration.
+            /// Every option of the set, in field order: its one declaration (not those of the
+            /// sets it holds).
             pub fn specs() -> Vec<$crate::options::OptionSpec> {
                 #[allow(unused_imports)]
                 use $crate::options::OptionKind::*;
@@ -312,27 +384,67 @@ macro_rules! option_set {
                 let $d = $dinit;
                 vec![$(
                     $crate::options::OptionSpec::new(stringify!($field), $kind, $default_text, $help)
-                        .with_python_type(<$ty as $crate::options::OptionField>::python_type()),
+                        .with_python_type(<$ty as $crate::options::OptionField>::python_type())
+                        .with_value_name(<$ty as $crate::options::OptionField>::value_name()),
                 )*]
             }
 
-            /// Sets option `name` from a front end's `input` (not validated here); `Ok(false)` when
-            /// `name` is none of this set's.
+            /// Sets option `name` (of this set or of one it holds) from a front end's `input`
+            /// (not validated here); `Ok(false)` when `name` is none of them.
             pub fn set<I: $crate::options::OptionInput + ?Sized>(
                 &mut self,
                 name: &str,
                 input: &I,
-            ) -> Result<bool, I::Error> {
+            ) -> ::std::result::Result<bool, I::Error> {
                 match name {
                     $(stringify!($field) => {
                         self.$field = <$ty as $crate::options::OptionField>::read(input, stringify!($field))?;
                     })*
-                    _ => return Ok(false),
+                    _ => {
+                        $($(if self.$nfield.set(name, input)? {
+                            return Ok(true);
+                        })+)?
+                        return Ok(false);
+                    }
                 }
                 Ok(true)
             }
         }
+
+        impl $crate::options::OptionSet for $name {
+            fn option_specs() -> Vec<$crate::options::OptionSpec> {
+                #[allow(unused_mut)]
+                let mut specs = Self::specs();
+                $($(specs.extend(<$nty as $crate::options::OptionSet>::option_specs());)+)?
+                specs
+            }
+            fn set_option<I: $crate::options::OptionInput + ?Sized>(
+                &mut self,
+                name: &str,
+                input: &I,
+            ) -> ::std::result::Result<bool, I::Error> {
+                self.set(name, input)
+            }
+            fn check(&self) -> ::std::result::Result<(), $crate::options::OptionError> {
+                self.validate()
+            }
+        }
     };
+}
+
+/// A set of options declared by [`option_set!`], as a front end walks it: its specs (those of
+/// the sets it holds included), a setter by name and its validation.
+pub trait OptionSet: Default + Clone + 'static {
+    /// Every option the set reads: its own, then those of the sets it holds.
+    fn option_specs() -> Vec<OptionSpec>;
+    /// Sets option `name` from `input`; `Ok(false)` when the set has no such option.
+    fn set_option<I: OptionInput + ?Sized>(
+        &mut self,
+        name: &str,
+        input: &I,
+    ) -> Result<bool, I::Error>;
+    /// Checks every value.
+    fn check(&self) -> Result<(), OptionError>;
 }
 
 option_set! {
@@ -721,6 +833,9 @@ pub struct OptionSpec {
     pub help: &'static str,
     /// Its type in Python's stubs (`float`, `int`, `bool`, `Literal["a", "b"]`, ...).
     pub python: String,
+    /// The value's name in help texts when it has a text form of its own (`START..END`, which
+    /// may start with a hyphen); `None`: the option's name.
+    pub value_name: Option<&'static str>,
 }
 
 impl OptionSpec {
@@ -742,12 +857,19 @@ impl OptionSpec {
             default: default.to_string(),
             help,
             python,
+            value_name: None,
         }
     }
 
     /// This description with the Python type `python` (an integer option: `int`).
     pub fn with_python_type(mut self, python: impl Into<String>) -> Self {
         self.python = python.into();
+        self
+    }
+
+    /// This description with the value's own name in help texts ([`OptionField::value_name`]).
+    pub fn with_value_name(mut self, value_name: Option<&'static str>) -> Self {
+        self.value_name = value_name;
         self
     }
 

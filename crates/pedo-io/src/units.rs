@@ -2,33 +2,37 @@
 //! or override, and the conversions of pixel coordinates and frame numbers the outputs use.
 
 use crate::recording::Recording;
-use modal_core::{OptionError, OptionKind, OptionSpec};
+use modal_core::{OptionError, OptionSpec};
 
-/// Sensor pitch, frame rate and pressure units that replace a file's (`--pitch-mm X[,Y]`,
-/// `--frame-rate HZ`, `--units U`; Python `pitch_mm=`, `frame_rate=`, `units=`). `None` keeps
-/// what the file says.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct UnitOverrides {
-    /// Millimetres per sensel `[x, y]` = `[column spacing, row spacing]`.
-    pub pitch_mm: Option<[f64; 2]>,
-    /// Frames per second.
-    pub frame_rate: Option<f64>,
-    /// Pressure units of the values, one [`crate::recording::kpa_per_unit`] knows (so that the
-    /// outputs can state forces in newtons): for formats that store none (`.npy`, `.npz`, CSV).
-    pub units: Option<String>,
+modal_core::option_set! {
+    /// Sensor pitch, frame rate and pressure units that replace a file's (`--pitch-mm X[xY]`,
+    /// `--frame-rate HZ`, `--units U`; Python `pitch_mm=`, `frame_rate=`, `units=`). `None` keeps
+    /// what the file says.
+    UnitOverrides {
+        let _d = ();
+        /// Millimetres per sensel `[x, y]` = `[column spacing, row spacing]`.
+        pitch_mm: Option<Pitch> = None;
+            Value, "the file's, if it says",
+            "Sensor pitch in mm per sensel: X (square sensels) or XxY (columns x rows, e.g. 7.62x5.08); overrides the file's. A comma is refused: 5,08 could be 5.08 or 5x8.";
+        /// Frames per second.
+        frame_rate: Option<f64> = None;
+            Value, "the file's, if it says",
+            "Frames per second; overrides the file's.";
+        /// Pressure units of the values, one [`crate::recording::kpa_per_unit`] knows (so that
+        /// the outputs can state forces in newtons): for formats that store none (`.npy`, `.npz`,
+        /// CSV).
+        units: Option<String> = None;
+            Value, "the file's, if it says",
+            "Pressure units of the values (kPa, Pa, MPa, N/cm², N/mm², psi, bar, mmHg), for formats that store none; overrides the file's.";
+    }
 }
 
 impl UnitOverrides {
-    /// Checks that the pitch and the frame rate are positive and finite.
+    /// Checks that the pitch and the frame rate are positive and finite and that the units are
+    /// known.
     pub fn validate(&self) -> Result<(), OptionError> {
-        if let Some(p) = self.pitch_mm
-            && !p.iter().all(|v| v.is_finite() && *v > 0.0)
-        {
-            return Err(OptionError::new(
-                "pitch_mm",
-                format!("{},{}", p[0], p[1]),
-                "X[,Y]: millimetres per sensel, > 0",
-            ));
+        if let Some(p) = self.pitch_mm {
+            p.validate()?;
         }
         if let Some(f) = self.frame_rate
             && !(f.is_finite() && f > 0.0)
@@ -38,7 +42,7 @@ impl UnitOverrides {
         if let Some(u) = &self.units
             && crate::recording::kpa_per_unit(u).is_none()
         {
-            return Err(OptionError::new("units", u, PRESSURE_UNITS));
+            return Err(OptionError::new("units", u.trim(), PRESSURE_UNITS));
         }
         Ok(())
     }
@@ -47,7 +51,7 @@ impl UnitOverrides {
     pub fn apply(&self, recording: &mut Recording) -> Result<(), OptionError> {
         self.validate()?;
         if let Some(p) = self.pitch_mm {
-            recording.set_pitch_mm(p);
+            recording.set_pitch_mm(p.0);
         }
         if let Some(f) = self.frame_rate {
             recording.dt_s = Some(1.0 / f);
@@ -62,89 +66,109 @@ impl UnitOverrides {
     }
 }
 
-/// Parses a pitch `X` or `X,Y` in mm per sensel (`X` alone for square sensels).
+/// A sensor pitch in mm per sensel, `[x, y]` = `[column spacing, row spacing]`: written `X`
+/// (square sensels) or `XxY` (`7.62x5.08`; `×` too). A comma is refused rather than guessed:
+/// `5,08` is 5.08 mm with a decimal comma and 5 × 8 mm as a list, and either misreading would
+/// scale every millimetre, area and force of a run without a word; the message offers both.
 ///
 /// ```
-/// assert_eq!(pedo_io::units::parse_pitch("5.08").unwrap(), [5.08, 5.08]);
-/// assert_eq!(pedo_io::units::parse_pitch("5,7.5").unwrap(), [5.0, 7.5]);
-/// assert!(pedo_io::units::parse_pitch("-1").is_err());
+/// use pedo_io::units::Pitch;
+/// assert_eq!("5.08".parse::<Pitch>().unwrap(), Pitch([5.08, 5.08]));
+/// assert_eq!("7.62x5.08".parse::<Pitch>().unwrap(), Pitch([7.62, 5.08]));
+/// let e = "5,08".parse::<Pitch>().unwrap_err().to_string();
+/// assert!(e.contains("5.08") && e.contains("5x08"), "{e}");
+/// assert!("-1".parse::<Pitch>().is_err());
 /// ```
-pub fn parse_pitch(s: &str) -> Result<[f64; 2], OptionError> {
-    let bad = || OptionError::new("pitch_mm", s, "X[,Y]: millimetres per sensel, > 0");
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| bad())?;
-    let pitch = match v.as_slice() {
-        [x] => [*x, *x],
-        [x, y] => [*x, *y],
-        _ => return Err(bad()),
-    };
-    UnitOverrides {
-        pitch_mm: Some(pitch),
-        ..UnitOverrides::default()
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pitch(pub [f64; 2]);
+
+/// What `--pitch-mm` takes, for its errors.
+const PITCH_FORM: &str = "X or XxY: millimetres per sensel, > 0 (XxY: columns x rows)";
+
+impl Pitch {
+    /// Checks that both spacings are positive and finite.
+    pub fn validate(&self) -> Result<(), OptionError> {
+        if self.0.iter().all(|v| v.is_finite() && *v > 0.0) {
+            Ok(())
+        } else {
+            Err(OptionError::new("pitch_mm", self, PITCH_FORM))
+        }
     }
-    .validate()
-    .map_err(|_| bad())?;
-    Ok(pitch)
+}
+
+impl std::fmt::Display for Pitch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [x, y] = self.0;
+        if x == y {
+            write!(f, "{x}")
+        } else {
+            write!(f, "{x}x{y}")
+        }
+    }
+}
+
+impl std::str::FromStr for Pitch {
+    type Err = OptionError;
+
+    fn from_str(s: &str) -> Result<Self, OptionError> {
+        let s = s.trim();
+        if let Some((a, b)) = s.split_once(',') {
+            let (a, b) = (a.trim(), b.trim());
+            let digits = |t: &str| !t.is_empty() && t.bytes().all(|c| c.is_ascii_digit());
+            // Only digits either side: both readings are plausible, and the message names both.
+            let readings = if digits(a) && digits(b) {
+                format!("{a}.{b} for one pitch with a decimal point, or {a}x{b} for columns x rows")
+            } else {
+                PITCH_FORM.to_string()
+            };
+            return Err(OptionError::new(
+                "pitch_mm",
+                s,
+                format!("no comma (a decimal comma or a list?): {readings}"),
+            ));
+        }
+        let bad = || OptionError::new("pitch_mm", s, PITCH_FORM);
+        let number = |x: &str| x.trim().parse::<f64>().map_err(|_| bad());
+        let pitch = match s.split_once(['x', 'X', '×']) {
+            Some((x, y)) => Pitch([number(x)?, number(y)?]),
+            None => {
+                let x = number(s)?;
+                Pitch([x, x])
+            }
+        };
+        pitch.validate().map_err(|_| bad())?;
+        Ok(pitch)
+    }
+}
+
+impl modal_core::options::OptionField for Pitch {
+    fn python_type() -> String {
+        "Pitch".into()
+    }
+    fn value_name() -> Option<&'static str> {
+        Some("X[xY]")
+    }
+    fn read<I: modal_core::options::OptionInput + ?Sized>(
+        input: &I,
+        option: &'static str,
+    ) -> Result<Self, I::Error> {
+        match input.written() {
+            Some(text) => Ok(text.parse()?),
+            None => Ok(Pitch(input.one_or_two(
+                option,
+                "a number or an (x, y) pair of numbers (mm per sensel)",
+            )?)),
+        }
+    }
 }
 
 /// The pressure units `--units` accepts (as `kpa_per_unit` reads them, case and spaces aside).
 const PRESSURE_UNITS: &str = "a pressure unit: kPa, Pa, MPa, N/cm², N/mm², psi, bar or mmHg";
 
-/// Parses pressure units (one of [`crate::recording::kpa_per_unit`]'s).
-///
-/// ```
-/// assert_eq!(pedo_io::units::parse_units("N/cm2").unwrap(), "N/cm²");
-/// assert_eq!(pedo_io::units::parse_units("kpa").unwrap(), "kPa");
-/// assert!(pedo_io::units::parse_units("furlongs").is_err());
-/// ```
-pub fn parse_units(s: &str) -> Result<String, OptionError> {
-    crate::recording::canonical_units(s)
-        .map(str::to_string)
-        .ok_or_else(|| OptionError::new("units", s.trim(), PRESSURE_UNITS))
-}
-
-/// Parses a frame rate in Hz.
-pub fn parse_frame_rate(s: &str) -> Result<f64, OptionError> {
-    let f: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| OptionError::new("frame_rate", s, "frames per second, > 0"))?;
-    UnitOverrides {
-        frame_rate: Some(f),
-        ..UnitOverrides::default()
-    }
-    .validate()?;
-    Ok(f)
-}
-
 /// The unit options of `pedomatch run`/`demo`/`match`/`inspect`, `pymodal.run` and
-/// `pymodal.read_recording`.
+/// `pymodal.read_recording`: their one declaration, [`UnitOverrides`].
 pub fn unit_option_specs() -> Vec<OptionSpec> {
-    vec![
-        OptionSpec::new(
-            "pitch_mm",
-            OptionKind::Value,
-            "the file's, if it says",
-            "Sensor pitch X[,Y] in mm per sensel (X alone: square sensels); overrides the file's.",
-        )
-        .with_python_type("Pitch"),
-        OptionSpec::new(
-            "frame_rate",
-            OptionKind::Value,
-            "the file's, if it says",
-            "Frames per second; overrides the file's.",
-        ),
-        OptionSpec::new(
-            "units",
-            OptionKind::Value,
-            "the file's, if it says",
-            "Pressure units of the values (kPa, Pa, MPa, N/cm², N/mm², psi, bar, mmHg), for formats that store none; overrides the file's.",
-        )
-        .with_python_type("str"),
-    ]
+    UnitOverrides::specs()
 }
 
 impl Recording {
@@ -170,19 +194,54 @@ mod tests {
         assert_eq!(rec.time_s(2), None);
         assert_eq!(rec.force_factor(), None);
         let o = UnitOverrides {
-            pitch_mm: Some(parse_pitch("2,3").unwrap()),
-            frame_rate: Some(parse_frame_rate("50").unwrap()),
-            units: Some(parse_units(" N/cm2 ").unwrap()),
+            pitch_mm: Some("2x3".parse().unwrap()),
+            frame_rate: Some(50.0),
+            units: Some(" N/cm2 ".into()),
         };
         o.apply(&mut rec).unwrap();
         assert_eq!(rec.units, "N/cm²");
         // N/cm² = 10 kPa; kPa × mm² × 1e-3 = N.
         assert_eq!(rec.force_factor(), Some(10.0 * 6.0 * 1e-3));
-        assert_eq!(parse_units("stone").unwrap_err().option, "units");
+        let stone = UnitOverrides {
+            units: Some("stone".into()),
+            ..Default::default()
+        };
+        assert_eq!(stone.validate().unwrap_err().option, "units");
         assert_eq!(rec.sensel_area(), Some(6.0));
         assert_eq!(rec.time_s(2), Some(0.04));
         assert_eq!(rec.to_mm(1.0, 2.0), Some([2.0, 6.0]));
-        assert_eq!(parse_frame_rate("0").unwrap_err().option, "frame_rate");
-        assert_eq!(parse_pitch("1,2,3").unwrap_err().option, "pitch_mm");
+        let stopped = UnitOverrides {
+            frame_rate: Some(0.0),
+            ..Default::default()
+        };
+        assert_eq!(stopped.validate().unwrap_err().option, "frame_rate");
+    }
+
+    #[test]
+    fn a_pitch_with_a_comma_is_refused_with_both_readings() {
+        for (written, one, two) in [("5,08", "5.08", "5x08"), ("2,3", "2.3", "2x3")] {
+            let e = written.parse::<Pitch>().unwrap_err();
+            assert_eq!(e.option, "pitch_mm");
+            let message = e.to_string();
+            assert!(message.contains(one) && message.contains(two), "{message}");
+        }
+        // The two-value form with a comma, as it was once written: refused too, saying how.
+        let e = "7.62,5.08".parse::<Pitch>().unwrap_err().to_string();
+        assert!(e.contains("XxY"), "{e}");
+        assert_eq!("5.08".parse::<Pitch>().unwrap(), Pitch([5.08, 5.08]));
+        assert_eq!("7.62x5.08".parse::<Pitch>().unwrap(), Pitch([7.62, 5.08]));
+        assert_eq!(" 2 × 3 ".parse::<Pitch>().unwrap(), Pitch([2.0, 3.0]));
+        assert_eq!("2X3".parse::<Pitch>().unwrap(), Pitch([2.0, 3.0]));
+        for bad in ["1x2x3", "x", "0", "-1", "2x-3", "inf", "five"] {
+            assert_eq!(
+                bad.parse::<Pitch>().unwrap_err().option,
+                "pitch_mm",
+                "{bad}"
+            );
+        }
+        // Printed back in the form it is read.
+        for p in [Pitch([5.08, 5.08]), Pitch([7.62, 5.08])] {
+            assert_eq!(p.to_string().parse::<Pitch>().unwrap(), p);
+        }
     }
 }

@@ -774,7 +774,7 @@ fn a_pitch_set_on_a_file_replaces_its_stated_sensel_area() {
     assert!((area(&wider) - 100.0 * sensels).abs() < 1e-9);
     let mut overridden = rec.clone();
     let units = pedo_io::units::UnitOverrides {
-        pitch_mm: Some([10.0, 10.0]),
+        pitch_mm: Some(pedo_io::units::Pitch([10.0, 10.0])),
         ..Default::default()
     };
     units.apply(&mut overridden).unwrap();

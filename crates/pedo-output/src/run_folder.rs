@@ -9,7 +9,7 @@ use crate::figure::{tracks_background, FigureAxes, MatchFigure, ObjectLabel, Tra
 use crate::outdir::OutDir;
 use crate::TableFormat;
 use crate::{Cell, InputInfo};
-use modal_core::OptionSpec;
+use modal_core::{Choice, OptionSpec};
 use pedo_io::cancel::Cancel;
 use pedo_io::formats::{read_recording_with, ReadOptions};
 use pedo_io::recording::FrameMeasures;
@@ -102,29 +102,42 @@ modal_core::choice!(AnimationFormat, "animation", [
     "none" => AnimationFormat::None,
 ]);
 
-/// The output options of a run or study (`pedomatch run`/`demo`/`batch`, `pymodal.run(out=...)`,
-/// `pymodal.batch`; `pedomatch match` takes `figures` and `report`), in the order the front ends
-/// list them: what a run folder holds besides its tables and `summary.json`, and the tables'
-/// format.
+modal_core::option_set! {
+    /// The output options of a run or study (`pedomatch run`/`demo`/`batch`,
+    /// `pymodal.run(out=...)`, `pymodal.batch`; `pedomatch match` takes `figures` and `report`),
+    /// in the order the front ends list them: what a run folder holds besides its tables and
+    /// `summary.json`, and the tables' format. [`RunOutputs::of`] turns them into the outputs.
+    OutputOptions {
+        let _d = ();
+        /// Figures of every pair and of the tracks.
+        figures: FigureFormat = FigureFormat::default();
+            Word(<FigureFormat as Choice>::NAMES), FigureFormat::default(),
+            "Figures of every matched pair and of the tracks: png, svg or none.";
+        /// The tables' file format.
+        tables: TableFormat = TableFormat::default();
+            Word(<TableFormat as Choice>::NAMES), TableFormat::default(),
+            "File format of the tables (pairs, objects, matches, tracks, frames, and reference_matches with drift correction; a batch's study table): csv, or parquet (typed, snappy-compressed columns with the CSV's names and values, for pandas, polars or Dask).";
+        /// The interactive report.
+        report: ReportFormat = ReportFormat::default();
+            Word(<ReportFormat as Choice>::NAMES), ReportFormat::default(),
+            "The interactive report: html writes a self-contained report.html that opens offline; none writes none.";
+        /// The recording played back.
+        animation: AnimationFormat = AnimationFormat::default();
+            Word(<AnimationFormat as Choice>::NAMES), AnimationFormat::default(),
+            "The recording played back: gif writes animation.gif (pressure frames with their contours and matches; long runs decimated to at most 150 frames); none writes none.";
+    }
+}
+
+impl OutputOptions {
+    /// Every value is one of its words: nothing to check.
+    pub fn validate(&self) -> std::result::Result<(), modal_core::OptionError> {
+        Ok(())
+    }
+}
+
+/// The output options' declarations ([`OutputOptions`]).
 pub fn output_option_specs() -> Vec<OptionSpec> {
-    vec![
-        OptionSpec::choice(
-            FigureFormat::default(),
-            "Figures of every matched pair and of the tracks: png, svg or none.",
-        ),
-        OptionSpec::choice(
-            TableFormat::default(),
-            "File format of the tables (pairs, objects, matches, tracks, frames, and reference_matches with drift correction; a batch's study table): csv, or parquet (typed, snappy-compressed columns with the CSV's names and values, for pandas, polars or Dask).",
-        ),
-        OptionSpec::choice(
-            ReportFormat::default(),
-            "The interactive report: html writes a self-contained report.html that opens offline; none writes none.",
-        ),
-        OptionSpec::choice(
-            AnimationFormat::default(),
-            "The recording played back: gif writes animation.gif (pressure frames with their contours and matches; long runs decimated to at most 150 frames); none writes none.",
-        ),
-    ]
+    OutputOptions::specs()
 }
 
 /// Which figure files a run writes.
@@ -173,19 +186,14 @@ pub struct RunOutputs {
 }
 
 impl RunOutputs {
-    /// The outputs the option values name, each `None` at its default
-    /// ([`output_option_specs`]): the one place a front end's words become outputs.
-    pub fn of(
-        figures: Option<FigureFormat>,
-        tables: Option<TableFormat>,
-        report: Option<ReportFormat>,
-        animation: Option<AnimationFormat>,
-    ) -> Self {
+    /// The outputs the option values name ([`OutputOptions`]): the one place a front end's
+    /// words become outputs.
+    pub fn of(o: &OutputOptions) -> Self {
         Self {
-            figures: figures.unwrap_or_default().into(),
-            report: report.unwrap_or_default() == ReportFormat::Html,
-            animation: animation.unwrap_or_default() == AnimationFormat::Gif,
-            tables: tables.unwrap_or_default(),
+            figures: o.figures.into(),
+            report: o.report == ReportFormat::Html,
+            animation: o.animation == AnimationFormat::Gif,
+            tables: o.tables,
         }
     }
 }

@@ -50,6 +50,20 @@ pub fn reference_pairs(
     start: usize,
     interval: usize,
 ) -> Vec<(usize, usize)> {
+    reference_pairs_every(objects, candidates, start, interval, 1)
+}
+
+/// [`reference_pairs`] of a run that keeps every `step`-th frame from `start` (`interval` a
+/// multiple of `step`): an object continues the one `step` frames before it, and a reference
+/// pair spans at least two kept frames.
+pub fn reference_pairs_every(
+    objects: &[SequenceObject],
+    candidates: &[(usize, usize)],
+    start: usize,
+    interval: usize,
+    step: usize,
+) -> Vec<(usize, usize)> {
+    let step = step.max(1);
     if interval < 2 {
         return Vec::new();
     }
@@ -70,11 +84,11 @@ pub fn reference_pairs(
         let mut ancestor = o;
         while objects[ancestor].frame > reference {
             match parent[ancestor] {
-                Some(p) if objects[p].frame + 1 == objects[ancestor].frame => ancestor = p,
+                Some(p) if objects[p].frame + step == objects[ancestor].frame => ancestor = p,
                 _ => break,
             }
         }
-        if objects[ancestor].frame == reference && t - reference >= 2 {
+        if objects[ancestor].frame == reference && t - reference >= 2 * step {
             out.push((ancestor, o));
         }
     }

@@ -116,13 +116,14 @@ fn contour_objects(
     (start, end): (usize, usize),
     tick: &(dyn Fn(usize) + Sync),
 ) -> Result<()> {
-    let (per_frame, shapes): (Vec<Vec<Contour>>, Vec<Vec<MeasuredShape>>) = per_frame_or_skipped(
-        start..end,
+    let kept = options.kept_frames(start, end);
+    let (per_frame, shapes): (Vec<Vec<Contour>>, Vec<Vec<MeasuredShape>>) = per_kept_frame(
+        &kept,
         &mut built.skipped_frames,
         options.cancel.as_ref(),
         |t| {
             let cs = frame_contours(recording, t, options);
-            tick(end - start);
+            tick(kept.len());
             cs
         },
     )?
@@ -136,7 +137,7 @@ fn contour_objects(
             let id = built.objects.len();
             built.objects.push(SequenceObject {
                 id,
-                frame: start + k,
+                frame: kept[k],
                 index,
                 level: None,
                 shape,
@@ -173,13 +174,14 @@ fn surface_objects(
 ) -> Result<()> {
     let keep = |s: &Shape| s.len() >= options.min_nodes.max(3);
     let threshold = options.surface.preprocess.threshold.unwrap_or(0.0);
-    let per_frame: Vec<Option<Shape>> = per_frame_or_skipped(
-        start..end,
+    let kept = options.kept_frames(start, end);
+    let per_frame: Vec<Option<Shape>> = per_kept_frame(
+        &kept,
         &mut built.skipped_frames,
         options.cancel.as_ref(),
         |t| {
             let shape = frame_surface(recording, t, threshold, options, &keep);
-            tick(end - start);
+            tick(kept.len());
             shape
         },
     )?;
@@ -188,14 +190,15 @@ fn surface_objects(
         match shape {
             Some(shape) => {
                 let o = built.objects.len();
+                // The previous kept frame's surface, if that frame had one.
                 if let Some(p) = previous
-                    && built.objects[p].frame + 1 == start + k
+                    && built.objects[p].frame + options.frame_step() == kept[k]
                 {
                     built.pairs.push((p, o));
                 }
                 built.objects.push(SequenceObject {
                     id: o,
-                    frame: start + k,
+                    frame: kept[k],
                     index: 0,
                     level: None,
                     shape,
@@ -220,7 +223,7 @@ fn isocontour_objects(
 ) -> Result<()> {
     let t = match options.iso_frame {
         Some(t) => t,
-        None => (start..end)
+        None => (options.kept_frames(start, end).into_iter())
             .max_by(|&a, &b| frame_load(recording, a).total_cmp(&frame_load(recording, b)))
             .unwrap_or(start),
     };
@@ -302,16 +305,27 @@ pub(crate) fn per_frame_or_skipped<T: Send + Default>(
     cancel: Option<&Cancel>,
     build: impl Fn(usize) -> Result<T> + Sync,
 ) -> Result<Vec<T>> {
+    per_kept_frame(&frames.collect::<Vec<_>>(), skipped, cancel, build)
+}
+
+/// [`per_frame_or_skipped`] of the frames listed (a run's kept frames, in order).
+fn per_kept_frame<T: Send + Default>(
+    frames: &[usize],
+    skipped: &mut Vec<SkippedFrame>,
+    cancel: Option<&Cancel>,
+    build: impl Fn(usize) -> Result<T> + Sync,
+) -> Result<Vec<T>> {
     let outcomes: Vec<Result<T>> = frames
-        .clone()
-        .into_par_iter()
-        .map(|t| {
+        .par_iter()
+        .map(|&t| {
             pedo_io::cancel::check(cancel)?;
             build(t)
         })
         .collect();
     pedo_io::cancel::check(cancel)?;
     Ok(frames
+        .iter()
+        .copied()
         .zip(outcomes)
         .map(|(frame, outcome)| {
             outcome.unwrap_or_else(|e| {

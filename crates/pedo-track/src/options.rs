@@ -3,7 +3,7 @@
 //! [`SequenceOptions`] for one recording.
 
 use crate::*;
-use modal_core::{MatchOptions, MatchParams, OptionError, OptionSpec, OptionValue};
+use modal_core::{Choice, MatchOptions, MatchParams, OptionError, OptionSpec, OptionValue};
 use pedo_io::cancel::Cancel;
 use pedo_io::contour::{ContourOptions, Resample};
 use pedo_io::recording::Recording;
@@ -48,6 +48,10 @@ pub struct SequenceOptions {
     /// The range must be non-empty and within the recording, else [`run_sequence`] and
     /// [`stream_sequence`] fail.
     pub frames: Option<(usize, usize)>,
+    /// Frame stride: every this many-th frame of [`frames`](Self::frames) is run, from its
+    /// first ([`SequenceOptions::kept_frames`]); 1 runs every frame (0 counts as 1). Objects keep
+    /// the recording's own frame numbers; pairs join consecutive kept frames.
+    pub every: usize,
     /// How each pair is matched. Default: [`MatchOptions::default`] without the outline fit
     /// (`rotation_search.outline_iterations` 0): a run's frames keep node-to-node ICP.
     pub matching: MatchOptions,
@@ -78,6 +82,17 @@ impl SequenceOptions {
     pub fn drift_corrected(&self) -> bool {
         self.drift_reference >= 2 && self.model != ObjectModel::Isocontour
     }
+
+    /// The frame stride, at least 1 ([`every`](Self::every)).
+    pub fn frame_step(&self) -> usize {
+        self.every.max(1)
+    }
+
+    /// The frames a run over `start..end` builds objects on: every
+    /// [`frame_step`](Self::frame_step)-th from `start`.
+    pub fn kept_frames(&self, start: usize, end: usize) -> Vec<usize> {
+        (start..end).step_by(self.frame_step()).collect()
+    }
 }
 
 impl Default for SequenceOptions {
@@ -98,6 +113,7 @@ impl Default for SequenceOptions {
             iso_count: 10,
             min_nodes: 8,
             frames: None,
+            every: 1,
             matching: for_frames(MatchOptions::default()),
             drift_reference: 0,
             keep_match_details: true,
@@ -230,61 +246,101 @@ impl std::str::FromStr for FrameRange {
     }
 }
 
-/// The user-facing parameters of a sequence run, shared by the CLI and the Python bindings:
-/// the matching options and how each frame becomes objects. [`RunParams::to_options`] checks
-/// them against a recording.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RunParams {
-    /// How each pair is matched, as the user gave it; [`RunParams::match_options`] turns it into
-    /// the engine's options for a run.
-    pub matching: MatchParams,
-    /// What each frame becomes: contours, a surface, or (one frame) isobaric contours.
-    pub model: ObjectModel,
-    /// Frames to use (`None`: all); negative indices count back from the end of each recording
-    /// ([`FrameRange::resolve`], called by [`RunParams::to_options`]).
-    pub frames: Option<FrameRange>,
-    /// Noise threshold in the recording's units (`None`: the file's own, else 0).
-    pub noise: Option<f64>,
-    /// Gaussian smoothing σ in sensels (0: none).
-    pub smooth: f64,
-    /// Contour node spacing in sensels.
-    pub spacing: f64,
-    /// Node budget of each brightness surface.
-    pub surface_nodes: usize,
-    /// Isocontour model: the frame (0-based, within [`frames`](Self::frames) when given, else
-    /// within the recording: [`RunParams::to_options`] fails otherwise; `None`: the frame of
-    /// largest load among those run).
-    pub iso_frame: Option<usize>,
-    /// Isocontour model: the number of levels (at least 2), evenly spaced as
-    /// [`SequenceOptions::iso_levels`] says.
-    pub iso_levels: usize,
-    /// Sensor pitch, frame rate and pressure units overriding the file's.
-    pub units: pedo_io::units::UnitOverrides,
-    /// Drift correction: frames between reference frames (0: off); see [`crate::drift`].
-    pub drift_reference: usize,
+impl modal_core::options::OptionField for FrameRange {
+    fn python_type() -> String {
+        "Tuple[Optional[int], Optional[int]]".into()
+    }
+    fn value_name() -> Option<&'static str> {
+        // `-50..` starts with a hyphen: the value's own name lets the command line take it.
+        Some("START..END")
+    }
+    fn read<I: modal_core::options::OptionInput + ?Sized>(
+        input: &I,
+        option: &'static str,
+    ) -> std::result::Result<Self, I::Error> {
+        if let Some(text) = input.written() {
+            return Ok(text.parse()?);
+        }
+        let [start, end] = input.bounds(
+            option,
+            "a (start, end) pair of 0-based frame indices, end excluded (either may be None; a \
+             negative index counts back from the end, as in a slice)",
+        )?;
+        Ok(FrameRange {
+            start: start.unwrap_or(0),
+            end,
+        })
+    }
 }
 
-impl Default for RunParams {
-    /// The defaults of [`SequenceOptions::default`] and [`MatchParams::default`], written there.
-    fn default() -> Self {
+/// The contour node spacing of [`SequenceOptions::default`], the default of
+/// [`RunParams::spacing`].
+fn default_spacing(d: &SequenceOptions) -> f64 {
+    match d.contour.resample {
+        Resample::Spacing(s) => s,
+        _ => 1.0,
+    }
+}
+
+modal_core::option_set! {
+    /// The user-facing parameters of a sequence run, shared by the CLI, the Python bindings and
+    /// a study: the matching options, how each frame becomes objects, and the units overriding
+    /// the file's; each option declared here once, its default that of
+    /// [`SequenceOptions::default`]. [`RunParams::to_options`] checks them against a recording.
+    RunParams {
+        nested(
+            /// How each pair is matched, as the user gave it; [`RunParams::match_options`] turns
+            /// it into the engine's options for a run.
+            matching: MatchParams,
+            /// Sensor pitch, frame rate and pressure units overriding the file's.
+            units: pedo_io::units::UnitOverrides,
+        );
         let d = SequenceOptions::default();
-        let spacing = match d.contour.resample {
-            Resample::Spacing(s) => s,
-            _ => 1.0,
-        };
-        Self {
-            matching: MatchParams::default(),
-            model: d.model,
-            frames: None,
-            noise: None,
-            smooth: d.contour.preprocess.sigma.unwrap_or(0.0),
-            spacing,
-            surface_nodes: d.surface.max_nodes.unwrap_or(120),
-            iso_frame: d.iso_frame,
-            iso_levels: d.iso_count,
-            units: Default::default(),
-            drift_reference: d.drift_reference,
-        }
+        /// What each frame becomes: contours, a surface, or (one frame) isobaric contours.
+        model: ObjectModel = d.model;
+            Word(ObjectModel::NAMES), d.model,
+            "Object model of each frame: closed contours of the loaded regions, brightness surfaces (pressure as height), or the isobaric contours of one frame matched level after level.";
+        /// Frames to use (`None`: all); negative indices count back from the end of each
+        /// recording ([`FrameRange::resolve`], called by [`RunParams::to_options`]).
+        frames: Option<FrameRange> = None;
+            Value, "all",
+            "Frames START..END, 0-based with END excluded as in a Python slice (START.. and ..END allowed; a negative index counts back from the end: -50.. is the last 50 frames, 0..-1 all but the last); the range must lie within the recording.";
+        /// Frame stride: every this many-th frame of [`frames`](Self::frames), from its first
+        /// ([`SequenceOptions::every`]).
+        every: usize = d.every;
+            Value, d.every,
+            "Keep every N-th frame of the frames run, from the first (1: every frame); pairs join consecutive kept frames, and the tables give the recording's own frame numbers and times (frames.csv keeps every frame of the range).";
+        /// Noise threshold in the recording's units (`None`: the file's own, else 0).
+        noise: Option<f64> = None;
+            Value, "the file's noise threshold, else 0",
+            "Noise threshold in the recording's pressure units: lower values count as no contact.";
+        /// Gaussian smoothing σ in sensels (0: none).
+        smooth: f64 = d.contour.preprocess.sigma.unwrap_or(0.0);
+            Value, d.contour.preprocess.sigma.unwrap_or(0.0),
+            "Gaussian smoothing of each frame, sigma in sensels (0: none; at most 1000).";
+        /// Contour node spacing in sensels.
+        spacing: f64 = default_spacing(&d);
+            Value, default_spacing(&d),
+            "Contour node spacing in sensels.";
+        /// Node budget of each brightness surface.
+        surface_nodes: usize = d.surface.max_nodes.unwrap_or(120);
+            Value, d.surface.max_nodes.unwrap_or(120),
+            "Node budget of each brightness surface.";
+        /// Isocontour model: the frame (0-based, within [`frames`](Self::frames) when given, else
+        /// within the recording: [`RunParams::to_options`] fails otherwise; `None`: the frame of
+        /// largest load among those run).
+        iso_frame: Option<usize> = d.iso_frame;
+            Value, "the frame of largest load",
+            "Isocontour model: the frame (0-based, within frames when given) whose isobaric contours are matched.";
+        /// Isocontour model: the number of levels (at least 2), evenly spaced as
+        /// [`SequenceOptions::iso_levels`] says.
+        iso_levels: usize = d.iso_count;
+            Value, d.iso_count,
+            "Isocontour model: the number of isobaric levels.";
+        /// Drift correction: frames between reference frames (0: off); see [`crate::drift`].
+        drift_reference: usize = d.drift_reference;
+            Value, d.drift_reference,
+            "Drift correction of tracks: every this many frames is a reference frame, and each object is also matched against its ancestor on the last one; tracks follow those matches first (0: off).";
     }
 }
 
@@ -325,7 +381,7 @@ impl RunParams {
     /// Whether a run with these parameters streams ([`streams`]): the contour and surface
     /// models without drift correction.
     pub fn streams(&self) -> bool {
-        streamable(self.model, self.drift_reference)
+        streamable(self.model, self.drift_reference) && self.every <= 1
     }
 
     /// Checks every parameter that does not depend on a recording.
@@ -380,6 +436,20 @@ impl RunParams {
                  of closed contours)",
             ));
         }
+        if self.every == 0 {
+            return Err(OptionError::new("every", self.every, "an integer >= 1"));
+        }
+        // Reference frames must be frames the run keeps, or no object would reach one.
+        if self.drift_reference >= 2 && !self.drift_reference.is_multiple_of(self.every) {
+            return Err(OptionError::new(
+                "drift_reference",
+                self.drift_reference,
+                format!(
+                    "0 (off) or a multiple of every ({}), so that reference frames are frames run",
+                    self.every
+                ),
+            ));
+        }
         if self.surface_nodes < 8 {
             return Err(OptionError::new(
                 "surface_nodes",
@@ -432,6 +502,7 @@ impl RunParams {
             model: self.model,
             matching,
             frames,
+            every: self.every,
             iso_frame,
             iso_count: self.iso_levels,
             drift_reference: self.drift_reference,
@@ -477,6 +548,7 @@ impl RunParams {
         let mut options = SequenceOptions {
             model: self.model,
             matching: self.match_options()?,
+            every: self.every,
             iso_frame: self.iso_frame,
             drift_reference: self.drift_reference,
             ..Default::default()
@@ -486,7 +558,7 @@ impl RunParams {
             &options,
             FileValues {
                 frames: self.frames.unwrap_or_default(),
-                pitch_mm: self.units.pitch_mm,
+                pitch_mm: self.units.pitch_mm.map(|p| p.0),
                 frame_rate: self.units.frame_rate,
                 // Spelled as the recordings will state them (`summary.json`).
                 units: self
@@ -510,6 +582,7 @@ impl RunParams {
         v.extend([
             ("model", Word(options.model.to_string())),
             ("frames", Word(file.frames.to_string())),
+            ("every", Int(options.every)),
             (
                 "noise",
                 options.contour.preprocess.threshold.map_or(Absent, Float),
@@ -543,67 +616,7 @@ struct FileValues {
 /// The options of a recording run beyond matching (`pedomatch run`/`demo`, `pymodal.run`), in
 /// the order of [`RunParams`]' fields, then the unit options ([`pedo_io::units::unit_option_specs`]).
 pub fn recording_option_specs() -> Vec<OptionSpec> {
-    use modal_core::OptionKind::Value;
-    let d = RunParams::default();
-    let mut specs = vec![
-        OptionSpec::choice(
-            d.model,
-            "Object model of each frame: closed contours of the loaded regions, brightness surfaces (pressure as height), or the isobaric contours of one frame matched level after level.",
-        ),
-        OptionSpec::new(
-            "frames",
-            Value,
-            "all",
-            "Frames START..END, 0-based with END excluded as in a Python slice (START.. and ..END allowed; a negative index counts back from the end: -50.. is the last 50 frames, 0..-1 all but the last); the range must lie within the recording.",
-        )
-        .with_python_type("Tuple[Optional[int], Optional[int]]"),
-        OptionSpec::new(
-            "noise",
-            Value,
-            "the file's noise threshold, else 0",
-            "Noise threshold in the recording's pressure units: lower values count as no contact.",
-        ),
-        OptionSpec::new(
-            "smooth",
-            Value,
-            d.smooth,
-            "Gaussian smoothing of each frame, sigma in sensels (0: none; at most 1000).",
-        ),
-        OptionSpec::new(
-            "spacing",
-            Value,
-            d.spacing,
-            "Contour node spacing in sensels.",
-        ),
-        OptionSpec::new(
-            "surface_nodes",
-            Value,
-            d.surface_nodes,
-            "Node budget of each brightness surface.",
-        )
-        .with_python_type("int"),
-        OptionSpec::new(
-            "iso_frame",
-            Value,
-            "the frame of largest load",
-            "Isocontour model: the frame (0-based, within frames when given) whose isobaric contours are matched.",
-        )
-        .with_python_type("int"),
-        OptionSpec::new(
-            "iso_levels",
-            Value,
-            d.iso_levels,
-            "Isocontour model: the number of isobaric levels.",
-        )
-        .with_python_type("int"),
-        OptionSpec::new(
-            "drift_reference",
-            Value,
-            d.drift_reference,
-            "Drift correction of tracks: every this many frames is a reference frame, and each object is also matched against its ancestor on the last one; tracks follow those matches first (0: off).",
-        )
-        .with_python_type("int"),
-    ];
+    let mut specs = RunParams::specs();
     specs.extend(pedo_io::units::unit_option_specs());
     specs
 }

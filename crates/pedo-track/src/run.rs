@@ -125,7 +125,13 @@ fn reference_matches(
     start: usize,
     options: &SequenceOptions,
 ) -> Vec<PairMatch> {
-    let refs = crate::drift::reference_pairs(objects, candidates, start, options.drift_reference);
+    let refs = crate::drift::reference_pairs_every(
+        objects,
+        candidates,
+        start,
+        options.drift_reference,
+        options.frame_step(),
+    );
     // Reference pairs lie frames apart: the sensor prior is for consecutive frames.
     let mut apart = options.clone();
     if apart.matching.prealign == Prealign::Sensor {

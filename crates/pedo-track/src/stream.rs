@@ -233,7 +233,7 @@ pub fn stream_sequence(
 /// Whether [`stream_sequence`] streams a run with these options (the contour and surface
 /// models without drift correction) rather than running it whole.
 pub fn streams(options: &SequenceOptions) -> bool {
-    streamable(options.model, options.drift_reference)
+    streamable(options.model, options.drift_reference) && options.frame_step() == 1
 }
 
 /// The rule of [`streams`] and [`RunParams::streams`]: the isocontour model matches the levels

@@ -34,20 +34,23 @@ fn input_strings(inputs: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<String>>
 
 /// What a run's folder holds, from the keywords ``figures``, ``tables``, ``report`` and
 /// ``animation`` (each None at its default): the output options of ``pedomatch run`` and
-/// ``batch``, declared once in `pedo_output::output_option_specs`.
+/// ``batch``, declared once in `pedo_output::OutputOptions`.
 pub(crate) fn run_outputs(
     figures: Option<&Bound<'_, PyAny>>,
     tables: Option<&Bound<'_, PyAny>>,
     report: Option<&Bound<'_, PyAny>>,
     animation: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<RunOutputs> {
-    use crate::options_py::word_keyword;
-    Ok(RunOutputs::of(
-        word_keyword("figures", figures)?,
-        word_keyword("tables", tables)?,
-        word_keyword("report", report)?,
-        word_keyword("animation", animation)?,
-    ))
+    let given = [
+        ("figures", figures),
+        ("tables", tables),
+        ("report", report),
+        ("animation", animation),
+    ];
+    let options: pedo_output::OutputOptions = crate::options_py::option_set(|name| {
+        given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v)
+    })?;
+    Ok(RunOutputs::of(&options))
 }
 
 /// The study options of the keywords.

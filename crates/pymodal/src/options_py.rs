@@ -1,14 +1,14 @@
-//! The keyword options of `pymodal.match` and `pymodal.run`, read into the library's option
-//! types: every keyword defaults to `None`, meaning the documented default, which the library
-//! fills in ([`MatchParams::default`], [`RunParams::default`]); words are parsed by the Rust
-//! types' `FromStr`, so Python and the CLI accept the same values.
+//! The keyword options of `pymodal.match`, `run`, `batch` and `read_recording`, read into the
+//! library's option sets ([`OptionSet`]: `MatchParams`, `RunParams`, `UnitOverrides`,
+//! `OutputOptions`): every keyword defaults to `None`, meaning the documented default, which the
+//! set's `Default` fills in; words are parsed by the Rust types' `FromStr`, so Python and the CLI
+//! accept the same values.
 
 use modal_core::options::OptionInput;
-use modal_core::{Choice, MatchParams, OptionKind, OptionSpec};
+use modal_core::{Choice, MatchParams, OptionKind, OptionSet, OptionSpec};
 use modal_core::{Material, OptionError};
 use pedo_io::units::UnitOverrides;
 use pedo_output::{Cell, Table};
-use pedo_track::{FrameRange, RunParams};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyList, PyString};
 
@@ -87,16 +87,6 @@ pub fn count_keyword(name: &str, value: Option<&Bound<'_, PyAny>>) -> PyResult<O
     opt_count(name, keyword(name, value)?)
 }
 
-/// A word option [`keyword`], parsed by `T`'s `FromStr` (`None` when absent).
-pub(crate) fn word_keyword<T: Choice>(
-    name: &str,
-    value: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Option<T>> {
-    keyword::<String>(name, value)?
-        .map(|s| T::parse_word(&s).map_err(to_py))
-        .transpose()
-}
-
 /// A keyword as given: the object, or `None` when absent.
 type Kw<'a, 'py> = Option<&'a Bound<'py, PyAny>>;
 
@@ -148,77 +138,67 @@ impl OptionInput for PyKeyword<'_, '_> {
             Err(_) => crate::model_py::parse_material(Some(self.0))?,
         })
     }
+    /// A `(start, end)` pair of ints or None (not bools); anything else (a string too) is an
+    /// `InputError` naming the keyword.
+    fn bounds(
+        &self,
+        option: &'static str,
+        expected: &str,
+    ) -> Result<[Option<isize>; 2], KeywordError> {
+        let v = self.0;
+        let bound = |b: Bound<'_, PyAny>| -> Option<Option<isize>> {
+            if b.is_none() {
+                Some(None)
+            } else if b.is_instance_of::<PyBool>() {
+                None
+            } else {
+                b.extract::<isize>().ok().map(Some)
+            }
+        };
+        let pair = match v.extract::<Vec<Bound<'_, PyAny>>>() {
+            Ok(items) if !v.is_instance_of::<PyString>() => match <[_; 2]>::try_from(items) {
+                Ok([start, end]) => bound(start).zip(bound(end)),
+                Err(_) => None,
+            },
+            _ => None,
+        };
+        let (start, end) = pair.ok_or_else(|| argument_error(option, expected, v))?;
+        Ok([start, end])
+    }
+    /// A number or an `(x, y)` pair of numbers; a string (which would read as a sequence of
+    /// characters) or anything else is an `InputError` naming the keyword.
+    fn one_or_two(&self, option: &'static str, expected: &str) -> Result<[f64; 2], KeywordError> {
+        let v = self.0;
+        if !v.is_instance_of::<PyString>() {
+            if let Ok(x) = v.extract::<f64>() {
+                return Ok([x, x]);
+            }
+            if let Ok([x, y]) = v.extract::<Vec<f64>>().as_deref() {
+                return Ok([*x, *y]);
+            }
+        }
+        Err(KeywordError(argument_error(option, expected, v)))
+    }
 }
 
-/// The matching options among the keywords `get` gives (a keyword's value by name; `None`
-/// when absent or None), each read as its declaration says; the others at their defaults. Not
-/// yet validated.
-pub fn match_params<'a, 'py: 'a>(get: impl Fn(&str) -> Kw<'a, 'py>) -> PyResult<MatchParams> {
-    let mut params = MatchParams::default();
-    for spec in MatchParams::specs() {
+/// The options of set `T` (those of the sets it holds included) among the keywords `get`
+/// gives (a keyword's value by name; `None` when absent or None), each read as its declaration
+/// says; the others at their defaults. Not yet validated.
+pub fn option_set<'a, 'py: 'a, T: OptionSet>(get: impl Fn(&str) -> Kw<'a, 'py>) -> PyResult<T> {
+    let mut params = T::default();
+    for spec in T::option_specs() {
         if let Some(v) = get(spec.name).filter(|v| !v.is_none()) {
-            params.set(spec.name, &PyKeyword(v)).map_err(|e| e.0)?;
+            params
+                .set_option(spec.name, &PyKeyword(v))
+                .map_err(|e| e.0)?;
         }
     }
     Ok(params)
 }
 
-/// `pitch_mm=`: a number (square sensels) or an `(x, y)` pair.
-pub fn pitch(value: Kw<'_, '_>) -> PyResult<Option<[f64; 2]>> {
-    let Some(v) = value.filter(|v| !v.is_none()) else {
-        return Ok(None);
-    };
-    // A string would read as a sequence of characters.
-    if !v.is_instance_of::<PyString>() {
-        if let Ok(x) = v.extract::<f64>() {
-            return Ok(Some([x, x]));
-        }
-        if let Ok([x, y]) = v.extract::<Vec<f64>>().as_deref() {
-            return Ok(Some([*x, *y]));
-        }
-    }
-    Err(argument_error(
-        "pitch_mm",
-        "a number or an (x, y) pair of numbers (mm per sensel)",
-        v,
-    ))
-}
-
-/// `frames=`: a `(start, end)` pair of 0-based frame indices, end excluded, either `None`; a
-/// negative index counts back from the end of the recording, as in a Python slice (resolved
-/// with the frame count by [`FrameRange::resolve`], as the CLI's `--frames`).
-pub fn frame_range(value: Kw<'_, '_>) -> PyResult<Option<FrameRange>> {
-    let Some(v) = value.filter(|v| !v.is_none()) else {
-        return Ok(None);
-    };
-    let bound = |b: Bound<'_, PyAny>| -> Option<Option<isize>> {
-        if b.is_none() {
-            Some(None)
-        } else if b.is_instance_of::<PyBool>() {
-            None
-        } else {
-            b.extract::<isize>().ok().map(Some)
-        }
-    };
-    let pair = match v.extract::<Vec<Bound<'_, PyAny>>>() {
-        Ok(items) if !v.is_instance_of::<PyString>() => match <[_; 2]>::try_from(items) {
-            Ok([start, end]) => bound(start).zip(bound(end)),
-            Err(_) => None,
-        },
-        _ => None,
-    };
-    let (start, end) = pair.ok_or_else(|| {
-        argument_error(
-            "frames",
-            "a (start, end) pair of 0-based frame indices, end excluded (either may be None; a \
-             negative index counts back from the end, as in a slice)",
-            v,
-        )
-    })?;
-    Ok(Some(FrameRange {
-        start: start.unwrap_or(0),
-        end,
-    }))
+/// The matching options among the keywords `get` gives, as [`option_set`] reads them.
+pub fn match_params<'a, 'py: 'a>(get: impl Fn(&str) -> Kw<'a, 'py>) -> PyResult<MatchParams> {
+    option_set(get)
 }
 
 /// The unit keywords, checked.
@@ -227,69 +207,15 @@ pub fn units(
     frame_rate: Kw<'_, '_>,
     units: Kw<'_, '_>,
 ) -> PyResult<UnitOverrides> {
-    let u = UnitOverrides {
-        pitch_mm: pitch(pitch_mm)?,
-        frame_rate: keyword("frame_rate", frame_rate)?,
-        units: keyword("units", units)?,
-    };
+    let given = [
+        ("pitch_mm", pitch_mm),
+        ("frame_rate", frame_rate),
+        ("units", units),
+    ];
+    let u: UnitOverrides =
+        option_set(|name| given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v))?;
     u.validate().map_err(to_py)?;
     Ok(u)
-}
-
-/// The recording keywords of `pymodal.run`, as given (read by [`RecordingKw::params`]).
-pub struct RecordingKw<'a, 'py> {
-    pub model: Kw<'a, 'py>,
-    pub frames: Kw<'a, 'py>,
-    pub noise: Kw<'a, 'py>,
-    pub smooth: Kw<'a, 'py>,
-    pub spacing: Kw<'a, 'py>,
-    pub surface_nodes: Kw<'a, 'py>,
-    pub iso_frame: Kw<'a, 'py>,
-    pub iso_levels: Kw<'a, 'py>,
-    pub pitch_mm: Kw<'a, 'py>,
-    pub frame_rate: Kw<'a, 'py>,
-    pub units: Kw<'a, 'py>,
-    pub drift_reference: Kw<'a, 'py>,
-}
-
-impl<'a, 'py> RecordingKw<'a, 'py> {
-    /// The keywords of `get` (a keyword's value by name: `**options`).
-    pub fn from_lookup(get: impl Fn(&str) -> Kw<'a, 'py>) -> Self {
-        Self {
-            model: get("model"),
-            frames: get("frames"),
-            noise: get("noise"),
-            smooth: get("smooth"),
-            spacing: get("spacing"),
-            surface_nodes: get("surface_nodes"),
-            iso_frame: get("iso_frame"),
-            iso_levels: get("iso_levels"),
-            pitch_mm: get("pitch_mm"),
-            frame_rate: get("frame_rate"),
-            units: get("units"),
-            drift_reference: get("drift_reference"),
-        }
-    }
-
-    /// The library's run parameters with `matching`; `None` keywords at their defaults.
-    pub fn params(&self, matching: MatchParams) -> PyResult<RunParams> {
-        let d = RunParams::default();
-        Ok(RunParams {
-            matching,
-            model: word_keyword("model", self.model)?.unwrap_or(d.model),
-            frames: frame_range(self.frames)?,
-            noise: keyword("noise", self.noise)?.or(d.noise),
-            smooth: keyword("smooth", self.smooth)?.unwrap_or(d.smooth),
-            spacing: keyword("spacing", self.spacing)?.unwrap_or(d.spacing),
-            surface_nodes: count_keyword("surface_nodes", self.surface_nodes)?
-                .unwrap_or(d.surface_nodes),
-            iso_frame: count_keyword("iso_frame", self.iso_frame)?.or(d.iso_frame),
-            iso_levels: count_keyword("iso_levels", self.iso_levels)?.unwrap_or(d.iso_levels),
-            units: units(self.pitch_mm, self.frame_rate, self.units)?,
-            drift_reference: count_keyword("drift_reference", self.drift_reference)?
-                .unwrap_or(d.drift_reference),
-        })
-    }
 }
 
 /// A table as a list of dicts keyed by column name.

@@ -14,7 +14,7 @@ use std::path::PathBuf;
 use crate::arrays::checked_array;
 use crate::errors::{internal, to_py};
 use crate::match_py::PyMatch;
-use crate::options_py::{cell_to_py, json_to_py, table_rows, RecordingKw};
+use crate::options_py::{cell_to_py, json_to_py, table_rows};
 
 /// A recording from a path, a (T, H, W) or (H, W) array (NaN = no sensor), or a `Recording`,
 /// and where it came from (a file's name and SHA-256).
@@ -137,8 +137,7 @@ macro_rules! define_run {
             let given = [$((stringify!($m), $m),)* $((stringify!($r), $r),)*];
             let get = |name: &str| given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v);
             let outputs = crate::batch_py::run_outputs($($o),*)?;
-            let params = crate::options_py::match_params(get)?;
-            let params = RecordingKw::from_lookup(get).params(params)?;
+            let params = crate::options_py::option_set(get)?;
             run_recording(py, recording, params, out, outputs)
         }
     };
@@ -321,22 +320,19 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// The keywords of [`run`] that a study takes as `**options`: the matching options, then the
-/// recording options (units included), as the option tables define them.
-fn run_keywords() -> Vec<&'static str> {
-    let matching = modal_core::options::match_option_specs();
-    let recording = pedo_track::recording_option_specs();
-    matching.iter().chain(&recording).map(|s| s.name).collect()
-}
-
 /// The run parameters of `**options` holding [`run`]'s keywords (read exactly as `run` reads
-/// them, through [`MatchKw`] and [`RecordingKw`]); an unknown keyword is an `OptionError`.
+/// them: the options of [`pedo_track::RunParams`], matching and units included); an unknown
+/// keyword is an `OptionError`.
 pub fn run_params<'py>(
     py: Python<'py>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<pedo_track::RunParams> {
     let d = options.cloned().unwrap_or_else(|| PyDict::new(py));
-    let keywords = run_keywords();
+    // Listed as `run`'s signature lists them: the matching options, then the recording ones.
+    let matching = modal_core::options::match_option_specs();
+    let keywords: Vec<&str> = (matching.iter().map(|s| s.name))
+        .chain(pedo_track::recording_option_specs().iter().map(|s| s.name))
+        .collect();
     for key in d.keys() {
         let key: String = key.extract()?;
         if !keywords.contains(&key.as_str()) {
@@ -352,7 +348,5 @@ pub fn run_params<'py>(
     for (key, value) in d.iter() {
         given.insert(key.extract::<String>()?, value);
     }
-    let get = |k: &str| given.get(k);
-    let matching = crate::options_py::match_params(get)?;
-    RecordingKw::from_lookup(get).params(matching)
+    crate::options_py::option_set(|k: &str| given.get(k))
 }

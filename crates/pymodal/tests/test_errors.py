@@ -146,6 +146,8 @@ SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, 1.5]])
         (lambda: pymodal.match(SQUARE, SQUARE, triangles_a=[[0, 1]]), "triangles_a", r"\(1, 2\)"),
         (lambda: pymodal.run(np.zeros((3, 8, 8)), pitch_mm="abc"), "pitch_mm", "'abc'"),
         (lambda: pymodal.run(np.zeros((3, 8, 8)), pitch_mm=(1.0, 2.0, 3.0)), "pitch_mm", "pair"),
+        # A decimal comma in a string is not read as two pitches: Python takes (x, y) numbers.
+        (lambda: pymodal.read_recording(ASF, pitch_mm="5,08"), "pitch_mm", "'5,08'"),
         (lambda: pymodal.run(np.zeros((3, 8, 8)), frames=5), "frames", r"\(start, end\) pair.*got 5"),
         (lambda: pymodal.run(np.zeros((3, 8, 8)), frames=(1, "x")), "frames", "0-based"),
         (lambda: pymodal.run(np.zeros((3, 8, 8)), frames=(1.5, 2)), "frames", "got \\(1.5, 2\\)"),

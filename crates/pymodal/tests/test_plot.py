@@ -169,7 +169,7 @@ def test_without_matplotlib_the_helpers_say_how_to_install_it():
         "    print(e)\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert "pip install 'pymodal[plot]'" in out.stdout, out.stdout + out.stderr
+    assert "pip install 'pedomatch[plot]'" in out.stdout, out.stdout + out.stderr
 
 
 def legend_texts(ax):

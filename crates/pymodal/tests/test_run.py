@@ -387,3 +387,33 @@ def test_run_without_out_writes_nothing_and_bad_output_values_raise(tmp_path, mo
     with pytest.raises(pymodal.OptionError, match="report"):
         pymodal.run(moving_blob(4), out=tmp_path / "x", report="pdf")
     assert not (tmp_path / "x").exists()
+
+
+def test_every_second_frame_keeps_the_recordings_frame_numbers_and_times():
+    rec = pymodal.read_recording(BUNDLED)
+    res = pymodal.run(rec, every=2, frames=(0, 60))
+    table = res["table"]
+    assert len(table) > 20
+    assert table[0]["frame_a"] == 0
+    for row in table:
+        assert row["frame_a"] % 2 == 0 and row["frame_b"] == row["frame_a"] + 2, row
+        assert row["time_a_s"] == pytest.approx(row["frame_a"] * rec.dt_s)
+        assert row["time_b_s"] == pytest.approx(row["frame_b"] * rec.dt_s)
+    assert all(o["frame"] % 2 == 0 for o in res["objects"])
+    for track in res["tracks"]:
+        assert (track[:, 0] % 2 == 0).all()
+    assert res["summary"]["options"]["every"] == 2
+    # The kept frames' objects are the full run's on those frames.
+    full = pymodal.run(rec, frames=(0, 60))
+    even = [(o["frame"], len(o["points"])) for o in full["objects"] if o["frame"] % 2 == 0]
+    assert [(o["frame"], len(o["points"])) for o in res["objects"]] == even
+    assert full["summary"]["options"]["every"] == 1
+
+
+def test_every_is_checked():
+    with pytest.raises(pymodal.OptionError, match="every"):
+        pymodal.run(BUNDLED, every=0)
+    with pytest.raises(TypeError, match="every"):
+        pymodal.run(BUNDLED, every="2")
+    with pytest.raises(pymodal.OptionError, match="multiple of every"):
+        pymodal.run(BUNDLED, every=2, drift_reference=25)

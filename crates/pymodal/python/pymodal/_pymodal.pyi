@@ -353,6 +353,7 @@ def run(
     material: Optional[Material] = None,
     model: Optional[Literal["contour", "surface", "isocontour"]] = None,
     frames: Optional[Tuple[Optional[int], Optional[int]]] = None,
+    every: Optional[int] = None,
     noise: Optional[float] = None,
     smooth: Optional[float] = None,
     spacing: Optional[float] = None,

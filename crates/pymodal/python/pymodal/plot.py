@@ -1,4 +1,4 @@
-"""Figures of matches, frames and tracks with matplotlib (``pip install 'pymodal[plot]'``).
+"""Figures of matches, frames and tracks with matplotlib (``pip install 'pedomatch[plot]'``).
 
 matplotlib is imported only when a function is called; without it the call raises an
 ImportError that says how to install it. Every function draws into ``ax`` (a new figure's axes
@@ -31,7 +31,7 @@ __all__ = ["plot_match", "plot_frame", "plot_tracks"]
 
 _MISSING = (
     "pymodal's plotting helpers need matplotlib, which is not installed: "
-    "pip install 'pymodal[plot]' (or pip install matplotlib)"
+    "pip install 'pedomatch[plot]' (or pip install matplotlib)"
 )
 
 
