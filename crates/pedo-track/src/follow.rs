@@ -17,8 +17,8 @@
 
 use crate::*;
 use modal_core::{
-    match_shapes, CorrespondenceField, FactoredSpline, MatchOptions, SplineCoefficients,
-    ThinPlateBasis,
+    match_shapes, CorrespondenceField, FactoredSpline, MatchOptions, MatchResult,
+    SplineCoefficients, ThinPlateBasis,
 };
 use pedo_io::{IoError, Result};
 use std::collections::HashMap;
@@ -36,7 +36,9 @@ pub struct FollowParams {
     /// closest point of the frame's outline. The closest point alone slides along a smooth
     /// outline; the modal partner alone is a node, off by up to half a spacing.
     pub pull: f64,
-    /// The anchor outline's points are at most this far apart (sensels).
+    /// The anchor outline's points are at most this far apart (sensels): the spline's centres,
+    /// whose factorisation is most of the cost of a new anchor (0.5 measured no more accurate
+    /// than 1 on the synthetic walks, at 8× the cost).
     pub anchor_step: f64,
     /// A frame's outline is sampled this finely for its closest points (sensels).
     pub target_step: f64,
@@ -54,9 +56,12 @@ pub struct FollowParams {
     /// where the contact region grows (heel strike) the new outline is new contact, not the
     /// anchor's outline moved.
     pub reach: f64,
-    /// The anchor is matched onto every `match_every`-th object of its lineage (and its first);
-    /// the frames between take the closest points alone.
-    pub match_every: usize,
+    /// The anchor is matched onto an object of its lineage (modal matching: most of the cost)
+    /// on its first, then once its image has moved this far (sensels, the largest motion of a
+    /// point, summed over frames) since the last match: a slide along the outline, which the
+    /// closest points do not see, is never larger than the motion itself. The frames between
+    /// take the closest points alone.
+    pub match_motion: f64,
 }
 
 impl Default for FollowParams {
@@ -64,13 +69,13 @@ impl Default for FollowParams {
         Self {
             smoothing: 1000.0,
             pull: 0.2,
-            anchor_step: 0.5,
+            anchor_step: 1.0,
             target_step: 0.25,
             coverage: 0.10,
             first_steps: 10,
             settled: 0.02,
             max_steps: 10,
-            match_every: 1,
+            match_motion: 0.5,
             reach: 2.0,
         }
     }
@@ -140,7 +145,8 @@ pub fn follow_points(
         let mut lineage = None;
         if let Some(a) = links.continues(b) {
             if let Some(mut l) = live.remove(&a) {
-                match l.step(run, b, aspect, params) {
+                let pair = links.pairs.get(&(a, b)).map(|&k| &run.pairs[k].result);
+                match l.step(run, pair, b, aspect, params) {
                     Ok(()) => lineage = Some(l),
                     // Not registered: the points cross by the pair's field, as at a split.
                     Err(_) => {
@@ -319,11 +325,12 @@ impl Lineage {
     fn step(
         &mut self,
         run: &SequenceResult,
+        pair: Option<&MatchResult>,
         b: usize,
         aspect: SenselAspect,
         params: &FollowParams,
     ) -> Result<()> {
-        self.anchor.register(run, b, aspect, params)?;
+        self.anchor.register(run, pair, b, aspect, params)?;
         let images = match &self.place_basis {
             Some(basis) => basis.apply(self.anchor.coefficients()),
             None => Vec::new(),
@@ -406,12 +413,12 @@ impl Lineage {
 struct Anchor {
     /// The anchor object's shape in registration coordinates, for modal matching.
     shape: modal_core::Shape,
-    /// Its outline densified: the nodes first at `node_at`, then the points between them.
-    dense: Vec<[f64; 2]>,
+    /// Where each node is among the anchor's densified outline (the spline's centres, in
+    /// outline order: a node, then the points between it and the next).
     node_at: Vec<usize>,
     spline: FactoredSpline,
     dense_basis: ThinPlateBasis,
-    /// The images of `dense` on the latest object, and the spline that gives them.
+    /// The images of the densified outline on the latest object, and the spline that gives them.
     image: Vec<[f64; 2]>,
     coefficients: Option<SplineCoefficients>,
     /// The share of the latest registration's outlines left uncovered (see [`FollowParams`]).
@@ -419,7 +426,7 @@ struct Anchor {
     /// Whether the anchor has been registered onto a later object yet.
     registered: bool,
     /// Registrations since the last modal match.
-    since_match: usize,
+    motion_since_match: f64,
 }
 
 impl Anchor {
@@ -438,15 +445,14 @@ impl Anchor {
         let dense_basis = spline.basis(&dense);
         let mut a = Self {
             shape,
-            image: dense.clone(),
-            dense,
+            image: dense,
             node_at,
             spline,
             dense_basis,
             coefficients: None,
             uncovered: 0.0,
             registered: false,
-            since_match: 0,
+            motion_since_match: 0.0,
         };
         let identity = a.image.clone();
         a.coefficients = Some(a.fit(&identity)?);
@@ -470,19 +476,28 @@ impl Anchor {
     fn register(
         &mut self,
         run: &SequenceResult,
+        pair: Option<&MatchResult>,
         b: usize,
         aspect: SenselAspect,
         params: &FollowParams,
     ) -> Result<()> {
         let target = registration_outline(&run.objects[b], aspect);
         let shape = closed_contour(&target)?;
-        // Modal matching is most of the cost: every `match_every` frames.
-        let matched = !self.registered || self.since_match + 1 >= params.match_every;
+        let matched = !self.registered || self.motion_since_match >= params.match_motion;
         let mut pairs: Vec<(usize, [f64; 2])> = Vec::new();
         let mut steps = 1;
         if matched {
-            let m = match_shapes(&self.shape, &shape, &MatchOptions::default())
-                .map_err(|e| IoError::invalid(e.to_string()))?;
+            // On an anchor's first registration the run has already matched the anchor's
+            // object onto this one (its own object is the frame before).
+            let own;
+            let m = match pair {
+                Some(m) if !self.registered => m,
+                _ => {
+                    own = match_shapes(&self.shape, &shape, &MatchOptions::default())
+                        .map_err(|e| IoError::invalid(e.to_string()))?;
+                    &own
+                }
+            };
             pairs = m
                 .pairs
                 .iter()
@@ -492,18 +507,24 @@ impl Anchor {
             if !self.registered {
                 steps = params.first_steps;
             }
-            self.since_match = 0;
-        } else {
-            self.since_match += 1;
+            self.motion_since_match = 0.0;
         }
+        let before = self.image.clone();
         let (dense_target, _) = densify(&target, params.target_step);
+        let dense_target = Grid::new(dense_target, params.reach);
         for k in 0.. {
             let moved = self.icp_step(&target, &dense_target, &pairs, params)?;
             if k + 1 >= steps.max(params.max_steps) || (k + 1 >= steps && moved < params.settled) {
                 break;
             }
         }
-        self.uncovered = uncovered(&self.image, &target, &dense_target);
+        self.motion_since_match += self
+            .image
+            .iter()
+            .zip(&before)
+            .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
+            .fold(0.0, f64::max);
+        self.uncovered = uncovered(&self.image, &target, &dense_target, params.reach);
         self.registered = true;
         Ok(())
     }
@@ -515,7 +536,7 @@ impl Anchor {
     fn icp_step(
         &mut self,
         nodes: &[[f64; 2]],
-        dense_target: &[[f64; 2]],
+        dense_target: &Grid,
         pairs: &[(usize, [f64; 2])],
         params: &FollowParams,
     ) -> Result<f64> {
@@ -523,15 +544,15 @@ impl Anchor {
         let mut sum: Vec<[f64; 2]> = self
             .image
             .iter()
-            .map(|&q| match nearest(dense_target, q) {
-                (k, d) if d <= params.reach => dense_target[k],
-                _ => q,
+            .map(|&q| match dense_target.nearest_within(q, params.reach) {
+                Some((k, _)) => dense_target.points[k],
+                None => q,
             })
             .collect();
         let mut count = vec![1.0; sum.len()];
+        let image = Grid::new(self.image.clone(), params.reach);
         for &p in nodes {
-            let (k, d) = nearest(&self.image, p);
-            if d <= params.reach {
+            if let Some((k, _)) = image.nearest_within(p, params.reach) {
                 sum[k][0] += p[0];
                 sum[k][1] += p[1];
                 count[k] += 1.0;
@@ -568,11 +589,61 @@ impl Anchor {
 
 /// The share of either outline (the registered anchor's points, the frame's nodes) that lies over
 /// [`COVERED`] from the other: the larger of the two.
-fn uncovered(image: &[[f64; 2]], nodes: &[[f64; 2]], dense_target: &[[f64; 2]]) -> f64 {
-    let far = |ps: &[[f64; 2]], of: &[[f64; 2]]| {
-        ps.iter().filter(|&&p| nearest(of, p).1 > COVERED).count() as f64 / ps.len().max(1) as f64
+fn uncovered(image: &[[f64; 2]], nodes: &[[f64; 2]], dense_target: &Grid, cell: f64) -> f64 {
+    let far = |ps: &[[f64; 2]], of: &Grid| {
+        let n = ps
+            .iter()
+            .filter(|&&p| of.nearest_within(p, COVERED).is_none());
+        n.count() as f64 / ps.len().max(1) as f64
     };
-    far(nodes, image).max(far(image, dense_target))
+    let image_grid = Grid::new(image.to_vec(), cell);
+    far(nodes, &image_grid).max(far(image, dense_target))
+}
+
+/// Points binned in square cells, for the nearest point within a short reach: an outline's
+/// points lie a fraction of a cell apart, so a query looks at a few dozen of them, not all.
+struct Grid {
+    points: Vec<[f64; 2]>,
+    cell: f64,
+    bins: HashMap<(i64, i64), Vec<usize>>,
+}
+
+impl Grid {
+    fn new(points: Vec<[f64; 2]>, cell: f64) -> Self {
+        let cell = if cell.is_finite() && cell > 0.0 {
+            cell
+        } else {
+            1.0
+        };
+        let mut bins: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+        for (i, &p) in points.iter().enumerate() {
+            bins.entry(Self::bin(p, cell)).or_default().push(i);
+        }
+        Self { points, cell, bins }
+    }
+
+    fn bin(p: [f64; 2], cell: f64) -> (i64, i64) {
+        ((p[0] / cell).floor() as i64, (p[1] / cell).floor() as i64)
+    }
+
+    /// The index of the point nearest `q` and its distance, if one lies within `reach`.
+    fn nearest_within(&self, q: [f64; 2], reach: f64) -> Option<(usize, f64)> {
+        let (cx, cy) = Self::bin(q, self.cell);
+        let r = (reach / self.cell).ceil() as i64;
+        let mut best = (usize::MAX, reach * reach);
+        for x in cx - r..=cx + r {
+            for y in cy - r..=cy + r {
+                for &i in self.bins.get(&(x, y)).map_or(&[][..], Vec::as_slice) {
+                    let p = self.points[i];
+                    let d = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+                    if d <= best.1 {
+                        best = (i, d);
+                    }
+                }
+            }
+        }
+        (best.0 != usize::MAX).then(|| (best.0, best.1.sqrt()))
+    }
 }
 
 /// The index of the point of `ps` nearest `q`, and its distance (brute force: a few hundred
