@@ -418,12 +418,16 @@ proptest! {
 fn a_factored_spline_gives_the_fitted_field_for_every_set_of_values() {
     let a = foot(80, 1.0);
     let inside = interior();
-    for (map, smoothing) in [(bend(300.0), 0.0), (bend(300.0), 50.0), (bend(150.0), 1000.0)] {
+    for (map, smoothing) in [
+        (bend(300.0), 0.0),
+        (bend(300.0), 50.0),
+        (bend(150.0), 1000.0),
+    ] {
         let spline = modal_core::FactoredSpline::new(&a, smoothing).unwrap();
         let basis = spline.basis(&inside);
         let b: Vec<[f64; 2]> = a.iter().map(|&p| map(p)).collect();
-        let field = CorrespondenceField::fit(&shape(&a), &shape(&b), &pairs(a.len()), smoothing)
-            .unwrap();
+        let field =
+            CorrespondenceField::fit(&shape(&a), &shape(&b), &pairs(a.len()), smoothing).unwrap();
         let got = basis.apply(&spline.fit(&b).unwrap());
         let (worst, _) = errors(&got, &field.apply(&inside));
         assert!(worst < 1e-9, "λ {smoothing}: {worst:e} mm apart");

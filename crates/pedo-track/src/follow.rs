@@ -190,6 +190,28 @@ pub fn follow_points(
     Ok(out)
 }
 
+/// The material points of a run as its outputs give them: the default seeds followed through a
+/// contour run ([`follow_points`] with the run's sensel aspect); `None` for the surface and
+/// isocontour models, whose objects are no contact outlines.
+///
+/// # Errors
+/// As [`follow_points`].
+pub fn run_points(
+    run: &SequenceResult,
+    options: &SequenceOptions,
+) -> Result<Option<FollowedPoints>> {
+    if options.model != ObjectModel::Contour {
+        return Ok(None);
+    }
+    follow_points(
+        run,
+        SenselAspect::of(options),
+        &FollowParams::default(),
+        &[],
+    )
+    .map(Some)
+}
+
 /// Which object continues which: from the run's candidate pairs (matched or skipped).
 struct Links {
     succs: HashMap<usize, Vec<usize>>,
