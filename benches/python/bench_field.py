@@ -103,6 +103,8 @@ GROUPS = {
                                          for law in (2, 3) for seed in (2, 3)],
 }
 TPS_LABEL = "pedomatch tracks + TPS (stand-in)"
+POINTS_LABEL = "pedomatch points (defaults: anchored registration)"
+POINTS_TPS_LABEL = "pedomatch points + TPS (stand-in for seeded points)"
 DIRECT_LABEL = "diagnostic: pymodal.match(frame 0, frame h), no chaining"
 CHAIN_LABEL = "reference: true motion, rounded to a node at every step"
 SHIFT_LABEL = "reference: true map, region moved 0.3 sensel heelwards"
@@ -128,6 +130,18 @@ def pedomatch_outline_positions(result, obj0, n_frames):
         if len(steps) and steps[0, 0] == obj0["id"]:
             frames = track[:, 0].astype(int)
             pos[frames, steps[0, 1]] = track[:, 1:3]
+    return pos
+
+
+def pedomatch_point_positions(result, obj0, n_frames):
+    """Every node of frame 0's outline followed as a material point (the run's ``points``,
+    anchored registration): (T, n, 2), NaN once ended or when the run has no points."""
+    nodes = np.asarray(obj0["points"])[:, :2]
+    pos = np.full((n_frames, len(nodes), 2), np.nan)
+    for pts, steps in zip(result.get("points", []), result.get("point_steps", [])):
+        if len(steps) and steps[0, 0] == obj0["id"] and steps[0, 1] >= 0:
+            frames = pts[:, 0].astype(int)
+            pos[frames, steps[0, 1]] = pts[:, 1:3]
     return pos
 
 
@@ -370,6 +384,12 @@ def run_case(spec, n_frames, grid, cpd, extra, tps_smoothing, log):
 
     track_pos = pedomatch_rows("pedomatch tracks (defaults)", result, TPS_LABEL)
     rec["alive"] = {h: float(np.isfinite(track_pos[h, :, 0]).mean()) for h in HORIZONS if h < T}
+    point_pos = pedomatch_point_positions(result, objs[0], T)
+    if np.isfinite(point_pos[1:]).any():
+        rec["outline"][POINTS_LABEL] = within(point_pos, truth_nodes, spacing)
+        tps = tracks_tps(point_pos, dense_pts, tps_smoothing)
+        rec["interior"][POINTS_TPS_LABEL] = within(tps[:, :n_int], truth_int)
+        rec["region"][POINTS_TPS_LABEL] = region_forces(frames, pix, tps[:, n_int:])
     field = pedomatch_field(result, dense_pts)
     if field is not None:
         rec["interior"]["pedomatch field"] = within(field[:, :n_int], truth_int)

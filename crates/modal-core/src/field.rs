@@ -302,6 +302,171 @@ impl CorrespondenceField {
     }
 }
 
+/// A thin-plate smoothing spline on fixed centres, factored once: the field of the same centres
+/// fitted to new values costs one back-substitution instead of a new `O(n³)` solve.
+///
+/// The system of [`CorrespondenceField::fit`] depends on the centres and λ only, its values on
+/// the right-hand side. A registration that moves one set of points onto each frame of a
+/// recording (the anchored tracks, docs/method.md §12) refits the same centres to new targets
+/// every frame; [`ThinPlateBasis`] holds the spline's terms at points mapped every frame (the
+/// centres themselves, tracked points), so that each frame's images are one matrix product.
+///
+/// ```
+/// use modal_core::FactoredSpline;
+/// let centres: Vec<[f64; 2]> = (0..12)
+///     .map(|i| {
+///         let t = i as f64 / 12.0 * std::f64::consts::TAU;
+///         [3.0 * t.cos(), t.sin()]
+///     })
+///     .collect();
+/// let spline = FactoredSpline::new(&centres, 0.0).unwrap();
+/// // A shift of the values is a shift of the map, inside the outline too.
+/// let shifted: Vec<[f64; 2]> = centres.iter().map(|p| [p[0] + 1.0, p[1] - 2.0]).collect();
+/// let coefficients = spline.fit(&shifted).unwrap();
+/// let basis = spline.basis(&[[0.5, 0.2]]);
+/// let [y] = basis.apply(&coefficients)[..] else { unreachable!() };
+/// assert!((y[0] - 1.5).abs() < 1e-9 && (y[1] + 1.8).abs() < 1e-9);
+/// ```
+#[derive(Debug, Clone)]
+pub struct FactoredSpline {
+    /// The centres in normalised coordinates.
+    centres: Vec<[f64; 2]>,
+    centre: [f64; 2],
+    radius: f64,
+    lu: faer::linalg::solvers::PartialPivLu<f64>,
+}
+
+/// The coefficients of a [`FactoredSpline`] fitted to one set of values: `n` weights then the
+/// three affine terms, one column per output coordinate.
+#[derive(Debug, Clone)]
+pub struct SplineCoefficients(Mat<f64>);
+
+/// The terms of a [`FactoredSpline`] at fixed points: `[U(|x − x_i|)…, 1, u, v]` per point, so
+/// that their images under any fitted coefficients are one matrix product.
+#[derive(Debug, Clone)]
+pub struct ThinPlateBasis(Mat<f64>);
+
+impl FactoredSpline {
+    /// Factors the spline's system for `centres` and regularisation λ = `smoothing` (in the
+    /// callers' units, as [`CorrespondenceField::fit`]).
+    ///
+    /// # Errors
+    /// [`ModalError::Option`] for a smoothing that is negative or not finite;
+    /// [`ModalError::TooFewMatches`] for fewer than 3 centres; [`ModalError::CoincidentMatches`]
+    /// or [`ModalError::CollinearMatches`] (side A) when centres coincide or lie on one line.
+    pub fn new(centres: &[[f64; 2]], smoothing: f64) -> Result<Self, ModalError> {
+        if !(smoothing.is_finite() && smoothing >= 0.0) {
+            return Err(OptionError::new("smoothing", smoothing, "a finite number >= 0").into());
+        }
+        let n = centres.len();
+        if n < MIN_MATCHES {
+            return Err(ModalError::TooFewMatches {
+                matches: n,
+                min: MIN_MATCHES,
+            });
+        }
+        let nodes: Vec<usize> = (0..n).collect();
+        check_spread(centres, &nodes, Side::A)?;
+        let (centre, radius) = frame_of(centres);
+        let u: Vec<[f64; 2]> = centres
+            .iter()
+            .map(|&p| normalise(p, centre, radius))
+            .collect();
+        let lu = system(&u, smoothing / (radius * radius)).partial_piv_lu();
+        Ok(Self {
+            centres: u,
+            centre,
+            radius,
+            lu,
+        })
+    }
+
+    /// The number of centres.
+    pub fn len(&self) -> usize {
+        self.centres.len()
+    }
+
+    /// Whether there are no centres (never: [`new`](Self::new) asks for three).
+    pub fn is_empty(&self) -> bool {
+        self.centres.is_empty()
+    }
+
+    /// The coefficients of the spline that sends centre `i` to (λ = 0) or near (λ > 0)
+    /// `values[i]`.
+    ///
+    /// # Errors
+    /// [`ModalError::SizeMismatch`] unless there is one value per centre;
+    /// [`ModalError::NonFiniteResult`] for a value or coefficient that is not finite.
+    pub fn fit(&self, values: &[[f64; 2]]) -> Result<SplineCoefficients, ModalError> {
+        let n = self.centres.len();
+        if values.len() != n {
+            return Err(ModalError::SizeMismatch {
+                what: "spline values",
+                expected: n,
+                found: values.len(),
+            });
+        }
+        let rhs = Mat::<f64>::from_fn(n + 3, 2, |r, c| if r < n { values[r][c] } else { 0.0 });
+        let x = self.lu.solve(&rhs);
+        if !x.col_iter().all(|c| c.iter().all(|v| v.is_finite())) {
+            return Err(ModalError::NonFiniteResult {
+                stage: "correspondence field",
+            });
+        }
+        Ok(SplineCoefficients(x))
+    }
+
+    /// The spline's terms at `points` (callers' units).
+    pub fn basis(&self, points: &[[f64; 2]]) -> ThinPlateBasis {
+        let n = self.centres.len();
+        let u: Vec<[f64; 2]> = points
+            .iter()
+            .map(|&p| normalise(p, self.centre, self.radius))
+            .collect();
+        ThinPlateBasis(Mat::<f64>::from_fn(u.len(), n + 3, |r, c| {
+            if c < n {
+                kernel(u[r], self.centres[c])
+            } else if c == n {
+                1.0
+            } else {
+                u[r][c - n - 1]
+            }
+        }))
+    }
+}
+
+impl ThinPlateBasis {
+    /// The images of the basis's points under the spline of `coefficients` (fitted by the
+    /// [`FactoredSpline`] that made this basis).
+    pub fn apply(&self, coefficients: &SplineCoefficients) -> Vec<[f64; 2]> {
+        let y = &self.0 * &coefficients.0;
+        (0..y.nrows()).map(|r| [y[(r, 0)], y[(r, 1)]]).collect()
+    }
+
+    /// The number of points.
+    pub fn len(&self) -> usize {
+        self.0.nrows()
+    }
+
+    /// Whether the basis holds no point.
+    pub fn is_empty(&self) -> bool {
+        self.0.nrows() == 0
+    }
+}
+
+/// The spline's matrix for normalised centres `u` and normalised λ:
+/// `[[K + λ I, P], [Pᵀ, 0]]` (§11).
+fn system(u: &[[f64; 2]], lambda: f64) -> Mat<f64> {
+    let n = u.len();
+    let poly = |i: usize, k: usize| if k == 0 { 1.0 } else { u[i][k - 1] };
+    Mat::<f64>::from_fn(n + 3, n + 3, |r, c| match (r < n, c < n) {
+        (true, true) => kernel(u[r], u[c]) + if r == c { lambda } else { 0.0 },
+        (true, false) => poly(r, c - n),
+        (false, true) => poly(c, r - n),
+        (false, false) => 0.0,
+    })
+}
+
 /// `(x − centre) / radius`.
 fn normalise(x: [f64; 2], centre: [f64; 2], radius: f64) -> [f64; 2] {
     [(x[0] - centre[0]) / radius, (x[1] - centre[1]) / radius]
@@ -383,14 +548,7 @@ fn solve(
     let n = from.len();
     let (centre, radius) = frame_of(&from);
     let u: Vec<[f64; 2]> = from.iter().map(|&p| normalise(p, centre, radius)).collect();
-    let lambda = smoothing / (radius * radius);
-    let poly = |i: usize, k: usize| if k == 0 { 1.0 } else { u[i][k - 1] };
-    let lhs = Mat::<f64>::from_fn(n + 3, n + 3, |r, c| match (r < n, c < n) {
-        (true, true) => kernel(u[r], u[c]) + if r == c { lambda } else { 0.0 },
-        (true, false) => poly(r, c - n),
-        (false, true) => poly(c, r - n),
-        (false, false) => 0.0,
-    });
+    let lhs = system(&u, smoothing / (radius * radius));
     let rhs = Mat::<f64>::from_fn(n + 3, 2, |r, c| if r < n { to[r][c] } else { 0.0 });
     let x = lhs.partial_piv_lu().solve(&rhs);
     let weights: Vec<[f64; 2]> = (0..n).map(|i| [x[(i, 0)], x[(i, 1)]]).collect();

@@ -26,7 +26,9 @@ mod simd;
 
 pub use eigen::{generalized_eigh, EigenSolution};
 pub use error::{ErrorKind, ModalError, OptionError, Side, Unsupported};
-pub use field::{CorrespondenceField, FieldParts};
+pub use field::{
+    CorrespondenceField, FactoredSpline, FieldParts, SplineCoefficients, ThinPlateBasis,
+};
 pub use matching::features::{AffinityMatrix, ModalFeatures};
 pub use matching::prealign::{Affine, RotationSearch};
 pub use matching::search::ThresholdMode;

@@ -412,3 +412,41 @@ proptest! {
         }
     }
 }
+
+/// The factored spline is the fitted field of the same centres: one factorisation, many fits.
+#[test]
+fn a_factored_spline_gives_the_fitted_field_for_every_set_of_values() {
+    let a = foot(80, 1.0);
+    let inside = interior();
+    for (map, smoothing) in [
+        (bend(300.0), 0.0),
+        (bend(300.0), 50.0),
+        (bend(150.0), 1000.0),
+    ] {
+        let spline = modal_core::FactoredSpline::new(&a, smoothing).unwrap();
+        let basis = spline.basis(&inside);
+        let b: Vec<[f64; 2]> = a.iter().map(|&p| map(p)).collect();
+        let field =
+            CorrespondenceField::fit(&shape(&a), &shape(&b), &pairs(a.len()), smoothing).unwrap();
+        let got = basis.apply(&spline.fit(&b).unwrap());
+        let (worst, _) = errors(&got, &field.apply(&inside));
+        assert!(worst < 1e-9, "λ {smoothing}: {worst:e} mm apart");
+    }
+}
+
+#[test]
+fn a_factored_spline_names_what_it_cannot_take() {
+    let a = foot(20, 1.0);
+    let line: Vec<[f64; 2]> = (0..10).map(|i| [i as f64, 2.0 * i as f64]).collect();
+    let e = modal_core::FactoredSpline::new(&line, 0.0).unwrap_err();
+    assert!(matches!(e, ModalError::CollinearMatches { .. }), "{e}");
+    let e = modal_core::FactoredSpline::new(&a[..2], 0.0).unwrap_err();
+    assert!(matches!(e, ModalError::TooFewMatches { .. }), "{e}");
+    assert!(modal_core::FactoredSpline::new(&a, f64::NAN).is_err());
+    let spline = modal_core::FactoredSpline::new(&a, 1.0).unwrap();
+    let e = spline.fit(&a[..5]).unwrap_err();
+    assert!(matches!(e, ModalError::SizeMismatch { .. }), "{e}");
+    let mut bad = a.clone();
+    bad[3][0] = f64::INFINITY;
+    assert!(spline.fit(&bad).is_err());
+}

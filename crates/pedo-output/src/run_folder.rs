@@ -29,6 +29,10 @@ use std::time::Instant;
 /// written as `NAME.csv` or `NAME.parquet` ([`TableFormat`]).
 pub const RUN_TABLES: [&str; 5] = ["pairs", "objects", "matches", "tracks", "frames"];
 
+/// The table of material points ([`crate::points_table`]) a whole contour run writes beside
+/// [`RUN_TABLES`].
+pub const POINTS: &str = "points";
+
 /// The table a run with drift correction ([`SequenceOptions::drift_corrected`]) writes besides
 /// [`RUN_TABLES`]: the matches of its reference pairs ([`crate::reference_matches_table`]).
 pub const REFERENCE_MATCHES: &str = "reference_matches";
@@ -595,7 +599,22 @@ pub fn write_run_folder(
     let counts = replay(run.recording, run.options, run.result, &mut tables)?;
     tables.finish(&counts)?;
     let cancel = run.options.cancel.as_ref();
-    write_figures(&dir, run.recording, run.result, outputs.figures, cancel)?;
+    // The material points and the figures need nothing of each other: on two threads.
+    let (points, figures) = std::thread::scope(|s| {
+        let points = s.spawn(|| -> Result<Option<crate::Table>> {
+            let Some(points) = pedo_track::follow::run_points(run.result, run.options)? else {
+                return Ok(None);
+            };
+            crate::points_table(run.recording, run.result, &points).map(Some)
+        });
+        let figures = write_figures(&dir, run.recording, run.result, outputs.figures, cancel);
+        (points.join(), figures)
+    });
+    figures?;
+    let points = points.map_err(|_| IoError::invalid("following the material points failed"))?;
+    if let Some(table) = points? {
+        crate::write_table(&dir, outputs.tables, POINTS, &table)?;
+    }
     let mut stages = timings.to_vec();
     stages.push(("output", started.elapsed().as_secs_f64()));
     let mut summary = crate::run_summary(

@@ -366,6 +366,93 @@ pub(crate) fn track_rows<E>(
     Ok(())
 }
 
+/// The material points followed by anchored registration ([`pedo_track::follow`]), one row per
+/// point and frame: point, step, frame, time, object id, the outline node the point was seeded
+/// on (empty for a point given by position), `x, y` (pixels) and `x_mm, y_mm` when the pitch is
+/// known, and the pressure under the point (bilinear between sensel centres; `pressure_kpa`
+/// when the units are known, else `pressure` in the file's units).
+///
+/// # Errors
+/// A frame of a step that the recording cannot give (never for the run's own points).
+pub fn points_table(
+    recording: &Recording,
+    r: &SequenceResult,
+    points: &pedo_track::follow::FollowedPoints,
+) -> pedo_io::Result<Table> {
+    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
+    let mut t = Table::new(&["point", "step", "frame"]);
+    if timed {
+        t.push_column("time_s");
+    }
+    for c in ["object_id", "seed_node", "x", "y"] {
+        t.push_column(c);
+    }
+    if mm {
+        t.push_column("x_mm");
+        t.push_column("y_mm");
+    }
+    let (pressure, per_unit) = match kpa_per_unit(&recording.units) {
+        Some(k) => ("pressure_kpa", k),
+        None => ("pressure", 1.0),
+    };
+    t.push_column(pressure);
+    let under = pressures_under(recording, r, points)?;
+    for (k, p) in points.points.iter().enumerate() {
+        for (s, &(o, xy)) in p.steps.iter().enumerate() {
+            let frame = r.objects[o].frame;
+            let mut cells = vec![Cell::int(k), Cell::int(s), Cell::int(frame)];
+            if timed {
+                cells.push(Cell::opt(recording.time_s(frame), 6));
+            }
+            cells.push(Cell::int(o));
+            cells.push(p.seed.1.map_or(Cell::Empty, Cell::int));
+            push_xy(&mut cells, recording, xy[0], xy[1], mm);
+            cells.push(Cell::Float(under[k][s] * per_unit, 4));
+            t.rows.push(cells);
+        }
+    }
+    Ok(t)
+}
+
+/// The pressure under every step of every point, each frame read once.
+fn pressures_under(
+    recording: &Recording,
+    r: &SequenceResult,
+    points: &pedo_track::follow::FollowedPoints,
+) -> pedo_io::Result<Vec<Vec<f64>>> {
+    let mut by_frame: std::collections::BTreeMap<usize, Vec<(usize, usize)>> = Default::default();
+    for (k, p) in points.points.iter().enumerate() {
+        for (s, &(o, _)) in p.steps.iter().enumerate() {
+            by_frame.entry(r.objects[o].frame).or_default().push((k, s));
+        }
+    }
+    let mut out: Vec<Vec<f64>> = points
+        .points
+        .iter()
+        .map(|p| vec![0.0; p.steps.len()])
+        .collect();
+    for (frame, steps) in by_frame {
+        let grid = recording.frame(frame)?;
+        for (k, s) in steps {
+            out[k][s] = bilinear(&grid, points.points[k].steps[s].1);
+        }
+    }
+    Ok(out)
+}
+
+/// The grid's value at `p` (x = column, y = row; sensel centres at whole numbers), bilinear
+/// between the four nearest centres, clamped to the grid.
+fn bilinear(grid: &pedo_io::Grid, p: [f64; 2]) -> f64 {
+    let clamp = |v: f64, n: usize| v.clamp(0.0, n.saturating_sub(1) as f64);
+    let (x, y) = (clamp(p[0], grid.cols()), clamp(p[1], grid.rows()));
+    let (c0, r0) = (x.floor() as usize, y.floor() as usize);
+    let (c1, r1) = ((c0 + 1).min(grid.cols() - 1), (r0 + 1).min(grid.rows() - 1));
+    let (fx, fy) = (x - c0 as f64, y - r0 as f64);
+    let top = grid.get(r0, c0) * (1.0 - fx) + grid.get(r0, c1) * fx;
+    let bottom = grid.get(r1, c0) * (1.0 - fx) + grid.get(r1, c1) * fx;
+    top * (1.0 - fy) + bottom * fy
+}
+
 /// The names and unit factors of the measures' columns for this recording.
 pub(crate) struct MeasureUnits {
     pub(crate) area: (&'static str, f64),

@@ -18,6 +18,7 @@
 //! | `matching` | each pair matched by modal matching (`modal-core`) |
 //! | `chain` | matches chained into node tracks |
 //! | [`drift`] | drift correction: tracks re-anchored on reference frames |
+//! | [`follow`] | material points followed through a stance by anchored registration |
 //! | [`result`] | what a run produces: objects, pairs, tracks, counts |
 //! | `run`, `stream`, [`sink`] | a whole run, a streamed run, and the events both hand to a writer |
 
@@ -25,6 +26,7 @@
 
 mod chain;
 pub mod drift;
+pub mod follow;
 mod matching;
 mod objects;
 pub mod options;

@@ -122,7 +122,7 @@ impl SenselAspect {
         Self::checked(pitch_mm.map_or(1.0, |[x, y]| y / x))
     }
 
-    fn of(options: &SequenceOptions) -> Self {
+    pub(crate) fn of(options: &SequenceOptions) -> Self {
         Self::checked(options.sensel_aspect)
     }
 

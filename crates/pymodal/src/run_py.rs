@@ -162,8 +162,10 @@ fn run_recording<'py>(
     // Ctrl-C stops the run at its next frame or pair and raises KeyboardInterrupt.
     let cancel = Cancel::new();
     options.cancel = Some(cancel.clone());
-    let result = crate::pool::detach_cancellable(py, &cancel, || {
-        run_sequence(&rec, &options, &|_, _, _| {})
+    let (result, points) = crate::pool::detach_cancellable(py, &cancel, || {
+        let result = run_sequence(&rec, &options, &|_, _, _| {})?;
+        let points = pedo_track::follow::run_points(&result, &options)?;
+        Ok::<_, pedo_io::IoError>((result, points))
     })?
     .map_err(to_py)?;
     require_objects(result.objects.len(), &rec, &options)
@@ -203,6 +205,7 @@ fn run_recording<'py>(
     }
     out.set_item("tracks", tracks)?;
     out.set_item("track_steps", track_steps)?;
+    set_points(py, &out, &result, points.as_ref())?;
     let (start, end) = options.frames.unwrap_or((0, rec.n_frames()));
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
     let measures = pedo_output::frames_table(&rec, threshold, start, end);
@@ -240,6 +243,37 @@ fn run_recording<'py>(
     timings.set_item("tracks", result.timings.tracks.as_secs_f64())?;
     out.set_item("timings", timings)?;
     Ok(out)
+}
+
+/// The material points of a contour run ([`pedo_track::follow`]) as `points` (per point, its
+/// steps as rows `frame, x, y` in pixels) and `point_steps` (per point, its steps as rows
+/// `object id, seed node`, the node −1 for a point not seeded on a node); both empty lists for
+/// the other models.
+fn set_points<'py>(
+    py: Python<'py>,
+    out: &Bound<'py, PyDict>,
+    result: &SequenceResult,
+    points: Option<&pedo_track::follow::FollowedPoints>,
+) -> PyResult<()> {
+    let (xy, steps) = (PyList::empty(py), PyList::empty(py));
+    for p in points.map_or(&[][..], |p| p.points.as_slice()) {
+        let n = p.steps.len();
+        let flat: Vec<f64> = p
+            .steps
+            .iter()
+            .flat_map(|&(o, q)| [result.objects[o].frame as f64, q[0], q[1]])
+            .collect();
+        xy.append(PyArray1::from_vec(py, flat).reshape([n, 3])?)?;
+        let node = p.seed.1.map_or(-1, |v| v as i64);
+        let ids: Vec<i64> = p
+            .steps
+            .iter()
+            .flat_map(|&(o, _)| [o as i64, node])
+            .collect();
+        steps.append(PyArray1::from_vec(py, ids).reshape([n, 2])?)?;
+    }
+    out.set_item("points", xy)?;
+    out.set_item("point_steps", steps)
 }
 
 /// The reference pairs of drift correction as dicts: the two objects, their frames, the

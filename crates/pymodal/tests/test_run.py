@@ -417,3 +417,47 @@ def test_every_is_checked():
         pymodal.run(BUNDLED, every="2")
     with pytest.raises(pymodal.OptionError, match="multiple of every"):
         pymodal.run(BUNDLED, every=2, drift_reference=25)
+
+
+def test_material_points_follow_the_synthetic_walk_and_are_no_nodes():
+    # The foot moves 10 sensels, turns 12 degrees and its forefoot widens by 15 % in 40 frames:
+    # the points seeded on frame 0's outline nodes stay within a node spacing (1 sensel) of
+    # their material points to the last frame.
+    walk = pymodal.SyntheticWalk(frames=40)
+    res = pymodal.run(walk.recording())
+    objects, points, steps = res["objects"], res["points"], res["point_steps"]
+    first = objects[0]
+    assert len(points) == len(steps) == len(first["points"])
+    errors = []
+    for p, s in zip(points, steps):
+        assert p.shape == (len(s), 3) and s.dtype == np.int64
+        assert s[0, 0] == first["id"] and s[0, 1] >= 0
+        np.testing.assert_allclose(p[0, 1:], first["points"][s[0, 1]][:2])
+        for (frame, _, _), (o, _) in zip(p, s):
+            assert objects[o]["frame"] == frame
+        truth = walk.true_positions(39, p[:1, 1:])[0]
+        errors.append(np.linalg.norm(p[-1, 1:] - truth) if p[-1, 0] == 39 else np.inf)
+    assert np.mean(np.array(errors) <= 1.0) >= 0.95, np.sort(errors)[-10:]
+    # The other models follow no points.
+    res = pymodal.run(moving_blob(frames=4), model="surface", surface_nodes=30)
+    assert res["points"] == [] and res["point_steps"] == []
+
+
+def test_points_csv_holds_the_points_of_the_result(tmp_path):
+    res = pymodal.run(str(BUNDLED), frames=(0, 30), out=tmp_path / "run")
+    rows = (tmp_path / "run" / "points.csv").read_text().splitlines()
+    header = rows[0].split(",")
+    assert header == ["point", "step", "frame", "time_s", "object_id", "seed_node", "x", "y",
+                      "x_mm", "y_mm", "pressure_kpa"]
+    assert len(rows) - 1 == sum(len(p) for p in res["points"])
+    rec = pymodal.read_recording(str(BUNDLED))
+    frames = np.asarray(rec.frames)
+    for line in rows[1:200]:
+        cells = line.split(",")
+        k, s, frame = int(cells[0]), int(cells[1]), int(cells[2])
+        x, y, p = float(cells[6]), float(cells[7]), float(cells[10])
+        np.testing.assert_allclose(res["points"][k][s], [frame, x, y], atol=1e-4)
+        # Bilinear between sensel centres: within the four values around the point.
+        r0, c0 = int(np.floor(y)), int(np.floor(x))
+        block = frames[frame, r0:r0 + 2, c0:c0 + 2]
+        assert block.min() - 1e-3 <= p <= block.max() + 1e-3

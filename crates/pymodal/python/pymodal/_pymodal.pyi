@@ -319,7 +319,10 @@ def surface(
 ) -> Surface: ...
 # run's result (RunResult, a dict) holds, besides table, matches, objects, tracks, track_steps,
 # frames, summary and timings, "reference_matches": with drift correction, one ReferenceMatch
-# per reference pair (an empty list without).
+# per reference pair (an empty list without); and for the contour model "points" (per material
+# point followed by anchored registration, a FloatArray of rows frame, x, y in pixels) with
+# "point_steps" (an IntArray of rows object id, seed node; -1 for no node), empty lists for the
+# other models.
 # A reference pair of drift correction: id_a, id_b and frame_a, frame_b (int), match (Match) and
 # tracked (BoolArray aligned with match.pairs: True where a track took the match).
 ReferenceMatch = dict[str, Any]

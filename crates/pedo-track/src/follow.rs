@@ -1,0 +1,773 @@
+//! Material points followed through a stance by anchored registration (docs/method.md §12).
+//!
+//! Chaining matches node to node rounds every step to a node: at 200 Hz a point of the foot moves
+//! a tenth of the node spacing per frame, so the rounding, not the matcher, makes node tracks
+//! drift. Here a point is never a node. Each object that begins a lineage (an object no earlier
+//! one continues) is an *anchor*: its outline, densified, is registered onto the outline of every
+//! later object of its lineage by a thin-plate smoothing spline on the anchor's fixed points
+//! (factored once per anchor), one curve-ICP step per frame warm-started from the frame before,
+//! its targets pulled towards the partners that modal matching of the anchor onto the frame
+//! gives the anchor's nodes. A point's position in a frame is the image of its place on the
+//! anchor, so errors do not add up from frame to frame.
+//!
+//! A lineage is re-anchored on its current object (the points keep their positions) when the
+//! registered anchor outline no longer covers the frame's outline (the contact region grew or
+//! shrank: heel strike, toe-off); where an object splits or objects merge, the points are carried
+//! across by the pair's [`CorrespondenceField`] and a new anchor starts.
+
+use crate::*;
+use modal_core::{
+    match_shapes, CorrespondenceField, FactoredSpline, MatchOptions, MatchResult,
+    SplineCoefficients, ThinPlateBasis,
+};
+use pedo_io::{IoError, Result};
+use std::collections::HashMap;
+
+/// The settings of anchored registration, in sensels (a sensel is the x pitch; oblong sensels
+/// are registered in their true proportions). The defaults were chosen on the tuning stances of
+/// `benches/python/anchor_study.py` and checked on its held-out ones (BENCHMARKS.md).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FollowParams {
+    /// The spline's regularisation λ (scipy's `smoothing`, sensel² units): large enough that a
+    /// node's own target (one closest point) cannot bend the field, small enough that the
+    /// forefoot's spreading and bend pass.
+    pub smoothing: f64,
+    /// The weight (0–1) of the modal match's partner in an anchor node's target; the rest is the
+    /// closest point of the frame's outline. The closest point alone slides along a smooth
+    /// outline; the modal partner alone is a node, off by up to half a spacing.
+    pub pull: f64,
+    /// The anchor outline's points are at most this far apart (sensels): the spline's centres,
+    /// whose factorisation is most of the cost of a new anchor (0.5 measured no more accurate
+    /// than 1 on the synthetic walks, at 8× the cost).
+    pub anchor_step: f64,
+    /// A frame's outline is sampled this finely for its closest points (sensels).
+    pub target_step: f64,
+    /// Re-anchor when more than this share of either outline lies over one sensel from the
+    /// other after registration.
+    pub coverage: f64,
+    /// ICP steps on the first frame after an anchor.
+    pub first_steps: usize,
+    /// A frame's ICP steps stop once no point of the anchor's image moves more than this
+    /// (sensels), or after `max_steps`.
+    pub settled: f64,
+    /// The most ICP steps on a frame after the first.
+    pub max_steps: usize,
+    /// Closest points farther than this from an anchor point's image (sensels) do not pull it:
+    /// where the contact region grows (heel strike) the new outline is new contact, not the
+    /// anchor's outline moved.
+    pub reach: f64,
+    /// The anchor is matched onto an object of its lineage (modal matching: most of the cost)
+    /// on its first, then once its image has moved this far (sensels, the largest motion of a
+    /// point, summed over frames) since the last match: a slide along the outline, which the
+    /// closest points do not see, is never larger than the motion itself. The frames between
+    /// take the closest points alone.
+    pub match_motion: f64,
+}
+
+impl Default for FollowParams {
+    fn default() -> Self {
+        Self {
+            smoothing: 1000.0,
+            pull: 0.2,
+            anchor_step: 1.0,
+            target_step: 0.25,
+            coverage: 0.10,
+            first_steps: 10,
+            settled: 0.02,
+            max_steps: 10,
+            match_motion: 0.5,
+            reach: 2.0,
+        }
+    }
+}
+
+/// The smoothing of the field that starts an anchor's registration (from the modal pairs alone)
+/// and of the field that carries points across a split or merge: the pairs are noisier than the
+/// registration's targets.
+const PAIR_SMOOTHING: f64 = 300.0;
+/// Distance (sensels) beyond which a point of one outline counts as not covered by the other.
+const COVERED: f64 = 1.0;
+
+/// One material point followed through the objects of a run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FollowedPoint {
+    /// The object it started on and, for a point seeded at an outline node, that node.
+    pub seed: (usize, Option<usize>),
+    /// `(object, [x, y])` of each frame it was followed through, in sequence order (sensels).
+    pub steps: Vec<(usize, [f64; 2])>,
+}
+
+/// Every point followed by [`follow_points`], with how often lineages were re-anchored.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FollowedPoints {
+    /// The points, in the order they were seeded.
+    pub points: Vec<FollowedPoint>,
+    /// Anchors started: one per lineage, plus one per re-anchoring and per split or merge.
+    pub anchors: usize,
+}
+
+/// Follows material points through the contour objects of a run: by default the outline nodes of
+/// every object that begins a lineage (`seeds` empty), or the given `seeds` (object, position
+/// in sensels) each from its object on.
+///
+/// # Errors
+/// [`IoError::InvalidInput`] for a run that is not of closed 2-D contours or a seed on an
+/// object the run does not have; a point that cannot be followed further (an object that
+/// cannot be matched or registered) ends there, as a track does, without failing the run.
+pub fn follow_points(
+    run: &SequenceResult,
+    aspect: SenselAspect,
+    params: &FollowParams,
+    seeds: &[(usize, [f64; 2])],
+) -> Result<FollowedPoints> {
+    if run.objects.iter().any(|o| o.shape.dim() != 2) {
+        return Err(IoError::invalid(
+            "points are followed on contours: this run's objects are surfaces",
+        ));
+    }
+    let links = Links::of(run);
+    let mut out = FollowedPoints::default();
+    let mut seeds_at: HashMap<usize, Vec<[f64; 2]>> = HashMap::new();
+    for &(o, p) in seeds {
+        if o >= run.objects.len() || !p.iter().all(|v| v.is_finite()) {
+            return Err(IoError::invalid(format!(
+                "point ({}, {}) seeded on object {o}: the run has {} (and points must be finite)",
+                p[0],
+                p[1],
+                pedo_io::counted(run.objects.len(), "object")
+            )));
+        }
+        seeds_at.entry(o).or_default().push(p);
+    }
+    // Per object: its anchor state and the points on it (index into out.points).
+    let mut live: HashMap<usize, Lineage> = HashMap::new();
+    for b in 0..run.objects.len() {
+        let mut lineage = None;
+        if let Some(a) = links.continues(b) {
+            if let Some(mut l) = live.remove(&a) {
+                let pair = links.pairs.get(&(a, b)).map(|&k| &run.pairs[k].result);
+                match l.step(run, pair, b, aspect, params) {
+                    Ok(()) => lineage = Some(l),
+                    // Not registered: the points cross by the pair's field, as at a split.
+                    Err(_) => {
+                        live.insert(a, l);
+                    }
+                }
+            }
+        }
+        if lineage.is_none() {
+            lineage = Lineage::start(run, b, aspect, params).ok();
+            if lineage.is_some() {
+                out.anchors += 1;
+            }
+            if let Some(l) = lineage.as_mut() {
+                let carried = links.handed_over(run, b, &mut live, aspect);
+                l.adopt(carried, aspect);
+                if links.preds(b).is_empty() && seeds.is_empty() {
+                    let nodes = outline(&run.objects[b]);
+                    let seeded = nodes.iter().enumerate().map(|(i, &p)| (Some(i), p));
+                    l.seed(seeded, &mut out, b, aspect);
+                }
+            }
+        }
+        let Some(mut l) = lineage else { continue };
+        if let Some(ps) = seeds_at.remove(&b) {
+            l.seed(ps.into_iter().map(|p| (None, p)), &mut out, b, aspect);
+        }
+        l.record(&mut out, b);
+        if links.succs(b).is_empty() {
+            // The lineage ends here: its anchor is dropped, its points end.
+            continue;
+        }
+        if l.anchor.uncovered > params.coverage {
+            if let Ok(fresh) = l.reanchor(run, b, aspect, params) {
+                l = fresh;
+                out.anchors += 1;
+            }
+        }
+        live.insert(b, l);
+    }
+    Ok(out)
+}
+
+/// The material points of a run as its outputs give them: the default seeds followed through a
+/// contour run ([`follow_points`] with the run's sensel aspect); `None` for the surface and
+/// isocontour models, whose objects are no contact outlines.
+///
+/// # Errors
+/// As [`follow_points`].
+pub fn run_points(
+    run: &SequenceResult,
+    options: &SequenceOptions,
+) -> Result<Option<FollowedPoints>> {
+    if options.model != ObjectModel::Contour {
+        return Ok(None);
+    }
+    follow_points(
+        run,
+        SenselAspect::of(options),
+        &FollowParams::default(),
+        &[],
+    )
+    .map(Some)
+}
+
+/// Which object continues which: from the run's candidate pairs (matched or skipped).
+struct Links {
+    succs: HashMap<usize, Vec<usize>>,
+    preds: HashMap<usize, Vec<usize>>,
+    pairs: HashMap<(usize, usize), usize>,
+}
+
+impl Links {
+    fn of(run: &SequenceResult) -> Self {
+        let mut l = Links {
+            succs: HashMap::new(),
+            preds: HashMap::new(),
+            pairs: HashMap::new(),
+        };
+        let matched = run.pairs.iter().map(|p| (p.a, p.b));
+        let skipped = run.skipped_pairs.iter().map(|p| (p.a, p.b));
+        for (a, b) in matched.chain(skipped) {
+            l.succs.entry(a).or_default().push(b);
+            l.preds.entry(b).or_default().push(a);
+        }
+        for (k, p) in run.pairs.iter().enumerate() {
+            l.pairs.insert((p.a, p.b), k);
+        }
+        l
+    }
+
+    fn preds(&self, b: usize) -> &[usize] {
+        self.preds.get(&b).map_or(&[], Vec::as_slice)
+    }
+
+    fn succs(&self, a: usize) -> &[usize] {
+        self.succs.get(&a).map_or(&[], Vec::as_slice)
+    }
+
+    /// The one object `b` continues, when neither splits nor merges.
+    fn continues(&self, b: usize) -> Option<usize> {
+        match self.preds(b) {
+            [a] if self.succs(*a) == [b] => Some(*a),
+            _ => None,
+        }
+    }
+
+    /// The points of `b`'s predecessors that `b` takes over at a split or merge, carried by each
+    /// pair's field: a point of a split object goes to the part whose outline its image lies
+    /// nearest (inside counts as distance 0).
+    fn handed_over(
+        &self,
+        run: &SequenceResult,
+        b: usize,
+        live: &mut HashMap<usize, Lineage>,
+        aspect: SenselAspect,
+    ) -> Vec<(usize, [f64; 2])> {
+        let mut carried = Vec::new();
+        for &a in self.preds(b) {
+            let Some(la) = live.get_mut(&a) else { continue };
+            let parts = self.succs(a);
+            let mut keep = Vec::new();
+            for &(point, pos) in &la.points {
+                let target = self.destination(run, a, pos, parts, aspect);
+                match target {
+                    Some((t, image)) if t == b => carried.push((point, image)),
+                    Some(_) => keep.push((point, pos)),
+                    None => {}
+                }
+            }
+            la.points = keep;
+            if la.points.is_empty() {
+                live.remove(&a);
+            }
+        }
+        carried
+    }
+
+    /// Where a point of object `a` at `pos` goes among `parts`: the part nearest its image.
+    fn destination(
+        &self,
+        run: &SequenceResult,
+        a: usize,
+        pos: [f64; 2],
+        parts: &[usize],
+        aspect: SenselAspect,
+    ) -> Option<(usize, [f64; 2])> {
+        let mut best: Option<(f64, usize, [f64; 2])> = None;
+        for &b in parts {
+            let Some(&k) = self.pairs.get(&(a, b)) else {
+                continue;
+            };
+            let pair = &run.pairs[k];
+            let (oa, ob) = (&run.objects[a].shape, &run.objects[b].shape);
+            let Ok(field) = CorrespondenceField::fit(oa, ob, &pair.result.pairs, PAIR_SMOOTHING)
+            else {
+                continue;
+            };
+            let [image] = field.apply(&[pos])[..] else {
+                continue;
+            };
+            let d = Contact::of(&run.objects[b], aspect).outside(image);
+            if best.is_none_or(|(bd, _, _)| d < bd) {
+                best = Some((d, b, image));
+            }
+        }
+        best.map(|(_, b, p)| (b, p))
+    }
+}
+
+/// The anchor of one lineage and the points it carries.
+struct Lineage {
+    anchor: Anchor,
+    /// (point index, position in sensels on the lineage's current object).
+    points: Vec<(usize, [f64; 2])>,
+    /// The points' places on the anchor (registration coordinates) and the spline's terms there.
+    places: Vec<[f64; 2]>,
+    place_basis: Option<ThinPlateBasis>,
+}
+
+impl Lineage {
+    fn start(
+        run: &SequenceResult,
+        b: usize,
+        aspect: SenselAspect,
+        params: &FollowParams,
+    ) -> Result<Self> {
+        Ok(Self {
+            anchor: Anchor::new(run, b, aspect, params)?,
+            points: Vec::new(),
+            places: Vec::new(),
+            place_basis: None,
+        })
+    }
+
+    /// The lineage moved onto object `b` (which continues its current object); on an error it
+    /// is left on its current object.
+    fn step(
+        &mut self,
+        run: &SequenceResult,
+        pair: Option<&MatchResult>,
+        b: usize,
+        aspect: SenselAspect,
+        params: &FollowParams,
+    ) -> Result<()> {
+        self.anchor.register(run, pair, b, aspect, params)?;
+        let images = match &self.place_basis {
+            Some(basis) => basis.apply(self.anchor.coefficients()),
+            None => Vec::new(),
+        };
+        for ((_, pos), image) in self.points.iter_mut().zip(images) {
+            *pos = aspect.from_registration(image);
+        }
+        // A point carried off the contact region has left the plate (the foot rolls off it):
+        // it ends, as the tissue's contact does.
+        let contact = Contact::of(&run.objects[b], aspect);
+        let kept: Vec<bool> = self
+            .points
+            .iter()
+            .map(|&(_, p)| contact.outside(p) <= COVERED)
+            .collect();
+        if kept.contains(&false) {
+            let mut k = kept.iter();
+            self.points.retain(|_| *k.next().unwrap_or(&true));
+            let mut k = kept.iter();
+            self.places.retain(|_| *k.next().unwrap_or(&true));
+            self.place_basis = Some(self.anchor.spline.basis(&self.places));
+        }
+        Ok(())
+    }
+
+    /// Points entering on the anchor's own object: their places are their positions there.
+    fn seed(
+        &mut self,
+        points: impl Iterator<Item = (Option<usize>, [f64; 2])>,
+        out: &mut FollowedPoints,
+        object: usize,
+        aspect: SenselAspect,
+    ) {
+        let carried: Vec<(usize, [f64; 2])> = points
+            .map(|(node, p)| {
+                out.points.push(FollowedPoint {
+                    seed: (object, node),
+                    steps: Vec::new(),
+                });
+                (out.points.len() - 1, p)
+            })
+            .collect();
+        self.adopt(carried, aspect);
+    }
+
+    /// Points entering at their positions on the object the anchor was started on.
+    fn adopt(&mut self, carried: Vec<(usize, [f64; 2])>, aspect: SenselAspect) {
+        if carried.is_empty() {
+            return;
+        }
+        for (k, p) in carried {
+            self.points.push((k, p));
+            self.places.push(aspect.to_registration(p));
+        }
+        self.place_basis = Some(self.anchor.spline.basis(&self.places));
+    }
+
+    /// Each point's position on object `b`, appended to its steps.
+    fn record(&self, out: &mut FollowedPoints, b: usize) {
+        for &(k, p) in &self.points {
+            out.points[k].steps.push((b, p));
+        }
+    }
+
+    /// A new anchor on object `b`, the lineage's current object: its points keep their positions.
+    fn reanchor(
+        &self,
+        run: &SequenceResult,
+        b: usize,
+        aspect: SenselAspect,
+        params: &FollowParams,
+    ) -> Result<Self> {
+        let mut l = Self::start(run, b, aspect, params)?;
+        l.adopt(self.points.clone(), aspect);
+        Ok(l)
+    }
+}
+
+/// An anchor outline and its current registration onto the lineage's latest object.
+struct Anchor {
+    /// The anchor object's shape in registration coordinates, for modal matching.
+    shape: modal_core::Shape,
+    /// Where each node is among the anchor's densified outline (the spline's centres, in
+    /// outline order: a node, then the points between it and the next).
+    node_at: Vec<usize>,
+    spline: FactoredSpline,
+    dense_basis: ThinPlateBasis,
+    /// The images of the densified outline on the latest object, and the spline that gives them.
+    image: Vec<[f64; 2]>,
+    coefficients: Option<SplineCoefficients>,
+    /// The share of the latest registration's outlines left uncovered (see [`FollowParams`]).
+    uncovered: f64,
+    /// Whether the anchor has been registered onto a later object yet.
+    registered: bool,
+    /// Registrations since the last modal match.
+    motion_since_match: f64,
+}
+
+impl Anchor {
+    fn new(
+        run: &SequenceResult,
+        b: usize,
+        aspect: SenselAspect,
+        params: &FollowParams,
+    ) -> Result<Self> {
+        let nodes = registration_outline(&run.objects[b], aspect);
+        let shape = modal_core::Shape::from_points_2d(&nodes, modal_core::Topology::ClosedContour)
+            .map_err(|e| IoError::invalid(e.to_string()))?;
+        let (dense, node_at) = densify(&nodes, params.anchor_step);
+        let spline = FactoredSpline::new(&dense, params.smoothing)
+            .map_err(|e| IoError::invalid(e.to_string()))?;
+        let dense_basis = spline.basis(&dense);
+        let mut a = Self {
+            shape,
+            image: dense,
+            node_at,
+            spline,
+            dense_basis,
+            coefficients: None,
+            uncovered: 0.0,
+            registered: false,
+            motion_since_match: 0.0,
+        };
+        let identity = a.image.clone();
+        a.coefficients = Some(a.fit(&identity)?);
+        Ok(a)
+    }
+
+    fn coefficients(&self) -> &SplineCoefficients {
+        self.coefficients
+            .as_ref()
+            .expect("an anchor is fitted when made")
+    }
+
+    fn fit(&self, values: &[[f64; 2]]) -> Result<SplineCoefficients> {
+        self.spline
+            .fit(values)
+            .map_err(|e| IoError::invalid(e.to_string()))
+    }
+
+    /// Registers the anchor onto object `b`: the modal pairs of the anchor onto `b`, then ICP
+    /// steps from the latest registration.
+    fn register(
+        &mut self,
+        run: &SequenceResult,
+        pair: Option<&MatchResult>,
+        b: usize,
+        aspect: SenselAspect,
+        params: &FollowParams,
+    ) -> Result<()> {
+        let target = registration_outline(&run.objects[b], aspect);
+        let shape = closed_contour(&target)?;
+        let matched = !self.registered || self.motion_since_match >= params.match_motion;
+        let mut pairs: Vec<(usize, [f64; 2])> = Vec::new();
+        let mut steps = 1;
+        if matched {
+            // On an anchor's first registration the run has already matched the anchor's
+            // object onto this one (its own object is the frame before).
+            let own;
+            let m = match pair {
+                Some(m) if !self.registered => m,
+                _ => {
+                    own = match_shapes(&self.shape, &shape, &MatchOptions::default())
+                        .map_err(|e| IoError::invalid(e.to_string()))?;
+                    &own
+                }
+            };
+            pairs = m
+                .pairs
+                .iter()
+                .filter(|p| !p.excess)
+                .map(|p| (self.node_at[p.a], target[p.b]))
+                .collect();
+            if !self.registered {
+                steps = params.first_steps;
+            }
+            self.motion_since_match = 0.0;
+        }
+        let before = self.image.clone();
+        let (dense_target, _) = densify(&target, params.target_step);
+        let dense_target = Grid::new(dense_target, params.reach);
+        for k in 0.. {
+            let moved = self.icp_step(&target, &dense_target, &pairs, params)?;
+            if k + 1 >= steps.max(params.max_steps) || (k + 1 >= steps && moved < params.settled) {
+                break;
+            }
+        }
+        self.motion_since_match += self
+            .image
+            .iter()
+            .zip(&before)
+            .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
+            .fold(0.0, f64::max);
+        self.uncovered = uncovered(&self.image, &target, &dense_target, params.reach);
+        self.registered = true;
+        Ok(())
+    }
+
+    /// One ICP step (returning how far the anchor's image moved, at most): each anchor point's target is the closest point of the frame's outline,
+    /// averaged with the frame's nodes that have it as their closest anchor image (so that the
+    /// frame's whole outline pulls, not only the parts nearest the anchor), and pulled towards
+    /// the modal partner for anchor nodes.
+    fn icp_step(
+        &mut self,
+        nodes: &[[f64; 2]],
+        dense_target: &Grid,
+        pairs: &[(usize, [f64; 2])],
+        params: &FollowParams,
+    ) -> Result<f64> {
+        // An anchor point with no target within reach keeps its image (its own weight).
+        let mut sum: Vec<[f64; 2]> = self
+            .image
+            .iter()
+            .map(|&q| match dense_target.nearest_within(q, params.reach) {
+                Some((k, _)) => dense_target.points[k],
+                None => q,
+            })
+            .collect();
+        let mut count = vec![1.0; sum.len()];
+        let image = Grid::new(self.image.clone(), params.reach);
+        for &p in nodes {
+            if let Some((k, _)) = image.nearest_within(p, params.reach) {
+                sum[k][0] += p[0];
+                sum[k][1] += p[1];
+                count[k] += 1.0;
+            }
+        }
+        let mut targets: Vec<[f64; 2]> = sum
+            .iter()
+            .zip(&count)
+            .map(|(s, c)| [s[0] / c, s[1] / c])
+            .collect();
+        for &(i, t) in pairs {
+            // A partner out of reach is a wrong match (a turned or mirrored pre-alignment of a
+            // small contact): the anchor's image is within a frame's motion of the outline.
+            let q = self.image[i];
+            if (q[0] - t[0]).hypot(q[1] - t[1]) > params.reach {
+                continue;
+            }
+            let d = &mut targets[i];
+            d[0] = (1.0 - params.pull) * d[0] + params.pull * t[0];
+            d[1] = (1.0 - params.pull) * d[1] + params.pull * t[1];
+        }
+        let c = self.fit(&targets)?;
+        let image = self.dense_basis.apply(&c);
+        let moved = image
+            .iter()
+            .zip(&self.image)
+            .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
+            .fold(0.0, f64::max);
+        self.image = image;
+        self.coefficients = Some(c);
+        Ok(moved)
+    }
+}
+
+/// The share of either outline (the registered anchor's points, the frame's nodes) that lies over
+/// [`COVERED`] from the other: the larger of the two.
+fn uncovered(image: &[[f64; 2]], nodes: &[[f64; 2]], dense_target: &Grid, cell: f64) -> f64 {
+    let far = |ps: &[[f64; 2]], of: &Grid| {
+        let n = ps
+            .iter()
+            .filter(|&&p| of.nearest_within(p, COVERED).is_none());
+        n.count() as f64 / ps.len().max(1) as f64
+    };
+    let image_grid = Grid::new(image.to_vec(), cell);
+    far(nodes, &image_grid).max(far(image, dense_target))
+}
+
+/// Points binned in square cells, for the nearest point within a short reach: an outline's
+/// points lie a fraction of a cell apart, so a query looks at a few dozen of them, not all.
+struct Grid {
+    points: Vec<[f64; 2]>,
+    cell: f64,
+    bins: HashMap<(i64, i64), Vec<usize>>,
+}
+
+impl Grid {
+    fn new(points: Vec<[f64; 2]>, cell: f64) -> Self {
+        let cell = if cell.is_finite() && cell > 0.0 {
+            cell
+        } else {
+            1.0
+        };
+        let mut bins: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+        for (i, &p) in points.iter().enumerate() {
+            bins.entry(Self::bin(p, cell)).or_default().push(i);
+        }
+        Self { points, cell, bins }
+    }
+
+    fn bin(p: [f64; 2], cell: f64) -> (i64, i64) {
+        ((p[0] / cell).floor() as i64, (p[1] / cell).floor() as i64)
+    }
+
+    /// The index of the point nearest `q` and its distance, if one lies within `reach`.
+    fn nearest_within(&self, q: [f64; 2], reach: f64) -> Option<(usize, f64)> {
+        let (cx, cy) = Self::bin(q, self.cell);
+        let r = (reach / self.cell).ceil() as i64;
+        let mut best = (usize::MAX, reach * reach);
+        for x in cx - r..=cx + r {
+            for y in cy - r..=cy + r {
+                for &i in self.bins.get(&(x, y)).map_or(&[][..], Vec::as_slice) {
+                    let p = self.points[i];
+                    let d = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+                    if d <= best.1 {
+                        best = (i, d);
+                    }
+                }
+            }
+        }
+        (best.0 != usize::MAX).then(|| (best.0, best.1.sqrt()))
+    }
+}
+
+/// The index of the point of `ps` nearest `q`, and its distance (brute force: a few hundred
+/// points, where a tree would cost more to build than it saves).
+fn nearest(ps: &[[f64; 2]], q: [f64; 2]) -> (usize, f64) {
+    let mut best = (0, f64::INFINITY);
+    for (i, p) in ps.iter().enumerate() {
+        let d = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+        if d < best.1 {
+            best = (i, d);
+        }
+    }
+    (best.0, best.1.sqrt())
+}
+
+/// A closed polyline with points added so that no gap exceeds `step`: the nodes first (node `i`
+/// at `node_at[i]`), then the points between them.
+fn densify(nodes: &[[f64; 2]], step: f64) -> (Vec<[f64; 2]>, Vec<usize>) {
+    let n = nodes.len();
+    let mut dense = Vec::with_capacity(n * 4);
+    let mut node_at = Vec::with_capacity(n);
+    for i in 0..n {
+        let (p, q) = (nodes[i], nodes[(i + 1) % n]);
+        node_at.push(dense.len());
+        let k = ((p[0] - q[0]).hypot(p[1] - q[1]) / step).ceil().max(1.0) as usize;
+        for j in 0..k {
+            let t = j as f64 / k as f64;
+            dense.push([p[0] + (q[0] - p[0]) * t, p[1] + (q[1] - p[1]) * t]);
+        }
+    }
+    (dense, node_at)
+}
+
+/// A closed contour through `nodes`.
+fn closed_contour(nodes: &[[f64; 2]]) -> Result<modal_core::Shape> {
+    modal_core::Shape::from_points_2d(nodes, modal_core::Topology::ClosedContour)
+        .map_err(|e| IoError::invalid(e.to_string()))
+}
+
+/// The object's outline nodes in sensels.
+fn outline(o: &SequenceObject) -> Vec<[f64; 2]> {
+    (0..o.shape.len())
+        .map(|i| [o.shape.point(i)[0], o.shape.point(i)[1]])
+        .collect()
+}
+
+/// The object's outline nodes in registration coordinates (true proportions).
+fn registration_outline(o: &SequenceObject, aspect: SenselAspect) -> Vec<[f64; 2]> {
+    outline(o)
+        .into_iter()
+        .map(|p| aspect.to_registration(p))
+        .collect()
+}
+
+/// A closed outline (sensels) and how far a point lies outside it.
+struct Contact {
+    nodes: Vec<[f64; 2]>,
+    /// The outline sampled every quarter sensel, in registration coordinates.
+    dense: Vec<[f64; 2]>,
+    aspect: SenselAspect,
+}
+
+impl Contact {
+    fn of(o: &SequenceObject, aspect: SenselAspect) -> Self {
+        let nodes = outline(o);
+        let (dense, _) = densify(&registration_outline(o, aspect), 0.25);
+        Self {
+            nodes,
+            dense,
+            aspect,
+        }
+    }
+
+    /// 0 for a point inside the outline, else its distance to it (registration units).
+    fn outside(&self, p: [f64; 2]) -> f64 {
+        let nodes = &self.nodes;
+        let n = nodes.len();
+        let mut inside = false;
+        for i in 0..n {
+            let (a, b) = (nodes[i], nodes[(i + 1) % n]);
+            if (a[1] > p[1]) != (b[1] > p[1]) {
+                let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+                if p[0] < x {
+                    inside = !inside;
+                }
+            }
+        }
+        if inside {
+            return 0.0;
+        }
+        nearest(&self.dense, self.aspect.to_registration(p)).1
+    }
+}
+
+impl SenselAspect {
+    /// Sensel coordinates to registration coordinates (y in units of the x pitch).
+    fn to_registration(self, p: [f64; 2]) -> [f64; 2] {
+        [p[0], p[1] * self.0]
+    }
+
+    /// Registration coordinates back to sensels.
+    fn from_registration(self, p: [f64; 2]) -> [f64; 2] {
+        [p[0], p[1] / self.0]
+    }
+}
