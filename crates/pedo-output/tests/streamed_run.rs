@@ -72,9 +72,12 @@ fn without_timings(bytes: &[u8]) -> serde_json::Value {
     v
 }
 
-/// The same files, byte for byte (`summary.json` but for its timings).
+/// The same files, byte for byte (`summary.json` but for its timings), but for the material
+/// points (`points.csv`), which a whole contour run writes and a streamed one not yet
+/// (docs/outputs.md).
 fn assert_same_folders(whole: &Path, streamed: &Path) {
-    let (a, b) = (files(whole), files(streamed));
+    let (mut a, b) = (files(whole), files(streamed));
+    a.retain(|(name, _)| !name.starts_with("points."));
     let names = |f: &[(String, Vec<u8>)]| f.iter().map(|x| x.0.clone()).collect::<Vec<_>>();
     assert_eq!(names(&a), names(&b));
     for ((name, x), (_, y)) in a.iter().zip(&b) {
