@@ -602,6 +602,11 @@ pub fn write_run_folder(
     // The material points and the figures need nothing of each other: on two threads.
     let (points, figures) = std::thread::scope(|s| {
         let points = s.spawn(|| -> Result<Option<crate::Table>> {
+            // A folder of tables only is the one a streamed run writes, which follows no
+            // points yet: the same folder whichever way it is written.
+            if tables_only(outputs) {
+                return Ok(None);
+            }
             let Some(points) = pedo_track::follow::run_points(run.result, run.options)? else {
                 return Ok(None);
             };
