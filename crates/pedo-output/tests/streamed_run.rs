@@ -93,27 +93,39 @@ fn assert_same_folders(whole: &Path, streamed: &Path) {
 fn a_streamed_run_writes_the_folder_of_the_whole_run() {
     // Frames 10..150: windows of FRAME_WINDOW frames, tracks and pairs across their edges.
     const { assert!(140 > 2 * FRAME_WINDOW) };
+    // The last case reads the frames as it goes with drift correction, whose reference pairs
+    // reach back across windows (its objects are held to the end).
     let cases = [
         (
             ObjectModel::Contour,
             (10, 150),
             TableFormat::Csv,
+            0,
             "contour-csv",
         ),
         (
             ObjectModel::Contour,
             (10, 150),
             TableFormat::Parquet,
+            0,
             "contour-parquet",
         ),
         (
             ObjectModel::Surface,
             (20, 100),
             TableFormat::Csv,
+            0,
             "surface-csv",
         ),
+        (
+            ObjectModel::Contour,
+            (10, 150),
+            TableFormat::Csv,
+            25,
+            "contour-drift",
+        ),
     ];
-    for (model, (start, end), tables, name) in cases {
+    for (model, (start, end), tables, drift_reference, name) in cases {
         let dir = temp_dir(name);
         let params = RunParams {
             model,
@@ -121,6 +133,7 @@ fn a_streamed_run_writes_the_folder_of_the_whole_run() {
                 start,
                 end: Some(end),
             }),
+            drift_reference,
             ..Default::default()
         };
         let whole = dir.join("whole");
