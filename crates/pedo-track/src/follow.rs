@@ -143,15 +143,15 @@ pub fn follow_points(
     let mut live: HashMap<usize, Lineage> = HashMap::new();
     for b in 0..run.objects.len() {
         let mut lineage = None;
-        if let Some(a) = links.continues(b) {
-            if let Some(mut l) = live.remove(&a) {
-                let pair = links.pairs.get(&(a, b)).map(|&k| &run.pairs[k].result);
-                match l.step(run, pair, b, aspect, params) {
-                    Ok(()) => lineage = Some(l),
-                    // Not registered: the points cross by the pair's field, as at a split.
-                    Err(_) => {
-                        live.insert(a, l);
-                    }
+        if let Some(a) = links.continues(b)
+            && let Some(mut l) = live.remove(&a)
+        {
+            let pair = links.pairs.get(&(a, b)).map(|&k| &run.pairs[k].result);
+            match l.step(run, pair, b, aspect, params) {
+                Ok(()) => lineage = Some(l),
+                // Not registered: the points cross by the pair's field, as at a split.
+                Err(_) => {
+                    live.insert(a, l);
                 }
             }
         }
@@ -179,11 +179,11 @@ pub fn follow_points(
             // The lineage ends here: its anchor is dropped, its points end.
             continue;
         }
-        if l.anchor.uncovered > params.coverage {
-            if let Ok(fresh) = l.reanchor(run, b, aspect, params) {
-                l = fresh;
-                out.anchors += 1;
-            }
+        if l.anchor.uncovered > params.coverage
+            && let Ok(fresh) = l.reanchor(run, b, aspect, params)
+        {
+            l = fresh;
+            out.anchors += 1;
         }
         live.insert(b, l);
     }
@@ -767,6 +767,7 @@ impl SenselAspect {
     }
 
     /// Registration coordinates back to sensels.
+    #[allow(clippy::wrong_self_convention)]
     fn from_registration(self, p: [f64; 2]) -> [f64; 2] {
         [p[0], p[1] / self.0]
     }
