@@ -358,7 +358,7 @@ impl Lineage {
             None => Vec::new(),
         };
         for ((_, pos), image) in self.points.iter_mut().zip(images) {
-            *pos = aspect.from_registration(image);
+            *pos = aspect.back_from_registration(image);
         }
         // A point carried off the contact region has left the plate (the foot rolls off it):
         // it ends, as the tissue's contact does.
@@ -767,8 +767,7 @@ impl SenselAspect {
     }
 
     /// Registration coordinates back to sensels.
-    #[allow(clippy::wrong_self_convention)]
-    fn from_registration(self, p: [f64; 2]) -> [f64; 2] {
+    fn back_from_registration(self, p: [f64; 2]) -> [f64; 2] {
         [p[0], p[1] / self.0]
     }
 }
