@@ -1,5 +1,6 @@
-//! Everything a pedomatch run writes. The third pipeline crate (docs/architecture.md): it
-//! implements the run engine's sink (`pedo_track::SequenceSink`) and draws what needs a whole run.
+//! Everything a pedomatch run writes. The third pipeline crate (docs/architecture.md): its
+//! writers are sinks of the run engine's events (`pedo_track::SequenceSink`): the tables as the
+//! events come, the figures, the report and the animation from the run the sink gathers.
 //!
 //! | module | what it writes |
 //! |---|---|
@@ -10,7 +11,7 @@
 //! | [`figure`] | PNG/SVG figures (a matched pair, a run's tracks) and the GIF animation |
 //! | [`html_report`] | the self-contained interactive `report.html` of a run or of one pair |
 //! | [`outdir`] | output folders written whole or not at all |
-//! | [`run_folder`] | the folder of one run, streamed or whole, through one writer ([`TablesSink`]) |
+//! | [`run_folder`] | the folder of one run, through one writer ([`FolderSink`]) whoever runs it |
 
 #![warn(missing_docs)]
 

@@ -1,9 +1,11 @@
 //! The folder of one run: its tables, `pairs.json`, figures, `summary.json`, `report.html` and
-//! `animation.gif`, written whole or not at all ([`crate::outdir`]). A run is written by one path
-//! whether it was held whole or streamed: the tables go through [`TablesSink`], handed the run's
-//! events by `pedo_track::stream_sequence` as they are made, or by `pedo_track::replay` from a
-//! whole result; the figures, the report and the animation need the whole run and are drawn
-//! from it after.
+//! `animation.gif`, written whole or not at all ([`crate::outdir`]). Every run folder is written
+//! by one path, from the run's events ([`pedo_track::SequenceSink`]) as the engine
+//! (`pedo_track::stream_sequence`) makes them, or as `pedo_track::replay` hands over a result
+//! already made (`pymodal.run(out=...)`): [`FolderSink`] writes the tables as the events come
+//! ([`TablesSink`]) and, for the figures, the report and the animation, which draw the whole run
+//! (every track over the peak image, the report's player), gathers it ([`pedo_track::Collect`]);
+//! `summary.json` is made from the counts the events add up to.
 
 use crate::figure::{tracks_background, FigureAxes, MatchFigure, ObjectLabel, TracksFigure};
 use crate::outdir::OutDir;
@@ -17,8 +19,8 @@ use pedo_io::recording::Recording;
 use pedo_io::FrameSource;
 use pedo_io::{IoError, Result};
 use pedo_track::{
-    replay, require_objects, run_sequence, stream_sequence, NoSink, PairMatch, RunCounts,
-    RunParams, SequenceObject, SequenceOptions, SequenceResult, SequenceSink, Stage,
+    replay, require_objects, stream_sequence, Collect, NoSink, PairMatch, RunCounts, RunParams,
+    SequenceObject, SequenceOptions, SequenceResult, SequenceSink, Stage,
 };
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
@@ -347,10 +349,13 @@ impl SequenceSink for TablesSink<'_> {
         })
     }
 
-    fn object(&mut self, object: &SequenceObject) -> Result<()> {
-        self.dim.get_or_insert(object.shape.dim());
-        self.objects
-            .push(self.dir, &crate::object_cells(self.recording, object))
+    fn frame_objects(&mut self, _: usize, objects: &[SequenceObject]) -> Result<()> {
+        for object in objects {
+            self.dim.get_or_insert(object.shape.dim());
+            self.objects
+                .push(self.dir, &crate::object_cells(self.recording, object))?;
+        }
+        Ok(())
     }
 
     fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()> {
@@ -409,10 +414,12 @@ pub struct RunPlan<'a> {
     pub timings: &'a [(&'a str, f64)],
 }
 
-/// Runs `recording` and writes its folder as `plan` says: streamed when the outputs are tables
-/// only ([`tables_only`], [`stream_run_folder`]), else run whole and written by
-/// [`write_run_folder`]. Returns the summary (`summary.json`) and the run's counts. What
-/// `pedomatch run` and every recording of a study do after reading.
+/// Runs `recording` and writes its folder as `plan` says: the engine
+/// ([`stream_sequence`]) hands the run's events to the folder's sinks ([`FolderSink`]) as it
+/// makes them, whatever the outputs (a run with tables only holds nothing of the run; one with
+/// figures, a report or an animation gathers what they need). Returns the summary
+/// (`summary.json`) and the run's counts. What `pedomatch run` and every recording of a study
+/// do after reading.
 pub fn run_into_folder(
     recording: &Recording,
     options: &SequenceOptions,
@@ -427,53 +434,36 @@ pub fn run_into_folder(
         outputs,
         timings,
     } = plan;
-    if tables_only(outputs) {
-        // Streamed: nothing of the run is held but its counts.
-        return match folder {
-            Some(folder) => stream_run_folder(
-                folder,
-                input,
-                recording,
-                frames,
-                params,
-                options,
-                outputs.tables,
-                timings,
-                progress,
-            ),
-            None => {
-                let counts = stream_sequence(recording, frames, options, progress, &mut NoSink)?;
-                require_objects(counts.objects, recording, options)?;
-                let summary =
-                    crate::run_summary_of(input, recording, params, options, &counts, timings);
-                Ok((summary, counts))
-            }
-        };
-    }
-    let result = run_sequence(recording, options, progress)?;
-    require_objects(result.objects.len(), recording, options)?;
-    let summary = match folder {
-        Some(folder) => {
-            let run = RunRecord {
-                input,
-                recording,
-                params,
-                options,
-                result: &result,
-            };
-            write_run_folder(folder, &run, outputs, timings)?
-        }
-        None => crate::run_summary(input, recording, params, options, &result, timings),
+    let run = RunOf {
+        input,
+        recording,
+        params,
+        options,
     };
-    Ok((summary, RunCounts::of(&result)))
+    match folder {
+        Some(folder) => write_folder(
+            folder,
+            &run,
+            outputs,
+            timings,
+            Feed::Run { frames, progress },
+        ),
+        None => {
+            let counts = stream_sequence(recording, frames, options, progress, &mut NoSink)?;
+            require_objects(counts.objects, recording, options)?;
+            let summary =
+                crate::run_summary_of(input, recording, params, options, &counts, timings);
+            Ok((summary, counts))
+        }
+    }
 }
 
 /// Runs `recording` as [`stream_sequence`] and writes the folder `out` of a run with tables
-/// only ([`tables_only`]), whole or not at all, byte for byte as [`write_run_folder`] writes it
-/// (the timings of `summary.json` aside): the tables are written as the run makes them, so
-/// neither the run nor its tables are ever held. `frames` reads the frames when `recording`
-/// holds none (see [`pedo_io::formats::read_for_streaming`]). `timings` are the stages measured
-/// before (e.g. reading). Returns the summary and the run's counts.
+/// only ([`tables_only`]), whole or not at all, by the one writer of every run folder
+/// ([`run_into_folder`]): the tables are written as the run makes them, so neither the run nor
+/// its tables are ever held. `frames` reads the frames when `recording` holds none (see
+/// [`pedo_io::formats::read_for_streaming`]). `timings` are the stages measured before (e.g.
+/// reading). Returns the summary and the run's counts.
 #[allow(clippy::too_many_arguments)]
 pub fn stream_run_folder(
     out: &Path,
@@ -486,23 +476,211 @@ pub fn stream_run_folder(
     timings: &[(&str, f64)],
     progress: &(dyn Fn(Stage, usize, usize) + Sync),
 ) -> Result<(Value, RunCounts)> {
+    let run = RunOf {
+        input,
+        recording,
+        params,
+        options,
+    };
+    let outputs = RunOutputs {
+        tables,
+        ..RunOutputs::default()
+    };
+    write_folder(out, &run, &outputs, timings, Feed::Run { frames, progress })
+}
+
+/// A run's recording, options and provenance, without its results.
+struct RunOf<'a> {
+    input: &'a InputInfo,
+    recording: &'a Recording,
+    params: &'a RunParams,
+    options: &'a SequenceOptions,
+}
+
+/// Where a folder's events come from: the engine running the recording, or a run already made.
+enum Feed<'f, 'p> {
+    /// [`stream_sequence`], reading the frames from `frames` when the recording holds none.
+    Run {
+        frames: Option<&'f mut dyn FrameSource>,
+        progress: &'p (dyn Fn(Stage, usize, usize) + Sync),
+    },
+    /// [`replay`] of a whole result.
+    Replay(&'p SequenceResult),
+}
+
+/// The sinks of a run folder: the tables, written as the events come ([`TablesSink`]), and,
+/// for a run with figures, a report or an animation, the run gathered for them and for the
+/// material points ([`Collect`], each pair without its match details: no output draws them).
+pub struct FolderSink<'a> {
+    tables: TablesSink<'a>,
+    whole: Option<Collect>,
+}
+
+impl SequenceSink for FolderSink<'_> {
+    fn frames(&mut self, first: usize, measures: &[FrameMeasures]) -> Result<()> {
+        self.tables.frames(first, measures)
+    }
+    fn frame_objects(&mut self, frame: usize, objects: &[SequenceObject]) -> Result<()> {
+        self.tables.frame_objects(frame, objects)?;
+        self.whole
+            .as_mut()
+            .map_or(Ok(()), |w| w.frame_objects(frame, objects))
+    }
+    fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()> {
+        self.tables.pair(pair, a, b)?;
+        self.whole.as_mut().map_or(Ok(()), |w| w.pair(pair, a, b))
+    }
+    fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
+        self.tables.track(index, steps)?;
+        self.whole
+            .as_mut()
+            .map_or(Ok(()), |w| w.track(index, steps))
+    }
+    fn reference_pair(
+        &mut self,
+        pair: &PairMatch,
+        a: &SequenceObject,
+        b: &SequenceObject,
+        tracked: &[bool],
+    ) -> Result<()> {
+        self.tables.reference_pair(pair, a, b, tracked)?;
+        let whole = self.whole.as_mut();
+        whole.map_or(Ok(()), |w| w.reference_pair(pair, a, b, tracked))
+    }
+}
+
+/// Writes the folder `out` of `run`, whole or not at all, from the events of `feed`: the one
+/// writer of every run folder, streamed or whole, from the command line, a study or Python.
+/// A folder with figures, a report or an animation, whose outputs draw the whole run (gathered
+/// from the engine, or the result replayed), also holds the material points (`points`, contour
+/// model: [`pedo_track::follow::run_points`], followed beside the figures on a second thread);
+/// a folder with tables only writes none, from any front end, since a streamed run holds
+/// nothing to follow them on (so `pymodal.run(out=...)` and a study's folder stay the same).
+/// `timings` are the stages measured before (e.g. reading); the time spent writing is added
+/// as `output`.
+fn write_folder(
+    out: &Path,
+    run: &RunOf<'_>,
+    outputs: &RunOutputs,
+    timings: &[(&str, f64)],
+    feed: Feed<'_, '_>,
+) -> Result<(Value, RunCounts)> {
     let started = Instant::now();
     let dir = OutDir::create(out)?;
-    let mut sink = TablesSink::create(&dir, recording, options, tables)?;
-    let counts = stream_sequence(recording, frames, options, progress, &mut sink)?;
-    require_objects(counts.objects, recording, options)?;
-    sink.finish(&counts)?;
+    // A replayed run is whole already: only a run of the engine gathers itself, and only
+    // when an output needs the whole run.
+    let gather = matches!(feed, Feed::Run { .. }) && !tables_only(outputs);
+    let mut sink = FolderSink {
+        tables: TablesSink::create(&dir, run.recording, run.options, outputs.tables)?,
+        whole: gather.then(|| Collect::new(false)),
+    };
+    let (counts, ran, replayed) = match feed {
+        Feed::Run { frames, progress } => {
+            let c = stream_sequence(run.recording, frames, run.options, progress, &mut sink)?;
+            (c, true, None)
+        }
+        Feed::Replay(r) => (
+            replay(run.recording, run.options, r, &mut sink)?,
+            false,
+            Some(r),
+        ),
+    };
+    require_objects(counts.objects, run.recording, run.options)?;
+    let FolderSink { tables, whole } = sink;
+    tables.finish(&counts)?;
+    let cancel = run.options.cancel.as_ref();
+    let gathered = whole.map(|w| w.into_result(counts.clone()));
+    let result = if tables_only(outputs) {
+        None
+    } else {
+        replayed.or(gathered.as_ref())
+    };
+    if let Some(r) = result {
+        write_figures_and_points(&dir, run, r, outputs, cancel)?;
+    }
+    // The run's own stages, when it ran here, are not the output's time.
     let t = counts.timings;
-    let run = started
-        .elapsed()
-        .saturating_sub(t.objects + t.matching + t.tracks);
+    let run_time = if ran {
+        t.objects + t.matching + t.tracks
+    } else {
+        Default::default()
+    };
     let mut stages = timings.to_vec();
-    stages.push(("output", run.as_secs_f64()));
-    let summary = crate::run_summary_of(input, recording, params, options, &counts, &stages);
+    stages.push((
+        "output",
+        started.elapsed().saturating_sub(run_time).as_secs_f64(),
+    ));
+    let (i, rec) = (run.input, run.recording);
+    let mut summary = crate::run_summary_of(i, rec, run.params, run.options, &counts, &stages);
+    if let Some(options) = summary["options"].as_object_mut() {
+        record_outputs(options, outputs);
+    }
     dir.write("summary.json", pretty(&summary).as_bytes())?;
-    pedo_io::cancel::check(options.cancel.as_ref())?;
+    if let Some(r) = result {
+        write_drawings(&dir, run, r, outputs, &summary)?;
+    }
+    // A cancelled run leaves the previous folder (or none), as if it had not run.
+    pedo_io::cancel::check(cancel)?;
     dir.commit()?;
     Ok((summary, counts))
+}
+
+/// The figures asked for and the material points (`points`, contour model) of the whole run
+/// `r`: they need nothing of each other, so the points are followed on a second thread.
+fn write_figures_and_points(
+    dir: &OutDir,
+    run: &RunOf<'_>,
+    r: &SequenceResult,
+    outputs: &RunOutputs,
+    cancel: Option<&Cancel>,
+) -> Result<()> {
+    let (points, figures) = std::thread::scope(|s| {
+        let points = s.spawn(|| -> Result<Option<crate::Table>> {
+            let Some(points) = pedo_track::follow::run_points(r, run.options)? else {
+                return Ok(None);
+            };
+            crate::points_table(run.recording, r, &points).map(Some)
+        });
+        let figures = write_figures(dir, run.recording, r, outputs.figures, cancel);
+        (points.join(), figures)
+    });
+    figures?;
+    let points = points.map_err(|_| IoError::invalid("following the material points failed"))?;
+    if let Some(table) = points? {
+        crate::write_table(dir, outputs.tables, POINTS, &table)?;
+    }
+    Ok(())
+}
+
+/// `report.html` and `animation.gif`, when asked, from the whole run `r` and its `summary`.
+fn write_drawings(
+    dir: &OutDir,
+    run: &RunOf<'_>,
+    r: &SequenceResult,
+    outputs: &RunOutputs,
+    summary: &Value,
+) -> Result<()> {
+    if outputs.report {
+        let record = RunRecord {
+            input: run.input,
+            recording: run.recording,
+            params: run.params,
+            options: run.options,
+            result: r,
+        };
+        dir.write("report.html", report_page(&record, summary)?.as_bytes())?;
+    }
+    if outputs.animation {
+        let axes = crate::figure::FigureAxes::of_recording(run.recording);
+        let animation = crate::figure::Animation {
+            recording: run.recording,
+            result: r,
+            axes: &axes,
+            frames: run.options.frames.unwrap_or((0, run.recording.n_frames())),
+        };
+        dir.write("animation.gif", &animation.to_gif()?)?;
+    }
+    Ok(())
 }
 
 /// Writes the match figure of every pair (in parallel on the current rayon pool) and the tracks
@@ -582,75 +760,24 @@ pub fn pretty(v: &Value) -> String {
     s
 }
 
-/// Writes the folder `out` of a run, whole or not at all (see [`crate::outdir`]): the tables, the
-/// figures, `summary.json` and, when asked, `report.html`. `timings` are the stages measured
-/// before the sequence run (e.g. reading); the time spent here is added as `output`. Returns
-/// the summary.
+/// Writes the folder `out` of a run already made, whole or not at all (see [`crate::outdir`]):
+/// its events replayed ([`replay`]) into the sinks every run folder is written by
+/// ([`run_into_folder`]). `timings` are the stages measured before the sequence run (e.g.
+/// reading); the time spent here is added as `output`. Returns the summary.
 pub fn write_run_folder(
     out: &Path,
     run: &RunRecord<'_>,
     outputs: &RunOutputs,
     timings: &[(&str, f64)],
 ) -> Result<Value> {
-    let started = Instant::now();
-    let dir = OutDir::create(out)?;
-    // The tables as a streamed run writes them: the same sink, handed the whole run.
-    let mut tables = TablesSink::create(&dir, run.recording, run.options, outputs.tables)?;
-    let counts = replay(run.recording, run.options, run.result, &mut tables)?;
-    tables.finish(&counts)?;
-    let cancel = run.options.cancel.as_ref();
-    // The material points and the figures need nothing of each other: on two threads.
-    let (points, figures) = std::thread::scope(|s| {
-        let points = s.spawn(|| -> Result<Option<crate::Table>> {
-            // A folder of tables only is the one a streamed run writes, which follows no
-            // points yet: the same folder whichever way it is written.
-            if tables_only(outputs) {
-                return Ok(None);
-            }
-            let Some(points) = pedo_track::follow::run_points(run.result, run.options)? else {
-                return Ok(None);
-            };
-            crate::points_table(run.recording, run.result, &points).map(Some)
-        });
-        let figures = write_figures(&dir, run.recording, run.result, outputs.figures, cancel);
-        (points.join(), figures)
-    });
-    figures?;
-    let points = points.map_err(|_| IoError::invalid("following the material points failed"))?;
-    if let Some(table) = points? {
-        crate::write_table(&dir, outputs.tables, POINTS, &table)?;
-    }
-    let mut stages = timings.to_vec();
-    stages.push(("output", started.elapsed().as_secs_f64()));
-    let mut summary = crate::run_summary(
-        run.input,
-        run.recording,
-        run.params,
-        run.options,
-        run.result,
-        &stages,
-    );
-    if let Some(options) = summary["options"].as_object_mut() {
-        record_outputs(options, outputs);
-    }
-    dir.write("summary.json", pretty(&summary).as_bytes())?;
-    if outputs.report {
-        dir.write("report.html", report_page(run, &summary)?.as_bytes())?;
-    }
-    if outputs.animation {
-        let axes = crate::figure::FigureAxes::of_recording(run.recording);
-        let animation = crate::figure::Animation {
-            recording: run.recording,
-            result: run.result,
-            axes: &axes,
-            frames: run.options.frames.unwrap_or((0, run.recording.n_frames())),
-        };
-        dir.write("animation.gif", &animation.to_gif()?)?;
-    }
-    // A cancelled run leaves the previous folder (or none), as if it had not run.
-    pedo_io::cancel::check(cancel)?;
-    dir.commit()?;
-    Ok(summary)
+    let of = RunOf {
+        input: run.input,
+        recording: run.recording,
+        params: run.params,
+        options: run.options,
+    };
+    let feed = Feed::Replay(run.result);
+    Ok(write_folder(out, &of, outputs, timings, feed)?.0)
 }
 
 /// Adds to the options a run records in `summary.json` the outputs that are options of their

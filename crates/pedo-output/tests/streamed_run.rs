@@ -1,7 +1,8 @@
 //! A run with tables only streams (`stream_run_folder`: frames read, matched, chained and
 //! written window by window) and writes, file for file and byte for byte, the folder of the same
 //! run held whole (`run_sequence` + `write_run_folder`); only the timings of `summary.json`
-//! differ. A run that fails half-way leaves no folder.
+//! differ. A folder with tables only holds no material points (`points`), whole or streamed.
+//! A run that fails half-way leaves no folder.
 
 use pedo_io::formats::{read_for_streaming, ReadOptions};
 use pedo_io::{read_recording, FrameSource, Recording, FRAME_WINDOW};
@@ -74,7 +75,8 @@ fn without_timings(bytes: &[u8]) -> serde_json::Value {
 
 /// The same files, byte for byte (`summary.json` but for its timings).
 fn assert_same_folders(whole: &Path, streamed: &Path) {
-    let (a, b) = (files(whole), files(streamed));
+    let a = files(whole);
+    let b = files(streamed);
     let names = |f: &[(String, Vec<u8>)]| f.iter().map(|x| x.0.clone()).collect::<Vec<_>>();
     assert_eq!(names(&a), names(&b));
     for ((name, x), (_, y)) in a.iter().zip(&b) {
@@ -93,27 +95,67 @@ fn assert_same_folders(whole: &Path, streamed: &Path) {
 fn a_streamed_run_writes_the_folder_of_the_whole_run() {
     // Frames 10..150: windows of FRAME_WINDOW frames, tracks and pairs across their edges.
     const { assert!(140 > 2 * FRAME_WINDOW) };
+    // The drift case reads the frames as it goes with drift correction, whose reference pairs
+    // reach back across windows (its objects are held to the end). The strided cases keep every
+    // 3rd (2nd) frame: a stride that does not divide the window, so the kept frames fall at other
+    // places of each window and pairs join kept frames across window edges.
     let cases = [
         (
             ObjectModel::Contour,
             (10, 150),
             TableFormat::Csv,
+            0,
             "contour-csv",
         ),
         (
             ObjectModel::Contour,
             (10, 150),
             TableFormat::Parquet,
+            0,
             "contour-parquet",
         ),
         (
             ObjectModel::Surface,
             (20, 100),
             TableFormat::Csv,
+            0,
             "surface-csv",
         ),
+        (
+            ObjectModel::Contour,
+            (10, 150),
+            TableFormat::Csv,
+            25,
+            "contour-drift",
+        ),
+        (
+            ObjectModel::Contour,
+            (10, 150),
+            TableFormat::Csv,
+            0,
+            "contour-every-3",
+        ),
+        (
+            ObjectModel::Surface,
+            (20, 100),
+            TableFormat::Csv,
+            0,
+            "surface-every-2",
+        ),
+        (
+            ObjectModel::Contour,
+            (10, 150),
+            TableFormat::Csv,
+            30,
+            "contour-drift-every-3",
+        ),
     ];
-    for (model, (start, end), tables, name) in cases {
+    for (model, (start, end), tables, drift_reference, name) in cases {
+        let every = match name {
+            n if n.ends_with("every-3") => 3,
+            n if n.ends_with("every-2") => 2,
+            _ => 1,
+        };
         let dir = temp_dir(name);
         let params = RunParams {
             model,
@@ -121,6 +163,8 @@ fn a_streamed_run_writes_the_folder_of_the_whole_run() {
                 start,
                 end: Some(end),
             }),
+            drift_reference,
+            every,
             ..Default::default()
         };
         let whole = dir.join("whole");
@@ -128,6 +172,20 @@ fn a_streamed_run_writes_the_folder_of_the_whole_run() {
         let pairs = summary["pairs"].as_u64().unwrap();
         assert!(pairs > 20, "{name}: {pairs} pairs");
         assert!(summary["tracks_3_or_more"].as_u64().unwrap() > 10, "{name}");
+        // Tables only: no material points, though the run is at hand (as a streamed run's).
+        let has_points = files(&whole).iter().any(|f| f.0.starts_with("points."));
+        assert!(!has_points, "{name}");
+        if every > 1 {
+            // Pairs join kept frames `every` apart, in the recording's own frame numbers.
+            let pairs_csv = std::fs::read_to_string(whole.join("pairs.csv")).unwrap();
+            let mut rows = pairs_csv.lines().skip(1);
+            let row: Vec<&str> = rows.next().unwrap().split(',').collect();
+            let (a, b): (usize, usize) = (row[2].parse().unwrap(), row[3].parse().unwrap());
+            assert_eq!((a - start as usize) % every, 0, "{name}: frame_a {a}");
+            assert_eq!(b - a, every, "{name}: {a} -> {b}");
+            // A strided run streams unless drift correction holds it.
+            assert_eq!(params.streams(), drift_reference < 2, "{name}");
+        }
 
         // Read from the file frame by frame, and held whole.
         let (recording, mut frames) = read_for_streaming(walk(), &ReadOptions::default()).unwrap();

@@ -1,8 +1,9 @@
 //! The run engine of pedomatch: a recording's objects frame by frame, matched pair by pair,
-//! chained into node tracks, with drift correction; held whole ([`run_sequence`]) or streamed
-//! window by window into a [`SequenceSink`] ([`stream_sequence`]). The second pipeline crate
-//! (docs/architecture.md): it reads nothing and writes nothing itself; `pedo-io` gives it
-//! recordings and `pedo-output` implements its sink.
+//! chained into node tracks, with drift correction. One loop runs every run
+//! ([`stream_sequence`]), window by window, handing its results as events to a
+//! [`SequenceSink`]; a whole run held in memory ([`run_sequence`]) is that loop feeding a
+//! [`Collect`]. The second pipeline crate (docs/architecture.md): it reads nothing and writes
+//! nothing itself; `pedo-io` gives it recordings and `pedo-output` implements its sinks.
 //!
 //! This is the job of Tables 1–3 of Tavares & Bastos (2005): for a contour or surface model, the
 //! objects of consecutive frames (paired by [`pairing`]) are matched; for the isocontour model,
@@ -20,7 +21,9 @@
 //! | [`drift`] | drift correction: tracks re-anchored on reference frames |
 //! | [`follow`] | material points followed through a stance by anchored registration |
 //! | [`result`] | what a run produces: objects, pairs, tracks, counts |
-//! | `run`, `stream`, [`sink`] | a whole run, a streamed run, and the events both hand to a writer |
+//! | `stream` | the engine: every run, window by window, its events handed to a sink |
+//! | [`sink`] | the events of a run ([`SequenceSink`]), gathered whole ([`Collect`]) or replayed |
+//! | `run` | a whole run: the engine feeding a [`Collect`] |
 
 #![warn(missing_docs)]
 

@@ -234,16 +234,11 @@ pub(crate) fn match_pair(
         trackable_percent: 100.0 * trackable as f64 / min,
         crossings: result.crossings,
     };
-    let mut result = result;
+    let mut pair = PairMatch { a, b, result, row };
     if !options.keep_match_details {
-        result.affinity = AffinityMatrix::new(0, 0, Vec::new())?;
-        result.aligned_a = Vec::new();
-        result.local_pairs = Vec::new();
-        result.pairs.shrink_to_fit();
-        result.unmatched_a.shrink_to_fit();
-        result.unmatched_b.shrink_to_fit();
+        pair.strip_details()?;
     }
-    Ok(PairMatch { a, b, result, row })
+    Ok(pair)
 }
 
 /// A part of a region paired with the whole region at a merge or a split (contour model): a heel

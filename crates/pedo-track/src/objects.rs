@@ -1,7 +1,6 @@
 //! The objects of every frame: contours, brightness surfaces or isobaric contours, each with
 //! its frame's measures, or the reason a frame has none.
 
-use crate::pairing::PairingMethod;
 use crate::*;
 use modal_core::Shape;
 use pedo_io::cancel::Cancel;
@@ -9,7 +8,6 @@ use pedo_io::contour::{contours, Contour};
 use pedo_io::recording::{FrameMeasures, Recording};
 use pedo_io::{IoError, Result};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// A pressure of the file's `units` as the outputs state it: in kPa when the units say how,
 /// else in the file's units ("units unknown" when it names none).
@@ -21,13 +19,11 @@ fn pressure_text(value: f64, units: &str) -> String {
     }
 }
 
-/// Objects in sequence order (numbered from 0), the pairs to match (indices into the objects)
-/// and, for contours, the splits and merges between consecutive frames.
-pub(crate) struct Built {
+/// The objects of the isocontour model's frame (numbered from 0), the pairs of consecutive
+/// levels to match (indices into the objects) and the levels that give no object.
+pub(crate) struct Levels {
     pub(crate) objects: Vec<SequenceObject>,
     pub(crate) pairs: Vec<(usize, usize)>,
-    pub(crate) splits: Vec<(usize, Vec<usize>)>,
-    pub(crate) merges: Vec<(Vec<usize>, usize)>,
     pub(crate) skipped_frames: Vec<SkippedFrame>,
 }
 
@@ -76,151 +72,20 @@ pub(crate) fn frame_contours(
     Ok(cs.into_iter().unzip())
 }
 
-pub(crate) fn build_objects(
-    recording: &Recording,
-    options: &SequenceOptions,
-    start: usize,
-    end: usize,
-    progress: &(dyn Fn(Stage, usize, usize) + Sync),
-) -> Result<Built> {
-    let mut built = Built {
-        objects: Vec::new(),
-        pairs: Vec::new(),
-        splits: Vec::new(),
-        merges: Vec::new(),
-        skipped_frames: Vec::new(),
-    };
-    let done = AtomicUsize::new(0);
-    let tick = |total: usize| {
-        progress(
-            Stage::Objects,
-            done.fetch_add(1, Ordering::Relaxed) + 1,
-            total,
-        )
-    };
-    let build = match options.model {
-        ObjectModel::Contour => contour_objects,
-        ObjectModel::Surface => surface_objects,
-        ObjectModel::Isocontour => isocontour_objects,
-    };
-    build(&mut built, recording, options, (start, end), &tick)?;
-    Ok(built)
-}
-
-/// Every frame's contours as objects, paired across consecutive frames by overlap (with their
-/// splits and merges); `tick(total)` reports each frame done.
-fn contour_objects(
-    built: &mut Built,
-    recording: &Recording,
-    options: &SequenceOptions,
-    (start, end): (usize, usize),
-    tick: &(dyn Fn(usize) + Sync),
-) -> Result<()> {
-    let kept = options.kept_frames(start, end);
-    let (per_frame, shapes): (Vec<Vec<Contour>>, Vec<Vec<MeasuredShape>>) = per_kept_frame(
-        &kept,
-        &mut built.skipped_frames,
-        options.cancel.as_ref(),
-        |t| {
-            let cs = frame_contours(recording, t, options);
-            tick(kept.len());
-            cs
-        },
-    )?
-    .into_iter()
-    .unzip();
-    let pairings = crate::pairing::track(&per_frame, PairingMethod::default())?;
-    let mut first = Vec::with_capacity(per_frame.len());
-    for (k, frame_shapes) in shapes.into_iter().enumerate() {
-        first.push(built.objects.len());
-        for (index, (shape, measures)) in frame_shapes.into_iter().enumerate() {
-            let id = built.objects.len();
-            built.objects.push(SequenceObject {
-                id,
-                frame: kept[k],
-                index,
-                level: None,
-                shape,
-                measures: Some(measures),
-            });
-        }
-    }
-    for (k, p) in pairings.iter().enumerate() {
-        let (fa, fb) = (first[k], first[k + 1]);
-        built
-            .pairs
-            .extend(p.pairs.iter().map(|&(i, j)| (fa + i, fb + j)));
-        built.splits.extend(
-            p.splits
-                .iter()
-                .map(|(i, js)| (fa + i, js.iter().map(|j| fb + j).collect())),
-        );
-        built.merges.extend(
-            p.merges
-                .iter()
-                .map(|(is, j)| (is.iter().map(|i| fa + i).collect(), fb + j)),
-        );
-    }
-    Ok(())
-}
-
-/// Every frame's pressure surface as an object, paired with the previous frame's.
-fn surface_objects(
-    built: &mut Built,
-    recording: &Recording,
-    options: &SequenceOptions,
-    (start, end): (usize, usize),
-    tick: &(dyn Fn(usize) + Sync),
-) -> Result<()> {
-    let keep = |s: &Shape| s.len() >= options.min_nodes.max(3);
-    let threshold = options.surface.preprocess.threshold.unwrap_or(0.0);
-    let kept = options.kept_frames(start, end);
-    let per_frame: Vec<Option<Shape>> = per_kept_frame(
-        &kept,
-        &mut built.skipped_frames,
-        options.cancel.as_ref(),
-        |t| {
-            let shape = frame_surface(recording, t, threshold, options, &keep);
-            tick(kept.len());
-            shape
-        },
-    )?;
-    let mut previous: Option<usize> = None;
-    for (k, shape) in per_frame.into_iter().enumerate() {
-        match shape {
-            Some(shape) => {
-                let o = built.objects.len();
-                // The previous kept frame's surface, if that frame had one.
-                if let Some(p) = previous
-                    && built.objects[p].frame + options.frame_step() == kept[k]
-                {
-                    built.pairs.push((p, o));
-                }
-                built.objects.push(SequenceObject {
-                    id: o,
-                    frame: kept[k],
-                    index: 0,
-                    level: None,
-                    shape,
-                    measures: None,
-                });
-                previous = Some(o);
-            }
-            None => previous = None,
-        }
-    }
-    Ok(())
-}
-
 /// The isobaric contours of one frame (the `iso_frame`, else the most loaded one) as objects,
 /// each level paired with the next.
-fn isocontour_objects(
-    built: &mut Built,
+/// `progress` reports [`Stage::Objects`] in levels done.
+pub(crate) fn isocontour_objects(
     recording: &Recording,
     options: &SequenceOptions,
     (start, end): (usize, usize),
-    tick: &(dyn Fn(usize) + Sync),
-) -> Result<()> {
+    progress: &(dyn Fn(Stage, usize, usize) + Sync),
+) -> Result<Levels> {
+    let mut built = Levels {
+        objects: Vec::new(),
+        pairs: Vec::new(),
+        skipped_frames: Vec::new(),
+    };
     let t = match options.iso_frame {
         Some(t) => t,
         None => (options.kept_frames(start, end).into_iter())
@@ -277,9 +142,9 @@ fn isocontour_objects(
                 ),
             }),
         }
-        tick(levels.len());
+        progress(Stage::Objects, index + 1, levels.len());
     }
-    Ok(())
+    Ok(built)
 }
 
 /// An isobaric level's object, its largest region's outline, or why it has none: no region
@@ -295,21 +160,11 @@ fn level_object(shape: Option<Shape>, min_nodes: usize) -> std::result::Result<S
     }
 }
 
-/// `build(t)` for every frame of `frames`, in parallel. A frame whose objects cannot be built is
+/// `build(t)` for every frame of `frames` (a run's kept frames, in order), in parallel. A frame whose objects cannot be built is
 /// recorded in `skipped` with its reason and gets no objects (`T::default()`); the run goes on.
 /// Once `cancel` is cancelled the frames not started are not built, and the whole fails with
 /// [`IoError::Cancelled`].
-pub(crate) fn per_frame_or_skipped<T: Send + Default>(
-    frames: std::ops::Range<usize>,
-    skipped: &mut Vec<SkippedFrame>,
-    cancel: Option<&Cancel>,
-    build: impl Fn(usize) -> Result<T> + Sync,
-) -> Result<Vec<T>> {
-    per_kept_frame(&frames.collect::<Vec<_>>(), skipped, cancel, build)
-}
-
-/// [`per_frame_or_skipped`] of the frames listed (a run's kept frames, in order).
-fn per_kept_frame<T: Send + Default>(
+pub(crate) fn per_kept_frame<T: Send + Default>(
     frames: &[usize],
     skipped: &mut Vec<SkippedFrame>,
     cancel: Option<&Cancel>,

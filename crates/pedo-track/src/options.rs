@@ -379,9 +379,9 @@ impl RunParams {
     }
 
     /// Whether a run with these parameters streams ([`streams`]): the contour and surface
-    /// models without drift correction.
+    /// models without drift correction, whatever the frame stride.
     pub fn streams(&self) -> bool {
-        streamable(self.model, self.drift_reference) && self.every <= 1
+        streamable(self.model, self.drift_reference)
     }
 
     /// Checks every parameter that does not depend on a recording.

@@ -115,6 +115,42 @@ pub struct PairMatch {
 }
 
 impl PairMatch {
+    /// The pair as a run without match details keeps it
+    /// ([`SequenceOptions::keep_match_details`](crate::SequenceOptions::keep_match_details) off):
+    /// its matches, unmatched nodes, transform and counts, without the affinity matrix, the
+    /// aligned nodes and the local pairs.
+    pub fn without_details(&self) -> Result<PairMatch> {
+        let r = &self.result;
+        let mut result = MatchResult {
+            pairs: r.pairs.clone(),
+            affinity: no_affinity()?,
+            local_pairs: Vec::new(),
+            unmatched_a: r.unmatched_a.clone(),
+            unmatched_b: r.unmatched_b.clone(),
+            n_modes: r.n_modes,
+            refits: r.refits,
+            solves: r.solves,
+            transform: r.transform,
+            aligned_a: Vec::new(),
+            crossings: r.crossings,
+        };
+        strip(&mut result);
+        Ok(PairMatch {
+            result,
+            row: self.row.clone(),
+            ..*self
+        })
+    }
+
+    /// Drops the match details in place (see [`PairMatch::without_details`]).
+    pub(crate) fn strip_details(&mut self) -> Result<()> {
+        self.result.affinity = no_affinity()?;
+        self.result.aligned_a = Vec::new();
+        self.result.local_pairs = Vec::new();
+        strip(&mut self.result);
+        Ok(())
+    }
+
     /// Fails unless the pair leads forward (`a < b`) onto an object of `onto`: the chaining of
     /// tracks visits objects in sequence order.
     pub(crate) fn check_forward(&self, onto: std::ops::Range<usize>) -> Result<()> {
@@ -140,6 +176,18 @@ impl PairMatch {
             self.a, self.b, m.a, m.b
         ))
     }
+}
+
+/// An empty affinity matrix (0 × 0), what a pair without details holds.
+fn no_affinity() -> Result<modal_core::AffinityMatrix> {
+    Ok(modal_core::AffinityMatrix::new(0, 0, Vec::new())?)
+}
+
+/// The vectors a pair without details keeps, without their spare capacity.
+fn strip(r: &mut MatchResult) {
+    r.pairs.shrink_to_fit();
+    r.unmatched_a.shrink_to_fit();
+    r.unmatched_b.shrink_to_fit();
 }
 
 /// One node followed across objects: `(object index, node index)` steps in sequence order.
@@ -296,15 +344,16 @@ pub struct SkippedPair {
     pub reason: String,
 }
 
-/// What [`run_sequence`](crate::run_sequence) and [`stream_sequence`](crate::stream_sequence) report to a progress callback
+/// What a run ([`stream_sequence`](crate::stream_sequence), [`run_sequence`](crate::run_sequence)) reports to a progress callback
 /// `progress(stage, done, total)`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Stage {
-    /// Building the objects: `done` of `total` frames, or of `total` isobaric levels for the
-    /// isocontour model. Not reported by a run that [`stream_sequence`](crate::stream_sequence) streams ([`streams`](crate::streams)).
+    /// Building the objects of the isocontour model: `done` of `total` isobaric levels. The
+    /// contour and surface models build and match window by window and report
+    /// [`Stage::Matching`] only.
     Objects,
-    /// Matching: `done` of `total` pairs ([`run_sequence`](crate::run_sequence)), or of `total` frames (a run that
-    /// [`stream_sequence`](crate::stream_sequence) streams, which reports no [`Stage::Objects`]).
+    /// Matching: `done` of `total` frames whose pairs are matched (a pair done counts as its
+    /// share of its window's frames), or of `total` pairs for the isocontour model.
     Matching,
 }
 
@@ -339,45 +388,7 @@ impl SequenceResult {
     /// the second object through this match, from its step on the first object (an earlier
     /// step of the same track, on the reference frame).
     pub fn reference_tracked(&self) -> Vec<Vec<bool>> {
-        if self.reference_pairs.is_empty() {
-            return Vec::new();
-        }
-        let track_of = self.track_of_nodes();
-        let on = |o: usize, n: usize| {
-            track_of
-                .get(o)
-                .and_then(|row| row.get(n))
-                .copied()
-                .flatten()
-        };
-        self.reference_pairs
-            .iter()
-            .map(|p| {
-                p.result
-                    .pairs
-                    .iter()
-                    .map(|m| !m.excess && on(p.a, m.a).is_some_and(|t| Some(t) == on(p.b, m.b)))
-                    .collect()
-            })
-            .collect()
-    }
-
-    /// The track of every node, by object and node (`None`: on no track, which a run's own
-    /// tracks never leave).
-    fn track_of_nodes(&self) -> Vec<Vec<Option<usize>>> {
-        let mut track_of: Vec<Vec<Option<usize>>> = self
-            .objects
-            .iter()
-            .map(|o| vec![None; o.shape.len()])
-            .collect();
-        for (k, t) in self.all_tracks().enumerate() {
-            for &(o, n) in &t.steps {
-                if let Some(slot) = track_of.get_mut(o).and_then(|row| row.get_mut(n)) {
-                    *slot = Some(k);
-                }
-            }
-        }
-        track_of
+        reference_tracked(&self.objects, self.all_tracks(), &self.reference_pairs)
     }
 
     /// Coordinates of the steps of `track` as `(frame, x, y[, z])` rows.
@@ -391,6 +402,46 @@ impl SequenceResult {
             })
             .collect()
     }
+}
+
+/// [`SequenceResult::reference_tracked`] of a run's `objects`, `tracks` and `reference` pairs:
+/// the engine's, which hands it to a sink with each reference pair.
+pub(crate) fn reference_tracked<T: std::borrow::Borrow<Track>>(
+    objects: &[SequenceObject],
+    tracks: impl Iterator<Item = T>,
+    reference: &[PairMatch],
+) -> Vec<Vec<bool>> {
+    if reference.is_empty() {
+        return Vec::new();
+    }
+    // The track of every node, by object and node (`None`: on no track, which a run's own
+    // tracks never leave).
+    let mut track_of: Vec<Vec<Option<usize>>> =
+        objects.iter().map(|o| vec![None; o.shape.len()]).collect();
+    for (k, t) in tracks.enumerate() {
+        for &(o, n) in &t.borrow().steps {
+            if let Some(slot) = track_of.get_mut(o).and_then(|row| row.get_mut(n)) {
+                *slot = Some(k);
+            }
+        }
+    }
+    let on = |o: usize, n: usize| {
+        track_of
+            .get(o)
+            .and_then(|row| row.get(n))
+            .copied()
+            .flatten()
+    };
+    reference
+        .iter()
+        .map(|p| {
+            p.result
+                .pairs
+                .iter()
+                .map(|m| !m.excess && on(p.a, m.a).is_some_and(|t| Some(t) == on(p.b, m.b)))
+                .collect()
+        })
+        .collect()
 }
 
 /// A pair that could not be matched, as the pairs table and `summary.json` report it.

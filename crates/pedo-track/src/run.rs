@@ -6,15 +6,13 @@
 //! yields one [`PairRow`] with the paper's columns, and the matches are chained into [`Track`]s.
 
 use crate::*;
-use modal_core::Prealign;
 use pedo_io::recording::Recording;
 use pedo_io::{IoError, Result};
-use std::collections::HashMap;
-use std::time::Instant;
 
 /// Builds the objects of the recording, matches them pair by pair (in parallel) and chains the
-/// matches into tracks. `progress(stage, done, total)` is called as work completes, possibly
-/// from several threads.
+/// matches into tracks, all held in the result: the run of [`stream_sequence`] gathered by a
+/// [`Collect`] (one engine for whole and streamed runs). `progress(stage, done, total)` is
+/// called as work completes, possibly from several threads (see [`stream_sequence`]).
 ///
 /// A frame whose objects cannot be built and a pair that cannot be matched do not fail the run:
 /// they are reported in [`SequenceResult::skipped_frames`] and
@@ -52,93 +50,10 @@ pub fn run_sequence(
     options: &SequenceOptions,
     progress: &(dyn Fn(Stage, usize, usize) + Sync),
 ) -> Result<SequenceResult> {
-    let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
-    if start >= end || end > recording.n_frames() {
-        return Err(IoError::invalid(format!(
-            "frame range {start}..{end} is empty or beyond the {} of the recording",
-            pedo_io::counted(recording.n_frames(), "frame")
-        )));
-    }
-    let t0 = Instant::now();
-    let Built {
-        objects,
-        pairs: candidate_pairs,
-        splits,
-        merges,
-        skipped_frames,
-    } = build_objects(recording, options, start, end, progress)?;
-    let t1 = Instant::now();
-
-    let parts = parts_of_wholes(&candidate_pairs, &splits, &merges);
-    let (pairs, skipped_pairs) = match_all(&objects, &candidate_pairs, &parts, options, progress);
-    // A cancelled run's pairs are incomplete (those not matched are skipped as "cancelled").
-    pedo_io::cancel::check(options.cancel.as_ref())?;
-    let t2 = Instant::now();
-    let reference_pairs = if options.drift_corrected() {
-        reference_matches(&objects, &candidate_pairs, start, options)
-    } else {
-        Vec::new()
-    };
-    let drift_tracks = || crate::drift::anchored_tracks(&objects, &pairs, &reference_pairs);
-    let (tracks, packed_tracks) = match (options.drift_corrected(), options.keep_match_details) {
-        (true, true) => (drift_tracks()?, None),
-        (true, false) => (Vec::new(), Some(drift_tracks()?.into_iter().collect())),
-        (false, true) => (chain_tracks(&objects, &pairs)?, None),
-        (false, false) => {
-            // Packed as they are chained: the tracks of a long run are never all held as
-            // vectors of their own.
-            let mut packed = PackedTracks::default();
-            chain_tracks_with(&objects, &pairs, &mut |t| {
-                packed.push(&t);
-                Ok(())
-            })?;
-            packed.shrink_to_fit();
-            (Vec::new(), Some(packed))
-        }
-    };
-    // Drift correction matches its reference pairs after the run's pairs.
-    pedo_io::cancel::check(options.cancel.as_ref())?;
-    let timings = StageTimings {
-        objects: t1 - t0,
-        matching: t2 - t1,
-        tracks: t2.elapsed(),
-    };
-    Ok(SequenceResult {
-        objects,
-        pairs,
-        reference_pairs,
-        tracks,
-        packed_tracks,
-        splits,
-        merges,
-        skipped_frames,
-        skipped_pairs,
-        timings,
-    })
-}
-
-/// The reference pairs of drift correction ([`crate::drift::reference_pairs`] for frames from
-/// `start`) matched; those that cannot be matched are left out.
-fn reference_matches(
-    objects: &[SequenceObject],
-    candidates: &[(usize, usize)],
-    start: usize,
-    options: &SequenceOptions,
-) -> Vec<PairMatch> {
-    let refs = crate::drift::reference_pairs_every(
-        objects,
-        candidates,
-        start,
-        options.drift_reference,
-        options.frame_step(),
-    );
-    // Reference pairs lie frames apart: the sensor prior is for consecutive frames.
-    let mut apart = options.clone();
-    if apart.matching.prealign == Prealign::Sensor {
-        apart.matching.prealign = Prealign::Robust;
-    }
-    let (matched, _) = match_all(objects, &refs, &HashMap::new(), &apart, &|_, _, _| {});
-    matched
+    // The one engine, gathering what it hands over.
+    let mut whole = Collect::new(options.keep_match_details);
+    let counts = stream_sequence(recording, None, options, progress, &mut whole)?;
+    Ok(whole.into_result(counts))
 }
 
 /// A run that found no object in any of its frames has nothing to match or report: an error

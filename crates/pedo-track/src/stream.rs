@@ -1,24 +1,44 @@
-//! Runs that do not hold the recording or its results: frames in windows, their objects built,
-//! matched and chained, every result handed to a [`SequenceSink`] as soon as it is final.
+//! The run engine, the one loop of every run: frames in windows, their objects built, matched
+//! and chained, every result handed to a [`SequenceSink`] as soon as it is final. A whole run
+//! ([`run_sequence`]) is this loop feeding a [`Collect`].
 
 use crate::pairing::PairingMethod;
 use crate::*;
-use modal_core::Shape;
+use modal_core::{Prealign, Shape};
 use pedo_io::contour::Contour;
 use pedo_io::recording::{FrameSource, Recording, FRAME_WINDOW};
 use pedo_io::{IoError, Result};
+use std::collections::HashMap;
+use std::ops::Range;
 use std::time::Instant;
 
-/// [`run_sequence`] without holding the run: the frames go in windows of [`FRAME_WINDOW`];
-/// each window's objects are built, handed to `sink`, their pairs matched and handed over,
-/// their matches chained into tracks and each track handed over as soon as it has ended and
-/// every track before it has gone. Only the open tracks and the objects they pass through are
-/// held, so memory does not grow with the recording's length (only with its longest track).
-/// Contour and surface models without drift correction; the isocontour model (one frame) and
-/// drift correction (reference pairs across windows) run whole and are handed over after.
-/// The results handed to `sink` are those of [`run_sequence`] with the same options (with
-/// [`SequenceOptions::keep_match_details`] off: the pairs hold only their matches);
-/// `progress` reports [`Stage::Matching`] in frames done.
+/// Runs `recording` with `options`, handing every result to `sink` as soon as it is final:
+/// the frames go in windows of [`FRAME_WINDOW`]; each window's objects are built (in
+/// parallel, on its kept frames: every [`SequenceOptions::frame_step`]-th of the run) and
+/// handed over frame by frame, their pairs matched (in parallel) and handed
+/// over, their matches chained into tracks and each track handed over as soon as it has ended
+/// and every track before it has gone. Returns the run's counts.
+///
+/// Only the open tracks and the objects they pass through are held, so memory does not grow
+/// with the recording's length (only with its longest track) — except with drift correction,
+/// whose reference pairs reach back across windows: its objects and matches (without their
+/// details) are held to the end, where the reference pairs are matched and the tracks anchored
+/// ([`crate::drift`]). The isocontour model builds the levels of its one frame first.
+///
+/// `source` reads the frames window by window when `recording` holds none (see
+/// [`pedo_io::formats::read_for_streaming`]); the isocontour model, which picks its frame
+/// among all, needs them held. `progress` reports [`Stage::Matching`] in frames done (the
+/// isocontour model: [`Stage::Objects`] in levels, then [`Stage::Matching`] in pairs).
+///
+/// A frame whose objects cannot be built and a pair that cannot be matched do not fail the run:
+/// they are reported in [`RunCounts::skipped_frames`] and [`RunCounts::skipped_pairs`].
+///
+/// # Errors
+///
+/// [`IoError::InvalidInput`] when [`SequenceOptions::frames`] is empty or reaches past the
+/// recording, or the isocontour frame is not in the recording; errors of the isocontour
+/// model's options, of the contour pairing, of `source` and of `sink`; [`IoError::Cancelled`]
+/// once [`SequenceOptions::cancel`] is cancelled.
 pub fn stream_sequence(
     recording: &Recording,
     mut source: Option<&mut dyn FrameSource>,
@@ -26,223 +46,466 @@ pub fn stream_sequence(
     progress: &(dyn Fn(Stage, usize, usize) + Sync),
     sink: &mut dyn SequenceSink,
 ) -> Result<RunCounts> {
-    let measures_threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
     let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
-    if !streams(options) {
-        if source.is_some() {
-            return Err(IoError::invalid(
-                "this run needs the whole recording (isocontour model or drift correction)",
-            ));
-        }
-        let r = run_sequence(recording, options, progress)?;
-        return replay(recording, options, &r, sink);
-    }
     if start >= end || end > recording.n_frames() {
         return Err(IoError::invalid(format!(
             "frame range {start}..{end} is empty or beyond the {} of the recording",
             pedo_io::counted(recording.n_frames(), "frame")
         )));
     }
-    let mut options = options.clone();
-    options.keep_match_details = false;
-    let options = &options;
-    let mut counts = RunCounts::default();
-    let mut held = Held::default();
-    let mut chain = Chainer::default();
-    // The last frame built: its first object and (contour model) its contours, or (surface
-    // model) its object, if any.
-    let mut last_contours: Option<(usize, Vec<Contour>)> = None;
-    let mut last_surface: Option<(usize, usize)> = None;
-    let threshold = options.surface.preprocess.threshold.unwrap_or(0.0);
-    let keep = |s: &Shape| s.len() >= options.min_nodes.max(3);
+    let mut run = Engine::new(options, start..end);
+    if options.model == ObjectModel::Isocontour {
+        if source.is_some() {
+            return Err(IoError::invalid(
+                "this run needs the whole recording (isocontour model)",
+            ));
+        }
+        run.isocontours(recording, progress, sink)?;
+    }
     let mut w0 = start;
     while w0 < end {
         let w1 = (w0 + FRAME_WINDOW).min(end);
-        let t0 = Instant::now();
+        let t = Instant::now();
         // The window's frames: those of `recording`, or read from `source` (numbered from w0).
         let read = match source.as_mut() {
             Some(s) => Some(s.window(recording, w0, w1)?),
             None => None,
         };
+        run.counts.timings.objects += t.elapsed();
         let (frames, offset) = match &read {
             Some(r) => (r, w0),
             None => (recording, 0),
         };
-        let first_new = held.end();
-        // The window's candidate pairs (ids), splits and merges.
-        let mut candidates: Vec<(usize, usize)> = Vec::new();
-        let (mut splits, mut merges) = (Vec::new(), Vec::new());
-        match options.model {
-            ObjectModel::Contour => {
-                let per_frame: Vec<FrameObjects> = per_frame_or_skipped(
-                    w0..w1,
-                    &mut counts.skipped_frames,
-                    options.cancel.as_ref(),
-                    |t| frame_contours(frames, t - offset, options),
-                )?;
-                for (k, (cs, shapes)) in per_frame.into_iter().enumerate() {
-                    let first = held.end();
-                    for (index, (shape, measures)) in shapes.into_iter().enumerate() {
-                        held.push(SequenceObject {
-                            id: held.end(),
-                            frame: w0 + k,
-                            index,
-                            level: None,
-                            shape,
-                            measures: Some(measures),
-                        });
-                    }
-                    if let Some((fa, previous)) = &last_contours {
-                        let (fa, fb) = (*fa, first);
-                        let p =
-                            crate::pairing::pair_contours(previous, &cs, PairingMethod::default())?;
-                        candidates.extend(p.pairs.iter().map(|&(i, j)| (fa + i, fb + j)));
-                        splits.extend(
-                            p.splits
-                                .iter()
-                                .map(|(i, js)| (fa + i, js.iter().map(|j| fb + j).collect())),
-                        );
-                        merges.extend(
-                            p.merges
-                                .iter()
-                                .map(|(is, j)| (is.iter().map(|i| fa + i).collect(), fb + j)),
-                        );
-                    }
-                    last_contours = Some((first, cs));
-                }
-            }
-            ObjectModel::Surface | ObjectModel::Isocontour => {
-                let per_frame: Vec<Option<Shape>> = per_frame_or_skipped(
-                    w0..w1,
-                    &mut counts.skipped_frames,
-                    options.cancel.as_ref(),
-                    |t| frame_surface(frames, t - offset, threshold, options, &keep),
-                )?;
-                for (k, shape) in per_frame.into_iter().enumerate() {
-                    let frame = w0 + k;
-                    match shape {
-                        Some(shape) => {
-                            let o = held.end();
-                            if let Some((p, pf)) = last_surface
-                                && pf + 1 == frame
-                            {
-                                candidates.push((p, o));
-                            }
-                            held.push(SequenceObject {
-                                id: o,
-                                frame,
-                                index: 0,
-                                level: None,
-                                shape,
-                                measures: None,
-                            });
-                            last_surface = Some((o, frame));
-                        }
-                        None => last_surface = None,
-                    }
-                }
-            }
-        }
-        sink.frames(
-            w0,
-            &frames.measures_of(measures_threshold, w0 - offset..w1 - offset),
-        )?;
+        let new = run.build(frames, offset, w0..w1, sink)?;
+        // The frames are done with: only the objects are needed from here.
         drop(read);
-        for id in first_new..held.end() {
-            sink.object(held.get(id)?)?;
+        if let Some(new) = new {
+            run.match_and_chain(new, w0..w1, progress, sink)?;
         }
-        counts.objects = held.end();
-        let t1 = Instant::now();
+        w0 = w1;
+    }
+    run.finish(sink)
+}
 
-        // The window's pairs, matched on the held objects (numbered from `held.base`).
-        let base = held.base;
-        let local = |id: usize| id - base;
-        let local_candidates: Vec<(usize, usize)> = candidates
-            .iter()
-            .map(|&(a, b)| (local(a), local(b)))
+/// The state of a run between windows.
+struct Engine<'o> {
+    options: &'o SequenceOptions,
+    frames: Range<usize>,
+    counts: RunCounts,
+    /// The objects still needed (every object with drift correction).
+    held: Held,
+    chain: Chainer,
+    /// The last frame built: its first object and (contour model) its contours, or (surface
+    /// model) its object and frame, if any.
+    last_contours: Option<(usize, Vec<Contour>)>,
+    last_surface: Option<(usize, usize)>,
+    /// Drift correction: what the reference pairs and the anchored tracks are made of at the end.
+    drift: Option<Anchoring>,
+}
+
+/// What drift correction holds to the end: every candidate pair and every pair matched (without
+/// its details); the objects are all held.
+#[derive(Default)]
+struct Anchoring {
+    candidates: Vec<(usize, usize)>,
+    pairs: Vec<PairMatch>,
+}
+
+/// The pairs a window's objects bring: candidates to match, splits and merges (object ids).
+#[derive(Default)]
+struct NewPairs {
+    /// The first object of the window.
+    first: usize,
+    candidates: Vec<(usize, usize)>,
+    splits: Vec<(usize, Vec<usize>)>,
+    merges: Vec<(Vec<usize>, usize)>,
+}
+
+impl<'o> Engine<'o> {
+    fn new(options: &'o SequenceOptions, frames: Range<usize>) -> Self {
+        Self {
+            options,
+            frames,
+            counts: RunCounts::default(),
+            held: Held::default(),
+            chain: Chainer::default(),
+            last_contours: None,
+            last_surface: None,
+            drift: options.drift_corrected().then(Anchoring::default),
+        }
+    }
+
+    /// The isocontour model's objects, the levels of one frame, matched and chained.
+    fn isocontours(
+        &mut self,
+        recording: &Recording,
+        progress: &(dyn Fn(Stage, usize, usize) + Sync),
+        sink: &mut dyn SequenceSink,
+    ) -> Result<()> {
+        let t0 = Instant::now();
+        let range = (self.frames.start, self.frames.end);
+        let levels = isocontour_objects(recording, self.options, range, progress)?;
+        self.counts.skipped_frames.extend(levels.skipped_frames);
+        if let Some(frame) = levels.objects.first().map(|o| o.frame) {
+            sink.frame_objects(frame, &levels.objects)?;
+        }
+        for o in levels.objects {
+            self.held.push(o);
+        }
+        self.counts.objects = self.held.end();
+        self.counts.timings.objects += t0.elapsed();
+        let new = NewPairs {
+            candidates: levels.pairs,
+            ..NewPairs::default()
+        };
+        let t1 = Instant::now();
+        let pairs = self.match_new(new, progress, sink)?;
+        let t2 = Instant::now();
+        // Every pair is known: the levels are one frame.
+        self.chain_new(0, pairs, self.held.end(), sink)?;
+        self.counts.timings.matching += t2 - t1;
+        self.counts.timings.tracks += t2.elapsed();
+        Ok(())
+    }
+
+    /// Hands over the measures of frames `w` (of `frames`, whose frame 0 is frame `offset` of
+    /// the recording) and, but for the isocontour model, builds their objects and hands them
+    /// over frame by frame; returns the pairs they bring.
+    fn build(
+        &mut self,
+        frames: &Recording,
+        offset: usize,
+        w: Range<usize>,
+        sink: &mut dyn SequenceSink,
+    ) -> Result<Option<NewPairs>> {
+        let t0 = Instant::now();
+        let threshold = self.options.contour.preprocess.threshold.unwrap_or(0.0);
+        sink.frames(
+            w.start,
+            &frames.measures_of(threshold, w.start - offset..w.end - offset),
+        )?;
+        let first = self.held.end();
+        let new = match self.options.model {
+            ObjectModel::Isocontour => None,
+            ObjectModel::Contour => Some(self.contours(frames, offset, w.clone())?),
+            ObjectModel::Surface => Some(self.surfaces(frames, offset, w.clone())?),
+        };
+        if new.is_some() {
+            let (kept, base) = (self.kept(w), self.held.base);
+            let all = self.held.objects.make_contiguous();
+            hand_frames(kept, &all[first - base..], sink)?;
+            self.counts.objects = self.held.end();
+        }
+        self.counts.timings.objects += t0.elapsed();
+        Ok(new.map(|n| NewPairs { first, ..n }))
+    }
+
+    /// The frames of `w` objects are built on: every [`SequenceOptions::frame_step`]-th of the
+    /// run from its first, wherever the windows begin.
+    fn kept(&self, w: Range<usize>) -> Vec<usize> {
+        let (start, step) = (self.frames.start, self.options.frame_step());
+        w.filter(|t| (t - start).is_multiple_of(step)).collect()
+    }
+
+    /// The contours of the kept frames of `w` as objects, paired with those of the kept frame
+    /// before by overlap (with their splits and merges).
+    fn contours(&mut self, frames: &Recording, offset: usize, w: Range<usize>) -> Result<NewPairs> {
+        let options = self.options;
+        let kept = self.kept(w);
+        let per_frame: Vec<FrameObjects> = per_kept_frame(
+            &kept,
+            &mut self.counts.skipped_frames,
+            options.cancel.as_ref(),
+            |t| frame_contours(frames, t - offset, options),
+        )?;
+        let mut new = NewPairs::default();
+        for (frame, (cs, shapes)) in kept.into_iter().zip(per_frame) {
+            let first = self.held.end();
+            for (index, (shape, measures)) in shapes.into_iter().enumerate() {
+                self.held.push(SequenceObject {
+                    id: self.held.end(),
+                    frame,
+                    index,
+                    level: None,
+                    shape,
+                    measures: Some(measures),
+                });
+            }
+            if let Some((fa, previous)) = &self.last_contours {
+                let p = crate::pairing::pair_contours(previous, &cs, PairingMethod::default())?;
+                new.add(*fa, first, p);
+            }
+            self.last_contours = Some((first, cs));
+        }
+        Ok(new)
+    }
+
+    /// The pressure surfaces of the kept frames of `w` as objects, each paired with the kept
+    /// frame before's.
+    fn surfaces(&mut self, frames: &Recording, offset: usize, w: Range<usize>) -> Result<NewPairs> {
+        let options = self.options;
+        let threshold = options.surface.preprocess.threshold.unwrap_or(0.0);
+        let keep = |s: &Shape| s.len() >= options.min_nodes.max(3);
+        let kept = self.kept(w);
+        let per_frame: Vec<Option<Shape>> = per_kept_frame(
+            &kept,
+            &mut self.counts.skipped_frames,
+            options.cancel.as_ref(),
+            |t| frame_surface(frames, t - offset, threshold, options, &keep),
+        )?;
+        let mut new = NewPairs::default();
+        for (frame, shape) in kept.into_iter().zip(per_frame) {
+            let Some(shape) = shape else {
+                self.last_surface = None;
+                continue;
+            };
+            let o = self.held.end();
+            // The previous kept frame's surface, if that frame had one.
+            if let Some((p, pf)) = self.last_surface
+                && pf + options.frame_step() == frame
+            {
+                new.candidates.push((p, o));
+            }
+            self.held.push(SequenceObject {
+                id: o,
+                frame,
+                index: 0,
+                level: None,
+                shape,
+                measures: None,
+            });
+            self.last_surface = Some((o, frame));
+        }
+        Ok(new)
+    }
+
+    /// Matches the pairs of window `w` and chains them; `progress` hears of the frames done.
+    fn match_and_chain(
+        &mut self,
+        new: NewPairs,
+        w: Range<usize>,
+        progress: &(dyn Fn(Stage, usize, usize) + Sync),
+        sink: &mut dyn SequenceSink,
+    ) -> Result<()> {
+        let (start, total) = (self.frames.start, self.frames.len());
+        // A pair done counts as its share of the window's frames.
+        let (before, width) = (w.start - start, w.len());
+        let frames_done = |_: Stage, n: usize, of: usize| {
+            progress(Stage::Matching, before + width * n / of.max(1), total)
+        };
+        let first = new.first;
+        let t1 = Instant::now();
+        let pairs = self.match_new(new, &frames_done, sink)?;
+        let t2 = Instant::now();
+        // Every pair leaving an object before the window's last frame is known now.
+        let settled = match self.options.model {
+            ObjectModel::Contour => self.last_contours.as_ref().map(|l| l.0),
+            _ => self.last_surface.map(|l| l.0),
+        };
+        let settled = settled.unwrap_or(self.held.end());
+        self.chain_new(first, pairs, settled, sink)?;
+        self.counts.timings.matching += t2 - t1;
+        self.counts.timings.tracks += t2.elapsed();
+        progress(Stage::Matching, w.end - start, total);
+        Ok(())
+    }
+
+    /// Matches `new`'s candidate pairs on the held objects (in windows on the rayon pool) and
+    /// hands each pair over; the pairs that cannot be matched are counted as skipped.
+    fn match_new(
+        &mut self,
+        new: NewPairs,
+        progress: &(dyn Fn(Stage, usize, usize) + Sync),
+        sink: &mut dyn SequenceSink,
+    ) -> Result<Vec<PairMatch>> {
+        // The held objects are numbered from `base`: the pairs are matched in their numbering.
+        let base = self.held.base;
+        let local = |(a, b): (usize, usize)| (a - base, b - base);
+        let candidates: Vec<(usize, usize)> = new.candidates.iter().map(|&p| local(p)).collect();
+        let splits: Vec<(usize, Vec<usize>)> = (new.splits.iter())
+            .map(|(i, js)| (*i - base, js.iter().map(|&j| j - base).collect()))
             .collect();
-        let local_splits: Vec<(usize, Vec<usize>)> = splits
-            .iter()
-            .map(|(i, js): &(usize, Vec<usize>)| {
-                (local(*i), js.iter().map(|&j| local(j)).collect())
-            })
+        let merges: Vec<(Vec<usize>, usize)> = (new.merges.iter())
+            .map(|(is, j)| (is.iter().map(|&i| i - base).collect(), *j - base))
             .collect();
-        let local_merges: Vec<(Vec<usize>, usize)> = merges
-            .iter()
-            .map(|(is, j): &(Vec<usize>, usize)| {
-                (is.iter().map(|&i| local(i)).collect(), local(*j))
-            })
-            .collect();
-        let parts = parts_of_wholes(&local_candidates, &local_splits, &local_merges);
-        let objects = held.objects.make_contiguous();
-        let (mut pairs, skipped) =
-            match_all(objects, &local_candidates, &parts, options, &|_, _, _| {});
-        pedo_io::cancel::check(options.cancel.as_ref())?;
+        let parts = parts_of_wholes(&candidates, &splits, &merges);
+        let objects = self.held.objects.make_contiguous();
+        let (mut pairs, skipped) = match_all(objects, &candidates, &parts, self.options, progress);
+        // A cancelled run's pairs are incomplete (those not matched are skipped as "cancelled").
+        pedo_io::cancel::check(self.options.cancel.as_ref())?;
         for p in &mut pairs {
             p.a += base;
             p.b += base;
         }
         for s in skipped {
-            let (oa, ob) = (held.get(s.a + base)?, held.get(s.b + base)?);
-            counts
-                .skipped_pairs
-                .push(SkippedPairRow::of_objects(oa, ob, &s.reason));
+            let (oa, ob) = (self.held.get(s.a + base)?, self.held.get(s.b + base)?);
+            let row = SkippedPairRow::of_objects(oa, ob, &s.reason);
+            self.counts.skipped_pairs.push(row);
         }
         for p in &pairs {
-            sink.pair(p, held.get(p.a)?, held.get(p.b)?)?;
-            counts.add_pair(&p.row);
+            sink.pair(p, self.held.get(p.a)?, self.held.get(p.b)?)?;
+            self.counts.add_pair(&p.row);
         }
-        counts.splits.extend(splits);
-        counts.merges.extend(merges);
-        let t2 = Instant::now();
+        if let Some(kept) = self.drift.as_mut() {
+            kept.candidates.extend(new.candidates);
+            for p in &pairs {
+                kept.pairs.push(p.without_details()?);
+            }
+        }
+        self.counts.splits.extend(new.splits);
+        self.counts.merges.extend(new.merges);
+        Ok(pairs)
+    }
 
-        // Every pair leaving an object before the window's last frame is known now.
-        let last_first = match options.model {
-            ObjectModel::Contour => last_contours.as_ref().map_or(held.end(), |l| l.0),
-            _ => last_surface.map_or(held.end(), |l| l.0),
-        };
-        chain.chain(
-            &held,
-            first_new..held.end(),
-            &pairs,
-            last_first,
-            &mut |k, track| {
+    /// Chains the objects from `first` on through `pairs` (every pair leaving an object before
+    /// `settled` is known), hands over the tracks that have ended and lets go of the objects no
+    /// open track needs. With drift correction the tracks are made at the end instead.
+    fn chain_new(
+        &mut self,
+        first: usize,
+        pairs: Vec<PairMatch>,
+        settled: usize,
+        sink: &mut dyn SequenceSink,
+    ) -> Result<()> {
+        if self.drift.is_some() {
+            return Ok(());
+        }
+        let (held, counts) = (&self.held, &mut self.counts);
+        self.chain
+            .chain(held, first..held.end(), &pairs, settled, &mut |k, track| {
                 counts.add_track(track.steps.len());
-                sink.track(k, &held_steps(&held, &track)?)
-            },
-        )?;
+                sink.track(k, &held_steps(held, &track)?)
+            })?;
         drop(pairs);
         // The objects before both the first open track and the last frame are done.
-        held.drop_below(chain.first_object().unwrap_or(usize::MAX).min(last_first));
-        let t3 = Instant::now();
-        counts.timings.objects += t1 - t0;
-        counts.timings.matching += t2 - t1;
-        counts.timings.tracks += t3 - t2;
-        progress(Stage::Matching, w1 - start, end - start);
-        w0 = w1;
+        let open = self.chain.first_object().unwrap_or(usize::MAX);
+        self.held.drop_below(open.min(settled));
+        Ok(())
     }
-    let t = Instant::now();
-    chain.finish(&mut |k, track| {
-        counts.add_track(track.steps.len());
-        sink.track(k, &held_steps(&held, &track)?)
-    })?;
-    counts.timings.tracks += t.elapsed();
-    Ok(counts)
+
+    /// Hands over the tracks left (with drift correction: every track, anchored on the
+    /// reference pairs, then the reference pairs); returns the run's counts.
+    fn finish(mut self, sink: &mut dyn SequenceSink) -> Result<RunCounts> {
+        let t = Instant::now();
+        match self.drift.take() {
+            Some(kept) => self.anchor(&kept.candidates, &kept.pairs, sink)?,
+            None => {
+                let (held, counts) = (&self.held, &mut self.counts);
+                self.chain.finish(&mut |k, track| {
+                    counts.add_track(track.steps.len());
+                    sink.track(k, &held_steps(held, &track)?)
+                })?;
+            }
+        }
+        // Drift correction matches its reference pairs after the run's pairs.
+        pedo_io::cancel::check(self.options.cancel.as_ref())?;
+        self.counts.timings.tracks += t.elapsed();
+        Ok(self.counts)
+    }
+
+    /// Drift correction: the reference pairs matched, the tracks chained through them first
+    /// ([`crate::drift::anchored_tracks`]), then both handed over.
+    fn anchor(
+        &mut self,
+        candidates: &[(usize, usize)],
+        pairs: &[PairMatch],
+        sink: &mut dyn SequenceSink,
+    ) -> Result<()> {
+        if self.held.base != 0 {
+            return Err(IoError::invalid(
+                "internal error (please report it): drift correction let go of objects",
+            ));
+        }
+        let objects: &[SequenceObject] = self.held.objects.make_contiguous();
+        let refs = reference_matches(objects, candidates, self.frames.start, self.options);
+        let tracks = crate::drift::anchored_tracks(objects, pairs, &refs)?;
+        for (k, t) in tracks.iter().enumerate() {
+            self.counts.add_track(t.steps.len());
+            let steps: Vec<(&SequenceObject, usize)> =
+                t.steps.iter().map(|&(o, n)| (&objects[o], n)).collect();
+            sink.track(k, &steps)?;
+        }
+        let tracked = reference_tracked(objects, tracks.iter(), &refs);
+        for (p, tracked) in refs.iter().zip(tracked) {
+            sink.reference_pair(p, &objects[p.a], &objects[p.b], &tracked)?;
+        }
+        Ok(())
+    }
 }
 
-/// Whether [`stream_sequence`] streams a run with these options (the contour and surface
-/// models without drift correction) rather than running it whole.
+impl NewPairs {
+    /// The pairing `p` of the frame whose first object is `fa` with the next, whose first is
+    /// `fb`, in object ids.
+    fn add(&mut self, fa: usize, fb: usize, p: crate::pairing::Pairing) {
+        let ids = |js: &[usize]| js.iter().map(|j| fb + j).collect();
+        self.candidates
+            .extend(p.pairs.iter().map(|&(i, j)| (fa + i, fb + j)));
+        self.splits
+            .extend(p.splits.iter().map(|(i, js)| (fa + i, ids(js))));
+        self.merges.extend(
+            p.merges
+                .iter()
+                .map(|(is, j)| (is.iter().map(|i| fa + i).collect(), fb + j)),
+        );
+    }
+}
+
+/// The reference pairs of drift correction ([`crate::drift::reference_pairs_every`] for the
+/// kept frames from `start`) matched; those that cannot be matched are left out.
+fn reference_matches(
+    objects: &[SequenceObject],
+    candidates: &[(usize, usize)],
+    start: usize,
+    options: &SequenceOptions,
+) -> Vec<PairMatch> {
+    let refs = crate::drift::reference_pairs_every(
+        objects,
+        candidates,
+        start,
+        options.drift_reference,
+        options.frame_step(),
+    );
+    // Reference pairs lie frames apart: the sensor prior is for consecutive frames.
+    let mut apart = options.clone();
+    if apart.matching.prealign == Prealign::Sensor {
+        apart.matching.prealign = Prealign::Robust;
+    }
+    let (matched, _) = match_all(objects, &refs, &HashMap::new(), &apart, &|_, _, _| {});
+    matched
+}
+
+/// The [`SequenceSink::frame_objects`] event of every frame of `frames` (the kept frames, in
+/// order), with its objects among `objects` (those of the frames, in frame order).
+pub(crate) fn hand_frames(
+    frames: impl IntoIterator<Item = usize>,
+    objects: &[SequenceObject],
+    sink: &mut dyn SequenceSink,
+) -> Result<()> {
+    let mut rest = objects;
+    for frame in frames {
+        let n = rest.iter().take_while(|o| o.frame == frame).count();
+        let (these, after) = rest.split_at(n);
+        sink.frame_objects(frame, these)?;
+        rest = after;
+    }
+    Ok(())
+}
+
+/// Whether a run with these options keeps its memory flat ([`stream_sequence`]): the contour
+/// and surface models without drift correction, with or without a frame stride (the windows
+/// build the kept frames only and pair each with the kept frame before, across windows too).
+/// The isocontour model needs its frames held (it picks one among them) and drift correction
+/// holds every object to the end.
 pub fn streams(options: &SequenceOptions) -> bool {
-    streamable(options.model, options.drift_reference) && options.frame_step() == 1
+    streamable(options.model, options.drift_reference)
 }
 
-/// The rule of [`streams`] and [`RunParams::streams`]: the isocontour model matches the levels
-/// of one frame, and drift correction pairs frames across windows, so both run whole.
+/// The rule of [`streams`] and [`RunParams::streams`].
 pub(crate) fn streamable(model: ObjectModel, drift_reference: usize) -> bool {
     model != ObjectModel::Isocontour && drift_reference < 2
 }
 
-/// The objects of a streamed run still needed: ids `base..base + objects.len()`.
+/// The objects of a run still needed: ids `base..base + objects.len()`.
 #[derive(Default)]
 pub(crate) struct Held {
     base: usize,

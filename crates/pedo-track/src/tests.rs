@@ -400,3 +400,102 @@ fn a_pair_that_cannot_be_matched_is_skipped_with_its_reason() {
     // The tracks of what was matched are still chained.
     assert!(!chain_tracks(&objects, &pairs).unwrap().is_empty());
 }
+
+/// The order of a run's events, as a sink that follows objects frame by frame relies on it.
+#[derive(Default)]
+struct EventOrder {
+    frames: Vec<usize>,
+    objects: Vec<usize>,
+    /// The frames handed over when each pair came.
+    frames_at_pair: Vec<(usize, Option<usize>)>,
+    tracks: Vec<usize>,
+}
+
+impl SequenceSink for EventOrder {
+    fn frame_objects(&mut self, frame: usize, objects: &[SequenceObject]) -> pedo_io::Result<()> {
+        assert!(objects.iter().all(|o| o.frame == frame));
+        self.frames.push(frame);
+        self.objects.extend(objects.iter().map(|o| o.id));
+        Ok(())
+    }
+    fn pair(
+        &mut self,
+        _: &PairMatch,
+        _: &SequenceObject,
+        b: &SequenceObject,
+    ) -> pedo_io::Result<()> {
+        self.frames_at_pair
+            .push((b.frame, self.frames.last().copied()));
+        Ok(())
+    }
+    fn track(&mut self, index: usize, _: &[(&SequenceObject, usize)]) -> pedo_io::Result<()> {
+        self.tracks.push(index);
+        Ok(())
+    }
+}
+
+#[test]
+fn the_engine_hands_every_frame_in_order_before_the_pairs_that_end_on_it() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../pedo-io/tests/data/FrasP01L.asf"
+    );
+    let rec = pedo_io::read_recording(path).unwrap();
+    // Three windows of frames, with frames without contact at the end of the step.
+    let options = SequenceOptions {
+        frames: Some((10, 10 + 2 * pedo_io::recording::FRAME_WINDOW + 20)),
+        keep_match_details: false,
+        ..Default::default()
+    };
+    let mut events = EventOrder::default();
+    let counts = stream_sequence(&rec, None, &options, &|_, _, _| {}, &mut events).unwrap();
+    let (start, end) = options.frames.unwrap();
+    assert_eq!(events.frames, (start..end).collect::<Vec<_>>());
+    assert_eq!(events.objects, (0..counts.objects).collect::<Vec<_>>());
+    assert_eq!(events.frames_at_pair.len(), counts.pairs);
+    assert!(events
+        .frames_at_pair
+        .iter()
+        .all(|&(frame, handed)| handed.is_some_and(|h| h >= frame)));
+    assert_eq!(events.tracks, (0..counts.tracks).collect::<Vec<_>>());
+    // The whole run is this engine gathered: the same objects, pairs and tracks.
+    let whole = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+    assert_eq!(whole.objects.len(), counts.objects);
+    assert_eq!(whole.pairs.len(), counts.pairs);
+    assert_eq!(whole.track_count(), counts.tracks);
+}
+
+#[test]
+fn a_strided_run_builds_and_pairs_its_kept_frames_across_windows() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../pedo-io/tests/data/FrasP01L.asf"
+    );
+    let rec = pedo_io::read_recording(path).unwrap();
+    // A stride that does not divide the window: the kept frames fall at other places of each.
+    let options = SequenceOptions {
+        frames: Some((10, 10 + 2 * pedo_io::recording::FRAME_WINDOW + 20)),
+        every: 3,
+        keep_match_details: false,
+        ..Default::default()
+    };
+    assert!(streams(&options), "a strided run streams");
+    let (start, end) = options.frames.unwrap();
+    let mut events = EventOrder::default();
+    let counts = stream_sequence(&rec, None, &options, &|_, _, _| {}, &mut events).unwrap();
+    assert_eq!(events.frames, options.kept_frames(start, end));
+    assert_eq!(events.objects, (0..counts.objects).collect::<Vec<_>>());
+    let whole = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+    assert!(whole.objects.iter().all(|o| (o.frame - start) % 3 == 0));
+    // Every pair joins kept frames 3 apart, those across a window's edge too.
+    assert!(whole.pairs.len() > 20);
+    for p in &whole.pairs {
+        let (fa, fb) = (whole.objects[p.a].frame, whole.objects[p.b].frame);
+        assert_eq!(fb, fa + 3, "pair {} -> {}", p.a, p.b);
+    }
+    let edge = start + pedo_io::recording::FRAME_WINDOW;
+    assert!(whole.pairs.iter().any(|p| {
+        let (fa, fb) = (whole.objects[p.a].frame, whole.objects[p.b].frame);
+        fa < edge && fb >= edge
+    }));
+}
