@@ -307,20 +307,27 @@ pub(crate) fn tracks_header(recording: &Recording, r: &SequenceResult) -> Table 
 /// The columns of [`tracks_table`] for objects of `dim` dimensions (those of the first object,
 /// 2 without objects).
 pub(crate) fn tracks_header_of(recording: &Recording, dim: usize) -> Table {
-    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
-    let mut t = Table::new(&["track", "step", "frame"]);
-    if timed {
-        t.push_column("time_s");
-    }
-    for c in ["object_id", "node", "x", "y"] {
-        t.push_column(c);
-    }
-    if mm {
-        t.push_column("x_mm");
-        t.push_column("y_mm");
-    }
+    let mut t = steps_header(recording, "track", "node");
     if dim == 3 {
         t.push_column("z");
+    }
+    t
+}
+
+/// The columns shared by the tables of things followed step by step (tracks, points): `what`
+/// (their number), step, frame, time when the rate is known, object id, `node`, `x, y` and
+/// `x_mm, y_mm` when the pitch is known.
+fn steps_header(recording: &Recording, what: &str, node: &str) -> Table {
+    let mut t = Table::new(&[what, "step", "frame"]);
+    if recording.dt_s.is_some() {
+        t.push_column("time_s");
+    }
+    for c in ["object_id", node, "x", "y"] {
+        t.push_column(c);
+    }
+    if recording.pitch_mm.is_some() {
+        t.push_column("x_mm");
+        t.push_column("y_mm");
     }
     t
 }
@@ -380,17 +387,7 @@ pub fn points_table(
     points: &pedo_track::follow::FollowedPoints,
 ) -> pedo_io::Result<Table> {
     let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
-    let mut t = Table::new(&["point", "step", "frame"]);
-    if timed {
-        t.push_column("time_s");
-    }
-    for c in ["object_id", "seed_node", "x", "y"] {
-        t.push_column(c);
-    }
-    if mm {
-        t.push_column("x_mm");
-        t.push_column("y_mm");
-    }
+    let mut t = steps_header(recording, "point", "seed_node");
     let (pressure, per_unit) = match kpa_per_unit(&recording.units) {
         Some(k) => ("pressure_kpa", k),
         None => ("pressure", 1.0),
