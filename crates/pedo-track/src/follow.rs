@@ -267,11 +267,11 @@ impl Links {
         let mut carried = Vec::new();
         for &a in self.preds(b) {
             let Some(la) = live.get_mut(&a) else { continue };
-            let parts = self.succs(a);
+            // Each part's field and outline once, for every point of `a`.
+            let parts = self.parts_of(run, a, aspect);
             let mut keep = Vec::new();
             for &(point, pos) in &la.points {
-                let target = self.destination(run, a, pos, parts, aspect);
-                match target {
+                match destination(&parts, pos) {
                     Some((t, image)) if t == b => carried.push((point, image)),
                     Some(_) => keep.push((point, pos)),
                     None => {}
@@ -285,36 +285,43 @@ impl Links {
         carried
     }
 
-    /// Where a point of object `a` at `pos` goes among `parts`: the part nearest its image.
-    fn destination(
+    /// The parts `a` continues as that a point can cross to: each with the field of its matched
+    /// pair and its outline.
+    fn parts_of(
         &self,
         run: &SequenceResult,
         a: usize,
-        pos: [f64; 2],
-        parts: &[usize],
         aspect: SenselAspect,
-    ) -> Option<(usize, [f64; 2])> {
-        let mut best: Option<(f64, usize, [f64; 2])> = None;
-        for &b in parts {
-            let Some(&k) = self.pairs.get(&(a, b)) else {
-                continue;
-            };
-            let pair = &run.pairs[k];
-            let (oa, ob) = (&run.objects[a].shape, &run.objects[b].shape);
-            let Ok(field) = CorrespondenceField::fit(oa, ob, &pair.result.pairs, PAIR_SMOOTHING)
-            else {
-                continue;
-            };
-            let [image] = field.apply(&[pos])[..] else {
-                continue;
-            };
-            let d = Contact::of(&run.objects[b], aspect).outside(image);
-            if best.is_none_or(|(bd, _, _)| d < bd) {
-                best = Some((d, b, image));
-            }
-        }
-        best.map(|(_, b, p)| (b, p))
+    ) -> Vec<(usize, CorrespondenceField, Contact)> {
+        self.succs(a)
+            .iter()
+            .filter_map(|&b| {
+                let pair = &run.pairs[*self.pairs.get(&(a, b))?];
+                let (oa, ob) = (&run.objects[a].shape, &run.objects[b].shape);
+                let field =
+                    CorrespondenceField::fit(oa, ob, &pair.result.pairs, PAIR_SMOOTHING).ok()?;
+                Some((b, field, Contact::of(&run.objects[b], aspect)))
+            })
+            .collect()
     }
+}
+
+/// Where a point at `pos` goes among `parts` ([`Links::parts_of`]): the part nearest its image.
+fn destination(
+    parts: &[(usize, CorrespondenceField, Contact)],
+    pos: [f64; 2],
+) -> Option<(usize, [f64; 2])> {
+    let mut best: Option<(f64, usize, [f64; 2])> = None;
+    for (b, field, contact) in parts {
+        let [image] = field.apply(&[pos])[..] else {
+            continue;
+        };
+        let d = contact.outside(image);
+        if best.is_none_or(|(bd, _, _)| d < bd) {
+            best = Some((d, *b, image));
+        }
+    }
+    best.map(|(_, b, p)| (b, p))
 }
 
 /// The anchor of one lineage and the points it carries.
