@@ -416,9 +416,9 @@ macro_rules! option_set {
             }
 
             /// The value of every option of the set as a provenance record states it
-            /// ([`OptionField::value`](crate::options::OptionField::value)), named and ordered
-            /// as [`specs`](Self::specs) (not those of the sets it holds): what a record lists,
-            /// with the names of the one declaration.
+            /// (each field's `OptionField::value`), named and ordered as [`specs`](Self::specs)
+            /// (not those of the sets it holds): what a record lists, with the names of the one
+            /// declaration.
             pub fn values(&self) -> Vec<(&'static str, $crate::options::OptionValue)> {
                 vec![$(
                     (stringify!($field), <$ty as $crate::options::OptionField>::value(&self.$field)),
