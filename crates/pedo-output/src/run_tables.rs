@@ -10,9 +10,7 @@
 use crate::*;
 use modal_core::MatchPair;
 use pedo_io::recording::{kpa_per_unit, Recording};
-use pedo_track::{
-    honest_step_of, PairMatch, PairObjects, PairRow, SequenceObject, SequenceResult, SkippedPairRow,
-};
+use pedo_track::{PairMatch, PairObjects, PairRow, SequenceObject, SequenceResult, SkippedPairRow};
 
 /// The per-pair table: ids, frames (and their times), node counts, the local, optimisation and
 /// excess matches, the mean cost, the trackable matches, the crossed pairs of matches (closed
@@ -169,7 +167,7 @@ pub(crate) fn object_cells(recording: &Recording, o: &SequenceObject) -> Vec<Cel
 
 /// Every match of every pair: object ids, nodes, cost, excess flag, whether node tracks may
 /// follow it (`trackable`: one-to-one and within the step rule of
-/// [`pedo_track::pairing::step_allowed`]), and the in-plane distance between the two nodes in sensels
+/// [`pedo_track::pairing::StepBound`], [`pedo_track::PairMatch::trackable`]), and the in-plane distance between the two nodes in sensels
 /// (and mm when the pitch is known).
 pub fn matches_table(recording: &Recording, r: &SequenceResult) -> Table {
     let mut t = matches_header(recording, "trackable");
@@ -253,7 +251,8 @@ pub(crate) fn pair_match_rows<E>(
     ob: &SequenceObject,
     emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
 ) -> std::result::Result<(), E> {
-    let trackable = |_, m: &MatchPair| !m.excess && honest_step_of(oa, m.a, ob, m.b);
+    let trackable =
+        |k: usize, m: &MatchPair| !m.excess && p.trackable.get(k).copied().unwrap_or(false);
     flagged_match_rows(recording, p, oa, ob, &trackable, emit)
 }
 

@@ -1,5 +1,5 @@
 //! Matches chained into node tracks: a track follows one node from object to object through
-//! the pairs, as long as each step is an honest one ([`honest_step`]).
+//! the pairs, as long as each step is an honest one ([`PairMatch::trackable`]).
 
 use crate::*;
 use pedo_io::Result;
@@ -111,15 +111,20 @@ impl Chainer {
         let ob = objects.object(o)?;
         let mut row = vec![NO_TRACK; ob.shape.len()];
         for p in incoming {
-            let oa = objects.object(p.a)?;
             let Some(from) = self.rows.get(&p.a) else {
                 continue;
             };
-            for mp in p.result.pairs.iter().filter(|mp| !mp.excess) {
+            for (k, mp) in p
+                .result
+                .pairs
+                .iter()
+                .enumerate()
+                .filter(|(_, mp)| !mp.excess)
+            {
                 let (Some(&t), Some(&slot)) = (from.get(mp.a), row.get(mp.b)) else {
                     return Err(p.beyond_nodes(mp, from.len(), row.len()));
                 };
-                if slot != NO_TRACK || !honest_step_of(oa, mp.a, ob, mp.b) {
+                if slot != NO_TRACK || !p.trackable.get(k).copied().unwrap_or(false) {
                     continue;
                 }
                 let t = t as usize;
@@ -173,8 +178,8 @@ impl Chainer {
 
 /// Chains matches into tracks. A node continues the track of the node it is matched to one-to-one
 /// in the previous object; excess (one-to-many) matches never extend a track, since a track must
-/// stay a single path, and neither does a match between frames that moves further than
-/// [`crate::pairing::step_allowed`] allows. Nodes with no such predecessor start a new track.
+/// stay a single path, and neither does a match that moves further than the pair's
+/// [`crate::pairing::StepBound`] allows ([`PairMatch::trackable`]). Nodes with no such predecessor start a new track.
 /// Every pair must lead forward (`a < b`) between the `objects` and name nodes they have.
 pub fn chain_tracks(objects: &[SequenceObject], pairs: &[PairMatch]) -> Result<Vec<Track>> {
     let mut tracks = Vec::new();
@@ -197,16 +202,4 @@ pub fn chain_tracks_with(
     let mut emit = |_, track| emit(track);
     chain.chain(objects, 0..objects.len(), pairs, objects.len(), &mut emit)?;
     chain.finish(&mut emit)
-}
-
-/// Whether the match of node `na` of object `a` with node `nb` of object `b` may extend a track:
-/// between frames, [`crate::pairing::step_allowed`]; within a frame (isocontour levels), always.
-pub fn honest_step(objects: &[SequenceObject], a: usize, na: usize, b: usize, nb: usize) -> bool {
-    honest_step_of(&objects[a], na, &objects[b], nb)
-}
-
-/// [`honest_step`] with the two objects given.
-pub fn honest_step_of(oa: &SequenceObject, na: usize, ob: &SequenceObject, nb: usize) -> bool {
-    oa.frame == ob.frame
-        || crate::pairing::step_allowed(oa.shape.point(na), ob.shape.point(nb), &ob.shape)
 }

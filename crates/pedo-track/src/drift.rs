@@ -121,7 +121,8 @@ fn dist(a: &[f64], b: &[f64]) -> f64 {
 /// matches (pairs `(ancestor, object)`) taking precedence: a node matched one-to-one to a node of
 /// its object's reference continues that node's track, when the track's last step is on one of
 /// the object's predecessors and lies within [`JUMP_LIMIT`] spacings. The remaining nodes follow
-/// their predecessor's matches where [`crate::pairing::step_allowed`] allows the step, and nodes
+/// their predecessor's matches where the pair's [`crate::pairing::StepBound`] allows the step
+/// ([`PairMatch::trackable`]), and nodes
 /// with neither start new tracks.
 ///
 /// # Errors
@@ -172,8 +173,15 @@ pub fn anchored_tracks(
             }
         }
         for p in &incoming[o] {
-            for mp in p.result.pairs.iter().filter(|mp| !mp.excess) {
-                if track_of[o][mp.b].is_some() || !crate::honest_step(objects, p.a, mp.a, o, mp.b) {
+            for (k, mp) in p
+                .result
+                .pairs
+                .iter()
+                .enumerate()
+                .filter(|(_, mp)| !mp.excess)
+            {
+                let trackable = p.trackable.get(k).copied().unwrap_or(false);
+                if track_of[o][mp.b].is_some() || !trackable {
                     continue;
                 }
                 if let Some(t) = track_of[p.a][mp.a]

@@ -213,10 +213,12 @@ pub(crate) fn match_pair(
     } else {
         one_to_one.len()
     };
-    let trackable = one_to_one
-        .iter()
-        .filter(|p| honest_step_of(oa, p.a, ob, p.b))
-        .count();
+    // The step rule is made once per pair and asked per match.
+    let bound = crate::pairing::StepBound::new(oa, ob, aspect);
+    let flags: Vec<bool> = (result.pairs.iter())
+        .map(|p| !p.excess && bound.allows(oa.shape.point(p.a), ob.shape.point(p.b)))
+        .collect();
+    let trackable = flags.iter().filter(|&&f| f).count();
     let mean_cost = if one_to_one.is_empty() {
         0.0
     } else {
@@ -234,7 +236,13 @@ pub(crate) fn match_pair(
         trackable_percent: 100.0 * trackable as f64 / min,
         crossings: result.crossings,
     };
-    let mut pair = PairMatch { a, b, result, row };
+    let mut pair = PairMatch {
+        a,
+        b,
+        result,
+        row,
+        trackable: flags,
+    };
     if !options.keep_match_details {
         pair.strip_details()?;
     }

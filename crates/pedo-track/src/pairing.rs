@@ -277,44 +277,306 @@ pub fn track(frames: &[Vec<Contour>], method: PairingMethod) -> Result<Vec<Pairi
 /// nodes along an outline by up to one spacing).
 pub const STEP_SLACK: f64 = 1.5;
 
-/// The step rule of node tracks (docs/method.md, "Tracks"): a track may step from node `from` of
-/// one frame's outline to node `to` of the next frame's outline `next` only if the step is no
-/// longer than the boundary itself moved there — the distance from `from` to `next` — plus
-/// [`STEP_SLACK`] node spacings of `next`. A match that asks for more has no honest partner: the
-/// track ends and `to` starts a new one. Only closed planar outlines are bounded (the contour
-/// model); for any other `next` every step is allowed. Both the whole-recording chaining
-/// ([`crate::chain_tracks`], [`crate::drift`]) and incremental chainers call this.
+/// The step rule of node tracks between two closed planar outlines (docs/method.md §9, "A step
+/// no longer than the boundary's own motion"): a track may step from node `from` of one outline
+/// to node `to` of the next outline `next` only if the step is no longer than the boundary itself
+/// moved there — the distance from `from` to `next` — plus [`STEP_SLACK`] node spacings of
+/// `next`. A match that asks for more has no honest partner: the track ends and `to` starts a
+/// new one. For any `next` that is not a closed planar outline every step is allowed here; a
+/// run's pairs are judged by [`StepBound`], which also bounds surfaces and isocontour levels.
 pub fn step_allowed(from: &[f64], to: &[f64], next: &modal_core::Shape) -> bool {
-    if next.dim() != 2 || !matches!(next.topology(), modal_core::Topology::ClosedContour) {
+    if !is_outline(next) {
         return true;
     }
+    outline_step_allowed(from, to, next.coords(), median_spacing(next.coords()))
+}
+
+/// Whether `shape` is a closed planar outline (a contour or an isocontour level).
+fn is_outline(shape: &modal_core::Shape) -> bool {
+    shape.dim() == 2 && matches!(shape.topology(), modal_core::Topology::ClosedContour)
+}
+
+/// [`step_allowed`] with the outline's median node spacing given.
+fn outline_step_allowed(from: &[f64], to: &[f64], coords: &[f64], spacing: f64) -> bool {
     let step = ((to[0] - from[0]).powi(2) + (to[1] - from[1]).powi(2)).sqrt();
-    let (motion, spacing) = outline_distance(next.coords(), [from[0], from[1]]);
+    let motion = outline_motion(coords, [from[0], from[1]]);
     step <= motion + STEP_SLACK * spacing
+}
+
+/// The least overlap, as a fraction of the smaller region, of the regions of two consecutive
+/// isocontour levels whose pair continues tracks (docs/method.md §9). Each level's object is its
+/// largest region's outline and a higher level nests inside a lower one, so the fraction is
+/// about 1 while the largest region stays on the same part of the foot and about 0 when it
+/// switches to another (the forefoot's, then the hallux's): measured on the bundled walk and
+/// every recording of `benches/data`, every pair overlapped by 0.99 or more, or not at all
+/// (docs/method.md §9).
+pub const LEVEL_MIN_OVERLAP: f64 = 0.5;
+
+/// The step rule of one pair of objects, made once per pair ([`StepBound::new`]) and asked per
+/// match ([`StepBound::allows`]): whether the match of a node of the first object with a node of
+/// the second may extend a track (docs/method.md §9).
+///
+/// - **Contours** of consecutive frames: [`step_allowed`], the boundary's own motion at the node
+///   plus [`STEP_SLACK`] node spacings, in sensels.
+/// - **Isocontour levels** (two objects of one frame): none when the levels' regions overlap by
+///   less than [`LEVEL_MIN_OVERLAP`] of the smaller (the level's largest region has switched to
+///   another part of the foot: new tracks start), else the contours' rule between the two level
+///   lines.
+/// - **Surfaces**: in the plane (x, y) with y scaled by the sensel aspect (true proportions), the
+///   distance from the node to the next surface's support (the union of its triangles: 0 inside,
+///   else how far the footprint withdrew from there) plus [`STEP_SLACK`] median edge lengths of
+///   the next surface's mesh in the plane; none when the two footprints lie apart (fewer than
+///   [`FOOTPRINT_MIN_OVERLAP`] of either surface's nodes inside the other's support).
+/// - Anything else (point sets, 3-D curves): every step.
+#[derive(Debug, Clone)]
+pub struct StepBound {
+    kind: BoundKind,
+}
+
+#[derive(Debug, Clone)]
+enum BoundKind {
+    Free,
+    Cut,
+    Outline {
+        coords: Vec<f64>,
+        spacing: f64,
+    },
+    Support {
+        aspect: f64,
+        /// The next surface's triangles, their corners in the plane (y scaled).
+        triangles: Vec<[[f64; 2]; 3]>,
+        /// Edges of one triangle only: the support's boundary.
+        boundary: Vec<[[f64; 2]; 2]>,
+        slack: f64,
+    },
+}
+
+impl StepBound {
+    /// The rule of the pair `a` → `b` (`aspect`: the sensels' row pitch over column pitch,
+    /// [`crate::SenselAspect`]; only surfaces use it).
+    pub fn new(
+        a: &crate::SequenceObject,
+        b: &crate::SequenceObject,
+        aspect: crate::SenselAspect,
+    ) -> Self {
+        let (sa, sb) = (&a.shape, &b.shape);
+        let kind = if is_outline(sb) {
+            let coords = sb.coords().to_vec();
+            let spacing = median_spacing(&coords);
+            if a.frame == b.frame && is_outline(sa) && !levels_overlap(sa, sb) {
+                BoundKind::Cut
+            } else {
+                BoundKind::Outline { coords, spacing }
+            }
+        } else if let modal_core::Topology::Mesh { triangles } = sb.topology()
+            && sb.dim() >= 2
+            && a.frame != b.frame
+        {
+            let next = support(sb, triangles, aspect.0);
+            if footprints_apart(sa, sb, &next, aspect.0) {
+                BoundKind::Cut
+            } else {
+                next
+            }
+        } else {
+            BoundKind::Free
+        };
+        Self { kind }
+    }
+
+    /// Whether a track may step from `from` (a node of the first object, its coordinates) to
+    /// `to` (a node of the second).
+    pub fn allows(&self, from: &[f64], to: &[f64]) -> bool {
+        match &self.kind {
+            BoundKind::Free => true,
+            BoundKind::Cut => false,
+            BoundKind::Outline { coords, spacing } => {
+                outline_step_allowed(from, to, coords, *spacing)
+            }
+            BoundKind::Support {
+                aspect,
+                triangles,
+                boundary,
+                slack,
+            } => {
+                let (p, q) = ([from[0], from[1] * aspect], [to[0], to[1] * aspect]);
+                let step = (q[0] - p[0]).hypot(q[1] - p[1]);
+                step <= support_distance(p, triangles, boundary) + slack
+            }
+        }
+    }
+
+    /// Whether this rule lets every step through (no bound for this kind of object).
+    pub fn is_free(&self) -> bool {
+        matches!(self.kind, BoundKind::Free)
+    }
+
+    /// Whether this rule lets no step through (isocontour levels whose regions do not overlap).
+    pub fn is_cut(&self) -> bool {
+        matches!(self.kind, BoundKind::Cut)
+    }
+}
+
+/// Whether the regions of two isocontour levels overlap by at least [`LEVEL_MIN_OVERLAP`] of
+/// the smaller one.
+fn levels_overlap(a: &modal_core::Shape, b: &modal_core::Shape) -> bool {
+    let contour = |s: &modal_core::Shape| Contour {
+        points: s.coords().chunks_exact(2).map(|p| [p[0], p[1]]).collect(),
+        hole: false,
+        level: 0.0,
+    };
+    let resolution = match PairingMethod::default() {
+        PairingMethod::Overlap { resolution, .. } => resolution,
+        _ => 4.0,
+    };
+    overlap(&contour(a), &contour(b), resolution).0 >= LEVEL_MIN_OVERLAP
+}
+
+/// The support rule of a surface `s` with `triangles`, y scaled by `aspect`.
+fn support(s: &modal_core::Shape, triangles: &[[usize; 3]], aspect: f64) -> BoundKind {
+    let d = s.dim();
+    let c = s.coords();
+    let n = s.len();
+    let at = |i: usize| [c[d * i], c[d * i + 1] * aspect];
+    let tris: Vec<[[f64; 2]; 3]> = triangles
+        .iter()
+        .filter(|t| t.iter().all(|&v| v < n))
+        .map(|t| t.map(at))
+        .collect();
+    let mut edges: std::collections::BTreeMap<(usize, usize), usize> = Default::default();
+    for t in triangles.iter().filter(|t| t.iter().all(|&v| v < n)) {
+        for k in 0..3 {
+            let (u, v) = (t[k], t[(k + 1) % 3]);
+            *edges.entry((u.min(v), u.max(v))).or_insert(0) += 1;
+        }
+    }
+    let boundary = edges
+        .iter()
+        .filter(|(_, count)| **count == 1)
+        .map(|(&(u, v), _)| [at(u), at(v)])
+        .collect();
+    let mut lengths: Vec<f64> = edges
+        .keys()
+        .map(|&(u, v)| {
+            let (p, q) = (at(u), at(v));
+            (q[0] - p[0]).hypot(q[1] - p[1])
+        })
+        .collect();
+    lengths.sort_by(f64::total_cmp);
+    let spacing = lengths.get(lengths.len() / 2).copied().unwrap_or(0.0);
+    if tris.is_empty() {
+        return BoundKind::Free;
+    }
+    BoundKind::Support {
+        aspect,
+        triangles: tris,
+        boundary,
+        slack: STEP_SLACK * spacing,
+    }
+}
+
+/// The least share of a surface's nodes inside the other surface's support, the larger of the
+/// two directions, for a pair of surfaces to continue tracks: the overlap pairing's least link
+/// (5 % of the smaller region, [`PairingMethod::default`]), estimated on the nodes. Footprints
+/// that lie apart are two contacts, not one that moved, whatever the matching pairs.
+pub const FOOTPRINT_MIN_OVERLAP: f64 = 0.05;
+
+/// Whether the footprints of surfaces `a` and `b` (`next`: `b`'s support) lie apart: fewer than
+/// [`FOOTPRINT_MIN_OVERLAP`] of `a`'s nodes inside `b`'s support and of `b`'s inside `a`'s.
+fn footprints_apart(
+    a: &modal_core::Shape,
+    b: &modal_core::Shape,
+    next: &BoundKind,
+    aspect: f64,
+) -> bool {
+    let share = |s: &modal_core::Shape, support: &BoundKind| match support {
+        BoundKind::Support {
+            triangles,
+            boundary,
+            ..
+        } if s.dim() >= 2 && !s.is_empty() => {
+            let inside = (0..s.len())
+                .filter(|&k| {
+                    let p = s.point(k);
+                    support_distance([p[0], p[1] * aspect], triangles, boundary) == 0.0
+                })
+                .count();
+            inside as f64 / s.len() as f64
+        }
+        // No support to lie in: no evidence that the footprints lie apart.
+        _ => 1.0,
+    };
+    if share(a, next) >= FOOTPRINT_MIN_OVERLAP {
+        return false;
+    }
+    let own = match a.topology() {
+        modal_core::Topology::Mesh { triangles } if a.dim() >= 2 => support(a, triangles, aspect),
+        _ => BoundKind::Free,
+    };
+    share(b, &own) < FOOTPRINT_MIN_OVERLAP
+}
+
+/// Distance from `p` to the union of `triangles` (0 inside one), whose boundary edges are
+/// `boundary`.
+fn support_distance(p: [f64; 2], triangles: &[[[f64; 2]; 3]], boundary: &[[[f64; 2]; 2]]) -> f64 {
+    let cross =
+        |a: [f64; 2], b: [f64; 2]| (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
+    let inside = triangles.iter().any(|&[a, b, c]| {
+        let (u, v, w) = (cross(a, b), cross(b, c), cross(c, a));
+        (u >= 0.0 && v >= 0.0 && w >= 0.0) || (u <= 0.0 && v <= 0.0 && w <= 0.0)
+    });
+    if inside {
+        return 0.0;
+    }
+    boundary
+        .iter()
+        .map(|&[a, b]| segment_distance(p, a, b))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Distance from `p` to the segment `a`–`b`.
+fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let ab = [b[0] - a[0], b[1] - a[1]];
+    let len2 = ab[0] * ab[0] + ab[1] * ab[1];
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let foot = [a[0] + t * ab[0], a[1] + t * ab[1]];
+    ((p[0] - foot[0]).powi(2) + (p[1] - foot[1]).powi(2)).sqrt()
+}
+
+/// Distance from `p` to the closed polyline `coords` (row-major `x, y`).
+fn outline_motion(coords: &[f64], p: [f64; 2]) -> f64 {
+    let n = coords.len() / 2;
+    let node = |i: usize| [coords[2 * (i % n)], coords[2 * (i % n) + 1]];
+    let mut best = f64::INFINITY;
+    for i in 0..n {
+        best = best.min(segment_distance(p, node(i), node(i + 1)));
+    }
+    best
+}
+
+/// The median segment length of the closed polyline `coords` (row-major `x, y`).
+fn median_spacing(coords: &[f64]) -> f64 {
+    let n = coords.len() / 2;
+    let node = |i: usize| [coords[2 * (i % n)], coords[2 * (i % n) + 1]];
+    let mut lengths: Vec<f64> = (0..n)
+        .map(|i| {
+            let (a, b) = (node(i), node(i + 1));
+            let ab = [b[0] - a[0], b[1] - a[1]];
+            (ab[0] * ab[0] + ab[1] * ab[1]).sqrt()
+        })
+        .collect();
+    lengths.sort_by(f64::total_cmp);
+    lengths.get(n / 2).copied().unwrap_or(0.0)
 }
 
 /// Distance from `p` to the closed polyline `coords` (row-major `x, y`), and the polyline's
 /// median segment length.
 pub(crate) fn outline_distance(coords: &[f64], p: [f64; 2]) -> (f64, f64) {
-    let n = coords.len() / 2;
-    let node = |i: usize| [coords[2 * (i % n)], coords[2 * (i % n) + 1]];
-    let mut best = f64::INFINITY;
-    let mut lengths = Vec::with_capacity(n);
-    for i in 0..n {
-        let (a, b) = (node(i), node(i + 1));
-        let ab = [b[0] - a[0], b[1] - a[1]];
-        let len2 = ab[0] * ab[0] + ab[1] * ab[1];
-        lengths.push(len2.sqrt());
-        let t = if len2 > 0.0 {
-            (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let foot = [a[0] + t * ab[0], a[1] + t * ab[1]];
-        best = best.min(((p[0] - foot[0]).powi(2) + (p[1] - foot[1]).powi(2)).sqrt());
-    }
-    lengths.sort_by(f64::total_cmp);
-    (best, lengths.get(n / 2).copied().unwrap_or(0.0))
+    (outline_motion(coords, p), median_spacing(coords))
 }
 
 #[cfg(test)]
@@ -353,5 +615,106 @@ mod step_tests {
         // Surfaces and point sets are not bounded.
         let cloud = Shape::new(2, next.coords().to_vec(), Topology::None).unwrap();
         assert!(step_allowed(&from, &[0.0, 25.0], &cloud));
+    }
+}
+
+#[cfg(test)]
+mod bound_tests {
+    use super::*;
+    use crate::{SenselAspect, SequenceObject};
+    use modal_core::{Shape, Topology};
+
+    /// A surface on the grid `x0..x0 + n`, `y0..y0 + n` (unit spacing), two triangles a cell.
+    fn patch(frame: usize, x0: f64, y0: f64, n: usize) -> SequenceObject {
+        let mut points = Vec::new();
+        for r in 0..=n {
+            for c in 0..=n {
+                points.push([x0 + c as f64, y0 + r as f64, 1.0]);
+            }
+        }
+        let at = |r: usize, c: usize| r * (n + 1) + c;
+        let mut triangles = Vec::new();
+        for r in 0..n {
+            for c in 0..n {
+                triangles.push([at(r, c), at(r, c + 1), at(r + 1, c + 1)]);
+                triangles.push([at(r, c), at(r + 1, c + 1), at(r + 1, c)]);
+            }
+        }
+        let shape = Shape::from_points_3d(&points, Topology::Mesh { triangles }).unwrap();
+        SequenceObject {
+            id: frame,
+            frame,
+            index: 0,
+            level: None,
+            shape,
+            measures: None,
+        }
+    }
+
+    #[test]
+    fn a_surface_step_is_bounded_by_the_footprints_motion_there() {
+        let a = patch(0, 0.0, 0.0, 10);
+        // A footprint 30 sensels on is another contact: no step at all, not even from the
+        // trailing edge (which a rigid jump would otherwise carry as far as the jump).
+        let far = StepBound::new(&a, &patch(1, 30.0, 0.0, 10), SenselAspect::SQUARE);
+        assert!(far.is_cut());
+        assert!(!far.allows(&[0.0, 5.0, 1.0], &[30.0, 5.0, 1.0]));
+        // A footprint 8 sensels on, overlapping the old by 3 of its 11 columns: a node reaches
+        // out to where the footprint went, plus 1.5 edge lengths (the median edge is 1).
+        let on = StepBound::new(&a, &patch(1, 8.0, 0.0, 10), SenselAspect::SQUARE);
+        assert!(!on.is_free() && !on.is_cut());
+        assert!(on.allows(&[0.0, 5.0, 1.0], &[9.4, 5.0, 1.0]));
+        assert!(!on.allows(&[0.0, 5.0, 1.0], &[9.6, 5.0, 1.0]));
+        assert!(!on.allows(&[5.0, 5.0, 1.0], &[15.0, 5.0, 1.0]));
+        // Inside a footprint that stays, a node may move 1.5 edge lengths only: not heel to toe.
+        let still = StepBound::new(&a, &patch(1, 0.0, 0.0, 10), SenselAspect::SQUARE);
+        assert!(still.allows(&[2.0, 2.0, 1.0], &[3.0, 3.0, 1.0]));
+        assert!(!still.allows(&[2.0, 2.0, 1.0], &[8.0, 8.0, 1.0]));
+        // A footprint moving 3 sensels: the trailing edge follows it.
+        let moved = StepBound::new(&a, &patch(1, 3.0, 0.0, 10), SenselAspect::SQUARE);
+        assert!(moved.allows(&[0.0, 5.0, 1.0], &[3.0, 5.0, 1.0]));
+        // Oblong sensels (rows 1.5 times as tall): the same two rows are 3, not 2, in the plane.
+        let a_row = patch(0, 0.0, 0.0, 10);
+        let up = patch(1, 0.0, 2.0, 10);
+        let square = StepBound::new(&a_row, &up, SenselAspect::SQUARE);
+        let oblong = StepBound::new(&a_row, &up, SenselAspect::of_pitch(Some([5.08, 7.62])));
+        // From the bottom row, 2 rows below the support's edge: 2 + 1.5 in square sensels,
+        // 3 + 1.5 × 1.5 in true proportions (the median edge is a row, 1.5 tall).
+        assert!(square.allows(&[5.0, 0.0, 1.0], &[5.0, 3.4, 1.0]));
+        assert!(!square.allows(&[5.0, 0.0, 1.0], &[8.0, 2.0, 1.0]));
+        assert!(oblong.allows(&[5.0, 0.0, 1.0], &[8.0, 2.0, 1.0]));
+        assert!(!oblong.allows(&[5.0, 0.0, 1.0], &[5.0, 3.6, 1.0]));
+    }
+
+    #[test]
+    fn isocontour_levels_whose_regions_do_not_overlap_cut_every_step() {
+        let ring = |cx: f64, r: f64| {
+            let n = 40;
+            let c: Vec<f64> = (0..n)
+                .flat_map(|k| {
+                    let t = std::f64::consts::TAU * k as f64 / n as f64;
+                    [cx + r * t.cos(), 10.0 + r * t.sin()]
+                })
+                .collect();
+            Shape::new(2, c, Topology::ClosedContour).unwrap()
+        };
+        let level = |index: usize, shape: Shape| SequenceObject {
+            id: index,
+            frame: 7,
+            index,
+            level: Some(index as f64),
+            shape,
+            measures: None,
+        };
+        let low = level(0, ring(10.0, 6.0));
+        // Nested inside: the contours' rule between the two level lines.
+        let inner = StepBound::new(&low, &level(1, ring(10.0, 4.0)), SenselAspect::SQUARE);
+        assert!(!inner.is_cut() && !inner.is_free());
+        assert!(inner.allows(&[16.0, 10.0], &[14.0, 10.0]));
+        assert!(!inner.allows(&[16.0, 10.0], &[6.0, 10.0]));
+        // Elsewhere on the foot: no step at all, however short.
+        let elsewhere = StepBound::new(&low, &level(1, ring(22.0, 3.0)), SenselAspect::SQUARE);
+        assert!(elsewhere.is_cut());
+        assert!(!elsewhere.allows(&[16.0, 10.0], &[19.0, 10.0]));
     }
 }

@@ -86,7 +86,7 @@ pub struct PairRow {
     /// that are not excess; 0 when there are none.
     pub mean_cost: f64,
     /// One-to-one matches that node tracks may follow: within the step rule of
-    /// [`crate::pairing::step_allowed`] (`matches.csv`'s `trackable`). A one-to-one assignment
+    /// [`crate::pairing::StepBound`] (`matches.csv`'s `trackable`). A one-to-one assignment
     /// pairs every node of the smaller object, so `optimisation_percent` is near 100 by
     /// construction; this says how many of those pairs a track may take.
     pub trackable_matches: usize,
@@ -112,6 +112,11 @@ pub struct PairMatch {
     pub result: MatchResult,
     /// The pair's row of the pairs table.
     pub row: PairRow,
+    /// Per match of [`MatchResult::pairs`], in order: whether a node track may follow it
+    /// (`matches.csv`'s `trackable`): one-to-one and within the pair's
+    /// [`StepBound`](crate::pairing::StepBound), judged once when the pair is matched. Every
+    /// chaining of tracks reads it.
+    pub trackable: Vec<bool>,
 }
 
 impl PairMatch {
@@ -138,6 +143,7 @@ impl PairMatch {
         Ok(PairMatch {
             result,
             row: self.row.clone(),
+            trackable: self.trackable.clone(),
             ..*self
         })
     }

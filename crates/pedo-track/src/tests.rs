@@ -499,3 +499,131 @@ fn a_strided_run_builds_and_pairs_its_kept_frames_across_windows() {
         fa < edge && fb >= edge
     }));
 }
+
+/// A recording of `frames` on a 24 × 24 grid, each sensel's value `value(frame, row, col)`.
+fn graded(frames: usize, value: impl Fn(usize, usize, usize) -> f32) -> Recording {
+    let (rows, cols) = (24, 24);
+    let mut data = Vec::with_capacity(frames * rows * cols);
+    for f in 0..frames {
+        for r in 0..rows {
+            for c in 0..cols {
+                data.push(value(f, r, c));
+            }
+        }
+    }
+    Recording::new(frames, rows, cols, data, vec![true; rows * cols]).unwrap()
+}
+
+/// A pressure dome of `peak` at its centre (`cx`, `cy`), falling to half the peak at `radius`
+/// and to nothing beyond it.
+fn dome(cx: f64, cy: f64, radius: f64, peak: f64) -> impl Fn(usize, usize) -> f32 {
+    move |r, c| {
+        let d = (r as f64 - cy).hypot(c as f64 - cx);
+        if d <= radius {
+            (peak * (1.0 - 0.5 * d / radius)) as f32
+        } else {
+            0.0
+        }
+    }
+}
+
+/// The frames a track passes from and to, step by step.
+fn track_frame_steps(run: &SequenceResult) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    for t in run.all_tracks() {
+        for w in t.steps.windows(2) {
+            out.push((run.objects[w[0].0].frame, run.objects[w[1].0].frame));
+        }
+    }
+    out
+}
+
+fn surface_run(rec: &Recording) -> SequenceResult {
+    let params = RunParams {
+        model: ObjectModel::Surface,
+        ..RunParams::default()
+    };
+    let options = params.to_options(rec).unwrap();
+    run_sequence(rec, &options, &|_, _, _| {}).unwrap()
+}
+
+#[test]
+fn a_surface_whose_support_jumps_ends_its_tracks() {
+    // Frames 0–2 load the left of the plate, frames 3–5 the right, 14 sensels on: nothing of
+    // frame 2's footprint is loaded in frame 3, and the modal matching still pairs every node.
+    let rec = graded(6, |f, r, c| {
+        let x = if f < 3 { 5.0 } else { 19.0 };
+        dome(x, 12.0, 3.5, 100.0)(r, c)
+    });
+    let run = surface_run(&rec);
+    assert_eq!(run.pairs.len(), 5);
+    let jump = run
+        .pairs
+        .iter()
+        .find(|p| run.objects[p.a].frame == 2)
+        .unwrap();
+    assert!(jump.row.optimisation_matches > 10);
+    assert_eq!(jump.row.trackable_matches, 0, "{:?}", jump.row);
+    assert!(jump.trackable.iter().all(|t| !t));
+    let steps = track_frame_steps(&run);
+    assert!(!steps.contains(&(2, 3)), "a track crossed the jump");
+    // The still frames either side keep their tracks.
+    assert!(steps.contains(&(0, 1)) && steps.contains(&(4, 5)));
+    for p in run.pairs.iter().filter(|p| run.objects[p.a].frame != 2) {
+        assert!(p.row.trackable_percent > 90.0, "{:?}", p.row);
+    }
+}
+
+#[test]
+fn a_moving_surface_keeps_its_tracks() {
+    // A dome sliding one sensel a frame to the right: its footprint moves with it.
+    let rec = graded(6, |f, r, c| dome(7.0 + f as f64, 12.0, 4.5, 100.0)(r, c));
+    let run = surface_run(&rec);
+    assert_eq!(run.pairs.len(), 5);
+    for p in &run.pairs {
+        assert!(p.row.trackable_percent > 50.0, "{:?}", p.row);
+    }
+    // Some tracks run through every frame.
+    let longest = run.all_tracks().map(|t| t.steps.len()).max().unwrap();
+    assert_eq!(longest, 6);
+}
+
+#[test]
+fn an_isocontour_level_whose_largest_region_switches_starts_new_tracks() {
+    // One frame: a broad low region on the left (the largest region of the low levels) and a
+    // small high peak on the right, the only region of the high levels.
+    let broad = dome(7.0, 12.0, 6.0, 40.0);
+    let peak = dome(18.0, 12.0, 3.5, 100.0);
+    let rec = graded(1, |_, r, c| broad(r, c) + peak(r, c));
+    let params = RunParams {
+        model: ObjectModel::Isocontour,
+        ..RunParams::default()
+    };
+    let mut options = params.to_options(&rec).unwrap();
+    options.iso_levels = Some(vec![10.0, 16.0, 22.0, 60.0, 70.0]);
+    let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+    assert_eq!(run.objects.len(), 5);
+    assert_eq!(run.pairs.len(), 4);
+    // The largest region of levels 0–2 is on the left, of levels 3–4 on the right.
+    let x = |o: usize| {
+        let s = &run.objects[o].shape;
+        (0..s.len()).map(|k| s.point(k)[0]).sum::<f64>() / s.len() as f64
+    };
+    assert!(x(2) < 12.0 && x(3) > 12.0, "{} {}", x(2), x(3));
+    for p in &run.pairs {
+        let switched = p.a == 2;
+        if switched {
+            assert_eq!(p.row.trackable_matches, 0, "{:?}", p.row);
+        } else {
+            assert!(p.row.trackable_matches > 0, "{:?}", p.row);
+        }
+    }
+    // No track passes from level 2 to level 3; tracks do continue between the other levels.
+    let levels: Vec<Vec<usize>> = run
+        .all_tracks()
+        .map(|t| t.steps.iter().map(|s| s.0).collect())
+        .collect();
+    assert!(!levels.iter().any(|l| l.windows(2).any(|w| w == [2, 3])));
+    assert!(levels.iter().any(|l| l.windows(2).any(|w| w == [0, 1])));
+    assert!(levels.iter().any(|l| l.windows(2).any(|w| w == [3, 4])));
+}
