@@ -7,7 +7,7 @@ use clap::Args;
 use modal_core::shape::looks_like_closed_contour;
 use modal_core::{Search, Shape, Topology};
 use pedo_output::figure::{FigureAxes, MatchFigure, ObjectLabel};
-use pedo_output::{FigureFormat, ReportFormat};
+use pedo_output::{FigureFormat, FigureSet, ReportFormat};
 use pedo_track::SenselAspect;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -43,9 +43,13 @@ pub struct MatchArgs {
     /// the matches.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Format of the match figure written with --out: png, svg or none (default: png).
+    /// The match figure written with --out: summary or pairs draw it (a match's one figure is
+    /// its pair's), none draws none (default: summary).
+    #[arg(long, value_parser = word::<FigureSet>())]
+    pub figures: Option<FigureSet>,
+    /// File format of the match figure: png or svg (default: png).
     #[arg(long, value_parser = word::<FigureFormat>())]
-    pub figures: Option<FigureFormat>,
+    pub figure_format: Option<FigureFormat>,
     /// Print the match result as one JSON object (with its pairs) instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -254,7 +258,10 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
             &dir,
             &figure,
             &r.pairs,
-            args.figures.unwrap_or_default().into(),
+            pedo_output::FigureKinds::of(
+                args.figures.unwrap_or_default(),
+                args.figure_format.unwrap_or_default(),
+            ),
         )?;
         if args.report.unwrap_or_default() == ReportFormat::Html {
             write_match_report(&dir, &figure, &r, &summary)?;

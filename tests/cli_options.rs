@@ -68,7 +68,16 @@ fn run_and_match_flags_are_the_library_option_tables() {
     expected.extend(flags_of(&pair));
     expected.extend(flags_of(&units));
     expected.extend(own(&[
-        "points", "frame", "frame-b", "out", "figures", "report", "layout", "json", "help",
+        "points",
+        "frame",
+        "frame-b",
+        "out",
+        "figures",
+        "figure-format",
+        "report",
+        "layout",
+        "json",
+        "help",
     ]));
     assert_eq!(long_flags("match"), expected);
 

@@ -13,8 +13,10 @@
 //! match page shows both objects, the matches by cost class, excess matches and unmatched nodes,
 //! and a 3-D view for 3-D points.
 //!
-//! Size is bounded: when `frames × rows × cols` exceeds [`MAX_PLAYER_VALUES`], the player keeps
-//! every `s`-th frame only (the report says so); the time series keep every frame.
+//! Size is bounded whatever the recording's length: the player shows at most
+//! [`MAX_PLAYER_FRAMES`] frames, evenly spaced, and at most [`MAX_PLAYER_VALUES`] pressure values
+//! (`frames × rows × cols`), keeping every `s`-th frame beyond (the report says so and names each
+//! frame by its own number); the time series keep every frame.
 
 use pedo_io::counted;
 use pedo_io::{IoError, Recording, Result};
@@ -25,6 +27,11 @@ use std::collections::HashMap;
 /// Most pressure values the player embeds (frames × rows × cols); beyond it frames are
 /// decimated. At most 5 bytes each: 12.5 MB, plus plotly.js (4.6 MB) and the overlays, under 25 MB.
 pub const MAX_PLAYER_VALUES: usize = 2_500_000;
+
+/// Most frames the player embeds, each with its pressure image and overlays (contours, matches,
+/// trails: about 10 kB a frame of a walk); beyond it frames are decimated, so that the report of a
+/// long recording stays a few megabytes.
+pub const MAX_PLAYER_FRAMES: usize = 240;
 
 /// Frames of history drawn as a trail behind each track's node.
 const TRAIL_FRAMES: usize = 4;
@@ -474,7 +481,7 @@ fn pressure_header(recording: &Recording, shown: Option<String>) -> String {
 /// (`total_force_n`, `total_load_mm2`, `total_load_sensels`): newtons when the pressure units
 /// convert and the sensel area is known; else the plain sum of the values times the sensel area
 /// (the file's units × mm²) or, without a pitch, the plain sum (the file's units × sensels).
-fn load_label(recording: &Recording) -> String {
+pub(crate) fn load_label(recording: &Recording) -> String {
     if recording.force_factor().is_some() {
         return "total force (N)".into();
     }
@@ -618,7 +625,7 @@ fn options_html(options: &[(String, String)]) -> String {
 /// Everything the page's script draws, as JSON.
 fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo) -> Value {
     let (n, rows, cols) = (recording.n_frames(), recording.rows(), recording.cols());
-    let step = (n * rows * cols).div_ceil(MAX_PLAYER_VALUES).max(1);
+    let step = player_step(n, rows * cols);
     let shown: Vec<usize> = (0..n).step_by(step).collect();
     let (kpa, punits) = pressure_scale(recording);
     let (pitch, xy_units) = match recording.pitch_mm {
@@ -683,10 +690,18 @@ fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo
         .map(|(s, e)| (s.min(n - 1), e.clamp(s.min(n - 1) + 1, n)))
         .unwrap_or((0, n));
     let decimation = (step > 1).then(|| {
+        let why = if n > MAX_PLAYER_FRAMES {
+            format!("the recording holds more than {MAX_PLAYER_FRAMES} frames")
+        } else {
+            format!(
+                "the recording holds more than {MAX_PLAYER_VALUES} pressure values (frames × rows × cols)"
+            )
+        };
         format!(
-            "The player shows every {} frame: the recording holds more than {MAX_PLAYER_VALUES} \
-             pressure values (frames × rows × cols). The time series keep every frame.",
-            ordinal(step)
+            "The player shows every {} frame ({} of {n}, each named by its own number): {why}. \
+             The time series and the tables keep every frame.",
+            ordinal(step),
+            shown.len()
         )
     });
     json!({
@@ -701,6 +716,15 @@ fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo
         "isocontour": result.objects.iter().any(|o| o.level.is_some()),
         "first_object_frame": result.objects.first().map(|o| o.frame),
     })
+}
+
+/// The frame stride of the player of a recording of `n` frames of `sensels` values each: 1, or
+/// the smallest that keeps it within [`MAX_PLAYER_FRAMES`] frames and [`MAX_PLAYER_VALUES`]
+/// values.
+pub fn player_step(n: usize, sensels: usize) -> usize {
+    let by_values = (n * sensels).div_ceil(MAX_PLAYER_VALUES);
+    let by_frames = n.div_ceil(MAX_PLAYER_FRAMES);
+    by_values.max(by_frames).max(1)
 }
 
 /// The frame the player opens on: the first frame it shows that holds objects within the
@@ -1544,6 +1568,36 @@ mod tests {
     }
 
     #[test]
+    fn long_recordings_of_small_frames_show_at_most_the_frame_bound() {
+        // 1,000 frames of 4 × 5 sensels: far below the value bound, above the frame bound.
+        let frames = 1000;
+        let rec = flat(frames, "kPa", Some([5.0, 5.0]));
+        let d = embedded_data(&run_report(&rec, &SequenceResult::default(), &info()).unwrap());
+        let step = frames.div_ceil(MAX_PLAYER_FRAMES);
+        assert_eq!(d["step"], step);
+        let shown: Vec<usize> = serde_json::from_value(d["shown"].clone()).unwrap();
+        assert!(shown.len() <= MAX_PLAYER_FRAMES, "{}", shown.len());
+        // Evenly spaced, named by their own numbers, from the first frame to near the last.
+        assert_eq!(shown, (0..frames).step_by(step).collect::<Vec<_>>());
+        assert!(frames - 1 - shown[shown.len() - 1] < step);
+        assert_eq!(d["z"].as_array().unwrap().len(), shown.len());
+        assert_eq!(
+            d["overlays"]["frames"].as_array().unwrap().len(),
+            shown.len()
+        );
+        let note = d["decimation"].as_str().unwrap();
+        assert!(
+            note.contains(&format!("({} of {frames}, ", shown.len()))
+                && note.contains(&format!("more than {MAX_PLAYER_FRAMES} frames")),
+            "{note}"
+        );
+        // The time series keep every frame.
+        assert_eq!(d["series"]["force"].as_array().unwrap().len(), frames);
+        assert_eq!(player_step(MAX_PLAYER_FRAMES, 20), 1);
+        assert_eq!(player_step(MAX_PLAYER_FRAMES + 1, 20), 2);
+    }
+
+    #[test]
     fn long_recordings_are_decimated_below_the_bound() {
         let (frames, rows, cols) = (301, 100, 100);
         let rec = Recording::from_array(frames, rows, cols, vec![0.0; frames * rows * cols], None)
@@ -1554,7 +1608,7 @@ mod tests {
         assert_eq!(d["step"], 2);
         let note = d["decimation"].as_str().unwrap();
         assert!(
-            note.starts_with("The player shows every 2nd frame: "),
+            note.starts_with("The player shows every 2nd frame (151 of 301, "),
             "{note}"
         );
         assert_eq!(d["shown"].as_array().unwrap().len(), 151);
