@@ -19,7 +19,7 @@
 use modal_core::{MatchPair, Shape, Topology};
 use pedo_io::Grid;
 use pedo_io::{IoError, Result};
-use pedo_track::{SequenceResult, Track};
+use pedo_track::{SequenceObject, SequenceResult, SequenceSink};
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
@@ -392,33 +392,125 @@ impl MatchFigure<'_> {
 impl TracksFigure<'_> {
     /// The figure as PNG bytes.
     pub fn to_png(&self) -> Result<Vec<u8>> {
-        render_png(&self.layout()?)
+        self.gathered()?.to_png(self.background, self.axes)
     }
 
     /// The figure as a standalone SVG document.
     pub fn to_svg(&self) -> Result<String> {
-        render_svg(&self.layout()?)
+        self.gathered()?.to_svg(self.background, self.axes)
     }
 
-    fn chosen_tracks(&self) -> Vec<std::borrow::Cow<'_, Track>> {
-        let mut chosen: Vec<_> = self
-            .result
-            .all_tracks()
-            .filter(|t| t.steps.len() >= self.min_steps.max(2))
-            .collect();
-        // Longest first; ties by first object so the choice is deterministic.
-        chosen.sort_by_key(|t| (std::cmp::Reverse(t.steps.len()), t.steps[0]));
-        chosen
+    /// The run's events gathered as a [`TracksGather`].
+    fn gathered(&self) -> Result<TracksGather> {
+        let mut g = TracksGather::new(self.min_steps, self.max_tracks);
+        let objects = &self.result.objects;
+        let mut start = 0;
+        while start < objects.len() {
+            let frame = objects[start].frame;
+            let end = start
+                + objects[start..]
+                    .iter()
+                    .take_while(|o| o.frame == frame)
+                    .count();
+            g.frame_objects(frame, &objects[start..end])?;
+            start = end;
+        }
+        for (k, t) in self.result.all_tracks().enumerate() {
+            let steps = t
+                .steps
+                .iter()
+                .map(
+                    |&(o, n)| match objects.get(o).filter(|obj| n < obj.shape.len()) {
+                        Some(obj) => Ok((obj, n)),
+                        None => Err(IoError::invalid(format!(
+                            "track step ({o}, {n}) names no node"
+                        ))),
+                    },
+                )
+                .collect::<Result<Vec<_>>>()?;
+            g.track(k, &steps)?;
+        }
+        Ok(g)
+    }
+}
+
+/// A track a [`TracksGather`] keeps: its steps, its first (object, node), each step's position
+/// in sensels and its object's level.
+type GatheredTrack = (usize, (usize, usize), Vec<([f64; 2], Option<f64>)>);
+
+/// What a tracks figure ([`TracksFigure`]) draws of a run, gathered from its events
+/// ([`SequenceSink`]) in memory bounded whatever the recording's length: the `max_tracks`
+/// longest tracks spanning at least `min_steps` objects (ties by their first object and node),
+/// each as its nodes' positions, how many tracks were long enough, the frames of the objects and,
+/// for an isocontour run (every object a level of one frame), the levels.
+#[derive(Debug, Clone)]
+pub struct TracksGather {
+    min_steps: usize,
+    max_tracks: usize,
+    /// The longest tracks so far, longest first: (steps, first (object, node), each step's
+    /// position in sensels and its object's level).
+    chosen: Vec<GatheredTrack>,
+    eligible: usize,
+    objects: usize,
+    frames: Option<(usize, usize)>,
+    /// Every object so far has a level and lies in one frame; their levels while so.
+    iso: bool,
+    levels: Vec<f64>,
+}
+
+impl TracksGather {
+    /// An empty gathering for a figure of the `max_tracks` longest tracks spanning at least
+    /// `min_steps` objects (2 at least whatever is set).
+    pub fn new(min_steps: usize, max_tracks: usize) -> Self {
+        Self {
+            min_steps: min_steps.max(2),
+            max_tracks,
+            chosen: Vec::new(),
+            eligible: 0,
+            objects: 0,
+            frames: None,
+            iso: true,
+            levels: Vec::new(),
+        }
     }
 
-    fn layout(&self) -> Result<Layout> {
-        let eligible = self.chosen_tracks();
-        let shown = &eligible[..eligible.len().min(self.max_tracks)];
-        let iso = iso_frame(self.result).map(|frame| (frame, self.level_range()));
+    /// The frame of an isocontour run (every object has a level and all share one frame).
+    pub fn iso_frame(&self) -> Option<usize> {
+        match self.frames {
+            Some((f0, f1)) if self.iso && f0 == f1 => Some(f0),
+            _ => None,
+        }
+    }
+
+    /// The image the figure is drawn over: the frame whose isobaric levels an isocontour run
+    /// matched, else the recording's peak-pressure image.
+    pub fn background(&self, recording: &pedo_io::Recording) -> Result<Grid> {
+        match self.iso_frame() {
+            Some(frame) => recording.frame(frame),
+            None => Ok(recording.peak_image()),
+        }
+    }
+
+    /// The figure over `background` as PNG bytes.
+    pub fn to_png(&self, background: &Grid, axes: &FigureAxes) -> Result<Vec<u8>> {
+        render_png(&self.layout(background, axes)?)
+    }
+
+    /// The figure over `background` as a standalone SVG document.
+    pub fn to_svg(&self, background: &Grid, axes: &FigureAxes) -> Result<String> {
+        render_svg(&self.layout(background, axes)?)
+    }
+
+    fn layout(&self, background: &Grid, axes: &FigureAxes) -> Result<Layout> {
+        let shown = &self.chosen;
+        let iso = self.iso_frame().map(|frame| (frame, self.level_range()));
         let mut lines = Vec::new();
         let mut starts = Vec::new();
-        for (k, t) in shown.iter().enumerate() {
-            let steps = self.track_steps(t)?;
+        for (k, (_, _, steps)) in shown.iter().enumerate() {
+            let steps: Vec<TrackStep> = steps
+                .iter()
+                .map(|&(p, level)| (axes.to_plot(p), level))
+                .collect();
             let colour = |level: Option<f64>| match (iso, level) {
                 (Some((_, range)), Some(l)) => level_color(l, range),
                 _ => TRACK_PALETTE[k % TRACK_PALETTE.len()],
@@ -444,75 +536,51 @@ impl TracksFigure<'_> {
             }
         }
         lines.extend(starts);
-        let (bounds, mut image) = self.background_image()?;
+        let (bounds, mut image) = pressure_image(background, axes)?;
         let (title, subtitle, legend) = match iso {
             Some((frame, range)) => {
                 if let Some(image) = &mut image {
-                    image.label = self
-                        .axes
-                        .pressure_label(&format!("pressure, frame {frame}"));
-                    image.marks = self.level_marks(range);
+                    image.label = axes.pressure_label(&format!("pressure, frame {frame}"));
+                    image.marks = self
+                        .levels
+                        .iter()
+                        .map(|&l| (l, level_color(l, range)))
+                        .collect();
                 }
-                self.iso_texts(frame, range, shown.len(), eligible.len())
+                self.iso_texts(axes, frame, range, shown.len())
             }
-            None => self.frame_texts(shown.len(), eligible.len()),
+            None => self.frame_texts(axes, shown.len()),
         };
         Ok(Layout::new(
-            bounds, self.axes, title, subtitle, legend, image, lines,
+            bounds, axes, title, subtitle, legend, image, lines,
         ))
-    }
-
-    /// A track's steps: each node in plotted units, with its object's isobaric level.
-    fn track_steps(&self, t: &Track) -> Result<Vec<TrackStep>> {
-        t.steps
-            .iter()
-            .map(|&(o, n)| {
-                let obj = self.result.objects.get(o).filter(|obj| n < obj.shape.len());
-                let obj = obj.ok_or_else(|| {
-                    IoError::invalid(format!("track step ({o}, {n}) names no node"))
-                })?;
-                let p = obj.shape.point(n);
-                Ok((self.axes.to_plot([p[0], p[1]]), obj.level))
-            })
-            .collect()
     }
 
     /// The lowest and highest isobaric level of the run's objects.
     fn level_range(&self) -> [f64; 2] {
-        let levels = self.result.objects.iter().filter_map(|o| o.level);
-        levels.fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], l| {
-            [lo.min(l), hi.max(l)]
-        })
-    }
-
-    /// Each level of the run in its colour, marked on the pressure bar.
-    fn level_marks(&self, range: [f64; 2]) -> Vec<(f64, RGBColor)> {
-        let levels = self.result.objects.iter().filter_map(|o| o.level);
-        levels.map(|l| (l, level_color(l, range))).collect()
-    }
-
-    /// The plot's extent (the whole image) and the image with its colour bar.
-    fn background_image(&self) -> Result<(Bounds, Option<PressureImage>)> {
-        pressure_image(self.background, self.axes)
+        self.levels
+            .iter()
+            .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], &l| {
+                [lo.min(l), hi.max(l)]
+            })
     }
 
     /// Title, subtitle and legend of tracks across frames.
-    fn frame_texts(&self, shown: usize, eligible: usize) -> (String, String, Vec<LegendEntry>) {
-        let frames = self.result.objects.iter().map(|o| o.frame);
-        let title = match (frames.clone().min(), frames.max()) {
-            (Some(f0), Some(f1)) => {
-                let times = match (self.axes.time_s(f0), self.axes.time_s(f1)) {
+    fn frame_texts(&self, axes: &FigureAxes, shown: usize) -> (String, String, Vec<LegendEntry>) {
+        let title = match self.frames {
+            Some((f0, f1)) => {
+                let times = match (axes.time_s(f0), axes.time_s(f1)) {
                     (Some(t0), Some(t1)) => format!(" ({t0:.3}\u{2013}{t1:.3} s)"),
                     _ => String::new(),
                 };
                 format!("Node tracks, frames {f0}\u{2013}{f1}{times}")
             }
-            _ => "Node tracks (no objects)".to_string(),
+            None => "Node tracks (no objects)".to_string(),
         };
         let subtitle = format!(
-            "the {shown} longest of {eligible} tracks spanning \u{2265} {} objects, over the peak \
+            "the {shown} longest of {} tracks spanning \u{2265} {} objects, over the peak \
              pressure",
-            self.min_steps.max(2)
+            self.eligible, self.min_steps
         );
         (
             title,
@@ -524,24 +592,24 @@ impl TracksFigure<'_> {
     /// Title, subtitle and legend of tracks across the isobaric levels of `frame`.
     fn iso_texts(
         &self,
+        axes: &FigureAxes,
         frame: usize,
         [lo, hi]: [f64; 2],
         shown: usize,
-        eligible: usize,
     ) -> (String, String, Vec<LegendEntry>) {
-        let units = match self.axes.pressure_units.as_str() {
+        let units = match axes.pressure_units.as_str() {
             "" => String::new(),
             u => format!(" {u}"),
         };
-        let n = self.result.objects.len();
         let title = format!(
-            "Node tracks across {n} isobaric levels, {}",
-            self.axes.frame_text(frame)
+            "Node tracks across {} isobaric levels, {}",
+            self.objects,
+            axes.frame_text(frame)
         );
         let subtitle = format!(
-            "levels {lo:.0}\u{2013}{hi:.0}{units}; the {shown} longest of {eligible} tracks \
+            "levels {lo:.0}\u{2013}{hi:.0}{units}; the {shown} longest of {} tracks \
              spanning \u{2265} {} levels",
-            self.min_steps.max(2)
+            self.eligible, self.min_steps
         );
         let mut legend = track_legend("node track (colour: level)", level_color(lo, [lo, hi]));
         legend.push(LegendEntry {
@@ -549,6 +617,57 @@ impl TracksFigure<'_> {
             glyph: Glyph::Line(level_color(hi, [lo, hi])),
         });
         (title, subtitle, legend)
+    }
+}
+
+impl SequenceSink for TracksGather {
+    fn frame_objects(&mut self, _: usize, objects: &[SequenceObject]) -> Result<()> {
+        for o in objects {
+            self.objects += 1;
+            self.frames = Some(match self.frames {
+                Some((f0, f1)) => (f0.min(o.frame), f1.max(o.frame)),
+                None => (o.frame, o.frame),
+            });
+            match o.level {
+                Some(l) if self.iso => self.levels.push(l),
+                _ => {
+                    self.iso = false;
+                    self.levels = Vec::new();
+                }
+            }
+            if self.frames.is_some_and(|(f0, f1)| f0 != f1) {
+                self.iso = false;
+                self.levels = Vec::new();
+            }
+        }
+        Ok(())
+    }
+
+    fn track(&mut self, _: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
+        if steps.len() < self.min_steps {
+            return Ok(());
+        }
+        self.eligible += 1;
+        // Longest first; ties by first object and node so the choice is deterministic.
+        let key = |len: usize, first: (usize, usize)| (std::cmp::Reverse(len), first);
+        let first = (steps[0].0.id, steps[0].1);
+        let new = key(steps.len(), first);
+        let at = self
+            .chosen
+            .partition_point(|(len, f, _)| key(*len, *f) < new);
+        if at >= self.max_tracks {
+            return Ok(());
+        }
+        let nodes = steps
+            .iter()
+            .map(|&(o, n)| {
+                let p = o.shape.point(n);
+                ([p[0], p[1]], o.level)
+            })
+            .collect();
+        self.chosen.insert(at, (steps.len(), first, nodes));
+        self.chosen.truncate(self.max_tracks);
+        Ok(())
     }
 }
 
@@ -1436,7 +1555,7 @@ fn render_svg(layout: &impl Drawing) -> Result<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pedo_track::SequenceObject;
+    use pedo_track::Track;
 
     /// A closed polygon approximating an ellipse with semi-axes `rx`, `ry` around `centre`.
     fn ellipse(n: usize, centre: [f64; 2], rx: f64, ry: f64) -> Shape {
@@ -1741,7 +1860,11 @@ mod tests {
         ] {
             assert!(svg.contains(text), "SVG lacks {text:?}");
         }
-        let layout = fig.layout().unwrap();
+        let layout = fig
+            .gathered()
+            .unwrap()
+            .layout(fig.background, fig.axes)
+            .unwrap();
         let img = decode(&fig.to_png().unwrap());
         assert_eq!((img.width(), img.height()), layout.size());
         // The colour bar's darkest step (the peak) and the image's grey both appear.

@@ -3,14 +3,16 @@
 //! by one path, from the run's events ([`pedo_track::SequenceSink`]) as the engine
 //! (`pedo_track::stream_sequence`) makes them, or as `pedo_track::replay` hands over a result
 //! already made (`pymodal.run(out=...)`): [`FolderSink`] writes the tables as the events come
-//! ([`TablesSink`]) and, for the figures, the report and the animation, which draw the whole run
-//! (every track over the peak image, the report's player), gathers it ([`pedo_track::Collect`]);
-//! `summary.json` is made from the counts the events add up to.
+//! ([`TablesSink`]), gathers what the summary figures and the report draw from the same events in
+//! bounded memory ([`FrameCurves`], [`TracksGather`], [`ReportGather`]), and gathers every object
+//! and pair ([`pedo_track::Collect`]) only for what needs them all: the material points of a
+//! contour run, the pair figures and the animation. `summary.json` is made from the counts the
+//! events add up to.
 
 use crate::figure::{
-    tracks_background, Curve, CurvesFigure, FigureAxes, MatchFigure, ObjectLabel, PeakFigure,
-    TracksFigure,
+    Curve, CurvesFigure, FigureAxes, MatchFigure, ObjectLabel, PeakFigure, TracksGather,
 };
+use crate::html_report::ReportGather;
 use crate::outdir::OutDir;
 use crate::TableFormat;
 use crate::{Cell, InputInfo};
@@ -22,8 +24,8 @@ use pedo_io::recording::Recording;
 use pedo_io::FrameSource;
 use pedo_io::{IoError, Result};
 use pedo_track::{
-    replay, require_objects, stream_sequence, Collect, NoSink, PairMatch, RunCounts, RunParams,
-    SequenceObject, SequenceOptions, SequenceResult, SequenceSink, Stage,
+    replay, require_objects, stream_sequence, Collect, NoSink, ObjectModel, PairMatch, RunCounts,
+    RunParams, SequenceObject, SequenceOptions, SequenceResult, SequenceSink, Stage,
 };
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
@@ -556,14 +558,21 @@ enum Feed<'f, 'p> {
     Replay(&'p SequenceResult),
 }
 
-/// The sinks of a run folder: the tables, written as the events come ([`TablesSink`]), and,
-/// for a run with figures, a report or an animation, the run gathered for them and for the
-/// material points ([`Collect`], each pair without its match details: no output draws them).
+/// The sinks of a run folder: the tables, written as the events come ([`TablesSink`]); for the
+/// figures and the report, what they draw gathered from the events in memory bounded whatever
+/// the recording's length ([`FrameCurves`], [`TracksGather`], [`ReportGather`]); and, only for
+/// what needs the run's every object and pair (the material points of a contour run, the pair
+/// figures of `--figures pairs`, the animation), those objects and pairs ([`Collect`], each pair
+/// without its match details, no tracks).
 pub struct FolderSink<'a> {
     tables: TablesSink<'a>,
     whole: Option<Collect>,
     /// For the curves figure: each frame's total force and contact area (a few numbers a frame).
     curves: Option<FrameCurves>,
+    /// For the tracks figure: its longest tracks.
+    tracks: Option<TracksGather>,
+    /// For `report.html`: its player's frames and the time series.
+    report: Option<ReportGather>,
 }
 
 /// The total force and contact area of every frame of a run, as the `frames` events hand them
@@ -598,19 +607,31 @@ impl SequenceSink for FolderSink<'_> {
     }
     fn frame_objects(&mut self, frame: usize, objects: &[SequenceObject]) -> Result<()> {
         self.tables.frame_objects(frame, objects)?;
+        if let Some(t) = self.tracks.as_mut() {
+            t.frame_objects(frame, objects)?;
+        }
+        if let Some(r) = self.report.as_mut() {
+            r.frame_objects(frame, objects)?;
+        }
         self.whole
             .as_mut()
             .map_or(Ok(()), |w| w.frame_objects(frame, objects))
     }
     fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()> {
         self.tables.pair(pair, a, b)?;
+        if let Some(r) = self.report.as_mut() {
+            r.pair(pair, a, b)?;
+        }
         self.whole.as_mut().map_or(Ok(()), |w| w.pair(pair, a, b))
     }
     fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
         self.tables.track(index, steps)?;
-        self.whole
+        if let Some(t) = self.tracks.as_mut() {
+            t.track(index, steps)?;
+        }
+        self.report
             .as_mut()
-            .map_or(Ok(()), |w| w.track(index, steps))
+            .map_or(Ok(()), |r| r.track(index, steps))
     }
     fn reference_pair(
         &mut self,
@@ -619,9 +640,7 @@ impl SequenceSink for FolderSink<'_> {
         b: &SequenceObject,
         tracked: &[bool],
     ) -> Result<()> {
-        self.tables.reference_pair(pair, a, b, tracked)?;
-        let whole = self.whole.as_mut();
-        whole.map_or(Ok(()), |w| w.reference_pair(pair, a, b, tracked))
+        self.tables.reference_pair(pair, a, b, tracked)
     }
 }
 
@@ -645,7 +664,12 @@ fn write_folder(
     let dir = OutDir::create(out)?;
     // A replayed run is whole already: only a run of the engine gathers itself, and only
     // when an output needs the whole run.
-    let gather = matches!(feed, Feed::Run { .. }) && !tables_only(outputs);
+    // A replayed run is whole already; a run of the engine gathers its objects and pairs only
+    // for what needs them all: the material points of a contour run (written with any output
+    // besides the tables), the pair figures and the animation.
+    let points = run.options.model == ObjectModel::Contour && !tables_only(outputs);
+    let pair_figures = outputs.figures.any() && outputs.pair_figures;
+    let gather = matches!(feed, Feed::Run { .. }) && (points || pair_figures || outputs.animation);
     let progress = match &feed {
         Feed::Run { progress, .. } => *progress,
         Feed::Replay(_) => &|_, _, _| {},
@@ -654,6 +678,13 @@ fn write_folder(
         tables: TablesSink::create(&dir, run.recording, run.options, outputs.tables)?,
         whole: gather.then(|| Collect::new(false)),
         curves: outputs.figures.any().then(FrameCurves::default),
+        tracks: outputs
+            .figures
+            .any()
+            .then(|| TracksGather::new(TRACKS_MIN_STEPS, TRACKS_SHOWN)),
+        report: outputs
+            .report
+            .then(|| ReportGather::new(run.recording, run.options.frames)),
     };
     let (counts, ran, replayed) = match feed {
         Feed::Run { frames, progress } => {
@@ -671,24 +702,29 @@ fn write_folder(
         tables,
         whole,
         curves,
+        tracks,
+        report,
     } = sink;
     tables.finish(&counts)?;
     let cancel = run.options.cancel.as_ref();
     let gathered = whole.map(|w| w.into_result(counts.clone()));
-    let result = if tables_only(outputs) {
-        None
-    } else {
+    // What needs every object and pair: the gathered run, or the one replayed.
+    let whole = if points || pair_figures || outputs.animation {
         replayed.or(gathered.as_ref())
+    } else {
+        None
     };
     let steps = OutputSteps {
         progress,
-        total: result.map_or(0, |r| output_count(r, outputs)),
+        total: output_count(&counts, outputs, points),
         done: AtomicUsize::new(0),
     };
-    if let Some(r) = result {
-        let curves = curves.unwrap_or_default();
-        write_figures_and_points(&dir, run, r, &curves, outputs, cancel, &steps)?;
-    }
+    let drawn = Drawn {
+        whole,
+        curves: curves.unwrap_or_default(),
+        tracks,
+    };
+    write_figures_and_points(&dir, run, &drawn, outputs, points, cancel, &steps)?;
     // The run's own stages, when it ran here, are not the output's time.
     let t = counts.timings;
     let run_time = if ran {
@@ -707,77 +743,16 @@ fn write_folder(
         record_outputs(options, outputs);
     }
     dir.write("summary.json", pretty(&summary).as_bytes())?;
-    if let Some(r) = result {
-        write_drawings(&dir, run, r, outputs, &summary, &steps)?;
-    }
-    // A cancelled run leaves the previous folder (or none), as if it had not run.
-    pedo_io::cancel::check(cancel)?;
-    dir.commit()?;
-    Ok((summary, counts))
-}
-
-/// The figures asked for and the material points (`points`, contour model) of the whole run
-/// `r`: they need nothing of each other, so the points are followed on a second thread.
-fn write_figures_and_points(
-    dir: &OutDir,
-    run: &RunOf<'_>,
-    r: &SequenceResult,
-    curves: &FrameCurves,
-    outputs: &RunOutputs,
-    cancel: Option<&Cancel>,
-    steps: &OutputSteps<'_>,
-) -> Result<()> {
-    let (points, figures) = std::thread::scope(|s| {
-        let points = s.spawn(|| -> Result<Option<crate::Table>> {
-            let points = pedo_track::follow::run_points(r, run.options);
-            steps.step();
-            let Some(points) = points? else {
-                return Ok(None);
-            };
-            crate::points_table(run.recording, r, &points).map(Some)
-        });
-        let drawn = &|| steps.step();
-        let figures = write_figures(
-            dir,
-            run.recording,
-            run.options,
-            r,
-            curves,
-            outputs,
-            cancel,
-            drawn,
-        );
-        (points.join(), figures)
-    });
-    figures?;
-    let points = points.map_err(|_| IoError::invalid("following the material points failed"))?;
-    if let Some(table) = points? {
-        crate::write_table(dir, outputs.tables, POINTS, &table)?;
-    }
-    Ok(())
-}
-
-/// `report.html` and `animation.gif`, when asked, from the whole run `r` and its `summary`.
-fn write_drawings(
-    dir: &OutDir,
-    run: &RunOf<'_>,
-    r: &SequenceResult,
-    outputs: &RunOutputs,
-    summary: &Value,
-    steps: &OutputSteps<'_>,
-) -> Result<()> {
-    if outputs.report {
-        let record = RunRecord {
-            input: run.input,
-            recording: run.recording,
-            params: run.params,
-            options: run.options,
-            result: r,
-        };
-        dir.write("report.html", report_page(&record, summary)?.as_bytes())?;
+    if let Some(report) = &report {
+        let info = report_info(run, &summary);
+        dir.write(
+            "report.html",
+            report.page(run.recording, &counts, &info)?.as_bytes(),
+        )?;
         steps.step();
     }
     if outputs.animation {
+        let r = whole.ok_or_else(|| IoError::invalid("the animation needs the whole run"))?;
         let axes = crate::figure::FigureAxes::of_recording(run.recording);
         let animation = crate::figure::Animation {
             recording: run.recording,
@@ -788,21 +763,94 @@ fn write_drawings(
         dir.write("animation.gif", &animation.to_gif()?)?;
         steps.step();
     }
+    // A cancelled run leaves the previous folder (or none), as if it had not run.
+    pedo_io::cancel::check(cancel)?;
+    dir.commit()?;
+    Ok((summary, counts))
+}
+
+/// What the figures of a run folder are drawn from: the run's objects and pairs when gathered
+/// (or replayed), the frames' curves and the longest tracks.
+struct Drawn<'r> {
+    whole: Option<&'r SequenceResult>,
+    curves: FrameCurves,
+    tracks: Option<TracksGather>,
+}
+
+/// The figures asked for and, when `points`, the material points (`points`, contour model) of
+/// the run's objects and pairs: they need nothing of each other, so the points are followed on
+/// a second thread.
+fn write_figures_and_points(
+    dir: &OutDir,
+    run: &RunOf<'_>,
+    drawn: &Drawn<'_>,
+    outputs: &RunOutputs,
+    points: bool,
+    cancel: Option<&Cancel>,
+    steps: &OutputSteps<'_>,
+) -> Result<()> {
+    let (points, figures) = std::thread::scope(|s| {
+        let points = s.spawn(|| -> Result<Option<crate::Table>> {
+            let Some(r) = drawn.whole.filter(|_| points) else {
+                return Ok(None);
+            };
+            let points = pedo_track::follow::run_points(r, run.options);
+            steps.step();
+            let Some(points) = points? else {
+                return Ok(None);
+            };
+            crate::points_table(run.recording, r, &points).map(Some)
+        });
+        let figures = match &drawn.tracks {
+            Some(tracks) => write_figures(
+                dir,
+                run.recording,
+                run.options,
+                drawn.whole,
+                tracks,
+                &drawn.curves,
+                outputs,
+                cancel,
+                &|| steps.step(),
+            ),
+            None => Ok(()),
+        };
+        (points.join(), figures)
+    });
+    figures?;
+    let points = points.map_err(|_| IoError::invalid("following the material points failed"))?;
+    if let Some(table) = points? {
+        crate::write_table(dir, outputs.tables, POINTS, &table)?;
+    }
     Ok(())
 }
 
-/// Writes the figures `outputs` asks for: the summary figures ([`SUMMARY_FIGURES`]: the tracks
-/// figure, the force and contact-area `curves` of the run's frames, the recording's peak
-/// pressure with its contact outlines) and, with [`RunOutputs::pair_figures`], the match figure
-/// of every pair (in parallel on the current rayon pool) under `figures/`, as PNG or SVG. Fails
-/// with [`IoError::Cancelled`] at the next figure once `cancel` is cancelled. `drawn` is called
-/// once per figure written (for a progress bar).
+/// The header of `report.html` of `run`: what its `summary` (`summary.json`) records, the
+/// options used and the time spent per stage.
+fn report_info(run: &RunOf<'_>, summary: &Value) -> crate::html_report::ReportInfo {
+    crate::html_report::ReportInfo {
+        format: run.recording.format.map(|f| f.name().to_string()),
+        contact_threshold: run.options.contour.preprocess.threshold.unwrap_or(0.0),
+        frames: run.options.frames,
+        ..crate::html_report::ReportInfo::of_summary(run.input.name.clone(), summary)
+    }
+}
+
+/// Writes the figures `outputs` asks for: the summary figures ([`SUMMARY_FIGURES`]: the
+/// `tracks` gathered from the run's events, the force and contact-area `curves` of its frames,
+/// the recording's peak pressure with its contact outlines) and, with
+/// [`RunOutputs::pair_figures`], the match figure of every pair of the whole run `whole` (in
+/// parallel on the current rayon pool) under `figures/`, as PNG or SVG. Fails with
+/// [`IoError::Cancelled`] at the next figure once `cancel` is cancelled, and when pair figures
+/// are asked without the whole run. `drawn` is called once per figure written (for a progress
+/// bar).
 #[allow(clippy::too_many_arguments)]
 pub fn write_figures(
     dir: &OutDir,
     recording: &Recording,
     options: &SequenceOptions,
-    r: &SequenceResult,
+    whole: Option<&SequenceResult>,
+    tracks: &TracksGather,
     curves: &FrameCurves,
     outputs: &RunOutputs,
     cancel: Option<&Cancel>,
@@ -814,6 +862,7 @@ pub fn write_figures(
     }
     let axes = FigureAxes::of_recording(recording);
     if outputs.pair_figures {
+        let r = whole.ok_or_else(|| IoError::invalid("pair figures need the whole run"))?;
         r.pairs.par_iter().try_for_each(|p| -> Result<()> {
             pedo_io::cancel::check(cancel)?;
             let (oa, ob) = (&r.objects[p.a], &r.objects[p.b]);
@@ -832,15 +881,14 @@ pub fn write_figures(
         })?;
     }
     pedo_io::cancel::check(cancel)?;
-    let background = tracks_background(recording, r)?;
-    let tracks = TracksFigure {
-        result: r,
-        background: &background,
-        axes: &axes,
-        min_steps: 3,
-        max_tracks: 40,
-    };
-    write_figure(dir, "tracks", kinds, || tracks.to_png(), || tracks.to_svg())?;
+    let background = tracks.background(recording)?;
+    write_figure(
+        dir,
+        "tracks",
+        kinds,
+        || tracks.to_png(&background, &axes),
+        || tracks.to_svg(&background, &axes),
+    )?;
     drawn();
     write_summary_figures(dir, recording, options, curves, kinds, cancel, drawn)
 }
@@ -911,21 +959,28 @@ impl OutputSteps<'_> {
     }
 }
 
-/// How many outputs a folder of run `r` writes after the run, as [`OutputSteps`] counts them:
-/// each figure, the material points, the report and the animation.
-fn output_count(r: &SequenceResult, outputs: &RunOutputs) -> usize {
+/// How many outputs a folder of a run with these `counts` writes after the run, as
+/// [`OutputSteps`] counts them: each figure, the material points (when `points`), the report and
+/// the animation.
+fn output_count(counts: &RunCounts, outputs: &RunOutputs, points: bool) -> usize {
     let figures = if outputs.figures.any() {
         SUMMARY_FIGURES.len()
             + if outputs.pair_figures {
-                r.pairs.len()
+                counts.pairs
             } else {
                 0
             }
     } else {
         0
     };
-    figures + 1 + usize::from(outputs.report) + usize::from(outputs.animation)
+    figures + usize::from(points) + usize::from(outputs.report) + usize::from(outputs.animation)
 }
+
+/// The tracks figure draws the [`TRACKS_SHOWN`] longest tracks spanning at least this many
+/// objects.
+pub const TRACKS_MIN_STEPS: usize = 3;
+/// The most tracks the tracks figure draws.
+pub const TRACKS_SHOWN: usize = 40;
 
 /// The outlines of the contact regions of the peak-pressure image `peak`, as the run's contour
 /// options draw a frame's (threshold, smoothing; no resampling), in sensels; holes left out.
