@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Default outputs (figures and report) of `pedomatch run` on the bundled F-Scan walk repeated
 # 1x and 20x (205 -> 4,100 frames): folder and report.html size, files, wall time, time per
-# frame and peak RSS; then a default `pedomatch batch` of the trials in benches/data and
-# /work/shared/data (when present). Run with two builds to compare them side by side.
+# frame and peak RSS; then a default `pedomatch batch` of the recordings in benches/data and,
+# when EXTRA_DATA names a folder, in it too. Run with two builds to compare them side by side.
 #
 # Usage: benches/lean.sh PEDOMATCH [PEDOMATCH...]   (e.g. a build of main copied aside, and
 #        target/release/pedomatch). Needs GNU time (/usr/bin/time). Prints Markdown tables.
@@ -53,7 +53,7 @@ for bin in "$@"; do
 done
 
 inputs=(benches/data)
-[ -d /work/shared/data ] && inputs+=(/work/shared/data)
+if [ -n "${EXTRA_DATA:-}" ]; then inputs+=("$EXTRA_DATA"); fi
 echo
 echo "| build | recordings | wall time (s) | peak RSS (MB) | files | folder (MB) |"
 echo "|---|---:|---:|---:|---:|---:|"
