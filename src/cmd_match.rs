@@ -7,7 +7,7 @@ use clap::Args;
 use modal_core::shape::looks_like_closed_contour;
 use modal_core::{Search, Shape, Topology};
 use pedo_output::figure::{FigureAxes, MatchFigure, ObjectLabel};
-use pedo_output::ReportFormat;
+use pedo_output::{FigureKinds, ReportFormat};
 use pedo_track::SenselAspect;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -43,7 +43,7 @@ pub struct MatchArgs {
     /// the matches.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// The figure and report written with --out: the output options of a run.
+    /// The figure (and its format) and report written with --out: the output options of a run.
     #[command(flatten)]
     pub outputs: OptionArgs<pedo_output::OutputOptions, Drawings>,
     /// Print the match result as one JSON object (with its pairs) instead of a table.
@@ -56,7 +56,7 @@ pub struct MatchArgs {
 pub struct Drawings;
 
 impl Selection for Drawings {
-    const NAMES: Option<&'static [&'static str]> = Some(&["figures", "report"]);
+    const NAMES: Option<&'static [&'static str]> = Some(&["figures", "figure_format", "report"]);
 }
 
 /// Extensions that always name point files; `.csv` and `.txt` are point files when laid out as
@@ -255,7 +255,12 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
             shapes: (&a, &b),
             objects: (&oa, &ob),
         };
-        write_match_figure(&dir, &figure, &r.pairs, outputs.figures.into())?;
+        write_match_figure(
+            &dir,
+            &figure,
+            &r.pairs,
+            FigureKinds::of(outputs.figures, outputs.figure_format),
+        )?;
         if outputs.report == ReportFormat::Html {
             write_match_report(&dir, &figure, &r, &summary)?;
         }

@@ -121,6 +121,7 @@ fn execute(
             bar.set_message(match stage {
                 Stage::Objects => "objects",
                 Stage::Matching => "matching",
+                Stage::Output => "output",
             });
         }
         bar.set_position(done as u64);

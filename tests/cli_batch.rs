@@ -398,7 +398,7 @@ fn resuming_with_an_animation_or_pair_figures_asked_for_runs_the_folder_again() 
         );
         serde_json::from_slice::<Value>(&out.stdout).unwrap()
     };
-    let png = with_figures(&["--figures", "png"]);
+    let png = with_figures(&["--figures", "pairs"]);
     assert_eq!(rows(&png)[0]["status"], "ok");
     let pairs = rows(&png)[0]["pairs"].as_u64().unwrap();
     let figures: Vec<PathBuf> = std::fs::read_dir(folder.join("figures"))
@@ -407,11 +407,11 @@ fn resuming_with_an_animation_or_pair_figures_asked_for_runs_the_folder_again() 
         .collect();
     assert_eq!(figures.len() as u64, pairs, "{figures:?}");
     assert_eq!(
-        rows(&with_figures(&["--figures", "png"]))[0]["status"],
+        rows(&with_figures(&["--figures", "pairs"]))[0]["status"],
         "skipped"
     );
     std::fs::remove_file(&figures[0]).unwrap();
-    let redone = with_figures(&["--figures", "png"]);
+    let redone = with_figures(&["--figures", "pairs"]);
     assert_eq!(rows(&redone)[0]["status"], "ok", "{redone}");
     assert!(figures[0].is_file());
     std::fs::remove_dir_all(&base).unwrap();

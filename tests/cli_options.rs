@@ -71,7 +71,7 @@ fn run_and_match_flags_are_the_library_option_tables() {
     let outputs = pedo_output::output_option_specs();
     let drawings: Vec<_> = outputs
         .iter()
-        .filter(|s| ["figures", "report"].contains(&s.name))
+        .filter(|s| ["figures", "figure_format", "report"].contains(&s.name))
         .cloned()
         .collect();
     expected.extend(flags_of(&drawings));

@@ -105,7 +105,10 @@ fn assert_tracks_follow_the_motion(tracks: &[std::collections::HashMap<String, S
 
 #[test]
 fn run_on_synthetic_motion_gives_complete_matches_and_true_tracks() {
-    let out = run_synthetic("synthetic", &["--figures", "svg"]);
+    let out = run_synthetic(
+        "synthetic",
+        &["--figures", "pairs", "--figure-format", "svg"],
+    );
 
     let rows = read_csv(&out.join("pairs.csv"));
     assert_eq!(rows.len(), 9, "one pair per consecutive frame");
@@ -133,10 +136,22 @@ fn run_on_synthetic_motion_gives_complete_matches_and_true_tracks() {
     let longest = tracks.iter().map(|r| num(r, "step")).fold(0.0, f64::max);
     assert!(longest >= 9.0, "some node is tracked through all 10 frames");
 
-    for name in ["tracks.png", "figures/pair_0000_0001.png"] {
-        assert!(!out.join(name).exists(), "--figures svg writes no {name}");
+    for name in [
+        "tracks.png",
+        "curves.png",
+        "peak.png",
+        "figures/pair_0000_0001.png",
+    ] {
+        assert!(
+            !out.join(name).exists(),
+            "--figure-format svg writes no {name}"
+        );
     }
-    assert!(out.join("tracks.svg").is_file());
+    for name in ["tracks.svg", "curves.svg", "peak.svg"] {
+        assert!(out.join(name).is_file(), "no {name}");
+    }
+    let pair_figures = std::fs::read_dir(out.join("figures")).unwrap().count();
+    assert_eq!(pair_figures, 9, "one figure per pair");
     let svg = std::fs::read_to_string(out.join("figures/pair_0000_0001.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
     // An .npy states no pitch and no frame rate: axes in sensels, frames without times.
@@ -200,7 +215,14 @@ fn demo_on_bundled_recording() {
         assert!(num(row, "frame_b") > num(row, "frame_a"));
     }
     assert!(parts > 0, "the first 70 frames hold a merge or a split");
-    assert_png(&out.join("tracks.png"));
+    // The default figures: the summary set, no figure per pair.
+    for name in ["tracks.png", "curves.png", "peak.png"] {
+        assert_png(&out.join(name));
+    }
+    assert!(
+        !out.join("figures").exists(),
+        "pair figures only with --figures pairs"
+    );
 
     // matches.csv marks the matches node tracks follow: exactly the steps of tracks.csv.
     let mut steps = std::collections::HashSet::new();
@@ -254,6 +276,8 @@ fn demo_figures_have_mm_axes_times_and_a_pressure_scale() {
         "--frames",
         "1..12",
         "--figures",
+        "pairs",
+        "--figure-format",
         "svg",
     ];
     let o = pedomatch(&args);
@@ -284,6 +308,19 @@ fn demo_figures_have_mm_axes_times_and_a_pressure_scale() {
         tracks.contains("peak pressure (kPa)"),
         "no pressure scale with units"
     );
+    // The curves: time in seconds (0.032 s a frame), force in N, area in mm², frames 1 to 11.
+    let curves = std::fs::read_to_string(out.join("curves.svg")).unwrap();
+    for text in [
+        "time (s)",
+        "total force (N)",
+        "contact area (mm²)",
+        "frames 1\u{2013}11 (0.032\u{2013}0.352 s)",
+        "11 frames",
+    ] {
+        assert!(curves.contains(text), "the curves lack {text:?}");
+    }
+    let peak = std::fs::read_to_string(out.join("peak.svg")).unwrap();
+    assert!(peak.contains("peak pressure (kPa)") && peak.contains("contact outline"));
 }
 
 /// Skipped levels (or frames) are not rows of pairs.csv: the run points to summary.json alone.
@@ -787,7 +824,16 @@ fn a_run_with_tables_only_writes_the_tables_of_a_run_with_figures() {
         );
         let (full, full_said) = run(
             &format!("full-{tables}"),
-            &["--figures", "svg", "--report", "none", "--tables", tables],
+            &[
+                "--figures",
+                "pairs",
+                "--figure-format",
+                "svg",
+                "--report",
+                "none",
+                "--tables",
+                tables,
+            ],
         );
         // The same counts; the closing line lists what each folder holds.
         let counts = |said: &str| said.lines().take(2).collect::<Vec<_>>().join("\n");

@@ -12,13 +12,14 @@
 //! system font is ever looked up, so a figure looks the same on every machine, fonts or none.
 //!
 //! The caller describes the recording once in a [`FigureAxes`] and labels the objects with
-//! [`ObjectLabel`]; [`MatchFigure`] and [`TracksFigure`] then render with `to_png` / `to_svg`,
+//! [`ObjectLabel`]; [`MatchFigure`], [`TracksFigure`], [`PeakFigure`] and [`CurvesFigure`] then
+//! render with `to_png` / `to_svg`,
 //! and [`Animation`] plays a run's frames back as an animated GIF.
 
 use modal_core::{MatchPair, Shape, Topology};
 use pedo_io::Grid;
 use pedo_io::{IoError, Result};
-use pedo_track::{SequenceResult, Track};
+use pedo_track::{SequenceObject, SequenceResult, SequenceSink};
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
@@ -391,33 +392,125 @@ impl MatchFigure<'_> {
 impl TracksFigure<'_> {
     /// The figure as PNG bytes.
     pub fn to_png(&self) -> Result<Vec<u8>> {
-        render_png(&self.layout()?)
+        self.gathered()?.to_png(self.background, self.axes)
     }
 
     /// The figure as a standalone SVG document.
     pub fn to_svg(&self) -> Result<String> {
-        render_svg(&self.layout()?)
+        self.gathered()?.to_svg(self.background, self.axes)
     }
 
-    fn chosen_tracks(&self) -> Vec<std::borrow::Cow<'_, Track>> {
-        let mut chosen: Vec<_> = self
-            .result
-            .all_tracks()
-            .filter(|t| t.steps.len() >= self.min_steps.max(2))
-            .collect();
-        // Longest first; ties by first object so the choice is deterministic.
-        chosen.sort_by_key(|t| (std::cmp::Reverse(t.steps.len()), t.steps[0]));
-        chosen
+    /// The run's events gathered as a [`TracksGather`].
+    fn gathered(&self) -> Result<TracksGather> {
+        let mut g = TracksGather::new(self.min_steps, self.max_tracks);
+        let objects = &self.result.objects;
+        let mut start = 0;
+        while start < objects.len() {
+            let frame = objects[start].frame;
+            let end = start
+                + objects[start..]
+                    .iter()
+                    .take_while(|o| o.frame == frame)
+                    .count();
+            g.frame_objects(frame, &objects[start..end])?;
+            start = end;
+        }
+        for (k, t) in self.result.all_tracks().enumerate() {
+            let steps = t
+                .steps
+                .iter()
+                .map(
+                    |&(o, n)| match objects.get(o).filter(|obj| n < obj.shape.len()) {
+                        Some(obj) => Ok((obj, n)),
+                        None => Err(IoError::invalid(format!(
+                            "track step ({o}, {n}) names no node"
+                        ))),
+                    },
+                )
+                .collect::<Result<Vec<_>>>()?;
+            g.track(k, &steps)?;
+        }
+        Ok(g)
+    }
+}
+
+/// A track a [`TracksGather`] keeps: its steps, its first (object, node), each step's position
+/// in sensels and its object's level.
+type GatheredTrack = (usize, (usize, usize), Vec<([f64; 2], Option<f64>)>);
+
+/// What a tracks figure ([`TracksFigure`]) draws of a run, gathered from its events
+/// ([`SequenceSink`]) in memory bounded whatever the recording's length: the `max_tracks`
+/// longest tracks spanning at least `min_steps` objects (ties by their first object and node),
+/// each as its nodes' positions, how many tracks were long enough, the frames of the objects and,
+/// for an isocontour run (every object a level of one frame), the levels.
+#[derive(Debug, Clone)]
+pub struct TracksGather {
+    min_steps: usize,
+    max_tracks: usize,
+    /// The longest tracks so far, longest first: (steps, first (object, node), each step's
+    /// position in sensels and its object's level).
+    chosen: Vec<GatheredTrack>,
+    eligible: usize,
+    objects: usize,
+    frames: Option<(usize, usize)>,
+    /// Every object so far has a level and lies in one frame; their levels while so.
+    iso: bool,
+    levels: Vec<f64>,
+}
+
+impl TracksGather {
+    /// An empty gathering for a figure of the `max_tracks` longest tracks spanning at least
+    /// `min_steps` objects (2 at least whatever is set).
+    pub fn new(min_steps: usize, max_tracks: usize) -> Self {
+        Self {
+            min_steps: min_steps.max(2),
+            max_tracks,
+            chosen: Vec::new(),
+            eligible: 0,
+            objects: 0,
+            frames: None,
+            iso: true,
+            levels: Vec::new(),
+        }
     }
 
-    fn layout(&self) -> Result<Layout> {
-        let eligible = self.chosen_tracks();
-        let shown = &eligible[..eligible.len().min(self.max_tracks)];
-        let iso = iso_frame(self.result).map(|frame| (frame, self.level_range()));
+    /// The frame of an isocontour run (every object has a level and all share one frame).
+    pub fn iso_frame(&self) -> Option<usize> {
+        match self.frames {
+            Some((f0, f1)) if self.iso && f0 == f1 => Some(f0),
+            _ => None,
+        }
+    }
+
+    /// The image the figure is drawn over: the frame whose isobaric levels an isocontour run
+    /// matched, else the recording's peak-pressure image.
+    pub fn background(&self, recording: &pedo_io::Recording) -> Result<Grid> {
+        match self.iso_frame() {
+            Some(frame) => recording.frame(frame),
+            None => Ok(recording.peak_image()),
+        }
+    }
+
+    /// The figure over `background` as PNG bytes.
+    pub fn to_png(&self, background: &Grid, axes: &FigureAxes) -> Result<Vec<u8>> {
+        render_png(&self.layout(background, axes)?)
+    }
+
+    /// The figure over `background` as a standalone SVG document.
+    pub fn to_svg(&self, background: &Grid, axes: &FigureAxes) -> Result<String> {
+        render_svg(&self.layout(background, axes)?)
+    }
+
+    fn layout(&self, background: &Grid, axes: &FigureAxes) -> Result<Layout> {
+        let shown = &self.chosen;
+        let iso = self.iso_frame().map(|frame| (frame, self.level_range()));
         let mut lines = Vec::new();
         let mut starts = Vec::new();
-        for (k, t) in shown.iter().enumerate() {
-            let steps = self.track_steps(t)?;
+        for (k, (_, _, steps)) in shown.iter().enumerate() {
+            let steps: Vec<TrackStep> = steps
+                .iter()
+                .map(|&(p, level)| (axes.to_plot(p), level))
+                .collect();
             let colour = |level: Option<f64>| match (iso, level) {
                 (Some((_, range)), Some(l)) => level_color(l, range),
                 _ => TRACK_PALETTE[k % TRACK_PALETTE.len()],
@@ -443,101 +536,51 @@ impl TracksFigure<'_> {
             }
         }
         lines.extend(starts);
-        let (bounds, mut image) = self.background_image()?;
+        let (bounds, mut image) = pressure_image(background, axes)?;
         let (title, subtitle, legend) = match iso {
             Some((frame, range)) => {
                 if let Some(image) = &mut image {
-                    image.label = self
-                        .axes
-                        .pressure_label(&format!("pressure, frame {frame}"));
-                    image.marks = self.level_marks(range);
+                    image.label = axes.pressure_label(&format!("pressure, frame {frame}"));
+                    image.marks = self
+                        .levels
+                        .iter()
+                        .map(|&l| (l, level_color(l, range)))
+                        .collect();
                 }
-                self.iso_texts(frame, range, shown.len(), eligible.len())
+                self.iso_texts(axes, frame, range, shown.len())
             }
-            None => self.frame_texts(shown.len(), eligible.len()),
+            None => self.frame_texts(axes, shown.len()),
         };
         Ok(Layout::new(
-            bounds, self.axes, title, subtitle, legend, image, lines,
+            bounds, axes, title, subtitle, legend, image, lines,
         ))
-    }
-
-    /// A track's steps: each node in plotted units, with its object's isobaric level.
-    fn track_steps(&self, t: &Track) -> Result<Vec<TrackStep>> {
-        t.steps
-            .iter()
-            .map(|&(o, n)| {
-                let obj = self.result.objects.get(o).filter(|obj| n < obj.shape.len());
-                let obj = obj.ok_or_else(|| {
-                    IoError::invalid(format!("track step ({o}, {n}) names no node"))
-                })?;
-                let p = obj.shape.point(n);
-                Ok((self.axes.to_plot([p[0], p[1]]), obj.level))
-            })
-            .collect()
     }
 
     /// The lowest and highest isobaric level of the run's objects.
     fn level_range(&self) -> [f64; 2] {
-        let levels = self.result.objects.iter().filter_map(|o| o.level);
-        levels.fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], l| {
-            [lo.min(l), hi.max(l)]
-        })
-    }
-
-    /// Each level of the run in its colour, marked on the pressure bar.
-    fn level_marks(&self, range: [f64; 2]) -> Vec<(f64, RGBColor)> {
-        let levels = self.result.objects.iter().filter_map(|o| o.level);
-        levels.map(|l| (l, level_color(l, range))).collect()
-    }
-
-    /// The plot's extent (the whole image) and the image with its colour bar.
-    fn background_image(&self) -> Result<(Bounds, Option<PressureImage>)> {
-        let g = self.background;
-        let (rows, cols) = (g.rows(), g.cols());
-        let corner = |c: f64, r: f64| self.axes.to_plot([c, r]);
-        let mut bounds = Bounds::of([
-            corner(-0.5, -0.5),
-            corner(cols as f64 - 0.5, rows as f64 - 0.5),
-        ])
-        .ok_or_else(|| IoError::invalid("the pressure image has no finite extent"))?;
-        bounds.pad = false;
-        let max = g.max();
-        let image = (max.is_finite() && max > 0.0).then(|| PressureImage {
-            cells: (0..rows)
-                .flat_map(|row| (0..cols).map(move |col| (row, col)))
-                .filter_map(|(row, col)| {
-                    let v = g.get(row, col);
-                    (v > 0.0).then(|| {
-                        let (x0, y0) = corner(col as f64 - 0.5, row as f64 - 0.5);
-                        let (x1, y1) = corner(col as f64 + 0.5, row as f64 + 0.5);
-                        ([(x0, y0), (x1, y1)], v)
-                    })
-                })
-                .collect(),
-            max,
-            label: self.axes.pressure_label("peak pressure"),
-            marks: Vec::new(),
-        });
-        Ok((bounds, image))
+        self.levels
+            .iter()
+            .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], &l| {
+                [lo.min(l), hi.max(l)]
+            })
     }
 
     /// Title, subtitle and legend of tracks across frames.
-    fn frame_texts(&self, shown: usize, eligible: usize) -> (String, String, Vec<LegendEntry>) {
-        let frames = self.result.objects.iter().map(|o| o.frame);
-        let title = match (frames.clone().min(), frames.max()) {
-            (Some(f0), Some(f1)) => {
-                let times = match (self.axes.time_s(f0), self.axes.time_s(f1)) {
+    fn frame_texts(&self, axes: &FigureAxes, shown: usize) -> (String, String, Vec<LegendEntry>) {
+        let title = match self.frames {
+            Some((f0, f1)) => {
+                let times = match (axes.time_s(f0), axes.time_s(f1)) {
                     (Some(t0), Some(t1)) => format!(" ({t0:.3}\u{2013}{t1:.3} s)"),
                     _ => String::new(),
                 };
                 format!("Node tracks, frames {f0}\u{2013}{f1}{times}")
             }
-            _ => "Node tracks (no objects)".to_string(),
+            None => "Node tracks (no objects)".to_string(),
         };
         let subtitle = format!(
-            "the {shown} longest of {eligible} tracks spanning \u{2265} {} objects, over the peak \
+            "the {shown} longest of {} tracks spanning \u{2265} {} objects, over the peak \
              pressure",
-            self.min_steps.max(2)
+            self.eligible, self.min_steps
         );
         (
             title,
@@ -549,24 +592,24 @@ impl TracksFigure<'_> {
     /// Title, subtitle and legend of tracks across the isobaric levels of `frame`.
     fn iso_texts(
         &self,
+        axes: &FigureAxes,
         frame: usize,
         [lo, hi]: [f64; 2],
         shown: usize,
-        eligible: usize,
     ) -> (String, String, Vec<LegendEntry>) {
-        let units = match self.axes.pressure_units.as_str() {
+        let units = match axes.pressure_units.as_str() {
             "" => String::new(),
             u => format!(" {u}"),
         };
-        let n = self.result.objects.len();
         let title = format!(
-            "Node tracks across {n} isobaric levels, {}",
-            self.axes.frame_text(frame)
+            "Node tracks across {} isobaric levels, {}",
+            self.objects,
+            axes.frame_text(frame)
         );
         let subtitle = format!(
-            "levels {lo:.0}\u{2013}{hi:.0}{units}; the {shown} longest of {eligible} tracks \
+            "levels {lo:.0}\u{2013}{hi:.0}{units}; the {shown} longest of {} tracks \
              spanning \u{2265} {} levels",
-            self.min_steps.max(2)
+            self.eligible, self.min_steps
         );
         let mut legend = track_legend("node track (colour: level)", level_color(lo, [lo, hi]));
         legend.push(LegendEntry {
@@ -575,6 +618,350 @@ impl TracksFigure<'_> {
         });
         (title, subtitle, legend)
     }
+}
+
+impl SequenceSink for TracksGather {
+    fn frame_objects(&mut self, _: usize, objects: &[SequenceObject]) -> Result<()> {
+        for o in objects {
+            self.objects += 1;
+            self.frames = Some(match self.frames {
+                Some((f0, f1)) => (f0.min(o.frame), f1.max(o.frame)),
+                None => (o.frame, o.frame),
+            });
+            match o.level {
+                Some(l) if self.iso => self.levels.push(l),
+                _ => {
+                    self.iso = false;
+                    self.levels = Vec::new();
+                }
+            }
+            if self.frames.is_some_and(|(f0, f1)| f0 != f1) {
+                self.iso = false;
+                self.levels = Vec::new();
+            }
+        }
+        Ok(())
+    }
+
+    fn track(&mut self, _: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
+        if steps.len() < self.min_steps {
+            return Ok(());
+        }
+        self.eligible += 1;
+        // Longest first; ties by first object and node so the choice is deterministic.
+        let key = |len: usize, first: (usize, usize)| (std::cmp::Reverse(len), first);
+        let first = (steps[0].0.id, steps[0].1);
+        let new = key(steps.len(), first);
+        let at = self
+            .chosen
+            .partition_point(|(len, f, _)| key(*len, *f) < new);
+        if at >= self.max_tracks {
+            return Ok(());
+        }
+        let nodes = steps
+            .iter()
+            .map(|&(o, n)| {
+                let p = o.shape.point(n);
+                ([p[0], p[1]], o.level)
+            })
+            .collect();
+        self.chosen.insert(at, (steps.len(), first, nodes));
+        self.chosen.truncate(self.max_tracks);
+        Ok(())
+    }
+}
+
+/// The recording's peak-pressure image (the largest value of every sensel over the frames) with
+/// the outlines of its contact regions: where the foot loaded the plate at all.
+#[derive(Debug, Clone)]
+pub struct PeakFigure<'a> {
+    /// The peak-pressure image, one value per sensel.
+    pub peak: &'a Grid,
+    /// The contact outlines of the peak image, closed polygons in sensels.
+    pub outlines: &'a [Vec<[f64; 2]>],
+    /// Units, timing and pressure units of the recording.
+    pub axes: &'a FigureAxes,
+    /// The frames the image covers, `start..end`.
+    pub frames: (usize, usize),
+}
+
+impl PeakFigure<'_> {
+    /// The figure as PNG bytes.
+    pub fn to_png(&self) -> Result<Vec<u8>> {
+        render_png(&self.layout()?)
+    }
+
+    /// The figure as a standalone SVG document.
+    pub fn to_svg(&self) -> Result<String> {
+        render_svg(&self.layout()?)
+    }
+
+    fn layout(&self) -> Result<Layout> {
+        let (bounds, image) = pressure_image(self.peak, self.axes)?;
+        let layers = self
+            .outlines
+            .iter()
+            .filter(|o| o.len() > 2)
+            .map(|o| Layer::Line {
+                points: o
+                    .iter()
+                    .chain(o.first())
+                    .map(|p| self.axes.to_plot(*p))
+                    .collect(),
+                color: COLOR_A,
+                width: 2,
+            })
+            .collect();
+        let (f0, f1) = (
+            self.frames.0,
+            self.frames.1.saturating_sub(1).max(self.frames.0),
+        );
+        let times = match (self.axes.time_s(f0), self.axes.time_s(f1)) {
+            (Some(t0), Some(t1)) => format!(" ({t0:.3}\u{2013}{t1:.3} s)"),
+            _ => String::new(),
+        };
+        let title = format!("Peak pressure, frames {f0}\u{2013}{f1}{times}");
+        let subtitle = format!(
+            "the largest value of every sensel; {} of the contact region",
+            pedo_io::counted(self.outlines.len(), "outline")
+        );
+        let legend = vec![LegendEntry {
+            text: "contact outline".to_string(),
+            glyph: Glyph::Line(COLOR_A),
+        }];
+        Ok(Layout::new(
+            bounds, self.axes, title, subtitle, legend, image, layers,
+        ))
+    }
+}
+
+/// One curve of a [`CurvesFigure`]: a quantity per frame.
+#[derive(Debug, Clone)]
+pub struct Curve<'a> {
+    /// The quantity and its unit, as the axis names it (`"total force (N)"`).
+    pub label: String,
+    /// One value per frame of [`CurvesFigure::frames`].
+    pub values: &'a [f64],
+}
+
+/// Quantities over time, one panel each sharing the time axis (seconds when the frame rate is
+/// known, else frames): the total force and the contact area of every frame of a run.
+#[derive(Debug, Clone)]
+pub struct CurvesFigure<'a> {
+    /// The frames (0-based), in order.
+    pub frames: &'a [usize],
+    /// The curves, top to bottom.
+    pub curves: Vec<Curve<'a>>,
+    /// Units, timing and pressure units of the recording.
+    pub axes: &'a FigureAxes,
+}
+
+impl CurvesFigure<'_> {
+    /// The figure as PNG bytes.
+    pub fn to_png(&self) -> Result<Vec<u8>> {
+        render_png(&self.layout()?)
+    }
+
+    /// The figure as a standalone SVG document.
+    pub fn to_svg(&self) -> Result<String> {
+        render_svg(&self.layout()?)
+    }
+
+    fn layout(&self) -> Result<CurvesLayout> {
+        if self.curves.is_empty() || self.frames.is_empty() {
+            return Err(IoError::invalid(
+                "a curves figure needs a curve and a frame",
+            ));
+        }
+        let n = self.frames.len();
+        if let Some(c) = self.curves.iter().find(|c| c.values.len() != n) {
+            return Err(IoError::invalid(format!(
+                "the curve {:?} has {} values for {n} frames",
+                c.label,
+                c.values.len()
+            )));
+        }
+        let x: Vec<f64> = self
+            .frames
+            .iter()
+            .map(|&f| self.axes.time_s(f).unwrap_or(f as f64))
+            .collect();
+        let timed = self.axes.time_s(0).is_some();
+        let (f0, f1) = (self.frames[0], self.frames[n - 1]);
+        let times = match (self.axes.time_s(f0), self.axes.time_s(f1)) {
+            (Some(t0), Some(t1)) => format!(" ({t0:.3}\u{2013}{t1:.3} s)"),
+            _ => String::new(),
+        };
+        Ok(CurvesLayout {
+            title: format!("Load over time, frames {f0}\u{2013}{f1}{times}"),
+            subtitle: format!("every frame of the run ({})", pedo_io::counted(n, "frame")),
+            x_desc: if timed { "time (s)" } else { "frame" }.to_string(),
+            x,
+            panels: self
+                .curves
+                .iter()
+                .enumerate()
+                .map(|(k, c)| {
+                    // A value that is not finite breaks the line instead of hiding the curve.
+                    (
+                        c.label.clone(),
+                        c.values.to_vec(),
+                        TRACK_PALETTE[k % TRACK_PALETTE.len()],
+                    )
+                })
+                .collect(),
+        })
+    }
+}
+
+/// A [`CurvesFigure`] laid out: a title and one panel a curve.
+struct CurvesLayout {
+    title: String,
+    subtitle: String,
+    x_desc: String,
+    x: Vec<f64>,
+    panels: Vec<(String, Vec<f64>, RGBColor)>,
+}
+
+/// The plot area of one panel of a curves figure, in pixels.
+const CURVE_PLOT: (u32, u32) = (640, 180);
+
+impl Drawing for CurvesLayout {
+    fn size(&self) -> (u32, u32) {
+        let panels = self.panels.len() as u32;
+        let width = (Y_LABEL_AREA + 24 + CURVE_PLOT.0 + 2 * PLOT_MARGIN).max(
+            text_width(&self.title, TITLE_SIZE).max(text_width(&self.subtitle, SUBTITLE_SIZE))
+                + 2 * TITLE_MARGIN,
+        );
+        let height = TITLE_HEIGHT + panels * (CURVE_PLOT.1 + PLOT_MARGIN) + X_LABEL_AREA;
+        (width.min(MAX_SIDE), height.min(MAX_SIDE))
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
+        root.fill(&WHITE).map_err(figure_error)?;
+        let (w, h) = root.dim_in_pixel();
+        let (top, body) = root.split_vertically(TITLE_HEIGHT);
+        fn centred(size: f64, color: &RGBColor) -> TextStyle<'_> {
+            TextStyle::from((FONT, size).into_font())
+                .color(color)
+                .pos(Pos::new(HPos::Center, VPos::Center))
+        }
+        top.draw_text(
+            &self.title,
+            &centred(TITLE_SIZE, &BLACK),
+            (w as i32 / 2, 18),
+        )
+        .map_err(figure_error)?;
+        top.draw_text(
+            &self.subtitle,
+            &centred(SUBTITLE_SIZE, &COLOR_SUBTITLE),
+            (w as i32 / 2, 42),
+        )
+        .map_err(figure_error)?;
+        let finite = |v: &&f64| v.is_finite();
+        let (x0, x1) = self
+            .x
+            .iter()
+            .filter(finite)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
+            });
+        let (x0, x1) = if x1 > x0 {
+            (x0, x1)
+        } else {
+            (x0 - 0.5, x0 + 0.5)
+        };
+        let panels = self.panels.len() as u32;
+        let mut rest = body;
+        for (k, (label, values, color)) in self.panels.iter().enumerate() {
+            let last = k as u32 + 1 == panels;
+            let height = CURVE_PLOT.1 + PLOT_MARGIN + if last { X_LABEL_AREA } else { 0 };
+            let height = height.min(h.saturating_sub(TITLE_HEIGHT));
+            let (area, below) = rest.split_vertically(height);
+            rest = below;
+            let top_value = values.iter().filter(finite).fold(0.0f64, |m, &v| m.max(v));
+            let y1 = if top_value > 0.0 {
+                1.05 * top_value
+            } else {
+                1.0
+            };
+            let mut chart = ChartBuilder::on(&area)
+                .margin(PLOT_MARGIN)
+                .margin_top(0)
+                .margin_bottom(if last { 0 } else { PLOT_MARGIN })
+                .margin_right(PLOT_MARGIN + 24)
+                .x_label_area_size(if last { X_LABEL_AREA } else { 0 })
+                .y_label_area_size(Y_LABEL_AREA + 24)
+                .build_cartesian_2d(x0..x1, 0.0..y1)
+                .map_err(figure_error)?;
+            let x_fmt = tick_formatter(x1 - x0, 8);
+            let y_fmt = tick_formatter(y1, 4);
+            let mut mesh = chart.configure_mesh();
+            mesh.y_desc(label.as_str())
+                .label_style((FONT, TICK_SIZE))
+                .axis_desc_style((FONT, LABEL_SIZE * 0.8))
+                .x_labels(8)
+                .y_labels(4)
+                .x_label_formatter(&x_fmt)
+                .y_label_formatter(&y_fmt)
+                .bold_line_style(COLOR_GRID.stroke_width(1))
+                .light_line_style(TRANSPARENT.stroke_width(0))
+                .axis_style(BLACK.stroke_width(1));
+            if last {
+                mesh.x_desc(self.x_desc.as_str());
+            }
+            mesh.draw().map_err(figure_error)?;
+            // One line per run of finite values.
+            let points: Vec<(f64, f64)> =
+                self.x.iter().copied().zip(values.iter().copied()).collect();
+            for piece in points.split(|(x, y)| !(x.is_finite() && y.is_finite())) {
+                if piece.len() == 1 {
+                    chart
+                        .draw_series(std::iter::once(Circle::new(piece[0], 2, color.filled())))
+                        .map_err(figure_error)?;
+                } else if piece.len() > 1 {
+                    chart
+                        .draw_series(std::iter::once(PathElement::new(
+                            piece.to_vec(),
+                            color.stroke_width(2),
+                        )))
+                        .map_err(figure_error)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The plot's extent (the whole image `g`, in sensels) and the image with its colour bar
+/// (none for an image without load).
+fn pressure_image(g: &Grid, axes: &FigureAxes) -> Result<(Bounds, Option<PressureImage>)> {
+    let (rows, cols) = (g.rows(), g.cols());
+    let corner = |c: f64, r: f64| axes.to_plot([c, r]);
+    let mut bounds = Bounds::of([
+        corner(-0.5, -0.5),
+        corner(cols as f64 - 0.5, rows as f64 - 0.5),
+    ])
+    .ok_or_else(|| IoError::invalid("the pressure image has no finite extent"))?;
+    bounds.pad = false;
+    let max = g.max();
+    let image = (max.is_finite() && max > 0.0).then(|| PressureImage {
+        cells: (0..rows)
+            .flat_map(|row| (0..cols).map(move |col| (row, col)))
+            .filter_map(|(row, col)| {
+                let v = g.get(row, col);
+                (v > 0.0).then(|| {
+                    let (x0, y0) = corner(col as f64 - 0.5, row as f64 - 0.5);
+                    let (x1, y1) = corner(col as f64 + 0.5, row as f64 + 0.5);
+                    ([(x0, y0), (x1, y1)], v)
+                })
+            })
+            .collect(),
+        max,
+        label: axes.pressure_label("peak pressure"),
+        marks: Vec::new(),
+    });
+    Ok((bounds, image))
 }
 
 /// A track's node in plotted units, with its object's isobaric level (isocontour runs).
@@ -1104,7 +1491,22 @@ fn register_bundled_font() -> Result<()> {
     }
 }
 
-fn render_png(layout: &Layout) -> Result<Vec<u8>> {
+/// A figure the renderers draw: its size in pixels and how it draws itself.
+trait Drawing {
+    fn size(&self) -> (u32, u32);
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>;
+}
+
+impl Drawing for Layout {
+    fn size(&self) -> (u32, u32) {
+        Layout::size(self)
+    }
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
+        Layout::draw(self, root)
+    }
+}
+
+fn render_png(layout: &impl Drawing) -> Result<Vec<u8>> {
     use image::ImageEncoder;
     let (w, h, pixels) = render_rgb(layout)?;
     let mut out = Vec::new();
@@ -1120,7 +1522,7 @@ fn render_png(layout: &Layout) -> Result<Vec<u8>> {
 }
 
 /// The figure as 8-bit RGB pixels, row by row: (width, height, pixels).
-fn render_rgb(layout: &Layout) -> Result<(u32, u32, Vec<u8>)> {
+fn render_rgb(layout: &impl Drawing) -> Result<(u32, u32, Vec<u8>)> {
     register_bundled_font()?;
     let (w, h) = layout.size();
     let mut pixels = vec![255u8; w as usize * h as usize * 3];
@@ -1139,7 +1541,7 @@ fn render_rgb(layout: &Layout) -> Result<(u32, u32, Vec<u8>)> {
     Ok((w, h, pixels))
 }
 
-fn render_svg(layout: &Layout) -> Result<String> {
+fn render_svg(layout: &impl Drawing) -> Result<String> {
     register_bundled_font()?;
     let mut out = String::new();
     {
@@ -1153,7 +1555,7 @@ fn render_svg(layout: &Layout) -> Result<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pedo_track::SequenceObject;
+    use pedo_track::Track;
 
     /// A closed polygon approximating an ellipse with semi-axes `rx`, `ry` around `centre`.
     fn ellipse(n: usize, centre: [f64; 2], rx: f64, ry: f64) -> Shape {
@@ -1458,7 +1860,11 @@ mod tests {
         ] {
             assert!(svg.contains(text), "SVG lacks {text:?}");
         }
-        let layout = fig.layout().unwrap();
+        let layout = fig
+            .gathered()
+            .unwrap()
+            .layout(fig.background, fig.axes)
+            .unwrap();
         let img = decode(&fig.to_png().unwrap());
         assert_eq!((img.width(), img.height()), layout.size());
         // The colour bar's darkest step (the peak) and the image's grey both appear.

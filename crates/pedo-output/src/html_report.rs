@@ -13,18 +13,24 @@
 //! match page shows both objects, the matches by cost class, excess matches and unmatched nodes,
 //! and a 3-D view for 3-D points.
 //!
-//! Size is bounded: when `frames × rows × cols` exceeds [`MAX_PLAYER_VALUES`], the player keeps
-//! every `s`-th frame only (the report says so); the time series keep every frame.
+//! Size is bounded whatever the recording's length: the player shows at most
+//! [`MAX_PLAYER_FRAMES`] frames, evenly spaced, and at most [`MAX_PLAYER_VALUES`] pressure values
+//! (`frames × rows × cols`), keeping every `s`-th frame beyond (the report says so and names each
+//! frame by its own number); the time series keep every frame.
 
 use pedo_io::counted;
 use pedo_io::{IoError, Recording, Result};
-use pedo_track::SequenceResult;
+use pedo_track::{PairMatch, RunCounts, SequenceObject, SequenceResult, SequenceSink};
 use serde_json::{json, Value};
-use std::collections::HashMap;
 
 /// Most pressure values the player embeds (frames × rows × cols); beyond it frames are
 /// decimated. At most 5 bytes each: 12.5 MB, plus plotly.js (4.6 MB) and the overlays, under 25 MB.
 pub const MAX_PLAYER_VALUES: usize = 2_500_000;
+
+/// Most frames the player embeds, each with its pressure image and overlays (contours, matches,
+/// trails: about 10 kB a frame of a walk); beyond it frames are decimated, so that the report of a
+/// long recording stays a few megabytes.
+pub const MAX_PLAYER_FRAMES: usize = 240;
 
 /// Frames of history drawn as a trail behind each track's node.
 const TRAIL_FRAMES: usize = 4;
@@ -91,7 +97,8 @@ fn option_text(v: &Value) -> String {
     }
 }
 
-/// The report of one run as a complete HTML page.
+/// The report of one run as a complete HTML page: the run's events gathered
+/// ([`ReportGather`]) and the page made of them.
 pub fn run_report(
     recording: &Recording,
     result: &SequenceResult,
@@ -100,15 +107,9 @@ pub fn run_report(
     if recording.n_frames() == 0 {
         return Err(report_error("the recording has no frames"));
     }
-    let data = report_data(recording, result, info);
-    let data = serde_json::to_string(&data)
-        .map_err(|e| report_error(format!("cannot encode the report data: {e}")))?;
-    Ok(page(
-        TEMPLATE,
-        &info.input,
-        &header_html(recording, result, info),
-        &data,
-    ))
+    let mut gather = ReportGather::new(recording, info.frames);
+    gather.feed(result)?;
+    gather.page(recording, &RunCounts::of(result), info)
 }
 
 /// A template filled in: title, header, the shared head, plotly.js and the data, in one pass (a
@@ -474,7 +475,7 @@ fn pressure_header(recording: &Recording, shown: Option<String>) -> String {
 /// (`total_force_n`, `total_load_mm2`, `total_load_sensels`): newtons when the pressure units
 /// convert and the sensel area is known; else the plain sum of the values times the sensel area
 /// (the file's units × mm²) or, without a pitch, the plain sum (the file's units × sensels).
-fn load_label(recording: &Recording) -> String {
+pub(crate) fn load_label(recording: &Recording) -> String {
     if recording.force_factor().is_some() {
         return "total force (N)".into();
     }
@@ -499,7 +500,7 @@ fn ordinal(n: usize) -> String {
     format!("{n}{suffix}")
 }
 
-fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo) -> String {
+fn header_html(recording: &Recording, counts: &RunCounts, info: &ReportInfo) -> String {
     let (_, punits) = pressure_scale(recording);
     let n = recording.n_frames();
     let frames = match info.frames {
@@ -544,9 +545,9 @@ fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo
             "result".into(),
             format!(
                 "{}, {}, {}",
-                counted(result.objects.len(), "object"),
-                counted(result.pairs.len(), "matched pair"),
-                counted(result.track_count(), "track")
+                counted(counts.objects, "object"),
+                counted(counts.pairs, "matched pair"),
+                counted(counts.tracks, "track")
             ),
         ),
     ];
@@ -554,15 +555,15 @@ fn header_html(recording: &Recording, result: &SequenceResult, info: &ReportInfo
         rows.push(("timings".into(), timings_text(&info.timings)));
     }
     let mut out = facts_html(&rows) + &options_html(&info.options);
-    let skipped: Vec<String> = result
+    let skipped: Vec<String> = counts
         .skipped_frames
         .iter()
         .map(|s| format!("frame {}: {}", s.frame, s.reason))
-        .chain(result.skipped_pairs.iter().map(|s| {
-            let (a, b) = (&result.objects[s.a], &result.objects[s.b]);
+        .chain(counts.skipped_pairs.iter().map(|s| {
+            let o = &s.objects;
             format!(
                 "pair {}→{} (frames {}→{}): {}",
-                a.id, b.id, a.frame, b.frame, s.reason
+                o.id_a, o.id_b, o.frame_a, o.frame_b, s.reason
             )
         }))
         .map(|s| format!("<li>{}</li>", html_escape(&s)))
@@ -615,119 +616,423 @@ fn options_html(options: &[(String, String)]) -> String {
     )
 }
 
-/// Everything the page's script draws, as JSON.
-fn report_data(recording: &Recording, result: &SequenceResult, info: &ReportInfo) -> Value {
-    let (n, rows, cols) = (recording.n_frames(), recording.rows(), recording.cols());
-    let step = (n * rows * cols).div_ceil(MAX_PLAYER_VALUES).max(1);
-    let shown: Vec<usize> = (0..n).step_by(step).collect();
-    let (kpa, punits) = pressure_scale(recording);
-    let (pitch, xy_units) = match recording.pitch_mm {
-        Some(p) => (p, "mm"),
-        None => ([1.0, 1.0], "sensels"),
-    };
-    let rate = recording.frame_rate();
-
-    // Pressure as integers of a fixed quantum: compact JSON and 3 significant digits at the peak.
-    // The largest value of any frame (0 at least), frame by frame: a long recording is held
-    // sparsely and never built whole.
-    let peak = recording.peak_image().max().max(0.0) * kpa;
-    let quantum = if peak > 0.0 {
-        10f64.powf((peak / 1000.0).log10().floor())
-    } else {
-        1.0
-    };
-    let mask = recording.sensor_mask();
-    let encode = |values: &[f32]| -> Vec<Option<i64>> {
-        values
-            .iter()
-            .zip(mask)
-            .map(|(&v, &m)| (m && v.is_finite()).then(|| (v as f64 * kpa / quantum).round() as i64))
-            .collect()
-    };
-    let z: Vec<Vec<Option<i64>>> = shown
-        .iter()
-        .map(|&t| encode(&recording.frame_slice(t).unwrap_or_default()))
-        .collect();
-    let peak_image: Vec<Option<i64>> = {
-        let g = recording.peak_image();
-        let v: Vec<f32> = g.data().iter().map(|&v| v as f32).collect();
-        encode(&v)
-    };
-
-    let mm = |p: &[f64]| -> [f64; 2] { [round3(p[0] * pitch[0]), round3(p[1] * pitch[1])] };
-    // Surfaces' heights are pressure rescaled to the footprint's extent (in sensels): same units as x.
-    let overlays = overlays(result, &shown, &mm, pitch[0], kpa);
-
-    let measures = recording.measures(info.contact_threshold);
-    let area_known = recording.sensel_area().is_some();
-    let cop: Vec<Option<[f64; 2]>> = measures.iter().map(|m| m.cop.map(|c| mm(&c))).collect();
-    let series = json!({
-        "frame": (0..n).collect::<Vec<_>>(),
-        "area": measures.iter().map(|m| round3(m.contact_area)).collect::<Vec<_>>(),
-        "force": measures.iter().map(|m| round3(m.total_force)).collect::<Vec<_>>(),
-        "peak": measures.iter().map(|m| round3(m.peak_pressure * kpa)).collect::<Vec<_>>(),
-        "cop_path": cop_path(&cop),
-        "cop": cop,
-        "area_label": if area_known { "contact area (mm²)" } else { "contact area (sensels)" },
-        "force_label": load_label(recording),
-        "peak_label": format!("peak pressure ({})", punits.as_deref().unwrap_or("units unknown")),
-    });
-    let pairs = json!({
-        "frame": result.pairs.iter().map(|p| p.row.objects.frame_a).collect::<Vec<_>>(),
-        "local": result.pairs.iter().map(|p| round3(p.row.local_percent)).collect::<Vec<_>>(),
-        "optimisation": result.pairs.iter().map(|p| round3(p.row.optimisation_percent)).collect::<Vec<_>>(),
-        "cost": result.pairs.iter().map(|p| round6(p.row.mean_cost)).collect::<Vec<_>>(),
-    });
-    let (start, end) = info
-        .frames
-        .map(|(s, e)| (s.min(n - 1), e.clamp(s.min(n - 1) + 1, n)))
-        .unwrap_or((0, n));
-    let decimation = (step > 1).then(|| {
-        format!(
-            "The player shows every {} frame: the recording holds more than {MAX_PLAYER_VALUES} \
-             pressure values (frames × rows × cols). The time series keep every frame.",
-            ordinal(step)
-        )
-    });
-    json!({
-        "n_frames": n, "rows": rows, "cols": cols, "step": step, "shown": shown,
-        "analysed": [start, end], "decimation": decimation,
-        "open_frame": open_frame(result, &shown, start, end),
-        "frame_rate": rate, "dx": pitch[0], "dy": pitch[1], "xy_units": xy_units,
-        "pressure_units": punits, "quantum": quantum, "z": z, "peak_image": peak_image,
-        "overlays": overlays, "series": series, "pairs": pairs,
-        "max_player_values": MAX_PLAYER_VALUES,
-        "surface": result.objects.first().is_some_and(|o| o.shape.dim() == 3),
-        "isocontour": result.objects.iter().any(|o| o.level.is_some()),
-        "first_object_frame": result.objects.first().map(|o| o.frame),
-    })
+/// The frame stride of the player of a recording of `n` frames of `sensels` values each: 1, or
+/// the smallest that keeps it within [`MAX_PLAYER_FRAMES`] frames and [`MAX_PLAYER_VALUES`]
+/// values.
+pub fn player_step(n: usize, sensels: usize) -> usize {
+    let by_values = (n * sensels).div_ceil(MAX_PLAYER_VALUES);
+    let by_frames = n.div_ceil(MAX_PLAYER_FRAMES);
+    by_values.max(by_frames).max(1)
 }
 
-/// The frame the player opens on: the first frame it shows that holds objects within the
-/// analysed frames `start..end` (an isocontour run has one frame of objects: the shown frame
-/// nearest it when the player is decimated), else the first shown frame of the analysed ones.
-fn open_frame(result: &SequenceResult, shown: &[usize], start: usize, end: usize) -> usize {
-    let analysed = |f: &usize| (start..end).contains(f);
-    let with_objects: std::collections::HashSet<usize> = result
-        .objects
-        .iter()
-        .map(|o| o.frame)
-        .filter(analysed)
-        .collect();
-    let nearest = |target: usize| {
+/// What the report draws of a run, gathered from its events ([`SequenceSink`]) as the engine or
+/// [`pedo_track::replay`] hands them over, in memory bounded whatever the recording's length:
+/// the overlays of the player's frames only (at most [`MAX_PLAYER_FRAMES`]: contours, matches
+/// with their costs, excess matches, unmatched nodes, track trails, the surface pair), a few
+/// numbers per pair for the time series, and a sample of the match costs for the cost classes
+/// (every cost up to [`COST_SAMPLE`], evenly strided beyond). [`ReportGather::page`] makes the
+/// page once the run is over.
+pub struct ReportGather {
+    /// The player's frame stride ([`player_step`]) and the recording's frame count.
+    step: usize,
+    n: usize,
+    /// Millimetres (or sensels) per sensel along x and y, and the pressure scale to kPa.
+    pitch: [f64; 2],
+    kpa: f64,
+    /// Per frame the player shows (frame `k × step`).
+    frames: Vec<ShownFrame>,
+    /// Per matched pair: its first frame, local and optimisation percentages, mean cost.
+    pair_frame: Vec<usize>,
+    pair_local: Vec<f64>,
+    pair_optimisation: Vec<f64>,
+    pair_cost: Vec<f64>,
+    costs: CostSample,
+    /// The analysed frames, `start..end`.
+    analysed: (usize, usize),
+    /// The first frame within the analysed frames that holds objects.
+    first_analysed_object_frame: Option<usize>,
+    first_object: Option<(usize, usize)>,
+    isocontour: bool,
+}
+
+/// The overlays of one frame the player shows, as the events bring them.
+#[derive(Default)]
+struct ShownFrame {
+    objects: bool,
+    contours: Lines,
+    levels: Vec<Value>,
+    /// One-to-one matches into the next frame, with their costs: classed once every cost is in.
+    segments: Vec<([f64; 2], [f64; 2], f64)>,
+    excess: Lines,
+    unmatched: Lines,
+    trails: Lines,
+    /// The first pair leaving the frame has been seen (its surfaces, for surface runs).
+    paired: bool,
+    surfaces: Option<Value>,
+}
+
+/// Match costs kept for the cost classes' quantiles: every cost up to this many, beyond it every
+/// s-th cost (s doubling as the costs come), so that the classes of a long run cost a bounded
+/// memory and are still its quantiles within a fraction of a class.
+pub const COST_SAMPLE: usize = 1 << 17;
+
+/// An evenly strided sample of the costs handed to it ([`COST_SAMPLE`]).
+#[derive(Default)]
+struct CostSample {
+    kept: Vec<f64>,
+    stride: usize,
+    seen: usize,
+}
+
+impl CostSample {
+    fn push(&mut self, c: f64) {
+        let stride = self.stride.max(1);
+        if self.seen.is_multiple_of(stride) {
+            self.kept.push(c);
+            if self.kept.len() >= COST_SAMPLE {
+                // Keep every other cost: the sample is then every (2 × stride)-th.
+                let halved: Vec<f64> = self.kept.iter().step_by(2).copied().collect();
+                self.kept = halved;
+                self.stride = 2 * stride;
+            }
+        }
+        self.seen += 1;
+    }
+}
+
+impl ReportGather {
+    /// An empty gathering for the report of a run of `recording` whose analysed frames are
+    /// `frames` (`start..end`; `None`: every frame), as [`ReportInfo::frames`].
+    pub fn new(recording: &Recording, frames: Option<(usize, usize)>) -> Self {
+        let n = recording.n_frames();
+        let step = player_step(n, recording.rows() * recording.cols());
+        let (kpa, _) = pressure_scale(recording);
+        let pitch = recording.pitch_mm.unwrap_or([1.0, 1.0]);
+        let analysed = frames
+            .map(|(s, e)| {
+                let last = n.saturating_sub(1);
+                (s.min(last), e.clamp(s.min(last) + 1, n.max(1)))
+            })
+            .unwrap_or((0, n));
+        Self {
+            step,
+            n,
+            pitch,
+            kpa,
+            frames: (0..n)
+                .step_by(step)
+                .map(|_| ShownFrame::default())
+                .collect(),
+            pair_frame: Vec::new(),
+            pair_local: Vec::new(),
+            pair_optimisation: Vec::new(),
+            pair_cost: Vec::new(),
+            costs: CostSample::default(),
+            analysed,
+            first_analysed_object_frame: None,
+            first_object: None,
+            isocontour: false,
+        }
+    }
+
+    /// The frames the player shows.
+    fn shown(&self) -> Vec<usize> {
+        (0..self.n).step_by(self.step).collect()
+    }
+
+    /// The overlays of frame `f`, when the player shows it.
+    fn shown_frame(&mut self, f: usize) -> Option<&mut ShownFrame> {
+        if !f.is_multiple_of(self.step) {
+            return None;
+        }
+        self.frames.get_mut(f / self.step)
+    }
+
+    fn mm(&self, p: &[f64]) -> [f64; 2] {
+        [round3(p[0] * self.pitch[0]), round3(p[1] * self.pitch[1])]
+    }
+
+    /// Hands a whole run to the gathering, each kind of event in the engine's order.
+    fn feed(&mut self, result: &SequenceResult) -> Result<()> {
+        let objects = &result.objects;
+        let mut start = 0;
+        while start < objects.len() {
+            let frame = objects[start].frame;
+            let end = start
+                + objects[start..]
+                    .iter()
+                    .take_while(|o| o.frame == frame)
+                    .count();
+            self.frame_objects(frame, &objects[start..end])?;
+            start = end;
+        }
+        for p in &result.pairs {
+            self.pair(p, &objects[p.a], &objects[p.b])?;
+        }
+        for (k, t) in result.all_tracks().enumerate() {
+            let steps: Vec<(&SequenceObject, usize)> =
+                t.steps.iter().map(|&(o, n)| (&objects[o], n)).collect();
+            self.track(k, &steps)?;
+        }
+        Ok(())
+    }
+
+    /// The report as a complete HTML page, once the run's events are in: `counts` gives its
+    /// header's counts and skipped frames and pairs.
+    pub fn page(
+        &self,
+        recording: &Recording,
+        counts: &RunCounts,
+        info: &ReportInfo,
+    ) -> Result<String> {
+        if recording.n_frames() == 0 {
+            return Err(report_error("the recording has no frames"));
+        }
+        let data = self.data(recording, info);
+        let data = serde_json::to_string(&data)
+            .map_err(|e| report_error(format!("cannot encode the report data: {e}")))?;
+        Ok(page(
+            TEMPLATE,
+            &info.input,
+            &header_html(recording, counts, info),
+            &data,
+        ))
+    }
+
+    /// The frame the player opens on: the first frame it shows that holds objects within the
+    /// analysed frames (an isocontour run has one frame of objects: the shown frame nearest it
+    /// when the player is decimated), else the first shown frame of the analysed ones.
+    fn open_frame(&self, shown: &[usize]) -> usize {
+        let (start, end) = self.analysed;
+        let analysed = |f: &usize| (start..end).contains(f);
+        let nearest = |target: usize| {
+            shown
+                .iter()
+                .copied()
+                .min_by_key(|&f| (f.abs_diff(target), f < target))
+        };
         shown
             .iter()
-            .copied()
-            .min_by_key(|&f| (f.abs_diff(target), f < target))
-    };
-    shown
-        .iter()
-        .copied()
-        .find(|f| with_objects.contains(f))
-        .or_else(|| with_objects.iter().min().and_then(|&f| nearest(f)))
-        .or_else(|| shown.iter().copied().find(analysed))
-        .or_else(|| nearest(start))
-        .unwrap_or(0)
+            .zip(&self.frames)
+            .find(|(f, s)| s.objects && analysed(f))
+            .map(|(&f, _)| f)
+            .or_else(|| self.first_analysed_object_frame.and_then(nearest))
+            .or_else(|| shown.iter().copied().find(analysed))
+            .or_else(|| nearest(start))
+            .unwrap_or(0)
+    }
+
+    /// Everything the page's script draws, as JSON.
+    fn data(&self, recording: &Recording, info: &ReportInfo) -> Value {
+        let (n, rows, cols) = (recording.n_frames(), recording.rows(), recording.cols());
+        let step = self.step;
+        let shown = self.shown();
+        let (kpa, punits) = pressure_scale(recording);
+        let xy_units = if recording.pitch_mm.is_some() {
+            "mm"
+        } else {
+            "sensels"
+        };
+        let pitch = self.pitch;
+        let rate = recording.frame_rate();
+
+        // Pressure as integers of a fixed quantum: compact JSON and 3 significant digits at the
+        // peak. The largest value of any frame (0 at least), frame by frame: a long recording is
+        // held sparsely and never built whole.
+        let peak_grid = recording.peak_image();
+        let peak = peak_grid.max().max(0.0) * kpa;
+        let quantum = if peak > 0.0 {
+            10f64.powf((peak / 1000.0).log10().floor())
+        } else {
+            1.0
+        };
+        let mask = recording.sensor_mask();
+        let encode = |values: &[f32]| -> Vec<Option<i64>> {
+            values
+                .iter()
+                .zip(mask)
+                .map(|(&v, &m)| {
+                    (m && v.is_finite()).then(|| (v as f64 * kpa / quantum).round() as i64)
+                })
+                .collect()
+        };
+        let z: Vec<Vec<Option<i64>>> = shown
+            .iter()
+            .map(|&t| encode(&recording.frame_slice(t).unwrap_or_default()))
+            .collect();
+        let peak_image: Vec<Option<i64>> = {
+            let v: Vec<f32> = peak_grid.data().iter().map(|&v| v as f32).collect();
+            encode(&v)
+        };
+
+        let mm = |p: &[f64]| -> [f64; 2] { [round3(p[0] * pitch[0]), round3(p[1] * pitch[1])] };
+        let classes = cost_classes(self.costs.kept.clone());
+        let frames: Vec<Value> = self
+            .frames
+            .iter()
+            .map(|s| {
+                let mut by_cost: Vec<Lines> =
+                    (0..classes.count()).map(|_| Lines::default()).collect();
+                for &(a, b, cost) in &s.segments {
+                    by_cost[classes.class(cost)].piece([a, b]);
+                }
+                json!({
+                    "contours": s.contours, "levels": s.levels, "matches": by_cost,
+                    "excess": s.excess, "unmatched": s.unmatched, "trails": s.trails,
+                    "surfaces": s.surfaces,
+                })
+            })
+            .collect();
+        let overlays = json!({ "cost_bounds": classes.bounds, "cost_labels": classes.labels, "frames": frames });
+
+        let measures = recording.measures(info.contact_threshold);
+        let area_known = recording.sensel_area().is_some();
+        let cop: Vec<Option<[f64; 2]>> = measures.iter().map(|m| m.cop.map(|c| mm(&c))).collect();
+        let series = json!({
+            "frame": (0..n).collect::<Vec<_>>(),
+            "area": measures.iter().map(|m| round3(m.contact_area)).collect::<Vec<_>>(),
+            "force": measures.iter().map(|m| round3(m.total_force)).collect::<Vec<_>>(),
+            "peak": measures.iter().map(|m| round3(m.peak_pressure * kpa)).collect::<Vec<_>>(),
+            "cop_path": cop_path(&cop),
+            "cop": cop,
+            "area_label": if area_known { "contact area (mm²)" } else { "contact area (sensels)" },
+            "force_label": load_label(recording),
+            "peak_label": format!("peak pressure ({})", punits.as_deref().unwrap_or("units unknown")),
+        });
+        let pairs = json!({
+            "frame": self.pair_frame,
+            "local": self.pair_local,
+            "optimisation": self.pair_optimisation,
+            "cost": self.pair_cost,
+        });
+        let (start, end) = self.analysed;
+        let decimation = (step > 1).then(|| {
+            let why = if n > MAX_PLAYER_FRAMES {
+                format!("the recording holds more than {MAX_PLAYER_FRAMES} frames")
+            } else {
+                format!(
+                    "the recording holds more than {MAX_PLAYER_VALUES} pressure values (frames × rows × cols)"
+                )
+            };
+            format!(
+                "The player shows every {} frame ({} of {n}, each named by its own number): {why}. \
+                 The time series and the tables keep every frame.",
+                ordinal(step),
+                shown.len()
+            )
+        });
+        json!({
+            "n_frames": n, "rows": rows, "cols": cols, "step": step, "shown": shown,
+            "analysed": [start, end], "decimation": decimation,
+            "open_frame": self.open_frame(&shown),
+            "frame_rate": rate, "dx": pitch[0], "dy": pitch[1], "xy_units": xy_units,
+            "pressure_units": punits, "quantum": quantum, "z": z, "peak_image": peak_image,
+            "overlays": overlays, "series": series, "pairs": pairs,
+            "max_player_values": MAX_PLAYER_VALUES,
+            "surface": self.first_object.is_some_and(|(_, dim)| dim == 3),
+            "isocontour": self.isocontour,
+            "first_object_frame": self.first_object.map(|(f, _)| f),
+        })
+    }
+}
+
+impl SequenceSink for ReportGather {
+    fn frame_objects(&mut self, frame: usize, objects: &[SequenceObject]) -> Result<()> {
+        if let Some(o) = objects.first() {
+            self.first_object.get_or_insert((o.frame, o.shape.dim()));
+        }
+        for o in objects {
+            self.isocontour |= o.level.is_some();
+            let (start, end) = self.analysed;
+            if (start..end).contains(&o.frame) && self.first_analysed_object_frame.is_none() {
+                self.first_analysed_object_frame = Some(o.frame);
+            }
+        }
+        let _ = frame;
+        // Objects come in frame order, but an isocontour run's one frame holds every level.
+        for o in objects {
+            let pts: Vec<[f64; 2]> = (0..o.shape.len())
+                .map(|i| self.mm(o.shape.point(i)))
+                .collect();
+            let level_scale = self.kpa;
+            let Some(s) = self.shown_frame(o.frame) else {
+                continue;
+            };
+            s.objects = true;
+            let Some(&first) = pts.first() else { continue };
+            if let Some(level) = o.level {
+                let mut pts = pts;
+                pts.push(first);
+                let mut outline = Lines::default();
+                outline.piece(pts);
+                let level = round6(level * level_scale);
+                s.levels
+                    .push(json!({ "level": level, "x": outline.x, "y": outline.y }));
+            } else if o.shape.dim() == 2 {
+                let mut pts = pts;
+                pts.push(first);
+                s.contours.piece(pts);
+            } else {
+                // Surfaces: nodes only, as separate one-point pieces (markers).
+                for p in pts {
+                    s.contours.piece([p]);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()> {
+        self.pair_frame.push(pair.row.objects.frame_a);
+        self.pair_local.push(round3(pair.row.local_percent));
+        self.pair_optimisation
+            .push(round3(pair.row.optimisation_percent));
+        self.pair_cost.push(round6(pair.row.mean_cost));
+        for m in &pair.result.pairs {
+            self.costs.push(m.cost);
+        }
+        let (pitch, z_scale) = (self.pitch, self.pitch[0]);
+        let mm = |p: &[f64]| -> [f64; 2] { [round3(p[0] * pitch[0]), round3(p[1] * pitch[1])] };
+        let Some(s) = self.shown_frame(a.frame) else {
+            return Ok(());
+        };
+        let (sa, sb) = (&a.shape, &b.shape);
+        for m in &pair.result.pairs {
+            let (p, q) = (mm(sa.point(m.a)), mm(sb.point(m.b)));
+            if m.excess {
+                s.excess.piece([p, q]);
+            } else {
+                s.segments.push((p, q, m.cost));
+            }
+        }
+        for &u in &pair.result.unmatched_a {
+            s.unmatched.piece([mm(sa.point(u))]);
+        }
+        if !s.paired {
+            s.paired = true;
+            s.surfaces = surface_pair(pair, a, b, &mm, z_scale);
+        }
+        Ok(())
+    }
+
+    fn track(&mut self, _: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
+        let pitch = self.pitch;
+        let mm = |p: &[f64]| -> [f64; 2] { [round3(p[0] * pitch[0]), round3(p[1] * pitch[1])] };
+        for (s, (o, _)) in steps.iter().enumerate() {
+            let from = s.saturating_sub(TRAIL_FRAMES);
+            if s == from {
+                continue;
+            }
+            if let Some(shown) = self.shown_frame(o.frame) {
+                shown.trails.piece(
+                    steps[from..=s]
+                        .iter()
+                        .map(|&(o, node)| mm(o.shape.point(node))),
+                );
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The centre-of-pressure path for plotly: x, y and time (frame index) per frame with a centre
@@ -778,125 +1083,17 @@ impl Lines {
     }
 }
 
-/// Per shown frame: contours (isocontours: one outline per level, with the level in the
-/// report's pressure units, `level_scale` per recording unit), matches into the next frame by
-/// cost class, excess matches, unmatched nodes, and track trails; plus the cost-class bounds.
-fn overlays(
-    result: &SequenceResult,
-    shown: &[usize],
-    mm: &dyn Fn(&[f64]) -> [f64; 2],
-    z_scale: f64,
-    level_scale: f64,
-) -> Value {
-    let classes = cost_classes(
-        result
-            .pairs
-            .iter()
-            .flat_map(|p| p.result.pairs.iter().map(|m| m.cost))
-            .collect(),
-    );
-
-    let mut objects_by_frame: HashMap<usize, Vec<usize>> = HashMap::new();
-    for (i, o) in result.objects.iter().enumerate() {
-        objects_by_frame.entry(o.frame).or_default().push(i);
-    }
-    let mut pairs_by_frame: HashMap<usize, Vec<usize>> = HashMap::new();
-    for (i, p) in result.pairs.iter().enumerate() {
-        pairs_by_frame
-            .entry(result.objects[p.a].frame)
-            .or_default()
-            .push(i);
-    }
-    // Track steps by frame: (track, step index).
-    let mut steps_by_frame: HashMap<usize, Vec<(usize, usize)>> = HashMap::new();
-    let tracks: Vec<_> = result.all_tracks().collect();
-    for (t, track) in tracks.iter().enumerate() {
-        for (s, &(o, _)) in track.steps.iter().enumerate() {
-            steps_by_frame
-                .entry(result.objects[o].frame)
-                .or_default()
-                .push((t, s));
-        }
-    }
-    let frames: Vec<Value> = shown
-        .iter()
-        .map(|&f| {
-            let mut contours = Lines::default();
-            let mut levels = Vec::new();
-            for &o in objects_by_frame.get(&f).into_iter().flatten() {
-                let shape = &result.objects[o].shape;
-                let mut pts: Vec<[f64; 2]> = (0..shape.len()).map(|i| mm(shape.point(i))).collect();
-                if let Some(&first) = pts.first() {
-                    if let Some(level) = result.objects[o].level {
-                        pts.push(first);
-                        let mut outline = Lines::default();
-                        outline.piece(pts);
-                        let level = round6(level * level_scale);
-                        levels.push(json!({ "level": level, "x": outline.x, "y": outline.y }));
-                    } else if shape.dim() == 2 {
-                        pts.push(first);
-                        contours.piece(pts);
-                    } else {
-                        // Surfaces: nodes only, as separate one-point pieces (markers).
-                        for p in pts {
-                            contours.piece([p]);
-                        }
-                    }
-                }
-            }
-            let mut by_cost: Vec<Lines> = (0..classes.count()).map(|_| Lines::default()).collect();
-            let mut excess = Lines::default();
-            let mut unmatched = Lines::default();
-            for &pi in pairs_by_frame.get(&f).into_iter().flatten() {
-                let p = &result.pairs[pi];
-                let (sa, sb) = (&result.objects[p.a].shape, &result.objects[p.b].shape);
-                for m in &p.result.pairs {
-                    let seg = [mm(sa.point(m.a)), mm(sb.point(m.b))];
-                    if m.excess {
-                        excess.piece(seg);
-                    } else {
-                        by_cost[classes.class(m.cost)].piece(seg);
-                    }
-                }
-                for &u in &p.result.unmatched_a {
-                    unmatched.piece([mm(sa.point(u))]);
-                }
-            }
-            let mut trails = Lines::default();
-            for &(t, s) in steps_by_frame.get(&f).into_iter().flatten() {
-                let steps = &tracks[t].steps;
-                let from = s.saturating_sub(TRAIL_FRAMES);
-                if s > from {
-                    trails.piece(
-                        steps[from..=s]
-                            .iter()
-                            .map(|&(o, node)| mm(result.objects[o].shape.point(node))),
-                    );
-                }
-            }
-            let surfaces = pairs_by_frame
-                .get(&f)
-                .and_then(|ps| ps.first())
-                .map(|&pi| surface_pair(result, &result.pairs[pi], mm, z_scale));
-            json!({
-                "contours": contours, "levels": levels, "matches": by_cost, "excess": excess,
-                "unmatched": unmatched, "trails": trails, "surfaces": surfaces,
-            })
-        })
-        .collect();
-    json!({ "cost_bounds": classes.bounds, "cost_labels": classes.labels, "frames": frames })
-}
-
 /// For the 3-D view: a surface pair's two meshes (x, y in mm or sensels; z the surface's height,
 /// pressure rescaled to the footprint, times `z_scale`) and its matches as segments; `None` for
 /// 2-D objects.
 fn surface_pair(
-    result: &SequenceResult,
-    pair: &pedo_track::PairMatch,
+    pair: &PairMatch,
+    a: &SequenceObject,
+    b: &SequenceObject,
     mm: &dyn Fn(&[f64]) -> [f64; 2],
     z_scale: f64,
 ) -> Option<Value> {
-    let (sa, sb) = (&result.objects[pair.a].shape, &result.objects[pair.b].shape);
+    let (sa, sb) = (&a.shape, &b.shape);
     if sa.dim() != 3 || sb.dim() != 3 {
         return None;
     }
@@ -933,7 +1130,7 @@ fn surface_pair(
     }
     Some(json!({
         "a": mesh(sa), "b": mesh(sb),
-        "frames": [result.objects[pair.a].frame, result.objects[pair.b].frame],
+        "frames": [a.frame, b.frame],
         "matches": { "x": seg[0], "y": seg[1], "z": seg[2] },
     }))
 }
@@ -970,6 +1167,34 @@ mod tests {
             .with_frame_rate(50.0)
             .unwrap()
             .with_units("kPa")
+    }
+
+    /// The frame a report whose player shows `shown` opens on, of run `r` analysed on
+    /// `start..end`.
+    fn open_frame(r: &SequenceResult, shown: &[usize], start: usize, end: usize) -> usize {
+        let step = if shown.len() > 1 {
+            shown[1] - shown[0]
+        } else {
+            1
+        };
+        let mut g = ReportGather {
+            step,
+            n: shown.last().map_or(0, |l| l + 1),
+            pitch: [1.0, 1.0],
+            kpa: 1.0,
+            frames: shown.iter().map(|_| ShownFrame::default()).collect(),
+            pair_frame: Vec::new(),
+            pair_local: Vec::new(),
+            pair_optimisation: Vec::new(),
+            pair_cost: Vec::new(),
+            costs: CostSample::default(),
+            analysed: (start, end),
+            first_analysed_object_frame: None,
+            first_object: None,
+            isocontour: false,
+        };
+        g.feed(r).unwrap();
+        g.open_frame(shown)
     }
 
     fn embedded_data(html: &str) -> Value {
@@ -1544,6 +1769,59 @@ mod tests {
     }
 
     #[test]
+    fn the_cost_sample_stays_bounded_and_keeps_the_quantiles() {
+        let mut sample = CostSample::default();
+        let n = 5 * COST_SAMPLE + 17;
+        // Costs 0..1 in a scrambled order (a multiplicative walk through the residues).
+        let costs: Vec<f64> = (0..n).map(|k| ((k * 7919) % n) as f64 / n as f64).collect();
+        for &c in &costs {
+            sample.push(c);
+        }
+        assert!(sample.kept.len() < COST_SAMPLE, "{}", sample.kept.len());
+        assert!(sample.kept.len() > COST_SAMPLE / 4, "{}", sample.kept.len());
+        let exact = cost_classes(costs);
+        let sampled = cost_classes(sample.kept.clone());
+        assert_eq!(exact.bounds.len(), sampled.bounds.len());
+        for (e, s) in exact.bounds.iter().zip(&sampled.bounds) {
+            assert!((e - s).abs() < 0.01, "{e} vs {s}");
+        }
+        // Below the bound every cost is kept.
+        let mut few = CostSample::default();
+        (0..1000).for_each(|k| few.push(k as f64));
+        assert_eq!(few.kept.len(), 1000);
+    }
+
+    #[test]
+    fn long_recordings_of_small_frames_show_at_most_the_frame_bound() {
+        // 1,000 frames of 4 × 5 sensels: far below the value bound, above the frame bound.
+        let frames = 1000;
+        let rec = flat(frames, "kPa", Some([5.0, 5.0]));
+        let d = embedded_data(&run_report(&rec, &SequenceResult::default(), &info()).unwrap());
+        let step = frames.div_ceil(MAX_PLAYER_FRAMES);
+        assert_eq!(d["step"], step);
+        let shown: Vec<usize> = serde_json::from_value(d["shown"].clone()).unwrap();
+        assert!(shown.len() <= MAX_PLAYER_FRAMES, "{}", shown.len());
+        // Evenly spaced, named by their own numbers, from the first frame to near the last.
+        assert_eq!(shown, (0..frames).step_by(step).collect::<Vec<_>>());
+        assert!(frames - 1 - shown[shown.len() - 1] < step);
+        assert_eq!(d["z"].as_array().unwrap().len(), shown.len());
+        assert_eq!(
+            d["overlays"]["frames"].as_array().unwrap().len(),
+            shown.len()
+        );
+        let note = d["decimation"].as_str().unwrap();
+        assert!(
+            note.contains(&format!("({} of {frames}, ", shown.len()))
+                && note.contains(&format!("more than {MAX_PLAYER_FRAMES} frames")),
+            "{note}"
+        );
+        // The time series keep every frame.
+        assert_eq!(d["series"]["force"].as_array().unwrap().len(), frames);
+        assert_eq!(player_step(MAX_PLAYER_FRAMES, 20), 1);
+        assert_eq!(player_step(MAX_PLAYER_FRAMES + 1, 20), 2);
+    }
+
+    #[test]
     fn long_recordings_are_decimated_below_the_bound() {
         let (frames, rows, cols) = (301, 100, 100);
         let rec = Recording::from_array(frames, rows, cols, vec![0.0; frames * rows * cols], None)
@@ -1554,7 +1832,7 @@ mod tests {
         assert_eq!(d["step"], 2);
         let note = d["decimation"].as_str().unwrap();
         assert!(
-            note.starts_with("The player shows every 2nd frame: "),
+            note.starts_with("The player shows every 2nd frame (151 of 301, "),
             "{note}"
         );
         assert_eq!(d["shown"].as_array().unwrap().len(), 151);

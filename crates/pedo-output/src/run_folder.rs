@@ -3,11 +3,16 @@
 //! by one path, from the run's events ([`pedo_track::SequenceSink`]) as the engine
 //! (`pedo_track::stream_sequence`) makes them, or as `pedo_track::replay` hands over a result
 //! already made (`pymodal.run(out=...)`): [`FolderSink`] writes the tables as the events come
-//! ([`TablesSink`]) and, for the figures, the report and the animation, which draw the whole run
-//! (every track over the peak image, the report's player), gathers it ([`pedo_track::Collect`]);
-//! `summary.json` is made from the counts the events add up to.
+//! ([`TablesSink`]), gathers what the summary figures and the report draw from the same events in
+//! bounded memory ([`FrameCurves`], [`TracksGather`], [`ReportGather`]), and gathers every object
+//! and pair ([`pedo_track::Collect`]) only for what needs them all: the material points of a
+//! contour run, the pair figures and the animation. `summary.json` is made from the counts the
+//! events add up to.
 
-use crate::figure::{tracks_background, FigureAxes, MatchFigure, ObjectLabel, TracksFigure};
+use crate::figure::{
+    Curve, CurvesFigure, FigureAxes, MatchFigure, ObjectLabel, PeakFigure, TracksGather,
+};
+use crate::html_report::ReportGather;
 use crate::outdir::OutDir;
 use crate::TableFormat;
 use crate::{Cell, InputInfo};
@@ -19,12 +24,13 @@ use pedo_io::recording::Recording;
 use pedo_io::FrameSource;
 use pedo_io::{IoError, Result};
 use pedo_track::{
-    replay, require_objects, stream_sequence, Collect, NoSink, PairMatch, RunCounts, RunParams,
-    SequenceObject, SequenceOptions, SequenceResult, SequenceSink, Stage,
+    replay, require_objects, stream_sequence, Collect, NoSink, ObjectModel, PairMatch, RunCounts,
+    RunParams, SequenceObject, SequenceOptions, SequenceResult, SequenceSink, Stage,
 };
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// The tables every run folder holds (besides `summary.json` and `pairs.json`), by name: each
@@ -60,7 +66,28 @@ pub fn run_table_files(tables: TableFormat, options: &SequenceOptions) -> Vec<St
     files
 }
 
-/// The figures of a run (`--figures`, `figures=`): a match figure per pair and the tracks figure.
+/// Which figures a run draws (`--figures`, `figures=`): the summary figures (the tracks over
+/// the peak pressure, the force and contact-area curves, the peak-pressure image with its
+/// outlines), those and a match figure per pair, or none.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FigureSet {
+    /// The summary figures: `tracks`, `curves` and `peak`, a few files whatever the
+    /// recording's length.
+    #[default]
+    Summary,
+    /// The summary figures and a match figure per pair (`figures/pair_*`).
+    Pairs,
+    /// No figures.
+    None,
+}
+
+modal_core::choice!(FigureSet, "figures", [
+    "summary" => FigureSet::Summary,
+    "pairs" => FigureSet::Pairs,
+    "none" => FigureSet::None,
+]);
+
+/// The file format of a run's figures (`--figure-format`, `figure_format=`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FigureFormat {
     /// PNG images.
@@ -68,14 +95,11 @@ pub enum FigureFormat {
     Png,
     /// SVG drawings.
     Svg,
-    /// No figures.
-    None,
 }
 
-modal_core::choice!(FigureFormat, "figures", [
+modal_core::choice!(FigureFormat, "figure_format", [
     "png" => FigureFormat::Png,
     "svg" => FigureFormat::Svg,
-    "none" => FigureFormat::None,
 ]);
 
 /// The interactive report of a run (`--report`, `report=`).
@@ -115,10 +139,14 @@ modal_core::option_set! {
     /// `summary.json`, and the tables' format. [`RunOutputs::of`] turns them into the outputs.
     OutputOptions {
         let _d = ();
-        /// Figures of every pair and of the tracks.
-        figures: FigureFormat = FigureFormat::default();
+        /// Which figures a run draws.
+        figures: FigureSet = FigureSet::default();
+            Word(<FigureSet as Choice>::NAMES), FigureSet::default(),
+            "Figures: summary (tracks.*, the tracks over the peak pressure; curves.*, total force and contact area over time; peak.*, the peak-pressure image with its outlines), pairs (those and a match figure of every matched pair, under figures/) or none.";
+        /// The figures' file format.
+        figure_format: FigureFormat = FigureFormat::default();
             Word(<FigureFormat as Choice>::NAMES), FigureFormat::default(),
-            "Figures of every matched pair (and of a run's tracks): png, svg or none.";
+            "File format of the figures: png or svg.";
         /// The tables' file format.
         tables: TableFormat = TableFormat::default();
             Word(<TableFormat as Choice>::NAMES), TableFormat::default(),
@@ -149,20 +177,39 @@ pub fn output_option_specs() -> Vec<OptionSpec> {
 /// Which figure files a run writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct FigureKinds {
-    /// Write PNG figures (`figures/pair_*.png`, `tracks.png`).
+    /// Write PNG figures (`tracks.png`, ..., `figures/pair_*.png`).
     pub png: bool,
-    /// Write SVG figures (`figures/pair_*.svg`, `tracks.svg`).
+    /// Write SVG figures (`tracks.svg`, ..., `figures/pair_*.svg`).
     pub svg: bool,
 }
 
-impl From<FigureFormat> for FigureKinds {
-    fn from(f: FigureFormat) -> Self {
+impl FigureKinds {
+    /// The files of `set` in `format`: none for [`FigureSet::None`].
+    pub fn of(set: FigureSet, format: FigureFormat) -> Self {
+        let drawn = set != FigureSet::None;
         Self {
-            png: f == FigureFormat::Png,
-            svg: f == FigureFormat::Svg,
+            png: drawn && format == FigureFormat::Png,
+            svg: drawn && format == FigureFormat::Svg,
         }
     }
+
+    /// Whether any figure file is written.
+    pub fn any(&self) -> bool {
+        self.png || self.svg
+    }
+
+    /// The file extensions written (`"png"`, `"svg"`).
+    pub fn extensions(&self) -> Vec<&'static str> {
+        [(self.png, "png"), (self.svg, "svg")]
+            .into_iter()
+            .filter_map(|(asked, ext)| asked.then_some(ext))
+            .collect()
+    }
 }
+
+/// The summary figures of a run, by stem (written as `STEM.png` or `STEM.svg`): the tracks
+/// over the peak pressure, the force and contact-area curves, the peak-pressure image.
+pub const SUMMARY_FIGURES: [&str; 3] = ["tracks", "curves", "peak"];
 
 /// A finished run of one recording, as the writers of its folder see it.
 pub struct RunRecord<'a> {
@@ -181,8 +228,10 @@ pub struct RunRecord<'a> {
 /// What a run folder holds besides its tables and `summary.json`.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct RunOutputs {
-    /// Figures to write: a match figure per pair and the tracks figure.
+    /// The figure files to write: the summary figures ([`SUMMARY_FIGURES`]) in these formats.
     pub figures: FigureKinds,
+    /// With [`figures`](Self::figures): a match figure per pair too (`figures/pair_*`).
+    pub pair_figures: bool,
     /// Write `report.html`, the interactive report ([`report_page`]).
     pub report: bool,
     /// `animation.gif`: the frames with their contours and matches (`--animation gif`).
@@ -196,7 +245,8 @@ impl RunOutputs {
     /// words become outputs.
     pub fn of(o: &OutputOptions) -> Self {
         Self {
-            figures: o.figures.into(),
+            figures: FigureKinds::of(o.figures, o.figure_format),
+            pair_figures: o.figures == FigureSet::Pairs,
             report: o.report == ReportFormat::Html,
             animation: o.animation == AnimationFormat::Gif,
             tables: o.tables,
@@ -208,7 +258,7 @@ impl RunOutputs {
 /// such a run streams ([`stream_run_folder`]), and its memory does not grow with the
 /// recording's length.
 pub fn tables_only(outputs: &RunOutputs) -> bool {
-    !outputs.figures.png && !outputs.figures.svg && !outputs.report && !outputs.animation
+    !outputs.figures.any() && !outputs.report && !outputs.animation
 }
 
 /// The recording at `path` read for a run with these parameters and outputs: a run that
@@ -528,45 +578,98 @@ enum Feed<'f, 'p> {
     Replay(&'p SequenceResult),
 }
 
-/// The sinks of a run folder: the tables, written as the events come ([`TablesSink`]), and,
-/// for a run with figures, a report or an animation, the run gathered for them and for the
-/// material points ([`Collect`], each pair without its match details: no output draws them);
-/// and the caller's own sink, if any ([`RunPlan::also`]).
+/// The sinks of a run folder: the tables, written as the events come ([`TablesSink`]); for the
+/// figures and the report, what they draw gathered from the events in memory bounded whatever
+/// the recording's length ([`FrameCurves`], [`TracksGather`], [`ReportGather`]); and, only for
+/// what needs the run's every object and pair (the material points of a contour run, the pair
+/// figures of `--figures pairs`, the animation), those objects and pairs ([`Collect`], each pair
+/// without its match details, no tracks); and the caller's own sink, if any ([`RunPlan::also`]).
 pub struct FolderSink<'a, 's> {
     tables: TablesSink<'a>,
     whole: Option<Collect>,
+    /// The caller's own sink, if any ([`RunPlan::also`]): every event, as it comes.
     also: Option<&'s mut dyn SequenceSink>,
+    /// For the curves figure: each frame's total force and contact area (a few numbers a frame).
+    curves: Option<FrameCurves>,
+    /// For the tracks figure: its longest tracks.
+    tracks: Option<TracksGather>,
+    /// For `report.html`: its player's frames and the time series.
+    report: Option<ReportGather>,
+}
+
+/// The total force and contact area of every frame of a run, as the `frames` events hand them
+/// over: what the curves figure draws.
+#[derive(Debug, Clone, Default)]
+pub struct FrameCurves {
+    /// The frames, in order.
+    pub frames: Vec<usize>,
+    /// Total force (or load) per frame, as `frames.csv` gives it.
+    pub force: Vec<f64>,
+    /// Contact area per frame (mm², or sensels without a pitch).
+    pub area: Vec<f64>,
+}
+
+impl SequenceSink for FrameCurves {
+    fn frames(&mut self, first: usize, measures: &[FrameMeasures]) -> Result<()> {
+        for (k, m) in measures.iter().enumerate() {
+            self.frames.push(first + k);
+            self.force.push(m.total_force);
+            self.area.push(m.contact_area);
+        }
+        Ok(())
+    }
 }
 
 impl FolderSink<'_, '_> {
-    /// The sinks besides the tables: the run gathered for the folder, then the caller's.
-    fn others(&mut self) -> impl Iterator<Item = &mut dyn SequenceSink> {
-        let whole = self.whole.as_mut().map(|w| w as &mut dyn SequenceSink);
-        let also = self
-            .also
+    /// The caller's own sink, if any ([`RunPlan::also`]).
+    fn also(&mut self) -> Option<&mut dyn SequenceSink> {
+        self.also
             .as_mut()
-            .map(|a| &mut **a as &mut dyn SequenceSink);
-        whole.into_iter().chain(also)
+            .map(|a| &mut **a as &mut dyn SequenceSink)
     }
 }
 
 impl SequenceSink for FolderSink<'_, '_> {
     fn frames(&mut self, first: usize, measures: &[FrameMeasures]) -> Result<()> {
+        if let Some(c) = self.curves.as_mut() {
+            c.frames(first, measures)?;
+        }
         self.tables.frames(first, measures)?;
-        self.others().try_for_each(|s| s.frames(first, measures))
+        self.also().map_or(Ok(()), |s| s.frames(first, measures))
     }
     fn frame_objects(&mut self, frame: usize, objects: &[SequenceObject]) -> Result<()> {
         self.tables.frame_objects(frame, objects)?;
-        self.others()
-            .try_for_each(|s| s.frame_objects(frame, objects))
+        if let Some(t) = self.tracks.as_mut() {
+            t.frame_objects(frame, objects)?;
+        }
+        if let Some(r) = self.report.as_mut() {
+            r.frame_objects(frame, objects)?;
+        }
+        if let Some(w) = self.whole.as_mut() {
+            w.frame_objects(frame, objects)?;
+        }
+        self.also()
+            .map_or(Ok(()), |s| s.frame_objects(frame, objects))
     }
     fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()> {
         self.tables.pair(pair, a, b)?;
-        self.others().try_for_each(|s| s.pair(pair, a, b))
+        if let Some(r) = self.report.as_mut() {
+            r.pair(pair, a, b)?;
+        }
+        if let Some(w) = self.whole.as_mut() {
+            w.pair(pair, a, b)?;
+        }
+        self.also().map_or(Ok(()), |s| s.pair(pair, a, b))
     }
     fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
         self.tables.track(index, steps)?;
-        self.others().try_for_each(|s| s.track(index, steps))
+        if let Some(t) = self.tracks.as_mut() {
+            t.track(index, steps)?;
+        }
+        if let Some(r) = self.report.as_mut() {
+            r.track(index, steps)?;
+        }
+        self.also().map_or(Ok(()), |s| s.track(index, steps))
     }
     fn reference_pair(
         &mut self,
@@ -576,8 +679,8 @@ impl SequenceSink for FolderSink<'_, '_> {
         tracked: &[bool],
     ) -> Result<()> {
         self.tables.reference_pair(pair, a, b, tracked)?;
-        self.others()
-            .try_for_each(|s| s.reference_pair(pair, a, b, tracked))
+        self.also()
+            .map_or(Ok(()), |s| s.reference_pair(pair, a, b, tracked))
     }
 }
 
@@ -601,11 +704,28 @@ fn write_folder(
     let dir = OutDir::create(out)?;
     // A replayed run is whole already: only a run of the engine gathers itself, and only
     // when an output needs the whole run.
-    let gather = matches!(feed, Feed::Run { .. }) && !tables_only(outputs);
+    // A replayed run is whole already; a run of the engine gathers its objects and pairs only
+    // for what needs them all: the material points of a contour run (written with any output
+    // besides the tables), the pair figures and the animation.
+    let points = run.options.model == ObjectModel::Contour && !tables_only(outputs);
+    let pair_figures = outputs.figures.any() && outputs.pair_figures;
+    let gather = matches!(feed, Feed::Run { .. }) && (points || pair_figures || outputs.animation);
+    let progress = match &feed {
+        Feed::Run { progress, .. } => *progress,
+        Feed::Replay(_) => &|_, _, _| {},
+    };
     let mut sink = FolderSink {
         tables: TablesSink::create(&dir, run.recording, run.options, outputs.tables)?,
         whole: gather.then(|| Collect::new(false)),
         also: None,
+        curves: outputs.figures.any().then(FrameCurves::default),
+        tracks: outputs
+            .figures
+            .any()
+            .then(|| TracksGather::new(TRACKS_MIN_STEPS, TRACKS_SHOWN)),
+        report: outputs
+            .report
+            .then(|| ReportGather::new(run.recording, run.options.frames)),
     };
     let (counts, ran, replayed) = match feed {
         Feed::Run {
@@ -624,18 +744,34 @@ fn write_folder(
         ),
     };
     require_objects(counts.objects, run.recording, run.options)?;
-    let FolderSink { tables, whole, .. } = sink;
+    let FolderSink {
+        tables,
+        whole,
+        curves,
+        tracks,
+        report,
+        ..
+    } = sink;
     tables.finish(&counts)?;
     let cancel = run.options.cancel.as_ref();
     let gathered = whole.map(|w| w.into_result(counts.clone()));
-    let result = if tables_only(outputs) {
-        None
-    } else {
+    // What needs every object and pair: the gathered run, or the one replayed.
+    let whole = if points || pair_figures || outputs.animation {
         replayed.or(gathered.as_ref())
+    } else {
+        None
     };
-    if let Some(r) = result {
-        write_figures_and_points(&dir, run, r, outputs, cancel)?;
-    }
+    let steps = OutputSteps {
+        progress,
+        total: output_count(&counts, outputs, points),
+        done: AtomicUsize::new(0),
+    };
+    let drawn = Drawn {
+        whole,
+        curves: curves.unwrap_or_default(),
+        tracks,
+    };
+    write_figures_and_points(&dir, run, &drawn, outputs, points, cancel, &steps)?;
     // The run's own stages, when it ran here, are not the output's time.
     let t = counts.timings;
     let run_time = if ran {
@@ -654,8 +790,25 @@ fn write_folder(
         record_outputs(options, outputs);
     }
     dir.write("summary.json", pretty(&summary).as_bytes())?;
-    if let Some(r) = result {
-        write_drawings(&dir, run, r, outputs, &summary)?;
+    if let Some(report) = &report {
+        let info = report_info(run, &summary);
+        dir.write(
+            "report.html",
+            report.page(run.recording, &counts, &info)?.as_bytes(),
+        )?;
+        steps.step();
+    }
+    if outputs.animation {
+        let r = whole.ok_or_else(|| IoError::invalid("the animation needs the whole run"))?;
+        let axes = crate::figure::FigureAxes::of_recording(run.recording);
+        let animation = crate::figure::Animation {
+            recording: run.recording,
+            result: r,
+            axes: &axes,
+            frames: run.options.frames.unwrap_or((0, run.recording.n_frames())),
+        };
+        dir.write("animation.gif", &animation.to_gif()?)?;
+        steps.step();
     }
     // A cancelled run leaves the previous folder (or none), as if it had not run.
     pedo_io::cancel::check(cancel)?;
@@ -663,23 +816,52 @@ fn write_folder(
     Ok((summary, counts))
 }
 
-/// The figures asked for and the material points (`points`, contour model) of the whole run
-/// `r`: they need nothing of each other, so the points are followed on a second thread.
+/// What the figures of a run folder are drawn from: the run's objects and pairs when gathered
+/// (or replayed), the frames' curves and the longest tracks.
+struct Drawn<'r> {
+    whole: Option<&'r SequenceResult>,
+    curves: FrameCurves,
+    tracks: Option<TracksGather>,
+}
+
+/// The figures asked for and, when `points`, the material points (`points`, contour model) of
+/// the run's objects and pairs: they need nothing of each other, so the points are followed on
+/// a second thread.
 fn write_figures_and_points(
     dir: &OutDir,
     run: &RunOf<'_>,
-    r: &SequenceResult,
+    drawn: &Drawn<'_>,
     outputs: &RunOutputs,
+    points: bool,
     cancel: Option<&Cancel>,
+    steps: &OutputSteps<'_>,
 ) -> Result<()> {
     let (points, figures) = std::thread::scope(|s| {
         let points = s.spawn(|| -> Result<Option<crate::Table>> {
-            let Some(points) = pedo_track::follow::run_points(r, run.options)? else {
+            let Some(r) = drawn.whole.filter(|_| points) else {
+                return Ok(None);
+            };
+            let points = pedo_track::follow::run_points(r, run.options);
+            steps.step();
+            let Some(points) = points? else {
                 return Ok(None);
             };
             crate::points_table(run.recording, r, &points).map(Some)
         });
-        let figures = write_figures(dir, run.recording, r, outputs.figures, cancel);
+        let figures = match &drawn.tracks {
+            Some(tracks) => write_figures(
+                dir,
+                run.recording,
+                run.options,
+                drawn.whole,
+                tracks,
+                &drawn.curves,
+                outputs,
+                cancel,
+                &|| steps.step(),
+            ),
+            None => Ok(()),
+        };
         (points.join(), figures)
     });
     figures?;
@@ -690,75 +872,180 @@ fn write_figures_and_points(
     Ok(())
 }
 
-/// `report.html` and `animation.gif`, when asked, from the whole run `r` and its `summary`.
-fn write_drawings(
-    dir: &OutDir,
-    run: &RunOf<'_>,
-    r: &SequenceResult,
-    outputs: &RunOutputs,
-    summary: &Value,
-) -> Result<()> {
-    if outputs.report {
-        let record = RunRecord {
-            input: run.input,
-            recording: run.recording,
-            params: run.params,
-            options: run.options,
-            result: r,
-        };
-        dir.write("report.html", report_page(&record, summary)?.as_bytes())?;
+/// The header of `report.html` of `run`: what its `summary` (`summary.json`) records, the
+/// options used and the time spent per stage.
+fn report_info(run: &RunOf<'_>, summary: &Value) -> crate::html_report::ReportInfo {
+    crate::html_report::ReportInfo {
+        format: run.recording.format.map(|f| f.name().to_string()),
+        contact_threshold: run.options.contour.preprocess.threshold.unwrap_or(0.0),
+        frames: run.options.frames,
+        ..crate::html_report::ReportInfo::of_summary(run.input.name.clone(), summary)
     }
-    if outputs.animation {
-        let axes = crate::figure::FigureAxes::of_recording(run.recording);
-        let animation = crate::figure::Animation {
-            recording: run.recording,
-            result: r,
-            axes: &axes,
-            frames: run.options.frames.unwrap_or((0, run.recording.n_frames())),
-        };
-        dir.write("animation.gif", &animation.to_gif()?)?;
-    }
-    Ok(())
 }
 
-/// Writes the match figure of every pair (in parallel on the current rayon pool) and the tracks
-/// figure, as PNG and/or SVG, under `figures/` and as `tracks.*`. Fails with
-/// [`IoError::Cancelled`] at the next figure once `cancel` is cancelled.
+/// Writes the figures `outputs` asks for: the summary figures ([`SUMMARY_FIGURES`]: the
+/// `tracks` gathered from the run's events, the force and contact-area `curves` of its frames,
+/// the recording's peak pressure with its contact outlines) and, with
+/// [`RunOutputs::pair_figures`], the match figure of every pair of the whole run `whole` (in
+/// parallel on the current rayon pool) under `figures/`, as PNG or SVG. Fails with
+/// [`IoError::Cancelled`] at the next figure once `cancel` is cancelled, and when pair figures
+/// are asked without the whole run. `drawn` is called once per figure written (for a progress
+/// bar).
+#[allow(clippy::too_many_arguments)]
 pub fn write_figures(
     dir: &OutDir,
     recording: &Recording,
-    r: &SequenceResult,
-    kinds: FigureKinds,
+    options: &SequenceOptions,
+    whole: Option<&SequenceResult>,
+    tracks: &TracksGather,
+    curves: &FrameCurves,
+    outputs: &RunOutputs,
     cancel: Option<&Cancel>,
+    drawn: &(dyn Fn() + Sync),
 ) -> Result<()> {
-    if !kinds.png && !kinds.svg {
+    let kinds = outputs.figures;
+    if !kinds.any() {
         return Ok(());
     }
     let axes = FigureAxes::of_recording(recording);
-    r.pairs.par_iter().try_for_each(|p| -> Result<()> {
-        pedo_io::cancel::check(cancel)?;
-        let (oa, ob) = (&r.objects[p.a], &r.objects[p.b]);
-        let fig = MatchFigure {
-            a: &oa.shape,
-            b: &ob.shape,
-            pairs: &p.result.pairs,
-            axes: &axes,
-            label_a: object_label(oa, recording),
-            label_b: object_label(ob, recording),
-        };
-        let stem = format!("figures/pair_{:04}_{:04}", oa.id, ob.id);
-        write_figure(dir, &stem, kinds, || fig.to_png(), || fig.to_svg())
-    })?;
+    if outputs.pair_figures {
+        let r = whole.ok_or_else(|| IoError::invalid("pair figures need the whole run"))?;
+        r.pairs.par_iter().try_for_each(|p| -> Result<()> {
+            pedo_io::cancel::check(cancel)?;
+            let (oa, ob) = (&r.objects[p.a], &r.objects[p.b]);
+            let fig = MatchFigure {
+                a: &oa.shape,
+                b: &ob.shape,
+                pairs: &p.result.pairs,
+                axes: &axes,
+                label_a: object_label(oa, recording),
+                label_b: object_label(ob, recording),
+            };
+            let stem = format!("figures/pair_{:04}_{:04}", oa.id, ob.id);
+            write_figure(dir, &stem, kinds, || fig.to_png(), || fig.to_svg())?;
+            drawn();
+            Ok(())
+        })?;
+    }
     pedo_io::cancel::check(cancel)?;
-    let background = tracks_background(recording, r)?;
-    let tracks = TracksFigure {
-        result: r,
-        background: &background,
+    let background = tracks.background(recording)?;
+    write_figure(
+        dir,
+        "tracks",
+        kinds,
+        || tracks.to_png(&background, &axes),
+        || tracks.to_svg(&background, &axes),
+    )?;
+    drawn();
+    write_summary_figures(dir, recording, options, curves, kinds, cancel, drawn)
+}
+
+/// The summary figures drawn from the recording and the frames' measures alone: `curves.*`
+/// (total force and contact area over time) and `peak.*` (the peak-pressure image with the
+/// outlines of its contact regions).
+fn write_summary_figures(
+    dir: &OutDir,
+    recording: &Recording,
+    options: &SequenceOptions,
+    curves: &FrameCurves,
+    kinds: FigureKinds,
+    cancel: Option<&Cancel>,
+    drawn: &(dyn Fn() + Sync),
+) -> Result<()> {
+    pedo_io::cancel::check(cancel)?;
+    let axes = FigureAxes::of_recording(recording);
+    if !curves.frames.is_empty() {
+        let area_label = if recording.sensel_area().is_some() {
+            "contact area (mm²)"
+        } else {
+            "contact area (sensels)"
+        };
+        let figure = CurvesFigure {
+            frames: &curves.frames,
+            curves: vec![
+                Curve {
+                    label: crate::html_report::load_label(recording),
+                    values: &curves.force,
+                },
+                Curve {
+                    label: area_label.to_string(),
+                    values: &curves.area,
+                },
+            ],
+            axes: &axes,
+        };
+        write_figure(dir, "curves", kinds, || figure.to_png(), || figure.to_svg())?;
+    }
+    drawn();
+    pedo_io::cancel::check(cancel)?;
+    let peak = recording.peak_image();
+    let outlines = peak_outlines(&peak, options)?;
+    let figure = PeakFigure {
+        peak: &peak,
+        outlines: &outlines,
         axes: &axes,
-        min_steps: 3,
-        max_tracks: 40,
+        frames: (0, recording.n_frames()),
     };
-    write_figure(dir, "tracks", kinds, || tracks.to_png(), || tracks.to_svg())
+    write_figure(dir, "peak", kinds, || figure.to_png(), || figure.to_svg())?;
+    drawn();
+    Ok(())
+}
+
+/// The output stage's progress ([`Stage::Output`]): `done` of `total` outputs, told to the run's
+/// progress callback as each is written (figures from several threads).
+struct OutputSteps<'p> {
+    progress: &'p (dyn Fn(Stage, usize, usize) + Sync),
+    total: usize,
+    done: AtomicUsize,
+}
+
+impl OutputSteps<'_> {
+    fn step(&self) {
+        let done = self.done.fetch_add(1, Ordering::Relaxed) + 1;
+        (self.progress)(Stage::Output, done.min(self.total), self.total);
+    }
+}
+
+/// How many outputs a folder of a run with these `counts` writes after the run, as
+/// [`OutputSteps`] counts them: each figure, the material points (when `points`), the report and
+/// the animation.
+fn output_count(counts: &RunCounts, outputs: &RunOutputs, points: bool) -> usize {
+    let figures = if outputs.figures.any() {
+        SUMMARY_FIGURES.len()
+            + if outputs.pair_figures {
+                counts.pairs
+            } else {
+                0
+            }
+    } else {
+        0
+    };
+    figures + usize::from(points) + usize::from(outputs.report) + usize::from(outputs.animation)
+}
+
+/// The tracks figure draws the [`TRACKS_SHOWN`] longest tracks spanning at least this many
+/// objects.
+pub const TRACKS_MIN_STEPS: usize = 3;
+/// The most tracks the tracks figure draws.
+pub const TRACKS_SHOWN: usize = 40;
+
+/// The outlines of the contact regions of the peak-pressure image `peak`, as the run's contour
+/// options draw a frame's (threshold, smoothing; no resampling), in sensels; holes left out.
+pub fn peak_outlines(
+    peak: &pedo_io::Grid,
+    options: &SequenceOptions,
+) -> Result<Vec<Vec<[f64; 2]>>> {
+    let opts = pedo_io::ContourOptions {
+        resample: pedo_io::Resample::None,
+        units: pedo_io::CoordUnits::Pixels,
+        include_holes: false,
+        ..options.contour
+    };
+    Ok(pedo_io::contours(peak, &opts)?
+        .into_iter()
+        .filter(|c| !c.hole && c.points.len() > 2)
+        .map(|c| c.points)
+        .collect())
 }
 
 /// An object as a figure's title names it: `object 12`, and for an isocontour its level

@@ -591,7 +591,10 @@ mod tests {
             .iter()
             .map(|s| s.name)
             .collect();
-        assert_eq!(names, ["figures", "tables", "report", "animation"]);
+        assert_eq!(
+            names,
+            ["figures", "figure_format", "tables", "report", "animation"]
+        );
         assert_eq!(TableFormat::default().file_name("matches"), "matches.csv");
     }
 }

@@ -26,7 +26,7 @@ use pedo_io::{IoError, Result};
 use pedo_output::outdir::{self};
 use pedo_output::{
     pretty, read_for_run, record_outputs, run_into_folder, run_table_files, Cell, InputInfo,
-    RunOutputs, RunPlan, Table, TableFormat,
+    RunOutputs, RunPlan, Table, TableFormat, SUMMARY_FIGURES,
 };
 use pedo_track::{run_options, ObjectModel, RunCounts, RunParams, SequenceOptions, Stage};
 use serde_json::{json, Map, Value};
@@ -1106,8 +1106,9 @@ fn process(
     let on_stage = |stage: Stage, done: usize, total: usize| {
         let part = done as f64 / total.max(1) as f64;
         progress(match stage {
-            Stage::Objects => 0.5 * part,
-            Stage::Matching => 0.5 + 0.5 * part,
+            Stage::Objects => 0.45 * part,
+            Stage::Matching => 0.45 + 0.45 * part,
+            Stage::Output => 0.9 + 0.1 * part,
         })
     };
     let plan = RunPlan {
@@ -1181,18 +1182,16 @@ fn complete_summary(
     if outputs.animation {
         files.push("animation.gif".into());
     }
-    let extensions = [(outputs.figures.png, "png"), (outputs.figures.svg, "svg")];
-    let extensions: Vec<&str> = extensions
-        .iter()
-        .filter_map(|&(asked, ext)| asked.then_some(ext))
-        .collect();
+    let extensions = outputs.figures.extensions();
     if !extensions.is_empty() {
-        let pairs = read_json(&folder.join("pairs.json"))?;
-        let mut stems = vec!["tracks".to_string()];
-        for pair in pairs.as_array()? {
-            if pair["status"] == "ok" {
-                let (a, b) = (pair["id_a"].as_u64()?, pair["id_b"].as_u64()?);
-                stems.push(format!("figures/pair_{a:04}_{b:04}"));
+        let mut stems: Vec<String> = SUMMARY_FIGURES.iter().map(|s| s.to_string()).collect();
+        if outputs.pair_figures {
+            let pairs = read_json(&folder.join("pairs.json"))?;
+            for pair in pairs.as_array()? {
+                if pair["status"] == "ok" {
+                    let (a, b) = (pair["id_a"].as_u64()?, pair["id_b"].as_u64()?);
+                    stems.push(format!("figures/pair_{a:04}_{b:04}"));
+                }
             }
         }
         for stem in &stems {

@@ -61,6 +61,7 @@ fn a_cancelled_study_keeps_finished_folders_and_writes_no_table() {
         cancel: Some(cancel.clone()),
         outputs: RunOutputs {
             figures: Default::default(),
+            pair_figures: false,
             report: false,
             animation: false,
             tables: Default::default(),

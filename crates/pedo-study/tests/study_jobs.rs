@@ -29,6 +29,7 @@ fn most_in_flight(jobs: usize, paths: &[PathBuf]) -> (usize, Vec<String>) {
         cancel: None,
         outputs: RunOutputs {
             figures: Default::default(),
+            pair_figures: false,
             report: false,
             animation: false,
             tables: Default::default(),

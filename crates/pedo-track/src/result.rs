@@ -361,6 +361,9 @@ pub enum Stage {
     /// Matching: `done` of `total` frames whose pairs are matched (a pair done counts as its
     /// share of its window's frames), or of `total` pairs for the isocontour model.
     Matching,
+    /// Writing what a run's folder holds once the run is over (the engine reports none of it):
+    /// `done` of `total` outputs (a figure, the material points, the report, the animation).
+    Output,
 }
 
 impl SequenceResult {

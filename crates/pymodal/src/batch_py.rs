@@ -32,17 +32,19 @@ fn input_strings(inputs: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<String>>
     items.map(|v| one(&v?).ok_or_else(bad)).collect()
 }
 
-/// What a run's folder holds, from the keywords ``figures``, ``tables``, ``report`` and
-/// ``animation`` (each None at its default): the output options of ``pedomatch run`` and
-/// ``batch``, declared once in `pedo_output::OutputOptions`.
+/// What a run's folder holds, from the keywords ``figures``, ``figure_format``, ``tables``,
+/// ``report`` and ``animation`` (each None at its default): the output options of
+/// ``pedomatch run`` and ``batch``, declared once in `pedo_output::OutputOptions`.
 pub(crate) fn run_outputs(
     figures: Option<&Bound<'_, PyAny>>,
+    figure_format: Option<&Bound<'_, PyAny>>,
     tables: Option<&Bound<'_, PyAny>>,
     report: Option<&Bound<'_, PyAny>>,
     animation: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<RunOutputs> {
     let given = [
         ("figures", figures),
+        ("figure_format", figure_format),
         ("tables", tables),
         ("report", report),
         ("animation", animation),
@@ -124,7 +126,9 @@ fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<St
 /// ``study.csv`` and ``study.json`` (which also keep the rows of earlier runs' recordings that are
 /// not among ``paths``; the list returned is this run's rows only); a recording whose folder is
 /// complete (same input SHA-256 and options) is skipped unless ``force``. ``jobs``: recordings run at once, each on one
-/// thread (None: every core). ``figures``: ``"png"``, ``"svg"`` or ``"none"``. ``report``: ``"html"`` (the
+/// thread (None: every core). ``figures``: ``"summary"`` (the tracks, curves and peak-pressure
+/// figures), ``"pairs"`` (those and a match figure per pair) or ``"none"``; ``figure_format``:
+/// ``"png"`` or ``"svg"``. ``report``: ``"html"`` (the
 /// self-contained ``report.html``) or ``"none"``. ``animation``: ``"gif"`` (``animation.gif``) or
 /// ``"none"``. ``tables``:
 /// ``"csv"``, or ``"parquet"`` (typed, compressed columns with the CSV's names and values;
@@ -139,7 +143,7 @@ fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<St
 /// folders, those running or not started leave none (a folder of an earlier run stays as it
 /// was), and the study table is not written.
 #[pyfunction]
-#[pyo3(signature = (paths, out=None, jobs=None, *, force=false, figures=None, tables=None, report=None, animation=None, layout=None, **options))]
+#[pyo3(signature = (paths, out=None, jobs=None, *, force=false, figures=None, figure_format=None, tables=None, report=None, animation=None, layout=None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn batch<'py>(
     py: Python<'py>,
@@ -148,6 +152,7 @@ fn batch<'py>(
     jobs: Option<&Bound<'py, PyAny>>,
     force: bool,
     figures: Option<&Bound<'py, PyAny>>,
+    figure_format: Option<&Bound<'py, PyAny>>,
     tables: Option<&Bound<'py, PyAny>>,
     report: Option<&Bound<'py, PyAny>>,
     animation: Option<&Bound<'py, PyAny>>,
@@ -156,7 +161,7 @@ fn batch<'py>(
 ) -> PyResult<Bound<'py, PyList>> {
     let inputs = input_strings(paths, "paths")?;
     let study = study_params(py, jobs, force)?;
-    let outputs = run_outputs(figures, tables, report, animation)?;
+    let outputs = run_outputs(figures, figure_format, tables, report, animation)?;
     let mut opts = study_options(py, inputs, out, study, outputs, options)?;
     opts.read.layout = layout;
     // Ctrl-C stops the study as the command line's does (the recordings finished keep their
@@ -184,10 +189,10 @@ fn batch<'py>(
 /// ``force``), but no study table. For distributing a study yourself (a Dask cluster, a job
 /// queue): ``[batch_row(p, out) for p in find_recordings(inputs)]`` equals
 /// ``batch(inputs, out)`` but for ``wall_time_s``. Never raises for a bad recording (its row says
-/// what went wrong); bad options raise. ``figures``, ``tables``, ``report``, ``animation`` and
-/// ``layout`` as for :func:`batch`.
+/// what went wrong); bad options raise. ``figures``, ``figure_format``, ``tables``, ``report``,
+/// ``animation`` and ``layout`` as for :func:`batch`.
 #[pyfunction]
-#[pyo3(signature = (path, out=None, *, force=false, figures=None, tables=None, report=None, animation=None, layout=None, **options))]
+#[pyo3(signature = (path, out=None, *, force=false, figures=None, figure_format=None, tables=None, report=None, animation=None, layout=None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn batch_row<'py>(
     py: Python<'py>,
@@ -195,6 +200,7 @@ fn batch_row<'py>(
     out: Option<PathBuf>,
     force: bool,
     figures: Option<&Bound<'py, PyAny>>,
+    figure_format: Option<&Bound<'py, PyAny>>,
     tables: Option<&Bound<'py, PyAny>>,
     report: Option<&Bound<'py, PyAny>>,
     animation: Option<&Bound<'py, PyAny>>,
@@ -202,7 +208,7 @@ fn batch_row<'py>(
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let inputs = vec![path.display().to_string()];
-    let outputs = run_outputs(figures, tables, report, animation)?;
+    let outputs = run_outputs(figures, figure_format, tables, report, animation)?;
     // One recording, on one thread.
     let study = StudyParams {
         jobs: Some(1),

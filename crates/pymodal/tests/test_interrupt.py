@@ -40,7 +40,7 @@ inputs, out, short, out2 = sys.argv[1].split(","), sys.argv[2], sys.argv[3], sys
 import pymodal
 print("ready", flush=True)
 try:
-    pymodal.batch(inputs, out, jobs=1, force=True, figures="png", spacing=0.5)
+    pymodal.batch(inputs, out, jobs=1, force=True, figures="pairs", spacing=0.5)
     print("finished", flush=True)
 except BaseException as e:
     print(type(e).__name__, flush=True)

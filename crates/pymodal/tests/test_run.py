@@ -368,6 +368,10 @@ def test_run_with_out_writes_the_folder_of_pedomatch_run(tmp_path, outputs):
     mine, study = tmp_path / "run", tmp_path / "study" / row["output"]
     assert _files(mine) == _files(study)
     assert ("report.html" in _files(mine)) == ("report" not in outputs)
+    if not outputs:
+        # The default figures are the summary set, the same in every front end: no pair figures.
+        assert {"tracks.png", "curves.png", "peak.png"} <= set(_files(mine))
+        assert not [f for f in _files(mine) if f.startswith("figures/")]
     tables = "parquet" if outputs else "csv"
     assert {f"pairs.{tables}", f"tracks.{tables}", "pairs.json", "summary.json"} <= set(_files(mine))
     for f in _files(mine):

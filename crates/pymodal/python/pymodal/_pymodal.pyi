@@ -374,7 +374,8 @@ def run(
     # @end generated
     out: Optional[Path] = None,
     # @generated keywords of run output: tests/generated.rs, from the option tables
-    figures: Optional[Literal["png", "svg", "none"]] = None,
+    figures: Optional[Literal["summary", "pairs", "none"]] = None,
+    figure_format: Optional[Literal["png", "svg"]] = None,
     tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
@@ -398,7 +399,8 @@ def batch(
     *,
     force: bool = False,
     # @generated keywords of batch output: tests/generated.rs, from the option tables
-    figures: Optional[Literal["png", "svg", "none"]] = None,
+    figures: Optional[Literal["summary", "pairs", "none"]] = None,
+    figure_format: Optional[Literal["png", "svg"]] = None,
     tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
@@ -417,7 +419,8 @@ def batch_row(
     *,
     force: bool = False,
     # @generated keywords of batch_row output: tests/generated.rs, from the option tables
-    figures: Optional[Literal["png", "svg", "none"]] = None,
+    figures: Optional[Literal["summary", "pairs", "none"]] = None,
+    figure_format: Optional[Literal["png", "svg"]] = None,
     tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
