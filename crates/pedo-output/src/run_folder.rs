@@ -19,7 +19,7 @@ use pedo_io::recording::Recording;
 use pedo_io::FrameSource;
 use pedo_io::{IoError, Result};
 use pedo_track::{
-    replay, require_objects, stream_sequence, Collect, NoSink, PairMatch, RunCounts, RunParams,
+    replay, require_objects, stream_sequence, Collect, PairMatch, RunCounts, RunParams,
     SequenceObject, SequenceOptions, SequenceResult, SequenceSink, Stage,
 };
 use rayon::prelude::*;
@@ -449,10 +449,12 @@ pub fn run_into_folder(
             Feed::Run { frames, progress },
         ),
         None => {
-            let counts = stream_sequence(recording, frames, options, progress, &mut NoSink)?;
+            let mut sink = crate::MeasuresSink::new(recording, options)?;
+            let counts = stream_sequence(recording, frames, options, progress, &mut sink)?;
             require_objects(counts.objects, recording, options)?;
-            let summary =
+            let mut summary =
                 crate::run_summary_of(input, recording, params, options, &counts, timings);
+            summary["measures"] = crate::measure_values_json(&sink.finish()?);
             Ok((summary, counts))
         }
     }
@@ -514,11 +516,18 @@ enum Feed<'f, 'p> {
 pub struct FolderSink<'a> {
     tables: TablesSink<'a>,
     whole: Option<Collect>,
+    measures: crate::MeasuresSink,
 }
 
 impl SequenceSink for FolderSink<'_> {
     fn frames(&mut self, first: usize, measures: &[FrameMeasures]) -> Result<()> {
         self.tables.frames(first, measures)
+    }
+    fn wants_frame_values(&self) -> bool {
+        true
+    }
+    fn frame_values(&mut self, frame: usize, values: &[f32]) -> Result<()> {
+        self.measures.frame_values(frame, values)
     }
     fn frame_objects(&mut self, frame: usize, objects: &[SequenceObject]) -> Result<()> {
         self.tables.frame_objects(frame, objects)?;
@@ -573,6 +582,7 @@ fn write_folder(
     let mut sink = FolderSink {
         tables: TablesSink::create(&dir, run.recording, run.options, outputs.tables)?,
         whole: gather.then(|| Collect::new(false)),
+        measures: crate::MeasuresSink::new(run.recording, run.options)?,
     };
     let (counts, ran, replayed) = match feed {
         Feed::Run { frames, progress } => {
@@ -586,8 +596,14 @@ fn write_folder(
         ),
     };
     require_objects(counts.objects, run.recording, run.options)?;
-    let FolderSink { tables, whole } = sink;
+    let FolderSink {
+        tables,
+        whole,
+        measures,
+    } = sink;
     tables.finish(&counts)?;
+    let measures = measures.finish()?;
+    crate::write_measures(&dir, run.recording, &measures, outputs.figures)?;
     let cancel = run.options.cancel.as_ref();
     let gathered = whole.map(|w| w.into_result(counts.clone()));
     let result = if tables_only(outputs) {
@@ -612,6 +628,7 @@ fn write_folder(
     ));
     let (i, rec) = (run.input, run.recording);
     let mut summary = crate::run_summary_of(i, rec, run.params, run.options, &counts, &stages);
+    summary["measures"] = crate::measure_values_json(&measures);
     if let Some(options) = summary["options"].as_object_mut() {
         record_outputs(options, outputs);
     }
