@@ -792,7 +792,8 @@ fn a_run_with_tables_only_writes_the_tables_of_a_run_with_figures() {
         // The same counts; the closing line lists what each folder holds.
         let counts = |said: &str| said.lines().take(2).collect::<Vec<_>>().join("\n");
         assert_eq!(counts(&lean_said), counts(&full_said));
-        let files = format!("frames.{tables}, matches.{tables}, objects.{tables}");
+        let files =
+            format!("frames.{tables}, matches.{tables}, mean.npy, measures.json, objects.{tables}");
         assert!(
             lean_said.contains(&files) && !lean_said.contains("figures/"),
             "{lean_said}"

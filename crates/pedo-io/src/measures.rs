@@ -344,7 +344,9 @@ impl RecordingMeasures {
         }
         self.forces.push(load * self.force_factor);
         self.max_contact = self.max_contact.max(contact);
-        self.first.get_or_insert(frame);
+        if self.first.is_none() {
+            self.first = Some(frame);
+        }
         self.next = frame + 1;
         Ok(())
     }

@@ -205,9 +205,11 @@ impl StudyMeasures {
     fn of_summary(summary: &Value) -> Self {
         Self::of_values(MEASURE_COLUMNS.map(|(_, name, unit)| {
             let m = &summary["measures"][name];
-            (m["unit"].as_str() == Some(unit))
-                .then(|| m["value"].as_f64())
-                .flatten()
+            if m["unit"].as_str() == Some(unit) {
+                m["value"].as_f64()
+            } else {
+                None
+            }
         }))
     }
 }
