@@ -248,7 +248,7 @@ def test_a_stance_agrees_with_the_xsensor_softwares_own_values():
     )
     vendor = lambda key: np.array([float(f["LF"][key]) for f in frames])
     # Frame by frame: the software's peak pressure, estimated load and contact area.
-    np.testing.assert_allclose(rec.peak_pressure, vendor("Peak Pressure (mmHg)"), rtol=1e-9)
+    np.testing.assert_allclose(rec.peak_pressure, vendor("Peak Pressure (mmHg)"), rtol=1e-6)  # float32
     load = vendor("Est. Load (N)")
     np.testing.assert_allclose(rec.total_force[load > 5], load[load > 5], rtol=0.01)
     np.testing.assert_allclose(rec.contact_area / 100, vendor("Contact Area (cm²)"), rtol=0.01, atol=0.01)
