@@ -2,6 +2,7 @@
 //! several at once, one row per recording in `study.csv`. The work is [`pedo_study`]'s.
 
 use crate::cmd_run::RunOptionsArgs;
+use crate::option_args::{OptionArgs, Selection};
 use crate::output;
 use crate::CliError;
 use clap::Args;
@@ -21,16 +22,22 @@ pub struct BatchArgs {
     /// The study folder: one folder per recording, study.csv and study.json.
     #[arg(long)]
     pub out: PathBuf,
-    /// Recordings run at once, each on one thread [default: the available cores].
-    #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
-    pub jobs: Option<u32>,
-    /// Run every recording again, even those whose folders are complete.
-    #[arg(long)]
-    pub force: bool,
+    /// How the study runs: recordings at once, and whether complete folders run again.
+    #[command(flatten)]
+    pub study: OptionArgs<pedo_study::StudyParams, StudyFlags>,
     #[command(flatten)]
     pub read: crate::option_args::ReadArgs,
     #[command(flatten)]
     pub options: RunOptionsArgs,
+}
+
+/// Every study option, `--jobs` also as `-j`.
+#[derive(Clone, Debug, Default)]
+pub struct StudyFlags;
+
+impl Selection for StudyFlags {
+    const NAMES: Option<&'static [&'static str]> = None;
+    const SHORT: &'static [(&'static str, char)] = &[("jobs", 'j')];
 }
 
 pub fn run(args: BatchArgs) -> Result<(), CliError> {
@@ -44,18 +51,18 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
             args.inputs.join(" ")
         )));
     }
-    let opts = StudyOptions {
+    let mut opts = StudyOptions {
         inputs: args.inputs.clone(),
         params,
         read: pedo_io::ReadOptions {
             layout: args.read.layout.clone(),
         },
         out: Some(args.out.clone()),
-        jobs: args.jobs.map_or(0, |j| j as usize),
-        force: args.force,
         cancel: None,
         outputs: args.options.outputs(),
+        ..StudyOptions::default()
     };
+    args.study.params().apply(&mut opts)?;
 
     // The bar moves in thousandths of a recording (so that it and its ETA advance within one),
     // but the text counts recordings: the finished ones and how far the running ones are.

@@ -1,6 +1,6 @@
 //! `pedomatch inspect FILE`: what a recording holds, in its physical units.
 
-use crate::option_args::{help, UnitArgs};
+use crate::option_args::{OptionArgs, Selection};
 use crate::CliError;
 use clap::Args;
 use pedo_output::{describe, InputInfo};
@@ -14,20 +14,31 @@ pub struct InspectArgs {
     pub recording: PathBuf,
     #[command(flatten)]
     pub read: crate::option_args::ReadArgs,
+    /// The options of a run that say how a recording's values read: its noise threshold and
+    /// units.
     #[command(flatten)]
-    pub units: UnitArgs,
-    #[arg(long, help = help("noise"))]
-    pub noise: Option<f64>,
+    pub options: OptionArgs<pedo_track::RunParams, Reading>,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
 }
 
+/// The options of `pedo_track::RunParams` that `inspect` takes: those that say how a recording's
+/// values read, as a run reads them.
+#[derive(Clone, Debug, Default)]
+pub struct Reading;
+
+impl Selection for Reading {
+    const NAMES: Option<&'static [&'static str]> =
+        Some(&["noise", "pitch_mm", "frame_rate", "units"]);
+}
+
 pub fn run(args: InspectArgs) -> Result<(), CliError> {
     let mut rec = args.read.read(&args.recording)?;
-    args.units.params().apply(&mut rec)?;
+    let params = args.options.params();
+    params.units.apply(&mut rec)?;
     let input = InputInfo::of_path(&args.recording)?;
-    let threshold = args.noise.or(rec.noise_threshold).unwrap_or(0.0);
+    let threshold = params.noise_threshold(&rec);
     let d = describe(&rec, &input, threshold);
     if args.json {
         outln!("{}", crate::output::pretty(&d)?);

@@ -1,13 +1,13 @@
 //! `pedomatch match A B`: correspondences between two objects given as images or point files.
 
-use crate::option_args::{help, tri_state, word, ModalArgs, UnitArgs};
+use crate::option_args::{help, tri_state, ModalArgs, OptionArgs, Selection, UnitArgs};
 use crate::output::{self, OutDir};
 use crate::CliError;
 use clap::Args;
 use modal_core::shape::looks_like_closed_contour;
 use modal_core::{Search, Shape, Topology};
 use pedo_output::figure::{FigureAxes, MatchFigure, ObjectLabel};
-use pedo_output::{FigureFormat, ReportFormat};
+use pedo_output::ReportFormat;
 use pedo_track::SenselAspect;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -43,16 +43,20 @@ pub struct MatchArgs {
     /// the matches.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Format of the match figure written with --out: png, svg or none (default: png).
-    #[arg(long, value_parser = word::<FigureFormat>())]
-    pub figures: Option<FigureFormat>,
+    /// The figure and report written with --out: the output options of a run.
+    #[command(flatten)]
+    pub outputs: OptionArgs<pedo_output::OutputOptions, Drawings>,
     /// Print the match result as one JSON object (with its pairs) instead of a table.
     #[arg(long)]
     pub json: bool,
-    /// The interactive report written with --out: html writes a self-contained report.html
-    /// that opens offline; none writes none (default: html).
-    #[arg(long, value_parser = word::<ReportFormat>())]
-    pub report: Option<ReportFormat>,
+}
+
+/// The output options of a run that `match` takes: its figure and its report.
+#[derive(Clone, Debug, Default)]
+pub struct Drawings;
+
+impl Selection for Drawings {
+    const NAMES: Option<&'static [&'static str]> = Some(&["figures", "report"]);
 }
 
 /// Extensions that always name point files; `.csv` and `.txt` are point files when laid out as
@@ -242,6 +246,7 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         s
     };
     if let Some(dir) = &args.out {
+        let outputs = args.outputs.params();
         let dir = OutDir::create(dir)?;
         dir.write("matches.csv", table.as_bytes())?;
         dir.write("match.json", output::pretty(&summary)?.as_bytes())?;
@@ -250,13 +255,8 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
             shapes: (&a, &b),
             objects: (&oa, &ob),
         };
-        write_match_figure(
-            &dir,
-            &figure,
-            &r.pairs,
-            args.figures.unwrap_or_default().into(),
-        )?;
-        if args.report.unwrap_or_default() == ReportFormat::Html {
+        write_match_figure(&dir, &figure, &r.pairs, outputs.figures.into())?;
+        if outputs.report == ReportFormat::Html {
             write_match_report(&dir, &figure, &r, &summary)?;
         }
         dir.commit()?;

@@ -133,6 +133,7 @@ fn execute(
         folder: Some(out),
         outputs: &outputs,
         timings: &[("read", read_time.as_secs_f64())],
+        also: None,
     };
     let (summary, _) = pedo_output::run_into_folder(&recording, &options, plan, &progress)
         .map_err(|e| e.of_input(&input.name))?;

@@ -33,17 +33,58 @@ pub fn help(name: &str) -> String {
 /// unit options), the units ([`UnitOverrides`]) and the outputs
 /// ([`pedo_output::OutputOptions`]). The flags are made from the set's specs, so this file names
 /// no option; an absent option is the set's default, so defaults are resolved in one step.
+///
+/// `S` selects which of the set's options a command takes ([`Every`] by default): a command that
+/// needs a few options of a set (`inspect`'s noise threshold and units of a run, `match`'s
+/// figures and report of a run's outputs) takes them from the same declaration.
 #[derive(Clone, Debug, Default)]
-pub struct OptionArgs<T> {
+pub struct OptionArgs<T, S = Every> {
     params: T,
+    selection: std::marker::PhantomData<S>,
+}
+
+/// Which options of a set a command takes.
+pub trait Selection: Clone + Default + Send + Sync + 'static {
+    /// The names of the options taken; `None`: every option of the set.
+    const NAMES: Option<&'static [&'static str]>;
+    /// Short flags of options taken (`-j` for `--jobs`): the command line's alone.
+    const SHORT: &'static [(&'static str, char)] = &[];
+}
+
+/// Every option of a set.
+#[derive(Clone, Debug, Default)]
+pub struct Every;
+
+impl Selection for Every {
+    const NAMES: Option<&'static [&'static str]> = None;
+}
+
+/// The specs of the options of `T` that `S` selects, in declaration order. A selected name
+/// that the set does not declare is a programming error, caught when the command line is built
+/// (every command's `--help` is tested).
+fn selected_specs<T: OptionSet, S: Selection>() -> Vec<OptionSpec> {
+    let specs = T::option_specs();
+    let Some(names) = S::NAMES else {
+        return specs;
+    };
+    for name in names {
+        assert!(
+            specs.iter().any(|s| s.name == *name),
+            "option {name} is not declared in the set it is selected from"
+        );
+    }
+    specs
+        .into_iter()
+        .filter(|s| names.contains(&s.name))
+        .collect()
 }
 
 /// The matching options of `pedomatch match`.
 pub type ModalArgs = OptionArgs<MatchParams>;
-/// The unit options of `pedomatch match` and `inspect`.
+/// The unit options of `pedomatch match`.
 pub type UnitArgs = OptionArgs<UnitOverrides>;
 
-impl<T: OptionSet> OptionArgs<T> {
+impl<T: OptionSet, S: Selection> OptionArgs<T, S> {
     /// These options as the library's parameters; absent ones at the library's defaults.
     pub fn params(&self) -> T {
         self.params.clone()
@@ -58,23 +99,27 @@ fn check_value<T: OptionSet>(name: &'static str, text: OptionText<'_>) -> Result
     params.check()
 }
 
-impl<T: OptionSet> clap::Args for OptionArgs<T> {
+impl<T: OptionSet, S: Selection> clap::Args for OptionArgs<T, S> {
     fn augment_args(cmd: clap::Command) -> clap::Command {
-        option_args(cmd, &T::option_specs(), check_value::<T>)
+        let mut cmd = option_args(cmd, &selected_specs::<T, S>(), check_value::<T>);
+        for &(name, short) in S::SHORT {
+            cmd = cmd.mut_arg(name, |a| a.short(short));
+        }
+        cmd
     }
     fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
         Self::augment_args(cmd)
     }
 }
 
-impl<T: OptionSet> clap::FromArgMatches for OptionArgs<T> {
+impl<T: OptionSet, S: Selection> clap::FromArgMatches for OptionArgs<T, S> {
     fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
         let mut args = Self::default();
         args.update_from_arg_matches(m)?;
         Ok(args)
     }
     fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
-        for (name, text) in given_options(m, &T::option_specs()) {
+        for (name, text) in given_options(m, &selected_specs::<T, S>()) {
             // Checked as it was parsed (`option_args`), so this only stores the value.
             self.params
                 .set_option(name, &text)

@@ -67,14 +67,37 @@ fn run_and_match_flags_are_the_library_option_tables() {
     let mut expected = flags_of(&matching);
     expected.extend(flags_of(&pair));
     expected.extend(flags_of(&units));
+    // The figure and report of `match` are the run's output options, from their declaration.
+    let outputs = pedo_output::output_option_specs();
+    let drawings: Vec<_> = outputs
+        .iter()
+        .filter(|s| ["figures", "report"].contains(&s.name))
+        .cloned()
+        .collect();
+    expected.extend(flags_of(&drawings));
     expected.extend(own(&[
-        "points", "frame", "frame-b", "out", "figures", "report", "layout", "json", "help",
+        "points", "frame", "frame-b", "out", "layout", "json", "help",
     ]));
     assert_eq!(long_flags("match"), expected);
 
+    // `inspect` takes a run's noise threshold and units, from their declaration, with its help.
+    let noise: Vec<_> = recording
+        .iter()
+        .filter(|s| s.name == "noise")
+        .cloned()
+        .collect();
     let mut expected = flags_of(&units);
-    expected.extend(own(&["noise", "layout", "json", "help"]));
+    expected.extend(flags_of(&noise));
+    expected.extend(own(&["layout", "json", "help"]));
     assert_eq!(long_flags("inspect"), expected);
+    let help = String::from_utf8(pedomatch(&["inspect", "--help"]).stdout).unwrap();
+    let first_words: String = noise[0]
+        .help
+        .split_whitespace()
+        .take(4)
+        .collect::<Vec<_>>()
+        .join(" ");
+    assert!(help.contains(&first_words), "{help}");
     assert!(long_flags("assign").contains("--solver"));
 }
 

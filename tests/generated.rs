@@ -1,8 +1,9 @@
 //! The files made from the library's option tables, one declaration per option
 //! ([`modal_core::options::MatchParams`], [`pedo_track::recording_option_specs`],
-//! [`pedo_io::units::unit_option_specs`], [`pedo_output::output_option_specs`]): the Python
-//! keywords and their docstrings (`crates/pymodal/src/keywords.rs`), the keyword blocks of the
-//! type stubs and the table of `docs/options.md`. Each test fails when a file is not what the
+//! [`pedo_io::units::unit_option_specs`], [`pedo_output::output_option_specs`],
+//! [`pedo_study::study_option_specs`]): the Python keywords and their docstrings
+//! (`crates/pymodal/src/keywords.rs`), the keyword blocks of the type stubs and the table of
+//! `docs/options.md`. Each test fails when a file is not what the
 //! tables make; `UPDATE_GENERATED=1 cargo test --test generated` writes them again. (The
 //! command-line flags are made from the same tables at run time: `src/option_args.rs`.)
 
@@ -89,13 +90,18 @@ fn python_keywords_are_the_option_tables() {
     check("crates/pymodal/src/keywords.rs", &keywords_rs());
 }
 
-/// The stub's keyword lines of the groups, as `name: Optional[type] = None,`.
-fn stub_lines(names: &[&str]) -> String {
+/// The stub's keyword lines of the groups, as `name: Optional[type] = None,`, indented by
+/// `indent` spaces.
+fn stub_lines(names: &[&str], indent: usize) -> String {
     groups()
         .into_iter()
+        .chain([("units", pedo_io::units::unit_option_specs())])
         .filter(|(g, _)| names.contains(g))
         .flat_map(|(_, specs)| specs)
-        .map(|s| format!("    {}: Optional[{}] = None,\n", s.name, s.python))
+        .map(|s| {
+            let pad = " ".repeat(indent);
+            format!("{pad}{}: Optional[{}] = None,\n", s.name, s.python)
+        })
         .collect()
 }
 
@@ -103,15 +109,22 @@ fn stub_lines(names: &[&str]) -> String {
 fn type_stubs_are_the_option_tables() {
     let rel = "crates/pymodal/python/pymodal/_pymodal.pyi";
     let mut text = std::fs::read_to_string(root().join(rel)).unwrap();
-    for (function, names) in [
-        ("match", &["match", "pair"][..]),
-        ("run", &["match", "recording"][..]),
-        ("run output", &["output"][..]),
-        ("batch output", &["output"][..]),
-        ("batch_row output", &["output"][..]),
+    for (function, names, indent) in [
+        ("match", &["match", "pair"][..], 4),
+        ("run", &["match", "recording"][..], 4),
+        ("run output", &["output"][..], 4),
+        ("batch output", &["output"][..], 4),
+        ("batch_row output", &["output"][..], 4),
+        ("read_recording", &["units"][..], 4),
+        ("Recording.from_array", &["units"][..], 8),
     ] {
         let begin = format!("# @generated keywords of {function}:");
-        text = between(&text, &begin, "# @end generated", &stub_lines(names));
+        text = between(
+            &text,
+            &begin,
+            "# @end generated",
+            &stub_lines(names, indent),
+        );
     }
     check(rel, &text);
 }
@@ -126,7 +139,9 @@ fn the_options_table_is_the_option_tables() {
     let mut table = String::from(
         "| option | CLI flag | Python keyword | values | default | meaning |\n|---|---|---|---|---|---|\n",
     );
-    for (group, specs) in groups() {
+    // The study options (`batch`) besides the keyword groups.
+    let study = ("study", pedo_study::study_option_specs());
+    for (group, specs) in groups().into_iter().chain([study]) {
         for s in specs {
             let flags: Vec<String> = s.cli_flags().iter().map(|f| format!("`{f}`")).collect();
             table.push_str(&format!(

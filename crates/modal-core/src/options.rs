@@ -67,6 +67,9 @@ macro_rules! choice {
             ) -> ::std::result::Result<Self, I::Error> {
                 Ok(<$ty as $crate::options::Choice>::parse_word(&input.text(option)?)?)
             }
+            fn value(&self) -> $crate::options::OptionValue {
+                $crate::options::OptionValue::Word(self.to_string())
+            }
         }
     };
 }
@@ -99,6 +102,9 @@ impl OptionField for assign::Method {
     }
     fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
         Ok(Self::parse_word(&input.text(option)?)?)
+    }
+    fn value(&self) -> OptionValue {
+        OptionValue::Word(self.to_string())
     }
 }
 
@@ -266,6 +272,8 @@ pub trait OptionField: Sized {
     }
     /// The value of option `option` from `input`.
     fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error>;
+    /// The value as a provenance record states it (`summary.json`, `study.json`).
+    fn value(&self) -> OptionValue;
 }
 
 impl OptionField for f64 {
@@ -274,6 +282,9 @@ impl OptionField for f64 {
     }
     fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
         input.number(option)
+    }
+    fn value(&self) -> OptionValue {
+        OptionValue::Float(*self)
     }
 }
 
@@ -284,6 +295,9 @@ impl OptionField for usize {
     fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
         input.count(option)
     }
+    fn value(&self) -> OptionValue {
+        OptionValue::Int(*self)
+    }
 }
 
 impl OptionField for bool {
@@ -292,6 +306,9 @@ impl OptionField for bool {
     }
     fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
         input.switch(option)
+    }
+    fn value(&self) -> OptionValue {
+        OptionValue::Bool(*self)
     }
 }
 
@@ -302,6 +319,9 @@ impl OptionField for String {
     fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
         input.text(option)
     }
+    fn value(&self) -> OptionValue {
+        OptionValue::Word(self.clone())
+    }
 }
 
 impl OptionField for Material {
@@ -310,6 +330,9 @@ impl OptionField for Material {
     }
     fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
         input.material(option)
+    }
+    fn value(&self) -> OptionValue {
+        OptionValue::Word(self.to_string())
     }
 }
 
@@ -323,6 +346,9 @@ impl<T: OptionField> OptionField for Option<T> {
     }
     fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
         T::read(input, option).map(Some)
+    }
+    fn value(&self) -> OptionValue {
+        self.as_ref().map_or(OptionValue::Absent, T::value)
     }
 }
 
@@ -386,6 +412,16 @@ macro_rules! option_set {
                     $crate::options::OptionSpec::new(stringify!($field), $kind, $default_text, $help)
                         .with_python_type(<$ty as $crate::options::OptionField>::python_type())
                         .with_value_name(<$ty as $crate::options::OptionField>::value_name()),
+                )*]
+            }
+
+            /// The value of every option of the set as a provenance record states it
+            /// (each field's `OptionField::value`), named and ordered as [`specs`](Self::specs)
+            /// (not those of the sets it holds): what a record lists, with the names of the one
+            /// declaration.
+            pub fn values(&self) -> Vec<(&'static str, $crate::options::OptionValue)> {
+                vec![$(
+                    (stringify!($field), <$ty as $crate::options::OptionField>::value(&self.$field)),
                 )*]
             }
 
@@ -741,38 +777,33 @@ impl MatchParams {
     /// [`MatchParams::to_match_options`]): the recipe's values filled in, in the order of
     /// [`match_option_specs`]. For provenance records.
     pub fn used(&self, used: &MatchOptions) -> Vec<(&'static str, OptionValue)> {
-        use OptionValue::{Bool, Float, Int, Word};
-        vec![
-            ("element", Word(used.model.element.to_string())),
-            ("modes", Float(used.mode_fraction)),
-            ("search", Word(used.search.to_string())),
-            ("solver", Word(used.method.to_string())),
-            (
-                "threshold",
-                used.threshold.map_or(OptionValue::Absent, Float),
-            ),
-            ("threshold_mode", Word(used.threshold_mode.to_string())),
-            ("excess", Bool(used.excess)),
-            ("paper", Bool(self.paper)),
-            ("prealign", Word(used.prealign.to_string())),
-            (
-                "max_rotation",
-                Float(used.rotation_search.max_rotation.unwrap_or(180.0)),
-            ),
-            ("refits", Int(used.refits)),
-            ("refit_tolerance", Float(used.refit_tolerance)),
-            ("refine", Word(used.refine.to_string())),
-            ("deform_modes", Int(used.deform_modes)),
-            ("deform_stiffness", Float(used.deform_stiffness)),
-            ("kappa", Float(used.model.kappa)),
-            ("center_stride", Int(used.model.center_stride)),
-            ("position_weight", Float(used.position_weight)),
-            ("cost_power", Float(used.cost_power)),
-            ("common_sigma", Bool(used.common_sigma)),
-            ("skip_rigid", Bool(used.skip_rigid)),
-            ("band", Int(used.band)),
-            ("material", Word(used.model.material.to_string())),
-        ]
+        // The options as the run resolved them, listed by the declaration.
+        let resolved = MatchParams {
+            element: used.model.element,
+            modes: Some(used.mode_fraction),
+            search: used.search,
+            solver: used.method,
+            threshold: used.threshold,
+            threshold_mode: used.threshold_mode,
+            excess: used.excess,
+            paper: self.paper,
+            prealign: Some(used.prealign),
+            max_rotation: Some(used.rotation_search.max_rotation.unwrap_or(180.0)),
+            refits: Some(used.refits),
+            refit_tolerance: Some(used.refit_tolerance),
+            refine: used.refine,
+            deform_modes: used.deform_modes,
+            deform_stiffness: used.deform_stiffness,
+            kappa: Some(used.model.kappa),
+            center_stride: Some(used.model.center_stride),
+            position_weight: Some(used.position_weight),
+            cost_power: Some(used.cost_power),
+            common_sigma: Some(used.common_sigma),
+            skip_rigid: used.skip_rigid,
+            band: used.band,
+            material: Some(used.model.material),
+        };
+        resolved.values()
     }
 }
 

@@ -160,6 +160,9 @@ impl modal_core::options::OptionField for Pitch {
             )?)),
         }
     }
+    fn value(&self) -> modal_core::OptionValue {
+        modal_core::OptionValue::Numbers(self.0.to_vec())
+    }
 }
 
 /// The pressure units `--units` accepts (as `kpa_per_unit` reads them, case and spaces aside).

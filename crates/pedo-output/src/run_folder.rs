@@ -19,7 +19,7 @@ use pedo_io::recording::Recording;
 use pedo_io::FrameSource;
 use pedo_io::{IoError, Result};
 use pedo_track::{
-    replay, require_objects, stream_sequence, Collect, PairMatch, RunCounts, RunParams,
+    replay, require_objects, stream_sequence, Collect, NoSink, PairMatch, RunCounts, RunParams,
     SequenceObject, SequenceOptions, SequenceResult, SequenceSink, Stage,
 };
 use rayon::prelude::*;
@@ -118,7 +118,7 @@ modal_core::option_set! {
         /// Figures of every pair and of the tracks.
         figures: FigureFormat = FigureFormat::default();
             Word(<FigureFormat as Choice>::NAMES), FigureFormat::default(),
-            "Figures of every matched pair and of the tracks: png, svg or none.";
+            "Figures of every matched pair (and of a run's tracks): png, svg or none.";
         /// The tables' file format.
         tables: TableFormat = TableFormat::default();
             Word(<TableFormat as Choice>::NAMES), TableFormat::default(),
@@ -412,6 +412,10 @@ pub struct RunPlan<'a> {
     pub outputs: &'a RunOutputs,
     /// Stages measured before the run (e.g. reading), for the summary.
     pub timings: &'a [(&'a str, f64)],
+    /// A sink that hears every event of the run besides the folder's own, e.g. a
+    /// [`Collect`] gathering the result `pymodal.run(out=...)` returns: one run feeds both, so
+    /// the folder is the one the command line writes; `None` for the others.
+    pub also: Option<&'a mut dyn SequenceSink>,
 }
 
 /// Runs `recording` and writes its folder as `plan` says: the engine
@@ -433,6 +437,7 @@ pub fn run_into_folder(
         folder,
         outputs,
         timings,
+        also,
     } = plan;
     let run = RunOf {
         input,
@@ -446,17 +451,67 @@ pub fn run_into_folder(
             &run,
             outputs,
             timings,
-            Feed::Run { frames, progress },
+            Feed::Run {
+                frames,
+                progress,
+                also,
+            },
         ),
         None => {
-            let mut sink = crate::MeasuresSink::new(recording, options)?;
+            let mut measures = crate::MeasuresSink::new(recording, options)?;
+            let mut none = NoSink;
+            let also = also.unwrap_or(&mut none);
+            let mut sink = WithMeasures {
+                measures: &mut measures,
+                also,
+            };
             let counts = stream_sequence(recording, frames, options, progress, &mut sink)?;
             require_objects(counts.objects, recording, options)?;
             let mut summary =
                 crate::run_summary_of(input, recording, params, options, &counts, timings);
-            summary["measures"] = crate::measure_values_json(&sink.finish()?);
+            summary["measures"] = crate::measure_values_json(&measures.finish()?);
             Ok((summary, counts))
         }
+    }
+}
+
+/// A run without a folder: its measures taken, every event handed on to the caller's sink.
+struct WithMeasures<'a> {
+    measures: &'a mut crate::MeasuresSink,
+    also: &'a mut dyn SequenceSink,
+}
+
+impl SequenceSink for WithMeasures<'_> {
+    fn frames(&mut self, first: usize, measures: &[FrameMeasures]) -> Result<()> {
+        self.also.frames(first, measures)
+    }
+    fn wants_frame_values(&self) -> bool {
+        true
+    }
+    fn frame_values(&mut self, frame: usize, values: &[f32]) -> Result<()> {
+        self.measures.frame_values(frame, values)?;
+        if self.also.wants_frame_values() {
+            self.also.frame_values(frame, values)?;
+        }
+        Ok(())
+    }
+    fn frame_objects(&mut self, frame: usize, objects: &[SequenceObject]) -> Result<()> {
+        self.also.frame_objects(frame, objects)
+    }
+    fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()> {
+        self.also.pair(pair, a, b)
+    }
+    fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
+        self.also.track(index, steps)
+    }
+    fn reference_pair(
+        &mut self,
+        pair: &PairMatch,
+        a: &SequenceObject,
+        b: &SequenceObject,
+        tracked: &[bool],
+    ) -> Result<()> {
+        self.also.reference_pair(pair, a, b, tracked)
     }
 }
 
@@ -488,7 +543,13 @@ pub fn stream_run_folder(
         tables,
         ..RunOutputs::default()
     };
-    write_folder(out, &run, &outputs, timings, Feed::Run { frames, progress })
+    let also = None;
+    let feed = Feed::Run {
+        frames,
+        progress,
+        also,
+    };
+    write_folder(out, &run, &outputs, timings, feed)
 }
 
 /// A run's recording, options and provenance, without its results.
@@ -501,49 +562,67 @@ struct RunOf<'a> {
 
 /// Where a folder's events come from: the engine running the recording, or a run already made.
 enum Feed<'f, 'p> {
-    /// [`stream_sequence`], reading the frames from `frames` when the recording holds none.
+    /// [`stream_sequence`], reading the frames from `frames` when the recording holds none,
+    /// its events also handed to `also` ([`RunPlan::also`]).
     Run {
         frames: Option<&'f mut dyn FrameSource>,
         progress: &'p (dyn Fn(Stage, usize, usize) + Sync),
+        also: Option<&'f mut dyn SequenceSink>,
     },
-    /// [`replay`] of a whole result.
+    /// [`replay`] of a whole result ([`write_run_folder`]: a result already made, which the
+    /// tests compare a streamed folder with).
     Replay(&'p SequenceResult),
 }
 
 /// The sinks of a run folder: the tables, written as the events come ([`TablesSink`]), and,
 /// for a run with figures, a report or an animation, the run gathered for them and for the
-/// material points ([`Collect`], each pair without its match details: no output draws them).
-pub struct FolderSink<'a> {
+/// material points ([`Collect`], each pair without its match details: no output draws them);
+/// and the caller's own sink, if any ([`RunPlan::also`]).
+pub struct FolderSink<'a, 's> {
     tables: TablesSink<'a>,
     whole: Option<Collect>,
+    also: Option<&'s mut dyn SequenceSink>,
     measures: crate::MeasuresSink,
 }
 
-impl SequenceSink for FolderSink<'_> {
+impl FolderSink<'_, '_> {
+    /// The sinks besides the tables: the run gathered for the folder, then the caller's.
+    fn others(&mut self) -> impl Iterator<Item = &mut dyn SequenceSink> {
+        let whole = self.whole.as_mut().map(|w| w as &mut dyn SequenceSink);
+        let also = self
+            .also
+            .as_mut()
+            .map(|a| &mut **a as &mut dyn SequenceSink);
+        whole.into_iter().chain(also)
+    }
+}
+
+impl SequenceSink for FolderSink<'_, '_> {
     fn frames(&mut self, first: usize, measures: &[FrameMeasures]) -> Result<()> {
-        self.tables.frames(first, measures)
+        self.tables.frames(first, measures)?;
+        self.others().try_for_each(|s| s.frames(first, measures))
     }
     fn wants_frame_values(&self) -> bool {
         true
     }
     fn frame_values(&mut self, frame: usize, values: &[f32]) -> Result<()> {
-        self.measures.frame_values(frame, values)
+        self.measures.frame_values(frame, values)?;
+        self.others()
+            .filter(|s| s.wants_frame_values())
+            .try_for_each(|s| s.frame_values(frame, values))
     }
     fn frame_objects(&mut self, frame: usize, objects: &[SequenceObject]) -> Result<()> {
         self.tables.frame_objects(frame, objects)?;
-        self.whole
-            .as_mut()
-            .map_or(Ok(()), |w| w.frame_objects(frame, objects))
+        self.others()
+            .try_for_each(|s| s.frame_objects(frame, objects))
     }
     fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()> {
         self.tables.pair(pair, a, b)?;
-        self.whole.as_mut().map_or(Ok(()), |w| w.pair(pair, a, b))
+        self.others().try_for_each(|s| s.pair(pair, a, b))
     }
     fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
         self.tables.track(index, steps)?;
-        self.whole
-            .as_mut()
-            .map_or(Ok(()), |w| w.track(index, steps))
+        self.others().try_for_each(|s| s.track(index, steps))
     }
     fn reference_pair(
         &mut self,
@@ -553,8 +632,8 @@ impl SequenceSink for FolderSink<'_> {
         tracked: &[bool],
     ) -> Result<()> {
         self.tables.reference_pair(pair, a, b, tracked)?;
-        let whole = self.whole.as_mut();
-        whole.map_or(Ok(()), |w| w.reference_pair(pair, a, b, tracked))
+        self.others()
+            .try_for_each(|s| s.reference_pair(pair, a, b, tracked))
     }
 }
 
@@ -582,10 +661,16 @@ fn write_folder(
     let mut sink = FolderSink {
         tables: TablesSink::create(&dir, run.recording, run.options, outputs.tables)?,
         whole: gather.then(|| Collect::new(false)),
+        also: None,
         measures: crate::MeasuresSink::new(run.recording, run.options)?,
     };
     let (counts, ran, replayed) = match feed {
-        Feed::Run { frames, progress } => {
+        Feed::Run {
+            frames,
+            progress,
+            also,
+        } => {
+            sink.also = also;
             let c = stream_sequence(run.recording, frames, run.options, progress, &mut sink)?;
             (c, true, None)
         }
@@ -600,6 +685,7 @@ fn write_folder(
         tables,
         whole,
         measures,
+        ..
     } = sink;
     tables.finish(&counts)?;
     let measures = measures.finish()?;

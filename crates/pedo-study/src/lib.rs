@@ -534,6 +534,53 @@ fn sniff_found_file(path: &Path) -> Option<Format> {
     }
 }
 
+modal_core::option_set! {
+    /// How a study runs its recordings, as a user gives it (`pedomatch batch --jobs N --force`,
+    /// `pymodal.batch(..., jobs=N, force=True)`, `pymodal.batch_row(..., force=True)`): each
+    /// option declared here once; [`StudyParams::apply`] sets them in [`StudyOptions`].
+    StudyParams {
+        let _d = ();
+        /// Recordings run at once, each on one thread (`None`: one per available core).
+        jobs: Option<usize> = None;
+            Value, "the available cores",
+            "Recordings run at once, each on one thread.";
+        /// Run every recording again, even those whose folders are complete.
+        force: bool = false;
+            Flag, false,
+            "Run every recording again, even those whose folders are complete.";
+    }
+}
+
+impl StudyParams {
+    /// Checks every value: at least one recording at a time.
+    pub fn validate(&self) -> std::result::Result<(), modal_core::OptionError> {
+        if self.jobs == Some(0) {
+            return Err(modal_core::OptionError::new(
+                "jobs",
+                0,
+                "an integer >= 1 (none: one per available core)",
+            ));
+        }
+        Ok(())
+    }
+
+    /// `opts` with these values, once checked.
+    pub fn apply(
+        &self,
+        opts: &mut StudyOptions,
+    ) -> std::result::Result<(), modal_core::OptionError> {
+        self.validate()?;
+        opts.jobs = self.jobs.unwrap_or(0);
+        opts.force = self.force;
+        Ok(())
+    }
+}
+
+/// The study options' declarations ([`StudyParams`]).
+pub fn study_option_specs() -> Vec<modal_core::OptionSpec> {
+    StudyParams::specs()
+}
+
 /// How a study runs.
 #[derive(Clone, Default)]
 pub struct StudyOptions {
@@ -1164,6 +1211,7 @@ fn process(
         folder: folder.as_deref(),
         outputs: &opts.outputs,
         timings: &[("read", read_s)],
+        also: None,
     };
     let (summary, counts) = run_into_folder(&recording, &options, plan, &on_stage)?;
     let mut row = row_of_summary(path, output, &summary, started);

@@ -130,6 +130,7 @@ fn both_folders(
         folder: Some(&streamed),
         outputs: &outputs,
         timings: &[],
+        also: None,
     };
     run_into_folder(recording, &options, plan, &|_, _, _| {}).unwrap();
     (whole, streamed)

@@ -271,6 +271,9 @@ impl modal_core::options::OptionField for FrameRange {
             end,
         })
     }
+    fn value(&self) -> OptionValue {
+        OptionValue::Word(self.to_string())
+    }
 }
 
 /// The contour node spacing of [`SequenceOptions::default`], the default of
@@ -496,7 +499,7 @@ impl RunParams {
             }
             (other, _) => other,
         };
-        let noise = self.noise.or(recording.noise_threshold).unwrap_or(0.0);
+        let noise = self.noise_threshold(recording);
         let sigma = (self.smooth > 0.0).then_some(self.smooth);
         let mut o = SequenceOptions {
             model: self.model,
@@ -518,6 +521,12 @@ impl RunParams {
         Ok(o)
     }
 
+    /// The noise threshold of a run of `recording`: [`noise`](Self::noise) when given, else the
+    /// file's own, else 0 (values at or below it count as no contact).
+    pub fn noise_threshold(&self, recording: &Recording) -> f64 {
+        self.noise.or(recording.noise_threshold).unwrap_or(0.0)
+    }
+
     /// Every option as actually used by `options` (from [`RunParams::to_options`]), defaults and
     /// the recording's values filled in: the matching options, then those of
     /// [`recording_option_specs`].
@@ -527,15 +536,12 @@ impl RunParams {
         recording: &Recording,
     ) -> Vec<(&'static str, OptionValue)> {
         let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
-        self.listed(
-            options,
-            FileValues {
-                frames: FrameRange::new(start, end),
-                pitch_mm: recording.pitch_mm,
-                frame_rate: recording.dt_s.map(|dt| 1.0 / dt),
-                units: recording.known_units().map(str::to_string),
-            },
-        )
+        let file = pedo_io::units::UnitOverrides {
+            pitch_mm: recording.pitch_mm.map(pedo_io::units::Pitch),
+            frame_rate: recording.dt_s.map(|dt| 1.0 / dt),
+            units: recording.known_units().map(str::to_string),
+        };
+        self.listed(options, FrameRange::new(start, end), file)
     }
 
     /// Every option as given to each recording of a study (`study.json`), listed as
@@ -554,63 +560,44 @@ impl RunParams {
             ..Default::default()
         };
         options.contour.preprocess.threshold = self.noise;
-        Ok(self.listed(
-            &options,
-            FileValues {
-                frames: self.frames.unwrap_or_default(),
-                pitch_mm: self.units.pitch_mm.map(|p| p.0),
-                frame_rate: self.units.frame_rate,
-                // Spelled as the recordings will state them (`summary.json`).
-                units: self
-                    .units
-                    .units
-                    .as_deref()
-                    .map(pedo_io::recording::stated_units),
-            },
-        ))
+        let file = pedo_io::units::UnitOverrides {
+            // Spelled as the recordings will state them (`summary.json`).
+            units: (self.units.units.as_deref()).map(pedo_io::recording::stated_units),
+            ..self.units.clone()
+        };
+        Ok(self.listed(&options, self.frames.unwrap_or_default(), file))
     }
 
     /// The list of [`RunParams::used`] and [`RunParams::given`]: one list of the options for
-    /// both, so that `summary.json` and `study.json` name the same options alike.
+    /// both, so that `summary.json` and `study.json` name the same options alike: the values
+    /// `options` resolved, the frames run and the units of `file`, named and ordered by the
+    /// declarations ([`MatchParams::used`], then `values()` of these parameters as resolved and
+    /// of the units).
     fn listed(
         &self,
         options: &SequenceOptions,
-        file: FileValues,
+        frames: FrameRange,
+        file: pedo_io::units::UnitOverrides,
     ) -> Vec<(&'static str, OptionValue)> {
-        use OptionValue::{Absent, Float, Int, Numbers, Word};
+        let resolved = RunParams {
+            matching: self.matching.clone(),
+            units: file,
+            model: options.model,
+            frames: Some(frames),
+            every: options.every,
+            noise: options.contour.preprocess.threshold,
+            smooth: self.smooth,
+            spacing: self.spacing,
+            surface_nodes: self.surface_nodes,
+            iso_frame: options.iso_frame,
+            iso_levels: self.iso_levels,
+            drift_reference: options.drift_reference,
+        };
         let mut v = self.matching.used(&options.matching);
-        v.extend([
-            ("model", Word(options.model.to_string())),
-            ("frames", Word(file.frames.to_string())),
-            ("every", Int(options.every)),
-            (
-                "noise",
-                options.contour.preprocess.threshold.map_or(Absent, Float),
-            ),
-            ("smooth", Float(self.smooth)),
-            ("spacing", Float(self.spacing)),
-            ("surface_nodes", Int(self.surface_nodes)),
-            ("iso_frame", options.iso_frame.map_or(Absent, Int)),
-            ("iso_levels", Int(self.iso_levels)),
-            ("drift_reference", Int(options.drift_reference)),
-            (
-                "pitch_mm",
-                file.pitch_mm.map_or(Absent, |p| Numbers(p.to_vec())),
-            ),
-            ("frame_rate", file.frame_rate.map_or(Absent, Float)),
-            ("units", file.units.map_or(Absent, Word)),
-        ]);
+        v.extend(resolved.values());
+        v.extend(resolved.units.values());
         v
     }
-}
-
-/// The values of [`RunParams::listed`] that a recording sets: the frames run, and the pitch,
-/// frame rate and pressure units (`None`: unknown, or left to each recording).
-struct FileValues {
-    frames: FrameRange,
-    pitch_mm: Option<[f64; 2]>,
-    frame_rate: Option<f64>,
-    units: Option<String>,
 }
 
 /// The options of a recording run beyond matching (`pedomatch run`/`demo`, `pymodal.run`), in

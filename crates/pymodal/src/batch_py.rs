@@ -4,13 +4,13 @@
 use pedo_io::cancel::Cancel;
 use pedo_io::ReadOptions;
 use pedo_output::RunOutputs;
-use pedo_study::{StudyOptions, StudyRow};
+use pedo_study::{StudyOptions, StudyParams, StudyRow};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyBool, PyDict, PyList};
 use std::path::PathBuf;
 
-use crate::errors::{argument_error, option_error, to_py};
-use crate::options_py::{count_keyword, table_rows};
+use crate::errors::{argument_error, to_py};
+use crate::options_py::table_rows;
 
 /// Inputs as strings: one path or pattern, or a sequence of them (str or os.PathLike); anything
 /// else is an `InputError` naming the argument `name`.
@@ -53,33 +53,42 @@ pub(crate) fn run_outputs(
     Ok(RunOutputs::of(&options))
 }
 
+/// How a study runs, from the keywords ``jobs`` (None: one per core) and ``force``: the options
+/// of ``pedomatch batch``, declared once in `pedo_study::StudyParams`.
+fn study_params(
+    py: Python<'_>,
+    jobs: Option<&Bound<'_, PyAny>>,
+    force: bool,
+) -> PyResult<StudyParams> {
+    let force = PyBool::new(py, force).to_owned().into_any();
+    let given = [("jobs", jobs), ("force", Some(&force))];
+    crate::options_py::option_set(|name| {
+        given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v)
+    })
+}
+
 /// The study options of the keywords.
 fn study_options(
     py: Python<'_>,
     inputs: Vec<String>,
     out: Option<PathBuf>,
-    jobs: Option<usize>,
-    force: bool,
+    study: StudyParams,
     outputs: RunOutputs,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<StudyOptions> {
-    if jobs == Some(0) {
-        return Err(option_error(
-            "jobs: 0 is not a number of jobs; expected >= 1 or None (every core)",
-        ));
-    }
     let params = crate::run_py::run_params(py, options)?;
     params.validate().map_err(to_py)?;
-    Ok(StudyOptions {
+    let mut opts = StudyOptions {
         inputs,
         params,
         read: ReadOptions::default(),
         out,
-        jobs: jobs.unwrap_or(0),
-        force,
         cancel: None,
         outputs,
-    })
+        ..StudyOptions::default()
+    };
+    study.apply(&mut opts).map_err(to_py)?;
+    Ok(opts)
 }
 
 fn row_dict<'py>(py: Python<'py>, row: &StudyRow) -> PyResult<Bound<'py, PyAny>> {
@@ -148,9 +157,9 @@ fn batch<'py>(
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let inputs = input_strings(paths, "paths")?;
-    let jobs = count_keyword("jobs", jobs)?;
+    let study = study_params(py, jobs, force)?;
     let outputs = run_outputs(figures, tables, report, animation)?;
-    let mut opts = study_options(py, inputs, out, jobs, force, outputs, options)?;
+    let mut opts = study_options(py, inputs, out, study, outputs, options)?;
     opts.read.layout = layout;
     // Ctrl-C stops the study as the command line's does (the recordings finished keep their
     // folders, no study table is written) and raises KeyboardInterrupt.
@@ -196,7 +205,12 @@ fn batch_row<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let inputs = vec![path.display().to_string()];
     let outputs = run_outputs(figures, tables, report, animation)?;
-    let mut opts = study_options(py, inputs, out, Some(1), force, outputs, options)?;
+    // One recording, on one thread.
+    let study = StudyParams {
+        jobs: Some(1),
+        ..study_params(py, None, force)?
+    };
+    let mut opts = study_options(py, inputs, out, study, outputs, options)?;
     opts.read.layout = layout;
     let cancel = Cancel::new();
     opts.cancel = Some(cancel.clone());

@@ -82,11 +82,6 @@ pub fn opt_count(name: &str, value: Option<i64>) -> PyResult<Option<usize>> {
     value.map(|v| count(name, v)).transpose()
 }
 
-/// An integer option [`keyword`] as a [`count`].
-pub fn count_keyword(name: &str, value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
-    opt_count(name, keyword(name, value)?)
-}
-
 /// A keyword as given: the object, or `None` when absent.
 type Kw<'a, 'py> = Option<&'a Bound<'py, PyAny>>;
 
@@ -294,6 +289,7 @@ fn _options<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         "output",
         spec_dicts(py, &pedo_output::output_option_specs())?,
     )?;
+    d.set_item("study", spec_dicts(py, &pedo_study::study_option_specs())?)?;
     Ok(d)
 }
 

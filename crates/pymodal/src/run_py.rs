@@ -4,9 +4,9 @@ use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods}
 use pedo_io::cancel::Cancel;
 use pedo_io::recording::kpa_per_unit;
 use pedo_io::Recording;
-use pedo_output::{write_run_folder, InputInfo, RunRecord};
+use pedo_output::{run_into_folder, InputInfo, RunPlan};
 use pedo_track::require_objects;
-use pedo_track::{run_sequence, SequenceResult};
+use pedo_track::{run_sequence, Collect, SequenceResult};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
@@ -162,18 +162,36 @@ fn run_recording<'py>(
     // Ctrl-C stops the run at its next frame or pair and raises KeyboardInterrupt.
     let cancel = Cancel::new();
     options.cancel = Some(cancel.clone());
-    let (result, points) = crate::pool::detach_cancellable(py, &cancel, || {
-        let result = run_sequence(&rec, &options, &|_, _, _| {})?;
-        let points = pedo_track::follow::run_points(&result, &options)?;
-        Ok::<_, pedo_io::IoError>((result, points))
+    // With a folder, one run feeds the folder's writer (the one of `pedomatch run`, so the
+    // folder is the command line's) and the gathering of the result returned here; without,
+    // the run is only gathered.
+    let (result, summary) = crate::pool::detach_cancellable(py, &cancel, || {
+        let Some(folder) = &out else {
+            let result = run_sequence(&rec, &options, &|_, _, _| {})?;
+            require_objects(result.objects.len(), &rec, &options)?;
+            return Ok((result, None));
+        };
+        let mut whole = Collect::new(options.keep_match_details);
+        let plan = RunPlan {
+            input: &input,
+            params: &params,
+            frames: None,
+            folder: Some(folder),
+            outputs: &outputs,
+            timings: &[("read", read_time)],
+            also: Some(&mut whole),
+        };
+        let (summary, counts) = run_into_folder(&rec, &options, plan, &|_, _, _| {})?;
+        Ok::<_, pedo_io::IoError>((whole.into_result(counts), Some(summary)))
+    })?
+    .map_err(|e| to_py(e.of_input(&input.name)))?;
+    let points = crate::pool::detach_cancellable(py, &cancel, || {
+        pedo_track::follow::run_points(&result, &options)
     })?
     .map_err(to_py)?;
-    require_objects(result.objects.len(), &rec, &options)
-        .map_err(|e| to_py(e.of_input(&input.name)))?;
 
-    let folder = out;
-    let out = PyDict::new(py);
-    out.set_item(
+    let dict = PyDict::new(py);
+    dict.set_item(
         "table",
         table_rows(py, &pedo_output::pairs_table(&rec, &result))?,
     )?;
@@ -181,9 +199,9 @@ fn run_recording<'py>(
     for p in &result.pairs {
         matches.append(Py::new(py, PyMatch::from_result(p.result.clone()))?)?;
     }
-    out.set_item("matches", matches)?;
-    out.set_item("reference_matches", reference_matches(py, &result)?)?;
-    out.set_item("objects", objects(py, &rec, &result)?)?;
+    dict.set_item("matches", matches)?;
+    dict.set_item("reference_matches", reference_matches(py, &result)?)?;
+    dict.set_item("objects", objects(py, &rec, &result)?)?;
     let tracks = PyList::empty(py);
     // Each track's steps as (object id, node): the object (an index into `objects`) says which
     // frame, object and isobaric level a step is on, as tracks.csv's object_id and node.
@@ -203,29 +221,15 @@ fn run_recording<'py>(
             .collect();
         tracks.append(PyArray1::from_vec(py, flat).reshape([pts.len(), width])?)?;
     }
-    out.set_item("tracks", tracks)?;
-    out.set_item("track_steps", track_steps)?;
-    set_points(py, &out, &result, points.as_ref())?;
+    dict.set_item("tracks", tracks)?;
+    dict.set_item("track_steps", track_steps)?;
+    set_points(py, &dict, &result, points.as_ref())?;
     let (start, end) = options.frames.unwrap_or((0, rec.n_frames()));
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
     let measures = pedo_output::frames_table(&rec, threshold, start, end);
-    out.set_item("frames", table_rows(py, &measures)?)?;
-    let summary = match folder {
-        // The folder `pedomatch run` writes, by the same writer, whole or not at all.
-        Some(folder) => {
-            let run = RunRecord {
-                input: &input,
-                recording: &rec,
-                params: &params,
-                options: &options,
-                result: &result,
-            };
-            let stages = [("read", read_time)];
-            crate::pool::detach_cancellable(py, &cancel, || {
-                write_run_folder(&folder, &run, &outputs, &stages)
-            })?
-            .map_err(to_py)?
-        }
+    dict.set_item("frames", table_rows(py, &measures)?)?;
+    let summary = match summary {
+        Some(summary) => summary,
         None => {
             let mut summary = pedo_output::run_summary(
                 &input,
@@ -244,14 +248,14 @@ fn run_recording<'py>(
             summary
         }
     };
-    out.set_item("summary", json_to_py(py, &summary)?)?;
+    dict.set_item("summary", json_to_py(py, &summary)?)?;
     let timings = PyDict::new(py);
     timings.set_item("read", read_time)?;
     timings.set_item("objects", result.timings.objects.as_secs_f64())?;
     timings.set_item("matching", result.timings.matching.as_secs_f64())?;
     timings.set_item("tracks", result.timings.tracks.as_secs_f64())?;
-    out.set_item("timings", timings)?;
-    Ok(out)
+    dict.set_item("timings", timings)?;
+    Ok(dict)
 }
 
 /// The material points of a contour run ([`pedo_track::follow`]) as `points` (per point, its

@@ -34,6 +34,19 @@ def test_batch_keywords_are_the_output_options():
         assert [k for k in keywords(fn) if k in names("output")] == names("output"), fn.__name__
 
 
+def test_batch_takes_the_study_options():
+    # `jobs` (positional too, as before) and `force` are `pedomatch batch`'s --jobs and --force.
+    params = inspect.signature(pymodal.batch).parameters
+    assert [p for p in params if p in names("study")] == names("study") == ["jobs", "force"]
+    assert "force" in inspect.signature(pymodal.batch_row).parameters
+    study = {o["name"]: o for o in OPTIONS["study"]}
+    assert study["jobs"]["cli_flags"] == ["--jobs"] and study["force"]["cli_flags"] == ["--force"]
+
+
+def test_from_array_keywords_are_the_unit_options():
+    assert keywords(pymodal.Recording.from_array) == names("units") + ["mask"]
+
+
 def test_read_recording_keywords_are_the_unit_options():
     # Plus the pedar layout table, as `--layout` beside --pitch-mm/--frame-rate on the CLI.
     assert keywords(pymodal.read_recording) == names("units") + ["layout"]

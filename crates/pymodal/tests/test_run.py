@@ -380,6 +380,76 @@ def test_run_with_out_writes_the_folder_of_pedomatch_run(tmp_path, outputs):
     assert timeless(summary) == timeless(json.loads((study / "summary.json").read_text()))
 
 
+def _pedomatch_binary():
+    """The `pedomatch` binary of this checkout (`PEDOMATCH_BIN`, else the newest of the cargo
+    target folders' debug and release builds), or None."""
+    import os
+
+    given = os.environ.get("PEDOMATCH_BIN")
+    if given:
+        return Path(given)
+    targets = [ROOT / "target"]
+    if os.environ.get("CARGO_TARGET_DIR"):
+        targets.insert(0, Path(os.environ["CARGO_TARGET_DIR"]))
+    found = [t / p / "pedomatch" for t in targets for p in ("debug", "release")]
+    found = [b for b in found if b.is_file()]
+    return max(found, key=lambda b: b.stat().st_mtime) if found else None
+
+
+@pytest.mark.parametrize(
+    "outputs",
+    [{}, {"tables": "parquet", "figures": "none", "report": "none"}],
+    ids=["defaults", "parquet-lean"],
+)
+def test_run_with_out_writes_the_folder_of_the_command_line(tmp_path, outputs):
+    """`run(out=...)` and `pedomatch run --out` on the walk write the same files, byte for
+    byte (`summary.json` but for its timings; `report.html` holds them too), since one run feeds
+    the folder's writer of the command line and the result returned; and what `run` returns is
+    what the folder holds."""
+    import json
+    import subprocess
+
+    binary = _pedomatch_binary()
+    if binary is None:
+        pytest.skip("no pedomatch binary built (cargo build), nor PEDOMATCH_BIN")
+    flags = ["--frames", "30..60"]
+    for k, v in outputs.items():
+        flags += [f"--{k}", v]
+    cli = tmp_path / "cli"
+    subprocess.run(
+        [str(binary), "run", str(BUNDLED), "--out", str(cli), *flags],
+        check=True,
+        capture_output=True,
+    )
+    res = pymodal.run(str(BUNDLED), out=tmp_path / "py", frames=(30, 60), **outputs)
+    py = tmp_path / "py"
+    assert _files(py) == _files(cli)
+    for f in _files(py):
+        if f in ("summary.json", "report.html"):
+            continue
+        assert (py / f).read_bytes() == (cli / f).read_bytes(), f
+    timeless = lambda s: {k: v for k, v in s.items() if k != "timings_s"}
+    summary = json.loads((py / "summary.json").read_text())
+    assert timeless(summary) == timeless(json.loads((cli / "summary.json").read_text()))
+    assert res["summary"] == summary
+    # The result returned is the run the folder holds: a row of pairs per matched pair, the
+    # same counts.
+    tables = "parquet" if outputs else "csv"
+    assert summary["pairs"] == len(res["table"]) == len(res["matches"]) > 0
+    assert summary["tracks"] == len(res["tracks"])
+    assert summary["objects"] == len(res["objects"])
+    if tables == "csv":
+        import csv
+
+        with open(py / "pairs.csv", newline="") as fh:
+            rows = list(csv.DictReader(fh))
+        assert [(int(r["id_a"]), int(r["id_b"])) for r in rows] == [
+            (r["id_a"], r["id_b"]) for r in res["table"]
+        ]
+    # Each Match keeps its details (the affinity matrix) although the folder's run holds none.
+    assert res["matches"][0].affinity.size > 0
+
+
 def test_run_without_out_writes_nothing_and_bad_output_values_raise(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     pymodal.run(moving_blob(4))

@@ -174,9 +174,11 @@ class Recording:
     def from_array(
         frames: ArrayLike,
         *,
+        # @generated keywords of Recording.from_array: tests/generated.rs, from the option tables
         pitch_mm: Optional[Pitch] = None,
         frame_rate: Optional[float] = None,
         units: Optional[str] = None,
+        # @end generated
         mask: Optional[ArrayLike] = None,
     ) -> Recording: ...
     @property
@@ -275,9 +277,11 @@ def linear_sum_assignment_threshold(
 def read_recording(
     path: Path,
     *,
+    # @generated keywords of read_recording: tests/generated.rs, from the option tables
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
     units: Optional[str] = None,
+    # @end generated
     layout: Optional[Path] = None,
 ) -> Recording: ...
 def contours(
