@@ -838,7 +838,8 @@ fn a_run_with_tables_only_writes_the_tables_of_a_run_with_figures() {
         // The same counts; the closing line lists what each folder holds.
         let counts = |said: &str| said.lines().take(2).collect::<Vec<_>>().join("\n");
         assert_eq!(counts(&lean_said), counts(&full_said));
-        let files = format!("frames.{tables}, matches.{tables}, objects.{tables}");
+        let files =
+            format!("frames.{tables}, matches.{tables}, mean.npy, measures.json, objects.{tables}");
         assert!(
             lean_said.contains(&files) && !lean_said.contains("figures/"),
             "{lean_said}"
@@ -851,6 +852,9 @@ fn a_run_with_tables_only_writes_the_tables_of_a_run_with_figures() {
         files.extend(
             ["pairs", "objects", "matches", "tracks", "frames"].map(|t| format!("{t}.{tables}")),
         );
+        // The measures, taken frame by frame as the streamed run reads them, are the same too.
+        files.extend(pedo_output::MEASURE_FILES.map(String::from));
+        assert!(full.join("peak.svg").is_file() && !lean.join("peak.svg").exists());
         for f in &files {
             let (a, b) = (
                 std::fs::read(lean.join(f)).unwrap(),
@@ -1282,4 +1286,58 @@ fn the_ordered_solver_runs_contours_without_crossings_and_refuses_surfaces() {
         err.contains("solver") && err.contains("closed contours"),
         "{err}"
     );
+}
+
+#[test]
+fn the_measures_of_the_walk_agree_with_its_frames_table() {
+    // measures.json against the frames table's own per-frame force, peak and area.
+    let dir = temp_dir("measures");
+    let out = dir.join("walk");
+    let o = pedomatch(&["demo", "--out", out.to_str().unwrap(), "--report", "none"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m = read_json(&out.join("measures.json"));
+    let frames = read_csv(&out.join("frames.csv"));
+    let col = |k: &str| frames.iter().map(|r| num(r, k)).collect::<Vec<f64>>();
+    let (force, peak, area) = (
+        col("total_force_n"),
+        col("peak_pressure_kpa"),
+        col("contact_area_mm2"),
+    );
+    let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    let value = |k: &str, unit: &str| {
+        assert_eq!(m["values"][k]["unit"], unit, "{k}");
+        m["values"][k]["value"].as_f64().unwrap()
+    };
+    let close = |a: f64, b: f64, rel: f64| (a - b).abs() <= rel * b.abs();
+    let dt = 0.032;
+    assert!(close(value("peak_force", "N"), max(&force), 1e-4));
+    assert!(close(value("peak_pressure", "kPa"), max(&peak), 1e-6));
+    assert!(close(value("max_contact_area", "mm²"), max(&area), 1e-6));
+    let fti: f64 = force.iter().sum::<f64>() * dt;
+    assert!(close(value("fti", "N·s"), fti, 1e-4));
+    // Contact time: the first and last frames above 10 % of the force range.
+    let lo = force.iter().copied().fold(f64::INFINITY, f64::min);
+    let threshold = lo + 0.1 * (max(&force) - lo);
+    let first = force.iter().position(|&f| f > threshold).unwrap();
+    let last = force.iter().rposition(|&f| f > threshold).unwrap();
+    assert_eq!(m["contact_frames"], serde_json::json!([first, last]));
+    assert!(close(
+        value("contact_time", "s"),
+        (last - first + 1) as f64 * dt,
+        1e-9
+    ));
+    assert!(value("pti_max", "kPa·s") > 0.0);
+    for f in ["peak.npy", "pti.npy", "mean.npy"] {
+        let bytes = std::fs::read(out.join(f)).unwrap();
+        assert!(bytes.starts_with(b"\x93NUMPY\x01\x00"), "{f}");
+        // Header, then 60 × 21 float64.
+        assert_eq!((bytes.len() - 128) / 8, 60 * 21, "{f}");
+        let header = String::from_utf8_lossy(&bytes[10..128]).into_owned();
+        assert!(
+            header.contains("'descr': '<f8'") && header.contains("(60, 21)"),
+            "{header}"
+        );
+    }
+    assert_png(&out.join("peak.png"));
+    assert_png(&out.join("pti.png"));
 }

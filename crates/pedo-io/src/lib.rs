@@ -27,6 +27,7 @@ pub mod formats;
 pub mod grid;
 pub mod isobar;
 pub mod limits;
+pub mod measures;
 pub mod points;
 pub mod preprocess;
 pub mod recording;

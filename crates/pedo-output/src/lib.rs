@@ -8,6 +8,7 @@
 //! | [`table_files`] | a table file as CSV or Parquet ([`TableFormat`]), whole or row by row |
 //! | [`run_tables`] | the tables of a run: pairs, objects, matches, tracks, frames, reference matches |
 //! | [`summary`] | `summary.json`: the input's provenance, the options used, the counts and timings |
+//! | [`measure_files`] | the measures of the recording: `peak.npy`, `pti.npy`, `mean.npy`, `measures.json`, `peak.png`, `pti.png` |
 //! | [`figure`] | PNG/SVG figures (a matched pair, a run's tracks) and the GIF animation |
 //! | [`html_report`] | the self-contained interactive `report.html` of a run or of one pair |
 //! | [`outdir`] | output folders written whole or not at all |
@@ -17,6 +18,7 @@
 
 pub mod figure;
 pub mod html_report;
+pub mod measure_files;
 pub mod outdir;
 pub mod run_folder;
 pub mod run_tables;
@@ -24,6 +26,7 @@ pub mod summary;
 pub mod table;
 pub mod table_files;
 
+pub use measure_files::*;
 pub use run_folder::*;
 pub use run_tables::*;
 pub use summary::*;

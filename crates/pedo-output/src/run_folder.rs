@@ -208,8 +208,9 @@ impl FigureKinds {
 }
 
 /// The summary figures of a run, by stem (written as `STEM.png` or `STEM.svg`): the tracks
-/// over the peak pressure, the force and contact-area curves, the peak-pressure image.
-pub const SUMMARY_FIGURES: [&str; 3] = ["tracks", "curves", "peak"];
+/// over the peak pressure, the force and contact-area curves, the peak-pressure image (with the
+/// contact outlines) and the pressure-time-integral image ([`crate::write_measures`]).
+pub const SUMMARY_FIGURES: [&str; 4] = ["tracks", "curves", "peak", "pti"];
 
 /// A finished run of one recording, as the writers of its folder see it.
 pub struct RunRecord<'a> {
@@ -508,14 +509,60 @@ pub fn run_into_folder(
             },
         ),
         None => {
+            let mut measures = crate::MeasuresSink::new(recording, options)?;
             let mut none = NoSink;
-            let sink = also.unwrap_or(&mut none);
-            let counts = stream_sequence(recording, frames, options, progress, sink)?;
+            let also = also.unwrap_or(&mut none);
+            let mut sink = WithMeasures {
+                measures: &mut measures,
+                also,
+            };
+            let counts = stream_sequence(recording, frames, options, progress, &mut sink)?;
             require_objects(counts.objects, recording, options)?;
-            let summary =
+            let mut summary =
                 crate::run_summary_of(input, recording, params, options, &counts, timings);
+            summary["measures"] = crate::measure_values_json(&measures.finish()?);
             Ok((summary, counts))
         }
+    }
+}
+
+/// A run without a folder: its measures taken, every event handed on to the caller's sink.
+struct WithMeasures<'a> {
+    measures: &'a mut crate::MeasuresSink,
+    also: &'a mut dyn SequenceSink,
+}
+
+impl SequenceSink for WithMeasures<'_> {
+    fn frames(&mut self, first: usize, measures: &[FrameMeasures]) -> Result<()> {
+        self.also.frames(first, measures)
+    }
+    fn wants_frame_values(&self) -> bool {
+        true
+    }
+    fn frame_values(&mut self, frame: usize, values: &[f32]) -> Result<()> {
+        self.measures.frame_values(frame, values)?;
+        if self.also.wants_frame_values() {
+            self.also.frame_values(frame, values)?;
+        }
+        Ok(())
+    }
+    fn frame_objects(&mut self, frame: usize, objects: &[SequenceObject]) -> Result<()> {
+        self.also.frame_objects(frame, objects)
+    }
+    fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()> {
+        self.also.pair(pair, a, b)
+    }
+    fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
+        self.also.track(index, steps)
+    }
+    fn reference_pair(
+        &mut self,
+        pair: &PairMatch,
+        a: &SequenceObject,
+        b: &SequenceObject,
+        tracked: &[bool],
+    ) -> Result<()> {
+        self.also.reference_pair(pair, a, b, tracked)
     }
 }
 
@@ -589,6 +636,9 @@ pub struct FolderSink<'a, 's> {
     whole: Option<Collect>,
     /// The caller's own sink, if any ([`RunPlan::also`]): every event, as it comes.
     also: Option<&'s mut dyn SequenceSink>,
+    /// The recording's measures (`peak.npy`, `pti.npy`, `mean.npy`, `measures.json`), summed
+    /// as the frames come.
+    measures: crate::MeasuresSink,
     /// For the curves figure: each frame's total force and contact area (a few numbers a frame).
     curves: Option<FrameCurves>,
     /// For the tracks figure: its longest tracks.
@@ -636,6 +686,16 @@ impl SequenceSink for FolderSink<'_, '_> {
         }
         self.tables.frames(first, measures)?;
         self.also().map_or(Ok(()), |s| s.frames(first, measures))
+    }
+    fn wants_frame_values(&self) -> bool {
+        true
+    }
+    fn frame_values(&mut self, frame: usize, values: &[f32]) -> Result<()> {
+        self.measures.frame_values(frame, values)?;
+        match self.also() {
+            Some(s) if s.wants_frame_values() => s.frame_values(frame, values),
+            _ => Ok(()),
+        }
     }
     fn frame_objects(&mut self, frame: usize, objects: &[SequenceObject]) -> Result<()> {
         self.tables.frame_objects(frame, objects)?;
@@ -726,6 +786,7 @@ fn write_folder(
         report: outputs
             .report
             .then(|| ReportGather::new(run.recording, run.options.frames)),
+        measures: crate::MeasuresSink::new(run.recording, run.options)?,
     };
     let (counts, ran, replayed) = match feed {
         Feed::Run {
@@ -750,6 +811,7 @@ fn write_folder(
         curves,
         tracks,
         report,
+        measures,
         ..
     } = sink;
     tables.finish(&counts)?;
@@ -766,6 +828,11 @@ fn write_folder(
         total: output_count(&counts, outputs, points),
         done: AtomicUsize::new(0),
     };
+    let measures = measures.finish()?;
+    crate::write_measures(&dir, run.recording, &measures, outputs.figures)?;
+    if outputs.figures.any() {
+        steps.step();
+    }
     let drawn = Drawn {
         whole,
         curves: curves.unwrap_or_default(),
@@ -786,6 +853,7 @@ fn write_folder(
     ));
     let (i, rec) = (run.input, run.recording);
     let mut summary = crate::run_summary_of(i, rec, run.params, run.options, &counts, &stages);
+    summary["measures"] = crate::measure_values_json(&measures);
     if let Some(options) = summary["options"].as_object_mut() {
         record_outputs(options, outputs);
     }

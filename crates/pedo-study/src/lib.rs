@@ -91,6 +91,9 @@ pub struct StudyRow {
     pub mean_trackable_percent: Option<f64>,
     /// Number of tracks; `None` on error.
     pub tracks: Option<usize>,
+    /// The measures of the recording ([`pedo_io::measures`]) in the study's units; `None` on
+    /// error and where the recording cannot give that unit.
+    pub measures: StudyMeasures,
     /// Seconds from the start of this recording to its row (for a skipped one: those of the
     /// run that wrote the folder).
     pub wall_time_s: f64,
@@ -142,8 +145,77 @@ impl RowUnits {
     }
 }
 
+/// The measures of a recording a study row gives ([`pedo_io::measures`], `summary.json`'s
+/// `measures`), each in the unit its column names: `None` when the recording cannot give that
+/// unit (a value in the file's own units, a time in frames, an area in sensels is left out, so
+/// that a column never mixes units), on error, and on a row of a study written before they
+/// were columns.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct StudyMeasures {
+    /// Peak pressure in kPa (`peak_pressure_kpa`).
+    pub peak_pressure_kpa: Option<f64>,
+    /// Largest pressure-time integral of a sensel in kPa·s (`pti_max_kpa_s`).
+    pub pti_max_kpa_s: Option<f64>,
+    /// Peak force in N (`peak_force_n`).
+    pub peak_force_n: Option<f64>,
+    /// Force-time integral in N·s (`fti_n_s`).
+    pub fti_n_s: Option<f64>,
+    /// Contact time in s (`contact_time_s`).
+    pub contact_time_s: Option<f64>,
+    /// Largest contact area of a frame in mm² (`max_contact_area_mm2`).
+    pub max_contact_area_mm2: Option<f64>,
+}
+
+/// The study columns of [`StudyMeasures`]: column, `summary.json` measure, its unit there.
+const MEASURE_COLUMNS: [(&str, &str, &str); 6] = [
+    ("peak_pressure_kpa", "peak_pressure", "kPa"),
+    ("pti_max_kpa_s", "pti_max", "kPa·s"),
+    ("peak_force_n", "peak_force", "N"),
+    ("fti_n_s", "fti", "N·s"),
+    ("contact_time_s", "contact_time", "s"),
+    ("max_contact_area_mm2", "max_contact_area", "mm²"),
+];
+
+impl StudyMeasures {
+    /// The values in column order.
+    fn values(&self) -> [Option<f64>; 6] {
+        [
+            self.peak_pressure_kpa,
+            self.pti_max_kpa_s,
+            self.peak_force_n,
+            self.fti_n_s,
+            self.contact_time_s,
+            self.max_contact_area_mm2,
+        ]
+    }
+
+    /// From the values in column order.
+    fn of_values(v: [Option<f64>; 6]) -> Self {
+        Self {
+            peak_pressure_kpa: v[0],
+            pti_max_kpa_s: v[1],
+            peak_force_n: v[2],
+            fti_n_s: v[3],
+            contact_time_s: v[4],
+            max_contact_area_mm2: v[5],
+        }
+    }
+
+    /// The measures a `summary.json` records (its `measures`), those in the columns' units.
+    fn of_summary(summary: &Value) -> Self {
+        Self::of_values(MEASURE_COLUMNS.map(|(_, name, unit)| {
+            let m = &summary["measures"][name];
+            if m["unit"].as_str() == Some(unit) {
+                m["value"].as_f64()
+            } else {
+                None
+            }
+        }))
+    }
+}
+
 /// The columns of the study table, units in the names.
-pub const STUDY_COLUMNS: [&str; 16] = [
+pub const STUDY_COLUMNS: [&str; 22] = [
     "path",
     "output",
     "format",
@@ -157,6 +229,12 @@ pub const STUDY_COLUMNS: [&str; 16] = [
     "mean_optimisation_percent",
     "mean_trackable_percent",
     "tracks",
+    "peak_pressure_kpa",
+    "pti_max_kpa_s",
+    "peak_force_n",
+    "fti_n_s",
+    "contact_time_s",
+    "max_contact_area_mm2",
     "wall_time_s",
     "status",
     "message",
@@ -172,7 +250,7 @@ pub fn study_table(rows: &[StudyRow]) -> Table {
         rows: rows
             .iter()
             .map(|r| {
-                vec![
+                let mut cells = vec![
                     Cell::Text(r.path.clone()),
                     text(&r.output),
                     text(&r.format),
@@ -186,10 +264,14 @@ pub fn study_table(rows: &[StudyRow]) -> Table {
                     float(r.mean_optimisation_percent, 1),
                     float(r.mean_trackable_percent, 1),
                     int(r.tracks),
+                ];
+                cells.extend(r.measures.values().map(|v| float(v, 4)));
+                cells.extend([
                     Cell::Float(r.wall_time_s, 3),
                     Cell::Text(r.status.name().into()),
                     Cell::Text(r.message.clone()),
-                ]
+                ]);
+                cells
             })
             .collect(),
     }
@@ -218,6 +300,7 @@ fn row_from_json(v: &Value) -> Option<StudyRow> {
         mean_optimisation_percent: float("mean_optimisation_percent"),
         mean_trackable_percent: float("mean_trackable_percent"),
         tracks: int("tracks"),
+        measures: StudyMeasures::of_values(MEASURE_COLUMNS.map(|(c, _, _)| float(c))),
         wall_time_s: float("wall_time_s")?,
         status: match text("status")?.as_str() {
             "ok" => RowStatus::Ok,
@@ -738,14 +821,24 @@ pub fn kept_message(message: &str, found: bool) -> String {
     }
 }
 
-/// `row`, its units read from its folder's `summary.json` if it gives none.
+/// `row`, its units and measures read from its folder's `summary.json` if it gives none (a row
+/// of a study written before they were columns).
 fn with_units_of_folder(out: &Path, row: &StudyRow) -> StudyRow {
     let mut row = row.clone();
-    if row.units == RowUnits::default()
+    let (no_units, no_measures) = (
+        row.units == RowUnits::default(),
+        row.measures == StudyMeasures::default(),
+    );
+    if (no_units || no_measures)
         && let Some(folder) = &row.output
         && let Some(summary) = read_json(&out.join(folder).join("summary.json"))
     {
-        row.units = RowUnits::of_summary(&summary);
+        if no_units {
+            row.units = RowUnits::of_summary(&summary);
+        }
+        if no_measures {
+            row.measures = StudyMeasures::of_summary(&summary);
+        }
     }
     row
 }
@@ -1051,6 +1144,7 @@ pub fn run_recording(
         mean_optimisation_percent: None,
         mean_trackable_percent: None,
         tracks: None,
+        measures: StudyMeasures::default(),
         wall_time_s: started.elapsed().as_secs_f64(),
         status: RowStatus::Error,
         message: one_line(&e.to_string()),
@@ -1141,8 +1235,9 @@ fn used_options(params: &RunParams, options: &SequenceOptions, recording: &Recor
 /// input's SHA-256 and the options `used` (with the animation choice of `outputs`, which
 /// `summary.json` records among them), with every table a run with `options` writes
 /// ([`run_table_files`]: reference_matches too with drift correction), and every output that
-/// `outputs` asks for: the report, the animation, the tracks figure and the figure of every
-/// matched pair (those of `pairs.json`), in each format asked for.
+/// `outputs` asks for: the measures' files ([`pedo_output::MEASURE_FILES`]), the report, the
+/// animation, the tracks, peak and PTI figures and the figure of every matched pair (those of
+/// `pairs.json`), in each format asked for.
 pub fn is_complete(
     folder: &Path,
     input: &InputInfo,
@@ -1176,6 +1271,7 @@ fn complete_summary(
         return None;
     }
     let mut files = run_table_files(outputs.tables, options);
+    files.extend(pedo_output::MEASURE_FILES.map(String::from));
     if outputs.report {
         files.push("report.html".into());
     }
@@ -1242,6 +1338,7 @@ fn row_of_summary(
         mean_optimisation_percent: summary["mean_optimisation_percent"].as_f64(),
         mean_trackable_percent: summary["mean_trackable_percent"].as_f64(),
         tracks: int(&summary["tracks"]),
+        measures: StudyMeasures::of_summary(summary),
         wall_time_s: started.elapsed().as_secs_f64(),
         status: RowStatus::Ok,
         message: String::new(),
@@ -1333,6 +1430,14 @@ mod tests {
             mean_optimisation_percent: Some(97.5),
             mean_trackable_percent: Some(88.5),
             tracks: Some(900),
+            measures: StudyMeasures {
+                peak_pressure_kpa: Some(812.5),
+                pti_max_kpa_s: Some(190.25),
+                peak_force_n: Some(1012.0),
+                fti_n_s: Some(402.5),
+                contact_time_s: Some(0.64),
+                max_contact_area_mm2: None,
+            },
             wall_time_s: 1.5,
             status,
             message: String::new(),

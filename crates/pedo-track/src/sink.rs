@@ -22,6 +22,20 @@ pub trait SequenceSink {
         let _ = (first, measures);
         Ok(())
     }
+    /// Whether this sink wants the values of the run's frames ([`frame_values`](Self::frame_values)):
+    /// the engine hands them only then (no sink wants them by default).
+    fn wants_frame_values(&self) -> bool {
+        false
+    }
+    /// The values of frame `frame` (`rows × cols` row-major, the file's units, 0 at missing
+    /// sensors), for a sink that [wants them](Self::wants_frame_values): every frame of the run's
+    /// range in order, as [`frames`](Self::frames) (a frame stride leaves no frame out: the
+    /// measures of a recording, `pedo_io::measures`, take all of them), right after the
+    /// `frames` event of its window.
+    fn frame_values(&mut self, frame: usize, values: &[f32]) -> Result<()> {
+        let _ = (frame, values);
+        Ok(())
+    }
     /// Frame `frame` is built: its objects in id order (none for a frame without contact or
     /// skipped, [`SequenceResult::skipped_frames`]). The contour and surface models hand every
     /// kept frame of the run in order ([`SequenceOptions::kept_frames`]: every frame but with a
@@ -70,6 +84,7 @@ pub fn replay(
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
     let (start, end) = options.frames.unwrap_or((0, recording.n_frames()));
     sink.frames(start, &recording.measures_of(threshold, start..end))?;
+    crate::stream::hand_values(recording, 0, start..end, sink)?;
     replay_frames(options, (start, end), &r.objects, sink)?;
     for p in &r.pairs {
         sink.pair(p, &r.objects[p.a], &r.objects[p.b])?;

@@ -87,6 +87,26 @@ pub fn stream_sequence(
     run.finish(sink)
 }
 
+/// Hands the values of frames `w` of `frames` (whose frame 0 is frame `offset` of the run's
+/// recording) to `sink`, when it [wants them](SequenceSink::wants_frame_values).
+pub(crate) fn hand_values(
+    frames: &Recording,
+    offset: usize,
+    w: Range<usize>,
+    sink: &mut dyn SequenceSink,
+) -> Result<()> {
+    if !sink.wants_frame_values() {
+        return Ok(());
+    }
+    for t in w {
+        let values = frames
+            .frame_slice(t - offset)
+            .ok_or_else(|| IoError::invalid(format!("frame {t} is beyond the frames read")))?;
+        sink.frame_values(t, &values)?;
+    }
+    Ok(())
+}
+
 /// The state of a run between windows.
 struct Engine<'o> {
     options: &'o SequenceOptions,
@@ -184,6 +204,7 @@ impl<'o> Engine<'o> {
             w.start,
             &frames.measures_of(threshold, w.start - offset..w.end - offset),
         )?;
+        hand_values(frames, offset, w.clone(), sink)?;
         let first = self.held.end();
         let new = match self.options.model {
             ObjectModel::Isocontour => None,

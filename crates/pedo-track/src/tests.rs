@@ -627,3 +627,49 @@ fn an_isocontour_level_whose_largest_region_switches_starts_new_tracks() {
     assert!(levels.iter().any(|l| l.windows(2).any(|w| w == [0, 1])));
     assert!(levels.iter().any(|l| l.windows(2).any(|w| w == [3, 4])));
 }
+
+/// A sink that wants the frames' values: which frames came, and their sum.
+#[derive(Default)]
+struct Values {
+    frames: Vec<usize>,
+    sums: Vec<f64>,
+}
+
+impl SequenceSink for Values {
+    fn wants_frame_values(&self) -> bool {
+        true
+    }
+    fn frame_values(&mut self, frame: usize, values: &[f32]) -> pedo_io::Result<()> {
+        self.frames.push(frame);
+        self.sums.push(values.iter().map(|&v| f64::from(v)).sum());
+        Ok(())
+    }
+}
+
+#[test]
+fn every_frame_of_the_range_is_handed_to_a_sink_that_wants_values_strided_or_replayed() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../pedo-io/tests/data/FrasP01L.asf"
+    );
+    let rec = pedo_io::read_recording(path).unwrap();
+    let (start, end) = (7, 7 + pedo_io::recording::FRAME_WINDOW + 30);
+    let options = SequenceOptions {
+        frames: Some((start, end)),
+        every: 3,
+        keep_match_details: false,
+        ..Default::default()
+    };
+    let want: Vec<f64> = (start..end)
+        .map(|t| rec.frame(t).unwrap().data().iter().sum())
+        .collect();
+    let mut streamed = Values::default();
+    stream_sequence(&rec, None, &options, &|_, _, _| {}, &mut streamed).unwrap();
+    assert_eq!(streamed.frames, (start..end).collect::<Vec<_>>());
+    assert_eq!(streamed.sums, want);
+    let whole = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+    let mut replayed = Values::default();
+    replay(&rec, &options, &whole, &mut replayed).unwrap();
+    assert_eq!(replayed.frames, streamed.frames);
+    assert_eq!(replayed.sums, want);
+}

@@ -304,6 +304,50 @@ impl PyRecording {
     fn measures<'py>(&self, py: Python<'py>, threshold: f64) -> PyResult<Bound<'py, PyDict>> {
         measures_dict(py, &self.inner, threshold)
     }
+    /// The measures gait researchers report of frames ``frames`` (``(start, end)``, every frame
+    /// by default), a sensel loaded above 0 and at or above ``threshold`` (docs/measures.md):
+    /// a dict of ``peak``, ``pti`` and ``mean`` (H, W) float64 images (NaN where there is no
+    /// sensor; ``mean`` over the frames each sensel is loaded, 0 where it never is), ``values``
+    /// (``peak_pressure``, ``pti_max``, ``peak_force`` or ``peak_load``, ``fti`` or
+    /// ``load_time_integral``, ``contact_time``, ``max_contact_area``: floats), ``units`` (the
+    /// unit of each value: kPa, kPa·s, N, N·s, s, mm² when the recording says so, else the
+    /// file's units, frames or sensels), ``frames``, ``contact_frames`` (the first and last frame
+    /// above the contact force threshold) and ``contact_force_threshold``. The same as a run
+    /// folder's ``peak.npy``, ``pti.npy``, ``mean.npy`` and ``measures.json``. An ``InputError``
+    /// when no sensor is loaded in any frame.
+    #[pyo3(signature = (threshold=0.0, frames=None))]
+    fn gait_measures<'py>(
+        &self,
+        py: Python<'py>,
+        threshold: f64,
+        frames: Option<(usize, usize)>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let range = frames.map_or(0..self.inner.n_frames(), |(a, b)| a..b);
+        let rec = &self.inner;
+        let m = crate::pool::detach(py, || {
+            pedo_io::measures::Measures::of_recording(rec, threshold, range)
+        })
+        .map_err(to_py)?;
+        let image = |v: &[f64]| -> PyResult<Bound<'py, PyAny>> {
+            let a = Array2::from_shape_vec((m.rows, m.cols), v.to_vec()).map_err(internal)?;
+            read_only(a.into_pyarray(py).into_any())
+        };
+        let d = PyDict::new(py);
+        d.set_item("peak", image(&m.peak)?)?;
+        d.set_item("pti", image(&m.pti)?)?;
+        d.set_item("mean", image(&m.mean)?)?;
+        let (values, units) = (PyDict::new(py), PyDict::new(py));
+        for q in m.quantities() {
+            values.set_item(q.name, q.value)?;
+            units.set_item(q.name, q.unit)?;
+        }
+        d.set_item("values", values)?;
+        d.set_item("units", units)?;
+        d.set_item("frames", (m.frames.start, m.frames.end))?;
+        d.set_item("contact_frames", m.values.contact_frames)?;
+        d.set_item("contact_force_threshold", m.values.contact_force_threshold)?;
+        Ok(d)
+    }
     fn __len__(&self) -> usize {
         self.inner.n_frames()
     }

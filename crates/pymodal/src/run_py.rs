@@ -230,14 +230,23 @@ fn run_recording<'py>(
     dict.set_item("frames", table_rows(py, &measures)?)?;
     let summary = match summary {
         Some(summary) => summary,
-        None => pedo_output::run_summary(
-            &input,
-            &rec,
-            &params,
-            &options,
-            &result,
-            &[("read", read_time)],
-        ),
+        None => {
+            let mut summary = pedo_output::run_summary(
+                &input,
+                &rec,
+                &params,
+                &options,
+                &result,
+                &[("read", read_time)],
+            );
+            // The measures a folder's summary.json holds (a folder computes them as it runs).
+            let m = crate::pool::detach(py, || {
+                pedo_io::measures::Measures::of_recording(&rec, threshold, start..end)
+            })
+            .map_err(to_py)?;
+            summary["measures"] = pedo_output::measure_values_json(&m);
+            summary
+        }
     };
     dict.set_item("summary", json_to_py(py, &summary)?)?;
     let timings = PyDict::new(py);

@@ -328,24 +328,49 @@ fn read_whole(source: &mut dyn Read, n: usize, name: &str) -> Result<Vec<u8>> {
 /// Encodes a recording as a 3-D little-endian `f4` array (T, rows, cols) in C order, NaN at
 /// missing sensors.
 pub fn recording_to_npy(rec: &Recording) -> Vec<u8> {
-    let dict = format!(
-        "{{'descr': '<f4', 'fortran_order': False, 'shape': ({}, {}, {}), }}",
-        rec.n_frames(),
-        rec.rows(),
-        rec.cols()
-    );
+    let shape = format!("({}, {}, {})", rec.n_frames(), rec.rows(), rec.cols());
+    let mut out = npy_header("<f4", &shape);
+    for v in rec.frames_with_nan() {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out
+}
+
+/// Encodes an image of `rows × cols` values (row-major) as a 2-D little-endian `f8` array in C
+/// order (NumPy's `float64`), such as the peak or PTI image of `pedo_io::measures`.
+///
+/// # Errors
+///
+/// [`IoError::InvalidInput`] when `values` does not hold `rows × cols` values.
+pub fn image_to_npy(rows: usize, cols: usize, values: &[f64]) -> Result<Vec<u8>> {
+    if rows.checked_mul(cols) != Some(values.len()) {
+        return Err(IoError::invalid(format!(
+            "an image of {rows}x{cols} needs {} values, got {}",
+            rows.saturating_mul(cols),
+            values.len()
+        )));
+    }
+    let mut out = npy_header("<f8", &format!("({rows}, {cols})"));
+    out.reserve(values.len() * 8);
+    for v in values {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    Ok(out)
+}
+
+/// The magic, version 1.0 and header dict of an array of type `descr` and shape `shape` (a
+/// Python tuple), padded so that the data starts at a multiple of 64 bytes.
+fn npy_header(descr: &str, shape: &str) -> Vec<u8> {
+    let dict = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
     // Magic (6) + version (2) + length (2) + dict + padding + '\n' must be a multiple of 64.
     let total = (10 + dict.len() + 1).div_ceil(64) * 64;
     let mut header = dict.into_bytes();
     header.resize(total - 10 - 1, b' ');
     header.push(b'\n');
-    let mut out = Vec::with_capacity(total + rec.data().len() * 4);
+    let mut out = Vec::with_capacity(total);
     out.extend_from_slice(b"\x93NUMPY\x01\x00");
     out.extend_from_slice(&(header.len() as u16).to_le_bytes());
     out.extend_from_slice(&header);
-    for v in rec.frames_with_nan() {
-        out.extend_from_slice(&v.to_le_bytes());
-    }
     out
 }
 

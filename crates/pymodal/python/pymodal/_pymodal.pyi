@@ -212,6 +212,9 @@ class Recording:
     @property
     def cop(self) -> FloatArray: ...
     def measures(self, threshold: float = 0.0) -> dict[str, npt.NDArray[Any]]: ...
+    def gait_measures(
+        self, threshold: float = 0.0, frames: Optional[Tuple[int, int]] = None
+    ) -> dict[str, Any]: ...
     def __len__(self) -> int: ...
 
 class Surface:
@@ -384,7 +387,8 @@ def run(
 
 # A row of a study table (batch, batch_row): path, output, format, frames, frame_rate_hz,
 # pitch_x_mm, pitch_y_mm, pressure_units, pairs, mean_local_percent, mean_optimisation_percent,
-# mean_trackable_percent, tracks, wall_time_s, status ("ok", "skipped", "error") and message,
+# mean_trackable_percent, tracks, peak_pressure_kpa, pti_max_kpa_s, peak_force_n, fti_n_s,
+# contact_time_s, max_contact_area_mm2, wall_time_s, status ("ok", "skipped", "error") and message,
 # the columns of study.csv (or study.parquet).
 StudyRow = dict[str, Any]
 

@@ -1,0 +1,573 @@
+//! The measures gait researchers report of a whole recording (or of a run's frames): the
+//! peak-pressure, pressure-time-integral and mean-pressure images, and the values peak pressure,
+//! PTI maximum, peak force, force-time integral, contact time and maximum contact area.
+//!
+//! [`RecordingMeasures`] takes the frames one at a time, as a streamed run reads them, and
+//! [`finish`](RecordingMeasures::finish)es into [`Measures`]; a whole recording is every frame
+//! fed in ([`Measures::of_recording`]). Definitions (docs/measures.md):
+//!
+//! * a sensel is *loaded* in a frame when its value is above 0 and at or above the contact
+//!   threshold (as in [`Recording::measures`]);
+//! * **peak image**: per sensel the largest value over the frames;
+//! * **PTI image**: per sensel `Σ p·Δt` over the frames where it is loaded (the rectangle rule
+//!   of novel's pressure-time integral, pressuRe's `pti_1`);
+//! * **mean image**: per sensel the mean of its values over the frames where it is loaded
+//!   (0 where it never is);
+//! * **force** of a frame: the load of its loaded sensels as [`FrameMeasures::total_force`]
+//!   (N when the pressure units and the sensel area are known);
+//! * **FTI**: `Σ F·Δt` over the frames; **peak force**: the largest `F`;
+//! * **contact time**: from the first to the last frame whose force exceeds
+//!   `min F + 10 % × (max F − min F)` ([`CONTACT_FORCE_FRACTION`], the automatic threshold of
+//!   pressuRe's `threshold_event`), both counted whole: `(last − first + 1) × Δt`;
+//! * **maximum contact area**: the largest number of loaded sensels in a frame × sensel area.
+//!
+//! Pressures are in kPa when the recording's units are known, else in the file's own units;
+//! force in N when units and sensel area are known, else the load in the file's units × mm² (or
+//! × sensels without a pitch); time in s when the frame rate is known, else in frames. Each value
+//! carries its unit ([`Measures::quantities`]) and is named by what it is (`peak_load`, not
+//! `peak_force`, when it is no force). Sensors that do not exist are NaN in the images.
+//!
+//! [`FrameMeasures::total_force`]: crate::recording::FrameMeasures::total_force
+
+use crate::error::{IoError, Result};
+use crate::recording::{canonical_units, kpa_per_unit, Recording};
+use std::ops::Range;
+
+/// The fraction of the force range above the smallest force of the frames that a frame's force
+/// must exceed to count in the contact time (pressuRe, `threshold_event`, `threshold = "auto"`:
+/// `min + 0.1 × (max − min)`).
+pub const CONTACT_FORCE_FRACTION: f64 = 0.1;
+
+/// The units the measures of a recording are given in (see the [module](self)).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeasureUnits {
+    /// `"kPa"` when the recording's units are known, else its units as written (`"file units"`
+    /// when it states none).
+    pub pressure: String,
+    /// `"N"`, or `"<pressure>·mm²"` / `"<pressure>·sensel"` when the load is no force.
+    pub force: String,
+    /// `"s"`, or `"frame"` without a frame rate.
+    pub time: String,
+    /// `"mm²"`, or `"sensel"` without a sensel area.
+    pub area: String,
+    /// Whether `force` is newtons (the values are then named `peak_force` and `fti`).
+    pub is_force: bool,
+}
+
+impl MeasureUnits {
+    /// The units of `recording`'s measures.
+    pub fn of(recording: &Recording) -> Self {
+        let known = kpa_per_unit(&recording.units).is_some();
+        let written = recording
+            .known_units()
+            .map(|u| canonical_units(u).unwrap_or(u).to_string())
+            .unwrap_or_else(|| "file units".to_string());
+        let is_force = recording.force_factor().is_some();
+        let force = match (is_force, recording.sensel_area()) {
+            (true, _) => "N".to_string(),
+            (false, Some(_)) => format!("{written}·mm²"),
+            (false, None) => format!("{written}·sensel"),
+        };
+        Self {
+            pressure: if known {
+                "kPa".to_string()
+            } else {
+                written.clone()
+            },
+            force,
+            time: if recording.dt_s.is_some() {
+                "s"
+            } else {
+                "frame"
+            }
+            .to_string(),
+            area: if recording.sensel_area().is_some() {
+                "mm²"
+            } else {
+                "sensel"
+            }
+            .to_string(),
+            is_force,
+        }
+    }
+}
+
+/// One value of [`Measures::quantities`]: its name, value and unit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Quantity {
+    /// `peak_pressure`, `pti_max`, `peak_force` (or `peak_load`), `fti` (or
+    /// `load_time_integral`), `contact_time`, `max_contact_area`.
+    pub name: &'static str,
+    /// The value, finite.
+    pub value: f64,
+    /// Its unit (`"kPa"`, `"kPa·s"`, `"N"`, `"N·s"`, `"s"`, `"mm²"`, or those of
+    /// [`MeasureUnits`] when the recording does not say).
+    pub unit: String,
+}
+
+/// The values of [`Measures`], in the units of [`Measures::units`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeasureValues {
+    /// The largest value of the peak image.
+    pub peak_pressure: f64,
+    /// The largest value of the PTI image (pressure × time).
+    pub pti_max: f64,
+    /// The largest force (or load) of a frame.
+    pub peak_force: f64,
+    /// The force-time integral `Σ F·Δt`.
+    pub fti: f64,
+    /// `(last − first + 1) × Δt` of the frames above the contact force threshold.
+    pub contact_time: f64,
+    /// The first and last frame counted in the contact time.
+    pub contact_frames: (usize, usize),
+    /// The force threshold of the contact time (force unit).
+    pub contact_force_threshold: f64,
+    /// The largest contact area of a frame.
+    pub max_contact_area: f64,
+}
+
+/// The measures of a recording's frames (see the [module](self)).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measures {
+    /// Rows of the images.
+    pub rows: usize,
+    /// Columns of the images.
+    pub cols: usize,
+    /// The frames measured, `start..end`.
+    pub frames: Range<usize>,
+    /// The contact threshold in the file's units: a sensel is loaded at or above it (and above 0).
+    pub threshold: f64,
+    /// Peak-pressure image, `rows × cols` row-major (NaN where there is no sensor).
+    pub peak: Vec<f64>,
+    /// Pressure-time-integral image (NaN where there is no sensor).
+    pub pti: Vec<f64>,
+    /// Mean-pressure image over each sensel's loaded frames (NaN where there is no sensor).
+    pub mean: Vec<f64>,
+    /// The values.
+    pub values: MeasureValues,
+    /// Their units.
+    pub units: MeasureUnits,
+}
+
+impl Measures {
+    /// The measures of frames `frames` of `recording` (every frame of that range), counting a
+    /// sensel as loaded above 0 and at or above `threshold` (file units).
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when `frames` is empty or reaches past the recording, or
+    /// when no sensor is loaded in any of them ([`RecordingMeasures::finish`]).
+    pub fn of_recording(
+        recording: &Recording,
+        threshold: f64,
+        frames: Range<usize>,
+    ) -> Result<Self> {
+        if frames.start >= frames.end || frames.end > recording.n_frames() {
+            return Err(IoError::invalid(format!(
+                "frame range {}..{} is empty or beyond the {} of the recording",
+                frames.start,
+                frames.end,
+                crate::counted(recording.n_frames(), "frame")
+            )));
+        }
+        let mut m = RecordingMeasures::new(recording, threshold)?;
+        for t in frames {
+            let values = recording
+                .frame_slice(t)
+                .ok_or_else(|| IoError::invalid(format!("frame {t} is beyond the recording")))?;
+            m.add_frame(t, &values)?;
+        }
+        m.finish()
+    }
+
+    /// The values with their names and units, in the order the outputs list them.
+    pub fn quantities(&self) -> Vec<Quantity> {
+        let (u, v) = (&self.units, &self.values);
+        let q = |name, value, unit: String| Quantity { name, value, unit };
+        vec![
+            q("peak_pressure", v.peak_pressure, u.pressure.clone()),
+            q("pti_max", v.pti_max, format!("{}·{}", u.pressure, u.time)),
+            q(
+                if u.is_force {
+                    "peak_force"
+                } else {
+                    "peak_load"
+                },
+                v.peak_force,
+                u.force.clone(),
+            ),
+            q(
+                if u.is_force {
+                    "fti"
+                } else {
+                    "load_time_integral"
+                },
+                v.fti,
+                format!("{}·{}", u.force, u.time),
+            ),
+            q("contact_time", v.contact_time, u.time.clone()),
+            q("max_contact_area", v.max_contact_area, u.area.clone()),
+        ]
+    }
+}
+
+/// The measures of a recording taken frame by frame: [`add_frame`](Self::add_frame) each frame
+/// in order, then [`finish`](Self::finish). Holds three images and one force per frame.
+///
+/// ```
+/// use pedo_io::measures::RecordingMeasures;
+/// use pedo_io::Recording;
+/// // 3 frames of 1 × 2 sensels of 0.5 cm × 0.5 cm at 100 Hz, in kPa.
+/// let data = vec![0.0, 100.0, 200.0, 100.0, 0.0, 0.0];
+/// let rec = Recording::new(3, 1, 2, data, vec![true; 2])?
+///     .with_pitch_mm([5.0, 5.0])?
+///     .with_frame_rate(100.0)?
+///     .with_units("kPa");
+/// let mut m = RecordingMeasures::new(&rec, 0.0)?;
+/// for t in 0..3 {
+///     m.add_frame(t, &rec.frame_slice(t).unwrap())?;
+/// }
+/// let m = m.finish()?;
+/// assert_eq!(m.peak, vec![200.0, 100.0]);
+/// assert!((m.pti[1] - 2.0).abs() < 1e-12); // (100 + 100) kPa × 0.01 s
+/// assert_eq!(m.mean, vec![200.0, 100.0]);
+/// assert!((m.values.peak_force - 7.5).abs() < 1e-12); // 300 kPa × 25 mm²
+/// assert!((m.values.fti - 0.1).abs() < 1e-12); // (2.5 + 7.5) N × 0.01 s
+/// # Ok::<(), pedo_io::IoError>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct RecordingMeasures {
+    rows: usize,
+    cols: usize,
+    mask: Vec<bool>,
+    threshold: f64,
+    /// File units → reported pressure unit.
+    pressure_factor: f64,
+    /// Sum of loaded file values → force (or load).
+    force_factor: f64,
+    /// Area of one sensel in the area unit.
+    area: f64,
+    /// Time between frames in the time unit.
+    dt: f64,
+    units: MeasureUnits,
+    peak: Vec<f64>,
+    sum: Vec<f64>,
+    loaded: Vec<u32>,
+    forces: Vec<f64>,
+    max_contact: usize,
+    first: Option<usize>,
+    next: usize,
+}
+
+impl RecordingMeasures {
+    /// Starts the measures of frames of `recording` (its size, mask, pitch, rate and units; a
+    /// header-only recording of a streamed run will do), counting a sensel as loaded above 0
+    /// and at or above `threshold` (file units).
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when `threshold` is not finite.
+    pub fn new(recording: &Recording, threshold: f64) -> Result<Self> {
+        if !threshold.is_finite() {
+            return Err(IoError::invalid(format!(
+                "contact threshold {threshold} is not finite"
+            )));
+        }
+        let per = recording.rows() * recording.cols();
+        let area = recording.sensel_area();
+        Ok(Self {
+            rows: recording.rows(),
+            cols: recording.cols(),
+            mask: recording.sensor_mask().to_vec(),
+            threshold,
+            pressure_factor: kpa_per_unit(&recording.units).unwrap_or(1.0),
+            force_factor: recording.force_factor().unwrap_or(area.unwrap_or(1.0)),
+            area: area.unwrap_or(1.0),
+            dt: recording.dt_s.unwrap_or(1.0),
+            units: MeasureUnits::of(recording),
+            peak: vec![0.0; per],
+            sum: vec![0.0; per],
+            loaded: vec![0; per],
+            forces: Vec::new(),
+            max_contact: 0,
+            first: None,
+            next: 0,
+        })
+    }
+
+    /// Adds frame number `frame` (`rows × cols` values, row-major, in the file's units; values
+    /// at missing sensors are ignored). Frames come in order, one after the other.
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when `values` is not `rows × cols` long, when `frame` does not
+    /// follow the frame added before, or when a value at an existing sensor is not finite.
+    pub fn add_frame(&mut self, frame: usize, values: &[f32]) -> Result<()> {
+        if values.len() != self.mask.len() {
+            return Err(IoError::invalid(format!(
+                "a frame of {}x{} needs {} values, got {}",
+                self.rows,
+                self.cols,
+                self.mask.len(),
+                values.len()
+            )));
+        }
+        if self.first.is_some() && frame != self.next {
+            return Err(IoError::invalid(format!(
+                "frame {frame} measured after frame {}: frames are measured one after the other",
+                self.next - 1
+            )));
+        }
+        let bad = (values.iter().zip(&self.mask)).position(|(v, &m)| m && !v.is_finite());
+        if let Some(i) = bad {
+            return Err(IoError::invalid(format!(
+                "frame {frame}, row {}, column {} is not finite",
+                i / self.cols,
+                i % self.cols
+            )));
+        }
+        let (mut load, mut contact) = (0.0f64, 0usize);
+        for (i, &v) in values.iter().enumerate() {
+            if !self.mask[i] {
+                continue;
+            }
+            let v = f64::from(v);
+            if v > self.peak[i] {
+                self.peak[i] = v;
+            }
+            if v > 0.0 && v >= self.threshold {
+                self.sum[i] += v;
+                self.loaded[i] += 1;
+                load += v;
+                contact += 1;
+            }
+        }
+        self.forces.push(load * self.force_factor);
+        self.max_contact = self.max_contact.max(contact);
+        if self.first.is_none() {
+            self.first = Some(frame);
+        }
+        self.next = frame + 1;
+        Ok(())
+    }
+
+    /// The measures of the frames added.
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when no frame was added, or when no sensor is loaded in any
+    /// frame (a recording without contact has no peak, PTI or contact time).
+    pub fn finish(self) -> Result<Measures> {
+        let Some(first) = self.first else {
+            return Err(IoError::invalid("no frame to measure"));
+        };
+        let frames = first..self.next;
+        if self.max_contact == 0 {
+            return Err(IoError::invalid(format!(
+                "no sensor is loaded (above 0 and at or above {}) in frames {}..{}: \
+                 the recording has no contact to measure",
+                self.threshold, frames.start, frames.end
+            )));
+        }
+        let (k, dt) = (self.pressure_factor, self.dt);
+        let image = |f: &dyn Fn(usize) -> f64| -> Vec<f64> {
+            (0..self.mask.len())
+                .map(|i| if self.mask[i] { f(i) } else { f64::NAN })
+                .collect()
+        };
+        let peak = image(&|i| self.peak[i] * k);
+        let pti = image(&|i| self.sum[i] * k * dt);
+        let mean = image(&|i| match self.loaded[i] {
+            0 => 0.0,
+            n => self.sum[i] * k / f64::from(n),
+        });
+        let finite_max = |v: &[f64]| {
+            v.iter()
+                .copied()
+                .filter(|x| x.is_finite())
+                .fold(0.0, f64::max)
+        };
+        let (lo, hi) = self
+            .forces
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), &f| {
+                (lo.min(f), hi.max(f))
+            });
+        let threshold = lo + CONTACT_FORCE_FRACTION * (hi - lo);
+        let above = |f: &f64| *f > threshold;
+        // Some frame has load, so the largest force exceeds the threshold.
+        let a = self.forces.iter().position(above).unwrap_or(0);
+        let b = self.forces.iter().rposition(above).unwrap_or(a);
+        let values = MeasureValues {
+            peak_pressure: finite_max(&peak),
+            pti_max: finite_max(&pti),
+            peak_force: hi,
+            fti: self.forces.iter().sum::<f64>() * dt,
+            contact_time: (b - a + 1) as f64 * dt,
+            contact_frames: (first + a, first + b),
+            contact_force_threshold: threshold,
+            max_contact_area: self.max_contact as f64 * self.area,
+        };
+        Ok(Measures {
+            rows: self.rows,
+            cols: self.cols,
+            frames,
+            threshold: self.threshold,
+            peak,
+            pti,
+            mean,
+            values,
+            units: self.units,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 4 frames of 2 × 2, one sensor missing (row 1, column 1), 0.5 cm pitch, 50 Hz, N/cm².
+    fn small() -> Recording {
+        #[rustfmt::skip]
+        let data = vec![
+            0.0, 0.0, 0.0, 9.0,
+            1.0, 2.0, 0.5, 9.0,
+            3.0, 0.0, 1.0, 9.0,
+            0.0, 0.0, 0.0, 9.0,
+        ];
+        let mask = vec![true, true, true, false];
+        Recording::new(4, 2, 2, data, mask)
+            .unwrap()
+            .with_pitch_mm([5.0, 5.0])
+            .unwrap()
+            .with_frame_rate(50.0)
+            .unwrap()
+            .with_units("N/cm2")
+    }
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() <= 1e-12 * b.abs().max(1.0)
+    }
+
+    #[test]
+    fn hand_computed_measures_of_a_small_recording() {
+        let rec = small();
+        let m = Measures::of_recording(&rec, 0.0, 0..4).unwrap();
+        // 1 N/cm² = 10 kPa; dt = 0.02 s; sensel 25 mm²: F = Σ N/cm² × 10 kPa × 25 mm² × 1e-3.
+        assert_eq!(m.units.pressure, "kPa");
+        assert_eq!(m.peak[..3], [30.0, 20.0, 10.0]);
+        assert!(m.peak[3].is_nan() && m.pti[3].is_nan() && m.mean[3].is_nan());
+        for (got, want) in m.pti[..3]
+            .iter()
+            .zip([(10.0 + 30.0) * 0.02, 0.4, (5.0 + 10.0) * 0.02])
+        {
+            assert!(close(*got, want), "{got} vs {want}");
+        }
+        assert_eq!(m.mean[..3], [20.0, 20.0, 7.5]);
+        // Forces: frame 1: 3.5 N/cm² → 0.875 N; frame 2: 4 → 1.0 N; frames 0 and 3: 0.
+        let v = &m.values;
+        assert!(close(v.peak_force, 1.0));
+        assert!(close(v.fti, (0.875 + 1.0) * 0.02));
+        // Threshold 0 + 10 % of 1 N: frames 1 and 2, 2 × 0.02 s.
+        assert!(close(v.contact_force_threshold, 0.1));
+        assert_eq!(v.contact_frames, (1, 2));
+        assert!(close(v.contact_time, 0.04));
+        assert_eq!(v.max_contact_area, 75.0);
+        assert_eq!(v.peak_pressure, 30.0);
+        assert!(close(v.pti_max, 0.8));
+        let names: Vec<_> = m
+            .quantities()
+            .iter()
+            .map(|q| (q.name, q.unit.clone()))
+            .collect();
+        assert_eq!(
+            names,
+            [
+                ("peak_pressure", "kPa".into()),
+                ("pti_max", "kPa·s".into()),
+                ("peak_force", "N".into()),
+                ("fti", "N·s".into()),
+                ("contact_time", "s".into()),
+                ("max_contact_area", "mm²".into()),
+            ]
+        );
+    }
+
+    #[test]
+    fn the_threshold_and_the_frame_range_bound_what_counts() {
+        let rec = small();
+        // At or above 1: the 0.5 leaves PTI, mean, force and area.
+        let m = Measures::of_recording(&rec, 1.0, 1..3).unwrap();
+        assert_eq!(m.frames, 1..3);
+        assert_eq!(m.mean[2], 10.0);
+        assert!(close(m.pti[2], 0.2));
+        // The peak counts every value, as the frames table's peak pressure.
+        assert_eq!(m.peak[2], 10.0);
+        assert_eq!(m.values.max_contact_area, 50.0);
+        assert!(close(m.values.peak_force, 1.0));
+        // Forces 0.75 and 1.0: threshold 0.75 + 0.025; only frame 2 exceeds it.
+        assert_eq!(m.values.contact_frames, (2, 2));
+        assert!(close(m.values.contact_time, 0.02));
+    }
+
+    #[test]
+    fn unknown_units_rate_and_pitch_name_the_values_by_what_they_are() {
+        let mut rec = small();
+        rec.units = String::new();
+        rec.dt_s = None;
+        rec.pitch_mm = None;
+        let m = Measures::of_recording(&rec, 0.0, 0..4).unwrap();
+        let q = m.quantities();
+        let got: Vec<_> = q.iter().map(|q| (q.name, q.unit.as_str())).collect();
+        assert_eq!(
+            got,
+            [
+                ("peak_pressure", "file units"),
+                ("pti_max", "file units·frame"),
+                ("peak_load", "file units·sensel"),
+                ("load_time_integral", "file units·sensel·frame"),
+                ("contact_time", "frame"),
+                ("max_contact_area", "sensel"),
+            ]
+        );
+        assert_eq!(m.peak[0], 3.0);
+        assert!(close(m.values.fti, 7.5));
+        assert_eq!(m.values.contact_time, 2.0);
+        // Stated but unknown units are named as written; the pitch gives a load in units·mm².
+        rec.units = "raw".into();
+        rec.pitch_mm = Some([5.0, 5.0]);
+        let m = Measures::of_recording(&rec, 0.0, 0..4).unwrap();
+        assert_eq!(m.quantities()[2].unit, "raw·mm²");
+        assert!(close(m.values.peak_force, 100.0));
+    }
+
+    #[test]
+    fn empty_recordings_and_bad_frames_are_clear_errors() {
+        let rec = Recording::new(2, 1, 2, vec![0.0; 4], vec![true; 2]).unwrap();
+        let e = Measures::of_recording(&rec, 0.0, 0..2)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no sensor is loaded"), "{e}");
+        let e = Measures::of_recording(&rec, 0.0, 1..1)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("empty or beyond"), "{e}");
+        let e = RecordingMeasures::new(&rec, 0.0)
+            .unwrap()
+            .finish()
+            .unwrap_err();
+        assert!(e.to_string().contains("no frame"), "{e}");
+        let mut m = RecordingMeasures::new(&rec, 0.0).unwrap();
+        assert!(m
+            .add_frame(0, &[1.0])
+            .unwrap_err()
+            .to_string()
+            .contains("needs 2 values"));
+        m.add_frame(3, &[1.0, 0.0]).unwrap();
+        let e = m.add_frame(5, &[1.0, 0.0]).unwrap_err().to_string();
+        assert!(e.contains("after frame 3"), "{e}");
+        let e = m.add_frame(4, &[f32::NAN, 0.0]).unwrap_err().to_string();
+        assert!(e.contains("row 0, column 0 is not finite"), "{e}");
+        assert!(RecordingMeasures::new(&rec, f64::NAN).is_err());
+    }
+}

@@ -1,0 +1,172 @@
+//! The figures of a recording's measures ([`pedo_io::measures`]): the peak-pressure and the
+//! pressure-time-integral images, drawn like the other figures (axes in mm when the pitch is
+//! known, a colour bar with the units, the bundled font).
+
+use super::*;
+use pedo_io::measures::Measures;
+
+/// Which image of [`Measures`] a [`MeasureFigure`] draws.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MeasureImage {
+    /// The peak-pressure image ([`Measures::peak`]).
+    Peak,
+    /// The pressure-time-integral image ([`Measures::pti`]).
+    Pti,
+}
+
+impl MeasureImage {
+    /// The file stem the run folder writes it as: `peak` or `pti` (`peak.png`, `pti.png`).
+    pub fn stem(self) -> &'static str {
+        match self {
+            MeasureImage::Peak => "peak",
+            MeasureImage::Pti => "pti",
+        }
+    }
+}
+
+/// One image of a recording's measures over its sensels, coloured by value with its colour bar.
+#[derive(Debug, Clone)]
+pub struct MeasureFigure<'a> {
+    /// The measures drawn.
+    pub measures: &'a Measures,
+    /// Which of their images.
+    pub image: MeasureImage,
+    /// The recording's scale and timing ([`FigureAxes::of_recording`]).
+    pub axes: &'a FigureAxes,
+}
+
+impl MeasureFigure<'_> {
+    /// The figure as PNG bytes.
+    pub fn to_png(&self) -> Result<Vec<u8>> {
+        render_png(&self.layout()?)
+    }
+
+    /// The figure as a standalone SVG document.
+    pub fn to_svg(&self) -> Result<String> {
+        render_svg(&self.layout()?)
+    }
+
+    fn layout(&self) -> Result<Layout> {
+        let m = self.measures;
+        let (values, what, unit, top) = match self.image {
+            MeasureImage::Peak => (
+                &m.peak,
+                "peak pressure",
+                m.units.pressure.clone(),
+                m.values.peak_pressure,
+            ),
+            MeasureImage::Pti => (
+                &m.pti,
+                "pressure-time integral",
+                format!("{}·{}", m.units.pressure, m.units.time),
+                m.values.pti_max,
+            ),
+        };
+        if values.len() != m.rows * m.cols {
+            return Err(IoError::invalid(
+                "the measure image does not fill its rows and columns",
+            ));
+        }
+        let corner = |c: f64, r: f64| self.axes.to_plot([c, r]);
+        let mut bounds = Bounds::of([
+            corner(-0.5, -0.5),
+            corner(m.cols as f64 - 0.5, m.rows as f64 - 0.5),
+        ])
+        .ok_or_else(|| IoError::invalid("the measure image has no finite extent"))?;
+        bounds.pad = false;
+        let cells: Vec<([(f64, f64); 2], f64)> = (0..m.rows * m.cols)
+            .filter(|&i| values[i].is_finite() && values[i] > 0.0)
+            .map(|i| {
+                let (row, col) = ((i / m.cols) as f64, (i % m.cols) as f64);
+                let (x0, y0) = corner(col - 0.5, row - 0.5);
+                let (x1, y1) = corner(col + 0.5, row + 0.5);
+                ([(x0, y0), (x1, y1)], values[i])
+            })
+            .collect();
+        let image = (top.is_finite() && top > 0.0).then(|| PressureImage {
+            cells,
+            max: top,
+            label: format!("{what} ({unit})"),
+            marks: Vec::new(),
+        });
+        let frames = match (
+            self.axes.time_s(m.frames.start),
+            self.axes.time_s(m.frames.end),
+        ) {
+            (Some(t0), Some(t1)) => format!(
+                "frames {}\u{2013}{} ({t0:.3}\u{2013}{t1:.3} s)",
+                m.frames.start,
+                m.frames.end - 1
+            ),
+            _ => format!("frames {}\u{2013}{}", m.frames.start, m.frames.end - 1),
+        };
+        let mut title = what.to_string();
+        if let Some(first) = title.get_mut(0..1) {
+            first.make_ascii_uppercase();
+        }
+        let subtitle = format!("{frames}; maximum {} {unit}", format_value(top));
+        Ok(Layout::new(
+            bounds,
+            self.axes,
+            title,
+            subtitle,
+            Vec::new(),
+            image,
+            Vec::new(),
+        ))
+    }
+}
+
+/// A value with four significant digits, as a subtitle states it.
+fn format_value(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let decimals = (3 - v.abs().log10().floor() as i32).clamp(0, 6) as usize;
+    format!("{v:.decimals$}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pedo_io::Recording;
+
+    #[test]
+    fn peak_and_pti_figures_have_colour_bars_with_units_and_mm_axes() {
+        let data: Vec<f32> = (0..2 * 6 * 4).map(|i| (i % 7) as f32 * 10.0).collect();
+        let rec = Recording::new(2, 6, 4, data, vec![true; 24])
+            .unwrap()
+            .with_pitch_mm([5.0, 5.0])
+            .unwrap()
+            .with_frame_rate(100.0)
+            .unwrap()
+            .with_units("kPa");
+        let m = Measures::of_recording(&rec, 0.0, 0..2).unwrap();
+        let axes = FigureAxes::of_recording(&rec);
+        let svg = |image| {
+            MeasureFigure {
+                measures: &m,
+                image,
+                axes: &axes,
+            }
+            .to_svg()
+            .unwrap()
+        };
+        let peak = svg(MeasureImage::Peak);
+        assert!(peak.contains("peak pressure (kPa)"), "colour bar label");
+        assert!(peak.contains("x (mm)") && peak.contains("y (mm)"));
+        assert!(peak.contains("Peak pressure"));
+        let pti = svg(MeasureImage::Pti);
+        assert!(pti.contains("pressure-time integral (kPa·s)"));
+        let png = MeasureFigure {
+            measures: &m,
+            image: MeasureImage::Pti,
+            axes: &axes,
+        }
+        .to_png()
+        .unwrap();
+        assert!(png.starts_with(b"\x89PNG"));
+        assert_eq!(format_value(812.345), "812.3");
+        assert_eq!(format_value(0.012345), "0.01235");
+    }
+}
