@@ -1327,10 +1327,19 @@ fn process(
     if let Some(e) = broken_link_error(path) {
         return Err(e);
     }
+    // The SHA-256 recorded must be of the bytes parsed: the input is read, then hashed, and
+    // must not change from before the read to after the hash (nor, streamed, to its last frame).
+    let stamp = FileStamp::of(path);
     let (mut recording, mut file_frames) =
         read_for_run(path, &opts.read, &opts.params, &opts.outputs)?;
     *read = Some((recording.n_frames(), RowUnits::of(&recording)));
     let input = InputInfo::of_path(path)?.with_layout(&opts.read, recording.format)?;
+    stamp.check(path)?;
+    let mut unchanged = file_frames.as_mut().map(|inner| Unchanged {
+        inner,
+        path,
+        stamp: &stamp,
+    });
     // The unit options are applied even when the options fail (a frame range beyond the
     // recording): the units an error row gives are those the run would have used.
     let options = run_options(&mut recording, &opts.params);
@@ -1370,7 +1379,7 @@ fn process(
     let plan = RunPlan {
         input: &input,
         params: &opts.params,
-        frames: file_frames.as_mut().map(|f| f as &mut dyn FrameSource),
+        frames: unchanged.as_mut().map(|f| f as &mut dyn FrameSource),
         folder: folder.as_deref(),
         outputs: &opts.outputs,
         timings: &[("read", read_s)],
@@ -1380,6 +1389,63 @@ fn process(
     let mut row = row_of_summary(path, output, &summary, started);
     row.message = run_note(&counts, options.model);
     Ok(row)
+}
+
+/// The size and modification time of a recording's file (of every file of a folder, in name
+/// order), to tell that it changed while it was read; `None` if they cannot be read.
+#[derive(Debug, Clone, PartialEq)]
+struct FileStamp(Option<Vec<(PathBuf, u64, Option<std::time::SystemTime>)>>);
+
+impl FileStamp {
+    fn of(path: &Path) -> Self {
+        let one = |p: PathBuf| {
+            let m = std::fs::metadata(&p).ok()?;
+            Some((p, m.len(), m.modified().ok()))
+        };
+        if path.is_dir() {
+            let Ok(entries) = std::fs::read_dir(path) else {
+                return Self(None);
+            };
+            let mut files: Vec<PathBuf> = entries
+                .flatten()
+                .map(|e| e.path())
+                .filter(|p| p.is_file())
+                .collect();
+            files.sort();
+            Self(files.into_iter().map(one).collect())
+        } else {
+            Self(one(path.to_path_buf()).map(|f| vec![f]))
+        }
+    }
+
+    /// Fails if the file at `path` is no longer as stamped.
+    fn check(&self, path: &Path) -> Result<()> {
+        if FileStamp::of(path) == *self {
+            return Ok(());
+        }
+        Err(IoError::Io {
+            path: path.display().to_string(),
+            source: std::io::Error::other(
+                "changed while it was being read (its size or modification time differ); run it again once nothing writes it",
+            ),
+        })
+    }
+}
+
+/// The frames of a streamed run, each window checked against the stamp its file had before it
+/// was read, so that the tables are of the bytes `summary.json`'s SHA-256 is of.
+struct Unchanged<'a> {
+    inner: &'a mut dyn FrameSource,
+    path: &'a Path,
+    stamp: &'a FileStamp,
+}
+
+impl FrameSource for Unchanged<'_> {
+    fn window(&mut self, recording: &Recording, w0: usize, w1: usize) -> Result<Recording> {
+        let window = self.inner.window(recording, w0, w1)?;
+        self.stamp.check(self.path)?;
+        Ok(window)
+    }
 }
 
 /// The options of a run as `summary.json` records them.
@@ -1756,6 +1822,60 @@ mod tests {
         }
         let other = std::thread::spawn(move || worker().0).join().unwrap();
         assert_ne!(other, first, "each calling thread has its own pool");
+    }
+
+    /// Frames of a recording, the file at `path` appended to before each window (another
+    /// program still writing it).
+    struct Appending<'a>(&'a Path);
+
+    impl FrameSource for Appending<'_> {
+        fn window(&mut self, recording: &Recording, w0: usize, w1: usize) -> Result<Recording> {
+            use std::io::Write;
+            let mut f = std::fs::OpenOptions::new()
+                .append(true)
+                .open(self.0)
+                .unwrap();
+            f.write_all(b"0,0\n").unwrap();
+            Recording::new(
+                w1 - w0,
+                recording.rows(),
+                recording.cols(),
+                vec![0.0; (w1 - w0) * recording.rows() * recording.cols()],
+                vec![true; recording.rows() * recording.cols()],
+            )
+        }
+    }
+
+    #[test]
+    fn a_file_changed_during_a_streamed_run_fails_it() {
+        let dir = std::env::temp_dir().join(format!("pedo-study-stamp-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("walk.csv");
+        std::fs::write(&path, "1,2\n3,4\n").unwrap();
+        let recording = Recording::new(4, 2, 2, vec![1.0; 16], vec![true; 4]).unwrap();
+        let stamp = FileStamp::of(&path);
+        stamp.check(&path).unwrap();
+        // Unchanged: the windows go through.
+        let mut still = Appending(&dir.join("other.csv"));
+        std::fs::write(dir.join("other.csv"), "").unwrap();
+        let mut frames = Unchanged {
+            inner: &mut still,
+            path: &path,
+            stamp: &stamp,
+        };
+        assert_eq!(frames.window(&recording, 0, 2).unwrap().n_frames(), 2);
+        // Appended to while its frames are read: the window fails, naming the file.
+        let mut appending = Appending(&path);
+        let mut frames = Unchanged {
+            inner: &mut appending,
+            path: &path,
+            stamp: &stamp,
+        };
+        let e = frames.window(&recording, 2, 4).unwrap_err().to_string();
+        assert!(e.contains("changed while it was being read"), "{e}");
+        assert!(e.contains("walk.csv"), "{e}");
+        assert!(stamp.check(&path).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
