@@ -255,13 +255,17 @@ fn folder_name(path: &Path, k: usize) -> String {
     }
 }
 
-/// Whether folder name `name` is one the recording at `path` may take ([`folder_name`]).
-fn is_folder_name_of(path: &Path, name: &str) -> bool {
-    (0..4).any(|k| folder_name(path, k) == name)
-        || name
-            .strip_prefix(&folder_name(path, 3))
-            .and_then(|rest| rest.strip_prefix('-'))
-            .is_some_and(|n| n.parse::<usize>().is_ok_and(|n| n >= 2))
+/// Whether a folder name is one the recording at `path` may take ([`folder_name`]); its
+/// names are made once.
+fn is_folder_name_of(path: &Path) -> impl Fn(&str) -> bool {
+    let names: Vec<String> = (0..4).map(|k| folder_name(path, k)).collect();
+    move |name| {
+        names.iter().any(|n| n == name)
+            || name
+                .strip_prefix(names[3].as_str())
+                .and_then(|rest| rest.strip_prefix('-'))
+                .is_some_and(|n| n.parse::<usize>().is_ok_and(|n| n >= 2))
+    }
 }
 
 /// Whether a study row or folder whose recording was given as `other` is about another file
@@ -293,22 +297,27 @@ fn output_names_with(
     previous: &[StudyRow],
     folder_name: &dyn Fn(&Path, usize) -> String,
 ) -> Vec<String> {
-    use std::collections::HashSet;
+    use std::collections::{HashMap, HashSet};
+    // The paths of the previous rows by folder, made once (a study may have thousands).
+    let mut by_folder: HashMap<String, Vec<&str>> = HashMap::new();
+    for r in previous {
+        by_folder.entry(row_folder(r)).or_default().push(&r.path);
+    }
     let mut taken: HashSet<String> = HashSet::new();
     let mut names = Vec::with_capacity(paths.len());
     for path in paths {
         let file = path.canonicalize().ok();
         let claimed_by_other = |name: &str| {
-            previous
-                .iter()
-                .any(|r| row_folder(r) == name && is_other_file(&r.path, file.as_deref()))
-                || out
-                    .and_then(|out| read_json(&out.join(name).join("summary.json")))
-                    .is_some_and(|summary| {
-                        summary["input"]["file"]
-                            .as_str()
-                            .is_some_and(|other| is_other_file(other, file.as_deref()))
-                    })
+            by_folder.get(name).is_some_and(|rows| {
+                rows.iter()
+                    .any(|other| is_other_file(other, file.as_deref()))
+            }) || out
+                .and_then(|out| read_json(&out.join(name).join("summary.json")))
+                .is_some_and(|summary| {
+                    summary["input"]["file"]
+                        .as_str()
+                        .is_some_and(|other| is_other_file(other, file.as_deref()))
+                })
         };
         let own = previous_row(previous, path)
             .and_then(|r| r.output.clone())
@@ -738,14 +747,10 @@ pub fn previous_row<'a>(previous: &'a [StudyRow], path: &Path) -> Option<&'a Stu
     let file = path.canonicalize().ok();
     let same_file =
         |r: &&StudyRow| file.is_some() && Path::new(&r.path).canonicalize().ok() == file;
+    let own = is_folder_name_of(path);
     previous
         .iter()
-        .find(|r| {
-            same_file(r)
-                && r.output
-                    .as_deref()
-                    .is_some_and(|n| is_folder_name_of(path, n))
-        })
+        .find(|r| r.output.as_deref().is_some_and(&own) && same_file(r))
         .or_else(|| {
             let folder = output_name(path);
             previous
@@ -1903,9 +1908,11 @@ mod tests {
         let names = output_names_with(None, &paths, &[], &all_same);
         assert_eq!(names, ["walk.asf-x", "walk.asf-y-2", "walk.asf-y-3"]);
         // A name of a longer form is one of the path's own.
-        assert!(is_folder_name_of(&paths[1], &folder_name(&paths[1], 2)));
-        assert!(is_folder_name_of(&paths[1], &folder_name(&paths[1], 5)));
-        assert!(!is_folder_name_of(&paths[1], &folder_name(&paths[0], 1)));
+        let own = is_folder_name_of(&paths[1]);
+        assert!(own(&folder_name(&paths[1], 2)));
+        assert!(own(&folder_name(&paths[1], 5)));
+        assert!(!own(&folder_name(&paths[0], 1)));
+        assert!(!own(&format!("{}-1", folder_name(&paths[1], 3))));
     }
 
     #[test]
