@@ -300,8 +300,12 @@ fn output_names_with(
     use std::collections::{HashMap, HashSet};
     // The paths of the previous rows by folder, made once (a study may have thousands).
     let mut by_folder: HashMap<String, Vec<&str>> = HashMap::new();
+    let mut by_output: HashMap<&str, Vec<&str>> = HashMap::new();
     for r in previous {
         by_folder.entry(row_folder(r)).or_default().push(&r.path);
+        if let Some(output) = &r.output {
+            by_output.entry(output).or_default().push(&r.path);
+        }
     }
     let mut taken: HashSet<String> = HashSet::new();
     let mut names = Vec::with_capacity(paths.len());
@@ -319,8 +323,29 @@ fn output_names_with(
                         .is_some_and(|other| is_other_file(other, file.as_deref()))
                 })
         };
-        let own = previous_row(previous, path)
-            .and_then(|r| r.output.clone())
+        // The folder of this recording's previous row (as `previous_row` finds it).
+        let same_file = |other: &&str| {
+            file.is_some() && Path::new(other).canonicalize().ok().as_deref() == file.as_deref()
+        };
+        let own = (0..)
+            .map(|k| (k, folder_name(path, k)))
+            .take_while(|(k, name)| *k < 4 || by_output.contains_key(name.as_str()))
+            .find(|(_, name)| {
+                by_output
+                    .get(name.as_str())
+                    .is_some_and(|rows| rows.iter().any(same_file))
+            })
+            .map(|(_, name)| name)
+            .or_else(|| {
+                let short = folder_name(path, 0);
+                by_output
+                    .get(short.as_str())
+                    .is_some_and(|rows| {
+                        rows.iter()
+                            .any(|other| !is_other_file(other, file.as_deref()))
+                    })
+                    .then_some(short)
+            })
             .filter(|name| !taken.contains(name));
         let name = own.unwrap_or_else(|| {
             (0..)
@@ -688,6 +713,11 @@ pub fn run_study(
     // pool. Not a rayon pool: a rayon worker waiting for its recording steals the next one and
     // would start it on the same busy pool (or, with a new pool, run more than `jobs` at once).
     let names = output_names(opts.out.as_deref(), paths, &previous);
+    // The previous rows by folder, for each recording's own (made once: thousands of rows).
+    let mut by_folder: std::collections::HashMap<String, Vec<&StudyRow>> = Default::default();
+    for r in &previous {
+        by_folder.entry(row_folder(r)).or_default().push(r);
+    }
     let next = AtomicUsize::new(0);
     let done: Mutex<Vec<Option<StudyRow>>> = Mutex::new(vec![None; paths.len()]);
     let cancel = opts.cancel.as_ref();
@@ -698,7 +728,12 @@ pub fn run_study(
         let index = next.fetch_add(1, Ordering::Relaxed);
         let Some(path) = paths.get(index) else { break };
         let name = &names[index];
-        let before = previous_row(&previous, path).filter(|r| row_folder(r) == *name);
+        let file = path.canonicalize().ok();
+        let before = by_folder.get(name).and_then(|rows| {
+            rows.iter()
+                .copied()
+                .find(|r| !is_other_file(&r.path, file.as_deref()))
+        });
         let report = |fraction| progress(StudyEvent::Progress { index, fraction });
         let output = opts.out.as_ref().map(|_| name.clone());
         let row = on_one_thread(|| run_recording_as(path, opts, output, before, &report));
