@@ -260,6 +260,51 @@ fn a_study_folder_is_never_written_over_other_files_and_no_input_is_an_error() {
 }
 
 #[test]
+fn a_batch_into_a_study_folder_in_use_is_refused_in_one_line_and_writes_nothing() {
+    let base = temp_dir("locked");
+    let input = study_inputs(&base);
+    let study = base.join("study");
+    // Another batch holds the study folder (this test process, through the library).
+    let held = pedo_study::lock_study_folder(&study).unwrap();
+    let recording = input.join("tekscan.csv");
+    let args = [
+        "batch",
+        recording.to_str().unwrap(),
+        "--out",
+        study.to_str().unwrap(),
+        "--figures",
+        "none",
+        "--report",
+        "none",
+    ];
+    let out = pedomatch(&args);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.starts_with("pedomatch: error: "), "{stderr}");
+    assert!(stderr.contains(study.to_str().unwrap()), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "in use by another pedomatch batch (process {})",
+            std::process::id()
+        )),
+        "{stderr}"
+    );
+    assert!(!study.join("study.csv").exists() && !study.join("study.json").exists());
+    // Released: the same command runs.
+    drop(held);
+    let out = pedomatch(&args);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(study.join("study.csv").is_file());
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+#[test]
 fn tables_parquet_writes_parquet_files_and_an_unknown_format_is_a_usage_error() {
     let base = temp_dir("parquet");
     let input = study_inputs(&base);

@@ -312,9 +312,17 @@ fn row_from_json(v: &Value) -> Option<StudyRow> {
 }
 
 /// The name of a recording's folder under the study folder: its file name and 8 hex digits of
-/// the SHA-256 of its absolute path, so that `a/walk.asf` and `b/walk.asf` never share a folder
-/// and a second run finds the same one.
+/// the SHA-256 of its absolute path, so that `a/walk.asf` and `b/walk.asf` get different
+/// folders and a second run finds the same one. Two recordings whose names would still be the
+/// same (the same file name and the same 8 digits) are told apart by [`output_names`].
 pub fn output_name(path: &Path) -> String {
+    folder_name(path, 0)
+}
+
+/// The `k`-th name the folder of the recording at `path` may take ([`output_names`]): its file
+/// name and 8 (`k` = 0), 16, 32 or 64 hex digits of the SHA-256 of its absolute path, then the
+/// 64 digits and `-2`, `-3`, ….
+fn folder_name(path: &Path, k: usize) -> String {
     let absolute = std::fs::canonicalize(path)
         .or_else(|_| std::path::absolute(path))
         .unwrap_or_else(|_| path.to_path_buf());
@@ -324,7 +332,114 @@ pub fn output_name(path: &Path) -> String {
         .map(|n| n.to_string_lossy().into_owned())
         .filter(|n| !n.is_empty() && !n.starts_with('.'))
         .unwrap_or_else(|| "recording".into());
-    format!("{name}-{}", &hash[..8])
+    match k {
+        0..=3 => format!("{name}-{}", &hash[..8 << k]),
+        _ => format!("{name}-{hash}-{}", k - 2),
+    }
+}
+
+/// Whether a folder name is one the recording at `path` may take ([`folder_name`]); its
+/// names are made once.
+fn is_folder_name_of(path: &Path) -> impl Fn(&str) -> bool {
+    let names: Vec<String> = (0..4).map(|k| folder_name(path, k)).collect();
+    move |name| {
+        names.iter().any(|n| n == name)
+            || name
+                .strip_prefix(names[3].as_str())
+                .and_then(|rest| rest.strip_prefix('-'))
+                .is_some_and(|n| n.parse::<usize>().is_ok_and(|n| n >= 2))
+    }
+}
+
+/// Whether a study row or folder whose recording was given as `other` is about another file
+/// than `file` (the canonical path of a recording): `other` names an existing file, and not
+/// that one. A path that no longer resolves (a recording moved, a relative path given from
+/// another folder) is taken for the same recording, as before names were checked.
+fn is_other_file(other: &str, file: Option<&Path>) -> bool {
+    match (Path::new(other).canonicalize().ok(), file) {
+        (Some(other), Some(file)) => other != file,
+        _ => false,
+    }
+}
+
+/// The folder names of the recordings at `paths` under study folder `out` (`None`: names
+/// only), in order, no two the same: each recording's [`output_name`], unless that name is
+/// already taken by an earlier recording of `paths`, by a row of the study's previous table
+/// (`previous`) about another file, or by a folder in `out` whose `summary.json` names another
+/// file: then a longer one (16, 32, 64 hex digits, then a count). A recording that has a row in
+/// `previous` keeps that row's folder, so that a resumed study finds its folders again.
+pub fn output_names(out: Option<&Path>, paths: &[PathBuf], previous: &[StudyRow]) -> Vec<String> {
+    output_names_with(out, paths, previous, &folder_name)
+}
+
+/// [`output_names`], the `k`-th name of a path given by `folder_name` (a test makes every
+/// recording's first name the same).
+fn output_names_with(
+    out: Option<&Path>,
+    paths: &[PathBuf],
+    previous: &[StudyRow],
+    folder_name: &dyn Fn(&Path, usize) -> String,
+) -> Vec<String> {
+    use std::collections::{HashMap, HashSet};
+    // The paths of the previous rows by folder, made once (a study may have thousands).
+    let mut by_folder: HashMap<String, Vec<&str>> = HashMap::new();
+    let mut by_output: HashMap<&str, Vec<&str>> = HashMap::new();
+    for r in previous {
+        by_folder.entry(row_folder(r)).or_default().push(&r.path);
+        if let Some(output) = &r.output {
+            by_output.entry(output).or_default().push(&r.path);
+        }
+    }
+    let mut taken: HashSet<String> = HashSet::new();
+    let mut names = Vec::with_capacity(paths.len());
+    for path in paths {
+        let file = path.canonicalize().ok();
+        let claimed_by_other = |name: &str| {
+            by_folder.get(name).is_some_and(|rows| {
+                rows.iter()
+                    .any(|other| is_other_file(other, file.as_deref()))
+            }) || out
+                .and_then(|out| read_json(&out.join(name).join("summary.json")))
+                .is_some_and(|summary| {
+                    summary["input"]["file"]
+                        .as_str()
+                        .is_some_and(|other| is_other_file(other, file.as_deref()))
+                })
+        };
+        // The folder of this recording's previous row (as `previous_row` finds it).
+        let same_file = |other: &&str| {
+            file.is_some() && Path::new(other).canonicalize().ok().as_deref() == file.as_deref()
+        };
+        let own = (0..)
+            .map(|k| (k, folder_name(path, k)))
+            .take_while(|(k, name)| *k < 4 || by_output.contains_key(name.as_str()))
+            .find(|(_, name)| {
+                by_output
+                    .get(name.as_str())
+                    .is_some_and(|rows| rows.iter().any(same_file))
+            })
+            .map(|(_, name)| name)
+            .or_else(|| {
+                let short = folder_name(path, 0);
+                by_output
+                    .get(short.as_str())
+                    .is_some_and(|rows| {
+                        rows.iter()
+                            .any(|other| !is_other_file(other, file.as_deref()))
+                    })
+                    .then_some(short)
+            })
+            .filter(|name| !taken.contains(name));
+        let name = own.unwrap_or_else(|| {
+            (0..)
+                .map(|k| folder_name(path, k))
+                .find(|name| !taken.contains(name) && !claimed_by_other(name))
+                .unwrap_or_else(|| folder_name(path, 0))
+        });
+        taken.insert(name.clone());
+        names.push(name);
+    }
+    names
 }
 
 /// The recordings named by `inputs`, in order, each once:
@@ -654,14 +769,24 @@ pub fn run_study(
     opts.params.validate()?;
     // Made before anything runs: options that cannot be listed would fail every recording.
     let provenance = study_provenance(paths, opts)?;
-    let previous_json = match &opts.out {
-        Some(out) => prepare_study_folder(out)?,
-        None => None,
+    // Held until the study table is written: a second batch into `out` is refused.
+    let (previous_json, _lock) = match &opts.out {
+        Some(out) => {
+            let lock = lock_study_folder(out)?;
+            (prepare_study_folder(out)?, Some(lock))
+        }
+        None => (None, None),
     };
-    let previous = previous_json
+    let mut previous = previous_json
         .as_ref()
         .map(rows_of_study_json)
         .unwrap_or_default();
+    if let Some(out) = &opts.out {
+        // Under the lock: what a killed run left is no longer anyone's.
+        sweep_staging(out);
+        let found = rows_of_unlisted_folders(out, &previous);
+        previous.extend(found);
+    }
     let jobs = if opts.jobs == 0 {
         std::thread::available_parallelism().map_or(1, |n| n.get())
     } else {
@@ -670,6 +795,12 @@ pub fn run_study(
     // `jobs` plain threads take the recordings in turn, each running one on its own one-thread
     // pool. Not a rayon pool: a rayon worker waiting for its recording steals the next one and
     // would start it on the same busy pool (or, with a new pool, run more than `jobs` at once).
+    let names = output_names(opts.out.as_deref(), paths, &previous);
+    // The previous rows by folder, for each recording's own (made once: thousands of rows).
+    let mut by_folder: std::collections::HashMap<String, Vec<&StudyRow>> = Default::default();
+    for r in &previous {
+        by_folder.entry(row_folder(r)).or_default().push(r);
+    }
     let next = AtomicUsize::new(0);
     let done: Mutex<Vec<Option<StudyRow>>> = Mutex::new(vec![None; paths.len()]);
     let cancel = opts.cancel.as_ref();
@@ -679,9 +810,16 @@ pub fn run_study(
         }
         let index = next.fetch_add(1, Ordering::Relaxed);
         let Some(path) = paths.get(index) else { break };
-        let before = previous_row(&previous, path);
+        let name = &names[index];
+        let file = path.canonicalize().ok();
+        let before = by_folder.get(name).and_then(|rows| {
+            rows.iter()
+                .copied()
+                .find(|r| !is_other_file(&r.path, file.as_deref()))
+        });
         let report = |fraction| progress(StudyEvent::Progress { index, fraction });
-        let row = on_one_thread(|| run_recording(path, opts, before, &report));
+        let output = opts.out.as_ref().map(|_| name.clone());
+        let row = on_one_thread(|| run_recording_as(path, opts, output, before, &report));
         progress(StudyEvent::Finished { index, row: &row });
         done.lock().unwrap_or_else(|e| e.into_inner())[index] = Some(row);
     };
@@ -721,10 +859,22 @@ pub fn run_study(
 }
 
 /// The row of recording `path` in a study's previous table: the row of its folder
-/// ([`output_name`]), however the path was spelled then (`data/x.asf`, `./data/x.asf`).
+/// ([`output_names`]), however the path was spelled then (`data/x.asf`, `./data/x.asf`), and
+/// not a row of another file that took the same folder name.
 pub fn previous_row<'a>(previous: &'a [StudyRow], path: &Path) -> Option<&'a StudyRow> {
-    let folder = output_name(path);
-    previous.iter().find(|r| row_folder(r) == folder)
+    let file = path.canonicalize().ok();
+    let same_file =
+        |r: &&StudyRow| file.is_some() && Path::new(&r.path).canonicalize().ok() == file;
+    let own = is_folder_name_of(path);
+    previous
+        .iter()
+        .find(|r| r.output.as_deref().is_some_and(&own) && same_file(r))
+        .or_else(|| {
+            let folder = output_name(path);
+            previous
+                .iter()
+                .find(|r| row_folder(r) == folder && !is_other_file(&r.path, file.as_deref()))
+        })
 }
 
 /// The folder a row is about: its `output`, or, for a row without one (a recording that
@@ -752,7 +902,9 @@ pub fn kept_rows(
     rows: &[StudyRow],
 ) -> Vec<StudyRow> {
     use std::collections::HashSet;
-    let this_run: HashSet<String> = paths.iter().map(|p| output_name(p)).collect();
+    let this_run: HashSet<String> = output_names(Some(out), paths, previous)
+        .into_iter()
+        .collect();
     let files: HashSet<PathBuf> = paths.iter().filter_map(|p| p.canonicalize().ok()).collect();
     // This run's inputs are read from their folders only if a kept row's path is gone.
     let inputs: std::cell::OnceCell<HashSet<Value>> = std::cell::OnceCell::new();
@@ -1036,6 +1188,135 @@ fn prepare_study_folder(out: &Path) -> Result<Option<Value>> {
     Ok(read_json(&out.join("study.json")))
 }
 
+/// The rows of the complete recording folders of study folder `out` that no row of `previous`
+/// names (a run killed after writing them but before its `study.json`), in name order, rebuilt
+/// from their `summary.json`, so that the next table loses none of them.
+fn rows_of_unlisted_folders(out: &Path, previous: &[StudyRow]) -> Vec<StudyRow> {
+    use std::collections::HashSet;
+    let listed: HashSet<&str> = previous
+        .iter()
+        .filter_map(|r| r.output.as_deref())
+        .collect();
+    let Ok(entries) = std::fs::read_dir(out) else {
+        return Vec::new();
+    };
+    let mut names: Vec<String> = entries
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| !n.starts_with('.') && !listed.contains(n.as_str()))
+        .collect();
+    names.sort();
+    names
+        .into_iter()
+        .filter_map(|name| {
+            let folder = out.join(&name);
+            if !outdir::is_output(&folder) {
+                return None;
+            }
+            let summary = read_json(&folder.join("summary.json"))?;
+            let file = summary["input"]["file"].as_str()?;
+            let mut row = row_of_summary(Path::new(file), Some(&name), &summary, Instant::now());
+            row.wall_time_s = summary["timings_s"]
+                .as_object()
+                .map_or(0.0, |t| t.values().filter_map(Value::as_f64).sum());
+            row.message =
+                "found in its folder (the run that wrote it stopped before the study table)".into();
+            Some(row)
+        })
+        .collect()
+}
+
+/// Removes what runs killed while writing into study folder `out` left: recording folders
+/// being staged (`.NAME.pedomatch-tmp-PID`) and study tables being written
+/// (`.study.csv.tmp-PID`, …) of processes that no longer run.
+fn sweep_staging(out: &Path) {
+    let Ok(entries) = std::fs::read_dir(out) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let pid = name
+            .strip_prefix('.')
+            .and_then(|n| {
+                n.rsplit_once(".pedomatch-tmp-").or_else(|| {
+                    n.strip_prefix("study.")
+                        .and_then(|n| n.rsplit_once(".tmp-"))
+                })
+            })
+            .and_then(|(_, pid)| pid.parse::<u32>().ok());
+        if let Some(pid) = pid
+            && pid != std::process::id()
+            && !process_runs(pid)
+        {
+            let path = entry.path();
+            let _ = std::fs::remove_dir_all(&path).or_else(|_| std::fs::remove_file(&path));
+        }
+    }
+}
+
+/// Whether process `pid` runs on this machine (unknown off Unix: taken as ended).
+fn process_runs(pid: u32) -> bool {
+    #[cfg(unix)]
+    {
+        let Ok(pid) = libc::pid_t::try_from(pid) else {
+            return false;
+        };
+        // SAFETY: signal 0 sends nothing; it only checks that the process exists.
+        let r = unsafe { libc::kill(pid, 0) };
+        r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM)
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = pid;
+        false
+    }
+}
+
+/// The lock file of a study folder ([`lock_study_folder`]).
+const STUDY_LOCK: &str = ".pedomatch-study.lock";
+
+/// Takes the study folder `out` for this process (creating it, and checking that it is a study
+/// folder or empty): an advisory lock on its lock file `.pedomatch-study.lock`, which holds the
+/// process id of its holder, released when the file returned is dropped (or the process ends,
+/// however). Fails at once, naming the folder and the process holding it, when another batch
+/// holds it.
+pub fn lock_study_folder(out: &Path) -> Result<std::fs::File> {
+    use std::io::Write;
+    prepare_study_folder(out)?;
+    let path = out.join(STUDY_LOCK);
+    let io = |e| IoError::Io {
+        path: path.display().to_string(),
+        source: e,
+    };
+    let mut file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .map_err(io)?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            let holder = std::fs::read_to_string(&path)
+                .ok()
+                .and_then(|s| s.trim().parse::<u32>().ok())
+                .map_or(String::new(), |pid| format!(" (process {pid})"));
+            return Err(IoError::Output {
+                path: out.display().to_string(),
+                msg: format!(
+                    "study folder in use by another pedomatch batch{holder}; wait for it to end or choose another output folder"
+                ),
+            });
+        }
+        Err(std::fs::TryLockError::Error(e)) => return Err(io(e)),
+    }
+    file.set_len(0)
+        .and_then(|()| writeln!(file, "{}", std::process::id()))
+        .map_err(io)?;
+    Ok(file)
+}
+
 /// The rows of a `study.json`: its `rows`, or, written by a pedomatch before it recorded what
 /// produced them, the bare list of rows it was (an old study folder still resumes).
 fn rows_of_study_json(json: &Value) -> Vec<StudyRow> {
@@ -1077,8 +1358,10 @@ fn write_study_table(
         TableFormat::Csv => Ok(table.to_csv().into_bytes()),
         TableFormat::Parquet => pedo_output::parquet_bytes(&table),
     };
-    write(name, bytes)?;
+    // `study.json` first: the next run reads its rows from it (and from the folders it lacks),
+    // so a run killed between the two renames loses no row.
     write("study.json", Ok(pretty(json).into_bytes()))?;
+    write(name, bytes)?;
     let _ = std::fs::remove_file(out.join(other));
     Ok(())
 }
@@ -1099,8 +1382,22 @@ pub fn run_recording(
     previous: Option<&StudyRow>,
     progress: &(dyn Fn(f64) + Sync),
 ) -> StudyRow {
+    let output = opts.out.as_deref().map(|out| {
+        let previous: Vec<StudyRow> = previous.into_iter().cloned().collect();
+        output_names(Some(out), &[path.to_path_buf()], &previous).remove(0)
+    });
+    run_recording_as(path, opts, output, previous, progress)
+}
+
+/// [`run_recording`] into folder `output` of the study folder (a name of [`output_names`]).
+fn run_recording_as(
+    path: &Path,
+    opts: &StudyOptions,
+    output: Option<String>,
+    previous: Option<&StudyRow>,
+    progress: &(dyn Fn(f64) + Sync),
+) -> StudyRow {
     let started = Instant::now();
-    let output = opts.out.as_ref().map(|_| output_name(path));
     // Set once the recording is read, so that an error row still says its frames and units.
     let mut read = None;
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
@@ -1164,10 +1461,19 @@ fn process(
     if let Some(e) = broken_link_error(path) {
         return Err(e);
     }
+    // The SHA-256 recorded must be of the bytes parsed: the input is read, then hashed, and
+    // must not change from before the read to after the hash (nor, streamed, to its last frame).
+    let stamp = FileStamp::of(path);
     let (mut recording, mut file_frames) =
         read_for_run(path, &opts.read, &opts.params, &opts.outputs)?;
     *read = Some((recording.n_frames(), RowUnits::of(&recording)));
     let input = InputInfo::of_path(path)?.with_layout(&opts.read, recording.format)?;
+    stamp.check(path)?;
+    let mut unchanged = file_frames.as_mut().map(|inner| Unchanged {
+        inner,
+        path,
+        stamp: &stamp,
+    });
     // The unit options are applied even when the options fail (a frame range beyond the
     // recording): the units an error row gives are those the run would have used.
     let options = run_options(&mut recording, &opts.params);
@@ -1208,7 +1514,7 @@ fn process(
     let plan = RunPlan {
         input: &input,
         params: &opts.params,
-        frames: file_frames.as_mut().map(|f| f as &mut dyn FrameSource),
+        frames: unchanged.as_mut().map(|f| f as &mut dyn FrameSource),
         folder: folder.as_deref(),
         outputs: &opts.outputs,
         timings: &[("read", read_s)],
@@ -1218,6 +1524,63 @@ fn process(
     let mut row = row_of_summary(path, output, &summary, started);
     row.message = run_note(&counts, options.model);
     Ok(row)
+}
+
+/// The size and modification time of a recording's file (of every file of a folder, in name
+/// order), to tell that it changed while it was read; `None` if they cannot be read.
+#[derive(Debug, Clone, PartialEq)]
+struct FileStamp(Option<Vec<(PathBuf, u64, Option<std::time::SystemTime>)>>);
+
+impl FileStamp {
+    fn of(path: &Path) -> Self {
+        let one = |p: PathBuf| {
+            let m = std::fs::metadata(&p).ok()?;
+            Some((p, m.len(), m.modified().ok()))
+        };
+        if path.is_dir() {
+            let Ok(entries) = std::fs::read_dir(path) else {
+                return Self(None);
+            };
+            let mut files: Vec<PathBuf> = entries
+                .flatten()
+                .map(|e| e.path())
+                .filter(|p| p.is_file())
+                .collect();
+            files.sort();
+            Self(files.into_iter().map(one).collect())
+        } else {
+            Self(one(path.to_path_buf()).map(|f| vec![f]))
+        }
+    }
+
+    /// Fails if the file at `path` is no longer as stamped.
+    fn check(&self, path: &Path) -> Result<()> {
+        if FileStamp::of(path) == *self {
+            return Ok(());
+        }
+        Err(IoError::Io {
+            path: path.display().to_string(),
+            source: std::io::Error::other(
+                "changed while it was being read (its size or modification time differ); run it again once nothing writes it",
+            ),
+        })
+    }
+}
+
+/// The frames of a streamed run, each window checked against the stamp its file had before it
+/// was read, so that the tables are of the bytes `summary.json`'s SHA-256 is of.
+struct Unchanged<'a> {
+    inner: &'a mut dyn FrameSource,
+    path: &'a Path,
+    stamp: &'a FileStamp,
+}
+
+impl FrameSource for Unchanged<'_> {
+    fn window(&mut self, recording: &Recording, w0: usize, w1: usize) -> Result<Recording> {
+        let window = self.inner.window(recording, w0, w1)?;
+        self.stamp.check(self.path)?;
+        Ok(window)
+    }
 }
 
 /// The options of a run as `summary.json` records them.
@@ -1603,6 +1966,92 @@ mod tests {
         }
         let other = std::thread::spawn(move || worker().0).join().unwrap();
         assert_ne!(other, first, "each calling thread has its own pool");
+    }
+
+    /// Frames of a recording, the file at `path` appended to before each window (another
+    /// program still writing it).
+    struct Appending<'a>(&'a Path);
+
+    impl FrameSource for Appending<'_> {
+        fn window(&mut self, recording: &Recording, w0: usize, w1: usize) -> Result<Recording> {
+            use std::io::Write;
+            let mut f = std::fs::OpenOptions::new()
+                .append(true)
+                .open(self.0)
+                .unwrap();
+            f.write_all(b"0,0\n").unwrap();
+            Recording::new(
+                w1 - w0,
+                recording.rows(),
+                recording.cols(),
+                vec![0.0; (w1 - w0) * recording.rows() * recording.cols()],
+                vec![true; recording.rows() * recording.cols()],
+            )
+        }
+    }
+
+    #[test]
+    fn a_file_changed_during_a_streamed_run_fails_it() {
+        let dir = std::env::temp_dir().join(format!("pedo-study-stamp-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("walk.csv");
+        std::fs::write(&path, "1,2\n3,4\n").unwrap();
+        let recording = Recording::new(4, 2, 2, vec![1.0; 16], vec![true; 4]).unwrap();
+        let stamp = FileStamp::of(&path);
+        stamp.check(&path).unwrap();
+        // Unchanged: the windows go through.
+        let mut still = Appending(&dir.join("other.csv"));
+        std::fs::write(dir.join("other.csv"), "").unwrap();
+        let mut frames = Unchanged {
+            inner: &mut still,
+            path: &path,
+            stamp: &stamp,
+        };
+        assert_eq!(frames.window(&recording, 0, 2).unwrap().n_frames(), 2);
+        // Appended to while its frames are read: the window fails, naming the file.
+        let mut appending = Appending(&path);
+        let mut frames = Unchanged {
+            inner: &mut appending,
+            path: &path,
+            stamp: &stamp,
+        };
+        let e = frames.window(&recording, 2, 4).unwrap_err().to_string();
+        assert!(e.contains("changed while it was being read"), "{e}");
+        assert!(e.contains("walk.csv"), "{e}");
+        assert!(stamp.check(&path).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn recordings_forced_to_one_folder_name_get_different_folders() {
+        // Every recording's first name the same: the later ones get their longer names.
+        let forced = |p: &Path, k: usize| match k {
+            0 => "walk.asf-00000000".to_string(),
+            k => folder_name(p, k),
+        };
+        let paths: Vec<PathBuf> = ["a/walk.asf", "b/walk.asf", "c/walk.asf"]
+            .iter()
+            .map(PathBuf::from)
+            .collect();
+        let names = output_names_with(None, &paths, &[], &forced);
+        assert_eq!(names[0], "walk.asf-00000000");
+        assert_eq!(names[1], folder_name(&paths[1], 1));
+        assert_eq!(names[2], folder_name(&paths[2], 1));
+        assert_eq!(names[1].len(), "walk.asf-".len() + 16);
+        assert_ne!(names[1], names[2]);
+        // Every name taken but the counted ones: a count tells them apart.
+        let all_same = |_: &Path, k: usize| match k {
+            0..=3 => "walk.asf-x".to_string(),
+            k => format!("walk.asf-y-{}", k - 2),
+        };
+        let names = output_names_with(None, &paths, &[], &all_same);
+        assert_eq!(names, ["walk.asf-x", "walk.asf-y-2", "walk.asf-y-3"]);
+        // A name of a longer form is one of the path's own.
+        let own = is_folder_name_of(&paths[1]);
+        assert!(own(&folder_name(&paths[1], 2)));
+        assert!(own(&folder_name(&paths[1], 5)));
+        assert!(!own(&folder_name(&paths[0], 1)));
+        assert!(!own(&format!("{}-1", folder_name(&paths[1], 3))));
     }
 
     #[test]
