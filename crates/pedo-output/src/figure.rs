@@ -843,23 +843,7 @@ impl Drawing for CurvesLayout {
         root.fill(&WHITE).map_err(figure_error)?;
         let (w, h) = root.dim_in_pixel();
         let (top, body) = root.split_vertically(TITLE_HEIGHT);
-        fn centred(size: f64, color: &RGBColor) -> TextStyle<'_> {
-            TextStyle::from((FONT, size).into_font())
-                .color(color)
-                .pos(Pos::new(HPos::Center, VPos::Center))
-        }
-        top.draw_text(
-            &self.title,
-            &centred(TITLE_SIZE, &BLACK),
-            (w as i32 / 2, 18),
-        )
-        .map_err(figure_error)?;
-        top.draw_text(
-            &self.subtitle,
-            &centred(SUBTITLE_SIZE, &COLOR_SUBTITLE),
-            (w as i32 / 2, 42),
-        )
-        .map_err(figure_error)?;
+        draw_title(&top, w, &self.title, &self.subtitle)?;
         let finite = |v: &&f64| v.is_finite();
         let (x0, x1) = self
             .x
@@ -1215,23 +1199,7 @@ impl Layout {
         root.fill(&WHITE).map_err(figure_error)?;
         let (w, _) = root.dim_in_pixel();
         let (top, body) = root.split_vertically(TITLE_HEIGHT);
-        fn centred(size: f64, color: &RGBColor) -> TextStyle<'_> {
-            TextStyle::from((FONT, size).into_font())
-                .color(color)
-                .pos(Pos::new(HPos::Center, VPos::Center))
-        }
-        top.draw_text(
-            &self.title,
-            &centred(TITLE_SIZE, &BLACK),
-            (w as i32 / 2, 18),
-        )
-        .map_err(figure_error)?;
-        top.draw_text(
-            &self.subtitle,
-            &centred(SUBTITLE_SIZE, &COLOR_SUBTITLE),
-            (w as i32 / 2, 42),
-        )
-        .map_err(figure_error)?;
+        draw_title(&top, w, &self.title, &self.subtitle)?;
         let (chart_area, rest) = body.split_horizontally(self.chart_width());
         self.draw_chart(&chart_area)?;
         let legend_area = match &self.image {
@@ -1472,6 +1440,26 @@ fn tick_formatter(range: f64, max_ticks: usize) -> impl Fn(&f64) -> String {
             s
         }
     }
+}
+
+/// A figure's title and subtitle, centred in the band `top` of a figure `width` pixels wide.
+fn draw_title<DB: DrawingBackend>(
+    top: &DrawingArea<DB, Shift>,
+    width: u32,
+    title: &str,
+    subtitle: &str,
+) -> Result<()> {
+    fn centred(size: f64, color: &RGBColor) -> TextStyle<'_> {
+        TextStyle::from((FONT, size).into_font())
+            .color(color)
+            .pos(Pos::new(HPos::Center, VPos::Center))
+    }
+    let x = width as i32 / 2;
+    top.draw_text(title, &centred(TITLE_SIZE, &BLACK), (x, 18))
+        .map_err(figure_error)?;
+    top.draw_text(subtitle, &centred(SUBTITLE_SIZE, &COLOR_SUBTITLE), (x, 42))
+        .map_err(figure_error)?;
+    Ok(())
 }
 
 fn figure_error(e: impl std::fmt::Display) -> IoError {
