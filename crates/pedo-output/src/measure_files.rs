@@ -100,13 +100,12 @@ pub fn write_measures(
     dir.write("measures.json", json.as_bytes())?;
     let axes = FigureAxes::of_recording(recording);
     // The peak-pressure image is a summary figure of its own, with the contact outlines.
-    for image in [MeasureImage::Pti] {
-        let fig = MeasureFigure {
-            measures: m,
-            image,
-            axes: &axes,
-        };
-        write_figure(dir, image.stem(), kinds, || fig.to_png(), || fig.to_svg())?;
-    }
+    let fig = MeasureFigure {
+        measures: m,
+        image: MeasureImage::Pti,
+        axes: &axes,
+    };
+    let stem = MeasureImage::Pti.stem();
+    write_figure(dir, stem, kinds, || fig.to_png(), || fig.to_svg())?;
     Ok(())
 }
