@@ -49,9 +49,10 @@ pub struct RunArgs {
     /// XML/JSON, footscan export, .npy/.npz, a CSV grid, a PNG/TIFF image, a folder of images or a
     /// numbered pattern (`walk_%03d.png`); the format is detected from the content.
     pub recording: PathBuf,
-    /// Output folder.
-    #[arg(long, default_value = "pedomatch-out")]
-    pub out: PathBuf,
+    /// Output folder [default: pedomatch-out, which a run without --out never takes from the
+    /// results of another input].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
     #[command(flatten)]
     pub read: crate::option_args::ReadArgs,
     #[command(flatten)]
@@ -78,15 +79,15 @@ pub fn run(args: RunArgs) -> Result<(), CliError> {
     let (recording, frames) =
         pedo_output::read_for_run(&args.recording, &read, &params, &args.options.outputs())?;
     let input = InputInfo::of_path(&args.recording)?.with_layout(&read, recording.format)?;
-    execute(
-        recording,
-        frames,
-        &input,
-        &args.out,
-        &args.options,
-        params,
-        t,
-    )
+    let out = match args.out {
+        Some(out) => out,
+        None => {
+            let out = PathBuf::from(pedo_output::DEFAULT_RUN_FOLDER);
+            pedo_output::refuse_other_input(&out, &input)?;
+            out
+        }
+    };
+    execute(recording, frames, &input, &out, &args.options, params, t)
 }
 
 pub fn demo(args: DemoArgs) -> Result<(), CliError> {

@@ -1341,3 +1341,66 @@ fn the_measures_of_the_walk_agree_with_its_frames_table() {
     assert_png(&out.join("peak.png"));
     assert_png(&out.join("pti.png"));
 }
+
+#[test]
+fn a_run_without_out_never_replaces_the_results_of_another_input() {
+    let dir = temp_dir("default-out");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let walk = root.join("examples/data/FrasP01L.asf");
+    let emed = root.join("crates/pedo-io/tests/data/emed-test-1-10.lst");
+    let run = |args: &[&std::ffi::OsStr]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_pedomatch"))
+            .current_dir(&dir)
+            .arg("run")
+            .args(args)
+            .args(["--figures", "none", "--report", "none"])
+            .output()
+            .unwrap()
+    };
+    let out = dir.join("pedomatch-out");
+    let first = run(&[emed.as_os_str()]);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let before = std::fs::read(out.join("summary.json")).unwrap();
+    // The same input again replaces its own results.
+    let again = run(&[emed.as_os_str()]);
+    assert!(
+        again.status.success(),
+        "{}",
+        String::from_utf8_lossy(&again.stderr)
+    );
+    // Another input is refused, with one line naming the earlier input, the folder untouched.
+    let other = run(&[walk.as_os_str()]);
+    assert_eq!(other.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&other.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("emed-test-1-10.lst") && err.contains("--out"),
+        "{err}"
+    );
+    let summary = read_json(&out.join("summary.json"));
+    assert!(summary["input"]["file"]
+        .as_str()
+        .unwrap()
+        .ends_with("emed-test-1-10.lst"));
+    assert_eq!(
+        summary["input"],
+        serde_json::from_slice::<serde_json::Value>(&before).unwrap()["input"]
+    );
+    // Naming the folder replaces it, as with any --out.
+    let named = run(&[walk.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+    assert!(
+        named.status.success(),
+        "{}",
+        String::from_utf8_lossy(&named.stderr)
+    );
+    let summary = read_json(&out.join("summary.json"));
+    assert!(summary["input"]["file"]
+        .as_str()
+        .unwrap()
+        .ends_with("FrasP01L.asf"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1194,3 +1194,39 @@ pub fn report_page(run: &RunRecord<'_>, summary: &Value) -> Result<String> {
     };
     crate::html_report::run_report(run.recording, run.result, &info)
 }
+
+/// The folder a run writes into when no folder is named (`pedomatch run` without `--out`).
+pub const DEFAULT_RUN_FOLDER: &str = "pedomatch-out";
+
+/// Refuses to replace `folder` when it holds the output of another input than `input`: what a
+/// run into the default folder ([`DEFAULT_RUN_FOLDER`]) checks, so that two runs of two
+/// recordings without `--out` never silently replace each other's results. A folder that does
+/// not exist, holds no `summary.json`, or holds the output of the same bytes (same SHA-256) is
+/// fine; a folder named explicitly is replaced by the usual rules of [`OutDir`].
+///
+/// # Errors
+/// [`IoError::Output`] naming the folder, the other input and how to keep both.
+pub fn refuse_other_input(folder: &Path, input: &InputInfo) -> Result<()> {
+    let Ok(bytes) = std::fs::read(folder.join("summary.json")) else {
+        return Ok(());
+    };
+    let Ok(summary) = serde_json::from_slice::<Value>(&bytes) else {
+        return Ok(());
+    };
+    let earlier = &summary["input"];
+    let (Some(sha), Some(ours)) = (earlier["sha256"].as_str(), input.sha256.as_deref()) else {
+        return Ok(());
+    };
+    if sha == ours {
+        return Ok(());
+    }
+    let name = earlier["file"].as_str().unwrap_or("another recording");
+    Err(IoError::Output {
+        path: folder.display().to_string(),
+        msg: format!(
+            "holds the results of another input ({name}); give --out DIR to keep both, or \
+             --out {} to replace them",
+            folder.display()
+        ),
+    })
+}
