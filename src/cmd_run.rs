@@ -61,9 +61,10 @@ pub struct RunArgs {
 
 #[derive(Args)]
 pub struct DemoArgs {
-    /// Output folder.
-    #[arg(long, default_value = "pedomatch-out")]
-    pub out: PathBuf,
+    /// Output folder [default: pedomatch-out, which a run without --out never takes from the
+    /// results of another input].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
     #[command(flatten)]
     pub options: RunOptionsArgs,
 }
@@ -79,14 +80,7 @@ pub fn run(args: RunArgs) -> Result<(), CliError> {
     let (recording, frames) =
         pedo_output::read_for_run(&args.recording, &read, &params, &args.options.outputs())?;
     let input = InputInfo::of_path(&args.recording)?.with_layout(&read, recording.format)?;
-    let out = match args.out {
-        Some(out) => out,
-        None => {
-            let out = PathBuf::from(pedo_output::DEFAULT_RUN_FOLDER);
-            pedo_output::refuse_other_input(&out, &input)?;
-            out
-        }
-    };
+    let out = out_folder(args.out, &input)?;
     execute(recording, frames, &input, &out, &args.options, params, t)
 }
 
@@ -97,7 +91,21 @@ pub fn demo(args: DemoArgs) -> Result<(), CliError> {
     let name = "examples/data/FrasP01L.asf";
     let recording = pedo_io::parse_bytes(DEMO_RECORDING, pedo_io::Format::Asf, name)?;
     let input = InputInfo::of_bytes(name, DEMO_RECORDING);
-    execute(recording, None, &input, &args.out, &args.options, params, t)
+    let out = out_folder(args.out, &input)?;
+    execute(recording, None, &input, &out, &args.options, params, t)
+}
+
+/// The folder a run writes: `--out` as given, else the default folder unless it holds the
+/// results of another input ([`pedo_output::refuse_other_input`]).
+fn out_folder(out: Option<PathBuf>, input: &InputInfo) -> Result<PathBuf, CliError> {
+    match out {
+        Some(out) => Ok(out),
+        None => {
+            let out = PathBuf::from(pedo_output::DEFAULT_RUN_FOLDER);
+            pedo_output::refuse_other_input(&out, input)?;
+            Ok(out)
+        }
+    }
 }
 
 fn execute(
