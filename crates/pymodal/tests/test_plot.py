@@ -331,7 +331,7 @@ def test_plot_tracks_takes_each_steps_level_from_its_object_not_its_position():
 
 
 def test_readme_three_panels_do_not_overlap():
-    # The README's example: no two texts of different panels or colour bars overlap (titles,
+    # The example of docs/python.md: no two texts of different panels or colour bars overlap (titles,
     # axis labels, tick labels, colour bar labels, legends).
     rec = blob_recording(frames=6)
     a = max(pymodal.contours(rec.frames[2], spacing=1.0), key=len)
