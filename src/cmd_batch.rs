@@ -54,9 +54,7 @@ pub fn run(args: BatchArgs) -> Result<(), CliError> {
     let mut opts = StudyOptions {
         inputs: args.inputs.clone(),
         params,
-        read: pedo_io::ReadOptions {
-            layout: args.read.layout.clone(),
-        },
+        read: args.read.params(),
         out: Some(args.out.clone()),
         cancel: None,
         outputs: args.options.outputs(),

@@ -76,7 +76,7 @@ pub fn run(args: RunArgs) -> Result<(), CliError> {
     let t = Instant::now();
     let params = args.options.params();
     params.validate()?;
-    let read = args.read.options();
+    let read = args.read.params();
     let (recording, frames) =
         pedo_output::read_for_run(&args.recording, &read, &params, &args.options.outputs())?;
     let input = InputInfo::of_path(&args.recording)?.with_layout(&read, recording.format)?;

@@ -5,9 +5,9 @@
 //! (an absent option is the library's default) and the same help text.
 
 use clap::builder::{PossibleValuesParser, TypedValueParser};
-use clap::Args;
 use modal_core::options::{OptionSpec, OptionText};
 use modal_core::{Choice, MatchParams, OptionError, OptionKind, OptionSet};
+use pedo_io::formats::ReadOptions;
 use pedo_io::units::UnitOverrides;
 
 /// A clap parser for an enumerated option: the possible values are the Rust type's words, the
@@ -23,6 +23,7 @@ pub fn help(name: &str) -> String {
         .chain(modal_core::options::pair_option_specs())
         .chain(pedo_track::recording_option_specs())
         .chain(pedo_output::output_option_specs())
+        .chain(pedo_io::formats::read_option_specs())
         .find(|s| s.name == name)
         .map(|s| s.help_with_default())
         .unwrap_or_else(|| panic!("option {name} is not in the library's option tables"))
@@ -171,10 +172,11 @@ fn option_args(
                 let parse = move |s: &str| check(name, OptionText::Text(s)).map(|()| s.to_string());
                 // A value with a text form of its own may start with a hyphen (`-50..`);
                 // a number may be negative (refused by its rule, not as an unknown flag).
-                let arg = if spec.value_name.is_some() {
-                    arg.allow_hyphen_values(true)
-                } else {
-                    arg.allow_negative_numbers(true)
+                let arg = match spec.value_name {
+                    // A file's name: a following flag is never taken for it.
+                    Some("FILE") => arg,
+                    Some(_) => arg.allow_hyphen_values(true),
+                    None => arg.allow_negative_numbers(true),
                 };
                 vec![arg.long(long).value_parser(parse)]
             }
@@ -218,26 +220,12 @@ pub fn tri_state(on: bool, off: bool) -> Option<bool> {
     }
 }
 
-/// How a recording file is read.
-#[derive(Args, Clone, Debug, Default)]
-pub struct ReadArgs {
-    /// Sensor-layout table of a novel pedar insole (CSV lines `insole,sensor,x1,y1,...,x4,y4`,
-    /// `# unit: mm` or `cm` for a pitch; default: the bundled layout of the common insole).
-    /// Only pedar exports use it.
-    #[arg(long, value_name = "FILE")]
-    pub layout: Option<std::path::PathBuf>,
-}
+/// How a recording file is read (`--layout`).
+pub type ReadArgs = OptionArgs<ReadOptions>;
 
 impl ReadArgs {
     /// Reads the recording at `path` with these settings.
     pub fn read(&self, path: &std::path::Path) -> pedo_io::Result<pedo_io::Recording> {
-        pedo_io::formats::read_recording_with(path, &self.options())
-    }
-
-    /// These settings as the library's reading options.
-    pub fn options(&self) -> pedo_io::formats::ReadOptions {
-        pedo_io::formats::ReadOptions {
-            layout: self.layout.clone(),
-        }
+        pedo_io::formats::read_recording_with(path, &self.params)
     }
 }

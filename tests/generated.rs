@@ -20,6 +20,23 @@ fn groups() -> Vec<(&'static str, Vec<OptionSpec>)> {
     ]
 }
 
+/// The keyword groups of the Python signatures: [`groups`], then the options that only some
+/// functions take: the units alone (`read_recording`, `Recording.from_array`), how a file is
+/// read (`read_recording`, `batch`, `batch_row`), how a study runs (`batch`) and what of it one
+/// row takes (`batch_row` runs on one thread: no `jobs`).
+fn keyword_groups() -> Vec<(&'static str, Vec<OptionSpec>)> {
+    let study = pedo_study::study_option_specs();
+    let row = study.iter().filter(|s| s.name != "jobs").cloned().collect();
+    let mut g = groups();
+    g.extend([
+        ("units", pedo_io::units::unit_option_specs()),
+        ("read", pedo_io::formats::read_option_specs()),
+        ("study", study),
+        ("row", row),
+    ]);
+    g
+}
+
 const UPDATE: &str = "UPDATE_GENERATED";
 const HOW: &str = "UPDATE_GENERATED=1 cargo test --test generated";
 
@@ -60,7 +77,7 @@ fn doc_line(s: &OptionSpec) -> String {
 
 fn keywords_rs() -> String {
     let mut groups_text = String::new();
-    for (group, specs) in groups() {
+    for (group, specs) in keyword_groups() {
         let names: Vec<&str> = specs.iter().map(|s| s.name).collect();
         let doc: Vec<String> = specs.iter().map(doc_line).collect();
         groups_text.push_str(&format!(
@@ -93,9 +110,8 @@ fn python_keywords_are_the_option_tables() {
 /// The stub's keyword lines of the groups, as `name: Optional[type] = None,`, indented by
 /// `indent` spaces.
 fn stub_lines(names: &[&str], indent: usize) -> String {
-    groups()
+    keyword_groups()
         .into_iter()
-        .chain([("units", pedo_io::units::unit_option_specs())])
         .filter(|(g, _)| names.contains(g))
         .flat_map(|(_, specs)| specs)
         .map(|s| {
@@ -113,9 +129,11 @@ fn type_stubs_are_the_option_tables() {
         ("match", &["match", "pair"][..], 4),
         ("run", &["match", "recording"][..], 4),
         ("run output", &["output"][..], 4),
-        ("batch output", &["output"][..], 4),
-        ("batch_row output", &["output"][..], 4),
-        ("read_recording", &["units"][..], 4),
+        ("batch study", &["study"][..], 4),
+        ("batch output", &["output", "read"][..], 4),
+        ("batch_row", &["row"][..], 4),
+        ("batch_row output", &["output", "read"][..], 4),
+        ("read_recording", &["units", "read"][..], 4),
         ("Recording.from_array", &["units"][..], 8),
     ] {
         let begin = format!("# @generated keywords of {function}:");
@@ -139,9 +157,11 @@ fn the_options_table_is_the_option_tables() {
     let mut table = String::from(
         "| option | CLI flag | Python keyword | values | default | meaning |\n|---|---|---|---|---|---|\n",
     );
-    // The study options (`batch`) besides the keyword groups.
+    // The reading (`--layout`) and study (`batch`) options besides the groups (whose run
+    // options hold the units).
+    let read = ("read", pedo_io::formats::read_option_specs());
     let study = ("study", pedo_study::study_option_specs());
-    for (group, specs) in groups().into_iter().chain([study]) {
+    for (group, specs) in groups().into_iter().chain([read, study]) {
         for s in specs {
             let flags: Vec<String> = s.cli_flags().iter().map(|f| format!("`{f}`")).collect();
             table.push_str(&format!(

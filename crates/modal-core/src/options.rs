@@ -166,6 +166,11 @@ pub trait OptionInput {
     fn material(&self, option: &'static str) -> Result<Material, Self::Error> {
         Ok(self.text(option)?.parse()?)
     }
+    /// A file's path: its text unless a front end has its own form (Python's `os.PathLike`).
+    /// Only the path: nothing here opens it.
+    fn path(&self, option: &'static str) -> Result<std::path::PathBuf, Self::Error> {
+        Ok(self.text(option)?.into())
+    }
     /// The value as the user wrote it, where a front end holds text (the command line): a type
     /// with a text form of its own (a frame range `10..60`, a pitch `7.62x5.08`) parses it.
     /// `None` where values come typed (Python), read by [`OptionInput::bounds`] and
@@ -321,6 +326,23 @@ impl OptionField for String {
     }
     fn value(&self) -> OptionValue {
         OptionValue::Word(self.clone())
+    }
+}
+
+/// A file named by the user (a sensor-layout table): read by [`OptionInput::path`], recorded as
+/// its text.
+impl OptionField for std::path::PathBuf {
+    fn python_type() -> String {
+        "Path".into()
+    }
+    fn value_name() -> Option<&'static str> {
+        Some("FILE")
+    }
+    fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
+        input.path(option)
+    }
+    fn value(&self) -> OptionValue {
+        OptionValue::Word(self.display().to_string())
     }
 }
 

@@ -405,33 +405,7 @@ impl TracksFigure<'_> {
     /// The run's events gathered as a [`TracksGather`].
     fn gathered(&self) -> Result<TracksGather> {
         let mut g = TracksGather::new(self.min_steps, self.max_tracks);
-        let objects = &self.result.objects;
-        let mut start = 0;
-        while start < objects.len() {
-            let frame = objects[start].frame;
-            let end = start
-                + objects[start..]
-                    .iter()
-                    .take_while(|o| o.frame == frame)
-                    .count();
-            g.frame_objects(frame, &objects[start..end])?;
-            start = end;
-        }
-        for (k, t) in self.result.all_tracks().enumerate() {
-            let steps = t
-                .steps
-                .iter()
-                .map(
-                    |&(o, n)| match objects.get(o).filter(|obj| n < obj.shape.len()) {
-                        Some(obj) => Ok((obj, n)),
-                        None => Err(IoError::invalid(format!(
-                            "track step ({o}, {n}) names no node"
-                        ))),
-                    },
-                )
-                .collect::<Result<Vec<_>>>()?;
-            g.track(k, &steps)?;
-        }
+        pedo_track::replay_result(self.result, &mut g)?;
         Ok(g)
     }
 }

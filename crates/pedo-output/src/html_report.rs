@@ -108,7 +108,7 @@ pub fn run_report(
         return Err(report_error("the recording has no frames"));
     }
     let mut gather = ReportGather::new(recording, info.frames);
-    gather.feed(result)?;
+    pedo_track::replay_result(result, &mut gather)?;
     gather.page(recording, &RunCounts::of(result), info)
 }
 
@@ -752,31 +752,6 @@ impl ReportGather {
         [round3(p[0] * self.pitch[0]), round3(p[1] * self.pitch[1])]
     }
 
-    /// Hands a whole run to the gathering, each kind of event in the engine's order.
-    fn feed(&mut self, result: &SequenceResult) -> Result<()> {
-        let objects = &result.objects;
-        let mut start = 0;
-        while start < objects.len() {
-            let frame = objects[start].frame;
-            let end = start
-                + objects[start..]
-                    .iter()
-                    .take_while(|o| o.frame == frame)
-                    .count();
-            self.frame_objects(frame, &objects[start..end])?;
-            start = end;
-        }
-        for p in &result.pairs {
-            self.pair(p, &objects[p.a], &objects[p.b])?;
-        }
-        for (k, t) in result.all_tracks().enumerate() {
-            let steps: Vec<(&SequenceObject, usize)> =
-                t.steps.iter().map(|&(o, n)| (&objects[o], n)).collect();
-            self.track(k, &steps)?;
-        }
-        Ok(())
-    }
-
     /// The report as a complete HTML page, once the run's events are in: `counts` gives its
     /// header's counts and skipped frames and pairs.
     pub fn page(
@@ -1193,7 +1168,7 @@ mod tests {
             first_object: None,
             isocontour: false,
         };
-        g.feed(r).unwrap();
+        pedo_track::replay_result(r, &mut g).unwrap();
         g.open_frame(shown)
     }
 

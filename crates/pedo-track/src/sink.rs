@@ -86,6 +86,24 @@ pub fn replay(
     sink.frames(start, &recording.measures_of(threshold, start..end))?;
     crate::stream::hand_values(recording, 0, start..end, sink)?;
     replay_frames(options, (start, end), &r.objects, sink)?;
+    replay_matches(r, sink)?;
+    Ok(RunCounts::of(r))
+}
+
+/// Hands the objects, pairs, tracks and reference pairs of a result already made to `sink`, in
+/// the engine's order, without the recording: each frame holding objects (frames without any
+/// are not handed, nor the frames' measures and values). For a writer that needs only these
+/// events (the tracks figure and the report, gathered from a whole result); [`replay`] hands
+/// every event.
+pub fn replay_result(r: &SequenceResult, sink: &mut dyn SequenceSink) -> Result<()> {
+    let mut frames: Vec<usize> = r.objects.iter().map(|o| o.frame).collect();
+    frames.dedup();
+    crate::stream::hand_frames(frames, &r.objects, sink)?;
+    replay_matches(r, sink)
+}
+
+/// The pairs, tracks and reference pairs of `r`, as [`replay`] hands them.
+fn replay_matches(r: &SequenceResult, sink: &mut dyn SequenceSink) -> Result<()> {
     for p in &r.pairs {
         sink.pair(p, &r.objects[p.a], &r.objects[p.b])?;
     }
@@ -97,7 +115,7 @@ pub fn replay(
     for (p, tracked) in r.reference_pairs.iter().zip(r.reference_tracked()) {
         sink.reference_pair(p, &r.objects[p.a], &r.objects[p.b], &tracked)?;
     }
-    Ok(RunCounts::of(r))
+    Ok(())
 }
 
 /// The [`SequenceSink::frame_objects`] events of `objects` (in frame order): every kept frame

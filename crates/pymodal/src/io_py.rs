@@ -152,6 +152,9 @@ impl PyRecording {
     ///
     /// Raises :class:`InputError` (a ``ValueError``) for arrays of the wrong shape or infinite
     /// values, :class:`OptionError` for a non-positive pitch or frame rate or unknown units.
+    // The unit keywords are spelled here, not taken from `crate::keywords` as the free
+    // functions' are: `#[pymethods]` sees no method a macro makes. The stub's keywords are
+    // generated from the declaration and `test_stubs.py` checks this signature against them.
     #[staticmethod]
     #[pyo3(signature = (frames, *, pitch_mm=None, frame_rate=None, units=None, mask=None))]
     fn from_array(
@@ -182,7 +185,14 @@ impl PyRecording {
         };
         // Checked like `run(units=...)`: a misspelt unit would silently turn forces in N into
         // the values' sum times mm².
-        let overrides = crate::options_py::units(pitch_mm, frame_rate, units)?;
+        let given = [
+            ("pitch_mm", pitch_mm),
+            ("frame_rate", frame_rate),
+            ("units", units),
+        ];
+        let overrides = crate::options_py::units(|name| {
+            given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v)
+        })?;
         let mut rec = Recording::from_array(t, h, w, data, mask).map_err(to_py)?;
         overrides.apply(&mut rec).map_err(to_py)?;
         Ok(Self { inner: rec })
@@ -380,36 +390,52 @@ impl PyRecording {
     }
 }
 
-/// Read a pressure recording: Tekscan ``.asf``, novel emed ``.lst``, CSV grid, NumPy ``.npy``
-/// (2-D or 3-D), PNG/TIFF (8/16-bit grayscale), a folder of images, or a numbered sequence
-/// (``"walk_%03d.png"``). The format is detected from the content and the extension.
-///
-/// ``pitch_mm`` (mm per sensel, a number or (x, y)) and ``frame_rate`` (Hz) set or override
-/// what the file says, as ``--pitch-mm`` and ``--frame-rate`` do on the command line, and
-/// ``units`` the pressure units (``--units``: kPa, Pa, MPa, N/cm², N/mm², psi, bar or mmHg)
-/// for formats that store none (``.npy``, ``.npz``, CSV), so that forces come out in newtons;
-/// ``layout`` is a pedar sensor-layout table (``--layout``; default: the bundled insole).
-///
-/// Raises ``FileNotFoundError`` (an ``OSError``) if the file does not exist, other ``OSError``
-/// subclasses if it cannot be read, and :class:`FormatError` (a ``ValueError``) naming the file
-/// (and line, for text formats) if it is corrupt, truncated or of no known format.
-#[pyfunction]
-#[pyo3(signature = (path, *, pitch_mm=None, frame_rate=None, units=None, layout=None))]
-fn read_recording(
-    py: Python<'_>,
-    path: PathBuf,
-    pitch_mm: Option<&Bound<'_, PyAny>>,
-    frame_rate: Option<&Bound<'_, PyAny>>,
-    units: Option<&Bound<'_, PyAny>>,
-    layout: Option<PathBuf>,
-) -> PyResult<PyRecording> {
-    let units = crate::options_py::units(pitch_mm, frame_rate, units)?;
-    let opts = pedo_io::formats::ReadOptions { layout };
-    let mut rec = crate::pool::detach(py, || pedo_io::formats::read_recording_with(&path, &opts))
-        .map_err(to_py)?;
-    units.apply(&mut rec).map_err(to_py)?;
-    Ok(PyRecording { inner: rec })
+/// `read_recording`, its keywords from the one declaration of each option (`crate::keywords`):
+/// the units and how the file is read.
+macro_rules! define_read_recording {
+    (
+        match: [$($_m:ident),*], match_doc: $_md:literal,
+        pair: [$($_p:ident),*], pair_doc: $_pd:literal,
+        recording: [$($_r:ident),*], recording_doc: $_rd:literal,
+        output: [$($_o:ident),*], output_doc: $_od:literal,
+        units: [$($u:ident),*], units_doc: $_ud:literal,
+        read: [$($rd:ident),*], read_doc: $_rdd:literal,
+        $($rest:tt)*
+    ) => {
+        /// Read a pressure recording: Tekscan ``.asf``, novel emed ``.lst``, CSV grid, NumPy ``.npy``
+        /// (2-D or 3-D), PNG/TIFF (8/16-bit grayscale), a folder of images, or a numbered sequence
+        /// (``"walk_%03d.png"``). The format is detected from the content and the extension.
+        ///
+        /// ``pitch_mm`` (mm per sensel, a number or (x, y)) and ``frame_rate`` (Hz) set or override
+        /// what the file says, as ``--pitch-mm`` and ``--frame-rate`` do on the command line, and
+        /// ``units`` the pressure units (``--units``: kPa, Pa, MPa, N/cm², N/mm², psi, bar or mmHg)
+        /// for formats that store none (``.npy``, ``.npz``, CSV), so that forces come out in newtons;
+        /// ``layout`` is a pedar sensor-layout table (``--layout``; default: the bundled insole).
+        ///
+        /// Raises ``FileNotFoundError`` (an ``OSError``) if the file does not exist, other ``OSError``
+        /// subclasses if it cannot be read, and :class:`FormatError` (a ``ValueError``) naming the file
+        /// (and line, for text formats) if it is corrupt, truncated or of no known format.
+        #[pyfunction]
+        #[pyo3(signature = (path, *, $($u = None,)* $($rd = None),*))]
+        fn read_recording(
+            py: Python<'_>,
+            path: PathBuf,
+            $($u: Option<&Bound<'_, PyAny>>,)*
+            $($rd: Option<&Bound<'_, PyAny>>,)*
+        ) -> PyResult<PyRecording> {
+            let given = [$((stringify!($u), $u),)* $((stringify!($rd), $rd),)*];
+            let get = |name: &str| given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v);
+            let units = crate::options_py::units(get)?;
+            let opts: pedo_io::formats::ReadOptions = crate::options_py::option_set(get)?;
+            let mut rec = crate::pool::detach(py, || pedo_io::formats::read_recording_with(&path, &opts))
+                .map_err(to_py)?;
+            units.apply(&mut rec).map_err(to_py)?;
+            Ok(PyRecording { inner: rec })
+        }
+    };
 }
+
+crate::keywords::with_option_keywords!(define_read_recording);
 
 /// A (T, H, W) or (H, W) array-like as `(T, H, W, row-major f32 data)`.
 fn frames_of(

@@ -126,6 +126,16 @@ impl OptionInput for PyKeyword<'_, '_> {
     fn text(&self, option: &'static str) -> Result<String, KeywordError> {
         self.read(option)
     }
+    /// A str or an `os.PathLike`.
+    fn path(&self, option: &'static str) -> Result<std::path::PathBuf, KeywordError> {
+        self.0.extract().map_err(|_| {
+            KeywordError(keyword_type_error(
+                option,
+                "a path (str or os.PathLike)",
+                self.0,
+            ))
+        })
+    }
     /// A preset name or `E,NU,RHO`, a dict or an `(E, nu, rho)` tuple, or a `Material`.
     fn material(&self, _option: &'static str) -> Result<Material, KeywordError> {
         Ok(match self.0.extract::<String>() {
@@ -196,19 +206,9 @@ pub fn match_params<'a, 'py: 'a>(get: impl Fn(&str) -> Kw<'a, 'py>) -> PyResult<
     option_set(get)
 }
 
-/// The unit keywords, checked.
-pub fn units(
-    pitch_mm: Kw<'_, '_>,
-    frame_rate: Kw<'_, '_>,
-    units: Kw<'_, '_>,
-) -> PyResult<UnitOverrides> {
-    let given = [
-        ("pitch_mm", pitch_mm),
-        ("frame_rate", frame_rate),
-        ("units", units),
-    ];
-    let u: UnitOverrides =
-        option_set(|name| given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v))?;
+/// The unit keywords among those `get` gives, checked.
+pub fn units<'a, 'py: 'a>(get: impl Fn(&str) -> Kw<'a, 'py>) -> PyResult<UnitOverrides> {
+    let u: UnitOverrides = option_set(get)?;
     u.validate().map_err(to_py)?;
     Ok(u)
 }

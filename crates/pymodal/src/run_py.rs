@@ -53,6 +53,7 @@ macro_rules! define_run {
         pair: [$($p:ident),*], pair_doc: $pair_doc:literal,
         recording: [$($r:ident),*], recording_doc: $recording_doc:literal,
         output: [$($o:ident),*], output_doc: $output_doc:literal,
+        $($rest:tt)*
     ) => {
         /// Match the objects of a whole recording, frame after frame (or level after level).
         ///
@@ -134,9 +135,9 @@ macro_rules! define_run {
             out: Option<PathBuf>,
             $($o: Option<&Bound<'py, PyAny>>,)*
         ) -> PyResult<Bound<'py, PyDict>> {
-            let given = [$((stringify!($m), $m),)* $((stringify!($r), $r),)*];
+            let given = [$((stringify!($m), $m),)* $((stringify!($r), $r),)* $((stringify!($o), $o),)*];
             let get = |name: &str| given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v);
-            let outputs = crate::batch_py::run_outputs($($o),*)?;
+            let outputs = crate::batch_py::run_outputs(get)?;
             let params = crate::options_py::option_set(get)?;
             run_recording(py, recording, params, out, outputs)
         }

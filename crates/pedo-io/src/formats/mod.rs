@@ -78,12 +78,29 @@ pub const SUPPORTED: &str = "Tekscan .asf and CSV export, novel emed .lst, novel
 Zebris .apd and XML raw-data export (or its TRIPOD JSON form, also gzip-compressed), \
 RSscan/Materialise footscan export, CSV grid, NumPy .npy/.npz, PNG/TIFF images";
 
-/// What reading needs besides the file itself.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct ReadOptions {
-    /// A pedar sensor-layout table (see [`pedar::PedarLayout::parse`]); `None`: the bundled
-    /// layout of the common insole.
-    pub layout: Option<PathBuf>,
+modal_core::option_set! {
+    /// What reading needs besides the file itself (`--layout FILE`; Python `layout=`).
+    ReadOptions {
+        let _d = ();
+        /// A pedar sensor-layout table (see [`pedar::PedarLayout::parse`]); `None`: the bundled
+        /// layout of the common insole.
+        layout: Option<PathBuf> = None;
+            Value, "the bundled layout of the common insole",
+            "Sensor-layout table of a novel pedar insole (CSV lines insole,sensor,x1,y1,...,x4,y4; '# unit: mm' or 'cm' for a pitch). Only pedar exports use it.";
+    }
+}
+
+impl ReadOptions {
+    /// Nothing to check before reading: the table is read, and checked, with the recording.
+    pub fn validate(&self) -> std::result::Result<(), modal_core::OptionError> {
+        Ok(())
+    }
+}
+
+/// The reading options' declarations: the command line's flags, Python's keywords and the
+/// documentation are made from them.
+pub fn read_option_specs() -> Vec<modal_core::OptionSpec> {
+    ReadOptions::specs()
 }
 
 /// How many leading bytes [`sniff_format`] looks at.

@@ -281,8 +281,8 @@ def read_recording(
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
     units: Optional[str] = None,
-    # @end generated
     layout: Optional[Path] = None,
+    # @end generated
 ) -> Recording: ...
 def contours(
     frame: ArrayLike,
@@ -399,17 +399,19 @@ def find_recordings(inputs: Union[Path, Sequence[Path]]) -> list[str]:
 def batch(
     paths: Union[Path, Sequence[Path]],
     out: Optional[Path] = None,
+    # @generated keywords of batch study: tests/generated.rs, from the option tables
     jobs: Optional[int] = None,
+    force: Optional[bool] = None,
+    # @end generated
     *,
-    force: bool = False,
     # @generated keywords of batch output: tests/generated.rs, from the option tables
     figures: Optional[Literal["summary", "pairs", "none"]] = None,
     figure_format: Optional[Literal["png", "svg"]] = None,
     tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
-    # @end generated
     layout: Optional[Path] = None,
+    # @end generated
     **options: Any,
 ) -> list[StudyRow]:
     """Run every recording like :func:`run` (several at once); return the study table, one dict per recording.
@@ -421,15 +423,17 @@ def batch_row(
     path: Path,
     out: Optional[Path] = None,
     *,
-    force: bool = False,
+    # @generated keywords of batch_row: tests/generated.rs, from the option tables
+    force: Optional[bool] = None,
+    # @end generated
     # @generated keywords of batch_row output: tests/generated.rs, from the option tables
     figures: Optional[Literal["summary", "pairs", "none"]] = None,
     figure_format: Optional[Literal["png", "svg"]] = None,
     tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
-    # @end generated
     layout: Optional[Path] = None,
+    # @end generated
     **options: Any,
 ) -> StudyRow:
     """One row of :func:`batch`'s table: one recording on one thread (for Dask or a job queue)."""
