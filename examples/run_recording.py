@@ -44,7 +44,7 @@ def main():
     write_csv(pairs_csv, table)
     pairs = np.genfromtxt(pairs_csv, delimiter=",", names=True)
     print("columns:", ", ".join(pairs.dtype.names))
-    print(f"optimisation matches: mean {pairs['optimisation_percent'].mean():.1f} %; "
+    print(f"round trip through the pair's fields: median {np.nanmedian(pairs['round_trip_sensels']):.3f} sensels; "
           f"local (mutual-best) matches: mean {pairs['local_percent'].mean():.1f} %")
 
     # Tracks: one (k, 3) array of (frame, x, y) rows per node track.

@@ -202,13 +202,24 @@ fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: Tab
     if int("pairs") == 0 {
         outln!("{}", pedo_study::no_pairs_note(isocontour, pairs.len()));
     } else {
-        outln!(
-            "mean local matches {:.1} %, optimisation matches {:.1} % ({:.1} % trackable), mean cost {:.4}",
-            float("mean_local_percent"),
-            float("mean_optimisation_percent"),
-            float("mean_trackable_percent"),
-            float("mean_cost")
-        );
+        // The share of nodes matched is near 100 % by construction (pairs.csv keeps it): the
+        // line says how far the matches can be trusted.
+        if summary["mean_round_trip_sensels"].is_f64() {
+            outln!(
+                "matches consistent to {:.3} sensels round trip (field residual {:.3}); {:.1} % trackable, {:.1} % mutual best",
+                float("mean_round_trip_sensels"),
+                float("mean_field_residual_sensels"),
+                float("mean_trackable_percent"),
+                float("mean_local_percent")
+            );
+        } else {
+            outln!(
+                "{:.1} % of matches trackable, {:.1} % mutual best, mean cost {:.4}",
+                float("mean_trackable_percent"),
+                float("mean_local_percent"),
+                float("mean_cost")
+            );
+        }
     }
     if !pairs.is_empty() || !frames.is_empty() {
         let first = pairs

@@ -551,6 +551,18 @@ fn header_html(recording: &Recording, counts: &RunCounts, info: &ReportInfo) -> 
             ),
         ),
     ];
+    if let (Some(trip), Some(residual)) = (counts.mean_round_trip(), counts.mean_field_residual()) {
+        // How far the matches can be trusted, in place of the share of nodes matched (near
+        // 100 % by construction).
+        rows.push((
+            "consistency".into(),
+            format!(
+                "round trip {trip:.3} sensels, field residual {residual:.3} sensels \
+                 (means over {} of the pairs' medians)",
+                counted(counts.consistent_pairs, "pair")
+            ),
+        ));
+    }
     if !info.timings.is_empty() {
         rows.push(("timings".into(), timings_text(&info.timings)));
     }

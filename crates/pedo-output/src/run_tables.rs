@@ -48,6 +48,9 @@ pub(crate) fn pairs_header(recording: &Recording) -> Table {
         "trackable_matches",
         "trackable_percent",
         "crossings",
+        "field_residual_sensels",
+        "round_trip_sensels",
+        "round_trip_p95_sensels",
         "status",
         "reason",
     ] {
@@ -69,6 +72,12 @@ pub(crate) fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
         Cell::int(row.trackable_matches),
         Cell::Float(row.trackable_percent, 1),
         row.crossings.map_or(Cell::Empty, Cell::int),
+    ]);
+    let c = row.consistency;
+    cells.extend([
+        Cell::opt(c.map(|c| c.field_residual), 4),
+        Cell::opt(c.map(|c| c.round_trip), 4),
+        Cell::opt(c.map(|c| c.round_trip_p95), 4),
         Cell::Text("ok".into()),
         Cell::Empty,
     ]);
@@ -78,7 +87,7 @@ pub(crate) fn pair_cells(recording: &Recording, row: &PairRow) -> Vec<Cell> {
 /// The row of [`pairs_table`] of a pair that could not be matched.
 pub(crate) fn skipped_pair_cells(recording: &Recording, s: &SkippedPairRow) -> Vec<Cell> {
     let mut cells = pair_objects_cells(recording, &s.objects);
-    cells.extend(std::iter::repeat_n(Cell::Empty, 9));
+    cells.extend(std::iter::repeat_n(Cell::Empty, 12));
     cells.extend([Cell::Text("skipped".into()), Cell::Text(s.reason.clone())]);
     cells
 }

@@ -260,6 +260,8 @@ pub fn run_summary_of(
         "mean_optimisation_percent": c.mean_optimisation_percent(),
         "mean_cost": c.mean_cost(),
         "mean_trackable_percent": c.mean_trackable_percent(),
+        "mean_round_trip_sensels": c.mean_round_trip(),
+        "mean_field_residual_sensels": c.mean_field_residual(),
         "timings_s": stages,
     })
 }

@@ -89,6 +89,10 @@ pub struct StudyRow {
     /// [`PairRow::trackable_percent`](pedo_track::PairRow::trackable_percent) (0–100);
     /// `None` without pairs or on error, and on a row of a study written before it was a column.
     pub mean_trackable_percent: Option<f64>,
+    /// Mean over the matched pairs of their median round trip through the pair's forward and
+    /// backward fields, in sensels ([`pedo_track::consistency`]); `None` without such pairs, on
+    /// error, and on a row of a study written before it was a column.
+    pub mean_round_trip_sensels: Option<f64>,
     /// Number of tracks; `None` on error.
     pub tracks: Option<usize>,
     /// The measures of the recording ([`pedo_io::measures`]) in the study's units; `None` on
@@ -215,7 +219,7 @@ impl StudyMeasures {
 }
 
 /// The columns of the study table, units in the names.
-pub const STUDY_COLUMNS: [&str; 22] = [
+pub const STUDY_COLUMNS: [&str; 23] = [
     "path",
     "output",
     "format",
@@ -228,6 +232,7 @@ pub const STUDY_COLUMNS: [&str; 22] = [
     "mean_local_percent",
     "mean_optimisation_percent",
     "mean_trackable_percent",
+    "mean_round_trip_sensels",
     "tracks",
     "peak_pressure_kpa",
     "pti_max_kpa_s",
@@ -263,6 +268,7 @@ pub fn study_table(rows: &[StudyRow]) -> Table {
                     float(r.mean_local_percent, 1),
                     float(r.mean_optimisation_percent, 1),
                     float(r.mean_trackable_percent, 1),
+                    float(r.mean_round_trip_sensels, 4),
                     int(r.tracks),
                 ];
                 cells.extend(r.measures.values().map(|v| float(v, 4)));
@@ -299,6 +305,7 @@ fn row_from_json(v: &Value) -> Option<StudyRow> {
         mean_local_percent: float("mean_local_percent"),
         mean_optimisation_percent: float("mean_optimisation_percent"),
         mean_trackable_percent: float("mean_trackable_percent"),
+        mean_round_trip_sensels: float("mean_round_trip_sensels"),
         tracks: int("tracks"),
         measures: StudyMeasures::of_values(MEASURE_COLUMNS.map(|(c, _, _)| float(c))),
         wall_time_s: float("wall_time_s")?,
@@ -1440,6 +1447,7 @@ fn run_recording_as(
         mean_local_percent: None,
         mean_optimisation_percent: None,
         mean_trackable_percent: None,
+        mean_round_trip_sensels: None,
         tracks: None,
         measures: StudyMeasures::default(),
         wall_time_s: started.elapsed().as_secs_f64(),
@@ -1700,6 +1708,7 @@ fn row_of_summary(
         mean_local_percent: summary["mean_local_percent"].as_f64(),
         mean_optimisation_percent: summary["mean_optimisation_percent"].as_f64(),
         mean_trackable_percent: summary["mean_trackable_percent"].as_f64(),
+        mean_round_trip_sensels: summary["mean_round_trip_sensels"].as_f64(),
         tracks: int(&summary["tracks"]),
         measures: StudyMeasures::of_summary(summary),
         wall_time_s: started.elapsed().as_secs_f64(),
@@ -1792,6 +1801,7 @@ mod tests {
             mean_local_percent: Some(61.25),
             mean_optimisation_percent: Some(97.5),
             mean_trackable_percent: Some(88.5),
+            mean_round_trip_sensels: Some(0.125),
             tracks: Some(900),
             measures: StudyMeasures {
                 peak_pressure_kpa: Some(812.5),

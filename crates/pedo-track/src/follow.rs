@@ -84,7 +84,7 @@ impl Default for FollowParams {
 /// The smoothing of the field that starts an anchor's registration (from the modal pairs alone)
 /// and of the field that carries points across a split or merge: the pairs are noisier than the
 /// registration's targets.
-const PAIR_SMOOTHING: f64 = 300.0;
+const PAIR_SMOOTHING: f64 = crate::consistency::FIELD_SMOOTHING;
 /// Distance (sensels) beyond which a point of one outline counts as not covered by the other.
 const COVERED: f64 = 1.0;
 

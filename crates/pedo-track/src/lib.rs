@@ -28,6 +28,7 @@
 #![warn(missing_docs)]
 
 mod chain;
+pub mod consistency;
 pub mod drift;
 pub mod follow;
 mod matching;

@@ -235,6 +235,12 @@ pub(crate) fn match_pair(
         trackable_matches: trackable,
         trackable_percent: 100.0 * trackable as f64 / min,
         crossings: result.crossings,
+        consistency: crate::consistency::PairConsistency::of(
+            &oa.shape,
+            &ob.shape,
+            &result.pairs,
+            aspect,
+        ),
     };
     let mut pair = PairMatch {
         a,

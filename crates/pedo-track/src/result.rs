@@ -96,6 +96,10 @@ pub struct PairRow {
     /// ([`MatchResult::crossings`](modal_core::MatchResult::crossings)): 0 when the matches keep
     /// the contours' cyclic order; `None` for surfaces.
     pub crossings: Option<usize>,
+    /// How far the matches agree with one smooth, invertible map of the plane (field residual
+    /// and round trip, sensels; [`crate::consistency`]); `None` for surfaces and pairs no field
+    /// can be fitted to.
+    pub consistency: Option<crate::consistency::PairConsistency>,
 }
 
 /// Matches of one pair of objects (indices into [`SequenceResult::objects`]).
@@ -493,6 +497,12 @@ pub struct RunCounts {
     pub cost_sum: f64,
     /// Sum over the matched pairs, in order, of [`PairRow::trackable_percent`].
     pub trackable_percent_sum: f64,
+    /// Matched pairs with consistency figures ([`PairRow::consistency`]).
+    pub consistent_pairs: usize,
+    /// Sum over those pairs, in order, of their median round trip (sensels).
+    pub round_trip_sum: f64,
+    /// Sum over those pairs, in order, of their median field residual (sensels).
+    pub field_residual_sum: f64,
     /// Tracks chained.
     pub tracks: usize,
     /// Tracks of 3 steps or more.
@@ -521,6 +531,9 @@ impl Default for RunCounts {
             optimisation_percent_sum: zero(),
             cost_sum: zero(),
             trackable_percent_sum: zero(),
+            consistent_pairs: 0,
+            round_trip_sum: zero(),
+            field_residual_sum: zero(),
             tracks: 0,
             tracks_3_or_more: 0,
             splits: Vec::new(),
@@ -563,6 +576,11 @@ impl RunCounts {
         self.optimisation_percent_sum += row.optimisation_percent;
         self.cost_sum += row.mean_cost;
         self.trackable_percent_sum += row.trackable_percent;
+        if let Some(c) = row.consistency {
+            self.consistent_pairs += 1;
+            self.round_trip_sum += c.round_trip;
+            self.field_residual_sum += c.field_residual;
+        }
     }
 
     pub(crate) fn add_track(&mut self, steps: usize) {
@@ -591,5 +609,17 @@ impl RunCounts {
     /// Mean trackable matches over the matched pairs, in % (`None` without pairs).
     pub fn mean_trackable_percent(&self) -> Option<f64> {
         self.mean(self.trackable_percent_sum)
+    }
+    /// Mean over the pairs with consistency figures of their median round trip, in sensels
+    /// (`None` without such pairs).
+    pub fn mean_round_trip(&self) -> Option<f64> {
+        let n = self.consistent_pairs;
+        (n > 0).then(|| self.round_trip_sum / n as f64)
+    }
+    /// Mean over the pairs with consistency figures of their median field residual, in sensels
+    /// (`None` without such pairs).
+    pub fn mean_field_residual(&self) -> Option<f64> {
+        let n = self.consistent_pairs;
+        (n > 0).then(|| self.field_residual_sum / n as f64)
     }
 }

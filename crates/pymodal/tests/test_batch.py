@@ -26,6 +26,7 @@ COLUMNS = [
     "mean_local_percent",
     "mean_optimisation_percent",
     "mean_trackable_percent",
+    "mean_round_trip_sensels",
     "tracks",
     "peak_pressure_kpa",
     "pti_max_kpa_s",
@@ -131,6 +132,7 @@ def test_batch_rows_agree_with_run_and_name_the_failure(study):
         assert row["mean_local_percent"] == pytest.approx(summary["mean_local_percent"])
         assert row["mean_optimisation_percent"] == pytest.approx(summary["mean_optimisation_percent"])
         assert row["mean_trackable_percent"] == pytest.approx(summary["mean_trackable_percent"])
+        assert row["mean_round_trip_sensels"] == pytest.approx(summary["mean_round_trip_sensels"], abs=1e-4)
     assert pickle.loads(pickle.dumps(rows)) == rows
 
 

@@ -47,6 +47,12 @@ def test_run_on_known_motion():
     np.testing.assert_allclose(median, VELOCITY, atol=0.25)
     assert max(len(t) for t in res["tracks"]) == len(frames)
     assert res["summary"]["mean_trackable_percent"] == pytest.approx(100.0)
+    # A rigid motion: the matches agree with one smooth, invertible map, so a node comes back
+    # after the forward and the backward field, and the summary is the mean of the pairs'.
+    trips = [row["round_trip_sensels"] for row in table]
+    assert max(trips) < 0.05, trips
+    assert all(row["field_residual_sensels"] < 0.5 for row in table)
+    assert res["summary"]["mean_round_trip_sensels"] == pytest.approx(np.mean(trips), abs=1e-4)
 
 
 def test_each_foot_has_its_own_measures():

@@ -387,7 +387,7 @@ def run(
 
 # A row of a study table (batch, batch_row): path, output, format, frames, frame_rate_hz,
 # pitch_x_mm, pitch_y_mm, pressure_units, pairs, mean_local_percent, mean_optimisation_percent,
-# mean_trackable_percent, tracks, peak_pressure_kpa, pti_max_kpa_s, peak_force_n, fti_n_s,
+# mean_trackable_percent, mean_round_trip_sensels, tracks, peak_pressure_kpa, pti_max_kpa_s, peak_force_n, fti_n_s,
 # contact_time_s, max_contact_area_mm2, wall_time_s, status ("ok", "skipped", "error") and message,
 # the columns of study.csv (or study.parquet).
 StudyRow = dict[str, Any]
