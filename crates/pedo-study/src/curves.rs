@@ -12,7 +12,7 @@ use crate::StudyRow;
 use pedo_io::{IoError, Result};
 use pedo_output::{Cell, ParquetWriter, TableFormat, CURVES};
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The study curves table's name (`study_curves.csv` or `.parquet`).
 pub const STUDY_CURVES: &str = "study_curves";
@@ -141,7 +141,7 @@ pub fn write_study_curves(out: &Path, rows: &[StudyRow], tables: TableFormat) ->
 }
 
 fn write_to(
-    tmp: &PathBuf,
+    tmp: &Path,
     out: &Path,
     rows: &[StudyRow],
     tables: TableFormat,
