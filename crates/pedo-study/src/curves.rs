@@ -140,39 +140,43 @@ pub fn write_study_curves(out: &Path, rows: &[StudyRow], tables: TableFormat) ->
     Ok(())
 }
 
-fn write_to(
-    tmp: &Path,
-    out: &Path,
-    rows: &[StudyRow],
-    tables: TableFormat,
-) -> std::io::Result<()> {
+/// The staging file of the study curves, CSV or Parquet, row by row.
+enum RowSink {
+    Csv(std::io::BufWriter<std::fs::File>),
+    Parquet(Box<ParquetWriter<std::io::BufWriter<std::fs::File>>>),
+}
+
+impl RowSink {
+    fn push(&mut self, cells: &[Cell]) -> std::io::Result<()> {
+        match self {
+            RowSink::Csv(w) => {
+                let mut line = String::new();
+                pedo_output::push_csv_line(&mut line, cells);
+                w.write_all(line.as_bytes())
+            }
+            RowSink::Parquet(p) => p.push(cells),
+        }
+    }
+
+    fn finish(self) -> std::io::Result<()> {
+        match self {
+            RowSink::Csv(mut w) => w.flush(),
+            RowSink::Parquet(p) => p.finish_into_inner()?.flush(),
+        }
+    }
+}
+
+fn write_to(tmp: &Path, out: &Path, rows: &[StudyRow], tables: TableFormat) -> std::io::Result<()> {
     let header: Vec<String> = STUDY_CURVES_COLUMNS.iter().map(|s| s.to_string()).collect();
-    let file = std::io::BufWriter::new(std::fs::File::create(tmp)?);
-    let mut sink: Box<dyn FnMut(Option<&[Cell]>) -> std::io::Result<()>> = match tables {
+    let mut file = std::io::BufWriter::new(std::fs::File::create(tmp)?);
+    let mut sink = match tables {
         TableFormat::Csv => {
-            let mut w = Some(file);
             let mut line = header.join(",");
             line.push('\n');
-            w.as_mut()
-                .map_or(Ok(()), |w| w.write_all(line.as_bytes()))?;
-            Box::new(move |cells| match (cells, w.as_mut()) {
-                (Some(cells), Some(w)) => {
-                    let mut line = String::new();
-                    pedo_output::push_csv_line(&mut line, cells);
-                    w.write_all(line.as_bytes())
-                }
-                (None, _) => w.take().map_or(Ok(()), |mut w| w.flush()),
-                (Some(_), None) => Ok(()),
-            })
+            file.write_all(line.as_bytes())?;
+            RowSink::Csv(file)
         }
-        TableFormat::Parquet => {
-            let mut p = Some(ParquetWriter::new(file, &header));
-            Box::new(move |cells| match (cells, p.as_mut()) {
-                (Some(cells), Some(p)) => p.push(cells),
-                (None, _) => p.take().map_or(Ok(()), |p| p.finish_into_inner()?.flush()),
-                (Some(_), None) => Ok(()),
-            })
-        }
+        TableFormat::Parquet => RowSink::Parquet(Box::new(ParquetWriter::new(file, &header))),
     };
     for row in rows {
         let Some(output) = &row.output else { continue };
@@ -189,10 +193,9 @@ fn write_to(
                     full[k] = cell;
                 }
             }
-            sink(Some(&full))?;
+            sink.push(&full)?;
         }
     }
-    sink(None)?;
-    drop(sink);
+    sink.finish()?;
     std::fs::File::open(tmp)?.sync_all()
 }
