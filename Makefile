@@ -85,7 +85,9 @@ examples: wheel
 	$(EXAMPLES)/run_recording
 	tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && \
 	$(PY) examples/match_two_frames.py --out "$$tmp/match.png" && test -s "$$tmp/match.png" && \
-	$(PY) examples/run_recording.py --out-dir "$$tmp" && test -s "$$tmp/pairs.csv"
+	$(PY) examples/run_recording.py --out-dir "$$tmp" && test -s "$$tmp/pairs.csv" && \
+	$(PY) examples/spm1d_curves.py "$$tmp/study" examples/data/FrasP01L.asf crates/pedo-io/tests/data/tekscan-FrasP01L-11-20.csv && \
+	test -s "$$tmp/study/study_curves.csv"
 
 # The demo's report.html in headless Chromium (Debian's `chromium`): drawn, playable, offline.
 # The binary as the tests build it (the same features: nothing is rebuilt after `cargo test`).

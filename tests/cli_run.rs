@@ -850,7 +850,8 @@ fn a_run_with_tables_only_writes_the_tables_of_a_run_with_figures() {
         );
         let mut files = vec!["pairs.json".to_string()];
         files.extend(
-            ["pairs", "objects", "matches", "tracks", "frames"].map(|t| format!("{t}.{tables}")),
+            ["pairs", "objects", "matches", "tracks", "frames", "curves"]
+                .map(|t| format!("{t}.{tables}")),
         );
         // The measures, taken frame by frame as the streamed run reads them, are the same too.
         files.extend(pedo_output::MEASURE_FILES.map(String::from));

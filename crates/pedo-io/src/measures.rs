@@ -19,7 +19,10 @@
 //! * **contact time**: from the first to the last frame whose force exceeds
 //!   `min F + 10 % × (max F − min F)` ([`CONTACT_FORCE_FRACTION`], the automatic threshold of
 //!   pressuRe's `threshold_event`), both counted whole: `(last − first + 1) × Δt`;
-//! * **maximum contact area**: the largest number of loaded sensels in a frame × sensel area.
+//! * **maximum contact area**: the largest number of loaded sensels in a frame × sensel area;
+//! * **stances** ([`crate::stances`]): the foot contacts among the frames, each with the values
+//!   above over its own frames ([`StanceValues`]) and its force, contact area, peak pressure and
+//!   centre of pressure resampled to 0–100 % of contact ([`StanceCurves`]).
 //!
 //! Pressures are in kPa when the recording's units are known, else in the file's own units;
 //! force in N when units and sensel area are known, else the load in the file's units × mm² (or
@@ -31,6 +34,7 @@
 
 use crate::error::{IoError, Result};
 use crate::recording::{canonical_units, kpa_per_unit, Recording};
+use crate::stances::{find_stances, resample, Stance, StanceRule};
 use std::ops::Range;
 
 /// The fraction of the force range above the smallest force of the frames that a frame's force
@@ -147,6 +151,92 @@ pub struct Measures {
     pub values: MeasureValues,
     /// Their units.
     pub units: MeasureUnits,
+    /// The stances among the frames, in frame order ([`crate::stances`]).
+    pub stances: Vec<StanceMeasures>,
+    /// The rule they were found by.
+    pub stance_rule: StanceRule,
+}
+
+/// One stance of a recording: its frames, its values and its curves.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StanceMeasures {
+    /// Its frames.
+    pub stance: Stance,
+    /// Its values, in the units of [`Measures::units`].
+    pub values: StanceValues,
+    /// Its curves over 0–100 % of contact.
+    pub curves: StanceCurves,
+}
+
+/// The values of one stance, over its frames `first..=last` (the definitions of
+/// [`MeasureValues`] restricted to them), in the units of [`Measures::units`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct StanceValues {
+    /// Time of the first frame, `first × Δt`.
+    pub start_time: f64,
+    /// Time of the last frame, `last × Δt`.
+    pub end_time: f64,
+    /// `(last − first + 1) × Δt`.
+    pub contact_time: f64,
+    /// The largest force (or load) of its frames.
+    pub peak_force: f64,
+    /// `Σ F·Δt` over its frames.
+    pub fti: f64,
+    /// The largest value at a sensor in its frames.
+    pub peak_pressure: f64,
+    /// The largest contact area of its frames.
+    pub max_contact_area: f64,
+}
+
+/// A stance's frame measures at [`CURVE_POINTS`](crate::stances::CURVE_POINTS) points of its
+/// contact, 0, 1, …, 100 % ([`resample`]): those of the frames table (force, contact area, peak
+/// pressure, centre of pressure), in the units of [`Measures::units`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct StanceCurves {
+    /// Force (or load).
+    pub force: Vec<f64>,
+    /// Contact area.
+    pub area: Vec<f64>,
+    /// Peak pressure of the frame.
+    pub peak_pressure: Vec<f64>,
+    /// Centre of pressure, x (column) in sensels; `None` only when no frame of the stance has
+    /// load (frames without load are skipped, see [`resample`]).
+    pub cop_x: Vec<Option<f64>>,
+    /// Centre of pressure, y (row) in sensels.
+    pub cop_y: Vec<Option<f64>>,
+}
+
+impl StanceMeasures {
+    /// The values with their names and units, as [`Measures::quantities`] names them.
+    pub fn quantities(&self, u: &MeasureUnits) -> Vec<Quantity> {
+        let v = &self.values;
+        let q = |name, value, unit: String| Quantity { name, value, unit };
+        vec![
+            q("start_time", v.start_time, u.time.clone()),
+            q("end_time", v.end_time, u.time.clone()),
+            q("contact_time", v.contact_time, u.time.clone()),
+            q(
+                if u.is_force {
+                    "peak_force"
+                } else {
+                    "peak_load"
+                },
+                v.peak_force,
+                u.force.clone(),
+            ),
+            q(
+                if u.is_force {
+                    "fti"
+                } else {
+                    "load_time_integral"
+                },
+                v.fti,
+                format!("{}·{}", u.force, u.time),
+            ),
+            q("peak_pressure", v.peak_pressure, u.pressure.clone()),
+            q("max_contact_area", v.max_contact_area, u.area.clone()),
+        ]
+    }
 }
 
 impl Measures {
@@ -254,6 +344,10 @@ pub struct RecordingMeasures {
     sum: Vec<f64>,
     loaded: Vec<u32>,
     forces: Vec<f64>,
+    /// Per frame: loaded sensels, largest value (file units), centre of pressure (sensels).
+    contacts: Vec<usize>,
+    peaks: Vec<f64>,
+    cops: Vec<Option<[f64; 2]>>,
     max_contact: usize,
     first: Option<usize>,
     next: usize,
@@ -289,6 +383,9 @@ impl RecordingMeasures {
             sum: vec![0.0; per],
             loaded: vec![0; per],
             forces: Vec::new(),
+            contacts: Vec::new(),
+            peaks: Vec::new(),
+            cops: Vec::new(),
             max_contact: 0,
             first: None,
             next: 0,
@@ -326,7 +423,8 @@ impl RecordingMeasures {
                 i % self.cols
             )));
         }
-        let (mut load, mut contact) = (0.0f64, 0usize);
+        let (mut load, mut contact, mut top) = (0.0f64, 0usize, 0.0f64);
+        let mut moment = [0.0f64; 2];
         for (i, &v) in values.iter().enumerate() {
             if !self.mask[i] {
                 continue;
@@ -335,14 +433,22 @@ impl RecordingMeasures {
             if v > self.peak[i] {
                 self.peak[i] = v;
             }
+            top = top.max(v);
             if v > 0.0 && v >= self.threshold {
                 self.sum[i] += v;
                 self.loaded[i] += 1;
                 load += v;
                 contact += 1;
+                // As the frames table's centre of pressure (`Recording::measures`).
+                moment[0] += v * (i % self.cols) as f64;
+                moment[1] += v * (i / self.cols) as f64;
             }
         }
         self.forces.push(load * self.force_factor);
+        self.contacts.push(contact);
+        self.peaks.push(top);
+        self.cops
+            .push((load > 0.0).then(|| [moment[0] / load, moment[1] / load]));
         self.max_contact = self.max_contact.max(contact);
         if self.first.is_none() {
             self.first = Some(frame);
@@ -398,6 +504,9 @@ impl RecordingMeasures {
         // Some frame has load, so the largest force exceeds the threshold.
         let a = self.forces.iter().position(above).unwrap_or(0);
         let b = self.forces.iter().rposition(above).unwrap_or(a);
+        let stance_rule = StanceRule::for_interval((self.units.time == "s").then_some(dt));
+        let (_, found) = find_stances(&self.forces, first, &stance_rule)?;
+        let stances = found.into_iter().map(|s| self.stance(s, first)).collect();
         let values = MeasureValues {
             peak_pressure: finite_max(&peak),
             pti_max: finite_max(&pti),
@@ -418,7 +527,51 @@ impl RecordingMeasures {
             mean,
             values,
             units: self.units,
+            stances,
+            stance_rule,
         })
+    }
+
+    /// The values and curves of stance `s` (frames numbered from `first`, the first added).
+    fn stance(&self, s: Stance, first: usize) -> StanceMeasures {
+        let frames = (s.first - first)..(s.last - first + 1);
+        let (k, dt) = (self.pressure_factor, self.dt);
+        let forces = &self.forces[frames.clone()];
+        let max = |v: &mut dyn Iterator<Item = f64>| v.fold(0.0f64, f64::max);
+        let values = StanceValues {
+            start_time: s.first as f64 * dt,
+            end_time: s.last as f64 * dt,
+            contact_time: s.frames() as f64 * dt,
+            peak_force: max(&mut forces.iter().copied()),
+            fti: forces.iter().sum::<f64>() * dt,
+            peak_pressure: max(&mut self.peaks[frames.clone()].iter().map(|p| p * k)),
+            max_contact_area: max(&mut self.contacts[frames.clone()]
+                .iter()
+                .map(|&c| c as f64 * self.area)),
+        };
+        let some = |v: &mut dyn Iterator<Item = f64>| {
+            resample(&v.map(Some).collect::<Vec<_>>())
+                .into_iter()
+                .flatten()
+                .collect::<Vec<f64>>()
+        };
+        let cops = &self.cops[frames.clone()];
+        let curves = StanceCurves {
+            force: some(&mut forces.iter().copied()),
+            area: some(
+                &mut self.contacts[frames.clone()]
+                    .iter()
+                    .map(|&c| c as f64 * self.area),
+            ),
+            peak_pressure: some(&mut self.peaks[frames].iter().map(|p| p * k)),
+            cop_x: resample(&cops.iter().map(|c| c.map(|c| c[0])).collect::<Vec<_>>()),
+            cop_y: resample(&cops.iter().map(|c| c.map(|c| c[1])).collect::<Vec<_>>()),
+        };
+        StanceMeasures {
+            stance: s,
+            values,
+            curves,
+        }
     }
 }
 
@@ -539,6 +692,90 @@ mod tests {
         let m = Measures::of_recording(&rec, 0.0, 0..4).unwrap();
         assert_eq!(m.quantities()[2].unit, "raw·mm²");
         assert!(close(m.values.peak_force, 100.0));
+    }
+
+    #[test]
+    fn stances_have_their_own_values_and_curves_computed_by_hand() {
+        // 1 × 2 sensels of 1 mm², 100 Hz (rule: gaps < 5 frames joined, stances >= 10 frames),
+        // kPa; forces in N = Σ kPa × 1e-3. Frames 2..=13: one stance, the left sensel at
+        // 1000 kPa, the right one rising 0, 100, …, 1100 kPa; frames 20..=31 another, the right
+        // sensel alone at 2000 kPa.
+        let n = 40;
+        let mut data = vec![0.0f32; 2 * n];
+        for t in 2..=13 {
+            data[2 * t] = 1000.0;
+            data[2 * t + 1] = 100.0 * (t - 2) as f32;
+        }
+        for t in 20..=31 {
+            data[2 * t + 1] = 2000.0;
+        }
+        let rec = Recording::new(n, 1, 2, data, vec![true; 2])
+            .unwrap()
+            .with_pitch_mm([1.0, 1.0])
+            .unwrap()
+            .with_frame_rate(100.0)
+            .unwrap()
+            .with_units("kPa");
+        let m = Measures::of_recording(&rec, 0.0, 0..n).unwrap();
+        assert_eq!(m.stance_rule.min_gap, 5);
+        let spans: Vec<_> = m.stances.iter().map(|s| s.stance).collect();
+        assert_eq!(
+            spans,
+            [
+                Stance {
+                    first: 2,
+                    last: 13,
+                    complete: true
+                },
+                Stance {
+                    first: 20,
+                    last: 31,
+                    complete: true
+                }
+            ]
+        );
+        let (a, b) = (&m.stances[0], &m.stances[1]);
+        assert!(close(a.values.start_time, 0.02) && close(a.values.end_time, 0.13));
+        assert!(close(a.values.contact_time, 0.12));
+        assert!(close(a.values.peak_force, 2.1)); // (1000 + 1100) kPa × 1 mm²
+                                                  // Σ (1 + 0.1 k) N over k = 0..11 = 12 + 6.6, × 0.01 s.
+        assert!(close(a.values.fti, 0.186), "{}", a.values.fti);
+        assert_eq!(a.values.peak_pressure, 1100.0);
+        assert_eq!(a.values.max_contact_area, 2.0);
+        assert_eq!(b.values.peak_pressure, 2000.0);
+        assert_eq!(b.values.max_contact_area, 1.0);
+        // Point p at frame 2 + 11 p / 100: the force 1 + 0.1 × 11 p / 100 N, linear.
+        let c = &a.curves;
+        for p in [0, 1, 37, 50, 99, 100] {
+            let want = 1.0 + 0.1 * 11.0 * p as f64 / 100.0;
+            assert!(close(c.force[p], want), "{p}: {} vs {want}", c.force[p]);
+        }
+        // Frame 2 (0 %) has the left sensel alone, frame 3 both: the area 1 → 2 mm² over the
+        // first 1/11 of the stance.
+        assert_eq!((c.area[0], c.area[100]), (1.0, 2.0));
+        assert!(close(c.area[5], 1.0 + 5.0 * 11.0 / 100.0));
+        // Centre of pressure x: frame 2 + j has weights 1000 (x = 0) and 100 j (x = 1).
+        let cop = |j: f64| 100.0 * j / (1000.0 + 100.0 * j);
+        assert_eq!(c.cop_x[0], Some(0.0));
+        assert!(close(c.cop_x[100].unwrap(), cop(11.0)));
+        // 50 % is frame 2 + 5.5: halfway between the centres of frames 7 and 8.
+        assert!(close(c.cop_x[50].unwrap(), (cop(5.0) + cop(6.0)) / 2.0));
+        assert_eq!(c.cop_y[50], Some(0.0));
+        assert_eq!(b.curves.peak_pressure, vec![2000.0; 101]);
+        assert_eq!(b.curves.cop_x, vec![Some(1.0); 101]);
+        let names: Vec<_> = a.quantities(&m.units).iter().map(|q| q.name).collect();
+        assert_eq!(
+            names,
+            [
+                "start_time",
+                "end_time",
+                "contact_time",
+                "peak_force",
+                "fti",
+                "peak_pressure",
+                "max_contact_area"
+            ]
+        );
     }
 
     #[test]

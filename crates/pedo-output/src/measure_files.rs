@@ -1,19 +1,27 @@
 //! The measures of a run's recording in its folder ([`pedo_io::measures`]): `peak.npy`,
 //! `pti.npy`, `mean.npy` (float64 images, rows × columns of the frames, NaN where there is no
 //! sensor), `measures.json` (each value with its unit, and how the contact time was found), the
-//! figure `pti.png` (or `.svg`; the peak-pressure figure, with the contact outlines, is a summary figure of the run folder), and the values in `summary.json`'s `measures`.
+//! figure `pti.png` (or `.svg`; the peak-pressure figure, with the contact outlines, is a summary figure of the run folder), and the values in `summary.json`'s `measures`;
+//! and the stances' curves, `curves.csv` (or `.parquet`, [`curves_table`]), with each stance's
+//! values in `measures.json`'s `stances`.
 
 use crate::figure::{FigureAxes, MeasureFigure, MeasureImage};
 use crate::outdir::OutDir;
 use crate::run_folder::{write_figure, FigureKinds};
+use crate::table::{Cell, Table};
+use crate::TableFormat;
 use pedo_io::formats::npy::image_to_npy;
 use pedo_io::measures::{Measures, RecordingMeasures, CONTACT_FORCE_FRACTION};
+use pedo_io::stances::{ASSUMED_RATE_HZ, CURVE_POINTS, MIN_GAP_S, MIN_STANCE_S};
 use pedo_io::{Recording, Result};
 use pedo_track::{SequenceOptions, SequenceSink};
 use serde_json::{json, Map, Value};
 
 /// The files of a run folder's measures besides its figures.
 pub const MEASURE_FILES: [&str; 4] = ["peak.npy", "pti.npy", "mean.npy", "measures.json"];
+
+/// The table of the stances' curves ([`curves_table`]), one of [`crate::RUN_TABLES`].
+pub const CURVES: &str = "curves";
 
 /// A sink that takes the measures of a run's frames as the engine hands them (every frame of
 /// the run's range, [`SequenceSink::frame_values`]).
@@ -61,10 +69,88 @@ pub fn measure_values_json(m: &Measures) -> Value {
     Value::Object(values)
 }
 
+/// The table of stance-normalised curves (`curves.csv`): one row per stance and per cent of
+/// contact (0..=100): `stance` (0-based, in frame order), `complete` (1, or 0 for a stance the
+/// recording may cut, on its first or last frame), `percent`, then the frames table's measures
+/// at that point of the stance, in its columns and units (contact area, total force, peak
+/// pressure, centre of pressure in sensels and in mm). More measures are more columns.
+pub fn curves_table(recording: &Recording, m: &Measures) -> Table {
+    let mut t = curves_header(recording);
+    let mm = recording.pitch_mm.is_some();
+    for (k, s) in m.stances.iter().enumerate() {
+        let c = &s.curves;
+        for p in 0..CURVE_POINTS {
+            let mut row = vec![
+                Cell::int(k),
+                Cell::int(usize::from(s.stance.complete)),
+                Cell::int(p),
+                Cell::Float(c.area[p], 4),
+                Cell::Float(c.force[p], 4),
+                Cell::Float(c.peak_pressure[p], 4),
+                Cell::opt(c.cop_x[p], 4),
+                Cell::opt(c.cop_y[p], 4),
+            ];
+            if mm {
+                let xy = c.cop_x[p]
+                    .zip(c.cop_y[p])
+                    .and_then(|(x, y)| recording.to_mm(x, y));
+                row.push(Cell::opt(xy.map(|v| v[0]), 4));
+                row.push(Cell::opt(xy.map(|v| v[1]), 4));
+            }
+            t.rows.push(row);
+        }
+    }
+    t
+}
+
+/// The columns of [`curves_table`] (no rows).
+pub fn curves_header(recording: &Recording) -> Table {
+    let u = crate::run_tables::measure_units(recording);
+    let mut t = Table::new(&["stance", "complete", "percent"]);
+    for c in [u.area.0, u.force, u.peak.0, "cop_x", "cop_y"] {
+        t.push_column(c);
+    }
+    if recording.pitch_mm.is_some() {
+        t.push_column("cop_x_mm");
+        t.push_column("cop_y_mm");
+    }
+    t
+}
+
+/// `measures.json`'s `stances`: each stance's frames, whether it is complete, and its values
+/// with their units.
+pub fn stances_json(m: &Measures) -> Value {
+    let stances: Vec<Value> = m
+        .stances
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            let values: Map<String, Value> = s
+                .quantities(&m.units)
+                .into_iter()
+                .map(|q| {
+                    (
+                        q.name.to_string(),
+                        json!({"value": q.value, "unit": q.unit}),
+                    )
+                })
+                .collect();
+            json!({
+                "stance": k,
+                "frames": [s.stance.first, s.stance.last],
+                "complete": s.stance.complete,
+                "values": values,
+            })
+        })
+        .collect();
+    Value::Array(stances)
+}
+
 /// `measures.json`: the frames measured, the thresholds, the values with their units and what
-/// each image file holds.
+/// each image file holds; the stances, their rule and values.
 pub fn measures_json(m: &Measures) -> Value {
     let u = &m.units;
+    let r = &m.stance_rule;
     json!({
         "frames": [m.frames.start, m.frames.end],
         "contact_threshold": m.threshold,
@@ -77,6 +163,16 @@ pub fn measures_json(m: &Measures) -> Value {
         },
         "contact_frames": [m.values.contact_frames.0, m.values.contact_frames.1],
         "values": measure_values_json(m),
+        "stance_rule": {
+            "min_gap_frames": r.min_gap,
+            "min_stance_frames": r.min_frames,
+            "rule": format!(
+                "frames whose force exceeds the contact force threshold; gaps shorter than {MIN_GAP_S} s joined, \
+                 stances shorter than {MIN_STANCE_S} s dropped (counted at {ASSUMED_RATE_HZ} Hz without a frame rate); \
+                 a stance on the first or last frame is not complete"
+            ),
+        },
+        "stances": stances_json(m),
         "images": {
             "peak.npy": format!("peak pressure per sensel ({})", u.pressure),
             "pti.npy": format!("pressure-time integral per sensel ({}·{})", u.pressure, u.time),
@@ -85,14 +181,17 @@ pub fn measures_json(m: &Measures) -> Value {
     })
 }
 
-/// Writes the measures' files into `dir` ([`MEASURE_FILES`]) and their figures as `kinds` says
-/// (`pti.png` or `.svg`).
+/// Writes the measures' files into `dir` ([`MEASURE_FILES`]), the curves table as `tables`
+/// says (`curves.csv` or `curves.parquet`) and their figures as `kinds` says (`pti.png` or
+/// `.svg`).
 pub fn write_measures(
     dir: &OutDir,
     recording: &Recording,
     m: &Measures,
     kinds: FigureKinds,
+    tables: TableFormat,
 ) -> Result<()> {
+    crate::write_table(dir, tables, CURVES, &curves_table(recording, m))?;
     dir.write("peak.npy", &image_to_npy(m.rows, m.cols, &m.peak)?)?;
     dir.write("pti.npy", &image_to_npy(m.rows, m.cols, &m.pti)?)?;
     dir.write("mean.npy", &image_to_npy(m.rows, m.cols, &m.mean)?)?;
@@ -108,4 +207,64 @@ pub fn write_measures(
     let stem = MeasureImage::Pti.stem();
     write_figure(dir, stem, kinds, || fig.to_png(), || fig.to_svg())?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_curves_table_has_a_row_per_stance_and_percent_in_the_frames_tables_units() {
+        // 12 frames of 1 × 2 sensels at 100 Hz in kPa, 2 mm pitch: frames 1..=10 in contact,
+        // the right sensel rising 0, 100, …, 900 kPa beside 1000 kPa.
+        let n = 12;
+        let mut data = vec![0.0f32; 2 * n];
+        for t in 1..=10 {
+            data[2 * t] = 1000.0;
+            data[2 * t + 1] = 100.0 * (t - 1) as f32;
+        }
+        let rec = Recording::new(n, 1, 2, data, vec![true; 2])
+            .unwrap()
+            .with_pitch_mm([2.0, 2.0])
+            .unwrap()
+            .with_frame_rate(100.0)
+            .unwrap()
+            .with_units("kPa");
+        let m = Measures::of_recording(&rec, 0.0, 0..n).unwrap();
+        let t = curves_table(&rec, &m);
+        assert_eq!(
+            t.header,
+            [
+                "stance",
+                "complete",
+                "percent",
+                "contact_area_mm2",
+                "total_force_n",
+                "peak_pressure_kpa",
+                "cop_x",
+                "cop_y",
+                "cop_x_mm",
+                "cop_y_mm"
+            ]
+        );
+        assert_eq!(t.rows.len(), 101);
+        // 50 %: frame 1 + 4.5, the force (1000 + 450) kPa × 4 mm² = 5.8 N, the peak 1000 kPa.
+        let row = &t.rows[50];
+        assert_eq!(row[..3], [Cell::Int(0), Cell::Int(1), Cell::Int(50)]);
+        assert!(
+            matches!(row[4], Cell::Float(f, 4) if (f - 5.8).abs() < 1e-9),
+            "{row:?}"
+        );
+        assert!(matches!(row[5], Cell::Float(f, 4) if f == 1000.0));
+        // x of the centre of pressure in mm: twice that in sensels.
+        let (Cell::Float(x, _), Cell::Float(xm, _)) = (&row[6], &row[8]) else {
+            panic!("{row:?}")
+        };
+        assert!((xm - 2.0 * x).abs() < 1e-12);
+        let json = measures_json(&m);
+        assert_eq!(json["stances"][0]["frames"], json!([1, 10]));
+        assert_eq!(json["stances"][0]["complete"], json!(true));
+        assert_eq!(json["stances"][0]["values"]["contact_time"]["unit"], "s");
+        assert_eq!(json["stance_rule"]["min_gap_frames"], 5);
+    }
 }

@@ -35,7 +35,7 @@ use std::time::Instant;
 
 /// The tables every run folder holds (besides `summary.json` and `pairs.json`), by name: each
 /// written as `NAME.csv` or `NAME.parquet` ([`TableFormat`]).
-pub const RUN_TABLES: [&str; 5] = ["pairs", "objects", "matches", "tracks", "frames"];
+pub const RUN_TABLES: [&str; 6] = ["pairs", "objects", "matches", "tracks", "frames", "curves"];
 
 /// The table of material points ([`crate::points_table`]) a whole contour run writes beside
 /// [`RUN_TABLES`].
@@ -829,7 +829,13 @@ fn write_folder(
         done: AtomicUsize::new(0),
     };
     let measures = measures.finish()?;
-    crate::write_measures(&dir, run.recording, &measures, outputs.figures)?;
+    crate::write_measures(
+        &dir,
+        run.recording,
+        &measures,
+        outputs.figures,
+        outputs.tables,
+    )?;
     if outputs.figures.any() {
         steps.step();
     }

@@ -92,7 +92,7 @@ impl Table {
 }
 
 /// Appends one CSV line of `cells` (as [`Table::to_csv`] writes it) to `s`.
-pub(crate) fn push_csv_line(s: &mut String, cells: &[Cell]) {
+pub fn push_csv_line(s: &mut String, cells: &[Cell]) {
     push_csv_row(s, cells)
 }
 

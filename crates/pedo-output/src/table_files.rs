@@ -1,6 +1,6 @@
 //! Table files: CSV or Parquet (`--tables csv|parquet`, `tables="parquet"` in Python).
 //!
-//! Every table of a run (pairs, objects, matches, tracks, frames) and a study's table is written
+//! Every table of a run (pairs, objects, matches, tracks, frames, curves) and a study's tables is written
 //! in one of two formats, with the same columns (the same names, units in the names: see
 //! [`crate::table`]) and the same rows:
 //!
@@ -195,7 +195,10 @@ fn kind_of_empty(name: &str) -> Kind {
         | "crossings"
         | "frames"
         | "pairs"
-        | "tracks" => Kind::Int,
+        | "tracks"
+        | "stance"
+        | "complete"
+        | "percent" => Kind::Int,
         _ => Kind::Float,
     }
 }
@@ -246,7 +249,7 @@ fn parquet_error(e: parquet::errors::ParquetError) -> std::io::Error {
 /// group every [`ROW_GROUP_ROWS`] rows. The columns' types are fixed when the first row group is
 /// written (see the module docs); a later value of another type is an error, except an integer
 /// in a `DOUBLE` column.
-pub(crate) struct ParquetWriter<W: Write + Send> {
+pub struct ParquetWriter<W: Write + Send> {
     columns: Vec<Column>,
     rows: usize,
     sink: Option<W>,

@@ -13,6 +13,8 @@
 //! - the study table keeps the rows of its previous version for recordings not in this run
 //!   ([`kept_rows`]), so that a run on part of a study does not drop the rest; `study.json`
 //!   says what produced it ([`study_json`]);
+//! - [`write_study_curves`] writes every folder's stance-normalised curves as one long table
+//!   (`study_curves.csv`), for 1-D statistics over the curves;
 //! - [`run_recording`] is one row of that table, for callers that distribute the recordings
 //!   themselves (Python's `pymodal.batch_row`, e.g. on a Dask cluster).
 //!
@@ -34,6 +36,9 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
+
+pub mod curves;
+pub use curves::{write_study_curves, STUDY_CURVES, STUDY_CURVES_COLUMNS};
 
 /// Marks a folder as a study output ([`run_study`] writes only into an empty folder or one
 /// holding it).
@@ -861,6 +866,7 @@ pub fn run_study(
         let json = study_json(provenance, &rows, &kept, earlier);
         let all: Vec<StudyRow> = rows.iter().chain(&kept).cloned().collect();
         write_study_table(out, &all, &json, opts.outputs.tables)?;
+        curves::write_study_curves(out, &all, opts.outputs.tables)?;
     }
     Ok(StudyRun { rows, kept })
 }
@@ -1235,7 +1241,7 @@ fn rows_of_unlisted_folders(out: &Path, previous: &[StudyRow]) -> Vec<StudyRow> 
 
 /// Removes what runs killed while writing into study folder `out` left: recording folders
 /// being staged (`.NAME.pedomatch-tmp-PID`) and study tables being written
-/// (`.study.csv.tmp-PID`, …) of processes that no longer run.
+/// (`.study.csv.tmp-PID`, `.study_curves.csv.tmp-PID`, …) of processes that no longer run.
 fn sweep_staging(out: &Path) {
     let Ok(entries) = std::fs::read_dir(out) else {
         return;
@@ -1245,10 +1251,8 @@ fn sweep_staging(out: &Path) {
         let pid = name
             .strip_prefix('.')
             .and_then(|n| {
-                n.rsplit_once(".pedomatch-tmp-").or_else(|| {
-                    n.strip_prefix("study.")
-                        .and_then(|n| n.rsplit_once(".tmp-"))
-                })
+                n.rsplit_once(".pedomatch-tmp-")
+                    .or_else(|| n.strip_prefix("study").and_then(|n| n.rsplit_once(".tmp-")))
             })
             .and_then(|(_, pid)| pid.parse::<u32>().ok());
         if let Some(pid) = pid

@@ -322,9 +322,16 @@ impl PyRecording {
     /// ``load_time_integral``, ``contact_time``, ``max_contact_area``: floats), ``units`` (the
     /// unit of each value: kPa, kPa·s, N, N·s, s, mm² when the recording says so, else the
     /// file's units, frames or sensels), ``frames``, ``contact_frames`` (the first and last frame
-    /// above the contact force threshold) and ``contact_force_threshold``. The same as a run
-    /// folder's ``peak.npy``, ``pti.npy``, ``mean.npy`` and ``measures.json``. An ``InputError``
-    /// when no sensor is loaded in any frame.
+    /// above the contact force threshold) and ``contact_force_threshold``; ``stances``, a list
+    /// with a dict per stance (foot contact, docs/measures.md): ``frames`` (first and last,
+    /// inclusive), ``complete`` (False when it touches the first or last frame measured),
+    /// ``values`` (``start_time``, ``end_time``, ``contact_time``, ``peak_force`` or
+    /// ``peak_load``, ``fti`` or ``load_time_integral``, ``peak_pressure``,
+    /// ``max_contact_area``), ``units`` and ``curves``: float64 arrays of 101 points over 0–100 %
+    /// of contact, ``percent``, ``contact_area``, ``total_force``, ``peak_pressure``, ``cop_x``
+    /// and ``cop_y`` (sensels; NaN only when no frame of the stance has load). The same as a run
+    /// folder's ``peak.npy``, ``pti.npy``, ``mean.npy``, ``measures.json`` and ``curves.csv``.
+    /// An ``InputError`` when no sensor is loaded in any frame.
     #[pyo3(signature = (threshold=0.0, frames=None))]
     fn gait_measures<'py>(
         &self,
@@ -356,6 +363,7 @@ impl PyRecording {
         d.set_item("frames", (m.frames.start, m.frames.end))?;
         d.set_item("contact_frames", m.values.contact_frames)?;
         d.set_item("contact_force_threshold", m.values.contact_force_threshold)?;
+        d.set_item("stances", stances_list(py, &m)?)?;
         Ok(d)
     }
     fn __len__(&self) -> usize {
@@ -388,6 +396,42 @@ impl PyRecording {
             repr(r.known_units().into_pyobject(py)?.into_any())?,
         ))
     }
+}
+
+/// The stances of `m` as [`PyRecording::gait_measures`] gives them.
+fn stances_list<'py>(
+    py: Python<'py>,
+    m: &pedo_io::measures::Measures,
+) -> PyResult<Bound<'py, pyo3::types::PyList>> {
+    let list = pyo3::types::PyList::empty(py);
+    let array = |v: Vec<f64>| read_only(PyArray1::from_vec(py, v).into_any());
+    let opt = |v: &[Option<f64>]| v.iter().map(|x| x.unwrap_or(f64::NAN)).collect::<Vec<_>>();
+    for s in &m.stances {
+        let d = PyDict::new(py);
+        d.set_item("frames", (s.stance.first, s.stance.last))?;
+        d.set_item("complete", s.stance.complete)?;
+        let (values, units) = (PyDict::new(py), PyDict::new(py));
+        for q in s.quantities(&m.units) {
+            values.set_item(q.name, q.value)?;
+            units.set_item(q.name, q.unit)?;
+        }
+        d.set_item("values", values)?;
+        d.set_item("units", units)?;
+        let c = &s.curves;
+        let curves = PyDict::new(py);
+        let percent = (0..pedo_io::stances::CURVE_POINTS)
+            .map(|p| p as f64)
+            .collect();
+        curves.set_item("percent", array(percent)?)?;
+        curves.set_item("contact_area", array(c.area.clone())?)?;
+        curves.set_item("total_force", array(c.force.clone())?)?;
+        curves.set_item("peak_pressure", array(c.peak_pressure.clone())?)?;
+        curves.set_item("cop_x", array(opt(&c.cop_x))?)?;
+        curves.set_item("cop_y", array(opt(&c.cop_y))?)?;
+        d.set_item("curves", curves)?;
+        list.append(d)?;
+    }
+    Ok(list)
 }
 
 /// `read_recording`, its keywords from the one declaration of each option (`crate::keywords`):

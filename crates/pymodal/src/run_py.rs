@@ -229,6 +229,12 @@ fn run_recording<'py>(
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
     let measures = pedo_output::frames_table(&rec, threshold, start, end);
     dict.set_item("frames", table_rows(py, &measures)?)?;
+    let m = crate::pool::detach(py, || {
+        pedo_io::measures::Measures::of_recording(&rec, threshold, start..end)
+    })
+    .map_err(to_py)?;
+    let curves = pedo_output::curves_table(&rec, &m);
+    dict.set_item("curves", table_rows(py, &curves)?)?;
     let summary = match summary {
         Some(summary) => summary,
         None => {
@@ -241,10 +247,6 @@ fn run_recording<'py>(
                 &[("read", read_time)],
             );
             // The measures a folder's summary.json holds (a folder computes them as it runs).
-            let m = crate::pool::detach(py, || {
-                pedo_io::measures::Measures::of_recording(&rec, threshold, start..end)
-            })
-            .map_err(to_py)?;
             summary["measures"] = pedo_output::measure_values_json(&m);
             summary
         }

@@ -325,7 +325,9 @@ def surface(
     z_scale: Literal["xy", "keep"] = "xy",
 ) -> Surface: ...
 # run's result (RunResult, a dict) holds, besides table, matches, objects, tracks, track_steps,
-# frames, summary and timings, "reference_matches": with drift correction, one ReferenceMatch
+# frames, curves (the rows of curves.csv as dicts: stance, complete, percent and the frames
+# table's measures at 0..100 % of each stance's contact), summary and timings,
+# "reference_matches": with drift correction, one ReferenceMatch
 # per reference pair (an empty list without); and for the contour model "points" (per material
 # point followed by anchored registration, a FloatArray of rows frame, x, y in pixels) with
 # "point_steps" (an IntArray of rows object id, seed node; -1 for no node), empty lists for the

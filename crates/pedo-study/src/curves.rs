@@ -1,0 +1,201 @@
+//! A study's stance-normalised curves in one long table (`study_curves.csv` or
+//! `study_curves.parquet`): every row of every recording folder's `curves` table
+//! ([`pedo_output::curves_table`]), headed by the recording's `path` and `output` folder, ready
+//! for 1-D statistics over the curves (spm1d: one curve per recording and stance).
+//!
+//! The table is made from the folders themselves, as the study table is from their
+//! `summary.json`: a resumed or partial study lists the rows of every folder its study table
+//! lists. It is written row by row to a staging file and renamed into place, so it appears
+//! whole or not at all and never holds the study in memory.
+
+use crate::StudyRow;
+use pedo_io::{IoError, Result};
+use pedo_output::{Cell, ParquetWriter, TableFormat, CURVES};
+use std::io::Write;
+use std::path::Path;
+
+/// The study curves table's name (`study_curves.csv` or `.parquet`).
+pub const STUDY_CURVES: &str = "study_curves";
+
+/// The columns of the study curves table: the recording, then the columns of every folder's
+/// curves table a recording may have (a recording without one of them, e.g. without pressure
+/// units or a pitch, leaves it empty, so that a column never mixes units). More measures of a
+/// stance are more columns.
+pub const STUDY_CURVES_COLUMNS: [&str; 12] = [
+    "path",
+    "output",
+    "stance",
+    "complete",
+    "percent",
+    "contact_area_mm2",
+    "total_force_n",
+    "peak_pressure_kpa",
+    "cop_x",
+    "cop_y",
+    "cop_x_mm",
+    "cop_y_mm",
+];
+
+/// The curves table of a recording's folder, `curves.csv` or `curves.parquet` (whichever is
+/// there, `tables`' first): its header and rows. `None` when the folder has neither (written
+/// by a pedomatch before the curves) or it cannot be read.
+fn folder_curves(folder: &Path, tables: TableFormat) -> Option<(Vec<String>, Vec<Vec<Cell>>)> {
+    let other = match tables {
+        TableFormat::Csv => TableFormat::Parquet,
+        TableFormat::Parquet => TableFormat::Csv,
+    };
+    [tables, other].into_iter().find_map(|f| {
+        let path = folder.join(f.file_name(CURVES));
+        match f {
+            TableFormat::Csv => read_csv(&path),
+            TableFormat::Parquet => read_parquet(&path),
+        }
+    })
+}
+
+/// A curves CSV (numbers and empty fields only).
+fn read_csv(path: &Path) -> Option<(Vec<String>, Vec<Vec<Cell>>)> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next()?.split(',').map(str::to_string).collect();
+    let rows = lines
+        .map(|line| {
+            line.split(',')
+                .map(|f| {
+                    if f.is_empty() {
+                        Some(Cell::Empty)
+                    } else if let Ok(v) = f.parse::<i64>() {
+                        Some(Cell::Int(v))
+                    } else {
+                        let decimals = f.split_once('.').map_or(0, |(_, d)| d.len());
+                        f.parse::<f64>().ok().map(|v| Cell::Float(v, decimals))
+                    }
+                })
+                .collect::<Option<Vec<Cell>>>()
+        })
+        .collect::<Option<Vec<_>>>()?;
+    Some((header, rows))
+}
+
+/// A curves Parquet file, its numbers written back with the decimals of the CSV (4).
+fn read_parquet(path: &Path) -> Option<(Vec<String>, Vec<Vec<Cell>>)> {
+    use parquet::file::reader::{FileReader, SerializedFileReader};
+    use parquet::record::Field;
+    let reader = SerializedFileReader::new(std::fs::File::open(path).ok()?).ok()?;
+    let header: Vec<String> = reader
+        .metadata()
+        .file_metadata()
+        .schema_descr()
+        .columns()
+        .iter()
+        .map(|c| c.name().to_string())
+        .collect();
+    let mut rows = Vec::new();
+    for row in reader.get_row_iter(None).ok()? {
+        let row = row.ok()?;
+        let cells = row
+            .get_column_iter()
+            .map(|(_, field)| match field {
+                Field::Null => Some(Cell::Empty),
+                Field::Long(v) => Some(Cell::Int(*v)),
+                Field::Double(v) => Some(Cell::Float(*v, 4)),
+                _ => None,
+            })
+            .collect::<Option<Vec<Cell>>>()?;
+        rows.push(cells);
+    }
+    Some((header, rows))
+}
+
+/// Where each of a folder's columns goes in the study table (`None`: a column it does not
+/// have, e.g. of a newer version).
+fn placement(header: &[String]) -> Vec<Option<usize>> {
+    header
+        .iter()
+        .map(|h| STUDY_CURVES_COLUMNS.iter().position(|c| c == h))
+        .collect()
+}
+
+/// Writes the curves of `rows`' folders under `out` (rows with a folder, in their order) as
+/// `study_curves.csv` (or `.parquet`, as `tables` says), replacing it in one rename; the table
+/// of the other format, left by an earlier run, is removed. A folder without a curves table
+/// (written before pedomatch wrote one) adds no row.
+pub fn write_study_curves(out: &Path, rows: &[StudyRow], tables: TableFormat) -> Result<()> {
+    let name = tables.file_name(STUDY_CURVES);
+    let target = out.join(&name);
+    let tmp = out.join(format!(".{name}.tmp-{}", std::process::id()));
+    let written = write_to(&tmp, out, rows, tables).and_then(|()| std::fs::rename(&tmp, &target));
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(IoError::Io {
+            path: target.display().to_string(),
+            source: e,
+        });
+    }
+    let other = match tables {
+        TableFormat::Csv => TableFormat::Parquet,
+        TableFormat::Parquet => TableFormat::Csv,
+    };
+    let _ = std::fs::remove_file(out.join(other.file_name(STUDY_CURVES)));
+    Ok(())
+}
+
+/// The staging file of the study curves, CSV or Parquet, row by row.
+enum RowSink {
+    Csv(std::io::BufWriter<std::fs::File>),
+    Parquet(Box<ParquetWriter<std::io::BufWriter<std::fs::File>>>),
+}
+
+impl RowSink {
+    fn push(&mut self, cells: &[Cell]) -> std::io::Result<()> {
+        match self {
+            RowSink::Csv(w) => {
+                let mut line = String::new();
+                pedo_output::push_csv_line(&mut line, cells);
+                w.write_all(line.as_bytes())
+            }
+            RowSink::Parquet(p) => p.push(cells),
+        }
+    }
+
+    fn finish(self) -> std::io::Result<()> {
+        match self {
+            RowSink::Csv(mut w) => w.flush(),
+            RowSink::Parquet(p) => p.finish_into_inner()?.flush(),
+        }
+    }
+}
+
+fn write_to(tmp: &Path, out: &Path, rows: &[StudyRow], tables: TableFormat) -> std::io::Result<()> {
+    let header: Vec<String> = STUDY_CURVES_COLUMNS.iter().map(|s| s.to_string()).collect();
+    let mut file = std::io::BufWriter::new(std::fs::File::create(tmp)?);
+    let mut sink = match tables {
+        TableFormat::Csv => {
+            let mut line = header.join(",");
+            line.push('\n');
+            file.write_all(line.as_bytes())?;
+            RowSink::Csv(file)
+        }
+        TableFormat::Parquet => RowSink::Parquet(Box::new(ParquetWriter::new(file, &header))),
+    };
+    for row in rows {
+        let Some(output) = &row.output else { continue };
+        let Some((cols, cells)) = folder_curves(&out.join(output), tables) else {
+            continue;
+        };
+        let at = placement(&cols);
+        for r in cells {
+            let mut full = vec![Cell::Empty; STUDY_CURVES_COLUMNS.len()];
+            full[0] = Cell::Text(row.path.clone());
+            full[1] = Cell::Text(output.clone());
+            for (cell, to) in r.into_iter().zip(&at) {
+                if let Some(k) = to.filter(|&k| k > 1) {
+                    full[k] = cell;
+                }
+            }
+            sink.push(&full)?;
+        }
+    }
+    sink.finish()?;
+    std::fs::File::open(tmp)?.sync_all()
+}
