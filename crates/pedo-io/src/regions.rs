@@ -139,7 +139,9 @@ pub struct FootAxis {
     /// The foot's length along its axis, between the outermost sensel centres (mm).
     pub length: f64,
     /// Left or right foot, as the MUN104 templates lie: a left foot with its toes towards
-    /// larger rows has its hallux towards larger columns.
+    /// larger rows has its hallux towards larger columns. An image seen from the other face
+    /// of the sensor (as Tekscan's F-Scan insoles are) names the other foot; the masks do not
+    /// depend on the name, only on the medial side found.
     pub side: Side,
     /// What told the heel from the toes.
     pub heel_toe_cue: HeelToeCue,
@@ -864,6 +866,124 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Every frame of `rec` turned by `deg` about the centre of a `side × side` canvas
+    /// (bilinear), square sensels of the recording's pitch.
+    fn turned_recording(rec: &Recording, deg: f64, side: usize) -> Recording {
+        let (rows, cols) = (rec.rows(), rec.cols());
+        let (s, co) = deg.to_radians().sin_cos();
+        let (cx, cy) = ((cols - 1) as f64 / 2.0, (rows - 1) as f64 / 2.0);
+        let m = (side - 1) as f64 / 2.0;
+        let mut data = Vec::with_capacity(rec.n_frames() * side * side);
+        for t in 0..rec.n_frames() {
+            let f = rec.frame_slice(t).unwrap();
+            let get = |r: isize, c: isize| {
+                if r < 0 || c < 0 || r >= rows as isize || c >= cols as isize {
+                    0.0
+                } else {
+                    f64::from(f[r as usize * cols + c as usize])
+                }
+            };
+            for r in 0..side {
+                for c in 0..side {
+                    let (x, y) = (c as f64 - m, r as f64 - m);
+                    let (ox, oy) = (co * x + s * y + cx, -s * x + co * y + cy);
+                    let (x0, y0) = (ox.floor(), oy.floor());
+                    let (fx, fy) = (ox - x0, oy - y0);
+                    let (x0, y0) = (x0 as isize, y0 as isize);
+                    let v = get(y0, x0) * (1.0 - fx) * (1.0 - fy)
+                        + get(y0, x0 + 1) * fx * (1.0 - fy)
+                        + get(y0 + 1, x0) * (1.0 - fx) * fy
+                        + get(y0 + 1, x0 + 1) * fx * fy;
+                    data.push(v as f32);
+                }
+            }
+        }
+        let mut out = Recording::new(rec.n_frames(), side, side, data, vec![true; side * side])
+            .unwrap()
+            .with_units(rec.units.clone());
+        out.pitch_mm = rec.pitch_mm;
+        out.dt_s = rec.dt_s;
+        out
+    }
+
+    /// The real emed step of pressuRe: the regions partition the sensels ever loaded, their
+    /// FTIs add up to the recording's, and their shares of the impulse move by less than 2
+    /// percentage points when the whole recording is turned by 10°.
+    #[test]
+    fn a_real_step_s_regions_are_stable_under_a_turn() {
+        let path = format!(
+            "{}/../../benches/data/emed-pressuRe-step.lst",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        let rec = crate::read_recording(path).unwrap();
+        let n = rec.n_frames();
+        for rule in [RegionRule::Coarse, RegionRule::Fine] {
+            let (masks, values) = recording_regions(&rec, 0.0, 0..n, rule).unwrap();
+            let m = Measures::of_recording(&rec, 0.0, 0..n).unwrap();
+            let loaded = m.pti.iter().filter(|&&q| q > 0.0).count();
+            assert_eq!(masks.labels.iter().filter(|&&l| l > 0).count(), loaded);
+            let fti: f64 = values.iter().map(|v| v.fti).sum();
+            assert!((fti - m.values.fti).abs() < 1e-9 * m.values.fti, "{fti}");
+            let share: f64 = values.iter().map(|v| v.impulse_share).sum();
+            assert!((share - 100.0).abs() < 1e-9);
+            let peak = values.iter().map(|v| v.peak_pressure).fold(0.0, f64::max);
+            assert_eq!(peak, m.values.peak_pressure);
+            for v in &values {
+                assert!(v.sensels > 0 && v.fti > 0.0, "{rule:?}: {v:?}");
+                assert!(v.contact_time > 0.0 && v.contact_time <= m.values.contact_time + 1e-12);
+                assert!(v.max_contact_area <= m.values.max_contact_area);
+            }
+            // A walking step: the heel is found from the centre of pressure's path.
+            let axis = masks.axis.as_ref().unwrap();
+            assert_eq!(axis.heel_toe_cue, HeelToeCue::CopPath);
+            for deg in [-10.0, 10.0] {
+                let side = 130;
+                let turned = turned_recording(&rec, deg, side);
+                let (tm, tv) = recording_regions(&turned, 0.0, 0..n, rule).unwrap();
+                assert_eq!(tm.axis.as_ref().unwrap().side, axis.side, "{rule:?} {deg}");
+                let worst = (values.iter().zip(&tv))
+                    .map(|(a, b)| (a.impulse_share - b.impulse_share).abs())
+                    .fold(0.0, f64::max);
+                eprintln!("{rule:?} turned {deg}°: largest change of a share {worst:.3} points");
+                for (a, b) in values.iter().zip(&tv) {
+                    let d = (a.impulse_share - b.impulse_share).abs();
+                    assert!(
+                        d < 2.0,
+                        "{rule:?} {deg}°: {} {:.2} % vs {:.2} %",
+                        a.name,
+                        a.impulse_share,
+                        b.impulse_share
+                    );
+                }
+            }
+        }
+    }
+
+    /// Real walks: the footscan step of pressuRe is a right foot; the F-Scan insole of the
+    /// left foot, whose midfoot contact lies towards column 0 (its image seen from the other
+    /// face than MUN104's, so named right), has its medial side towards larger columns.
+    #[test]
+    fn real_walks_have_their_medial_side() {
+        let root = env!("CARGO_MANIFEST_DIR");
+        let read = |f: &str| crate::read_recording(format!("{root}/{f}")).unwrap();
+        let rec = read("../../benches/data/footscan-pressuRe-barefoot.txt");
+        let (m, _) = recording_regions(&rec, 0.0, 0..rec.n_frames(), RegionRule::Fine).unwrap();
+        let axis = m.axis.unwrap();
+        assert_eq!(axis.side, Side::Right);
+        assert_eq!(axis.heel_toe_cue, HeelToeCue::CopPath);
+        let rec = read("tests/data/FrasP01L.asf");
+        let (m, v) = recording_regions(&rec, 0.0, 0..rec.n_frames(), RegionRule::Fine).unwrap();
+        let axis = m.axis.unwrap();
+        assert!(axis.medial[0] > 0.9, "{axis:?}");
+        // Toes towards row 0, the heel at the other end.
+        assert!(axis.direction[1] < -0.9, "{axis:?}");
+        // The heel carries more of the impulse than the toes in this walk.
+        let share = |n: &str| v.iter().find(|r| r.name == n).unwrap().impulse_share;
+        assert!(
+            share("heel_medial") + share("heel_lateral") > share("hallux") + share("lesser_toes")
+        );
     }
 
     #[test]
