@@ -265,7 +265,7 @@ pub fn foot_axis(
             (lo.min(t), hi.max(t))
         });
     let length = hi - lo;
-    if !(length > 0.0) {
+    if length.is_nan() || length <= 0.0 {
         return Err(IoError::invalid(
             "the footprint has no length to divide into regions",
         ));
@@ -603,9 +603,12 @@ impl RegionSeries {
                 count[usize::from(l) - 1] += 1;
             }
         }
-        for k in 0..r {
-            self.forces[k].push(load[k] * self.force_factor);
-            self.contact[k] = self.contact[k].max(count[k]);
+        for (((f, c), l), n) in (self.forces.iter_mut().zip(&mut self.contact))
+            .zip(&load)
+            .zip(&count)
+        {
+            f.push(l * self.force_factor);
+            *c = (*c).max(*n);
         }
         Ok(())
     }
@@ -632,7 +635,7 @@ impl RegionSeries {
             .map(|f| f.iter().sum::<f64>() * self.dt)
             .collect();
         let total: f64 = ftis.iter().sum();
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return Err(IoError::invalid(
                 "no region is loaded in any frame: the regions have no impulse to share",
             ));
@@ -848,7 +851,8 @@ mod tests {
                         let across = |n: &str| dot(centroid(&m, n), md);
                         match rule {
                             RegionRule::Coarse => {
-                                let a: Vec<f64> = COARSE_REGIONS.iter().map(|n| along(n)).collect();
+                                let a: Vec<f64> =
+                                    COARSE_REGIONS.iter().map(|&n| along(n)).collect();
                                 assert!(a.windows(2).all(|w| w[0] < w[1]), "{case}: {a:?}");
                             }
                             RegionRule::Fine => {

@@ -215,6 +215,12 @@ class Recording:
     def gait_measures(
         self, threshold: float = 0.0, frames: Optional[Tuple[int, int]] = None
     ) -> dict[str, Any]: ...
+    def regions(
+        self,
+        rule: Literal["coarse", "fine"] = "fine",
+        threshold: float = 0.0,
+        frames: Optional[Tuple[int, int]] = None,
+    ) -> dict[str, Any]: ...
     def __len__(self) -> int: ...
 
 class Surface:
@@ -382,6 +388,7 @@ def run(
     tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
+    region_rule: Optional[Literal["none", "coarse", "fine"]] = None,
     # @end generated
 ) -> RunResult: ...
 
@@ -408,6 +415,7 @@ def batch(
     tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
+    region_rule: Optional[Literal["none", "coarse", "fine"]] = None,
     # @end generated
     layout: Optional[Path] = None,
     **options: Any,
@@ -428,6 +436,7 @@ def batch_row(
     tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
+    region_rule: Optional[Literal["none", "coarse", "fine"]] = None,
     # @end generated
     layout: Optional[Path] = None,
     **options: Any,
