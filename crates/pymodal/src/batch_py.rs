@@ -33,7 +33,7 @@ fn input_strings(inputs: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<String>>
 }
 
 /// What a run's folder holds, from the keywords ``figures``, ``figure_format``, ``tables``,
-/// ``report`` and ``animation`` (each None at its default): the output options of
+/// ``report``, ``animation`` and ``region_rule`` (each None at its default): the output options of
 /// ``pedomatch run`` and ``batch``, declared once in `pedo_output::OutputOptions`.
 pub(crate) fn run_outputs(
     figures: Option<&Bound<'_, PyAny>>,
@@ -41,6 +41,7 @@ pub(crate) fn run_outputs(
     tables: Option<&Bound<'_, PyAny>>,
     report: Option<&Bound<'_, PyAny>>,
     animation: Option<&Bound<'_, PyAny>>,
+    region_rule: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<RunOutputs> {
     let given = [
         ("figures", figures),
@@ -48,6 +49,7 @@ pub(crate) fn run_outputs(
         ("tables", tables),
         ("report", report),
         ("animation", animation),
+        ("region_rule", region_rule),
     ];
     let options: pedo_output::OutputOptions = crate::options_py::option_set(|name| {
         given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v)
@@ -145,7 +147,7 @@ fn find_recordings(py: Python<'_>, inputs: &Bound<'_, PyAny>) -> PyResult<Vec<St
 /// folders, those running or not started leave none (a folder of an earlier run stays as it
 /// was), and the study table is not written.
 #[pyfunction]
-#[pyo3(signature = (paths, out=None, jobs=None, *, force=false, figures=None, figure_format=None, tables=None, report=None, animation=None, layout=None, **options))]
+#[pyo3(signature = (paths, out=None, jobs=None, *, force=false, figures=None, figure_format=None, tables=None, report=None, animation=None, region_rule=None, layout=None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn batch<'py>(
     py: Python<'py>,
@@ -158,12 +160,20 @@ fn batch<'py>(
     tables: Option<&Bound<'py, PyAny>>,
     report: Option<&Bound<'py, PyAny>>,
     animation: Option<&Bound<'py, PyAny>>,
+    region_rule: Option<&Bound<'py, PyAny>>,
     layout: Option<PathBuf>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let inputs = input_strings(paths, "paths")?;
     let study = study_params(py, jobs, force)?;
-    let outputs = run_outputs(figures, figure_format, tables, report, animation)?;
+    let outputs = run_outputs(
+        figures,
+        figure_format,
+        tables,
+        report,
+        animation,
+        region_rule,
+    )?;
     let mut opts = study_options(py, inputs, out, study, outputs, options)?;
     opts.read.layout = layout;
     // Ctrl-C stops the study as the command line's does (the recordings finished keep their
@@ -194,7 +204,7 @@ fn batch<'py>(
 /// what went wrong); bad options raise. ``figures``, ``figure_format``, ``tables``, ``report``,
 /// ``animation`` and ``layout`` as for :func:`batch`.
 #[pyfunction]
-#[pyo3(signature = (path, out=None, *, force=false, figures=None, figure_format=None, tables=None, report=None, animation=None, layout=None, **options))]
+#[pyo3(signature = (path, out=None, *, force=false, figures=None, figure_format=None, tables=None, report=None, animation=None, region_rule=None, layout=None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn batch_row<'py>(
     py: Python<'py>,
@@ -206,11 +216,19 @@ fn batch_row<'py>(
     tables: Option<&Bound<'py, PyAny>>,
     report: Option<&Bound<'py, PyAny>>,
     animation: Option<&Bound<'py, PyAny>>,
+    region_rule: Option<&Bound<'py, PyAny>>,
     layout: Option<PathBuf>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let inputs = vec![path.display().to_string()];
-    let outputs = run_outputs(figures, figure_format, tables, report, animation)?;
+    let outputs = run_outputs(
+        figures,
+        figure_format,
+        tables,
+        report,
+        animation,
+        region_rule,
+    )?;
     // One recording, on one thread.
     let study = StudyParams {
         jobs: Some(1),

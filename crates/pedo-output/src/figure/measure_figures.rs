@@ -271,4 +271,48 @@ mod tests {
         assert_eq!(format_value(812.345), "812.3");
         assert_eq!(format_value(0.012345), "0.01235");
     }
+
+    #[test]
+    fn the_regions_figure_outlines_each_region_and_names_it() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../pedo-io/tests/data/synthetic-walk.lst"
+        );
+        let rec = pedo_io::read_recording(path).unwrap();
+        let n = rec.n_frames();
+        let m = Measures::of_recording(&rec, 0.0, 0..n).unwrap();
+        let (masks, _) = pedo_io::regions::recording_regions(
+            &rec,
+            0.0,
+            0..n,
+            pedo_io::regions::RegionRule::Fine,
+        )
+        .unwrap();
+        let axes = FigureAxes::of_recording(&rec);
+        let fig = RegionFigure {
+            measures: &m,
+            masks: &masks,
+            axes: &axes,
+        };
+        let svg = fig.to_svg().unwrap();
+        for name in [
+            "heel medial",
+            "mh3 5",
+            "lesser toes",
+            "foot axis",
+            "Regions (fine)",
+        ] {
+            assert!(svg.contains(name), "{name}");
+        }
+        assert!(fig.to_png().unwrap().starts_with(b"\x89PNG"));
+        // Masks of another size are an error, not a panic.
+        let mut wrong = masks.clone();
+        wrong.rows += 1;
+        let fig = RegionFigure {
+            measures: &m,
+            masks: &wrong,
+            axes: &axes,
+        };
+        assert!(fig.to_svg().is_err());
+    }
 }
