@@ -31,6 +31,7 @@ pub mod measures;
 pub mod points;
 pub mod preprocess;
 pub mod recording;
+pub mod regions;
 pub mod stances;
 pub mod surface;
 pub mod synthetic;

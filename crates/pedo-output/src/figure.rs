@@ -32,7 +32,7 @@ mod measure_figures;
 mod text;
 
 pub use animation::{Animation, DEFAULT_GIF_DELAY_CS, MAX_ANIMATION_FRAMES, MIN_GIF_DELAY_CS};
-pub use measure_figures::{MeasureFigure, MeasureImage};
+pub use measure_figures::{MeasureFigure, MeasureImage, RegionFigure};
 
 /// The bundled font (DejaVu Sans; licence in `fonts/LICENSE-DejaVu.txt`).
 static FONT_BYTES: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");

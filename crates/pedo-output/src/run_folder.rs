@@ -87,6 +87,37 @@ modal_core::choice!(FigureSet, "figures", [
     "none" => FigureSet::None,
 ]);
 
+/// Which anatomical regions a run divides the footprint into (`--region-rule`,
+/// `region_rule=`; [`pedo_io::regions`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RegionChoice {
+    /// No regions.
+    #[default]
+    None,
+    /// Hindfoot, midfoot, forefoot, toes.
+    Coarse,
+    /// Medial and lateral heel, midfoot, first, second and lateral metatarsal heads, hallux,
+    /// lesser toes.
+    Fine,
+}
+
+modal_core::choice!(RegionChoice, "region_rule", [
+    "none" => RegionChoice::None,
+    "coarse" => RegionChoice::Coarse,
+    "fine" => RegionChoice::Fine,
+]);
+
+impl RegionChoice {
+    /// The rule of [`pedo_io::regions`], `None` for no regions.
+    pub fn rule(self) -> Option<pedo_io::regions::RegionRule> {
+        match self {
+            RegionChoice::None => None,
+            RegionChoice::Coarse => Some(pedo_io::regions::RegionRule::Coarse),
+            RegionChoice::Fine => Some(pedo_io::regions::RegionRule::Fine),
+        }
+    }
+}
+
 /// The file format of a run's figures (`--figure-format`, `figure_format=`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FigureFormat {
@@ -159,6 +190,10 @@ modal_core::option_set! {
         animation: AnimationFormat = AnimationFormat::default();
             Word(<AnimationFormat as Choice>::NAMES), AnimationFormat::default(),
             "The recording played back: gif writes animation.gif (pressure frames with their contours and matches; long runs decimated to at most 150 frames); none writes none.";
+        /// The anatomical regions of the footprint.
+        region_rule: RegionChoice = RegionChoice::default();
+            Word(<RegionChoice as Choice>::NAMES), RegionChoice::default(),
+            "Anatomical regions of the footprint, found from the peak image and the centre of pressure's path, with each region's peak pressure, PTI, FTI, contact area, contact time and share of the impulse (regions.csv, regions.json, regions.npy, regions.png): coarse (hindfoot, midfoot, forefoot, toes), fine (medial and lateral heel, midfoot, first, second and lateral metatarsal heads, hallux, lesser toes) or none. One foot per recording; a streamed run keeps its frames' loaded sensels for them.";
     }
 }
 
@@ -239,6 +274,8 @@ pub struct RunOutputs {
     pub animation: bool,
     /// The file format of the tables (and of a study's table).
     pub tables: TableFormat,
+    /// The rule of the footprint's anatomical regions (`regions.*`), `None` for none.
+    pub regions: Option<pedo_io::regions::RegionRule>,
 }
 
 impl RunOutputs {
@@ -251,6 +288,7 @@ impl RunOutputs {
             report: o.report == ReportFormat::Html,
             animation: o.animation == AnimationFormat::Gif,
             tables: o.tables,
+            regions: o.region_rule.rule(),
         }
     }
 }
@@ -786,7 +824,21 @@ fn write_folder(
         report: outputs
             .report
             .then(|| ReportGather::new(run.recording, run.options.frames)),
-        measures: crate::MeasuresSink::new(run.recording, run.options)?,
+        measures: {
+            let m = crate::MeasuresSink::new(run.recording, run.options)?;
+            let streamed = matches!(
+                &feed,
+                Feed::Run {
+                    frames: Some(_),
+                    ..
+                }
+            );
+            if streamed && outputs.regions.is_some() {
+                m.keeping_frames()
+            } else {
+                m
+            }
+        },
     };
     let (counts, ran, replayed) = match feed {
         Feed::Run {
@@ -828,7 +880,7 @@ fn write_folder(
         total: output_count(&counts, outputs, points),
         done: AtomicUsize::new(0),
     };
-    let measures = measures.finish()?;
+    let (measures, regions) = measures.finish_with_regions(run.recording, outputs.regions)?;
     crate::write_measures(
         &dir,
         run.recording,
@@ -836,6 +888,16 @@ fn write_folder(
         outputs.figures,
         outputs.tables,
     )?;
+    if let (Some(rule), Some(outcome)) = (outputs.regions, &regions) {
+        crate::write_regions(
+            &dir,
+            run.recording,
+            &measures,
+            rule,
+            outcome,
+            outputs.figures,
+        )?;
+    }
     if outputs.figures.any() {
         steps.step();
     }
@@ -1186,6 +1248,9 @@ pub fn write_run_folder(
 pub fn record_outputs(options: &mut Map<String, Value>, outputs: &RunOutputs) {
     if outputs.animation {
         options.insert("animation".into(), json!("gif"));
+    }
+    if let Some(rule) = outputs.regions {
+        options.insert("region_rule".into(), json!(rule.name()));
     }
 }
 

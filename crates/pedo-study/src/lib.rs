@@ -1374,7 +1374,53 @@ fn write_study_table(
     write("study.json", Ok(pretty(json).into_bytes()))?;
     write(name, bytes)?;
     let _ = std::fs::remove_file(out.join(other));
+    match study_regions_csv(out, rows) {
+        Some(csv) => write(STUDY_REGIONS, Ok(csv.into_bytes()))?,
+        None => {
+            let _ = std::fs::remove_file(out.join(STUDY_REGIONS));
+        }
+    }
     Ok(())
+}
+
+/// The long table of every region measure of a study's trials, beside its study table.
+pub const STUDY_REGIONS: &str = "study_regions.csv";
+
+/// `study_regions.csv`: the rows of each trial's `regions.csv` (region, measure, value, unit)
+/// after its path, `trial,region,measure,value,unit`, in the study table's order; `None` when
+/// no trial has regions (a study run without a region rule).
+fn study_regions_csv(out: &Path, rows: &[StudyRow]) -> Option<String> {
+    use pedo_output::Cell;
+    let mut table = pedo_output::Table {
+        header: ["trial", "region", "measure", "value", "unit"]
+            .map(String::from)
+            .to_vec(),
+        rows: Vec::new(),
+    };
+    for row in rows {
+        let Some(folder) = &row.output else { continue };
+        if row.status == RowStatus::Error {
+            continue;
+        }
+        let Ok(text) = std::fs::read_to_string(out.join(folder).join("regions.csv")) else {
+            continue;
+        };
+        for line in text.lines().skip(1) {
+            let f: Vec<&str> = line.split(',').collect();
+            if let [region, measure, value, unit] = f[..]
+                && let Ok(v) = value.parse::<f64>()
+            {
+                table.rows.push(vec![
+                    Cell::Text(row.path.clone()),
+                    Cell::Text(region.to_string()),
+                    Cell::Text(measure.to_string()),
+                    Cell::Float(v, 6),
+                    Cell::Text(unit.to_string()),
+                ]);
+            }
+        }
+    }
+    (!table.rows.is_empty()).then(|| table.to_csv())
 }
 
 /// The study table's file in study folder `out` when tables are written as `tables`.
@@ -1647,6 +1693,9 @@ fn complete_summary(
     }
     let mut files = run_table_files(outputs.tables, options);
     files.extend(pedo_output::MEASURE_FILES.map(String::from));
+    if outputs.regions.is_some() {
+        files.push("regions.json".into());
+    }
     if outputs.report {
         files.push("report.html".into());
     }

@@ -65,6 +65,7 @@ fn a_cancelled_study_keeps_finished_folders_and_writes_no_table() {
             report: false,
             animation: false,
             tables: Default::default(),
+            regions: None,
         },
     };
     // Cancelled as b makes progress, once a is done.

@@ -33,6 +33,7 @@ fn most_in_flight(jobs: usize, paths: &[PathBuf]) -> (usize, Vec<String>) {
             report: false,
             animation: false,
             tables: Default::default(),
+            regions: None,
         },
     };
     let state = Mutex::new((BTreeSet::new(), BTreeSet::new(), 0usize));

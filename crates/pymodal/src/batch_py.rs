@@ -121,7 +121,8 @@ macro_rules! define_batch {
         /// figures), ``"pairs"`` (those and a match figure per pair) or ``"none"``; ``figure_format``:
         /// ``"png"`` or ``"svg"``. ``report``: ``"html"`` (the
         /// self-contained ``report.html``) or ``"none"``. ``animation``: ``"gif"`` (``animation.gif``) or
-        /// ``"none"``. ``tables``:
+        /// ``"none"``. ``region_rule``: ``"coarse"`` or ``"fine"`` writes each recording's anatomical
+        /// regions (``regions.*``) and ``study_regions.csv``; ``"none"`` (the default) none. ``tables``:
         /// ``"csv"``, or ``"parquet"`` (typed, compressed columns with the CSV's names and values;
         /// ``pandas.read_parquet`` reads them; the study table is then ``study.parquet``). ``layout``: a
         /// pedar sensor-layout table for the pedar recordings (``--layout``; default: the bundled

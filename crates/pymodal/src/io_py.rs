@@ -366,6 +366,72 @@ impl PyRecording {
         d.set_item("stances", stances_list(py, &m)?)?;
         Ok(d)
     }
+    /// The footprint's anatomical regions and each one's measures (docs/measures.md,
+    /// Regions): ``rule`` ``"coarse"`` (hindfoot, midfoot, forefoot, toes) or ``"fine"``
+    /// (heel_medial, heel_lateral, midfoot, mh1, mh2, mh3_5, hallux, lesser_toes), over
+    /// ``frames=(start, end)`` (all by default), a sensel loaded above 0 and at or above
+    /// ``threshold``. A dict: ``labels`` (int array rows × cols, 0 outside the footprint, ``k``
+    /// for ``names[k - 1]``), ``names``, ``values`` (region → measure → value), ``units``
+    /// (measure → unit), ``side`` (``"left"``/``"right"``), ``heel_toe_cue``, ``axis``
+    /// (``heel_mm``, ``toe_mm``, ``direction``, ``medial``, ``length_mm``). The same as a run
+    /// folder's ``regions.npy`` and ``regions.json``. An ``InputError`` when the footprint is
+    /// too small to divide; ``NoObjectError`` when there is none.
+    #[pyo3(signature = (rule="fine", threshold=0.0, frames=None))]
+    fn regions<'py>(
+        &self,
+        py: Python<'py>,
+        rule: &str,
+        threshold: f64,
+        frames: Option<(usize, usize)>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        use pedo_io::regions::{recording_regions, RegionRule};
+        let rule = match rule {
+            "coarse" => RegionRule::Coarse,
+            "fine" => RegionRule::Fine,
+            other => {
+                return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                    "rule must be \"coarse\" or \"fine\", got {other:?}"
+                )))
+            }
+        };
+        let range = frames.map_or(0..self.inner.n_frames(), |(a, b)| a..b);
+        let rec = &self.inner;
+        let (masks, values, m) = crate::pool::detach(py, || {
+            let m = pedo_io::measures::Measures::of_recording(rec, threshold, range.clone())?;
+            let (masks, values) = recording_regions(rec, threshold, range, rule)?;
+            Ok::<_, pedo_io::IoError>((masks, values, m))
+        })
+        .map_err(to_py)?;
+        let labels: Vec<i64> = masks.labels.iter().map(|&l| i64::from(l)).collect();
+        let a = Array2::from_shape_vec((masks.rows, masks.cols), labels).map_err(internal)?;
+        let d = PyDict::new(py);
+        d.set_item("labels", read_only(a.into_pyarray(py).into_any())?)?;
+        d.set_item("names", masks.names.clone())?;
+        let (per, units) = (PyDict::new(py), PyDict::new(py));
+        for (region, measure, value, unit) in pedo_output::region_quantities(&m, &values) {
+            if per.get_item(&region)?.is_none() {
+                per.set_item(&region, PyDict::new(py))?;
+            }
+            per.get_item(&region)?
+                .ok_or_else(|| internal("region entry"))?
+                .set_item(measure, value)?;
+            units.set_item(measure, unit)?;
+        }
+        d.set_item("values", per)?;
+        d.set_item("units", units)?;
+        if let Some(axis) = &masks.axis {
+            d.set_item("side", axis.side.name())?;
+            d.set_item("heel_toe_cue", axis.heel_toe_cue.name())?;
+            let ax = PyDict::new(py);
+            ax.set_item("heel_mm", (axis.heel[0], axis.heel[1]))?;
+            ax.set_item("toe_mm", (axis.toe[0], axis.toe[1]))?;
+            ax.set_item("direction", (axis.direction[0], axis.direction[1]))?;
+            ax.set_item("medial", (axis.medial[0], axis.medial[1]))?;
+            ax.set_item("length_mm", axis.length)?;
+            d.set_item("axis", ax)?;
+        }
+        Ok(d)
+    }
     fn __len__(&self) -> usize {
         self.inner.n_frames()
     }

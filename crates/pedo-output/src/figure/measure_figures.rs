@@ -117,6 +117,108 @@ impl MeasureFigure<'_> {
     }
 }
 
+/// The regions of a footprint over its peak-pressure image: each region's outline in its own
+/// colour, named in the legend, and the foot's axis heel → toe (dashed).
+#[derive(Debug, Clone)]
+pub struct RegionFigure<'a> {
+    /// The measures whose peak image is drawn.
+    pub measures: &'a Measures,
+    /// The regions.
+    pub masks: &'a pedo_io::regions::RegionMasks,
+    /// The recording's scale ([`FigureAxes::of_recording`]).
+    pub axes: &'a FigureAxes,
+}
+
+impl RegionFigure<'_> {
+    /// The figure as PNG bytes.
+    pub fn to_png(&self) -> Result<Vec<u8>> {
+        render_png(&self.layout()?)
+    }
+
+    /// The figure as a standalone SVG document.
+    pub fn to_svg(&self) -> Result<String> {
+        render_svg(&self.layout()?)
+    }
+
+    fn layout(&self) -> Result<Layout> {
+        let (m, masks) = (self.measures, self.masks);
+        if masks.rows != m.rows || masks.cols != m.cols || masks.labels.len() != m.rows * m.cols {
+            return Err(IoError::invalid(
+                "the region masks do not fit the peak image",
+            ));
+        }
+        let mut layout = MeasureFigure {
+            measures: m,
+            image: MeasureImage::Peak,
+            axes: self.axes,
+        }
+        .layout()?;
+        let colour = |k: usize| TRACK_PALETTE[k % TRACK_PALETTE.len()];
+        let (rows, cols) = (m.rows as isize, m.cols as isize);
+        let label = |r: isize, c: isize| {
+            if r < 0 || c < 0 || r >= rows || c >= cols {
+                0
+            } else {
+                masks.labels[(r * cols + c) as usize]
+            }
+        };
+        let mut layers = Vec::new();
+        for r in 0..rows {
+            for c in 0..cols {
+                let l = label(r, c);
+                if l == 0 {
+                    continue;
+                }
+                let (x, y) = (c as f64, r as f64);
+                // The cell's edges bordering another region or the outside.
+                let edges = [
+                    (label(r - 1, c), [x - 0.5, y - 0.5], [x + 0.5, y - 0.5]),
+                    (label(r + 1, c), [x - 0.5, y + 0.5], [x + 0.5, y + 0.5]),
+                    (label(r, c - 1), [x - 0.5, y - 0.5], [x - 0.5, y + 0.5]),
+                    (label(r, c + 1), [x + 0.5, y - 0.5], [x + 0.5, y + 0.5]),
+                ];
+                for (other, a, b) in edges {
+                    if other != l {
+                        layers.push(Layer::Line {
+                            points: vec![self.axes.to_plot(a), self.axes.to_plot(b)],
+                            color: colour(usize::from(l) - 1),
+                            width: 2,
+                        });
+                    }
+                }
+            }
+        }
+        let mut legend: Vec<LegendEntry> = (masks.names.iter().enumerate())
+            .map(|(k, name)| LegendEntry {
+                text: name.replace('_', " "),
+                glyph: Glyph::Line(colour(k)),
+            })
+            .collect();
+        if let Some(axis) = &masks.axis {
+            // The axis is in mm; the figure's points are in sensels.
+            let pitch = self.axes.pitch_mm.unwrap_or([1.0, 1.0]);
+            let at = |p: [f64; 2]| self.axes.to_plot([p[0] / pitch[0], p[1] / pitch[1]]);
+            layers.push(Layer::Dashed {
+                points: vec![at(axis.heel), at(axis.toe)],
+                color: COLOR_UNMATCHED,
+            });
+            legend.push(LegendEntry {
+                text: format!("foot axis, heel to toe ({} foot)", axis.side.name()),
+                glyph: Glyph::Dashed(COLOR_UNMATCHED),
+            });
+        }
+        let rule = masks.rule.map_or("user", |r| r.name());
+        layout.title = format!("Regions ({rule}) over the peak pressure");
+        layout.subtitle = format!(
+            "{} of the footprint",
+            pedo_io::counted(masks.names.len(), "region")
+        );
+        layout.legend = legend;
+        layout.layers = layers;
+        Ok(layout)
+    }
+}
+
 /// A value with four significant digits, as a subtitle states it.
 fn format_value(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
@@ -168,5 +270,49 @@ mod tests {
         assert!(png.starts_with(b"\x89PNG"));
         assert_eq!(format_value(812.345), "812.3");
         assert_eq!(format_value(0.012345), "0.01235");
+    }
+
+    #[test]
+    fn the_regions_figure_outlines_each_region_and_names_it() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../pedo-io/tests/data/synthetic-walk.lst"
+        );
+        let rec = pedo_io::read_recording(path).unwrap();
+        let n = rec.n_frames();
+        let m = Measures::of_recording(&rec, 0.0, 0..n).unwrap();
+        let (masks, _) = pedo_io::regions::recording_regions(
+            &rec,
+            0.0,
+            0..n,
+            pedo_io::regions::RegionRule::Fine,
+        )
+        .unwrap();
+        let axes = FigureAxes::of_recording(&rec);
+        let fig = RegionFigure {
+            measures: &m,
+            masks: &masks,
+            axes: &axes,
+        };
+        let svg = fig.to_svg().unwrap();
+        for name in [
+            "heel medial",
+            "mh3 5",
+            "lesser toes",
+            "foot axis",
+            "Regions (fine)",
+        ] {
+            assert!(svg.contains(name), "{name}");
+        }
+        assert!(fig.to_png().unwrap().starts_with(b"\x89PNG"));
+        // Masks of another size are an error, not a panic.
+        let mut wrong = masks.clone();
+        wrong.rows += 1;
+        let fig = RegionFigure {
+            measures: &m,
+            masks: &wrong,
+            axes: &axes,
+        };
+        assert!(fig.to_svg().is_err());
     }
 }

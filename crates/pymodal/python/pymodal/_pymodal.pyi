@@ -215,6 +215,12 @@ class Recording:
     def gait_measures(
         self, threshold: float = 0.0, frames: Optional[Tuple[int, int]] = None
     ) -> dict[str, Any]: ...
+    def regions(
+        self,
+        rule: Literal["coarse", "fine"] = "fine",
+        threshold: float = 0.0,
+        frames: Optional[Tuple[int, int]] = None,
+    ) -> dict[str, Any]: ...
     def __len__(self) -> int: ...
 
 class Surface:
@@ -384,6 +390,7 @@ def run(
     tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
+    region_rule: Optional[Literal["none", "coarse", "fine"]] = None,
     # @end generated
 ) -> RunResult: ...
 
@@ -412,6 +419,7 @@ def batch(
     tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
+    region_rule: Optional[Literal["none", "coarse", "fine"]] = None,
     layout: Optional[Path] = None,
     # @end generated
     **options: Any,
@@ -434,6 +442,7 @@ def batch_row(
     tables: Optional[Literal["csv", "parquet"]] = None,
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
+    region_rule: Optional[Literal["none", "coarse", "fine"]] = None,
     layout: Optional[Path] = None,
     # @end generated
     **options: Any,
