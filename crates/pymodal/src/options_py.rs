@@ -197,16 +197,7 @@ pub fn match_params<'a, 'py: 'a>(get: impl Fn(&str) -> Kw<'a, 'py>) -> PyResult<
 }
 
 /// The unit keywords, checked.
-pub fn units(
-    pitch_mm: Kw<'_, '_>,
-    frame_rate: Kw<'_, '_>,
-    units: Kw<'_, '_>,
-) -> PyResult<UnitOverrides> {
-    let given = [
-        ("pitch_mm", pitch_mm),
-        ("frame_rate", frame_rate),
-        ("units", units),
-    ];
+pub fn units<'a, 'py: 'a>(given: &[(&str, Kw<'a, 'py>)]) -> PyResult<UnitOverrides> {
     let u: UnitOverrides =
         option_set(|name| given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v))?;
     u.validate().map_err(to_py)?;

@@ -178,6 +178,8 @@ class Recording:
         pitch_mm: Optional[Pitch] = None,
         frame_rate: Optional[float] = None,
         units: Optional[str] = None,
+        time_axis: Optional[Literal["first", "last"]] = None,
+        clip_negative: Optional[bool] = None,
         # @end generated
         mask: Optional[ArrayLike] = None,
     ) -> Recording: ...
@@ -281,6 +283,8 @@ def read_recording(
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
     units: Optional[str] = None,
+    time_axis: Optional[Literal["first", "last"]] = None,
+    clip_negative: Optional[bool] = None,
     # @end generated
     layout: Optional[Path] = None,
 ) -> Recording: ...
@@ -374,6 +378,8 @@ def run(
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
     units: Optional[str] = None,
+    time_axis: Optional[Literal["first", "last"]] = None,
+    clip_negative: Optional[bool] = None,
     # @end generated
     out: Optional[Path] = None,
     # @generated keywords of run output: tests/generated.rs, from the option tables
