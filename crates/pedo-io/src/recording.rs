@@ -500,8 +500,7 @@ impl Recording {
         let (a, b, c) = (self.n_frames, self.rows, self.cols);
         let array = matches!(self.format, None | Some(Format::Npy) | Some(Format::Npz));
         array
-            && a >= 2
-            && a <= TIME_LAST_GRID_MAX
+            && (2..=TIME_LAST_GRID_MAX).contains(&a)
             && b <= TIME_LAST_GRID_MAX
             && c >= TIME_LAST_MIN_FRAMES
             && c >= TIME_LAST_RATIO * a.max(b)
