@@ -29,14 +29,23 @@ pub struct InspectArgs {
 pub struct Reading;
 
 impl Selection for Reading {
-    const NAMES: Option<&'static [&'static str]> =
-        Some(&["noise", "pitch_mm", "frame_rate", "units"]);
+    const NAMES: Option<&'static [&'static str]> = Some(&[
+        "noise",
+        "pitch_mm",
+        "frame_rate",
+        "units",
+        "time_axis",
+        "clip_negative",
+    ]);
 }
 
 pub fn run(args: InspectArgs) -> Result<(), CliError> {
     let mut rec = args.read.read(&args.recording)?;
     let params = args.options.params();
-    params.units.apply(&mut rec)?;
+    params
+        .units
+        .apply(&mut rec)
+        .map_err(|e| e.of_input(&args.recording.display().to_string()))?;
     let input = InputInfo::of_path(&args.recording)?;
     let threshold = params.noise_threshold(&rec);
     let d = describe(&rec, &input, threshold);
@@ -75,6 +84,22 @@ pub fn run(args: InspectArgs) -> Result<(), CliError> {
     outln!("duration (s)    {}", show(&d["duration_s"]));
     outln!("pressure units  {}", show(&d["pressure_units"]));
     outln!("noise threshold {}", show(&d["noise_threshold"]));
+    let negatives = &d["negative_values"];
+    outln!(
+        "negative values {}",
+        match negatives["count"].as_u64() {
+            Some(0) | None => "none".to_string(),
+            Some(n) => format!(
+                "{n} (min {}){}",
+                show(&negatives["min"]),
+                if negatives["clipped"].as_bool() == Some(true) {
+                    ", clipped to 0 (--clip-negative)"
+                } else {
+                    "; --clip-negative sets them to 0"
+                }
+            ),
+        }
+    );
     outln!(
         "per-frame measures over all {} frames ({} with contact), values of at least {threshold}:",
         d["frames"],

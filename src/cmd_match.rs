@@ -30,7 +30,11 @@ pub struct MatchArgs {
     #[arg(long, default_value_t = 0)]
     pub frame: usize,
     /// Frame (0-based) of the second input, when it differs from --frame: two frames of one
-    /// recording are `match walk.asf walk.asf --frame 40 --frame-b 41`.
+    /// recording are `match walk.asf walk.asf --frame 40 --frame-b 41`. A later frame of the
+    /// same recording is matched with the settings of `pedomatch run` (its objects, its
+    /// consecutive-frame defaults: sensor pre-alignment, a 30° rotation bound, node-to-node
+    /// ICP), so that the pair's matches are the run's for that pair; the output says so.
+    /// Two files, or an earlier frame, keep the defaults of a pair.
     #[arg(long)]
     pub frame_b: Option<usize>,
     #[command(flatten)]
@@ -113,7 +117,10 @@ fn load_object(path: &Path, frame: usize, args: &MatchArgs) -> Result<Object, Cl
         return Ok(plain(points));
     }
     let mut rec = args.read.read(path)?;
-    args.units.params().apply(&mut rec)?;
+    args.units
+        .params()
+        .apply(&mut rec)
+        .map_err(|e| e.of_input(&path.display().to_string()))?;
     if frame >= rec.n_frames() {
         return Err(CliError::Usage(format!(
             "{}: frame = {frame}: expected a frame in 0..{} (0-based)",
@@ -163,13 +170,168 @@ fn with_topology(
     Ok((retag(a)?, retag(b)?, ordered))
 }
 
+/// Which defaults a match used, and why: the run's for two frames of one recording in time
+/// order, a pair's otherwise.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Settings {
+    /// `pedomatch run`'s for consecutive frames (the pair is the run's pair).
+    Run,
+    /// The defaults of two objects.
+    Pair,
+}
+
+impl Settings {
+    /// The settings for `args`: the run's when both inputs are one recording (the same file)
+    /// and `--frame-b` names a later frame than `--frame`.
+    fn of(args: &MatchArgs) -> Self {
+        let later = args.frame_b.is_some_and(|b| b > args.frame);
+        let same = match (args.a.canonicalize(), args.b.canonicalize()) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        };
+        if later && same && !args.points && !is_point_file(&args.a) {
+            Settings::Run
+        } else {
+            Settings::Pair
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Settings::Run => "run",
+            Settings::Pair => "pair",
+        }
+    }
+
+    /// One sentence for the output: which defaults, and why.
+    fn reason(self) -> &'static str {
+        match self {
+            Settings::Run => {
+                "two frames of one recording: matched with the settings of pedomatch run for \
+                 consecutive frames (its objects, sensor pre-alignment, a 30 degree rotation \
+                 bound, node-to-node ICP), so the matches are the run's for this pair"
+            }
+            Settings::Pair => {
+                "two objects: the defaults of a pair (rotation search over any turn, the outline \
+                 fit of two outlines); a later frame of the same recording (--frame-b) gets the \
+                 run's settings"
+            }
+        }
+    }
+}
+
+/// Whether `path` is a point file by its extension or layout (as [`load_object`] decides).
+fn is_point_file(path: &Path) -> bool {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    POINT_EXTENSIONS.contains(&ext.as_str())
+        || (matches!(ext.as_str(), "csv" | "txt")
+            && std::fs::read_to_string(path).is_ok_and(|t| pedo_io::points::is_point_layout(&t)))
+}
+
+/// Two frames of one recording matched as `pedomatch run` matches them: the run's objects of
+/// frames `--frame` and `--frame-b` (a run of those two frames: `--frames A..B+1 --every B-A`),
+/// the object of the first frame of largest contact area and the object of the second the run
+/// pairs it with, and that pair's result.
+struct RunPair {
+    oa: Object,
+    ob: Object,
+    result: modal_core::MatchResult,
+    /// Every option as the run used it.
+    used: Vec<(&'static str, modal_core::OptionValue)>,
+    search: Search,
+}
+
+fn run_pair(args: &MatchArgs) -> Result<RunPair, CliError> {
+    let (fa, fb) = (args.frame, args.frame_b.unwrap_or(args.frame));
+    let mut rec = args.read.read(&args.a)?;
+    let name = args.a.display().to_string();
+    let params = pedo_track::RunParams {
+        matching: args.modal.params(),
+        units: args.units.params(),
+        frames: Some(pedo_track::FrameRange::new(fa, fb + 1)),
+        every: fb - fa,
+        ..Default::default()
+    };
+    args.units
+        .params()
+        .apply(&mut rec)
+        .map_err(|e| e.of_input(&name))?;
+    if fb >= rec.n_frames() {
+        return Err(CliError::Usage(format!(
+            "{name}: frame = {fb}: expected a frame in 0..{} (0-based)",
+            rec.n_frames()
+        )));
+    }
+    let options = params.to_options(&rec)?;
+    let run = pedo_track::run_sequence(&rec, &options, &|_, _, _| {})?;
+    let area = |o: &pedo_track::SequenceObject| o.measures.as_ref().map_or(0.0, |m| m.contact_area);
+    let largest = run
+        .objects
+        .iter()
+        .filter(|o| o.frame == fa)
+        .max_by(|x, y| area(x).total_cmp(&area(y)))
+        .ok_or_else(|| format!("{name}: frame {fa} has no loaded region"))?;
+    let pair = run
+        .pairs
+        .iter()
+        .filter(|p| p.a == largest.id)
+        .max_by(|x, y| area(&run.objects[x.b]).total_cmp(&area(&run.objects[y.b])));
+    let Some(pair) = pair else {
+        let why = run
+            .skipped_pairs
+            .iter()
+            .find(|s| s.a == largest.id)
+            .map_or("no object of that frame continues it".to_string(), |s| {
+                s.reason.clone()
+            });
+        return Err(CliError::Runtime(format!(
+            "{name}: the largest object of frame {fa} has no match in frame {fb}: {why}"
+        )));
+    };
+    let object = |o: &pedo_track::SequenceObject| Object {
+        points: o.shape.clone(),
+        pitch_mm: rec.pitch_mm,
+        time_s: rec.time_s(o.frame),
+        axes: Some(FigureAxes::of_recording(&rec)),
+        source: Some((rec.clone(), o.frame)),
+    };
+    Ok(RunPair {
+        oa: object(largest),
+        ob: object(&run.objects[pair.b]),
+        result: pair.result.clone(),
+        used: params.used(&options, &rec),
+        search: options.matching.search,
+    })
+}
+
 pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let started = Instant::now();
     let params = args.modal.params();
     params.validate()?;
     args.units.params().validate()?;
-    let oa = load_object(&args.a, args.frame, &args)?;
-    let ob = load_object(&args.b, args.frame_b.unwrap_or(args.frame), &args)?;
+    let settings = Settings::of(&args);
+    if settings == Settings::Run && (args.ordered || args.no_ordered) {
+        return Err(CliError::Usage(
+            "--ordered/--no-ordered: two frames of one recording are matched as a run matches \
+             them (closed contours, ordered); the option applies to two objects"
+                .into(),
+        ));
+    }
+    let oa;
+    let ob;
+    let mut from_run = None;
+    if settings == Settings::Run {
+        let p = run_pair(&args)?;
+        (oa, ob) = (p.oa, p.ob);
+        from_run = Some((p.result, p.used, p.search));
+    } else {
+        oa = load_object(&args.a, args.frame, &args)?;
+        ob = load_object(&args.b, args.frame_b.unwrap_or(args.frame), &args)?;
+    }
     warn_if_no_frames(&oa, &args.a, args.frame, "--frame");
     let flag_b = if args.frame_b.is_some() {
         "--frame-b"
@@ -190,20 +352,31 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
             b.dim()
         )));
     }
-    // The same setting `pymodal.match` picks for these objects (unordered 3-D points: surfaces).
-    let mut o = params.to_match_options(a.dim(), ordered)?;
-    o.ordered = Some(ordered);
     let t_match = Instant::now();
-    // Two frames of one sensor are matched in its true proportions, as `run` matches them.
-    let aspect = match (oa.frame(), ob.frame()) {
-        (Some(_), Some(_)) if oa.pitch_mm == ob.pitch_mm => SenselAspect::of_pitch(oa.pitch_mm),
-        _ => SenselAspect::SQUARE,
+    let (r, used, search) = match from_run {
+        Some(matched) => matched,
+        None => {
+            // The same setting `pymodal.match` picks for these objects (unordered 3-D points:
+            // surfaces).
+            let mut o = params.to_match_options(a.dim(), ordered)?;
+            o.ordered = Some(ordered);
+            // Two frames of one sensor are matched in its true proportions, as `run` matches
+            // them.
+            let aspect = match (oa.frame(), ob.frame()) {
+                (Some(_), Some(_)) if oa.pitch_mm == ob.pitch_mm => {
+                    SenselAspect::of_pitch(oa.pitch_mm)
+                }
+                _ => SenselAspect::SQUARE,
+            };
+            let r = aspect.back(modal_core::match_shapes(
+                aspect.shape(&a)?.as_ref(),
+                aspect.shape(&b)?.as_ref(),
+                &o,
+            )?);
+            (r, params.used(&o), o.search)
+        }
     };
-    let r = aspect.back(modal_core::match_shapes(
-        aspect.shape(&a)?.as_ref(),
-        aspect.shape(&b)?.as_ref(),
-        &o,
-    )?);
+    // The run's matching is timed with its objects (read time included).
     let match_time = t_match.elapsed().as_secs_f64();
     let rows = r.pairs.iter().map(|p| {
         vec![
@@ -214,8 +387,7 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         ]
     });
     let table = output::csv_table(&["node_a", "node_b", "cost", "excess"], rows);
-    let used: serde_json::Map<String, serde_json::Value> = params
-        .used(&o)
+    let used: serde_json::Map<String, serde_json::Value> = used
         .iter()
         .map(|(k, v)| (k.to_string(), pedo_output::option_json(v)))
         .chain([("ordered".to_string(), serde_json::json!(ordered))])
@@ -226,8 +398,10 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         "frame_a": oa.frame(), "frame_b": ob.frame(),
         "time_a_s": oa.time_s, "time_b_s": ob.time_s,
         "pitch_mm_a": oa.pitch_mm, "pitch_mm_b": ob.pitch_mm,
+        "settings": settings.name(),
+        "settings_reason": settings.reason(),
         "options": used,
-        "search": o.search.to_string(),
+        "search": search.to_string(),
         "matches": r.pairs.len(),
         "nodes_a": a.len(), "nodes_b": b.len(),
         "local_matches": r.local_count(), "optimisation_matches": r.one_to_one_count(),
@@ -266,18 +440,20 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         }
         dir.commit()?;
     }
-    let primary = if o.search == Search::Best {
+    let primary = if search == Search::Best {
         "best (many-to-one)"
     } else {
         "one-to-one"
     };
     let counts = format!(
-        "{} × {} nodes: {} local, {} {primary}, {} excess matches",
+        "{} × {} nodes: {} local, {} {primary}, {} excess matches ({} settings: {})",
         a.len(),
         b.len(),
         r.local_count(),
         r.one_to_one_count(),
-        r.excess_count()
+        r.excess_count(),
+        settings.name(),
+        settings.reason()
     );
     if args.json {
         out!("{}", output::pretty(&with_pairs())?);

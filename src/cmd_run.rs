@@ -117,7 +117,8 @@ fn execute(
     params: RunParams,
     started: Instant,
 ) -> Result<(), CliError> {
-    let options = pedo_track::run_options(&mut recording, &params)?;
+    let options =
+        pedo_track::run_options(&mut recording, &params).map_err(|e| e.of_input(&input.name))?;
     let read_time = started.elapsed();
     let bar = progress_bar();
     let bar_state = Mutex::new(None::<Stage>);

@@ -1237,7 +1237,19 @@ fn two_frames_of_oblong_sensels_are_matched_in_their_true_proportions() {
         &["match", a.to_str().unwrap(), b.to_str().unwrap()],
         "scaled",
     );
-    let frames = ["match", walk, walk, "--frame", "40", "--frame-b", "41"];
+    // Two files (a copy of the walk): the pair defaults, as for the point files. (One file
+    // would be matched with the run's settings, its objects the run's.)
+    let copy = dir.join("copy.asf");
+    std::fs::copy(walk, &copy).unwrap();
+    let frames = [
+        "match",
+        walk,
+        copy.to_str().unwrap(),
+        "--frame",
+        "40",
+        "--frame-b",
+        "41",
+    ];
     let oblong = matches(
         &[&frames[..], &["--pitch-mm", "5.08x7.62"]].concat(),
         "oblong",

@@ -48,6 +48,18 @@ pub enum IoError {
         /// What the content looks like, or that nothing was recognised.
         recognised: String,
     },
+    /// A 3-D array looks stored time-last (rows, columns, frames) by the rule of
+    /// [`crate::recording::TIME_LAST_RULE`], and no option said which axis is time
+    /// (`--time-axis`, Python `time_axis=`): read as stored it would be `shape[0]` frames of
+    /// `shape[1] × shape[2]` sensels, transposed `shape[2]` frames of `shape[0] × shape[1]`;
+    /// the message names both.
+    #[error("{}", time_last_message(path, shape))]
+    TimeLast {
+        /// The file, or empty for an array handed over (see [`IoError::of_input`]).
+        path: String,
+        /// The array's shape as stored.
+        shape: [usize; 3],
+    },
     /// An argument is out of range or inconsistent.
     #[error("invalid input: {0}")]
     InvalidInput(String),
@@ -116,9 +128,31 @@ impl IoError {
     pub fn of_input(self, name: &str) -> Self {
         match self {
             IoError::NoObject(msg) => IoError::NoObject(format!("{name}: {msg}")),
+            IoError::TimeLast { path, shape } if path.is_empty() => IoError::TimeLast {
+                path: name.to_string(),
+                shape,
+            },
             e => e,
         }
     }
+}
+
+/// The message of [`IoError::TimeLast`]: both readings of the array and the option that
+/// chooses.
+fn time_last_message(path: &str, shape: &[usize; 3]) -> String {
+    let [a, b, c] = *shape;
+    let file = if path.is_empty() {
+        String::new()
+    } else {
+        format!("{path}: ")
+    };
+    format!(
+        "{file}a 3-D array of shape ({a}, {b}, {c}) looks stored time-last ({}): read as \
+         stored it is {a} frames of {b} x {c} sensels, transposed {c} frames of {a} x {b}. Say \
+         which: --time-axis last (Python time_axis=\"last\") reads {c} frames of {a} x {b}, \
+         --time-axis first (time_axis=\"first\") {a} frames of {b} x {c}",
+        crate::recording::TIME_LAST_RULE
+    )
 }
 
 /// Result alias of the crate.

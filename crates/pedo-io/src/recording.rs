@@ -86,6 +86,23 @@ impl std::fmt::Display for Format {
     }
 }
 
+/// How much longer than each of the first two axes the last axis of an array must be for the
+/// array to look stored time-last ([`TIME_LAST_RULE`]).
+pub const TIME_LAST_RATIO: usize = 3;
+/// The shortest last axis of an array that looks stored time-last ([`TIME_LAST_RULE`]).
+pub const TIME_LAST_MIN_FRAMES: usize = 64;
+/// The longest first and second axes of an array that looks stored time-last: sensor grids
+/// ([`TIME_LAST_RULE`]).
+pub const TIME_LAST_GRID_MAX: usize = 256;
+
+/// When a 3-D array read as (frames, rows, columns) looks stored time-last, (rows, columns,
+/// frames), and is refused unless the time axis is given ([`Recording::looks_time_last`]): a
+/// recording's frames outnumber the rows and columns of its sensor, so an array whose last axis
+/// is much longer than the first two, and whose first two are the size of a sensor grid, was
+/// most likely saved time-last (as MATLAB and many lab scripts store a recording).
+pub const TIME_LAST_RULE: &str = "its first two axes are each at most 256 (the size of a sensor \
+grid), and its last axis is at least 64 long and at least 3 times as long as each of them";
+
 /// A plantar-pressure recording: `T` frames of `rows × cols` values (`f32`).
 ///
 /// Sensors that do not exist (Tekscan `B`, `-1` or NaN in other exports) are recorded in
@@ -116,6 +133,41 @@ pub struct Recording {
     pub noise_threshold: Option<f64>,
     /// The format this recording was read from, if it was read from a file.
     pub format: Option<Format>,
+    /// The file's values below 0 when the values held are not the file's: set to 0
+    /// ([`clip_negatives`](Self::clip_negatives)), or not held (a file read frame by frame by a
+    /// run that streams). `None`: they are counted in the frames held.
+    file_negatives: Option<NegativeValues>,
+    /// Whether values below 0 were set to 0; windows of a file read frame by frame
+    /// ([`crate::FrameSource`]) are clipped alike.
+    negatives_clipped: bool,
+    /// Whether the unit options settled which axis of the array is time (checked, kept or
+    /// transposed: [`crate::units::UnitOverrides::apply`]), so that a second application does
+    /// not transpose it again.
+    time_axis_settled: bool,
+}
+
+/// The values below 0 at existing sensors of a recording, over every frame: a pressure is not
+/// negative, so these are an offset, a baseline subtracted by a device or an export, or noise.
+/// Measures count only values above 0 (and at or above the noise threshold), so they never
+/// enter an area, a force or a peak; they are reported (`pedomatch inspect`, `summary.json`,
+/// Python's `Recording.negative_values`) so that an offset does not pass without a word.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct NegativeValues {
+    /// How many values are below 0.
+    pub count: usize,
+    /// The lowest of them, `None` when there are none.
+    pub min: Option<f64>,
+}
+
+impl NegativeValues {
+    /// Counts `v` when it is below 0.
+    pub(crate) fn add(&mut self, v: f32) {
+        if v < 0.0 {
+            self.count += 1;
+            let v = f64::from(v);
+            self.min = Some(self.min.map_or(v, |m| m.min(v)));
+        }
+    }
 }
 
 /// The per-frame measures of a recording (see [`Recording::measures`]).
@@ -198,6 +250,9 @@ impl Recording {
             units: String::new(),
             noise_threshold: None,
             format: None,
+            file_negatives: None,
+            negatives_clipped: false,
+            time_axis_settled: false,
         })
     }
 
@@ -376,6 +431,115 @@ impl Recording {
             }
         }
         out
+    }
+
+    /// The values below 0 at existing sensors over every frame, as the file held them (before
+    /// [`clip_negatives`](Self::clip_negatives), and for a recording read frame by frame as its
+    /// first reading counted them).
+    pub fn negative_values(&self) -> NegativeValues {
+        if let Some(n) = self.file_negatives {
+            return n;
+        }
+        let mut n = NegativeValues::default();
+        // Values at missing sensors are 0.
+        match &self.frames {
+            Frames::Dense(d) => d.iter().for_each(|&v| n.add(v)),
+            Frames::Sparse(s) => s.values.iter().for_each(|&v| n.add(v)),
+        }
+        n
+    }
+
+    /// Whether values below 0 were set to 0 ([`clip_negatives`](Self::clip_negatives)).
+    pub fn negatives_clipped(&self) -> bool {
+        self.negatives_clipped
+    }
+
+    /// Sets every value below 0 to 0, remembering how many there were and the lowest
+    /// ([`negative_values`](Self::negative_values) still reports the file's).
+    pub fn clip_negatives(&mut self) {
+        let n = self.negative_values();
+        self.file_negatives = Some(n);
+        self.negatives_clipped = true;
+        if n.count == 0 {
+            return;
+        }
+        let per = self.rows * self.cols;
+        let mut data = self.data().into_owned();
+        data.iter_mut().filter(|v| **v < 0.0).for_each(|v| *v = 0.0);
+        self.frames = Frames::compact(data, per);
+    }
+
+    /// Marks the values as clipped to 0 already, the file having held `file` below 0 (a
+    /// recording restored from a saved state, whose values were clipped when it was read).
+    pub fn mark_negatives_clipped(&mut self, file: NegativeValues) {
+        self.file_negatives = Some(file);
+        self.negatives_clipped = true;
+    }
+
+    /// Records the negative values a first reading of a file counted, for a recording that holds
+    /// none of its values (read frame by frame).
+    pub(crate) fn set_file_negatives(&mut self, n: NegativeValues) {
+        self.file_negatives = Some(n);
+    }
+
+    /// Whether the unit options settled which axis is time ([`Self::settle_time_axis`]).
+    pub(crate) fn time_axis_settled(&self) -> bool {
+        self.time_axis_settled
+    }
+
+    /// Marks which axis is time as settled (a recording restored from a saved state, whose
+    /// axes were settled when it was first read, or one whose time axis is known).
+    pub fn settle_time_axis(&mut self) {
+        self.time_axis_settled = true;
+    }
+
+    /// Whether this recording reads as an array stored time-last: see
+    /// [`TIME_LAST_RULE`]. Only arrays (NumPy files and arrays handed over, whose axes no
+    /// header names) are asked.
+    pub fn looks_time_last(&self) -> bool {
+        let (a, b, c) = (self.n_frames, self.rows, self.cols);
+        let array = matches!(self.format, None | Some(Format::Npy) | Some(Format::Npz));
+        array
+            && (2..=TIME_LAST_GRID_MAX).contains(&a)
+            && b <= TIME_LAST_GRID_MAX
+            && c >= TIME_LAST_MIN_FRAMES
+            && c >= TIME_LAST_RATIO * a.max(b)
+    }
+
+    /// This recording's array `(a, b, c)`, read as `a` frames of `b × c`, read instead as an
+    /// array stored time-last: `c` frames of `a × b` (frame `k`'s value at row `i`, column `j`
+    /// is the value at `[i, j, k]`). A sensor is missing when it is NaN (or missing) in every
+    /// frame, as [`Recording::from_nan_frames`] says. Pitch, sensel area and frame interval are
+    /// dropped (they belonged to the axes as first read); units, noise threshold and format are
+    /// kept.
+    ///
+    /// ```
+    /// use pedo_io::Recording;
+    /// // 2 rows x 3 columns x 4 frames, value = 100 i + 10 j + k.
+    /// let data: Vec<f32> = (0..24).map(|n| (100 * (n / 12) + 10 * (n / 4 % 3) + n % 4) as f32).collect();
+    /// let as_read = Recording::new(2, 3, 4, data, vec![true; 12])?;
+    /// let r = as_read.time_last_transposed()?;
+    /// assert_eq!((r.n_frames(), r.rows(), r.cols()), (4, 2, 3));
+    /// assert_eq!(r.frame(3)?.get(1, 2), 123.0);
+    /// # Ok::<(), pedo_io::IoError>(())
+    /// ```
+    pub fn time_last_transposed(&self) -> Result<Recording> {
+        let (a, b, c) = (self.n_frames, self.rows, self.cols);
+        let old = self.frames_with_nan();
+        let mut data = vec![0.0f32; old.len()];
+        for k in 0..c {
+            for i in 0..a {
+                for j in 0..b {
+                    data[(k * a + i) * b + j] = old[(i * b + j) * c + k];
+                }
+            }
+        }
+        let mut r = Recording::from_nan_frames(c, a, b, data)?;
+        r.units = self.units.clone();
+        r.noise_threshold = self.noise_threshold;
+        r.format = self.format;
+        r.time_axis_settled = true;
+        Ok(r)
     }
 
     /// The pressure units the file states ([`Recording::units`]), `None` when it states none:
@@ -848,6 +1012,10 @@ impl Recording {
         r.units = self.units.clone();
         r.noise_threshold = self.noise_threshold;
         r.format = self.format;
+        r.time_axis_settled = self.time_axis_settled;
+        if self.negatives_clipped {
+            r.clip_negatives();
+        }
         Ok(r)
     }
 
@@ -895,6 +1063,9 @@ impl Recording {
             units: String::new(),
             noise_threshold: None,
             format: None,
+            file_negatives: None,
+            negatives_clipped: false,
+            time_axis_settled: false,
         })
     }
 }

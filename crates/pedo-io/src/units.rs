@@ -1,7 +1,9 @@
 //! Physical units of a recording: the sensor pitch (mm) and the frame rate (Hz) a user may set
 //! or override, and the conversions of pixel coordinates and frame numbers the outputs use.
 
+use crate::error::IoError;
 use crate::recording::Recording;
+use modal_core::Choice;
 use modal_core::{OptionError, OptionSpec};
 
 modal_core::option_set! {
@@ -24,8 +26,32 @@ modal_core::option_set! {
         units: Option<String> = None;
             Value, "the file's, if it says",
             "Pressure units of the values (kPa, Pa, MPa, N/cm², N/mm², psi, bar, mmHg), for formats that store none; overrides the file's.";
+        /// Which axis of a 3-D array (`.npy`, `.npz`, an array handed to Python's
+        /// `Recording.from_array`) is time. `None`: the first, and an array that looks stored
+        /// time-last ([`crate::recording::TIME_LAST_RULE`]) is refused
+        /// ([`IoError::TimeLast`]) naming both readings.
+        time_axis: Option<TimeAxis> = None;
+            Word(TimeAxis::NAMES), "first; an array that looks time-last is refused",
+            "Which axis of a 3-D array (.npy, .npz, Recording.from_array) is time: first (frames, rows, columns) or last (rows, columns, frames; transposed when read). Unset, an array whose first two axes are at most 256 and whose last is at least 64 and 3 times as long as each is refused, naming both readings.";
+        /// Set values below 0 to 0 before anything is measured or matched; by default they
+        /// are kept (measures count only values above 0) and reported
+        /// ([`Recording::negative_values`]).
+        clip_negative: bool = false;
+            Flag, false,
+            "Set values below 0 (an offset or a subtracted baseline) to 0 before anything is read from the frames; by default they are kept, and counted with their minimum by inspect and summary.json (measures count only values above 0).";
     }
 }
+
+/// Which axis of a 3-D array is time ([`UnitOverrides::time_axis`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TimeAxis {
+    /// `(frames, rows, columns)`, as NumPy files written by pedomatch and most Python code.
+    First,
+    /// `(rows, columns, frames)`, as MATLAB and many lab scripts store a recording.
+    Last,
+}
+
+modal_core::choice!(TimeAxis, "time_axis", ["first" => TimeAxis::First, "last" => TimeAxis::Last]);
 
 impl UnitOverrides {
     /// Checks that the pitch and the frame rate are positive and finite and that the units are
@@ -47,9 +73,24 @@ impl UnitOverrides {
         Ok(())
     }
 
-    /// Sets the recording's pitch (and the sensel area derived from it) and frame interval.
-    pub fn apply(&self, recording: &mut Recording) -> Result<(), OptionError> {
+    /// Settles which axis of an array is time ([`time_axis`](Self::time_axis): a time-last
+    /// array transposed, or refused when it looks time-last and no axis was given), sets
+    /// values below 0 to 0 when asked ([`clip_negative`](Self::clip_negative)), then sets
+    /// the recording's pitch (and the sensel area derived from it), frame interval and units.
+    /// Applied again (a recording handed to a run), the time axis is not settled twice.
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::Option`] for an invalid value; [`IoError::TimeLast`] for an array that looks
+    /// stored time-last when no time axis was given (its `path` empty: see
+    /// [`IoError::of_input`]); [`IoError::InvalidInput`] for `time_axis = last` on a recording
+    /// that is no array, or whose time axis was already settled.
+    pub fn apply(&self, recording: &mut Recording) -> crate::Result<()> {
         self.validate()?;
+        self.settle_time_axis(recording)?;
+        if self.clip_negative && !recording.negatives_clipped() {
+            recording.clip_negatives();
+        }
         if let Some(p) = self.pitch_mm {
             recording.set_pitch_mm(p.0);
         }
@@ -62,6 +103,41 @@ impl UnitOverrides {
                 .unwrap_or(u.trim())
                 .to_string();
         }
+        Ok(())
+    }
+
+    /// The time-axis step of [`apply`](Self::apply).
+    fn settle_time_axis(&self, recording: &mut Recording) -> crate::Result<()> {
+        let array = matches!(
+            recording.format,
+            None | Some(crate::Format::Npy) | Some(crate::Format::Npz)
+        );
+        match self.time_axis {
+            Some(TimeAxis::Last) if !array => {
+                return Err(IoError::invalid(format!(
+                    "time_axis = last applies to arrays (.npy, .npz, Recording.from_array); a \
+                     {} file says where its frames are",
+                    recording.format.map_or("", |f| f.name())
+                )));
+            }
+            Some(TimeAxis::Last) if recording.time_axis_settled() => {
+                return Err(IoError::invalid(
+                    "time_axis = last for a recording whose time axis was settled when it was \
+                     read: give it where the array is read (read_recording, \
+                     Recording.from_array), once",
+                ));
+            }
+            Some(TimeAxis::Last) => *recording = recording.time_last_transposed()?,
+            _ if recording.time_axis_settled() => {}
+            None if recording.looks_time_last() => {
+                return Err(IoError::TimeLast {
+                    path: String::new(),
+                    shape: [recording.n_frames(), recording.rows(), recording.cols()],
+                });
+            }
+            Some(TimeAxis::First) | None => {}
+        }
+        recording.settle_time_axis();
         Ok(())
     }
 }
@@ -200,6 +276,7 @@ mod tests {
             pitch_mm: Some("2x3".parse().unwrap()),
             frame_rate: Some(50.0),
             units: Some(" N/cm2 ".into()),
+            ..Default::default()
         };
         o.apply(&mut rec).unwrap();
         assert_eq!(rec.units, "N/cm²");
@@ -246,5 +323,146 @@ mod tests {
         for p in [Pitch([5.08, 5.08]), Pitch([7.62, 5.08])] {
             assert_eq!(p.to_string().parse::<Pitch>().unwrap(), p);
         }
+    }
+}
+
+#[cfg(test)]
+mod input_tests {
+    use super::*;
+    use crate::formats::npy::{parse_npy, recording_to_npy};
+
+    /// The value at `[i, j, k]` of the test arrays, different along each axis.
+    fn v(i: usize, j: usize, k: usize) -> f32 {
+        (1000 * i + 10 * j) as f32 + k as f32 * 0.5
+    }
+
+    /// A `.npy` read as stored from an array of `shape` (C order) holding `v`.
+    fn read_as_stored([a, b, c]: [usize; 3]) -> Recording {
+        let data: Vec<f32> = (0..a * b * c)
+            .map(|n| v(n / (b * c), n / c % b, n % c))
+            .collect();
+        let rec = Recording::new(a, b, c, data, vec![true; b * c]).unwrap();
+        parse_npy(&recording_to_npy(&rec), "speed.npy").unwrap()
+    }
+
+    #[test]
+    fn a_time_last_array_is_refused_naming_both_shapes_unless_the_axis_is_given() {
+        let mut rec = read_as_stored([63, 33, 500]);
+        let e = UnitOverrides::default()
+            .apply(&mut rec)
+            .unwrap_err()
+            .of_input("speed.npy");
+        assert!(
+            matches!(
+                e,
+                IoError::TimeLast {
+                    shape: [63, 33, 500],
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        let m = e.to_string();
+        for says in [
+            "speed.npy: ",
+            "63 frames of 33 x 500",
+            "500 frames of 63 x 33",
+            "--time-axis last",
+            "time_axis=\"last\"",
+        ] {
+            assert!(m.contains(says), "{says:?}: {m}");
+        }
+        // Refused whole: the recording is as it was.
+        assert_eq!(rec.n_frames(), 63);
+        let last = UnitOverrides {
+            time_axis: Some(TimeAxis::Last),
+            ..Default::default()
+        };
+        last.apply(&mut rec).unwrap();
+        assert_eq!((rec.n_frames(), rec.rows(), rec.cols()), (500, 63, 33));
+        for (k, i, j) in [(0, 0, 0), (499, 62, 32), (17, 40, 3), (250, 1, 30)] {
+            assert_eq!(rec.frame(k).unwrap().get(i, j), f64::from(v(i, j, k)));
+        }
+        // Applied again (a recording handed to a run): not transposed twice, not refused.
+        UnitOverrides::default().apply(&mut rec).unwrap();
+        assert_eq!(rec.n_frames(), 500);
+        assert!(last.apply(&mut rec).is_err());
+        // Kept as stored when asked.
+        let mut kept = read_as_stored([63, 33, 500]);
+        let first = UnitOverrides {
+            time_axis: Some(TimeAxis::First),
+            ..Default::default()
+        };
+        first.apply(&mut kept).unwrap();
+        assert_eq!((kept.n_frames(), kept.rows(), kept.cols()), (63, 33, 500));
+    }
+
+    #[test]
+    fn the_time_last_rule_takes_recordings_stored_time_first() {
+        // Time-first arrays as pedomatch and NumPy code write them, and sensors of vendor
+        // sizes: none refused.
+        for shape in [
+            [500, 63, 33],
+            [205, 60, 21],
+            [40, 95, 64],
+            [1, 33, 500],
+            [63, 33, 100],
+        ] {
+            let mut rec = read_as_stored(shape);
+            UnitOverrides::default().apply(&mut rec).unwrap();
+            assert_eq!(rec.n_frames(), shape[0], "{shape:?}");
+        }
+        for shape in [[63, 33, 500], [60, 21, 205], [2, 2, 64], [256, 10, 1024]] {
+            assert!(read_as_stored(shape).looks_time_last(), "{shape:?}");
+        }
+        // A vendor format states its frames: never asked, and `last` is refused for it.
+        let mut lst = read_as_stored([63, 33, 500]);
+        lst.format = Some(crate::Format::Lst);
+        assert!(!lst.looks_time_last());
+        let last = UnitOverrides {
+            time_axis: Some(TimeAxis::Last),
+            ..Default::default()
+        };
+        assert!(matches!(
+            last.apply(&mut lst),
+            Err(IoError::InvalidInput(_))
+        ));
+    }
+
+    #[test]
+    fn negative_values_are_counted_and_clipped_only_on_request() {
+        let data = vec![
+            -2.0, 5.0, 0.0, -0.5, // frame 0
+            3.0, -7.25, 99.0, 0.0, // frame 1 (99 at a missing sensor)
+        ];
+        let mask = vec![true, true, true, false];
+        let mut rec = Recording::new(2, 2, 2, data.clone(), mask.clone()).unwrap();
+        let oracle = data
+            .iter()
+            .enumerate()
+            .filter(|(n, x)| mask[n % 4] && **x < 0.0)
+            .map(|(_, x)| f64::from(*x));
+        let (count, min) = (oracle.clone().count(), oracle.fold(f64::INFINITY, f64::min));
+        let n = rec.negative_values();
+        assert_eq!((n.count, n.min), (2, Some(min)));
+        assert_eq!(count, 2);
+        let before = rec.measures(0.0);
+        UnitOverrides::default().apply(&mut rec).unwrap();
+        assert!(!rec.negatives_clipped());
+        assert_eq!(rec.frame(1).unwrap().get(0, 1), -7.25);
+        let clip = UnitOverrides {
+            clip_negative: true,
+            ..Default::default()
+        };
+        clip.apply(&mut rec).unwrap();
+        assert!(rec.negatives_clipped());
+        assert_eq!(rec.frame(1).unwrap().get(0, 1), 0.0);
+        assert_eq!(rec.frame(0).unwrap().get(0, 0), 0.0);
+        assert_eq!(rec.frame(0).unwrap().get(0, 1), 5.0);
+        // Still the file's, reported.
+        assert_eq!(rec.negative_values().count, 2);
+        assert_eq!(rec.negative_values().min, Some(-7.25));
+        // Measures count only values above 0: clipping changes none.
+        assert_eq!(rec.measures(0.0), before);
     }
 }

@@ -168,10 +168,20 @@ pub fn describe(recording: &Recording, input: &InputInfo, threshold: f64) -> Val
         "duration_s": recording.dt_s.map(|dt| dt * recording.n_frames() as f64),
         "pressure_units": recording.known_units(),
         "noise_threshold": recording.noise_threshold,
+        "negative_values": negative_values(recording),
         "measures_threshold": threshold,
         "loaded_frames": loaded,
         "measures": measures,
     })
+}
+
+/// The values below 0 of a recording's existing sensors over every frame, as the file held
+/// them: `{"count", "min", "clipped"}` (`min` null without any; `clipped`: set to 0 by
+/// `clip_negative`). Measures count only values above 0, so these never enter one; they are
+/// reported so that an offset in the data does not pass without a word.
+pub fn negative_values(recording: &Recording) -> Value {
+    let n = recording.negative_values();
+    json!({"count": n.count, "min": n.min, "clipped": recording.negatives_clipped()})
 }
 
 /// The provenance and outcome of a run, as written to `summary.json` and returned by
@@ -234,6 +244,7 @@ pub fn run_summary_of(
             "pitch_mm": recording.pitch_mm,
             "frame_rate_hz": recording.frame_rate(),
             "pressure_units": recording.known_units(),
+            "negative_values": negative_values(recording),
         },
         "options": used,
         "objects": c.objects,

@@ -1534,7 +1534,7 @@ fn process(
     });
     // The unit options are applied even when the options fail (a frame range beyond the
     // recording): the units an error row gives are those the run would have used.
-    let options = run_options(&mut recording, &opts.params);
+    let options = run_options(&mut recording, &opts.params).map_err(|e| e.of_input(&input.name));
     *read = Some((recording.n_frames(), RowUnits::of(&recording)));
     let mut options = options?;
     options.cancel = opts.cancel.clone();
@@ -1896,6 +1896,9 @@ mod tests {
         }
         let csv = study_table(&[row(RowStatus::Ok)]).to_csv();
         assert_eq!(csv.lines().next().unwrap(), STUDY_COLUMNS.join(","));
+        // Reading knows it for pedomatch's own, and refuses it as a recording naming it.
+        let own = pedo_io::formats::own_tables::own_table(&csv).map(|t| t.file);
+        assert_eq!(own, Some("study.csv"));
         assert!(
             csv.contains("\"data/s01, left \"\"walk\"\".asf\","),
             "free text is quoted: {csv}"

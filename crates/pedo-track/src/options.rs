@@ -540,6 +540,8 @@ impl RunParams {
             pitch_mm: recording.pitch_mm.map(pedo_io::units::Pitch),
             frame_rate: recording.dt_s.map(|dt| 1.0 / dt),
             units: recording.known_units().map(str::to_string),
+            // As given: how the file's values were read.
+            ..self.units.clone()
         };
         self.listed(options, FrameRange::new(start, end), file)
     }

@@ -252,10 +252,10 @@ impl LibraryError for IoError {
     fn into_py_err(self) -> PyErr {
         match self {
             IoError::Io { path, source } => os_error(path, &source),
-            e
-            @ (IoError::Parse { .. } | IoError::Format { .. } | IoError::UnknownFormat { .. }) => {
-                FORMAT_ERROR.err(e.to_string())
-            }
+            e @ (IoError::Parse { .. }
+            | IoError::Format { .. }
+            | IoError::UnknownFormat { .. }
+            | IoError::TimeLast { .. }) => FORMAT_ERROR.err(e.to_string()),
             IoError::Option(e) => e.into_py_err(),
             e @ IoError::Figure(_) => internal(e),
             e @ (IoError::InvalidInput(_) | IoError::Output { .. }) => {

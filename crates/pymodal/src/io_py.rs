@@ -97,6 +97,11 @@ impl PyRecording {
             .str(&r.units)
             .opt_f64(r.noise_threshold)
             .str(&r.format.map(format_name).unwrap_or_default());
+        // The values below 0 the file held, when they were clipped.
+        let negatives = r.negative_values();
+        w.bool(r.negatives_clipped())
+            .usize(negatives.count)
+            .opt_f64(negatives.min);
         w
     }
 
@@ -113,7 +118,17 @@ impl PyRecording {
         rec.units = r.string()?;
         rec.noise_threshold = r.opt_f64()?;
         let format = r.string()?;
+        let clipped = r.bool()?;
+        let negatives = pedo_io::recording::NegativeValues {
+            count: r.usize()?,
+            min: r.opt_f64()?,
+        };
         r.finish()?;
+        if clipped {
+            rec.mark_negatives_clipped(negatives);
+        }
+        // Its time axis was settled when it was first read.
+        rec.settle_time_axis();
         rec.format = match format.as_str() {
             "" => None,
             name => Some(format_of_name(name).ok_or_else(|| {
@@ -148,21 +163,31 @@ impl PyRecording {
     /// frame_rate : float, optional — frames per second (Hz).
     /// units : str, optional — pressure units (``"kPa"``, ``"N/cm2"``, ``"psi"``, ...; the units
     ///     ``run(units=...)`` accepts); forces are in N when units and pitch are known.
+    /// time_axis : ``"first"`` or ``"last"``, optional — which axis of a 3-D array is time:
+    ///     ``"last"`` for (H, W, T) arrays (as MATLAB stores them), transposed here. Unset, an
+    ///     array that looks time-last (first two axes at most 256, the last at least 64 and 3
+    ///     times as long as each) is refused with a :class:`FormatError` naming both readings.
+    /// clip_negative : bool, optional — set values below 0 to 0 (by default kept and counted:
+    ///     :attr:`negative_values`).
     /// mask : (H, W) bool array, optional — True where a sensor exists.
     ///
     /// Raises :class:`InputError` (a ``ValueError``) for arrays of the wrong shape or infinite
-    /// values, :class:`OptionError` for a non-positive pitch or frame rate or unknown units.
+    /// values, :class:`FormatError` for an array that looks time-last when ``time_axis`` is not
+    /// given, :class:`OptionError` for a non-positive pitch or frame rate or unknown units.
     // The unit keywords are spelled here, not taken from `crate::keywords` as the free
     // functions' are: `#[pymethods]` sees no method a macro makes. The stub's keywords are
     // generated from the declaration and `test_stubs.py` checks this signature against them.
     #[staticmethod]
-    #[pyo3(signature = (frames, *, pitch_mm=None, frame_rate=None, units=None, mask=None))]
+    #[pyo3(signature = (frames, *, pitch_mm=None, frame_rate=None, units=None, time_axis=None, clip_negative=None, mask=None))]
+    #[allow(clippy::too_many_arguments)]
     fn from_array(
         py: Python<'_>,
         frames: &Bound<'_, PyAny>,
         pitch_mm: Option<&Bound<'_, PyAny>>,
         frame_rate: Option<&Bound<'_, PyAny>>,
         units: Option<&Bound<'_, PyAny>>,
+        time_axis: Option<&Bound<'_, PyAny>>,
+        clip_negative: Option<&Bound<'_, PyAny>>,
         mask: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let (t, h, w, data) = frames_of(py, frames)?;
@@ -189,6 +214,8 @@ impl PyRecording {
             ("pitch_mm", pitch_mm),
             ("frame_rate", frame_rate),
             ("units", units),
+            ("time_axis", time_axis),
+            ("clip_negative", clip_negative),
         ];
         let overrides = crate::options_py::units(|name| {
             given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v)
@@ -206,6 +233,20 @@ impl PyRecording {
             .map_err(internal)?;
         read_only(a.into_pyarray(py))
     }
+    /// The values below 0 at existing sensors over every frame, as the file held them:
+    /// ``{"count": int, "min": float or None, "clipped": bool}`` (``clipped``: set to 0 by
+    /// ``clip_negative=True``). A pressure is not negative: these are an offset or a subtracted
+    /// baseline. Measures count only values above 0.
+    #[getter]
+    fn negative_values<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let n = self.inner.negative_values();
+        let d = PyDict::new(py);
+        d.set_item("count", n.count)?;
+        d.set_item("min", n.min)?;
+        d.set_item("clipped", self.inner.negatives_clipped())?;
+        Ok(d)
+    }
+
     /// (H, W) bool, True where a sensor exists.
     #[getter]
     fn sensor_mask<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<bool>>> {
@@ -539,7 +580,9 @@ macro_rules! define_read_recording {
             let opts: pedo_io::formats::ReadOptions = crate::options_py::option_set(get)?;
             let mut rec = crate::pool::detach(py, || pedo_io::formats::read_recording_with(&path, &opts))
                 .map_err(to_py)?;
-            units.apply(&mut rec).map_err(to_py)?;
+            units
+                .apply(&mut rec)
+                .map_err(|e| to_py(e.of_input(&path.display().to_string())))?;
             Ok(PyRecording { inner: rec })
         }
     };

@@ -9,7 +9,7 @@ use pyo3::types::{PyBytes, PyTuple};
 
 /// Format version of the state: bumped whenever a class's layout changes, so an old pickle
 /// raises a clear error instead of decoding garbage.
-const VERSION: u8 = 1;
+const VERSION: u8 = 2;
 
 /// Serialises fields into a state.
 pub struct Writer(Vec<u8>);

@@ -10,7 +10,7 @@
 use super::parse_num;
 use crate::error::{IoError, Result};
 use crate::recording::stated_units;
-use crate::recording::{Format, Recording, SparseFrames};
+use crate::recording::{Format, NegativeValues, Recording, SparseFrames};
 use std::iter::Peekable;
 
 /// A length with its unit (`5.08 mm`, `0.2 in`) in mm.
@@ -246,6 +246,8 @@ struct FrameReader<'k, 'a> {
     /// The line of the current frame's `Frame N`.
     frame_line: usize,
     keep: &'k mut Keep<'a>,
+    /// The values below 0 of the frames handed on (not kept: counted as they pass).
+    negatives: NegativeValues,
 }
 
 /// How a row of values ended.
@@ -270,6 +272,7 @@ impl<'k, 'a> FrameReader<'k, 'a> {
             row: header.rows,
             frame_line: header.data_line,
             keep,
+            negatives: NegativeValues::default(),
         }
     }
 
@@ -388,6 +391,8 @@ impl<'k, 'a> FrameReader<'k, 'a> {
         match self.keep {
             Keep::All => self.frames.push(&self.frame),
             Keep::Handed(hand) => {
+                // `B` reads as 0: only sensors' values count.
+                self.frame.iter().for_each(|&v| self.negatives.add(v));
                 self.frames.push_empty();
                 if let Some(hand) = hand {
                     hand(&self.frame)?;
@@ -406,7 +411,7 @@ impl<'k, 'a> FrameReader<'k, 'a> {
         closed: bool,
         csv: bool,
         name: &str,
-    ) -> Result<(SparseFrames, Vec<bool>)> {
+    ) -> Result<(SparseFrames, Vec<bool>, NegativeValues)> {
         let err = |msg: String| IoError::parse(name, last_line, msg);
         let partial = if self.between_frames() {
             String::new()
@@ -435,7 +440,7 @@ impl<'k, 'a> FrameReader<'k, 'a> {
             return Err(err("truncated: no closing @@ after the last frame".into()));
         }
         let mask = self.mask.into_iter().map(|m| m.unwrap_or(true)).collect();
-        Ok((self.frames, mask))
+        Ok((self.frames, mask, self.negatives))
     }
 }
 
@@ -468,8 +473,12 @@ fn parse_tekscan_lines(
             break; // reported by `finish` as a truncated frame
         }
     }
-    let (frames, mask) = reader.finish(last_line, closed, csv, name)?;
+    let handed = matches!(reader.keep, Keep::Handed(_));
+    let (frames, mask, negatives) = reader.finish(last_line, closed, csv, name)?;
     let mut rec = Recording::from_sparse(header.rows, header.cols, frames, mask)?;
+    if handed {
+        rec.set_file_negatives(negatives);
+    }
     rec.pitch_mm = header.pitch_mm;
     rec.sensel_area_mm2 = header.sensel_area_mm2;
     rec.dt_s = header.dt_s;

@@ -6,6 +6,7 @@ pub mod images;
 pub mod lst;
 pub mod npy;
 pub mod npz;
+pub mod own_tables;
 pub mod pedar;
 pub mod pedcad;
 mod stream;
@@ -135,6 +136,10 @@ pub fn sniff_format(path: &Path, head: &[u8]) -> std::result::Result<Format, Str
     let head = &head[..head.len().min(SNIFF_BYTES)];
     if head.is_empty() {
         return Err("the file is empty".into());
+    }
+    // A results table has a header of names and rows of numbers: a CSV grid, but for its names.
+    if let Some(what) = own_tables::own_output(head) {
+        return Err(what);
     }
     if let Some(text) = utf16_to_utf8(head) {
         return sniff_format(path, &text).map_err(|what| format!("UTF-16 text: {what}"));
@@ -714,6 +719,10 @@ impl Sniffed {
             .take(SNIFF_BYTES as u64)
             .read_to_end(&mut head)
             .map_err(io)?;
+        // One of pedomatch's own outputs is no unknown format: it is refused naming it.
+        if let Some(what) = own_tables::own_output(&head) {
+            return Err(IoError::format(name, what));
+        }
         let format =
             sniff_format(path, &head).map_err(|what| IoError::unknown_format(name, what))?;
         Ok(Self {

@@ -178,6 +178,8 @@ class Recording:
         pitch_mm: Optional[Pitch] = None,
         frame_rate: Optional[float] = None,
         units: Optional[str] = None,
+        time_axis: Optional[Literal["first", "last"]] = None,
+        clip_negative: Optional[bool] = None,
         # @end generated
         mask: Optional[ArrayLike] = None,
     ) -> Recording: ...
@@ -195,6 +197,8 @@ class Recording:
     def sensel_area_mm2(self) -> Optional[float]: ...
     @property
     def noise_threshold(self) -> Optional[float]: ...
+    @property
+    def negative_values(self) -> dict[str, Any]: ...
     @property
     def format(self) -> Optional[str]: ...
     @property
@@ -287,6 +291,8 @@ def read_recording(
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
     units: Optional[str] = None,
+    time_axis: Optional[Literal["first", "last"]] = None,
+    clip_negative: Optional[bool] = None,
     layout: Optional[Path] = None,
     # @end generated
 ) -> Recording: ...
@@ -382,6 +388,8 @@ def run(
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
     units: Optional[str] = None,
+    time_axis: Optional[Literal["first", "last"]] = None,
+    clip_negative: Optional[bool] = None,
     # @end generated
     out: Optional[Path] = None,
     # @generated keywords of run output: tests/generated.rs, from the option tables
