@@ -374,6 +374,10 @@ def run(
     pitch_mm: Optional[Pitch] = None,
     frame_rate: Optional[float] = None,
     units: Optional[str] = None,
+    points: Optional[Union[Path, ArrayLike]] = None,
+    points_frame: Optional[int] = None,
+    regions: Optional[Union[Path, ArrayLike]] = None,
+    regions_frame: Optional[int] = None,
     # @end generated
     out: Optional[Path] = None,
     # @generated keywords of run output: tests/generated.rs, from the option tables
