@@ -611,10 +611,7 @@ impl RunParams {
         let mut v = self.matching.used(&options.matching);
         v.extend(resolved.values());
         v.extend(resolved.units.values());
-        // The points and regions only when given: a run without them records what it did.
-        if self.inputs.any() {
-            v.extend(self.inputs.values());
-        }
+        v.extend(self.inputs.values());
         v
     }
 }
