@@ -304,10 +304,7 @@ impl LabelMask {
             while next.get(&start).is_some_and(|v| !v.is_empty()) {
                 let mut lp = vec![start];
                 let mut at = start;
-                loop {
-                    let Some(b) = next.get_mut(&at).and_then(Vec::pop) else {
-                        break;
-                    };
+                while let Some(b) = next.get_mut(&at).and_then(Vec::pop) {
                     if b == start {
                         break;
                     }
