@@ -40,7 +40,9 @@ pub use model::{
     modal_basis, model_matrices, ElementKind, ModalBasis, ModelMatrices, ModelOptions,
 };
 pub use model::{Material, PlaneModel};
-pub use options::{Choice, MatchParams, OptionKind, OptionSet, OptionSpec, OptionValue};
+pub use options::{
+    Choice, MatchParams, OptionKind, OptionSet, OptionSpec, OptionValue, PathOrRows,
+};
 pub use shape::{Shape, Topology};
 
 /// The eigensolver's building blocks on faer matrices, for the stage benchmarks

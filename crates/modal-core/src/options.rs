@@ -188,6 +188,44 @@ pub trait OptionInput {
     /// One number or a pair of numbers (Python's `5.08` or `(7.62, 5.08)`), as a pair; `expected`
     /// describes the form in the error.
     fn one_or_two(&self, option: &'static str, expected: &str) -> Result<[f64; 2], Self::Error>;
+    /// A file's path or the rows of a table of numbers (Python's `(n, 2)` array of points, a
+    /// 2-D mask): the text as a path unless a front end has rows to give.
+    fn path_or_rows(&self, option: &'static str) -> Result<PathOrRows, Self::Error> {
+        Ok(PathOrRows::Path(self.text(option)?))
+    }
+}
+
+/// The value of an option that names a file or gives its content directly: a path (the command
+/// line, Python's `str` or `os.PathLike`) or rows of numbers (Python's array, e.g. `(n, 2)`
+/// points or a 2-D mask).
+#[derive(Debug, Clone, PartialEq)]
+pub enum PathOrRows {
+    /// A file's path.
+    Path(String),
+    /// Rows of numbers, each as given (a front end checks nothing of their lengths).
+    Rows(Vec<Vec<f64>>),
+}
+
+impl OptionField for PathOrRows {
+    fn python_type() -> String {
+        "Union[Path, ArrayLike]".into()
+    }
+    fn value_name() -> Option<&'static str> {
+        Some("FILE")
+    }
+    fn read<I: OptionInput + ?Sized>(input: &I, option: &'static str) -> Result<Self, I::Error> {
+        input.path_or_rows(option)
+    }
+    fn value(&self) -> OptionValue {
+        match self {
+            PathOrRows::Path(p) => OptionValue::Word(p.clone()),
+            PathOrRows::Rows(rows) => OptionValue::Word(format!(
+                "an array of {} row{}",
+                rows.len(),
+                if rows.len() == 1 { "" } else { "s" }
+            )),
+        }
+    }
 }
 
 /// The command line's form of an option value: its text (`--modes 0.5`), or a switch given

@@ -11,7 +11,8 @@
 //! - [`contour`] extracts closed, counter-clockwise contours (sub-pixel marching squares or the
 //!   paper's edge chain), [`surface`] builds the paper's brightness surfaces and [`isobar`] its
 //!   isobaric contours: the objects of one frame that the run engine (`pedo-track`) matches;
-//! - [`points`] reads and writes point files, [`synthetic`] makes recordings with a known motion;
+//! - [`points`] reads and writes point files, [`regions`] the points and region masks a user
+//!   marks to be followed through a stance, [`synthetic`] makes recordings with a known motion;
 //! - [`IoError`] is the one error enum of the pipeline crates (this one, `pedo-track`,
 //!   `pedo-output` and `pedo-study`), and [`cancel::Cancel`] the request that stops their work.
 //!
@@ -27,6 +28,7 @@ pub mod formats;
 pub mod grid;
 pub mod isobar;
 pub mod limits;
+pub mod marks;
 pub mod measures;
 pub mod points;
 pub mod preprocess;

@@ -646,7 +646,7 @@ impl Recording {
 
 /// The sums behind [`FrameMeasures`], sensor by sensor.
 #[derive(Default)]
-struct MeasureSum {
+pub(crate) struct MeasureSum {
     contact: usize,
     load: f64,
     peak: f64,
@@ -655,7 +655,7 @@ struct MeasureSum {
 
 impl MeasureSum {
     /// Adds an existing sensor's value `v` at row `r`, column `c`.
-    fn add(&mut self, v: f64, r: usize, c: usize, threshold: f64) {
+    pub(crate) fn add(&mut self, v: f64, r: usize, c: usize, threshold: f64) {
         if v > 0.0 && v >= threshold {
             self.contact += 1;
             self.load += v;
@@ -666,7 +666,7 @@ impl MeasureSum {
     }
 
     /// The measures in `recording`'s units (see [`FrameMeasures`]).
-    fn measures(&self, recording: &Recording) -> FrameMeasures {
+    pub(crate) fn measures(&self, recording: &Recording) -> FrameMeasures {
         let area = recording.sensel_area().unwrap_or(1.0);
         let force = recording.force_factor().unwrap_or(area);
         FrameMeasures {

@@ -41,6 +41,10 @@ pub const RUN_TABLES: [&str; 6] = ["pairs", "objects", "matches", "tracks", "fra
 /// [`RUN_TABLES`].
 pub const POINTS: &str = "points";
 
+/// The table of the user's regions ([`crate::regions_table`]) a contour run given regions
+/// writes beside [`POINTS`].
+pub const REGION_SERIES: &str = "region_series";
+
 /// The table a run with drift correction ([`SequenceOptions::drift_corrected`]) writes besides
 /// [`RUN_TABLES`]: the matches of its reference pairs ([`crate::reference_matches_table`]).
 pub const REFERENCE_MATCHES: &str = "reference_matches";
@@ -805,7 +809,9 @@ fn write_folder(
     // A replayed run is whole already; a run of the engine gathers its objects and pairs only
     // for what needs them all: the material points of a contour run (written with any output
     // besides the tables), the pair figures and the animation.
-    let points = run.options.model == ObjectModel::Contour && !tables_only(outputs);
+    // The user's points and regions are followed whatever the outputs.
+    let points = run.options.model == ObjectModel::Contour
+        && (!tables_only(outputs) || !run.options.inputs.is_empty());
     let pair_figures = outputs.figures.any() && outputs.pair_figures;
     let gather = matches!(feed, Feed::Run { .. }) && (points || pair_figures || outputs.animation);
     let progress = match &feed {
@@ -972,8 +978,9 @@ fn write_figures_and_points(
     cancel: Option<&Cancel>,
     steps: &OutputSteps<'_>,
 ) -> Result<()> {
+    type Tables = (crate::Table, Option<crate::Table>);
     let (points, figures) = std::thread::scope(|s| {
-        let points = s.spawn(|| -> Result<Option<crate::Table>> {
+        let points = s.spawn(|| -> Result<Option<Tables>> {
             let Some(r) = drawn.whole.filter(|_| points) else {
                 return Ok(None);
             };
@@ -982,7 +989,15 @@ fn write_figures_and_points(
             let Some(points) = points? else {
                 return Ok(None);
             };
-            crate::points_table(run.recording, r, &points).map(Some)
+            let (rec, inputs) = (run.recording, &run.options.inputs);
+            let table = crate::points_table(rec, r, &points, inputs)?;
+            let regions = (!inputs.regions.is_empty())
+                .then(|| {
+                    let threshold = run.options.contour.preprocess.threshold.unwrap_or(0.0);
+                    crate::regions_table(rec, r, &points, inputs, threshold)
+                })
+                .transpose()?;
+            Ok(Some((table, regions)))
         });
         let figures = match &drawn.tracks {
             Some(tracks) => write_figures(
@@ -1002,8 +1017,11 @@ fn write_figures_and_points(
     });
     figures?;
     let points = points.map_err(|_| IoError::invalid("following the material points failed"))?;
-    if let Some(table) = points? {
+    if let Some((table, regions)) = points? {
         crate::write_table(dir, outputs.tables, POINTS, &table)?;
+        if let Some(regions) = regions {
+            crate::write_table(dir, outputs.tables, REGION_SERIES, &regions)?;
+        }
     }
     Ok(())
 }

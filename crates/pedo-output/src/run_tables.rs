@@ -384,8 +384,11 @@ pub(crate) fn track_rows<E>(
 /// The material points followed by anchored registration ([`pedo_track::follow`]), one row per
 /// point and frame: point, step, frame, time, object id, the outline node the point was seeded
 /// on (empty for a point given by position), `x, y` (pixels) and `x_mm, y_mm` when the pitch is
-/// known, and the pressure under the point (bilinear between sensel centres; `pressure_kpa`
-/// when the units are known, else `pressure` in the file's units).
+/// known, the pressure under the point (bilinear between sensel centres; `pressure_kpa`
+/// when the units are known, else `pressure` in the file's units), its `kind` (`outline`: a
+/// default point seeded on an outline node; `user`: a point the user gave) and `name` (a user
+/// point's, from `inputs`; empty for the outline's). The points of the user's regions are not
+/// rows ([`regions_table`]); `point` numbers the rows' points from 0.
 ///
 /// # Errors
 /// A frame of a step that the recording cannot give (never for the run's own points).
@@ -393,7 +396,9 @@ pub fn points_table(
     recording: &Recording,
     r: &SequenceResult,
     points: &pedo_track::follow::FollowedPoints,
+    inputs: &pedo_track::UserInputs,
 ) -> pedo_io::Result<Table> {
+    use pedo_track::follow::Seeded;
     let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
     let mut t = steps_header(recording, "point", "seed_node");
     let (pressure, per_unit) = match kpa_per_unit(&recording.units) {
@@ -401,11 +406,22 @@ pub fn points_table(
         None => ("pressure", 1.0),
     };
     t.push_column(pressure);
+    t.push_column("kind");
+    t.push_column("name");
     let under = pressures_under(recording, r, points)?;
-    for (k, p) in points.points.iter().enumerate() {
+    let shown = points
+        .points
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| !matches!(p.kind, Seeded::Region(_)));
+    for (row_point, (k, p)) in shown.enumerate() {
+        let (kind, name) = match p.kind {
+            Seeded::Point(i) => ("user", inputs.points.get(i).map(|u| u.name.as_str())),
+            _ => ("outline", None),
+        };
         for (s, &(o, xy)) in p.steps.iter().enumerate() {
             let frame = r.objects[o].frame;
-            let mut cells = vec![Cell::int(k), Cell::int(s), Cell::int(frame)];
+            let mut cells = vec![Cell::int(row_point), Cell::int(s), Cell::int(frame)];
             if timed {
                 cells.push(Cell::opt(recording.time_s(frame), 6));
             }
@@ -413,10 +429,116 @@ pub fn points_table(
             cells.push(p.seed.1.map_or(Cell::Empty, Cell::int));
             push_xy(&mut cells, recording, xy[0], xy[1], mm);
             cells.push(Cell::Float(under[k][s] * per_unit, 4));
+            cells.push(Cell::Text(kind.to_string()));
+            cells.push(name.map_or(Cell::Empty, |n| Cell::Text(n.to_string())));
             t.rows.push(cells);
         }
     }
     Ok(t)
+}
+
+/// The user's regions ([`pedo_track::UserInputs::regions`]) through the run, two rows per region
+/// and frame on which it is followed: `kind` `moving`, the region carried by the field (the
+/// sensels whose centres lie inside its followed outline), and `fixed`, the mask's own sensels
+/// on that frame. Columns: `region` (its label), `kind`, `frame`, `time_s`, `sensels` (existing
+/// sensors in the region) and its area (`area_mm2`, or `area_sensels` without a pitch), then
+/// the measures of its sensels as `frames.csv` gives a frame's (contact sensors and area,
+/// total force or load, peak pressure, centre of pressure in sensels and mm, named by the
+/// units known) and the mean pressure of its contact sensors (`mean_pressure_kpa`, or
+/// `mean_pressure` in the file's units).
+///
+/// # Errors
+/// A frame the recording cannot give.
+pub fn regions_table(
+    recording: &Recording,
+    r: &SequenceResult,
+    points: &pedo_track::follow::FollowedPoints,
+    inputs: &pedo_track::UserInputs,
+    threshold: f64,
+) -> pedo_io::Result<Table> {
+    use pedo_track::follow::Seeded;
+    let mut t = Table::new(&["region", "kind", "frame"]);
+    if recording.dt_s.is_some() {
+        t.push_column("time_s");
+    }
+    t.push_column("sensels");
+    t.push_column(match recording.sensel_area() {
+        Some(_) => "area_mm2",
+        None => "area_sensels",
+    });
+    push_measure_columns(&mut t, recording);
+    let (mean, per_unit) = match kpa_per_unit(&recording.units) {
+        Some(k) => ("mean_pressure_kpa", k),
+        None => ("mean_pressure", 1.0),
+    };
+    t.push_column(mean);
+    let u = measure_units(recording);
+    let area = recording.sensel_area().unwrap_or(1.0);
+    let sensors = recording.sensor_mask();
+    for (k, region) in inputs.regions.iter().enumerate() {
+        // The region's followed outline per frame, its points in outline order.
+        let mut by_frame: std::collections::BTreeMap<usize, Vec<[f64; 2]>> = Default::default();
+        for p in points.points.iter().filter(|p| p.kind == Seeded::Region(k)) {
+            for &(o, xy) in &p.steps {
+                by_frame.entry(r.objects[o].frame).or_default().push(xy);
+            }
+        }
+        for (frame, outline) in by_frame.into_iter().filter(|(_, o)| o.len() >= 3) {
+            let grid = recording.frame(frame)?;
+            let moving = raster(recording, &outline);
+            for (kind, cells) in [("moving", &moving), ("fixed", &region.cells)] {
+                let n = (cells.iter().zip(sensors))
+                    .filter(|(c, s)| **c && **s)
+                    .count();
+                let m = recording.cells_measures(&grid, threshold, cells);
+                let mut row = vec![
+                    Cell::int(region.label as usize),
+                    Cell::Text(kind.to_string()),
+                    Cell::int(frame),
+                ];
+                if recording.dt_s.is_some() {
+                    row.push(Cell::opt(recording.time_s(frame), 6));
+                }
+                row.push(Cell::int(n));
+                row.push(Cell::Float(n as f64 * area, 4));
+                push_measures(&mut row, recording, &u, Some(&m));
+                // The mean of the contact sensors' values: the load over their count.
+                let load = m.total_force / recording.force_factor().unwrap_or(area);
+                row.push(match m.contact_sensors {
+                    0 => Cell::Empty,
+                    c => Cell::Float(load / c as f64 * per_unit, 4),
+                });
+                t.rows.push(row);
+            }
+        }
+    }
+    Ok(t)
+}
+
+/// The sensels (row-major) whose centres lie inside the closed `outline` (sensels).
+fn raster(recording: &Recording, outline: &[[f64; 2]]) -> Vec<bool> {
+    let (rows, cols) = (recording.rows(), recording.cols());
+    let mut cells = vec![false; rows * cols];
+    let (lo, hi) = outline.iter().fold(
+        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+        |(lo, hi), p| {
+            (
+                [lo[0].min(p[0]), lo[1].min(p[1])],
+                [hi[0].max(p[0]), hi[1].max(p[1])],
+            )
+        },
+    );
+    let span = |lo: f64, hi: f64, n: usize| {
+        let first = lo.ceil().clamp(0.0, n as f64) as usize;
+        let last = (hi.floor() + 1.0).clamp(0.0, n as f64) as usize;
+        first..last.max(first)
+    };
+    for r in span(lo[1], hi[1], rows) {
+        for c in span(lo[0], hi[0], cols) {
+            cells[r * cols + c] = pedo_io::contour::point_in_polygon([c as f64, r as f64], outline);
+        }
+    }
+    cells
 }
 
 /// The pressure under every step of every point, each frame read once.

@@ -15,6 +15,7 @@
 //! shrank: heel strike, toe-off); where an object splits or objects merge, the points are carried
 //! across by the pair's [`CorrespondenceField`] and a new anchor starts.
 
+use crate::inputs::UserInputs;
 use crate::*;
 use modal_core::{
     match_shapes, CorrespondenceField, FactoredSpline, MatchOptions, MatchResult,
@@ -88,11 +89,38 @@ const PAIR_SMOOTHING: f64 = crate::consistency::FIELD_SMOOTHING;
 /// Distance (sensels) beyond which a point of one outline counts as not covered by the other.
 const COVERED: f64 = 1.0;
 
+/// What a followed point was seeded as.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Seeded {
+    /// An outline node of an object that begins a lineage (the default points).
+    Outline,
+    /// A point given by position: the index among the seeds given ([`follow_seeded`]), or among
+    /// the user's points ([`UserInputs::points`]).
+    Point(usize),
+    /// A point of a region's outline: the index of the region ([`UserInputs::regions`]). It is
+    /// not ended where it leaves the contact region (a region's outline runs along the
+    /// foot's).
+    Region(usize),
+}
+
+/// A point to follow from its object on ([`follow_seeded`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Seed {
+    /// The object (an index into the run's objects) it is given on.
+    pub object: usize,
+    /// Its position on that object, in sensels.
+    pub xy: [f64; 2],
+    /// What it is.
+    pub kind: Seeded,
+}
+
 /// One material point followed through the objects of a run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FollowedPoint {
     /// The object it started on and, for a point seeded at an outline node, that node.
     pub seed: (usize, Option<usize>),
+    /// What it was seeded as.
+    pub kind: Seeded,
     /// `(object, [x, y])` of each frame it was followed through, in sequence order (sensels).
     pub steps: Vec<(usize, [f64; 2])>,
 }
@@ -120,6 +148,32 @@ pub fn follow_points(
     params: &FollowParams,
     seeds: &[(usize, [f64; 2])],
 ) -> Result<FollowedPoints> {
+    let seeds: Vec<Seed> = seeds
+        .iter()
+        .enumerate()
+        .map(|(k, &(object, xy))| Seed {
+            object,
+            xy,
+            kind: Seeded::Point(k),
+        })
+        .collect();
+    follow_seeded(run, aspect, params, &seeds, seeds.is_empty())
+}
+
+/// Follows the `seeds` (each from its object on) through the contour objects of a run and,
+/// with `outline`, the outline nodes of every object that begins a lineage too (the points of
+/// [`follow_points`] without seeds). A seed on an object within a lineage starts a new anchor
+/// there (the lineage's points keep their positions), so that its place is its position.
+///
+/// # Errors
+/// As [`follow_points`].
+pub fn follow_seeded(
+    run: &SequenceResult,
+    aspect: SenselAspect,
+    params: &FollowParams,
+    seeds: &[Seed],
+    outline_seeds: bool,
+) -> Result<FollowedPoints> {
     if run.objects.iter().any(|o| o.shape.dim() != 2) {
         return Err(IoError::invalid(
             "points are followed on contours: this run's objects are surfaces",
@@ -127,8 +181,9 @@ pub fn follow_points(
     }
     let links = Links::of(run);
     let mut out = FollowedPoints::default();
-    let mut seeds_at: HashMap<usize, Vec<[f64; 2]>> = HashMap::new();
-    for &(o, p) in seeds {
+    let mut seeds_at: HashMap<usize, Vec<Seed>> = HashMap::new();
+    for seed in seeds {
+        let (o, p) = (seed.object, seed.xy);
         if o >= run.objects.len() || !p.iter().all(|v| v.is_finite()) {
             return Err(IoError::invalid(format!(
                 "point ({}, {}) seeded on object {o}: the run has {} (and points must be finite)",
@@ -137,7 +192,7 @@ pub fn follow_points(
                 pedo_io::counted(run.objects.len(), "object")
             )));
         }
-        seeds_at.entry(o).or_default().push(p);
+        seeds_at.entry(o).or_default().push(*seed);
     }
     // Per object: its anchor state and the points on it (index into out.points).
     let mut live: HashMap<usize, Lineage> = HashMap::new();
@@ -163,16 +218,34 @@ pub fn follow_points(
             if let Some(l) = lineage.as_mut() {
                 let carried = links.handed_over(run, b, &mut live, aspect);
                 l.adopt(carried, aspect);
-                if links.preds(b).is_empty() && seeds.is_empty() {
+                if links.preds(b).is_empty() && outline_seeds {
                     let nodes = outline(&run.objects[b]);
-                    let seeded = nodes.iter().enumerate().map(|(i, &p)| (Some(i), p));
+                    let seeded = nodes
+                        .iter()
+                        .enumerate()
+                        .map(|(i, &p)| (Some(i), p, Seeded::Outline));
                     l.seed(seeded, &mut out, b, aspect);
                 }
             }
         }
         let Some(mut l) = lineage else { continue };
         if let Some(ps) = seeds_at.remove(&b) {
-            l.seed(ps.into_iter().map(|p| (None, p)), &mut out, b, aspect);
+            // A place on the anchor is a position on the anchor's object: a seed on a later
+            // object of the lineage starts a new anchor there.
+            if l.object != b
+                && let Ok(fresh) = l.reanchor(run, b, aspect, params)
+            {
+                l = fresh;
+                out.anchors += 1;
+            }
+            if l.object == b {
+                l.seed(
+                    ps.into_iter().map(|p| (None, p.xy, p.kind)),
+                    &mut out,
+                    b,
+                    aspect,
+                );
+            }
         }
         l.record(&mut out, b);
         if links.succs(b).is_empty() {
@@ -190,12 +263,14 @@ pub fn follow_points(
     Ok(out)
 }
 
-/// The material points of a run as its outputs give them: the default seeds followed through a
-/// contour run ([`follow_points`] with the run's sensel aspect); `None` for the surface and
-/// isocontour models, whose objects are no contact outlines.
+/// The material points of a run as its outputs give them: the default seeds (the outline
+/// nodes of every object that begins a lineage) and the user's points and regions
+/// ([`SequenceOptions::inputs`], placed by [`user_seeds`]) followed through a contour run
+/// ([`follow_seeded`] with the run's sensel aspect); `None` for the surface and isocontour
+/// models, whose objects are no contact outlines.
 ///
 /// # Errors
-/// As [`follow_points`].
+/// As [`follow_points`] and [`user_seeds`].
 pub fn run_points(
     run: &SequenceResult,
     options: &SequenceOptions,
@@ -203,13 +278,87 @@ pub fn run_points(
     if options.model != ObjectModel::Contour {
         return Ok(None);
     }
-    follow_points(
+    let seeds = user_seeds(run, &options.inputs)?;
+    follow_seeded(
         run,
         SenselAspect::of(options),
         &FollowParams::default(),
-        &[],
+        &seeds,
+        true,
     )
     .map(Some)
+}
+
+/// How far apart (sensels) the points of a region's outline are seeded.
+pub const REGION_STEP: f64 = 0.5;
+
+/// The seeds of the user's points and regions on the objects of `run`: a point on the first
+/// object (of its frame, when given) whose outline holds it; each region's outline, every
+/// [`REGION_STEP`] sensels, on the object of its frame (the first frame with an object unless
+/// given) whose outline holds most of its sensels' centres.
+///
+/// # Errors
+/// [`IoError::InvalidInput`] naming a point that no object's outline holds (on its frame, or on
+/// any frame run), or a region that lies on no object of its frame.
+pub fn user_seeds(run: &SequenceResult, inputs: &UserInputs) -> Result<Vec<Seed>> {
+    let mut seeds = Vec::new();
+    let inside = |o: &SequenceObject, p: [f64; 2]| {
+        o.shape.dim() == 2 && pedo_io::contour::point_in_polygon(p, &outline(o))
+    };
+    for (k, p) in inputs.points.iter().enumerate() {
+        let on_frame = |o: &SequenceObject| p.frame.is_none_or(|f| o.frame == f);
+        let object = run
+            .objects
+            .iter()
+            .position(|o| on_frame(o) && inside(o, p.xy));
+        let Some(object) = object else {
+            let when = match p.frame {
+                Some(f) => format!("on frame {f}"),
+                None => "on any frame run".to_string(),
+            };
+            return Err(IoError::invalid(format!(
+                "point {:?} at x {}, y {} (sensels) lies inside no object's outline {when}",
+                p.name, p.xy[0], p.xy[1]
+            )));
+        };
+        seeds.push(Seed {
+            object,
+            xy: p.xy,
+            kind: Seeded::Point(k),
+        });
+    }
+    if inputs.regions.is_empty() {
+        return Ok(seeds);
+    }
+    let first = run.objects.iter().map(|o| o.frame).min();
+    let Some(frame) = inputs.regions_frame.or(first) else {
+        return Err(IoError::invalid(
+            "regions: the run has no object to draw them on",
+        ));
+    };
+    for (r, region) in inputs.regions.iter().enumerate() {
+        let centres = region.centres();
+        let best = run
+            .objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.frame == frame)
+            .map(|(i, o)| (i, centres.iter().filter(|&&c| inside(o, c)).count()))
+            .max_by_key(|&(i, n)| (n, std::cmp::Reverse(i)));
+        let Some((object, _)) = best.filter(|&(_, n)| n > 0) else {
+            return Err(IoError::invalid(format!(
+                "region {} lies on no object of frame {frame}",
+                region.label
+            )));
+        };
+        let (dense, _) = densify(&region.outline, REGION_STEP);
+        seeds.extend(dense.into_iter().map(|xy| Seed {
+            object,
+            xy,
+            kind: Seeded::Region(r),
+        }));
+    }
+    Ok(seeds)
 }
 
 /// Which object continues which: from the run's candidate pairs (matched or skipped).
@@ -263,21 +412,25 @@ impl Links {
         b: usize,
         live: &mut HashMap<usize, Lineage>,
         aspect: SenselAspect,
-    ) -> Vec<(usize, [f64; 2])> {
+    ) -> Vec<(usize, [f64; 2], bool)> {
         let mut carried = Vec::new();
         for &a in self.preds(b) {
             let Some(la) = live.get_mut(&a) else { continue };
             // Each part's field and outline once, for every point of `a`.
             let parts = self.parts_of(run, a, aspect);
-            let mut keep = Vec::new();
-            for &(point, pos) in &la.points {
+            let (mut keep, mut keep_ends) = (Vec::new(), Vec::new());
+            for (&(point, pos), &ends) in la.points.iter().zip(&la.ends_off) {
                 match destination(&parts, pos) {
-                    Some((t, image)) if t == b => carried.push((point, image)),
-                    Some(_) => keep.push((point, pos)),
+                    Some((t, image)) if t == b => carried.push((point, image, ends)),
+                    Some(_) => {
+                        keep.push((point, pos));
+                        keep_ends.push(ends);
+                    }
                     None => {}
                 }
             }
             la.points = keep;
+            la.ends_off = keep_ends;
             if la.points.is_empty() {
                 live.remove(&a);
             }
@@ -327,8 +480,12 @@ fn destination(
 /// The anchor of one lineage and the points it carries.
 struct Lineage {
     anchor: Anchor,
+    /// The object the anchor was made on.
+    object: usize,
     /// (point index, position in sensels on the lineage's current object).
     points: Vec<(usize, [f64; 2])>,
+    /// Per point: whether it ends where it leaves the contact region (not a region's).
+    ends_off: Vec<bool>,
     /// The points' places on the anchor (registration coordinates) and the spline's terms there.
     places: Vec<[f64; 2]>,
     place_basis: Option<ThinPlateBasis>,
@@ -343,7 +500,9 @@ impl Lineage {
     ) -> Result<Self> {
         Ok(Self {
             anchor: Anchor::new(run, b, aspect, params)?,
+            object: b,
             points: Vec::new(),
+            ends_off: Vec::new(),
             places: Vec::new(),
             place_basis: None,
         })
@@ -373,11 +532,14 @@ impl Lineage {
         let kept: Vec<bool> = self
             .points
             .iter()
-            .map(|&(_, p)| contact.outside(p) <= COVERED)
+            .zip(&self.ends_off)
+            .map(|(&(_, p), &ends)| !ends || contact.outside(p) <= COVERED)
             .collect();
         if kept.contains(&false) {
             let mut k = kept.iter();
             self.points.retain(|_| *k.next().unwrap_or(&true));
+            let mut k = kept.iter();
+            self.ends_off.retain(|_| *k.next().unwrap_or(&true));
             let mut k = kept.iter();
             self.places.retain(|_| *k.next().unwrap_or(&true));
             self.place_basis = Some(self.anchor.spline.basis(&self.places));
@@ -388,30 +550,34 @@ impl Lineage {
     /// Points entering on the anchor's own object: their places are their positions there.
     fn seed(
         &mut self,
-        points: impl Iterator<Item = (Option<usize>, [f64; 2])>,
+        points: impl Iterator<Item = (Option<usize>, [f64; 2], Seeded)>,
         out: &mut FollowedPoints,
         object: usize,
         aspect: SenselAspect,
     ) {
-        let carried: Vec<(usize, [f64; 2])> = points
-            .map(|(node, p)| {
+        let carried: Vec<(usize, [f64; 2], bool)> = points
+            .map(|(node, p, kind)| {
                 out.points.push(FollowedPoint {
                     seed: (object, node),
+                    kind,
                     steps: Vec::new(),
                 });
-                (out.points.len() - 1, p)
+                let ends_off = !matches!(kind, Seeded::Region(_));
+                (out.points.len() - 1, p, ends_off)
             })
             .collect();
         self.adopt(carried, aspect);
     }
 
-    /// Points entering at their positions on the object the anchor was started on.
-    fn adopt(&mut self, carried: Vec<(usize, [f64; 2])>, aspect: SenselAspect) {
+    /// Points entering at their positions on the object the anchor was started on (with
+    /// whether each ends where it leaves the contact region).
+    fn adopt(&mut self, carried: Vec<(usize, [f64; 2], bool)>, aspect: SenselAspect) {
         if carried.is_empty() {
             return;
         }
-        for (k, p) in carried {
+        for (k, p, ends_off) in carried {
             self.points.push((k, p));
+            self.ends_off.push(ends_off);
             self.places.push(aspect.to_registration(p));
         }
         self.place_basis = Some(self.anchor.spline.basis(&self.places));
@@ -433,7 +599,10 @@ impl Lineage {
         params: &FollowParams,
     ) -> Result<Self> {
         let mut l = Self::start(run, b, aspect, params)?;
-        l.adopt(self.points.clone(), aspect);
+        let carried = (self.points.iter().zip(&self.ends_off))
+            .map(|(&(k, p), &e)| (k, p, e))
+            .collect();
+        l.adopt(carried, aspect);
         Ok(l)
     }
 }

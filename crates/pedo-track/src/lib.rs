@@ -20,6 +20,7 @@
 //! | `chain` | matches chained into node tracks |
 //! | [`drift`] | drift correction: tracks re-anchored on reference frames |
 //! | [`follow`] | material points followed through a stance by anchored registration |
+//! | [`inputs`] | the points and regions a user gives to follow ([`RunInputs`]) |
 //! | [`result`] | what a run produces: objects, pairs, tracks, counts |
 //! | `stream` | the engine: every run, window by window, its events handed to a sink |
 //! | [`sink`] | the events of a run ([`SequenceSink`]), gathered whole ([`Collect`]) or replayed |
@@ -31,6 +32,7 @@ mod chain;
 pub mod consistency;
 pub mod drift;
 pub mod follow;
+pub mod inputs;
 mod matching;
 mod objects;
 pub mod options;
@@ -43,6 +45,7 @@ mod stream;
 mod tests;
 
 pub use chain::*;
+pub use inputs::{RunInputs, UserInputs};
 pub use matching::*;
 #[allow(unused_imports)]
 pub(crate) use objects::*;

@@ -73,6 +73,9 @@ pub struct SequenceOptions {
     /// [`run_sequence`] and [`stream_sequence`] then fail with [`IoError::Cancelled`](pedo_io::IoError::Cancelled)
     /// ([`pedo_io::cancel`]). `None`: the run goes to its end.
     pub cancel: Option<Cancel>,
+    /// The points and regions a user gives to follow through the stance ([`crate::follow`]),
+    /// read for this recording ([`RunParams::to_options`]); none by default.
+    pub inputs: crate::inputs::UserInputs,
 }
 
 impl SequenceOptions {
@@ -118,6 +121,7 @@ impl Default for SequenceOptions {
             drift_reference: 0,
             keep_match_details: true,
             sensel_aspect: 1.0,
+            inputs: Default::default(),
             cancel: None,
         }
     }
@@ -297,6 +301,8 @@ modal_core::option_set! {
             matching: MatchParams,
             /// Sensor pitch, frame rate and pressure units overriding the file's.
             units: pedo_io::units::UnitOverrides,
+            /// Points and regions to follow through the stance (contour model).
+            inputs: crate::inputs::RunInputs,
         );
         let d = SequenceOptions::default();
         /// What each frame becomes: contours, a surface, or (one frame) isobaric contours.
@@ -382,9 +388,10 @@ impl RunParams {
     }
 
     /// Whether a run with these parameters streams ([`streams`]): the contour and surface
-    /// models without drift correction, whatever the frame stride.
+    /// models without drift correction, whatever the frame stride, without points or regions
+    /// to follow (they need the whole run).
     pub fn streams(&self) -> bool {
-        streamable(self.model, self.drift_reference)
+        streamable(self.model, self.drift_reference) && !self.inputs.any()
     }
 
     /// Checks every parameter that does not depend on a recording.
@@ -518,6 +525,13 @@ impl RunParams {
         o.surface.preprocess.sigma = sigma;
         o.surface.max_nodes = Some(self.surface_nodes);
         o.sensel_aspect = SenselAspect::of_pitch(recording.pitch_mm).0;
+        if self.inputs.any() && self.model != ObjectModel::Contour {
+            return Err(pedo_io::IoError::invalid(format!(
+                "points and regions are followed on contact outlines: the contour model, not {}",
+                self.model
+            )));
+        }
+        o.inputs = crate::inputs::UserInputs::of(&self.inputs, recording)?;
         Ok(o)
     }
 
@@ -594,19 +608,23 @@ impl RunParams {
             iso_frame: options.iso_frame,
             iso_levels: self.iso_levels,
             drift_reference: options.drift_reference,
+            inputs: self.inputs.clone(),
         };
         let mut v = self.matching.used(&options.matching);
         v.extend(resolved.values());
         v.extend(resolved.units.values());
+        v.extend(self.inputs.values());
         v
     }
 }
 
 /// The options of a recording run beyond matching (`pedomatch run`/`demo`, `pymodal.run`), in
-/// the order of [`RunParams`]' fields, then the unit options ([`pedo_io::units::unit_option_specs`]).
+/// the order of [`RunParams`]' fields, then the unit options ([`pedo_io::units::unit_option_specs`])
+/// and the points and regions to follow ([`crate::inputs::RunInputs`]).
 pub fn recording_option_specs() -> Vec<OptionSpec> {
     let mut specs = RunParams::specs();
     specs.extend(pedo_io::units::unit_option_specs());
+    specs.extend(crate::inputs::RunInputs::specs());
     specs
 }
 

@@ -6,7 +6,7 @@
 
 use modal_core::options::OptionInput;
 use modal_core::{Choice, MatchParams, OptionKind, OptionSet, OptionSpec};
-use modal_core::{Material, OptionError};
+use modal_core::{Material, OptionError, PathOrRows};
 use pedo_io::units::UnitOverrides;
 use pedo_output::{Cell, Table};
 use pyo3::prelude::*;
@@ -183,6 +183,31 @@ impl OptionInput for PyKeyword<'_, '_> {
             }
         }
         Err(KeywordError(argument_error(option, expected, v)))
+    }
+    /// A path (`str` or `os.PathLike`), or a 2-D array-like of numbers (a NumPy array, nested
+    /// sequences) as its rows; anything else is an `InputError` naming the keyword.
+    fn path_or_rows(&self, option: &'static str) -> Result<PathOrRows, KeywordError> {
+        let v = self.0;
+        if let Ok(p) = v.extract::<std::path::PathBuf>() {
+            return Ok(PathOrRows::Path(p.display().to_string()));
+        }
+        let py = v.py();
+        let rows = (|| -> PyResult<Vec<Vec<f64>>> {
+            let arr = py
+                .import("numpy")?
+                .call_method1("asarray", (v, "float64"))?;
+            if arr.getattr("ndim")?.extract::<usize>()? != 2 {
+                return Err(pyo3::exceptions::PyValueError::new_err("not 2-D"));
+            }
+            arr.call_method0("tolist")?.extract()
+        })();
+        rows.map(PathOrRows::Rows).map_err(|_| {
+            KeywordError(argument_error(
+                option,
+                "a path or a 2-D array of numbers",
+                v,
+            ))
+        })
     }
 }
 

@@ -99,6 +99,15 @@ macro_rules! define_run {
         ///   ``tracks`` (row for row): the object each step is on (an index into ``objects``, which
         ///   gives its frame and, for an isocontour run, its level) and the node within it, as
         ///   ``tracks.csv``'s ``object_id`` and ``node``;
+        /// - ``points``: the material points of a contour run (``points.csv``): per point a
+        ///   (k, 3) float array of ``(frame, x, y)`` rows (sensels); ``point_steps`` per point a
+        ///   (k, 2) int array of ``(object_id, seed_node)`` rows (node -1 for a point given by
+        ///   position); ``point_names`` per point the name of a point given with ``points``
+        ///   (None for the outline's default points); empty lists for the other models;
+        /// - ``region_series``: with ``regions``, the rows of ``region_series.csv`` as dicts (``region``,
+        ///   ``kind`` "moving" or "fixed", ``frame``, ``time_s``, ``sensels``, ``area_mm2``,
+        ///   ``total_force_n``, ``peak_pressure_kpa``, ``cop_x``, ``cop_y``, ...,
+        ///   ``mean_pressure_kpa``, named by the units known); an empty list without;
         /// - ``frames``: list of dicts of per-frame measures (``frame``, ``time_s``,
         ///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
         ///   units allow, like ``frames.csv``);
@@ -224,9 +233,17 @@ fn run_recording<'py>(
     }
     dict.set_item("tracks", tracks)?;
     dict.set_item("track_steps", track_steps)?;
-    set_points(py, &dict, &result, points.as_ref())?;
+    set_points(py, &dict, &result, points.as_ref(), &options.inputs)?;
     let (start, end) = options.frames.unwrap_or((0, rec.n_frames()));
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
+    let regions = match &points {
+        Some(p) if !options.inputs.regions.is_empty() => {
+            pedo_output::regions_table(&rec, &result, p, &options.inputs, threshold)
+                .map_err(to_py)?
+        }
+        _ => pedo_output::Table::default(),
+    };
+    dict.set_item("region_series", table_rows(py, &regions)?)?;
     let measures = pedo_output::frames_table(&rec, threshold, start, end);
     dict.set_item("frames", table_rows(py, &measures)?)?;
     let m = crate::pool::detach(py, || {
@@ -262,17 +279,26 @@ fn run_recording<'py>(
 }
 
 /// The material points of a contour run ([`pedo_track::follow`]) as `points` (per point, its
-/// steps as rows `frame, x, y` in pixels) and `point_steps` (per point, its steps as rows
-/// `object id, seed node`, the node −1 for a point not seeded on a node); both empty lists for
-/// the other models.
+/// steps as rows `frame, x, y` in pixels), `point_steps` (per point, its steps as rows
+/// `object id, seed node`, the node −1 for a point not seeded on a node) and `point_names` (per
+/// point, the user's name of a point given with `points=`, None for the outline's), as the
+/// points of `points.csv` (not the regions' outlines); all empty lists for the other models.
 fn set_points<'py>(
     py: Python<'py>,
     out: &Bound<'py, PyDict>,
     result: &SequenceResult,
     points: Option<&pedo_track::follow::FollowedPoints>,
+    inputs: &pedo_track::UserInputs,
 ) -> PyResult<()> {
-    let (xy, steps) = (PyList::empty(py), PyList::empty(py));
-    for p in points.map_or(&[][..], |p| p.points.as_slice()) {
+    use pedo_track::follow::Seeded;
+    let (xy, steps, names) = (PyList::empty(py), PyList::empty(py), PyList::empty(py));
+    let all = points.map_or(&[][..], |p| p.points.as_slice());
+    for p in all.iter().filter(|p| !matches!(p.kind, Seeded::Region(_))) {
+        let name = match p.kind {
+            Seeded::Point(i) => inputs.points.get(i).map(|u| u.name.clone()),
+            _ => None,
+        };
+        names.append(name)?;
         let n = p.steps.len();
         let flat: Vec<f64> = p
             .steps
@@ -289,6 +315,7 @@ fn set_points<'py>(
         steps.append(PyArray1::from_vec(py, ids).reshape([n, 2])?)?;
     }
     out.set_item("points", xy)?;
+    out.set_item("point_names", names)?;
     out.set_item("point_steps", steps)
 }
 

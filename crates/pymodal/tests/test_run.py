@@ -528,7 +528,7 @@ def test_points_csv_holds_the_points_of_the_result(tmp_path):
     rows = (tmp_path / "run" / "points.csv").read_text().splitlines()
     header = rows[0].split(",")
     assert header == ["point", "step", "frame", "time_s", "object_id", "seed_node", "x", "y",
-                      "x_mm", "y_mm", "pressure_kpa"]
+                      "x_mm", "y_mm", "pressure_kpa", "kind", "name"]
     assert len(rows) - 1 == sum(len(p) for p in res["points"])
     rec = pymodal.read_recording(str(BUNDLED))
     frames = np.asarray(rec.frames)

@@ -390,6 +390,10 @@ def run(
     units: Optional[str] = None,
     time_axis: Optional[Literal["first", "last"]] = None,
     clip_negative: Optional[bool] = None,
+    points: Optional[Union[Path, ArrayLike]] = None,
+    points_frame: Optional[int] = None,
+    regions: Optional[Union[Path, ArrayLike]] = None,
+    regions_frame: Optional[int] = None,
     # @end generated
     out: Optional[Path] = None,
     # @generated keywords of run output: tests/generated.rs, from the option tables
