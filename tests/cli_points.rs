@@ -2,24 +2,9 @@
 //! regions followed through a synthetic walk, written to points.csv and region_series.csv.
 
 mod common;
-use common::{pedomatch, temp_dir};
+use common::{pedomatch, read_csv, temp_dir};
 use std::collections::HashMap;
 use std::path::Path;
-
-fn read_csv(path: &Path) -> Vec<HashMap<String, String>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
-    lines
-        .map(|l| {
-            header
-                .iter()
-                .cloned()
-                .zip(l.split(',').map(String::from))
-                .collect()
-        })
-        .collect()
-}
 
 fn num(row: &HashMap<String, String>, k: &str) -> f64 {
     row[k]

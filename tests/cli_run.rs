@@ -1,24 +1,8 @@
 //! End-to-end tests of `pedomatch run`, `demo` and `match`.
 
 mod common;
-use common::{pedomatch, read_json, temp_dir};
+use common::{pedomatch, read_csv, read_json, temp_dir};
 use std::path::{Path, PathBuf};
-
-/// Reads a CSV with a header into rows of (column name → field).
-fn read_csv(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
-    lines
-        .map(|l| {
-            header
-                .iter()
-                .cloned()
-                .zip(l.split(',').map(String::from))
-                .collect()
-        })
-        .collect()
-}
 
 fn num(row: &std::collections::HashMap<String, String>, k: &str) -> f64 {
     row[k]

@@ -38,3 +38,20 @@ pub fn read_json(path: &Path) -> serde_json::Value {
     )
     .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
+
+/// Reads a CSV with a header into rows of (column name → field).
+#[allow(dead_code)]
+pub fn read_csv(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(String::from))
+                .collect()
+        })
+        .collect()
+}

@@ -59,6 +59,29 @@ pub struct MeasureUnits {
 }
 
 impl MeasureUnits {
+    /// The peak load and its time integral as named quantities: `peak_force` (N) and `fti`
+    /// (N·s) when the load is a force, else `peak_load` and `load_time_integral` in the file's
+    /// units (never named a force unless it is one).
+    pub fn load_quantities(&self, peak: f64, integral: f64) -> [Quantity; 2] {
+        let (peak_name, integral_name) = if self.is_force {
+            ("peak_force", "fti")
+        } else {
+            ("peak_load", "load_time_integral")
+        };
+        [
+            Quantity {
+                name: peak_name,
+                value: peak,
+                unit: self.force.clone(),
+            },
+            Quantity {
+                name: integral_name,
+                value: integral,
+                unit: format!("{}·{}", self.force, self.time),
+            },
+        ]
+    }
+
     /// The units of `recording`'s measures.
     pub fn of(recording: &Recording) -> Self {
         let known = kpa_per_unit(&recording.units).is_some();
@@ -211,28 +234,13 @@ impl StanceMeasures {
     pub fn quantities(&self, u: &MeasureUnits) -> Vec<Quantity> {
         let v = &self.values;
         let q = |name, value, unit: String| Quantity { name, value, unit };
+        let [peak, fti] = u.load_quantities(v.peak_force, v.fti);
         vec![
             q("start_time", v.start_time, u.time.clone()),
             q("end_time", v.end_time, u.time.clone()),
             q("contact_time", v.contact_time, u.time.clone()),
-            q(
-                if u.is_force {
-                    "peak_force"
-                } else {
-                    "peak_load"
-                },
-                v.peak_force,
-                u.force.clone(),
-            ),
-            q(
-                if u.is_force {
-                    "fti"
-                } else {
-                    "load_time_integral"
-                },
-                v.fti,
-                format!("{}·{}", u.force, u.time),
-            ),
+            peak,
+            fti,
             q("peak_pressure", v.peak_pressure, u.pressure.clone()),
             q("max_contact_area", v.max_contact_area, u.area.clone()),
         ]
@@ -274,27 +282,12 @@ impl Measures {
     pub fn quantities(&self) -> Vec<Quantity> {
         let (u, v) = (&self.units, &self.values);
         let q = |name, value, unit: String| Quantity { name, value, unit };
+        let [peak, fti] = u.load_quantities(v.peak_force, v.fti);
         vec![
             q("peak_pressure", v.peak_pressure, u.pressure.clone()),
             q("pti_max", v.pti_max, format!("{}·{}", u.pressure, u.time)),
-            q(
-                if u.is_force {
-                    "peak_force"
-                } else {
-                    "peak_load"
-                },
-                v.peak_force,
-                u.force.clone(),
-            ),
-            q(
-                if u.is_force {
-                    "fti"
-                } else {
-                    "load_time_integral"
-                },
-                v.fti,
-                format!("{}·{}", u.force, u.time),
-            ),
+            peak,
+            fti,
             q("contact_time", v.contact_time, u.time.clone()),
             q("max_contact_area", v.max_contact_area, u.area.clone()),
         ]

@@ -333,11 +333,6 @@ pub fn region_quantities(
     values: &[RegionValues],
 ) -> Vec<(String, &'static str, f64, String)> {
     let u = &m.units;
-    let (force, fti) = if u.is_force {
-        ("peak_force", "fti")
-    } else {
-        ("peak_load", "load_time_integral")
-    };
     let mut out = Vec::new();
     for v in values {
         let name = || v.name.clone();
@@ -348,8 +343,9 @@ pub fn region_quantities(
             v.pti_max,
             format!("{}·{}", u.pressure, u.time),
         ));
-        out.push((name(), force, v.peak_force, u.force.clone()));
-        out.push((name(), fti, v.fti, format!("{}·{}", u.force, u.time)));
+        for l in u.load_quantities(v.peak_force, v.fti) {
+            out.push((name(), l.name, l.value, l.unit));
+        }
         out.push((
             name(),
             "max_contact_area",

@@ -568,6 +568,7 @@ macro_rules! define_read_recording {
         /// (and line, for text formats) if it is corrupt, truncated or of no known format.
         #[pyfunction]
         #[pyo3(signature = (path, *, $($u = None,)* $($rd = None),*))]
+        #[allow(clippy::too_many_arguments)]
         fn read_recording(
             py: Python<'_>,
             path: PathBuf,
