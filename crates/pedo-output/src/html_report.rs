@@ -653,11 +653,13 @@ pub struct ReportGather {
     kpa: f64,
     /// Per frame the player shows (frame `k × step`).
     frames: Vec<ShownFrame>,
-    /// Per matched pair: its first frame, local and optimisation percentages, mean cost.
+    /// Per matched pair: its first frame, local and trackable percentages, mean cost and median
+    /// round trip (sensels; none for surfaces).
     pair_frame: Vec<usize>,
     pair_local: Vec<f64>,
-    pair_optimisation: Vec<f64>,
+    pair_trackable: Vec<f64>,
     pair_cost: Vec<f64>,
+    pair_round_trip: Vec<Option<f64>>,
     costs: CostSample,
     /// The analysed frames, `start..end`.
     analysed: (usize, usize),
@@ -737,7 +739,8 @@ impl ReportGather {
                 .collect(),
             pair_frame: Vec::new(),
             pair_local: Vec::new(),
-            pair_optimisation: Vec::new(),
+            pair_trackable: Vec::new(),
+            pair_round_trip: Vec::new(),
             pair_cost: Vec::new(),
             costs: CostSample::default(),
             analysed,
@@ -889,8 +892,9 @@ impl ReportGather {
         let pairs = json!({
             "frame": self.pair_frame,
             "local": self.pair_local,
-            "optimisation": self.pair_optimisation,
+            "trackable": self.pair_trackable,
             "cost": self.pair_cost,
+            "round_trip": self.pair_round_trip,
         });
         let (start, end) = self.analysed;
         let decimation = (step > 1).then(|| {
@@ -972,8 +976,8 @@ impl SequenceSink for ReportGather {
     fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()> {
         self.pair_frame.push(pair.row.objects.frame_a);
         self.pair_local.push(round3(pair.row.local_percent));
-        self.pair_optimisation
-            .push(round3(pair.row.optimisation_percent));
+        self.pair_trackable.push(round3(pair.row.trackable_percent));
+        (self.pair_round_trip).push(pair.row.consistency.map(|c| round6(c.round_trip)));
         self.pair_cost.push(round6(pair.row.mean_cost));
         for m in &pair.result.pairs {
             self.costs.push(m.cost);
@@ -1172,7 +1176,8 @@ mod tests {
             frames: shown.iter().map(|_| ShownFrame::default()).collect(),
             pair_frame: Vec::new(),
             pair_local: Vec::new(),
-            pair_optimisation: Vec::new(),
+            pair_trackable: Vec::new(),
+            pair_round_trip: Vec::new(),
             pair_cost: Vec::new(),
             costs: CostSample::default(),
             analysed: (start, end),
