@@ -122,7 +122,13 @@ mod tests {
         assert!(good.field_residual < 0.01, "{good:?}");
         assert!(good.round_trip_p95 < 0.01, "{good:?}");
         // A third of the matches sent to the opposite side of the outline: torn matches.
-        let torn = |i: usize| if i.is_multiple_of(3) { (i + n / 2) % n } else { i };
+        let torn = |i: usize| {
+            if i.is_multiple_of(3) {
+                (i + n / 2) % n
+            } else {
+                i
+            }
+        };
         let bad = PairConsistency::of(&a, &b, &pairs(torn, n), SenselAspect::SQUARE).unwrap();
         assert!(bad.field_residual > 1.0, "{bad:?}");
         assert!(
