@@ -6,6 +6,7 @@ use crate::CliError;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use pedo_io::counted;
+use pedo_io::formats::stamp::{FileStamp, Unchanged};
 use pedo_output::InputInfo;
 use pedo_output::TableFormat;
 use pedo_track::{RunParams, Stage};
@@ -77,10 +78,23 @@ pub fn run(args: RunArgs) -> Result<(), CliError> {
     let params = args.options.params();
     params.validate()?;
     let read = args.read.params();
-    let (recording, frames) =
-        pedo_output::read_for_run(&args.recording, &read, &params, &args.options.outputs())?;
-    let input = InputInfo::of_path(&args.recording)?.with_layout(&read, recording.format)?;
+    // The SHA-256 recorded must be of the bytes parsed: the file must not change from before
+    // the read to after the hash (nor, streamed, to its last frame).
+    let path = &args.recording;
+    let stamp = FileStamp::of(path);
+    let (recording, mut frames) =
+        pedo_output::read_for_run(path, &read, &params, &args.options.outputs())?;
+    let input = InputInfo::of_path(path)?.with_layout(&read, recording.format)?;
+    stamp.check(path)?;
     let out = out_folder(args.out, &input)?;
+    let mut unchanged = frames.as_mut().map(|inner| Unchanged {
+        inner,
+        path,
+        stamp: &stamp,
+    });
+    let frames = unchanged
+        .as_mut()
+        .map(|f| f as &mut dyn pedo_io::FrameSource);
     execute(recording, frames, &input, &out, &args.options, params, t)
 }
 
@@ -110,7 +124,7 @@ fn out_folder(out: Option<PathBuf>, input: &InputInfo) -> Result<PathBuf, CliErr
 
 fn execute(
     mut recording: pedo_io::Recording,
-    mut frames: Option<pedo_io::formats::FileFrames>,
+    frames: Option<&mut dyn pedo_io::FrameSource>,
     input: &InputInfo,
     out: &std::path::Path,
     o: &RunOptionsArgs,
@@ -140,7 +154,8 @@ fn execute(
     let plan = pedo_output::RunPlan {
         input,
         params: &params,
-        frames: frames.as_mut().map(|f| f as &mut dyn pedo_io::FrameSource),
+        // Reborrowed for the plan's lifetime (a trait object's may shorten, not its borrow's).
+        frames: frames.map(|f| &mut *f as &mut dyn pedo_io::FrameSource),
         folder: Some(out),
         outputs: &outputs,
         timings: &[("read", read_time.as_secs_f64())],

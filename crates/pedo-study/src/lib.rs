@@ -22,6 +22,7 @@
 //! `pymodal.run(out=...)` write theirs: `report.html` included when the outputs ask for it.
 
 use pedo_io::cancel::Cancel;
+use pedo_io::formats::stamp::{FileStamp, Unchanged};
 use pedo_io::formats::{has_recording_extension, sniff_format, ReadOptions, SNIFF_BYTES};
 use pedo_io::recording::{Format, FrameSource, Recording};
 use pedo_io::{IoError, Result};
@@ -1582,63 +1583,6 @@ fn process(
     let mut row = row_of_summary(path, output, &summary, started);
     row.message = run_note(&counts, options.model);
     Ok(row)
-}
-
-/// The size and modification time of a recording's file (of every file of a folder, in name
-/// order), to tell that it changed while it was read; `None` if they cannot be read.
-#[derive(Debug, Clone, PartialEq)]
-struct FileStamp(Option<Vec<(PathBuf, u64, Option<std::time::SystemTime>)>>);
-
-impl FileStamp {
-    fn of(path: &Path) -> Self {
-        let one = |p: PathBuf| {
-            let m = std::fs::metadata(&p).ok()?;
-            Some((p, m.len(), m.modified().ok()))
-        };
-        if path.is_dir() {
-            let Ok(entries) = std::fs::read_dir(path) else {
-                return Self(None);
-            };
-            let mut files: Vec<PathBuf> = entries
-                .flatten()
-                .map(|e| e.path())
-                .filter(|p| p.is_file())
-                .collect();
-            files.sort();
-            Self(files.into_iter().map(one).collect())
-        } else {
-            Self(one(path.to_path_buf()).map(|f| vec![f]))
-        }
-    }
-
-    /// Fails if the file at `path` is no longer as stamped.
-    fn check(&self, path: &Path) -> Result<()> {
-        if FileStamp::of(path) == *self {
-            return Ok(());
-        }
-        Err(IoError::Io {
-            path: path.display().to_string(),
-            source: std::io::Error::other(
-                "changed while it was being read (its size or modification time differ); run it again once nothing writes it",
-            ),
-        })
-    }
-}
-
-/// The frames of a streamed run, each window checked against the stamp its file had before it
-/// was read, so that the tables are of the bytes `summary.json`'s SHA-256 is of.
-struct Unchanged<'a> {
-    inner: &'a mut dyn FrameSource,
-    path: &'a Path,
-    stamp: &'a FileStamp,
-}
-
-impl FrameSource for Unchanged<'_> {
-    fn window(&mut self, recording: &Recording, w0: usize, w1: usize) -> Result<Recording> {
-        let window = self.inner.window(recording, w0, w1)?;
-        self.stamp.check(self.path)?;
-        Ok(window)
-    }
 }
 
 /// The options of a run as `summary.json` records them.

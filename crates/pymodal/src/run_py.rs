@@ -28,8 +28,13 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
     }
     if let Ok(path) = obj.extract::<std::path::PathBuf>() {
         return crate::pool::detach(py, || {
+            // The SHA-256 recorded must be of the bytes parsed: the file must not change from
+            // before the read to after the hash.
+            let stamp = pedo_io::formats::stamp::FileStamp::of(&path);
             let rec = pedo_io::read_recording(&path)?;
-            Ok::<_, pedo_io::IoError>((rec, InputInfo::of_path(&path)?))
+            let input = InputInfo::of_path(&path)?;
+            stamp.check(&path)?;
+            Ok::<_, pedo_io::IoError>((rec, input))
         })
         .map_err(to_py);
     }

@@ -9,6 +9,7 @@ pub mod npz;
 pub mod own_tables;
 pub mod pedar;
 pub mod pedcad;
+pub mod stamp;
 mod stream;
 pub mod zebris_raw;
 
