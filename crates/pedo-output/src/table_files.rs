@@ -596,7 +596,14 @@ mod tests {
             .collect();
         assert_eq!(
             names,
-            ["figures", "figure_format", "tables", "report", "animation"]
+            [
+                "figures",
+                "figure_format",
+                "tables",
+                "report",
+                "animation",
+                "region_rule"
+            ]
         );
         assert_eq!(TableFormat::default().file_name("matches"), "matches.csv");
     }
