@@ -23,7 +23,7 @@ pub struct OwnTable {
 /// Every table pedomatch writes as CSV, with the columns that tell it apart. A header that holds
 /// the columns of several (`pedomatch match`'s `matches.csv` is a part of a run's) is the one
 /// with the most.
-pub const OWN_TABLES: [OwnTable; 9] = [
+pub const OWN_TABLES: [OwnTable; 14] = [
     OwnTable {
         file: "frames.csv",
         what: "the per-frame measures of a run",
@@ -83,6 +83,31 @@ pub const OWN_TABLES: [OwnTable; 9] = [
         file: "matches.csv",
         what: "the matches of pedomatch match",
         columns: &["node_a", "node_b", "cost", "excess"],
+    },
+    OwnTable {
+        file: "curves.csv",
+        what: "the stance-normalised curves of a run",
+        columns: &["stance", "complete", "percent"],
+    },
+    OwnTable {
+        file: "region_series.csv",
+        what: "the followed regions of a run",
+        columns: &["region", "kind", "frame", "sensels"],
+    },
+    OwnTable {
+        file: "regions.csv",
+        what: "the anatomical regions of a run",
+        columns: &["region", "measure", "value", "unit"],
+    },
+    OwnTable {
+        file: "study_curves.csv",
+        what: "a study's stance-normalised curves",
+        columns: &["path", "output", "stance", "complete", "percent"],
+    },
+    OwnTable {
+        file: "study_regions.csv",
+        what: "a study's anatomical regions",
+        columns: &["trial", "region", "measure", "value", "unit"],
     },
     OwnTable {
         file: "study.csv",
