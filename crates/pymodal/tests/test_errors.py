@@ -311,8 +311,8 @@ def test_every_option_keyword_is_audited_for_its_type():
     for table, functions in [("match", ["match", "run", "batch_row"]), ("pair", ["match"]),
                              ("recording", ["run", "batch", "batch_row"]), ("units", ["read_recording"])]:
         for spec in specs[table]:
-            if spec["name"] in ("material", "pitch_mm", "frames"):
-                continue  # not scalars: a wrong form is an InputError naming it (above)
+            if spec["name"] in ("material", "pitch_mm", "frames", "points", "regions"):
+                continue  # not scalars: a wrong form is an InputError naming it
             for f in functions:
                 assert (f, spec["name"]) in audited, (f, spec["name"])
     assert ("batch", "jobs") in audited and ("Recording.from_array", "frame_rate") in audited
