@@ -905,22 +905,8 @@ fn pressure_image(g: &Grid, axes: &FigureAxes) -> Result<(Bounds, Option<Pressur
     .ok_or_else(|| IoError::invalid("the pressure image has no finite extent"))?;
     bounds.pad = false;
     let max = g.max();
-    let image = (max.is_finite() && max > 0.0).then(|| PressureImage {
-        cells: (0..rows)
-            .flat_map(|row| (0..cols).map(move |col| (row, col)))
-            .filter_map(|(row, col)| {
-                let v = g.get(row, col);
-                (v > 0.0).then(|| {
-                    let (x0, y0) = corner(col as f64 - 0.5, row as f64 - 0.5);
-                    let (x1, y1) = corner(col as f64 + 0.5, row as f64 + 0.5);
-                    ([(x0, y0), (x1, y1)], v)
-                })
-            })
-            .collect(),
-        max,
-        label: axes.pressure_label("peak pressure"),
-        marks: Vec::new(),
-    });
+    let image = (max.is_finite() && max > 0.0)
+        .then(|| PressureImage::of_grid(g, corner, max, axes.pressure_label("peak pressure")));
     Ok((bounds, image))
 }
 
@@ -1044,6 +1030,30 @@ struct PressureImage {
     label: String,
     /// Values marked across the colour bar in their colours (the levels of isocontour tracks).
     marks: Vec<(f64, RGBColor)>,
+}
+
+impl PressureImage {
+    /// Every loaded sensel (value above 0) of `g` as a cell between its edges on the plot
+    /// (`corner` maps a sensel position to plot coordinates), shaded up to `max`.
+    fn of_grid(g: &Grid, corner: impl Fn(f64, f64) -> (f64, f64), max: f64, label: String) -> Self {
+        let cells = (0..g.rows())
+            .flat_map(|row| (0..g.cols()).map(move |col| (row, col)))
+            .filter_map(|(row, col)| {
+                let v = g.get(row, col);
+                (v > 0.0).then(|| {
+                    let (x0, y0) = corner(col as f64 - 0.5, row as f64 - 0.5);
+                    let (x1, y1) = corner(col as f64 + 0.5, row as f64 + 0.5);
+                    ([(x0, y0), (x1, y1)], v)
+                })
+            })
+            .collect();
+        PressureImage {
+            cells,
+            max,
+            label,
+            marks: Vec::new(),
+        }
+    }
 }
 
 /// Light to dark grey, so that coloured lines stay visible over high pressure. The grey follows

@@ -187,22 +187,8 @@ impl Animation<'_> {
         } else {
             1.0
         };
-        let image = PressureImage {
-            cells: (0..rows)
-                .flat_map(|row| (0..cols).map(move |col| (row, col)))
-                .filter_map(|(row, col)| {
-                    let v = grid.get(row, col);
-                    (v > 0.0).then(|| {
-                        let (x0, y0) = corner(col as f64 - 0.5, row as f64 - 0.5);
-                        let (x1, y1) = corner(col as f64 + 0.5, row as f64 + 0.5);
-                        ([(x0, y0), (x1, y1)], v)
-                    })
-                })
-                .collect(),
-            max,
-            label: self.axes.pressure_label("pressure"),
-            marks: Vec::new(),
-        };
+        let image =
+            PressureImage::of_grid(&grid, corner, max, self.axes.pressure_label("pressure"));
         let title = self.axes.frame_text(t);
         let objects = r.objects.iter().filter(|o| o.frame == t).count();
         let subtitle = format!(
