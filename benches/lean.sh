@@ -12,25 +12,8 @@ walk=$(realpath crates/pedo-io/tests/data/FrasP01L.asf)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
-# The walk's header (END_FRAME set to the new count), its 205 frames k times renumbered (as
-# benches/memory.sh makes them).
-repeat_walk() {
-  local k=$1 out=$2
-  awk -v k="$k" '
-    /^ASCII_DATA/ { header = header $0 "\n"; inbody = 1; next }
-    !inbody { if ($0 ~ /^END_FRAME/) { sub(/[0-9]+/, "@END@") } header = header $0 "\n"; next }
-    /^@@/ { tail = $0 "\n"; next }
-    /^Frame / { n++ }
-    { body[n] = body[n] $0 "\n" }
-    END {
-      nf = n; gsub(/@END@/, nf * k, header); printf "%s", header; printf "%s", body[0]
-      m = 0
-      for (r = 0; r < k; r++) for (f = 1; f <= nf; f++) {
-        m++; b = body[f]; sub(/^Frame [0-9]+/, "Frame " m, b); printf "%s", b
-      }
-      printf "%s", tail
-    }' "$walk" >"$out"
-}
+# repeat_walk K OUT: the walk repeated K times.
+source "$(dirname "$0")/repeat_walk.sh"
 for k in 1 20; do repeat_walk "$k" "$tmp/walk_x$k.asf"; done
 
 mb() { awk -v b="$1" 'BEGIN { printf "%.1f", b / 1048576 }'; }
