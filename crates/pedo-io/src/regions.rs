@@ -752,6 +752,17 @@ mod tests {
     /// `image` turned by `deg` about its centre (and mirrored across its columns first when
     /// `mirror`), bilinear, into a square canvas of side `side`; returns the canvas and the
     /// map of a point of the original (x = column, y = row) into it.
+    /// The image `get(row, col)` read bilinearly at column `x`, row `y`.
+    fn bilinear(get: &impl Fn(isize, isize) -> f64, x: f64, y: f64) -> f64 {
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (c, r) = (x0 as isize, y0 as isize);
+        get(r, c) * (1.0 - fx) * (1.0 - fy)
+            + get(r, c + 1) * fx * (1.0 - fy)
+            + get(r + 1, c) * (1.0 - fx) * fy
+            + get(r + 1, c + 1) * fx * fy
+    }
+
     fn turned(
         image: &[f64],
         rows: usize,
@@ -786,13 +797,7 @@ mod tests {
                 // Inverse map: canvas → original (before mirroring).
                 let (x, y) = (c as f64 - m, r as f64 - m);
                 let (ox, oy) = (co * x + s * y + cx, -s * x + co * y + cy);
-                let (x0, y0) = (ox.floor(), oy.floor());
-                let (fx, fy) = (ox - x0, oy - y0);
-                let (x0, y0) = (x0 as isize, y0 as isize);
-                let v = get(y0, x0) * (1.0 - fx) * (1.0 - fy)
-                    + get(y0, x0 + 1) * fx * (1.0 - fy)
-                    + get(y0 + 1, x0) * (1.0 - fx) * fy
-                    + get(y0 + 1, x0 + 1) * fx * fy;
+                let v = bilinear(&get, ox, oy);
                 // Interpolation smears the footprint's edge: keep what is clearly loaded.
                 out[r * side + c] = if v >= 1.0 { v } else { 0.0 };
             }
@@ -893,13 +898,7 @@ mod tests {
                 for c in 0..side {
                     let (x, y) = (c as f64 - m, r as f64 - m);
                     let (ox, oy) = (co * x + s * y + cx, -s * x + co * y + cy);
-                    let (x0, y0) = (ox.floor(), oy.floor());
-                    let (fx, fy) = (ox - x0, oy - y0);
-                    let (x0, y0) = (x0 as isize, y0 as isize);
-                    let v = get(y0, x0) * (1.0 - fx) * (1.0 - fy)
-                        + get(y0, x0 + 1) * fx * (1.0 - fy)
-                        + get(y0 + 1, x0) * (1.0 - fx) * fy
-                        + get(y0 + 1, x0 + 1) * fx * fy;
+                    let v = bilinear(&get, ox, oy);
                     data.push(v as f32);
                 }
             }
