@@ -31,7 +31,7 @@ Hungarian assignment (scipy); BCPD (the binary in $BCPD_BIN, run with its defaul
 OpenMP thread; skipped, with a note, when unset). Time: wall time per pair including, for BCPD, the
 writing and reading of its text files and the process start.
 
-Run:  python benches/python/bench_landmarks.py [--data DIR] [--pairs 20] [--markdown]
+Run:  python benches/python/bench_landmarks.py [--data DIR] [--pairs 12] [--markdown]
       python benches/python/bench_landmarks.py --halves tuning --only pedomatch \
           --variant position_weight=0.5 --variant refine=modal      (settings tried on tuning)
 """
@@ -309,15 +309,18 @@ def summarise(errs, times):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--data", default=os.environ.get("LANDMARK_DATA"))
-    ap.add_argument("--pairs", type=int, default=20, help="at most this many pairs per class and half")
+    ap.add_argument("--pairs", type=int, default=12, help="at most this many pairs per class and half")
     ap.add_argument("--halves", default="tuning,held-out")
     ap.add_argument("--only", default="", help="comma-separated method names to run (substring)")
     ap.add_argument("--variant", action="append", default=[],
                     help="extra pymodal.match row, e.g. 'position_weight=0.5,refine=modal' (repeatable)")
+    ap.add_argument("--by-class", action="store_true", help="also the share within 2 spacings per class")
     ap.add_argument("--markdown", action="store_true")
     args = ap.parse_args()
     if not args.data:
-        sys.exit("give --data DIR (or LANDMARK_DATA) holding Momocs' hearts.rda, nsfishes.rda, charring.rda")
+        print("bench_landmarks skipped: give --data DIR (or set LANDMARK_DATA) holding Momocs' "
+              "hearts.rda, nsfishes.rda and charring.rda")
+        return
 
     rng = np.random.default_rng(1)
     outlines = [Outline(c, s, p, l, rng) for c, s, p, l in load(args.data)]
@@ -357,7 +360,7 @@ def main():
         a0, b0 = pairs[0]
         for f in methods.values():  # warm-up (imports, first-call costs)
             f(a0, b0)
-        rows = {}
+        rows, per_class = {}, {}
         for name, f in methods.items():
             errs, times = [], []
             for a, b in pairs:
@@ -366,6 +369,8 @@ def main():
                 times.append(time.perf_counter() - t0)
                 errs.append(errors(b, carried))
             rows[name] = summarise(errs, times)
+            for (a, _), e in zip(pairs, errs):
+                per_class.setdefault(a.cls, {}).setdefault(name, []).append(e)
         nl = rows[next(iter(rows))]["n"]
         title = f"{half}: {len(pairs)} pairs, {nl} landmarks, error in B's point spacings"
         cpd_ms = rows.get("CPD rigid + deformable (pycpd)", {}).get("ms")
@@ -383,6 +388,13 @@ def main():
                 ratio = f"{cpd_ms / r['ms']:6.1f}x" if cpd_ms else ""
                 print(f"  {name:34s} {r['w1']:.3f} {r['w2']:.3f} {r['w5']:.3f}  med {r['med']:.2f}"
                       f"  p90 {r['p90']:.2f}  {r['ms']:7.1f} ms {ratio}")
+        if args.by_class:
+            print(f"\n{half}, share within 2 spacings by class (pairs)\n")
+            print("| class | pairs | " + " | ".join(rows) + " |")
+            print("|---|---|" + "---|" * len(rows))
+            for cls in sorted(per_class):
+                cells = [f"{(np.concatenate(per_class[cls][n]) <= 2).mean():.2f}" for n in rows]
+                print(f"| {cls} | {len(per_class[cls][next(iter(rows))])} | " + " | ".join(cells) + " |")
 
 
 if __name__ == "__main__":
