@@ -291,6 +291,29 @@ def bcpd_version(binary):
 # ---------------------------------------------------------------- main
 
 
+def variant_kw(v):
+    return {k: parse_value(x) for k, x in (kv.split("=", 1) for kv in v.split(","))}
+
+
+def turns(half, pairs, settings):
+    """Per class: pairs whose pre-alignment (Match.transform) turns A by over 30 and 90 degrees."""
+    import pymodal
+
+    print(f"\n{half}: pairs turned by over 30 / 90 degrees by the pre-alignment\n")
+    names = ["defaults" if not kw else ",".join(f"{k}={x}" for k, x in kw.items()) for kw in settings]
+    print("| class | pairs | " + " | ".join(names) + " |")
+    print("|---|---|" + "---|" * len(names))
+    by = {}
+    for a, b in pairs:
+        row = by.setdefault(a.cls, [[] for _ in settings])
+        for k, kw in enumerate(settings):
+            t = np.asarray(pymodal.match(a.pts, b.pts, **kw).transform)
+            row[k].append(abs(np.degrees(np.arctan2(t[1, 0], t[0, 0]))))
+    for cls in sorted(by):
+        cells = [f"{(np.array(d) > 30).sum()} / {(np.array(d) > 90).sum()}" for d in by[cls]]
+        print(f"| {cls} | {len(by[cls][0])} | " + " | ".join(cells) + " |")
+
+
 def parse_value(x):
     for conv in (int, float):
         try:
@@ -315,6 +338,8 @@ def main():
     ap.add_argument("--variant", action="append", default=[],
                     help="extra pymodal.match row, e.g. 'position_weight=0.5,refine=modal' (repeatable)")
     ap.add_argument("--by-class", action="store_true", help="also the share within 2 spacings per class")
+    ap.add_argument("--turns", action="store_true",
+                    help="only count, per class, the pairs whose pre-alignment turns A by over 30 / 90 degrees")
     ap.add_argument("--markdown", action="store_true")
     args = ap.parse_args()
     if not args.data:
@@ -335,9 +360,7 @@ def main():
         "shape context + Hungarian": sc_hungarian,
     }
     for v in args.variant:
-        kw = dict(kv.split("=", 1) for kv in v.split(","))
-        kw = {k: parse_value(x) for k, x in kw.items()}
-        methods[f"pedomatch {v}"] = pedomatch(**kw)
+        methods[f"pedomatch {v}"] = pedomatch(**variant_kw(v))
     binary = os.environ.get("BCPD_BIN")
     notes = []
     if binary and Path(binary).is_file():
@@ -357,6 +380,9 @@ def main():
 
     for half in args.halves.split(","):
         pairs = cases(outlines, half, args.pairs, seed=2 if half == "tuning" else 3)
+        if args.turns:
+            turns(half, pairs, [{}] + [variant_kw(v) for v in args.variant])
+            continue
         a0, b0 = pairs[0]
         for f in methods.values():  # warm-up (imports, first-call costs)
             f(a0, b0)
