@@ -5,10 +5,11 @@ point drift (BCPD), on the same within-class pairs.
 Data: three outline data sets of the R package Momocs (GPL >= 3, not shipped with this project):
 `hearts` (240 hand-drawn hearts by 8 people, 80 points, 4 landmarks), `nsfishes` (218 North Sea
 fish outlines, 120 points, 5 landmarks) and `charring` (324 cereal grains in three views, 120
-points, 2 landmarks). The landmarks are indices into each outline, placed by the data sets'
-authors. Classes: the hearts; the five fish orders with at least 16 specimens; grains by taxon and
-view (6). The `.rda` files are read from --data (or $LANDMARK_DATA), each checked against its
-SHA-256 below; the `rdata` package (PyPI) parses them.
+points, 2 landmarks). The landmarks are indices into each outline, as distributed with the data
+sets. Classes: the hearts; the five fish orders with at least 16 specimens; grains by taxon and
+view (6). The `.rda` files (the package's data/ folder, Momocs 1.5.0) are read from --data (or
+$LANDMARK_DATA), each checked against its SHA-256 below; the `rdata` package (PyPI) parses them.
+Without a data folder the benchmark says so and exits.
 
 Cases: every outline is resampled by arc length to its own count of points (100-185, drawn per
 outline) from a random start, so counts differ within a pair and a landmark lies between nodes.
@@ -31,9 +32,10 @@ Hungarian assignment (scipy); BCPD (the binary in $BCPD_BIN, run with its defaul
 OpenMP thread; skipped, with a note, when unset). Time: wall time per pair including, for BCPD, the
 writing and reading of its text files and the process start.
 
-Run:  python benches/python/bench_landmarks.py [--data DIR] [--pairs 12] [--markdown]
-      python benches/python/bench_landmarks.py --halves tuning --only pedomatch \
-          --variant position_weight=0.5 --variant refine=modal      (settings tried on tuning)
+Run:  python benches/python/bench_landmarks.py --data DIR [--pairs 12] [--markdown]
+      python benches/python/bench_landmarks.py --data DIR --halves tuning --only pedomatch \
+          --by-class --variant prealign=normalize,solver=ordered  (settings tried on tuning)
+      python benches/python/bench_landmarks.py --data DIR --turns --variant max_rotation=30
 """
 import argparse
 import hashlib
@@ -223,7 +225,9 @@ def pedomatch_field(a, b):
     import pymodal
 
     m = pymodal.match(a.pts, b.pts)
-    moved = m.field(a.pts, b.pts).apply(point_at(a.pts, a.cum, a.u * a.spacing))
+    i = np.floor(a.u).astype(int) % len(a.pts)
+    s = a.cum[i] + (a.u - np.floor(a.u)) * np.diff(a.cum)[i]  # the landmarks' places on A
+    moved = m.field(a.pts, b.pts).apply(point_at(a.pts, a.cum, s))
     return point_at(b.pts, b.cum, b.project(moved))
 
 
