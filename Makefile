@@ -98,9 +98,9 @@ test-browser: venv
 bench:
 	cargo bench
 
-# The Python peers (pycpd, POT) are only needed here, not by the tests.
+# The Python peers (pycpd, POT) and the R-data reader (rdata) are only needed here, not by the tests.
 bench-python: wheel
-	$(PY) -m pip install -q pycpd pot
+	$(PY) -m pip install -q pycpd pot rdata
 	for s in benches/python/bench_*.py; do $(PY) $$s || exit 1; done
 
 # Formatting (instant): part of `make test`, as are clippy (inside the test build) and rustdoc.
