@@ -315,22 +315,41 @@ def regions_forces(result, kind, n_frames):
     return out
 
 
+# Each sensel's share inside a region is counted on SUB x SUB points spread over the sensel: the
+# region's force is each sensel's value times the share of it the region covers (as pedomatch's
+# moving regions count it), so that a region moved by a tenth of a sensel changes by a tenth of
+# its edge sensels, not by whole sensels switching in or out.
+SUB = 8
+
+
+def sensel_subpoints(st):
+    """(SUB * SUB, sensels, 2): SUB x SUB points spread evenly over every sensel."""
+    pix = st.pixel_centres()
+    o = (np.arange(SUB) + 0.5) / SUB - 0.5
+    return np.stack([pix + [dx, dy] for dy in o for dx in o])
+
+
 def region_setup(st, frames, y_cut):
-    """The forefoot third of frame 0's contact region: its polygon and true forces."""
+    """The forefoot third of frame 0's contact region: its polygon and true forces (each
+    sensel's value times the share of it whose material point lies in the region)."""
     contour = max(pymodal.contours(frames[0], spacing=0.5), key=len)
     poly = clip_below(contour, y_cut)
-    pix = st.pixel_centres()
-    true = np.array([frames[t].ravel()[(st.reference_positions(t, pix)[:, 1] < y_cut)].sum()
-                     for t in range(len(frames))])
-    return poly, pix, true
+    sub = sensel_subpoints(st)
+    true = np.array([
+        (frames[t].ravel() * np.mean([st.reference_positions(t, q)[:, 1] < y_cut for q in sub], 0)).sum()
+        for t in range(len(frames))])
+    return poly, sub, true
 
 
-def region_forces(frames, pix, polys):
-    """Force (kPa x sensels) inside each frame's polygon: polys (T, m, 2)."""
+def region_forces(frames, sub, polys):
+    """Force (kPa x sensels) inside each frame's polygon, each sensel by the share of it the
+    polygon covers: polys (T, m, 2)."""
     out = np.full(len(frames), np.nan)
+    n = sub.shape[1]
     for t, poly in enumerate(polys):
         if np.isfinite(poly).all():
-            out[t] = frames[t].ravel()[points_in_poly(pix, poly)].sum()
+            share = points_in_poly(sub.reshape(-1, 2), poly).reshape(-1, n).mean(0)
+            out[t] = (frames[t].ravel() * share).sum()
     return out
 
 
@@ -367,13 +386,13 @@ def run_case(spec, n_frames, grid, cpd, extra, tps_smoothing, log):
     inside = inside[(inside[:, 0] % grid == 0) & (inside[:, 1] % grid == 0)]
     interior = inside[:, ::-1].astype(float)
     truth_int = np.array([st.true_positions(t, interior) for t in range(T)])
-    poly, pix, true_force = region_setup(st, frames, y_cut)
-    rec["region"]["static frame-0 mask"] = region_forces(frames, pix, [poly] * T)
+    poly, sub, true_force = region_setup(st, frames, y_cut)
+    rec["region"]["static frame-0 mask"] = region_forces(frames, sub, [poly] * T)
     rec["region"][REGIONS_LABEL] = regions_forces(result, "moving", T)
     rec["region"][FIXED_LABEL] = regions_forces(result, "fixed", T)
     # How sensitive the force is to the region's placement: the exact map, off by 0.3 sensel.
     rec["region"][SHIFT_LABEL] = region_forces(
-        frames, pix, [st.true_positions(t, poly) + [0.0, 0.3] for t in range(T)])
+        frames, sub, [st.true_positions(t, poly) + [0.0, 0.3] for t in range(T)])
     rec["n"] = dict(nodes=len(nodes0), interior=len(interior), objects_per_frame=len(result["objects"]) / T)
 
     # Ceiling for node-to-node trackers: the nearest node of frame h to the truth.
@@ -407,7 +426,7 @@ def run_case(spec, n_frames, grid, cpd, extra, tps_smoothing, log):
         tps = tracks_tps(pos, dense_pts, tps_smoothing)
         rec["seconds"][tps_label] = time.perf_counter() - t1
         rec["interior"][tps_label] = within(tps[:, :n_int], truth_int)
-        rec["region"][tps_label] = region_forces(frames, pix, tps[:, n_int:])
+        rec["region"][tps_label] = region_forces(frames, sub, tps[:, n_int:])
         return pos
 
     track_pos = pedomatch_rows("pedomatch tracks (defaults)", result, TPS_LABEL)
@@ -417,11 +436,11 @@ def run_case(spec, n_frames, grid, cpd, extra, tps_smoothing, log):
         rec["outline"][POINTS_LABEL] = within(point_pos, truth_nodes, spacing)
         tps = tracks_tps(point_pos, dense_pts, tps_smoothing)
         rec["interior"][POINTS_TPS_LABEL] = within(tps[:, :n_int], truth_int)
-        rec["region"][POINTS_TPS_LABEL] = region_forces(frames, pix, tps[:, n_int:])
+        rec["region"][POINTS_TPS_LABEL] = region_forces(frames, sub, tps[:, n_int:])
     field = pedomatch_field(result, dense_pts)
     if field is not None:
         rec["interior"]["pedomatch field"] = within(field[:, :n_int], truth_int)
-        rec["region"]["pedomatch field"] = region_forces(frames, pix, field[:, n_int:])
+        rec["region"]["pedomatch field"] = region_forces(frames, sub, field[:, n_int:])
     if extra:
         t0 = time.perf_counter()
         res25 = pymodal.run(frames, pitch_mm=PITCH_MM, frame_rate=FRAME_RATE, units="kPa", drift_reference=25)
@@ -444,7 +463,7 @@ def run_case(spec, n_frames, grid, cpd, extra, tps_smoothing, log):
         rec["seconds"]["direct pymodal.match 0 -> t (+ TPS)"] = time.perf_counter() - t0
         rec["outline"][DIRECT_LABEL] = within(direct, truth_nodes, spacing)
         rec["interior"][DIRECT_LABEL + " + TPS"] = within(dtps[:, :n_int], truth_int)
-        rec["region"][DIRECT_LABEL + " + TPS"] = region_forces(frames, pix, dtps[:, n_int:])
+        rec["region"][DIRECT_LABEL + " + TPS"] = region_forces(frames, sub, dtps[:, n_int:])
 
     t0 = time.perf_counter()
     rec["outline"]["chained nearest neighbour"] = within(chained(outlines, T, nn_step), truth_nodes, spacing)
@@ -463,7 +482,7 @@ def run_case(spec, n_frames, grid, cpd, extra, tps_smoothing, log):
         rec["seconds"][label] = time.perf_counter() - t0
         rec["outline"][label] = within(pos[:, :a], truth_nodes, spacing)
         rec["interior"][label] = within(pos[:, a:b], truth_int)
-        rec["region"][label] = region_forces(frames, pix, pos[:, b:])
+        rec["region"][label] = region_forces(frames, sub, pos[:, b:])
 
     rec["region_frames"] = {}
     for key, forces in list(rec["region"].items()):

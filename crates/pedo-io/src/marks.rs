@@ -329,6 +329,66 @@ impl LabelMask {
     }
 }
 
+/// The share (0..=1) of each sensel (row-major, `rows × cols`) that the closed polygon `outline`
+/// covers, in sensel coordinates (x = column, y = row; sensel `(r, c)` is the unit square
+/// centred on `(c, r)`). The area is exact: the polygon's edges are accumulated as signed areas
+/// per sensel, as a font rasteriser does, so a region that moves by a tenth of a sensel changes
+/// its edge sensels' shares by about a tenth rather than switching whole sensels in or out.
+/// A self-intersecting outline counts a doubly covered part once. Points need not lie on the
+/// grid: the outline is clipped to it.
+pub fn polygon_coverage(outline: &[[f64; 2]], rows: usize, cols: usize) -> Vec<f64> {
+    let mut shares = vec![0.0; rows * cols];
+    // Clipped to the grid's columns, so that no edge reaches past a row's end (the rasteriser
+    // accumulates along the whole buffer); rows outside the grid it skips by itself.
+    let clipped = clip_to_columns(outline, -0.5, cols as f64 - 0.5);
+    if clipped.len() < 3 || rows == 0 || cols == 0 {
+        return shares;
+    }
+    // One spare column takes the contributions of edges on the grid's right side.
+    let mut raster = ab_glyph_rasterizer::Rasterizer::new(cols + 1, rows);
+    let at = |p: [f64; 2]| ab_glyph_rasterizer::point((p[0] + 0.5) as f32, (p[1] + 0.5) as f32);
+    for (i, &p) in clipped.iter().enumerate() {
+        raster.draw_line(at(p), at(clipped[(i + 1) % clipped.len()]));
+    }
+    // The rasteriser sums in f32: shares within its rounding of 0 or 1 are whole.
+    let whole = |a: f32| match f64::from(a) {
+        a if a < 1e-5 => 0.0,
+        a if a > 1.0 - 1e-5 => 1.0,
+        a => a,
+    };
+    raster.for_each_pixel_2d(|x, y, a| {
+        if (x as usize) < cols {
+            shares[y as usize * cols + x as usize] = whole(a);
+        }
+    });
+    shares
+}
+
+/// The part of the closed polygon `outline` with `lo ≤ x ≤ hi` (Sutherland–Hodgman, one
+/// half-plane after the other).
+fn clip_to_columns(outline: &[[f64; 2]], lo: f64, hi: f64) -> Vec<[f64; 2]> {
+    let keep_left = |p: &[f64; 2]| p[0] >= lo;
+    let keep_right = |p: &[f64; 2]| p[0] <= hi;
+    let half = clip_half_plane(outline, keep_left, lo);
+    clip_half_plane(&half, keep_right, hi)
+}
+
+/// The part of a closed polygon on the kept side of the vertical line `x = at`.
+fn clip_half_plane(poly: &[[f64; 2]], keep: impl Fn(&[f64; 2]) -> bool, at: f64) -> Vec<[f64; 2]> {
+    let mut out = Vec::with_capacity(poly.len() + 2);
+    for (i, p) in poly.iter().enumerate() {
+        let q = &poly[(i + 1) % poly.len()];
+        if keep(p) {
+            out.push(*p);
+        }
+        if keep(p) != keep(q) {
+            let s = (at - p[0]) / (q[0] - p[0]);
+            out.push([at, p[1] + s * (q[1] - p[1])]);
+        }
+    }
+    out
+}
+
 fn label_of(v: f64) -> Option<u32> {
     (v.is_finite() && v >= 0.0 && v.fract() == 0.0 && v <= u32::MAX as f64).then_some(v as u32)
 }
@@ -345,6 +405,32 @@ impl Recording {
             for (i, &c) in cells.iter().enumerate() {
                 if c && mask[i] {
                     sum.add(frame.get(i / cols, i % cols), i / cols, i % cols, threshold);
+                }
+            }
+        }
+        sum.measures(self)
+    }
+
+    /// The [`measures`](Recording::measures) of a region that covers the share `shares[i]`
+    /// (0..=1, row-major, `rows × cols`; [`polygon_coverage`]) of each sensel: every existing
+    /// sensor's contact, load and centre of pressure counted by its share, its value towards the
+    /// peak where the region covers at least half of it. Whole shares (0 or 1) give exactly
+    /// [`cells_measures`](Recording::cells_measures). Nothing is counted when `shares` is not of
+    /// the recording's shape.
+    pub fn covered_measures(&self, frame: &Grid, threshold: f64, shares: &[f64]) -> FrameMeasures {
+        let mut sum = MeasureSum::default();
+        let (rows, cols) = (self.rows(), self.cols());
+        if shares.len() == rows * cols && frame.rows() == rows && frame.cols() == cols {
+            let mask = self.sensor_mask();
+            for (i, &w) in shares.iter().enumerate() {
+                if w > 0.0 && mask[i] {
+                    sum.add_share(
+                        frame.get(i / cols, i % cols),
+                        i / cols,
+                        i % cols,
+                        threshold,
+                        w,
+                    );
                 }
             }
         }
@@ -381,6 +467,83 @@ mod tests {
             given_points_of_rows(&[vec![1.0, 2.0]]).unwrap()[0].xy,
             [1.0, 2.0]
         );
+    }
+
+    #[test]
+    fn coverage_is_the_area_of_each_sensel_inside_the_outline() {
+        // A rectangle from x = 0.25 to 2.0 and y = -0.5 to 0.75 (sensel (r, c) spans
+        // c ± 0.5, r ± 0.5), partly off the grid's left side.
+        let rect = [[-1.0, -0.5], [2.0, -0.5], [2.0, 0.75], [-1.0, 0.75]];
+        let s = polygon_coverage(&rect, 2, 4);
+        let want = [1.0, 1.0, 0.5, 0.0, 0.25, 0.25, 0.125, 0.0];
+        for (got, want) in s.iter().zip(want) {
+            assert!((got - want).abs() < 1e-6, "{s:?}");
+        }
+        // A triangle over many sensels against counting 64 × 64 points per sensel; the
+        // shares sum to its area where it lies on the grid.
+        let tri = [[0.3, -2.0], [7.9, 3.1], [1.2, 5.7]];
+        let (rows, cols) = (6, 7);
+        let s = polygon_coverage(&tri, rows, cols);
+        let k = 64;
+        for r in 0..rows {
+            for c in 0..cols {
+                let mut inside = 0;
+                for i in 0..k {
+                    for j in 0..k {
+                        let x = c as f64 - 0.5 + (j as f64 + 0.5) / k as f64;
+                        let y = r as f64 - 0.5 + (i as f64 + 0.5) / k as f64;
+                        inside += usize::from(crate::contour::point_in_polygon([x, y], &tri));
+                    }
+                }
+                let oracle = inside as f64 / (k * k) as f64;
+                let got = s[r * cols + c];
+                assert!((got - oracle).abs() < 0.01, "({r}, {c}): {got} vs {oracle}");
+            }
+        }
+        assert!(polygon_coverage(&[[0.0, 0.0], [1.0, 1.0]], 3, 3)
+            .iter()
+            .all(|&v| v == 0.0));
+        assert!(
+            polygon_coverage(&[[-9.0, 0.0], [-5.0, 0.0], [-7.0, 2.0]], 3, 3)
+                .iter()
+                .all(|&v| v == 0.0)
+        );
+    }
+
+    #[test]
+    fn whole_shares_measure_as_the_mask_does_and_half_a_sensel_counts_half() {
+        #[rustfmt::skip]
+        let rows = vec![
+            vec![0.0, 1.0, 1.0, 0.0],
+            vec![0.0, 1.0, 1.0, 0.0],
+            vec![0.0, 0.0, 1.0, 0.0],
+        ];
+        let m = LabelMask::of_rows(&rows).unwrap();
+        let values: Vec<f32> = (0..12).map(|i| i as f32).collect();
+        let rec = Recording::new(1, 3, 4, values, vec![true; 12]).unwrap();
+        let grid = rec.frame(0).unwrap();
+        let shares = polygon_coverage(&m.outline(1), 3, 4);
+        assert_eq!(
+            shares,
+            m.cells(1)
+                .iter()
+                .map(|&c| f64::from(u8::from(c)))
+                .collect::<Vec<_>>()
+        );
+        let whole = rec.cells_measures(&grid, 0.0, &m.cells(1));
+        let covered = rec.covered_measures(&grid, 0.0, &shares);
+        assert_eq!(whole.contact_sensors, covered.contact_sensors);
+        assert!((whole.total_force - covered.total_force).abs() < 1e-4);
+        assert_eq!(whole.peak_pressure, covered.peak_pressure);
+        // Half of sensel (0, 3) (value 3) and a quarter of (1, 3) (value 7) more.
+        let mut more = shares.clone();
+        more[3] = 0.5;
+        more[7] = 0.25;
+        let m2 = rec.covered_measures(&grid, 0.0, &more);
+        assert!((m2.total_force - (whole.total_force + 1.5 + 1.75)).abs() < 1e-4);
+        assert!((m2.contact_area - (whole.contact_area + 0.75)).abs() < 1e-4);
+        // Half covered counts to the peak, a quarter does not.
+        assert_eq!(m2.peak_pressure, whole.peak_pressure.max(3.0));
     }
 
     #[test]

@@ -177,7 +177,9 @@ pub struct FrameMeasures {
     /// threshold (the noise threshold sets values below it to 0, so a value equal to it is a
     /// contact, as in the outlines).
     pub contact_sensors: usize,
-    /// Contact area: `contact_sensors × sensel area` in mm², or in sensels when the area is unknown.
+    /// Contact area: `contact_sensors × sensel area` in mm², or in sensels when the area is
+    /// unknown (for a region that covers sensels in part, the covered shares of its contact
+    /// sensors; `contact_sensors` is then their sum rounded).
     pub contact_area: f64,
     /// Total force of the contact sensors in N when units and sensel area are known
     /// ([`Recording::force_factor`]); else their sum times the sensel area in mm² when that is
@@ -647,7 +649,8 @@ impl Recording {
 /// The sums behind [`FrameMeasures`], sensor by sensor.
 #[derive(Default)]
 pub(crate) struct MeasureSum {
-    contact: usize,
+    /// Contact sensors counted by weight (whole sensors: a count).
+    contact: f64,
     load: f64,
     peak: f64,
     moment: [f64; 2],
@@ -656,13 +659,22 @@ pub(crate) struct MeasureSum {
 impl MeasureSum {
     /// Adds an existing sensor's value `v` at row `r`, column `c`.
     pub(crate) fn add(&mut self, v: f64, r: usize, c: usize, threshold: f64) {
+        self.add_share(v, r, c, threshold, 1.0);
+    }
+
+    /// Adds the share `w` (0..=1) of an existing sensor's value `v` at row `r`, column `c`: the
+    /// part of the sensel a region covers counts towards its contact, load and centre of
+    /// pressure; its value counts towards the peak when the region covers at least half of it.
+    pub(crate) fn add_share(&mut self, v: f64, r: usize, c: usize, threshold: f64, w: f64) {
         if v > 0.0 && v >= threshold {
-            self.contact += 1;
-            self.load += v;
-            self.moment[0] += v * c as f64;
-            self.moment[1] += v * r as f64;
+            self.contact += w;
+            self.load += w * v;
+            self.moment[0] += w * v * c as f64;
+            self.moment[1] += w * v * r as f64;
         }
-        self.peak = self.peak.max(v);
+        if w >= 0.5 {
+            self.peak = self.peak.max(v);
+        }
     }
 
     /// The measures in `recording`'s units (see [`FrameMeasures`]).
@@ -670,8 +682,8 @@ impl MeasureSum {
         let area = recording.sensel_area().unwrap_or(1.0);
         let force = recording.force_factor().unwrap_or(area);
         FrameMeasures {
-            contact_sensors: self.contact,
-            contact_area: self.contact as f64 * area,
+            contact_sensors: self.contact.round() as usize,
+            contact_area: self.contact * area,
             total_force: self.load * force,
             peak_pressure: self.peak,
             cop: (self.load > 0.0)

@@ -439,10 +439,12 @@ pub fn points_table(
 
 /// The user's regions ([`pedo_track::UserInputs::regions`]) through the run, two rows per region
 /// and frame on which it is followed: `kind` `moving`, the region carried by the field (the
-/// sensels whose centres lie inside its followed outline), and `fixed`, the mask's own sensels
-/// on that frame. Columns: `region` (its label), `kind`, `frame`, `time_s`, `sensels` (existing
-/// sensors in the region) and its area (`area_mm2`, or `area_sensels` without a pitch), then
-/// the measures of its sensels as `frames.csv` gives a frame's (contact sensors and area,
+/// share of each sensel its followed outline covers: a region moved by a tenth of a sensel
+/// changes its edge sensels by a tenth, not whole sensels in or out), and `fixed`, the mask's
+/// own sensels on that frame. Columns: `region` (its label), `kind`, `frame`, `time_s`,
+/// `sensels` (existing sensors in the region, each by its covered share) and its area
+/// (`area_mm2`, or `area_sensels` without a pitch), then the measures of its sensels, each
+/// counted by its share, as `frames.csv` gives a frame's (contact sensors and area,
 /// total force or load, peak pressure, centre of pressure in sensels and mm, named by the
 /// units known) and the mean pressure of its contact sensors (`mean_pressure_kpa`, or
 /// `mean_pressure` in the file's units).
@@ -483,14 +485,22 @@ pub fn regions_table(
                 by_frame.entry(r.objects[o].frame).or_default().push(xy);
             }
         }
+        let fixed: Vec<f64> = region
+            .cells
+            .iter()
+            .map(|&c| f64::from(u8::from(c)))
+            .collect();
         for (frame, outline) in by_frame.into_iter().filter(|(_, o)| o.len() >= 3) {
             let grid = recording.frame(frame)?;
-            let moving = raster(recording, &outline);
-            for (kind, cells) in [("moving", &moving), ("fixed", &region.cells)] {
-                let n = (cells.iter().zip(sensors))
-                    .filter(|(c, s)| **c && **s)
-                    .count();
-                let m = recording.cells_measures(&grid, threshold, cells);
+            let moving =
+                pedo_io::marks::polygon_coverage(&outline, recording.rows(), recording.cols());
+            for (kind, shares) in [("moving", &moving), ("fixed", &fixed)] {
+                // Existing sensors in the region, each by the share of it the region covers.
+                let n: f64 = (shares.iter().zip(sensors))
+                    .filter(|(_, s)| **s)
+                    .map(|(w, _)| w)
+                    .sum();
+                let m = recording.covered_measures(&grid, threshold, shares);
                 let mut row = vec![
                     Cell::int(region.label as usize),
                     Cell::Text(kind.to_string()),
@@ -499,46 +509,21 @@ pub fn regions_table(
                 if recording.dt_s.is_some() {
                     row.push(Cell::opt(recording.time_s(frame), 6));
                 }
-                row.push(Cell::int(n));
-                row.push(Cell::Float(n as f64 * area, 4));
+                row.push(Cell::Float(n, 3));
+                row.push(Cell::Float(n * area, 4));
                 push_measures(&mut row, recording, &u, Some(&m));
-                // The mean of the contact sensors' values: the load over their count.
+                // The mean of the contact sensors' values: the load over their covered count.
                 let load = m.total_force / recording.force_factor().unwrap_or(area);
-                row.push(match m.contact_sensors {
-                    0 => Cell::Empty,
-                    c => Cell::Float(load / c as f64 * per_unit, 4),
+                let contact = m.contact_area / area;
+                row.push(match contact > 0.0 {
+                    false => Cell::Empty,
+                    true => Cell::Float(load / contact * per_unit, 4),
                 });
                 t.rows.push(row);
             }
         }
     }
     Ok(t)
-}
-
-/// The sensels (row-major) whose centres lie inside the closed `outline` (sensels).
-fn raster(recording: &Recording, outline: &[[f64; 2]]) -> Vec<bool> {
-    let (rows, cols) = (recording.rows(), recording.cols());
-    let mut cells = vec![false; rows * cols];
-    let (lo, hi) = outline.iter().fold(
-        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
-        |(lo, hi), p| {
-            (
-                [lo[0].min(p[0]), lo[1].min(p[1])],
-                [hi[0].max(p[0]), hi[1].max(p[1])],
-            )
-        },
-    );
-    let span = |lo: f64, hi: f64, n: usize| {
-        let first = lo.ceil().clamp(0.0, n as f64) as usize;
-        let last = (hi.floor() + 1.0).clamp(0.0, n as f64) as usize;
-        first..last.max(first)
-    };
-    for r in span(lo[1], hi[1], rows) {
-        for c in span(lo[0], hi[0], cols) {
-            cells[r * cols + c] = pedo_io::contour::point_in_polygon([c as f64, r as f64], outline);
-        }
-    }
-    cells
 }
 
 /// The pressure under every step of every point, each frame read once.
