@@ -1120,8 +1120,8 @@ mod tests {
         assert!((a.force[100] - 5.0).abs() < 1e-9);
         // The regions' forces add up to the stance's force curve.
         let total = &m.stances[0].curves.force;
-        for p in 0..101 {
-            assert!((a.force[p] + b.force[p] - total[p]).abs() < 1e-9, "{p}");
+        for (p, ((fa, fb), t)) in a.force.iter().zip(&b.force).zip(total).enumerate() {
+            assert!((fa + fb - t).abs() < 1e-9, "{p}");
         }
         // Frames that are not the measures' are refused.
         let mut short = RegionSeries::new(&rec, 0.0, &masks).unwrap();

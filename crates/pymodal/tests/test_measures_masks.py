@@ -127,8 +127,9 @@ def polygons_of_walk(rec):
     f = np.nan_to_num(np.asarray(rec.frames, dtype=np.float64), nan=0.0)
     rows, cols = np.nonzero((f > 0).any(axis=0))
     dx, dy = rec.pitch_mm
-    x0, x1 = (cols.min() - 1) * dx, (cols.max() + 1) * dx
-    y0, y1 = (rows.min() - 1) * dy, (rows.max() + 1) * dy
+    # Edges half a sensel off the centres: no centre lies on them.
+    x0, x1 = (cols.min() - 0.5) * dx, (cols.max() + 0.5) * dx
+    y0, y1 = (rows.min() - 0.5) * dy, (rows.max() + 0.5) * dy
     ym = 0.5 * (y0 + y1)
     return {
         "rearfoot": [(x0, ym + 7.3), (x1, ym - 4.1), (x1, y1), (x0, y1)],
