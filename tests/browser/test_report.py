@@ -10,7 +10,9 @@ a run of part of a recording (`--frames`) opens on its first frame with objects 
 frames were analysed, a surface run draws its 3-D view, an isocontour run shows each level of its
 frame, `pedomatch match` reports are drawn (with a 3-D view for 3-D points), file names holding
 markup are shown as written (plotly reads names as HTML-like text), near-identical shapes get one
-cost class, the pages make no network request
+cost class, the measures section draws the peak and PTI images and the stances' curves (with a
+region rule and a user's point: the regions' outlines and names and the point's track), the
+pages make no network request
 (every host resolves to nothing, and the page's Content-Security-Policy would report any load),
 and `--report none` writes no report. Standard library only; needs `chromium` on PATH.
 """
@@ -152,6 +154,44 @@ def check_markup_in_file_names(binary, tmp, failures):
     expect(costs == ["all costs ≈ 0"], f"identical outlines: cost classes {costs!r}")
 
 
+def check_measures(binary, tmp, report, failures):
+    """The measures section: the demo's report draws the peak image, the PTI image and the
+    stances' force curves; a run with fine regions and a user's point draws the regions'
+    outlines and names and the point's track over the peak image."""
+    def drawn(dom, div, until):
+        start = dom.find(f'id="{div}"')
+        end = dom.find(until, start + 1)
+        return start >= 0 and "main-svg" in dom[start:end]
+    dom, expect = check_page(f"file://{report}", failures, "measures")
+    expect('<div id="measures-view">' in dom, "the measures section is hidden")
+    expect(drawn(dom, "peak-regions", 'id="pti"'), "the peak image of the measures is not drawn")
+    expect(drawn(dom, "pti", 'id="stance-curves"'), "the PTI image is not drawn")
+    expect(drawn(dom, "stance-curves", '<p class="note"'), "the stance curves are not drawn")
+    expect("pressure-time integral" in dom and "over the stance" in dom,
+           "the measures' titles are missing")
+    expect("PTI kPa·s" in dom, "the PTI colour bar does not name its unit")
+    walk = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..",
+                        "examples", "data", "FrasP01L.asf")
+    out = os.path.join(tmp, "objects")
+    objects = open(os.path.join(os.path.dirname(report), "objects.csv")).read().splitlines()
+    head = objects[0].split(",")
+    first = dict(zip(head, objects[1].split(",")))
+    points = os.path.join(tmp, "points.csv")
+    with open(points, "w") as f:
+        f.write(f"name,x,y,frame\nheel,{first['centroid_x']},{first['centroid_y']},{first['frame']}\n")
+    subprocess.run([binary, "run", walk, "--out", out, "--figures", "none", "--region-rule", "fine",
+                    "--points", points], check=True, stdout=subprocess.DEVNULL)
+    dom, expect = check_page(f"file://{os.path.join(out, 'report.html')}", failures,
+                             "measures with regions and points")
+    legend = [html.unescape(t) for t in re.findall(r'class="legendtext"[^>]*>([^<]*)<', dom)]
+    expect("regions (fine)" in legend, f"the regions' outlines are not in the legend: {legend!r}")
+    expect("point heel" in legend, f"the user's point is not in the legend: {legend!r}")
+    expect(">hallux<" in dom and ">mh1<" in dom, "the regions' names are not drawn")
+    data = embedded_data(os.path.join(out, "report.html"))["measures"]
+    expect(len(data["points"]) == 1 and len(data["points"][0]["x"]) > 1,
+           "the user's point has no track in the report's data")
+
+
 def check_match_reports(binary, tmp, failures):
     """`pedomatch match` of two outlines and of two 3-D point sets: each report is drawn (the
     3-D one with its WebGL scene), offline, with every match of match.json."""
@@ -251,6 +291,7 @@ def main():
             failures.append("surface run: the 3-D view is not shown")
         if not re.search(r'class="legendtext"[^>]*>frame 73<', dom):
             failures.append("surface run: the 3-D view does not show the pair 72 -> 73")
+        check_measures(binary, tmp, report, failures)
         check_isocontours(binary, tmp, failures)
         check_analysed_frames(binary, tmp, failures)
         check_match_reports(binary, tmp, failures)
@@ -265,8 +306,8 @@ def main():
     print(f"report.html of the demo is {size / 2**20:.1f} MB")
     # Scenarios: size, frames 0 / 75 / 204 (with the titles clear of the mode bar), the clamped
     # frame, the surface view, isocontours, the analysed frames, two match reports, markup in
-    # file names, --report none.
-    scenarios = 12
+    # file names, --report none, the measures (demo; regions and a point).
+    scenarios = 14
     failed = min(len(failures), scenarios)
     print(f"browser: {scenarios - failed} passed, {failed} failed")
     if failures:

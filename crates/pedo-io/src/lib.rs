@@ -38,6 +38,7 @@ pub mod stances;
 pub mod surface;
 pub mod synthetic;
 pub mod units;
+pub mod user_masks;
 
 pub use contour::{contour_shapes, contours, Contour, ContourMethod, ContourOptions, Resample};
 pub use error::{counted, IoError, Result};

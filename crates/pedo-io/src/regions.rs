@@ -506,6 +506,20 @@ pub struct RegionValues {
     pub contact_time: f64,
     /// The region's share of the footprint's force-time integral (%).
     pub impulse_share: f64,
+    /// Its force and peak pressure over each stance of the recording's [`Measures`] (in their
+    /// order), resampled to 0–100 % of contact as the stance's own curves
+    /// ([`crate::stances::resample`]).
+    pub curves: Vec<RegionCurves>,
+}
+
+/// One region's curves over one stance, at [`CURVE_POINTS`](crate::stances::CURVE_POINTS)
+/// points of its contact, in the units of the recording's [`Measures`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegionCurves {
+    /// The region's force (or load): its loaded sensels' load, as the frames' force.
+    pub force: Vec<f64>,
+    /// The largest value at one of the region's sensels, as the frames' peak pressure.
+    pub peak_pressure: Vec<f64>,
 }
 
 /// The per-frame force and contact of each region of `masks` over a recording's frames, fed
@@ -518,10 +532,14 @@ pub struct RegionSeries {
     mask: Vec<bool>,
     threshold: f64,
     force_factor: f64,
+    /// File units → the measures' pressure unit.
+    pressure_factor: f64,
     area: f64,
     dt: f64,
     /// Per region, its force in each frame.
     forces: Vec<Vec<f64>>,
+    /// Per region, its largest value (file units) in each frame.
+    peaks: Vec<Vec<f64>>,
     contact: Vec<usize>,
 }
 
@@ -569,9 +587,11 @@ impl RegionSeries {
             mask: recording.sensor_mask().to_vec(),
             threshold,
             force_factor: recording.force_factor().unwrap_or(area.unwrap_or(1.0)),
+            pressure_factor: crate::recording::kpa_per_unit(&recording.units).unwrap_or(1.0),
             area: area.unwrap_or(1.0),
             dt: recording.dt_s.unwrap_or(1.0),
             forces: vec![Vec::new(); masks.names.len()],
+            peaks: vec![Vec::new(); masks.names.len()],
             contact: vec![0; masks.names.len()],
         })
     }
@@ -592,12 +612,18 @@ impl RegionSeries {
         let r = self.names.len();
         let mut load = vec![0.0f64; r];
         let mut count = vec![0usize; r];
+        let mut top = vec![0.0f64; r];
         for (i, &v) in values.iter().enumerate() {
             let l = self.labels[i];
             if l == 0 || !self.mask[i] {
                 continue;
             }
             let v = f64::from(v);
+            // Every value counts in the peak, as in the frames' peak pressure.
+            let t = &mut top[usize::from(l) - 1];
+            if v > *t {
+                *t = v;
+            }
             if v > 0.0 && v >= self.threshold {
                 load[usize::from(l) - 1] += v;
                 count[usize::from(l) - 1] += 1;
@@ -610,6 +636,9 @@ impl RegionSeries {
             f.push(l * self.force_factor);
             *c = (*c).max(*n);
         }
+        for (p, t) in self.peaks.iter_mut().zip(top) {
+            p.push(t);
+        }
         Ok(())
     }
 
@@ -618,11 +647,19 @@ impl RegionSeries {
     /// # Errors
     ///
     /// [`IoError::InvalidInput`] when no frame was added, the images are not the masks' size,
-    /// or no region holds any load (the footprint's impulse is 0).
+    /// the frames added are not those of `measures`, or no region holds any load (the
+    /// footprint's impulse is 0).
     pub fn finish(self, measures: &Measures) -> Result<Vec<RegionValues>> {
         let n = self.forces.first().map_or(0, Vec::len);
         if n == 0 {
             return Err(IoError::invalid("no frame to measure per region"));
+        }
+        if n != measures.frames.len() {
+            return Err(IoError::invalid(format!(
+                "{} measured per region, the measures hold {}",
+                crate::counted(n, "frame"),
+                measures.frames.len()
+            )));
         }
         if measures.peak.len() != self.labels.len() {
             return Err(IoError::invalid(
@@ -677,9 +714,36 @@ impl RegionSeries {
                 max_contact_area: self.contact[k] as f64 * self.area,
                 contact_time,
                 impulse_share: 100.0 * ftis[k] / total,
+                curves: self.stance_curves(k, measures),
             });
         }
         Ok(out)
+    }
+}
+
+impl RegionSeries {
+    /// Region `k`'s force and peak pressure over each stance of `measures` (whose frames are
+    /// those added, the first added being `measures.frames.start`).
+    fn stance_curves(&self, k: usize, measures: &Measures) -> Vec<RegionCurves> {
+        let start = measures.frames.start;
+        let curve = |v: &[f64], factor: f64| -> Vec<f64> {
+            let known: Vec<Option<f64>> = v.iter().map(|x| Some(x * factor)).collect();
+            crate::stances::resample(&known)
+                .into_iter()
+                .flatten()
+                .collect()
+        };
+        measures
+            .stances
+            .iter()
+            .map(|s| {
+                let frames = (s.stance.first - start)..(s.stance.last - start + 1);
+                RegionCurves {
+                    force: curve(&self.forces[k][frames.clone()], 1.0),
+                    peak_pressure: curve(&self.peaks[k][frames], self.pressure_factor),
+                }
+            })
+            .collect()
     }
 }
 
@@ -1004,5 +1068,64 @@ mod tests {
         let e =
             automatic_masks(&[f64::NAN; 20], 4, 5, [1.0, 1.0], None, RegionRule::Fine).unwrap_err();
         assert!(matches!(e, IoError::NoObject(_)));
+    }
+
+    #[test]
+    fn region_curves_are_each_region_s_force_and_peak_over_each_stance() {
+        // 14 frames of 1 × 3 sensels, 2 mm pitch, 100 Hz, kPa: sensels 0 and 1 are region
+        // "a", sensel 2 region "b". Frames 1..=12 in contact (one stance of 12 frames).
+        let n = 14;
+        let mut data = vec![0.0f32; 3 * n];
+        for t in 1..=12 {
+            data[3 * t] = 100.0 * t as f32;
+            data[3 * t + 1] = 50.0;
+            data[3 * t + 2] = if t < 7 { 300.0 } else { 0.0 };
+        }
+        let rec = Recording::new(n, 1, 3, data, vec![true; 3])
+            .unwrap()
+            .with_pitch_mm([2.0, 2.0])
+            .unwrap()
+            .with_frame_rate(100.0)
+            .unwrap()
+            .with_units("kPa");
+        let m = Measures::of_recording(&rec, 0.0, 0..n).unwrap();
+        assert_eq!(m.stances.len(), 1);
+        assert_eq!(
+            (m.stances[0].stance.first, m.stances[0].stance.last),
+            (1, 12)
+        );
+        let masks = RegionMasks {
+            rows: 1,
+            cols: 3,
+            labels: vec![1, 1, 2],
+            names: vec!["a".into(), "b".into()],
+            rule: None,
+            axis: None,
+        };
+        let mut series = RegionSeries::new(&rec, 0.0, &masks).unwrap();
+        for t in 0..n {
+            series.add_frame(&rec.frame_slice(t).unwrap()).unwrap();
+        }
+        let v = series.finish(&m).unwrap();
+        let (a, b) = (&v[0].curves[0], &v[1].curves[0]);
+        assert_eq!((a.force.len(), b.peak_pressure.len()), (101, 101));
+        // Point p lies at frame 1 + 11 p / 100; at 50 %: frame 6.5, between frames 6 and 7.
+        // Region a: (100 t + 50) kPa × 4 mm² = (0.4 t + 0.2) N → 2.8 N; its peak 100 t → 650.
+        assert!((a.force[50] - 2.8).abs() < 1e-9, "{}", a.force[50]);
+        assert!((a.peak_pressure[50] - 650.0).abs() < 1e-9);
+        // Region b: 1.2 N up to frame 6, 0 from frame 7: halfway, 0.6 N and 150 kPa.
+        assert!((b.force[50] - 0.6).abs() < 1e-9, "{}", b.force[50]);
+        assert!((b.peak_pressure[50] - 150.0).abs() < 1e-9);
+        assert_eq!((b.force[0], b.force[100]), (1.2, 0.0));
+        assert!((a.force[100] - 5.0).abs() < 1e-9);
+        // The regions' forces add up to the stance's force curve.
+        let total = &m.stances[0].curves.force;
+        for (p, ((fa, fb), t)) in a.force.iter().zip(&b.force).zip(total).enumerate() {
+            assert!((fa + fb - t).abs() < 1e-9, "{p}");
+        }
+        // Frames that are not the measures' are refused.
+        let mut short = RegionSeries::new(&rec, 0.0, &masks).unwrap();
+        short.add_frame(&rec.frame_slice(0).unwrap()).unwrap();
+        assert!(short.finish(&m).is_err());
     }
 }

@@ -66,6 +66,143 @@ pub struct ReportInfo {
     /// player still plays the whole recording but opens within this range, and the header and
     /// the time series show it.
     pub frames: Option<(usize, usize)>,
+    /// The measures section's data ([`ReportMeasures::to_json`]); `Null`: no such section.
+    pub measures: Value,
+}
+
+/// What the report's measures section draws: the peak-pressure image with the regions'
+/// outlines (a rule's or the user's masks), the user's regions and the tracks of the user's
+/// points over it, the pressure-time-integral image, and the force of every stance over 0–100 %
+/// of contact with the mean of the complete stances. Images go as integers of a fixed quantum
+/// (three significant digits at their largest value), outlines as the edges between sensels of
+/// different labels: the section adds a few tens of kB to a report.
+#[derive(Debug, Clone)]
+pub struct ReportMeasures<'a> {
+    /// The recording's measures.
+    pub measures: &'a pedo_io::measures::Measures,
+    /// The regions measured and what made them (a rule's name or `"masks"`).
+    pub regions: Option<(&'a str, &'a pedo_io::regions::RegionMasks)>,
+    /// The user's regions followed through the stance (`--regions`), as drawn on their frame:
+    /// name and cells (row-major).
+    pub user_regions: Vec<(String, Vec<bool>)>,
+    /// The user's points (`--points`): name and positions through the stance (x = column,
+    /// y = row, sensels).
+    pub points: Vec<(String, Vec<[f64; 2]>)>,
+}
+
+impl ReportMeasures<'_> {
+    /// The section's data for a recording of sensels `pitch` mm (or sensels) apart.
+    pub fn to_json(&self, pitch: [f64; 2]) -> Value {
+        let m = self.measures;
+        let u = &m.units;
+        let encode = |image: &[f64], top: f64| -> (Vec<Option<i64>>, f64) {
+            let quantum = if top > 0.0 {
+                10f64.powf((top / 1000.0).log10().floor())
+            } else {
+                1.0
+            };
+            let values = image
+                .iter()
+                .map(|&v| v.is_finite().then(|| (v / quantum).round() as i64))
+                .collect();
+            (values, quantum)
+        };
+        let (peak, peak_q) = encode(&m.peak, m.values.peak_pressure);
+        let (pti, pti_q) = encode(&m.pti, m.values.pti_max);
+        let outline =
+            |label_of: &dyn Fn(usize) -> u32| label_outlines(label_of, m.rows, m.cols, pitch);
+        let regions = self.regions.map(|(rule, masks)| {
+            let lines = outline(&|i| u32::from(masks.labels[i]));
+            let centres: Vec<Value> = (1..=masks.names.len())
+                .filter_map(|k| {
+                    let cells: Vec<usize> = (0..masks.labels.len())
+                        .filter(|&i| usize::from(masks.labels[i]) == k)
+                        .collect();
+                    let n = cells.len() as f64;
+                    (n > 0.0).then(|| {
+                        let cx = cells.iter().map(|&i| (i % m.cols) as f64).sum::<f64>() / n;
+                        let cy = cells.iter().map(|&i| (i / m.cols) as f64).sum::<f64>() / n;
+                        json!({"name": masks.names[k - 1],
+                               "x": round3(cx * pitch[0]), "y": round3(cy * pitch[1])})
+                    })
+                })
+                .collect();
+            json!({"rule": rule, "outlines": lines, "names": centres})
+        });
+        let user_regions: Vec<Value> = (self.user_regions.iter())
+            .map(|(name, cells)| {
+                let lines = outline(&|i| u32::from(cells.get(i).copied().unwrap_or(false)));
+                json!({"name": name, "outline": lines})
+            })
+            .collect();
+        let points: Vec<Value> = (self.points.iter())
+            .map(|(name, xy)| {
+                let x: Vec<f64> = xy.iter().map(|p| round3(p[0] * pitch[0])).collect();
+                let y: Vec<f64> = xy.iter().map(|p| round3(p[1] * pitch[1])).collect();
+                json!({"name": name, "x": x, "y": y})
+            })
+            .collect();
+        let curves: Vec<Vec<f64>> = (m.stances.iter())
+            .map(|s| s.curves.force.iter().map(|&v| round3(v)).collect())
+            .collect();
+        let complete: Vec<bool> = m.stances.iter().map(|s| s.stance.complete).collect();
+        let chosen: Vec<&[f64]> = (curves.iter().zip(&complete))
+            .filter(|(_, c)| **c || !complete.contains(&true))
+            .map(|(v, _)| v.as_slice())
+            .collect();
+        let (mean, sd) = crate::figure::mean_and_sd(&chosen);
+        let load = if u.is_force { "force" } else { "load" };
+        json!({
+            "peak": peak, "peak_quantum": peak_q, "peak_units": u.pressure,
+            "pti": pti, "pti_quantum": pti_q, "pti_units": format!("{}·{}", u.pressure, u.time),
+            "regions": regions, "user_regions": user_regions, "points": points,
+            "stances": {
+                "label": format!("{load} ({})", u.force),
+                "curves": curves, "complete": complete,
+                "mean": mean.iter().map(|&v| round3(v)).collect::<Vec<_>>(),
+                "sd": sd.iter().map(|&v| round3(v)).collect::<Vec<_>>(),
+                "averaged": chosen.len(),
+            },
+        })
+    }
+}
+
+/// The edges between sensels of different labels (`label_of(i)`, 0 = none) around every labelled
+/// sensel, as one line piece each (corners at the sensel centres ± half a pitch, in mm or
+/// sensels).
+fn label_outlines(
+    label_of: &dyn Fn(usize) -> u32,
+    rows: usize,
+    cols: usize,
+    pitch: [f64; 2],
+) -> Lines {
+    let mut lines = Lines::default();
+    let at = |c: f64, r: f64| [round3(c * pitch[0]), round3(r * pitch[1])];
+    for i in 0..rows * cols {
+        let l = label_of(i);
+        if l == 0 {
+            continue;
+        }
+        let (r, c) = (i / cols, i % cols);
+        let (x, y) = (c as f64, r as f64);
+        let differs = |rr: Option<usize>, cc: Option<usize>| match (rr, cc) {
+            (Some(rr), Some(cc)) if rr < rows && cc < cols => label_of(rr * cols + cc) != l,
+            _ => true,
+        };
+        if differs(r.checked_sub(1), Some(c)) {
+            lines.piece([at(x - 0.5, y - 0.5), at(x + 0.5, y - 0.5)]);
+        }
+        if differs(Some(r + 1), Some(c)) {
+            lines.piece([at(x - 0.5, y + 0.5), at(x + 0.5, y + 0.5)]);
+        }
+        if differs(Some(r), c.checked_sub(1)) {
+            lines.piece([at(x - 0.5, y - 0.5), at(x - 0.5, y + 0.5)]);
+        }
+        if differs(Some(r), Some(c + 1)) {
+            lines.piece([at(x + 0.5, y - 0.5), at(x + 0.5, y + 0.5)]);
+        }
+    }
+    lines
 }
 
 impl ReportInfo {
@@ -923,6 +1060,7 @@ impl ReportGather {
             "surface": self.first_object.is_some_and(|(_, dim)| dim == 3),
             "isocontour": self.isocontour,
             "first_object_frame": self.first_object.map(|(f, _)| f),
+            "measures": info.measures,
         })
     }
 }
@@ -1204,6 +1342,7 @@ mod tests {
             timings: vec![("matching".into(), 0.5)],
             contact_threshold: 0.0,
             frames: None,
+            measures: Value::Null,
         }
     }
 

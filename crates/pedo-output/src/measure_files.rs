@@ -26,6 +26,10 @@ use serde_json::{json, Map, Value};
 /// The files of a run folder's measures besides its figures.
 pub const MEASURE_FILES: [&str; 4] = ["peak.npy", "pti.npy", "mean.npy", "measures.json"];
 
+/// The figure of the stances' curves (`stance_curves.png` or `.svg`,
+/// [`crate::figure::StanceCurvesFigure`]), written with the measures whenever figures are.
+pub const STANCE_CURVES_FIGURE: &str = "stance_curves";
+
 /// The table of the stances' curves ([`curves_table`]), one of [`crate::RUN_TABLES`].
 pub const CURVES: &str = "curves";
 
@@ -78,10 +82,10 @@ impl MeasuresSink {
         self.measures.finish()
     }
 
-    /// The measures of the frames handed and, with a `rule`, the regions of their footprint
-    /// (masks from the measures' images and the centre of pressure's path) with their values:
-    /// measured on the frames kept ([`keeping_frames`](Self::keeping_frames)), else on those of
-    /// `recording`.
+    /// The measures of the frames handed and, with regions `asked`, the regions of their
+    /// footprint (by a rule: masks from the measures' images and the centre of pressure's path;
+    /// or the user's masks) with their values: measured on the frames kept
+    /// ([`keeping_frames`](Self::keeping_frames)), else on those of `recording`.
     ///
     /// # Errors
     ///
@@ -90,7 +94,7 @@ impl MeasuresSink {
     pub fn finish_with_regions(
         self,
         recording: &Recording,
-        rule: Option<RegionRule>,
+        asked: Option<RegionsAsked>,
     ) -> Result<(Measures, Option<RegionOutcome>)> {
         let Self {
             measures,
@@ -100,15 +104,41 @@ impl MeasuresSink {
             ..
         } = self;
         let measures = measures.finish()?;
-        let Some(rule) = rule else {
+        let Some(asked) = asked else {
             return Ok((measures, None));
         };
-        let outcome = regions_of(recording, &measures, threshold, &cop, kept.as_deref(), rule);
+        let outcome = regions_of(
+            recording,
+            &measures,
+            threshold,
+            &cop,
+            kept.as_deref(),
+            asked,
+        );
         Ok((measures, Some(outcome)))
     }
 }
 
-/// The regions of `measures` by `rule` and their values, measured on the frames `kept` (the
+/// The regions a run measures: found by a rule, or the user's masks.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RegionsAsked {
+    /// Found from the footprint by a rule ([`pedo_io::regions::automatic_masks`]).
+    Rule(RegionRule),
+    /// The user's masks over the peak image ([`pedo_io::user_masks`]).
+    Masks(RegionMasks),
+}
+
+impl RegionsAsked {
+    /// What `regions.json` names as the regions' rule: the rule's name, or `"masks"`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            RegionsAsked::Rule(r) => r.name(),
+            RegionsAsked::Masks(_) => "masks",
+        }
+    }
+}
+
+/// The regions of `measures` `asked` and their values, measured on the frames `kept` (the
 /// loaded sensels of each) or, without them, on those of `recording`.
 fn regions_of(
     recording: &Recording,
@@ -116,9 +146,12 @@ fn regions_of(
     threshold: f64,
     cop: &[Option<[f64; 2]>],
     kept: Option<&[Vec<(u32, f32)>]>,
-    rule: RegionRule,
+    asked: RegionsAsked,
 ) -> RegionOutcome {
-    let masks = masks_of_measures(recording, measures, Some(cop), rule)?;
+    let masks = match asked {
+        RegionsAsked::Rule(rule) => masks_of_measures(recording, measures, Some(cop), rule)?,
+        RegionsAsked::Masks(m) => m,
+    };
     let mut series = RegionSeries::new(recording, threshold, &masks)?;
     match kept {
         Some(frames) => {
@@ -190,10 +223,17 @@ pub fn measure_values_json(m: &Measures) -> Value {
 /// contact (0..=100): `stance` (0-based, in frame order), `complete` (1, or 0 for a stance the
 /// recording may cut, on its first or last frame), `percent`, then the frames table's measures
 /// at that point of the stance, in its columns and units (contact area, total force, peak
-/// pressure, centre of pressure in sensels and in mm). More measures are more columns.
-pub fn curves_table(recording: &Recording, m: &Measures) -> Table {
-    let mut t = curves_header(recording);
+/// pressure, centre of pressure in sensels and in mm), then with `regions` (a region rule or
+/// the user's masks) each region's force and peak pressure ([`region_curve_columns`]). More
+/// measures are more columns.
+pub fn curves_table(
+    recording: &Recording,
+    m: &Measures,
+    regions: Option<&[RegionValues]>,
+) -> Table {
+    let mut t = curves_header(recording, regions);
     let mm = recording.pitch_mm.is_some();
+    let regions = regions.unwrap_or_default();
     for (k, s) in m.stances.iter().enumerate() {
         let c = &s.curves;
         for p in 0..CURVE_POINTS {
@@ -214,14 +254,29 @@ pub fn curves_table(recording: &Recording, m: &Measures) -> Table {
                 row.push(Cell::opt(xy.map(|v| v[0]), 4));
                 row.push(Cell::opt(xy.map(|v| v[1]), 4));
             }
+            for r in regions {
+                let curve = r.curves.get(k);
+                row.push(Cell::opt(curve.map(|c| c.force[p]), 4));
+                row.push(Cell::opt(curve.map(|c| c.peak_pressure[p]), 4));
+            }
             t.rows.push(row);
         }
     }
     t
 }
 
+/// The columns of region `name`'s curves in [`curves_table`] for `recording`: its force and its
+/// peak pressure, named as the frames table's with the region's name in front of them
+/// (`forefoot_force_n`, `forefoot_peak_pressure_kpa`; `forefoot_load_mm2` when the load is no
+/// force, `forefoot_peak_pressure` in unknown units).
+pub fn region_curve_columns(recording: &Recording, name: &str) -> [String; 2] {
+    let u = crate::run_tables::measure_units(recording);
+    let force = u.force.strip_prefix("total_").unwrap_or(u.force);
+    [format!("{name}_{force}"), format!("{name}_{}", u.peak.0)]
+}
+
 /// The columns of [`curves_table`] (no rows).
-pub fn curves_header(recording: &Recording) -> Table {
+pub fn curves_header(recording: &Recording, regions: Option<&[RegionValues]>) -> Table {
     let u = crate::run_tables::measure_units(recording);
     let mut t = Table::new(&["stance", "complete", "percent"]);
     for c in [u.area.0, u.force, u.peak.0, "cop_x", "cop_y"] {
@@ -230,6 +285,11 @@ pub fn curves_header(recording: &Recording) -> Table {
     if recording.pitch_mm.is_some() {
         t.push_column("cop_x_mm");
         t.push_column("cop_y_mm");
+    }
+    for r in regions.unwrap_or_default() {
+        for c in region_curve_columns(recording, &r.name) {
+            t.push_column(&c);
+        }
     }
     t
 }
@@ -299,16 +359,17 @@ pub fn measures_json(m: &Measures) -> Value {
 }
 
 /// Writes the measures' files into `dir` ([`MEASURE_FILES`]), the curves table as `tables`
-/// says (`curves.csv` or `curves.parquet`) and their figures as `kinds` says (`pti.png` or
-/// `.svg`).
+/// says (`curves.csv` or `curves.parquet`, with the curves of `regions` when given) and their
+/// figures as `kinds` says (`pti.png` and `stance_curves.png`, or `.svg`).
 pub fn write_measures(
     dir: &OutDir,
     recording: &Recording,
     m: &Measures,
+    regions: Option<&[RegionValues]>,
     kinds: FigureKinds,
     tables: TableFormat,
 ) -> Result<()> {
-    crate::write_table(dir, tables, CURVES, &curves_table(recording, m))?;
+    crate::write_table(dir, tables, CURVES, &curves_table(recording, m, regions))?;
     dir.write("peak.npy", &image_to_npy(m.rows, m.cols, &m.peak)?)?;
     dir.write("pti.npy", &image_to_npy(m.rows, m.cols, &m.pti)?)?;
     dir.write("mean.npy", &image_to_npy(m.rows, m.cols, &m.mean)?)?;
@@ -323,6 +384,14 @@ pub fn write_measures(
     };
     let stem = MeasureImage::Pti.stem();
     write_figure(dir, stem, kinds, || fig.to_png(), || fig.to_svg())?;
+    let curves = crate::figure::StanceCurvesFigure { measures: m };
+    write_figure(
+        dir,
+        STANCE_CURVES_FIGURE,
+        kinds,
+        || curves.to_png(),
+        || curves.to_svg(),
+    )?;
     Ok(())
 }
 
@@ -367,13 +436,13 @@ pub fn regions_csv(m: &Measures, values: &[RegionValues]) -> String {
     csv
 }
 
-/// `regions.json`: the rule, the label of each region in `regions.npy`, the foot's axis and
+/// `regions.json`: the rule (or `"masks"` for the user's), the label of each region in `regions.npy`, the foot's axis and
 /// side, the bounds used and each region's values; or, when the footprint could not be
 /// divided, why.
-pub fn regions_json(m: &Measures, rule: RegionRule, outcome: &RegionOutcome) -> Value {
+pub fn regions_json(m: &Measures, rule: &str, outcome: &RegionOutcome) -> Value {
     let (masks, values) = match outcome {
         Ok(found) => found,
-        Err(e) => return json!({"rule": rule.name(), "error": e.to_string()}),
+        Err(e) => return json!({"rule": rule, "error": e.to_string()}),
     };
     let labels: Map<String, Value> = (masks.names.iter().enumerate())
         .map(|(k, n)| ((k + 1).to_string(), json!(n)))
@@ -400,7 +469,7 @@ pub fn regions_json(m: &Measures, rule: RegionRule, outcome: &RegionOutcome) -> 
         })
     });
     json!({
-        "rule": rule.name(),
+        "rule": rule,
         "labels": labels,
         "label_image": "regions.npy: per sensel 0 outside the footprint, else the region's label",
         "foot": axis,
@@ -414,12 +483,13 @@ pub fn regions_json(m: &Measures, rule: RegionRule, outcome: &RegionOutcome) -> 
 }
 
 /// Writes the regions' files into `dir` ([`REGION_FILES`]: the CSV and the label image only
-/// when the footprint was divided) and their figure `regions.png` (or `.svg`) as `kinds` says.
+/// when the footprint was divided) and their figure `regions.png` (or `.svg`) as `kinds` says;
+/// `rule` is what `regions.json` names as their rule ([`RegionsAsked::name`]).
 pub fn write_regions(
     dir: &OutDir,
     recording: &Recording,
     m: &Measures,
-    rule: RegionRule,
+    rule: &str,
     outcome: &RegionOutcome,
     kinds: FigureKinds,
 ) -> Result<()> {
@@ -465,7 +535,7 @@ mod tests {
             .unwrap()
             .with_units("kPa");
         let m = Measures::of_recording(&rec, 0.0, 0..n).unwrap();
-        let t = curves_table(&rec, &m);
+        let t = curves_table(&rec, &m, None);
         assert_eq!(
             t.header,
             [

@@ -16,7 +16,7 @@ use crate::html_report::ReportGather;
 use crate::outdir::OutDir;
 use crate::TableFormat;
 use crate::{Cell, InputInfo};
-use modal_core::{Choice, OptionSpec};
+use modal_core::{Choice, OptionSpec, PathOrRows};
 use pedo_io::cancel::Cancel;
 use pedo_io::formats::{read_recording_with, ReadOptions};
 use pedo_io::recording::FrameMeasures;
@@ -198,12 +198,23 @@ modal_core::option_set! {
         region_rule: RegionChoice = RegionChoice::default();
             Word(<RegionChoice as Choice>::NAMES), RegionChoice::default(),
             "Anatomical regions of the footprint, found from the peak image and the centre of pressure's path, with each region's peak pressure, PTI, FTI, contact area, contact time and share of the impulse (regions.csv, regions.json, regions.npy, regions.png): coarse (hindfoot, midfoot, forefoot, toes), fine (medial and lateral heel, midfoot, first, second and lateral metatarsal heads, hallux, lesser toes) or none. One foot per recording; a streamed run keeps its frames' loaded sensels for them.";
+        /// The user's region masks over the peak image.
+        masks: Option<PathOrRows> = None;
+            Value, "none",
+            "Region masks drawn over the peak image, measured as the automatic regions (regions.csv, regions.json, regions.npy, regions.png, and each region's curves in curves.csv): a label image of the recording's rows x columns (.npy, a CSV grid or an image; Python also takes a 2-D array; 0 = no region, label k named region_k), or a CSV of polygons region,x_mm,y_mm (or region,x,y in sensels), one vertex a line, named by their region column. Instead of region_rule.";
     }
 }
 
 impl OutputOptions {
-    /// Every value is one of its words: nothing to check.
+    /// The regions come from a rule or from the user's masks, not both.
     pub fn validate(&self) -> std::result::Result<(), modal_core::OptionError> {
+        if self.masks.is_some() && self.region_rule != RegionChoice::None {
+            return Err(modal_core::OptionError::new(
+                "masks",
+                "masks with a region_rule",
+                "region_rule none when masks are given (the masks are the regions measured)",
+            ));
+        }
         Ok(())
     }
 }
@@ -266,7 +277,7 @@ pub struct RunRecord<'a> {
 }
 
 /// What a run folder holds besides its tables and `summary.json`.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct RunOutputs {
     /// The figure files to write: the summary figures ([`SUMMARY_FIGURES`]) in these formats.
     pub figures: FigureKinds,
@@ -280,6 +291,39 @@ pub struct RunOutputs {
     pub tables: TableFormat,
     /// The rule of the footprint's anatomical regions (`regions.*`), `None` for none.
     pub regions: Option<pedo_io::regions::RegionRule>,
+    /// The user's region masks over the peak image (`regions.*` instead of a rule's), read for
+    /// each recording ([`user_masks_for`]).
+    pub masks: Option<std::sync::Arc<PathOrRows>>,
+}
+
+impl RunOutputs {
+    /// Whether the run measures regions: by a rule or the user's masks.
+    pub fn any_regions(&self) -> bool {
+        self.regions.is_some() || self.masks.is_some()
+    }
+}
+
+/// The user's masks of `outputs` read for `recording` (`None` without masks).
+///
+/// # Errors
+///
+/// Those of [`pedo_io::user_masks::read_user_masks`] and
+/// [`pedo_io::user_masks::user_masks_of_rows`]: a file that cannot be read, masks of another
+/// shape than the recording's frames, polygons that overlap or hold no sensel.
+pub fn user_masks_for(
+    outputs: &RunOutputs,
+    recording: &Recording,
+) -> Result<Option<pedo_io::regions::RegionMasks>> {
+    use pedo_io::user_masks::{read_user_masks, user_masks_of_rows};
+    let (rows, cols) = (recording.rows(), recording.cols());
+    outputs
+        .masks
+        .as_deref()
+        .map(|m| match m {
+            PathOrRows::Path(p) => read_user_masks(p, rows, cols, recording.pitch_mm),
+            PathOrRows::Rows(values) => user_masks_of_rows(values, rows, cols),
+        })
+        .transpose()
 }
 
 impl RunOutputs {
@@ -293,6 +337,7 @@ impl RunOutputs {
             animation: o.animation == AnimationFormat::Gif,
             tables: o.tables,
             regions: o.region_rule.rule(),
+            masks: o.masks.clone().map(std::sync::Arc::new),
         }
     }
 }
@@ -803,6 +848,12 @@ fn write_folder(
     feed: Feed<'_, '_>,
 ) -> Result<(Value, RunCounts)> {
     let started = Instant::now();
+    // The user's masks are read (and checked against the recording) before the run.
+    let asked = match (outputs.regions, user_masks_for(outputs, run.recording)?) {
+        (_, Some(masks)) => Some(crate::RegionsAsked::Masks(masks)),
+        (Some(rule), None) => Some(crate::RegionsAsked::Rule(rule)),
+        (None, None) => None,
+    };
     let dir = OutDir::create(out)?;
     // A replayed run is whole already: only a run of the engine gathers itself, and only
     // when an output needs the whole run.
@@ -839,7 +890,7 @@ fn write_folder(
                     ..
                 }
             );
-            if streamed && outputs.regions.is_some() {
+            if streamed && outputs.any_regions() {
                 m.keeping_frames()
             } else {
                 m
@@ -886,15 +937,21 @@ fn write_folder(
         total: output_count(&counts, outputs, points),
         done: AtomicUsize::new(0),
     };
-    let (measures, regions) = measures.finish_with_regions(run.recording, outputs.regions)?;
+    let rule_name = asked.as_ref().map(crate::RegionsAsked::name);
+    let (measures, regions) = measures.finish_with_regions(run.recording, asked)?;
+    let region_values = match &regions {
+        Some(Ok((_, values))) => Some(values.as_slice()),
+        _ => None,
+    };
     crate::write_measures(
         &dir,
         run.recording,
         &measures,
+        region_values,
         outputs.figures,
         outputs.tables,
     )?;
-    if let (Some(rule), Some(outcome)) = (outputs.regions, &regions) {
+    if let (Some(rule), Some(outcome)) = (rule_name, &regions) {
         crate::write_regions(
             &dir,
             run.recording,
@@ -912,7 +969,7 @@ fn write_folder(
         curves: curves.unwrap_or_default(),
         tracks,
     };
-    write_figures_and_points(&dir, run, &drawn, outputs, points, cancel, &steps)?;
+    let user_points = write_figures_and_points(&dir, run, &drawn, outputs, points, cancel, &steps)?;
     // The run's own stages, when it ran here, are not the output's time.
     let t = counts.timings;
     let run_time = if ran {
@@ -933,7 +990,20 @@ fn write_folder(
     }
     dir.write("summary.json", pretty(&summary).as_bytes())?;
     if let Some(report) = &report {
-        let info = report_info(run, &summary);
+        let mut info = report_info(run, &summary);
+        let user_regions = (run.options.inputs.regions.iter())
+            .map(|r| (format!("region {}", r.label), r.cells.clone()))
+            .collect();
+        let shown = crate::html_report::ReportMeasures {
+            measures: &measures,
+            regions: match (rule_name, &regions) {
+                (Some(rule), Some(Ok((masks, _)))) => Some((rule, masks)),
+                _ => None,
+            },
+            user_regions,
+            points: user_points,
+        };
+        info.measures = shown.to_json(run.recording.pitch_mm.unwrap_or([1.0, 1.0]));
         dir.write(
             "report.html",
             report.page(run.recording, &counts, &info)?.as_bytes(),
@@ -966,9 +1036,12 @@ struct Drawn<'r> {
     tracks: Option<TracksGather>,
 }
 
+/// A user's point through the stance, for the report: its name and positions (sensels).
+type UserTrack = (String, Vec<[f64; 2]>);
+
 /// The figures asked for and, when `points`, the material points (`points`, contour model) of
 /// the run's objects and pairs: they need nothing of each other, so the points are followed on
-/// a second thread.
+/// a second thread. Returns the user's points through the stance (for the report).
 fn write_figures_and_points(
     dir: &OutDir,
     run: &RunOf<'_>,
@@ -977,8 +1050,8 @@ fn write_figures_and_points(
     points: bool,
     cancel: Option<&Cancel>,
     steps: &OutputSteps<'_>,
-) -> Result<()> {
-    type Tables = (crate::Table, Option<crate::Table>);
+) -> Result<Vec<UserTrack>> {
+    type Tables = (crate::Table, Option<crate::Table>, Vec<UserTrack>);
     let (points, figures) = std::thread::scope(|s| {
         let points = s.spawn(|| -> Result<Option<Tables>> {
             let Some(r) = drawn.whole.filter(|_| points) else {
@@ -991,13 +1064,25 @@ fn write_figures_and_points(
             };
             let (rec, inputs) = (run.recording, &run.options.inputs);
             let table = crate::points_table(rec, r, &points, inputs)?;
+            let tracks: Vec<UserTrack> = (points.points.iter())
+                .filter_map(|p| match p.kind {
+                    pedo_track::follow::Seeded::Point(i) => {
+                        let name = inputs
+                            .points
+                            .get(i)
+                            .map_or(format!("p{}", i + 1), |u| u.name.clone());
+                        Some((name, p.steps.iter().map(|&(_, xy)| xy).collect()))
+                    }
+                    _ => None,
+                })
+                .collect();
             let regions = (!inputs.regions.is_empty())
                 .then(|| {
                     let threshold = run.options.contour.preprocess.threshold.unwrap_or(0.0);
                     crate::regions_table(rec, r, &points, inputs, threshold)
                 })
                 .transpose()?;
-            Ok(Some((table, regions)))
+            Ok(Some((table, regions, tracks)))
         });
         let figures = match &drawn.tracks {
             Some(tracks) => write_figures(
@@ -1017,13 +1102,15 @@ fn write_figures_and_points(
     });
     figures?;
     let points = points.map_err(|_| IoError::invalid("following the material points failed"))?;
-    if let Some((table, regions)) = points? {
+    let mut user_tracks = Vec::new();
+    if let Some((table, regions, tracks)) = points? {
         crate::write_table(dir, outputs.tables, POINTS, &table)?;
         if let Some(regions) = regions {
             crate::write_table(dir, outputs.tables, REGION_SERIES, &regions)?;
         }
+        user_tracks = tracks;
     }
-    Ok(())
+    Ok(user_tracks)
 }
 
 /// The header of `report.html` of `run`: what its `summary` (`summary.json`) records, the
@@ -1269,6 +1356,15 @@ pub fn record_outputs(options: &mut Map<String, Value>, outputs: &RunOutputs) {
     }
     if let Some(rule) = outputs.regions {
         options.insert("region_rule".into(), json!(rule.name()));
+    }
+    match outputs.masks.as_deref() {
+        Some(PathOrRows::Path(p)) => {
+            options.insert("masks".into(), json!(p));
+        }
+        Some(PathOrRows::Rows(rows)) => {
+            options.insert("masks".into(), json!(rows));
+        }
+        None => {}
     }
 }
 

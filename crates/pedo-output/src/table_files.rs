@@ -602,7 +602,8 @@ mod tests {
                 "tables",
                 "report",
                 "animation",
-                "region_rule"
+                "region_rule",
+                "masks"
             ]
         );
         assert_eq!(TableFormat::default().file_name("matches"), "matches.csv");

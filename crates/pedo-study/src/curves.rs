@@ -20,7 +20,8 @@ pub const STUDY_CURVES: &str = "study_curves";
 /// The columns of the study curves table: the recording, then the columns of every folder's
 /// curves table a recording may have (a recording without one of them, e.g. without pressure
 /// units or a pitch, leaves it empty, so that a column never mixes units). More measures of a
-/// stance are more columns.
+/// stance are more columns. The regions' curves of folders run with a region rule or masks
+/// (`forefoot_force_n`, ...) follow these ([`study_curves_columns`]).
 pub const STUDY_CURVES_COLUMNS: [&str; 12] = [
     "path",
     "output",
@@ -107,13 +108,41 @@ fn read_parquet(path: &Path) -> Option<(Vec<String>, Vec<Vec<Cell>>)> {
     Some((header, rows))
 }
 
-/// Where each of a folder's columns goes in the study table (`None`: a column it does not
-/// have, e.g. of a newer version).
-fn placement(header: &[String]) -> Vec<Option<usize>> {
+/// Where each of a folder's columns goes in the study table of columns `columns` (`None`: a
+/// column it does not have, e.g. of a newer version).
+fn placement(header: &[String], columns: &[String]) -> Vec<Option<usize>> {
     header
         .iter()
-        .map(|h| STUDY_CURVES_COLUMNS.iter().position(|c| c == h))
+        .map(|h| columns.iter().position(|c| c == h))
         .collect()
+}
+
+/// Whether `column` of a folder's curves table is a region's curve: a force (`_force_n`, or a
+/// load `_load_...`) or peak pressure (`_peak_pressure...`) column other than the frames'.
+fn is_region_curve(column: &str) -> bool {
+    !STUDY_CURVES_COLUMNS.contains(&column)
+        && (column.ends_with("_force_n")
+            || column.contains("_load_")
+            || column.contains("_peak_pressure"))
+}
+
+/// The columns of the study curves table of `rows`' folders under `out`:
+/// [`STUDY_CURVES_COLUMNS`], then the region curve columns of the folders' curves tables, in the
+/// order they first appear (a folder without them leaves them empty).
+pub fn study_curves_columns(out: &Path, rows: &[StudyRow], tables: TableFormat) -> Vec<String> {
+    let mut columns: Vec<String> = STUDY_CURVES_COLUMNS.iter().map(|s| s.to_string()).collect();
+    for row in rows {
+        let Some(output) = &row.output else { continue };
+        let Some((cols, _)) = folder_curves(&out.join(output), tables) else {
+            continue;
+        };
+        for c in cols {
+            if is_region_curve(&c) && !columns.contains(&c) {
+                columns.push(c);
+            }
+        }
+    }
+    columns
 }
 
 /// Writes the curves of `rows`' folders under `out` (rows with a folder, in their order) as
@@ -167,7 +196,7 @@ impl RowSink {
 }
 
 fn write_to(tmp: &Path, out: &Path, rows: &[StudyRow], tables: TableFormat) -> std::io::Result<()> {
-    let header: Vec<String> = STUDY_CURVES_COLUMNS.iter().map(|s| s.to_string()).collect();
+    let header = study_curves_columns(out, rows, tables);
     let mut file = std::io::BufWriter::new(std::fs::File::create(tmp)?);
     let mut sink = match tables {
         TableFormat::Csv => {
@@ -183,9 +212,9 @@ fn write_to(tmp: &Path, out: &Path, rows: &[StudyRow], tables: TableFormat) -> s
         let Some((cols, cells)) = folder_curves(&out.join(output), tables) else {
             continue;
         };
-        let at = placement(&cols);
+        let at = placement(&cols, &header);
         for r in cells {
-            let mut full = vec![Cell::Empty; STUDY_CURVES_COLUMNS.len()];
+            let mut full = vec![Cell::Empty; header.len()];
             full[0] = Cell::Text(row.path.clone());
             full[1] = Cell::Text(output.clone());
             for (cell, to) in r.into_iter().zip(&at) {

@@ -39,7 +39,7 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 pub mod curves;
-pub use curves::{write_study_curves, STUDY_CURVES, STUDY_CURVES_COLUMNS};
+pub use curves::{study_curves_columns, write_study_curves, STUDY_CURVES, STUDY_CURVES_COLUMNS};
 
 /// Marks a folder as a study output ([`run_study`] writes only into an empty folder or one
 /// holding it).
@@ -1637,7 +1637,7 @@ fn complete_summary(
     }
     let mut files = run_table_files(outputs.tables, options);
     files.extend(pedo_output::MEASURE_FILES.map(String::from));
-    if outputs.regions.is_some() {
+    if outputs.any_regions() {
         files.push("regions.json".into());
     }
     if outputs.report {

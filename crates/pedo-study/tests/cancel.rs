@@ -66,6 +66,7 @@ fn a_cancelled_study_keeps_finished_folders_and_writes_no_table() {
             animation: false,
             tables: Default::default(),
             regions: None,
+            masks: None,
         },
     };
     // Cancelled as b makes progress, once a is done.

@@ -34,6 +34,7 @@ fn most_in_flight(jobs: usize, paths: &[PathBuf]) -> (usize, Vec<String>) {
             animation: false,
             tables: Default::default(),
             regions: None,
+            masks: None,
         },
     };
     let state = Mutex::new((BTreeSet::new(), BTreeSet::new(), 0usize));

@@ -255,7 +255,7 @@ fn run_recording<'py>(
         pedo_io::measures::Measures::of_recording(&rec, threshold, start..end)
     })
     .map_err(to_py)?;
-    let curves = pedo_output::curves_table(&rec, &m);
+    let curves = pedo_output::curves_table(&rec, &m, None);
     dict.set_item("curves", table_rows(py, &curves)?)?;
     let summary = match summary {
         Some(summary) => summary,

@@ -403,6 +403,7 @@ def run(
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
     region_rule: Optional[Literal["none", "coarse", "fine"]] = None,
+    masks: Optional[Union[Path, ArrayLike]] = None,
     # @end generated
 ) -> RunResult: ...
 
@@ -432,6 +433,7 @@ def batch(
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
     region_rule: Optional[Literal["none", "coarse", "fine"]] = None,
+    masks: Optional[Union[Path, ArrayLike]] = None,
     layout: Optional[Path] = None,
     # @end generated
     **options: Any,
@@ -455,6 +457,7 @@ def batch_row(
     report: Optional[Literal["html", "none"]] = None,
     animation: Optional[Literal["gif", "none"]] = None,
     region_rule: Optional[Literal["none", "coarse", "fine"]] = None,
+    masks: Optional[Union[Path, ArrayLike]] = None,
     layout: Optional[Path] = None,
     # @end generated
     **options: Any,
