@@ -29,10 +29,12 @@ use std::ops::Range;
 
 mod animation;
 mod measure_figures;
+mod register_figures;
 mod text;
 
 pub use animation::{Animation, DEFAULT_GIF_DELAY_CS, MAX_ANIMATION_FRAMES, MIN_GIF_DELAY_CS};
 pub use measure_figures::{MeasureFigure, MeasureImage, RegionFigure};
+pub use register_figures::RegisteredStackFigure;
 
 /// The bundled font (DejaVu Sans; licence in `fonts/LICENSE-DejaVu.txt`).
 static FONT_BYTES: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");

@@ -183,8 +183,14 @@ impl FootImages {
     /// one footprint per recording).
     ///
     /// # Errors
-    /// [`IoError::InvalidInput`] for a recording without frames or without any load.
+    /// [`IoError::NoObject`] for a recording without any load (no footprint);
+    /// [`IoError::InvalidInput`] for one without frames.
     pub fn of_recording(recording: &pedo_io::Recording) -> Result<Self> {
+        if recording.n_frames() > 0 && !recording.peak_image().data().iter().any(|&v| v > 0.0) {
+            return Err(IoError::no_object(
+                "no sensel is loaded in any frame: there is no footprint to register",
+            ));
+        }
         let m = Measures::of_recording(recording, 0.0, 0..recording.n_frames())?;
         Ok(Self::from_measures(&m))
     }
