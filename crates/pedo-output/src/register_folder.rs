@@ -118,6 +118,9 @@ pub fn write_register_folder(
     dir.commit()
 }
 
+/// One image of a trial's, when it has it.
+type Layer = fn(&FootImages) -> Option<&Vec<f64>>;
+
 /// `registered.npz`: `peak`, `pti`, `mean` (trials × rows × columns, float64; `pti` and `mean`
 /// when every trial has them), `mask` (bool, same shape), `template_peak` (and `template_pti`,
 /// `template_mean` when known), `template_mask`, `trials` (their names), `affine` (trials × 2 × 3).
@@ -125,7 +128,7 @@ pub fn registered_npz(names: &[String], reg: &StudyRegistration) -> Result<Vec<u
     let tpl = &reg.template.images;
     let (rows, cols, n) = (tpl.rows, tpl.cols, reg.trials.len());
     let mut members: Vec<(String, Vec<u8>)> = Vec::new();
-    let stack = |get: &dyn Fn(&FootImages) -> Option<&Vec<f64>>| -> Option<Vec<f64>> {
+    let stack = |get: Layer| -> Option<Vec<f64>> {
         let mut v = Vec::with_capacity(n * rows * cols);
         for r in &reg.trials {
             v.extend_from_slice(get(&r.images)?);
@@ -134,10 +137,10 @@ pub fn registered_npz(names: &[String], reg: &StudyRegistration) -> Result<Vec<u
     };
     let shape3 = format!("({n}, {rows}, {cols})");
     let shape2 = format!("({rows}, {cols})");
-    let layers: [(&str, &dyn Fn(&FootImages) -> Option<&Vec<f64>>); 3] = [
-        ("peak", &|f| Some(&f.peak)),
-        ("pti", &|f| f.pti.as_ref()),
-        ("mean", &|f| f.mean.as_ref()),
+    let layers: [(&str, Layer); 3] = [
+        ("peak", |f| Some(&f.peak)),
+        ("pti", |f| f.pti.as_ref()),
+        ("mean", |f| f.mean.as_ref()),
     ];
     for (name, get) in layers {
         if let Some(v) = stack(get) {

@@ -703,11 +703,10 @@ fn register_with(
     let (cm, cb) = correction.as_linear();
     let mut t = t;
     let (m0, t0) = (t.m, t.t);
-    for r in 0..2 {
-        for k in 0..2 {
-            t.m[r][k] = cm[r][0] * m0[0][k] + cm[r][1] * m0[1][k];
-        }
-        t.t[r] = cm[r][0] * t0[0] + cm[r][1] * t0[1] + cb[r];
+    for (r, row) in cm.iter().enumerate() {
+        t.m[r][0] = row[0] * m0[0][0] + row[1] * m0[1][0];
+        t.m[r][1] = row[0] * m0[0][1] + row[1] * m0[1][1];
+        t.t[r] = row[0] * t0[0] + row[1] * t0[1] + cb[r];
     }
     let det = t.m[0][0] * t.m[1][1] - t.m[0][1] * t.m[1][0];
     Ok(Registration {

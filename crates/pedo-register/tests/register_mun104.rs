@@ -142,7 +142,11 @@ fn errors_are_typed() {
     assert!(err.to_string().contains("trial 1"), "{err}");
     // A template trial that is not there; images of the wrong size.
     assert!(matches!(
-        register_trials(&[tpl.clone()], &TemplateSource::Trial(3), &params()),
+        register_trials(
+            std::slice::from_ref(&tpl),
+            &TemplateSource::Trial(3),
+            &params()
+        ),
         Err(IoError::InvalidInput(_))
     ));
     assert!(matches!(
