@@ -18,6 +18,7 @@ mod cmd_assign;
 mod cmd_batch;
 mod cmd_inspect;
 mod cmd_match;
+mod cmd_register;
 mod cmd_run;
 mod interrupt;
 mod option_args;
@@ -56,6 +57,10 @@ enum Command {
     /// Match two objects given as point files or pressure images.
     #[command(after_help = EXIT_CODES)]
     Match(cmd_match::MatchArgs),
+    /// Register the footprints of many recordings onto one template (a trial, a study
+    /// template or the bundled MUN104 image) for pixel-wise statistics.
+    #[command(after_help = EXIT_CODES)]
+    Register(cmd_register::RegisterArgs),
     /// Solve a linear assignment problem read from a CSV cost matrix.
     #[command(after_help = EXIT_CODES)]
     Assign(cmd_assign::AssignArgs),
@@ -128,6 +133,7 @@ fn main() -> ExitCode {
         Command::Batch(args) => cmd_batch::run(args),
         Command::Demo(args) => cmd_run::demo(args),
         Command::Match(args) => cmd_match::run(args),
+        Command::Register(args) => cmd_register::run(args),
         Command::Assign(args) => cmd_assign::run(args),
         Command::Inspect(args) => cmd_inspect::run(args),
     };

@@ -33,6 +33,7 @@ fn keyword_groups() -> Vec<(&'static str, Vec<OptionSpec>)> {
         ("read", pedo_io::formats::read_option_specs()),
         ("study", study),
         ("row", row),
+        ("register", pedo_register::register_option_specs()),
     ]);
     g
 }
@@ -135,6 +136,8 @@ fn type_stubs_are_the_option_tables() {
         ("batch_row output", &["output", "read"][..], 4),
         ("read_recording", &["units", "read"][..], 4),
         ("Recording.from_array", &["units"][..], 8),
+        ("register", &["register"][..], 4),
+        ("register read", &["read"][..], 4),
     ] {
         let begin = format!("# @generated keywords of {function}:");
         text = between(
@@ -161,7 +164,8 @@ fn the_options_table_is_the_option_tables() {
     // options hold the units).
     let read = ("read", pedo_io::formats::read_option_specs());
     let study = ("study", pedo_study::study_option_specs());
-    for (group, specs) in groups().into_iter().chain([read, study]) {
+    let register = ("register", pedo_register::register_option_specs());
+    for (group, specs) in groups().into_iter().chain([read, study, register]) {
         for s in specs {
             let flags: Vec<String> = s.cli_flags().iter().map(|f| format!("`{f}`")).collect();
             table.push_str(&format!(

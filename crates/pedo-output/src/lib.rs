@@ -20,6 +20,7 @@ pub mod figure;
 pub mod html_report;
 pub mod measure_files;
 pub mod outdir;
+pub mod register_folder;
 pub mod run_folder;
 pub mod run_tables;
 pub mod summary;

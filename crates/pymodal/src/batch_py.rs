@@ -99,6 +99,7 @@ macro_rules! define_batch {
         read: [$($rd:ident),*], read_doc: $_rdd:literal,
         study: [$($s:ident),*], study_doc: $_sd:literal,
         row: [$($w:ident),*], row_doc: $_wd:literal,
+        $($rest:tt)*
     ) => {
         /// Run every recording of ``paths`` like :func:`run` and return the study table: a list of dicts,
         /// one per recording in order, with the columns of ``study.csv``: ``path``, ``output`` (its

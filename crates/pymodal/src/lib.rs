@@ -16,6 +16,7 @@ mod model_py;
 mod options_py;
 mod pickling;
 mod pool;
+mod register_py;
 mod run_py;
 mod synthetic_py;
 
@@ -45,6 +46,7 @@ fn _pymodal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     io_py::register(m)?;
     run_py::register(m)?;
     batch_py::register(m)?;
+    register_py::register(m)?;
     options_py::register(m)?;
     synthetic_py::register(m)?;
     Ok(())

@@ -23,7 +23,7 @@ pub struct OwnTable {
 /// Every table pedomatch writes as CSV, with the columns that tell it apart. A header that holds
 /// the columns of several (`pedomatch match`'s `matches.csv` is a part of a run's) is the one
 /// with the most.
-pub const OWN_TABLES: [OwnTable; 14] = [
+pub const OWN_TABLES: [OwnTable; 15] = [
     OwnTable {
         file: "frames.csv",
         what: "the per-frame measures of a run",
@@ -121,6 +121,17 @@ pub const OWN_TABLES: [OwnTable; 14] = [
             "tracks",
             "wall_time_s",
             "status",
+        ],
+    },
+    OwnTable {
+        file: "registration.csv",
+        what: "the per-trial maps and quality of a footprint registration",
+        columns: &[
+            "trial",
+            "fallback",
+            "turn_deg",
+            "residual_sensels",
+            "mask_xor_pct",
         ],
     },
 ];

@@ -220,7 +220,7 @@ impl RegionFigure<'_> {
 }
 
 /// A value with four significant digits, as a subtitle states it.
-fn format_value(v: f64) -> String {
+pub(super) fn format_value(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
         return format!("{v}");
     }

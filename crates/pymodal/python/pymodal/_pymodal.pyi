@@ -464,3 +464,25 @@ def batch_row(
 ) -> StudyRow:
     """One row of :func:`batch`'s table: one recording on one thread (for Dask or a job queue)."""
     ...
+
+def register(
+    inputs: Union[Path, Sequence[Path], npt.ArrayLike],
+    out: Optional[Path] = None,
+    template_image: Optional[npt.ArrayLike] = None,
+    *,
+    # @generated keywords of register: tests/generated.rs, from the option tables
+    template: Optional[str] = None,
+    mirror_left: Optional[bool] = None,
+    max_turn: Optional[float] = None,
+    outline_nodes: Optional[int] = None,
+    field_smoothing: Optional[float] = None,
+    template_rounds: Optional[int] = None,
+    refine_intensity: Optional[bool] = None,
+    foot_threshold: Optional[float] = None,
+    # @end generated
+    # @generated keywords of register read: tests/generated.rs, from the option tables
+    layout: Optional[Path] = None,
+    # @end generated
+) -> dict[str, Any]:
+    """Register footprints onto one template: the registered stack, masks, template and a table per trial."""
+    ...

@@ -1,0 +1,290 @@
+"""Footprint registration on real data: pedomatch's `register` against the registration methods
+of the pedobarography literature, on the SpeedPP2D peak images (Pataky et al. 2008; 10
+subjects x 60 trials of 63 x 33 sensels, from the PyPI package `jiku-data`, which is the
+authors' release; installed, not vendored).
+
+    pip install jiku-data scikit-image scipy SimpleITK
+    python benches/python/bench_register.py              # tables as text
+    python benches/python/bench_register.py --markdown   # tables as BENCHMARKS.md holds them
+    python benches/python/bench_register.py --quick      # a few pairs per table
+
+Pairs (moving trial -> fixed trial, the fixed one the template): within a subject, trials
+(2k, 2k+1) for k < 10; between subjects, trial k of s onto trial k of t for k < 3 and s < t.
+Every choice of pedomatch's defaults was made on subjects 0-4 (TUNING); subjects 5-9 are
+HELD OUT and reported in their own tables.
+
+Methods on the same pairs:
+  unregistered  the moving image as it is;
+  principal     principal axes of the footprint masks: centroids, axis angle (the smaller turn of
+                the two axis directions) and the square root of the area ratio (similarity);
+  fft           phase correlation (scikit-image `phase_cross_correlation`): rotation and scale
+                from the log-polar magnitude spectra, then the translation (similarity);
+  min-mse       minimum-MSE alignment (scipy.optimize, Powell): rigid from the identity, then
+                affine from the rigid optimum;
+  bspline       SimpleITK: affine (moments-initialised, mean squares) then a B-spline
+                (mesh 4 x 4, mean squares, L-BFGS-B) on top;
+  pedomatch     pymodal.register(moving, template_image=fixed): whole-foot outlines, modal
+                matching with the no-flip prior, thin-plate field.
+
+Metrics (numpy, the same for every method): mean squared pressure difference over the grid
+(kPa^2); Pearson correlation over the union of the two footprints (sensels loaded above 0,
+the moving one's mask carried by the method's own map, >= 0.5 after linear interpolation); mask
+XOR as a percentage of the fixed footprint's sensels; time per registration (one core).
+"""
+
+import argparse
+import os
+import sys
+import time
+
+for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "RAYON_NUM_THREADS"):
+    os.environ.setdefault(_v, "1")
+
+import numpy as np
+from scipy import ndimage, optimize
+
+TUNE = range(0, 5)
+HELD = range(5, 10)
+
+
+def load():
+    try:
+        import jikudata
+    except ImportError:
+        sys.exit("needs the PyPI package jiku-data (pip install jiku-data)")
+    d = jikudata.SpeedPP2D()
+    return np.asarray(d.y, dtype=float), np.asarray(d.x["subj"])
+
+
+def pairs_of(subjects, quick):
+    within, between = [], []
+    for s in subjects:
+        for k in range(2 if quick else 10):
+            within.append((s * 60 + 2 * k, s * 60 + 2 * k + 1))
+    for s in subjects:
+        for t in subjects:
+            if s < t:
+                for k in range(1 if quick else 3):
+                    between.append((s * 60 + k, t * 60 + k))
+    return within, between
+
+
+# ---- maps as (2x2 matrix, offset) taking fixed (row, col) coordinates into the moving image ----
+
+
+def warp(img, m, off):
+    return ndimage.affine_transform(img, m, offset=off, order=1, mode="constant", cval=0.0)
+
+
+def mask_of(img):
+    return img > 0
+
+
+def moments(mask):
+    rc = np.argwhere(mask).astype(float)
+    c = rc.mean(axis=0)
+    cov = np.cov((rc - c).T)
+    w, v = np.linalg.eigh(cov)
+    major = v[:, 1]
+    return c, np.arctan2(major[1], major[0]), len(rc)
+
+
+def rot(a):
+    return np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+
+
+def principal(mov, fix):
+    cm, am, nm = moments(mask_of(mov))
+    cf, af, nf = moments(mask_of(fix))
+    d = (am - af + np.pi / 2) % np.pi - np.pi / 2  # the smaller turn of the two axis directions
+    s = np.sqrt(nm / nf)
+    m = s * rot(d)
+    return m, cm - m @ cf
+
+
+def fft(mov, fix):
+    from skimage.registration import phase_cross_correlation
+    from skimage.transform import warp_polar
+
+    shape = fix.shape
+    win = np.outer(np.hanning(shape[0]), np.hanning(shape[1]))
+    fm = np.abs(np.fft.fftshift(np.fft.fft2(mov * win)))
+    ff = np.abs(np.fft.fftshift(np.fft.fft2(fix * win)))
+    radius = min(shape) // 2
+    pm = warp_polar(fm, radius=radius, scaling="log", output_shape=(360, radius))
+    pf = warp_polar(ff, radius=radius, scaling="log", output_shape=(360, radius))
+    sh, _, _ = phase_cross_correlation(pf[:180], pm[:180], upsample_factor=10, normalization=None)
+    ang = np.deg2rad(sh[0])
+    klog = radius / np.log(radius)
+    scale = np.exp(sh[1] / klog)
+    best = None
+    # The spectrum's rotation is known up to 180 degrees: keep the turn that correlates better.
+    for a in (ang, ang + np.pi):
+        a = (a + np.pi) % (2 * np.pi) - np.pi
+        c = (np.array(shape) - 1) / 2
+        m = rot(-a) / scale
+        off = c - m @ c
+        turned = warp(mov, m, off)
+        t, _, _ = phase_cross_correlation(fix, turned, upsample_factor=10, normalization=None)
+        off2 = off - m @ t
+        r = np.corrcoef(warp(mov, m, off2).ravel(), fix.ravel())[0, 1]
+        if best is None or r > best[0]:
+            best = (r, m, off2)
+    return best[1], best[2]
+
+
+def min_mse(mov, fix):
+    c = (np.array(fix.shape) - 1) / 2
+
+    def rigid(p):
+        m = rot(p[0])
+        return m, c - m @ c + p[1:3]
+
+    def affine(p):
+        m = np.array([[1 + p[0], p[1]], [p[2], 1 + p[3]]])
+        return m, c - m @ c + p[4:6]
+
+    def cost(p, f):
+        m, off = f(p)
+        return np.mean((warp(mov, m, off) - fix) ** 2)
+
+    r = optimize.minimize(cost, np.zeros(3), args=(rigid,), method="Powell")
+    m0, off0 = rigid(r.x)
+    p0 = np.array([m0[0, 0] - 1, m0[0, 1], m0[1, 0], m0[1, 1] - 1, *(off0 - (c - m0 @ c))])
+    a = optimize.minimize(cost, p0, args=(affine,), method="Powell")
+    return affine(a.x)
+
+
+def bspline(mov, fix):
+    import SimpleITK as sitk
+
+    f = sitk.GetImageFromArray(fix.astype(np.float32))
+    m = sitk.GetImageFromArray(mov.astype(np.float32))
+    init = sitk.CenteredTransformInitializer(
+        f, m, sitk.AffineTransform(2), sitk.CenteredTransformInitializerFilter.MOMENTS
+    )
+    reg = sitk.ImageRegistrationMethod()
+    reg.SetMetricAsMeanSquares()
+    reg.SetInterpolator(sitk.sitkLinear)
+    reg.SetOptimizerAsRegularStepGradientDescent(1.0, 1e-4, 200)
+    reg.SetOptimizerScalesFromPhysicalShift()
+    reg.SetInitialTransform(init, inPlace=False)
+    aff = reg.Execute(f, m)
+    bs = sitk.BSplineTransformInitializer(f, [4, 4], order=3)
+    reg2 = sitk.ImageRegistrationMethod()
+    reg2.SetMetricAsMeanSquares()
+    reg2.SetInterpolator(sitk.sitkLinear)
+    reg2.SetOptimizerAsLBFGSB(gradientConvergenceTolerance=1e-5, numberOfIterations=100)
+    reg2.SetMovingInitialTransform(aff)
+    reg2.SetInitialTransform(bs, inPlace=True)
+    reg2.Execute(f, m)
+    total = sitk.CompositeTransform([aff, bs])
+    out = sitk.GetArrayFromImage(sitk.Resample(m, f, total, sitk.sitkLinear, 0.0))
+    mm = sitk.GetImageFromArray(mask_of(mov).astype(np.float32))
+    mk = sitk.GetArrayFromImage(sitk.Resample(mm, f, total, sitk.sitkLinear, 0.0)) >= 0.5
+    return out.astype(float), mk
+
+
+def pedomatch(mov, fix):
+    import pymodal
+
+    r = pymodal.register(mov[None], template_image=fix)
+    return r["peak"][0], r["mask"][0]
+
+
+def apply_map(method, mov, fix):
+    if method == "unregistered":
+        return mov, mask_of(mov)
+    if method == "bspline":
+        return bspline(mov, fix)
+    if method == "pedomatch":
+        return pedomatch(mov, fix)
+    m, off = {"principal": principal, "fft": fft, "min-mse": min_mse}[method](mov, fix)
+    reg = warp(mov, m, off)
+    mk = warp(mask_of(mov).astype(float), m, off) >= 0.5
+    return reg, mk
+
+
+def metrics(reg, mk, fix):
+    fm = mask_of(fix)
+    mse = float(np.mean((reg - fix) ** 2))
+    u = mk | fm
+    corr = float(np.corrcoef(reg[u], fix[u])[0, 1])
+    xor = 100.0 * float(np.count_nonzero(mk ^ fm)) / float(np.count_nonzero(fm))
+    return mse, corr, xor
+
+
+METHODS = ["unregistered", "principal", "fft", "min-mse", "bspline", "pedomatch"]
+
+
+def run(y, pairs, methods):
+    out = {}
+    for meth in methods:
+        rows = []
+        for a, b in pairs:
+            t0 = time.perf_counter()
+            reg, mk = apply_map(meth, y[a], y[b])
+            dt = time.perf_counter() - t0
+            rows.append((*metrics(reg, mk, y[b]), dt))
+        out[meth] = np.array(rows)
+    return out
+
+
+def table(title, res, markdown):
+    base = res["unregistered"]
+    head = ["method", "median MSE (kPa²)", "median correlation", "median mask XOR (%)",
+            "pairs with XOR worse than unregistered", "ms / registration"]
+    lines = []
+    for meth, r in res.items():
+        worse = int(np.sum(r[:, 2] > base[:, 2] + 1e-9))
+        lines.append([meth, f"{np.median(r[:, 0]):.0f}", f"{np.nanmedian(r[:, 1]):.3f}",
+                      f"{np.median(r[:, 2]):.1f}", f"{worse} of {len(r)}",
+                      f"{1000 * np.mean(r[:, 3]):.1f}"])
+    if markdown:
+        print(f"\n**{title}**\n")
+        print("| " + " | ".join(head) + " |")
+        print("|" + "---|" * len(head))
+        for ln in lines:
+            print("| " + " | ".join(ln) + " |")
+    else:
+        print(f"\n{title}")
+        print("  ".join(f"{h:>14}" for h in head))
+        for ln in lines:
+            print("  ".join(f"{c:>14}" for c in ln))
+
+
+def study_speed(y, markdown):
+    import pymodal
+
+    t0 = time.perf_counter()
+    r = pymodal.register(y, template="study")
+    dt = time.perf_counter() - t0
+    c = np.array([row["correlation"] for row in r["table"]])
+    x = np.array([row["mask_xor_pct"] for row in r["table"]])
+    msg = (f"{len(y)} peak images registered onto a study template (2 rounds, every core) in "
+           f"{dt:.1f} s; median correlation with the template {np.median(c):.3f}, median mask XOR "
+           f"{np.median(x):.1f} %")
+    print(("\n" if markdown else "\n") + msg)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--markdown", action="store_true")
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--methods", default=",".join(METHODS))
+    ap.add_argument("--halves", default="tune,held")
+    args = ap.parse_args()
+    y, _ = load()
+    methods = args.methods.split(",")
+    for half in args.halves.split(","):
+        subjects = TUNE if half == "tune" else HELD
+        name = "tuning, subjects 0-4" if half == "tune" else "held out, subjects 5-9"
+        within, between = pairs_of(subjects, args.quick)
+        table(f"Within subjects ({name}, {len(within)} pairs)", run(y, within, methods), args.markdown)
+        table(f"Between subjects ({name}, {len(between)} pairs)", run(y, between, methods), args.markdown)
+    if "pedomatch" in methods and not args.quick:
+        study_speed(y, args.markdown)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,757 @@
+//! Footprints registered across trials (docs/method.md, "Registering footprints"): each
+//! trial's images carried onto one template's grid, for pixel-wise statistics.
+//!
+//! Per trial: the whole-foot outline (the convex hull of every sensel its peak image loads,
+//! [`footprint`]), the template's outline matched onto it by modal matching (modal-core,
+//! the outline recipe) with a prior that a footprint never turns over (a candidate map that
+//! mirrors or turns by more than [`RegisterParams::max_turn`] is refused and the footprints
+//! aligned by centroid and size instead), the thin-plate [`CorrespondenceField`] of the
+//! matches (from the template's plane to the trial's), and every image of the trial sampled
+//! (bilinear) at the field's image of each template sensel. No files, no terminal: the front
+//! ends read the recordings and pedo-output writes the results.
+
+pub mod footprint;
+pub mod refine;
+
+use footprint::{bilinear, distance_to_polygon, hull_of_mask, loaded_mask};
+use modal_core::matching::prealign::rotation_angle;
+use modal_core::{Affine, CorrespondenceField, MatchOptions, MatchPair, Shape, Topology};
+use pedo_io::measures::Measures;
+use pedo_io::{IoError, Result};
+use rayon::prelude::*;
+
+modal_core::option_set! {
+    /// How footprints are registered (`pedomatch register`, `pymodal.register`): each option
+    /// declared here once.
+    RegisterParams {
+        let _d = ();
+        /// The template: `first`, `study`, `mun104` or a file.
+        template: String = "first".to_string();
+            Value, "first",
+            "The template every trial is registered onto: first (the first trial), study (a study template: the trials registered onto their median-sized trial, averaged, and registered again, template_rounds times), mun104 (the bundled MUN104 right-foot peak image of Pataky et al. 2011, 63 x 27 sensels; mun104-left for the left foot's) or a file (a recording, whose peak image is taken).";
+        /// Mirror every trial left-right before registering it.
+        mirror_left: bool = false;
+            Flag, false,
+            "Mirror every trial left-right before registering it: left feet onto a right-foot template.";
+        /// Largest turn of the template onto a trial, in degrees.
+        max_turn: f64 = 45.0;
+            Value, 45.0,
+            "Largest turn, in degrees, of the map of the template's outline onto a trial's: a footprint does not turn heel to toe. A map that turns further, or mirrors, is refused and the trial aligned by centroid and size alone (the fallback column of registration.csv).";
+        /// Nodes of each whole-foot outline.
+        outline_nodes: usize = 64;
+            Value, 64,
+            "Nodes of each whole-foot outline (the convex hull of every loaded sensel), evenly spaced.";
+        /// Smoothing of the thin-plate field, λ (0 interpolates the matches).
+        field_smoothing: f64 = 1.0;
+            Value, 1.0,
+            "Smoothing of the thin-plate field fitted to the outlines' matches (lambda, in sensels squared as scipy's RBFInterpolator smoothing); 0 interpolates them exactly.";
+        /// Rounds of the study template.
+        template_rounds: usize = 2;
+            Value, 2,
+            "Rounds of the study template (template study): register, average, register again.";
+        /// Refine each map by the images' intensities.
+        refine_intensity: bool = true;
+            NegatedFlag, true,
+            "Refine each trial's map by the images: a rigid correction (turn and shift) of the outline's field that lowers the mean squared difference of the peak images (Levenberg-Marquardt, on the images blurred by 1.5 sensels, then as they are). --no-refine-intensity registers by the outlines alone.";
+        /// A sensel is part of a footprint above this peak value.
+        foot_threshold: f64 = 0.0;
+            Value, 0.0,
+            "A sensel belongs to a footprint when its peak value is above this (the file's units).";
+    }
+}
+
+impl RegisterParams {
+    /// Checks every value.
+    pub fn validate(&self) -> std::result::Result<(), modal_core::OptionError> {
+        use modal_core::OptionError;
+        if !(self.max_turn.is_finite() && (0.0..=180.0).contains(&self.max_turn)) {
+            return Err(OptionError::new(
+                "max_turn",
+                self.max_turn,
+                "a number of degrees in [0, 180]",
+            ));
+        }
+        if self.outline_nodes < 8 {
+            return Err(OptionError::new(
+                "outline_nodes",
+                self.outline_nodes,
+                "an integer >= 8",
+            ));
+        }
+        if !(self.field_smoothing.is_finite() && self.field_smoothing >= 0.0) {
+            return Err(OptionError::new(
+                "field_smoothing",
+                self.field_smoothing,
+                "a finite number >= 0",
+            ));
+        }
+        if !self.foot_threshold.is_finite() {
+            return Err(OptionError::new(
+                "foot_threshold",
+                self.foot_threshold,
+                "a finite number",
+            ));
+        }
+        if self.template.trim().is_empty() {
+            return Err(OptionError::new(
+                "template",
+                "''",
+                "first, study, mun104, mun104-left or a file",
+            ));
+        }
+        Ok(())
+    }
+
+    /// What [`template`](Self::template) names.
+    pub fn template_source(&self) -> TemplateName {
+        match self.template.trim() {
+            "first" => TemplateName::First,
+            "study" => TemplateName::Study,
+            "mun104" | "mun104-right" => TemplateName::Mun104Right,
+            "mun104-left" => TemplateName::Mun104Left,
+            other => TemplateName::File(other.into()),
+        }
+    }
+}
+
+/// The register options' declarations ([`RegisterParams`]).
+pub fn register_option_specs() -> Vec<modal_core::OptionSpec> {
+    RegisterParams::specs()
+}
+
+/// What a `template` option names.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TemplateName {
+    /// The first trial.
+    First,
+    /// A study template, built from the trials.
+    Study,
+    /// The bundled MUN104 right-foot template.
+    Mun104Right,
+    /// The bundled MUN104 left-foot template.
+    Mun104Left,
+    /// A file, read by the front end.
+    File(std::path::PathBuf),
+}
+
+/// The images of one footprint, `rows × cols` row-major (NaN: no sensor, read as 0): the peak
+/// image always, the pressure-time integral and the mean pressure when the trial is a recording.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FootImages {
+    /// Rows of the grid.
+    pub rows: usize,
+    /// Columns of the grid.
+    pub cols: usize,
+    /// Peak pressure per sensel.
+    pub peak: Vec<f64>,
+    /// Pressure-time integral per sensel, when known.
+    pub pti: Option<Vec<f64>>,
+    /// Mean pressure over each sensel's loaded frames, when known.
+    pub mean: Option<Vec<f64>>,
+}
+
+impl FootImages {
+    /// A footprint of its peak image alone.
+    ///
+    /// # Errors
+    /// [`IoError::InvalidInput`] for an empty grid, a length other than `rows × cols` or an
+    /// infinite value.
+    pub fn from_peak(rows: usize, cols: usize, peak: Vec<f64>) -> Result<Self> {
+        let f = Self {
+            rows,
+            cols,
+            peak,
+            pti: None,
+            mean: None,
+        };
+        f.check()?;
+        Ok(f)
+    }
+
+    /// The peak, PTI and mean images of a recording's measures.
+    pub fn from_measures(m: &Measures) -> Self {
+        Self {
+            rows: m.rows,
+            cols: m.cols,
+            peak: m.peak.clone(),
+            pti: Some(m.pti.clone()),
+            mean: Some(m.mean.clone()),
+        }
+    }
+
+    /// The peak, PTI and mean images of every frame of a recording (a sensel loaded above 0:
+    /// one footprint per recording).
+    ///
+    /// # Errors
+    /// [`IoError::NoObject`] for a recording without any load (no footprint);
+    /// [`IoError::InvalidInput`] for one without frames.
+    pub fn of_recording(recording: &pedo_io::Recording) -> Result<Self> {
+        if recording.n_frames() > 0 && !recording.peak_image().data().iter().any(|&v| v > 0.0) {
+            return Err(IoError::no_object(
+                "no sensel is loaded in any frame: there is no footprint to register",
+            ));
+        }
+        let m = Measures::of_recording(recording, 0.0, 0..recording.n_frames())?;
+        Ok(Self::from_measures(&m))
+    }
+
+    fn check(&self) -> Result<()> {
+        if self.rows == 0 || self.cols == 0 {
+            return Err(IoError::invalid(format!(
+                "a footprint image of {} x {} sensels is empty",
+                self.rows, self.cols
+            )));
+        }
+        for (name, layer) in self.layers() {
+            if layer.len() != self.rows * self.cols {
+                return Err(IoError::invalid(format!(
+                    "the {name} image holds {} values, not {} x {}",
+                    layer.len(),
+                    self.rows,
+                    self.cols
+                )));
+            }
+            if layer.iter().any(|v| v.is_infinite()) {
+                return Err(IoError::invalid(format!(
+                    "the {name} image holds an infinite value"
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// The images held, named (`peak`, `pti`, `mean`).
+    pub fn layers(&self) -> Vec<(&'static str, &[f64])> {
+        let mut out = vec![("peak", self.peak.as_slice())];
+        if let Some(p) = &self.pti {
+            out.push(("pti", p.as_slice()));
+        }
+        if let Some(m) = &self.mean {
+            out.push(("mean", m.as_slice()));
+        }
+        out
+    }
+
+    /// The footprint mirrored left-right (column `c` to `cols − 1 − c`).
+    pub fn mirrored(&self) -> Self {
+        let flip = |v: &[f64]| -> Vec<f64> {
+            v.chunks_exact(self.cols)
+                .flat_map(|row| row.iter().rev().copied())
+                .collect()
+        };
+        Self {
+            rows: self.rows,
+            cols: self.cols,
+            peak: flip(&self.peak),
+            pti: self.pti.as_deref().map(flip),
+            mean: self.mean.as_deref().map(flip),
+        }
+    }
+}
+
+/// The bundled MUN104 peak-pressure template (Pataky, Bosch & Rosenbaum 2011, MIT; 63 × 27
+/// sensels), of the right foot or the left.
+pub fn mun104(right: bool) -> FootImages {
+    let text = if right {
+        include_str!("../data/MUN104R.csv")
+    } else {
+        include_str!("../data/MUN104L.csv")
+    };
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.trim().parse::<f64>().unwrap_or(0.0))
+                .collect()
+        })
+        .collect();
+    let cols = rows.first().map_or(0, Vec::len);
+    FootImages {
+        rows: rows.len(),
+        cols,
+        peak: rows.concat(),
+        pti: None,
+        mean: None,
+    }
+}
+
+/// A template: its images, its footprint mask and whole-foot outline.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Template {
+    /// The template's images (a study template: the means of the registered trials).
+    pub images: FootImages,
+    /// Its footprint: the sensels loaded above the threshold (a study template: those of at
+    /// least half of the registered trials).
+    pub mask: Vec<bool>,
+    /// Its whole-foot outline, `outline_nodes` points.
+    pub outline: Vec<[f64; 2]>,
+}
+
+impl Template {
+    /// The template of `images` with footprint `mask`.
+    ///
+    /// # Errors
+    /// [`IoError::NoObject`] when the mask loads fewer than 3 sensels or no area.
+    pub fn with_mask(images: FootImages, mask: Vec<bool>, nodes: usize) -> Result<Self> {
+        images.check()?;
+        let outline = outline_of(&mask, images.rows, images.cols, nodes)
+            .map_err(|e| e.of_input("the template"))?;
+        Ok(Self {
+            images,
+            mask,
+            outline,
+        })
+    }
+
+    /// The template of `images`, its footprint the sensels whose peak is above `threshold`.
+    ///
+    /// # Errors
+    /// As [`with_mask`](Self::with_mask).
+    pub fn of_images(images: FootImages, threshold: f64, nodes: usize) -> Result<Self> {
+        let mask = loaded_mask(&images.peak, threshold);
+        Self::with_mask(images, mask, nodes)
+    }
+}
+
+fn outline_of(mask: &[bool], rows: usize, cols: usize, nodes: usize) -> Result<Vec<[f64; 2]>> {
+    let hull = hull_of_mask(mask, rows, cols)?;
+    pedo_io::contour::resample_closed(&hull, nodes)
+}
+
+/// One trial registered onto the template: its images on the template's grid, its footprint
+/// there, the map of the match and the quality of the registration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Registration {
+    /// The trial's images sampled on the template's grid.
+    pub images: FootImages,
+    /// The trial's footprint on the template's grid.
+    pub mask: Vec<bool>,
+    /// The affine map of the match, template sensels to the trial's: `x' = M x + t`.
+    pub affine: [[f64; 3]; 2],
+    /// The turn of that map, in degrees (signed, counter-clockwise in (column, row)).
+    pub turn_deg: f64,
+    /// Its scale, `√det M`.
+    pub scale: f64,
+    /// Whether the match was refused by the prior (it mirrored or turned further than
+    /// `max_turn`) and the trial aligned by centroid and size alone.
+    pub fallback: bool,
+    /// RMS distance, in the trial's sensels, from the field's image of each template outline
+    /// node to the trial's outline.
+    pub residual_sensels: f64,
+    /// Sensels in one footprint but not the other (template and registered trial), as a
+    /// percentage of the template's footprint.
+    pub mask_xor_pct: f64,
+    /// Pearson correlation of the registered peak image with the template's over the union of
+    /// the two footprints; `None` when one of them is constant there.
+    pub correlation: Option<f64>,
+}
+
+/// Every trial of a study registered onto one template.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyRegistration {
+    /// The template the trials were registered onto.
+    pub template: Template,
+    /// One registration per trial, in the trials' order.
+    pub trials: Vec<Registration>,
+}
+
+/// The blurs (Gaussian σ, sensels) of the intensity refinement's stages, coarse to fine.
+const REFINE_BLURS: [f64; 2] = [1.5, 0.0];
+/// Levenberg–Marquardt iterations per stage (at most; fewer when a step no longer helps).
+const REFINE_ITERATIONS: usize = 20;
+
+/// Where the template comes from, once the front end has read any file.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TemplateSource {
+    /// One of the trials (after mirroring, when the trials are mirrored).
+    Trial(usize),
+    /// A study template built from the trials in `rounds` rounds.
+    Study {
+        /// Rounds of register-and-average.
+        rounds: usize,
+    },
+    /// Given images (a file's peak image, the bundled template).
+    Images(FootImages),
+}
+
+impl RegisterParams {
+    /// The source of the template of these options with a file's images, when it names a file
+    /// (`read` reads it).
+    ///
+    /// # Errors
+    /// What `read` returns.
+    pub fn resolve_template(
+        &self,
+        read: impl FnOnce(&std::path::Path) -> Result<FootImages>,
+    ) -> Result<TemplateSource> {
+        Ok(match self.template_source() {
+            TemplateName::First => TemplateSource::Trial(0),
+            TemplateName::Study => TemplateSource::Study {
+                rounds: self.template_rounds,
+            },
+            TemplateName::Mun104Right => TemplateSource::Images(mun104(true)),
+            TemplateName::Mun104Left => TemplateSource::Images(mun104(false)),
+            TemplateName::File(p) => TemplateSource::Images(read(&p)?),
+        })
+    }
+}
+
+/// Registers every trial onto the template `source` names, the trials in parallel on the rayon
+/// pool.
+///
+/// # Errors
+/// [`IoError::InvalidInput`] for no trials, a trial index beyond them or invalid images;
+/// [`IoError::NoObject`] for a footprint with fewer than 3 loaded sensels (naming the trial);
+/// [`IoError::Option`] for an invalid option; a field that cannot be fitted
+/// ([`IoError::Shape`]).
+pub fn register_trials(
+    trials: &[FootImages],
+    source: &TemplateSource,
+    params: &RegisterParams,
+) -> Result<StudyRegistration> {
+    params.validate()?;
+    if trials.is_empty() {
+        return Err(IoError::invalid("no trials to register".to_string()));
+    }
+    for (i, t) in trials.iter().enumerate() {
+        t.check().map_err(|e| e.of_input(&format!("trial {i}")))?;
+    }
+    let trials: Vec<FootImages> = if params.mirror_left {
+        trials.iter().map(FootImages::mirrored).collect()
+    } else {
+        trials.to_vec()
+    };
+    let prepared: Vec<Prepared> = trials
+        .par_iter()
+        .enumerate()
+        .map(|(i, t)| Prepared::new(t, params).map_err(|e| e.of_input(&format!("trial {i}"))))
+        .collect::<Result<_>>()?;
+    let template = match source {
+        TemplateSource::Trial(i) => {
+            let t = trials.get(*i).ok_or_else(|| {
+                IoError::invalid(format!(
+                    "template trial {i} is beyond the {}",
+                    pedo_io::counted(trials.len(), "trial")
+                ))
+            })?;
+            Template::of_images(t.clone(), params.foot_threshold, params.outline_nodes)?
+        }
+        TemplateSource::Images(images) => {
+            Template::of_images(images.clone(), params.foot_threshold, params.outline_nodes)?
+        }
+        TemplateSource::Study { rounds } => {
+            // Start from the trial of median footprint area: neither the smallest nor the
+            // largest foot decides the grid's shape.
+            let mut order: Vec<usize> = (0..trials.len()).collect();
+            order.sort_by_key(|&i| prepared[i].area);
+            let start = order[order.len() / 2];
+            let mut template = Template::of_images(
+                trials[start].clone(),
+                params.foot_threshold,
+                params.outline_nodes,
+            )?;
+            for _ in 0..*rounds {
+                let regs = register_prepared(&prepared, &template, params)?;
+                template = average_template(&regs, &template, params.outline_nodes)?;
+            }
+            template
+        }
+    };
+    let regs = register_prepared(&prepared, &template, params)?;
+    Ok(StudyRegistration {
+        template,
+        trials: regs,
+    })
+}
+
+/// Registers one trial onto `template`.
+///
+/// # Errors
+/// As [`register_trials`].
+pub fn register_one(
+    trial: &FootImages,
+    template: &Template,
+    params: &RegisterParams,
+) -> Result<Registration> {
+    params.validate()?;
+    trial.check()?;
+    let trial = if params.mirror_left {
+        trial.mirrored()
+    } else {
+        trial.clone()
+    };
+    let p = Prepared::new(&trial, params)?;
+    register_with(&p, template, params)
+}
+
+/// A trial with its outline.
+struct Prepared<'a> {
+    images: std::borrow::Cow<'a, FootImages>,
+    mask: Vec<bool>,
+    outline: Vec<[f64; 2]>,
+    area: usize,
+}
+
+impl<'a> Prepared<'a> {
+    fn new(t: &'a FootImages, params: &RegisterParams) -> Result<Self> {
+        let mask = loaded_mask(&t.peak, params.foot_threshold);
+        let outline = outline_of(&mask, t.rows, t.cols, params.outline_nodes)?;
+        let area = mask.iter().filter(|&&m| m).count();
+        Ok(Self {
+            images: std::borrow::Cow::Borrowed(t),
+            mask,
+            outline,
+            area,
+        })
+    }
+}
+
+fn register_prepared(
+    prepared: &[Prepared<'_>],
+    template: &Template,
+    params: &RegisterParams,
+) -> Result<Vec<Registration>> {
+    prepared
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| {
+            register_with(p, template, params).map_err(|e| e.of_input(&format!("trial {i}")))
+        })
+        .collect()
+}
+
+/// The mean of registered trials as a template: mean images, the sensels of at least half of
+/// the trials' footprints.
+fn average_template(regs: &[Registration], like: &Template, nodes: usize) -> Result<Template> {
+    let (rows, cols) = (like.images.rows, like.images.cols);
+    let n = regs.len() as f64;
+    let mean_of = |get: &dyn Fn(&Registration) -> Option<&Vec<f64>>| -> Option<Vec<f64>> {
+        let mut acc = vec![0.0; rows * cols];
+        for r in regs {
+            for (a, v) in acc.iter_mut().zip(get(r)?) {
+                *a += v / n;
+            }
+        }
+        Some(acc)
+    };
+    let peak = mean_of(&|r| Some(&r.images.peak)).unwrap_or_default();
+    let pti = mean_of(&|r| r.images.pti.as_ref());
+    let mean = mean_of(&|r| r.images.mean.as_ref());
+    let mut votes = vec![0usize; rows * cols];
+    for r in regs {
+        for (v, &m) in votes.iter_mut().zip(&r.mask) {
+            *v += usize::from(m);
+        }
+    }
+    let mask = votes.iter().map(|&v| 2 * v >= regs.len()).collect();
+    Template::with_mask(
+        FootImages {
+            rows,
+            cols,
+            peak,
+            pti,
+            mean,
+        },
+        mask,
+        nodes,
+    )
+}
+
+/// The map of the outline match, or the centroid-and-size alignment when the prior refuses it,
+/// with the pairs a field is fitted to.
+fn outline_map(
+    template: &[[f64; 2]],
+    trial: &[[f64; 2]],
+    params: &RegisterParams,
+) -> Result<(Shape, Vec<MatchPair>, Affine, bool)> {
+    let a = Shape::from_points_2d(template, Topology::ClosedContour)?;
+    let b = Shape::from_points_2d(trial, Topology::ClosedContour)?;
+    let mut opts = MatchOptions::for_outlines();
+    opts.rotation_search.max_rotation = Some(params.max_turn);
+    let accepted = match modal_core::match_shapes(&a, &b, &opts) {
+        Ok(m) => {
+            let t = m.transform;
+            let ok = t.det() > 0.0 && rotation_angle(&t) <= params.max_turn + 1e-6;
+            let pairs: Vec<MatchPair> = m.pairs.into_iter().filter(|p| !p.excess).collect();
+            (ok && pairs.len() >= 3).then_some((pairs, t))
+        }
+        Err(_) => None,
+    };
+    if let Some((pairs, t)) = accepted {
+        return Ok((b, pairs, t, false));
+    }
+    // The prior's fallback: centroids onto each other, RMS radii equal, no turn; the field is
+    // then that map (the template's nodes and their images as pairs).
+    let stats = |p: &[[f64; 2]]| {
+        let n = p.len() as f64;
+        let c = [
+            p.iter().map(|q| q[0]).sum::<f64>() / n,
+            p.iter().map(|q| q[1]).sum::<f64>() / n,
+        ];
+        let r = (p
+            .iter()
+            .map(|q| (q[0] - c[0]).powi(2) + (q[1] - c[1]).powi(2))
+            .sum::<f64>()
+            / n)
+            .sqrt();
+        (c, r)
+    };
+    let ((ca, ra), (cb, rb)) = (stats(template), stats(trial));
+    let s = rb / ra;
+    let mut t = Affine::identity(2);
+    t.m[0][0] = s;
+    t.m[1][1] = s;
+    t.t[0] = cb[0] - s * ca[0];
+    t.t[1] = cb[1] - s * ca[1];
+    let mapped: Vec<[f64; 2]> = template
+        .iter()
+        .map(|q| [s * q[0] + t.t[0], s * q[1] + t.t[1]])
+        .collect();
+    let pairs = (0..template.len())
+        .map(|i| MatchPair {
+            a: i,
+            b: i,
+            cost: 0.0,
+            excess: false,
+        })
+        .collect();
+    Ok((
+        Shape::from_points_2d(&mapped, Topology::ClosedContour)?,
+        pairs,
+        t,
+        true,
+    ))
+}
+
+fn register_with(
+    p: &Prepared<'_>,
+    template: &Template,
+    params: &RegisterParams,
+) -> Result<Registration> {
+    let a = Shape::from_points_2d(&template.outline, Topology::ClosedContour)?;
+    let (b, pairs, t, fallback) = outline_map(&template.outline, &p.outline, params)?;
+    let field = CorrespondenceField::fit(&a, &b, &pairs, params.field_smoothing)?;
+    let (rows, cols) = (template.images.rows, template.images.cols);
+    let centres: Vec<[f64; 2]> = (0..rows * cols)
+        .map(|i| [(i % cols) as f64, (i / cols) as f64])
+        .collect();
+    let src = &p.images;
+    let mut at = field.apply(&centres);
+    let correction = if params.refine_intensity {
+        refine::refine_map(
+            &at,
+            refine::GridImage {
+                rows,
+                cols,
+                values: &template.images.peak,
+            },
+            refine::GridImage {
+                rows: src.rows,
+                cols: src.cols,
+                values: &src.peak,
+            },
+            &REFINE_BLURS,
+            REFINE_ITERATIONS,
+            &refine::RIGID_DIRECTIONS,
+        )
+    } else {
+        refine::PlaneAffine::identity([0.0, 0.0])
+    };
+    for q in &mut at {
+        *q = correction.apply(*q);
+    }
+    let sample = |v: &[f64]| -> Vec<f64> {
+        at.iter()
+            .map(|q| bilinear(v, src.rows, src.cols, q[0], q[1]))
+            .collect()
+    };
+    let images = FootImages {
+        rows,
+        cols,
+        peak: sample(&src.peak),
+        pti: src.pti.as_deref().map(sample),
+        mean: src.mean.as_deref().map(sample),
+    };
+    let mask_f: Vec<f64> = p.mask.iter().map(|&m| f64::from(u8::from(m))).collect();
+    let mask: Vec<bool> = sample(&mask_f).iter().map(|&v| v >= 0.5).collect();
+    let residual_sensels = {
+        let moved: Vec<[f64; 2]> = field
+            .apply(&template.outline)
+            .into_iter()
+            .map(|q| correction.apply(q))
+            .collect();
+        (moved
+            .iter()
+            .map(|&q| distance_to_polygon(q, &p.outline).powi(2))
+            .sum::<f64>()
+            / moved.len() as f64)
+            .sqrt()
+    };
+    let tpl_area = template.mask.iter().filter(|&&m| m).count().max(1);
+    let xor = mask
+        .iter()
+        .zip(&template.mask)
+        .filter(|(a, b)| a != b)
+        .count();
+    let correlation = correlation_over(
+        &images.peak,
+        &template.images.peak,
+        mask.iter().zip(&template.mask).map(|(a, b)| *a || *b),
+    );
+    // The map reported: the correction after the match's map.
+    let (cm, cb) = correction.as_linear();
+    let mut t = t;
+    let (m0, t0) = (t.m, t.t);
+    for (r, row) in cm.iter().enumerate() {
+        t.m[r][0] = row[0] * m0[0][0] + row[1] * m0[1][0];
+        t.m[r][1] = row[0] * m0[0][1] + row[1] * m0[1][1];
+        t.t[r] = row[0] * t0[0] + row[1] * t0[1] + cb[r];
+    }
+    let det = t.m[0][0] * t.m[1][1] - t.m[0][1] * t.m[1][0];
+    Ok(Registration {
+        images,
+        mask,
+        affine: [
+            [t.m[0][0], t.m[0][1], t.t[0]],
+            [t.m[1][0], t.m[1][1], t.t[1]],
+        ],
+        turn_deg: (t.m[1][0] - t.m[0][1])
+            .atan2(t.m[0][0] + t.m[1][1])
+            .to_degrees(),
+        scale: det.abs().sqrt(),
+        fallback,
+        residual_sensels,
+        mask_xor_pct: 100.0 * xor as f64 / tpl_area as f64,
+        correlation,
+    })
+}
+
+/// Pearson correlation of `a` and `b` (NaN read as 0) over the sensels `keep` selects; `None`
+/// when fewer than 2 are kept or either is constant there.
+pub fn correlation_over(a: &[f64], b: &[f64], keep: impl Iterator<Item = bool>) -> Option<f64> {
+    let z = |v: f64| if v.is_nan() { 0.0 } else { v };
+    let pts: Vec<(f64, f64)> = a
+        .iter()
+        .zip(b)
+        .zip(keep)
+        .filter(|(_, k)| *k)
+        .map(|((&x, &y), _)| (z(x), z(y)))
+        .collect();
+    if pts.len() < 2 {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let (mx, my) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (x, y) in pts {
+        sxy += (x - mx) * (y - my);
+        sxx += (x - mx).powi(2);
+        syy += (y - my).powi(2);
+    }
+    let r = sxy / (sxx * syy).sqrt();
+    r.is_finite().then_some(r)
+}
