@@ -329,6 +329,32 @@ impl LabelMask {
     }
 }
 
+/// The sensels (row-major, `rows × cols`) whose centres lie inside the closed `outline`
+/// (x = column, y = row, in sensels): a followed region's outline rasterised.
+pub fn polygon_cells(rows: usize, cols: usize, outline: &[[f64; 2]]) -> Vec<bool> {
+    let mut cells = vec![false; rows * cols];
+    let (lo, hi) = outline.iter().fold(
+        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+        |(lo, hi), p| {
+            (
+                [lo[0].min(p[0]), lo[1].min(p[1])],
+                [hi[0].max(p[0]), hi[1].max(p[1])],
+            )
+        },
+    );
+    let span = |lo: f64, hi: f64, n: usize| {
+        let first = lo.ceil().clamp(0.0, n as f64) as usize;
+        let last = (hi.floor() + 1.0).clamp(0.0, n as f64) as usize;
+        first..last.max(first)
+    };
+    for r in span(lo[1], hi[1], rows) {
+        for c in span(lo[0], hi[0], cols) {
+            cells[r * cols + c] = crate::contour::point_in_polygon([c as f64, r as f64], outline);
+        }
+    }
+    cells
+}
+
 fn label_of(v: f64) -> Option<u32> {
     (v.is_finite() && v >= 0.0 && v.fract() == 0.0 && v <= u32::MAX as f64).then_some(v as u32)
 }

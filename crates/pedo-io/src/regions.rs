@@ -683,6 +683,155 @@ impl RegionSeries {
     }
 }
 
+/// The per-frame force and contact of regions whose sensels change from frame to frame (regions
+/// that move with the foot, followed through the stance): fed one frame at a time with each
+/// region's sensels on it ([`add_frame`](Self::add_frame)); [`finish`](Self::finish) gives each
+/// region's values as [`RegionSeries`] does for fixed ones, the images' values (peak pressure,
+/// PTI) taken per sensel over the frames it lies in the region only.
+#[derive(Debug, Clone)]
+pub struct MovingRegionSeries {
+    names: Vec<String>,
+    mask: Vec<bool>,
+    threshold: f64,
+    force_factor: f64,
+    pressure_factor: f64,
+    area: f64,
+    dt: f64,
+    forces: Vec<Vec<f64>>,
+    contact: Vec<usize>,
+    sensels: Vec<usize>,
+    peak: Vec<f64>,
+    /// Per region, per sensel, the sum of its loaded values over the frames it lay in the region.
+    sums: Vec<Vec<f64>>,
+}
+
+impl MovingRegionSeries {
+    /// Starts the series of the regions `names` over frames of `recording` (its mask, pitch,
+    /// rate and units), a sensel loaded above 0 and at or above `threshold` (file units).
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when `threshold` is not finite.
+    pub fn new(recording: &Recording, threshold: f64, names: &[String]) -> Result<Self> {
+        if !threshold.is_finite() {
+            return Err(IoError::invalid(format!(
+                "contact threshold {threshold} is not finite"
+            )));
+        }
+        let area = recording.sensel_area();
+        let n = recording.rows() * recording.cols();
+        Ok(Self {
+            names: names.to_vec(),
+            mask: recording.sensor_mask().to_vec(),
+            threshold,
+            force_factor: recording.force_factor().unwrap_or(area.unwrap_or(1.0)),
+            pressure_factor: crate::recording::kpa_per_unit(&recording.units).unwrap_or(1.0),
+            area: area.unwrap_or(1.0),
+            dt: recording.dt_s.unwrap_or(1.0),
+            forces: vec![Vec::new(); names.len()],
+            contact: vec![0; names.len()],
+            sensels: vec![0; names.len()],
+            peak: vec![0.0; names.len()],
+            sums: vec![vec![0.0; n]; names.len()],
+        })
+    }
+
+    /// Adds the next frame (`rows × cols` values in the file's units) with each region's
+    /// sensels on it (row-major; `None`: the region is not on this frame, its force 0).
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when `values` or a region's sensels are not `rows × cols`
+    /// long, or `cells` does not hold one entry per region.
+    pub fn add_frame(&mut self, values: &[f32], cells: &[Option<Vec<bool>>]) -> Result<()> {
+        let n = self.mask.len();
+        if values.len() != n || cells.len() != self.names.len() {
+            return Err(IoError::invalid(format!(
+                "a frame needs {n} values and the sensels of {} regions, got {} and {}",
+                self.names.len(),
+                values.len(),
+                cells.len()
+            )));
+        }
+        for (k, region) in cells.iter().enumerate() {
+            let (mut load, mut count, mut held) = (0.0f64, 0usize, 0usize);
+            if let Some(region) = region {
+                if region.len() != n {
+                    return Err(IoError::invalid(format!(
+                        "region {} holds {} sensels' flags, the frame {n}",
+                        self.names[k],
+                        region.len()
+                    )));
+                }
+                for i in (0..n).filter(|&i| region[i] && self.mask[i]) {
+                    held += 1;
+                    let v = f64::from(values[i]);
+                    if !v.is_finite() {
+                        continue;
+                    }
+                    self.peak[k] = self.peak[k].max(v);
+                    if v > 0.0 && v >= self.threshold {
+                        load += v;
+                        count += 1;
+                        self.sums[k][i] += v;
+                    }
+                }
+            }
+            self.forces[k].push(load * self.force_factor);
+            self.contact[k] = self.contact[k].max(count);
+            self.sensels[k] = self.sensels[k].max(held);
+        }
+        Ok(())
+    }
+
+    /// Each region's values ([`RegionValues`]; `sensels` is the most it held on a frame), its
+    /// share of `total_fti`, the footprint's force-time integral (that of the fixed regions,
+    /// so that fixed and moving shares compare).
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when no frame was added or `total_fti` is not above 0.
+    pub fn finish(self, total_fti: f64) -> Result<Vec<RegionValues>> {
+        if self.forces.first().is_none_or(Vec::is_empty) {
+            return Err(IoError::invalid("no frame to measure the moving regions on"));
+        }
+        if total_fti.is_nan() || total_fti <= 0.0 {
+            return Err(IoError::invalid(
+                "the footprint has no impulse for the moving regions to share",
+            ));
+        }
+        let (k, dt) = (self.pressure_factor, self.dt);
+        let mut out = Vec::with_capacity(self.names.len());
+        for (r, name) in self.names.iter().enumerate() {
+            let f = &self.forces[r];
+            let fti = f.iter().sum::<f64>() * dt;
+            let (lo, hi) = f.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &x| {
+                (lo.min(x), hi.max(x))
+            });
+            let contact_time = if hi > 0.0 {
+                let threshold = lo + CONTACT_FORCE_FRACTION * (hi - lo);
+                let a = f.iter().position(|&x| x > threshold).unwrap_or(0);
+                let b = f.iter().rposition(|&x| x > threshold).unwrap_or(a);
+                (b - a + 1) as f64 * dt
+            } else {
+                0.0
+            };
+            out.push(RegionValues {
+                name: name.clone(),
+                sensels: self.sensels[r],
+                peak_pressure: self.peak[r] * k,
+                pti_max: self.sums[r].iter().fold(0.0f64, |m, &s| m.max(s)) * k * dt,
+                peak_force: hi,
+                fti,
+                max_contact_area: self.contact[r] as f64 * self.area,
+                contact_time,
+                impulse_share: 100.0 * fti / total_fti,
+            });
+        }
+        Ok(out)
+    }
+}
+
 /// The automatic regions of `recording`'s frames `frames` by `rule`, and their values: the
 /// footprint is every sensel loaded in some frame (its PTI above 0), weighted by its peak
 /// pressure; the centre of pressure's path tells heel from toe.
