@@ -440,12 +440,13 @@ pub fn points_table(
 /// The user's regions ([`pedo_track::UserInputs::regions`]) through the run, two rows per region
 /// and frame on which it is followed: `kind` `moving`, the region carried by the field (the
 /// sensels whose centres lie inside its followed outline), and `fixed`, the mask's own sensels
-/// on that frame. Columns: `region` (its label), `kind`, `frame`, `time_s`, `sensels` (existing
-/// sensors in the region) and its area (`area_mm2`, or `area_sensels` without a pitch), then
-/// the measures of its sensels as `frames.csv` gives a frame's (contact sensors and area,
-/// total force or load, peak pressure, centre of pressure in sensels and mm, named by the
-/// units known) and the mean pressure of its contact sensors (`mean_pressure_kpa`, or
-/// `mean_pressure` in the file's units).
+/// on that frame. Columns ([`region_series_header`]): `region` (its label), `kind`, `frame`,
+/// `time_s`, `sensels` (existing sensors in the region) and its area (`area_mm2`, or
+/// `area_sensels` without a pitch), then the measures of its sensels as `frames.csv` gives a
+/// frame's (contact sensors and area, total force or load, peak pressure, centre of pressure in
+/// sensels and mm, named by the units known) and the mean pressure of its contact sensors
+/// (`mean_pressure_kpa`, or `mean_pressure` in the file's units); `name` and `stance` are those
+/// of the anatomical regions ([`crate::moving_regions`]), empty for the user's.
 ///
 /// # Errors
 /// A frame the recording cannot give.
@@ -457,24 +458,7 @@ pub fn regions_table(
     threshold: f64,
 ) -> pedo_io::Result<Table> {
     use pedo_track::follow::Seeded;
-    let mut t = Table::new(&["region", "kind", "frame"]);
-    if recording.dt_s.is_some() {
-        t.push_column("time_s");
-    }
-    t.push_column("sensels");
-    t.push_column(match recording.sensel_area() {
-        Some(_) => "area_mm2",
-        None => "area_sensels",
-    });
-    push_measure_columns(&mut t, recording);
-    let (mean, per_unit) = match kpa_per_unit(&recording.units) {
-        Some(k) => ("mean_pressure_kpa", k),
-        None => ("mean_pressure", 1.0),
-    };
-    t.push_column(mean);
-    let u = measure_units(recording);
-    let area = recording.sensel_area().unwrap_or(1.0);
-    let sensors = recording.sensor_mask();
+    let mut t = region_series_header(recording);
     for (k, region) in inputs.regions.iter().enumerate() {
         // The region's followed outline per frame, its points in outline order.
         let mut by_frame: std::collections::BTreeMap<usize, Vec<[f64; 2]>> = Default::default();
@@ -487,58 +471,110 @@ pub fn regions_table(
             let grid = recording.frame(frame)?;
             let moving = raster(recording, &outline);
             for (kind, cells) in [("moving", &moving), ("fixed", &region.cells)] {
-                let n = (cells.iter().zip(sensors))
-                    .filter(|(c, s)| **c && **s)
-                    .count();
-                let m = recording.cells_measures(&grid, threshold, cells);
-                let mut row = vec![
-                    Cell::int(region.label as usize),
-                    Cell::Text(kind.to_string()),
-                    Cell::int(frame),
-                ];
-                if recording.dt_s.is_some() {
-                    row.push(Cell::opt(recording.time_s(frame), 6));
-                }
-                row.push(Cell::int(n));
-                row.push(Cell::Float(n as f64 * area, 4));
-                push_measures(&mut row, recording, &u, Some(&m));
-                // The mean of the contact sensors' values: the load over their count.
-                let load = m.total_force / recording.force_factor().unwrap_or(area);
-                row.push(match m.contact_sensors {
-                    0 => Cell::Empty,
-                    c => Cell::Float(load / c as f64 * per_unit, 4),
-                });
-                t.rows.push(row);
+                let id = RegionId {
+                    label: region.label as usize,
+                    kind,
+                    name: None,
+                    stance: None,
+                };
+                t.rows.push(region_series_row(
+                    recording,
+                    &id,
+                    frame,
+                    Some((&grid, cells.as_slice())),
+                    threshold,
+                ));
             }
         }
     }
     Ok(t)
 }
 
-/// The sensels (row-major) whose centres lie inside the closed `outline` (sensels).
-fn raster(recording: &Recording, outline: &[[f64; 2]]) -> Vec<bool> {
-    let (rows, cols) = (recording.rows(), recording.cols());
-    let mut cells = vec![false; rows * cols];
-    let (lo, hi) = outline.iter().fold(
-        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
-        |(lo, hi), p| {
-            (
-                [lo[0].min(p[0]), lo[1].min(p[1])],
-                [hi[0].max(p[0]), hi[1].max(p[1])],
-            )
-        },
-    );
-    let span = |lo: f64, hi: f64, n: usize| {
-        let first = lo.ceil().clamp(0.0, n as f64) as usize;
-        let last = (hi.floor() + 1.0).clamp(0.0, n as f64) as usize;
-        first..last.max(first)
-    };
-    for r in span(lo[1], hi[1], rows) {
-        for c in span(lo[0], hi[0], cols) {
-            cells[r * cols + c] = pedo_io::contour::point_in_polygon([c as f64, r as f64], outline);
+/// Which region a row of `region_series.csv` is of.
+pub(crate) struct RegionId<'a> {
+    /// Its label (the user's mask's, or the rule's 1-based number).
+    pub(crate) label: usize,
+    /// `moving` or `fixed`.
+    pub(crate) kind: &'a str,
+    /// The anatomical region's name.
+    pub(crate) name: Option<&'a str>,
+    /// The anatomical region's stance.
+    pub(crate) stance: Option<usize>,
+}
+
+/// The columns of `region_series.csv` ([`regions_table`]; no rows).
+pub fn region_series_header(recording: &Recording) -> Table {
+    let mut t = Table::new(&["region", "kind", "frame"]);
+    if recording.dt_s.is_some() {
+        t.push_column("time_s");
+    }
+    t.push_column("sensels");
+    t.push_column(match recording.sensel_area() {
+        Some(_) => "area_mm2",
+        None => "area_sensels",
+    });
+    push_measure_columns(&mut t, recording);
+    t.push_column(match kpa_per_unit(&recording.units) {
+        Some(_) => "mean_pressure_kpa",
+        None => "mean_pressure",
+    });
+    t.push_column("name");
+    t.push_column("stance");
+    t
+}
+
+/// One row of `region_series.csv`: the region `id` on `frame`, its sensels `cells` of that
+/// frame's `grid` (`None`: the region was not followed to the frame, its measures empty).
+pub(crate) fn region_series_row(
+    recording: &Recording,
+    id: &RegionId<'_>,
+    frame: usize,
+    cells: Option<(&pedo_io::Grid, &[bool])>,
+    threshold: f64,
+) -> Vec<Cell> {
+    let per_unit = kpa_per_unit(&recording.units).unwrap_or(1.0);
+    let u = measure_units(recording);
+    let area = recording.sensel_area().unwrap_or(1.0);
+    let sensors = recording.sensor_mask();
+    let mut row = vec![
+        Cell::int(id.label),
+        Cell::Text(id.kind.to_string()),
+        Cell::int(frame),
+    ];
+    if recording.dt_s.is_some() {
+        row.push(Cell::opt(recording.time_s(frame), 6));
+    }
+    match cells {
+        Some((grid, cells)) => {
+            let n = (cells.iter().zip(sensors))
+                .filter(|(c, s)| **c && **s)
+                .count();
+            let m = recording.cells_measures(grid, threshold, cells);
+            row.push(Cell::int(n));
+            row.push(Cell::Float(n as f64 * area, 4));
+            push_measures(&mut row, recording, &u, Some(&m));
+            // The mean of the contact sensors' values: the load over their count.
+            let load = m.total_force / recording.force_factor().unwrap_or(area);
+            row.push(match m.contact_sensors {
+                0 => Cell::Empty,
+                c => Cell::Float(load / c as f64 * per_unit, 4),
+            });
+        }
+        None => {
+            row.push(Cell::Empty);
+            row.push(Cell::Empty);
+            push_measures(&mut row, recording, &u, None);
+            row.push(Cell::Empty);
         }
     }
-    cells
+    row.push(id.name.map_or(Cell::Empty, |n| Cell::Text(n.to_string())));
+    row.push(id.stance.map_or(Cell::Empty, Cell::int));
+    row
+}
+
+/// The sensels (row-major) whose centres lie inside the closed `outline` (sensels).
+fn raster(recording: &Recording, outline: &[[f64; 2]]) -> Vec<bool> {
+    pedo_io::marks::polygon_cells(recording.rows(), recording.cols(), outline)
 }
 
 /// The pressure under every step of every point, each frame read once.
