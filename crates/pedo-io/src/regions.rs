@@ -793,7 +793,9 @@ impl MovingRegionSeries {
     /// [`IoError::InvalidInput`] when no frame was added or `total_fti` is not above 0.
     pub fn finish(self, total_fti: f64) -> Result<Vec<RegionValues>> {
         if self.forces.first().is_none_or(Vec::is_empty) {
-            return Err(IoError::invalid("no frame to measure the moving regions on"));
+            return Err(IoError::invalid(
+                "no frame to measure the moving regions on",
+            ));
         }
         if total_fti.is_nan() || total_fti <= 0.0 {
             return Err(IoError::invalid(

@@ -362,7 +362,11 @@ pub fn region_quantities(
 /// regions' rows (`kind` `fixed`, the masks over the peak image), then, when the regions were
 /// carried through the stances, the moving regions' (`kind` `moving`,
 /// [`crate::moving_regions`]).
-pub fn regions_csv(m: &Measures, values: &[RegionValues], moving: Option<&[RegionValues]>) -> String {
+pub fn regions_csv(
+    m: &Measures,
+    values: &[RegionValues],
+    moving: Option<&[RegionValues]>,
+) -> String {
     let mut csv = String::from("region,measure,value,unit,kind\n");
     let kinds = [("fixed", Some(values)), ("moving", moving)];
     for (kind, values) in kinds.into_iter().filter_map(|(k, v)| Some((k, v?))) {
@@ -445,7 +449,10 @@ pub fn write_regions(
         return Ok(());
     };
     let moving_values = moving.and_then(|o| o.as_ref().ok()).map(|a| &a.values[..]);
-    dir.write("regions.csv", regions_csv(m, values, moving_values).as_bytes())?;
+    dir.write(
+        "regions.csv",
+        regions_csv(m, values, moving_values).as_bytes(),
+    )?;
     let labels: Vec<f64> = masks.labels.iter().map(|&l| f64::from(l)).collect();
     dir.write(
         "regions.npy",

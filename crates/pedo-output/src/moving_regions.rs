@@ -93,7 +93,8 @@ pub fn anatomy_rows(
                     stance: Some(r.stance),
                 };
                 let at = cells.map(|c| (&grid, c));
-                t.rows.push(region_series_row(recording, &id, frame, at, threshold));
+                t.rows
+                    .push(region_series_row(recording, &id, frame, at, threshold));
             }
         }
     }

@@ -136,7 +136,11 @@ fn a_run_s_regions_are_the_same_streamed_or_held_and_match_the_library() {
             .find(|l| l.starts_with(&format!("{},fti,", v.name)) && l.ends_with(",moving"))
             .unwrap();
         let fti: f64 = line.split(',').nth(2).unwrap().parse().unwrap();
-        assert!((sum * dt - fti).abs() <= 1e-3 * fti.max(1e-9), "{}: {sum} vs {fti}", v.name);
+        assert!(
+            (sum * dt - fti).abs() <= 1e-3 * fti.max(1e-9),
+            "{}: {sum} vs {fti}",
+            v.name
+        );
     }
     let frames = std::fs::read_to_string(held_out.join("frames.csv")).unwrap();
     let mut fl = frames.lines();
@@ -153,7 +157,10 @@ fn a_run_s_regions_are_the_same_streamed_or_held_and_match_the_library() {
             .filter(|r| r[col("kind")] == "moving" && r[col("frame")] == reference)
             .map(|r| r[col("contact_sensors")].parse::<f64>().unwrap())
             .sum();
-        assert!(held <= contact && held >= 0.95 * contact, "{held} of {contact}");
+        assert!(
+            held <= contact && held >= 0.95 * contact,
+            "{held} of {contact}"
+        );
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

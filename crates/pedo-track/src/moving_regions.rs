@@ -205,11 +205,16 @@ pub fn follow_masks(
                 let outline = LabelMask::new(rows, cols, labels)?.outline(1);
                 let index = owner.len();
                 owner.push(out.len());
-                seeds.extend(follow::densify(&outline, REGION_STEP).0.into_iter().map(|xy| Seed {
-                    object: objects[j],
-                    xy,
-                    kind: Seeded::Region(index),
-                }));
+                seeds.extend(
+                    follow::densify(&outline, REGION_STEP)
+                        .0
+                        .into_iter()
+                        .map(|xy| Seed {
+                            object: objects[j],
+                            xy,
+                            kind: Seeded::Region(index),
+                        }),
+                );
                 followed += 1;
             }
             out.push(MovingRegion {
@@ -232,7 +237,10 @@ pub fn follow_masks(
                 continue;
             };
             for &(o, xy) in &p.steps {
-                by_part[part].entry(run.objects[o].frame).or_default().push(xy);
+                by_part[part]
+                    .entry(run.objects[o].frame)
+                    .or_default()
+                    .push(xy);
             }
         }
         for (part, frames) in by_part.into_iter().enumerate() {

@@ -105,7 +105,11 @@ fn points_followed_backwards_land_within_a_sensel_of_their_material_points() {
     assert_eq!(followed.points.len(), 3);
     for (p, &xy) in followed.points.iter().zip(&places) {
         // One step per frame, in frame order, the seed's own place on its frame.
-        let frames: Vec<usize> = p.steps.iter().map(|(o, _)| result.objects[*o].frame).collect();
+        let frames: Vec<usize> = p
+            .steps
+            .iter()
+            .map(|(o, _)| result.objects[*o].frame)
+            .collect();
         assert_eq!(frames, (0..60).collect::<Vec<_>>());
         assert_eq!(p.steps[seeded].1, xy);
         let material = walk.reference_position(seeded, xy);
@@ -145,8 +149,7 @@ fn seeds_on_two_frames_or_outside_the_frames_are_refused() {
     .unwrap_err();
     assert!(matches!(e, IoError::InvalidInput(_)), "{e}");
     assert!(e.to_string().contains("one frame"), "{e}");
-    let e = follow_both_ways(&result, SenselAspect::SQUARE, &params, &[seed(3)], 0, 2)
-        .unwrap_err();
+    let e = follow_both_ways(&result, SenselAspect::SQUARE, &params, &[seed(3)], 0, 2).unwrap_err();
     assert!(matches!(e, IoError::InvalidInput(_)), "{e}");
 }
 
@@ -188,11 +191,19 @@ fn regions_partition_the_contact_of_their_reference_frame_and_follow_the_true_re
     }
     // The force of each region carried by the field against the true region's, beside the
     // fixed mask's: at the worst frame of each, the carried region is closer.
-    for r in moving.iter().filter(|r| r.reference_cells.iter().any(|&c| c)) {
+    for r in moving
+        .iter()
+        .filter(|r| r.reference_cells.iter().any(|&c| c))
+    {
         let fixed: Vec<bool> = masks.labels.iter().map(|&l| l == r.label).collect();
         let (mut worst_moving, mut worst_fixed, mut mean_moving) = (0.0f64, 0.0f64, 0.0f64);
         for t in 0..80 {
-            let truth = load(&rec, t, &true_cells(&walk, &rec, reference, t, &r.reference_cells), th);
+            let truth = load(
+                &rec,
+                t,
+                &true_cells(&walk, &rec, reference, t, &r.reference_cells),
+                th,
+            );
             let carried = load(&rec, t, &r.cells(t, rows, cols).unwrap(), th);
             let left = load(&rec, t, &fixed, th);
             worst_moving = worst_moving.max((carried - truth).abs() / truth);
@@ -239,7 +250,11 @@ fn regions_are_carried_on_contour_runs_of_fitting_masks_only() {
         follow_masks(&result, &options, &rec, &masks, &[stance], th).unwrap();
     for r in &moved {
         for t in 0..12 {
-            assert!(r.cells(t, rec.rows(), rec.cols()).is_some(), "{} frame {t}", r.name);
+            assert!(
+                r.cells(t, rec.rows(), rec.cols()).is_some(),
+                "{} frame {t}",
+                r.name
+            );
         }
     }
 }
