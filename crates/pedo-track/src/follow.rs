@@ -326,7 +326,7 @@ pub fn follow_both_ways(
             ..*s
         })
         .collect();
-    let pass = |reversed: bool| -> Result<Vec<Vec<(usize, [f64; 2])>>> {
+    let pass = |reversed: bool| -> Result<Vec<Steps>> {
         let (lo, hi) = if reversed { (first, f) } else { (f, last) };
         let (sub, old) = sub_run(run, lo..=hi, reversed);
         let mut new_of = vec![usize::MAX; run.objects.len()];
@@ -363,6 +363,9 @@ pub fn follow_both_ways(
     }
     Ok(out)
 }
+
+/// `(object, [x, y])` of each frame a point was followed through.
+type Steps = Vec<(usize, [f64; 2])>;
 
 /// The objects of `run` on frames `frames` as a run of their own, in sequence order or, when
 /// `reversed`, in reversed order with every pair between them turned round (its matches from

@@ -262,7 +262,12 @@ fn run_recording<'py>(
     };
     // The anatomical regions of region_rule: fixed and carried through the stances (contour
     // model), their rows after the user's regions, their values as regions.csv's rows.
-    let mut values = pedo_output::Table::new(&["region", "measure", "value", "unit", "kind"]);
+    let mut values = pedo_output::Table {
+        header: ["region", "measure", "value", "unit", "kind"]
+            .map(String::from)
+            .to_vec(),
+        rows: Vec::new(),
+    };
     if let Some(rule) = outputs.regions {
         let anatomy = crate::pool::detach_cancellable(py, &cancel, || {
             // A footprint that cannot be divided has no regions (regions.json says why).
