@@ -508,7 +508,7 @@ pub struct RegionValues {
     pub impulse_share: f64,
     /// Its force and peak pressure over each stance of the recording's [`Measures`] (in their
     /// order), resampled to 0–100 % of contact as the stance's own curves
-    /// ([`crate::stances::resample`]).
+    /// ([`crate::stances::resample`]); empty for a region carried by the field.
     pub curves: Vec<RegionCurves>,
 }
 
@@ -744,6 +744,164 @@ impl RegionSeries {
                 }
             })
             .collect()
+    }
+}
+
+/// The per-frame force and contact of regions whose sensels change from frame to frame (regions
+/// that move with the foot, followed through the stance): fed one frame at a time with each
+/// region's sensels on it ([`add_frame`](Self::add_frame)); [`finish`](Self::finish) gives each
+/// region's values as [`RegionSeries`] does for fixed ones, the images' values (peak pressure,
+/// PTI) taken per sensel over the frames it lies in the region only.
+#[derive(Debug, Clone)]
+pub struct MovingRegionSeries {
+    names: Vec<String>,
+    mask: Vec<bool>,
+    threshold: f64,
+    force_factor: f64,
+    pressure_factor: f64,
+    area: f64,
+    dt: f64,
+    forces: Vec<Vec<f64>>,
+    contact: Vec<f64>,
+    sensels: Vec<f64>,
+    peak: Vec<f64>,
+    /// Per region, per sensel, the sum of its loaded values over the frames it lay in the region.
+    sums: Vec<Vec<f64>>,
+}
+
+impl MovingRegionSeries {
+    /// Starts the series of the regions `names` over frames of `recording` (its mask, pitch,
+    /// rate and units), a sensel loaded above 0 and at or above `threshold` (file units).
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when `threshold` is not finite.
+    pub fn new(recording: &Recording, threshold: f64, names: &[String]) -> Result<Self> {
+        if !threshold.is_finite() {
+            return Err(IoError::invalid(format!(
+                "contact threshold {threshold} is not finite"
+            )));
+        }
+        let area = recording.sensel_area();
+        let n = recording.rows() * recording.cols();
+        Ok(Self {
+            names: names.to_vec(),
+            mask: recording.sensor_mask().to_vec(),
+            threshold,
+            force_factor: recording.force_factor().unwrap_or(area.unwrap_or(1.0)),
+            pressure_factor: crate::recording::kpa_per_unit(&recording.units).unwrap_or(1.0),
+            area: area.unwrap_or(1.0),
+            dt: recording.dt_s.unwrap_or(1.0),
+            forces: vec![Vec::new(); names.len()],
+            contact: vec![0.0; names.len()],
+            sensels: vec![0.0; names.len()],
+            peak: vec![0.0; names.len()],
+            sums: vec![vec![0.0; n]; names.len()],
+        })
+    }
+
+    /// Adds the next frame (`rows × cols` values in the file's units) with the share of each
+    /// sensel each region covers on it (row-major, 0..=1; `None`: the region is not on this
+    /// frame, its force 0): a sensel counts towards a region's force, contact and PTI by its
+    /// share, towards its peak pressure when at least half of it is inside.
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when `values` or a region's shares are not `rows × cols`
+    /// long, or `shares` does not hold one entry per region.
+    pub fn add_frame(&mut self, values: &[f32], shares: &[Option<Vec<f64>>]) -> Result<()> {
+        let n = self.mask.len();
+        if values.len() != n || shares.len() != self.names.len() {
+            return Err(IoError::invalid(format!(
+                "a frame needs {n} values and the sensels of {} regions, got {} and {}",
+                self.names.len(),
+                values.len(),
+                shares.len()
+            )));
+        }
+        for (k, region) in shares.iter().enumerate() {
+            let (mut load, mut count, mut held) = (0.0f64, 0.0f64, 0.0f64);
+            if let Some(region) = region {
+                if region.len() != n {
+                    return Err(IoError::invalid(format!(
+                        "region {} holds {} sensels' shares, the frame {n}",
+                        self.names[k],
+                        region.len()
+                    )));
+                }
+                for i in (0..n).filter(|&i| region[i] > 0.0 && self.mask[i]) {
+                    let w = region[i];
+                    held += w;
+                    let v = f64::from(values[i]);
+                    if !v.is_finite() {
+                        continue;
+                    }
+                    if w >= 0.5 {
+                        self.peak[k] = self.peak[k].max(v);
+                    }
+                    if v > 0.0 && v >= self.threshold {
+                        load += w * v;
+                        count += w;
+                        self.sums[k][i] += w * v;
+                    }
+                }
+            }
+            self.forces[k].push(load * self.force_factor);
+            self.contact[k] = self.contact[k].max(count);
+            self.sensels[k] = self.sensels[k].max(held);
+        }
+        Ok(())
+    }
+
+    /// Each region's values ([`RegionValues`]; `sensels` is the most it held on a frame), its
+    /// share of `total_fti`, the footprint's force-time integral (that of the fixed regions,
+    /// so that fixed and moving shares compare).
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when no frame was added or `total_fti` is not above 0.
+    pub fn finish(self, total_fti: f64) -> Result<Vec<RegionValues>> {
+        if self.forces.first().is_none_or(Vec::is_empty) {
+            return Err(IoError::invalid(
+                "no frame to measure the moving regions on",
+            ));
+        }
+        if total_fti.is_nan() || total_fti <= 0.0 {
+            return Err(IoError::invalid(
+                "the footprint has no impulse for the moving regions to share",
+            ));
+        }
+        let (k, dt) = (self.pressure_factor, self.dt);
+        let mut out = Vec::with_capacity(self.names.len());
+        for (r, name) in self.names.iter().enumerate() {
+            let f = &self.forces[r];
+            let fti = f.iter().sum::<f64>() * dt;
+            let (lo, hi) = f.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &x| {
+                (lo.min(x), hi.max(x))
+            });
+            let contact_time = if hi > 0.0 {
+                let threshold = lo + CONTACT_FORCE_FRACTION * (hi - lo);
+                let a = f.iter().position(|&x| x > threshold).unwrap_or(0);
+                let b = f.iter().rposition(|&x| x > threshold).unwrap_or(a);
+                (b - a + 1) as f64 * dt
+            } else {
+                0.0
+            };
+            out.push(RegionValues {
+                name: name.clone(),
+                sensels: self.sensels[r].round() as usize,
+                peak_pressure: self.peak[r] * k,
+                pti_max: self.sums[r].iter().fold(0.0f64, |m, &s| m.max(s)) * k * dt,
+                peak_force: hi,
+                fti,
+                max_contact_area: self.contact[r] * self.area,
+                contact_time,
+                impulse_share: 100.0 * fti / total_fti,
+                // The stance-normalised curves are the fixed regions' (`curves.csv`).
+                curves: Vec::new(),
+            });
+        }
+        Ok(out)
     }
 }
 

@@ -29,14 +29,14 @@ use std::ops::Range;
 
 mod animation;
 mod measure_figures;
-mod stance_curves_figure;
 mod register_figures;
+mod stance_curves_figure;
 mod text;
 
 pub use animation::{Animation, DEFAULT_GIF_DELAY_CS, MAX_ANIMATION_FRAMES, MIN_GIF_DELAY_CS};
 pub use measure_figures::{MeasureFigure, MeasureImage, RegionFigure};
-pub use stance_curves_figure::{mean_and_sd, StanceCurvesFigure};
 pub use register_figures::RegisteredStackFigure;
+pub use stance_curves_figure::{mean_and_sd, StanceCurvesFigure};
 
 /// The bundled font (DejaVu Sans; licence in `fonts/LICENSE-DejaVu.txt`).
 static FONT_BYTES: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");

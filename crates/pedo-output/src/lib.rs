@@ -19,6 +19,7 @@
 pub mod figure;
 pub mod html_report;
 pub mod measure_files;
+pub mod moving_regions;
 pub mod outdir;
 pub mod register_folder;
 pub mod run_folder;

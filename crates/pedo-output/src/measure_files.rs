@@ -427,11 +427,21 @@ pub fn region_quantities(
     out
 }
 
-/// `regions.csv`: one row per region and measure, `region,measure,value,unit`.
-pub fn regions_csv(m: &Measures, values: &[RegionValues]) -> String {
-    let mut csv = String::from("region,measure,value,unit\n");
-    for (region, measure, value, unit) in region_quantities(m, values) {
-        csv.push_str(&format!("{region},{measure},{value},{unit}\n"));
+/// `regions.csv`: one row per region and measure, `region,measure,value,unit,kind`: the fixed
+/// regions' rows (`kind` `fixed`, the masks over the peak image), then, when the regions were
+/// carried through the stances, the moving regions' (`kind` `moving`,
+/// [`crate::moving_regions`]).
+pub fn regions_csv(
+    m: &Measures,
+    values: &[RegionValues],
+    moving: Option<&[RegionValues]>,
+) -> String {
+    let mut csv = String::from("region,measure,value,unit,kind\n");
+    let kinds = [("fixed", Some(values)), ("moving", moving)];
+    for (kind, values) in kinds.into_iter().filter_map(|(k, v)| Some((k, v?))) {
+        for (region, measure, value, unit) in region_quantities(m, values) {
+            csv.push_str(&format!("{region},{measure},{value},{unit},{kind}\n"));
+        }
     }
     csv
 }
@@ -439,7 +449,12 @@ pub fn regions_csv(m: &Measures, values: &[RegionValues]) -> String {
 /// `regions.json`: the rule (or `"masks"` for the user's), the label of each region in `regions.npy`, the foot's axis and
 /// side, the bounds used and each region's values; or, when the footprint could not be
 /// divided, why.
-pub fn regions_json(m: &Measures, rule: &str, outcome: &RegionOutcome) -> Value {
+pub fn regions_json(
+    m: &Measures,
+    rule: &str,
+    outcome: &RegionOutcome,
+    moving: Option<&crate::moving_regions::MovingOutcome>,
+) -> Value {
     let (masks, values) = match outcome {
         Ok(found) => found,
         Err(e) => return json!({"rule": rule, "error": e.to_string()}),
@@ -468,7 +483,7 @@ pub fn regions_json(m: &Measures, rule: &str, outcome: &RegionOutcome) -> Value 
             "length_mm": a.length,
         })
     });
-    json!({
+    let mut out = json!({
         "rule": rule,
         "labels": labels,
         "label_image": "regions.npy: per sensel 0 outside the footprint, else the region's label",
@@ -479,26 +494,36 @@ pub fn regions_json(m: &Measures, rule: &str, outcome: &RegionOutcome) -> Value 
             "hallux_width_fraction": HALLUX_BOUND,
         },
         "regions": per,
-    })
+    });
+    if let Some(moving) = moving {
+        out["moving"] = crate::moving_regions::moving_json(m, moving);
+    }
+    out
 }
 
 /// Writes the regions' files into `dir` ([`REGION_FILES`]: the CSV and the label image only
-/// when the footprint was divided) and their figure `regions.png` (or `.svg`) as `kinds` says;
-/// `rule` is what `regions.json` names as their rule ([`RegionsAsked::name`]).
+/// when the footprint was divided; with `moving`, the moving regions' values and rows too) and
+/// their figure `regions.png` (or `.svg`) as `kinds` says; `rule` is what `regions.json` names
+/// as their rule ([`RegionsAsked::name`]).
 pub fn write_regions(
     dir: &OutDir,
     recording: &Recording,
     m: &Measures,
     rule: &str,
     outcome: &RegionOutcome,
+    moving: Option<&crate::moving_regions::MovingOutcome>,
     kinds: FigureKinds,
 ) -> Result<()> {
-    let json = crate::run_folder::pretty(&regions_json(m, rule, outcome));
+    let json = crate::run_folder::pretty(&regions_json(m, rule, outcome, moving));
     dir.write("regions.json", json.as_bytes())?;
     let Ok((masks, values)) = outcome else {
         return Ok(());
     };
-    dir.write("regions.csv", regions_csv(m, values).as_bytes())?;
+    let moving_values = moving.and_then(|o| o.as_ref().ok()).map(|a| &a.values[..]);
+    dir.write(
+        "regions.csv",
+        regions_csv(m, values, moving_values).as_bytes(),
+    )?;
     let labels: Vec<f64> = masks.labels.iter().map(|&l| f64::from(l)).collect();
     dir.write(
         "regions.npy",

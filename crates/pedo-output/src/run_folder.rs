@@ -197,11 +197,11 @@ modal_core::option_set! {
         /// The anatomical regions of the footprint.
         region_rule: RegionChoice = RegionChoice::default();
             Word(<RegionChoice as Choice>::NAMES), RegionChoice::default(),
-            "Anatomical regions of the footprint, found from the peak image and the centre of pressure's path, with each region's peak pressure, PTI, FTI, contact area, contact time and share of the impulse (regions.csv, regions.json, regions.npy, regions.png): coarse (hindfoot, midfoot, forefoot, toes), fine (medial and lateral heel, midfoot, first, second and lateral metatarsal heads, hallux, lesser toes) or none. One foot per recording; a streamed run keeps its frames' loaded sensels for them.";
+            "Anatomical regions of the footprint, found from the peak image and the centre of pressure's path, with each region's peak pressure, PTI, FTI, contact area, contact time and share of the impulse (regions.csv, regions.json, regions.npy, regions.png): coarse (hindfoot, midfoot, forefoot, toes), fine (medial and lateral heel, midfoot, first, second and lateral metatarsal heads, hallux, lesser toes) or none. One foot per recording; a streamed run keeps its frames' loaded sensels for them. A contour run also carries each region through every stance with the foot (moving, beside the fixed masks: regions.csv's kind, region_series.csv).";
         /// The user's region masks over the peak image.
         masks: Option<PathOrRows> = None;
             Value, "none",
-            "Region masks drawn over the peak image, measured as the automatic regions (regions.csv, regions.json, regions.npy, regions.png, and each region's curves in curves.csv): a label image of the recording's rows x columns (.npy, a CSV grid or an image; Python also takes a 2-D array; 0 = no region, label k named region_k), or a CSV of polygons region,x_mm,y_mm (or region,x,y in sensels), one vertex a line, named by their region column. Instead of region_rule.";
+            "Region masks drawn over the peak image, measured as the automatic regions (regions.csv, regions.json, regions.npy, regions.png, and each region's curves in curves.csv): a label image of the recording's rows x columns (.npy, a CSV grid or an image; Python also takes a 2-D array; 0 = no region, label k named region_k), or a CSV of polygons region,x_mm,y_mm (or region,x,y in sensels), one vertex a line, named by their region column. Instead of region_rule; a contour run carries them through every stance as it carries the rule's.";
     }
 }
 
@@ -864,7 +864,19 @@ fn write_folder(
     let points = run.options.model == ObjectModel::Contour
         && (!tables_only(outputs) || !run.options.inputs.is_empty());
     let pair_figures = outputs.figures.any() && outputs.pair_figures;
-    let gather = matches!(feed, Feed::Run { .. }) && (points || pair_figures || outputs.animation);
+    // The anatomical regions are carried through the stances of a contour run whose recording
+    // holds its frames (not a streamed one).
+    let frames_streamed = matches!(
+        &feed,
+        Feed::Run {
+            frames: Some(_),
+            ..
+        }
+    );
+    let anatomy = outputs.any_regions() && run.options.model == ObjectModel::Contour;
+    let carried = anatomy && !frames_streamed;
+    let gather = matches!(feed, Feed::Run { .. })
+        && (points || pair_figures || outputs.animation || carried);
     let progress = match &feed {
         Feed::Run { progress, .. } => *progress,
         Feed::Replay(_) => &|_, _, _| {},
@@ -927,7 +939,7 @@ fn write_folder(
     let cancel = run.options.cancel.as_ref();
     let gathered = whole.map(|w| w.into_result(counts.clone()));
     // What needs every object and pair: the gathered run, or the one replayed.
-    let whole = if points || pair_figures || outputs.animation {
+    let whole = if points || pair_figures || outputs.animation || carried {
         replayed.or(gathered.as_ref())
     } else {
         None
@@ -939,6 +951,22 @@ fn write_folder(
     };
     let rule_name = asked.as_ref().map(crate::RegionsAsked::name);
     let (measures, regions) = measures.finish_with_regions(run.recording, asked)?;
+    let moving = match (&regions, whole) {
+        (Some(Ok((masks, values))), Some(r)) if carried => Some(
+            crate::moving_regions::follow_anatomy(
+                run.recording,
+                r,
+                run.options,
+                &measures,
+                masks,
+                values,
+            ),
+        ),
+        (Some(Ok(_)), _) if anatomy => Some(Err(IoError::invalid(
+            "a streamed run does not hold its frames: the regions are not carried through the stances",
+        ))),
+        _ => None,
+    };
     let region_values = match &regions {
         Some(Ok((_, values))) => Some(values.as_slice()),
         _ => None,
@@ -958,6 +986,7 @@ fn write_folder(
             &measures,
             rule,
             outcome,
+            moving.as_ref(),
             outputs.figures,
         )?;
     }
@@ -969,7 +998,12 @@ fn write_folder(
         curves: curves.unwrap_or_default(),
         tracks,
     };
-    let user_points = write_figures_and_points(&dir, run, &drawn, outputs, points, cancel, &steps)?;
+    let anatomy = match (&regions, &moving) {
+        (Some(Ok((masks, _))), Some(Ok(a))) => Some((masks, a)),
+        _ => None,
+    };
+    let user_points =
+        write_figures_and_points(&dir, run, &drawn, outputs, points, anatomy, cancel, &steps)?;
     // The run's own stages, when it ran here, are not the output's time.
     let t = counts.timings;
     let run_time = if ran {
@@ -1042,12 +1076,17 @@ type UserTrack = (String, Vec<[f64; 2]>);
 /// The figures asked for and, when `points`, the material points (`points`, contour model) of
 /// the run's objects and pairs: they need nothing of each other, so the points are followed on
 /// a second thread. Returns the user's points through the stance (for the report).
+#[allow(clippy::too_many_arguments)]
 fn write_figures_and_points(
     dir: &OutDir,
     run: &RunOf<'_>,
     drawn: &Drawn<'_>,
     outputs: &RunOutputs,
     points: bool,
+    anatomy: Option<(
+        &pedo_io::regions::RegionMasks,
+        &crate::moving_regions::MovingAnatomy,
+    )>,
     cancel: Option<&Cancel>,
     steps: &OutputSteps<'_>,
 ) -> Result<Vec<UserTrack>> {
@@ -1102,13 +1141,20 @@ fn write_figures_and_points(
     });
     figures?;
     let points = points.map_err(|_| IoError::invalid("following the material points failed"))?;
+    let mut series = None;
     let mut user_tracks = Vec::new();
     if let Some((table, regions, tracks)) = points? {
         crate::write_table(dir, outputs.tables, POINTS, &table)?;
-        if let Some(regions) = regions {
-            crate::write_table(dir, outputs.tables, REGION_SERIES, &regions)?;
-        }
+        series = regions;
         user_tracks = tracks;
+    }
+    if let Some((masks, anatomy)) = anatomy {
+        let threshold = run.options.contour.preprocess.threshold.unwrap_or(0.0);
+        let t = series.get_or_insert_with(|| crate::region_series_header(run.recording));
+        crate::moving_regions::anatomy_rows(t, run.recording, masks, anatomy, threshold)?;
+    }
+    if let Some(series) = series {
+        crate::write_table(dir, outputs.tables, REGION_SERIES, &series)?;
     }
     Ok(user_tracks)
 }

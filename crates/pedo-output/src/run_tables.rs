@@ -441,13 +441,14 @@ pub fn points_table(
 /// and frame on which it is followed: `kind` `moving`, the region carried by the field (the
 /// share of each sensel its followed outline covers: a region moved by a tenth of a sensel
 /// changes its edge sensels by a tenth, not whole sensels in or out), and `fixed`, the mask's
-/// own sensels on that frame. Columns: `region` (its label), `kind`, `frame`, `time_s`,
-/// `sensels` (existing sensors in the region, each by its covered share) and its area
-/// (`area_mm2`, or `area_sensels` without a pitch), then the measures of its sensels, each
-/// counted by its share, as `frames.csv` gives a frame's (contact sensors and area,
-/// total force or load, peak pressure, centre of pressure in sensels and mm, named by the
-/// units known) and the mean pressure of its contact sensors (`mean_pressure_kpa`, or
-/// `mean_pressure` in the file's units).
+/// own sensels on that frame. Columns ([`region_series_header`]): `region` (its label), `kind`,
+/// `frame`, `time_s`, `sensels` (existing sensors in the region, each by its covered share) and
+/// its area (`area_mm2`, or `area_sensels` without a pitch), then the measures of its sensels,
+/// each counted by its share, as `frames.csv` gives a frame's (contact sensors and area, total
+/// force or load, peak pressure, centre of pressure in sensels and mm, named by the units known)
+/// and the mean pressure of its contact sensors (`mean_pressure_kpa`, or `mean_pressure` in the
+/// file's units); `name` and `stance` are those of the anatomical regions
+/// ([`crate::moving_regions`]), empty for the user's.
 ///
 /// # Errors
 /// A frame the recording cannot give.
@@ -459,24 +460,7 @@ pub fn regions_table(
     threshold: f64,
 ) -> pedo_io::Result<Table> {
     use pedo_track::follow::Seeded;
-    let mut t = Table::new(&["region", "kind", "frame"]);
-    if recording.dt_s.is_some() {
-        t.push_column("time_s");
-    }
-    t.push_column("sensels");
-    t.push_column(match recording.sensel_area() {
-        Some(_) => "area_mm2",
-        None => "area_sensels",
-    });
-    push_measure_columns(&mut t, recording);
-    let (mean, per_unit) = match kpa_per_unit(&recording.units) {
-        Some(k) => ("mean_pressure_kpa", k),
-        None => ("mean_pressure", 1.0),
-    };
-    t.push_column(mean);
-    let u = measure_units(recording);
-    let area = recording.sensel_area().unwrap_or(1.0);
-    let sensors = recording.sensor_mask();
+    let mut t = region_series_header(recording);
     for (k, region) in inputs.regions.iter().enumerate() {
         // The region's followed outline per frame, its points in outline order.
         let mut by_frame: std::collections::BTreeMap<usize, Vec<[f64; 2]>> = Default::default();
@@ -495,35 +479,109 @@ pub fn regions_table(
             let moving =
                 pedo_io::marks::polygon_coverage(&outline, recording.rows(), recording.cols());
             for (kind, shares) in [("moving", &moving), ("fixed", &fixed)] {
-                // Existing sensors in the region, each by the share of it the region covers.
-                let n: f64 = (shares.iter().zip(sensors))
-                    .filter(|(_, s)| **s)
-                    .map(|(w, _)| w)
-                    .sum();
-                let m = recording.covered_measures(&grid, threshold, shares);
-                let mut row = vec![
-                    Cell::int(region.label as usize),
-                    Cell::Text(kind.to_string()),
-                    Cell::int(frame),
-                ];
-                if recording.dt_s.is_some() {
-                    row.push(Cell::opt(recording.time_s(frame), 6));
-                }
-                row.push(Cell::Float(n, 3));
-                row.push(Cell::Float(n * area, 4));
-                push_measures(&mut row, recording, &u, Some(&m));
-                // The mean of the contact sensors' values: the load over their covered count.
-                let load = m.total_force / recording.force_factor().unwrap_or(area);
-                let contact = m.contact_area / area;
-                row.push(match contact > 0.0 {
-                    false => Cell::Empty,
-                    true => Cell::Float(load / contact * per_unit, 4),
-                });
-                t.rows.push(row);
+                let id = RegionId {
+                    label: region.label as usize,
+                    kind,
+                    name: None,
+                    stance: None,
+                };
+                t.rows.push(region_series_row(
+                    recording,
+                    &id,
+                    frame,
+                    Some((&grid, shares.as_slice())),
+                    threshold,
+                ));
             }
         }
     }
     Ok(t)
+}
+
+/// Which region a row of `region_series.csv` is of.
+pub(crate) struct RegionId<'a> {
+    /// Its label (the user's mask's, or the rule's 1-based number).
+    pub(crate) label: usize,
+    /// `moving` or `fixed`.
+    pub(crate) kind: &'a str,
+    /// The anatomical region's name.
+    pub(crate) name: Option<&'a str>,
+    /// The anatomical region's stance.
+    pub(crate) stance: Option<usize>,
+}
+
+/// The columns of `region_series.csv` ([`regions_table`]; no rows).
+pub fn region_series_header(recording: &Recording) -> Table {
+    let mut t = Table::new(&["region", "kind", "frame"]);
+    if recording.dt_s.is_some() {
+        t.push_column("time_s");
+    }
+    t.push_column("sensels");
+    t.push_column(match recording.sensel_area() {
+        Some(_) => "area_mm2",
+        None => "area_sensels",
+    });
+    push_measure_columns(&mut t, recording);
+    t.push_column(match kpa_per_unit(&recording.units) {
+        Some(_) => "mean_pressure_kpa",
+        None => "mean_pressure",
+    });
+    t.push_column("name");
+    t.push_column("stance");
+    t
+}
+
+/// One row of `region_series.csv`: the region `id` on `frame`, the share of each sensel of that
+/// frame's `grid` it covers (`None`: the region was not followed to the frame, its measures
+/// empty).
+pub(crate) fn region_series_row(
+    recording: &Recording,
+    id: &RegionId<'_>,
+    frame: usize,
+    shares: Option<(&pedo_io::Grid, &[f64])>,
+    threshold: f64,
+) -> Vec<Cell> {
+    let per_unit = kpa_per_unit(&recording.units).unwrap_or(1.0);
+    let u = measure_units(recording);
+    let area = recording.sensel_area().unwrap_or(1.0);
+    let sensors = recording.sensor_mask();
+    let mut row = vec![
+        Cell::int(id.label),
+        Cell::Text(id.kind.to_string()),
+        Cell::int(frame),
+    ];
+    if recording.dt_s.is_some() {
+        row.push(Cell::opt(recording.time_s(frame), 6));
+    }
+    match shares {
+        Some((grid, shares)) => {
+            // Existing sensors in the region, each by the share of it the region covers.
+            let n: f64 = (shares.iter().zip(sensors))
+                .filter(|(_, s)| **s)
+                .map(|(w, _)| w)
+                .sum();
+            let m = recording.covered_measures(grid, threshold, shares);
+            row.push(Cell::Float(n, 3));
+            row.push(Cell::Float(n * area, 4));
+            push_measures(&mut row, recording, &u, Some(&m));
+            // The mean of the contact sensors' values: the load over their covered count.
+            let load = m.total_force / recording.force_factor().unwrap_or(area);
+            let contact = m.contact_area / area;
+            row.push(match contact > 0.0 {
+                false => Cell::Empty,
+                true => Cell::Float(load / contact * per_unit, 4),
+            });
+        }
+        None => {
+            row.push(Cell::Empty);
+            row.push(Cell::Empty);
+            push_measures(&mut row, recording, &u, None);
+            row.push(Cell::Empty);
+        }
+    }
+    row.push(id.name.map_or(Cell::Empty, |n| Cell::Text(n.to_string())));
+    row.push(id.stance.map_or(Cell::Empty, Cell::int));
+    row
 }
 
 /// The pressure under every step of every point, each frame read once.

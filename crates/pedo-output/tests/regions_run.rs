@@ -37,6 +37,7 @@ fn a_run_s_regions_are_the_same_streamed_or_held_and_match_the_library() {
     let (header, mut frames) = read_for_streaming(walk(), &ReadOptions::default()).unwrap();
     assert!(frames.is_some());
     let mut written = Vec::new();
+    let mut movings = Vec::new();
     let outs = [dir.join("run-0"), dir.join("run-1")];
     for (k, (rec, source)) in [
         (&header, frames.as_mut().map(|f| f as &mut dyn FrameSource)),
@@ -64,20 +65,29 @@ fn a_run_s_regions_are_the_same_streamed_or_held_and_match_the_library() {
         .unwrap();
         assert_eq!(summary["options"]["region_rule"], "fine");
         let read = |f: &str| std::fs::read(out.join(f)).unwrap();
-        written.push((
-            read("regions.csv"),
-            read("regions.npy"),
-            read("regions.json"),
-        ));
+        let mut json: serde_json::Value = serde_json::from_slice(&read("regions.json")).unwrap();
+        // The fixed regions' rows and values; the moving ones need the frames held.
+        let moving = json.as_object_mut().unwrap().remove("moving").unwrap();
+        let csv = String::from_utf8(read("regions.csv")).unwrap();
+        let fixed: Vec<String> = csv
+            .lines()
+            .filter(|l| !l.ends_with(",moving"))
+            .map(String::from)
+            .collect();
+        written.push((fixed.join("\n").into_bytes(), read("regions.npy"), json));
+        movings.push((moving, csv));
     }
     assert!(written[0] == written[1], "streamed and held regions differ");
+    // Streamed, the regions are not carried (the run does not hold its frames): said so.
+    assert!(movings[0].0["error"].as_str().unwrap().contains("streamed"));
+    assert!(!movings[0].1.contains(",moving"));
 
     // The library on the recording held whole, frames 0..120, threshold of the file.
     let threshold = held.noise_threshold.unwrap_or(0.0);
     let (masks, values) = recording_regions(&held, threshold, 0..120, RegionRule::Fine).unwrap();
     let csv = String::from_utf8(written[0].0.clone()).unwrap();
     let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some("region,measure,value,unit"));
+    assert_eq!(lines.next(), Some("region,measure,value,unit,kind"));
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 7 * values.len());
     for v in &values {
@@ -93,7 +103,7 @@ fn a_run_s_regions_are_the_same_streamed_or_held_and_match_the_library() {
     let unit = |m: &str| rows.iter().find(|r| r[1] == m).unwrap()[3];
     assert_eq!(unit("fti"), "N·s");
     assert_eq!(unit("impulse_share"), "%");
-    let json: serde_json::Value = serde_json::from_slice(&written[0].2).unwrap();
+    let json = &written[0].2;
     assert_eq!(json["labels"]["1"], "heel_medial");
     assert_eq!(json["foot"]["heel_toe_cue"], "cop_path");
     // The label image: the masks, as float64 after the .npy header.
@@ -102,6 +112,55 @@ fn a_run_s_regions_are_the_same_streamed_or_held_and_match_the_library() {
     for (i, &l) in masks.labels.iter().enumerate() {
         let v = f64::from_le_bytes(body[8 * i..8 * i + 8].try_into().unwrap());
         assert_eq!(v, f64::from(l));
+    }
+
+    // Held, the regions are also carried through the stance: each moving region's FTI in
+    // regions.csv is the sum of its force over the frames of region_series.csv's moving rows,
+    // and on the stance's reference frame the moving regions hold (almost) the frame's contact.
+    let held_out = &outs[1];
+    let (moving, csv) = &movings[1];
+    let series = std::fs::read_to_string(held_out.join("region_series.csv")).unwrap();
+    let mut lines = series.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let dt = held.dt_s.unwrap();
+    let stances = moving["stances"].as_array().unwrap();
+    assert!(!stances.is_empty());
+    for v in &values {
+        let sum: f64 = (rows.iter())
+            .filter(|r| r[col("name")] == v.name && r[col("kind")] == "moving")
+            .filter_map(|r| r[col("total_force_n")].parse::<f64>().ok())
+            .sum();
+        let line = (csv.lines())
+            .find(|l| l.starts_with(&format!("{},fti,", v.name)) && l.ends_with(",moving"))
+            .unwrap();
+        let fti: f64 = line.split(',').nth(2).unwrap().parse().unwrap();
+        assert!(
+            (sum * dt - fti).abs() <= 1e-3 * fti.max(1e-9),
+            "{}: {sum} vs {fti}",
+            v.name
+        );
+    }
+    let frames = std::fs::read_to_string(held_out.join("frames.csv")).unwrap();
+    let mut fl = frames.lines();
+    let fh: Vec<&str> = fl.next().unwrap().split(',').collect();
+    let fcol = |name: &str| fh.iter().position(|h| *h == name).unwrap();
+    for s in stances {
+        let reference = s["reference_frame"].as_u64().unwrap().to_string();
+        let contact: f64 = (frames.lines().skip(1))
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .find(|r| r[fcol("frame")] == reference)
+            .map(|r| r[fcol("contact_sensors")].parse().unwrap())
+            .unwrap();
+        let held: f64 = (rows.iter())
+            .filter(|r| r[col("kind")] == "moving" && r[col("frame")] == reference)
+            .map(|r| r[col("contact_sensors")].parse::<f64>().unwrap())
+            .sum();
+        assert!(
+            held <= contact && held >= 0.95 * contact,
+            "{held} of {contact}"
+        );
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1408,7 +1408,11 @@ fn study_regions_csv(out: &Path, rows: &[StudyRow]) -> Option<String> {
         };
         for line in text.lines().skip(1) {
             let f: Vec<&str> = line.split(',').collect();
-            if let [region, measure, value, unit] = f[..]
+            // The fixed regions' rows (a `kind` column after the unit since the regions also
+            // move with the foot; the moving rows stay in the trial's regions.csv).
+            let fixed = matches!(f.get(4), None | Some(&"fixed"));
+            if let [region, measure, value, unit, ..] = f[..]
+                && fixed
                 && let Ok(v) = value.parse::<f64>()
             {
                 table.rows.push(vec![

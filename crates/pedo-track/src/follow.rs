@@ -174,6 +174,19 @@ pub fn follow_seeded(
     seeds: &[Seed],
     outline_seeds: bool,
 ) -> Result<FollowedPoints> {
+    follow_inner(run, aspect, params, seeds, outline_seeds, false)
+}
+
+/// [`follow_seeded`]; `lazy`: a lineage is started only for an object with seeds or points
+/// handed over, and dropped once it carries no point (nothing is registered for nothing).
+fn follow_inner(
+    run: &SequenceResult,
+    aspect: SenselAspect,
+    params: &FollowParams,
+    seeds: &[Seed],
+    outline_seeds: bool,
+    lazy: bool,
+) -> Result<FollowedPoints> {
     if run.objects.iter().any(|o| o.shape.dim() != 2) {
         return Err(IoError::invalid(
             "points are followed on contours: this run's objects are surfaces",
@@ -210,7 +223,10 @@ pub fn follow_seeded(
                 }
             }
         }
-        if lineage.is_none() {
+        let wanted = !lazy
+            || seeds_at.contains_key(&b)
+            || links.preds(b).iter().any(|a| live.contains_key(a));
+        if lineage.is_none() && wanted {
             lineage = Lineage::start(run, b, aspect, params).ok();
             if lineage.is_some() {
                 out.anchors += 1;
@@ -248,7 +264,7 @@ pub fn follow_seeded(
             }
         }
         l.record(&mut out, b);
-        if links.succs(b).is_empty() {
+        if links.succs(b).is_empty() || (lazy && l.points.is_empty()) {
             // The lineage ends here: its anchor is dropped, its points end.
             continue;
         }
@@ -261,6 +277,156 @@ pub fn follow_seeded(
         live.insert(b, l);
     }
     Ok(out)
+}
+
+/// Follows `seeds`, all on objects of one frame `f`, through the objects of frames
+/// `first..=last` of `run` (`first ≤ f ≤ last`) forwards from `f` to `last` and backwards from
+/// `f` to `first`: the backward pass is [`follow_seeded`] on the objects of `first..=f` in
+/// reversed order, each pair's matches turned round, so a point is carried by the same anchored
+/// registration either way. Returns one point per seed, in the order of `seeds`, with the kind
+/// given, its steps in frame order (the seed's own frame once).
+///
+/// # Errors
+/// [`IoError::InvalidInput`] for seeds on objects of different frames, a frame `f` outside
+/// `first..=last`, and as [`follow_seeded`].
+pub fn follow_both_ways(
+    run: &SequenceResult,
+    aspect: SenselAspect,
+    params: &FollowParams,
+    seeds: &[Seed],
+    first: usize,
+    last: usize,
+) -> Result<FollowedPoints> {
+    let mut out = FollowedPoints::default();
+    let Some(s0) = seeds.first() else {
+        return Ok(out);
+    };
+    let frame_of = |o: usize| run.objects.get(o).map(|o| o.frame);
+    let f = frame_of(s0.object).ok_or_else(|| {
+        IoError::invalid(format!(
+            "a seed on object {}: the run has {}",
+            s0.object,
+            pedo_io::counted(run.objects.len(), "object")
+        ))
+    })?;
+    if let Some(s) = seeds.iter().find(|s| frame_of(s.object) != Some(f)) {
+        return Err(IoError::invalid(format!(
+            "seeds followed both ways lie on one frame: object {} is not on frame {f}",
+            s.object
+        )));
+    }
+    if !(first..=last).contains(&f) {
+        return Err(IoError::invalid(format!(
+            "seeds on frame {f} followed through frames {first}..={last}"
+        )));
+    }
+    let numbered: Vec<Seed> = (seeds.iter().enumerate())
+        .map(|(k, s)| Seed {
+            kind: Seeded::Point(k),
+            ..*s
+        })
+        .collect();
+    let pass = |reversed: bool| -> Result<Vec<Steps>> {
+        let (lo, hi) = if reversed { (first, f) } else { (f, last) };
+        let (sub, old) = sub_run(run, lo..=hi, reversed);
+        let mut new_of = vec![usize::MAX; run.objects.len()];
+        for (n, &o) in old.iter().enumerate() {
+            new_of[o] = n;
+        }
+        let local: Vec<Seed> = (numbered.iter())
+            .map(|s| Seed {
+                object: new_of[s.object],
+                ..*s
+            })
+            .collect();
+        let followed = follow_inner(&sub, aspect, params, &local, false, true)?;
+        let mut steps = vec![Vec::new(); seeds.len()];
+        for p in followed.points {
+            if let Seeded::Point(k) = p.kind {
+                steps[k] = p.steps.into_iter().map(|(o, xy)| (old[o], xy)).collect();
+            }
+        }
+        Ok(steps)
+    };
+    let forward = pass(false)?;
+    let backward = pass(true)?;
+    for ((seed, fwd), bwd) in seeds.iter().zip(forward).zip(backward) {
+        // The backward steps from the seed's frame down: the seed's own step is the forward's.
+        let mut steps: Vec<(usize, [f64; 2])> = bwd.into_iter().skip(1).collect();
+        steps.reverse();
+        steps.extend(fwd);
+        out.points.push(FollowedPoint {
+            seed: (seed.object, None),
+            kind: seed.kind,
+            steps,
+        });
+    }
+    Ok(out)
+}
+
+/// `(object, [x, y])` of each frame a point was followed through.
+type Steps = Vec<(usize, [f64; 2])>;
+
+/// The objects of `run` on frames `frames` as a run of their own, in sequence order or, when
+/// `reversed`, in reversed order with every pair between them turned round (its matches from
+/// the later object to the earlier); with the index in `run` of each of its objects.
+fn sub_run(
+    run: &SequenceResult,
+    frames: std::ops::RangeInclusive<usize>,
+    reversed: bool,
+) -> (SequenceResult, Vec<usize>) {
+    let mut old: Vec<usize> = (0..run.objects.len())
+        .filter(|&o| frames.contains(&run.objects[o].frame))
+        .collect();
+    if reversed {
+        old.reverse();
+    }
+    let mut new_of: HashMap<usize, usize> = HashMap::new();
+    for (n, &o) in old.iter().enumerate() {
+        new_of.insert(o, n);
+    }
+    let objects = old.iter().map(|&o| run.objects[o].clone()).collect();
+    let link = |a: usize, b: usize| {
+        let (na, nb) = (*new_of.get(&a)?, *new_of.get(&b)?);
+        Some(if reversed { (nb, na) } else { (na, nb) })
+    };
+    let pairs = (run.pairs.iter())
+        .filter_map(|p| {
+            let (a, b) = link(p.a, p.b)?;
+            // The follower reads a pair's matches only (its transform is left as it was).
+            let mut result = p.without_details().ok()?.result;
+            if reversed {
+                for m in &mut result.pairs {
+                    std::mem::swap(&mut m.a, &mut m.b);
+                }
+                std::mem::swap(&mut result.unmatched_a, &mut result.unmatched_b);
+            }
+            Some(PairMatch {
+                a,
+                b,
+                result,
+                row: p.row.clone(),
+                trackable: p.trackable.clone(),
+            })
+        })
+        .collect();
+    let skipped_pairs = (run.skipped_pairs.iter())
+        .filter_map(|p| {
+            let (a, b) = link(p.a, p.b)?;
+            Some(crate::result::SkippedPair {
+                a,
+                b,
+                reason: p.reason.clone(),
+            })
+        })
+        .collect();
+    let sub = SequenceResult {
+        objects,
+        pairs,
+        skipped_pairs,
+        ..SequenceResult::default()
+    };
+    (sub, old)
 }
 
 /// The material points of a run as its outputs give them: the default seeds (the outline
@@ -859,7 +1025,7 @@ fn nearest(ps: &[[f64; 2]], q: [f64; 2]) -> (usize, f64) {
 
 /// A closed polyline with points added so that no gap exceeds `step`: the nodes first (node `i`
 /// at `node_at[i]`), then the points between them.
-fn densify(nodes: &[[f64; 2]], step: f64) -> (Vec<[f64; 2]>, Vec<usize>) {
+pub(crate) fn densify(nodes: &[[f64; 2]], step: f64) -> (Vec<[f64; 2]>, Vec<usize>) {
     let n = nodes.len();
     let mut dense = Vec::with_capacity(n * 4);
     let mut node_at = Vec::with_capacity(n);

@@ -34,6 +34,7 @@ pub mod drift;
 pub mod follow;
 pub mod inputs;
 mod matching;
+pub mod moving_regions;
 mod objects;
 pub mod options;
 pub mod pairing;

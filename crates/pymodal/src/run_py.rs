@@ -109,10 +109,14 @@ macro_rules! define_run {
         ///   (k, 2) int array of ``(object_id, seed_node)`` rows (node -1 for a point given by
         ///   position); ``point_names`` per point the name of a point given with ``points``
         ///   (None for the outline's default points); empty lists for the other models;
-        /// - ``region_series``: with ``regions``, the rows of ``region_series.csv`` as dicts (``region``,
-        ///   ``kind`` "moving" or "fixed", ``frame``, ``time_s``, ``sensels``, ``area_mm2``,
-        ///   ``total_force_n``, ``peak_pressure_kpa``, ``cop_x``, ``cop_y``, ...,
-        ///   ``mean_pressure_kpa``, named by the units known); an empty list without;
+        /// - ``region_series``: with ``regions`` or ``region_rule``, the rows of ``region_series.csv``
+        ///   as dicts (``region``, ``kind`` "moving" or "fixed", ``frame``, ``time_s``, ``sensels``,
+        ///   ``area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x``, ``cop_y``, ...,
+        ///   ``mean_pressure_kpa``, named by the units known; ``name`` and ``stance`` of an
+        ///   anatomical region, None for the user's); an empty list without;
+        /// - ``regions``: with ``region_rule``, the rows of ``regions.csv`` as dicts (``region``,
+        ///   ``measure``, ``value``, ``unit``, ``kind`` "fixed" or, contour model, "moving"); an
+        ///   empty list without, or when the footprint cannot be divided;
         /// - ``frames``: list of dicts of per-frame measures (``frame``, ``time_s``,
         ///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
         ///   units allow, like ``frames.csv``);
@@ -241,14 +245,6 @@ fn run_recording<'py>(
     set_points(py, &dict, &result, points.as_ref(), &options.inputs)?;
     let (start, end) = options.frames.unwrap_or((0, rec.n_frames()));
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
-    let regions = match &points {
-        Some(p) if !options.inputs.regions.is_empty() => {
-            pedo_output::regions_table(&rec, &result, p, &options.inputs, threshold)
-                .map_err(to_py)?
-        }
-        _ => pedo_output::Table::default(),
-    };
-    dict.set_item("region_series", table_rows(py, &regions)?)?;
     let measures = pedo_output::frames_table(&rec, threshold, start, end);
     dict.set_item("frames", table_rows(py, &measures)?)?;
     let m = crate::pool::detach(py, || {
@@ -257,6 +253,64 @@ fn run_recording<'py>(
     .map_err(to_py)?;
     let curves = pedo_output::curves_table(&rec, &m, None);
     dict.set_item("curves", table_rows(py, &curves)?)?;
+    let mut regions = match &points {
+        Some(p) if !options.inputs.regions.is_empty() => {
+            pedo_output::regions_table(&rec, &result, p, &options.inputs, threshold)
+                .map_err(to_py)?
+        }
+        _ => pedo_output::Table::default(),
+    };
+    // The anatomical regions of region_rule: fixed and carried through the stances (contour
+    // model), their rows after the user's regions, their values as regions.csv's rows.
+    let mut values = pedo_output::Table {
+        header: ["region", "measure", "value", "unit", "kind"]
+            .map(String::from)
+            .to_vec(),
+        rows: Vec::new(),
+    };
+    if let Some(rule) = outputs.regions {
+        let anatomy = crate::pool::detach_cancellable(py, &cancel, || {
+            // A footprint that cannot be divided has no regions (regions.json says why).
+            let Ok((masks, fixed)) =
+                pedo_io::regions::recording_regions(&rec, threshold, start..end, rule)
+            else {
+                return Ok(None);
+            };
+            let moving = (options.model == pedo_track::ObjectModel::Contour)
+                .then(|| {
+                    pedo_output::moving_regions::follow_anatomy(
+                        &rec, &result, &options, &m, &masks, &fixed,
+                    )
+                })
+                .transpose()?;
+            Ok::<_, pedo_io::IoError>(Some((masks, fixed, moving)))
+        })?
+        .map_err(to_py)?;
+        if let Some((masks, fixed, moving)) = anatomy {
+            if let Some(a) = &moving {
+                if regions.header.is_empty() {
+                    regions = pedo_output::region_series_header(&rec);
+                }
+                pedo_output::moving_regions::anatomy_rows(&mut regions, &rec, &masks, a, threshold)
+                    .map_err(to_py)?;
+            }
+            let moving = moving.as_ref().map(|a| &a.values);
+            let kinds = [("fixed", Some(&fixed)), ("moving", moving)];
+            for (kind, v) in kinds.into_iter().filter_map(|(k, v)| Some((k, v?))) {
+                for (region, measure, value, unit) in pedo_output::region_quantities(&m, v) {
+                    values.rows.push(vec![
+                        pedo_output::Cell::Text(region),
+                        pedo_output::Cell::Text(measure.to_string()),
+                        pedo_output::Cell::Float(value, 6),
+                        pedo_output::Cell::Text(unit),
+                        pedo_output::Cell::Text(kind.to_string()),
+                    ]);
+                }
+            }
+        }
+    }
+    dict.set_item("region_series", table_rows(py, &regions)?)?;
+    dict.set_item("regions", table_rows(py, &values)?)?;
     let summary = match summary {
         Some(summary) => summary,
         None => {

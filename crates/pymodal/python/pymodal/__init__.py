@@ -41,12 +41,13 @@ def _same(a: _Any, b: _Any) -> bool:
 class RunResult(dict[str, _Any]):
     """What :func:`run` returns: a dict (``table``, ``matches``, ``reference_matches``,
     ``objects``, ``tracks``, ``track_steps``, ``points``, ``point_steps``, ``point_names``,
-    ``region_series``, ``frames``, ``summary``, ``timings``) that Jupyter shows as a table of its
+    ``region_series``, ``regions``, ``frames``, ``curves``, ``summary``, ``timings``) that Jupyter shows as a table of its
     summary. ``points`` are the material points of a contour run, followed by anchored
     registration (one array of rows ``frame, x, y`` per point; ``point_steps`` gives each step's
     object id and the node the point was seeded on, ``point_names`` the name of a point given
     with ``points=``, None for the outline's); ``region_series`` the rows of ``region_series.csv`` for the
-    regions given with ``regions=``.
+    regions given with ``regions=`` and, with ``region_rule=``, the anatomical regions fixed and
+    carried through each stance; ``regions`` the rows of ``regions.csv`` (``kind`` fixed or moving).
 
     Compares by value with ``==``: the same keys, and values equal recursively (lists element by
     element, numpy arrays in shape, dtype and values), NaN equal to NaN, so that a result equals

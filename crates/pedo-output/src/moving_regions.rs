@@ -1,0 +1,142 @@
+//! The anatomical regions of a run that move with the foot ([`pedo_track::moving_regions`]):
+//! their rows in `region_series.csv` beside the fixed masks', their values in `regions.csv`
+//! (`kind` `moving`) and `regions.json` (`moving`).
+
+use crate::run_tables::{region_series_row, RegionId};
+use crate::table::Table;
+use pedo_io::measures::Measures;
+use pedo_io::regions::{MovingRegionSeries, RegionMasks, RegionValues};
+use pedo_io::stances::Stance;
+use pedo_io::{IoError, Recording, Result};
+use pedo_track::moving_regions::{follow_masks, MovingRegion};
+use pedo_track::{SequenceOptions, SequenceResult};
+use serde_json::{json, Map, Value};
+
+/// The anatomical regions carried through a run's stances and their values over its frames.
+#[derive(Debug, Clone)]
+pub struct MovingAnatomy {
+    /// One per stance and region, in stance order, then label order.
+    pub regions: Vec<MovingRegion>,
+    /// Each region's values over the run's frames (0 force outside the stances), in the
+    /// masks' label order, the share of the fixed regions' impulse.
+    pub values: Vec<RegionValues>,
+}
+
+/// The moving regions of a run, or why there are none (a run not of contours, a footprint that
+/// could not be divided).
+pub type MovingOutcome = std::result::Result<MovingAnatomy, IoError>;
+
+/// The regions of `masks` carried through each stance of `measures` by the contour run `run`
+/// ([`follow_masks`]), and their values over the frames of `measures` ([`MovingRegionSeries`]),
+/// the shares of the impulse of the `fixed` regions' values.
+///
+/// # Errors
+/// Those of [`follow_masks`] and [`MovingRegionSeries`]; a frame the recording does not hold.
+pub fn follow_anatomy(
+    recording: &Recording,
+    run: &SequenceResult,
+    options: &SequenceOptions,
+    measures: &Measures,
+    masks: &RegionMasks,
+    fixed: &[RegionValues],
+) -> Result<MovingAnatomy> {
+    let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
+    let stances: Vec<Stance> = measures.stances.iter().map(|s| s.stance).collect();
+    let regions = follow_masks(run, options, recording, masks, &stances, threshold)?;
+    let (rows, cols) = (recording.rows(), recording.cols());
+    let mut series = MovingRegionSeries::new(recording, threshold, &masks.names)?;
+    for t in measures.frames.clone() {
+        let values = recording
+            .frame_slice(t)
+            .ok_or_else(|| IoError::invalid(format!("frame {t} is not held to measure on")))?;
+        let shares: Vec<Option<Vec<f64>>> = (1..=masks.names.len())
+            .map(|label| {
+                let r = regions.iter().find(|r| {
+                    usize::from(r.label) == label && (r.frames.0..=r.frames.1).contains(&t)
+                })?;
+                r.shares(t, rows, cols)
+            })
+            .collect();
+        series.add_frame(&values, &shares)?;
+    }
+    let total: f64 = fixed.iter().map(|v| v.fti).sum();
+    let values = series.finish(total)?;
+    Ok(MovingAnatomy { regions, values })
+}
+
+/// Appends to `t` ([`crate::region_series_header`]) the rows of the moving anatomical regions:
+/// for each stance, region and frame of the stance, `kind` `moving` (the share of each sensel the
+/// region's followed outlines cover; empty measures on a frame it was not followed to) and `fixed`
+/// (the mask drawn on the peak image, left in place), with the region's label, `name` and
+/// `stance`. A region off the contact has 0 force, not a missing row.
+///
+/// # Errors
+/// A frame the recording cannot give.
+pub fn anatomy_rows(
+    t: &mut Table,
+    recording: &Recording,
+    masks: &RegionMasks,
+    moving: &MovingAnatomy,
+    threshold: f64,
+) -> Result<()> {
+    let (rows, cols) = (recording.rows(), recording.cols());
+    for r in &moving.regions {
+        let fixed: Vec<f64> = (masks.labels.iter())
+            .map(|&l| f64::from(u8::from(l == r.label)))
+            .collect();
+        for frame in r.frames.0..=r.frames.1 {
+            let grid = recording.frame(frame)?;
+            let shares = r.shares(frame, rows, cols);
+            for (kind, cells) in [("moving", shares.as_deref()), ("fixed", Some(&fixed[..]))] {
+                let id = RegionId {
+                    label: usize::from(r.label),
+                    kind,
+                    name: Some(&r.name),
+                    stance: Some(r.stance),
+                };
+                let at = cells.map(|c| (&grid, c));
+                t.rows
+                    .push(region_series_row(recording, &id, frame, at, threshold));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `regions.json`'s `moving`: how the regions were carried (the reference frame's rule), each
+/// stance's reference frame and per region its sensels there and parts (found, followed), and
+/// each region's values with their units; or why there are none.
+pub fn moving_json(m: &Measures, outcome: &MovingOutcome) -> Value {
+    let moving = match outcome {
+        Ok(found) => found,
+        Err(e) => return json!({"error": e.to_string()}),
+    };
+    let mut stances: Vec<Value> = Vec::new();
+    for r in &moving.regions {
+        if stances.len() <= r.stance {
+            stances.push(json!({
+                "stance": r.stance,
+                "frames": [r.frames.0, r.frames.1],
+                "reference_frame": r.reference_frame,
+                "regions": {},
+            }));
+        }
+        if let Some(s) = stances.last_mut() {
+            s["regions"][&r.name] = json!({
+                "reference_sensels": r.reference_cells.iter().filter(|&&c| c).count(),
+                "parts": r.parts.0,
+                "parts_followed": r.parts.1,
+            });
+        }
+    }
+    let mut per: Map<String, Value> = Map::new();
+    for (region, measure, value, unit) in crate::region_quantities(m, &moving.values) {
+        let entry = per.entry(region).or_insert_with(|| json!({}));
+        entry[measure] = json!({"value": value, "unit": unit});
+    }
+    json!({
+        "rule": "each stance's frame of largest contact area is its reference frame; a region there is the mask's sensels in contact, each connected part followed by its outline forwards and backwards through the stance; on a frame the region is the sensels whose centres lie inside its followed outlines",
+        "stances": stances,
+        "regions": per,
+    })
+}

@@ -1,0 +1,254 @@
+//! Anatomical regions that move with the foot (docs/method.md, "Regions carried by the field"):
+//! the automatic masks of [`pedo_io::regions`], drawn once over the peak image, carried through
+//! each stance by the follower of [`crate::follow`].
+//!
+//! For each stance the **reference frame** is its frame of largest contact area (the most
+//! sensels loaded; the earliest of equals): the foot-flat frame, where the whole sole is down and
+//! the peak image's footprint and the frame's contact agree best. On it a region is the mask's
+//! sensels that are in contact, so the regions partition that frame's contact. Each connected
+//! part of a region (4-neighbours) is followed by its outline (the boundary of its sensels'
+//! squares) forwards to the stance's last frame and backwards to its first
+//! ([`follow::follow_both_ways`]); on a frame the region is the share of each sensel that
+//! one of its parts' followed outlines covers, sensel by sensel. A part that no contour object of the reference frame
+//! holds (contact below the contours' smoothing) is not followed.
+
+use crate::follow::{self, FollowParams, Seed, Seeded, REGION_STEP};
+use crate::*;
+use pedo_io::marks::{polygon_coverage, LabelMask};
+use pedo_io::recording::Recording;
+use pedo_io::regions::RegionMasks;
+use pedo_io::stances::Stance;
+use pedo_io::{IoError, Result};
+use std::collections::BTreeMap;
+
+/// One anatomical region of one stance, carried by the field.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MovingRegion {
+    /// The stance (0-based, in frame order).
+    pub stance: usize,
+    /// The region's label in the masks (1-based).
+    pub label: u8,
+    /// The region's name.
+    pub name: String,
+    /// The stance's frames, `first..=last`.
+    pub frames: (usize, usize),
+    /// The frame it is defined on (the stance's frame of largest contact area).
+    pub reference_frame: usize,
+    /// Its sensels on the reference frame (row-major): the mask's sensels in contact there.
+    pub reference_cells: Vec<bool>,
+    /// Its connected parts on the reference frame, and of those, the parts followed.
+    pub parts: (usize, usize),
+    /// Per frame of the stance on which a part was followed: each followed part's outline
+    /// there (sensels, x = column, y = row).
+    pub outlines: BTreeMap<usize, Vec<Vec<[f64; 2]>>>,
+}
+
+impl MovingRegion {
+    /// The share of each sensel (`rows × cols`, row-major) it covers on `frame`: the part of
+    /// the sensel inside a followed part's outline ([`polygon_coverage`]); `None` on a frame it
+    /// was not followed to (outside its stance, or no contour object carried it there).
+    pub fn shares(&self, frame: usize, rows: usize, cols: usize) -> Option<Vec<f64>> {
+        let parts = self.outlines.get(&frame)?;
+        let mut shares = vec![0.0; rows * cols];
+        for outline in parts.iter().filter(|o| o.len() >= 3) {
+            for (w, part) in shares.iter_mut().zip(polygon_coverage(outline, rows, cols)) {
+                *w = (*w + part).min(1.0);
+            }
+        }
+        Some(shares)
+    }
+}
+
+/// The reference frame of a stance: its frame of largest contact area (sensels of the sensor
+/// loaded above 0 and at or above `threshold`), the earliest of equals.
+///
+/// # Errors
+/// A frame the recording does not hold.
+pub fn reference_frame(recording: &Recording, stance: &Stance, threshold: f64) -> Result<usize> {
+    let mut best = (stance.first, 0usize);
+    for t in stance.first..=stance.last {
+        let n = contact_cells(recording, t, threshold)?
+            .iter()
+            .filter(|&&c| c)
+            .count();
+        if n > best.1 {
+            best = (t, n);
+        }
+    }
+    Ok(best.0)
+}
+
+/// The sensels of the sensor loaded above 0 and at or above `threshold` on frame `t`.
+fn contact_cells(recording: &Recording, t: usize, threshold: f64) -> Result<Vec<bool>> {
+    let values = recording
+        .frame_slice(t)
+        .ok_or_else(|| IoError::invalid(format!("frame {t} is not held to follow regions on")))?;
+    let mask = recording.sensor_mask();
+    Ok(values
+        .iter()
+        .zip(mask)
+        .map(|(&v, &m)| m && v > 0.0 && f64::from(v) >= threshold)
+        .collect())
+}
+
+/// The connected parts (4-neighbours) of the sensels `cells` (`rows × cols`), each as its
+/// sensels' flags.
+fn parts_of(cells: &[bool], rows: usize, cols: usize) -> Vec<Vec<bool>> {
+    let mut seen = vec![false; cells.len()];
+    let mut parts = Vec::new();
+    for start in 0..cells.len() {
+        if !cells[start] || seen[start] {
+            continue;
+        }
+        let mut part = vec![false; cells.len()];
+        let mut stack = vec![start];
+        seen[start] = true;
+        while let Some(i) = stack.pop() {
+            part[i] = true;
+            let (r, c) = (i / cols, i % cols);
+            let mut near = Vec::with_capacity(4);
+            if r > 0 {
+                near.push(i - cols);
+            }
+            if r + 1 < rows {
+                near.push(i + cols);
+            }
+            if c > 0 {
+                near.push(i - 1);
+            }
+            if c + 1 < cols {
+                near.push(i + 1);
+            }
+            for j in near {
+                if cells[j] && !seen[j] {
+                    seen[j] = true;
+                    stack.push(j);
+                }
+            }
+        }
+        parts.push(part);
+    }
+    parts
+}
+
+/// The regions of `masks` carried through every stance of `stances` by the objects and pairs
+/// of the contour run `run` (see the [module](self)): one [`MovingRegion`] per stance and
+/// region, in stance order, then label order. A region with no sensel in contact on its
+/// stance's reference frame has no part (it is empty on every frame).
+///
+/// # Errors
+/// [`IoError::InvalidInput`] for a run that is not of contours, masks that are not of the
+/// recording's shape, or a stance's frame the recording does not hold.
+pub fn follow_masks(
+    run: &SequenceResult,
+    options: &SequenceOptions,
+    recording: &Recording,
+    masks: &RegionMasks,
+    stances: &[Stance],
+    threshold: f64,
+) -> Result<Vec<MovingRegion>> {
+    if options.model != ObjectModel::Contour {
+        return Err(IoError::invalid(
+            "regions are carried by the field of contour runs only",
+        ));
+    }
+    let (rows, cols) = (recording.rows(), recording.cols());
+    if (masks.rows, masks.cols) != (rows, cols) || masks.labels.len() != rows * cols {
+        return Err(IoError::invalid(format!(
+            "region masks of {}x{} do not fit frames of {rows}x{cols}",
+            masks.rows, masks.cols
+        )));
+    }
+    let aspect = SenselAspect::of(options);
+    let params = FollowParams::default();
+    let mut out = Vec::new();
+    for (s, stance) in stances.iter().enumerate() {
+        let reference = reference_frame(recording, stance, threshold)?;
+        let contact = contact_cells(recording, reference, threshold)?;
+        let objects: Vec<usize> = (0..run.objects.len())
+            .filter(|&o| run.objects[o].frame == reference && run.objects[o].shape.dim() == 2)
+            .collect();
+        let outline_of = |o: usize| -> Vec<[f64; 2]> {
+            let shape = &run.objects[o].shape;
+            (0..shape.len())
+                .map(|i| [shape.point(i)[0], shape.point(i)[1]])
+                .collect()
+        };
+        let object_outlines: Vec<Vec<[f64; 2]>> = objects.iter().map(|&o| outline_of(o)).collect();
+        // Seeds of every part of every region of this stance; `owner[j]` = (region, part).
+        let mut seeds = Vec::new();
+        let mut owner: Vec<usize> = Vec::new();
+        for (k, name) in masks.names.iter().enumerate() {
+            let label = (k + 1) as u8;
+            let cells: Vec<bool> = (masks.labels.iter().zip(&contact))
+                .map(|(&l, &c)| l == label && c)
+                .collect();
+            let parts = parts_of(&cells, rows, cols);
+            let mut followed = 0;
+            for part in &parts {
+                let centres: Vec<[f64; 2]> = (part.iter().enumerate())
+                    .filter(|(_, c)| **c)
+                    .map(|(i, _)| [(i % cols) as f64, (i / cols) as f64])
+                    .collect();
+                let held = (object_outlines.iter().enumerate())
+                    .map(|(j, o)| {
+                        let n = (centres.iter())
+                            .filter(|&&c| pedo_io::contour::point_in_polygon(c, o))
+                            .count();
+                        (j, n)
+                    })
+                    .max_by_key(|&(j, n)| (n, std::cmp::Reverse(j)));
+                let Some((j, _)) = held.filter(|&(_, n)| n > 0) else {
+                    continue;
+                };
+                let labels: Vec<u32> = part.iter().map(|&c| u32::from(c)).collect();
+                let outline = LabelMask::new(rows, cols, labels)?.outline(1);
+                let index = owner.len();
+                owner.push(out.len());
+                seeds.extend(
+                    follow::densify(&outline, REGION_STEP)
+                        .0
+                        .into_iter()
+                        .map(|xy| Seed {
+                            object: objects[j],
+                            xy,
+                            kind: Seeded::Region(index),
+                        }),
+                );
+                followed += 1;
+            }
+            out.push(MovingRegion {
+                stance: s,
+                label,
+                name: name.clone(),
+                frames: (stance.first, stance.last),
+                reference_frame: reference,
+                reference_cells: cells,
+                parts: (parts.len(), followed),
+                outlines: BTreeMap::new(),
+            });
+        }
+        let followed =
+            follow::follow_both_ways(run, aspect, &params, &seeds, stance.first, stance.last)?;
+        // Each part's outline per frame: its points in outline order, where followed.
+        let mut by_part: Vec<BTreeMap<usize, Vec<[f64; 2]>>> = vec![BTreeMap::new(); owner.len()];
+        for p in &followed.points {
+            let Seeded::Region(part) = p.kind else {
+                continue;
+            };
+            for &(o, xy) in &p.steps {
+                by_part[part]
+                    .entry(run.objects[o].frame)
+                    .or_default()
+                    .push(xy);
+            }
+        }
+        for (part, frames) in by_part.into_iter().enumerate() {
+            let region = &mut out[owner[part]];
+            for (frame, outline) in frames {
+                region.outlines.entry(frame).or_default().push(outline);
+            }
+        }
+    }
+    Ok(out)
+}
