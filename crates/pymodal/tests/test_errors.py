@@ -190,6 +190,7 @@ INT_KEYWORD_CALLS = {
     "eigh": lambda **kw: pymodal.eigh(np.eye(3), np.eye(3), **kw),
     "ModalModel": lambda **kw: pymodal.ModalModel(SQUARE, **kw),
     "SyntheticWalk": lambda **kw: pymodal.SyntheticWalk(**kw),
+    "register": lambda **kw: pymodal.register(np.zeros((2, 8, 8)), **kw),
 }
 
 

@@ -166,14 +166,14 @@ def test_polygon_masks_are_measured_as_numpy_finds_them(tmp_path):
     assert [meta["labels"][str(k)] for k in (1, 2)] == names
     threshold = json.loads((out / "measures.json").read_text())["contact_threshold"]
     want = numpy_region_values(rec, labels, names, threshold)
-    got = read_csv(out / "regions.csv")
+    got = [r for r in read_csv(out / "regions.csv") if r["kind"] == "fixed"]
     assert len(got) == 7 * len(names)
     for row in got:
         assert float(row["value"]) == pytest.approx(want[row["region"]][row["measure"]], rel=1e-9, abs=1e-12), row
     # The same regions as a 2-D array: the same values, regions named by their labels.
     out2 = tmp_path / "array"
     pymodal.run(rec, out=str(out2), report="none", figures="none", masks=labels * 3)
-    got2 = {(r["measure"], r["region"]): r["value"] for r in read_csv(out2 / "regions.csv")}
+    got2 = {(r["measure"], r["region"]): r["value"] for r in read_csv(out2 / "regions.csv") if r["kind"] == "fixed"}
     for row in got:
         label = 3 * (names.index(row["region"]) + 1)
         assert got2[(row["measure"], f"region_{label}")] == row["value"]
@@ -182,7 +182,7 @@ def test_polygon_masks_are_measured_as_numpy_finds_them(tmp_path):
     np.save(npy, labels.astype(np.float64))
     out3 = tmp_path / "npy"
     pymodal.run(rec, out=str(out3), report="none", figures="none", masks=str(npy))
-    assert read_csv(out3 / "regions.csv") == [
+    assert [r for r in read_csv(out3 / "regions.csv") if r["kind"] == "fixed"] == [
         dict(r, region=f"region_{names.index(r['region']) + 1}") for r in got
     ]
     assert "region_1_force_n" in read_csv(out3 / "curves.csv")[0]
