@@ -32,22 +32,8 @@ pub struct GivenPoint {
 /// number or a frame that is not a non-negative integer; [`IoError::Format`] for a file without
 /// a header or without points.
 pub fn parse_given_points(text: &str, name: &str) -> Result<Vec<GivenPoint>> {
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i, l.trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-    let split = |l: &str| -> Vec<String> {
-        l.split([',', ';', '\t'])
-            .map(|f| f.trim().trim_matches('"').to_string())
-            .collect()
-    };
-    let (_, header) = lines
-        .next()
-        .ok_or_else(|| IoError::format(name, "no header: expected x,y or x_mm,y_mm"))?;
-    let header: Vec<String> = split(header).iter().map(|h| h.to_lowercase()).collect();
-    let col = |n: &str| header.iter().position(|h| h == n);
+    let table = HandTable::parse(text, name, "x,y or x_mm,y_mm")?;
+    let (header, col) = (&table.header, |n: &str| table.col(n));
     let (x, y, mm) = match (col("x"), col("y"), col("x_mm"), col("y_mm")) {
         (Some(x), Some(y), _, _) => (x, y, false),
         (_, _, Some(x), Some(y)) => (x, y, true),
@@ -63,32 +49,18 @@ pub fn parse_given_points(text: &str, name: &str) -> Result<Vec<GivenPoint>> {
     };
     let (name_col, frame_col) = (col("name"), col("frame"));
     let mut out = Vec::new();
-    for (i, line) in lines {
-        let f = split(line);
-        let get = |c: usize, what: &str| {
-            f.get(c)
-                .ok_or_else(|| IoError::parse(name, i + 1, format!("no {what} column")))
-        };
-        let number = |c: usize, what: &str| -> Result<f64> {
-            let s = get(c, what)?;
-            s.parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| {
-                    IoError::parse(name, i + 1, format!("{what} {s:?} is not a finite number"))
-                })
-        };
-        let xy = [number(x, &header[x])?, number(y, &header[y])?];
+    for row in table.rows() {
+        let xy = [row.number(x, &header[x])?, row.number(y, &header[y])?];
         let frame = match frame_col {
             Some(c) => {
-                let s = get(c, "frame")?;
+                let s = row.get(c, "frame")?;
                 if s.is_empty() {
                     None
                 } else {
                     Some(s.parse::<usize>().map_err(|_| {
                         IoError::parse(
                             name,
-                            i + 1,
+                            row.line,
                             format!("frame {s:?} is not a frame number (0-based)"),
                         )
                     })?)
@@ -96,7 +68,7 @@ pub fn parse_given_points(text: &str, name: &str) -> Result<Vec<GivenPoint>> {
             }
             None => None,
         };
-        let label = match name_col.map(|c| get(c, "name")).transpose()? {
+        let label = match name_col.map(|c| row.get(c, "name")).transpose()? {
             Some(s) if !s.is_empty() => s.clone(),
             _ => format!("p{}", out.len() + 1),
         };
@@ -387,6 +359,82 @@ fn clip_half_plane(poly: &[[f64; 2]], keep: impl Fn(&[f64; 2]) -> bool, at: f64)
         }
     }
     out
+}
+
+/// A small table a user writes by hand (points, polygons): a header, then one row a line,
+/// fields separated by commas, semicolons or tabs (quotes and spaces around them dropped),
+/// blank lines and `#` comments skipped, a byte-order mark ignored.
+pub(crate) struct HandTable<'a> {
+    /// The file's name, for errors.
+    name: &'a str,
+    /// The header's names, lower case.
+    pub(crate) header: Vec<String>,
+    /// Each row's 1-based line number and fields.
+    rows: Vec<(usize, Vec<String>)>,
+}
+
+impl<'a> HandTable<'a> {
+    /// Splits `text` (the file `name`); `expected` names the header's columns for the error
+    /// of a file without one.
+    pub(crate) fn parse(text: &str, name: &'a str, expected: &str) -> Result<Self> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let split = |l: &str| -> Vec<String> {
+            l.split([',', ';', '\t'])
+                .map(|f| f.trim().trim_matches('"').to_string())
+                .collect()
+        };
+        let mut lines = (text.lines().enumerate())
+            .map(|(i, l)| (i + 1, l.trim()))
+            .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+        let (_, header) = lines
+            .next()
+            .ok_or_else(|| IoError::format(name, format!("no header: expected {expected}")))?;
+        let header = split(header).iter().map(|h| h.to_lowercase()).collect();
+        let rows = lines.map(|(i, l)| (i, split(l))).collect();
+        Ok(Self { name, header, rows })
+    }
+
+    /// The index of the column named `n` (lower case).
+    pub(crate) fn col(&self, n: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == n)
+    }
+
+    /// The rows under the header.
+    pub(crate) fn rows(&self) -> impl Iterator<Item = HandRow<'_>> {
+        (self.rows.iter()).map(|(line, fields)| HandRow {
+            name: self.name,
+            line: *line,
+            fields,
+        })
+    }
+}
+
+/// One row of a [`HandTable`].
+pub(crate) struct HandRow<'a> {
+    name: &'a str,
+    /// Its line in the file, 1-based.
+    pub(crate) line: usize,
+    fields: &'a [String],
+}
+
+impl HandRow<'_> {
+    /// Field `c`, named `what` in the error of a row too short for it.
+    pub(crate) fn get(&self, c: usize, what: &str) -> Result<&String> {
+        (self.fields.get(c))
+            .ok_or_else(|| IoError::parse(self.name, self.line, format!("no {what} column")))
+    }
+
+    /// Field `c` as a finite number.
+    pub(crate) fn number(&self, c: usize, what: &str) -> Result<f64> {
+        let s = self.get(c, what)?;
+        (s.parse::<f64>().ok().filter(|v| v.is_finite())).ok_or_else(|| {
+            IoError::parse(
+                self.name,
+                self.line,
+                format!("{what} {s:?} is not a finite number"),
+            )
+        })
+    }
 }
 
 fn label_of(v: f64) -> Option<u32> {

@@ -55,22 +55,8 @@ pub fn parse_mask_polygons(
     name: &str,
     pitch_mm: Option<[f64; 2]>,
 ) -> Result<Vec<MaskPolygon>> {
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i, l.trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-    let split = |l: &str| -> Vec<String> {
-        l.split([',', ';', '\t'])
-            .map(|f| f.trim().trim_matches('"').to_string())
-            .collect()
-    };
-    let (_, header) = lines
-        .next()
-        .ok_or_else(|| IoError::format(name, "no header: expected region,x_mm,y_mm"))?;
-    let header: Vec<String> = split(header).iter().map(|h| h.to_lowercase()).collect();
-    let col = |n: &str| header.iter().position(|h| h == n);
+    let table = crate::marks::HandTable::parse(text, name, "region,x_mm,y_mm")?;
+    let (header, col) = (&table.header, |n: &str| table.col(n));
     let region =
         col("region").ok_or_else(|| IoError::format(name, "the header names no region column"))?;
     let (x, y, mm) = match (col("x_mm"), col("y_mm"), col("x"), col("y")) {
@@ -98,26 +84,15 @@ pub fn parse_mask_polygons(
         [1.0, 1.0]
     };
     let mut out: Vec<MaskPolygon> = Vec::new();
-    for (i, line) in lines {
-        let f = split(line);
-        let get = |c: usize, what: &str| {
-            f.get(c)
-                .ok_or_else(|| IoError::parse(name, i + 1, format!("no {what} column")))
-        };
-        let number = |c: usize, what: &str| -> Result<f64> {
-            let s = get(c, what)?;
-            s.parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| {
-                    IoError::parse(name, i + 1, format!("{what} {s:?} is not a finite number"))
-                })
-        };
-        let region = get(region, "region")?.clone();
+    for row in table.rows() {
+        let region = row.get(region, "region")?.clone();
         if region.is_empty() {
-            return Err(IoError::parse(name, i + 1, "the region has no name"));
+            return Err(IoError::parse(name, row.line, "the region has no name"));
         }
-        let p = [number(x, "x")? * scale[0], number(y, "y")? * scale[1]];
+        let p = [
+            row.number(x, "x")? * scale[0],
+            row.number(y, "y")? * scale[1],
+        ];
         match out.iter_mut().find(|r| r.name == region) {
             Some(r) => r.vertices.push(p),
             None => out.push(MaskPolygon {
