@@ -42,6 +42,44 @@ use std::ops::Range;
 /// `min + 0.1 × (max − min)`).
 pub const CONTACT_FORCE_FRACTION: f64 = 0.1;
 
+/// When a force series (one value per frame) is in contact: its largest force, the contact
+/// force threshold (`min + CONTACT_FORCE_FRACTION × (max − min)`) and the first and last frame
+/// above it (both 0 when none is: a series of zeros or of one constant force).
+pub(crate) struct ForceContact {
+    pub(crate) peak: f64,
+    pub(crate) threshold: f64,
+    pub(crate) first: usize,
+    pub(crate) last: usize,
+}
+
+impl ForceContact {
+    pub(crate) fn of(forces: &[f64]) -> Self {
+        let (lo, hi) = (forces.iter()).fold((f64::INFINITY, 0.0f64), |(lo, hi), &f| {
+            (lo.min(f), hi.max(f))
+        });
+        let threshold = lo + CONTACT_FORCE_FRACTION * (hi - lo);
+        let above = |f: &f64| *f > threshold;
+        let first = forces.iter().position(above).unwrap_or(0);
+        let last = forces.iter().rposition(above).unwrap_or(first);
+        ForceContact {
+            peak: hi,
+            threshold,
+            first,
+            last,
+        }
+    }
+
+    /// The contact time: the frames from the first to the last above the threshold, `dt`
+    /// each; 0 for a series without force.
+    pub(crate) fn time(&self, dt: f64) -> f64 {
+        if self.peak > 0.0 {
+            (self.last - self.first + 1) as f64 * dt
+        } else {
+            0.0
+        }
+    }
+}
+
 /// The units the measures of a recording are given in (see the [module](self)).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeasureUnits {
@@ -486,17 +524,13 @@ impl RecordingMeasures {
                 .filter(|x| x.is_finite())
                 .fold(0.0, f64::max)
         };
-        let (lo, hi) = self
-            .forces
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(lo, hi), &f| {
-                (lo.min(f), hi.max(f))
-            });
-        let threshold = lo + CONTACT_FORCE_FRACTION * (hi - lo);
-        let above = |f: &f64| *f > threshold;
         // Some frame has load, so the largest force exceeds the threshold.
-        let a = self.forces.iter().position(above).unwrap_or(0);
-        let b = self.forces.iter().rposition(above).unwrap_or(a);
+        let ForceContact {
+            peak: hi,
+            threshold,
+            first: a,
+            last: b,
+        } = ForceContact::of(&self.forces);
         let stance_rule = StanceRule::for_interval((self.units.time == "s").then_some(dt));
         let (_, found) = find_stances(&self.forces, first, &stance_rule)?;
         let stances = found.into_iter().map(|s| self.stance(s, first)).collect();

@@ -22,7 +22,7 @@
 //! once the masks are known from the whole recording).
 
 use crate::error::{IoError, Result};
-use crate::measures::{Measures, CONTACT_FORCE_FRACTION};
+use crate::measures::{ForceContact, Measures};
 use crate::recording::Recording;
 
 /// The regions of the coarse rule, heel to toe.
@@ -692,18 +692,8 @@ impl RegionSeries {
                     }
                 }
             }
-            let f = &self.forces[k];
-            let (lo, hi) = f.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &x| {
-                (lo.min(x), hi.max(x))
-            });
-            let contact_time = if hi > 0.0 {
-                let threshold = lo + CONTACT_FORCE_FRACTION * (hi - lo);
-                let a = f.iter().position(|&x| x > threshold).unwrap_or(0);
-                let b = f.iter().rposition(|&x| x > threshold).unwrap_or(a);
-                (b - a + 1) as f64 * self.dt
-            } else {
-                0.0
-            };
+            let contact = ForceContact::of(&self.forces[k]);
+            let (hi, contact_time) = (contact.peak, contact.time(self.dt));
             out.push(RegionValues {
                 name: name.clone(),
                 sensels,
@@ -876,17 +866,8 @@ impl MovingRegionSeries {
         for (r, name) in self.names.iter().enumerate() {
             let f = &self.forces[r];
             let fti = f.iter().sum::<f64>() * dt;
-            let (lo, hi) = f.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &x| {
-                (lo.min(x), hi.max(x))
-            });
-            let contact_time = if hi > 0.0 {
-                let threshold = lo + CONTACT_FORCE_FRACTION * (hi - lo);
-                let a = f.iter().position(|&x| x > threshold).unwrap_or(0);
-                let b = f.iter().rposition(|&x| x > threshold).unwrap_or(a);
-                (b - a + 1) as f64 * dt
-            } else {
-                0.0
-            };
+            let contact = ForceContact::of(f);
+            let (hi, contact_time) = (contact.peak, contact.time(dt));
             out.push(RegionValues {
                 name: name.clone(),
                 sensels: self.sensels[r].round() as usize,
