@@ -906,15 +906,30 @@ pub fn recording_regions(
         .map(|m| m.cop)
         .collect();
     let masks = masks_of_measures(recording, &measures, Some(&cop), rule)?;
-    let mut series = RegionSeries::new(recording, threshold, &masks)?;
-    for t in frames {
+    let values = region_values(recording, threshold, &masks, &measures)?;
+    Ok((masks, values))
+}
+
+/// The values of each region of `masks` (automatic or the user's) over the frames of
+/// `measures`, measured on `recording`'s frames above `threshold`.
+///
+/// # Errors
+///
+/// Those of [`RegionSeries`]; a frame of `measures` that `recording` does not hold.
+pub fn region_values(
+    recording: &Recording,
+    threshold: f64,
+    masks: &RegionMasks,
+    measures: &Measures,
+) -> Result<Vec<RegionValues>> {
+    let mut series = RegionSeries::new(recording, threshold, masks)?;
+    for t in measures.frames.clone() {
         let values = recording
             .frame_slice(t)
             .ok_or_else(|| IoError::invalid(format!("frame {t} is beyond the recording")))?;
         series.add_frame(&values)?;
     }
-    let values = series.finish(&measures)?;
-    Ok((masks, values))
+    series.finish(measures)
 }
 
 /// The automatic masks of a recording's [`Measures`]: the footprint image is the peak image

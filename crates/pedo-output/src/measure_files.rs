@@ -152,29 +152,37 @@ fn regions_of(
         RegionsAsked::Rule(rule) => masks_of_measures(recording, measures, Some(cop), rule)?,
         RegionsAsked::Masks(m) => m,
     };
+    let Some(frames) = kept else {
+        let values = pedo_io::regions::region_values(recording, threshold, &masks, measures)?;
+        return Ok((masks, values));
+    };
     let mut series = RegionSeries::new(recording, threshold, &masks)?;
-    match kept {
-        Some(frames) => {
-            let mut dense = vec![0.0f32; masks.labels.len()];
-            for frame in frames {
-                dense.fill(0.0);
-                for &(i, v) in frame {
-                    dense[i as usize] = v;
-                }
-                series.add_frame(&dense)?;
-            }
+    let mut dense = vec![0.0f32; masks.labels.len()];
+    for frame in frames {
+        dense.fill(0.0);
+        for &(i, v) in frame {
+            dense[i as usize] = v;
         }
-        None => {
-            for t in measures.frames.clone() {
-                let values = recording.frame_slice(t).ok_or_else(|| {
-                    IoError::invalid(format!("frame {t} is not held to measure the regions on"))
-                })?;
-                series.add_frame(&values)?;
-            }
-        }
+        series.add_frame(&dense)?;
     }
     let values = series.finish(measures)?;
     Ok((masks, values))
+}
+
+/// The regions `asked` of a recording held whole, and their values over the frames of
+/// `measures` (above `threshold`): what a run's folder measures, for a run without one.
+pub fn recording_regions(
+    recording: &Recording,
+    measures: &Measures,
+    threshold: f64,
+    asked: RegionsAsked,
+) -> RegionOutcome {
+    let cop: Vec<Option<[f64; 2]>> = recording
+        .measures_of(threshold, measures.frames.clone())
+        .iter()
+        .map(|m| m.cop)
+        .collect();
+    regions_of(recording, measures, threshold, &cop, None, asked)
 }
 
 impl SequenceSink for MeasuresSink {

@@ -326,6 +326,25 @@ pub fn user_masks_for(
         .transpose()
 }
 
+/// The regions `outputs` ask to measure on `recording`: the user's masks (read and checked
+/// against the recording's grid), else the rule's, else none.
+///
+/// # Errors
+///
+/// Those of [`user_masks_for`].
+pub fn regions_asked(
+    outputs: &RunOutputs,
+    recording: &Recording,
+) -> Result<Option<crate::RegionsAsked>> {
+    Ok(
+        match (outputs.regions, user_masks_for(outputs, recording)?) {
+            (_, Some(masks)) => Some(crate::RegionsAsked::Masks(masks)),
+            (Some(rule), None) => Some(crate::RegionsAsked::Rule(rule)),
+            (None, None) => None,
+        },
+    )
+}
+
 impl RunOutputs {
     /// The outputs the option values name ([`OutputOptions`]): the one place a front end's
     /// words become outputs.
@@ -849,11 +868,7 @@ fn write_folder(
 ) -> Result<(Value, RunCounts)> {
     let started = Instant::now();
     // The user's masks are read (and checked against the recording) before the run.
-    let asked = match (outputs.regions, user_masks_for(outputs, run.recording)?) {
-        (_, Some(masks)) => Some(crate::RegionsAsked::Masks(masks)),
-        (Some(rule), None) => Some(crate::RegionsAsked::Rule(rule)),
-        (None, None) => None,
-    };
+    let asked = regions_asked(outputs, run.recording)?;
     let dir = OutDir::create(out)?;
     // A replayed run is whole already: only a run of the engine gathers itself, and only
     // when an output needs the whole run.

@@ -109,12 +109,12 @@ macro_rules! define_run {
         ///   (k, 2) int array of ``(object_id, seed_node)`` rows (node -1 for a point given by
         ///   position); ``point_names`` per point the name of a point given with ``points``
         ///   (None for the outline's default points); empty lists for the other models;
-        /// - ``region_series``: with ``regions`` or ``region_rule``, the rows of ``region_series.csv``
+        /// - ``region_series``: with ``regions``, ``region_rule`` or ``masks``, the rows of ``region_series.csv``
         ///   as dicts (``region``, ``kind`` "moving" or "fixed", ``frame``, ``time_s``, ``sensels``,
         ///   ``area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x``, ``cop_y``, ...,
         ///   ``mean_pressure_kpa``, named by the units known; ``name`` and ``stance`` of an
         ///   anatomical region, None for the user's); an empty list without;
-        /// - ``regions``: with ``region_rule``, the rows of ``regions.csv`` as dicts (``region``,
+        /// - ``regions``: with ``region_rule`` or ``masks``, the rows of ``regions.csv`` as dicts (``region``,
         ///   ``measure``, ``value``, ``unit``, ``kind`` "fixed" or, contour model, "moving"); an
         ///   empty list without, or when the footprint cannot be divided;
         /// - ``frames``: list of dicts of per-frame measures (``frame``, ``time_s``,
@@ -251,8 +251,6 @@ fn run_recording<'py>(
         pedo_io::measures::Measures::of_recording(&rec, threshold, start..end)
     })
     .map_err(to_py)?;
-    let curves = pedo_output::curves_table(&rec, &m, None);
-    dict.set_item("curves", table_rows(py, &curves)?)?;
     let mut regions = match &points {
         Some(p) if !options.inputs.regions.is_empty() => {
             pedo_output::regions_table(&rec, &result, p, &options.inputs, threshold)
@@ -260,7 +258,7 @@ fn run_recording<'py>(
         }
         _ => pedo_output::Table::default(),
     };
-    // The anatomical regions of region_rule: fixed and carried through the stances (contour
+    // The regions of region_rule or masks: fixed and carried through the stances (contour
     // model), their rows after the user's regions, their values as regions.csv's rows.
     let mut values = pedo_output::Table {
         header: ["region", "measure", "value", "unit", "kind"]
@@ -268,11 +266,11 @@ fn run_recording<'py>(
             .to_vec(),
         rows: Vec::new(),
     };
-    if let Some(rule) = outputs.regions {
+    let mut fixed_values = None;
+    if let Some(asked) = pedo_output::regions_asked(&outputs, &rec).map_err(to_py)? {
         let anatomy = crate::pool::detach_cancellable(py, &cancel, || {
             // A footprint that cannot be divided has no regions (regions.json says why).
-            let Ok((masks, fixed)) =
-                pedo_io::regions::recording_regions(&rec, threshold, start..end, rule)
+            let Ok((masks, fixed)) = pedo_output::recording_regions(&rec, &m, threshold, asked)
             else {
                 return Ok(None);
             };
@@ -307,8 +305,12 @@ fn run_recording<'py>(
                     ]);
                 }
             }
+            fixed_values = Some(fixed);
         }
     }
+    // The stance-normalised curves, with each fixed region's as curves.csv has them.
+    let curves = pedo_output::curves_table(&rec, &m, fixed_values.as_deref());
+    dict.set_item("curves", table_rows(py, &curves)?)?;
     dict.set_item("region_series", table_rows(py, &regions)?)?;
     dict.set_item("regions", table_rows(py, &values)?)?;
     let summary = match summary {

@@ -202,3 +202,44 @@ def test_masks_that_do_not_fit_are_input_errors(tmp_path):
         pymodal.run(rec, out=str(tmp_path / "c"), report="none", figures="none",
                     masks=str(bad), region_rule="fine")
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def same_rows(got, written):
+    """pymodal.run's rows (typed values) against a folder's CSV rows (text)."""
+    assert len(got) == len(written)
+    for g, w in zip(got, written):
+        assert set(g) == set(w), (sorted(g), sorted(w))
+        for key, text in w.items():
+            value = g[key]
+            if isinstance(value, str):
+                assert value == text, key
+            elif value is None:
+                assert text == "", key
+            else:
+                # The CSV rounds to the decimals it shows.
+                decimals = len(text.split(".")[1]) if "." in text and "e" not in text.lower() else 0
+                tolerance = 0.51 * 10.0**-decimals if decimals else 1e-9 * max(1.0, abs(float(text)))
+                assert abs(float(value) - float(text)) <= tolerance, (key, value, text)
+
+
+@pytest.mark.parametrize("regions", ["fine", "masks"])
+def test_a_run_without_a_folder_returns_the_folder_s_regions_and_region_curves(regions, tmp_path):
+    rec = pymodal.read_recording(str(WALK))
+    if regions == "fine":
+        asked = {"region_rule": "fine"}
+    else:
+        labels = np.zeros(rec.frames.shape[1:], dtype=int)
+        labels[: labels.shape[0] // 2] = 1
+        labels[labels.shape[0] // 2 :] = 2
+        asked = {"masks": labels}
+    options = dict(report="none", figures="none", frames=(20, 120), **asked)
+    out = tmp_path / "run"
+    pymodal.run(rec, out=str(out), **options)
+    res = pymodal.run(rec, **options)
+    curves = read_csv(out / "curves.csv")
+    region_columns = [c for c in curves[0] if c.endswith("_force_n") and c != "total_force_n"]
+    assert len(region_columns) == (8 if regions == "fine" else 2)
+    same_rows(res["curves"], curves)
+    same_rows(res["regions"], read_csv(out / "regions.csv"))
+    assert {r["kind"] for r in res["regions"]} == {"fixed", "moving"}
+    same_rows(res["region_series"], read_csv(out / "region_series.csv"))

@@ -338,7 +338,8 @@ def surface(
 ) -> Surface: ...
 # run's result (RunResult, a dict) holds, besides table, matches, objects, tracks, track_steps,
 # frames, curves (the rows of curves.csv as dicts: stance, complete, percent and the frames
-# table's measures at 0..100 % of each stance's contact), summary and timings,
+# table's measures at 0..100 % of each stance's contact, and each region's with region_rule
+# or masks), summary and timings,
 # "reference_matches": with drift correction, one ReferenceMatch
 # per reference pair (an empty list without); and for the contour model "points" (per material
 # point followed by anchored registration, a FloatArray of rows frame, x, y in pixels) with
