@@ -101,6 +101,13 @@ pub fn run(args: InspectArgs) -> Result<(), CliError> {
         }
     );
     outln!(
+        "streams         {}",
+        match d["read_whole"].as_str() {
+            None => "yes: a run with tables only reads its frames as it goes".to_string(),
+            Some(why) => format!("no: {why}"),
+        }
+    );
+    outln!(
         "per-frame measures over all {} frames ({} with contact), values of at least {threshold}:",
         d["frames"],
         d["loaded_frames"]

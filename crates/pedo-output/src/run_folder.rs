@@ -369,19 +369,50 @@ pub fn tables_only(outputs: &RunOutputs) -> bool {
 }
 
 /// The recording at `path` read for a run with these parameters and outputs: a run that
-/// streams (tables only, and [`RunParams::streams`]) reads a Tekscan file's frames as it goes
-/// ([`pedo_io::formats::read_for_streaming`]), never held whole; any other run reads it whole.
+/// streams (tables only, and [`RunParams::streams`]) reads a file's frames as it goes when its
+/// format allows ([`pedo_io::formats::read_for_streaming`]), never held whole; any other run
+/// reads it whole.
 pub fn read_for_run(
     path: &Path,
     read: &ReadOptions,
     params: &RunParams,
     outputs: &RunOutputs,
 ) -> Result<(Recording, Option<pedo_io::formats::FileFrames>)> {
-    if tables_only(outputs) && params.streams() {
-        pedo_io::formats::read_for_streaming(path, read)
-    } else {
-        Ok((read_recording_with(path, read)?, None))
+    match run_reads_whole(params, outputs) {
+        None => pedo_io::formats::read_for_streaming(path, read),
+        Some(_) => Ok((read_recording_with(path, read)?, None)),
     }
+}
+
+/// Why a run with these parameters and outputs reads its recording whole whatever its format,
+/// `None` when it reads a file's frames as it goes if the format allows
+/// ([`pedo_io::formats::why_read_whole`]).
+fn run_reads_whole(params: &RunParams, outputs: &RunOutputs) -> Option<&'static str> {
+    if !tables_only(outputs) {
+        Some("the figures, the report or the animation are drawn from the whole recording")
+    } else if !params.streams() {
+        Some("the isocontour model, drift correction, points and regions need the whole run")
+    } else if params.units.time_axis == Some(pedo_io::units::TimeAxis::Last) {
+        // The frames of a time-last array are spread over all of it.
+        Some("an array transposed from time-last is read whole")
+    } else {
+        None
+    }
+}
+
+/// `summary.json`'s `input.read_whole`: why a run that did not read its file's frames as it
+/// went (`streamed`, `input.streamed`) read them whole (the first reason that applies), `None`
+/// when it streamed. `also`: the run's whole result is returned too ([`RunPlan::also`]).
+fn read_whole(run: &RunOf<'_>, outputs: &RunOutputs, streamed: bool, also: bool) -> Value {
+    let why = match () {
+        _ if streamed => None,
+        _ if also => Some("the whole result is returned".to_string()),
+        _ => match run_reads_whole(run.params, outputs) {
+            Some(why) => Some(why.to_string()),
+            None => (run.input.why_read_whole()).or(Some("the recording was read whole".into())),
+        },
+    };
+    json!(why)
 }
 
 /// The tables of a run folder written as [`stream_sequence`] makes them: every row goes to its
@@ -615,6 +646,8 @@ pub fn run_into_folder(
             },
         ),
         None => {
+            let streamed = frames.is_some();
+            let read_whole = read_whole(&run, outputs, streamed, also.is_some());
             let mut measures = crate::MeasuresSink::new(recording, options)?;
             let mut none = NoSink;
             let also = also.unwrap_or(&mut none);
@@ -627,6 +660,8 @@ pub fn run_into_folder(
             let mut summary =
                 crate::run_summary_of(input, recording, params, options, &counts, timings);
             summary["measures"] = crate::measure_values_json(&measures.finish()?);
+            summary["input"]["streamed"] = json!(streamed);
+            summary["input"]["read_whole"] = read_whole;
             Ok((summary, counts))
         }
     }
@@ -867,6 +902,13 @@ fn write_folder(
     feed: Feed<'_, '_>,
 ) -> Result<(Value, RunCounts)> {
     let started = Instant::now();
+    let (streamed, read_whole) = match &feed {
+        Feed::Run { frames, also, .. } => {
+            let streamed = frames.is_some();
+            (streamed, read_whole(run, outputs, streamed, also.is_some()))
+        }
+        Feed::Replay(_) => (false, json!("the run was made whole first")),
+    };
     // The user's masks are read (and checked against the recording) before the run.
     let asked = regions_asked(outputs, run.recording)?;
     let dir = OutDir::create(out)?;
@@ -1033,6 +1075,8 @@ fn write_folder(
     ));
     let (i, rec) = (run.input, run.recording);
     let mut summary = crate::run_summary_of(i, rec, run.params, run.options, &counts, &stages);
+    summary["input"]["streamed"] = json!(streamed);
+    summary["input"]["read_whole"] = read_whole;
     summary["measures"] = crate::measure_values_json(&measures);
     if let Some(options) = summary["options"].as_object_mut() {
         record_outputs(options, outputs);

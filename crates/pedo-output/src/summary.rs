@@ -25,6 +25,19 @@ pub struct InputInfo {
 }
 
 impl InputInfo {
+    /// Why a run that streams (tables only) reads this input whole, `None` when it reads its
+    /// frames as it goes ([`pedo_io::formats::why_read_whole`]).
+    pub fn why_read_whole(&self) -> Option<String> {
+        // A file, a folder or a numbered pattern of images (which has no hash): else data
+        // given in memory (an array, the demo's bytes).
+        let path = std::path::Path::new(&self.name);
+        if path.exists() || self.name.contains('%') {
+            pedo_io::formats::why_read_whole(path)
+        } else {
+            Some("the recording was given in memory".to_string())
+        }
+    }
+
     /// The name and hash of bytes read from `name`.
     pub fn of_bytes(name: &str, bytes: &[u8]) -> Self {
         Self {
@@ -141,6 +154,7 @@ pub fn describe(recording: &Recording, input: &InputInfo, threshold: f64) -> Val
     let u = measure_units(recording);
     let m = recording.measures(threshold);
     let loaded = m.iter().filter(|x| x.contact_sensors > 0).count();
+    let read_whole = input.why_read_whole();
     let mut measures = Map::new();
     measures.insert(
         u.area.0.into(),
@@ -169,6 +183,8 @@ pub fn describe(recording: &Recording, input: &InputInfo, threshold: f64) -> Val
         "pressure_units": recording.known_units(),
         "noise_threshold": recording.noise_threshold,
         "negative_values": negative_values(recording),
+        "streams": read_whole.is_none(),
+        "read_whole": read_whole,
         "measures_threshold": threshold,
         "loaded_frames": loaded,
         "measures": measures,

@@ -67,13 +67,27 @@ fn walkdir(dir: &Path) -> Vec<PathBuf> {
     found
 }
 
+/// `summary.json` without its timings and without how the run read its frames (`streamed`,
+/// `read_whole`).
 fn without_timings(bytes: &[u8]) -> serde_json::Value {
     let mut v: serde_json::Value = serde_json::from_slice(bytes).unwrap();
     v.as_object_mut().unwrap().remove("timings_s");
+    let input = v["input"].as_object_mut().unwrap();
+    input.remove("streamed");
+    input.remove("read_whole");
     v
 }
 
-/// The same files, byte for byte (`summary.json` but for its timings).
+/// Whether the run of this `summary.json` read its frames as it went, and why not.
+fn how_read(dir: &Path) -> (bool, Option<String>) {
+    let v: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
+    let why = v["input"]["read_whole"].as_str().map(str::to_string);
+    (v["input"]["streamed"].as_bool().unwrap(), why)
+}
+
+/// The same files, byte for byte (`summary.json` but for its timings and how the run read its
+/// frames).
 fn assert_same_folders(whole: &Path, streamed: &Path) {
     let a = files(whole);
     let b = files(streamed);
@@ -218,7 +232,12 @@ fn a_streamed_run_writes_the_folder_of_the_whole_run() {
             assert_eq!(streamed["tracks"], summary["tracks"]);
             assert_eq!(counts.pairs as u64, summary["pairs"].as_u64().unwrap());
             assert_same_folders(&whole, &out);
+            let (read_as_it_went, why) = how_read(&out);
+            assert_eq!(read_as_it_went, k == 0, "{name}: {why:?}");
+            assert_eq!(why.is_none(), k == 0, "{name}: {why:?}");
         }
+        let (_, why) = how_read(&whole);
+        assert_eq!(why.as_deref(), Some("the run was made whole first"));
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
@@ -296,10 +315,16 @@ fn a_recording_read_for_streaming_holds_no_values_but_its_shape() {
     assert_eq!((shape.pitch_mm, shape.dt_s), (held.pitch_mm, held.dt_s));
     assert_eq!(shape.units, held.units);
     assert!(shape.frames_bytes() * 20 < held.frames_bytes());
-    // Other formats are read whole.
-    let npy = temp_dir("npy").join("walk.npy");
+    // A .npy array is read as the run goes too; an emed .lst file is read whole.
+    let dir = temp_dir("npy");
+    let npy = dir.join("walk.npy");
     pedo_io::formats::npy::write_npy(&held, &npy).unwrap();
-    let (whole, none) = read_for_streaming(&npy, &ReadOptions::default()).unwrap();
+    let (shape, frames) = read_for_streaming(&npy, &ReadOptions::default()).unwrap();
+    assert!(frames.is_some());
+    assert_eq!(shape.sensor_mask(), held.sensor_mask());
+    let lst = files::data("emed-test-1-10.lst");
+    let (whole, none) = read_for_streaming(&lst, &ReadOptions::default()).unwrap();
     assert!(none.is_none());
-    assert_eq!(whole.data(), held.data());
+    assert_eq!(whole.data(), read_recording(&lst).unwrap().data());
+    let _ = std::fs::remove_dir_all(&dir);
 }

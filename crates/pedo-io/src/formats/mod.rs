@@ -574,11 +574,11 @@ pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording> {
 }
 
 /// A recording read for a run that goes through it once, in order (`pedo_track::stream_sequence`):
-/// a Tekscan `.asf` file or CSV export (not gzip-compressed) is read once, checked whole, and
-/// returned without its values (every frame reads as 0: only its size, sensor mask, units and
-/// number of frames are held), with a [`FileFrames`] that reads its frames again, window by
-/// window, as the run asks for them; any other recording is read whole, with no
-/// [`FileFrames`].
+/// a file whose frames can be read again window by window ([`why_read_whole`] says which) is
+/// read once, checked whole, and returned without its values (every frame reads as 0: only its
+/// size, sensor mask, units, values below 0 and number of frames are held), with a
+/// [`FileFrames`] that reads its frames again, window by window, as the run asks for them; any
+/// other recording is read whole, with no [`FileFrames`].
 pub fn read_for_streaming(
     path: impl AsRef<Path>,
     opts: &ReadOptions,
@@ -587,42 +587,75 @@ pub fn read_for_streaming(
     let name = path.display().to_string();
     // Anything else, or a file that cannot be opened or sniffed, is read (and its error
     // reported) the usual way.
-    let tekscan = match path.is_dir() {
+    let sniffed = match path.is_dir() {
         true => None,
         false => Sniffed::open(path, &name).ok(),
     };
-    let Some((sniffed, csv)) = tekscan.and_then(|s| s.tekscan_csv().map(|csv| (s, csv))) else {
+    let Some(sniffed) = sniffed.filter(|s| s.why_read_whole().is_none()) else {
         return Ok((read_recording_with(path, opts)?, None));
     };
-    let size = sniffed.size;
-    let shape = asf::read_tekscan(
-        sniffed.lines(),
-        size,
-        &name,
-        csv,
-        &mut asf::Keep::Handed(None),
-    )?;
-    let frames = FileFrames::start(path.to_path_buf(), name, size, csv);
+    let (shape, source) = match sniffed.format {
+        Format::Npy => {
+            drop(sniffed);
+            let mut npy = npy::NpyFile::open(path, &name)?;
+            (npy.shape()?, Source::Npy(npy))
+        }
+        format => {
+            let csv = format == Format::TekscanCsv;
+            let size = sniffed.size;
+            let mut keep = asf::Keep::Handed(None);
+            let shape = asf::read_tekscan(sniffed.lines(), size, &name, csv, &mut keep)?;
+            (
+                shape,
+                Source::tekscan(path.to_path_buf(), name.clone(), size, csv),
+            )
+        }
+    };
+    let frames = FileFrames {
+        source,
+        next: 0,
+        name,
+    };
     Ok((shape, Some(frames)))
 }
 
-/// The frames of a Tekscan file read again, in order, by a thread of their own (see
-/// [`read_for_streaming`]); only a window's frames are held at a time.
+/// Why a run that streams reads the file at `path` whole, `None` when it reads its frames as it
+/// goes ([`read_for_streaming`]); `None` too for a file that cannot be read (its error is
+/// the reading's).
+pub fn why_read_whole(path: impl AsRef<Path>) -> Option<String> {
+    let path = path.as_ref();
+    if path.is_dir() || (!path.exists() && path.to_str().is_some_and(images::has_counter)) {
+        return Some("a folder or sequence of images is read whole".into());
+    }
+    Sniffed::open(path, &path.display().to_string())
+        .ok()?
+        .why_read_whole()
+}
+
+/// The frames of a file read again, in order (see [`read_for_streaming`]); only a window's
+/// frames are held at a time.
 pub struct FileFrames {
-    frames: std::sync::mpsc::Receiver<Result<Vec<f32>>>,
+    source: Source,
     /// The number of the next frame to come.
     next: usize,
     name: String,
 }
 
-impl FileFrames {
-    fn start(path: PathBuf, name: String, size: usize, csv: bool) -> Self {
+/// Where a [`FileFrames`] reads its frames.
+enum Source {
+    /// A Tekscan file parsed again by a thread of its own, handing its frames one by one.
+    Tekscan(std::sync::mpsc::Receiver<Result<Vec<f32>>>),
+    /// A `.npy` array, read a window at a time.
+    Npy(npy::NpyFile),
+}
+
+impl Source {
+    fn tekscan(path: PathBuf, name: String, size: usize, csv: bool) -> Self {
         let (send, frames) = std::sync::mpsc::sync_channel(crate::recording::FRAME_WINDOW);
-        let thread_name = name.clone();
         std::thread::spawn(move || {
             let read = || -> Result<()> {
                 let file = std::fs::File::open(&path).map_err(|source| IoError::Io {
-                    path: thread_name.clone(),
+                    path: name.clone(),
                     source,
                 })?;
                 let lines = stream::bounded(file, false, stream::Stretch::Line);
@@ -631,32 +664,26 @@ impl FileFrames {
                         .map_err(|_| IoError::invalid("the run stopped reading"))
                 };
                 let mut keep = asf::Keep::Handed(Some(&mut hand));
-                asf::read_tekscan(lines, size, &thread_name, csv, &mut keep).map(drop)
+                asf::read_tekscan(lines, size, &name, csv, &mut keep).map(drop)
             };
             if let Err(e) = read() {
                 let _ = send.send(Err(e));
             }
         });
-        Self {
-            frames,
-            next: 0,
-            name,
-        }
+        Source::Tekscan(frames)
     }
 }
 
-impl crate::recording::FrameSource for FileFrames {
-    fn window(&mut self, recording: &Recording, w0: usize, w1: usize) -> Result<Recording> {
-        if w0 < self.next || w1 <= w0 {
-            return Err(IoError::invalid(format!(
-                "{}: frames {w0}..{w1} asked for after frame {}",
-                self.name, self.next
-            )));
-        }
-        let per = recording.rows() * recording.cols();
+impl FileFrames {
+    /// The values of frames `next..w1`, those before `w0` dropped.
+    fn values(&mut self, w0: usize, w1: usize, per: usize) -> Result<Vec<f32>> {
+        let frames = match &mut self.source {
+            Source::Npy(npy) => return npy.window(w0, w1),
+            Source::Tekscan(frames) => frames,
+        };
         let mut data = Vec::with_capacity((w1 - w0) * per);
         while self.next < w1 {
-            let frame = self.frames.recv().map_err(|_| {
+            let frame = frames.recv().map_err(|_| {
                 IoError::invalid(format!(
                     "{}: the file has fewer frames on a second read",
                     self.name
@@ -667,6 +694,20 @@ impl crate::recording::FrameSource for FileFrames {
             }
             self.next += 1;
         }
+        Ok(data)
+    }
+}
+
+impl crate::recording::FrameSource for FileFrames {
+    fn window(&mut self, recording: &Recording, w0: usize, w1: usize) -> Result<Recording> {
+        if w0 < self.next || w1 <= w0 || w1 > recording.n_frames() {
+            return Err(IoError::invalid(format!(
+                "{}: frames {w0}..{w1} asked for after frame {}",
+                self.name, self.next
+            )));
+        }
+        let data = self.values(w0, w1, recording.rows() * recording.cols())?;
+        self.next = w1;
         // The size, mask and units of the run's recording (its unit overrides applied).
         recording.like(w1 - w0, data)
     }
@@ -739,13 +780,21 @@ impl Sniffed {
         self.head.starts_with(GZIP_MAGIC)
     }
 
-    /// For a Tekscan `.asf` file (`false`) or CSV export (`true`) that is not gzip-compressed
-    /// nor UTF-16: the formats a run may read again, frame by frame.
-    fn tekscan_csv(&self) -> Option<bool> {
-        (matches!(self.format, Format::Asf | Format::TekscanCsv)
-            && !self.is_gzip()
-            && utf16_little_endian(&self.head).is_none())
-        .then_some(self.format == Format::TekscanCsv)
+    /// Why a run that streams reads this file whole ([`why_read_whole`]); `None` for a
+    /// Tekscan `.asf` file or CSV export and a `.npy` array, not gzip-compressed (nor UTF-16):
+    /// the files a run reads again, window by window.
+    fn why_read_whole(&self) -> Option<String> {
+        if self.is_gzip() {
+            return Some("a gzip-compressed file is read whole".into());
+        }
+        if utf16_little_endian(&self.head).is_some() {
+            return Some("a UTF-16 text file is read whole".into());
+        }
+        match self.format {
+            Format::Asf | Format::TekscanCsv | Format::Npy => None,
+            Format::Csv | Format::Png | Format::Tiff => Some("a single frame is read whole".into()),
+            f => Some(format!("the {} format is read whole", f.name())),
+        }
     }
 
     /// The whole file's bytes, from the start.

@@ -302,6 +302,124 @@ fn read_body(
     Ok(rec)
 }
 
+/// A `.npy` array in a file, read window of frames by window as a streamed run asks for them
+/// ([`super::FileFrames`]): never more than a window's values held. A C-order array's frames
+/// are contiguous (one read a window); a Fortran-order array's values of one sensor are, so a
+/// window is one read of its frames per sensor, in file order.
+pub(crate) struct NpyFile {
+    file: std::fs::File,
+    h: NpyHeader,
+    dims: (usize, usize, usize),
+    /// Where the data begin in the file.
+    data: u64,
+    name: String,
+}
+
+impl NpyFile {
+    /// The array of the `.npy` file at `path`, its header read and its length checked.
+    pub(crate) fn open(path: &Path, name: &str) -> Result<Self> {
+        let fail = |msg: String| IoError::format(name, msg);
+        let io = |source| IoError::Io {
+            path: name.to_string(),
+            source,
+        };
+        let file = std::fs::File::open(path).map_err(io)?;
+        let size = file.metadata().map_err(io)?.len();
+        let mut head = Vec::new();
+        (&file).take(12).read_to_end(&mut head).map_err(io)?;
+        // NumPy writes a header of about a hundred bytes.
+        let end = header_end(&head).filter(|&e| e <= (1 << 20) && e as u64 <= size);
+        let Some(end) = end else {
+            read_header(&head, &fail)?;
+            return Err(fail("truncated header".into()));
+        };
+        (&file)
+            .take((end - head.len()) as u64)
+            .read_to_end(&mut head)
+            .map_err(io)?;
+        let (h, data) = read_header(&head, &fail)?;
+        let dims = dims(&h, &fail)?;
+        check_body(&h, size - data as u64, &fail)?;
+        Ok(Self {
+            file,
+            h,
+            dims,
+            data: data as u64,
+            name: name.to_string(),
+        })
+    }
+
+    /// Frames `w0..w1` (within the array), their values in C order, NaN where the array holds
+    /// NaN; an infinite value or one beyond float32's range is an error, as read whole.
+    pub(crate) fn window(&mut self, w0: usize, w1: usize) -> Result<Vec<f32>> {
+        use std::io::{Seek, SeekFrom};
+        let (t, r, c) = self.dims;
+        let (per, size, n) = (r * c, self.h.size, w1 - w0);
+        let fail = |msg: String| IoError::format(&self.name, msg);
+        let read_fail = |e: std::io::Error| fail(format!("cannot read the array: {e}"));
+        let mut out = vec![0.0f32; n * per];
+        if !self.h.fortran {
+            let mut raw = vec![0u8; n * per * size];
+            let at = self.data + (w0 * per * size) as u64;
+            self.file.seek(SeekFrom::Start(at)).map_err(read_fail)?;
+            self.file.read_exact(&mut raw).map_err(read_fail)?;
+            for (v, chunk) in out.iter_mut().zip(raw.chunks_exact(size)) {
+                *v = value(chunk, &self.h, &fail)?;
+            }
+            return Ok(out);
+        }
+        // Fortran layout: index (i, j, k) of shape (t, r, c) sits at i + t * (j + r * k).
+        let mut raw = vec![0u8; n * size];
+        for k in 0..c {
+            for j in 0..r {
+                let at = self.data + ((w0 + t * (j + r * k)) * size) as u64;
+                self.file.seek(SeekFrom::Start(at)).map_err(read_fail)?;
+                self.file.read_exact(&mut raw).map_err(read_fail)?;
+                for (i, chunk) in raw.chunks_exact(size).enumerate() {
+                    out[i * per + j * c + k] = value(chunk, &self.h, &fail)?;
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// The array as a recording without its values (see [`super::read_for_streaming`]): every
+    /// frame read once, in windows, for its missing sensors (NaN in every frame; NaN in only
+    /// some is an error, as read whole) and its values below 0; none held.
+    pub(crate) fn shape(&mut self) -> Result<Recording> {
+        let (t, r, c) = self.dims;
+        let per = r * c;
+        let mut nans = vec![0usize; per];
+        let mut negatives = crate::recording::NegativeValues::default();
+        for w0 in (0..t).step_by(crate::recording::FRAME_WINDOW) {
+            let w1 = (w0 + crate::recording::FRAME_WINDOW).min(t);
+            for (k, &v) in self.window(w0, w1)?.iter().enumerate() {
+                match v.is_nan() {
+                    true => nans[k % per] += 1,
+                    false => negatives.add(v),
+                }
+            }
+        }
+        if let Some(i) = nans.iter().position(|&n| n > 0 && n < t) {
+            // The message of the whole read (`Recording::from_sparse_nan`).
+            let e = IoError::invalid(format!(
+                "row {}, column {} is NaN in {} of {t} frames only",
+                i / c,
+                i % c,
+                nans[i]
+            ));
+            return Err(IoError::format(&self.name, e.to_string()));
+        }
+        let mut frames = SparseFrames::new(per);
+        (0..t).for_each(|_| frames.push_empty());
+        let mask = nans.iter().map(|&n| n == 0).collect();
+        let mut rec = Recording::from_sparse(r, c, frames, mask)?;
+        rec.set_file_negatives(negatives);
+        rec.format = Some(Format::Npy);
+        Ok(rec)
+    }
+}
+
 /// `n` bytes of `source` (a Fortran-order array's data).
 fn read_whole(source: &mut dyn Read, n: usize, name: &str) -> Result<Vec<u8>> {
     if n > MAX_FORTRAN_STREAM {
