@@ -77,14 +77,20 @@ pub fn run(args: RegisterArgs) -> Result<(), CliError> {
         out!("{}", crate::output::pretty(&table.to_json())?);
     } else {
         let fallbacks = reg.trials.iter().filter(|r| r.fallback).count();
+        let unmoved = reg
+            .trials
+            .iter()
+            .filter(|r| r.kept == pedo_register::MapKept::Identity)
+            .count();
         let mut xor: Vec<f64> = reg.trials.iter().map(|r| r.mask_xor_pct).collect();
         xor.sort_by(f64::total_cmp);
         outln!(
-            "{} registered onto a template of {} x {} sensels ({} by the prior's fallback); median mask XOR {:.1} %; {}",
+            "{} registered onto a template of {} x {} sensels ({} by the prior's fallback, {} left as they lie: no map overlapped better); median mask XOR {:.1} %; {}",
             counted(reg.trials.len(), "trial"),
             reg.template.images.rows,
             reg.template.images.cols,
             fallbacks,
+            unmoved,
             xor[xor.len() / 2],
             args.out.display()
         );

@@ -14,9 +14,10 @@ use std::path::Path;
 pub const REGISTER_FILES: [&str; 3] = ["registered.npz", "registration.csv", "registered.png"];
 
 /// The columns of `registration.csv`, in order.
-pub const REGISTRATION_COLUMNS: [&str; 13] = [
+pub const REGISTRATION_COLUMNS: [&str; 14] = [
     "trial",
     "fallback",
+    "map",
     "m11",
     "m12",
     "tx_sensels",
@@ -38,6 +39,7 @@ pub fn registration_table(names: &[String], reg: &StudyRegistration) -> Table {
         t.rows.push(vec![
             Cell::Text(name.clone()),
             Cell::Int(i64::from(r.fallback)),
+            Cell::Text(r.kept.as_str().to_string()),
             Cell::Float(m11, 6),
             Cell::Float(m12, 6),
             Cell::Float(tx, 4),

@@ -12,6 +12,7 @@
 
 pub mod footprint;
 pub mod refine;
+pub mod warp;
 
 use footprint::{bilinear, distance_to_polygon, hull_of_mask, loaded_mask};
 use modal_core::matching::prealign::rotation_angle;
@@ -53,6 +54,14 @@ modal_core::option_set! {
         refine_intensity: bool = true;
             NegatedFlag, true,
             "Refine each trial's map by the images: a rigid correction (turn and shift) of the outline's field that lowers the mean squared difference of the peak images (Levenberg-Marquardt, on the images blurred by 1.5 sensels, then as they are). --no-refine-intensity registers by the outlines alone.";
+        /// Spacing of the non-rigid intensity step's control points, in sensels (0: none).
+        warp_spacing: f64 = 6.0;
+            Value, 6.0,
+            "Spacing, in template sensels, of the control points of the non-rigid step after the rigid correction: a cubic B-spline displacement fitted to the peak images (Levenberg-Marquardt on the mean squared difference with a bending penalty, blurred by 1.5 sensels, then as they are; no step may fold the map). 0 leaves it out; so does --no-refine-intensity.";
+        /// Weight of the non-rigid step's bending penalty.
+        warp_smoothing: f64 = 1e-4;
+            Value, 1e-4,
+            "Weight of the bending penalty of the non-rigid step (the control grid's squared second differences, times the template's mean squared value): larger is stiffer.";
         /// A sensel is part of a footprint above this peak value.
         foot_threshold: f64 = 0.0;
             Value, 0.0,
@@ -82,6 +91,20 @@ impl RegisterParams {
             return Err(OptionError::new(
                 "field_smoothing",
                 self.field_smoothing,
+                "a finite number >= 0",
+            ));
+        }
+        if !(self.warp_spacing.is_finite() && self.warp_spacing >= 0.0) {
+            return Err(OptionError::new(
+                "warp_spacing",
+                self.warp_spacing,
+                "a finite number of sensels >= 0",
+            ));
+        }
+        if !(self.warp_smoothing.is_finite() && self.warp_smoothing >= 0.0) {
+            return Err(OptionError::new(
+                "warp_smoothing",
+                self.warp_smoothing,
                 "a finite number >= 0",
             ));
         }
@@ -336,6 +359,9 @@ pub struct Registration {
     /// Whether the match was refused by the prior (it mirrored or turned further than
     /// `max_turn`) and the trial aligned by centroid and size alone.
     pub fallback: bool,
+    /// Which map was kept: the identity when every map overlapped the template worse than the
+    /// unregistered trial (the map then reported is the identity).
+    pub kept: MapKept,
     /// RMS distance, in the trial's sensels, from the field's image of each template outline
     /// node to the trial's outline.
     pub residual_sensels: f64,
@@ -358,6 +384,12 @@ pub struct StudyRegistration {
 
 /// The blurs (Gaussian σ, sensels) of the intensity refinement's stages, coarse to fine.
 const REFINE_BLURS: [f64; 2] = [1.5, 0.0];
+/// Weight of the footprints' masks beside the peak pressures in the non-rigid step (relative to
+/// the template's mean squared value; chosen on the tuning subjects, BENCHMARKS.md).
+const WARP_MASK_WEIGHT: f64 = 0.5;
+/// Levenberg–Marquardt iterations per stage of the non-rigid step, at most: each costs a pass
+/// over every sensel and a solve of the control grid's normal equations.
+const WARP_ITERATIONS: usize = 12;
 /// Levenberg–Marquardt iterations per stage (at most; fewer when a step no longer helps).
 const REFINE_ITERATIONS: usize = 20;
 
@@ -451,8 +483,14 @@ pub fn register_trials(
                 params.foot_threshold,
                 params.outline_nodes,
             )?;
+            // The rounds average rigidly registered trials: the mean is a template, not a trial,
+            // and the non-rigid step would triple the study's time for a sharper mean only.
+            let rounds_params = RegisterParams {
+                warp_spacing: 0.0,
+                ..params.clone()
+            };
             for _ in 0..*rounds {
-                let regs = register_prepared(&prepared, &template, params)?;
+                let regs = register_prepared(&prepared, &template, &rounds_params)?;
                 template = average_template(&regs, &template, params.outline_nodes)?;
             }
             template
@@ -624,6 +662,120 @@ fn outline_map(
     ))
 }
 
+/// Which map a registration kept (the last check of [`register_with`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MapKept {
+    /// The outline's field, the rigid correction and the non-rigid intensity step.
+    Warp,
+    /// The outline's field and the rigid correction (the warp overlapped the template worse
+    /// than the unregistered trial, or there was no warp).
+    Rigid,
+    /// The identity: every map overlapped the template worse than the trial as it lies.
+    Identity,
+}
+
+impl MapKept {
+    /// Its name in `registration.csv`: `warp`, `rigid` or `identity`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Warp => "warp",
+            Self::Rigid => "rigid",
+            Self::Identity => "identity",
+        }
+    }
+}
+
+/// The template's grid and the trial's images, as the sampling needs them.
+struct Sampler<'a> {
+    src: &'a FootImages,
+    mask_f: Vec<f64>,
+    template_mask: &'a [bool],
+}
+
+impl Sampler<'_> {
+    fn sample(&self, at: &[[f64; 2]], v: &[f64]) -> Vec<f64> {
+        at.iter()
+            .map(|q| bilinear(v, self.src.rows, self.src.cols, q[0], q[1]))
+            .collect()
+    }
+
+    /// The trial's footprint carried onto the template's grid by `at`.
+    fn mask(&self, at: &[[f64; 2]]) -> Vec<bool> {
+        self.sample(at, &self.mask_f)
+            .iter()
+            .map(|&v| v >= 0.5)
+            .collect()
+    }
+
+    fn xor(&self, mask: &[bool]) -> usize {
+        mask.iter()
+            .zip(self.template_mask)
+            .filter(|(a, b)| a != b)
+            .count()
+    }
+}
+
+/// The map of the template's sensels into the trial's plane: the outline's field, the rigid
+/// correction by the images, the non-rigid step; with the correction and the points before
+/// the non-rigid step.
+fn fitted_points(
+    field: &CorrespondenceField,
+    template: &Template,
+    trial: &Prepared<'_>,
+    params: &RegisterParams,
+) -> (refine::PlaneAffine, Vec<[f64; 2]>, Vec<[f64; 2]>) {
+    let src = &trial.images;
+    let (rows, cols) = (template.images.rows, template.images.cols);
+    let centres = grid_centres(rows, cols);
+    let grid = |r, c, v| refine::GridImage {
+        rows: r,
+        cols: c,
+        values: v,
+    };
+    let (tpl, img) = (
+        grid(rows, cols, &template.images.peak[..]),
+        grid(src.rows, src.cols, &src.peak[..]),
+    );
+    let mut at = field.apply(&centres);
+    if !params.refine_intensity {
+        return (refine::PlaneAffine::identity([0.0, 0.0]), at.clone(), at);
+    }
+    let correction = refine::refine_map(
+        &at,
+        tpl,
+        img,
+        &REFINE_BLURS,
+        REFINE_ITERATIONS,
+        &refine::RIGID_DIRECTIONS,
+    );
+    for q in &mut at {
+        *q = correction.apply(*q);
+    }
+    let settings = warp::WarpSettings {
+        spacing: params.warp_spacing,
+        smoothing: params.warp_smoothing,
+        blurs: REFINE_BLURS,
+        iterations: WARP_ITERATIONS,
+        mask_weight: WARP_MASK_WEIGHT,
+    };
+    let as_f = |m: &[bool]| -> Vec<f64> { m.iter().map(|&b| f64::from(u8::from(b))).collect() };
+    let (tm, sm) = (as_f(&template.mask), as_f(&trial.mask));
+    let images = warp::WarpImages {
+        template: tpl,
+        trial: img,
+        template_mask: &tm,
+        trial_mask: &sm,
+    };
+    let warped = warp::refine_warp(&at, &images, &settings);
+    (correction, at, warped)
+}
+
+fn grid_centres(rows: usize, cols: usize) -> Vec<[f64; 2]> {
+    (0..rows * cols)
+        .map(|i| [(i % cols) as f64, (i / cols) as f64])
+        .collect()
+}
+
 fn register_with(
     p: &Prepared<'_>,
     template: &Template,
@@ -633,98 +785,133 @@ fn register_with(
     let (b, pairs, t, fallback) = outline_map(&template.outline, &p.outline, params)?;
     let field = CorrespondenceField::fit(&a, &b, &pairs, params.field_smoothing)?;
     let (rows, cols) = (template.images.rows, template.images.cols);
-    let centres: Vec<[f64; 2]> = (0..rows * cols)
-        .map(|i| [(i % cols) as f64, (i / cols) as f64])
-        .collect();
     let src = &p.images;
-    let mut at = field.apply(&centres);
-    let correction = if params.refine_intensity {
-        refine::refine_map(
-            &at,
-            refine::GridImage {
-                rows,
-                cols,
-                values: &template.images.peak,
-            },
-            refine::GridImage {
-                rows: src.rows,
-                cols: src.cols,
-                values: &src.peak,
-            },
-            &REFINE_BLURS,
-            REFINE_ITERATIONS,
-            &refine::RIGID_DIRECTIONS,
-        )
-    } else {
-        refine::PlaneAffine::identity([0.0, 0.0])
+    let (correction, rigid_at, warped_at) = fitted_points(&field, template, p, params);
+    let s = Sampler {
+        src,
+        mask_f: p.mask.iter().map(|&m| f64::from(u8::from(m))).collect(),
+        template_mask: &template.mask,
     };
-    for q in &mut at {
-        *q = correction.apply(*q);
+    // Never worse than the trial as it lies: the last check keeps the first of the warp, the
+    // rigid map and the identity whose footprint overlaps the template's at least as well as
+    // the unregistered trial's does (a registration that moved the footprint's edge away is
+    // no registration for pixel-wise statistics).
+    let identity = grid_centres(rows, cols);
+    let identity_mask = s.mask(&identity);
+    let xor_identity = s.xor(&identity_mask);
+    let mut kept = (MapKept::Identity, identity, identity_mask);
+    for (kind, at) in [(MapKept::Rigid, rigid_at), (MapKept::Warp, warped_at)]
+        .into_iter()
+        .rev()
+    {
+        if kind == MapKept::Warp && !(params.refine_intensity && params.warp_spacing > 0.0) {
+            continue;
+        }
+        let mask = s.mask(&at);
+        if s.xor(&mask) <= xor_identity {
+            kept = (kind, at, mask);
+            break;
+        }
     }
-    let sample = |v: &[f64]| -> Vec<f64> {
-        at.iter()
-            .map(|q| bilinear(v, src.rows, src.cols, q[0], q[1]))
-            .collect()
-    };
+    let (kind, at, mask) = kept;
     let images = FootImages {
         rows,
         cols,
-        peak: sample(&src.peak),
-        pti: src.pti.as_deref().map(sample),
-        mean: src.mean.as_deref().map(sample),
+        peak: s.sample(&at, &src.peak),
+        pti: src.pti.as_deref().map(|v| s.sample(&at, v)),
+        mean: src.mean.as_deref().map(|v| s.sample(&at, v)),
     };
-    let mask_f: Vec<f64> = p.mask.iter().map(|&m| f64::from(u8::from(m))).collect();
-    let mask: Vec<bool> = sample(&mask_f).iter().map(|&v| v >= 0.5).collect();
-    let residual_sensels = {
-        let moved: Vec<[f64; 2]> = field
-            .apply(&template.outline)
-            .into_iter()
-            .map(|q| correction.apply(q))
-            .collect();
-        (moved
-            .iter()
-            .map(|&q| distance_to_polygon(q, &p.outline).powi(2))
-            .sum::<f64>()
-            / moved.len() as f64)
-            .sqrt()
-    };
-    let tpl_area = template.mask.iter().filter(|&&m| m).count().max(1);
-    let xor = mask
+    let outline_image = outline_image(&field, &correction, template, &at, kind);
+    let residual_sensels = (outline_image
         .iter()
-        .zip(&template.mask)
-        .filter(|(a, b)| a != b)
-        .count();
+        .map(|&q| distance_to_polygon(q, &p.outline).powi(2))
+        .sum::<f64>()
+        / outline_image.len() as f64)
+        .sqrt();
+    let tpl_area = template.mask.iter().filter(|&&m| m).count().max(1);
     let correlation = correlation_over(
         &images.peak,
         &template.images.peak,
         mask.iter().zip(&template.mask).map(|(a, b)| *a || *b),
     );
-    // The map reported: the correction after the match's map.
-    let (cm, cb) = correction.as_linear();
-    let mut t = t;
-    let (m0, t0) = (t.m, t.t);
-    for (r, row) in cm.iter().enumerate() {
-        t.m[r][0] = row[0] * m0[0][0] + row[1] * m0[1][0];
-        t.m[r][1] = row[0] * m0[0][1] + row[1] * m0[1][1];
-        t.t[r] = row[0] * t0[0] + row[1] * t0[1] + cb[r];
-    }
-    let det = t.m[0][0] * t.m[1][1] - t.m[0][1] * t.m[1][0];
+    let affine = if kind == MapKept::Identity {
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+    } else {
+        composed(&t, &correction)
+    };
+    let det = affine[0][0] * affine[1][1] - affine[0][1] * affine[1][0];
     Ok(Registration {
+        mask_xor_pct: 100.0 * s.xor(&mask) as f64 / tpl_area as f64,
         images,
         mask,
-        affine: [
-            [t.m[0][0], t.m[0][1], t.t[0]],
-            [t.m[1][0], t.m[1][1], t.t[1]],
-        ],
-        turn_deg: (t.m[1][0] - t.m[0][1])
-            .atan2(t.m[0][0] + t.m[1][1])
+        turn_deg: (affine[1][0] - affine[0][1])
+            .atan2(affine[0][0] + affine[1][1])
             .to_degrees(),
         scale: det.abs().sqrt(),
+        affine,
         fallback,
+        kept: kind,
         residual_sensels,
-        mask_xor_pct: 100.0 * xor as f64 / tpl_area as f64,
         correlation,
     })
+}
+
+/// The template's outline nodes carried by the kept map: the field and the correction, plus the
+/// non-rigid step's displacement (interpolated bilinearly between the sensels' own) for a warp.
+fn outline_image(
+    field: &CorrespondenceField,
+    correction: &refine::PlaneAffine,
+    template: &Template,
+    at: &[[f64; 2]],
+    kind: MapKept,
+) -> Vec<[f64; 2]> {
+    if kind == MapKept::Identity {
+        return template.outline.clone();
+    }
+    let (rows, cols) = (template.images.rows, template.images.cols);
+    let moved: Vec<[f64; 2]> = field
+        .apply(&template.outline)
+        .into_iter()
+        .map(|q| correction.apply(q))
+        .collect();
+    if kind != MapKept::Warp {
+        return moved;
+    }
+    let rigid: Vec<[f64; 2]> = field
+        .apply(&grid_centres(rows, cols))
+        .into_iter()
+        .map(|q| correction.apply(q))
+        .collect();
+    let (dx, dy): (Vec<f64>, Vec<f64>) = at
+        .iter()
+        .zip(&rigid)
+        .map(|(w, r)| (w[0] - r[0], w[1] - r[1]))
+        .unzip();
+    moved
+        .iter()
+        .zip(&template.outline)
+        .map(|(m, o)| {
+            let clamp = |v: f64, n: usize| v.clamp(0.0, (n - 1) as f64);
+            let (x, y) = (clamp(o[0], cols), clamp(o[1], rows));
+            [
+                m[0] + bilinear(&dx, rows, cols, x, y),
+                m[1] + bilinear(&dy, rows, cols, x, y),
+            ]
+        })
+        .collect()
+}
+
+/// `[M | t]` of the correction after the match's map.
+fn composed(t: &Affine, correction: &refine::PlaneAffine) -> [[f64; 3]; 2] {
+    let (cm, cb) = correction.as_linear();
+    let (m0, t0) = (t.m, t.t);
+    let mut out = [[0.0; 3]; 2];
+    for (r, row) in cm.iter().enumerate() {
+        out[r][0] = row[0] * m0[0][0] + row[1] * m0[1][0];
+        out[r][1] = row[0] * m0[0][1] + row[1] * m0[1][1];
+        out[r][2] = row[0] * t0[0] + row[1] * t0[1] + cb[r];
+    }
+    out
 }
 
 /// Pearson correlation of `a` and `b` (NaN read as 0) over the sensels `keep` selects; `None`

@@ -124,7 +124,13 @@ pub fn blurred(img: GridImage<'_>, sigma: f64) -> Vec<f64> {
 }
 
 /// The value and gradient `(v, ∂v/∂x, ∂v/∂y)` of the bilinear interpolation at `(x, y)`.
-fn bilinear_grad(values: &[f64], rows: usize, cols: usize, x: f64, y: f64) -> (f64, f64, f64) {
+pub(crate) fn bilinear_grad(
+    values: &[f64],
+    rows: usize,
+    cols: usize,
+    x: f64,
+    y: f64,
+) -> (f64, f64, f64) {
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
     let at = |r: f64, c: f64| -> f64 {

@@ -3,8 +3,8 @@
 use pedo_io::IoError;
 use pedo_register::footprint::bilinear;
 use pedo_register::{
-    correlation_over, mun104, register_one, register_trials, FootImages, RegisterParams, Template,
-    TemplateSource,
+    correlation_over, mun104, register_one, register_trials, FootImages, MapKept, RegisterParams,
+    Template, TemplateSource,
 };
 
 /// A trial made from the template: its sensel `x` holds the template's value at `g(x)`, `g` an
@@ -163,4 +163,75 @@ fn errors_are_typed() {
         register_one(&tpl, &template, &p),
         Err(IoError::Option(_))
     ));
+}
+
+/// The non-rigid step lowers the squared difference of a trial bent where no global map can
+/// follow (the template's forefoot shifted sideways against its heel), below the rigid map's.
+#[test]
+fn the_warp_follows_a_local_bend_the_rigid_map_cannot() {
+    let tpl = mun104(true);
+    let template = Template::of_images(tpl.clone(), 0.0, 64).unwrap();
+    // Rows 0..25 (toes, forefoot) moved 2 sensels sideways, fading out by row 40.
+    let peak = (0..tpl.rows * tpl.cols)
+        .map(|i| {
+            let (x, y) = ((i % tpl.cols) as f64, (i / tpl.cols) as f64);
+            let shift = 2.0 * ((40.0 - y) / 15.0).clamp(0.0, 1.0);
+            bilinear(&tpl.peak, tpl.rows, tpl.cols, x - shift, y)
+        })
+        .collect();
+    let trial = FootImages::from_peak(tpl.rows, tpl.cols, peak).unwrap();
+    let mse = |r: &pedo_register::Registration| -> f64 {
+        r.images
+            .peak
+            .iter()
+            .zip(&tpl.peak)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>()
+            / tpl.peak.len() as f64
+    };
+    let warped = register_one(&trial, &template, &params()).unwrap();
+    let mut p = params();
+    p.warp_spacing = 0.0;
+    let rigid = register_one(&trial, &template, &p).unwrap();
+    assert_eq!(warped.kept, MapKept::Warp);
+    assert_eq!(rigid.kept, MapKept::Rigid);
+    assert!(
+        mse(&warped) < 0.5 * mse(&rigid),
+        "MSE warp {:.1}, rigid {:.1}",
+        mse(&warped),
+        mse(&rigid)
+    );
+    assert!(warped.mask_xor_pct <= rigid.mask_xor_pct + 1.0);
+}
+
+/// A trial that already lies on the template is never moved off it: whatever the maps do, the
+/// footprint kept overlaps the template at least as well as the trial as it lies (here exactly).
+#[test]
+fn no_registration_overlaps_worse_than_the_trial_as_it_lies() {
+    let tpl = mun104(true);
+    let template = Template::of_images(tpl.clone(), 0.0, 64).unwrap();
+    for trial in [
+        tpl.clone(),
+        warped(&tpl, tpl.rows, tpl.cols, 3.0, 1.02, 0.3),
+    ] {
+        let unregistered = {
+            let m = pedo_register::footprint::loaded_mask(&trial.peak, 0.0);
+            let xor = m.iter().zip(&template.mask).filter(|(a, b)| a != b).count();
+            100.0 * xor as f64 / template.mask.iter().filter(|&&v| v).count() as f64
+        };
+        for spacing in [0.0, 6.0] {
+            let mut p = params();
+            p.warp_spacing = spacing;
+            let r = register_one(&trial, &template, &p).unwrap();
+            assert!(
+                r.mask_xor_pct <= unregistered + 1e-9,
+                "spacing {spacing}: XOR {:.2} % against {unregistered:.2} % unregistered ({:?})",
+                r.mask_xor_pct,
+                r.kept
+            );
+            if r.kept == MapKept::Identity {
+                assert_eq!(r.affine, [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+            }
+        }
+    }
 }

@@ -125,7 +125,8 @@ macro_rules! define_register {
         /// ``(trials, rows, columns)`` on the template's grid; ``mask`` (bool, same shape), each
         /// trial's footprint there; ``template_peak``, ``template_mask``; ``trials`` (names);
         /// ``table``, a list of dicts, one per trial, with the columns of ``registration.csv``
-        /// (``trial``, ``fallback``, the map ``m11 m12 tx_sensels m21 m22 ty_sensels``,
+        /// (``trial``, ``fallback``, ``map`` (``warp``, ``rigid`` or ``identity``: the map kept),
+        /// the map ``m11 m12 tx_sensels m21 m22 ty_sensels``,
         /// ``turn_deg``, ``scale``, ``residual_sensels``, ``mask_xor_pct``, ``correlation``).
         /// An empty footprint raises :class:`InputError` (or the no-object error) naming its trial.
         /// The GIL is released during the work.

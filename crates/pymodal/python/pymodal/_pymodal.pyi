@@ -479,6 +479,8 @@ def register(
     field_smoothing: Optional[float] = None,
     template_rounds: Optional[int] = None,
     refine_intensity: Optional[bool] = None,
+    warp_spacing: Optional[float] = None,
+    warp_smoothing: Optional[float] = None,
     foot_threshold: Optional[float] = None,
     # @end generated
     # @generated keywords of register read: tests/generated.rs, from the option tables
