@@ -81,21 +81,65 @@ Zebris .apd and XML raw-data export (or its TRIPOD JSON form, also gzip-compress
 RSscan/Materialise footscan export, CSV grid, NumPy .npy/.npz, PNG/TIFF images";
 
 modal_core::option_set! {
-    /// What reading needs besides the file itself (`--layout FILE`; Python `layout=`).
+    /// What reading needs besides the file itself (`--layout FILE`; Python `layout=`), and the
+    /// limits a file is held to ([`crate::limits`]), raised for a file larger than any export
+    /// they were sized for.
     ReadOptions {
-        let _d = ();
+        let d = crate::limits::Limits::DEFAULT;
         /// A pedar sensor-layout table (see [`pedar::PedarLayout::parse`]); `None`: the bundled
         /// layout of the common insole.
         layout: Option<PathBuf> = None;
             Value, "the bundled layout of the common insole",
             "Sensor-layout table of a novel pedar insole (CSV lines insole,sensor,x1,y1,...,x4,y4; '# unit: mm' or 'cm' for a pitch). Only pedar exports use it.";
+        /// Most sensors of one frame ([`crate::limits::MAX_FRAME_SENSORS`]).
+        max_frame_sensors: usize = d.frame_sensors;
+            Value, d.frame_sensors,
+            "Most sensors (rows x columns) a frame may have: a file claiming more is refused before anything is allocated.";
+        /// Most frames of one recording ([`crate::limits::MAX_FRAMES`]).
+        max_frames: usize = d.frames;
+            Value, d.frames,
+            "Most frames a recording may have: a file claiming or holding more is refused.";
+        /// Most values of one recording ([`crate::limits::MAX_RECORDING_VALUES`]).
+        max_values: usize = d.values;
+            Value, d.values,
+            "Most values (frames x sensors per frame) a recording may hold: every frame of a run is visited whole, so this also bounds a run's time.";
+        /// Most MiB a compressed recording may expand to ([`crate::limits::MAX_DECOMPRESSED`]).
+        max_decompressed_mb: usize = (d.decompressed >> 20) as usize;
+            Value, d.decompressed >> 20,
+            "Most MiB a gzip-compressed recording (or a deflated .npz member) may expand to; what is decompressed is parsed as it comes, never held whole.";
+        /// Most MiB of text held at once ([`crate::limits::MAX_TOKEN_BYTES`]).
+        max_text_mb: usize = d.text >> 20;
+            Value, d.text >> 20,
+            "Longest stretch of a text export held at once, in MiB: a line, an XML element, comment or CDATA section, a JSON string.";
     }
 }
 
 impl ReadOptions {
-    /// Nothing to check before reading: the table is read, and checked, with the recording.
+    /// Each limit at least 1 (the layout table is read, and checked, with the recording).
     pub fn validate(&self) -> std::result::Result<(), modal_core::OptionError> {
+        for (option, value) in [
+            ("max_frame_sensors", self.max_frame_sensors),
+            ("max_frames", self.max_frames),
+            ("max_values", self.max_values),
+            ("max_decompressed_mb", self.max_decompressed_mb),
+            ("max_text_mb", self.max_text_mb),
+        ] {
+            if value == 0 {
+                return Err(modal_core::OptionError::new(option, 0, "an integer >= 1"));
+            }
+        }
         Ok(())
+    }
+
+    /// The limits a read with these options is held to.
+    pub fn limits(&self) -> crate::limits::Limits {
+        crate::limits::Limits {
+            frame_sensors: self.max_frame_sensors,
+            frames: self.max_frames,
+            values: self.max_values,
+            decompressed: (self.max_decompressed_mb as u64).saturating_mul(1 << 20),
+            text: self.max_text_mb.saturating_mul(1 << 20),
+        }
     }
 }
 
@@ -463,11 +507,13 @@ pub fn parse_bytes_with(
     name: &str,
     opts: &ReadOptions,
 ) -> Result<Recording> {
-    let gzip = bytes.starts_with(GZIP_MAGIC);
-    if is_binary(format) && !gzip {
-        return parse_binary(bytes, format, name);
-    }
-    parse_source(bytes, gzip, bytes.len(), format, name, opts)
+    opts.limits().apply(|| {
+        let gzip = bytes.starts_with(GZIP_MAGIC);
+        if is_binary(format) && !gzip {
+            return parse_binary(bytes, format, name);
+        }
+        parse_source(bytes, gzip, bytes.len(), format, name, opts)
+    })
 }
 
 /// Whether `format` is parsed from its bytes whole (a zip's directory is at its end, an image
@@ -506,7 +552,7 @@ fn parse_source(
         Box::new(std::io::BufReader::new(source))
     };
     let size = match gzip {
-        true => usize::try_from(crate::limits::MAX_DECOMPRESSED).unwrap_or(usize::MAX),
+        true => usize::try_from(crate::limits::current().decompressed).unwrap_or(usize::MAX),
         false => size,
     };
     let head = decoded
@@ -583,7 +629,30 @@ pub fn read_for_streaming(
     path: impl AsRef<Path>,
     opts: &ReadOptions,
 ) -> Result<(Recording, Option<FileFrames>)> {
-    let path = path.as_ref();
+    let read = read_for_run(path, opts)?;
+    Ok((read.recording, read.frames))
+}
+
+/// A recording read for a run ([`read_for_run`]).
+pub struct RunInput {
+    /// The recording (without its values when `frames` reads them as the run goes).
+    pub recording: Recording,
+    /// The frames read again, window by window ([`read_for_streaming`]).
+    pub frames: Option<FileFrames>,
+    /// Lower-case hex SHA-256 of the file's bytes as the parser read them (the whole file:
+    /// what the parser left unread is hashed after it); `None` for a folder or a numbered
+    /// sequence of images. A second reading of a streamed file must give the same digest.
+    pub sha256: Option<String>,
+}
+
+/// [`read_for_streaming`], with the SHA-256 of the bytes parsed.
+pub fn read_for_run(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<RunInput> {
+    opts.limits()
+        .apply(|| read_for_run_within(path.as_ref(), opts))
+}
+
+/// [`read_for_run`] within the limits of `opts`, set by the caller.
+fn read_for_run_within(path: &Path, opts: &ReadOptions) -> Result<RunInput> {
     let name = path.display().to_string();
     // Anything else, or a file that cannot be opened or sniffed, is read (and its error
     // reported) the usual way.
@@ -592,18 +661,24 @@ pub fn read_for_streaming(
         false => Sniffed::open(path, &name).ok(),
     };
     let Some((sniffed, csv)) = tekscan.and_then(|s| s.tekscan_csv().map(|csv| (s, csv))) else {
-        return Ok((read_recording_with(path, opts)?, None));
+        let (recording, sha256) = read_hashed(path, opts)?;
+        return Ok(RunInput {
+            recording,
+            frames: None,
+            sha256,
+        });
     };
     let size = sniffed.size;
-    let shape = asf::read_tekscan(
-        sniffed.lines(),
-        size,
-        &name,
-        csv,
-        &mut asf::Keep::Handed(None),
-    )?;
-    let frames = FileFrames::start(path.to_path_buf(), name, size, csv);
-    Ok((shape, Some(frames)))
+    let (bytes, sha, rest) = sniffed.hashed(&name)?;
+    let lines = stream::bounded(bytes, false, stream::Stretch::Line);
+    let shape = asf::read_tekscan(lines, size, &name, csv, &mut asf::Keep::Handed(None))?;
+    let sha256 = stamp::finish(&sha, Some(rest)).map_err(|e| stream::read_error(&name, e))?;
+    let again = FileFrames::start(path.to_path_buf(), name, size, csv, opts.limits());
+    Ok(RunInput {
+        recording: shape,
+        frames: Some(again.expecting(sha256.clone())),
+        sha256: Some(sha256),
+    })
 }
 
 /// The frames of a Tekscan file read again, in order, by a thread of their own (see
@@ -613,34 +688,84 @@ pub struct FileFrames {
     /// The number of the next frame to come.
     next: usize,
     name: String,
+    /// The digest of the first reading, which the second one (sent by the reading thread
+    /// after the last frame) must equal.
+    digest: std::sync::mpsc::Receiver<String>,
+    expected: Option<String>,
 }
 
 impl FileFrames {
-    fn start(path: PathBuf, name: String, size: usize, csv: bool) -> Self {
+    fn start(
+        path: PathBuf,
+        name: String,
+        size: usize,
+        csv: bool,
+        limits: crate::limits::Limits,
+    ) -> Self {
         let (send, frames) = std::sync::mpsc::sync_channel(crate::recording::FRAME_WINDOW);
+        let (send_digest, digest) = std::sync::mpsc::sync_channel(1);
         let thread_name = name.clone();
         std::thread::spawn(move || {
-            let read = || -> Result<()> {
-                let file = std::fs::File::open(&path).map_err(|source| IoError::Io {
+            let read = || -> Result<String> {
+                let io = |source| IoError::Io {
                     path: thread_name.clone(),
                     source,
-                })?;
-                let lines = stream::bounded(file, false, stream::Stretch::Line);
+                };
+                let file = std::fs::File::open(&path).map_err(io)?;
+                let rest = file.try_clone().map_err(io)?;
+                let sha = std::rc::Rc::new(std::cell::RefCell::new(
+                    <sha2::Sha256 as sha2::Digest>::new(),
+                ));
+                let hashed = stamp::Hashing::new(file, &sha);
+                let lines = stream::bounded(hashed, false, stream::Stretch::Line);
                 let mut hand = |frame: &[f32]| -> Result<()> {
                     send.send(Ok(frame.to_vec()))
                         .map_err(|_| IoError::invalid("the run stopped reading"))
                 };
                 let mut keep = asf::Keep::Handed(Some(&mut hand));
-                asf::read_tekscan(lines, size, &thread_name, csv, &mut keep).map(drop)
+                asf::read_tekscan(lines, size, &thread_name, csv, &mut keep)?;
+                stamp::finish(&sha, Some(rest)).map_err(|e| stream::read_error(&thread_name, e))
             };
-            if let Err(e) = read() {
-                let _ = send.send(Err(e));
+            match limits.apply(read) {
+                Ok(digest) => drop(send_digest.send(digest)),
+                Err(e) => drop(send.send(Err(e))),
             }
         });
         Self {
             frames,
             next: 0,
             name,
+            digest,
+            expected: None,
+        }
+    }
+
+    /// These frames, checked once the last has come: the second reading's SHA-256 must be
+    /// `digest`, the first's.
+    fn expecting(mut self, digest: String) -> Self {
+        self.expected = Some(digest);
+        self
+    }
+
+    /// Once the file's last frame has been handed over: fails unless the second reading gave
+    /// the first one's digest (a file rewritten between them, even to its old size and time).
+    fn check_digest(&mut self) -> Result<()> {
+        let Some(expected) = self.expected.take() else {
+            return Ok(());
+        };
+        // Frames after the last (none in a file read whole before) or the reading's error.
+        if let Ok(more) = self.frames.try_recv() {
+            more?;
+            return Err(stamp::changed(&self.name));
+        }
+        match self.digest.recv() {
+            Ok(d) if d == expected => Ok(()),
+            Ok(_) => Err(stamp::changed(&self.name)),
+            // The reading failed after its last frame: its error is on the frames' channel.
+            Err(_) => match self.frames.recv() {
+                Ok(Err(e)) => Err(e),
+                _ => Err(stamp::changed(&self.name)),
+            },
         }
     }
 }
@@ -667,6 +792,9 @@ impl crate::recording::FrameSource for FileFrames {
             }
             self.next += 1;
         }
+        if self.next == recording.n_frames() {
+            self.check_digest()?;
+        }
         // The size, mask and units of the run's recording (its unit overrides applied).
         recording.like(w1 - w0, data)
     }
@@ -674,15 +802,24 @@ impl crate::recording::FrameSource for FileFrames {
 
 /// [`read_recording`] with reading options (a pedar layout file for `--layout FILE`).
 pub fn read_recording_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Recording> {
-    let path = path.as_ref();
+    read_hashed(path.as_ref(), opts).map(|(recording, _)| recording)
+}
+
+/// [`read_recording_with`], with the SHA-256 of the bytes parsed ([`RunInput::sha256`]).
+pub fn read_hashed(path: &Path, opts: &ReadOptions) -> Result<(Recording, Option<String>)> {
+    opts.limits().apply(|| read_hashed_within(path, opts))
+}
+
+/// [`read_hashed`] within the limits of `opts`, set by the caller.
+fn read_hashed_within(path: &Path, opts: &ReadOptions) -> Result<(Recording, Option<String>)> {
     if path.is_dir() {
-        return images::read_image_folder(path);
+        return Ok((images::read_image_folder(path)?, None));
     }
     if let Some(s) = path.to_str()
         && images::has_counter(s)
         && !path.exists()
     {
-        return images::read_numbered(s);
+        return Ok((images::read_numbered(s)?, None));
     }
     let name = path.display().to_string();
     // Every text format is parsed as it is read (a long recording's file is never held whole,
@@ -691,13 +828,21 @@ pub fn read_recording_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result
     let format = sniffed.format;
     if is_binary(format) && !sniffed.is_gzip() {
         drop(sniffed);
-        return parse_binary(&read_bytes(path)?, format, &name);
+        let bytes = read_bytes(path)?;
+        let sha256 = stamp::hex(&<sha2::Sha256 as sha2::Digest>::digest(&bytes));
+        return Ok((parse_binary(&bytes, format, &name)?, Some(sha256)));
     }
     let (size, gzip) = (sniffed.size, sniffed.is_gzip());
-    parse_source(sniffed.bytes(), gzip, size, format, &name, opts)
+    let (bytes, sha, rest) = sniffed.hashed(&name)?;
+    let recording = parse_source(bytes, gzip, size, format, &name, opts)?;
+    let sha256 = stamp::finish(&sha, Some(rest)).map_err(|e| stream::read_error(&name, e))?;
+    Ok((recording, Some(sha256)))
 }
 
 /// A recording's file opened, its first [`SNIFF_BYTES`] read and its format told from them.
+/// A SHA-256 fed by a reader that a parser holds ([`stamp::Hashing`]).
+type SharedSha = std::rc::Rc<std::cell::RefCell<sha2::Sha256>>;
+
 struct Sniffed {
     file: std::fs::File,
     head: Vec<u8>,
@@ -713,8 +858,21 @@ impl Sniffed {
             path: name.to_string(),
             source,
         };
+        // A FIFO or a device blocks or never ends: refused before it is opened (opening a FIFO
+        // waits for a writer), and checked again once open.
+        let regular = |m: &std::fs::Metadata| {
+            match m.is_file() {
+            true => Ok(()),
+            false => Err(IoError::invalid(format!(
+                "{name}: not a regular file (a device, FIFO or socket); a recording is read from a file"
+            ))),
+        }
+        };
+        regular(&std::fs::metadata(path).map_err(io)?)?;
         let mut file = std::fs::File::open(path).map_err(io)?;
-        let size = file.metadata().map_err(io)?.len();
+        let meta = file.metadata().map_err(io)?;
+        regular(&meta)?;
+        let size = meta.len();
         let mut head = Vec::with_capacity(SNIFF_BYTES);
         (&mut file)
             .take(SNIFF_BYTES as u64)
@@ -754,8 +912,16 @@ impl Sniffed {
         std::io::Cursor::new(self.head).chain(self.file)
     }
 
-    /// The whole file's lines, from the start.
-    fn lines(self) -> impl std::io::BufRead {
-        stream::bounded(self.bytes(), false, stream::Stretch::Line)
+    /// The whole file's bytes, from the start, hashed as they are read into the returned
+    /// SHA-256, with a second handle on the file (sharing its offset) to hash what the parser
+    /// leaves unread ([`stamp::finish`]).
+    fn hashed(self, name: &str) -> Result<(impl std::io::Read, SharedSha, std::fs::File)> {
+        let rest = self.file.try_clone().map_err(|source| IoError::Io {
+            path: name.to_string(),
+            source,
+        })?;
+        let sha = SharedSha::default();
+        let bytes = stamp::Hashing::new(self.bytes(), &sha);
+        Ok((bytes, sha, rest))
     }
 }
