@@ -82,9 +82,12 @@ pub fn run(args: RunArgs) -> Result<(), CliError> {
     // the read to after the hash (nor, streamed, to its last frame).
     let path = &args.recording;
     let stamp = FileStamp::of(path);
-    let (recording, mut frames) =
-        pedo_output::read_for_run(path, &read, &params, &args.options.outputs())?;
-    let input = InputInfo::of_path(path)?.with_layout(&read, recording.format)?;
+    let pedo_io::formats::RunInput {
+        recording,
+        mut frames,
+        sha256,
+    } = pedo_output::read_for_run(path, &read, &params, &args.options.outputs())?;
+    let input = InputInfo::of_read(path, sha256)?.with_layout(&read, recording.format)?;
     stamp.check(path)?;
     let out = out_folder(args.out, &input)?;
     let mut unchanged = frames.as_mut().map(|inner| Unchanged {

@@ -56,6 +56,20 @@ pub enum ModalError {
         /// Nodes needed.
         min: usize,
     },
+    /// The object has more nodes than a model may have ([`MatchOptions::max_nodes`]): a model
+    /// of `n` nodes holds dense matrices of `(dim · n)²` values.
+    ///
+    /// [`MatchOptions::max_nodes`]: crate::MatchOptions::max_nodes
+    #[error(
+        "{nodes} nodes are more than the {max} an object may have (its model holds dense \
+         matrices of (dim x nodes)^2 values); raise it with --max-nodes (Python max_nodes=)"
+    )]
+    TooManyNodes {
+        /// Nodes of the object.
+        nodes: usize,
+        /// The most allowed.
+        max: usize,
+    },
     /// Two nodes are at the same place (an outline that touches itself, duplicated points).
     #[error("nodes {first} and {second} coincide; remove duplicate points")]
     CoincidentNodes {
@@ -325,6 +339,7 @@ impl ModalError {
             | Self::CoordinateCount { .. }
             | Self::NonFiniteCoordinate { .. }
             | Self::TooFewNodes { .. }
+            | Self::TooManyNodes { .. }
             | Self::CoincidentNodes { .. }
             | Self::Collinear
             | Self::ZeroExtent

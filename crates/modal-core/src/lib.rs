@@ -34,7 +34,7 @@ pub use matching::prealign::{Affine, RotationSearch};
 pub use matching::search::ThresholdMode;
 pub use matching::{
     match_prepared, match_shapes, prepare, MatchOptions, MatchPair, MatchResult, Parallelism,
-    Prealign, PreparedShape, Refine, Search,
+    Prealign, PreparedShape, Refine, Search, MAX_NODES,
 };
 pub use model::{
     modal_basis, model_matrices, ElementKind, ModalBasis, ModelMatrices, ModelOptions,

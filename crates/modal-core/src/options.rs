@@ -672,6 +672,10 @@ option_set! {
         material: Option<Material> = None;
             Value, by_input(|o| o.model.material),
             "Material: a preset (rubber, steel, aluminium, cork, unit) or E,NU,RHO; only Poisson's ratio changes the matches.";
+        /// Most nodes of one object ([`crate::MAX_NODES`]).
+        max_nodes: usize = d.max_nodes;
+            Value, d.max_nodes,
+            "Most nodes an object may have: a larger one is refused before its model, whose dense matrices grow with the square of the nodes, is built (4096 2-D nodes: 512 MiB a matrix).";
     }
 }
 
@@ -734,6 +738,13 @@ impl MatchParams {
         )?;
         if let Some(k) = self.kappa {
             check(k.is_finite() && k > 0.0, "kappa", k, "a finite number > 0")?;
+        }
+        if self.max_nodes < 3 {
+            return Err(OptionError::new(
+                "max_nodes",
+                self.max_nodes,
+                "an integer >= 3",
+            ));
         }
         if self.center_stride == Some(0) {
             return Err(OptionError::new("center_stride", 0, "an integer >= 1"));
@@ -814,6 +825,7 @@ impl MatchParams {
         o.refine = self.refine;
         o.deform_modes = self.deform_modes;
         o.deform_stiffness = self.deform_stiffness;
+        o.max_nodes = self.max_nodes;
         o.position_weight = self.position_weight.unwrap_or(o.position_weight);
         o.cost_power = self.cost_power.unwrap_or(o.cost_power);
         o.common_sigma = self.common_sigma.unwrap_or(o.common_sigma);
@@ -862,8 +874,13 @@ impl MatchParams {
             skip_rigid: used.skip_rigid,
             band: used.band,
             material: Some(used.model.material),
+            max_nodes: used.max_nodes,
         };
-        resolved.values()
+        // A limit changes no result, only whether there is one: records leave it out, and stay
+        // comparable with those made before it was an option (a resumed study's folders).
+        let mut values = resolved.values();
+        values.retain(|(name, _)| *name != "max_nodes");
+        values
     }
 }
 

@@ -131,3 +131,60 @@ fn identical_objects_match_themselves() {
         assert!(r.pairs.iter().all(|p| p.b == 39 - p.a));
     }
 }
+
+#[test]
+fn an_object_beyond_the_node_limit_is_refused_before_its_model_is_built() {
+    // 20,000 nodes: a model of 1.6 × 10⁹ values a matrix. Refused at once, naming the option.
+    let big = shape(&square(20_000));
+    let small = shape(&square(40));
+    let o = MatchOptions::default();
+    let t = std::time::Instant::now();
+    let e = err(&big, &small, &o);
+    assert_eq!(
+        e,
+        ModalError::TooManyNodes {
+            nodes: 20_000,
+            max: modal_core::MAX_NODES
+        }
+        .of(Side::A)
+    );
+    assert!(e.to_string().contains("--max-nodes"), "{e}");
+    assert!(t.elapsed() < std::time::Duration::from_secs(10));
+    // Raised, the limit lets a larger object through (here 50 nodes under a limit of 60,
+    // refused under 45).
+    let a = shape(&square(50));
+    let tight = MatchOptions {
+        max_nodes: 45,
+        ..MatchOptions::default()
+    };
+    assert!(matches!(err(&a, &small, &tight), ModalError::Object { .. }));
+    let roomy = MatchOptions {
+        max_nodes: 60,
+        ..MatchOptions::default()
+    };
+    assert!(match_shapes(&a, &small, &roomy).is_ok());
+}
+
+#[test]
+fn coordinates_near_the_largest_finite_numbers_match_as_at_unit_scale() {
+    // A contour and its turned, stretched copy, matched at unit scale and at 1e300 (every
+    // coordinate finite): the same matches, not "all nodes coincide".
+    let a = square(40);
+    let b: Vec<[f64; 2]> = square(40)
+        .iter()
+        .map(|p| [1.1 * p[0] - 0.2 * p[1] + 0.3, 0.2 * p[0] + 1.1 * p[1]])
+        .collect();
+    let o = MatchOptions::default();
+    let unit = match_shapes(&shape(&a), &shape(&b), &o).unwrap();
+    for scale in [1e300, 1e-300] {
+        let big = |p: &[[f64; 2]]| -> Vec<[f64; 2]> {
+            p.iter().map(|q| [q[0] * scale, q[1] * scale]).collect()
+        };
+        let scaled = match_shapes(&shape(&big(&a)), &shape(&big(&b)), &o)
+            .unwrap_or_else(|e| panic!("scale {scale}: {e}"));
+        let pairs = |r: &modal_core::MatchResult| -> Vec<(usize, usize)> {
+            r.pairs.iter().map(|p| (p.a, p.b)).collect()
+        };
+        assert_eq!(pairs(&scaled), pairs(&unit), "scale {scale}");
+    }
+}

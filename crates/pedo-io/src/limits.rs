@@ -33,33 +33,103 @@ pub const MAX_DECOMPRESSED: u64 = 1 << 30;
 /// frame's row of a large plate, a Zebris frame's `<cells>`) takes well under 1 MB.
 pub const MAX_TOKEN_BYTES: usize = 16 << 20;
 
-/// A frame of `rows` × `cols` sensors within [`MAX_FRAME_SENSORS`]: its number of sensors, or
-/// what is wrong (`what` names the claim: `"ROWS x COLS"`, `"Matrix"`, `"an image"`).
+/// The limits a read is held to: the constants above by default, raised (or lowered) by the
+/// reading options (`ReadOptions`: `--max-frames`, Python `max_frames=`, ...) for a file a user
+/// knows to be larger than any export they were sized for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Limits {
+    /// Sensors of one frame ([`MAX_FRAME_SENSORS`]).
+    pub frame_sensors: usize,
+    /// Frames of one recording ([`MAX_FRAMES`]).
+    pub frames: usize,
+    /// Values of one recording ([`MAX_RECORDING_VALUES`]).
+    pub values: usize,
+    /// Bytes a compressed recording may expand to ([`MAX_DECOMPRESSED`]).
+    pub decompressed: u64,
+    /// The longest stretch of text held at once ([`MAX_TOKEN_BYTES`]).
+    pub text: usize,
+}
+
+impl Limits {
+    /// The documented limits, the constants of this module.
+    pub const DEFAULT: Limits = Limits {
+        frame_sensors: MAX_FRAME_SENSORS,
+        frames: MAX_FRAMES,
+        values: MAX_RECORDING_VALUES,
+        decompressed: MAX_DECOMPRESSED,
+        text: MAX_TOKEN_BYTES,
+    };
+
+    /// Runs `f` with these limits as the readers' on this thread, the previous ones restored
+    /// afterwards (also when `f` unwinds). A scope rather than an argument of every reader: the
+    /// checks sit deep in each format's parser, and a read never leaves its thread (a streamed
+    /// file's second pass sets the limits of its own thread).
+    pub fn apply<T>(self, f: impl FnOnce() -> T) -> T {
+        struct Restore(Limits);
+        impl Drop for Restore {
+            fn drop(&mut self) {
+                CURRENT.with(|c| c.set(self.0));
+            }
+        }
+        let _restore = Restore(CURRENT.with(|c| c.replace(self)));
+        f()
+    }
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+thread_local! {
+    static CURRENT: std::cell::Cell<Limits> = const { std::cell::Cell::new(Limits::DEFAULT) };
+}
+
+/// The limits of a read on this thread: [`Limits::DEFAULT`] unless a [`Limits::apply`] holds.
+pub fn current() -> Limits {
+    CURRENT.with(|c| c.get())
+}
+
+/// How a refusal says to raise the limit it hit: the option of the reading options that sets it.
+pub fn raise(option: &str) -> String {
+    format!(
+        "raise it with --{} (Python {option}=) if the file is genuine",
+        option.replace('_', "-")
+    )
+}
+
+/// A frame of `rows` × `cols` sensors within [`Limits::frame_sensors`]: its number of sensors,
+/// or what is wrong (`what` names the claim: `"ROWS x COLS"`, `"Matrix"`, `"an image"`).
 pub fn frame_sensors(what: &str, rows: usize, cols: usize) -> std::result::Result<usize, String> {
+    let most = current().frame_sensors;
     match rows.checked_mul(cols) {
-        Some(per) if per <= MAX_FRAME_SENSORS => Ok(per),
+        Some(per) if per <= most => Ok(per),
         _ => Err(format!(
-            "{what} of {rows} x {cols} sensors is more than the {MAX_FRAME_SENSORS} sensors a \
-             frame may have"
+            "{what} of {rows} x {cols} sensors is more than the {most} sensors a frame may have; \
+             {}",
+            raise("max_frame_sensors")
         )),
     }
 }
 
-/// Whether a recording may hold `n_frames` frames of `per` sensors ([`MAX_FRAMES`],
-/// [`MAX_RECORDING_VALUES`]); `Err` says why not.
+/// Whether a recording may hold `n_frames` frames of `per` sensors ([`Limits::frames`],
+/// [`Limits::values`]); `Err` says why not.
 pub fn frame_count(n_frames: usize, per: usize) -> std::result::Result<(), String> {
-    if n_frames > MAX_FRAMES {
+    let limits = current();
+    if n_frames > limits.frames {
         return Err(format!(
-            "{n_frames} frames are more than the {MAX_FRAMES} a recording may have"
+            "{n_frames} frames are more than the {} a recording may have; {}",
+            limits.frames,
+            raise("max_frames")
         ));
     }
-    if n_frames
-        .checked_mul(per)
-        .is_none_or(|n| n > MAX_RECORDING_VALUES)
-    {
+    if n_frames.checked_mul(per).is_none_or(|n| n > limits.values) {
         return Err(format!(
-            "{n_frames} frames of {per} sensors are more than the {MAX_RECORDING_VALUES} values \
-             a recording may hold"
+            "{n_frames} frames of {per} sensors are more than the {} values a recording may \
+             hold; {}",
+            limits.values,
+            raise("max_values")
         ));
     }
     Ok(())

@@ -135,6 +135,11 @@ fn cubic(t: f64) -> [f64; 4] {
     [w(1.0 + t), w(t), w(1.0 - t), w(2.0 - t)]
 }
 
+/// Samples an upsampled frame may have per sensor a frame may have
+/// ([`Limits::frame_sensors`](crate::limits::Limits)): 16, so 16.7 million (134 MB) by default,
+/// a 1024 × 1024 frame upsampled 4-fold.
+pub const UPSAMPLED_PER_SENSOR: usize = 16;
+
 /// Upsamples by an integer factor `k`: the output has `(rows − 1)·k + 1` × `(cols − 1)·k + 1`
 /// samples, output sample `(R, C)` sitting at input position `(R / k, C / k)`, so input samples are
 /// kept exactly and coordinates divide by `k` to return to input pixels.
@@ -146,13 +151,27 @@ pub fn upsample(grid: &Grid, k: usize, interp: Interpolation) -> Result<Grid> {
     }
     let (rows, cols) = (grid.rows(), grid.cols());
     let (ro, co) = ((rows - 1) * k + 1, (cols - 1) * k + 1);
+    // Checked before it is allocated: 64-fold on a large plate is thousands of times the frame.
+    let most = crate::limits::current()
+        .frame_sensors
+        .saturating_mul(UPSAMPLED_PER_SENSOR);
+    let samples = ro.checked_mul(co).filter(|&n| n <= most).ok_or_else(|| {
+        IoError::invalid(format!(
+            "upsampling {rows} x {cols} samples by {k} makes {ro} x {co}, more than the {most} \
+             an upsampled frame may have; use a smaller factor"
+        ))
+    })?;
+    let mut out = crate::limits::try_with_capacity(samples).ok_or_else(|| {
+        IoError::invalid(format!(
+            "cannot allocate memory for {ro} x {co} upsampled samples"
+        ))
+    })?;
     let at = |r: isize, c: isize| {
         grid.get(
             r.clamp(0, rows as isize - 1) as usize,
             c.clamp(0, cols as isize - 1) as usize,
         )
     };
-    let mut out = Vec::with_capacity(ro * co);
     for y in 0..ro {
         let (y0, ty) = ((y / k) as isize, (y % k) as f64 / k as f64);
         for x in 0..co {

@@ -427,12 +427,45 @@ impl Recording {
     pub fn frames_with_nan(&self) -> Vec<f32> {
         let per = self.rows * self.cols;
         let mut out = self.data().into_owned();
+        self.mark_missing(&mut out, per);
+        out
+    }
+
+    /// [`frames_with_nan`](Self::frames_with_nan), or an error when the memory for every value
+    /// cannot be had (a recording held sparsely may be far larger dense): never an abort.
+    pub fn try_frames_with_nan(&self) -> crate::Result<Vec<f32>> {
+        let per = self.rows * self.cols;
+        let n = self.n_frames.saturating_mul(per);
+        let mut out = crate::limits::try_with_capacity::<f32>(n).ok_or_else(|| {
+            IoError::invalid(format!(
+                "{} frames of {} x {} values take {} MB as one array, more than can be had; \
+                 take a range of frames (frame(t), or --frames for a run)",
+                self.n_frames,
+                self.rows,
+                self.cols,
+                n.saturating_mul(4) >> 20
+            ))
+        })?;
+        match &self.frames {
+            Frames::Dense(d) => out.extend_from_slice(d),
+            Frames::Sparse(_) => {
+                out.resize(n, 0.0);
+                for (t, frame) in out.chunks_exact_mut(per).enumerate() {
+                    self.frames.fill(t, per, frame);
+                }
+            }
+        }
+        self.mark_missing(&mut out, per);
+        Ok(out)
+    }
+
+    /// Sets the values of missing sensors of `frames` (frames of `per` values) to NaN.
+    fn mark_missing(&self, out: &mut [f32], per: usize) {
         for (i, v) in out.iter_mut().enumerate() {
             if !self.sensor_mask[i % per] {
                 *v = f32::NAN;
             }
         }
-        out
     }
 
     /// The values below 0 at existing sensors over every frame, as the file held them (before

@@ -2,10 +2,12 @@
 //! never panics on arbitrary frames; and a mutation fuzzer over every reader, seeded with the
 //! samples in tests/data, that fails on any panic, hang or outsized allocation.
 //!
-//! The fuzzer runs `PEDO_FUZZ_EXECS` executions in total (default 20 000, a few seconds); the
-//! full campaign is `PEDO_FUZZ_EXECS=1000000 cargo test -p pedo-io --test fuzz mutation_fuzz --
-//! --nocapture` (a debug build, so integer overflows panic too). `PEDO_FUZZ_SEED` changes the
-//! random sequence.
+//! The fuzzer runs `PEDO_FUZZ_EXECS` executions in total (default 20 000, a few seconds), among
+//! them size-amplifying mutations (a header's count or dimension multiplied, a block repeated
+//! up to 512 kB, the result gzip-compressed); the full campaign, outside CI, is
+//! `PEDO_FUZZ_EXECS=1000000 cargo test -p pedo-io --test fuzz mutation_fuzz -- --nocapture`
+//! (a debug build, so integer overflows panic too; BENCHMARKS.md has its result).
+//! `PEDO_FUZZ_SEED` changes the random sequence.
 
 use pedo_io::formats::{asf, csv, lst, npy};
 use pedo_io::surface::{surface, SurfaceOptions};
@@ -212,9 +214,60 @@ const TOKENS: &[&[u8]] = &[
     b"'shape': (",
 ];
 
+/// The longest input an amplifying mutation makes: a few hundred kB keeps an execution within
+/// milliseconds while a header claiming 10⁶ times the data present is still tried.
+const AMPLIFIED_MAX: usize = 512 << 10;
+
+/// Size-amplifying mutations: a number of the input (a header's count, a dimension, a length)
+/// multiplied, or a block of it repeated many times, as a hostile file claims or holds far more
+/// than its seed.
+fn amplify(rng: &mut Rng, v: &mut Vec<u8>) {
+    let n = v.len();
+    if n == 0 {
+        return;
+    }
+    if rng.below(2) == 0 {
+        // Multiply a run of digits (a count, a dimension, a length) by a large factor.
+        let i = rng.below(n);
+        if let Some(s) = (i..n).find(|&k| v[k].is_ascii_digit()) {
+            let e = (s..n).find(|&k| !v[k].is_ascii_digit()).unwrap_or(n);
+            let number: u128 = std::str::from_utf8(&v[s..e.min(s + 30)])
+                .ok()
+                .and_then(|t| t.parse().ok())
+                .unwrap_or(1);
+            let factor: u128 = [10, 256, 1000, 1 << 16, 1 << 20, 1_000_000_007][rng.below(6)];
+            let text = number.max(1).saturating_mul(factor).to_string();
+            v.splice(s..e, text.bytes());
+        }
+        return;
+    }
+    // Repeat a block: a frame, a row, a page or a tag copied up to the size limit.
+    let i = rng.below(n);
+    let len = 1 + rng.below((n - i).min(4096));
+    let block = v[i..i + len].to_vec();
+    let times = 1 + rng.below(AMPLIFIED_MAX / len).min(1 << 14);
+    let at = i + len;
+    let repeated: Vec<u8> = block
+        .iter()
+        .copied()
+        .cycle()
+        .take((times * len).min(AMPLIFIED_MAX.saturating_sub(n)))
+        .collect();
+    v.splice(at..at, repeated);
+}
+
+/// The input gzip-compressed: a text reader's input inflates to many times its size on disk.
+fn gzipped(v: &[u8]) -> Vec<u8> {
+    use std::io::Write as _;
+    let mut z = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    z.write_all(v).unwrap();
+    z.finish().unwrap()
+}
+
 fn mutate_once(rng: &mut Rng, v: &mut Vec<u8>, seeds: &[(String, Format, Vec<u8>)]) {
     let n = v.len();
-    match rng.below(9) {
+    match rng.below(10) {
+        9 => amplify(rng, v),
         0 if n > 0 => {
             let i = rng.below(n);
             v[i] ^= 1 << rng.below(8);
@@ -398,6 +451,16 @@ fn mutation_fuzz_every_reader() {
         for _ in 0..1 + rng.below(8) {
             mutate_once(&mut rng, &mut input, &seeds);
         }
+        // One input in eight is amplified once more and one in sixteen of those compressed,
+        // so that every run tries claims and bodies far beyond the seeds'.
+        let mut inflated = input.len();
+        if rng.below(8) == 0 {
+            amplify(&mut rng, &mut input);
+            inflated = input.len();
+            if rng.below(16) == 0 {
+                input = gzipped(&input);
+            }
+        }
         let t = Instant::now();
         let outcome = std::panic::catch_unwind(|| execute(&input, *format));
         let took = t.elapsed();
@@ -415,7 +478,7 @@ fn mutation_fuzz_every_reader() {
         };
         // Every input is at most a few hundred kB: a reader allocating more than 16 MiB plus
         // 512 bytes per input byte trusted a size field it should have capped.
-        let cap = (16 << 20) + 512 * input.len();
+        let cap = (16 << 20) + 512 * inflated.max(input.len());
         assert!(
             big <= cap,
             "execution {i} (seed {name}) allocated {big} bytes at once; input kept in {}",

@@ -478,3 +478,210 @@ fn an_honest_npz_of_zeros_reads_without_its_data_held() {
     assert_eq!(from_file, rec);
     std::fs::remove_file(path).unwrap();
 }
+
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/")).join(name)
+}
+
+#[test]
+fn every_limit_is_an_option_and_its_refusal_says_how_to_raise_it() {
+    // The bundled walk has 205 frames of 60 x 21 sensors: each limit set just below what it
+    // holds refuses it, naming the option; the default reads it.
+    let walk = data("FrasP01L.asf");
+    assert_eq!(read_recording(&walk).unwrap().n_frames(), 205);
+    let d = ReadOptions::default();
+    let cases = [
+        (
+            "--max-frames (Python max_frames=)",
+            ReadOptions {
+                max_frames: 204,
+                ..d.clone()
+            },
+        ),
+        (
+            "--max-frame-sensors",
+            ReadOptions {
+                max_frame_sensors: 60 * 21 - 1,
+                ..d.clone()
+            },
+        ),
+        (
+            "--max-values",
+            ReadOptions {
+                max_values: 205 * 60 * 21 - 1,
+                ..d.clone()
+            },
+        ),
+    ];
+    let name = walk.display().to_string();
+    let typed = |e: &IoError| format_error(e) || parse_error(e);
+    for (says, opts) in cases {
+        refused(says, &name, says, typed, || {
+            pedo_io::read_recording_with(&walk, &opts)
+        });
+        // The limit holds for the read only: the default reads the file again.
+        assert_eq!(read_recording(&walk).unwrap().n_frames(), 205);
+    }
+    // A limit below 1 is refused as an option; a line longer than 1 MiB under a 1 MiB limit.
+    assert!(ReadOptions {
+        max_text_mb: 0,
+        ..d.clone()
+    }
+    .validate()
+    .is_err());
+    let long = scratch("long-line.csv");
+    std::fs::write(&long, "1,".repeat(600_000) + "1\n").unwrap();
+    let opts = ReadOptions {
+        max_text_mb: 1,
+        ..d.clone()
+    };
+    let name = long.display().to_string();
+    refused("line", &name, "--max-text-mb", typed, || {
+        pedo_io::read_recording_with(&long, &opts)
+    });
+    assert!(read_recording(&long).is_ok());
+    // A compressed recording's expansion: 2 MiB of text refused under a 1 MiB limit, read
+    // whole under the default.
+    let row = "0,".repeat(20) + "0\n";
+    let gz = gzip([(row.into_bytes(), 50_000)]);
+    let opts = ReadOptions {
+        max_decompressed_mb: 1,
+        ..ReadOptions::default()
+    };
+    refused(
+        "gzip",
+        "g.csv.gz",
+        "--max-decompressed-mb",
+        format_error,
+        || pedo_io::formats::parse_bytes_with(&gz, Format::Csv, "g.csv.gz", &opts),
+    );
+    // Raised, a limit lets a file through that the default refuses: 300,000 sensors of one
+    // frame in a 2.1 MB CSV grid within a 200,000-sensor limit, then within 400,000.
+    let grid = ("1 ".repeat(999) + "1\n").repeat(300);
+    let tight = ReadOptions {
+        max_frame_sensors: 200_000,
+        ..ReadOptions::default()
+    };
+    refused("grid", "grid.csv", "--max-frame-sensors", typed, || {
+        pedo_io::formats::parse_bytes_with(grid.as_bytes(), Format::Csv, "grid.csv", &tight)
+    });
+    let roomy = ReadOptions {
+        max_frame_sensors: 400_000,
+        ..ReadOptions::default()
+    };
+    let rec = pedo_io::formats::parse_bytes_with(grid.as_bytes(), Format::Csv, "grid.csv", &roomy);
+    assert_eq!(rec.unwrap().n_sensors(), 300_000);
+}
+
+#[test]
+fn an_xml_comment_or_cdata_section_is_bounded_whatever_bytes_it_holds() {
+    // 24 MiB between `<!--` and `-->`, with a `<` and a `>` every few bytes (which end a
+    // stretch of text, not a comment), and the same in a CDATA section.
+    let head = "<measurement><cell_count><x>4</x><y>3</y></cell_count>";
+    for (open, close) in [("<!--", "-->"), ("<a><![CDATA[", "]]></a>")] {
+        let gz = gzip([
+            once(head),
+            once(open),
+            (b"<a> b ".to_vec(), 4 << 20),
+            once(close),
+            once("</measurement>"),
+        ]);
+        assert!(gz.len() < 1 << 20, "{}", gz.len());
+        refused(open, "c.xml", "--max-text-mb", format_error, || {
+            parse_bytes(&gz, Format::ZebrisXml, "c.xml")
+        });
+    }
+}
+
+#[test]
+fn a_json_string_of_escaped_quotes_is_bounded() {
+    // 20 MiB of `\"` inside one string: every other byte a quote, none of them its end.
+    let gz = gzip([
+        once(r#"{"cell_count": {"x": 4, "y": 3}, "note": ""#),
+        (br#"\""#.to_vec(), 10 << 20),
+        once(r#""}"#),
+    ]);
+    refused("escaped", "e.json", "--max-text-mb", format_error, || {
+        parse_bytes(&gz, Format::ZebrisJson, "e.json")
+    });
+}
+
+#[test]
+fn a_fifo_or_a_device_is_refused_at_once() {
+    let fifo = scratch("named.fifo");
+    let _ = std::fs::remove_file(&fifo);
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    let mut paths = vec![PathBuf::from("/dev/zero")];
+    if made.is_ok_and(|s| s.success()) {
+        paths.push(fifo);
+    }
+    for path in paths {
+        // Opening a FIFO for reading waits for a writer: read on a thread, with a deadline.
+        let (send, got) = std::sync::mpsc::channel();
+        let p = path.clone();
+        std::thread::spawn(move || drop(send.send(read_recording(&p).map(|r| r.n_frames()))));
+        let out = got.recv_timeout(Duration::from_secs(20));
+        let e = out.unwrap_or_else(|_| panic!("{}: no answer in 20 s", path.display()));
+        let msg = e.unwrap_err().to_string();
+        assert!(msg.contains("not a regular file"), "{msg}");
+    }
+}
+
+#[test]
+fn the_recorded_hash_is_of_the_bytes_parsed_and_a_second_reading_must_agree() {
+    use sha2::Digest as _;
+    let walk = std::fs::read(data("FrasP01L.asf")).unwrap();
+    let want: String = sha2::Sha256::digest(&walk)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    let path = scratch("rewritten.asf");
+    std::fs::write(&path, &walk).unwrap();
+    let opts = ReadOptions::default();
+    let (_, sha) = pedo_io::formats::read_hashed(&path, &opts).unwrap();
+    assert_eq!(sha.as_deref(), Some(want.as_str()));
+    // Streamed: read once, then rewritten to the same size and modification time (one digit
+    // of a frame changed) before the frames are read again. The last window fails.
+    let read = pedo_io::formats::read_for_run(&path, &opts).unwrap();
+    assert_eq!(read.sha256.as_deref(), Some(want.as_str()));
+    let mut frames = read.frames.expect("a Tekscan file streams");
+    let mtime = std::fs::metadata(&path).unwrap().modified().unwrap();
+    let text = String::from_utf8_lossy(&walk).into_owned();
+    let frame = text.find("Frame 100").unwrap();
+    let at = frame + text[frame..].find(",1").unwrap() + 1;
+    // Written in place (no moment of a truncated file), one byte, the time set back.
+    use std::os::unix::fs::FileExt as _;
+    let file = std::fs::File::options().write(true).open(&path).unwrap();
+    file.write_at(b"2", at as u64).unwrap();
+    file.set_modified(mtime).unwrap();
+    drop(file);
+    assert_eq!(std::fs::metadata(&path).unwrap().modified().unwrap(), mtime);
+    let n = read.recording.n_frames();
+    use pedo_io::FrameSource as _;
+    let first = frames.window(&read.recording, 0, 64);
+    assert!(first.is_ok());
+    let last = frames
+        .window(&read.recording, 64, n)
+        .unwrap_err()
+        .to_string();
+    assert!(last.contains("changed while it was being read"), "{last}");
+    // Unchanged, the same streamed read goes through.
+    std::fs::write(&path, &walk).unwrap();
+    let read = pedo_io::formats::read_for_run(&path, &opts).unwrap();
+    let mut frames = read.frames.unwrap();
+    assert!(frames.window(&read.recording, 0, n).is_ok());
+}
+
+#[test]
+fn upsampling_a_large_frame_is_checked_before_it_is_allocated() {
+    use pedo_io::preprocess::{upsample, Interpolation};
+    // 1024 x 1024 by 64: 4.3 × 10⁹ samples, 34 GB. Refused at once; 4-fold goes through.
+    let g = pedo_io::Grid::new(1024, 1024, vec![0.0; 1 << 20]).unwrap();
+    let (out, peak, took) = measured(|| upsample(&g, 64, Interpolation::Bilinear));
+    let msg = out.unwrap_err().to_string();
+    assert!(msg.contains("use a smaller factor"), "{msg}");
+    assert!(peak <= BUDGET && took <= TIME, "{peak} bytes, {took:?}");
+    let small = pedo_io::Grid::new(64, 64, vec![1.0; 64 * 64]).unwrap();
+    let up = upsample(&small, 4, Interpolation::Bilinear).unwrap();
+    assert_eq!((up.rows(), up.cols()), (253, 253));
+}

@@ -535,6 +535,7 @@ fn pedar_truncation_layout_files_and_options() {
         data("pedar-example-3.01-4.00.asc"),
         &ReadOptions {
             layout: Some(p.clone()),
+            ..ReadOptions::default()
         },
     )
     .unwrap();
@@ -549,7 +550,10 @@ fn pedar_truncation_layout_files_and_options() {
     let bad = s.write("bad.csv", b"L,1,0,0,1,0,1,1\n");
     let e = read_recording_with(
         data("pedar-example-3.01-4.00.asc"),
-        &ReadOptions { layout: Some(bad) },
+        &ReadOptions {
+            layout: Some(bad),
+            ..ReadOptions::default()
+        },
     )
     .unwrap_err()
     .to_string();

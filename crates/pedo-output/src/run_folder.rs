@@ -18,7 +18,7 @@ use crate::TableFormat;
 use crate::{Cell, InputInfo};
 use modal_core::{Choice, OptionSpec, PathOrRows};
 use pedo_io::cancel::Cancel;
-use pedo_io::formats::{read_recording_with, ReadOptions};
+use pedo_io::formats::ReadOptions;
 use pedo_io::recording::FrameMeasures;
 use pedo_io::recording::Recording;
 use pedo_io::FrameSource;
@@ -370,17 +370,24 @@ pub fn tables_only(outputs: &RunOutputs) -> bool {
 
 /// The recording at `path` read for a run with these parameters and outputs: a run that
 /// streams (tables only, and [`RunParams::streams`]) reads a file's frames as it goes when its
-/// format allows ([`pedo_io::formats::read_for_streaming`]), never held whole; any other run
-/// reads it whole.
+/// format allows ([`pedo_io::formats::read_for_run`]), never held whole; any other run reads it
+/// whole. Either way with the SHA-256 of the bytes parsed.
 pub fn read_for_run(
     path: &Path,
     read: &ReadOptions,
     params: &RunParams,
     outputs: &RunOutputs,
-) -> Result<(Recording, Option<pedo_io::formats::FileFrames>)> {
+) -> Result<pedo_io::formats::RunInput> {
     match run_reads_whole(params, outputs) {
-        None => pedo_io::formats::read_for_streaming(path, read),
-        Some(_) => Ok((read_recording_with(path, read)?, None)),
+        None => pedo_io::formats::read_for_run(path, read),
+        Some(_) => {
+            let (recording, sha256) = pedo_io::formats::read_hashed(path, read)?;
+            Ok(pedo_io::formats::RunInput {
+                recording,
+                frames: None,
+                sha256,
+            })
+        }
     }
 }
 

@@ -47,6 +47,20 @@ impl InputInfo {
         }
     }
 
+    /// The input read from `path` whose parser's bytes hashed to `sha256`
+    /// ([`pedo_io::formats::RunInput::sha256`]); without a digest (a folder of images), the
+    /// hash of its files ([`InputInfo::of_path`]).
+    pub fn of_read(path: &std::path::Path, sha256: Option<String>) -> Result<Self> {
+        match sha256 {
+            Some(sha256) => Ok(Self {
+                name: path.display().to_string(),
+                sha256: Some(sha256),
+                layout: None,
+            }),
+            None => Self::of_path(path),
+        }
+    }
+
     /// This input with the layout file of `read` when the recording read is a pedar one
     /// (`format`): its sensors' places, and so every result, depend on that file's content.
     pub fn with_layout(mut self, read: &ReadOptions, format: Option<Format>) -> Result<Self> {

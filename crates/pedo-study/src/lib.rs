@@ -1527,10 +1527,13 @@ fn process(
     // The SHA-256 recorded must be of the bytes parsed: the input is read, then hashed, and
     // must not change from before the read to after the hash (nor, streamed, to its last frame).
     let stamp = FileStamp::of(path);
-    let (mut recording, mut file_frames) =
-        read_for_run(path, &opts.read, &opts.params, &opts.outputs)?;
+    let pedo_io::formats::RunInput {
+        mut recording,
+        frames: mut file_frames,
+        sha256,
+    } = read_for_run(path, &opts.read, &opts.params, &opts.outputs)?;
     *read = Some((recording.n_frames(), RowUnits::of(&recording)));
-    let input = InputInfo::of_path(path)?.with_layout(&opts.read, recording.format)?;
+    let input = InputInfo::of_read(path, sha256)?.with_layout(&opts.read, recording.format)?;
     stamp.check(path)?;
     let mut unchanged = file_frames.as_mut().map(|inner| Unchanged {
         inner,

@@ -58,7 +58,17 @@ pub(crate) fn frame_contours(
 ) -> Result<FrameObjects> {
     let frame = recording.frame(t)?;
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
-    let mut cs: Vec<(Contour, MeasuredShape)> = contours(&frame, &options.contour)?
+    let found = contours(&frame, &options.contour)?;
+    // Refused here, before a model of it is built: its matrices grow with the nodes' square.
+    let most = options.matching.max_nodes;
+    if let Some(c) = found.iter().find(|c| !c.hole && c.points.len() > most) {
+        return Err(IoError::invalid(format!(
+            "a contour of {} nodes is more than the {most} an object may have; a larger \
+             --spacing (Python spacing=) makes fewer, or raise --max-nodes (Python max_nodes=)",
+            c.points.len()
+        )));
+    }
+    let mut cs: Vec<(Contour, MeasuredShape)> = found
         .into_iter()
         .filter(|c| !c.hole && c.points.len() >= options.min_nodes.max(3))
         .filter_map(|c| {

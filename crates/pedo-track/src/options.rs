@@ -467,6 +467,17 @@ impl RunParams {
                 "an integer >= 8",
             ));
         }
+        // A surface may keep its hull's corners beyond its budget; the budget itself must fit.
+        if self.surface_nodes > self.matching.max_nodes {
+            return Err(OptionError::new(
+                "surface_nodes",
+                self.surface_nodes,
+                format!(
+                    "at most max_nodes ({}), the most nodes an object may have",
+                    self.matching.max_nodes
+                ),
+            ));
+        }
         Ok(())
     }
 

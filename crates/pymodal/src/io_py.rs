@@ -229,8 +229,10 @@ impl PyRecording {
     #[getter]
     fn frames<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
         let r = &self.inner;
-        let a = Array3::from_shape_vec((r.n_frames(), r.rows(), r.cols()), r.frames_with_nan())
-            .map_err(internal)?;
+        // A recording held sparsely may be far larger dense: an error, never an abort.
+        let values = r.try_frames_with_nan().map_err(crate::errors::to_py)?;
+        let a =
+            Array3::from_shape_vec((r.n_frames(), r.rows(), r.cols()), values).map_err(internal)?;
         read_only(a.into_pyarray(py))
     }
     /// The values below 0 at existing sensors over every frame, as the file held them:

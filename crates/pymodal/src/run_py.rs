@@ -31,8 +31,9 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
             // The SHA-256 recorded must be of the bytes parsed: the file must not change from
             // before the read to after the hash.
             let stamp = pedo_io::formats::stamp::FileStamp::of(&path);
-            let rec = pedo_io::read_recording(&path)?;
-            let input = InputInfo::of_path(&path)?;
+            let read = pedo_io::ReadOptions::default();
+            let (rec, sha256) = pedo_io::formats::read_hashed(&path, &read)?;
+            let input = InputInfo::of_read(&path, sha256)?;
             stamp.check(&path)?;
             Ok::<_, pedo_io::IoError>((rec, input))
         })

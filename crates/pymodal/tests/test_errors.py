@@ -339,3 +339,20 @@ def test_docstrings_name_every_keyword_and_the_exceptions():
     for name in ("InputError", "OptionError", "FormatError", "FileNotFoundError"):
         assert name in run_doc, name
     assert "sensels" in pymodal.contours.__doc__ and "pixel" not in pymodal.contours.__doc__
+
+
+def test_reading_limits_are_keywords_and_a_refusal_says_how_to_raise_it():
+    with pytest.raises(pymodal.FormatError, match=r"max_frames="):
+        pymodal.read_recording(ASF, max_frames=100)
+    assert pymodal.read_recording(ASF, max_frames=205).frames.shape[0] == 205
+
+
+def test_an_object_beyond_the_node_limit_is_a_typed_error_at_once():
+    # 20,000 points: a model of 1.6e9 values a matrix; refused before it is built.
+    points = outline(20_000)
+    with pytest.raises(pymodal.PedomatchError, match=r"max_nodes="):
+        pymodal.match(points, points)
+    small = outline(50)
+    with pytest.raises(pymodal.PedomatchError, match=r"max_nodes="):
+        pymodal.match(small, small, max_nodes=40)
+    assert len(pymodal.match(small, small, max_nodes=60).pairs) > 0

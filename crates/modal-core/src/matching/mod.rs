@@ -37,7 +37,7 @@ use crate::shape::{Shape, Topology};
 pub use self::first_phase::Parallelism;
 pub use self::prealign::Prealign;
 pub use self::prepare::{prepare, PreparedShape};
-pub use self::recipe::MatchOptions;
+pub use self::recipe::{MatchOptions, MAX_NODES};
 pub use self::refine::Refine;
 pub use self::result::{MatchPair, MatchResult};
 pub use self::search::Search;

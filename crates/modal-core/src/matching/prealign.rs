@@ -129,13 +129,20 @@ pub fn normalize(pts: &[f64], dim: usize) -> Result<(Vec<f64>, [f64; 3], f64), M
             c[a] += p[a] / n as f64;
         }
     }
+    let extent = pts.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
+    // The spread is summed in units of a power of two near the extent (an exact rescaling):
+    // squares of coordinates near 1e300, finite as they are, would overflow.
+    let unit = 2f64.powi(extent.log2().floor().clamp(-1000.0, 1000.0) as i32);
     let ms: f64 = pts
         .chunks_exact(dim)
-        .map(|p| (0..dim).map(|a| (p[a] - c[a]).powi(2)).sum::<f64>())
+        .map(|p| {
+            (0..dim)
+                .map(|a| (p[a] / unit - c[a] / unit).powi(2))
+                .sum::<f64>()
+        })
         .sum::<f64>()
         / n as f64;
-    let rms = ms.sqrt();
-    let extent = pts.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
+    let rms = ms.sqrt() * unit;
     if !(rms.is_finite() && rms > 1e-12 * extent) {
         return Err(ModalError::ZeroExtent);
     }

@@ -100,10 +100,17 @@ pub(crate) fn prepare_as(
     opts: &MatchOptions,
     side: Option<Side>,
 ) -> Result<PreparedShape, ModalError> {
-    validate(shape).map_err(|e| match side {
-        Some(side) => e.of(side),
-        None => e,
-    })?;
+    let too_many = (shape.len() > opts.max_nodes).then_some(ModalError::TooManyNodes {
+        nodes: shape.len(),
+        max: opts.max_nodes,
+    });
+    too_many
+        .map_or(Ok(()), Err)
+        .and_then(|()| validate(shape))
+        .map_err(|e| match side {
+            Some(side) => e.of(side),
+            None => e,
+        })?;
     let ordered = opts
         .ordered
         .unwrap_or(matches!(shape.topology(), Topology::ClosedContour));

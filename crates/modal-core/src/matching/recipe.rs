@@ -5,6 +5,11 @@ use super::refine::Refine;
 use super::search::{Search, ThresholdMode};
 use crate::model::{Material, ModelOptions};
 
+/// The most nodes an object may have by default: a 2-D model of 4096 nodes holds dense
+/// matrices of 8192² values (512 MiB each) and takes minutes to solve, while the objects of a
+/// recording hold hundreds (a contour at one node per sensel, a surface of 120 nodes).
+pub const MAX_NODES: usize = 4096;
+
 /// Parameters of [`match_shapes`](super::match_shapes). The defaults are the measured recipe of docs/method.md §7.3.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MatchOptions {
@@ -63,6 +68,9 @@ pub struct MatchOptions {
     /// What follows the affine re-fits: nothing more ([`Refine::Affine`], the default) or the
     /// modal non-rigid warp of docs/method.md §7.4 ([`Refine::Modal`]).
     pub refine: Refine,
+    /// Most nodes of one object ([`MAX_NODES`] by default): more is refused before a model is
+    /// built, as its dense matrices grow with the square of the nodes.
+    pub max_nodes: usize,
     /// Modes of the warp's displacement field (the rigid ones included), [`Refine::Modal`] only.
     pub deform_modes: usize,
     /// Weight of the modes' strain energy against the fit of the warp, [`Refine::Modal`] only:
@@ -116,6 +124,7 @@ impl Default for MatchOptions {
             // 40 modes, or stiffness 10 or 1000, gained less or lost.
             deform_modes: 12,
             deform_stiffness: 100.0,
+            max_nodes: MAX_NODES,
         }
     }
 }

@@ -6,7 +6,6 @@ use super::asf::trunc;
 use super::parse_num;
 use crate::error::{IoError, Result};
 use crate::grid::Grid;
-use crate::limits::MAX_FRAME_SENSORS;
 use crate::recording::{Format, Recording};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -14,7 +13,7 @@ use std::path::Path;
 /// The fields of a line; at most one more than a frame may have sensors (a longer row is
 /// refused, and never split whole).
 fn split_fields(line: &str, sep: Option<char>) -> Vec<&str> {
-    let most = MAX_FRAME_SENSORS + 1;
+    let most = crate::limits::current().frame_sensors.saturating_add(1);
     match sep {
         Some(c) => line.split(c).map(str::trim).take(most).collect(),
         None => line.split_whitespace().take(most).collect(),

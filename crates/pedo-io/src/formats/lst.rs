@@ -4,7 +4,6 @@
 use super::asf::trunc;
 use super::parse_num;
 use crate::error::{IoError, Result};
-use crate::limits::MAX_FRAME_SENSORS;
 use crate::recording::{Format, Recording, SparseFrames};
 
 /// What a `.lst` page prints besides the pressures: the forces the export computed itself.
@@ -162,9 +161,11 @@ impl Page {
             )));
         }
         // A page prints a window of the plate: never more cells than a frame may have.
-        if self.cells.len() + self.columns.len() > MAX_FRAME_SENSORS {
+        let most = crate::limits::current().frame_sensors;
+        if self.cells.len() + self.columns.len() > most {
             return Err(err(format!(
-                "the page holds more than the {MAX_FRAME_SENSORS} sensors a frame may have"
+                "the page holds more than the {most} sensors a frame may have; {}",
+                crate::limits::raise("max_frame_sensors")
             )));
         }
         for (k, v) in fields[1..].iter().enumerate() {
@@ -345,10 +346,14 @@ impl<'a> Pages<'a> {
         }
         // Pages before the first `Matrix` line wait for it, within one frame's worth of cells.
         let waiting: usize = self.pending.iter().map(|p| p.cells.len()).sum();
-        if waiting + pg.cells.len() > MAX_FRAME_SENSORS {
+        let most = crate::limits::current().frame_sensors;
+        if waiting + pg.cells.len() > most {
             return Err(IoError::format(
                 self.name,
-                format!("more than {MAX_FRAME_SENSORS} values before a `Matrix: CxR` line"),
+                format!(
+                    "more than {most} values before a `Matrix: CxR` line; {}",
+                    crate::limits::raise("max_frame_sensors")
+                ),
             ));
         }
         self.pending.push(pg);

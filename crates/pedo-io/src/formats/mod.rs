@@ -81,21 +81,65 @@ Zebris .apd and XML raw-data export (or its TRIPOD JSON form, also gzip-compress
 RSscan/Materialise footscan export, CSV grid, NumPy .npy/.npz, PNG/TIFF images";
 
 modal_core::option_set! {
-    /// What reading needs besides the file itself (`--layout FILE`; Python `layout=`).
+    /// What reading needs besides the file itself (`--layout FILE`; Python `layout=`), and the
+    /// limits a file is held to ([`crate::limits`]), raised for a file larger than any export
+    /// they were sized for.
     ReadOptions {
-        let _d = ();
+        let d = crate::limits::Limits::DEFAULT;
         /// A pedar sensor-layout table (see [`pedar::PedarLayout::parse`]); `None`: the bundled
         /// layout of the common insole.
         layout: Option<PathBuf> = None;
             Value, "the bundled layout of the common insole",
             "Sensor-layout table of a novel pedar insole (CSV lines insole,sensor,x1,y1,...,x4,y4; '# unit: mm' or 'cm' for a pitch). Only pedar exports use it.";
+        /// Most sensors of one frame ([`crate::limits::MAX_FRAME_SENSORS`]).
+        max_frame_sensors: usize = d.frame_sensors;
+            Value, d.frame_sensors,
+            "Most sensors (rows x columns) a frame may have: a file claiming more is refused before anything is allocated.";
+        /// Most frames of one recording ([`crate::limits::MAX_FRAMES`]).
+        max_frames: usize = d.frames;
+            Value, d.frames,
+            "Most frames a recording may have: a file claiming or holding more is refused.";
+        /// Most values of one recording ([`crate::limits::MAX_RECORDING_VALUES`]).
+        max_values: usize = d.values;
+            Value, d.values,
+            "Most values (frames x sensors per frame) a recording may hold: every frame of a run is visited whole, so this also bounds a run's time.";
+        /// Most MiB a compressed recording may expand to ([`crate::limits::MAX_DECOMPRESSED`]).
+        max_decompressed_mb: usize = (d.decompressed >> 20) as usize;
+            Value, d.decompressed >> 20,
+            "Most MiB a gzip-compressed recording (or a deflated .npz member) may expand to; what is decompressed is parsed as it comes, never held whole.";
+        /// Most MiB of text held at once ([`crate::limits::MAX_TOKEN_BYTES`]).
+        max_text_mb: usize = d.text >> 20;
+            Value, d.text >> 20,
+            "Longest stretch of a text export held at once, in MiB: a line, an XML element, comment or CDATA section, a JSON string.";
     }
 }
 
 impl ReadOptions {
-    /// Nothing to check before reading: the table is read, and checked, with the recording.
+    /// Each limit at least 1 (the layout table is read, and checked, with the recording).
     pub fn validate(&self) -> std::result::Result<(), modal_core::OptionError> {
+        for (option, value) in [
+            ("max_frame_sensors", self.max_frame_sensors),
+            ("max_frames", self.max_frames),
+            ("max_values", self.max_values),
+            ("max_decompressed_mb", self.max_decompressed_mb),
+            ("max_text_mb", self.max_text_mb),
+        ] {
+            if value == 0 {
+                return Err(modal_core::OptionError::new(option, 0, "an integer >= 1"));
+            }
+        }
         Ok(())
+    }
+
+    /// The limits a read with these options is held to.
+    pub fn limits(&self) -> crate::limits::Limits {
+        crate::limits::Limits {
+            frame_sensors: self.max_frame_sensors,
+            frames: self.max_frames,
+            values: self.max_values,
+            decompressed: (self.max_decompressed_mb as u64).saturating_mul(1 << 20),
+            text: self.max_text_mb.saturating_mul(1 << 20),
+        }
     }
 }
 
@@ -463,11 +507,13 @@ pub fn parse_bytes_with(
     name: &str,
     opts: &ReadOptions,
 ) -> Result<Recording> {
-    let gzip = bytes.starts_with(GZIP_MAGIC);
-    if is_binary(format) && !gzip {
-        return parse_binary(bytes, format, name);
-    }
-    parse_source(bytes, gzip, bytes.len(), format, name, opts)
+    opts.limits().apply(|| {
+        let gzip = bytes.starts_with(GZIP_MAGIC);
+        if is_binary(format) && !gzip {
+            return parse_binary(bytes, format, name);
+        }
+        parse_source(bytes, gzip, bytes.len(), format, name, opts)
+    })
 }
 
 /// Whether `format` is parsed from its bytes whole (a zip's directory is at its end, an image
@@ -506,7 +552,7 @@ fn parse_source(
         Box::new(std::io::BufReader::new(source))
     };
     let size = match gzip {
-        true => usize::try_from(crate::limits::MAX_DECOMPRESSED).unwrap_or(usize::MAX),
+        true => usize::try_from(crate::limits::current().decompressed).unwrap_or(usize::MAX),
         false => size,
     };
     let head = decoded
@@ -583,7 +629,30 @@ pub fn read_for_streaming(
     path: impl AsRef<Path>,
     opts: &ReadOptions,
 ) -> Result<(Recording, Option<FileFrames>)> {
-    let path = path.as_ref();
+    let read = read_for_run(path, opts)?;
+    Ok((read.recording, read.frames))
+}
+
+/// A recording read for a run ([`read_for_run`]).
+pub struct RunInput {
+    /// The recording (without its values when `frames` reads them as the run goes).
+    pub recording: Recording,
+    /// The frames read again, window by window ([`read_for_streaming`]).
+    pub frames: Option<FileFrames>,
+    /// Lower-case hex SHA-256 of the file's bytes as the parser read them (the whole file:
+    /// what the parser left unread is hashed after it); `None` for a folder or a numbered
+    /// sequence of images. A second reading of a streamed file must give the same digest.
+    pub sha256: Option<String>,
+}
+
+/// [`read_for_streaming`], with the SHA-256 of the bytes parsed.
+pub fn read_for_run(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<RunInput> {
+    opts.limits()
+        .apply(|| read_for_run_within(path.as_ref(), opts))
+}
+
+/// [`read_for_run`] within the limits of `opts`, set by the caller.
+fn read_for_run_within(path: &Path, opts: &ReadOptions) -> Result<RunInput> {
     let name = path.display().to_string();
     // Anything else, or a file that cannot be opened or sniffed, is read (and its error
     // reported) the usual way.
@@ -592,31 +661,48 @@ pub fn read_for_streaming(
         false => Sniffed::open(path, &name).ok(),
     };
     let Some(sniffed) = sniffed.filter(|s| s.why_read_whole().is_none()) else {
-        return Ok((read_recording_with(path, opts)?, None));
+        let (recording, sha256) = read_hashed(path, opts)?;
+        return Ok(RunInput {
+            recording,
+            frames: None,
+            sha256,
+        });
     };
-    let (shape, source) = match sniffed.format {
+    let (shape, source, sha256) = match sniffed.format {
         Format::Npy => {
-            drop(sniffed);
+            // The array is read at offsets, window by window: its digest is of the whole file,
+            // read once here; a change later is caught by the caller's size and time check.
+            let (mut bytes, sha, rest) = sniffed.hashed(&name)?;
+            std::io::copy(&mut bytes, &mut std::io::sink())
+                .map_err(|e| stream::read_error(&name, e))?;
+            let sha256 =
+                stamp::finish(&sha, Some(rest)).map_err(|e| stream::read_error(&name, e))?;
             let mut npy = npy::NpyFile::open(path, &name)?;
-            (npy.shape()?, Source::Npy(npy))
+            (npy.shape()?, Source::Npy(npy), sha256)
         }
         format => {
             let csv = format == Format::TekscanCsv;
             let size = sniffed.size;
-            let mut keep = asf::Keep::Handed(None);
-            let shape = asf::read_tekscan(sniffed.lines(), size, &name, csv, &mut keep)?;
-            (
-                shape,
-                Source::tekscan(path.to_path_buf(), name.clone(), size, csv),
-            )
+            let (bytes, sha, rest) = sniffed.hashed(&name)?;
+            let lines = stream::bounded(bytes, false, stream::Stretch::Line);
+            let shape = asf::read_tekscan(lines, size, &name, csv, &mut asf::Keep::Handed(None))?;
+            let sha256 =
+                stamp::finish(&sha, Some(rest)).map_err(|e| stream::read_error(&name, e))?;
+            let source = Source::tekscan(path.to_path_buf(), name.clone(), size, csv, opts.limits());
+            (shape, source, sha256)
         }
     };
     let frames = FileFrames {
         source,
         next: 0,
         name,
+        expected: Some(sha256.clone()),
     };
-    Ok((shape, Some(frames)))
+    Ok(RunInput {
+        recording: shape,
+        frames: Some(frames),
+        sha256: Some(sha256),
+    })
 }
 
 /// Why a run that streams reads the file at `path` whole, `None` when it reads its frames as it
@@ -639,38 +725,58 @@ pub struct FileFrames {
     /// The number of the next frame to come.
     next: usize,
     name: String,
+    /// The digest of the first reading, which the second one (a Tekscan file's reading thread
+    /// sends it after the last frame) must equal.
+    expected: Option<String>,
 }
 
 /// Where a [`FileFrames`] reads its frames.
 enum Source {
-    /// A Tekscan file parsed again by a thread of its own, handing its frames one by one.
-    Tekscan(std::sync::mpsc::Receiver<Result<Vec<f32>>>),
+    /// A Tekscan file parsed again by a thread of its own, handing its frames one by one and,
+    /// after the last, the SHA-256 of the bytes it read.
+    Tekscan {
+        frames: std::sync::mpsc::Receiver<Result<Vec<f32>>>,
+        digest: std::sync::mpsc::Receiver<String>,
+    },
     /// A `.npy` array, read a window at a time.
     Npy(npy::NpyFile),
 }
 
 impl Source {
-    fn tekscan(path: PathBuf, name: String, size: usize, csv: bool) -> Self {
+    fn tekscan(
+        path: PathBuf,
+        name: String,
+        size: usize,
+        csv: bool,
+        limits: crate::limits::Limits,
+    ) -> Self {
         let (send, frames) = std::sync::mpsc::sync_channel(crate::recording::FRAME_WINDOW);
+        let (send_digest, digest) = std::sync::mpsc::sync_channel(1);
         std::thread::spawn(move || {
-            let read = || -> Result<()> {
-                let file = std::fs::File::open(&path).map_err(|source| IoError::Io {
+            let read = || -> Result<String> {
+                let io = |source| IoError::Io {
                     path: name.clone(),
                     source,
-                })?;
-                let lines = stream::bounded(file, false, stream::Stretch::Line);
+                };
+                let file = std::fs::File::open(&path).map_err(io)?;
+                let rest = file.try_clone().map_err(io)?;
+                let sha = SharedSha::default();
+                let hashed = stamp::Hashing::new(file, &sha);
+                let lines = stream::bounded(hashed, false, stream::Stretch::Line);
                 let mut hand = |frame: &[f32]| -> Result<()> {
                     send.send(Ok(frame.to_vec()))
                         .map_err(|_| IoError::invalid("the run stopped reading"))
                 };
                 let mut keep = asf::Keep::Handed(Some(&mut hand));
-                asf::read_tekscan(lines, size, &name, csv, &mut keep).map(drop)
+                asf::read_tekscan(lines, size, &name, csv, &mut keep)?;
+                stamp::finish(&sha, Some(rest)).map_err(|e| stream::read_error(&name, e))
             };
-            if let Err(e) = read() {
-                let _ = send.send(Err(e));
+            match limits.apply(read) {
+                Ok(digest) => drop(send_digest.send(digest)),
+                Err(e) => drop(send.send(Err(e))),
             }
         });
-        Source::Tekscan(frames)
+        Source::Tekscan { frames, digest }
     }
 }
 
@@ -679,7 +785,7 @@ impl FileFrames {
     fn values(&mut self, w0: usize, w1: usize, per: usize) -> Result<Vec<f32>> {
         let frames = match &mut self.source {
             Source::Npy(npy) => return npy.window(w0, w1),
-            Source::Tekscan(frames) => frames,
+            Source::Tekscan { frames, .. } => frames,
         };
         let mut data = Vec::with_capacity((w1 - w0) * per);
         while self.next < w1 {
@@ -696,6 +802,32 @@ impl FileFrames {
         }
         Ok(data)
     }
+
+    /// Once the file's last frame has been handed over: fails unless a Tekscan file's second
+    /// reading gave the first one's digest (a file rewritten between them, even to its old size
+    /// and time).
+    fn check_digest(&mut self) -> Result<()> {
+        let Some(expected) = self.expected.take() else {
+            return Ok(());
+        };
+        let Source::Tekscan { frames, digest } = &self.source else {
+            return Ok(());
+        };
+        // Frames after the last (none in a file read whole before) or the reading's error.
+        if let Ok(more) = frames.try_recv() {
+            more?;
+            return Err(stamp::changed(&self.name));
+        }
+        match digest.recv() {
+            Ok(d) if d == expected => Ok(()),
+            Ok(_) => Err(stamp::changed(&self.name)),
+            // The reading failed after its last frame: its error is on the frames' channel.
+            Err(_) => match frames.recv() {
+                Ok(Err(e)) => Err(e),
+                _ => Err(stamp::changed(&self.name)),
+            },
+        }
+    }
 }
 
 impl crate::recording::FrameSource for FileFrames {
@@ -708,6 +840,9 @@ impl crate::recording::FrameSource for FileFrames {
         }
         let data = self.values(w0, w1, recording.rows() * recording.cols())?;
         self.next = w1;
+        if self.next == recording.n_frames() {
+            self.check_digest()?;
+        }
         // The size, mask and units of the run's recording (its unit overrides applied).
         recording.like(w1 - w0, data)
     }
@@ -715,15 +850,24 @@ impl crate::recording::FrameSource for FileFrames {
 
 /// [`read_recording`] with reading options (a pedar layout file for `--layout FILE`).
 pub fn read_recording_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Recording> {
-    let path = path.as_ref();
+    read_hashed(path.as_ref(), opts).map(|(recording, _)| recording)
+}
+
+/// [`read_recording_with`], with the SHA-256 of the bytes parsed ([`RunInput::sha256`]).
+pub fn read_hashed(path: &Path, opts: &ReadOptions) -> Result<(Recording, Option<String>)> {
+    opts.limits().apply(|| read_hashed_within(path, opts))
+}
+
+/// [`read_hashed`] within the limits of `opts`, set by the caller.
+fn read_hashed_within(path: &Path, opts: &ReadOptions) -> Result<(Recording, Option<String>)> {
     if path.is_dir() {
-        return images::read_image_folder(path);
+        return Ok((images::read_image_folder(path)?, None));
     }
     if let Some(s) = path.to_str()
         && images::has_counter(s)
         && !path.exists()
     {
-        return images::read_numbered(s);
+        return Ok((images::read_numbered(s)?, None));
     }
     let name = path.display().to_string();
     // Every text format is parsed as it is read (a long recording's file is never held whole,
@@ -732,13 +876,21 @@ pub fn read_recording_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result
     let format = sniffed.format;
     if is_binary(format) && !sniffed.is_gzip() {
         drop(sniffed);
-        return parse_binary(&read_bytes(path)?, format, &name);
+        let bytes = read_bytes(path)?;
+        let sha256 = stamp::hex(&<sha2::Sha256 as sha2::Digest>::digest(&bytes));
+        return Ok((parse_binary(&bytes, format, &name)?, Some(sha256)));
     }
     let (size, gzip) = (sniffed.size, sniffed.is_gzip());
-    parse_source(sniffed.bytes(), gzip, size, format, &name, opts)
+    let (bytes, sha, rest) = sniffed.hashed(&name)?;
+    let recording = parse_source(bytes, gzip, size, format, &name, opts)?;
+    let sha256 = stamp::finish(&sha, Some(rest)).map_err(|e| stream::read_error(&name, e))?;
+    Ok((recording, Some(sha256)))
 }
 
 /// A recording's file opened, its first [`SNIFF_BYTES`] read and its format told from them.
+/// A SHA-256 fed by a reader that a parser holds ([`stamp::Hashing`]).
+type SharedSha = std::rc::Rc<std::cell::RefCell<sha2::Sha256>>;
+
 struct Sniffed {
     file: std::fs::File,
     head: Vec<u8>,
@@ -754,8 +906,21 @@ impl Sniffed {
             path: name.to_string(),
             source,
         };
+        // A FIFO or a device blocks or never ends: refused before it is opened (opening a FIFO
+        // waits for a writer), and checked again once open.
+        let regular = |m: &std::fs::Metadata| {
+            match m.is_file() {
+            true => Ok(()),
+            false => Err(IoError::invalid(format!(
+                "{name}: not a regular file (a device, FIFO or socket); a recording is read from a file"
+            ))),
+        }
+        };
+        regular(&std::fs::metadata(path).map_err(io)?)?;
         let mut file = std::fs::File::open(path).map_err(io)?;
-        let size = file.metadata().map_err(io)?.len();
+        let meta = file.metadata().map_err(io)?;
+        regular(&meta)?;
+        let size = meta.len();
         let mut head = Vec::with_capacity(SNIFF_BYTES);
         (&mut file)
             .take(SNIFF_BYTES as u64)
@@ -803,8 +968,16 @@ impl Sniffed {
         std::io::Cursor::new(self.head).chain(self.file)
     }
 
-    /// The whole file's lines, from the start.
-    fn lines(self) -> impl std::io::BufRead {
-        stream::bounded(self.bytes(), false, stream::Stretch::Line)
+    /// The whole file's bytes, from the start, hashed as they are read into the returned
+    /// SHA-256, with a second handle on the file (sharing its offset) to hash what the parser
+    /// leaves unread ([`stamp::finish`]).
+    fn hashed(self, name: &str) -> Result<(impl std::io::Read, SharedSha, std::fs::File)> {
+        let rest = self.file.try_clone().map_err(|source| IoError::Io {
+            path: name.to_string(),
+            source,
+        })?;
+        let sha = SharedSha::default();
+        let bytes = stamp::Hashing::new(self.bytes(), &sha);
+        Ok((bytes, sha, rest))
     }
 }

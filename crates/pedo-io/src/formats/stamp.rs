@@ -1,9 +1,80 @@
-//! That a recording's file does not change while a run reads it: the SHA-256 a run records must
-//! be of the bytes it parsed, so a file is stamped (size and modification time) before it is
-//! read and checked after it is hashed and, streamed, after every window of frames.
+//! That a recording's file does not change while a run reads it: the SHA-256 a run records is
+//! of the bytes its parser read ([`Hashing`], a reader between the file and the parser), a
+//! streamed file's second pass is hashed too and must give the same digest, and a file is
+//! stamped (size and modification time) before it is read and checked after every window of
+//! frames, so that a change is caught as soon as it shows.
 
 use crate::{FrameSource, IoError, Recording, Result};
+use sha2::{Digest, Sha256};
+use std::cell::RefCell;
+use std::io::Read;
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+/// A reader that feeds every byte read through it to a SHA-256 its caller keeps (the reader
+/// itself goes into a parser and is dropped there).
+pub(crate) struct Hashing<R> {
+    inner: R,
+    sha: Rc<RefCell<Sha256>>,
+}
+
+impl<R: Read> Hashing<R> {
+    /// `inner` hashed into `sha` as it is read.
+    pub(crate) fn new(inner: R, sha: &Rc<RefCell<Sha256>>) -> Self {
+        Self {
+            inner,
+            sha: Rc::clone(sha),
+        }
+    }
+}
+
+impl<R: Read> Read for Hashing<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.sha.borrow_mut().update(&buf[..n]);
+        Ok(n)
+    }
+}
+
+/// Lower-case hex of a digest.
+pub(crate) fn hex(digest: &[u8]) -> String {
+    digest.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// The hex SHA-256 of `sha` after the rest of `file` (whatever the parser left unread: it
+/// shares the parser's file offset) has been fed to it, so that it is the whole file's.
+pub(crate) fn finish(
+    sha: &Rc<RefCell<Sha256>>,
+    file: Option<std::fs::File>,
+) -> std::io::Result<String> {
+    if let Some(mut rest) = file {
+        std::io::copy(&mut rest, &mut Sink(Rc::clone(sha)))?;
+    }
+    Ok(hex(&sha.borrow().clone().finalize()))
+}
+
+/// A writer feeding a shared SHA-256.
+struct Sink(Rc<RefCell<Sha256>>);
+
+impl std::io::Write for Sink {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.borrow_mut().update(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// The error of a file whose second reading differs from its first.
+pub(crate) fn changed(name: &str) -> IoError {
+    IoError::Io {
+        path: name.to_string(),
+        source: std::io::Error::other(
+            "changed while it was being read (a second reading of its bytes gives another SHA-256); run it again once nothing writes it",
+        ),
+    }
+}
 
 /// The size and modification time of a recording's file (of every file of a folder, in name
 /// order), to tell that it changed while it was read; `None` if they cannot be read.

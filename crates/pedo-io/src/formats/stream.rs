@@ -3,10 +3,10 @@
 //! parsed, not what the file claims or expands to.
 
 use crate::error::{IoError, Result};
-use crate::limits::{MAX_DECOMPRESSED, MAX_TOKEN_BYTES};
+use crate::limits::{current, raise};
 use std::io::{self, BufRead, Read};
 
-/// What bounds a stretch of a text format (see [`MAX_TOKEN_BYTES`]): the byte that ends it.
+/// What bounds a stretch of a text format (see [`MAX_TOKEN_BYTES`](crate::limits::MAX_TOKEN_BYTES)): the byte that ends it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Stretch {
     /// A line of a text export, ended by `\n`.
@@ -26,38 +26,65 @@ impl Stretch {
         }
     }
 
-    fn too_long(self) -> String {
+    fn too_long(self, most: usize) -> String {
         let what = match self {
             Stretch::Line => "a line",
             Stretch::Xml => "text between two XML tags",
             Stretch::Json => "JSON between two quotes",
         };
-        format!("{what} longer than {MAX_TOKEN_BYTES} bytes: no export of this format")
+        format!(
+            "{what} longer than {most} bytes: no export of this format; {}",
+            raise("max_text_mb")
+        )
     }
 }
 
 /// A reader that fails (with [`io::ErrorKind::InvalidData`]) once more than its limit of bytes
 /// have come through (what a compressed file may expand to), or a stretch of more than
-/// [`MAX_TOKEN_BYTES`] without its end byte: a parser above it never holds more.
+/// [`MAX_TOKEN_BYTES`](crate::limits::MAX_TOKEN_BYTES) without its end byte (the limits [`current`] when it is made): a parser
+/// above it never holds more.
 pub(crate) struct Bounded<R> {
     inner: R,
     limit: Option<u64>,
     read: u64,
     stretch: Option<Stretch>,
     run: usize,
+    /// The longest stretch allowed.
+    most: usize,
+    /// A JSON string's backslash escapes the byte after it (an escaped quote ends nothing).
+    escaped: bool,
 }
 
 impl<R: Read> Bounded<R> {
-    /// `inner` (decompressed already when `decompressed`: then at most [`MAX_DECOMPRESSED`]
+    /// `inner` (decompressed already when `decompressed`: then at most [`MAX_DECOMPRESSED`](crate::limits::MAX_DECOMPRESSED)
     /// bytes), its stretches bounded when `stretch` is given.
     pub(crate) fn new(inner: R, decompressed: bool, stretch: Option<Stretch>) -> Self {
+        let limits = current();
         Self {
             inner,
-            limit: decompressed.then_some(MAX_DECOMPRESSED),
+            limit: decompressed.then_some(limits.decompressed),
             read: 0,
             stretch,
             run: 0,
+            most: limits.text,
+            escaped: false,
         }
+    }
+
+    /// The run of a JSON string after `bytes`: only a quote no backslash escapes ends it.
+    fn json_run(&mut self, bytes: &[u8]) -> usize {
+        let mut run = self.run;
+        for &b in bytes {
+            run += 1;
+            if self.escaped {
+                self.escaped = false;
+            } else if b == b'\\' {
+                self.escaped = true;
+            } else if b == b'"' {
+                run = 0;
+            }
+        }
+        run
     }
 }
 
@@ -67,19 +94,23 @@ impl<R: Read> Read for Bounded<R> {
         self.read += n as u64;
         if let Some(limit) = self.limit.filter(|&l| self.read > l) {
             return Err(invalid(format!(
-                "decompresses to more than {limit} bytes, the limit for a compressed recording"
+                "decompresses to more than {limit} bytes, the limit for a compressed recording; \
+                 {}",
+                raise("max_decompressed_mb")
             )));
         }
         let Some(stretch) = self.stretch else {
             return Ok(n);
         };
-        let end = stretch.end();
-        self.run = match memchr::memrchr(end, &buf[..n]) {
-            Some(i) => n - 1 - i,
-            None => self.run + n,
+        self.run = match stretch {
+            Stretch::Json => self.json_run(&buf[..n]),
+            _ => match memchr::memrchr(stretch.end(), &buf[..n]) {
+                Some(i) => n - 1 - i,
+                None => self.run + n,
+            },
         };
-        if self.run > MAX_TOKEN_BYTES {
-            return Err(invalid(stretch.too_long()));
+        if self.run > self.most {
+            return Err(invalid(stretch.too_long(self.most)));
         }
         Ok(n)
     }
@@ -188,7 +219,7 @@ pub(crate) fn bounded<'a>(
 }
 
 /// All of `decoded` (decompressed already when `decompressed`: then at most
-/// [`MAX_DECOMPRESSED`] bytes), for the formats parsed whole.
+/// [`MAX_DECOMPRESSED`](crate::limits::MAX_DECOMPRESSED) bytes), for the formats parsed whole.
 pub(crate) fn read_all(decoded: impl Read, decompressed: bool, name: &str) -> Result<Vec<u8>> {
     let mut bytes = Vec::new();
     Bounded::new(decoded, decompressed, None)
@@ -232,7 +263,7 @@ mod tests {
 
     #[test]
     fn an_overlong_stretch_and_an_oversized_stream_are_format_errors() {
-        let long = vec![b'0'; MAX_TOKEN_BYTES + 2];
+        let long = vec![b'0'; crate::limits::MAX_TOKEN_BYTES + 2];
         let e = parse_lines(bounded(&long[..], false, Stretch::Line), "l.csv", |l| {
             Ok(l.count())
         })
@@ -244,7 +275,7 @@ mod tests {
         );
         // Lines of the same total length pass.
         let mut short = long.clone();
-        short[MAX_TOKEN_BYTES / 2] = b'\n';
+        short[crate::limits::MAX_TOKEN_BYTES / 2] = b'\n';
         let n = parse_lines(bounded(&short[..], false, Stretch::Line), "s", |l| {
             Ok(l.count())
         });

@@ -32,7 +32,7 @@
 use super::parse_num;
 use super::stream::{bounded, read_error, Stretch};
 use crate::error::{IoError, Result};
-use crate::limits::MAX_TOKEN_BYTES;
+use crate::limits::{current, raise};
 use crate::recording::stated_units;
 use crate::recording::{Format, Recording, SparseFrames};
 use quick_xml::events::Event;
@@ -298,11 +298,70 @@ pub fn parse_zebris_xml(bytes: &[u8], name: &str) -> Result<Recording> {
     read_zebris_xml(bounded(bytes, false, Stretch::Xml), name)
 }
 
+/// The bytes of one XML event (a tag, a comment, a CDATA section, a processing instruction)
+/// bounded by the text limit: the parser holds an event whole before it hands it over, and a
+/// comment or CDATA section may hold any byte but its end (`<` and `>` included), so no byte
+/// of the stream bounds it. The reader resets `spent` after every event.
+struct EventBudget<R> {
+    inner: R,
+    spent: usize,
+    most: usize,
+}
+
+impl<R> EventBudget<R> {
+    fn new(inner: R, most: usize) -> Self {
+        Self {
+            inner,
+            spent: 0,
+            most,
+        }
+    }
+}
+
+impl<R> EventBudget<R> {
+    fn over(&self) -> std::io::Result<()> {
+        if self.spent > self.most {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                format!(
+                    "an XML element, comment or CDATA section longer than {} bytes: no export \
+                     of this format; {}",
+                    self.most,
+                    raise("max_text_mb")
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl<R: std::io::Read> std::io::Read for EventBudget<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        self.over()?;
+        let n = self.inner.read(buf)?;
+        self.spent = self.spent.saturating_add(n);
+        Ok(n)
+    }
+}
+
+impl<R: std::io::BufRead> std::io::BufRead for EventBudget<R> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        self.over()?;
+        self.inner.fill_buf()
+    }
+    fn consume(&mut self, n: usize) {
+        // Counted here, refused at the next fill: `consume` cannot fail.
+        self.spent = self.spent.saturating_add(n);
+        self.inner.consume(n);
+    }
+}
+
 /// Parses the XML raw-data export as it is read from `source`: only the open elements' names,
 /// the element being read and the frames (sparse) are held; the work per element does not grow
 /// with the depth of nesting.
 pub(crate) fn read_zebris_xml(source: impl std::io::BufRead, name: &str) -> Result<Recording> {
-    let mut reader = Reader::from_reader(source);
+    let most_text = current().text;
+    let mut reader = Reader::from_reader(EventBudget::new(source, most_text));
     let mut path: Vec<String> = Vec::new();
     let mut text = String::new();
     let mut plate: [Option<usize>; 2] = [None, None];
@@ -396,12 +455,14 @@ pub(crate) fn read_zebris_xml(source: impl std::io::BufRead, name: &str) -> Resu
             Event::Eof => break,
             _ => {}
         }
-        if text.len() > MAX_TOKEN_BYTES {
+        if text.len() > most_text {
             return Err(fail(format!(
-                "an element holds more than {MAX_TOKEN_BYTES} bytes of text"
+                "an element holds more than {most_text} bytes of text; {}",
+                raise("max_text_mb")
             )));
         }
         buf.clear();
+        reader.get_mut().spent = 0;
     }
     if !path.is_empty() {
         return Err(IoError::parse(

@@ -261,6 +261,7 @@ def match(
     skip_rigid: Optional[bool] = None,
     band: Optional[int] = None,
     material: Optional[Material] = None,
+    max_nodes: Optional[int] = None,
     ordered: Optional[bool] = None,
     # @end generated
     triangles_a: Optional[ArrayLike] = None,
@@ -294,6 +295,11 @@ def read_recording(
     time_axis: Optional[Literal["first", "last"]] = None,
     clip_negative: Optional[bool] = None,
     layout: Optional[Path] = None,
+    max_frame_sensors: Optional[int] = None,
+    max_frames: Optional[int] = None,
+    max_values: Optional[int] = None,
+    max_decompressed_mb: Optional[int] = None,
+    max_text_mb: Optional[int] = None,
     # @end generated
 ) -> Recording: ...
 def contours(
@@ -376,6 +382,7 @@ def run(
     skip_rigid: Optional[bool] = None,
     band: Optional[int] = None,
     material: Optional[Material] = None,
+    max_nodes: Optional[int] = None,
     model: Optional[Literal["contour", "surface", "isocontour"]] = None,
     frames: Optional[Tuple[Optional[int], Optional[int]]] = None,
     every: Optional[int] = None,
@@ -436,6 +443,11 @@ def batch(
     region_rule: Optional[Literal["none", "coarse", "fine"]] = None,
     masks: Optional[Union[Path, ArrayLike]] = None,
     layout: Optional[Path] = None,
+    max_frame_sensors: Optional[int] = None,
+    max_frames: Optional[int] = None,
+    max_values: Optional[int] = None,
+    max_decompressed_mb: Optional[int] = None,
+    max_text_mb: Optional[int] = None,
     # @end generated
     **options: Any,
 ) -> list[StudyRow]:
@@ -460,6 +472,11 @@ def batch_row(
     region_rule: Optional[Literal["none", "coarse", "fine"]] = None,
     masks: Optional[Union[Path, ArrayLike]] = None,
     layout: Optional[Path] = None,
+    max_frame_sensors: Optional[int] = None,
+    max_frames: Optional[int] = None,
+    max_values: Optional[int] = None,
+    max_decompressed_mb: Optional[int] = None,
+    max_text_mb: Optional[int] = None,
     # @end generated
     **options: Any,
 ) -> StudyRow:
@@ -485,6 +502,11 @@ def register(
     # @end generated
     # @generated keywords of register read: tests/generated.rs, from the option tables
     layout: Optional[Path] = None,
+    max_frame_sensors: Optional[int] = None,
+    max_frames: Optional[int] = None,
+    max_values: Optional[int] = None,
+    max_decompressed_mb: Optional[int] = None,
+    max_text_mb: Optional[int] = None,
     # @end generated
 ) -> dict[str, Any]:
     """Register footprints onto one template: the registered stack, masks, template and a table per trial."""
