@@ -688,7 +688,8 @@ fn read_for_run_within(path: &Path, opts: &ReadOptions) -> Result<RunInput> {
             let shape = asf::read_tekscan(lines, size, &name, csv, &mut asf::Keep::Handed(None))?;
             let sha256 =
                 stamp::finish(&sha, Some(rest)).map_err(|e| stream::read_error(&name, e))?;
-            let source = Source::tekscan(path.to_path_buf(), name.clone(), size, csv, opts.limits());
+            let source =
+                Source::tekscan(path.to_path_buf(), name.clone(), size, csv, opts.limits());
             (shape, source, sha256)
         }
     };
