@@ -413,9 +413,9 @@ fn run_reads_whole(params: &RunParams, outputs: &RunOutputs) -> Option<&'static 
 fn read_whole(run: &RunOf<'_>, outputs: &RunOutputs, streamed: bool, also: bool) -> Value {
     let why = match () {
         _ if streamed => None,
-        _ if also => Some("the whole result is returned".to_string()),
         _ => match run_reads_whole(run.params, outputs) {
             Some(why) => Some(why.to_string()),
+            None if also => Some("the whole result is returned".to_string()),
             None => (run.input.why_read_whole()).or(Some("the recording was read whole".into())),
         },
     };

@@ -289,8 +289,9 @@ fn spec_dicts<'py>(py: Python<'py>, specs: &[OptionSpec]) -> PyResult<Bound<'py,
 /// The library's option tables: ``{"match": [...], "pair": [...], "recording": [...],
 /// "units": [...], "output": [...]}``, each option a dict ``{name, kind, values, default, help,
 /// cli_flags}``. ``match`` takes the "match" and "pair" options, ``run`` the "match" and
-/// "recording" ones (which include "units"), ``read_recording`` the "units" ones, ``batch`` the
-/// "output" ones besides those of ``run``.
+/// "recording" ones (which include "units"), ``read_recording`` the "units" and "read" ones (the
+/// pedar layout and the reading limits), ``batch`` the "output" and "read" ones besides those of
+/// ``run``.
 #[pyfunction]
 fn _options<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -309,6 +310,10 @@ fn _options<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
     d.set_item(
         "units",
         spec_dicts(py, &pedo_io::units::unit_option_specs())?,
+    )?;
+    d.set_item(
+        "read",
+        spec_dicts(py, &pedo_io::formats::read_option_specs())?,
     )?;
     d.set_item(
         "output",

@@ -191,6 +191,8 @@ INT_KEYWORD_CALLS = {
     "ModalModel": lambda **kw: pymodal.ModalModel(SQUARE, **kw),
     "SyntheticWalk": lambda **kw: pymodal.SyntheticWalk(**kw),
     "register": lambda **kw: pymodal.register(np.zeros((2, 8, 8)), **kw),
+    "read_recording": lambda **kw: pymodal.read_recording(ASF, **kw),
+    "batch_row": lambda **kw: pymodal.batch_row(ASF, **kw),
 }
 
 

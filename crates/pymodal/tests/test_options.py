@@ -48,8 +48,9 @@ def test_from_array_keywords_are_the_unit_options():
 
 
 def test_read_recording_keywords_are_the_unit_options():
-    # Plus the pedar layout table, as `--layout` beside --pitch-mm/--frame-rate on the CLI.
-    assert keywords(pymodal.read_recording) == names("units") + ["layout"]
+    # Plus the reading options (the pedar layout table, the limits), as on the CLI.
+    assert names("read")[0] == "layout" and "max_frames" in names("read")
+    assert keywords(pymodal.read_recording) == names("units") + names("read")
     assert set(names("units")) <= set(names("recording"))
 
 

@@ -242,7 +242,8 @@ def test_run_reports_time_mm_and_provenance():
     assert s["recording"]["frame_rate_hz"] == pytest.approx(31.25)
     assert s["recording"]["pressure_units"] == "kPa"
     names = {o["name"] for group in ("match", "recording") for o in pymodal._options()[group]}
-    assert set(s["options"]) == names
+    # max_nodes is a limit, not a setting: left out of the record.
+    assert set(s["options"]) == names - {"max_nodes"}
     assert {"read", "objects", "matching", "tracks"} <= set(s["timings_s"])
     for o in res["objects"]:
         assert o["time_s"] == pytest.approx(o["frame"] * 0.032)
@@ -356,6 +357,15 @@ def _files(folder):
     return sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file())
 
 
+
+def comparable(summary):
+    """A summary without its timings nor how the file was read: pymodal.run, which also returns
+    the whole result, reads whole a file the command line streams with tables only
+    (input.streamed, input.read_whole)."""
+    out = {k: v for k, v in summary.items() if k != "timings_s"}
+    out["input"] = {k: v for k, v in summary["input"].items() if k not in ("streamed", "read_whole")}
+    return out
+
 @pytest.mark.parametrize(
     "outputs",
     [{}, {"tables": "parquet", "figures": "none", "report": "none"}],
@@ -386,8 +396,7 @@ def test_run_with_out_writes_the_folder_of_pedomatch_run(tmp_path, outputs):
         assert (mine / f).read_bytes() == (study / f).read_bytes(), f
     summary = json.loads((mine / "summary.json").read_text())
     assert res["summary"] == summary
-    timeless = lambda s: {k: v for k, v in s.items() if k != "timings_s"}
-    assert timeless(summary) == timeless(json.loads((study / "summary.json").read_text()))
+    assert comparable(summary) == comparable(json.loads((study / "summary.json").read_text()))
 
 
 def _pedomatch_binary():
@@ -438,9 +447,16 @@ def test_run_with_out_writes_the_folder_of_the_command_line(tmp_path, outputs):
         if f in ("summary.json", "report.html"):
             continue
         assert (py / f).read_bytes() == (cli / f).read_bytes(), f
-    timeless = lambda s: {k: v for k, v in s.items() if k != "timings_s"}
     summary = json.loads((py / "summary.json").read_text())
-    assert timeless(summary) == timeless(json.loads((cli / "summary.json").read_text()))
+    written = json.loads((cli / "summary.json").read_text())
+    assert comparable(summary) == comparable(written)
+    # With tables only the command line streams the file; pymodal.run, returning the whole
+    # result too, reads it whole and says why. With figures both read it whole, for them.
+    assert written["input"]["streamed"] == bool(outputs)
+    assert summary["input"]["streamed"] is False
+    assert summary["input"]["read_whole"] == (
+        "the whole result is returned" if outputs else written["input"]["read_whole"]
+    )
     assert res["summary"] == summary
     # The result returned is the run the folder holds: a row of pairs per matched pair, the
     # same counts.
