@@ -662,7 +662,7 @@ fn outline_map(
     ))
 }
 
-/// Which map a registration kept (the last check of [`register_with`]).
+/// Which map a registration kept (the last check of [`register_one`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MapKept {
     /// The outline's field, the rigid correction and the non-rigid intensity step.
