@@ -1,5 +1,5 @@
 //! That a recording's file does not change while a run reads it: the SHA-256 a run records is
-//! of the bytes its parser read ([`Hashing`], a reader between the file and the parser), a
+//! of the bytes its parser read (`Hashing`, a reader between the file and the parser), a
 //! streamed file's second pass is hashed too and must give the same digest, and a file is
 //! stamped (size and modification time) before it is read and checked after every window of
 //! frames, so that a change is caught as soon as it shows.
