@@ -899,14 +899,29 @@ pub fn recording_regions(
     frames: std::ops::Range<usize>,
     rule: RegionRule,
 ) -> Result<(RegionMasks, Vec<RegionValues>)> {
-    let measures = Measures::of_recording(recording, threshold, frames.clone())?;
+    let measures = Measures::of_recording(recording, threshold, frames)?;
+    regions_of_measures(recording, threshold, &measures, rule)
+}
+
+/// [`recording_regions`] of a recording whose [`Measures`] (over the frames and above the
+/// `threshold` to measure the regions on) are taken already.
+///
+/// # Errors
+///
+/// Those of [`automatic_masks`] and [`RegionSeries`].
+pub fn regions_of_measures(
+    recording: &Recording,
+    threshold: f64,
+    measures: &Measures,
+    rule: RegionRule,
+) -> Result<(RegionMasks, Vec<RegionValues>)> {
     let cop: Vec<Option<[f64; 2]>> = recording
-        .measures_of(threshold, frames.clone())
+        .measures_of(threshold, measures.frames.clone())
         .iter()
         .map(|m| m.cop)
         .collect();
-    let masks = masks_of_measures(recording, &measures, Some(&cop), rule)?;
-    let values = region_values(recording, threshold, &masks, &measures)?;
+    let masks = masks_of_measures(recording, measures, Some(&cop), rule)?;
+    let values = region_values(recording, threshold, &masks, measures)?;
     Ok((masks, values))
 }
 

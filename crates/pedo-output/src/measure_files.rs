@@ -177,12 +177,15 @@ pub fn recording_regions(
     threshold: f64,
     asked: RegionsAsked,
 ) -> RegionOutcome {
-    let cop: Vec<Option<[f64; 2]>> = recording
-        .measures_of(threshold, measures.frames.clone())
-        .iter()
-        .map(|m| m.cop)
-        .collect();
-    regions_of(recording, measures, threshold, &cop, None, asked)
+    match asked {
+        RegionsAsked::Rule(rule) => {
+            pedo_io::regions::regions_of_measures(recording, threshold, measures, rule)
+        }
+        RegionsAsked::Masks(masks) => {
+            let values = pedo_io::regions::region_values(recording, threshold, &masks, measures)?;
+            Ok((masks, values))
+        }
+    }
 }
 
 impl SequenceSink for MeasuresSink {
