@@ -488,3 +488,212 @@ fn a_unit_a_spreadsheet_would_run_is_text_in_the_study_table() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Starts `pedomatch batch inputs --out study` on one thread, without figures or report.
+fn batch_into(inputs: &Path, study: &Path, extra: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_pedomatch"))
+        .arg("batch")
+        .arg(inputs)
+        .arg("--out")
+        .arg(study)
+        .args(["--jobs", "1", "--figures", "none", "--report", "none"])
+        .args(extra)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start pedomatch")
+}
+
+/// The recordings (file names) of a study table's rows: `study.csv`'s and `study.json`'s.
+fn study_rows(study: &Path) -> (Vec<String>, Vec<String>) {
+    let name = |p: &str| p.rsplit('/').next().unwrap().to_string();
+    let mut csv: Vec<String> = std::fs::read_to_string(study.join("study.csv"))
+        .unwrap_or_default()
+        .lines()
+        .skip(1)
+        .map(|l| name(l.split(',').next().unwrap()))
+        .collect();
+    let json: serde_json::Value = std::fs::read(study.join("study.json"))
+        .ok()
+        .and_then(|b| serde_json::from_slice(&b).ok())
+        .unwrap_or_default();
+    let mut rows: Vec<String> = json["rows"]
+        .as_array()
+        .map(|rows| {
+            rows.iter()
+                .map(|r| name(r["path"].as_str().unwrap()))
+                .collect()
+        })
+        .unwrap_or_default();
+    csv.sort();
+    rows.sort();
+    (csv, rows)
+}
+
+#[test]
+fn killed_batches_never_lose_a_row_of_the_study_table() {
+    let base = temp_dir("kill-batch");
+    let (inputs, study) = (base.join("in"), base.join("study"));
+    std::fs::create_dir_all(&inputs).unwrap();
+    let lst =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/pedo-io/tests/data/emed-test-1-10.lst");
+    let add = |k: usize| std::fs::copy(&lst, inputs.join(format!("r{k:02}.lst"))).unwrap();
+    (0..4).for_each(|k| {
+        add(k);
+    });
+    let full = {
+        let t = Instant::now();
+        assert!(batch_into(&inputs, &study, &[]).wait().unwrap().success());
+        t.elapsed()
+    };
+    let mut listed = study_rows(&study).0;
+    assert_eq!(listed.len(), 4);
+    // Twenty runs, each with one more recording and every folder written again, killed at
+    // moments spread over the run: between any two of its renames, the table keeps every row
+    // it had, in both files, and the next run lists them all.
+    for k in 1..=20 {
+        add(3 + k);
+        // A run's time grows with its recordings: the kills are spread from 40 % to 120 % of it.
+        let expected = full.mul_f64((4 + k) as f64 / 4.0);
+        let mut child = batch_into(&inputs, &study, &["--force"]);
+        std::thread::sleep(expected.mul_f64(0.4 + 0.8 * k as f64 / 20.0));
+        signal(&child, "-KILL");
+        child.wait().unwrap();
+        let (csv, json) = study_rows(&study);
+        eprintln!(
+            "kill {k}: {} rows in study.csv, {} in study.json",
+            csv.len(),
+            json.len()
+        );
+        for row in &listed {
+            assert!(
+                csv.contains(row) && json.contains(row),
+                "kill {k}: {row} lost: {csv:?} {json:?}"
+            );
+        }
+        listed = csv;
+    }
+    assert!(batch_into(&inputs, &study, &[]).wait().unwrap().success());
+    let (csv, json) = study_rows(&study);
+    let all: Vec<String> = (0..24).map(|k| format!("r{k:02}.lst")).collect();
+    assert_eq!((&csv, &json), (&all, &all));
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+#[test]
+fn two_batches_into_one_study_at_once_keep_every_row_or_refuse_the_second() {
+    let base = temp_dir("two-batches");
+    let lst =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/pedo-io/tests/data/emed-test-1-10.lst");
+    for (sub, names) in [("a", ["a1", "a2", "a3"]), ("b", ["b1", "b2", "b3"])] {
+        std::fs::create_dir_all(base.join(sub)).unwrap();
+        for n in names {
+            std::fs::copy(&lst, base.join(sub).join(format!("{n}.lst"))).unwrap();
+        }
+    }
+    for trial in 0..5 {
+        let study = base.join(format!("study{trial}"));
+        let mut a = batch_into(&base.join("a"), &study, &[]);
+        let mut b = batch_into(&base.join("b"), &study, &[]);
+        let mut refused = 0;
+        let mut ran = Vec::new();
+        for (name, child) in [("a", &mut a), ("b", &mut b)] {
+            let mut stderr = String::new();
+            child
+                .stderr
+                .take()
+                .unwrap()
+                .read_to_string(&mut stderr)
+                .unwrap();
+            match child.wait().unwrap().code() {
+                Some(0) => ran.push(name),
+                Some(1) if stderr.contains("in use by another pedomatch batch") => refused += 1,
+                code => panic!("trial {trial}, batch {name}: exit {code:?}: {stderr}"),
+            }
+        }
+        eprintln!("trial {trial}: {ran:?} ran, {refused} refused");
+        assert!(refused <= 1 && !ran.is_empty(), "trial {trial}");
+        let (csv, json) = study_rows(&study);
+        let expected: Vec<String> = ran
+            .iter()
+            .flat_map(|s| (1..=3).map(move |i| format!("{s}{i}.lst")))
+            .collect();
+        assert_eq!(
+            (&csv, &json),
+            (&expected, &expected),
+            "trial {trial}: {ran:?} ran"
+        );
+    }
+    std::fs::remove_dir_all(&base).unwrap();
+}
+
+fn copy_tree(from: &Path, to: &Path) {
+    if from.is_dir() {
+        std::fs::create_dir_all(to).unwrap();
+        for e in std::fs::read_dir(from).unwrap().flatten() {
+            copy_tree(&e.path(), &to.join(e.file_name()));
+        }
+    } else {
+        std::fs::copy(from, to).unwrap();
+    }
+}
+
+#[test]
+fn a_batch_killed_between_any_two_renames_loses_no_row_on_the_next_run() {
+    // Every state a kill can leave while a run adds a recording and writes every folder again:
+    // the study before, with the first j renames of the run done (its recordings' folders in
+    // the order they run, then study.json, study.csv, study_curves.csv). From each, the next
+    // run's table lists every recording, in both files.
+    let base = temp_dir("renames");
+    let inputs = base.join("in");
+    std::fs::create_dir_all(&inputs).unwrap();
+    let lst =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/pedo-io/tests/data/emed-test-1-10.lst");
+    for k in 0..3 {
+        std::fs::copy(&lst, inputs.join(format!("r{k}.lst"))).unwrap();
+    }
+    let (before, after) = (base.join("before"), base.join("after"));
+    assert!(batch_into(&inputs, &before, &[]).wait().unwrap().success());
+    copy_tree(&before, &after);
+    std::fs::copy(&lst, inputs.join("r3.lst")).unwrap();
+    assert!(batch_into(&inputs, &after, &["--force"])
+        .wait()
+        .unwrap()
+        .success());
+    let all: Vec<String> = (0..4).map(|k| format!("r{k}.lst")).collect();
+    assert_eq!(study_rows(&after).0, all);
+    let mut folders: Vec<String> = std::fs::read_dir(&after)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('r') && n.contains(".lst-"))
+        .collect();
+    folders.sort();
+    assert_eq!(folders.len(), 4);
+    let renames: Vec<String> = folders
+        .into_iter()
+        .chain(["study.json", "study.csv", "study_curves.csv"].map(String::from))
+        .filter(|n| after.join(n).exists())
+        .collect();
+    for j in 0..=renames.len() {
+        let state = base.join(format!("state{j}"));
+        copy_tree(&before, &state);
+        for name in &renames[..j] {
+            let _ = std::fs::remove_dir_all(state.join(name))
+                .or_else(|_| std::fs::remove_file(state.join(name)));
+            copy_tree(&after.join(name), &state.join(name));
+        }
+        assert!(
+            batch_into(&inputs, &state, &[]).wait().unwrap().success(),
+            "state {j}"
+        );
+        let (csv, json) = study_rows(&state);
+        assert_eq!(
+            (&csv, &json),
+            (&all, &all),
+            "after the first {j} renames: {:?}",
+            &renames[..j]
+        );
+    }
+    std::fs::remove_dir_all(&base).unwrap();
+}

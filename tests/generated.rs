@@ -129,7 +129,7 @@ fn type_stubs_are_the_option_tables() {
     for (function, names, indent) in [
         ("match", &["match", "pair"][..], 4),
         ("run", &["match", "recording"][..], 4),
-        ("run output", &["output"][..], 4),
+        ("run output", &["output", "read"][..], 4),
         ("batch study", &["study"][..], 4),
         ("batch output", &["output", "read"][..], 4),
         ("batch_row", &["row"][..], 4),

@@ -38,6 +38,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
+mod claim;
 pub mod curves;
 pub use curves::{study_curves_columns, write_study_curves, STUDY_CURVES, STUDY_CURVES_COLUMNS};
 
@@ -418,6 +419,9 @@ fn output_names_with(
                         .as_str()
                         .is_some_and(|other| is_other_file(other, file.as_deref()))
                 })
+                || out
+                    .and_then(|out| claim::claimant(out, name))
+                    .is_some_and(|other| is_other_file(&other, file.as_deref()))
         };
         // The folder of this recording's previous row (as `previous_row` finds it).
         let same_file = |other: &&str| {
@@ -809,6 +813,12 @@ pub fn run_study(
     // pool. Not a rayon pool: a rayon worker waiting for its recording steals the next one and
     // would start it on the same busy pool (or, with a new pool, run more than `jobs` at once).
     let names = output_names(opts.out.as_deref(), paths, &previous);
+    if let Some(out) = &opts.out {
+        // Under the lock no `batch_row` runs: the claims only tell later ones these names.
+        for (path, name) in paths.iter().zip(&names) {
+            let _ = claim::claim(out, name, path, &|_| false);
+        }
+    }
     // The previous rows by folder, for each recording's own (made once: thousands of rows).
     let mut by_folder: std::collections::HashMap<String, Vec<&StudyRow>> = Default::default();
     for r in &previous {
@@ -1291,42 +1301,71 @@ const STUDY_LOCK: &str = ".pedomatch-study.lock";
 /// folder or empty): an advisory lock on its lock file `.pedomatch-study.lock`, which holds the
 /// process id of its holder, released when the file returned is dropped (or the process ends,
 /// however). Fails at once, naming the folder and the process holding it, when another batch
-/// holds it.
+/// holds it, or while recordings of it run one by one ([`share_study_folder`]).
 pub fn lock_study_folder(out: &Path) -> Result<std::fs::File> {
     use std::io::Write;
+    let (mut file, path) = open_study_lock(out, false)?;
+    file.set_len(0)
+        .and_then(|()| writeln!(file, "{}", std::process::id()))
+        .map_err(|e| IoError::Io {
+            path: path.display().to_string(),
+            source: e,
+        })?;
+    Ok(file)
+}
+
+/// Opens the study folder `out` for one recording's run beside others (`batch_row` calls,
+/// which may run at once in many processes): a shared lock on its lock file, so that a
+/// `batch` into `out` ([`lock_study_folder`]) is refused while any runs, and this is refused
+/// while a `batch` runs. Returns the lock (released when dropped) and the rows of the study's
+/// previous table ([`open_study_folder`]).
+pub fn share_study_folder(out: &Path) -> Result<(std::fs::File, Vec<StudyRow>)> {
+    let (file, _) = open_study_lock(out, true)?;
+    Ok((file, open_study_folder(out)?))
+}
+
+/// The study folder's lock file, opened and locked (`shared` or not); fails at once when
+/// another process holds it the other way.
+fn open_study_lock(out: &Path, shared: bool) -> Result<(std::fs::File, PathBuf)> {
     prepare_study_folder(out)?;
     let path = out.join(STUDY_LOCK);
     let io = |e| IoError::Io {
         path: path.display().to_string(),
         source: e,
     };
-    let mut file = std::fs::OpenOptions::new()
+    let file = std::fs::OpenOptions::new()
         .read(true)
         .write(true)
         .create(true)
         .truncate(false)
         .open(&path)
         .map_err(io)?;
-    match file.try_lock() {
-        Ok(()) => {}
+    let locked = match shared {
+        true => file.try_lock_shared(),
+        false => file.try_lock(),
+    };
+    match locked {
+        Ok(()) => Ok((file, path)),
         Err(std::fs::TryLockError::WouldBlock) => {
+            // The process id a batch wrote (recordings run one by one write none).
             let holder = std::fs::read_to_string(&path)
                 .ok()
                 .and_then(|s| s.trim().parse::<u32>().ok())
-                .map_or(String::new(), |pid| format!(" (process {pid})"));
-            return Err(IoError::Output {
+                .filter(|&pid| process_runs(pid));
+            let by = match (shared, holder) {
+                (_, Some(pid)) => format!("another pedomatch batch (process {pid})"),
+                (true, None) => "another pedomatch batch".to_string(),
+                (false, None) => "recordings run one by one (batch_row)".to_string(),
+            };
+            Err(IoError::Output {
                 path: out.display().to_string(),
                 msg: format!(
-                    "study folder in use by another pedomatch batch{holder}; wait for it to end or choose another output folder"
+                    "study folder in use by {by}; wait for it to end or choose another output folder"
                 ),
-            });
+            })
         }
-        Err(std::fs::TryLockError::Error(e)) => return Err(io(e)),
+        Err(std::fs::TryLockError::Error(e)) => Err(io(e)),
     }
-    file.set_len(0)
-        .and_then(|()| writeln!(file, "{}", std::process::id()))
-        .map_err(io)?;
-    Ok(file)
 }
 
 /// The rows of a `study.json`: its `rows`, or, written by a pedomatch before it recorded what
@@ -1446,9 +1485,32 @@ pub fn run_recording(
 ) -> StudyRow {
     let output = opts.out.as_deref().map(|out| {
         let previous: Vec<StudyRow> = previous.into_iter().cloned().collect();
-        output_names(Some(out), &[path.to_path_buf()], &previous).remove(0)
+        claimed_output_name(out, path, &previous, &folder_name)
     });
     run_recording_as(path, opts, output, previous, progress)
+}
+
+/// The folder name of the recording at `path` in study folder `out` ([`output_names`], with
+/// its `previous` row), claimed for it, so that a run elsewhere of a recording with the same
+/// first name, started at the same moment, takes another. A name claimed by another recording
+/// is passed over by [`output_names`] from then on, so each refusal moves on; a claim that
+/// cannot be written (a read-only folder) leaves the name unclaimed, for the run to fail
+/// writing its folder.
+fn claimed_output_name(
+    out: &Path,
+    path: &Path,
+    previous: &[StudyRow],
+    folder_name: &dyn Fn(&Path, usize) -> String,
+) -> String {
+    let file = path.canonicalize().ok();
+    let is_other = |other: &str| is_other_file(other, file.as_deref());
+    loop {
+        let name =
+            output_names_with(Some(out), &[path.to_path_buf()], previous, folder_name).remove(0);
+        if !matches!(claim::claim(out, &name, path, &is_other), Ok(false)) {
+            return name;
+        }
+    }
 }
 
 /// [`run_recording`] into folder `output` of the study folder (a name of [`output_names`]).
@@ -2069,6 +2131,88 @@ mod tests {
         assert!(own(&folder_name(&paths[1], 5)));
         assert!(!own(&folder_name(&paths[0], 1)));
         assert!(!own(&format!("{}-1", folder_name(&paths[1], 3))));
+    }
+
+    #[test]
+    fn recordings_run_at_once_under_one_first_name_claim_different_folders() {
+        // Eight recordings whose first names are the same, named at once by eight threads as
+        // `batch_row` calls in eight processes would: each gets its own folder, and asked
+        // again (a resumed call), the same one.
+        let base = std::env::temp_dir().join(format!("pedo-claims-{}", std::process::id()));
+        let out = base.join("study");
+        std::fs::create_dir_all(&out).unwrap();
+        let paths: Vec<PathBuf> = (0..8)
+            .map(|i| {
+                let dir = base.join(format!("trial{i}"));
+                std::fs::create_dir_all(&dir).unwrap();
+                std::fs::write(dir.join("walk.asf"), b"").unwrap();
+                dir.join("walk.asf")
+            })
+            .collect();
+        let forced = |p: &Path, k: usize| match k {
+            0 => "walk.asf-00000000".to_string(),
+            k => folder_name(p, k),
+        };
+        let barrier = std::sync::Barrier::new(paths.len());
+        let names: Vec<String> = std::thread::scope(|s| {
+            let runs: Vec<_> = paths
+                .iter()
+                .map(|p| {
+                    s.spawn(|| {
+                        barrier.wait();
+                        claimed_output_name(&out, p, &[], &forced)
+                    })
+                })
+                .collect();
+            runs.into_iter().map(|r| r.join().unwrap()).collect()
+        });
+        let distinct: std::collections::HashSet<&String> = names.iter().collect();
+        assert_eq!(distinct.len(), paths.len(), "{names:?}");
+        assert_eq!(
+            names.iter().filter(|n| *n == "walk.asf-00000000").count(),
+            1
+        );
+        for (p, name) in paths.iter().zip(&names) {
+            assert_eq!(&claimed_output_name(&out, p, &[], &forced), name);
+        }
+        // A batch names them as the claims say (none takes another's).
+        let batch = output_names_with(Some(&out), &paths, &[], &forced);
+        let claimed_first =
+            paths[names.iter().position(|n| n == "walk.asf-00000000").unwrap()].clone();
+        for (p, name) in paths.iter().zip(&batch) {
+            assert_eq!(
+                name == "walk.asf-00000000",
+                *p == claimed_first,
+                "{batch:?}"
+            );
+        }
+        std::fs::remove_dir_all(&base).unwrap();
+    }
+
+    #[test]
+    fn a_batch_and_recordings_run_one_by_one_exclude_each_other() {
+        let out = std::env::temp_dir().join(format!("pedo-shared-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&out);
+        let (row_a, _) = share_study_folder(&out).unwrap();
+        let (row_b, _) = share_study_folder(&out).expect("rows run beside each other");
+        let refused = lock_study_folder(&out).unwrap_err().to_string();
+        assert!(
+            refused.contains("in use by recordings run one by one"),
+            "{refused}"
+        );
+        drop((row_a, row_b));
+        let batch = lock_study_folder(&out).unwrap();
+        let refused = share_study_folder(&out).unwrap_err().to_string();
+        assert!(
+            refused.contains(&format!(
+                "another pedomatch batch (process {})",
+                std::process::id()
+            )),
+            "{refused}"
+        );
+        drop(batch);
+        assert!(share_study_folder(&out).is_ok());
+        std::fs::remove_dir_all(&out).unwrap();
     }
 
     #[test]

@@ -176,7 +176,9 @@ macro_rules! define_batch {
         /// ``force``), but no study table. For distributing a study yourself (a Dask cluster, a job
         /// queue): ``[batch_row(p, out) for p in find_recordings(inputs)]`` equals
         /// ``batch(inputs, out)`` but for ``wall_time_s``. Never raises for a bad recording (its row says
-        /// what went wrong); bad options raise. ``figures``, ``figure_format``, ``tables``, ``report``,
+        /// what went wrong); bad options raise. Calls at once into one ``out`` (many processes)
+        /// give each recording its own folder, and a :func:`batch` into ``out`` is refused while
+        /// any runs (and this, while a batch runs). ``figures``, ``figure_format``, ``tables``, ``report``,
         /// ``animation`` and ``layout`` as for :func:`batch`.
         #[pyfunction]
         #[pyo3(signature = (path, out=None, *, $($w = None,)* $($o = None,)* $($rd = None,)* **options))]
@@ -199,9 +201,13 @@ macro_rules! define_batch {
             let cancel = Cancel::new();
             opts.cancel = Some(cancel.clone());
             let row = crate::pool::detach_cancellable(py, &cancel, || {
-                let previous = match &opts.out {
-                    Some(out) => pedo_study::open_study_folder(out)?,
-                    None => Vec::new(),
+                // Held through the run: a `batch` into the folder is refused while rows run.
+                let (_shared, previous) = match &opts.out {
+                    Some(out) => {
+                        let (lock, rows) = pedo_study::share_study_folder(out)?;
+                        (Some(lock), rows)
+                    }
+                    None => (None, Vec::new()),
                 };
                 let before = pedo_study::previous_row(&previous, &path);
                 let row =

@@ -18,7 +18,11 @@ use crate::options_py::{cell_to_py, json_to_py, table_rows};
 
 /// A recording from a path, a (T, H, W) or (H, W) array (NaN = no sensor), or a `Recording`,
 /// and where it came from (a file's name and SHA-256).
-fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording, InputInfo)> {
+fn recording_from(
+    py: Python<'_>,
+    obj: &Bound<'_, PyAny>,
+    read: &pedo_io::ReadOptions,
+) -> PyResult<(Recording, InputInfo)> {
     let unnamed = |name: &str| InputInfo {
         name: name.to_string(),
         ..InputInfo::default()
@@ -31,9 +35,8 @@ fn recording_from(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(Recording
             // The SHA-256 recorded must be of the bytes parsed: the file must not change from
             // before the read to after the hash.
             let stamp = pedo_io::formats::stamp::FileStamp::of(&path);
-            let read = pedo_io::ReadOptions::default();
-            let (rec, sha256) = pedo_io::formats::read_hashed(&path, &read)?;
-            let input = InputInfo::of_read(&path, sha256)?;
+            let (rec, sha256) = pedo_io::formats::read_hashed(&path, read)?;
+            let input = InputInfo::of_read(&path, sha256)?.with_layout(read, rec.format)?;
             stamp.check(&path)?;
             Ok::<_, pedo_io::IoError>((rec, input))
         })
@@ -59,6 +62,8 @@ macro_rules! define_run {
         pair: [$($p:ident),*], pair_doc: $pair_doc:literal,
         recording: [$($r:ident),*], recording_doc: $recording_doc:literal,
         output: [$($o:ident),*], output_doc: $output_doc:literal,
+        units: [$($_u:ident),*], units_doc: $_ud:literal,
+        read: [$($rd:ident),*], read_doc: $read_doc:literal,
         $($rest:tt)*
     ) => {
         /// Match the objects of a whole recording, frame after frame (or level after level).
@@ -77,6 +82,7 @@ macro_rules! define_run {
         #[doc = $recording_doc]
         /// out : path or None — the folder to write (see above).
         #[doc = $output_doc]
+        #[doc = $read_doc]
         ///
         /// Returns a dict with
         ///
@@ -144,7 +150,7 @@ macro_rules! define_run {
         /// cannot be processed does not raise: it is skipped, with its reason in ``summary``
         /// (``summary["skipped"]``).
         #[pyfunction]
-        #[pyo3(signature = (recording, *, $($m = None,)* $($r = None,)* out = None, $($o = None),*))]
+        #[pyo3(signature = (recording, *, $($m = None,)* $($r = None,)* out = None, $($o = None,)* $($rd = None),*))]
         #[allow(clippy::too_many_arguments)]
         fn run<'py>(
             py: Python<'py>,
@@ -153,12 +159,14 @@ macro_rules! define_run {
             $($r: Option<&Bound<'py, PyAny>>,)*
             out: Option<PathBuf>,
             $($o: Option<&Bound<'py, PyAny>>,)*
+            $($rd: Option<&Bound<'py, PyAny>>,)*
         ) -> PyResult<Bound<'py, PyDict>> {
-            let given = [$((stringify!($m), $m),)* $((stringify!($r), $r),)* $((stringify!($o), $o),)*];
+            let given = [$((stringify!($m), $m),)* $((stringify!($r), $r),)* $((stringify!($o), $o),)* $((stringify!($rd), $rd),)*];
             let get = |name: &str| given.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v);
             let outputs = crate::batch_py::run_outputs(get)?;
             let params = crate::options_py::option_set(get)?;
-            run_recording(py, recording, params, out, outputs)
+            let read: pedo_io::formats::ReadOptions = crate::options_py::option_set(get)?;
+            run_recording(py, recording, params, &read, out, outputs)
         }
     };
 }
@@ -170,12 +178,13 @@ fn run_recording<'py>(
     py: Python<'py>,
     recording: &Bound<'py, PyAny>,
     params: pedo_track::RunParams,
+    read: &pedo_io::ReadOptions,
     out: Option<PathBuf>,
     outputs: pedo_output::RunOutputs,
 ) -> PyResult<Bound<'py, PyDict>> {
     params.validate().map_err(to_py)?;
     let started = std::time::Instant::now();
-    let (mut rec, input) = recording_from(py, recording)?;
+    let (mut rec, input) = recording_from(py, recording, read)?;
     params.units.apply(&mut rec).map_err(to_py)?;
     let read_time = started.elapsed().as_secs_f64();
     let mut options = params.to_options(&rec).map_err(to_py)?;

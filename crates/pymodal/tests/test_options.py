@@ -24,9 +24,10 @@ def test_match_keywords_are_the_match_and_pair_options():
     assert keywords(pymodal.match) == names("match", "pair") + extra
 
 
-def test_run_keywords_are_the_match_recording_and_output_options():
-    # `out` is the folder written (pedomatch run --out), the output options what it holds.
-    assert keywords(pymodal.run) == names("match", "recording") + ["out"] + names("output")
+def test_run_keywords_are_the_match_recording_output_and_read_options():
+    # `out` is the folder written (pedomatch run --out), the output options what it holds; the
+    # reading options (limits, layout) as read_recording takes them.
+    assert keywords(pymodal.run) == names("match", "recording") + ["out"] + names("output", "read")
 
 
 def test_batch_keywords_are_the_output_options():

@@ -412,6 +412,12 @@ def run(
     animation: Optional[Literal["gif", "none"]] = None,
     region_rule: Optional[Literal["none", "coarse", "fine"]] = None,
     masks: Optional[Union[Path, ArrayLike]] = None,
+    layout: Optional[Path] = None,
+    max_frame_sensors: Optional[int] = None,
+    max_frames: Optional[int] = None,
+    max_values: Optional[int] = None,
+    max_decompressed_mb: Optional[int] = None,
+    max_text_mb: Optional[int] = None,
     # @end generated
 ) -> RunResult: ...
 
