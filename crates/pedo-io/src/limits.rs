@@ -33,6 +33,17 @@ pub const MAX_DECOMPRESSED: u64 = 1 << 30;
 /// frame's row of a large plate, a Zebris frame's `<cells>`) takes well under 1 MB.
 pub const MAX_TOKEN_BYTES: usize = 16 << 20;
 
+/// Bytes of frame values a read may hold whatever its file's size: 256 MiB. A read may also hold
+/// [`HELD_PER_FILE_BYTE`] bytes of values per byte of its file, so that a real export of any
+/// size reads, while a small file that expands to dense values (a gzip of a million frames of
+/// ones) is refused long before it takes the memory its frames would.
+pub const MAX_HELD_BYTES: u64 = 256 << 20;
+
+/// Bytes of frame values a read may hold per byte of its file on disk: 128. A text export holds
+/// 1–3 bytes of values per byte of text; its gzip is 6–25 times smaller than the text (the
+/// exports of the test data), so a real compressed export holds at most ~75 per byte.
+pub const HELD_PER_FILE_BYTE: u64 = 128;
+
 /// The limits a read is held to: the constants above by default, raised (or lowered) by the
 /// reading options (`ReadOptions`: `--max-frames`, Python `max_frames=`, ...) for a file a user
 /// knows to be larger than any export they were sized for.
@@ -48,6 +59,9 @@ pub struct Limits {
     pub decompressed: u64,
     /// The longest stretch of text held at once ([`MAX_TOKEN_BYTES`]).
     pub text: usize,
+    /// Bytes of frame values a read may hold beyond [`HELD_PER_FILE_BYTE`] per byte of its
+    /// file ([`MAX_HELD_BYTES`]).
+    pub held: u64,
 }
 
 impl Limits {
@@ -58,6 +72,7 @@ impl Limits {
         values: MAX_RECORDING_VALUES,
         decompressed: MAX_DECOMPRESSED,
         text: MAX_TOKEN_BYTES,
+        held: MAX_HELD_BYTES,
     };
 
     /// Runs `f` with these limits as the readers' on this thread, the previous ones restored
@@ -84,6 +99,42 @@ impl Default for Limits {
 
 thread_local! {
     static CURRENT: std::cell::Cell<Limits> = const { std::cell::Cell::new(Limits::DEFAULT) };
+    /// The size on disk of the file being read on this thread; `None` outside a read.
+    static FILE_BYTES: std::cell::Cell<Option<u64>> = const { std::cell::Cell::new(None) };
+    /// The bytes of values the frames being read on this thread hold so far.
+    static HELD: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// Runs `f`, a read of a file (or folder of files) of `bytes` bytes on disk, the values its
+/// frames may hold sized by it ([`Limits::held`]); the previous size restored afterwards.
+pub(crate) fn reading<T>(bytes: u64, f: impl FnOnce() -> T) -> T {
+    struct Restore(Option<u64>, u64);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            FILE_BYTES.with(|c| c.set(self.0));
+            HELD.with(|c| c.set(self.1));
+        }
+    }
+    let _restore = Restore(
+        FILE_BYTES.with(|c| c.replace(Some(bytes))),
+        HELD.with(|c| c.replace(0)),
+    );
+    f()
+}
+
+/// Records that the frames being read hold `bytes` bytes of values (a reader's store, after
+/// each frame); 0 when the store is handed on or dropped.
+pub(crate) fn holding(bytes: usize) {
+    if FILE_BYTES.with(|c| c.get()).is_some() {
+        HELD.with(|c| c.set(bytes as u64));
+    }
+}
+
+/// The bytes of values the frames read may hold: [`Limits::held`], or [`HELD_PER_FILE_BYTE`]
+/// per byte of the file being read when that is more.
+fn held_budget(limits: &Limits) -> u64 {
+    let file = FILE_BYTES.with(|c| c.get()).unwrap_or(0);
+    limits.held.max(file.saturating_mul(HELD_PER_FILE_BYTE))
 }
 
 /// The limits of a read on this thread: [`Limits::DEFAULT`] unless a [`Limits::apply`] holds.
@@ -122,6 +173,19 @@ pub fn frame_count(n_frames: usize, per: usize) -> std::result::Result<(), Strin
             "{n_frames} frames are more than the {} a recording may have; {}",
             limits.frames,
             raise("max_frames")
+        ));
+    }
+    let held = HELD.with(|c| c.get());
+    let budget = held_budget(&limits);
+    if held > budget {
+        let file = FILE_BYTES.with(|c| c.get()).unwrap_or(0);
+        return Err(format!(
+            "its first {} frames hold {} MiB of values, more than the {} MiB a file of {file} \
+             bytes may expand to; {}",
+            n_frames.saturating_sub(1),
+            held.div_ceil(1 << 20),
+            budget >> 20,
+            raise("max_memory_mb")
         ));
     }
     if n_frames.checked_mul(per).is_none_or(|n| n > limits.values) {

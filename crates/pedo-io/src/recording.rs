@@ -905,7 +905,14 @@ impl SparseFrames {
                 self.push_entry(i, v);
             }
         }
+        self.end_frame();
+    }
+
+    /// Ends the frame being built, and tells the reading limits what the frames now hold
+    /// ([`crate::limits::holding`]: the reader's next frame is refused past its budget).
+    fn end_frame(&mut self) {
         self.starts.push(self.values.len());
+        crate::limits::holding(self.bytes());
     }
 
     /// Adds the value `v` at position `i` to the frame being built (ended by
@@ -931,12 +938,12 @@ impl SparseFrames {
                 self.push_entry(i, v);
             }
         }
-        self.starts.push(self.values.len());
+        self.end_frame();
     }
 
     /// Appends a frame of zeros.
     pub(crate) fn push_empty(&mut self) {
-        self.starts.push(self.values.len());
+        self.end_frame();
     }
 
     pub(crate) fn n_frames(&self) -> usize {

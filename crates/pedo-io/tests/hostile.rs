@@ -138,6 +138,7 @@ fn scratch(name: &str) -> PathBuf {
 const ZEBRIS_HEAD: &str = "<measurement><cell_count><x>256</x><y>256</y></cell_count><movements>\
     <movement><clips><clip><cell_size><x>8.467</x><y>8.467</y></cell_size>\
     <frequency>100</frequency><units>N/cm2</units><data>";
+const ZEBRIS_TAIL: &str = "</data></clip></clips></movement></movements></measurement>";
 
 #[test]
 fn a_zebris_xml_of_a_million_empty_frames_on_a_large_plate() {
@@ -145,7 +146,7 @@ fn a_zebris_xml_of_a_million_empty_frames_on_a_large_plate() {
     let gz = gzip([
         once(ZEBRIS_HEAD),
         (b"<quant/>".to_vec(), 1_000_000),
-        once("</data></clip></clips></movement></movements></measurement>"),
+        once(ZEBRIS_TAIL),
     ]);
     assert!(gz.len() < 16 << 10, "{}", gz.len());
     let says = "values a recording may hold";
@@ -157,7 +158,7 @@ fn a_zebris_xml_of_a_million_empty_frames_on_a_large_plate() {
     let gz = gzip([
         once(ZEBRIS_HEAD),
         (b"<quant/>".to_vec(), frames),
-        once("</data></clip></clips></movement></movements></measurement>"),
+        once(ZEBRIS_TAIL),
     ]);
     let (rec, peak, _) = measured(|| parse_bytes(&gz, Format::ZebrisXml, "z.xml.gz"));
     assert_eq!(rec.unwrap().n_frames(), frames);
@@ -571,6 +572,42 @@ fn every_limit_is_an_option_and_its_refusal_says_how_to_raise_it() {
     };
     let rec = pedo_io::formats::parse_bytes_with(grid.as_bytes(), Format::Csv, "grid.csv", &roomy);
     assert_eq!(rec.unwrap().n_sensors(), 300_000);
+}
+
+#[test]
+fn a_small_file_of_dense_frames_is_held_to_its_size() {
+    // 200 frames of a 256 x 256 plate, every sensel loaded, in a gzip of about 100 KB: 79 MB of
+    // values held. Under a 16 MiB floor they are refused at the frame that passes it, naming
+    // the option; under the default (256 MiB, or 128 bytes per byte of the file) they read.
+    let quant = format!(
+        "<quant><cell_begin><x>0</x><y>0</y></cell_begin><cell_count><x>256</x><y>256</y>\
+         </cell_count><cells>{}</cells></quant>",
+        "1 ".repeat(65536)
+    );
+    let gz = gzip([
+        once(ZEBRIS_HEAD),
+        (quant.clone().into_bytes(), 200),
+        once(ZEBRIS_TAIL),
+    ]);
+    assert!(gz.len() < 200 << 10, "{}", gz.len());
+    let tight = ReadOptions {
+        max_memory_mb: 16,
+        ..ReadOptions::default()
+    };
+    let says = "more than the 16 MiB a file of";
+    let (e, peak, _) =
+        measured(|| pedo_io::formats::parse_bytes_with(&gz, Format::ZebrisXml, "d.xml.gz", &tight));
+    let e = e.unwrap_err().to_string();
+    assert!(e.contains(says) && e.contains("--max-memory-mb"), "{e}");
+    assert!(peak <= 64 << 20, "held {peak} bytes");
+    let rec = pedo_io::formats::parse_bytes(&gz, Format::ZebrisXml, "d.xml.gz").unwrap();
+    assert_eq!((rec.n_frames(), rec.n_sensors()), (200, 65536));
+    // The floor is a floor: the same frames as plain text (26 MB) read under it, their
+    // budget 128 bytes per byte of the file.
+    let plain = [ZEBRIS_HEAD, &quant.repeat(200), ZEBRIS_TAIL].concat();
+    let rec =
+        pedo_io::formats::parse_bytes_with(plain.as_bytes(), Format::ZebrisXml, "p.xml", &tight);
+    assert_eq!(rec.unwrap().n_frames(), 200);
 }
 
 #[test]

@@ -97,6 +97,8 @@ ZEBRIS_HEAD = (b"<measurement><cell_count><x>256</x><y>256</y></cell_count><move
                b"<clips><clip><cell_size><x>8.467</x><y>8.467</y></cell_size><frequency>100</frequency>"
                b"<data>")
 ZEBRIS_TAIL = b"</data></clip></clips></movement></movements></measurement>"
+ZEBRIS_ONES = (b"<quant><cell_begin><x>0</x><y>0</y></cell_begin><cell_count><x>256</x><y>256</y>"
+               b"</cell_count><cells>" + b"1 " * 65536 + b"</cells></quant>")
 
 
 def png_of_zeros(side):
@@ -139,6 +141,9 @@ def corpus(tmp_path_factory):
         # A grid whose line 46 is bad, then 100 MB more: the error at once.
         "grid.csv.gz": (gzip_of((b"0,0,0,0,0\n", 45), (b"0,0,x,0,0\n", 1), (b"0,0,0,0,0\n", 10_000_000)),
                         "grid.csv.gz:46"),
+        # 8174 frames of a 256 x 256 plate, every sensel 1, in 1.5 MB: 3.2 GB held before.
+        "ones.xml.gz": (gzip_of((ZEBRIS_HEAD, 1), (ZEBRIS_ONES, 8174), (ZEBRIS_TAIL, 1)),
+                        "a file of"),
         # More than a compressed recording may expand to.
         "blank.lst.gz": (gzip_of((b"Page 1\n", 1), (b"\n" + b" " * 4095, (1 << 30) // 4096 + 1)),
                          "decompresses to more than"),
@@ -156,7 +161,7 @@ def corpus(tmp_path_factory):
     return cases
 
 
-CASES = ["million.xml.gz", "deep.xml.gz", "walk.lst.gz", "zeros.png", "walk.json.gz", "grid.csv.gz",
+CASES = ["million.xml.gz", "ones.xml.gz", "deep.xml.gz", "walk.lst.gz", "zeros.png", "walk.json.gz", "grid.csv.gz",
          "blank.lst.gz", "line.csv", "nul.csv"]
 
 
@@ -166,7 +171,7 @@ def test_a_hostile_file_read_is_a_format_error_within_memory_and_time(corpus, na
     check("read_recording", path, expect=expect, says=says)
 
 
-@pytest.mark.parametrize("name", ["million.xml.gz", "walk.lst.gz", "zeros.png", "line.csv"])
+@pytest.mark.parametrize("name", ["million.xml.gz", "ones.xml.gz", "walk.lst.gz", "zeros.png", "line.csv"])
 def test_a_hostile_file_run_is_a_format_error_and_writes_nothing(corpus, name, tmp_path):
     path, expect, says = corpus[name]
     out = tmp_path / "run"

@@ -111,6 +111,11 @@ modal_core::option_set! {
         max_text_mb: usize = d.text >> 20;
             Value, d.text >> 20,
             "Longest stretch of a text export held at once, in MiB: a line, an XML element, comment or CDATA section, a JSON string.";
+        /// Most MiB of frame values a read holds whatever the file's size
+        /// ([`crate::limits::MAX_HELD_BYTES`]).
+        max_memory_mb: usize = (d.held >> 20) as usize;
+            Value, d.held >> 20,
+            "Most MiB of frame values a recording read may hold, or 128 times the file's size on disk when that is more: a small compressed file that expands to dense frames is refused before it takes their memory (zeros take none).";
     }
 }
 
@@ -123,6 +128,7 @@ impl ReadOptions {
             ("max_values", self.max_values),
             ("max_decompressed_mb", self.max_decompressed_mb),
             ("max_text_mb", self.max_text_mb),
+            ("max_memory_mb", self.max_memory_mb),
         ] {
             if value == 0 {
                 return Err(modal_core::OptionError::new(option, 0, "an integer >= 1"));
@@ -139,6 +145,7 @@ impl ReadOptions {
             values: self.max_values,
             decompressed: (self.max_decompressed_mb as u64).saturating_mul(1 << 20),
             text: self.max_text_mb.saturating_mul(1 << 20),
+            held: (self.max_memory_mb as u64).saturating_mul(1 << 20),
         }
     }
 }
@@ -507,12 +514,15 @@ pub fn parse_bytes_with(
     name: &str,
     opts: &ReadOptions,
 ) -> Result<Recording> {
+    let size = bytes.len() as u64;
     opts.limits().apply(|| {
-        let gzip = bytes.starts_with(GZIP_MAGIC);
-        if is_binary(format) && !gzip {
-            return parse_binary(bytes, format, name);
-        }
-        parse_source(bytes, gzip, bytes.len(), format, name, opts)
+        crate::limits::reading(size, || {
+            let gzip = bytes.starts_with(GZIP_MAGIC);
+            if is_binary(format) && !gzip {
+                return parse_binary(bytes, format, name);
+            }
+            parse_source(bytes, gzip, bytes.len(), format, name, opts)
+        })
     })
 }
 
@@ -647,8 +657,9 @@ pub struct RunInput {
 
 /// [`read_for_streaming`], with the SHA-256 of the bytes parsed.
 pub fn read_for_run(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<RunInput> {
+    let path = path.as_ref();
     opts.limits()
-        .apply(|| read_for_run_within(path.as_ref(), opts))
+        .apply(|| crate::limits::reading(bytes_on_disk(path), || read_for_run_within(path, opts)))
 }
 
 /// [`read_for_run`] within the limits of `opts`, set by the caller.
@@ -856,7 +867,22 @@ pub fn read_recording_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result
 
 /// [`read_recording_with`], with the SHA-256 of the bytes parsed ([`RunInput::sha256`]).
 pub fn read_hashed(path: &Path, opts: &ReadOptions) -> Result<(Recording, Option<String>)> {
-    opts.limits().apply(|| read_hashed_within(path, opts))
+    opts.limits()
+        .apply(|| crate::limits::reading(bytes_on_disk(path), || read_hashed_within(path, opts)))
+}
+
+/// The size on disk of the file at `path`, or of the files of a folder (an image sequence)
+/// together; 0 when it cannot be read (the read then reports why).
+fn bytes_on_disk(path: &Path) -> u64 {
+    match std::fs::read_dir(path) {
+        Ok(entries) => entries
+            .flatten()
+            .filter_map(|e| e.metadata().ok())
+            .filter(|m| m.is_file())
+            .map(|m| m.len())
+            .sum(),
+        Err(_) => std::fs::metadata(path).map_or(0, |m| m.len()),
+    }
 }
 
 /// [`read_hashed`] within the limits of `opts`, set by the caller.

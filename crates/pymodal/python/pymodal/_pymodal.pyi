@@ -300,6 +300,7 @@ def read_recording(
     max_values: Optional[int] = None,
     max_decompressed_mb: Optional[int] = None,
     max_text_mb: Optional[int] = None,
+    max_memory_mb: Optional[int] = None,
     # @end generated
 ) -> Recording: ...
 def contours(
@@ -418,6 +419,7 @@ def run(
     max_values: Optional[int] = None,
     max_decompressed_mb: Optional[int] = None,
     max_text_mb: Optional[int] = None,
+    max_memory_mb: Optional[int] = None,
     # @end generated
 ) -> RunResult: ...
 
@@ -454,6 +456,7 @@ def batch(
     max_values: Optional[int] = None,
     max_decompressed_mb: Optional[int] = None,
     max_text_mb: Optional[int] = None,
+    max_memory_mb: Optional[int] = None,
     # @end generated
     **options: Any,
 ) -> list[StudyRow]:
@@ -483,6 +486,7 @@ def batch_row(
     max_values: Optional[int] = None,
     max_decompressed_mb: Optional[int] = None,
     max_text_mb: Optional[int] = None,
+    max_memory_mb: Optional[int] = None,
     # @end generated
     **options: Any,
 ) -> StudyRow:
@@ -513,6 +517,7 @@ def register(
     max_values: Optional[int] = None,
     max_decompressed_mb: Optional[int] = None,
     max_text_mb: Optional[int] = None,
+    max_memory_mb: Optional[int] = None,
     # @end generated
 ) -> dict[str, Any]:
     """Register footprints onto one template: the registered stack, masks, template and a table per trial."""
