@@ -130,6 +130,24 @@ pub(crate) fn holding(bytes: usize) {
     }
 }
 
+/// Whether the read may hold `more` bytes of values besides the frames it holds (data that
+/// must be held whole, as a Fortran-ordered array's); `Err` says why not.
+pub(crate) fn may_hold(more: u64) -> std::result::Result<(), String> {
+    let budget = held_budget(&current());
+    let held = HELD.with(|c| c.get()).saturating_add(more);
+    if held <= budget {
+        return Ok(());
+    }
+    let file = FILE_BYTES.with(|c| c.get()).unwrap_or(0);
+    Err(format!(
+        "its values would take {} MiB, more than the {} MiB a file of {file} bytes may expand \
+         to; {}",
+        held.div_ceil(1 << 20),
+        budget >> 20,
+        raise("max_memory_mb")
+    ))
+}
+
 /// The bytes of values the frames read may hold: [`Limits::held`], or [`HELD_PER_FILE_BYTE`]
 /// per byte of the file being read when that is more.
 fn held_budget(limits: &Limits) -> u64 {

@@ -187,6 +187,14 @@ def test_an_honest_npz_of_zeros_reads_within_memory(tmp_path):
     check("read_recording", path, expect="result", says="result 100 (100, 1000, 1000)")
 
 
+def test_a_deflated_npz_of_dense_frames_is_held_to_its_size(tmp_path):
+    # 100 MB of ones in about 100 KB: 600 MB held as frames before.
+    path = tmp_path / "ones.npz"
+    np.savez_compressed(path, frames=np.ones((100, 1000, 1000), np.uint8))
+    assert path.stat().st_size < 2 << 20
+    check("read_recording", path, expect="FormatError", says="max_memory_mb")
+
+
 def test_too_many_nodes_is_an_error_not_an_abort():
     # 20,000 points raised a PanicException and aborted the interpreter.
     check("match", 20_000, expect="DegenerateShapeError", says="max_nodes")

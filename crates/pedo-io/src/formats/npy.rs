@@ -269,6 +269,7 @@ fn read_body(
         let bytes = match body {
             Body::Bytes(b) => b,
             Body::Stream(source) => {
+                crate::limits::may_hold((t * per * size) as u64).map_err(&fail)?;
                 owned = read_whole(source, t * per * size, name)?;
                 &owned[..]
             }
@@ -287,7 +288,10 @@ fn read_body(
             Body::Stream(s) => s,
         };
         let mut raw = vec![0u8; per * size];
-        for _ in 0..t {
+        for i in 0..t {
+            // The frames held so far within the read's budget (a deflated member of dense
+            // values may be far larger than its file).
+            crate::limits::frame_count(i + 1, per).map_err(&fail)?;
             source
                 .read_exact(&mut raw)
                 .map_err(|e| fail(format!("cannot read the array: {e}")))?;
