@@ -79,7 +79,7 @@ fn a_cancelled_study_keeps_finished_folders_and_writes_no_table() {
     let mut names: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n != ".pedomatch-study" && n != ".pedomatch-study.lock")
+        .filter(|n| !n.starts_with(".pedomatch-"))
         .collect();
     names.sort();
     assert_eq!(names.len(), 1, "{names:?}");
