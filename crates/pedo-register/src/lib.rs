@@ -10,6 +10,7 @@
 //! (bilinear) at the field's image of each template sensel. No files, no terminal: the front
 //! ends read the recordings and pedo-output writes the results.
 
+mod band;
 pub mod footprint;
 pub mod refine;
 pub mod warp;
@@ -756,6 +757,8 @@ fn fitted_points(
         smoothing: params.warp_smoothing,
         blurs: REFINE_BLURS,
         iterations: WARP_ITERATIONS,
+        fine_spacing: 0.0,
+        fine_smoothing: params.warp_smoothing,
         mask_weight: WARP_MASK_WEIGHT,
     };
     let as_f = |m: &[bool]| -> Vec<f64> { m.iter().map(|&b| f64::from(u8::from(b))).collect() };
