@@ -29,6 +29,8 @@ pub struct WarpSettings {
     pub fine_spacing: f64,
     /// Weight of the bending penalty of the fine stage (as `smoothing`).
     pub fine_smoothing: f64,
+    /// Levenberg–Marquardt iterations of the fine stage, at most.
+    pub fine_iterations: usize,
     /// Weight of the footprints' masks (1 inside, 0 outside) beside the pressures, relative to
     /// the template's mean squared value: keeps the edges together while the pressures move.
     pub mask_weight: f64,
@@ -260,18 +262,16 @@ pub fn refine_warp(
         return at;
     }
     for &sigma in &settings.blurs {
-        at = warp_stage(
-            &at,
-            images,
-            sigma,
-            settings.spacing,
-            settings.smoothing,
-            settings,
-        );
+        let stage = (settings.spacing, settings.smoothing, settings.iterations);
+        at = warp_stage(&at, images, sigma, stage, settings);
     }
     if settings.fine_spacing > 0.0 && settings.fine_spacing < settings.spacing {
-        let (spacing, smoothing) = (settings.fine_spacing, settings.fine_smoothing);
-        at = warp_stage(&at, images, 0.0, spacing, smoothing, settings);
+        let stage = (
+            settings.fine_spacing,
+            settings.fine_smoothing,
+            settings.fine_iterations,
+        );
+        at = warp_stage(&at, images, 0.0, stage, settings);
     }
     at
 }
@@ -280,8 +280,7 @@ fn warp_stage(
     base: &[[f64; 2]],
     images: &WarpImages<'_>,
     sigma: f64,
-    spacing: f64,
-    smoothing: f64,
+    (spacing, smoothing, iterations): (f64, f64, usize),
     settings: &WarpSettings,
 ) -> Vec<[f64; 2]> {
     let (template, trial) = (images.template, images.trial);
@@ -324,7 +323,7 @@ fn warp_stage(
     let mut at = base.to_vec();
     let mut current = p.data_cost(&at);
     let mut lambda = 1e-3;
-    for _ in 0..settings.iterations {
+    for _ in 0..iterations {
         let (mut normal, mut gradient) = normal_equations(&p, &at, lattice.band_width());
         add_bending(&mut normal, &stencils, alpha);
         let (bent, rtheta) = bending(&stencils, &theta);
@@ -473,6 +472,7 @@ mod tests {
             iterations: 20,
             fine_spacing: 0.0,
             fine_smoothing: 0.0,
+            fine_iterations: 0,
             mask_weight: 0.0,
         };
         let images = WarpImages {
