@@ -87,7 +87,8 @@ examples: wheel
 	$(PY) examples/match_two_frames.py --out "$$tmp/match.png" && test -s "$$tmp/match.png" && \
 	$(PY) examples/run_recording.py --out-dir "$$tmp" && test -s "$$tmp/pairs.csv" && \
 	$(PY) examples/spm1d_curves.py "$$tmp/study" examples/data/FrasP01L.asf crates/pedo-io/tests/data/tekscan-FrasP01L-11-20.csv && \
-	test -s "$$tmp/study/study_curves.csv"
+	test -s "$$tmp/study/study_curves.csv" && \
+	$(PY) examples/spm_register_speed.py --iterations 200
 
 # The demo's report.html in headless Chromium (Debian's `chromium`): drawn, playable, offline.
 # The binary as the tests build it (the same features: nothing is rebuilt after `cargo test`).

@@ -10,6 +10,7 @@
 //! (bilinear) at the field's image of each template sensel. No files, no terminal: the front
 //! ends read the recordings and pedo-output writes the results.
 
+mod band;
 pub mod footprint;
 pub mod refine;
 pub mod warp;
@@ -57,7 +58,7 @@ modal_core::option_set! {
         /// Spacing of the non-rigid intensity step's control points, in sensels (0: none).
         warp_spacing: f64 = 6.0;
             Value, 6.0,
-            "Spacing, in template sensels, of the control points of the non-rigid step after the rigid correction: a cubic B-spline displacement fitted to the peak images (Levenberg-Marquardt on the mean squared difference with a bending penalty, blurred by 1.5 sensels, then as they are; no step may fold the map). 0 leaves it out; so does --no-refine-intensity.";
+            "Spacing, in template sensels, of the control points of the non-rigid step after the rigid correction: a cubic B-spline displacement fitted to the peak images (Levenberg-Marquardt on the mean squared difference with a bending penalty, blurred by 1.5 sensels, then as they are, then on a lattice of half the spacing; no step may fold the map). 0 leaves it out; so does --no-refine-intensity.";
         /// Weight of the non-rigid step's bending penalty.
         warp_smoothing: f64 = 1e-4;
             Value, 1e-4,
@@ -390,6 +391,9 @@ const WARP_MASK_WEIGHT: f64 = 0.5;
 /// Levenberg–Marquardt iterations per stage of the non-rigid step, at most: each costs a pass
 /// over every sensel and a solve of the control grid's normal equations.
 const WARP_ITERATIONS: usize = 12;
+/// Iterations of the non-rigid step's last stage, on a lattice of half the spacing (chosen on
+/// the tuning subjects: 12 fitted no closer than 6, BENCHMARKS.md).
+const WARP_FINE_ITERATIONS: usize = 6;
 /// Levenberg–Marquardt iterations per stage (at most; fewer when a step no longer helps).
 const REFINE_ITERATIONS: usize = 20;
 
@@ -723,6 +727,7 @@ fn fitted_points(
     template: &Template,
     trial: &Prepared<'_>,
     params: &RegisterParams,
+    correct: bool,
 ) -> (refine::PlaneAffine, Vec<[f64; 2]>, Vec<[f64; 2]>) {
     let src = &trial.images;
     let (rows, cols) = (template.images.rows, template.images.cols);
@@ -740,14 +745,18 @@ fn fitted_points(
     if !params.refine_intensity {
         return (refine::PlaneAffine::identity([0.0, 0.0]), at.clone(), at);
     }
-    let correction = refine::refine_map(
-        &at,
-        tpl,
-        img,
-        &REFINE_BLURS,
-        REFINE_ITERATIONS,
-        &refine::RIGID_DIRECTIONS,
-    );
+    let correction = if correct {
+        refine::refine_map(
+            &at,
+            tpl,
+            img,
+            &REFINE_BLURS,
+            REFINE_ITERATIONS,
+            &refine::RIGID_DIRECTIONS,
+        )
+    } else {
+        refine::PlaneAffine::identity([0.0, 0.0])
+    };
     for q in &mut at {
         *q = correction.apply(*q);
     }
@@ -756,6 +765,9 @@ fn fitted_points(
         smoothing: params.warp_smoothing,
         blurs: REFINE_BLURS,
         iterations: WARP_ITERATIONS,
+        fine_spacing: params.warp_spacing / 2.0,
+        fine_smoothing: params.warp_smoothing,
+        fine_iterations: WARP_FINE_ITERATIONS,
         mask_weight: WARP_MASK_WEIGHT,
     };
     let as_f = |m: &[bool]| -> Vec<f64> { m.iter().map(|&b| f64::from(u8::from(b))).collect() };
@@ -786,7 +798,6 @@ fn register_with(
     let field = CorrespondenceField::fit(&a, &b, &pairs, params.field_smoothing)?;
     let (rows, cols) = (template.images.rows, template.images.cols);
     let src = &p.images;
-    let (correction, rigid_at, warped_at) = fitted_points(&field, template, p, params);
     let s = Sampler {
         src,
         mask_f: p.mask.iter().map(|&m| f64::from(u8::from(m))).collect(),
@@ -795,25 +806,26 @@ fn register_with(
     // Never worse than the trial as it lies: the last check keeps the first of the warp, the
     // rigid map and the identity whose footprint overlaps the template's at least as well as
     // the unregistered trial's does (a registration that moved the footprint's edge away is
-    // no registration for pixel-wise statistics).
+    // no registration for pixel-wise statistics). When both maps fail, the correction by the
+    // images may be what went astray (it fits pressures, which may lie in another basin than
+    // the outline's): the warp and the outline's field without the correction are tried too.
     let identity = grid_centres(rows, cols);
     let identity_mask = s.mask(&identity);
     let xor_identity = s.xor(&identity_mask);
-    let mut kept = (MapKept::Identity, identity, identity_mask);
-    for (kind, at) in [(MapKept::Rigid, rigid_at), (MapKept::Warp, warped_at)]
-        .into_iter()
-        .rev()
-    {
-        if kind == MapKept::Warp && !(params.refine_intensity && params.warp_spacing > 0.0) {
-            continue;
+    let mut correction = refine::PlaneAffine::identity([0.0, 0.0]);
+    let mut kept = None;
+    for correct in [true, false] {
+        if !correct && !params.refine_intensity {
+            break;
         }
-        let mask = s.mask(&at);
-        if s.xor(&mask) <= xor_identity {
-            kept = (kind, at, mask);
+        let (c, rigid_at, warped_at) = fitted_points(&field, template, p, params, correct);
+        correction = c;
+        kept = first_overlapping(&s, [rigid_at, warped_at], params, xor_identity);
+        if kept.is_some() {
             break;
         }
     }
-    let (kind, at, mask) = kept;
+    let (kind, at, mask) = kept.unwrap_or((MapKept::Identity, identity, identity_mask));
     let images = FootImages {
         rows,
         cols,
@@ -854,6 +866,25 @@ fn register_with(
         residual_sensels,
         correlation,
     })
+}
+
+/// The first of the warp and the rigid map (`[rigid, warped]`) whose footprint overlaps the
+/// template's with at most `xor_identity` sensels in exactly one of them.
+fn first_overlapping(
+    s: &Sampler<'_>,
+    [rigid_at, warped_at]: [Vec<[f64; 2]>; 2],
+    params: &RegisterParams,
+    xor_identity: usize,
+) -> Option<(MapKept, Vec<[f64; 2]>, Vec<bool>)> {
+    let warp = params.refine_intensity && params.warp_spacing > 0.0;
+    [(MapKept::Warp, warped_at), (MapKept::Rigid, rigid_at)]
+        .into_iter()
+        .filter(|(kind, _)| warp || *kind != MapKept::Warp)
+        .map(|(kind, at)| {
+            let mask = s.mask(&at);
+            (kind, at, mask)
+        })
+        .find(|(_, _, mask)| s.xor(mask) <= xor_identity)
 }
 
 /// The template's outline nodes carried by the kept map: the field and the correction, plus the

@@ -10,8 +10,8 @@
 //! step moves the pressure pattern inside the footprint (the toes, the metatarsal heads) onto the
 //! template's, which a global map cannot.
 
+use crate::band::Band;
 use crate::refine::{blurred, GridImage};
-use nalgebra::{DMatrix, DVector};
 
 /// How the warp is fitted.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,6 +24,13 @@ pub struct WarpSettings {
     pub blurs: [f64; 2],
     /// Levenberg–Marquardt iterations per stage, at most.
     pub iterations: usize,
+    /// Spacing of a last, finer stage on the images as they are, after the stages of `blurs`
+    /// (0: none): the coarse lattice brings the pattern near, the fine one fits the detail.
+    pub fine_spacing: f64,
+    /// Weight of the bending penalty of the fine stage (as `smoothing`).
+    pub fine_smoothing: f64,
+    /// Levenberg–Marquardt iterations of the fine stage, at most.
+    pub fine_iterations: usize,
     /// Weight of the footprints' masks (1 inside, 0 outside) beside the pressures, relative to
     /// the template's mean squared value: keeps the edges together while the pressures move.
     pub mask_weight: f64,
@@ -91,34 +98,63 @@ impl Lattice {
         out
     }
 
-    /// `Σ ‖second differences‖²` of each displacement component along rows and columns, as the
-    /// matrix `R` of `θᵀ R θ` over one component's control values.
-    fn bending(&self) -> DMatrix<f64> {
-        let n = self.len();
-        let mut r = DMatrix::zeros(n, n);
-        let mut add = |idx: [usize; 3]| {
-            let w = [1.0, -2.0, 1.0];
-            for (p, &a) in idx.iter().enumerate() {
-                for (q, &b) in idx.iter().enumerate() {
-                    r[(a, b)] += w[p] * w[q];
-                }
-            }
-        };
+    /// The second-difference stencils of the bending penalty, along rows and along columns:
+    /// `Σ ‖θ_a − 2 θ_b + θ_c‖²` over them is the penalty of each displacement component.
+    fn stencils(&self) -> Vec<[usize; 3]> {
+        let nx = self.nx;
+        let mut out = Vec::new();
         for j in 0..self.ny {
-            for i in 1..self.nx.saturating_sub(1) {
-                add([j * self.nx + i - 1, j * self.nx + i, j * self.nx + i + 1]);
+            for i in 1..nx.saturating_sub(1) {
+                out.push([j * nx + i - 1, j * nx + i, j * nx + i + 1]);
             }
         }
         for j in 1..self.ny.saturating_sub(1) {
-            for i in 0..self.nx {
-                add([
-                    (j - 1) * self.nx + i,
-                    j * self.nx + i,
-                    (j + 1) * self.nx + i,
-                ]);
+            for i in 0..nx {
+                out.push([(j - 1) * nx + i, j * nx + i, (j + 1) * nx + i]);
             }
         }
-        r
+        out
+    }
+
+    /// The super-diagonals of the normal matrix with the unknowns interleaved (`x` then `y` of
+    /// each control point): two control points share a sensel only within three rows and three
+    /// columns of each other.
+    fn band_width(&self) -> usize {
+        2 * (3 * self.nx + 3) + 1
+    }
+}
+
+/// The bending penalty `Σ ‖second differences‖²` of the interleaved displacements `theta`, and
+/// its half-gradient `R θ`.
+fn bending(stencils: &[[usize; 3]], theta: &[f64]) -> (f64, Vec<f64>) {
+    const W: [f64; 3] = [1.0, -2.0, 1.0];
+    let mut grad = vec![0.0; theta.len()];
+    let mut value = 0.0;
+    for s in stencils {
+        for c in 0..2 {
+            let d: f64 = s.iter().zip(W).map(|(&k, w)| w * theta[2 * k + c]).sum();
+            value += d * d;
+            for (&k, w) in s.iter().zip(W) {
+                grad[2 * k + c] += w * d;
+            }
+        }
+    }
+    (value, grad)
+}
+
+/// `R` of [`bending`] times `alpha`, added to the band.
+fn add_bending(band: &mut Band, stencils: &[[usize; 3]], alpha: f64) {
+    const W: [f64; 3] = [1.0, -2.0, 1.0];
+    for s in stencils {
+        for (p, &a) in s.iter().enumerate() {
+            for (q, &b) in s.iter().enumerate() {
+                if a <= b {
+                    let v = alpha * W[p] * W[q];
+                    band.add(2 * a, 2 * b, v);
+                    band.add(2 * a + 1, 2 * b + 1, v);
+                }
+            }
+        }
     }
 }
 
@@ -135,6 +171,8 @@ struct Problem<'a> {
     /// Template sensel `i`'s image in the trial's plane before the warp.
     base: &'a [[f64; 2]],
     supports: Vec<[(usize, f64); 16]>,
+    /// Control points of the lattice.
+    unknowns: usize,
     channels: Vec<Channel>,
     rows: usize,
     cols: usize,
@@ -146,15 +184,16 @@ struct Problem<'a> {
 }
 
 impl Problem<'_> {
-    fn moved(&self, theta: &[f64], n: usize) -> Vec<[f64; 2]> {
+    /// The points moved by the interleaved control displacements `theta`.
+    fn moved(&self, theta: &[f64]) -> Vec<[f64; 2]> {
         self.base
             .iter()
             .zip(&self.supports)
             .map(|(b, s)| {
                 let (mut dx, mut dy) = (0.0, 0.0);
                 for &(k, w) in s {
-                    dx += w * theta[k];
-                    dy += w * theta[n + k];
+                    dx += w * theta[2 * k];
+                    dy += w * theta[2 * k + 1];
                 }
                 [b[0] + dx, b[1] + dy]
             })
@@ -223,7 +262,16 @@ pub fn refine_warp(
         return at;
     }
     for &sigma in &settings.blurs {
-        at = warp_stage(&at, images, sigma, settings);
+        let stage = (settings.spacing, settings.smoothing, settings.iterations);
+        at = warp_stage(&at, images, sigma, stage, settings);
+    }
+    if settings.fine_spacing > 0.0 && settings.fine_spacing < settings.spacing {
+        let stage = (
+            settings.fine_spacing,
+            settings.fine_smoothing,
+            settings.fine_iterations,
+        );
+        at = warp_stage(&at, images, 0.0, stage, settings);
     }
     at
 }
@@ -232,11 +280,12 @@ fn warp_stage(
     base: &[[f64; 2]],
     images: &WarpImages<'_>,
     sigma: f64,
+    (spacing, smoothing, iterations): (f64, f64, usize),
     settings: &WarpSettings,
 ) -> Vec<[f64; 2]> {
     let (template, trial) = (images.template, images.trial);
     let (rows, cols) = (template.rows, template.cols);
-    let lattice = Lattice::new(rows, cols, settings.spacing);
+    let lattice = Lattice::new(rows, cols, spacing);
     let n = lattice.len();
     let supports = (0..rows * cols)
         .map(|i| lattice.support((i % cols) as f64, (i / cols) as f64))
@@ -260,6 +309,7 @@ fn warp_stage(
     let p = Problem {
         base,
         supports,
+        unknowns: n,
         channels,
         rows: trial.rows,
         cols: trial.cols,
@@ -267,32 +317,31 @@ fn warp_stage(
         grid_cols: cols,
         grid_rows: rows,
     };
-    let alpha = settings.smoothing * scale;
-    let bend = lattice.bending();
+    let alpha = smoothing * scale;
+    let stencils = lattice.stencils();
     let mut theta = vec![0.0; 2 * n];
-    let penalty = |th: &[f64]| -> f64 {
-        let (x, y) = (
-            DVector::from_column_slice(&th[..n]),
-            DVector::from_column_slice(&th[n..]),
-        );
-        alpha * ((&bend * &x).dot(&x) + (&bend * &y).dot(&y))
-    };
     let mut at = base.to_vec();
     let mut current = p.data_cost(&at);
     let mut lambda = 1e-3;
-    for _ in 0..settings.iterations {
-        let (jtj, jtr) = normal_equations(&p, &at, n);
+    for _ in 0..iterations {
+        let (mut normal, mut gradient) = normal_equations(&p, &at, lattice.band_width());
+        add_bending(&mut normal, &stencils, alpha);
+        let (bent, rtheta) = bending(&stencils, &theta);
+        for (g, r) in gradient.iter_mut().zip(&rtheta) {
+            *g += alpha * r;
+        }
+        let before = current + alpha * bent;
         let mut improved = false;
         for _ in 0..6 {
-            let Some(step) = damped_step(&jtj, &jtr, &bend, alpha, lambda, &theta) else {
+            let Some(step) = damped_step(&normal, &gradient, lambda) else {
                 lambda *= 10.0;
                 continue;
             };
-            let next: Vec<f64> = theta.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
-            let moved = p.moved(&next, n);
-            let cost = p.data_cost(&moved) + penalty(&next);
-            if cost < current + penalty(&theta) && p.unfolded(&moved) {
-                current = cost - penalty(&next);
+            let next: Vec<f64> = theta.iter().zip(&step).map(|(a, b)| a + b).collect();
+            let moved = p.moved(&next);
+            let data = p.data_cost(&moved);
+            if data + alpha * bending(&stencils, &next).0 < before && p.unfolded(&moved) {
+                current = data;
                 theta = next;
                 at = moved;
                 lambda = (lambda / 3.0).max(1e-9);
@@ -309,76 +358,74 @@ fn warp_stage(
 }
 
 /// `JᵀJ / N` and `Jᵀr / N` of the data term at the points `at`, the unknowns the control
-/// displacements (`x` of every control point, then `y`).
-fn normal_equations(p: &Problem<'_>, at: &[[f64; 2]], n: usize) -> (DMatrix<f64>, DVector<f64>) {
-    let m = 2 * n;
-    // Row-major in a flat buffer: the inner loop is the hot one of the whole registration.
-    let mut jtj = vec![0.0; m * m];
+/// displacements interleaved (`x`, `y` of control point 0, then of 1, …), `JᵀJ` as a band.
+/// Each sensel's Jacobian is its image gradient times its 16 B-spline weights, so its share of
+/// `JᵀJ` is the 2 × 2 gradient product (summed over the channels) times the weights' outer
+/// product: one pass over the 16 × 16 weights per sensel, the hot loop of the registration.
+fn normal_equations(p: &Problem<'_>, at: &[[f64; 2]], width: usize) -> (Band, Vec<f64>) {
+    let m = 2 * p.unknowns;
+    let mut jtj = Band::zeros(m, width);
     let mut jtr = vec![0.0; m];
     let inv = 1.0 / at.len().max(1) as f64;
-    for ch in &p.channels {
-        for ((q, t), s) in at.iter().zip(&ch.tpl).zip(&p.supports) {
+    for (i, (q, s)) in at.iter().zip(&p.supports).enumerate() {
+        // [gx², gx gy, gy²] and [gx r, gy r], each weighted, over the channels.
+        let (mut g2, mut gr) = ([0.0; 3], [0.0; 2]);
+        for ch in &p.channels {
             let (v, gx, gy) = crate::refine::bilinear_grad(&ch.img, p.rows, p.cols, q[0], q[1]);
-            if gx == 0.0 && gy == 0.0 {
-                continue;
-            }
-            let w = ch.weight * inv;
-            let r = v - t;
-            let mut idx = [0usize; 32];
-            let mut jac = [0.0; 32];
-            for (k, &(c, wk)) in s.iter().enumerate() {
-                idx[k] = c;
-                jac[k] = gx * wk;
-                idx[16 + k] = n + c;
-                jac[16 + k] = gy * wk;
-            }
-            for a in 0..32 {
-                let ja = w * jac[a];
-                jtr[idx[a]] += ja * r;
-                let row = &mut jtj[idx[a] * m..(idx[a] + 1) * m];
-                for b in 0..32 {
-                    row[idx[b]] += ja * jac[b];
+            let (w, r) = (ch.weight * inv, v - ch.tpl[i]);
+            g2 = [
+                g2[0] + w * gx * gx,
+                g2[1] + w * gx * gy,
+                g2[2] + w * gy * gy,
+            ];
+            gr = [gr[0] + w * gx * r, gr[1] + w * gy * r];
+        }
+        if g2 == [0.0; 3] {
+            continue;
+        }
+        for (a, &(ca, wa)) in s.iter().enumerate() {
+            jtr[2 * ca] += wa * gr[0];
+            jtr[2 * ca + 1] += wa * gr[1];
+            for (b, &(cb, wb)) in s.iter().enumerate().skip(a) {
+                let ww = wa * wb;
+                if ca == cb {
+                    // Two weights of one control point (a sensel at the grid's edge): both
+                    // orders of the pair land on its own block.
+                    let ww = if a == b { ww } else { 2.0 * ww };
+                    jtj.add(2 * ca, 2 * ca, ww * g2[0]);
+                    jtj.add(2 * ca, 2 * ca + 1, ww * g2[1]);
+                    jtj.add(2 * ca + 1, 2 * ca + 1, ww * g2[2]);
+                } else {
+                    let (lo, hi) = (ca.min(cb), ca.max(cb));
+                    jtj.add(2 * lo, 2 * hi, ww * g2[0]);
+                    jtj.add(2 * lo, 2 * hi + 1, ww * g2[1]);
+                    jtj.add(2 * lo + 1, 2 * hi, ww * g2[1]);
+                    jtj.add(2 * lo + 1, 2 * hi + 1, ww * g2[2]);
                 }
             }
         }
     }
-    (DMatrix::from_row_slice(m, m, &jtj), DVector::from_vec(jtr))
+    (jtj, jtr)
 }
 
-/// The Levenberg–Marquardt step of the penalised problem, or `None` when its matrix is not
-/// positive definite.
-fn damped_step(
-    jtj: &DMatrix<f64>,
-    jtr: &DVector<f64>,
-    bend: &DMatrix<f64>,
-    alpha: f64,
-    lambda: f64,
-    theta: &[f64],
-) -> Option<DVector<f64>> {
-    let n = bend.nrows();
-    let mut a = jtj.clone();
-    let mut g = jtr.clone();
-    for c in 0..2 {
-        let th = DVector::from_column_slice(&theta[c * n..(c + 1) * n]);
-        let bt = bend * th;
-        for i in 0..n {
-            g[c * n + i] += alpha * bt[i];
-            for j in 0..n {
-                a[(c * n + i, c * n + j)] += alpha * bend[(i, j)];
-            }
-        }
-    }
+/// The Levenberg–Marquardt step `−(A + damping)⁻¹ g` of the penalised problem (`A` its normal
+/// matrix with the bending, `g` its gradient), or `None` when the damped matrix is not positive
+/// definite.
+fn damped_step(normal: &Band, gradient: &[f64], lambda: f64) -> Option<Vec<f64>> {
+    let mut a = normal.clone();
     // The damping on the diagonal, with a floor so that control points no sensel sees (beyond
     // the footprint) stay where they are.
     let floor = 1e-6
-        * (0..a.nrows())
-            .map(|i| a[(i, i)])
+        * (0..a.len())
+            .map(|i| a.diagonal(i))
             .fold(0.0, f64::max)
             .max(1e-12);
-    for i in 0..a.nrows() {
-        a[(i, i)] += lambda * a[(i, i)].max(floor) + floor;
+    for i in 0..a.len() {
+        let d = a.diagonal(i);
+        a.add(i, i, lambda * d.max(floor) + floor);
     }
-    let step = a.cholesky()?.solve(&(-g));
+    let minus: Vec<f64> = gradient.iter().map(|g| -g).collect();
+    let step = a.cholesky()?.solve(&minus);
     step.iter().all(|v| v.is_finite()).then_some(step)
 }
 
@@ -423,6 +470,9 @@ mod tests {
             smoothing: 1e-4,
             blurs: [1.5, 0.0],
             iterations: 20,
+            fine_spacing: 0.0,
+            fine_smoothing: 0.0,
+            fine_iterations: 0,
             mask_weight: 0.0,
         };
         let images = WarpImages {
