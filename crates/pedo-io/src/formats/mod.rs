@@ -669,16 +669,37 @@ fn read_for_run_within(path: &Path, opts: &ReadOptions) -> Result<RunInput> {
         });
     };
     let (shape, source, sha256) = match sniffed.format {
-        Format::Npy => {
-            // The array is read at offsets, window by window: its digest is of the whole file,
-            // read once here; a change later is caught by the caller's size and time check.
+        format @ (Format::Npy | Format::Npz) => {
+            // The array is read at offsets (or inflated in order), window by window: its digest
+            // is of the whole file, read once here; a change later is caught by the caller's
+            // size and time check.
             let (mut bytes, sha, rest) = sniffed.hashed(&name)?;
             std::io::copy(&mut bytes, &mut std::io::sink())
                 .map_err(|e| stream::read_error(&name, e))?;
             let sha256 =
                 stamp::finish(&sha, Some(rest)).map_err(|e| stream::read_error(&name, e))?;
-            let mut npy = npy::NpyFile::open(path, &name)?;
-            (npy.shape()?, Source::Npy(npy), sha256)
+            let array = || -> Result<_> {
+                let mut npy = match format {
+                    Format::Npy => npy::NpyFile::open(path, &name)?,
+                    _ => npz::stream_array(path, &name, true)?,
+                };
+                Ok((npy.shape()?, npy))
+            };
+            match array() {
+                Ok((shape, npy)) => (shape, Source::Npy(npy), sha256),
+                // An archive the whole read refuses, or reads otherwise: its outcome is the
+                // whole read's.
+                Err(_) if format == Format::Npz => {
+                    let (recording, sha256) = read_hashed(path, opts)?;
+                    let frames = None;
+                    return Ok(RunInput {
+                        recording,
+                        frames,
+                        sha256,
+                    });
+                }
+                Err(e) => return Err(e),
+            }
         }
         format => {
             let csv = format == Format::TekscanCsv;
@@ -893,6 +914,7 @@ fn read_hashed_within(path: &Path, opts: &ReadOptions) -> Result<(Recording, Opt
 type SharedSha = std::rc::Rc<std::cell::RefCell<sha2::Sha256>>;
 
 struct Sniffed {
+    path: PathBuf,
     file: std::fs::File,
     head: Vec<u8>,
     /// The file's length in bytes.
@@ -934,6 +956,7 @@ impl Sniffed {
         let format =
             sniff_format(path, &head).map_err(|what| IoError::unknown_format(name, what))?;
         Ok(Self {
+            path: path.to_path_buf(),
             file,
             head,
             size: usize::try_from(size).unwrap_or(usize::MAX),
@@ -947,8 +970,9 @@ impl Sniffed {
     }
 
     /// Why a run that streams reads this file whole ([`why_read_whole`]); `None` for a
-    /// Tekscan `.asf` file or CSV export and a `.npy` array, not gzip-compressed (nor UTF-16):
-    /// the files a run reads again, window by window.
+    /// Tekscan `.asf` file or CSV export, a `.npy` array and a `.npz` archive whose array is
+    /// stored or deflated in C order, not gzip-compressed (nor UTF-16): the files a run reads
+    /// again, window by window.
     fn why_read_whole(&self) -> Option<String> {
         if self.is_gzip() {
             return Some("a gzip-compressed file is read whole".into());
@@ -958,6 +982,7 @@ impl Sniffed {
         }
         match self.format {
             Format::Asf | Format::TekscanCsv | Format::Npy => None,
+            Format::Npz => npz::why_read_whole(&self.path, &self.path.display().to_string()),
             Format::Csv | Format::Png | Format::Tiff => Some("a single frame is read whole".into()),
             f => Some(format!("the {} format is read whole", f.name())),
         }
