@@ -153,8 +153,9 @@ fn files_read_whole_say_why() {
     assert!(why.contains("gzip"), "{why}");
     let (_, frames) = read_for_streaming(&gz, &ReadOptions::default()).unwrap();
     assert!(frames.is_none());
-    let lst = why_read_whole(files::data("emed-test-1-10.lst")).unwrap();
-    assert!(lst.contains("the lst format"), "{lst}");
+    let pedar = why_read_whole(files::data("pedar-example-3.01-4.00.asc")).unwrap();
+    assert!(pedar.contains("the pedar format"), "{pedar}");
+    assert_eq!(why_read_whole(files::data("emed-test-1-10.lst")), None);
     let asf = files::data("FrasP01L.asf");
     assert_eq!(why_read_whole(asf), None);
     assert!(why_read_whole(&dir).unwrap().contains("folder"));
@@ -213,7 +214,10 @@ fn npz_members_read_window_by_window_are_the_whole_reads() {
     let path = dir.join("f.npz");
     std::fs::write(&path, zip(&[("frames.npy", array)], true, false)).unwrap();
     let why = why_read_whole(&path).unwrap();
-    assert!(why.contains("Fortran-order array in a deflated member"), "{why}");
+    assert!(
+        why.contains("Fortran-order array in a deflated member"),
+        "{why}"
+    );
     let (rec, frames) = read_for_streaming(&path, &ReadOptions::default()).unwrap();
     assert!(frames.is_none());
     assert_eq!(rec, read_recording(&path).unwrap());
@@ -246,15 +250,28 @@ fn a_streamed_npz_is_read_or_refused_as_the_whole_read() {
         npy((130, 3, 3), "<f8", fortran, value)
     };
     let cases = [
-        ("nan.npz", zip(&[("a.npy", bad(&some_nan, false))], false, false)),
-        ("nan_f.npz", zip(&[("a.npy", bad(&some_nan, true))], false, true)),
-        ("inf.npz", zip(&[("a.npy", bad(&infinite, false))], true, false)),
+        (
+            "nan.npz",
+            zip(&[("a.npy", bad(&some_nan, false))], false, false),
+        ),
+        (
+            "nan_f.npz",
+            zip(&[("a.npy", bad(&some_nan, true))], false, true),
+        ),
+        (
+            "inf.npz",
+            zip(&[("a.npy", bad(&infinite, false))], true, false),
+        ),
         // Its values flipped: a CRC mismatch, as the whole read finds it.
         ("crc.npz", corrupt),
         // The first array unreadable, the second read: the whole read's choice.
         (
             "second.npz",
-            zip(&[("a.npy", bad(&infinite, false)), ("b.npy", good)], false, false),
+            zip(
+                &[("a.npy", bad(&infinite, false)), ("b.npy", good)],
+                false,
+                false,
+            ),
         ),
     ];
     for (name, bytes) in cases {

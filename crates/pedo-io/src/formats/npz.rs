@@ -344,7 +344,12 @@ const MAX_DIRECTORY: u64 = 16 << 20;
 /// The archive's bytes from its central directory (or ZIP64 end record, wherever the first is)
 /// to its end, and where they begin.
 fn directory(file: &File, size: u64, name: &str) -> Result<(Vec<u8>, u64)> {
-    let corrupt = || IoError::format(name, "corrupt zip archive: no end of central directory record");
+    let corrupt = || {
+        IoError::format(
+            name,
+            "corrupt zip archive: no end of central directory record",
+        )
+    };
     let mut base = size.saturating_sub(22 + 65_535 + 20);
     // Each round reads from further back: the end record, the ZIP64 record, the directory.
     for _ in 0..4 {

@@ -65,4 +65,3 @@ pub fn zip(members: &[(&str, Vec<u8>)], deflate: bool, zip64: bool) -> Vec<u8> {
     out.extend_from_slice(&0u16.to_le_bytes());
     out
 }
-
