@@ -51,7 +51,11 @@ fn lst_frames_read_as_they_are_parsed_are_the_whole_reads() {
             back.extend_from_slice(&frames.window(&header, w0, w1).unwrap().data());
         }
         let per = held.rows() * held.cols();
-        assert_eq!(back, held.data()[from * per..].to_vec(), "from frame {from}");
+        assert_eq!(
+            back,
+            held.data()[from * per..].to_vec(),
+            "from frame {from}"
+        );
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

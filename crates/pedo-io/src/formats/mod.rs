@@ -1006,7 +1006,10 @@ impl Sniffed {
             Format::Asf | Format::TekscanCsv | Format::Lst | Format::Npy => None,
             Format::Npz => npz::why_read_whole(&self.path, &self.path.display().to_string()),
             Format::Csv | Format::Png | Format::Tiff => Some("a single frame is read whole".into()),
-            f => Some(format!("the {} format is read whole", f.name())),
+            f => Some(format!(
+                "the {} format is read whole (its reader does not yet hand frames on as it parses)",
+                f.name()
+            )),
         }
     }
 
