@@ -1,7 +1,8 @@
-//! A `.npy` array read for a streamed run (`read_for_streaming`): its shape, sensor mask and
-//! values below 0 as the whole read finds them, its frames read back window by window equal to
-//! the whole read's, in C and Fortran order and several dtypes; a file that is read whole says
-//! why (`why_read_whole`).
+//! A `.npy` array, or a `.npz` archive's, read for a streamed run (`read_for_streaming`): its
+//! shape, sensor mask and values below 0 as the whole read finds them, its frames read back
+//! window by window equal to the whole read's, in C and Fortran order, several dtypes, stored
+//! and deflated members; a bad array refused with the whole read's error; a file that is read
+//! whole says why (`why_read_whole`).
 
 use pedo_io::formats::{read_for_streaming, why_read_whole, ReadOptions};
 use pedo_io::{read_recording, FrameSource, FRAME_WINDOW};
@@ -9,6 +10,9 @@ use pedo_io::{read_recording, FrameSource, FRAME_WINDOW};
 #[path = "common/files.rs"]
 mod files;
 use files::temp_dir;
+#[path = "common/zip.rs"]
+mod zip_file;
+use zip_file::zip;
 
 /// A `.npy` file of shape `(t, r, c)` whose value at `[i, j, k]` is `value(i, j, k)`, stored in
 /// C or Fortran order as `descr` (`<f4`, `>i2`, `<f8`).
@@ -149,10 +153,138 @@ fn files_read_whole_say_why() {
     assert!(why.contains("gzip"), "{why}");
     let (_, frames) = read_for_streaming(&gz, &ReadOptions::default()).unwrap();
     assert!(frames.is_none());
-    let lst = why_read_whole(files::data("emed-test-1-10.lst")).unwrap();
-    assert!(lst.contains("the lst format"), "{lst}");
+    let pedar = why_read_whole(files::data("pedar-example-3.01-4.00.asc")).unwrap();
+    assert!(pedar.contains("the pedar format"), "{pedar}");
+    assert_eq!(why_read_whole(files::data("emed-test-1-10.lst")), None);
     let asf = files::data("FrasP01L.asf");
     assert_eq!(why_read_whole(asf), None);
     assert!(why_read_whole(&dir).unwrap().contains("folder"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Frames `from..` of the file at `path` read for a streamed run, window by window from
+/// `from`, with the recording read so.
+fn streamed_frames(path: &std::path::Path, from: usize) -> (pedo_io::Recording, Vec<f32>) {
+    let (header, frames) = read_for_streaming(path, &ReadOptions::default()).unwrap();
+    let mut frames = frames.expect("streamed");
+    let mut back = Vec::new();
+    let n = header.n_frames();
+    for w0 in (from..n).step_by(FRAME_WINDOW) {
+        let w1 = (w0 + FRAME_WINDOW).min(n);
+        let window = frames.window(&header, w0, w1).unwrap();
+        assert_eq!(window.n_frames(), w1 - w0);
+        back.extend_from_slice(&window.data());
+    }
+    (header, back)
+}
+
+#[test]
+fn npz_members_read_window_by_window_are_the_whole_reads() {
+    let dir = temp_dir("npz-stream");
+    let shape = (2 * FRAME_WINDOW + 13, 5, 4);
+    // A 1-D member first, which the whole read skips (as the streamed one must).
+    let labels = npy_1d();
+    for (deflate, zip64, fortran) in [
+        (false, false, false),
+        (false, true, true),
+        (true, false, false),
+        (true, true, false),
+    ] {
+        let what = format!("deflate={deflate} zip64={zip64} fortran={fortran}");
+        let array = npy(shape, "<f4", fortran, pressure(true));
+        let members = [("labels.npy", labels.clone()), ("frames.npy", array)];
+        let path = dir.join("a.npz");
+        std::fs::write(&path, zip(&members, deflate, zip64)).unwrap();
+        let held = read_recording(&path).unwrap();
+        assert_eq!(why_read_whole(&path), None, "{what}");
+        let (header, back) = streamed_frames(&path, 0);
+        assert_eq!(header.n_frames(), held.n_frames(), "{what}");
+        assert_eq!(header.sensor_mask(), held.sensor_mask(), "{what}");
+        assert_eq!(header.negative_values(), held.negative_values(), "{what}");
+        assert_eq!(header.format, held.format, "{what}");
+        assert!(header.frames_bytes() * 5 < held.frames_bytes(), "{what}");
+        assert_eq!(back, held.data().to_vec(), "{what}");
+        // A run from a later frame: the windows before it skipped (inflated and dropped).
+        let from = FRAME_WINDOW + 3;
+        let (_, later) = streamed_frames(&path, from);
+        assert_eq!(later, held.data()[from * 20..].to_vec(), "{what}");
+    }
+    // A deflated Fortran-order array is read whole, saying why, with the whole read's frames.
+    let array = npy(shape, "<f8", true, pressure(false));
+    let path = dir.join("f.npz");
+    std::fs::write(&path, zip(&[("frames.npy", array)], true, false)).unwrap();
+    let why = why_read_whole(&path).unwrap();
+    assert!(
+        why.contains("Fortran-order array in a deflated member"),
+        "{why}"
+    );
+    let (rec, frames) = read_for_streaming(&path, &ReadOptions::default()).unwrap();
+    assert!(frames.is_none());
+    assert_eq!(rec, read_recording(&path).unwrap());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A 1-D `.npy` array of two `<f4` zeros (no recording).
+fn npy_1d() -> Vec<u8> {
+    let dict = "{'descr': '<f4', 'fortran_order': False, 'shape': (2,), }";
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend_from_slice(&(dict.len() as u16 + 1).to_le_bytes());
+    out.extend_from_slice(dict.as_bytes());
+    out.push(b'\n');
+    out.extend_from_slice(&[0; 8]);
+    out
+}
+
+#[test]
+fn a_streamed_npz_is_read_or_refused_as_the_whole_read() {
+    let dir = temp_dir("npz-stream-bad");
+    let some_nan = |i, j, k| match (i, j, k) {
+        (70, 1, 1) => f64::NAN,
+        _ => 1.0,
+    };
+    let infinite = |i, _, _| if i == 100 { f64::INFINITY } else { 1.0 };
+    let good = npy((130, 3, 3), "<f8", false, pressure(false));
+    let mut corrupt = zip(&[("frames.npy", good.clone())], false, false);
+    corrupt[200] ^= 0xff;
+    let bad = |value: &dyn Fn(usize, usize, usize) -> f64, fortran| {
+        npy((130, 3, 3), "<f8", fortran, value)
+    };
+    let cases = [
+        (
+            "nan.npz",
+            zip(&[("a.npy", bad(&some_nan, false))], false, false),
+        ),
+        (
+            "nan_f.npz",
+            zip(&[("a.npy", bad(&some_nan, true))], false, true),
+        ),
+        (
+            "inf.npz",
+            zip(&[("a.npy", bad(&infinite, false))], true, false),
+        ),
+        // Its values flipped: a CRC mismatch, as the whole read finds it.
+        ("crc.npz", corrupt),
+        // The first array unreadable, the second read: the whole read's choice.
+        (
+            "second.npz",
+            zip(
+                &[("a.npy", bad(&infinite, false)), ("b.npy", good)],
+                false,
+                false,
+            ),
+        ),
+    ];
+    for (name, bytes) in cases {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let streamed = read_for_streaming(&path, &ReadOptions::default());
+        match read_recording(&path) {
+            Ok(whole) => assert_eq!(streamed.unwrap().0, whole, "{name}"),
+            Err(whole) => {
+                let e = streamed.err().unwrap();
+                assert_eq!(e.to_string(), whole.to_string(), "{name}");
+            }
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

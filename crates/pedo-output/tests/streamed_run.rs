@@ -315,7 +315,7 @@ fn a_recording_read_for_streaming_holds_no_values_but_its_shape() {
     assert_eq!((shape.pitch_mm, shape.dt_s), (held.pitch_mm, held.dt_s));
     assert_eq!(shape.units, held.units);
     assert!(shape.frames_bytes() * 20 < held.frames_bytes());
-    // A .npy array is read as the run goes too; an emed .lst file is read whole.
+    // A .npy array and an emed .lst are read as the run goes too; a pedar file is read whole.
     let dir = temp_dir("npy");
     let npy = dir.join("walk.npy");
     pedo_io::formats::npy::write_npy(&held, &npy).unwrap();
@@ -323,8 +323,12 @@ fn a_recording_read_for_streaming_holds_no_values_but_its_shape() {
     assert!(frames.is_some());
     assert_eq!(shape.sensor_mask(), held.sensor_mask());
     let lst = files::data("emed-test-1-10.lst");
-    let (whole, none) = read_for_streaming(&lst, &ReadOptions::default()).unwrap();
+    let (shape, frames) = read_for_streaming(&lst, &ReadOptions::default()).unwrap();
+    assert!(frames.is_some());
+    assert_eq!(shape.n_frames(), read_recording(&lst).unwrap().n_frames());
+    let pedar = files::data("pedar-example-3.01-4.00.asc");
+    let (whole, none) = read_for_streaming(&pedar, &ReadOptions::default()).unwrap();
     assert!(none.is_none());
-    assert_eq!(whole.data(), read_recording(&lst).unwrap().data());
+    assert_eq!(whole.data(), read_recording(&pedar).unwrap().data());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1,10 +1,10 @@
 //! novel emed ASCII page export (`.lst`): Latin-1 text, one page per picture separated by form
 //! feeds; each page prints a window of rows and columns of the full `Matrix: CxR` plate.
 
-use super::asf::trunc;
+use super::asf::{trunc, Keep};
 use super::parse_num;
 use crate::error::{IoError, Result};
-use crate::recording::{Format, Recording, SparseFrames};
+use crate::recording::{Format, NegativeValues, Recording, SparseFrames};
 
 /// What a `.lst` page prints besides the pressures: the forces the export computed itself.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -276,7 +276,17 @@ pub(crate) fn read_lst(
     lines: impl Iterator<Item = (usize, String)>,
     name: &str,
 ) -> Result<(Recording, Vec<LstPageForces>)> {
-    let mut pages = Pages::new(name);
+    read_lst_keeping(lines, name, &mut Keep::All)
+}
+
+/// [`read_lst`], each picture kept or handed on as `keep` says (handed: neither its values nor
+/// its printed forces held).
+pub(crate) fn read_lst_keeping(
+    lines: impl Iterator<Item = (usize, String)>,
+    name: &str,
+    keep: &mut Keep<'_>,
+) -> Result<(Recording, Vec<LstPageForces>)> {
+    let mut pages = Pages::new(name, keep);
     let mut page = Page::starting_at(1);
     for (ln, raw) in lines {
         let mut parts = raw.split('\x0c');
@@ -294,8 +304,11 @@ pub(crate) fn read_lst(
 
 /// The pages read so far: placed on the plate (the first page's `Matrix`) as frames, or, before
 /// a page has stated the plate, kept until one does.
-struct Pages<'a> {
+struct Pages<'a, 'k, 'h> {
     name: &'a str,
+    keep: &'k mut Keep<'h>,
+    /// The values below 0 of the pictures handed on (not kept: counted as they pass).
+    negatives: NegativeValues,
     /// The plate, `(cols, rows)`, once a page has stated it.
     plate: Option<(usize, usize)>,
     pending: Vec<Page>,
@@ -307,10 +320,12 @@ struct Pages<'a> {
     size_cm: Option<(f64, f64)>,
 }
 
-impl<'a> Pages<'a> {
-    fn new(name: &'a str) -> Self {
+impl<'a, 'k, 'h> Pages<'a, 'k, 'h> {
+    fn new(name: &'a str, keep: &'k mut Keep<'h>) -> Self {
         Pages {
             name,
+            keep,
+            negatives: NegativeValues::default(),
             plate: None,
             pending: Vec::new(),
             frames: None,
@@ -331,7 +346,9 @@ impl<'a> Pages<'a> {
         self.area_cm2 = self.area_cm2.or(pg.area_cm2);
         self.dt_ms = self.dt_ms.or(pg.dt_ms);
         self.size_cm = self.size_cm.or(pg.size_cm);
-        self.forces.push(std::mem::take(&mut pg.forces));
+        if matches!(self.keep, Keep::All) {
+            self.forces.push(std::mem::take(&mut pg.forces));
+        }
         if self.plate.is_none()
             && let Some((c, r, _)) = pg.matrix
         {
@@ -366,8 +383,23 @@ impl<'a> Pages<'a> {
             return Ok(());
         };
         crate::limits::check_frames(self.name, frames.n_frames() + 1, rows * cols)?;
-        frames.push_entries(&mut pg.entries(cols, rows, self.name)?);
-        Ok(())
+        let mut entries = pg.entries(cols, rows, self.name)?;
+        let hand = match self.keep {
+            Keep::All => {
+                frames.push_entries(&mut entries);
+                return Ok(());
+            }
+            Keep::Handed(hand) => hand,
+        };
+        // A cell printed twice holds its last value, as the frames kept hold it.
+        let mut frame = vec![0.0f32; rows * cols];
+        entries.iter().for_each(|&(i, v)| frame[i] = v);
+        frame.iter().for_each(|&v| self.negatives.add(v));
+        frames.push_empty();
+        match hand {
+            Some(hand) => hand(&frame),
+            None => Ok(()),
+        }
     }
 
     fn finish(self) -> Result<(Recording, Vec<LstPageForces>)> {
@@ -378,6 +410,9 @@ impl<'a> Pages<'a> {
             return Err(IoError::format(self.name, "no `Matrix: CxR` line"));
         };
         let mut rec = Recording::from_sparse(rows, cols, frames, vec![true; rows * cols])?;
+        if let Keep::Handed(_) = self.keep {
+            rec.set_file_negatives(self.negatives);
+        }
         rec.sensel_area_mm2 = self.area_cm2.map(|a| a * 100.0);
         rec.dt_s = self.dt_ms.map(|ms| ms / 1000.0);
         rec.pitch_mm = self.size_cm.map(|(x, y)| [x * 10.0, y * 10.0]);

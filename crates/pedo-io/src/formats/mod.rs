@@ -680,27 +680,46 @@ fn read_for_run_within(path: &Path, opts: &ReadOptions) -> Result<RunInput> {
         });
     };
     let (shape, source, sha256) = match sniffed.format {
-        Format::Npy => {
-            // The array is read at offsets, window by window: its digest is of the whole file,
-            // read once here; a change later is caught by the caller's size and time check.
+        format @ (Format::Npy | Format::Npz) => {
+            // The array is read at offsets (or inflated in order), window by window: its digest
+            // is of the whole file, read once here; a change later is caught by the caller's
+            // size and time check.
             let (mut bytes, sha, rest) = sniffed.hashed(&name)?;
             std::io::copy(&mut bytes, &mut std::io::sink())
                 .map_err(|e| stream::read_error(&name, e))?;
             let sha256 =
                 stamp::finish(&sha, Some(rest)).map_err(|e| stream::read_error(&name, e))?;
-            let mut npy = npy::NpyFile::open(path, &name)?;
-            (npy.shape()?, Source::Npy(npy), sha256)
+            let array = || -> Result<_> {
+                let mut npy = match format {
+                    Format::Npy => npy::NpyFile::open(path, &name)?,
+                    _ => npz::stream_array(path, &name, true)?,
+                };
+                Ok((npy.shape()?, npy))
+            };
+            match array() {
+                Ok((shape, npy)) => (shape, Source::Npy(npy), sha256),
+                // An archive the whole read refuses, or reads otherwise: its outcome is the
+                // whole read's.
+                Err(_) if format == Format::Npz => {
+                    let (recording, sha256) = read_hashed(path, opts)?;
+                    let frames = None;
+                    return Ok(RunInput {
+                        recording,
+                        frames,
+                        sha256,
+                    });
+                }
+                Err(e) => return Err(e),
+            }
         }
         format => {
-            let csv = format == Format::TekscanCsv;
             let size = sniffed.size;
             let (bytes, sha, rest) = sniffed.hashed(&name)?;
-            let lines = stream::bounded(bytes, false, stream::Stretch::Line);
-            let shape = asf::read_tekscan(lines, size, &name, csv, &mut asf::Keep::Handed(None))?;
+            let text = Text { format, size };
+            let shape = text.read(bytes, &name, &mut asf::Keep::Handed(None))?;
             let sha256 =
                 stamp::finish(&sha, Some(rest)).map_err(|e| stream::read_error(&name, e))?;
-            let source =
-                Source::tekscan(path.to_path_buf(), name.clone(), size, csv, opts.limits());
+            let source = Source::text(path.to_path_buf(), name.clone(), text, opts.limits());
             (shape, source, sha256)
         }
     };
@@ -737,16 +756,16 @@ pub struct FileFrames {
     /// The number of the next frame to come.
     next: usize,
     name: String,
-    /// The digest of the first reading, which the second one (a Tekscan file's reading thread
+    /// The digest of the first reading, which the second one (a text file's reading thread
     /// sends it after the last frame) must equal.
     expected: Option<String>,
 }
 
 /// Where a [`FileFrames`] reads its frames.
 enum Source {
-    /// A Tekscan file parsed again by a thread of its own, handing its frames one by one and,
-    /// after the last, the SHA-256 of the bytes it read.
-    Tekscan {
+    /// A text file (Tekscan `.asf` or CSV export, emed `.lst`) parsed again by a thread of its
+    /// own, handing its frames one by one and, after the last, the SHA-256 of the bytes it read.
+    Text {
         frames: std::sync::mpsc::Receiver<Result<Vec<f32>>>,
         digest: std::sync::mpsc::Receiver<String>,
     },
@@ -754,14 +773,39 @@ enum Source {
     Npy(npy::NpyFile),
 }
 
+/// A text format a run reads as it goes, parsed again by a thread of its own ([`Source::Text`]).
+#[derive(Clone, Copy)]
+struct Text {
+    format: Format,
+    /// The file's length in bytes.
+    size: usize,
+}
+
+impl Text {
+    /// The recording in `bytes` (the file from its start), each frame kept or handed on as
+    /// `keep` says.
+    fn read(
+        self,
+        bytes: impl std::io::Read,
+        name: &str,
+        keep: &mut asf::Keep<'_>,
+    ) -> Result<Recording> {
+        let lines = stream::bounded(bytes, false, stream::Stretch::Line);
+        match self.format {
+            Format::Lst => {
+                stream::parse_lines(lines, name, |l| lst::read_lst_keeping(l, name, keep))
+                    .map(|(r, _)| r)
+            }
+            format => {
+                let csv = format == Format::TekscanCsv;
+                asf::read_tekscan(lines, self.size, name, csv, keep)
+            }
+        }
+    }
+}
+
 impl Source {
-    fn tekscan(
-        path: PathBuf,
-        name: String,
-        size: usize,
-        csv: bool,
-        limits: crate::limits::Limits,
-    ) -> Self {
+    fn text(path: PathBuf, name: String, text: Text, limits: crate::limits::Limits) -> Self {
         let (send, frames) = std::sync::mpsc::sync_channel(crate::recording::FRAME_WINDOW);
         let (send_digest, digest) = std::sync::mpsc::sync_channel(1);
         std::thread::spawn(move || {
@@ -774,13 +818,12 @@ impl Source {
                 let rest = file.try_clone().map_err(io)?;
                 let sha = SharedSha::default();
                 let hashed = stamp::Hashing::new(file, &sha);
-                let lines = stream::bounded(hashed, false, stream::Stretch::Line);
                 let mut hand = |frame: &[f32]| -> Result<()> {
                     send.send(Ok(frame.to_vec()))
                         .map_err(|_| IoError::invalid("the run stopped reading"))
                 };
                 let mut keep = asf::Keep::Handed(Some(&mut hand));
-                asf::read_tekscan(lines, size, &name, csv, &mut keep)?;
+                text.read(hashed, &name, &mut keep)?;
                 stamp::finish(&sha, Some(rest)).map_err(|e| stream::read_error(&name, e))
             };
             match limits.apply(read) {
@@ -788,7 +831,7 @@ impl Source {
                 Err(e) => drop(send.send(Err(e))),
             }
         });
-        Source::Tekscan { frames, digest }
+        Source::Text { frames, digest }
     }
 }
 
@@ -797,7 +840,7 @@ impl FileFrames {
     fn values(&mut self, w0: usize, w1: usize, per: usize) -> Result<Vec<f32>> {
         let frames = match &mut self.source {
             Source::Npy(npy) => return npy.window(w0, w1),
-            Source::Tekscan { frames, .. } => frames,
+            Source::Text { frames, .. } => frames,
         };
         let mut data = Vec::with_capacity((w1 - w0) * per);
         while self.next < w1 {
@@ -815,14 +858,14 @@ impl FileFrames {
         Ok(data)
     }
 
-    /// Once the file's last frame has been handed over: fails unless a Tekscan file's second
+    /// Once the file's last frame has been handed over: fails unless a text file's second
     /// reading gave the first one's digest (a file rewritten between them, even to its old size
     /// and time).
     fn check_digest(&mut self) -> Result<()> {
         let Some(expected) = self.expected.take() else {
             return Ok(());
         };
-        let Source::Tekscan { frames, digest } = &self.source else {
+        let Source::Text { frames, digest } = &self.source else {
             return Ok(());
         };
         // Frames after the last (none in a file read whole before) or the reading's error.
@@ -919,6 +962,7 @@ fn read_hashed_within(path: &Path, opts: &ReadOptions) -> Result<(Recording, Opt
 type SharedSha = std::rc::Rc<std::cell::RefCell<sha2::Sha256>>;
 
 struct Sniffed {
+    path: PathBuf,
     file: std::fs::File,
     head: Vec<u8>,
     /// The file's length in bytes.
@@ -960,6 +1004,7 @@ impl Sniffed {
         let format =
             sniff_format(path, &head).map_err(|what| IoError::unknown_format(name, what))?;
         Ok(Self {
+            path: path.to_path_buf(),
             file,
             head,
             size: usize::try_from(size).unwrap_or(usize::MAX),
@@ -973,8 +1018,9 @@ impl Sniffed {
     }
 
     /// Why a run that streams reads this file whole ([`why_read_whole`]); `None` for a
-    /// Tekscan `.asf` file or CSV export and a `.npy` array, not gzip-compressed (nor UTF-16):
-    /// the files a run reads again, window by window.
+    /// Tekscan `.asf` file or CSV export, an emed `.lst`, a `.npy` array and a `.npz` archive whose array is
+    /// stored or deflated in C order, not gzip-compressed (nor UTF-16): the files a run reads
+    /// again, window by window.
     fn why_read_whole(&self) -> Option<String> {
         if self.is_gzip() {
             return Some("a gzip-compressed file is read whole".into());
@@ -983,9 +1029,13 @@ impl Sniffed {
             return Some("a UTF-16 text file is read whole".into());
         }
         match self.format {
-            Format::Asf | Format::TekscanCsv | Format::Npy => None,
+            Format::Asf | Format::TekscanCsv | Format::Lst | Format::Npy => None,
+            Format::Npz => npz::why_read_whole(&self.path, &self.path.display().to_string()),
             Format::Csv | Format::Png | Format::Tiff => Some("a single frame is read whole".into()),
-            f => Some(format!("the {} format is read whole", f.name())),
+            f => Some(format!(
+                "the {} format is read whole (its reader does not yet hand frames on as it parses)",
+                f.name()
+            )),
         }
     }
 

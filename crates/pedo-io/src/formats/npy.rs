@@ -161,6 +161,19 @@ const MAX_FORTRAN_STREAM: usize = 256 << 20;
 /// `size` bytes: only its frames (sparse) are held, not its data.
 pub(crate) fn read_npy(source: &mut dyn Read, size: u64, name: &str) -> Result<Recording> {
     let fail = |msg: String| IoError::format(name, msg);
+    let (h, data_start) = read_head(source, size, &fail)?;
+    let dims = dims(&h, &fail)?;
+    check_body(&h, size.saturating_sub(data_start as u64), &fail)?;
+    read_body(&h, dims, Body::Stream(source), name)
+}
+
+/// The header of a `.npy` array read from the start of `source`, whose stated length is `size`
+/// bytes, and where its data begin; `source` is left at the data.
+fn read_head(
+    source: &mut dyn Read,
+    size: u64,
+    fail: &impl Fn(String) -> IoError,
+) -> Result<(NpyHeader, usize)> {
     let mut some = |n: usize| -> Result<Vec<u8>> {
         let mut v = Vec::new();
         (&mut *source)
@@ -176,14 +189,11 @@ pub(crate) fn read_npy(source: &mut dyn Read, size: u64, name: &str) -> Result<R
     // NumPy writes a header of about a hundred bytes.
     let end = header_end(&head).filter(|&e| e <= (1 << 20) && e as u64 <= size);
     let Some(end) = end else {
-        read_header(&head, &fail)?;
+        read_header(&head, fail)?;
         return Err(fail("truncated header".into()));
     };
     head.extend(some(end.saturating_sub(head.len()))?);
-    let (h, data_start) = read_header(&head, &fail)?;
-    let dims = dims(&h, &fail)?;
-    check_body(&h, size.saturating_sub(data_start as u64), &fail)?;
-    read_body(&h, dims, Body::Stream(source), name)
+    read_header(&head, fail)
 }
 
 /// Where the header of a `.npy` whose first bytes are `b` ends, when they show it.
@@ -307,54 +317,111 @@ fn read_body(
 }
 
 /// A `.npy` array in a file, read window of frames by window as a streamed run asks for them
-/// ([`super::FileFrames`]): never more than a window's values held. A C-order array's frames
-/// are contiguous (one read a window); a Fortran-order array's values of one sensor are, so a
-/// window is one read of its frames per sensor, in file order.
+/// ([`super::FileFrames`]): never more than a window's values held. A `.npy` file's array, or a
+/// stored `.npz` member's, is read at offsets: a C-order array's frames are contiguous (one read
+/// a window); a Fortran-order array's values of one sensor are, so a window is one read of its
+/// frames per sensor, in file order. A deflated member's C-order array is inflated from its
+/// start, a window at a time, in order.
 pub(crate) struct NpyFile {
-    file: std::fs::File,
+    data: Data,
     h: NpyHeader,
     dims: (usize, usize, usize),
-    /// Where the data begin in the file.
-    data: u64,
     name: String,
+    format: Format,
+}
+
+/// Reopens a deflated `.npz` member: its array's bytes from the start, inflated as they are read
+/// (its length and CRC-32 checked once the last is read).
+pub(crate) type Reopen = Box<dyn FnMut() -> Result<Box<dyn Read + Send>> + Send>;
+
+/// Where an [`NpyFile`] reads its values.
+enum Data {
+    /// At offsets of a file: the values begin at `at`.
+    Seek { file: std::fs::File, at: u64 },
+    /// Inflated in order: `reader` is at the start of frame `next`; the values begin `at`
+    /// bytes into the member.
+    Inflate {
+        reopen: Reopen,
+        reader: Box<dyn Read + Send>,
+        next: usize,
+        at: usize,
+    },
 }
 
 impl NpyFile {
     /// The array of the `.npy` file at `path`, its header read and its length checked.
     pub(crate) fn open(path: &Path, name: &str) -> Result<Self> {
-        let fail = |msg: String| IoError::format(name, msg);
         let io = |source| IoError::Io {
             path: name.to_string(),
             source,
         };
         let file = std::fs::File::open(path).map_err(io)?;
         let size = file.metadata().map_err(io)?.len();
-        let mut head = Vec::new();
-        (&file).take(12).read_to_end(&mut head).map_err(io)?;
-        // NumPy writes a header of about a hundred bytes.
-        let end = header_end(&head).filter(|&e| e <= (1 << 20) && e as u64 <= size);
-        let Some(end) = end else {
-            read_header(&head, &fail)?;
-            return Err(fail("truncated header".into()));
-        };
+        Self::at(file, 0, size, name, Format::Npy)
+    }
+
+    /// The array that fills `len` bytes of `file` from `base` (a stored `.npz` member), its
+    /// header read and its length checked.
+    pub(crate) fn at(
+        mut file: std::fs::File,
+        base: u64,
+        len: u64,
+        name: &str,
+        format: Format,
+    ) -> Result<Self> {
+        use std::io::{Seek, SeekFrom};
+        let fail = |msg: String| IoError::format(name, msg);
         (&file)
-            .take((end - head.len()) as u64)
-            .read_to_end(&mut head)
-            .map_err(io)?;
-        let (h, data) = read_header(&head, &fail)?;
+            .seek(SeekFrom::Start(base))
+            .map_err(|e| fail(format!("cannot read the array: {e}")))?;
+        let (h, data) = read_head(&mut file, len, &fail)?;
         let dims = dims(&h, &fail)?;
-        check_body(&h, size - data as u64, &fail)?;
-        Ok(Self {
+        check_body(&h, len - data as u64, &fail)?;
+        let data = Data::Seek {
             file,
+            at: base + data as u64,
+        };
+        let name = name.to_string();
+        Ok(Self {
+            data,
             h,
             dims,
-            data: data as u64,
-            name: name.to_string(),
+            name,
+            format,
+        })
+    }
+
+    /// The C-order array of a deflated `.npz` member of `len` bytes (inflated), its header read
+    /// and its length checked; a Fortran-order one is an error (its frames are spread over all
+    /// of it: it is read whole).
+    pub(crate) fn inflated(mut reopen: Reopen, len: u64, name: &str) -> Result<Self> {
+        let fail = |msg: String| IoError::format(name, msg);
+        let mut reader = reopen()?;
+        let (h, at) = read_head(&mut reader, len, &fail)?;
+        let dims = dims(&h, &fail)?;
+        check_body(&h, len - at as u64, &fail)?;
+        if h.fortran {
+            return Err(fail(FORTRAN_DEFLATED.into()));
+        }
+        let data = Data::Inflate {
+            reopen,
+            reader,
+            next: 0,
+            at,
+        };
+        let name = name.to_string();
+        Ok(Self {
+            data,
+            h,
+            dims,
+            name,
+            format: Format::Npz,
         })
     }
 
     /// Frames `w0..w1` (within the array), their values in C order, NaN where the array holds
-    /// NaN; an infinite value or one beyond float32's range is an error, as read whole.
+    /// NaN; an infinite value or one beyond float32's range is an error, as read whole. An
+    /// inflated array's windows come in order.
     pub(crate) fn window(&mut self, w0: usize, w1: usize) -> Result<Vec<f32>> {
         use std::io::{Seek, SeekFrom};
         let (t, r, c) = self.dims;
@@ -362,29 +429,76 @@ impl NpyFile {
         let fail = |msg: String| IoError::format(&self.name, msg);
         let read_fail = |e: std::io::Error| fail(format!("cannot read the array: {e}"));
         let mut out = vec![0.0f32; n * per];
-        if !self.h.fortran {
-            let mut raw = vec![0u8; n * per * size];
-            let at = self.data + (w0 * per * size) as u64;
-            self.file.seek(SeekFrom::Start(at)).map_err(read_fail)?;
-            self.file.read_exact(&mut raw).map_err(read_fail)?;
-            for (v, chunk) in out.iter_mut().zip(raw.chunks_exact(size)) {
-                *v = value(chunk, &self.h, &fail)?;
+        let frame_bytes = (per * size) as u64;
+        let file = match &mut self.data {
+            Data::Seek { file, at } if self.h.fortran => (file, *at),
+            Data::Seek { file, at } => {
+                let mut raw = vec![0u8; n * per * size];
+                file.seek(SeekFrom::Start(*at + w0 as u64 * frame_bytes))
+                    .map_err(read_fail)?;
+                file.read_exact(&mut raw).map_err(read_fail)?;
+                return self.decode_into(&raw, out);
             }
-            return Ok(out);
-        }
+            Data::Inflate { reader, next, .. } => {
+                if w0 < *next {
+                    return Err(fail(format!("frames {w0}..{w1} asked for after {next}")));
+                }
+                let skip = (w0 - *next) as u64 * frame_bytes;
+                let skipped = std::io::copy(&mut (&mut *reader).take(skip), &mut std::io::sink());
+                let mut raw = vec![0u8; n * per * size];
+                skipped
+                    .and_then(|_| reader.read_exact(&mut raw))
+                    .map_err(read_fail)?;
+                // After the last frame: the member's length and CRC-32, checked at its end.
+                if w1 == t {
+                    let mut rest = Vec::new();
+                    reader.read_to_end(&mut rest).map_err(read_fail)?;
+                }
+                *next = w1;
+                return self.decode_into(&raw, out);
+            }
+        };
         // Fortran layout: index (i, j, k) of shape (t, r, c) sits at i + t * (j + r * k).
+        let (file, at) = file;
         let mut raw = vec![0u8; n * size];
         for k in 0..c {
             for j in 0..r {
-                let at = self.data + ((w0 + t * (j + r * k)) * size) as u64;
-                self.file.seek(SeekFrom::Start(at)).map_err(read_fail)?;
-                self.file.read_exact(&mut raw).map_err(read_fail)?;
+                let from = at + ((w0 + t * (j + r * k)) * size) as u64;
+                file.seek(SeekFrom::Start(from)).map_err(read_fail)?;
+                file.read_exact(&mut raw).map_err(read_fail)?;
                 for (i, chunk) in raw.chunks_exact(size).enumerate() {
                     out[i * per + j * c + k] = value(chunk, &self.h, &fail)?;
                 }
             }
         }
         Ok(out)
+    }
+
+    /// `raw`'s values (C order) into `out`.
+    fn decode_into(&self, raw: &[u8], mut out: Vec<f32>) -> Result<Vec<f32>> {
+        let fail = |msg: String| IoError::format(&self.name, msg);
+        for (v, chunk) in out.iter_mut().zip(raw.chunks_exact(self.h.size)) {
+            *v = value(chunk, &self.h, &fail)?;
+        }
+        Ok(out)
+    }
+
+    /// An inflated array read again from its first frame.
+    fn rewind(&mut self) -> Result<()> {
+        if let Data::Inflate {
+            reopen,
+            reader,
+            next,
+            at,
+        } = &mut self.data
+        {
+            let mut fresh = reopen()?;
+            let mut head = (&mut fresh).take(*at as u64);
+            std::io::copy(&mut head, &mut std::io::sink())
+                .map_err(|e| IoError::format(&self.name, format!("cannot read the array: {e}")))?;
+            (*reader, *next) = (fresh, 0);
+        }
+        Ok(())
     }
 
     /// The array as a recording without its values (see [`super::read_for_streaming`]): every
@@ -419,10 +533,15 @@ impl NpyFile {
         let mask = nans.iter().map(|&n| n == 0).collect();
         let mut rec = Recording::from_sparse(r, c, frames, mask)?;
         rec.set_file_negatives(negatives);
-        rec.format = Some(Format::Npy);
+        rec.format = Some(self.format);
+        self.rewind()?;
         Ok(rec)
     }
 }
+
+/// Why a deflated member's Fortran-order array is read whole.
+pub(crate) const FORTRAN_DEFLATED: &str =
+    "a Fortran-order array in a deflated member is read whole (its frames are spread over all of it)";
 
 /// `n` bytes of `source` (a Fortran-order array's data).
 fn read_whole(source: &mut dyn Read, n: usize, name: &str) -> Result<Vec<u8>> {
