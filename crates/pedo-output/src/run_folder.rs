@@ -23,6 +23,7 @@ use pedo_io::recording::FrameMeasures;
 use pedo_io::recording::Recording;
 use pedo_io::FrameSource;
 use pedo_io::{IoError, Result};
+use pedo_track::follow::FollowSink;
 use pedo_track::{
     replay, require_objects, stream_sequence, Collect, NoSink, ObjectModel, PairMatch, RunCounts,
     RunParams, SequenceObject, SequenceOptions, SequenceResult, SequenceSink, Stage,
@@ -700,6 +701,12 @@ impl SequenceSink for WithMeasures<'_> {
     fn pair(&mut self, pair: &PairMatch, a: &SequenceObject, b: &SequenceObject) -> Result<()> {
         self.also.pair(pair, a, b)
     }
+    fn skipped_pair(&mut self, a: &SequenceObject, b: &SequenceObject, reason: &str) -> Result<()> {
+        self.also.skipped_pair(a, b, reason)
+    }
+    fn settled(&mut self, object: usize) -> Result<()> {
+        self.also.settled(object)
+    }
     fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
         self.also.track(index, steps)
     }
@@ -782,6 +789,8 @@ enum Feed<'f, 'p> {
 pub struct FolderSink<'a, 's> {
     tables: TablesSink<'a>,
     whole: Option<Collect>,
+    /// The material points of a contour run, followed as the events come.
+    points: Option<FollowSink<'a>>,
     /// The caller's own sink, if any ([`RunPlan::also`]): every event, as it comes.
     also: Option<&'s mut dyn SequenceSink>,
     /// The recording's measures (`peak.npy`, `pti.npy`, `mean.npy`, `measures.json`), summed
@@ -856,6 +865,9 @@ impl SequenceSink for FolderSink<'_, '_> {
         if let Some(w) = self.whole.as_mut() {
             w.frame_objects(frame, objects)?;
         }
+        if let Some(p) = self.points.as_mut() {
+            p.frame_objects(frame, objects)?;
+        }
         self.also()
             .map_or(Ok(()), |s| s.frame_objects(frame, objects))
     }
@@ -867,7 +879,22 @@ impl SequenceSink for FolderSink<'_, '_> {
         if let Some(w) = self.whole.as_mut() {
             w.pair(pair, a, b)?;
         }
+        if let Some(p) = self.points.as_mut() {
+            p.pair(pair, a, b)?;
+        }
         self.also().map_or(Ok(()), |s| s.pair(pair, a, b))
+    }
+    fn skipped_pair(&mut self, a: &SequenceObject, b: &SequenceObject, reason: &str) -> Result<()> {
+        if let Some(p) = self.points.as_mut() {
+            p.skipped_pair(a, b, reason)?;
+        }
+        self.also().map_or(Ok(()), |s| s.skipped_pair(a, b, reason))
+    }
+    fn settled(&mut self, object: usize) -> Result<()> {
+        if let Some(p) = self.points.as_mut() {
+            p.settled(object)?;
+        }
+        self.also().map_or(Ok(()), |s| s.settled(object))
     }
     fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
         self.tables.track(index, steps)?;
@@ -919,12 +946,10 @@ fn write_folder(
     // The user's masks are read (and checked against the recording) before the run.
     let asked = regions_asked(outputs, run.recording)?;
     let dir = OutDir::create(out)?;
-    // A replayed run is whole already: only a run of the engine gathers itself, and only
-    // when an output needs the whole run.
-    // A replayed run is whole already; a run of the engine gathers its objects and pairs only
-    // for what needs them all: the material points of a contour run (written with any output
-    // besides the tables), the pair figures and the animation.
-    // The user's points and regions are followed whatever the outputs.
+    // The material points of a contour run are followed as the events come (with any output
+    // besides the tables; the user's points and regions whatever the outputs). A replayed run
+    // is whole already; a run of the engine gathers its objects and pairs only for what needs
+    // them all: the pair figures, the animation and the anatomical regions carried.
     let points = run.options.model == ObjectModel::Contour
         && (!tables_only(outputs) || !run.options.inputs.is_empty());
     let pair_figures = outputs.figures.any() && outputs.pair_figures;
@@ -939,15 +964,18 @@ fn write_folder(
     );
     let anatomy = outputs.any_regions() && run.options.model == ObjectModel::Contour;
     let carried = anatomy && !frames_streamed;
-    let gather = matches!(feed, Feed::Run { .. })
-        && (points || pair_figures || outputs.animation || carried);
+    let gather = matches!(feed, Feed::Run { .. }) && (pair_figures || outputs.animation || carried);
     let progress = match &feed {
         Feed::Run { progress, .. } => *progress,
         Feed::Replay(_) => &|_, _, _| {},
     };
+    let mut points_table = points
+        .then(|| PointsTable::create(&dir, run.recording, run.options, outputs.tables))
+        .transpose()?;
     let mut sink = FolderSink {
         tables: TablesSink::create(&dir, run.recording, run.options, outputs.tables)?,
         whole: gather.then(|| Collect::new(false)),
+        points: (points_table.as_mut()).map(|t| FollowSink::new(run.options, t)),
         also: None,
         curves: outputs.figures.any().then(FrameCurves::default),
         tracks: outputs
@@ -993,6 +1021,7 @@ fn write_folder(
     let FolderSink {
         tables,
         whole,
+        points: follow,
         curves,
         tracks,
         report,
@@ -1003,7 +1032,7 @@ fn write_folder(
     let cancel = run.options.cancel.as_ref();
     let gathered = whole.map(|w| w.into_result(counts.clone()));
     // What needs every object and pair: the gathered run, or the one replayed.
-    let whole = if points || pair_figures || outputs.animation || carried {
+    let whole = if pair_figures || outputs.animation || carried {
         replayed.or(gathered.as_ref())
     } else {
         None
@@ -1013,6 +1042,11 @@ fn write_folder(
         total: output_count(&counts, outputs, points),
         done: AtomicUsize::new(0),
     };
+    if let Some(follow) = follow {
+        follow.finish()?;
+        steps.step();
+    }
+    let followed = points_table.map(PointsTable::finish).transpose()?;
     let rule_name = asked.as_ref().map(crate::RegionsAsked::name);
     let (measures, regions) = measures.finish_with_regions(run.recording, asked)?;
     let moving = match (&regions, whole) {
@@ -1066,8 +1100,16 @@ fn write_folder(
         (Some(Ok((masks, _))), Some(Ok(a))) => Some((masks, a)),
         _ => None,
     };
-    let user_points =
-        write_figures_and_points(&dir, run, &drawn, outputs, points, anatomy, cancel, &steps)?;
+    let user_points = write_figures_and_points(
+        &dir,
+        run,
+        &drawn,
+        outputs,
+        followed.as_deref(),
+        anatomy,
+        cancel,
+        &steps,
+    )?;
     // The run's own stages, when it ran here, are not the output's time.
     let t = counts.timings;
     let run_time = if ran {
@@ -1139,16 +1181,69 @@ struct Drawn<'r> {
 /// A user's point through the stance, for the report: its name and positions (sensels).
 type UserTrack = (String, Vec<[f64; 2]>);
 
-/// The figures asked for and, when `points`, the material points (`points`, contour model) of
-/// the run's objects and pairs: they need nothing of each other, so the points are followed on
-/// a second thread. Returns the user's points through the stance (for the report).
+/// A point followed with the frame of each of its steps.
+type PointFrames = (pedo_track::follow::FollowedPoint, Vec<usize>);
+
+/// The `points` table of a contour run, written as [`FollowSink`] hands the points over
+/// ([`crate::points_table`]'s rows); the user's points and the points of the user's regions
+/// (a few) are kept for the report and `region_series`.
+struct PointsTable<'a> {
+    dir: &'a OutDir,
+    writer: crate::TableWriter,
+    rows: crate::PointRows<'a>,
+    kept: Vec<PointFrames>,
+}
+
+impl<'a> PointsTable<'a> {
+    fn create(
+        dir: &'a OutDir,
+        recording: &'a Recording,
+        options: &'a SequenceOptions,
+        format: TableFormat,
+    ) -> Result<Self> {
+        let header = crate::points_header(recording).header;
+        Ok(Self {
+            dir,
+            writer: crate::TableWriter::create(dir, format, POINTS, &header)?,
+            rows: crate::PointRows::new(recording, &options.inputs),
+            kept: Vec::new(),
+        })
+    }
+
+    /// Ends the table; returns the points kept.
+    fn finish(self) -> Result<Vec<PointFrames>> {
+        self.writer.finish(self.dir)?;
+        Ok(self.kept)
+    }
+}
+
+impl pedo_track::follow::PointsSink for PointsTable<'_> {
+    fn point(
+        &mut self,
+        _: usize,
+        p: &pedo_track::follow::FollowedPoint,
+        frames: &[usize],
+    ) -> Result<()> {
+        let (writer, dir) = (&mut self.writer, self.dir);
+        self.rows
+            .point(p, frames, &mut |cells| writer.push(dir, &cells))?;
+        if p.kind != pedo_track::follow::Seeded::Outline {
+            self.kept.push((p.clone(), frames.to_vec()));
+        }
+        Ok(())
+    }
+}
+
+/// The figures asked for; then, from the user's points and regions followed (`followed`), the
+/// `region_series` table with the anatomical regions carried (`anatomy`). Returns the user's
+/// points through the stance (for the report).
 #[allow(clippy::too_many_arguments)]
 fn write_figures_and_points(
     dir: &OutDir,
     run: &RunOf<'_>,
     drawn: &Drawn<'_>,
     outputs: &RunOutputs,
-    points: bool,
+    followed: Option<&[PointFrames]>,
     anatomy: Option<(
         &pedo_io::regions::RegionMasks,
         &crate::moving_regions::MovingAnatomy,
@@ -1156,66 +1251,46 @@ fn write_figures_and_points(
     cancel: Option<&Cancel>,
     steps: &OutputSteps<'_>,
 ) -> Result<Vec<UserTrack>> {
-    type Tables = (crate::Table, Option<crate::Table>, Vec<UserTrack>);
-    let (points, figures) = std::thread::scope(|s| {
-        let points = s.spawn(|| -> Result<Option<Tables>> {
-            let Some(r) = drawn.whole.filter(|_| points) else {
-                return Ok(None);
-            };
-            let points = pedo_track::follow::run_points(r, run.options);
-            steps.step();
-            let Some(points) = points? else {
-                return Ok(None);
-            };
-            let (rec, inputs) = (run.recording, &run.options.inputs);
-            let table = crate::points_table(rec, r, &points, inputs)?;
-            let tracks: Vec<UserTrack> = (points.points.iter())
-                .filter_map(|p| match p.kind {
-                    pedo_track::follow::Seeded::Point(i) => {
-                        let name = inputs
-                            .points
-                            .get(i)
-                            .map_or(format!("p{}", i + 1), |u| u.name.clone());
-                        Some((name, p.steps.iter().map(|&(_, xy)| xy).collect()))
-                    }
-                    _ => None,
-                })
-                .collect();
-            let regions = (!inputs.regions.is_empty())
-                .then(|| {
-                    let threshold = run.options.contour.preprocess.threshold.unwrap_or(0.0);
-                    crate::regions_table(rec, r, &points, inputs, threshold)
-                })
-                .transpose()?;
-            Ok(Some((table, regions, tracks)))
-        });
-        let figures = match &drawn.tracks {
-            Some(tracks) => write_figures(
-                dir,
-                run.recording,
-                run.options,
-                drawn.whole,
-                tracks,
-                &drawn.curves,
-                outputs,
-                cancel,
-                &|| steps.step(),
-            ),
-            None => Ok(()),
-        };
-        (points.join(), figures)
-    });
-    figures?;
-    let points = points.map_err(|_| IoError::invalid("following the material points failed"))?;
+    if let Some(tracks) = &drawn.tracks {
+        write_figures(
+            dir,
+            run.recording,
+            run.options,
+            drawn.whole,
+            tracks,
+            &drawn.curves,
+            outputs,
+            cancel,
+            &|| steps.step(),
+        )?;
+    }
+    let (rec, inputs) = (run.recording, &run.options.inputs);
+    let threshold = run.options.contour.preprocess.threshold.unwrap_or(0.0);
+    let followed = followed.unwrap_or_default();
+    let user_tracks: Vec<UserTrack> = (followed.iter())
+        .filter_map(|(p, _)| match p.kind {
+            pedo_track::follow::Seeded::Point(i) => {
+                let name = (inputs.points.get(i)).map_or(format!("p{}", i + 1), |u| u.name.clone());
+                Some((name, p.steps.iter().map(|&(_, xy)| xy).collect()))
+            }
+            _ => None,
+        })
+        .collect();
     let mut series = None;
-    let mut user_tracks = Vec::new();
-    if let Some((table, regions, tracks)) = points? {
-        crate::write_table(dir, outputs.tables, POINTS, &table)?;
-        series = regions;
-        user_tracks = tracks;
+    if !inputs.regions.is_empty() && !followed.is_empty() {
+        let frame_of: std::collections::HashMap<usize, usize> = (followed.iter())
+            .flat_map(|(p, frames)| p.steps.iter().map(|s| s.0).zip(frames.iter().copied()))
+            .collect();
+        let points = pedo_track::follow::FollowedPoints {
+            points: followed.iter().map(|(p, _)| p.clone()).collect(),
+            anchors: 0,
+        };
+        let frame = |o: usize| frame_of.get(&o).copied().unwrap_or_default();
+        series = Some(crate::regions_table(
+            rec, &frame, &points, inputs, threshold,
+        )?);
     }
     if let Some((masks, anatomy)) = anatomy {
-        let threshold = run.options.contour.preprocess.threshold.unwrap_or(0.0);
         let t = series.get_or_insert_with(|| crate::region_series_header(run.recording));
         crate::moving_regions::anatomy_rows(t, run.recording, masks, anatomy, threshold)?;
     }

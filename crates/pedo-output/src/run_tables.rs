@@ -398,43 +398,91 @@ pub fn points_table(
     points: &pedo_track::follow::FollowedPoints,
     inputs: &pedo_track::UserInputs,
 ) -> pedo_io::Result<Table> {
-    use pedo_track::follow::Seeded;
-    let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
+    let mut t = points_header(recording);
+    let mut rows = PointRows::new(recording, inputs);
+    for p in &points.points {
+        let frames: Vec<usize> = p.steps.iter().map(|&(o, _)| r.objects[o].frame).collect();
+        rows.point(p, &frames, &mut |cells| {
+            t.rows.push(cells);
+            Ok(())
+        })?;
+    }
+    Ok(t)
+}
+
+/// The columns of [`points_table`] (no rows).
+pub fn points_header(recording: &Recording) -> Table {
     let mut t = steps_header(recording, "point", "seed_node");
-    let (pressure, per_unit) = match kpa_per_unit(&recording.units) {
-        Some(k) => ("pressure_kpa", k),
-        None => ("pressure", 1.0),
-    };
-    t.push_column(pressure);
+    t.push_column(match kpa_per_unit(&recording.units) {
+        Some(_) => "pressure_kpa",
+        None => "pressure",
+    });
     t.push_column("kind");
     t.push_column("name");
-    let under = pressures_under(recording, r, points)?;
-    let shown = points
-        .points
-        .iter()
-        .enumerate()
-        .filter(|(_, p)| !matches!(p.kind, Seeded::Region(_)));
-    for (row_point, (k, p)) in shown.enumerate() {
+    t
+}
+
+/// The rows of [`points_table`], point by point in the order followed: the pressure under each
+/// step read from the frames from the current point's first on (a point is seeded on its first
+/// frame, and points are seeded in frame order), each frame read once.
+pub(crate) struct PointRows<'a> {
+    recording: &'a Recording,
+    inputs: &'a pedo_track::UserInputs,
+    /// The points given rows so far.
+    rows: usize,
+    grids: std::collections::BTreeMap<usize, pedo_io::Grid>,
+}
+
+impl<'a> PointRows<'a> {
+    pub(crate) fn new(recording: &'a Recording, inputs: &'a pedo_track::UserInputs) -> Self {
+        Self {
+            recording,
+            inputs,
+            rows: 0,
+            grids: Default::default(),
+        }
+    }
+
+    /// The rows of point `p`, the frame of each step in `frames`, one by one to `emit` (none
+    /// for a region's point).
+    pub(crate) fn point(
+        &mut self,
+        p: &pedo_track::follow::FollowedPoint,
+        frames: &[usize],
+        emit: &mut dyn FnMut(Vec<Cell>) -> pedo_io::Result<()>,
+    ) -> pedo_io::Result<()> {
+        use pedo_track::follow::Seeded;
+        let recording = self.recording;
+        let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
+        let per_unit = kpa_per_unit(&recording.units).unwrap_or(1.0);
         let (kind, name) = match p.kind {
-            Seeded::Point(i) => ("user", inputs.points.get(i).map(|u| u.name.as_str())),
-            _ => ("outline", None),
+            Seeded::Region(_) => return Ok(()),
+            Seeded::Point(i) => ("user", self.inputs.points.get(i).map(|u| u.name.as_str())),
+            Seeded::Outline => ("outline", None),
         };
-        for (s, &(o, xy)) in p.steps.iter().enumerate() {
-            let frame = r.objects[o].frame;
-            let mut cells = vec![Cell::int(row_point), Cell::int(s), Cell::int(frame)];
+        if let Some(&first) = frames.first() {
+            self.grids = self.grids.split_off(&first);
+        }
+        for (s, (&(o, xy), &frame)) in p.steps.iter().zip(frames).enumerate() {
+            let grid = match self.grids.entry(frame) {
+                std::collections::btree_map::Entry::Occupied(g) => g.into_mut(),
+                std::collections::btree_map::Entry::Vacant(v) => v.insert(recording.frame(frame)?),
+            };
+            let mut cells = vec![Cell::int(self.rows), Cell::int(s), Cell::int(frame)];
             if timed {
                 cells.push(Cell::opt(recording.time_s(frame), 6));
             }
             cells.push(Cell::int(o));
             cells.push(p.seed.1.map_or(Cell::Empty, Cell::int));
             push_xy(&mut cells, recording, xy[0], xy[1], mm);
-            cells.push(Cell::Float(under[k][s] * per_unit, 4));
+            cells.push(Cell::Float(bilinear(grid, xy) * per_unit, 4));
             cells.push(Cell::Text(kind.to_string()));
             cells.push(name.map_or(Cell::Empty, |n| Cell::Text(n.to_string())));
-            t.rows.push(cells);
+            emit(cells)?;
         }
+        self.rows += 1;
+        Ok(())
     }
-    Ok(t)
 }
 
 /// The user's regions ([`pedo_track::UserInputs::regions`]) through the run, two rows per region
@@ -448,13 +496,14 @@ pub fn points_table(
 /// force or load, peak pressure, centre of pressure in sensels and mm, named by the units known)
 /// and the mean pressure of its contact sensors (`mean_pressure_kpa`, or `mean_pressure` in the
 /// file's units); `name` and `stance` are those of the anatomical regions
-/// ([`crate::moving_regions`]), empty for the user's.
+/// ([`crate::moving_regions`]), empty for the user's. `frame_of` gives the frame of an object
+/// of the run.
 ///
 /// # Errors
 /// A frame the recording cannot give.
 pub fn regions_table(
     recording: &Recording,
-    r: &SequenceResult,
+    frame_of: &dyn Fn(usize) -> usize,
     points: &pedo_track::follow::FollowedPoints,
     inputs: &pedo_track::UserInputs,
     threshold: f64,
@@ -466,7 +515,7 @@ pub fn regions_table(
         let mut by_frame: std::collections::BTreeMap<usize, Vec<[f64; 2]>> = Default::default();
         for p in points.points.iter().filter(|p| p.kind == Seeded::Region(k)) {
             for &(o, xy) in &p.steps {
-                by_frame.entry(r.objects[o].frame).or_default().push(xy);
+                by_frame.entry(frame_of(o)).or_default().push(xy);
             }
         }
         let fixed: Vec<f64> = region
@@ -582,32 +631,6 @@ pub(crate) fn region_series_row(
     row.push(id.name.map_or(Cell::Empty, |n| Cell::Text(n.to_string())));
     row.push(id.stance.map_or(Cell::Empty, Cell::int));
     row
-}
-
-/// The pressure under every step of every point, each frame read once.
-fn pressures_under(
-    recording: &Recording,
-    r: &SequenceResult,
-    points: &pedo_track::follow::FollowedPoints,
-) -> pedo_io::Result<Vec<Vec<f64>>> {
-    let mut by_frame: std::collections::BTreeMap<usize, Vec<(usize, usize)>> = Default::default();
-    for (k, p) in points.points.iter().enumerate() {
-        for (s, &(o, _)) in p.steps.iter().enumerate() {
-            by_frame.entry(r.objects[o].frame).or_default().push((k, s));
-        }
-    }
-    let mut out: Vec<Vec<f64>> = points
-        .points
-        .iter()
-        .map(|p| vec![0.0; p.steps.len()])
-        .collect();
-    for (frame, steps) in by_frame {
-        let grid = recording.frame(frame)?;
-        for (k, s) in steps {
-            out[k][s] = bilinear(&grid, points.points[k].steps[s].1);
-        }
-    }
-    Ok(out)
 }
 
 /// The grid's value at `p` (x = column, y = row; sensel centres at whole numbers), bilinear

@@ -24,6 +24,9 @@ use modal_core::{
 use pedo_io::{IoError, Result};
 use std::collections::HashMap;
 
+mod sink;
+pub use sink::{FollowSink, PointsSink};
+
 /// The settings of anchored registration, in sensels (a sensel is the x pitch; oblong sensels
 /// are registered in their true proportions). The defaults were chosen on the tuning stances of
 /// `benches/python/anchor_study.py` and checked on its held-out ones (BENCHMARKS.md).
@@ -188,13 +191,10 @@ fn follow_inner(
     lazy: bool,
 ) -> Result<FollowedPoints> {
     if run.objects.iter().any(|o| o.shape.dim() != 2) {
-        return Err(IoError::invalid(
-            "points are followed on contours: this run's objects are surfaces",
-        ));
+        return Err(surfaces_refused());
     }
-    let links = Links::of(run);
-    let mut out = FollowedPoints::default();
-    let mut seeds_at: HashMap<usize, Vec<Seed>> = HashMap::new();
+    let whole = WholeRun::of(run);
+    let mut follower = Follower::new(aspect, *params, outline_seeds, lazy);
     for seed in seeds {
         let (o, p) = (seed.object, seed.xy);
         if o >= run.objects.len() || !p.iter().all(|v| v.is_finite()) {
@@ -205,78 +205,229 @@ fn follow_inner(
                 pedo_io::counted(run.objects.len(), "object")
             )));
         }
-        seeds_at.entry(o).or_default().push(*seed);
+        follower.seed_on(*seed);
     }
-    // Per object: its anchor state and the points on it (index into out.points).
-    let mut live: HashMap<usize, Lineage> = HashMap::new();
     for b in 0..run.objects.len() {
+        follower.object(&whole, b);
+    }
+    Ok(follower.into_points())
+}
+
+/// The error of following points on a run of surfaces.
+fn surfaces_refused() -> IoError {
+    IoError::invalid("points are followed on contours: this run's objects are surfaces")
+}
+
+/// What the follower reads of a run: its objects and matched pairs by id, and which object
+/// continues which (from the pairs matched or skipped). A whole run ([`WholeRun`]) or the
+/// window of a run as it streams ([`sink::FollowSink`]).
+trait RunView {
+    fn object(&self, id: usize) -> &SequenceObject;
+    /// The matches of the pair `a → b`, if it was matched.
+    fn pair(&self, a: usize, b: usize) -> Option<&MatchResult>;
+    fn links(&self) -> &Links;
+}
+
+/// A whole run as the follower reads it.
+struct WholeRun<'r> {
+    run: &'r SequenceResult,
+    links: Links,
+    pairs: HashMap<(usize, usize), usize>,
+}
+
+impl<'r> WholeRun<'r> {
+    fn of(run: &'r SequenceResult) -> Self {
+        let mut links = Links::default();
+        let matched = run.pairs.iter().map(|p| (p.a, p.b));
+        let skipped = run.skipped_pairs.iter().map(|p| (p.a, p.b));
+        for (a, b) in matched.chain(skipped) {
+            links.add(a, b);
+        }
+        let pairs = (run.pairs.iter().enumerate())
+            .map(|(k, p)| ((p.a, p.b), k))
+            .collect();
+        Self { run, links, pairs }
+    }
+}
+
+impl RunView for WholeRun<'_> {
+    fn object(&self, id: usize) -> &SequenceObject {
+        &self.run.objects[id]
+    }
+    fn pair(&self, a: usize, b: usize) -> Option<&MatchResult> {
+        let k = *self.pairs.get(&(a, b))?;
+        Some(&self.run.pairs[k].result)
+    }
+    fn links(&self) -> &Links {
+        &self.links
+    }
+}
+
+/// The state of anchored registration between objects: the lineages alive and the points
+/// followed. Objects are handed in id order ([`Follower::object`]), each once every pair
+/// leaving it is known.
+struct Follower {
+    aspect: SenselAspect,
+    params: FollowParams,
+    outline_seeds: bool,
+    lazy: bool,
+    seeds_at: HashMap<usize, Vec<Seed>>,
+    /// Per object: its anchor state and the points on it (index into `points`).
+    live: HashMap<usize, Lineage>,
+    points: PointsKept,
+    anchors: usize,
+    /// The frame of the last object followed and the first object of that frame.
+    frame: Option<(usize, usize)>,
+}
+
+/// The points followed, numbered from 0 in the order they were seeded: those from `base` on
+/// are held (a streamed run hands the ones before over once they have ended), each with the
+/// frame of each of its steps.
+#[derive(Default)]
+struct PointsKept {
+    base: usize,
+    held: std::collections::VecDeque<(FollowedPoint, Vec<usize>)>,
+}
+
+impl PointsKept {
+    fn push(&mut self, p: FollowedPoint) -> usize {
+        self.held.push_back((p, Vec::new()));
+        self.base + self.held.len() - 1
+    }
+    fn step(&mut self, k: usize, object: usize, frame: usize, xy: [f64; 2]) {
+        let (p, frames) = &mut self.held[k - self.base];
+        p.steps.push((object, xy));
+        frames.push(frame);
+    }
+}
+
+impl Follower {
+    fn new(aspect: SenselAspect, params: FollowParams, outline_seeds: bool, lazy: bool) -> Self {
+        Self {
+            aspect,
+            params,
+            outline_seeds,
+            lazy,
+            seeds_at: HashMap::new(),
+            live: HashMap::new(),
+            points: PointsKept::default(),
+            anchors: 0,
+            frame: None,
+        }
+    }
+
+    /// A point to seed on its object, handed before that object.
+    fn seed_on(&mut self, seed: Seed) {
+        self.seeds_at.entry(seed.object).or_default().push(seed);
+    }
+
+    /// Every point followed (none handed over).
+    fn into_points(self) -> FollowedPoints {
+        FollowedPoints {
+            points: self.points.held.into_iter().map(|(p, _)| p).collect(),
+            anchors: self.anchors,
+        }
+    }
+
+    /// Follows the points onto object `b` (every object before it followed, every pair leaving
+    /// it known); a point that cannot be followed further ends there, as a track does.
+    fn object(&mut self, run: &dyn RunView, b: usize) {
+        let (aspect, params, links) = (self.aspect, self.params, run.links());
+        let params = &params;
+        let frame = run.object(b).frame;
+        if self.frame.is_none_or(|(f, _)| f != frame) {
+            // The lineages left on frames before the last one can continue no more.
+            let last_first = self.frame.map_or(0, |(_, first)| first);
+            self.live.retain(|&o, _| o >= last_first);
+            self.frame = Some((frame, b));
+        }
         let mut lineage = None;
         if let Some(a) = links.continues(b)
-            && let Some(mut l) = live.remove(&a)
+            && let Some(mut l) = self.live.remove(&a)
         {
-            let pair = links.pairs.get(&(a, b)).map(|&k| &run.pairs[k].result);
-            match l.step(run, pair, b, aspect, params) {
+            match l.step(run.object(b), run.pair(a, b), aspect, params) {
                 Ok(()) => lineage = Some(l),
                 // Not registered: the points cross by the pair's field, as at a split.
                 Err(_) => {
-                    live.insert(a, l);
+                    self.live.insert(a, l);
                 }
             }
         }
-        let wanted = !lazy
-            || seeds_at.contains_key(&b)
-            || links.preds(b).iter().any(|a| live.contains_key(a));
+        let wanted = !self.lazy
+            || self.seeds_at.contains_key(&b)
+            || links.preds(b).iter().any(|a| self.live.contains_key(a));
         if lineage.is_none() && wanted {
-            lineage = Lineage::start(run, b, aspect, params).ok();
-            if lineage.is_some() {
-                out.anchors += 1;
-            }
-            if let Some(l) = lineage.as_mut() {
-                let carried = links.handed_over(run, b, &mut live, aspect);
-                l.adopt(carried, aspect);
-                if links.preds(b).is_empty() && outline_seeds {
-                    let nodes = outline(&run.objects[b]);
-                    let seeded = nodes
-                        .iter()
-                        .enumerate()
-                        .map(|(i, &p)| (Some(i), p, Seeded::Outline));
-                    l.seed(seeded, &mut out, b, aspect);
-                }
-            }
+            lineage = self.start(run, b);
         }
-        let Some(mut l) = lineage else { continue };
-        if let Some(ps) = seeds_at.remove(&b) {
+        let Some(mut l) = lineage else { return };
+        if let Some(ps) = self.seeds_at.remove(&b) {
             // A place on the anchor is a position on the anchor's object: a seed on a later
             // object of the lineage starts a new anchor there.
             if l.object != b
-                && let Ok(fresh) = l.reanchor(run, b, aspect, params)
+                && let Ok(fresh) = l.reanchor(run.object(b), b, aspect, params)
             {
                 l = fresh;
-                out.anchors += 1;
+                self.anchors += 1;
             }
             if l.object == b {
-                l.seed(
-                    ps.into_iter().map(|p| (None, p.xy, p.kind)),
-                    &mut out,
-                    b,
-                    aspect,
-                );
+                let seeded = ps.into_iter().map(|p| (None, p.xy, p.kind));
+                l.seed(seeded, &mut self.points, b, aspect);
             }
         }
-        l.record(&mut out, b);
-        if links.succs(b).is_empty() || (lazy && l.points.is_empty()) {
+        for &(k, p) in &l.points {
+            self.points.step(k, b, frame, p);
+        }
+        if links.succs(b).is_empty() || (self.lazy && l.points.is_empty()) {
             // The lineage ends here: its anchor is dropped, its points end.
-            continue;
+            return;
         }
         if l.anchor.uncovered > params.coverage
-            && let Ok(fresh) = l.reanchor(run, b, aspect, params)
+            && let Ok(fresh) = l.reanchor(run.object(b), b, aspect, params)
         {
             l = fresh;
-            out.anchors += 1;
+            self.anchors += 1;
         }
-        live.insert(b, l);
+        self.live.insert(b, l);
     }
-    Ok(out)
+
+    /// A new lineage on `b`: with the points its predecessors hand over and, for an object
+    /// that begins a lineage, its outline nodes.
+    fn start(&mut self, run: &dyn RunView, b: usize) -> Option<Lineage> {
+        let aspect = self.aspect;
+        let mut l = Lineage::start(run.object(b), b, aspect, &self.params).ok()?;
+        self.anchors += 1;
+        let carried = handed_over(run, b, &mut self.live, aspect);
+        l.adopt(carried, aspect);
+        if run.links().preds(b).is_empty() && self.outline_seeds {
+            let nodes = outline(run.object(b));
+            let seeded = (nodes.iter().enumerate()).map(|(i, &p)| (Some(i), p, Seeded::Outline));
+            l.seed(seeded, &mut self.points, b, aspect);
+        }
+        Some(l)
+    }
+
+    /// The points that have ended, in order, once every point before them has: those that no
+    /// lineage alive carries (a streamed run hands them over and lets go of them).
+    fn ended(&mut self) -> Vec<(usize, FollowedPoint, Vec<usize>)> {
+        let alive: std::collections::HashSet<usize> = (self.live.values())
+            .flat_map(|l| l.points.iter().map(|&(k, _)| k))
+            .collect();
+        let mut out = Vec::new();
+        while !alive.contains(&self.points.base) {
+            let Some((p, frames)) = self.points.held.pop_front() else {
+                break;
+            };
+            out.push((self.points.base, p, frames));
+            self.points.base += 1;
+        }
+        out
+    }
+
+    /// Every point left, once every object has been followed.
+    fn finish(&mut self) -> Vec<(usize, FollowedPoint, Vec<usize>)> {
+        self.live.clear();
+        self.ended()
+    }
 }
 
 /// Follows `seeds`, all on objects of one frame `f`, through the objects of frames
@@ -461,23 +612,100 @@ pub const REGION_STEP: f64 = 0.5;
 /// The seeds of the user's points and regions on the objects of `run`: a point on the first
 /// object (of its frame, when given) whose outline holds it; each region's outline, every
 /// [`REGION_STEP`] sensels, on the object of its frame (the first frame with an object unless
-/// given) whose outline holds most of its sensels' centres.
+/// given) whose outline holds most of its sensels' centres. In the order of their objects (on
+/// one object: the points in the order given, then the regions').
 ///
 /// # Errors
 /// [`IoError::InvalidInput`] naming a point that no object's outline holds (on its frame, or on
 /// any frame run), or a region that lies on no object of its frame.
 pub fn user_seeds(run: &SequenceResult, inputs: &UserInputs) -> Result<Vec<Seed>> {
+    let mut placer = SeedPlacer::new(inputs);
     let mut seeds = Vec::new();
-    let inside = |o: &SequenceObject, p: [f64; 2]| {
-        o.shape.dim() == 2 && pedo_io::contour::point_in_polygon(p, &outline(o))
-    };
-    for (k, p) in inputs.points.iter().enumerate() {
-        let on_frame = |o: &SequenceObject| p.frame.is_none_or(|f| o.frame == f);
-        let object = run
-            .objects
-            .iter()
-            .position(|o| on_frame(o) && inside(o, p.xy));
-        let Some(object) = object else {
+    let mut rest = run.objects.as_slice();
+    while let Some(first) = rest.first() {
+        let n = rest.iter().take_while(|o| o.frame == first.frame).count();
+        let (these, after) = rest.split_at(n);
+        seeds.extend(placer.frame(first.frame, these));
+        rest = after;
+    }
+    placer.finish()?;
+    Ok(seeds)
+}
+
+/// The user's points and regions placed on a run's objects frame by frame, as they are made
+/// ([`user_seeds`]).
+pub(crate) struct SeedPlacer<'i> {
+    inputs: &'i UserInputs,
+    /// Per point: whether it is placed.
+    placed: Vec<bool>,
+    /// The frame the regions are drawn on, once known, and the first region found on no
+    /// object of it.
+    regions_frame: Option<usize>,
+    regions_placed: bool,
+    region_missing: Option<usize>,
+}
+
+impl<'i> SeedPlacer<'i> {
+    pub(crate) fn new(inputs: &'i UserInputs) -> Self {
+        Self {
+            inputs,
+            placed: vec![false; inputs.points.len()],
+            regions_frame: inputs.regions_frame,
+            regions_placed: false,
+            region_missing: None,
+        }
+    }
+
+    /// The seeds on `objects`, the objects of `frame` (in id order).
+    pub(crate) fn frame(&mut self, frame: usize, objects: &[SequenceObject]) -> Vec<Seed> {
+        let inside = |o: &SequenceObject, p: [f64; 2]| {
+            o.shape.dim() == 2 && pedo_io::contour::point_in_polygon(p, &outline(o))
+        };
+        let mut seeds = Vec::new();
+        for (k, p) in self.inputs.points.iter().enumerate() {
+            if self.placed[k] || p.frame.is_some_and(|f| f != frame) {
+                continue;
+            }
+            if let Some(o) = objects.iter().find(|o| inside(o, p.xy)) {
+                self.placed[k] = true;
+                let kind = Seeded::Point(k);
+                seeds.push(Seed {
+                    object: o.id,
+                    xy: p.xy,
+                    kind,
+                });
+            }
+        }
+        if self.inputs.regions.is_empty() || objects.is_empty() {
+            return seeds;
+        }
+        if *self.regions_frame.get_or_insert(frame) != frame {
+            return seeds;
+        }
+        self.regions_placed = true;
+        for (r, region) in self.inputs.regions.iter().enumerate() {
+            let centres = region.centres();
+            let best = (objects.iter())
+                .map(|o| (o.id, centres.iter().filter(|&&c| inside(o, c)).count()))
+                .max_by_key(|&(i, n)| (n, std::cmp::Reverse(i)));
+            let Some((object, _)) = best.filter(|&(_, n)| n > 0) else {
+                self.region_missing.get_or_insert(r);
+                continue;
+            };
+            let (dense, _) = densify(&region.outline, REGION_STEP);
+            seeds.extend(dense.into_iter().map(|xy| Seed {
+                object,
+                xy,
+                kind: Seeded::Region(r),
+            }));
+        }
+        seeds
+    }
+
+    /// Every frame seen: an error naming the first point or region left unplaced.
+    pub(crate) fn finish(&self) -> Result<()> {
+        let points = self.inputs.points.iter().zip(&self.placed);
+        if let Some((p, _)) = points.into_iter().find(|(_, placed)| !**placed) {
             let when = match p.frame {
                 Some(f) => format!("on frame {f}"),
                 None => "on any frame run".to_string(),
@@ -486,71 +714,39 @@ pub fn user_seeds(run: &SequenceResult, inputs: &UserInputs) -> Result<Vec<Seed>
                 "point {:?} at x {}, y {} (sensels) lies inside no object's outline {when}",
                 p.name, p.xy[0], p.xy[1]
             )));
+        }
+        if self.inputs.regions.is_empty() {
+            return Ok(());
+        }
+        let Some(frame) = self.regions_frame else {
+            return Err(IoError::invalid(
+                "regions: the run has no object to draw them on",
+            ));
         };
-        seeds.push(Seed {
-            object,
-            xy: p.xy,
-            kind: Seeded::Point(k),
-        });
-    }
-    if inputs.regions.is_empty() {
-        return Ok(seeds);
-    }
-    let first = run.objects.iter().map(|o| o.frame).min();
-    let Some(frame) = inputs.regions_frame.or(first) else {
-        return Err(IoError::invalid(
-            "regions: the run has no object to draw them on",
-        ));
-    };
-    for (r, region) in inputs.regions.iter().enumerate() {
-        let centres = region.centres();
-        let best = run
-            .objects
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| o.frame == frame)
-            .map(|(i, o)| (i, centres.iter().filter(|&&c| inside(o, c)).count()))
-            .max_by_key(|&(i, n)| (n, std::cmp::Reverse(i)));
-        let Some((object, _)) = best.filter(|&(_, n)| n > 0) else {
-            return Err(IoError::invalid(format!(
+        // The regions' frame given, but no object on it: the first region lies on none.
+        let missing = self.region_missing.or((!self.regions_placed).then_some(0));
+        match missing {
+            Some(r) => Err(IoError::invalid(format!(
                 "region {} lies on no object of frame {frame}",
-                region.label
-            )));
-        };
-        let (dense, _) = densify(&region.outline, REGION_STEP);
-        seeds.extend(dense.into_iter().map(|xy| Seed {
-            object,
-            xy,
-            kind: Seeded::Region(r),
-        }));
+                self.inputs.regions[r].label
+            ))),
+            None => Ok(()),
+        }
     }
-    Ok(seeds)
 }
 
 /// Which object continues which: from the run's candidate pairs (matched or skipped).
+#[derive(Default)]
 struct Links {
     succs: HashMap<usize, Vec<usize>>,
     preds: HashMap<usize, Vec<usize>>,
-    pairs: HashMap<(usize, usize), usize>,
 }
 
 impl Links {
-    fn of(run: &SequenceResult) -> Self {
-        let mut l = Links {
-            succs: HashMap::new(),
-            preds: HashMap::new(),
-            pairs: HashMap::new(),
-        };
-        let matched = run.pairs.iter().map(|p| (p.a, p.b));
-        let skipped = run.skipped_pairs.iter().map(|p| (p.a, p.b));
-        for (a, b) in matched.chain(skipped) {
-            l.succs.entry(a).or_default().push(b);
-            l.preds.entry(b).or_default().push(a);
-        }
-        for (k, p) in run.pairs.iter().enumerate() {
-            l.pairs.insert((p.a, p.b), k);
-        }
-        l
+    /// The candidate pair `a → b`.
+    fn add(&mut self, a: usize, b: usize) {
+        self.succs.entry(a).or_default().push(b);
+        self.preds.entry(b).or_default().push(a);
     }
 
     fn preds(&self, b: usize) -> &[usize] {
@@ -569,63 +765,65 @@ impl Links {
         }
     }
 
-    /// The points of `b`'s predecessors that `b` takes over at a split or merge, carried by each
-    /// pair's field: a point of a split object goes to the part whose outline its image lies
-    /// nearest (inside counts as distance 0).
-    fn handed_over(
-        &self,
-        run: &SequenceResult,
-        b: usize,
-        live: &mut HashMap<usize, Lineage>,
-        aspect: SenselAspect,
-    ) -> Vec<(usize, [f64; 2], bool)> {
-        let mut carried = Vec::new();
-        for &a in self.preds(b) {
-            let Some(la) = live.get_mut(&a) else { continue };
-            // Each part's field and outline once, for every point of `a`.
-            let parts = self.parts_of(run, a, aspect);
-            let (mut keep, mut keep_ends) = (Vec::new(), Vec::new());
-            for (&(point, pos), &ends) in la.points.iter().zip(&la.ends_off) {
-                match destination(&parts, pos) {
-                    Some((t, image)) if t == b => carried.push((point, image, ends)),
-                    Some(_) => {
-                        keep.push((point, pos));
-                        keep_ends.push(ends);
-                    }
-                    None => {}
-                }
-            }
-            la.points = keep;
-            la.ends_off = keep_ends;
-            if la.points.is_empty() {
-                live.remove(&a);
-            }
-        }
-        carried
-    }
-
-    /// The parts `a` continues as that a point can cross to: each with the field of its matched
-    /// pair and its outline.
-    fn parts_of(
-        &self,
-        run: &SequenceResult,
-        a: usize,
-        aspect: SenselAspect,
-    ) -> Vec<(usize, CorrespondenceField, Contact)> {
-        self.succs(a)
-            .iter()
-            .filter_map(|&b| {
-                let pair = &run.pairs[*self.pairs.get(&(a, b))?];
-                let (oa, ob) = (&run.objects[a].shape, &run.objects[b].shape);
-                let field =
-                    CorrespondenceField::fit(oa, ob, &pair.result.pairs, PAIR_SMOOTHING).ok()?;
-                Some((b, field, Contact::of(&run.objects[b], aspect)))
-            })
-            .collect()
+    /// Lets go of the links of objects before `id`.
+    fn drop_below(&mut self, id: usize) {
+        self.succs.retain(|&a, _| a >= id);
+        self.preds.retain(|&b, _| b >= id);
     }
 }
 
-/// Where a point at `pos` goes among `parts` ([`Links::parts_of`]): the part nearest its image.
+/// The points of `b`'s predecessors that `b` takes over at a split or merge, carried by each
+/// pair's field: a point of a split object goes to the part whose outline its image lies
+/// nearest (inside counts as distance 0).
+fn handed_over(
+    run: &dyn RunView,
+    b: usize,
+    live: &mut HashMap<usize, Lineage>,
+    aspect: SenselAspect,
+) -> Vec<(usize, [f64; 2], bool)> {
+    let mut carried = Vec::new();
+    for &a in run.links().preds(b) {
+        let Some(la) = live.get_mut(&a) else { continue };
+        // Each part's field and outline once, for every point of `a`.
+        let parts = parts_of(run, a, aspect);
+        let (mut keep, mut keep_ends) = (Vec::new(), Vec::new());
+        for (&(point, pos), &ends) in la.points.iter().zip(&la.ends_off) {
+            match destination(&parts, pos) {
+                Some((t, image)) if t == b => carried.push((point, image, ends)),
+                Some(_) => {
+                    keep.push((point, pos));
+                    keep_ends.push(ends);
+                }
+                None => {}
+            }
+        }
+        la.points = keep;
+        la.ends_off = keep_ends;
+        if la.points.is_empty() {
+            live.remove(&a);
+        }
+    }
+    carried
+}
+
+/// The parts `a` continues as that a point can cross to: each with the field of its matched
+/// pair and its outline.
+fn parts_of(
+    run: &dyn RunView,
+    a: usize,
+    aspect: SenselAspect,
+) -> Vec<(usize, CorrespondenceField, Contact)> {
+    (run.links().succs(a).iter())
+        .filter_map(|&b| {
+            let pair = run.pair(a, b)?;
+            let (oa, ob) = (&run.object(a).shape, &run.object(b).shape);
+            let field = CorrespondenceField::fit(oa, ob, &pair.pairs, PAIR_SMOOTHING).ok()?;
+            Some((b, field, Contact::of(run.object(b), aspect)))
+        })
+        .collect()
+}
+
+/// Where a point at `pos` goes among `parts` ([`parts_of`]): the part nearest its image.
 fn destination(
     parts: &[(usize, CorrespondenceField, Contact)],
     pos: [f64; 2],
@@ -658,14 +856,15 @@ struct Lineage {
 }
 
 impl Lineage {
+    /// A lineage anchored on object `b`, `o`.
     fn start(
-        run: &SequenceResult,
+        o: &SequenceObject,
         b: usize,
         aspect: SenselAspect,
         params: &FollowParams,
     ) -> Result<Self> {
         Ok(Self {
-            anchor: Anchor::new(run, b, aspect, params)?,
+            anchor: Anchor::new(o, aspect, params)?,
             object: b,
             points: Vec::new(),
             ends_off: Vec::new(),
@@ -674,17 +873,16 @@ impl Lineage {
         })
     }
 
-    /// The lineage moved onto object `b` (which continues its current object); on an error it
-    /// is left on its current object.
+    /// The lineage moved onto object `b` (which continues its current object), matched onto it
+    /// as `pair`; on an error it is left on its current object.
     fn step(
         &mut self,
-        run: &SequenceResult,
+        b: &SequenceObject,
         pair: Option<&MatchResult>,
-        b: usize,
         aspect: SenselAspect,
         params: &FollowParams,
     ) -> Result<()> {
-        self.anchor.register(run, pair, b, aspect, params)?;
+        self.anchor.register(b, pair, aspect, params)?;
         let images = match &self.place_basis {
             Some(basis) => basis.apply(self.anchor.coefficients()),
             None => Vec::new(),
@@ -694,7 +892,7 @@ impl Lineage {
         }
         // A point carried off the contact region has left the plate (the foot rolls off it):
         // it ends, as the tissue's contact does.
-        let contact = Contact::of(&run.objects[b], aspect);
+        let contact = Contact::of(b, aspect);
         let kept: Vec<bool> = self
             .points
             .iter()
@@ -717,19 +915,19 @@ impl Lineage {
     fn seed(
         &mut self,
         points: impl Iterator<Item = (Option<usize>, [f64; 2], Seeded)>,
-        out: &mut FollowedPoints,
+        out: &mut PointsKept,
         object: usize,
         aspect: SenselAspect,
     ) {
         let carried: Vec<(usize, [f64; 2], bool)> = points
             .map(|(node, p, kind)| {
-                out.points.push(FollowedPoint {
+                let k = out.push(FollowedPoint {
                     seed: (object, node),
                     kind,
                     steps: Vec::new(),
                 });
                 let ends_off = !matches!(kind, Seeded::Region(_));
-                (out.points.len() - 1, p, ends_off)
+                (k, p, ends_off)
             })
             .collect();
         self.adopt(carried, aspect);
@@ -749,22 +947,16 @@ impl Lineage {
         self.place_basis = Some(self.anchor.spline.basis(&self.places));
     }
 
-    /// Each point's position on object `b`, appended to its steps.
-    fn record(&self, out: &mut FollowedPoints, b: usize) {
-        for &(k, p) in &self.points {
-            out.points[k].steps.push((b, p));
-        }
-    }
-
-    /// A new anchor on object `b`, the lineage's current object: its points keep their positions.
+    /// A new anchor on object `b`, `o`, the lineage's current object: its points keep their
+    /// positions.
     fn reanchor(
         &self,
-        run: &SequenceResult,
+        o: &SequenceObject,
         b: usize,
         aspect: SenselAspect,
         params: &FollowParams,
     ) -> Result<Self> {
-        let mut l = Self::start(run, b, aspect, params)?;
+        let mut l = Self::start(o, b, aspect, params)?;
         let carried = (self.points.iter().zip(&self.ends_off))
             .map(|(&(k, p), &e)| (k, p, e))
             .collect();
@@ -794,13 +986,8 @@ struct Anchor {
 }
 
 impl Anchor {
-    fn new(
-        run: &SequenceResult,
-        b: usize,
-        aspect: SenselAspect,
-        params: &FollowParams,
-    ) -> Result<Self> {
-        let nodes = registration_outline(&run.objects[b], aspect);
+    fn new(o: &SequenceObject, aspect: SenselAspect, params: &FollowParams) -> Result<Self> {
+        let nodes = registration_outline(o, aspect);
         let shape = modal_core::Shape::from_points_2d(&nodes, modal_core::Topology::ClosedContour)
             .map_err(|e| IoError::invalid(e.to_string()))?;
         let (dense, node_at) = densify(&nodes, params.anchor_step);
@@ -839,13 +1026,12 @@ impl Anchor {
     /// steps from the latest registration.
     fn register(
         &mut self,
-        run: &SequenceResult,
+        b: &SequenceObject,
         pair: Option<&MatchResult>,
-        b: usize,
         aspect: SenselAspect,
         params: &FollowParams,
     ) -> Result<()> {
-        let target = registration_outline(&run.objects[b], aspect);
+        let target = registration_outline(b, aspect);
         let shape = closed_contour(&target)?;
         let matched = !self.registered || self.motion_since_match >= params.match_motion;
         let mut pairs: Vec<(usize, [f64; 2])> = Vec::new();

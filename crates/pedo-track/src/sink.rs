@@ -50,6 +50,19 @@ pub trait SequenceSink {
         let _ = (pair, a, b);
         Ok(())
     }
+    /// A candidate pair that could not be matched ([`SequenceResult::skipped_pairs`]), with
+    /// its two objects and why, before the pairs matched beside it.
+    fn skipped_pair(&mut self, a: &SequenceObject, b: &SequenceObject, reason: &str) -> Result<()> {
+        let _ = (a, b, reason);
+        Ok(())
+    }
+    /// Every pair, matched or skipped, that leaves an object before object `object` has been
+    /// handed over (the objects before it will be continued by no other): a sink that follows
+    /// objects into their successors can take them from here.
+    fn settled(&mut self, object: usize) -> Result<()> {
+        let _ = object;
+        Ok(())
+    }
     /// Track number `index` (in order from 0), once it has ended: its steps as object and node.
     fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
         let _ = (index, steps);
@@ -104,9 +117,13 @@ pub fn replay_result(r: &SequenceResult, sink: &mut dyn SequenceSink) -> Result<
 
 /// The pairs, tracks and reference pairs of `r`, as [`replay`] hands them.
 fn replay_matches(r: &SequenceResult, sink: &mut dyn SequenceSink) -> Result<()> {
+    for s in &r.skipped_pairs {
+        sink.skipped_pair(&r.objects[s.a], &r.objects[s.b], &s.reason)?;
+    }
     for p in &r.pairs {
         sink.pair(p, &r.objects[p.a], &r.objects[p.b])?;
     }
+    sink.settled(r.objects.len())?;
     for (k, t) in r.all_tracks().enumerate() {
         let steps: Vec<(&SequenceObject, usize)> =
             t.steps.iter().map(|&(o, n)| (&r.objects[o], n)).collect();

@@ -182,6 +182,7 @@ impl<'o> Engine<'o> {
         let pairs = self.match_new(new, progress, sink)?;
         let t2 = Instant::now();
         // Every pair is known: the levels are one frame.
+        sink.settled(self.held.end())?;
         self.chain_new(0, pairs, self.held.end(), sink)?;
         self.counts.timings.matching += t2 - t1;
         self.counts.timings.tracks += t2.elapsed();
@@ -327,6 +328,8 @@ impl<'o> Engine<'o> {
         self.chain_new(first, pairs, settled, sink)?;
         self.counts.timings.matching += t2 - t1;
         self.counts.timings.tracks += t2.elapsed();
+        // A sink's own work on what is settled is none of the run's stages.
+        sink.settled(settled)?;
         progress(Stage::Matching, w.end - start, total);
         Ok(())
     }
@@ -360,6 +363,7 @@ impl<'o> Engine<'o> {
         }
         for s in skipped {
             let (oa, ob) = (self.held.get(s.a + base)?, self.held.get(s.b + base)?);
+            sink.skipped_pair(oa, ob, &s.reason)?;
             let row = SkippedPairRow::of_objects(oa, ob, &s.reason);
             self.counts.skipped_pairs.push(row);
         }

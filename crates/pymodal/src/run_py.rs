@@ -262,10 +262,14 @@ fn run_recording<'py>(
     })
     .map_err(to_py)?;
     let mut regions = match &points {
-        Some(p) if !options.inputs.regions.is_empty() => {
-            pedo_output::regions_table(&rec, &result, p, &options.inputs, threshold)
-                .map_err(to_py)?
-        }
+        Some(p) if !options.inputs.regions.is_empty() => pedo_output::regions_table(
+            &rec,
+            &|o| result.objects[o].frame,
+            p,
+            &options.inputs,
+            threshold,
+        )
+        .map_err(to_py)?,
         _ => pedo_output::Table::default(),
     };
     // The regions of region_rule or masks: fixed and carried through the stances (contour
