@@ -1154,6 +1154,14 @@ pub trait FrameSource {
     /// Frames `w0..w1` of `recording` as a recording of `w1 - w0` frames with its size, mask
     /// and units. Windows are asked for in order.
     fn window(&mut self, recording: &Recording, w0: usize, w1: usize) -> Result<Recording>;
+
+    /// Called once a run has read its last window, which may end before the recording's last
+    /// frame (a run of some frames): a source that checks what it read (a file's digest) does
+    /// so here, so that a run of part of a file still fails when the file changed.
+    fn finish(&mut self, recording: &Recording) -> Result<()> {
+        let _ = recording;
+        Ok(())
+    }
 }
 
 /// Frames a streamed run holds at a time: a [`FrameSource`] reads at most this many ahead.

@@ -722,3 +722,61 @@ fn upsampling_a_large_frame_is_checked_before_it_is_allocated() {
     let up = upsample(&small, 4, Interpolation::Bilinear).unwrap();
     assert_eq!((up.rows(), up.cols()), (253, 253));
 }
+
+/// Writes `byte` at `at` in the file at `path` in place, its modification time set back.
+fn rewrite_in_place(path: &std::path::Path, at: u64, byte: u8) {
+    use std::os::unix::fs::FileExt as _;
+    let mtime = std::fs::metadata(path).unwrap().modified().unwrap();
+    let file = std::fs::File::options().write(true).open(path).unwrap();
+    file.write_at(&[byte], at).unwrap();
+    file.set_modified(mtime).unwrap();
+}
+
+#[test]
+fn a_run_of_the_first_frames_still_checks_the_whole_files_digest() {
+    use pedo_io::FrameSource as _;
+    let opts = ReadOptions::default();
+    // A Tekscan file changed after frame 100 (same size and time): a run of frames 0..64 asks
+    // for none of it, and still fails when it finishes; unchanged, it finishes.
+    let walk = std::fs::read(data("FrasP01L.asf")).unwrap();
+    let path = scratch("first-frames.asf");
+    std::fs::write(&path, &walk).unwrap();
+    let text = String::from_utf8_lossy(&walk).into_owned();
+    let frame = text.find("Frame 100").unwrap();
+    let at = frame + text[frame..].find(",1").unwrap() + 1;
+    let read = pedo_io::formats::read_for_run(&path, &opts).unwrap();
+    let mut frames = read.frames.expect("a Tekscan file streams");
+    rewrite_in_place(&path, at as u64, b'2');
+    assert!(frames.window(&read.recording, 0, 64).is_ok());
+    let e = frames.finish(&read.recording).unwrap_err().to_string();
+    assert!(e.contains("changed while it was being read"), "{e}");
+    std::fs::write(&path, &walk).unwrap();
+    let read = pedo_io::formats::read_for_run(&path, &opts).unwrap();
+    let mut frames = read.frames.unwrap();
+    assert!(frames.window(&read.recording, 0, 64).is_ok());
+    assert!(frames.finish(&read.recording).is_ok());
+    // A .npy array, read at offsets: one value changed in place after the first reading.
+    let mut npy = b"\x93NUMPY\x01\x00".to_vec();
+    let dict = "{'descr': '<f4', 'fortran_order': False, 'shape': (130, 4, 5), }";
+    let pad = 64 - (10 + dict.len() + 1) % 64;
+    let header = format!("{dict}{}\n", " ".repeat(pad));
+    npy.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    npy.extend_from_slice(header.as_bytes());
+    let body = npy.len();
+    for k in 0..130 * 20 {
+        npy.extend_from_slice(&((k % 7) as f32).to_le_bytes());
+    }
+    let path = scratch("first-frames.npy");
+    std::fs::write(&path, &npy).unwrap();
+    let read = pedo_io::formats::read_for_run(&path, &opts).unwrap();
+    let mut frames = read.frames.expect("a .npy array streams");
+    rewrite_in_place(&path, (body + 4 * 20 * 120) as u64, 0x40);
+    assert!(frames.window(&read.recording, 0, 64).is_ok());
+    let e = frames.finish(&read.recording).unwrap_err().to_string();
+    assert!(e.contains("changed while it was being read"), "{e}");
+    std::fs::write(&path, &npy).unwrap();
+    let read = pedo_io::formats::read_for_run(&path, &opts).unwrap();
+    let mut frames = read.frames.unwrap();
+    assert!(frames.window(&read.recording, 0, 130).is_ok());
+    assert!(frames.finish(&read.recording).is_ok());
+}

@@ -84,6 +84,10 @@ pub fn stream_sequence(
         }
         w0 = w1;
     }
+    // What the source read is checked (a file's digest) before the run's outputs are made.
+    if let Some(s) = source.as_mut() {
+        s.finish(recording)?;
+    }
     run.finish(sink)
 }
 

@@ -726,6 +726,7 @@ fn read_for_run_within(path: &Path, opts: &ReadOptions) -> Result<RunInput> {
     let frames = FileFrames {
         source,
         next: 0,
+        path: path.to_path_buf(),
         name,
         expected: Some(sha256.clone()),
     };
@@ -755,6 +756,7 @@ pub struct FileFrames {
     source: Source,
     /// The number of the next frame to come.
     next: usize,
+    path: PathBuf,
     name: String,
     /// The digest of the first reading, which the second one (a text file's reading thread
     /// sends it after the last frame) must equal.
@@ -885,6 +887,38 @@ impl FileFrames {
     }
 }
 
+impl FileFrames {
+    /// Once the run has read its last window: the digest of the whole file checked against the
+    /// first reading's, if the last frame did not check it. A text file's reading goes on to
+    /// its end (the frames the run did not ask for are passed over); an array read at offsets
+    /// is hashed again from its start (the size and time of the file are checked after every
+    /// window besides).
+    fn check_rest(&mut self, n_frames: usize) -> Result<()> {
+        if self.expected.is_none() {
+            return Ok(());
+        }
+        match &mut self.source {
+            Source::Text { .. } => {
+                while self.next < n_frames {
+                    let w1 = (self.next + crate::recording::FRAME_WINDOW).min(n_frames);
+                    self.values(w1, w1, 0)?;
+                    self.next = w1;
+                }
+                self.check_digest()
+            }
+            Source::Npy(_) => {
+                let expected = self.expected.take();
+                let digest = stamp::file_digest(&self.path)
+                    .map_err(|e| stream::read_error(&self.name, e))?;
+                match Some(digest) == expected {
+                    true => Ok(()),
+                    false => Err(stamp::changed(&self.name)),
+                }
+            }
+        }
+    }
+}
+
 impl crate::recording::FrameSource for FileFrames {
     fn window(&mut self, recording: &Recording, w0: usize, w1: usize) -> Result<Recording> {
         if w0 < self.next || w1 <= w0 || w1 > recording.n_frames() {
@@ -900,6 +934,10 @@ impl crate::recording::FrameSource for FileFrames {
         }
         // The size, mask and units of the run's recording (its unit overrides applied).
         recording.like(w1 - w0, data)
+    }
+
+    fn finish(&mut self, recording: &Recording) -> Result<()> {
+        self.check_rest(recording.n_frames())
     }
 }
 

@@ -36,6 +36,14 @@ impl<R: Read> Read for Hashing<R> {
     }
 }
 
+/// The lower-case hex SHA-256 of the file at `path`, read from its start to its end.
+pub(crate) fn file_digest(path: &Path) -> std::io::Result<String> {
+    let mut file = std::fs::File::open(path)?;
+    let mut sha = Sha256::new();
+    std::io::copy(&mut file, &mut sha)?;
+    Ok(hex(&sha.finalize()))
+}
+
 /// Lower-case hex of a digest.
 pub(crate) fn hex(digest: &[u8]) -> String {
     digest.iter().map(|b| format!("{b:02x}")).collect()
@@ -137,5 +145,10 @@ impl FrameSource for Unchanged<'_> {
         let window = self.inner.window(recording, w0, w1)?;
         self.stamp.check(self.path)?;
         Ok(window)
+    }
+
+    fn finish(&mut self, recording: &Recording) -> Result<()> {
+        self.inner.finish(recording)?;
+        self.stamp.check(self.path)
     }
 }
