@@ -133,19 +133,26 @@ pub(crate) fn holding(bytes: usize) {
 /// Whether the read may hold `more` bytes of values besides the frames it holds (data that
 /// must be held whole, as a Fortran-ordered array's); `Err` says why not.
 pub(crate) fn may_hold(more: u64) -> std::result::Result<(), String> {
-    let budget = held_budget(&current());
+    over_budget(&current(), more).map_or(Ok(()), |(held, over)| {
+        Err(format!("its values would take {held} MiB, {over}"))
+    })
+}
+
+/// When the frames held and `more` bytes pass the read's budget ([`held_budget`]): the MiB
+/// they take and the end of the refusal that says so (the budget, the file's size, the option).
+fn over_budget(limits: &Limits, more: u64) -> Option<(u64, String)> {
+    let budget = held_budget(limits);
     let held = HELD.with(|c| c.get()).saturating_add(more);
     if held <= budget {
-        return Ok(());
+        return None;
     }
     let file = FILE_BYTES.with(|c| c.get()).unwrap_or(0);
-    Err(format!(
-        "its values would take {} MiB, more than the {} MiB a file of {file} bytes may expand \
-         to; {}",
-        held.div_ceil(1 << 20),
+    let over = format!(
+        "more than the {} MiB a file of {file} bytes may expand to; {}",
         budget >> 20,
         raise("max_memory_mb")
-    ))
+    );
+    Some((held.div_ceil(1 << 20), over))
 }
 
 /// The bytes of values the frames read may hold: [`Limits::held`], or [`HELD_PER_FILE_BYTE`]
@@ -193,17 +200,10 @@ pub fn frame_count(n_frames: usize, per: usize) -> std::result::Result<(), Strin
             raise("max_frames")
         ));
     }
-    let held = HELD.with(|c| c.get());
-    let budget = held_budget(&limits);
-    if held > budget {
-        let file = FILE_BYTES.with(|c| c.get()).unwrap_or(0);
+    if let Some((held, over)) = over_budget(&limits, 0) {
+        let read = n_frames.saturating_sub(1);
         return Err(format!(
-            "its first {} frames hold {} MiB of values, more than the {} MiB a file of {file} \
-             bytes may expand to; {}",
-            n_frames.saturating_sub(1),
-            held.div_ceil(1 << 20),
-            budget >> 20,
-            raise("max_memory_mb")
+            "its first {read} frames hold {held} MiB of values, {over}"
         ));
     }
     if n_frames.checked_mul(per).is_none_or(|n| n > limits.values) {
