@@ -774,6 +774,16 @@ fn a_run_of_the_first_frames_still_checks_the_whole_files_digest() {
     assert!(frames.window(&read.recording, 0, 64).is_ok());
     let e = frames.finish(&read.recording).unwrap_err().to_string();
     assert!(e.contains("changed while it was being read"), "{e}");
+    // The same change under a run of every frame: its last window fails.
+    std::fs::write(&path, &npy).unwrap();
+    let read = pedo_io::formats::read_for_run(&path, &opts).unwrap();
+    let mut frames = read.frames.unwrap();
+    rewrite_in_place(&path, (body + 4 * 20 * 120) as u64, 0x40);
+    let e = frames
+        .window(&read.recording, 0, 130)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("changed while it was being read"), "{e}");
     std::fs::write(&path, &npy).unwrap();
     let read = pedo_io::formats::read_for_run(&path, &opts).unwrap();
     let mut frames = read.frames.unwrap();

@@ -861,14 +861,20 @@ impl FileFrames {
     }
 
     /// Once the file's last frame has been handed over: fails unless a text file's second
-    /// reading gave the first one's digest (a file rewritten between them, even to its old size
-    /// and time).
+    /// reading, or an array's file hashed again whole, gives the first reading's digest (a file
+    /// rewritten between them, even to its old size and time).
     fn check_digest(&mut self) -> Result<()> {
         let Some(expected) = self.expected.take() else {
             return Ok(());
         };
         let Source::Text { frames, digest } = &self.source else {
-            return Ok(());
+            // An array read at offsets: its file hashed again whole.
+            let digest =
+                stamp::file_digest(&self.path).map_err(|e| stream::read_error(&self.name, e))?;
+            return match digest == expected {
+                true => Ok(()),
+                false => Err(stamp::changed(&self.name)),
+            };
         };
         // Frames after the last (none in a file read whole before) or the reading's error.
         if let Ok(more) = frames.try_recv() {
@@ -897,25 +903,14 @@ impl FileFrames {
         if self.expected.is_none() {
             return Ok(());
         }
-        match &mut self.source {
-            Source::Text { .. } => {
-                while self.next < n_frames {
-                    let w1 = (self.next + crate::recording::FRAME_WINDOW).min(n_frames);
-                    self.values(w1, w1, 0)?;
-                    self.next = w1;
-                }
-                self.check_digest()
-            }
-            Source::Npy(_) => {
-                let expected = self.expected.take();
-                let digest = stamp::file_digest(&self.path)
-                    .map_err(|e| stream::read_error(&self.name, e))?;
-                match Some(digest) == expected {
-                    true => Ok(()),
-                    false => Err(stamp::changed(&self.name)),
-                }
+        if let Source::Text { .. } = self.source {
+            while self.next < n_frames {
+                let w1 = (self.next + crate::recording::FRAME_WINDOW).min(n_frames);
+                self.values(w1, w1, 0)?;
+                self.next = w1;
             }
         }
+        self.check_digest()
     }
 }
 
