@@ -236,6 +236,8 @@ struct Bounded {
     stderr: String,
     peak_kb: i64,
     took: Duration,
+    /// User and system CPU time.
+    cpu: Duration,
 }
 
 /// The address space a run may take (`prlimit --as`, when the tool is there): a failed
@@ -282,6 +284,10 @@ fn bounded(args: &[&std::ffi::OsStr]) -> Bounded {
         stderr,
         peak_kb: usage.ru_maxrss,
         took: start.elapsed(),
+        cpu: [usage.ru_utime, usage.ru_stime]
+            .iter()
+            .map(|t| Duration::from_secs(t.tv_sec as u64) + Duration::from_micros(t.tv_usec as u64))
+            .sum(),
     }
 }
 
@@ -297,10 +303,11 @@ fn refused(file: &Path, says: &str) {
     ]);
     let name = file.display().to_string();
     eprintln!(
-        "{name}: exit {:?}, peak {} MB, {:.2?}: {}",
+        "{name}: exit {:?}, peak {} MB, {:.2?} ({:.2?} CPU): {}",
         r.code,
         r.peak_kb / 1024,
         r.took,
+        r.cpu,
         r.stderr.trim_end()
     );
     assert_eq!(r.code, Some(1), "{name}: {}", r.stderr);
@@ -313,6 +320,7 @@ fn refused(file: &Path, says: &str) {
     assert_eq!(r.stderr.lines().count(), 1, "{}", r.stderr);
     assert!(r.peak_kb <= 512 << 10, "{name}: peak {} kB", r.peak_kb);
     assert!(r.took <= Duration::from_secs(10), "{name}: {:?}", r.took);
+    assert!(r.cpu <= Duration::from_secs(10), "{name}: {:?} CPU", r.cpu);
     assert!(!out.exists(), "no output for a refused recording");
 }
 
@@ -368,6 +376,15 @@ fn hostile_files_are_one_line_errors_within_memory_and_time() {
     let xml = gzip_of(&[(ZEBRIS_HEAD, 1), (b"<quant/>", 1_000_000), (ZEBRIS_TAIL, 1)]);
     let says = "values a recording may hold";
     refused(&write("million.xml.gz", &xml), says);
+    // 550 bytes: 32,768 empty frames of 256 × 256, every value a recording may hold (2³¹),
+    // and 13 KB: as many frames each loading one sensel. Made frame by frame, their objects
+    // and measures took 13.5 s and 20 s of CPU; now they cost what they hold.
+    let empty = gzip_of(&[(ZEBRIS_HEAD, 1), (b"<quant/>", 32_768), (ZEBRIS_TAIL, 1)]);
+    refused(&write("wait.xml.gz", &empty), "no object to match");
+    let dot = b"<quant><cell_begin><x>5</x><y>7</y></cell_begin><cell_count><x>1</x><y>1</y>\
+        </cell_count><cells>100</cells></quant>";
+    let dots = gzip_of(&[(ZEBRIS_HEAD, 1), (dot, 32_768), (ZEBRIS_TAIL, 1)]);
+    refused(&write("dots.xml.gz", &dots), "no object to match");
     // Nested 10⁶ deep: minutes of quadratic work before.
     let deep = gzip_of(&[(ZEBRIS_HEAD, 1), (b"<a>", 1_000_000), (b"</a>", 1_000_000)]);
     refused(&write("deep.xml.gz", &deep), "nested elements");

@@ -286,6 +286,18 @@ fn segments(case: u8, saddle_high: bool) -> &'static [(u8, u8)] {
 /// Marching squares on `grid` at `level`, the grid surrounded by a ring that is below the level
 /// (0 when the level is positive), so every contour closes. Points in grid pixel coordinates.
 pub fn marching_squares(grid: &Grid, level: f64, saddle: Saddle) -> Result<Vec<Contour>> {
+    marching_squares_at(grid, level, saddle, (0, 0))
+}
+
+/// [`marching_squares`] of a window of a larger grid whose first row and column are `origin`
+/// there: the points are those of the larger grid, bit for bit, when the level is positive and
+/// the larger grid is 0 around the window.
+fn marching_squares_at(
+    grid: &Grid,
+    level: f64,
+    saddle: Saddle,
+    origin: (usize, usize),
+) -> Result<Vec<Contour>> {
     if !level.is_finite() {
         return Err(IoError::invalid(format!(
             "level must be finite, got {level}"
@@ -302,24 +314,35 @@ pub fn marching_squares(grid: &Grid, level: f64, saddle: Saddle) -> Result<Vec<C
         }
     };
     let frac = |a: f64, b: f64| if a == b { 0.0 } else { (level - a) / (b - a) };
+    // Only the cells touching a value above the level cross it (the padding is below it): the
+    // cells walked and the edges keyed are those of the window around such values, so that a
+    // frame of a few loaded sensels on a large plate costs its window, not the plate.
+    let Some(((r0, c0), (r1, c1))) = above_bounds(grid, level) else {
+        return Ok(Vec::new());
+    };
+    // Cells (i, j) of the padded grid with i in r0..=r1 + 1, j in c0..=c1 + 1; their corners
+    // in rows r0..=r1 + 2, columns c0..=c1 + 2, numbered from (r0, c0) in a width `kw`.
+    let (kh, kw) = (r1 - r0 + 3, c1 - c0 + 3);
     // Edge keys: horizontal edge from (i, j) to (i, j+1) = 2(i w + j); vertical (i, j)-(i+1, j) = +1.
     let key_of = |i: usize, j: usize, e: u8| -> usize {
+        let (i, j) = (i - r0, j - c0);
         match e {
-            0 => 2 * (i * w + j),
-            2 => 2 * ((i + 1) * w + j),
-            3 => 2 * (i * w + j) + 1,
-            _ => 2 * (i * w + j + 1) + 1,
+            0 => 2 * (i * kw + j),
+            2 => 2 * ((i + 1) * kw + j),
+            3 => 2 * (i * kw + j) + 1,
+            _ => 2 * (i * kw + j + 1) + 1,
         }
     };
     let point_of = |key: usize| -> [f64; 2] {
         let (cell, vert) = (key / 2, key % 2 == 1);
-        let (i, j) = (cell / w, cell % w);
+        let (i, j) = (cell / kw + r0, cell % kw + c0);
+        let (y, x) = ((i + origin.0) as f64 - 1.0, (j + origin.1) as f64 - 1.0);
         if vert {
             let t = frac(val(i, j), val(i + 1, j));
-            [j as f64 - 1.0, i as f64 - 1.0 + t]
+            [x, y + t]
         } else {
             let t = frac(val(i, j), val(i, j + 1));
-            [j as f64 - 1.0 + t, i as f64 - 1.0]
+            [x + t, y]
         }
     };
     // Two edges per cell: a grid larger than memory allows is an error, not an abort (a
@@ -329,14 +352,14 @@ pub fn marching_squares(grid: &Grid, level: f64, saddle: Saddle) -> Result<Vec<C
             "a grid of {rows} x {cols} is too large for its contours in memory"
         ))
     };
-    let nkeys = h
-        .checked_mul(w)
+    let nkeys = kh
+        .checked_mul(kw)
         .and_then(|n| n.checked_mul(2))
         .ok_or_else(too_large)?;
     let mut next = crate::limits::try_filled(nkeys, usize::MAX).ok_or_else(too_large)?;
     let mut starts = Vec::new();
-    for i in 0..h - 1 {
-        for j in 0..w - 1 {
+    for i in r0..=r1 + 1 {
+        for j in c0..=c1 + 1 {
             let (tl, tr, bl, br) = (val(i, j), val(i, j + 1), val(i + 1, j), val(i + 1, j + 1));
             let case = u8::from(tl > level)
                 | u8::from(tr > level) << 1
@@ -396,6 +419,26 @@ pub fn marching_squares(grid: &Grid, level: f64, saddle: Saddle) -> Result<Vec<C
         });
     }
     Ok(out)
+}
+
+/// The first and last row and column of `grid` holding a value above `level`, if any.
+fn above_bounds(grid: &Grid, level: f64) -> Option<((usize, usize), (usize, usize))> {
+    let cols = grid.cols();
+    let mut rows_above = (0..grid.rows()).filter(|&r| {
+        let row = &grid.data()[r * cols..(r + 1) * cols];
+        row.iter().any(|&v| v > level)
+    });
+    let r0 = rows_above.next()?;
+    let r1 = rows_above.last().unwrap_or(r0);
+    let (mut c0, mut c1) = (cols, 0);
+    for r in r0..=r1 {
+        let row = &grid.data()[r * cols..(r + 1) * cols];
+        if let Some(first) = row.iter().position(|&v| v > level) {
+            c0 = c0.min(first);
+            c1 = c1.max(row.iter().rposition(|&v| v > level).unwrap_or(first));
+        }
+    }
+    Some(((r0, c0), (r1, c1)))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -658,6 +701,45 @@ pub fn default_level(g: &Grid) -> Option<f64> {
 /// # Ok::<(), pedo_io::IoError>(())
 /// ```
 pub fn contours(frame: &Grid, opts: &ContourOptions) -> Result<Vec<Contour>> {
+    contours_at(frame, (0, 0), opts)
+}
+
+/// Whether [`contours_of_window`] gives a frame's contours with these options: marching
+/// squares at a positive level, without smoothing or upsampling (which reach past a window).
+pub fn window_gives_contours(opts: &ContourOptions) -> bool {
+    let plain = |f: Option<f64>| f.is_none_or(|v| v == 0.0);
+    matches!(opts.method, ContourMethod::MarchingSquares { .. })
+        && opts.level.is_none_or(|l| l > 0.0)
+        && plain(opts.preprocess.sigma)
+        && opts.preprocess.upsample.is_none_or(|(f, _)| f == 1)
+}
+
+/// The [`contours`] of a frame that is 0 outside `window`, whose first row and column are
+/// `origin` in the frame: the same contours, bit for bit, at the cost of the window, when
+/// [`window_gives_contours`] (an error otherwise).
+///
+/// # Errors
+///
+/// As [`contours`]; [`IoError::InvalidInput`] when the options reach past a window.
+pub fn contours_of_window(
+    window: &Grid,
+    origin: (usize, usize),
+    opts: &ContourOptions,
+) -> Result<Vec<Contour>> {
+    if !window_gives_contours(opts) {
+        return Err(IoError::invalid(
+            "these contour options reach past a window of the frame (smoothing, upsampling, \
+             the chain method or a level at or below 0)",
+        ));
+    }
+    contours_at(window, origin, opts)
+}
+
+fn contours_at(
+    frame: &Grid,
+    origin: (usize, usize),
+    opts: &ContourOptions,
+) -> Result<Vec<Contour>> {
     opts.units.check()?;
     if !(opts.min_area.is_finite() && opts.min_area >= 0.0) {
         return Err(IoError::invalid(format!(
@@ -680,7 +762,9 @@ pub fn contours(frame: &Grid, opts: &ContourOptions) -> Result<Vec<Contour>> {
     };
     let (g, k) = opts.preprocess.apply(frame)?;
     let mut cs = match opts.method {
-        ContourMethod::MarchingSquares { saddle } => marching_squares(&g, level, saddle)?,
+        ContourMethod::MarchingSquares { saddle } => {
+            marching_squares_at(&g, level, saddle, origin)?
+        }
         ContourMethod::Chain { high, refine } => {
             let high = high.unwrap_or(2.0 * level);
             chain_contours(&g, level, high, refine)?

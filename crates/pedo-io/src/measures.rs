@@ -33,7 +33,7 @@
 //! [`FrameMeasures::total_force`]: crate::recording::FrameMeasures::total_force
 
 use crate::error::{IoError, Result};
-use crate::recording::{canonical_units, kpa_per_unit, Recording};
+use crate::recording::{canonical_units, kpa_per_unit, Recording, StoredValues};
 use crate::stances::{find_stances, resample, Stance, StanceRule};
 use std::ops::Range;
 
@@ -440,12 +440,7 @@ impl RecordingMeasures {
                 values.len()
             )));
         }
-        if self.first.is_some() && frame != self.next {
-            return Err(IoError::invalid(format!(
-                "frame {frame} measured after frame {}: frames are measured one after the other",
-                self.next - 1
-            )));
-        }
+        self.check_order(frame)?;
         let bad = (values.iter().zip(&self.mask)).position(|(v, &m)| m && !v.is_finite());
         if let Some(i) = bad {
             return Err(IoError::invalid(format!(
@@ -475,17 +470,65 @@ impl RecordingMeasures {
                 moment[1] += v * (i / self.cols) as f64;
             }
         }
+        self.end_of_frame(frame, load, contact, top, moment);
+        Ok(())
+    }
+
+    /// Adds frame number `frame` given by the values it holds ([`StoredValues`]: a frame held
+    /// sparsely, or one of zeros), at the cost of those values rather than of the frame's size;
+    /// the same as [`add_frame`](Self::add_frame) with the whole frame, bit for bit.
+    ///
+    /// # Errors
+    ///
+    /// As [`add_frame`](Self::add_frame).
+    pub fn add_stored(&mut self, frame: usize, stored: StoredValues<'_>) -> Result<()> {
+        if stored.frame_len() != self.mask.len() || !stored.all_positive() {
+            return self.add_frame(frame, &stored.to_frame());
+        }
+        self.check_order(frame)?;
+        let (mut load, mut contact, mut top) = (0.0f64, 0usize, 0.0f64);
+        let mut moment = [0.0f64; 2];
+        for (i, v) in stored.iter().filter(|&(i, _)| self.mask[i]) {
+            let v = f64::from(v);
+            if v > self.peak[i] {
+                self.peak[i] = v;
+            }
+            top = top.max(v);
+            if v >= self.threshold {
+                self.sum[i] += v;
+                self.loaded[i] += 1;
+                load += v;
+                contact += 1;
+                moment[0] += v * (i % self.cols) as f64;
+                moment[1] += v * (i / self.cols) as f64;
+            }
+        }
+        self.end_of_frame(frame, load, contact, top, moment);
+        Ok(())
+    }
+
+    fn check_order(&self, frame: usize) -> Result<()> {
+        if self.first.is_some() && frame != self.next {
+            return Err(IoError::invalid(format!(
+                "frame {frame} measured after frame {}: frames are measured one after the other",
+                self.next - 1
+            )));
+        }
+        Ok(())
+    }
+
+    /// Records frame `frame`'s sums.
+    fn end_of_frame(&mut self, frame: usize, load: f64, contact: usize, top: f64, m: [f64; 2]) {
         self.forces.push(load * self.force_factor);
         self.contacts.push(contact);
         self.peaks.push(top);
         self.cops
-            .push((load > 0.0).then(|| [moment[0] / load, moment[1] / load]));
+            .push((load > 0.0).then(|| [m[0] / load, m[1] / load]));
         self.max_contact = self.max_contact.max(contact);
         if self.first.is_none() {
             self.first = Some(frame);
         }
         self.next = frame + 1;
-        Ok(())
     }
 
     /// The measures of the frames added.
@@ -627,6 +670,39 @@ mod tests {
 
     fn close(a: f64, b: f64) -> bool {
         (a - b).abs() <= 1e-12 * b.abs().max(1.0)
+    }
+
+    proptest::proptest! {
+        /// A frame added by the values it holds is measured as the whole frame is, bit for bit
+        /// (values of every kind: loaded, below the threshold, negative, `-0.0`).
+        #[test]
+        fn frames_added_by_their_stored_values_measure_as_whole_frames(
+            data in proptest::collection::vec(proptest::prop_oneof![
+                6 => proptest::strategy::Just(0.0f32),
+                3 => 0.01f32..50.0,
+                1 => proptest::strategy::Just(-0.0f32),
+                1 => -3.0f32..-0.01,
+            ], 5 * 12),
+            threshold in 0.0f64..20.0,
+        ) {
+            let mut mask = vec![true; 12];
+            mask[5] = false;
+            let rec = Recording::new(5, 3, 4, data, mask).unwrap().with_frame_rate(100.0).unwrap();
+            let mut stored = RecordingMeasures::new(&rec, threshold).unwrap();
+            let mut whole = RecordingMeasures::new(&rec, threshold).unwrap();
+            for t in 0..5 {
+                let frame = rec.frame_slice(t).unwrap();
+                match rec.stored_values(t) {
+                    Some(s) => stored.add_stored(t, s).unwrap(),
+                    None => stored.add_frame(t, &frame).unwrap(),
+                }
+                whole.add_frame(t, &frame).unwrap();
+            }
+            proptest::prop_assert_eq!(
+                format!("{:?}", stored.finish()),
+                format!("{:?}", whole.finish())
+            );
+        }
     }
 
     #[test]

@@ -399,6 +399,44 @@ impl Recording {
         })
     }
 
+    /// The values frame `t` holds, when the frames are held sparsely (or frame `t` holds no
+    /// value: every value `+0.0`, bit for bit); `None` for a frame held whole, or past the end.
+    /// A run takes a sparse frame's measures and values from these, and passes over a frame
+    /// holding nothing without making it, so that its cost follows the values a file holds,
+    /// not the size its header claims (a small file of many empty frames on a large plate).
+    pub fn stored_values(&self, t: usize) -> Option<StoredValues<'_>> {
+        let per = self.rows * self.cols;
+        if t >= self.n_frames {
+            return None;
+        }
+        match &self.frames {
+            Frames::Dense(d) => d[t * per..(t + 1) * per]
+                .iter()
+                .all(|v| v.to_bits() == 0)
+                .then_some(StoredValues {
+                    at: Positions::Narrow(&[]),
+                    values: &[],
+                    len: per,
+                    cols: self.cols,
+                }),
+            Frames::Sparse(s) => Some(s.stored(t, self.cols)),
+        }
+    }
+
+    /// Frame `t`'s raw values (0 at missing sensors) written into `out`, whose room is reused
+    /// from frame to frame; `None` past the end.
+    pub fn frame_into<'a>(&'a self, t: usize, out: &'a mut Vec<f32>) -> Option<&'a [f32]> {
+        let per = self.rows * self.cols;
+        (t < self.n_frames).then(|| match &self.frames {
+            Frames::Dense(d) => &d[t * per..(t + 1) * per],
+            Frames::Sparse(_) => {
+                out.resize(per, 0.0);
+                self.frames.fill(t, per, out);
+                &out[..]
+            }
+        })
+    }
+
     /// Frame `t` as a [`Grid`] (missing sensors read as 0, i.e. no contact).
     pub fn frame(&self, t: usize) -> Result<Grid> {
         let s = self.frame_slice(t).ok_or_else(|| {
@@ -627,8 +665,15 @@ impl Recording {
         let mut f = vec![0.0f32; per];
         (frames.start..frames.end.min(self.n_frames))
             .map(|t| {
-                self.frames.fill(t, per, &mut f);
                 let mut sum = MeasureSum::default();
+                if let Some(stored) = self.stored_values(t).filter(StoredValues::all_positive) {
+                    // The zeros add nothing (bit for bit), positions come in order.
+                    for (i, v) in stored.iter().filter(|&(i, _)| self.sensor_mask[i]) {
+                        sum.add(v as f64, i / self.cols, i % self.cols, threshold);
+                    }
+                    return sum.measures(self);
+                }
+                self.frames.fill(t, per, &mut f);
                 for (i, &v) in f.iter().enumerate() {
                     if self.sensor_mask[i] {
                         sum.add(v as f64, i / self.cols, i % self.cols, threshold);
@@ -878,6 +923,71 @@ pub(crate) struct SparseFrames {
     per: usize,
 }
 
+/// The values one frame holds, by position in increasing order, every other value `+0.0`
+/// ([`Recording::stored_values`]).
+#[derive(Debug, Clone, Copy)]
+pub struct StoredValues<'a> {
+    at: Positions<'a>,
+    values: &'a [f32],
+    len: usize,
+    cols: usize,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Positions<'a> {
+    Narrow(&'a [u16]),
+    Wide(&'a [u32]),
+}
+
+impl<'a> StoredValues<'a> {
+    /// The frame's size (rows × cols), stored or not.
+    pub fn frame_len(&self) -> usize {
+        self.len
+    }
+    /// Whether the frame holds no value.
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+    /// Whether every value held is finite and above 0 (then the frame's sums, peaks and
+    /// contact over its stored values are those over all of its values, bit for bit: the
+    /// zeros add nothing and no ±0 or NaN makes a maximum depend on the order).
+    pub fn all_positive(&self) -> bool {
+        self.values.iter().all(|v| v.is_finite() && *v > 0.0)
+    }
+    /// `(position, value)` in increasing order of position.
+    pub fn iter(&self) -> impl Iterator<Item = (usize, f32)> + 'a {
+        let (at, values) = (self.at, self.values);
+        values.iter().enumerate().map(move |(k, &v)| match at {
+            Positions::Narrow(a) => (a[k] as usize, v),
+            Positions::Wide(a) => (a[k] as usize, v),
+        })
+    }
+    /// The smallest window of the frame holding every value held, as a grid (0 elsewhere in
+    /// it), with its first row and column in the frame; `None` when the frame holds no value.
+    pub fn window(&self) -> Option<(Grid, (usize, usize))> {
+        let (first, last) = (self.iter().next()?.0, self.iter().last()?.0);
+        let (r0, r1) = (first / self.cols, last / self.cols);
+        let (c0, c1) = self.iter().fold((self.cols, 0), |(lo, hi), (i, _)| {
+            (lo.min(i % self.cols), hi.max(i % self.cols))
+        });
+        let (rows, cols) = (r1 - r0 + 1, c1 - c0 + 1);
+        let mut data = vec![0.0f64; rows * cols];
+        for (i, v) in self.iter() {
+            data[(i / self.cols - r0) * cols + i % self.cols - c0] = v as f64;
+        }
+        // Values held are finite (as every recording's), so the grid is valid.
+        Some((Grid::new(rows, cols, data).ok()?, (r0, c0)))
+    }
+    /// The whole frame, every value.
+    pub fn to_frame(&self) -> Vec<f32> {
+        let mut out = vec![0.0; self.len];
+        for (i, v) in self.iter() {
+            out[i] = v;
+        }
+        out
+    }
+}
+
 /// The most values a frame with `u16` positions may have.
 const NARROW_MAX: usize = u16::MAX as usize + 1;
 
@@ -956,6 +1066,20 @@ impl SparseFrames {
             self.wide[k] as usize
         } else {
             self.at[k] as usize
+        }
+    }
+
+    fn stored(&self, t: usize, cols: usize) -> StoredValues<'_> {
+        let k = self.starts[t]..self.starts[t + 1];
+        StoredValues {
+            at: if self.is_wide() {
+                Positions::Wide(&self.wide[k.clone()])
+            } else {
+                Positions::Narrow(&self.at[k.clone()])
+            },
+            values: &self.values[k],
+            len: self.per,
+            cols,
         }
     }
 
@@ -1177,6 +1301,64 @@ mod tests {
             s.push(f);
         }
         s
+    }
+
+    /// Frames of 5 × 7, mostly 0, holding values of every kind a file may: loaded, below the
+    /// threshold, negative (an offset) and `-0.0`.
+    fn mostly_zero_frames() -> impl proptest::strategy::Strategy<Value = (Vec<f32>, Vec<bool>)> {
+        use proptest::prelude::*;
+        let value = prop_oneof![
+            6 => Just(0.0f32),
+            3 => 0.01f32..50.0,
+            1 => Just(-0.0f32),
+            1 => -3.0f32..-0.01,
+        ];
+        (
+            proptest::collection::vec(value, 4 * 35),
+            proptest::collection::vec(proptest::bool::weighted(0.9), 35),
+        )
+    }
+
+    proptest::proptest! {
+        /// The measures taken from a sparse frame's stored values are those of the whole
+        /// frame, bit for bit (the oracle: the same frames held whole).
+        #[test]
+        fn measures_of_stored_values_are_those_of_whole_frames(
+            (data, mask) in mostly_zero_frames(),
+            threshold in proptest::prop_oneof![proptest::strategy::Just(0.0), 0.0f64..20.0],
+        ) {
+            let sparse = Recording::new(4, 5, 7, data, mask).unwrap();
+            let mut whole = sparse.clone();
+            whole.frames = Frames::Dense(sparse.data().into_owned());
+            let (a, b) = (sparse.measures(threshold), whole.measures(threshold));
+            proptest::prop_assert_eq!(format!("{a:?}"), format!("{b:?}"));
+            for t in 0..4 {
+                let stored = sparse.stored_values(t);
+                proptest::prop_assert_eq!(
+                    stored.map(|s| s.to_frame()),
+                    sparse.is_sparse().then(|| whole.frame_slice(t).unwrap().into_owned())
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_frame_holding_nothing_is_known_without_making_it() {
+        let (rows, cols) = (256, 256);
+        let mut data = vec![0.0f32; 3 * rows * cols];
+        data[rows * cols + 300] = 4.0;
+        let rec = Recording::new(3, rows, cols, data, vec![true; rows * cols]).unwrap();
+        assert!(rec.stored_values(0).unwrap().is_empty());
+        let one = rec.stored_values(1).unwrap();
+        assert_eq!(one.iter().collect::<Vec<_>>(), [(300, 4.0)]);
+        let (window, origin) = one.window().unwrap();
+        assert_eq!((window.rows(), window.cols(), origin), (1, 1, (1, 44)));
+        assert!(rec.stored_values(3).is_none());
+        // Held whole, a frame of zeros is still told apart (and a loaded one is not listed).
+        let mut whole = rec.clone();
+        whole.frames = Frames::Dense(rec.data().into_owned());
+        assert!(whole.stored_values(2).unwrap().is_empty());
+        assert!(whole.stored_values(1).is_none());
     }
 
     #[test]

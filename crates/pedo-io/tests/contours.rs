@@ -7,6 +7,66 @@ use pedo_io::{
 };
 use std::f64::consts::PI;
 
+proptest::proptest! {
+    /// The contours of a window around a sparse frame's values are the frame's, bit for bit:
+    /// a few loaded sensels on a large plate are contoured at the cost of their window.
+    #[test]
+    fn a_window_around_the_values_has_the_frames_contours(
+        blobs in proptest::collection::vec((0usize..40, 0usize..30, 1usize..5, 0.5f64..40.0), 1..4),
+        threshold in proptest::option::of(0.0f64..10.0),
+        level in proptest::option::of(0.1f64..20.0),
+        pixels in proptest::bool::ANY,
+    ) {
+        let (rows, cols) = (40, 30);
+        let mut data = vec![0.0; rows * cols];
+        for &(r, c, size, v) in &blobs {
+            for (dr, dc) in (0..size).flat_map(|dr| (0..size).map(move |dc| (dr, dc))) {
+                if r + dr < rows && c + dc < cols {
+                    data[(r + dr) * cols + c + dc] = v + (dr * 3 + dc) as f64 * 0.7;
+                }
+            }
+        }
+        let frame = Grid::new(rows, cols, data.clone()).unwrap();
+        let opts = ContourOptions {
+            level,
+            preprocess: Preprocess { threshold, ..Preprocess::default() },
+            resample: Resample::Spacing(0.8),
+            units: if pixels { CoordUnits::Pixels } else { CoordUnits::Millimetres { dx_mm: 8.4, dy_mm: 7.6 } },
+            ..ContourOptions::default()
+        };
+        proptest::prop_assume!(pedo_io::contour::window_gives_contours(&opts));
+        let loaded: Vec<usize> = (0..rows * cols).filter(|&i| data[i] != 0.0).collect();
+        let (r0, r1) = (loaded[0] / cols, loaded[loaded.len() - 1] / cols);
+        let c0 = loaded.iter().map(|i| i % cols).min().unwrap();
+        let c1 = loaded.iter().map(|i| i % cols).max().unwrap();
+        let (h, w) = (r1 - r0 + 1, c1 - c0 + 1);
+        let window: Vec<f64> = (0..h * w).map(|k| data[(r0 + k / w) * cols + c0 + k % w]).collect();
+        let window = Grid::new(h, w, window).unwrap();
+        let whole = contours(&frame, &opts).unwrap();
+        let windowed = pedo_io::contour::contours_of_window(&window, (r0, c0), &opts).unwrap();
+        proptest::prop_assert_eq!(format!("{whole:?}"), format!("{windowed:?}"));
+    }
+}
+
+#[test]
+fn a_window_is_refused_for_options_that_reach_past_it() {
+    let g = Grid::new(2, 2, vec![1.0; 4]).unwrap();
+    let smoothed = ContourOptions {
+        preprocess: Preprocess {
+            sigma: Some(1.0),
+            ..Preprocess::default()
+        },
+        ..ContourOptions::default()
+    };
+    let e = pedo_io::contour::contours_of_window(&g, (3, 4), &smoothed).unwrap_err();
+    assert!(e.to_string().contains("reach past a window"), "{e}");
+    let at_zero = ContourOptions {
+        level: Some(0.0),
+        ..ContourOptions::default()
+    };
+    assert!(!pedo_io::contour::window_gives_contours(&at_zero));
+}
+
 fn cone(rows: usize, cols: usize, centres: &[(f64, f64)], radius: f64) -> Grid {
     // Sum of cones of height `radius` (value = radius - distance, clipped at 0): level sets are circles.
     let mut d = vec![0.0; rows * cols];

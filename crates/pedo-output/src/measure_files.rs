@@ -19,7 +19,7 @@ use pedo_io::regions::{
     LENGTH_BOUNDS, METATARSAL_BOUNDS,
 };
 use pedo_io::stances::{ASSUMED_RATE_HZ, CURVE_POINTS, MIN_GAP_S, MIN_STANCE_S};
-use pedo_io::{IoError, Recording, Result};
+use pedo_io::{IoError, Recording, Result, StoredValues};
 use pedo_track::{SequenceOptions, SequenceSink};
 use serde_json::{json, Map, Value};
 
@@ -199,6 +199,31 @@ impl SequenceSink for MeasuresSink {
         for (i, &v) in values.iter().enumerate() {
             let x = f64::from(v);
             if self.mask[i] && x > 0.0 && x >= self.threshold {
+                load += x;
+                mx += x * (i % self.cols) as f64;
+                my += x * (i / self.cols) as f64;
+                if self.kept.is_some() {
+                    loaded.push((i as u32, v));
+                }
+            }
+        }
+        self.cop.push((load > 0.0).then(|| [mx / load, my / load]));
+        if let Some(kept) = self.kept.as_mut() {
+            kept.push(loaded);
+        }
+        Ok(())
+    }
+    fn stored_frame_values(&mut self, frame: usize, stored: StoredValues<'_>) -> Result<()> {
+        if stored.frame_len() != self.mask.len() || !stored.all_positive() {
+            return self.frame_values(frame, &stored.to_frame());
+        }
+        self.measures.add_stored(frame, stored)?;
+        // As frame_values: the zeros add nothing to the sums, positions come in order.
+        let (mut load, mut mx, mut my) = (0.0f64, 0.0f64, 0.0f64);
+        let mut loaded = Vec::new();
+        for (i, v) in stored.iter() {
+            let x = f64::from(v);
+            if self.mask[i] && x >= self.threshold {
                 load += x;
                 mx += x * (i % self.cols) as f64;
                 my += x * (i / self.cols) as f64;

@@ -22,7 +22,7 @@ use pedo_io::formats::ReadOptions;
 use pedo_io::recording::FrameMeasures;
 use pedo_io::recording::Recording;
 use pedo_io::FrameSource;
-use pedo_io::{IoError, Result};
+use pedo_io::{IoError, Result, StoredValues};
 use pedo_track::follow::FollowSink;
 use pedo_track::{
     replay, require_objects, stream_sequence, Collect, NoSink, ObjectModel, PairMatch, RunCounts,
@@ -695,6 +695,13 @@ impl SequenceSink for WithMeasures<'_> {
         }
         Ok(())
     }
+    fn stored_frame_values(&mut self, frame: usize, stored: StoredValues<'_>) -> Result<()> {
+        self.measures.stored_frame_values(frame, stored)?;
+        if self.also.wants_frame_values() {
+            self.also.stored_frame_values(frame, stored)?;
+        }
+        Ok(())
+    }
     fn frame_objects(&mut self, frame: usize, objects: &[SequenceObject]) -> Result<()> {
         self.also.frame_objects(frame, objects)
     }
@@ -851,6 +858,13 @@ impl SequenceSink for FolderSink<'_, '_> {
         self.measures.frame_values(frame, values)?;
         match self.also() {
             Some(s) if s.wants_frame_values() => s.frame_values(frame, values),
+            _ => Ok(()),
+        }
+    }
+    fn stored_frame_values(&mut self, frame: usize, stored: StoredValues<'_>) -> Result<()> {
+        self.measures.stored_frame_values(frame, stored)?;
+        match self.also() {
+            Some(s) if s.wants_frame_values() => s.stored_frame_values(frame, stored),
             _ => Ok(()),
         }
     }

@@ -56,9 +56,24 @@ pub(crate) fn frame_contours(
     t: usize,
     options: &SequenceOptions,
 ) -> Result<FrameObjects> {
-    let frame = recording.frame(t)?;
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
-    let found = contours(&frame, &options.contour)?;
+    // A frame held sparsely is contoured on the window of its values (the same contours): a
+    // few loaded sensels on a large plate cost their window, and the whole frame is made only
+    // for the measures of an object, if it has one.
+    let window = recording
+        .stored_values(t)
+        .filter(|_| pedo_io::contour::window_gives_contours(&options.contour))
+        .and_then(|s| s.window());
+    let (found, frame) = match window {
+        Some((w, origin)) => (
+            pedo_io::contour::contours_of_window(&w, origin, &options.contour)?,
+            None,
+        ),
+        None => {
+            let frame = recording.frame(t)?;
+            (contours(&frame, &options.contour)?, Some(frame))
+        }
+    };
     // Refused here, before a model of it is built: its matrices grow with the nodes' square.
     let most = options.matching.max_nodes;
     if let Some(c) = found.iter().find(|c| !c.hole && c.points.len() > most) {
@@ -68,9 +83,19 @@ pub(crate) fn frame_contours(
             c.points.len()
         )));
     }
-    let mut cs: Vec<(Contour, MeasuredShape)> = found
+    let kept: Vec<Contour> = found
         .into_iter()
         .filter(|c| !c.hole && c.points.len() >= options.min_nodes.max(3))
+        .collect();
+    if kept.is_empty() {
+        return Ok(FrameObjects::default());
+    }
+    let frame = match frame {
+        Some(f) => f,
+        None => recording.frame(t)?,
+    };
+    let mut cs: Vec<(Contour, MeasuredShape)> = kept
+        .into_iter()
         .filter_map(|c| {
             let shape = c.to_shape().ok()?;
             let outline = outline_in_sensels(&c, options.contour.units);

@@ -8,7 +8,7 @@
 
 use crate::*;
 use pedo_io::recording::FrameMeasures;
-use pedo_io::{Recording, Result};
+use pedo_io::{Recording, Result, StoredValues};
 
 /// Where a run hands its results, each as soon as it is final. Each kind of event comes in the
 /// order of the [`SequenceResult`] that [`run_sequence`] returns; the kinds interleave (a frame's
@@ -35,6 +35,14 @@ pub trait SequenceSink {
     fn frame_values(&mut self, frame: usize, values: &[f32]) -> Result<()> {
         let _ = (frame, values);
         Ok(())
+    }
+    /// [`frame_values`](Self::frame_values) of a frame given by the values it holds (a frame
+    /// held sparsely, or one of zeros: [`Recording::stored_values`]). By default the sink is
+    /// handed the whole frame; a sink that can take the values held alone does, so that the
+    /// empty frames of a long recording, or the few values of a large plate, cost what they
+    /// hold.
+    fn stored_frame_values(&mut self, frame: usize, stored: StoredValues<'_>) -> Result<()> {
+        self.frame_values(frame, &stored.to_frame())
     }
     /// Frame `frame` is built: its objects in id order (none for a frame without contact or
     /// skipped, [`SequenceResult::skipped_frames`]). The contour and surface models hand every

@@ -10,6 +10,7 @@ use pedo_io::recording::{FrameSource, Recording, FRAME_WINDOW};
 use pedo_io::{IoError, Result};
 use std::collections::HashMap;
 use std::ops::Range;
+use std::sync::OnceLock;
 use std::time::Instant;
 
 /// Runs `recording` with `options`, handing every result to `sink` as soon as it is final:
@@ -102,11 +103,16 @@ pub(crate) fn hand_values(
     if !sink.wants_frame_values() {
         return Ok(());
     }
+    let mut room = Vec::new();
     for t in w {
+        if let Some(stored) = frames.stored_values(t - offset) {
+            sink.stored_frame_values(t, stored)?;
+            continue;
+        }
         let values = frames
-            .frame_slice(t - offset)
+            .frame_into(t - offset, &mut room)
             .ok_or_else(|| IoError::invalid(format!("frame {t} is beyond the frames read")))?;
-        sink.frame_values(t, &values)?;
+        sink.frame_values(t, values)?;
     }
     Ok(())
 }
@@ -125,6 +131,40 @@ struct Engine<'o> {
     last_surface: Option<(usize, usize)>,
     /// Drift correction: what the reference pairs and the anchored tracks are made of at the end.
     drift: Option<Anchoring>,
+    /// What a frame that holds no value makes (the same for every such frame of the run).
+    empty: EmptyFrame,
+}
+
+/// The objects of a frame that holds no value ([`Recording::stored_values`]), made once: they
+/// depend on the run's options and the frames' size and mask only, so a recording of many
+/// empty frames (a long wait on the plate, or a small file claiming many) costs no more than
+/// one of them for its objects.
+#[derive(Default)]
+struct EmptyFrame {
+    contours: OnceLock<FrameObjects>,
+    surface: OnceLock<Option<Shape>>,
+}
+
+/// Whether frame `t` of `frames` holds no value.
+fn holds_nothing(frames: &Recording, t: usize) -> bool {
+    frames.stored_values(t).is_some_and(|s| s.is_empty())
+}
+
+/// `build()`, or for a frame that holds no value the result `once` keeps of the first such
+/// frame built (an error is not kept: it is the frame's skipped reason, made again).
+fn once_if_empty<T: Clone>(
+    once: &OnceLock<T>,
+    empty: bool,
+    build: impl FnOnce() -> Result<T>,
+) -> Result<T> {
+    if !empty {
+        return build();
+    }
+    if let Some(kept) = once.get() {
+        return Ok(kept.clone());
+    }
+    let made = build()?;
+    Ok(once.get_or_init(|| made).clone())
 }
 
 /// What drift correction holds to the end: every candidate pair and every pair matched (without
@@ -156,6 +196,7 @@ impl<'o> Engine<'o> {
             last_contours: None,
             last_surface: None,
             drift: options.drift_corrected().then(Anchoring::default),
+            empty: EmptyFrame::default(),
         }
     }
 
@@ -242,7 +283,12 @@ impl<'o> Engine<'o> {
             &kept,
             &mut self.counts.skipped_frames,
             options.cancel.as_ref(),
-            |t| frame_contours(frames, t - offset, options),
+            |t| {
+                let empty = holds_nothing(frames, t - offset);
+                once_if_empty(&self.empty.contours, empty, || {
+                    frame_contours(frames, t - offset, options)
+                })
+            },
         )?;
         let mut new = NewPairs::default();
         for (frame, (cs, shapes)) in kept.into_iter().zip(per_frame) {
@@ -277,7 +323,12 @@ impl<'o> Engine<'o> {
             &kept,
             &mut self.counts.skipped_frames,
             options.cancel.as_ref(),
-            |t| frame_surface(frames, t - offset, threshold, options, &keep),
+            |t| {
+                let empty = holds_nothing(frames, t - offset);
+                once_if_empty(&self.empty.surface, empty, || {
+                    frame_surface(frames, t - offset, threshold, options, &keep)
+                })
+            },
         )?;
         let mut new = NewPairs::default();
         for (frame, shape) in kept.into_iter().zip(per_frame) {
