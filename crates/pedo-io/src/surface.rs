@@ -423,6 +423,39 @@ fn keep_triangles_positive(
 /// Builds the brightness surface of a frame (see the module documentation). An empty frame (no
 /// sample above the level) or fewer than 3 non-collinear samples is an error: there is no surface.
 pub fn surface(frame: &Grid, opts: &SurfaceOptions) -> Result<Surface> {
+    surface_at(frame, (0, 0), opts)
+}
+
+/// Whether [`surface_of_window`] gives a frame's surface with these options: a sample level
+/// at or above 0, without smoothing or upsampling (which reach past a window).
+pub fn window_gives_surface(opts: &SurfaceOptions) -> bool {
+    opts.sample_level >= 0.0
+        && opts.preprocess.sigma.is_none_or(|s| s == 0.0)
+        && opts.preprocess.upsample.is_none_or(|(f, _)| f == 1)
+}
+
+/// The [`surface`] of a frame that is 0 outside `window`, whose first row and column are
+/// `origin` in the frame: the same surface, bit for bit, at the cost of the window, when
+/// [`window_gives_surface`] (an error otherwise).
+///
+/// # Errors
+///
+/// As [`surface`]; [`IoError::InvalidInput`] when the options reach past a window.
+pub fn surface_of_window(
+    window: &Grid,
+    origin: (usize, usize),
+    opts: &SurfaceOptions,
+) -> Result<Surface> {
+    if !window_gives_surface(opts) {
+        return Err(IoError::invalid(
+            "these surface options reach past a window of the frame (smoothing, upsampling or \
+             a sample level below 0)",
+        ));
+    }
+    surface_at(window, origin, opts)
+}
+
+fn surface_at(frame: &Grid, origin: (usize, usize), opts: &SurfaceOptions) -> Result<Surface> {
     opts.units.check()?;
     if opts.step == 0 {
         return Err(IoError::invalid("sampling step must be at least 1"));
@@ -455,7 +488,7 @@ pub fn surface(frame: &Grid, opts: &SurfaceOptions) -> Result<Surface> {
             let z = g.get(r, c);
             if z > level {
                 samples.push(Sample {
-                    pos: Point2::new(c as f64, r as f64),
+                    pos: Point2::new((c + origin.1) as f64, (r + origin.0) as f64),
                     z,
                     id: samples.len(),
                 });

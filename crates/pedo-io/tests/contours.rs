@@ -318,3 +318,42 @@ fn real_frames_give_closed_ccw_contours() {
     }
     assert!(total > 100);
 }
+
+proptest::proptest! {
+    /// The surface of a window around a frame's loaded sensels is the frame's, bit for bit.
+    #[test]
+    fn a_window_around_the_values_has_the_frames_surface(
+        blobs in proptest::collection::vec((0usize..30, 0usize..25, 2usize..6, 0.5f64..40.0), 1..3),
+        step in 1usize..3,
+        max_nodes in proptest::option::of(8usize..30),
+        level in 0.0f64..5.0,
+    ) {
+        let (rows, cols) = (30, 25);
+        let mut data = vec![0.0; rows * cols];
+        for &(r, c, size, v) in &blobs {
+            for (dr, dc) in (0..size).flat_map(|dr| (0..size).map(move |dc| (dr, dc))) {
+                if r + dr < rows && c + dc < cols {
+                    data[(r + dr) * cols + c + dc] = v + ((dr * 5 + dc * 3) % 7) as f64;
+                }
+            }
+        }
+        let opts = pedo_io::surface::SurfaceOptions {
+            sample_level: level,
+            step,
+            max_nodes,
+            units: CoordUnits::Millimetres { dx_mm: 8.4, dy_mm: 7.6 },
+            ..Default::default()
+        };
+        let loaded: Vec<usize> = (0..rows * cols).filter(|&i| data[i] != 0.0).collect();
+        let (r0, r1) = (loaded[0] / cols, loaded[loaded.len() - 1] / cols);
+        let c0 = loaded.iter().map(|i| i % cols).min().unwrap();
+        let c1 = loaded.iter().map(|i| i % cols).max().unwrap();
+        let (h, w) = (r1 - r0 + 1, c1 - c0 + 1);
+        let window: Vec<f64> = (0..h * w).map(|k| data[(r0 + k / w) * cols + c0 + k % w]).collect();
+        let frame = Grid::new(rows, cols, data).unwrap();
+        let window = Grid::new(h, w, window).unwrap();
+        let whole = pedo_io::surface::surface(&frame, &opts);
+        let windowed = pedo_io::surface::surface_of_window(&window, (r0, c0), &opts);
+        proptest::prop_assert_eq!(format!("{whole:?}"), format!("{windowed:?}"));
+    }
+}

@@ -238,13 +238,30 @@ pub(crate) fn frame_surface(
     options: &SequenceOptions,
     keep: &dyn Fn(&Shape) -> bool,
 ) -> Result<Option<Shape>> {
-    let frame = recording.frame(t)?;
-    if frame.max() <= threshold {
-        return Ok(None);
-    }
+    // A sparse frame of positive values is meshed on the window of its values (the same
+    // surface, and the same largest value): its cost is its window's, not the plate's.
+    let window = recording
+        .stored_values(t)
+        .filter(|s| s.all_positive() && pedo_io::surface::window_gives_surface(&options.surface))
+        .and_then(|s| s.window());
+    let made = match window {
+        Some((w, origin)) => {
+            if w.max() <= threshold {
+                return Ok(None);
+            }
+            pedo_io::surface::surface_of_window(&w, origin, &options.surface)
+        }
+        None => {
+            let frame = recording.frame(t)?;
+            if frame.max() <= threshold {
+                return Ok(None);
+            }
+            pedo_io::surface::surface(&frame, &options.surface)
+        }
+    };
     // Only "nothing there" is a frame without an object; a bad option or a mesh that failed is
     // that frame's skipped reason, so a run never ends on a bare "no object" that hides it.
-    match pedo_io::surface::surface(&frame, &options.surface) {
+    match made {
         Ok(s) => Ok(Some(s.to_shape()?).filter(|s| keep(s))),
         Err(IoError::NoObject(_)) => Ok(None),
         Err(e) => Err(e),
@@ -253,6 +270,10 @@ pub(crate) fn frame_surface(
 
 /// Sum of the frame's values: the load the isocontour model picks its frame by.
 fn frame_load(recording: &Recording, t: usize) -> f64 {
+    // A sparse frame of positive values sums to the same from its stored values alone.
+    if let Some(stored) = recording.stored_values(t).filter(|s| s.all_positive()) {
+        return stored.iter().fold(0.0, |sum, (_, v)| sum + v as f64);
+    }
     recording
         .frame_slice(t)
         .map_or(0.0, |f| f.iter().map(|&v| v as f64).sum())
