@@ -412,6 +412,47 @@ fn hostile_files_are_one_line_errors_within_memory_and_time() {
 }
 
 #[test]
+fn a_small_file_of_many_frames_holding_little_runs_within_memory_and_time() {
+    // 13 KB: 32,768 frames of 256 × 256 (every value a recording may hold), four of them a
+    // loaded 12 × 12 patch, the rest one loaded sensel. Every model's run succeeds; frame by
+    // frame it took 2.2 s (contour), 5.5 s (isocontour) and 26 s (surface) of CPU.
+    let dir = temp_dir("sparse-frames");
+    let patch = format!(
+        "<quant><cell_begin><x>100</x><y>100</y></cell_begin><cell_count><x>12</x><y>12</y>\
+         </cell_count><cells>{}</cells></quant>",
+        "100 ".repeat(144)
+    );
+    let dot = b"<quant><cell_begin><x>5</x><y>7</y></cell_begin><cell_count><x>1</x><y>1</y>\
+        </cell_count><cells>100</cells></quant>";
+    let xml = gzip_of(&[
+        (ZEBRIS_HEAD, 1),
+        (patch.as_bytes(), 4),
+        (dot, 32_764),
+        (ZEBRIS_TAIL, 1),
+    ]);
+    let file = dir.join("patches.xml.gz");
+    std::fs::write(&file, xml).unwrap();
+    for model in ["contour", "surface", "isocontour"] {
+        let out = dir.join(model);
+        let r = bounded(&[
+            "run".as_ref(),
+            file.as_os_str(),
+            "--model".as_ref(),
+            model.as_ref(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ]);
+        eprintln!("{model}: peak {} MB, {:.2?} CPU", r.peak_kb / 1024, r.cpu);
+        assert_eq!(r.code, Some(0), "{model}: {}", r.stderr);
+        assert!(r.peak_kb <= 512 << 10, "{model}: peak {} kB", r.peak_kb);
+        assert!(r.cpu <= Duration::from_secs(10), "{model}: {:?} CPU", r.cpu);
+        let frames = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+        assert_eq!(frames.lines().count(), 32_768 + 1, "{model}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn a_batch_with_a_hostile_file_beside_good_ones_has_one_error_row() {
     let dir = temp_dir("hostile-batch");
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/pedo-io/tests/data");
