@@ -629,12 +629,14 @@ fn outline_start(
 
 /// The starts of the image fit (the outline match's, when the prior accepts it, and the
 /// principal axes'), each with its affine correction by the images; the one whose corrected map
-/// fits the images better is returned, with whether the outline match was refused.
+/// fits the images better is returned, with the template sensels' images under its field and
+/// whether the outline match was refused.
+#[allow(clippy::type_complexity)]
 fn chosen_start(
     template: &Template,
     p: &Prepared<'_>,
     params: &RegisterParams,
-) -> Result<(start::Start, refine::PlaneAffine, bool)> {
+) -> Result<(start::Start, Vec<[f64; 2]>, refine::PlaneAffine, bool)> {
     let outline = outline_start(&template.outline, &p.outline, params)?;
     let fallback = outline.is_none();
     let mut starts: Vec<start::Start> = outline.into_iter().collect();
@@ -646,27 +648,30 @@ fn chosen_start(
             starts.push(start::affine_start(template, map, params.field_smoothing)?);
         }
     }
-    let mut best: Option<(f64, start::Start, refine::PlaneAffine)> = None;
+    let centres = grid_centres(template.images.rows, template.images.cols);
+    let mut best: Option<(f64, start::Start, Vec<[f64; 2]>, refine::PlaneAffine)> = None;
     for st in starts {
+        let points = st.field.apply(&centres);
         let (correction, cost) = if params.refine_intensity {
-            image_correction(&st.field, template, p)
+            image_correction(&points, template, p)
         } else {
             (refine::PlaneAffine::identity([0.0, 0.0]), 0.0)
         };
         if best.as_ref().map_or(true, |b| cost < b.0) {
-            best = Some((cost, st, correction));
+            best = Some((cost, st, points, correction));
         }
     }
-    let (_, st, correction) = best.ok_or_else(|| {
+    let (_, st, points, correction) = best.ok_or_else(|| {
         IoError::no_object("the footprint has no principal axes (fewer than 3 sensels)")
     })?;
-    Ok((st, correction, fallback))
+    Ok((st, points, correction, fallback))
 }
 
-/// The affine correction by the images of the field's map, and the cost of the corrected map: the
-/// peak images' mean squared difference plus the footprints', weighted as in the warp.
+/// The affine correction by the images of the map `at` (the template sensels' images), and the
+/// cost of the corrected map: the peak images' squared difference plus the footprints',
+/// weighted as in the warp.
 fn image_correction(
-    field: &CorrespondenceField,
+    at: &[[f64; 2]],
     template: &Template,
     p: &Prepared<'_>,
 ) -> (refine::PlaneAffine, f64) {
@@ -677,9 +682,8 @@ fn image_correction(
         cols: c,
         values: v,
     };
-    let at = field.apply(&grid_centres(rows, cols));
     let correction = refine::refine_map(
-        &at,
+        at,
         grid(rows, cols, &template.images.peak[..]),
         grid(src.rows, src.cols, &src.peak[..]),
         &REFINE_BLURS,
@@ -758,7 +762,7 @@ impl Sampler<'_> {
 /// `correction` by the images, the non-rigid step; the points before the non-rigid step and
 /// after.
 fn fitted_points(
-    field: &CorrespondenceField,
+    start: &[[f64; 2]],
     template: &Template,
     trial: &Prepared<'_>,
     params: &RegisterParams,
@@ -766,7 +770,6 @@ fn fitted_points(
 ) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
     let src = &trial.images;
     let (rows, cols) = (template.images.rows, template.images.cols);
-    let centres = grid_centres(rows, cols);
     let grid = |r, c, v| refine::GridImage {
         rows: r,
         cols: c,
@@ -776,7 +779,7 @@ fn fitted_points(
         grid(rows, cols, &template.images.peak[..]),
         grid(src.rows, src.cols, &src.peak[..]),
     );
-    let mut at = field.apply(&centres);
+    let mut at = start.to_vec();
     if !params.refine_intensity {
         return (at.clone(), at);
     }
@@ -816,7 +819,7 @@ fn register_with(
     template: &Template,
     params: &RegisterParams,
 ) -> Result<Registration> {
-    let (start, fitted_correction, fallback) = chosen_start(template, p, params)?;
+    let (start, start_points, fitted_correction, fallback) = chosen_start(template, p, params)?;
     let (field, t) = (&start.field, &start.map);
     let (rows, cols) = (template.images.rows, template.images.cols);
     let src = &p.images;
@@ -845,7 +848,7 @@ fn register_with(
         } else {
             refine::PlaneAffine::identity([0.0, 0.0])
         };
-        let (rigid_at, warped_at) = fitted_points(field, template, p, params, correction);
+        let (rigid_at, warped_at) = fitted_points(&start_points, template, p, params, correction);
         kept = first_overlapping(&s, [rigid_at, warped_at], params, xor_identity);
         if kept.is_some() {
             break;
@@ -859,7 +862,7 @@ fn register_with(
         pti: src.pti.as_deref().map(|v| s.sample(&at, v)),
         mean: src.mean.as_deref().map(|v| s.sample(&at, v)),
     };
-    let outline_image = outline_image(field, &correction, template, &at, kind);
+    let outline_image = outline_image(field, &correction, template, (&start_points, &at), kind);
     let residual_sensels = (outline_image
         .iter()
         .map(|&q| distance_to_polygon(q, &p.outline).powi(2))
@@ -914,12 +917,13 @@ fn first_overlapping(
 }
 
 /// The template's outline nodes carried by the kept map: the field and the correction, plus the
-/// non-rigid step's displacement (interpolated bilinearly between the sensels' own) for a warp.
+/// non-rigid step's displacement (interpolated bilinearly between the sensels' own) for a warp;
+/// `start` and `at` are the template sensels' images under the field and under the kept map.
 fn outline_image(
     field: &CorrespondenceField,
     correction: &refine::PlaneAffine,
     template: &Template,
-    at: &[[f64; 2]],
+    (start, at): (&[[f64; 2]], &[[f64; 2]]),
     kind: MapKept,
 ) -> Vec<[f64; 2]> {
     if kind == MapKept::Identity {
@@ -934,11 +938,7 @@ fn outline_image(
     if kind != MapKept::Warp {
         return moved;
     }
-    let rigid: Vec<[f64; 2]> = field
-        .apply(&grid_centres(rows, cols))
-        .into_iter()
-        .map(|q| correction.apply(q))
-        .collect();
+    let rigid: Vec<[f64; 2]> = start.iter().map(|&q| correction.apply(q)).collect();
     let (dx, dy): (Vec<f64>, Vec<f64>) = at
         .iter()
         .zip(&rigid)

@@ -174,6 +174,61 @@ fn add_bending(band: &mut Band, stencils: &[[usize; 3]], alpha: f64) {
     }
 }
 
+/// The four sensels of an image grid around a point (`None` beyond the grid, read as 0) and the
+/// point's place between them: the bilinear interpolation of every channel sampled at one point
+/// (the same arithmetic as `footprint::bilinear` and `refine::bilinear_grad`, the corners found
+/// once).
+struct Cell {
+    idx: [Option<usize>; 4],
+    fx: f64,
+    fy: f64,
+}
+
+impl Cell {
+    fn at(rows: usize, cols: usize, x: f64, y: f64) -> Self {
+        if !(x.is_finite() && y.is_finite()) {
+            return Self {
+                idx: [None; 4],
+                fx: 0.0,
+                fy: 0.0,
+            };
+        }
+        let (x0, y0) = (x.floor(), y.floor());
+        let id = |r: f64, c: f64| {
+            (r >= 0.0 && c >= 0.0 && r < rows as f64 && c < cols as f64)
+                .then(|| r as usize * cols + c as usize)
+        };
+        Self {
+            idx: [
+                id(y0, x0),
+                id(y0, x0 + 1.0),
+                id(y0 + 1.0, x0),
+                id(y0 + 1.0, x0 + 1.0),
+            ],
+            fx: x - x0,
+            fy: y - y0,
+        }
+    }
+
+    fn corners(&self, v: &[f64]) -> [f64; 4] {
+        self.idx.map(|i| i.map_or(0.0, |i| v[i]))
+    }
+
+    fn value(&self, v: &[f64]) -> f64 {
+        let ([v00, v01, v10, v11], fx, fy) = (self.corners(v), self.fx, self.fy);
+        (1.0 - fy) * ((1.0 - fx) * v00 + fx * v01) + fy * ((1.0 - fx) * v10 + fx * v11)
+    }
+
+    /// The value and its gradient `(v, ∂v/∂x, ∂v/∂y)`.
+    fn value_grad(&self, v: &[f64]) -> (f64, f64, f64) {
+        let ([v00, v01, v10, v11], fx, fy) = (self.corners(v), self.fx, self.fy);
+        let value = (1.0 - fy) * ((1.0 - fx) * v00 + fx * v01) + fy * ((1.0 - fx) * v10 + fx * v11);
+        let gx = (1.0 - fy) * (v01 - v00) + fy * (v11 - v10);
+        let gy = (1.0 - fx) * (v10 - v00) + fx * (v11 - v01);
+        (value, gx, gy)
+    }
+}
+
 /// One image pair the warp fits: the template's values, the trial's, and the weight of its mean
 /// squared difference.
 struct Channel {
@@ -223,20 +278,17 @@ impl Problem<'_> {
 
     fn data_cost(&self, at: &[[f64; 2]]) -> f64 {
         let n = at.len().max(1) as f64;
+        let mut sums = [0.0; 2];
+        for (i, q) in at.iter().enumerate() {
+            let cell = Cell::at(self.rows, self.cols, q[0], q[1]);
+            for (sum, ch) in sums.iter_mut().zip(&self.channels) {
+                *sum += (cell.value(&ch.img) - ch.tpl[i]).powi(2);
+            }
+        }
         self.channels
             .iter()
-            .map(|ch| {
-                ch.weight
-                    * at.iter()
-                        .zip(&ch.tpl)
-                        .map(|(q, t)| {
-                            (crate::footprint::bilinear(&ch.img, self.rows, self.cols, q[0], q[1])
-                                - t)
-                                .powi(2)
-                        })
-                        .sum::<f64>()
-                    / n
-            })
+            .zip(sums)
+            .map(|(ch, sum)| ch.weight * sum / n)
             .sum()
     }
 
@@ -401,8 +453,9 @@ fn normal_equations(p: &Problem<'_>, at: &[[f64; 2]], width: usize) -> (Band, Ve
     for (i, (q, s)) in at.iter().zip(&p.supports).enumerate() {
         // [gx², gx gy, gy²] and [gx r, gy r], each weighted, over the channels.
         let (mut g2, mut gr) = ([0.0; 3], [0.0; 2]);
+        let cell = Cell::at(p.rows, p.cols, q[0], q[1]);
         for ch in &p.channels {
-            let (v, gx, gy) = crate::refine::bilinear_grad(&ch.img, p.rows, p.cols, q[0], q[1]);
+            let (v, gx, gy) = cell.value_grad(&ch.img);
             let (w, r) = (ch.weight * inv, v - ch.tpl[i]);
             g2 = [
                 g2[0] + w * gx * gx,
