@@ -643,10 +643,10 @@ fn chosen_start(
     let cols = [template.images.cols, p.images.cols];
     // Without the images there is nothing to choose by: the principal axes only stand in for a
     // refused match.
-    if fallback || params.refine_intensity {
-        if let Some(map) = start::principal_axes(&template.mask, &p.mask, cols, params.max_turn) {
-            starts.push(start::affine_start(template, map, params.field_smoothing)?);
-        }
+    if (fallback || params.refine_intensity)
+        && let Some(map) = start::principal_axes(&template.mask, &p.mask, cols, params.max_turn)
+    {
+        starts.push(start::affine_start(template, map, params.field_smoothing)?);
     }
     let centres = grid_centres(template.images.rows, template.images.cols);
     let mut best: Option<(f64, start::Start, Vec<[f64; 2]>, refine::PlaneAffine)> = None;
@@ -657,7 +657,7 @@ fn chosen_start(
         } else {
             (refine::PlaneAffine::identity([0.0, 0.0]), 0.0)
         };
-        if best.as_ref().map_or(true, |b| cost < b.0) {
+        if best.as_ref().is_none_or(|b| cost < b.0) {
             best = Some((cost, st, points, correction));
         }
     }

@@ -543,9 +543,8 @@ fn cell_products(p: &Problem<'_>, g2s: &[[f64; 3]], width: usize) -> Band {
 /// `(i0 + a % 4, j0 + a / 4)` are distinct (the lattice extends three points beyond the grid).
 fn add_cell(jtj: &mut Band, cell: &[[[f64; 3]; 16]; 16], nx: usize, (i0, j0): (usize, usize)) {
     let index = |a: usize| (j0 + a / 4) * nx + i0 + a % 4;
-    for a in 0..16 {
-        for b in a..16 {
-            let g2 = cell[a][b];
+    for (a, row) in cell.iter().enumerate() {
+        for (b, &g2) in row.iter().enumerate().skip(a) {
             let (ca, cb) = (index(a), index(b));
             if a == b {
                 jtj.add(2 * ca, 2 * ca, g2[0]);
