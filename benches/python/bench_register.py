@@ -45,7 +45,9 @@ import os
 import sys
 import time
 
-for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "RAYON_NUM_THREADS"):
+# One thread for every method (ITK, under SimpleITK, would otherwise use every core).
+for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "RAYON_NUM_THREADS",
+           "ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS"):
     os.environ.setdefault(_v, "1")
 
 import numpy as np
@@ -304,19 +306,24 @@ def study_speed(y, markdown):
 
 def interleaved_speed(y, n=12):
     """B-spline and pedomatch one after the other on the first n held-out between pairs: their
-    time ratio under the same load."""
+    time ratio under the same load, in wall-clock and in CPU time (the process's, both on one
+    thread: the CPU time is what a loaded machine changes least)."""
     _, between = pairs_of(HELD, False)
-    tb, tp = [], []
+    tb, tp, cb, cp = [], [], [], []
     for a, c in between[:n]:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         bspline(y[a], y[c])
-        t1 = time.perf_counter()
+        t1, c1 = time.perf_counter(), time.process_time()
         pedomatch(y[a], y[c])
         tb.append(t1 - t0)
         tp.append(time.perf_counter() - t1)
-    r = np.array(tb) / np.array(tp)
-    print(f"\nB-spline median {1000 * np.median(tb):.0f} ms, pedomatch median "
-          f"{1000 * np.median(tp):.0f} ms; ratio median {np.median(r):.1f}x, smallest {r.min():.1f}x")
+        cb.append(c1 - c0)
+        cp.append(time.process_time() - c1)
+    for what, b, p in (("wall-clock", tb, tp), ("CPU", cb, cp)):
+        r = np.array(b) / np.array(p)
+        print(f"\n{what}: B-spline median {1000 * np.median(b):.0f} ms, pedomatch median "
+              f"{1000 * np.median(p):.0f} ms; ratio median {np.median(r):.1f}x, smallest "
+              f"{r.min():.1f}x")
 
 
 def main():

@@ -4,15 +4,17 @@
 //! Per trial: the whole-foot outline (the convex hull of every sensel its peak image loads,
 //! [`footprint`]), the template's outline matched onto it by modal matching (modal-core,
 //! the outline recipe) with a prior that a footprint never turns over (a candidate map that
-//! mirrors or turns by more than [`RegisterParams::max_turn`] is refused and the footprints
-//! aligned by centroid and size instead), the thin-plate [`CorrespondenceField`] of the
-//! matches (from the template's plane to the trial's), and every image of the trial sampled
-//! (bilinear) at the field's image of each template sensel. No files, no terminal: the front
+//! mirrors or turns by more than [`RegisterParams::max_turn`] is refused), the thin-plate
+//! [`CorrespondenceField`] of the matches (from the template's plane to the trial's), or the
+//! footprints' principal axes when they fit the images better (`start`); an affine correction
+//! and a non-rigid B-spline step by the images (`refine`, `warp`); and every image of the trial
+//! sampled (bilinear) at the map's image of each template sensel. No files, no terminal: the front
 //! ends read the recordings and pedo-output writes the results.
 
 mod band;
 pub mod footprint;
 pub mod refine;
+mod start;
 pub mod warp;
 
 use footprint::{bilinear, distance_to_polygon, hull_of_mask, loaded_mask};
@@ -38,7 +40,7 @@ modal_core::option_set! {
         /// Largest turn of the template onto a trial, in degrees.
         max_turn: f64 = 45.0;
             Value, 45.0,
-            "Largest turn, in degrees, of the map of the template's outline onto a trial's: a footprint does not turn heel to toe. A map that turns further, or mirrors, is refused and the trial aligned by centroid and size alone (the fallback column of registration.csv).";
+            "Largest turn, in degrees, of the map of the template's outline onto a trial's: a footprint does not turn heel to toe. A map that turns further, or mirrors, is refused and the trial aligned by the footprints' principal axes alone (centroids, the axes' turn within this bound, the areas' ratio; the fallback column of registration.csv).";
         /// Nodes of each whole-foot outline.
         outline_nodes: usize = 64;
             Value, 64,
@@ -54,11 +56,11 @@ modal_core::option_set! {
         /// Refine each map by the images' intensities.
         refine_intensity: bool = true;
             NegatedFlag, true,
-            "Refine each trial's map by the images: a rigid correction (turn and shift) of the outline's field that lowers the mean squared difference of the peak images (Levenberg-Marquardt, on the images blurred by 1.5 sensels, then as they are). --no-refine-intensity registers by the outlines alone.";
+            "Refine each trial's map by the images: an affine correction of the outline's field, and of the footprints' principal axes, that lowers the mean squared difference of the peak images (Levenberg-Marquardt, on the images blurred by 1.5 sensels, then as they are), the better of the two kept. --no-refine-intensity registers by the outlines alone.";
         /// Spacing of the non-rigid intensity step's control points, in sensels (0: none).
         warp_spacing: f64 = 6.0;
             Value, 6.0,
-            "Spacing, in template sensels, of the control points of the non-rigid step after the rigid correction: a cubic B-spline displacement fitted to the peak images (Levenberg-Marquardt on the mean squared difference with a bending penalty, blurred by 1.5 sensels, then as they are, then on a lattice of half the spacing; no step may fold the map). 0 leaves it out; so does --no-refine-intensity.";
+            "Spacing, in template sensels, of the control points of the non-rigid step after the affine correction: a cubic B-spline displacement fitted to the peak images (Levenberg-Marquardt on the mean squared difference with a bending penalty, blurred by 1.5 sensels, then as they are, then on a lattice of half the spacing; no step may fold the map). 0 leaves it out; so does --no-refine-intensity.";
         /// Weight of the non-rigid step's bending penalty.
         warp_smoothing: f64 = 1e-4;
             Value, 1e-4,
@@ -358,7 +360,7 @@ pub struct Registration {
     /// Its scale, `√det M`.
     pub scale: f64,
     /// Whether the match was refused by the prior (it mirrored or turned further than
-    /// `max_turn`) and the trial aligned by centroid and size alone.
+    /// `max_turn`) and the trial aligned by the footprints' principal axes alone.
     pub fallback: bool,
     /// Which map was kept: the identity when every map overlapped the template worse than the
     /// unregistered trial (the map then reported is the identity).
@@ -600,78 +602,115 @@ fn average_template(regs: &[Registration], like: &Template, nodes: usize) -> Res
     )
 }
 
-/// The map of the outline match, or the centroid-and-size alignment when the prior refuses it,
-/// with the pairs a field is fitted to.
-fn outline_map(
+/// The start of the outline match: the thin-plate field of its pairs and its affine map; `None`
+/// when the match fails or the prior refuses it (it mirrors or turns further than `max_turn`).
+fn outline_start(
     template: &[[f64; 2]],
     trial: &[[f64; 2]],
     params: &RegisterParams,
-) -> Result<(Shape, Vec<MatchPair>, Affine, bool)> {
+) -> Result<Option<start::Start>> {
     let a = Shape::from_points_2d(template, Topology::ClosedContour)?;
     let b = Shape::from_points_2d(trial, Topology::ClosedContour)?;
     let mut opts = MatchOptions::for_outlines();
     opts.rotation_search.max_rotation = Some(params.max_turn);
-    let accepted = match modal_core::match_shapes(&a, &b, &opts) {
-        Ok(m) => {
-            let t = m.transform;
-            let ok = t.det() > 0.0 && rotation_angle(&t) <= params.max_turn + 1e-6;
-            let pairs: Vec<MatchPair> = m.pairs.into_iter().filter(|p| !p.excess).collect();
-            (ok && pairs.len() >= 3).then_some((pairs, t))
-        }
-        Err(_) => None,
+    let Ok(m) = modal_core::match_shapes(&a, &b, &opts) else {
+        return Ok(None);
     };
-    if let Some((pairs, t)) = accepted {
-        return Ok((b, pairs, t, false));
+    let t = m.transform;
+    let pairs: Vec<MatchPair> = m.pairs.into_iter().filter(|p| !p.excess).collect();
+    if !(t.det() > 0.0 && rotation_angle(&t) <= params.max_turn + 1e-6 && pairs.len() >= 3) {
+        return Ok(None);
     }
-    // The prior's fallback: centroids onto each other, RMS radii equal, no turn; the field is
-    // then that map (the template's nodes and their images as pairs).
-    let stats = |p: &[[f64; 2]]| {
-        let n = p.len() as f64;
-        let c = [
-            p.iter().map(|q| q[0]).sum::<f64>() / n,
-            p.iter().map(|q| q[1]).sum::<f64>() / n,
-        ];
-        let r = (p
-            .iter()
-            .map(|q| (q[0] - c[0]).powi(2) + (q[1] - c[1]).powi(2))
-            .sum::<f64>()
-            / n)
-            .sqrt();
-        (c, r)
+    Ok(Some(start::Start {
+        field: CorrespondenceField::fit(&a, &b, &pairs, params.field_smoothing)?,
+        map: t,
+    }))
+}
+
+/// The starts of the image fit (the outline match's, when the prior accepts it, and the
+/// principal axes'), each with its affine correction by the images; the one whose corrected map
+/// fits the images better is returned, with the template sensels' images under its field and
+/// whether the outline match was refused.
+#[allow(clippy::type_complexity)]
+fn chosen_start(
+    template: &Template,
+    p: &Prepared<'_>,
+    params: &RegisterParams,
+) -> Result<(start::Start, Vec<[f64; 2]>, refine::PlaneAffine, bool)> {
+    let outline = outline_start(&template.outline, &p.outline, params)?;
+    let fallback = outline.is_none();
+    let mut starts: Vec<start::Start> = outline.into_iter().collect();
+    let cols = [template.images.cols, p.images.cols];
+    // Without the images there is nothing to choose by: the principal axes only stand in for a
+    // refused match.
+    if (fallback || params.refine_intensity)
+        && let Some(map) = start::principal_axes(&template.mask, &p.mask, cols, params.max_turn)
+    {
+        starts.push(start::affine_start(template, map, params.field_smoothing)?);
+    }
+    let centres = grid_centres(template.images.rows, template.images.cols);
+    let mut best: Option<(f64, start::Start, Vec<[f64; 2]>, refine::PlaneAffine)> = None;
+    for st in starts {
+        let points = st.field.apply(&centres);
+        let (correction, cost) = if params.refine_intensity {
+            image_correction(&points, template, p)
+        } else {
+            (refine::PlaneAffine::identity([0.0, 0.0]), 0.0)
+        };
+        if best.as_ref().is_none_or(|b| cost < b.0) {
+            best = Some((cost, st, points, correction));
+        }
+    }
+    let (_, st, points, correction) = best.ok_or_else(|| {
+        IoError::no_object("the footprint has no principal axes (fewer than 3 sensels)")
+    })?;
+    Ok((st, points, correction, fallback))
+}
+
+/// The affine correction by the images of the map `at` (the template sensels' images), and the
+/// cost of the corrected map: the peak images' squared difference plus the footprints',
+/// weighted as in the warp.
+fn image_correction(
+    at: &[[f64; 2]],
+    template: &Template,
+    p: &Prepared<'_>,
+) -> (refine::PlaneAffine, f64) {
+    let (rows, cols) = (template.images.rows, template.images.cols);
+    let src = &p.images;
+    let grid = |r, c, v| refine::GridImage {
+        rows: r,
+        cols: c,
+        values: v,
     };
-    let ((ca, ra), (cb, rb)) = (stats(template), stats(trial));
-    let s = rb / ra;
-    let mut t = Affine::identity(2);
-    t.m[0][0] = s;
-    t.m[1][1] = s;
-    t.t[0] = cb[0] - s * ca[0];
-    t.t[1] = cb[1] - s * ca[1];
-    let mapped: Vec<[f64; 2]> = template
-        .iter()
-        .map(|q| [s * q[0] + t.t[0], s * q[1] + t.t[1]])
-        .collect();
-    let pairs = (0..template.len())
-        .map(|i| MatchPair {
-            a: i,
-            b: i,
-            cost: 0.0,
-            excess: false,
-        })
-        .collect();
-    Ok((
-        Shape::from_points_2d(&mapped, Topology::ClosedContour)?,
-        pairs,
-        t,
-        true,
-    ))
+    let correction = refine::refine_map(
+        at,
+        grid(rows, cols, &template.images.peak[..]),
+        grid(src.rows, src.cols, &src.peak[..]),
+        &REFINE_BLURS,
+        REFINE_ITERATIONS,
+        &refine::AFFINE_DIRECTIONS,
+    );
+    let z = |v: f64| if v.is_nan() { 0.0 } else { v };
+    let tpl = &template.images.peak;
+    let scale = tpl.iter().map(|&v| z(v) * z(v)).sum::<f64>() / tpl.len().max(1) as f64;
+    let as_f = |m: &bool| f64::from(u8::from(*m));
+    let mask_f: Vec<f64> = p.mask.iter().map(as_f).collect();
+    let mut cost = 0.0;
+    for ((q, &t), m) in at.iter().zip(tpl).zip(&template.mask) {
+        let q = correction.apply(*q);
+        let v = bilinear(&src.peak, src.rows, src.cols, q[0], q[1]);
+        let inside = bilinear(&mask_f, src.rows, src.cols, q[0], q[1]);
+        cost += (v - z(t)).powi(2) + WARP_MASK_WEIGHT * scale * (inside - as_f(m)).powi(2);
+    }
+    (correction, cost)
 }
 
 /// Which map a registration kept (the last check of [`register_one`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MapKept {
-    /// The outline's field, the rigid correction and the non-rigid intensity step.
+    /// The start's field, the affine correction and the non-rigid intensity step.
     Warp,
-    /// The outline's field and the rigid correction (the warp overlapped the template worse
+    /// The start's field and the affine correction, no warp (`rigid`: the warp overlapped the template worse
     /// than the unregistered trial, or there was no warp).
     Rigid,
     /// The identity: every map overlapped the template worse than the trial as it lies.
@@ -719,19 +758,18 @@ impl Sampler<'_> {
     }
 }
 
-/// The map of the template's sensels into the trial's plane: the outline's field, the rigid
-/// correction by the images, the non-rigid step; with the correction and the points before
-/// the non-rigid step.
+/// The map of the template's sensels into the trial's plane: the start's field, the
+/// `correction` by the images, the non-rigid step; the points before the non-rigid step and
+/// after.
 fn fitted_points(
-    field: &CorrespondenceField,
+    start: &[[f64; 2]],
     template: &Template,
     trial: &Prepared<'_>,
     params: &RegisterParams,
-    correct: bool,
-) -> (refine::PlaneAffine, Vec<[f64; 2]>, Vec<[f64; 2]>) {
+    correction: refine::PlaneAffine,
+) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
     let src = &trial.images;
     let (rows, cols) = (template.images.rows, template.images.cols);
-    let centres = grid_centres(rows, cols);
     let grid = |r, c, v| refine::GridImage {
         rows: r,
         cols: c,
@@ -741,22 +779,10 @@ fn fitted_points(
         grid(rows, cols, &template.images.peak[..]),
         grid(src.rows, src.cols, &src.peak[..]),
     );
-    let mut at = field.apply(&centres);
+    let mut at = start.to_vec();
     if !params.refine_intensity {
-        return (refine::PlaneAffine::identity([0.0, 0.0]), at.clone(), at);
+        return (at.clone(), at);
     }
-    let correction = if correct {
-        refine::refine_map(
-            &at,
-            tpl,
-            img,
-            &REFINE_BLURS,
-            REFINE_ITERATIONS,
-            &refine::RIGID_DIRECTIONS,
-        )
-    } else {
-        refine::PlaneAffine::identity([0.0, 0.0])
-    };
     for q in &mut at {
         *q = correction.apply(*q);
     }
@@ -779,7 +805,7 @@ fn fitted_points(
         trial_mask: &sm,
     };
     let warped = warp::refine_warp(&at, &images, &settings);
-    (correction, at, warped)
+    (at, warped)
 }
 
 fn grid_centres(rows: usize, cols: usize) -> Vec<[f64; 2]> {
@@ -793,9 +819,8 @@ fn register_with(
     template: &Template,
     params: &RegisterParams,
 ) -> Result<Registration> {
-    let a = Shape::from_points_2d(&template.outline, Topology::ClosedContour)?;
-    let (b, pairs, t, fallback) = outline_map(&template.outline, &p.outline, params)?;
-    let field = CorrespondenceField::fit(&a, &b, &pairs, params.field_smoothing)?;
+    let (start, start_points, fitted_correction, fallback) = chosen_start(template, p, params)?;
+    let (field, t) = (&start.field, &start.map);
     let (rows, cols) = (template.images.rows, template.images.cols);
     let src = &p.images;
     let s = Sampler {
@@ -804,11 +829,11 @@ fn register_with(
         template_mask: &template.mask,
     };
     // Never worse than the trial as it lies: the last check keeps the first of the warp, the
-    // rigid map and the identity whose footprint overlaps the template's at least as well as
+    // map without it (`rigid`) and the identity whose footprint overlaps the template's at least as well as
     // the unregistered trial's does (a registration that moved the footprint's edge away is
     // no registration for pixel-wise statistics). When both maps fail, the correction by the
     // images may be what went astray (it fits pressures, which may lie in another basin than
-    // the outline's): the warp and the outline's field without the correction are tried too.
+    // the outline's): the warp and the start's field without the correction are tried too.
     let identity = grid_centres(rows, cols);
     let identity_mask = s.mask(&identity);
     let xor_identity = s.xor(&identity_mask);
@@ -818,8 +843,12 @@ fn register_with(
         if !correct && !params.refine_intensity {
             break;
         }
-        let (c, rigid_at, warped_at) = fitted_points(&field, template, p, params, correct);
-        correction = c;
+        correction = if correct {
+            fitted_correction
+        } else {
+            refine::PlaneAffine::identity([0.0, 0.0])
+        };
+        let (rigid_at, warped_at) = fitted_points(&start_points, template, p, params, correction);
         kept = first_overlapping(&s, [rigid_at, warped_at], params, xor_identity);
         if kept.is_some() {
             break;
@@ -833,7 +862,7 @@ fn register_with(
         pti: src.pti.as_deref().map(|v| s.sample(&at, v)),
         mean: src.mean.as_deref().map(|v| s.sample(&at, v)),
     };
-    let outline_image = outline_image(&field, &correction, template, &at, kind);
+    let outline_image = outline_image(field, &correction, template, (&start_points, &at), kind);
     let residual_sensels = (outline_image
         .iter()
         .map(|&q| distance_to_polygon(q, &p.outline).powi(2))
@@ -849,7 +878,7 @@ fn register_with(
     let affine = if kind == MapKept::Identity {
         [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
     } else {
-        composed(&t, &correction)
+        composed(t, &correction)
     };
     let det = affine[0][0] * affine[1][1] - affine[0][1] * affine[1][0];
     Ok(Registration {
@@ -888,12 +917,13 @@ fn first_overlapping(
 }
 
 /// The template's outline nodes carried by the kept map: the field and the correction, plus the
-/// non-rigid step's displacement (interpolated bilinearly between the sensels' own) for a warp.
+/// non-rigid step's displacement (interpolated bilinearly between the sensels' own) for a warp;
+/// `start` and `at` are the template sensels' images under the field and under the kept map.
 fn outline_image(
     field: &CorrespondenceField,
     correction: &refine::PlaneAffine,
     template: &Template,
-    at: &[[f64; 2]],
+    (start, at): (&[[f64; 2]], &[[f64; 2]]),
     kind: MapKept,
 ) -> Vec<[f64; 2]> {
     if kind == MapKept::Identity {
@@ -908,11 +938,7 @@ fn outline_image(
     if kind != MapKept::Warp {
         return moved;
     }
-    let rigid: Vec<[f64; 2]> = field
-        .apply(&grid_centres(rows, cols))
-        .into_iter()
-        .map(|q| correction.apply(q))
-        .collect();
+    let rigid: Vec<[f64; 2]> = start.iter().map(|&q| correction.apply(q)).collect();
     let (dx, dy): (Vec<f64>, Vec<f64>) = at
         .iter()
         .zip(&rigid)

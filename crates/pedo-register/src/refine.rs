@@ -170,6 +170,12 @@ fn cost(
         / points.len().max(1) as f64
 }
 
+/// A stage stops once a step lowers the cost by less than this fraction: the last steps of a
+/// stage gain less each, and the one that fails costs up to 8 evaluations (on the tuning pairs
+/// 1e-4 fitted as closely as no bound, in four fifths of the registration's time; 1e-3 fitted
+/// the between-subject pairs 2 % worse).
+const STOP_GAIN: f64 = 1e-4;
+
 /// Solves the 6 × 6 system `a x = b` by Gaussian elimination with partial pivoting; `None`
 /// when it is singular.
 fn solve6(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> Option<[f64; 6]> {
@@ -296,6 +302,7 @@ pub fn refine_map(
                 }
             }
             let mut improved = false;
+            let before = current;
             for _ in 0..8 {
                 let mut damped = jtj;
                 for a in 0..6 {
@@ -323,7 +330,7 @@ pub fn refine_map(
                 }
                 lambda *= 4.0;
             }
-            if !improved {
+            if !improved || before - current < STOP_GAIN * before {
                 break;
             }
         }
