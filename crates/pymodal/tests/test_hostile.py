@@ -171,7 +171,7 @@ def test_a_hostile_file_read_is_a_format_error_within_memory_and_time(corpus, na
     check("read_recording", path, expect=expect, says=says)
 
 
-@pytest.mark.parametrize("name", ["million.xml.gz", "ones.xml.gz", "walk.lst.gz", "zeros.png", "line.csv"])
+@pytest.mark.parametrize("name", ["million.xml.gz", "walk.lst.gz", "zeros.png", "line.csv"])
 def test_a_hostile_file_run_is_a_format_error_and_writes_nothing(corpus, name, tmp_path):
     path, expect, says = corpus[name]
     out = tmp_path / "run"

@@ -102,7 +102,7 @@ modal_core::option_set! {
         /// Most values of one recording ([`crate::limits::MAX_RECORDING_VALUES`]).
         max_values: usize = d.values;
             Value, d.values,
-            "Most values (frames x sensors per frame) a recording may hold: every frame of a run is visited whole, so this also bounds a run's time.";
+            "Most values (frames x sensors per frame) a recording may hold, zeros included: it bounds the frames a run takes a row of and the work on frames held whole (a frame holding few values costs what it holds).";
         /// Most MiB a compressed recording may expand to ([`crate::limits::MAX_DECOMPRESSED`]).
         max_decompressed_mb: usize = (d.decompressed >> 20) as usize;
             Value, d.decompressed >> 20,
