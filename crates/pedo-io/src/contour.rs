@@ -429,7 +429,7 @@ fn above_bounds(grid: &Grid, level: f64) -> Option<((usize, usize), (usize, usiz
         row.iter().any(|&v| v > level)
     });
     let r0 = rows_above.next()?;
-    let r1 = rows_above.last().unwrap_or(r0);
+    let r1 = rows_above.next_back().unwrap_or(r0);
     let (mut c0, mut c1) = (cols, 0);
     for r in r0..=r1 {
         let row = &grid.data()[r * cols..(r + 1) * cols];
