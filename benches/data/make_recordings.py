@@ -1,6 +1,7 @@
 """Writes the real-recording excerpts of benches/data/ (see README.md there) from their sources.
 
     python benches/data/make_recordings.py --pressure-extdata DIR [--out benches/data]
+    python benches/data/make_recordings.py --pataky-trials DIR   # the batch benchmark's 8 trials
 
 - DIR: the `inst/extdata/` folder of the public R package pressuRe (GitHub `ellenlii07/pressuRe`,
   MIT): `emed_test.lst`, `pedar_example.asc`, `footscan_test.xls` are read from it.
@@ -112,9 +113,21 @@ def pedar_excerpt(src, dst, first_s=2.0, last_s=5.0):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    ap.add_argument("--pressure-extdata", required=True)
+    ap.add_argument("--pressure-extdata")
     ap.add_argument("--out", default=os.path.dirname(os.path.abspath(__file__)))
+    ap.add_argument("--pataky-trials", metavar="DIR",
+                    help="only write subject 0's first 8 Pataky (2008) trials into DIR (500 Hz "
+                         "footscan, 0.53-0.76 s each): the default batch's benchmark "
+                         "(benches/batch_speed.sh)")
     a = ap.parse_args()
+    if a.pataky_trials:
+        os.makedirs(a.pataky_trials, exist_ok=True)
+        for t in range(8):
+            dst = os.path.join(a.pataky_trials, f"footscan-Pataky2008-s00-t{t:02}.txt")
+            print(dst, footscan_jiku(dst, 0, t))
+        return
+    if not a.pressure_extdata:
+        ap.error("--pressure-extdata is required")
     src = a.pressure_extdata
     out = a.out
     print("emed pictures:", emed_copy(os.path.join(src, "emed_test.lst"),

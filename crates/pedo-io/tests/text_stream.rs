@@ -96,3 +96,93 @@ fn a_streamed_lst_is_refused_as_the_whole_read_refuses_it() {
     assert!(failed.contains("changed"), "{failed}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A footscan export of `n` frames of 6 x 5 sensors: column 4 of row 0 is no sensor (-1 in every
+/// grid), row 5 column 0 is -1 in the first frames only (an unloaded sensor), one value is below
+/// 0 and `odd` is written at frame 3, row 2, column 2.
+fn footscan(n: usize, odd: &str) -> String {
+    let mut out = String::from(
+        "[General]\nUnitDistance=mm\nUnitPressure=kPa\nUnitTime=ms\n\n[Technical]\nSensCountX=6\n",
+    );
+    out += &format!("SensCountY=5\nLDistX=7.62\nLDistY=5.08\nTimeDiff=2\nMinIdx=1\nMaxIdx={n}\n");
+    let grid = |t: usize| -> String {
+        let mut g = String::new();
+        for r in 0..6 {
+            let row: Vec<String> = (0..5)
+                .map(|c| match (r, c) {
+                    (0, 4) => "-1".to_string(),
+                    (5, 0) if t < 10 => "-1".to_string(),
+                    (2, 2) if t == 3 => odd.to_string(),
+                    (1, 1) if t == 7 => "-2.5".to_string(),
+                    _ => format!("{}", (t * 7 + r * 5 + c * 3) % 11),
+                })
+                .collect();
+            g += &row.join("\t");
+            g.push('\n');
+        }
+        g
+    };
+    out += &format!("\n[Data]\n{}", grid(0));
+    for t in 0..n {
+        out += &format!("\n[Data{}]\n{}", t + 1, grid(t));
+    }
+    out
+}
+
+#[test]
+fn footscan_frames_read_as_they_are_parsed_are_the_whole_reads() {
+    let dir = temp_dir("footscan-stream");
+    let path = dir.join("trial.txt");
+    std::fs::write(&path, footscan(2 * FRAME_WINDOW + 9, "4")).unwrap();
+    let held = read_recording(&path).unwrap();
+    assert_eq!(why_read_whole(&path), None);
+    let (header, frames) = read_for_streaming(&path, &ReadOptions::default()).unwrap();
+    let mut frames = frames.expect("a footscan export streams");
+    assert_eq!(header.n_frames(), held.n_frames());
+    assert_eq!(header.sensor_mask(), held.sensor_mask());
+    assert_eq!(held.n_sensors(), 29);
+    assert_eq!(header.negative_values(), held.negative_values());
+    assert_eq!(held.negative_values().count, 1);
+    assert_eq!(
+        (header.pitch_mm, header.dt_s, &header.units, header.format),
+        (held.pitch_mm, held.dt_s, &held.units, held.format)
+    );
+    let mut back = Vec::new();
+    let n = held.n_frames();
+    for w0 in (0..n).step_by(FRAME_WINDOW) {
+        let w1 = (w0 + FRAME_WINDOW).min(n);
+        back.extend_from_slice(&frames.window(&header, w0, w1).unwrap().data());
+    }
+    assert_eq!(back, held.data().to_vec());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_streamed_footscan_or_apd_file_is_refused_or_read_as_the_whole_read() {
+    let dir = temp_dir("footscan-stream-bad");
+    // A value too large for the frames' numbers, and a file cut inside its last frame.
+    let text = footscan(20, "1e39");
+    let cut = footscan(20, "4");
+    for (name, text) in [("huge.txt", &text[..]), ("cut.txt", &cut[..cut.len() - 12])] {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let whole = read_recording(&path).unwrap_err().to_string();
+        let e = read_for_streaming(&path, &ReadOptions::default()).err();
+        assert_eq!(e.map(|e| e.to_string()), Some(whole), "{name}");
+    }
+    // A Zebris .apd of its peak image only: its one frame.
+    let apd = "[General]\nSource=<<zebris>>\nUnitDistance=cm\n[Technical]\nSensCountX=2\n\
+               SensCountY=3\nLDistX=0.846\nLDistY=0.846\n[Data]\n1\t-1\t3\n0\t5\t6\n";
+    let path = dir.join("peak.apd");
+    std::fs::write(&path, apd).unwrap();
+    let held = read_recording(&path).unwrap();
+    let (header, frames) = read_for_streaming(&path, &ReadOptions::default()).unwrap();
+    assert_eq!(header.sensor_mask(), held.sensor_mask());
+    assert_eq!(header.format, held.format);
+    let window = frames
+        .expect("an .apd streams")
+        .window(&header, 0, 1)
+        .unwrap();
+    assert_eq!(window.data(), held.data());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1152,10 +1152,13 @@ fn uncovered(image: &[[f64; 2]], nodes: &[[f64; 2]], dense_target: &Grid, cell: 
 
 /// Points binned in square cells, for the nearest point within a short reach: an outline's
 /// points lie a fraction of a cell apart, so a query looks at a few dozen of them, not all.
+/// The points are sorted by cell, column by column (each cell's in their own order), so that a
+/// query finds each column's run of cells with one binary search.
 struct Grid {
     points: Vec<[f64; 2]>,
     cell: f64,
-    bins: HashMap<(i64, i64), Vec<usize>>,
+    /// Each point's cell and index, sorted by cell (stably: within a cell, by index).
+    bins: Vec<((i64, i64), usize)>,
 }
 
 impl Grid {
@@ -1165,10 +1168,10 @@ impl Grid {
         } else {
             1.0
         };
-        let mut bins: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
-        for (i, &p) in points.iter().enumerate() {
-            bins.entry(Self::bin(p, cell)).or_default().push(i);
-        }
+        let mut bins: Vec<_> = (points.iter().enumerate())
+            .map(|(i, &p)| (Self::bin(p, cell), i))
+            .collect();
+        bins.sort_by_key(|&(b, _)| b);
         Self { points, cell, bins }
     }
 
@@ -1176,19 +1179,20 @@ impl Grid {
         ((p[0] / cell).floor() as i64, (p[1] / cell).floor() as i64)
     }
 
-    /// The index of the point nearest `q` and its distance, if one lies within `reach`.
+    /// The index of the point nearest `q` and its distance, if one lies within `reach`; of
+    /// points equally near, the first met going through the cells column by column.
     fn nearest_within(&self, q: [f64; 2], reach: f64) -> Option<(usize, f64)> {
         let (cx, cy) = Self::bin(q, self.cell);
         let r = (reach / self.cell).ceil() as i64;
         let mut best = (usize::MAX, reach * reach);
         for x in cx - r..=cx + r {
-            for y in cy - r..=cy + r {
-                for &i in self.bins.get(&(x, y)).map_or(&[][..], Vec::as_slice) {
-                    let p = self.points[i];
-                    let d = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
-                    if d <= best.1 {
-                        best = (i, d);
-                    }
+            let first = self.bins.partition_point(|&(b, _)| b < (x, cy - r));
+            let column = self.bins[first..].iter();
+            for &(_, i) in column.take_while(|&&(b, _)| b <= (x, cy + r)) {
+                let p = self.points[i];
+                let d = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+                if d <= best.1 {
+                    best = (i, d);
                 }
             }
         }
@@ -1297,5 +1301,61 @@ impl SenselAspect {
     /// Registration coordinates back to sensels.
     fn back_from_registration(self, p: [f64; 2]) -> [f64; 2] {
         [p[0], p[1] / self.0]
+    }
+}
+
+#[cfg(test)]
+mod grid_tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The cells visited one by one, as a map of cells lists them (the grid's former layout):
+    /// column by column, each cell's points in their order, a later point at an equal distance
+    /// taking the place of an earlier one.
+    fn cell_by_cell(
+        points: &[[f64; 2]],
+        cell: f64,
+        q: [f64; 2],
+        reach: f64,
+    ) -> Option<(usize, f64)> {
+        let mut bins: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+        for (i, &p) in points.iter().enumerate() {
+            bins.entry(Grid::bin(p, cell)).or_default().push(i);
+        }
+        let (cx, cy) = Grid::bin(q, cell);
+        let r = (reach / cell).ceil() as i64;
+        let mut best = (usize::MAX, reach * reach);
+        for x in cx - r..=cx + r {
+            for y in cy - r..=cy + r {
+                for &i in bins.get(&(x, y)).map_or(&[][..], Vec::as_slice) {
+                    let p = points[i];
+                    let d = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+                    if d <= best.1 {
+                        best = (i, d);
+                    }
+                }
+            }
+        }
+        (best.0 != usize::MAX).then(|| (best.0, best.1.sqrt()))
+    }
+
+    proptest! {
+        // Points and queries on a quarter-unit lattice: equal distances are common, so the
+        // order in which equally near points are met is tested too.
+        #[test]
+        fn the_sorted_grid_finds_what_the_cells_one_by_one_find(
+            pts in prop::collection::vec((-40i32..40, -40i32..40), 1..80),
+            queries in prop::collection::vec((-48i32..48, -48i32..48), 1..20),
+            cell in prop::sample::select(vec![0.5, 1.0, 2.0, 3.0]),
+            reach in prop::sample::select(vec![1.0, 2.0, 2.5]),
+        ) {
+            let points: Vec<[f64; 2]> =
+                pts.iter().map(|&(x, y)| [f64::from(x) * 0.25, f64::from(y) * 0.25]).collect();
+            let grid = Grid::new(points.clone(), cell);
+            for &(x, y) in &queries {
+                let q = [f64::from(x) * 0.25, f64::from(y) * 0.25];
+                prop_assert_eq!(grid.nearest_within(q, reach), cell_by_cell(&points, cell, q, reach));
+            }
+        }
     }
 }

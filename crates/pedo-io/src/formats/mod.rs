@@ -765,8 +765,9 @@ pub struct FileFrames {
 
 /// Where a [`FileFrames`] reads its frames.
 enum Source {
-    /// A text file (Tekscan `.asf` or CSV export, emed `.lst`) parsed again by a thread of its
-    /// own, handing its frames one by one and, after the last, the SHA-256 of the bytes it read.
+    /// A text file (Tekscan `.asf` or CSV export, emed `.lst`, Zebris `.apd` or footscan export)
+    /// parsed again by a thread of its own, handing its frames one by one and, after the last,
+    /// the SHA-256 of the bytes it read.
     Text {
         frames: std::sync::mpsc::Receiver<Result<Vec<f32>>>,
         digest: std::sync::mpsc::Receiver<String>,
@@ -797,6 +798,9 @@ impl Text {
             Format::Lst => {
                 stream::parse_lines(lines, name, |l| lst::read_lst_keeping(l, name, keep))
                     .map(|(r, _)| r)
+            }
+            Format::Zebris | Format::Footscan => {
+                stream::parse_lines(lines, name, |l| pedcad::read_pedcad_keeping(l, name, keep))
             }
             format => {
                 let csv = format == Format::TekscanCsv;
@@ -1062,7 +1066,12 @@ impl Sniffed {
             return Some("a UTF-16 text file is read whole".into());
         }
         match self.format {
-            Format::Asf | Format::TekscanCsv | Format::Lst | Format::Npy => None,
+            Format::Asf
+            | Format::TekscanCsv
+            | Format::Lst
+            | Format::Zebris
+            | Format::Footscan
+            | Format::Npy => None,
             Format::Npz => npz::why_read_whole(&self.path, &self.path.display().to_string()),
             Format::Csv | Format::Png | Format::Tiff => Some("a single frame is read whole".into()),
             f => Some(format!(

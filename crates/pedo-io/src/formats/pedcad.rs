@@ -11,13 +11,14 @@
 //!   frames only is an unloaded sensor (0).
 //!
 //! A file with `[Data<k>]` frames reads as those frames; a peak-only file (Zebris `.apd`) as one
-//! frame.
+//! frame. A streamed run reads it twice: first without holding a frame, then handing each frame
+//! on as its grid ends ([`Keep::Handed`]).
 
-use super::asf::trunc;
+use super::asf::{trunc, Keep};
 use super::parse_num;
 use crate::error::{IoError, Result};
 use crate::recording::stated_units;
-use crate::recording::{Format, Recording};
+use crate::recording::{Format, NegativeValues, Recording, SparseFrames};
 
 /// One `[Data]` or `[Data<k>]` grid as read.
 struct Grid {
@@ -82,9 +83,20 @@ pub(crate) fn read_pedcad(
     lines: impl Iterator<Item = (usize, String)>,
     name: &str,
 ) -> Result<Recording> {
+    read_pedcad_keeping(lines, name, &mut Keep::All)
+}
+
+/// [`read_pedcad`], each frame kept or handed on as `keep` says (handed: its values are not
+/// held once its grid has ended; the recording's frames read as 0).
+pub(crate) fn read_pedcad_keeping(
+    lines: impl Iterator<Item = (usize, String)>,
+    name: &str,
+    keep: &mut Keep<'_>,
+) -> Result<Recording> {
     let err = |line: usize, msg: String| IoError::parse(name, line, msg);
     let mut h = Header::default();
     let mut grids: Vec<Grid> = Vec::new();
+    let mut handed = Handed::default();
     let mut in_data = false;
     let mut last_ln = 0;
     let mut lines = lines.peekable();
@@ -95,8 +107,9 @@ pub(crate) fn read_pedcad(
             continue;
         }
         if let Some(sec) = t.strip_prefix('[').and_then(|s| s.strip_suffix(']')) {
-            if let Some(g) = grids.last() {
+            if let Some(g) = grids.last_mut() {
                 check_complete(g, &h, name)?;
+                handed.settle(g, keep)?;
             }
             in_data = false;
             if let Some(index) = data_section(sec.trim()) {
@@ -179,10 +192,100 @@ pub(crate) fn read_pedcad(
     {
         grids.pop();
     }
-    if let Some(g) = grids.last() {
+    if let Some(g) = grids.last_mut() {
         check_complete(g, &h, name)?;
+        handed.settle(g, keep)?;
     }
-    build(h, grids, name, last_ln)
+    build(h, grids, name, last_ln, keep, handed)
+}
+
+/// What the frames handed on leave behind: the sensors they show, their values below 0, the
+/// first value that is not finite (refused as the whole read refuses it) and a frame of zeros
+/// each.
+#[derive(Default)]
+struct Handed {
+    mask: Vec<bool>,
+    negatives: NegativeValues,
+    not_finite: Option<(usize, usize, f32)>,
+    frames: Option<SparseFrames>,
+}
+
+impl Handed {
+    /// Hands a frame grid that has ended on, unless `keep` holds it, and lets go of its values.
+    fn settle(&mut self, g: &mut Grid, keep: &mut Keep<'_>) -> Result<()> {
+        let Keep::Handed(hand) = keep else {
+            return Ok(());
+        };
+        if g.index.is_none() {
+            return Ok(());
+        }
+        let values = std::mem::take(&mut g.values);
+        let shown: Vec<bool> = values.iter().map(|&v| v != -1.0).collect();
+        let frame: Vec<f32> = (values.into_iter())
+            .map(|v| if v == -1.0 { 0.0 } else { v })
+            .collect();
+        self.push(&frame, &shown);
+        match hand {
+            Some(hand) => hand(&frame),
+            None => Ok(()),
+        }
+    }
+
+    /// The recording of the frames handed on, without their values; a peak-only file's one
+    /// frame (`first`, the peak image) handed on now. A value that is not finite at a sensor is
+    /// refused with [`Recording::new`]'s words.
+    fn recording(
+        mut self,
+        first: &Grid,
+        keep: &mut Keep<'_>,
+        rows: usize,
+        cols: usize,
+        mut mask: Vec<bool>,
+    ) -> Result<Recording> {
+        if self.frames.is_none() {
+            let mut peak = Grid {
+                index: Some(0),
+                header_line: first.header_line,
+                values: first.values.clone(),
+                rows_read: first.rows_read,
+            };
+            self.settle(&mut peak, keep)?;
+        }
+        for (m, &s) in mask.iter_mut().zip(&self.mask) {
+            *m |= s;
+        }
+        if let Some((t, i, v)) = self.not_finite.filter(|&(_, i, _)| mask[i]) {
+            return Err(IoError::invalid(format!(
+                "frame {t}, row {}, column {} is not finite ({v})",
+                i / cols,
+                i % cols
+            )));
+        }
+        let frames = self.frames.expect("a frame was handed on");
+        let mut rec = Recording::from_sparse(rows, cols, frames, mask)?;
+        rec.set_file_negatives(self.negatives);
+        Ok(rec)
+    }
+
+    /// Counts one frame handed on (`frame`, its -1 read as 0; `shown`: where it held a value).
+    fn push(&mut self, frame: &[f32], shown: &[bool]) {
+        let frames = self
+            .frames
+            .get_or_insert_with(|| SparseFrames::new(frame.len()));
+        if self.mask.is_empty() {
+            self.mask = vec![false; frame.len()];
+        }
+        for (m, &s) in self.mask.iter_mut().zip(shown) {
+            *m |= s;
+        }
+        for (i, &v) in frame.iter().enumerate() {
+            self.negatives.add(v);
+            if !v.is_finite() && self.not_finite.is_none() {
+                self.not_finite = Some((frames.n_frames(), i, v));
+            }
+        }
+        frames.push_empty();
+    }
 }
 
 fn read_key(h: &mut Header, key: &str, val: &str) -> std::result::Result<(), String> {
@@ -221,7 +324,14 @@ fn check_complete(g: &Grid, h: &Header, name: &str) -> Result<()> {
     Ok(())
 }
 
-fn build(h: Header, grids: Vec<Grid>, name: &str, last_ln: usize) -> Result<Recording> {
+fn build(
+    h: Header,
+    grids: Vec<Grid>,
+    name: &str,
+    last_ln: usize,
+    keep: &mut Keep<'_>,
+    handed: Handed,
+) -> Result<Recording> {
     let err = |line: usize, msg: String| IoError::parse(name, line, msg);
     let (rows, cols) = match (h.rows, h.cols) {
         (Some(r), Some(c)) => (r, c),
@@ -275,18 +385,24 @@ fn build(h: Header, grids: Vec<Grid>, name: &str, last_ln: usize) -> Result<Reco
         return Err(IoError::format(name, "no [Data] section"));
     }
     let per = rows * cols;
-    // A sensor exists when any grid (frames or peak) holds something other than -1 there.
+    // A sensor exists when any grid (frames or peak) holds something other than -1 there (the
+    // frames handed on hold no values: they left what they showed in `handed`).
     let mut mask = vec![false; per];
     for g in frames.iter().copied().chain(peak) {
         for (m, &v) in mask.iter_mut().zip(&g.values) {
             *m |= v != -1.0;
         }
     }
-    let mut data = Vec::with_capacity(frames.len() * per);
-    for g in &frames {
-        data.extend(g.values.iter().map(|&v| if v == -1.0 { 0.0 } else { v }));
-    }
-    let mut rec = Recording::new(frames.len(), rows, cols, data, mask)?;
+    let mut rec = match keep {
+        Keep::All => {
+            let mut data = Vec::with_capacity(frames.len() * per);
+            for g in &frames {
+                data.extend(g.values.iter().map(|&v| if v == -1.0 { 0.0 } else { v }));
+            }
+            Recording::new(frames.len(), rows, cols, data, mask)?
+        }
+        Keep::Handed(_) => handed.recording(frames[0], keep, rows, cols, mask)?,
+    };
     let mm = mm_per(h.unit_distance.as_deref()).ok_or_else(|| {
         IoError::format(
             name,
