@@ -33,7 +33,8 @@
 //! [`FrameMeasures::total_force`]: crate::recording::FrameMeasures::total_force
 
 use crate::error::{IoError, Result};
-use crate::recording::{canonical_units, kpa_per_unit, Recording};
+use crate::recording::{canonical_units, kpa_per_unit, FootColumns, Recording};
+use crate::regions::Side;
 use crate::stances::{find_stances, resample, Stance, StanceRule};
 use std::ops::Range;
 
@@ -216,6 +217,22 @@ pub struct Measures {
     pub stances: Vec<StanceMeasures>,
     /// The rule they were found by.
     pub stance_rule: StanceRule,
+    /// For a recording of both feet apart ([`Recording::feet`]: pedar's two insoles), each
+    /// foot's own measures, in the recording's order of the feet; a foot never loaded in the
+    /// frames has none. Empty for a single sensor.
+    pub feet: Vec<FootMeasures>,
+}
+
+/// The measures of one foot of a recording of both ([`Recording::feet`]): those of its sensels
+/// alone, the images NaN outside them, its stances found from its own force.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FootMeasures {
+    /// Which foot.
+    pub side: Side,
+    /// The columns of its sensels in the recording's frames.
+    pub columns: Range<usize>,
+    /// Its measures (with no feet of their own).
+    pub measures: Measures,
 }
 
 /// One stance of a recording: its frames, its values and its curves.
@@ -316,6 +333,18 @@ impl Measures {
         m.finish()
     }
 
+    /// The stances whose curves a recording's outputs show: each foot's own, the left's then
+    /// the right's, for a recording of both feet apart ([`Measures::feet`]), else its stances.
+    pub fn curve_stances(&self) -> Vec<&StanceMeasures> {
+        if self.feet.is_empty() {
+            self.stances.iter().collect()
+        } else {
+            (self.feet.iter())
+                .flat_map(|f| &f.measures.stances)
+                .collect()
+        }
+    }
+
     /// The values with their names and units, in the order the outputs list them.
     pub fn quantities(&self) -> Vec<Quantity> {
         let (u, v) = (&self.units, &self.values);
@@ -382,6 +411,8 @@ pub struct RecordingMeasures {
     max_contact: usize,
     first: Option<usize>,
     next: usize,
+    /// Each foot's measures, for a recording of both feet apart.
+    feet: Vec<(FootColumns, RecordingMeasures)>,
 }
 
 impl RecordingMeasures {
@@ -393,6 +424,20 @@ impl RecordingMeasures {
     ///
     /// [`IoError::InvalidInput`] when `threshold` is not finite.
     pub fn new(recording: &Recording, threshold: f64) -> Result<Self> {
+        let mut whole = Self::of_sensels(recording, threshold)?;
+        for foot in &recording.feet {
+            let mut m = Self::of_sensels(recording, threshold)?;
+            // The foot's sensels alone: every other one is as a missing sensor.
+            for (i, exists) in m.mask.iter_mut().enumerate() {
+                *exists &= foot.columns.contains(&(i % m.cols));
+            }
+            whole.feet.push((foot.clone(), m));
+        }
+        Ok(whole)
+    }
+
+    /// [`new`](Self::new) without the feet.
+    fn of_sensels(recording: &Recording, threshold: f64) -> Result<Self> {
         if !threshold.is_finite() {
             return Err(IoError::invalid(format!(
                 "contact threshold {threshold} is not finite"
@@ -420,6 +465,7 @@ impl RecordingMeasures {
             max_contact: 0,
             first: None,
             next: 0,
+            feet: Vec::new(),
         })
     }
 
@@ -485,6 +531,9 @@ impl RecordingMeasures {
             self.first = Some(frame);
         }
         self.next = frame + 1;
+        for (_, foot) in &mut self.feet {
+            foot.add_frame(frame, values)?;
+        }
         Ok(())
     }
 
@@ -534,6 +583,17 @@ impl RecordingMeasures {
         let stance_rule = StanceRule::for_interval((self.units.time == "s").then_some(dt));
         let (_, found) = find_stances(&self.forces, first, &stance_rule)?;
         let stances = found.into_iter().map(|s| self.stance(s, first)).collect();
+        let mut feet = Vec::new();
+        for (foot, m) in self.feet {
+            // A foot without contact in these frames has no measures; the other foot has.
+            if m.max_contact > 0 {
+                feet.push(FootMeasures {
+                    side: foot.side,
+                    columns: foot.columns,
+                    measures: m.finish()?,
+                });
+            }
+        }
         let values = MeasureValues {
             peak_pressure: finite_max(&peak),
             pti_max: finite_max(&pti),
@@ -556,6 +616,7 @@ impl RecordingMeasures {
             units: self.units,
             stances,
             stance_rule,
+            feet,
         })
     }
 
