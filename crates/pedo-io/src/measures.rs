@@ -22,7 +22,10 @@
 //! * **maximum contact area**: the largest number of loaded sensels in a frame × sensel area;
 //! * **stances** ([`crate::stances`]): the foot contacts among the frames, each with the values
 //!   above over its own frames ([`StanceValues`]) and its force, contact area, peak pressure and
-//!   centre of pressure resampled to 0–100 % of contact ([`StanceCurves`]).
+//!   centre of pressure resampled to 0–100 % of contact ([`StanceCurves`]);
+//! * **feet**: for a recording of both feet apart ([`Recording::feet`], pedar's two insoles),
+//!   all of the above again for each foot on its sensels alone ([`FootMeasures`]): in walking
+//!   one foot is nearly always down, so the stances of both feet's summed force are no foot's.
 //!
 //! Pressures are in kPa when the recording's units are known, else in the file's own units;
 //! force in N when units and sensel area are known, else the load in the file's units × mm² (or
