@@ -47,4 +47,6 @@ pub use formats::{
     sniff_format, ReadOptions,
 };
 pub use grid::{CoordUnits, Grid};
-pub use recording::{Format, FrameMeasures, FrameSource, Recording, StoredValues, FRAME_WINDOW};
+pub use recording::{
+    FootColumns, Format, FrameMeasures, FrameSource, Recording, StoredValues, FRAME_WINDOW,
+};

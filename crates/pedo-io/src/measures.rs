@@ -22,7 +22,10 @@
 //! * **maximum contact area**: the largest number of loaded sensels in a frame × sensel area;
 //! * **stances** ([`crate::stances`]): the foot contacts among the frames, each with the values
 //!   above over its own frames ([`StanceValues`]) and its force, contact area, peak pressure and
-//!   centre of pressure resampled to 0–100 % of contact ([`StanceCurves`]).
+//!   centre of pressure resampled to 0–100 % of contact ([`StanceCurves`]);
+//! * **feet**: for a recording of both feet apart ([`Recording::feet`], pedar's two insoles),
+//!   all of the above again for each foot on its sensels alone ([`FootMeasures`]): in walking
+//!   one foot is nearly always down, so the stances of both feet's summed force are no foot's.
 //!
 //! Pressures are in kPa when the recording's units are known, else in the file's own units;
 //! force in N when units and sensel area are known, else the load in the file's units × mm² (or
@@ -33,7 +36,8 @@
 //! [`FrameMeasures::total_force`]: crate::recording::FrameMeasures::total_force
 
 use crate::error::{IoError, Result};
-use crate::recording::{canonical_units, kpa_per_unit, Recording, StoredValues};
+use crate::recording::{canonical_units, kpa_per_unit, FootColumns, Recording, StoredValues};
+use crate::regions::Side;
 use crate::stances::{find_stances, resample, Stance, StanceRule};
 use std::ops::Range;
 
@@ -216,6 +220,22 @@ pub struct Measures {
     pub stances: Vec<StanceMeasures>,
     /// The rule they were found by.
     pub stance_rule: StanceRule,
+    /// For a recording of both feet apart ([`Recording::feet`]: pedar's two insoles), each
+    /// foot's own measures, in the recording's order of the feet; a foot never loaded in the
+    /// frames has none. Empty for a single sensor.
+    pub feet: Vec<FootMeasures>,
+}
+
+/// The measures of one foot of a recording of both ([`Recording::feet`]): those of its sensels
+/// alone, the images NaN outside them, its stances found from its own force.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FootMeasures {
+    /// Which foot.
+    pub side: Side,
+    /// The columns of its sensels in the recording's frames.
+    pub columns: Range<usize>,
+    /// Its measures (with no feet of their own).
+    pub measures: Measures,
 }
 
 /// One stance of a recording: its frames, its values and its curves.
@@ -316,6 +336,18 @@ impl Measures {
         m.finish()
     }
 
+    /// The stances whose curves a recording's outputs show: each foot's own, the left's then
+    /// the right's, for a recording of both feet apart ([`Measures::feet`]), else its stances.
+    pub fn curve_stances(&self) -> Vec<&StanceMeasures> {
+        if self.feet.is_empty() {
+            self.stances.iter().collect()
+        } else {
+            (self.feet.iter())
+                .flat_map(|f| &f.measures.stances)
+                .collect()
+        }
+    }
+
     /// The values with their names and units, in the order the outputs list them.
     pub fn quantities(&self) -> Vec<Quantity> {
         let (u, v) = (&self.units, &self.values);
@@ -382,6 +414,8 @@ pub struct RecordingMeasures {
     max_contact: usize,
     first: Option<usize>,
     next: usize,
+    /// Each foot's measures, for a recording of both feet apart.
+    feet: Vec<(FootColumns, RecordingMeasures)>,
 }
 
 impl RecordingMeasures {
@@ -393,6 +427,20 @@ impl RecordingMeasures {
     ///
     /// [`IoError::InvalidInput`] when `threshold` is not finite.
     pub fn new(recording: &Recording, threshold: f64) -> Result<Self> {
+        let mut whole = Self::of_sensels(recording, threshold)?;
+        for foot in &recording.feet {
+            let mut m = Self::of_sensels(recording, threshold)?;
+            // The foot's sensels alone: every other one is as a missing sensor.
+            for (i, exists) in m.mask.iter_mut().enumerate() {
+                *exists &= foot.columns.contains(&(i % m.cols));
+            }
+            whole.feet.push((foot.clone(), m));
+        }
+        Ok(whole)
+    }
+
+    /// [`new`](Self::new) without the feet.
+    fn of_sensels(recording: &Recording, threshold: f64) -> Result<Self> {
         if !threshold.is_finite() {
             return Err(IoError::invalid(format!(
                 "contact threshold {threshold} is not finite"
@@ -420,6 +468,7 @@ impl RecordingMeasures {
             max_contact: 0,
             first: None,
             next: 0,
+            feet: Vec::new(),
         })
     }
 
@@ -471,6 +520,9 @@ impl RecordingMeasures {
             }
         }
         self.end_of_frame(frame, load, contact, top, moment);
+        for (_, foot) in &mut self.feet {
+            foot.add_frame(frame, values)?;
+        }
         Ok(())
     }
 
@@ -504,6 +556,9 @@ impl RecordingMeasures {
             }
         }
         self.end_of_frame(frame, load, contact, top, moment);
+        for (_, foot) in &mut self.feet {
+            foot.add_stored(frame, stored)?;
+        }
         Ok(())
     }
 
@@ -577,6 +632,17 @@ impl RecordingMeasures {
         let stance_rule = StanceRule::for_interval((self.units.time == "s").then_some(dt));
         let (_, found) = find_stances(&self.forces, first, &stance_rule)?;
         let stances = found.into_iter().map(|s| self.stance(s, first)).collect();
+        let mut feet = Vec::new();
+        for (foot, m) in self.feet {
+            // A foot without contact in these frames has no measures; the other foot has.
+            if m.max_contact > 0 {
+                feet.push(FootMeasures {
+                    side: foot.side,
+                    columns: foot.columns,
+                    measures: m.finish()?,
+                });
+            }
+        }
         let values = MeasureValues {
             peak_pressure: finite_max(&peak),
             pti_max: finite_max(&pti),
@@ -599,6 +665,7 @@ impl RecordingMeasures {
             units: self.units,
             stances,
             stance_rule,
+            feet,
         })
     }
 

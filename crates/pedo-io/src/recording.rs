@@ -144,6 +144,19 @@ pub struct Recording {
     /// transposed: [`crate::units::UnitOverrides::apply`]), so that a second application does
     /// not transpose it again.
     time_axis_settled: bool,
+    /// The columns of each foot when the frames hold both feet apart (pedar's two insoles, side
+    /// by side); empty for a single sensor (a plate), whose feet the file does not tell apart.
+    pub feet: Vec<FootColumns>,
+}
+
+/// The columns of a recording's frames that one foot's sensor covers (one insole): every sensor
+/// of that foot, and no other, lies in them.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FootColumns {
+    /// Which foot.
+    pub side: crate::regions::Side,
+    /// Its columns, `start..end`.
+    pub columns: std::ops::Range<usize>,
 }
 
 /// The values below 0 at existing sensors of a recording, over every frame: a pressure is not
@@ -255,6 +268,7 @@ impl Recording {
             file_negatives: None,
             negatives_clipped: false,
             time_axis_settled: false,
+            feet: Vec::new(),
         })
     }
 
@@ -1197,6 +1211,7 @@ impl Recording {
         r.noise_threshold = self.noise_threshold;
         r.format = self.format;
         r.time_axis_settled = self.time_axis_settled;
+        r.feet = self.feet.clone();
         if self.negatives_clipped {
             r.clip_negatives();
         }
@@ -1250,6 +1265,7 @@ impl Recording {
             file_negatives: None,
             negatives_clipped: false,
             time_axis_settled: false,
+            feet: Vec::new(),
         })
     }
 }

@@ -756,3 +756,113 @@ fn a_pedar_layout_with_an_unknown_unit_is_an_error_naming_file_line_and_units() 
     }
     assert_eq!(PedarLayout::bundled().mm_per_unit, None);
 }
+
+/// What a foot's measures must be, from the export's own columns (`cols` of each row) and the
+/// number of image cells each of those sensors covers (`cells`): peak pressure, PTI maximum,
+/// FTI and contact time by their definitions (docs/measures.md), in kPa, kPa·s, kPa·cell·s, s.
+fn foot_oracle(rows: &[(f64, Vec<f64>)], cols: std::ops::Range<usize>, cells: &[f64]) -> [f64; 4] {
+    let dt = 0.01;
+    let peak = rows
+        .iter()
+        .flat_map(|r| &r.1[cols.clone()])
+        .fold(0.0, |a, &b| f64::max(a, b));
+    let pti = cols
+        .clone()
+        .map(|k| rows.iter().map(|r| r.1[k] * dt).sum::<f64>());
+    let force: Vec<f64> = rows
+        .iter()
+        .map(|r| cols.clone().map(|k| r.1[k] * cells[k]).sum())
+        .collect();
+    let (lo, hi) = force
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(l, h), &f| (l.min(f), h.max(f)));
+    let above: Vec<usize> = (0..force.len())
+        .filter(|&t| force[t] > lo + 0.1 * (hi - lo))
+        .collect();
+    let contact = (above[above.len() - 1] - above[0] + 1) as f64 * dt;
+    [
+        peak,
+        pti.fold(0.0, f64::max),
+        force.iter().sum::<f64>() * dt,
+        contact,
+    ]
+}
+
+#[test]
+fn pedar_insoles_are_measured_per_foot_as_their_own_columns_say() {
+    use pedo_io::measures::Measures;
+    use pedo_io::regions::Side;
+    let text = String::from_utf8(bytes("pedar-example-3.01-4.00.asc")).unwrap();
+    let rows = pedar_rows(&text);
+    let rec = read_recording(data("pedar-example-3.01-4.00.asc")).unwrap();
+    let (cols, n) = (rec.cols(), rec.n_frames());
+    let sides: Vec<_> = rec.feet.iter().map(|f| f.side).collect();
+    assert_eq!(sides, [Side::Left, Side::Right]);
+    let (left, right) = (rec.feet[0].columns.clone(), rec.feet[1].columns.clone());
+    assert!(
+        left.end + 2 == right.start && right.end == cols,
+        "{left:?} {right:?}"
+    );
+    // Each image cell of a sensor is one of the export's columns over every frame: which one
+    // (found by its values), and so how many cells each sensor covers. A cell's sensor is of
+    // the insole whose columns it lies in.
+    let frames: Vec<Vec<f32>> = (0..n)
+        .map(|t| rec.frame_slice(t).unwrap().to_vec())
+        .collect();
+    let mut cells = vec![0.0; 198];
+    for i in 0..rec.rows() * cols {
+        let series: Vec<f64> = frames.iter().map(|f| f64::from(f[i])).collect();
+        if series.iter().all(|&v| v == 0.0) {
+            continue;
+        }
+        let k = (0..198)
+            .find(|&k| rows.iter().zip(&series).all(|(r, &v)| r.1[k] == v))
+            .unwrap_or_else(|| panic!("cell {i} holds no sensor's values"));
+        let (foot, offset) = if k < 99 { (&left, 0) } else { (&right, 99) };
+        assert!(
+            foot.contains(&(i % cols)),
+            "cell {i} of sensor {} of the other insole",
+            k - offset + 1
+        );
+        cells[k] += 1.0;
+    }
+    let m = Measures::of_recording(&rec, 0.0, 0..n).unwrap();
+    assert_eq!(m.feet.len(), 2);
+    for (foot, sensors) in m.feet.iter().zip([0..99, 99..198]) {
+        let want = foot_oracle(&rows, sensors, &cells);
+        let v = &foot.measures.values;
+        let got = [v.peak_pressure, v.pti_max, v.fti, v.contact_time];
+        for (g, w) in got.iter().zip(want) {
+            assert!(
+                (g - w).abs() <= 1e-9 * w.max(1.0),
+                "{:?}: {got:?} vs {want:?}",
+                foot.side
+            );
+        }
+        // Its images are the whole recording's on its columns, NaN elsewhere.
+        for i in 0..rec.rows() * cols {
+            let mine = foot.columns.contains(&(i % cols));
+            let (a, b) = (foot.measures.pti[i], m.pti[i]);
+            assert!(
+                if mine {
+                    a.to_bits() == b.to_bits()
+                } else {
+                    a.is_nan()
+                },
+                "{i}"
+            );
+        }
+    }
+    // The feet share the whole recording's load: their FTIs sum to its FTI.
+    let fti: f64 = m.feet.iter().map(|f| f.measures.values.fti).sum();
+    assert!(
+        (fti - m.values.fti).abs() <= 1e-9 * fti,
+        "{fti} vs {}",
+        m.values.fti
+    );
+    // A plate's recording has no feet.
+    assert!(read_recording(data("emed-test-1-10.lst"))
+        .unwrap()
+        .feet
+        .is_empty());
+}

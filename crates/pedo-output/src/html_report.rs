@@ -142,10 +142,12 @@ impl ReportMeasures<'_> {
                 json!({"name": name, "x": x, "y": y})
             })
             .collect();
-        let curves: Vec<Vec<f64>> = (m.stances.iter())
+        // Both feet apart: each foot's own stances, as curves.csv has them.
+        let stances = m.curve_stances();
+        let curves: Vec<Vec<f64>> = (stances.iter())
             .map(|s| s.curves.force.iter().map(|&v| round3(v)).collect())
             .collect();
-        let complete: Vec<bool> = m.stances.iter().map(|s| s.stance.complete).collect();
+        let complete: Vec<bool> = stances.iter().map(|s| s.stance.complete).collect();
         let chosen: Vec<&[f64]> = (curves.iter().zip(&complete))
             .filter(|(_, c)| **c || !complete.contains(&true))
             .map(|(v, _)| v.as_slice())

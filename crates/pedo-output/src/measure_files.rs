@@ -13,7 +13,7 @@ use crate::run_folder::{write_figure, FigureKinds};
 use crate::table::{Cell, Table};
 use crate::TableFormat;
 use pedo_io::formats::npy::image_to_npy;
-use pedo_io::measures::{Measures, RecordingMeasures, CONTACT_FORCE_FRACTION};
+use pedo_io::measures::{Measures, RecordingMeasures, StanceMeasures, CONTACT_FORCE_FRACTION};
 use pedo_io::regions::{
     masks_of_measures, RegionMasks, RegionRule, RegionSeries, RegionValues, HALLUX_BOUND,
     LENGTH_BOUNDS, METATARSAL_BOUNDS,
@@ -261,44 +261,68 @@ pub fn measure_values_json(m: &Measures) -> Value {
 /// at that point of the stance, in its columns and units (contact area, total force, peak
 /// pressure, centre of pressure in sensels and in mm), then with `regions` (a region rule or
 /// the user's masks) each region's force and peak pressure ([`region_curve_columns`]). More
-/// measures are more columns.
+/// measures are more columns. A recording of both feet apart ([`Recording::feet`]) has a
+/// `foot` column first and each foot's stances, numbered per foot, measured on its sensels
+/// alone (the left foot's, then the right's), and no region columns: the regions are of the
+/// whole footprint, not of a foot.
 pub fn curves_table(
     recording: &Recording,
     m: &Measures,
     regions: Option<&[RegionValues]>,
 ) -> Table {
     let mut t = curves_header(recording, regions);
-    let mm = recording.pitch_mm.is_some();
-    let regions = regions.unwrap_or_default();
-    for (k, s) in m.stances.iter().enumerate() {
-        let c = &s.curves;
-        for p in 0..CURVE_POINTS {
-            let mut row = vec![
-                Cell::int(k),
-                Cell::int(usize::from(s.stance.complete)),
-                Cell::int(p),
-                Cell::Float(c.area[p], 4),
-                Cell::Float(c.force[p], 4),
-                Cell::Float(c.peak_pressure[p], 4),
-                Cell::opt(c.cop_x[p], 4),
-                Cell::opt(c.cop_y[p], 4),
-            ];
-            if mm {
-                let xy = c.cop_x[p]
-                    .zip(c.cop_y[p])
-                    .and_then(|(x, y)| recording.to_mm(x, y));
-                row.push(Cell::opt(xy.map(|v| v[0]), 4));
-                row.push(Cell::opt(xy.map(|v| v[1]), 4));
-            }
-            for r in regions {
-                let curve = r.curves.get(k);
-                row.push(Cell::opt(curve.map(|c| c.force[p]), 4));
-                row.push(Cell::opt(curve.map(|c| c.peak_pressure[p]), 4));
-            }
-            t.rows.push(row);
+    if recording.feet.is_empty() {
+        for (k, s) in m.stances.iter().enumerate() {
+            stance_rows(&mut t, recording, None, k, s, regions.unwrap_or_default());
+        }
+    }
+    for foot in &m.feet {
+        for (k, s) in foot.measures.stances.iter().enumerate() {
+            stance_rows(&mut t, recording, Some(foot.side.name()), k, s, &[]);
         }
     }
     t
+}
+
+/// The rows of stance `k`, `s`, of [`curves_table`], with its `foot` when the table has one.
+fn stance_rows(
+    t: &mut Table,
+    recording: &Recording,
+    foot: Option<&str>,
+    k: usize,
+    s: &StanceMeasures,
+    regions: &[RegionValues],
+) {
+    let c = &s.curves;
+    for p in 0..CURVE_POINTS {
+        let mut row: Vec<Cell> = foot
+            .map(|f| Cell::Text(f.to_string()))
+            .into_iter()
+            .collect();
+        row.extend([
+            Cell::int(k),
+            Cell::int(usize::from(s.stance.complete)),
+            Cell::int(p),
+            Cell::Float(c.area[p], 4),
+            Cell::Float(c.force[p], 4),
+            Cell::Float(c.peak_pressure[p], 4),
+            Cell::opt(c.cop_x[p], 4),
+            Cell::opt(c.cop_y[p], 4),
+        ]);
+        if recording.pitch_mm.is_some() {
+            let xy = c.cop_x[p]
+                .zip(c.cop_y[p])
+                .and_then(|(x, y)| recording.to_mm(x, y));
+            row.push(Cell::opt(xy.map(|v| v[0]), 4));
+            row.push(Cell::opt(xy.map(|v| v[1]), 4));
+        }
+        for r in regions {
+            let curve = r.curves.get(k);
+            row.push(Cell::opt(curve.map(|c| c.force[p]), 4));
+            row.push(Cell::opt(curve.map(|c| c.peak_pressure[p]), 4));
+        }
+        t.rows.push(row);
+    }
 }
 
 /// The columns of region `name`'s curves in [`curves_table`] for `recording`: its force and its
@@ -314,7 +338,12 @@ pub fn region_curve_columns(recording: &Recording, name: &str) -> [String; 2] {
 /// The columns of [`curves_table`] (no rows).
 pub fn curves_header(recording: &Recording, regions: Option<&[RegionValues]>) -> Table {
     let u = crate::run_tables::measure_units(recording);
-    let mut t = Table::new(&["stance", "complete", "percent"]);
+    let feet = !recording.feet.is_empty();
+    let mut t = if feet {
+        Table::new(&["foot", "stance", "complete", "percent"])
+    } else {
+        Table::new(&["stance", "complete", "percent"])
+    };
     for c in [u.area.0, u.force, u.peak.0, "cop_x", "cop_y"] {
         t.push_column(c);
     }
@@ -322,7 +351,7 @@ pub fn curves_header(recording: &Recording, regions: Option<&[RegionValues]>) ->
         t.push_column("cop_x_mm");
         t.push_column("cop_y_mm");
     }
-    for r in regions.unwrap_or_default() {
+    for r in regions.filter(|_| !feet).unwrap_or_default() {
         for c in region_curve_columns(recording, &r.name) {
             t.push_column(&c);
         }
@@ -359,9 +388,40 @@ pub fn stances_json(m: &Measures) -> Value {
     Value::Array(stances)
 }
 
+/// `measures.json`'s `feet`, for a recording of both feet apart: per foot (the left, then the
+/// right) its name, its columns in the images, its contact force threshold and frames, its
+/// values and its stances, as the whole recording's.
+pub fn feet_json(m: &Measures) -> Value {
+    let feet = m.feet.iter().map(|f| {
+        let fm = &f.measures;
+        json!({
+            "foot": f.side.name(),
+            "columns": [f.columns.start, f.columns.end],
+            "contact_force_threshold": {
+                "value": fm.values.contact_force_threshold,
+                "unit": fm.units.force,
+            },
+            "contact_frames": [fm.values.contact_frames.0, fm.values.contact_frames.1],
+            "values": measure_values_json(fm),
+            "stances": stances_json(fm),
+        })
+    });
+    Value::Array(feet.collect())
+}
+
 /// `measures.json`: the frames measured, the thresholds, the values with their units and what
-/// each image file holds; the stances, their rule and values.
+/// each image file holds; the stances, their rule and values; with both feet apart, each
+/// foot's ([`feet_json`]).
 pub fn measures_json(m: &Measures) -> Value {
+    let mut out = whole_measures_json(m);
+    if !m.feet.is_empty() {
+        out["feet"] = feet_json(m);
+    }
+    out
+}
+
+/// [`measures_json`] without the feet.
+fn whole_measures_json(m: &Measures) -> Value {
     let u = &m.units;
     let r = &m.stance_rule;
     json!({
@@ -631,5 +691,45 @@ mod tests {
         assert_eq!(json["stances"][0]["complete"], json!(true));
         assert_eq!(json["stances"][0]["values"]["contact_time"]["unit"], "s");
         assert_eq!(json["stance_rule"]["min_gap_frames"], 5);
+        // A recording of one sensor has no feet.
+        assert!(json.get("feet").is_none());
+    }
+
+    #[test]
+    fn both_insoles_of_a_pedar_walk_have_their_own_stances_and_curves() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../pedo-io/tests/data/pedar-example-3.01-4.00.asc"
+        );
+        let rec = pedo_io::read_recording(path).unwrap();
+        let m = Measures::of_recording(&rec, 0.0, 0..rec.n_frames()).unwrap();
+        let t = curves_table(&rec, &m, None);
+        assert_eq!(t.header[..2], ["foot", "stance"]);
+        let feet: Vec<(&str, usize)> = (m.feet.iter())
+            .map(|f| (f.side.name(), f.measures.stances.len()))
+            .collect();
+        assert!(feet.iter().all(|f| f.1 > 0), "{feet:?}");
+        // The left foot's rows, then the right's, stances numbered per foot.
+        let want: Vec<(&str, i64)> = (feet.iter())
+            .flat_map(|&(side, n)| (0..n).flat_map(move |k| [(side, k as i64); 101]))
+            .collect();
+        let got: Vec<(&str, i64)> = (t.rows.iter())
+            .map(|r| match (&r[0], &r[1]) {
+                (Cell::Text(f), Cell::Int(k)) => (f.as_str(), *k),
+                other => panic!("{other:?}"),
+            })
+            .collect();
+        assert_eq!(got, want);
+        let json = measures_json(&m);
+        let feet_json = json["feet"].as_array().unwrap();
+        assert_eq!(feet_json.len(), 2);
+        assert_eq!(feet_json[1]["foot"], "right");
+        let left = &m.feet[0].measures.values;
+        assert_eq!(
+            feet_json[0]["values"]["contact_time"]["value"],
+            json!(left.contact_time)
+        );
+        // Regions are of the whole image: no region columns beside a foot's curves.
+        assert_eq!(curves_header(&rec, Some(&[])).header, t.header);
     }
 }

@@ -54,16 +54,18 @@ fn folder_curves(folder: &Path, tables: TableFormat) -> Option<(Vec<String>, Vec
     })
 }
 
-/// A curves CSV (numbers and empty fields only).
+/// A curves CSV (numbers and empty fields; text in a pedar recording's `foot` column only).
 fn read_csv(path: &Path) -> Option<(Vec<String>, Vec<Vec<Cell>>)> {
     let text = std::fs::read_to_string(path).ok()?;
     let mut lines = text.lines();
     let header: Vec<String> = lines.next()?.split(',').map(str::to_string).collect();
     let rows = lines
         .map(|line| {
-            line.split(',')
-                .map(|f| {
-                    if f.is_empty() {
+            (line.split(',').zip(&header))
+                .map(|(f, column)| {
+                    if column == "foot" {
+                        Some(Cell::Text(f.to_string()))
+                    } else if f.is_empty() {
                         Some(Cell::Empty)
                     } else if let Ok(v) = f.parse::<i64>() {
                         Some(Cell::Int(v))
@@ -100,6 +102,7 @@ fn read_parquet(path: &Path) -> Option<(Vec<String>, Vec<Vec<Cell>>)> {
                 Field::Null => Some(Cell::Empty),
                 Field::Long(v) => Some(Cell::Int(*v)),
                 Field::Double(v) => Some(Cell::Float(*v, 4)),
+                Field::Str(v) => Some(Cell::Text(v.clone())),
                 _ => None,
             })
             .collect::<Option<Vec<Cell>>>()?;
@@ -127,20 +130,26 @@ fn is_region_curve(column: &str) -> bool {
 }
 
 /// The columns of the study curves table of `rows`' folders under `out`:
-/// [`STUDY_CURVES_COLUMNS`], then the region curve columns of the folders' curves tables, in the
-/// order they first appear (a folder without them leaves them empty).
+/// [`STUDY_CURVES_COLUMNS`] (with `foot` after `output` when a folder's curves are per foot, a
+/// pedar recording's; empty for the others), then the region curve columns of the folders'
+/// curves tables, in the order they first appear (a folder without them leaves them empty).
 pub fn study_curves_columns(out: &Path, rows: &[StudyRow], tables: TableFormat) -> Vec<String> {
     let mut columns: Vec<String> = STUDY_CURVES_COLUMNS.iter().map(|s| s.to_string()).collect();
+    let mut feet = false;
     for row in rows {
         let Some(output) = &row.output else { continue };
         let Some((cols, _)) = folder_curves(&out.join(output), tables) else {
             continue;
         };
         for c in cols {
+            feet |= c == "foot";
             if is_region_curve(&c) && !columns.contains(&c) {
                 columns.push(c);
             }
         }
+    }
+    if feet {
+        columns.insert(2, "foot".to_string());
     }
     columns
 }
@@ -227,4 +236,55 @@ fn write_to(tmp: &Path, out: &Path, rows: &[StudyRow], tables: TableFormat) -> s
     }
     sink.finish()?;
     std::fs::File::open(tmp)?.sync_all()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pedar_folders_foot_column_joins_the_study_curves_empty_for_the_others() {
+        let out = std::env::temp_dir().join(format!("pedo-feet-{}", std::process::id()));
+        let plate = "stance,complete,percent,peak_pressure_kpa\n0,1,0,1.5000\n";
+        let pedar = "foot,stance,complete,percent,peak_pressure_kpa\n\
+                     left,0,1,0,3.0000\nright,0,0,0,4.0000\n";
+        let mut rows = Vec::new();
+        for (name, csv) in [("plate", plate), ("pedar", pedar)] {
+            std::fs::create_dir_all(out.join(name)).unwrap();
+            std::fs::write(out.join(name).join("curves.csv"), csv).unwrap();
+            let row = serde_json::json!({"path": name, "output": name, "wall_time_s": 0.0, "status": "ok"});
+            rows.push(crate::row_from_json(&row).unwrap());
+        }
+        write_study_curves(&out, &rows, TableFormat::Csv).unwrap();
+        let text = std::fs::read_to_string(out.join("study_curves.csv")).unwrap();
+        let lines: Vec<Vec<&str>> = text.lines().map(|l| l.split(',').collect()).collect();
+        assert_eq!(lines[0][..4], ["path", "output", "foot", "stance"]);
+        let at = |name: &str| lines[0].iter().position(|c| *c == name).unwrap();
+        let (foot, area) = (at("foot"), at("peak_pressure_kpa"));
+        let got: Vec<(&str, &str, &str)> = (lines[1..].iter())
+            .map(|l| (l[0], l[foot], l[area]))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                ("plate", "", "1.5000"),
+                ("pedar", "left", "3.0000"),
+                ("pedar", "right", "4.0000")
+            ]
+        );
+        // As Parquet too: the foot is a text column, empty for the plate.
+        write_study_curves(&out, &rows, TableFormat::Parquet).unwrap();
+        let (header, cells) = read_parquet(&out.join("study_curves.parquet")).unwrap();
+        assert_eq!(header[2], "foot");
+        let feet: Vec<Cell> = cells.iter().map(|r| r[2].clone()).collect();
+        assert_eq!(
+            feet,
+            [
+                Cell::Empty,
+                Cell::Text("left".into()),
+                Cell::Text("right".into())
+            ]
+        );
+        std::fs::remove_dir_all(&out).unwrap();
+    }
 }

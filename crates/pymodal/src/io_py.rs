@@ -102,6 +102,13 @@ impl PyRecording {
         w.bool(r.negatives_clipped())
             .usize(negatives.count)
             .opt_f64(negatives.min);
+        // Where each foot is, for a recording of both feet apart (pedar).
+        w.usize(r.feet.len());
+        for foot in &r.feet {
+            w.str(foot.side.name())
+                .usize(foot.columns.start)
+                .usize(foot.columns.end);
+        }
         w
     }
 
@@ -123,6 +130,24 @@ impl PyRecording {
             count: r.usize()?,
             min: r.opt_f64()?,
         };
+        for _ in 0..r.usize()? {
+            let side = match r.string()?.as_str() {
+                "left" => pedo_io::regions::Side::Left,
+                "right" => pedo_io::regions::Side::Right,
+                other => {
+                    return Err(PyValueError::new_err(format!(
+                        "cannot unpickle Recording: unknown foot {other:?}"
+                    )))
+                }
+            };
+            let columns = r.usize()?..r.usize()?;
+            if columns.start > columns.end || columns.end > cols {
+                return Err(PyValueError::new_err(
+                    "cannot unpickle Recording: a foot's columns lie outside its frames",
+                ));
+            }
+            rec.feet.push(pedo_io::FootColumns { side, columns });
+        }
         r.finish()?;
         if clipped {
             rec.mark_negatives_clipped(negatives);
@@ -372,8 +397,12 @@ impl PyRecording {
     /// ``peak_load``, ``fti`` or ``load_time_integral``, ``peak_pressure``,
     /// ``max_contact_area``), ``units`` and ``curves``: float64 arrays of 101 points over 0–100 %
     /// of contact, ``percent``, ``contact_area``, ``total_force``, ``peak_pressure``, ``cop_x``
-    /// and ``cop_y`` (sensels; NaN only when no frame of the stance has load). The same as a run
-    /// folder's ``peak.npy``, ``pti.npy``, ``mean.npy``, ``measures.json`` and ``curves.csv``.
+    /// and ``cop_y`` (sensels; NaN only when no frame of the stance has load); ``feet``, for a
+    /// recording of both feet apart (pedar's two insoles; empty otherwise), ``"left"`` and
+    /// ``"right"`` to each foot's own dict of the same keys (its images NaN outside its sensels,
+    /// its stances found from its own force) and its ``columns`` ``(start, end)``; a foot never
+    /// loaded in the frames is absent. The same as a run folder's ``peak.npy``, ``pti.npy``,
+    /// ``mean.npy``, ``measures.json`` and ``curves.csv``.
     /// An ``InputError`` when no sensor is loaded in any frame.
     #[pyo3(signature = (threshold=0.0, frames=None))]
     fn gait_measures<'py>(
@@ -388,25 +417,14 @@ impl PyRecording {
             pedo_io::measures::Measures::of_recording(rec, threshold, range)
         })
         .map_err(to_py)?;
-        let image = |v: &[f64]| -> PyResult<Bound<'py, PyAny>> {
-            let a = Array2::from_shape_vec((m.rows, m.cols), v.to_vec()).map_err(internal)?;
-            read_only(a.into_pyarray(py).into_any())
-        };
-        let d = PyDict::new(py);
-        d.set_item("peak", image(&m.peak)?)?;
-        d.set_item("pti", image(&m.pti)?)?;
-        d.set_item("mean", image(&m.mean)?)?;
-        let (values, units) = (PyDict::new(py), PyDict::new(py));
-        for q in m.quantities() {
-            values.set_item(q.name, q.value)?;
-            units.set_item(q.name, q.unit)?;
+        let d = gait_dict(py, &m)?;
+        let feet = PyDict::new(py);
+        for foot in &m.feet {
+            let f = gait_dict(py, &foot.measures)?;
+            f.set_item("columns", (foot.columns.start, foot.columns.end))?;
+            feet.set_item(foot.side.name(), f)?;
         }
-        d.set_item("values", values)?;
-        d.set_item("units", units)?;
-        d.set_item("frames", (m.frames.start, m.frames.end))?;
-        d.set_item("contact_frames", m.values.contact_frames)?;
-        d.set_item("contact_force_threshold", m.values.contact_force_threshold)?;
-        d.set_item("stances", stances_list(py, &m)?)?;
+        d.set_item("feet", feet)?;
         Ok(d)
     }
     /// The footprint's anatomical regions and each one's measures (docs/measures.md,
@@ -505,6 +523,33 @@ impl PyRecording {
             repr(r.known_units().into_pyobject(py)?.into_any())?,
         ))
     }
+}
+
+/// The measures `m` as [`PyRecording::gait_measures`] gives them, without the feet.
+fn gait_dict<'py>(
+    py: Python<'py>,
+    m: &pedo_io::measures::Measures,
+) -> PyResult<Bound<'py, PyDict>> {
+    let image = |v: &[f64]| -> PyResult<Bound<'py, PyAny>> {
+        let a = Array2::from_shape_vec((m.rows, m.cols), v.to_vec()).map_err(internal)?;
+        read_only(a.into_pyarray(py).into_any())
+    };
+    let d = PyDict::new(py);
+    d.set_item("peak", image(&m.peak)?)?;
+    d.set_item("pti", image(&m.pti)?)?;
+    d.set_item("mean", image(&m.mean)?)?;
+    let (values, units) = (PyDict::new(py), PyDict::new(py));
+    for q in m.quantities() {
+        values.set_item(q.name, q.value)?;
+        units.set_item(q.name, q.unit)?;
+    }
+    d.set_item("values", values)?;
+    d.set_item("units", units)?;
+    d.set_item("frames", (m.frames.start, m.frames.end))?;
+    d.set_item("contact_frames", m.values.contact_frames)?;
+    d.set_item("contact_force_threshold", m.values.contact_force_threshold)?;
+    d.set_item("stances", stances_list(py, m)?)?;
+    Ok(d)
 }
 
 /// The stances of `m` as [`PyRecording::gait_measures`] gives them.

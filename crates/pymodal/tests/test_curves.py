@@ -47,10 +47,14 @@ def numpy_stances(force, dt):
     return [(a, b, bool(a > 0 and b < n - 1)) for a, b in runs if b - a + 1 >= min_frames]
 
 
-def frame_series(rec):
-    """Force, area, peak pressure and centre of pressure per frame from rec.frames, in NumPy."""
+def frame_series(rec, columns=None):
+    """Force, area, peak pressure and centre of pressure per frame from rec.frames, in NumPy;
+    of the sensels of columns (start, end) alone when given (one foot of pedar's two)."""
     f = np.asarray(rec.frames, dtype=np.float64)
     exists = ~np.isnan(f[0])
+    if columns is not None:
+        exists[:, : columns[0]] = False
+        exists[:, columns[1] :] = False
     v = np.nan_to_num(f, nan=0.0)
     loaded = (v > 0) & exists
     k = KPA.get((rec.units or "").lower(), 1.0)
@@ -132,6 +136,9 @@ def test_curves_csv_is_numpy_interp_of_frames_csv(path, tmp_path):
     measures = json.loads((tmp_path / "run" / "measures.json").read_text())
     numbers = [int(r["frame"]) for r in frames]
     assert numbers == list(range(numbers[0], numbers[0] + len(numbers)))
+    assert len(res["curves"]) == len(curves)
+    if "feet" in measures:
+        return feet_curves_are_numpy_interp(path, measures, curves, res)
     force_col = next(c for c in curves[0] if c.startswith("total_"))
     force = column(frames, force_col)
     dt = pymodal.read_recording(str(path)).dt_s
@@ -151,8 +158,33 @@ def test_curves_csv_is_numpy_interp_of_frames_csv(path, tmp_path):
             # Both tables are written with 4 decimals: 1e-4 apart at most.
             np.testing.assert_allclose(column(rows, name), interp(a, b, column(frames, name)), rtol=0, atol=1.5e-4, err_msg=name)
     # pymodal.run's result holds the same rows.
-    assert len(res["curves"]) == len(curves)
     assert res["curves"][5]["percent"] == 5
+
+
+def feet_curves_are_numpy_interp(path, measures, curves, res):
+    """Both insoles of a pedar recording: curves.csv's rows of each foot (its `foot` column)
+    are numpy.interp of the foot's own frame measures over its own stances, and measures.json's
+    `feet` are Recording.gait_measures()'s."""
+    rec = pymodal.read_recording(str(path))
+    mine = rec.gait_measures()["feet"]
+    assert [f["foot"] for f in measures["feet"]] == list(mine) == ["left", "right"]
+    assert list(curves[0])[:2] == ["foot", "stance"] and res["curves"][0]["foot"] == "left"
+    for foot in measures["feet"]:
+        theirs = mine[foot["foot"]]
+        assert tuple(foot["columns"]) == theirs["columns"]
+        assert {k: v["value"] for k, v in foot["values"].items()} == pytest.approx(theirs["values"], rel=1e-12)
+        series = frame_series(rec, foot["columns"])
+        want = numpy_stances(series["total_force"], rec.dt_s)
+        assert [tuple(s["frames"]) + (s["complete"],) for s in foot["stances"]] == want
+        rows = [r for r in curves if r["foot"] == foot["foot"]]
+        assert len(rows) == 101 * len(want) > 0
+        for k, (a, b, _) in enumerate(want):
+            part = rows[101 * k : 101 * (k + 1)]
+            assert {int(r["stance"]) for r in part} == {k}
+            for name in ("contact_area", "total_", "peak_pressure", "cop_x", "cop_y"):
+                col = next(c for c in part[0] if c.startswith(name))
+                key = next(c for c in series if c.startswith(name))
+                np.testing.assert_allclose(column(part, col), interp(a, b, series[key]), rtol=0, atol=1.5e-4, err_msg=col)
 
 
 def test_study_curves_csv_is_every_folders_curves(tmp_path):

@@ -17,7 +17,8 @@ use super::asf::trunc;
 use super::{parse_num, read_bytes};
 use crate::error::{IoError, Result};
 use crate::recording::stated_units;
-use crate::recording::{Format, Recording, SparseFrames};
+use crate::recording::{FootColumns, Format, Recording, SparseFrames};
+use crate::regions::Side;
 use std::path::Path;
 use std::sync::OnceLock;
 
@@ -405,6 +406,8 @@ struct Raster {
     cols: usize,
     cells: Vec<Vec<usize>>,
     pitch: Option<[f64; 2]>,
+    /// The columns of each group, in order.
+    group_columns: Vec<std::ops::Range<usize>>,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -541,11 +544,20 @@ fn rasterise(groups: &[Vec<&SensorOutline>], mm: Option<f64>, name: &str) -> Res
         }
     }
     let pitch = mm.map(|m| [cw * m, ch * m]);
+    // A group's cells never reach past the columns its outlines span (`k1` is clamped to them).
+    let group_columns = (groups.iter().zip(&x_ranges))
+        .map(|(g, &(x_lo, c0))| {
+            let hi = g.iter().map(|s| span(s, 0).1).fold(x_lo, f64::max);
+            let n = ((hi - x_lo) / cw).ceil().max(1.0) as usize;
+            c0 as usize..(c0 as usize + n).min(cols)
+        })
+        .collect();
     Ok(Raster {
         rows,
         cols,
         cells,
         pitch,
+        group_columns,
     })
 }
 
@@ -603,6 +615,18 @@ fn to_recording(
     rec.dt_s = d.dt_s;
     rec.units = stated_units(&d.units);
     rec.format = Some(Format::Pedar);
+    // Each insole is one foot; a single insole alone is as any single sensor.
+    if insoles.len() > 1 {
+        rec.feet = (insoles.iter().zip(&r.group_columns))
+            .map(|(&side, columns)| FootColumns {
+                side: match side {
+                    Insole::Left => Side::Left,
+                    Insole::Right => Side::Right,
+                },
+                columns: columns.clone(),
+            })
+            .collect();
+    }
     Ok(rec)
 }
 

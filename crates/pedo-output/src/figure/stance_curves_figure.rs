@@ -55,11 +55,13 @@ impl StanceCurvesFigure<'_> {
     fn layout(&self) -> StanceCurvesLayout {
         let m = self.measures;
         let u = &m.units;
-        let complete: Vec<usize> = (0..m.stances.len())
-            .filter(|&k| m.stances[k].stance.complete)
+        // Both feet apart: each foot's own stances, as curves.csv has them.
+        let stances = m.curve_stances();
+        let complete: Vec<usize> = (0..stances.len())
+            .filter(|&k| stances[k].stance.complete)
             .collect();
         let averaged: Vec<usize> = if complete.is_empty() {
-            (0..m.stances.len()).collect()
+            (0..stances.len()).collect()
         } else {
             complete.clone()
         };
@@ -76,7 +78,7 @@ impl StanceCurvesFigure<'_> {
             .into_iter()
             .map(|(label, pick)| {
                 let each: Vec<Vec<f64>> =
-                    m.stances.iter().map(|s| pick(&s.curves).to_vec()).collect();
+                    stances.iter().map(|s| pick(&s.curves).to_vec()).collect();
                 let chosen: Vec<&[f64]> = averaged.iter().map(|&k| each[k].as_slice()).collect();
                 let (mean, sd) = mean_and_sd(&chosen);
                 StancePanel {
@@ -87,17 +89,22 @@ impl StanceCurvesFigure<'_> {
                 }
             })
             .collect();
-        let n = m.stances.len();
+        let n = stances.len();
+        let feet = if m.feet.is_empty() {
+            ""
+        } else {
+            " of both feet"
+        };
         let subtitle = if n == 0 {
             "no stance among the frames".to_string()
         } else if complete.is_empty() {
             format!(
-                "{}, none complete: mean ± SD of all",
+                "{}{feet}, none complete: mean ± SD of all",
                 pedo_io::counted(n, "stance")
             )
         } else {
             format!(
-                "{}; mean ± SD of the {} complete",
+                "{}{feet}; mean ± SD of the {} complete",
                 pedo_io::counted(n, "stance"),
                 complete.len()
             )

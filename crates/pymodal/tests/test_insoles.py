@@ -1,0 +1,94 @@
+"""A pedar recording's two insoles measured per foot (Recording.gait_measures()["feet"]) against
+NumPy on the export's own columns: each insole's peak pressure, PTI, force-time integral,
+contact time and stances, with its force weighed by the image cells each sensor covers."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pymodal
+from test_curves import numpy_stances
+
+DATA = Path(__file__).resolve().parents[3] / "crates" / "pedo-io" / "tests" / "data"
+ASC = DATA / "pedar-example-3.01-4.00.asc"
+
+
+def export_columns():
+    """The export's frame interval and values, frames × 198 (the left insole's 99 sensors, then
+    the right's), read by NumPy from the text."""
+    lines = ASC.read_text().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("time[")) + 1
+    a = np.loadtxt(lines[start:])
+    return a[1, 0] - a[0, 0], a[:, 1:]
+
+
+def sensor_cells(rec, values):
+    """Per sensor, how many cells of the image hold its values over every frame; and per cell
+    of a sensor, its sensor (-1 for a cell that is no sensor or never loaded)."""
+    image = np.nan_to_num(rec.frames).reshape(len(rec), -1).astype(np.float32)
+    series = {values[:, k].astype(np.float32).tobytes(): k for k in range(values.shape[1])}
+    owner = np.full(image.shape[1], -1)
+    for i in np.flatnonzero(image.any(axis=0)):
+        owner[i] = series[image[:, i].tobytes()]
+    return np.bincount(owner[owner >= 0], minlength=values.shape[1]), owner
+
+
+def test_each_insole_is_measured_from_its_own_columns():
+    rec = pymodal.read_recording(str(ASC))
+    dt, values = export_columns()
+    assert dt == pytest.approx(rec.dt_s)
+    cells, owner = sensor_cells(rec, values)
+    got = rec.gait_measures()
+    assert list(got["feet"]) == ["left", "right"]
+    width = rec.frames.shape[2]
+    for name, sensors in [("left", slice(0, 99)), ("right", slice(99, 198))]:
+        foot = got["feet"][name]
+        a, b = foot["columns"]
+        # Every cell of this insole's sensors lies in its columns, and no other insole's does.
+        cols = np.flatnonzero(owner >= 0) % width
+        mine = (owner[owner >= 0] >= sensors.start) & (owner[owner >= 0] < sensors.stop)
+        assert np.all((cols >= a) & (cols < b) == mine)
+        p = values[:, sensors]
+        force = p @ cells[sensors]
+        lo, hi = force.min(), force.max()
+        above = np.flatnonzero(force > lo + 0.1 * (hi - lo))
+        want = {
+            "peak_pressure": p.max(),
+            "pti_max": (p * dt).sum(axis=0).max(),
+            "peak_load": hi,
+            "load_time_integral": force.sum() * dt,
+            "contact_time": (above[-1] - above[0] + 1) * dt,
+            "max_contact_area": ((p > 0) @ cells[sensors]).max(),
+        }
+        assert foot["values"] == pytest.approx(want, rel=1e-9)
+        assert foot["contact_frames"] == (above[0], above[-1])
+        # Its stances are found from its own force, each with its own values.
+        stances = numpy_stances(force, dt)
+        assert [(*s["frames"], s["complete"]) for s in foot["stances"]] == stances
+        assert stances, name
+        for s in foot["stances"]:
+            f0, f1 = s["frames"]
+            assert s["values"]["load_time_integral"] == pytest.approx(force[f0 : f1 + 1].sum() * dt, rel=1e-9)
+        # Its images are the recording's on its columns, NaN elsewhere.
+        for image in ("peak", "pti", "mean"):
+            np.testing.assert_array_equal(foot[image][:, a:b], got[image][:, a:b])
+            assert np.isnan(foot[image][:, :a]).all() and np.isnan(foot[image][:, b:]).all()
+    # The two feet share the recording's load.
+    total = sum(f["values"]["load_time_integral"] for f in got["feet"].values())
+    assert total == pytest.approx(got["values"]["load_time_integral"], rel=1e-9)
+
+
+def test_a_plate_has_no_feet_and_a_pickled_insole_recording_keeps_them():
+    import pickle
+
+    plate = pymodal.read_recording(str(DATA / "emed-test-1-10.lst"))
+    assert plate.gait_measures()["feet"] == {}
+    rec = pymodal.read_recording(str(ASC))
+    again = pickle.loads(pickle.dumps(rec))
+    assert again == rec
+    feet = again.gait_measures(frames=(0, 40))["feet"]
+    assert feet
+    assert {k: v["columns"] for k, v in feet.items()} == {
+        k: v["columns"] for k, v in rec.gait_measures(frames=(0, 40))["feet"].items()
+    }
