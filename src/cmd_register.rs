@@ -16,7 +16,7 @@ pub struct RegisterArgs {
     /// glob patterns (quoted, e.g. 'data/**/*.csv').
     #[arg(required = true, value_name = "INPUTS")]
     pub inputs: Vec<String>,
-    /// The output folder: registered.npz, registration.csv and registered.png.
+    /// The output folder: registered.npz, registration.csv, registered.png and register.html.
     #[arg(long)]
     pub out: PathBuf,
     #[command(flatten)]

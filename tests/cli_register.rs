@@ -99,6 +99,29 @@ fn the_template_registered_onto_itself_and_a_shifted_copy() {
     let (names, _) = npz_member(&npz, "trials.npy");
     assert!(names.contains("'shape': (2,)"), "{names}");
     assert!(out.join("registered.png").exists());
+    // The page embeds both trials, their images as the stack holds them, and the CSV's rows.
+    let html = std::fs::read_to_string(out.join("register.html")).unwrap();
+    let at = html.find("id=\"report-data\">").unwrap() + "id=\"report-data\">".len();
+    let end = at + html[at..].find("</script>").unwrap();
+    let d: serde_json::Value = serde_json::from_str(&html[at..end]).unwrap();
+    assert_eq!(d["trials"], 2);
+    assert_eq!(
+        (d["rows"].as_u64(), d["cols"].as_u64()),
+        (Some(63), Some(27))
+    );
+    let shown = d["shown"].as_array().unwrap();
+    assert_eq!(shown.len(), 2);
+    for (k, t) in shown.iter().enumerate() {
+        let embedded = t["peak"].as_array().unwrap();
+        assert_eq!(embedded.len(), tpl.len());
+        for (e, v) in embedded.iter().zip(&peak[k * tpl.len()..]) {
+            assert!((e.as_f64().unwrap() - v).abs() <= 1e-5 * v.abs(), "{e} {v}");
+        }
+        assert_eq!(t["name"].as_str(), Some(table[k]["trial"].as_str()));
+        let csv: f64 = table[k]["mask_xor_pct"].parse().unwrap();
+        let page = d["quality"][k]["mask_xor_pct"].as_f64().unwrap();
+        assert!((csv - page).abs() < 1e-3, "{csv} {page}");
+    }
 }
 
 #[test]

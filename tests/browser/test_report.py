@@ -11,8 +11,8 @@ frames were analysed, a surface run draws its 3-D view, an isocontour run shows 
 frame, `pedomatch match` reports are drawn (with a 3-D view for 3-D points), file names holding
 markup are shown as written (plotly reads names as HTML-like text), near-identical shapes get one
 cost class, the measures section draws the peak and PTI images and the stances' curves (with a
-region rule and a user's point: the regions' outlines and names and the point's track), the
-pages make no network request
+region rule and a user's point: the regions' outlines and names and the point's track),
+`pedomatch register`'s register.html is drawn with its quality table, the pages make no network request
 (every host resolves to nothing, and the page's Content-Security-Policy would report any load),
 and `--report none` writes no report. Standard library only; needs `chromium` on PATH.
 """
@@ -255,6 +255,31 @@ def check_isocontours(binary, tmp, failures):
         failures.append(f"isocontours: the page does not open on frame {frame}")
 
 
+def check_register_page(binary, tmp, failures):
+    """`pedomatch register` of MUN104R and a copy named with markup: register.html draws its five
+    images and its quality table, opens on the trial asked for, and shows the name as written."""
+    src = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "crates", "pedo-io",
+                       "tests", "data", "MUN104R.csv")
+    inputs = os.path.join(tmp, "register-in")
+    os.makedirs(inputs)
+    for name in ("a.csv", "<b>b.csv"):
+        shutil.copy(src, os.path.join(inputs, name))
+    out = os.path.join(tmp, "register")
+    subprocess.run([binary, "register", inputs, "--out", out, "--template", "first"], check=True,
+                   stdout=subprocess.DEVNULL)
+    page = os.path.join(out, "register.html")
+    dom, expect = check_page(f"file://{page}#trial=1", failures, "register.html")
+    expect(len(re.findall(r'<svg class="main-svg"', dom)) >= 10,
+           "the five plotly images are not drawn (main-svg elements missing)")
+    expect('data-trial="1"' in dom and 'data-shown="2"' in dom,
+           "the page does not show trial 1 of 2")
+    quality = re.search(r'id="quality">(.*?)</table>', dom, re.S)
+    expect(quality is not None and len(re.findall(r"<tr[ >]", quality.group(1))) == 3,
+           "the quality table has not its header and 2 rows")
+    expect("&lt;b&gt;b.csv" in dom and "<b>b.csv" not in dom,
+           "the trial's name is not shown as written")
+
+
 def main():
     if len(sys.argv) < 2:
         sys.exit(__doc__)
@@ -296,6 +321,7 @@ def main():
         check_analysed_frames(binary, tmp, failures)
         check_match_reports(binary, tmp, failures)
         check_markup_in_file_names(binary, tmp, failures)
+        check_register_page(binary, tmp, failures)
         none = os.path.join(tmp, "none")
         subprocess.run([binary, "demo", "--out", none, "--figures", "none", "--report", "none"],
                        check=True, stdout=subprocess.DEVNULL)
@@ -306,8 +332,8 @@ def main():
     print(f"report.html of the demo is {size / 2**20:.1f} MB")
     # Scenarios: size, frames 0 / 75 / 204 (with the titles clear of the mode bar), the clamped
     # frame, the surface view, isocontours, the analysed frames, two match reports, markup in
-    # file names, --report none, the measures (demo; regions and a point).
-    scenarios = 14
+    # file names, --report none, the measures (demo; regions and a point), register.html.
+    scenarios = 15
     failed = min(len(failures), scenarios)
     print(f"browser: {scenarios - failed} passed, {failed} failed")
     if failures:

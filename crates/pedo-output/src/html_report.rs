@@ -253,7 +253,7 @@ pub fn run_report(
 
 /// A template filled in: title, header, the shared head, plotly.js and the data, in one pass (a
 /// file name holding `{{DATA}}` stays text).
-fn page(template: &str, title: &str, header: &str, data: &str) -> String {
+pub(crate) fn page(template: &str, title: &str, header: &str, data: &str) -> String {
     let values = [
         ("{{TITLE}}", html_escape(title)),
         ("{{HEADER}}", header.to_string()),
@@ -751,7 +751,7 @@ fn table_rows(rows: &[(String, String)]) -> String {
         .collect()
 }
 
-fn facts_html(rows: &[(String, String)]) -> String {
+pub(crate) fn facts_html(rows: &[(String, String)]) -> String {
     format!("<table class=\"facts\">{}</table>", table_rows(rows))
 }
 

@@ -11,6 +11,7 @@
 //! | [`measure_files`] | the measures of the recording: `peak.npy`, `pti.npy`, `mean.npy`, `measures.json`, `peak.png`, `pti.png` |
 //! | [`figure`] | PNG/SVG figures (a matched pair, a run's tracks) and the GIF animation |
 //! | [`html_report`] | the self-contained interactive `report.html` of a run or of one pair |
+//! | [`register_folder`], [`register_page`] | the folder of `pedomatch register` and its page `register.html` |
 //! | [`outdir`] | output folders written whole or not at all |
 //! | [`run_folder`] | the folder of one run, through one writer ([`FolderSink`]) whoever runs it |
 
@@ -22,6 +23,7 @@ pub mod measure_files;
 pub mod moving_regions;
 pub mod outdir;
 pub mod register_folder;
+pub mod register_page;
 pub mod run_folder;
 pub mod run_tables;
 pub mod summary;

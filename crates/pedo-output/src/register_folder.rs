@@ -1,17 +1,25 @@
 //! The folder of `pedomatch register` / `pymodal.register(out=...)`, written whole or not at all
 //! ([`OutDir`]): `registered.npz` (the stack of registered images, the masks, the template, the
 //! trials' names and maps), `registration.csv` (a row per trial: its map and quality) and
-//! `registered.png` (template, mean and SD of the registered peak images).
+//! `registered.png` (template, mean and SD of the registered peak images) and `register.html`
+//! (the same and each trial's difference from the template, with the quality table:
+//! [`crate::register_page`]).
 
 use crate::figure::{FigureAxes, RegisteredStackFigure};
 use crate::outdir::OutDir;
+use crate::register_page::MAX_PAGE_VALUES;
 use crate::table::{Cell, Table};
 use pedo_io::{IoError, Result};
 use pedo_register::{FootImages, StudyRegistration};
 use std::path::Path;
 
 /// The files of a register folder.
-pub const REGISTER_FILES: [&str; 3] = ["registered.npz", "registration.csv", "registered.png"];
+pub const REGISTER_FILES: [&str; 4] = [
+    "registered.npz",
+    "registration.csv",
+    "registered.png",
+    "register.html",
+];
 
 /// The columns of `registration.csv`, in order.
 pub const REGISTRATION_COLUMNS: [&str; 14] = [
@@ -117,6 +125,8 @@ pub fn write_register_folder(
     }
     .to_png()?;
     dir.write("registered.png", &png)?;
+    let html = crate::register_page::register_page(names, reg, axes, MAX_PAGE_VALUES)?;
+    dir.write("register.html", html.as_bytes())?;
     dir.commit()
 }
 

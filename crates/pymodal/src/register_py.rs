@@ -119,7 +119,8 @@ macro_rules! define_register {
         /// a prior against mirroring and turns beyond ``max_turn``, a thin-plate field carries the
         /// template's grid into the trial and its images are sampled there (bilinear).
         /// ``mirror_left``: mirror every trial left-right first. ``out``: also write
-        /// ``registered.npz``, ``registration.csv`` and ``registered.png`` there (whole or not at all).
+        /// ``registered.npz``, ``registration.csv``, ``registered.png`` and ``register.html`` there
+        /// (whole or not at all).
         ///
         /// Returns a dict: ``peak`` (and ``pti``, ``mean`` for recordings), float arrays
         /// ``(trials, rows, columns)`` on the template's grid; ``mask`` (bool, same shape), each

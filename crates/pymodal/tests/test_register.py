@@ -71,6 +71,8 @@ def test_a_mirrored_left_foot_goes_onto_the_right_template_without_a_flip(tmp_pa
     np.testing.assert_array_equal(z["peak"], r["peak"])
     assert list(z["trials"]) == r["trials"]
     assert (tmp_path / "reg" / "registration.csv").read_text().startswith("trial,fallback,")
+    page = (tmp_path / "reg" / "register.html").read_text(encoding="utf-8")
+    assert '"trials":2' in page and page.count('"mask_xor_pct"') == 2
 
 
 def test_errors_are_typed():
