@@ -498,28 +498,7 @@ impl RecordingMeasures {
                 i % self.cols
             )));
         }
-        let (mut load, mut contact, mut top) = (0.0f64, 0usize, 0.0f64);
-        let mut moment = [0.0f64; 2];
-        for (i, &v) in values.iter().enumerate() {
-            if !self.mask[i] {
-                continue;
-            }
-            let v = f64::from(v);
-            if v > self.peak[i] {
-                self.peak[i] = v;
-            }
-            top = top.max(v);
-            if v > 0.0 && v >= self.threshold {
-                self.sum[i] += v;
-                self.loaded[i] += 1;
-                load += v;
-                contact += 1;
-                // As the frames table's centre of pressure (`Recording::measures`).
-                moment[0] += v * (i % self.cols) as f64;
-                moment[1] += v * (i / self.cols) as f64;
-            }
-        }
-        self.end_of_frame(frame, load, contact, top, moment);
+        self.add_sensels(frame, values.iter().copied().enumerate());
         for (_, foot) in &mut self.feet {
             foot.add_frame(frame, values)?;
         }
@@ -538,28 +517,35 @@ impl RecordingMeasures {
             return self.add_frame(frame, &stored.to_frame());
         }
         self.check_order(frame)?;
+        // The zeros a stored frame leaves out add nothing: no peak, load or contact.
+        self.add_sensels(frame, stored.iter());
+        for (_, foot) in &mut self.feet {
+            foot.add_stored(frame, stored)?;
+        }
+        Ok(())
+    }
+
+    /// Adds frame `frame`'s sensels `(position, value)`, in order of position.
+    fn add_sensels(&mut self, frame: usize, sensels: impl Iterator<Item = (usize, f32)>) {
         let (mut load, mut contact, mut top) = (0.0f64, 0usize, 0.0f64);
         let mut moment = [0.0f64; 2];
-        for (i, v) in stored.iter().filter(|&(i, _)| self.mask[i]) {
+        for (i, v) in sensels.filter(|&(i, _)| self.mask[i]) {
             let v = f64::from(v);
             if v > self.peak[i] {
                 self.peak[i] = v;
             }
             top = top.max(v);
-            if v >= self.threshold {
+            if v > 0.0 && v >= self.threshold {
                 self.sum[i] += v;
                 self.loaded[i] += 1;
                 load += v;
                 contact += 1;
+                // As the frames table's centre of pressure (`Recording::measures`).
                 moment[0] += v * (i % self.cols) as f64;
                 moment[1] += v * (i / self.cols) as f64;
             }
         }
         self.end_of_frame(frame, load, contact, top, moment);
-        for (_, foot) in &mut self.feet {
-            foot.add_stored(frame, stored)?;
-        }
-        Ok(())
     }
 
     fn check_order(&self, frame: usize) -> Result<()> {

@@ -7,6 +7,20 @@ use pedo_io::{
 };
 use std::f64::consts::PI;
 
+/// The smallest window of a frame of `cols` columns holding its values that are not 0, and its
+/// first row and column.
+fn window_of(data: &[f64], cols: usize) -> (Grid, (usize, usize)) {
+    let loaded: Vec<usize> = (0..data.len()).filter(|&i| data[i] != 0.0).collect();
+    let (r0, r1) = (loaded[0] / cols, loaded[loaded.len() - 1] / cols);
+    let c0 = loaded.iter().map(|i| i % cols).min().unwrap();
+    let c1 = loaded.iter().map(|i| i % cols).max().unwrap();
+    let (h, w) = (r1 - r0 + 1, c1 - c0 + 1);
+    let window = (0..h * w)
+        .map(|k| data[(r0 + k / w) * cols + c0 + k % w])
+        .collect();
+    (Grid::new(h, w, window).unwrap(), (r0, c0))
+}
+
 proptest::proptest! {
     /// The contours of a window around a sparse frame's values are the frame's, bit for bit:
     /// a few loaded sensels on a large plate are contoured at the cost of their window.
@@ -35,13 +49,7 @@ proptest::proptest! {
             ..ContourOptions::default()
         };
         proptest::prop_assume!(pedo_io::contour::window_gives_contours(&opts));
-        let loaded: Vec<usize> = (0..rows * cols).filter(|&i| data[i] != 0.0).collect();
-        let (r0, r1) = (loaded[0] / cols, loaded[loaded.len() - 1] / cols);
-        let c0 = loaded.iter().map(|i| i % cols).min().unwrap();
-        let c1 = loaded.iter().map(|i| i % cols).max().unwrap();
-        let (h, w) = (r1 - r0 + 1, c1 - c0 + 1);
-        let window: Vec<f64> = (0..h * w).map(|k| data[(r0 + k / w) * cols + c0 + k % w]).collect();
-        let window = Grid::new(h, w, window).unwrap();
+        let (window, (r0, c0)) = window_of(&data, cols);
         let whole = contours(&frame, &opts).unwrap();
         let windowed = pedo_io::contour::contours_of_window(&window, (r0, c0), &opts).unwrap();
         proptest::prop_assert_eq!(format!("{whole:?}"), format!("{windowed:?}"));
@@ -344,14 +352,8 @@ proptest::proptest! {
             units: CoordUnits::Millimetres { dx_mm: 8.4, dy_mm: 7.6 },
             ..Default::default()
         };
-        let loaded: Vec<usize> = (0..rows * cols).filter(|&i| data[i] != 0.0).collect();
-        let (r0, r1) = (loaded[0] / cols, loaded[loaded.len() - 1] / cols);
-        let c0 = loaded.iter().map(|i| i % cols).min().unwrap();
-        let c1 = loaded.iter().map(|i| i % cols).max().unwrap();
-        let (h, w) = (r1 - r0 + 1, c1 - c0 + 1);
-        let window: Vec<f64> = (0..h * w).map(|k| data[(r0 + k / w) * cols + c0 + k % w]).collect();
+        let (window, (r0, c0)) = window_of(&data, cols);
         let frame = Grid::new(rows, cols, data).unwrap();
-        let window = Grid::new(h, w, window).unwrap();
         let whole = pedo_io::surface::surface(&frame, &opts);
         let windowed = pedo_io::surface::surface_of_window(&window, (r0, c0), &opts);
         proptest::prop_assert_eq!(format!("{whole:?}"), format!("{windowed:?}"));

@@ -194,9 +194,27 @@ impl SequenceSink for MeasuresSink {
     }
     fn frame_values(&mut self, frame: usize, values: &[f32]) -> Result<()> {
         self.measures.add_frame(frame, values)?;
+        self.add_centre(values.iter().copied().enumerate());
+        Ok(())
+    }
+    fn stored_frame_values(&mut self, frame: usize, stored: StoredValues<'_>) -> Result<()> {
+        if stored.frame_len() != self.mask.len() || !stored.all_positive() {
+            return self.frame_values(frame, &stored.to_frame());
+        }
+        self.measures.add_stored(frame, stored)?;
+        // The zeros a stored frame leaves out add nothing to the sums.
+        self.add_centre(stored.iter());
+        Ok(())
+    }
+}
+
+impl MeasuresSink {
+    /// A frame's centre of pressure (and its loaded sensels, when kept) from its sensels
+    /// `(position, value)` in order of position.
+    fn add_centre(&mut self, sensels: impl Iterator<Item = (usize, f32)>) {
         let (mut load, mut mx, mut my) = (0.0f64, 0.0f64, 0.0f64);
         let mut loaded = Vec::new();
-        for (i, &v) in values.iter().enumerate() {
+        for (i, v) in sensels {
             let x = f64::from(v);
             if self.mask[i] && x > 0.0 && x >= self.threshold {
                 load += x;
@@ -211,32 +229,6 @@ impl SequenceSink for MeasuresSink {
         if let Some(kept) = self.kept.as_mut() {
             kept.push(loaded);
         }
-        Ok(())
-    }
-    fn stored_frame_values(&mut self, frame: usize, stored: StoredValues<'_>) -> Result<()> {
-        if stored.frame_len() != self.mask.len() || !stored.all_positive() {
-            return self.frame_values(frame, &stored.to_frame());
-        }
-        self.measures.add_stored(frame, stored)?;
-        // As frame_values: the zeros add nothing to the sums, positions come in order.
-        let (mut load, mut mx, mut my) = (0.0f64, 0.0f64, 0.0f64);
-        let mut loaded = Vec::new();
-        for (i, v) in stored.iter() {
-            let x = f64::from(v);
-            if self.mask[i] && x >= self.threshold {
-                load += x;
-                mx += x * (i % self.cols) as f64;
-                my += x * (i / self.cols) as f64;
-                if self.kept.is_some() {
-                    loaded.push((i as u32, v));
-                }
-            }
-        }
-        self.cop.push((load > 0.0).then(|| [mx / load, my / load]));
-        if let Some(kept) = self.kept.as_mut() {
-            kept.push(loaded);
-        }
-        Ok(())
     }
 }
 
