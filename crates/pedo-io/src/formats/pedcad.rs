@@ -12,7 +12,7 @@
 //!
 //! A file with `[Data<k>]` frames reads as those frames; a peak-only file (Zebris `.apd`) as one
 //! frame. A streamed run reads it twice: first without holding a frame, then handing each frame
-//! on as its grid ends ([`Keep::Handed`]).
+//! on as its grid ends (`Keep::Handed`).
 
 use super::asf::{trunc, Keep};
 use super::parse_num;
