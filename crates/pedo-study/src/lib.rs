@@ -1352,10 +1352,14 @@ fn open_study_lock(out: &Path, shared: bool) -> Result<(std::fs::File, PathBuf)>
                 .ok()
                 .and_then(|s| s.trim().parse::<u32>().ok())
                 .filter(|&pid| process_runs(pid));
-            let by = match (shared, holder) {
-                (_, Some(pid)) => format!("another pedomatch batch (process {pid})"),
+            // Who holds it: a batch when even a shared lock cannot be had (the process id it
+            // writes may not be there yet, just after it took the lock), else rows run one by
+            // one. The probe's lock goes with `file`.
+            let batch = shared || file.try_lock_shared().is_err();
+            let by = match (batch, holder) {
+                (true, Some(pid)) => format!("another pedomatch batch (process {pid})"),
                 (true, None) => "another pedomatch batch".to_string(),
-                (false, None) => "recordings run one by one (batch_row)".to_string(),
+                (false, _) => "recordings run one by one (batch_row)".to_string(),
             };
             Err(IoError::Output {
                 path: out.display().to_string(),
@@ -2212,6 +2216,16 @@ mod tests {
         );
         drop(batch);
         assert!(share_study_folder(&out).is_ok());
+        // Just after a batch takes the lock, before it has written its process id: a second
+        // batch is told it is a batch, not rows run one by one.
+        let taken = std::fs::File::create(out.join(STUDY_LOCK)).unwrap();
+        taken.try_lock().unwrap();
+        let refused = lock_study_folder(&out).unwrap_err().to_string();
+        assert!(
+            refused.contains("in use by another pedomatch batch;"),
+            "{refused}"
+        );
+        drop(taken);
         std::fs::remove_dir_all(&out).unwrap();
     }
 
