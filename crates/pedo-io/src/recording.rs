@@ -380,7 +380,7 @@ impl Recording {
     /// the recording is held sparsely: prefer [`frame_slice`](Self::frame_slice) for long ones).
     pub fn data(&self) -> Cow<'_, [f32]> {
         match &self.frames {
-            Frames::Dense(d) => Cow::Borrowed(d),
+            Frames::Dense { values: d, .. } => Cow::Borrowed(d),
             Frames::Sparse(_) => {
                 let per = self.rows * self.cols;
                 let mut out = vec![0.0f32; self.n_frames * per];
@@ -404,7 +404,7 @@ impl Recording {
     pub fn frame_slice(&self, t: usize) -> Option<Cow<'_, [f32]>> {
         let per = self.rows * self.cols;
         (t < self.n_frames).then(|| match &self.frames {
-            Frames::Dense(d) => Cow::Borrowed(&d[t * per..(t + 1) * per]),
+            Frames::Dense { values: d, .. } => Cow::Borrowed(&d[t * per..(t + 1) * per]),
             Frames::Sparse(_) => {
                 let mut out = vec![0.0f32; per];
                 self.frames.fill(t, per, &mut out);
@@ -424,15 +424,12 @@ impl Recording {
             return None;
         }
         match &self.frames {
-            Frames::Dense(d) => d[t * per..(t + 1) * per]
-                .iter()
-                .all(|v| v.to_bits() == 0)
-                .then_some(StoredValues {
-                    at: Positions::Narrow(&[]),
-                    values: &[],
-                    len: per,
-                    cols: self.cols,
-                }),
+            Frames::Dense { empty, .. } => empty[t].then_some(StoredValues {
+                at: Positions::Narrow(&[]),
+                values: &[],
+                len: per,
+                cols: self.cols,
+            }),
             Frames::Sparse(s) => Some(s.stored(t, self.cols)),
         }
     }
@@ -442,7 +439,7 @@ impl Recording {
     pub fn frame_into<'a>(&'a self, t: usize, out: &'a mut Vec<f32>) -> Option<&'a [f32]> {
         let per = self.rows * self.cols;
         (t < self.n_frames).then(|| match &self.frames {
-            Frames::Dense(d) => &d[t * per..(t + 1) * per],
+            Frames::Dense { values: d, .. } => &d[t * per..(t + 1) * per],
             Frames::Sparse(_) => {
                 out.resize(per, 0.0);
                 self.frames.fill(t, per, out);
@@ -470,7 +467,7 @@ impl Recording {
     /// Bytes taken by the frames' values (and, held sparsely, their positions).
     pub fn frames_bytes(&self) -> usize {
         match &self.frames {
-            Frames::Dense(d) => d.len() * 4,
+            Frames::Dense { values: d, .. } => d.len() * 4,
             Frames::Sparse(s) => s.bytes(),
         }
     }
@@ -499,7 +496,7 @@ impl Recording {
             ))
         })?;
         match &self.frames {
-            Frames::Dense(d) => out.extend_from_slice(d),
+            Frames::Dense { values: d, .. } => out.extend_from_slice(d),
             Frames::Sparse(_) => {
                 out.resize(n, 0.0);
                 for (t, frame) in out.chunks_exact_mut(per).enumerate() {
@@ -530,7 +527,7 @@ impl Recording {
         let mut n = NegativeValues::default();
         // Values at missing sensors are 0.
         match &self.frames {
-            Frames::Dense(d) => d.iter().for_each(|&v| n.add(v)),
+            Frames::Dense { values: d, .. } => d.iter().for_each(|&v| n.add(v)),
             Frames::Sparse(s) => s.values.iter().for_each(|&v| n.add(v)),
         }
         n
@@ -924,7 +921,12 @@ fn validate(
 /// held alike and compare equal).
 #[derive(Debug, Clone, PartialEq)]
 enum Frames {
-    Dense(Vec<f32>),
+    /// Every value, with whether each frame holds nothing (every value `+0.0`), found once
+    /// when the frames are made since a run asks it of every frame more than once.
+    Dense {
+        values: Vec<f32>,
+        empty: Vec<bool>,
+    },
     Sparse(SparseFrames),
 }
 
@@ -987,10 +989,10 @@ impl<'a> StoredValues<'a> {
     /// The smallest window of the frame holding every value held, as a grid (0 elsewhere in
     /// it), with its first row and column in the frame; `None` when the frame holds no value.
     pub fn window(&self) -> Option<(Grid, (usize, usize))> {
-        let (first, last) = (self.iter().next()?.0, self.iter().last()?.0);
-        let (r0, r1) = (first / self.cols, last / self.cols);
-        let (c0, c1) = self.iter().fold((self.cols, 0), |(lo, hi), (i, _)| {
-            (lo.min(i % self.cols), hi.max(i % self.cols))
+        // Positions increase, so the first gives the first row; one pass finds the rest.
+        let r0 = self.iter().next()?.0 / self.cols;
+        let (r1, c0, c1) = self.iter().fold((r0, self.cols, 0), |(_, lo, hi), (i, _)| {
+            (i / self.cols, lo.min(i % self.cols), hi.max(i % self.cols))
         });
         let (rows, cols) = (r1 - r0 + 1, c1 - c0 + 1);
         let mut data = vec![0.0f64; rows * cols];
@@ -1146,7 +1148,7 @@ impl Frames {
         let n = data.len() / per;
         let stored = data.iter().filter(|v| v.to_bits() != 0).count();
         if !SparseFrames::pays(n, per, stored) {
-            return Frames::Dense(data);
+            return Frames::dense(data, per);
         }
         let mut s = SparseFrames::new(per);
         if s.is_wide() {
@@ -1176,13 +1178,22 @@ impl Frames {
                 d[t * per + i] = v;
             }
         }
-        Frames::Dense(d)
+        Frames::dense(d, per)
+    }
+
+    /// `values` (frames of `per` values) held whole.
+    fn dense(values: Vec<f32>, per: usize) -> Self {
+        let empty = values
+            .chunks_exact(per)
+            .map(|f| f.iter().all(|v| v.to_bits() == 0))
+            .collect();
+        Frames::Dense { values, empty }
     }
 
     /// Writes frame `t` (of `per` values) into `out`.
     fn fill(&self, t: usize, per: usize, out: &mut [f32]) {
         match self {
-            Frames::Dense(d) => out.copy_from_slice(&d[t * per..(t + 1) * per]),
+            Frames::Dense { values: d, .. } => out.copy_from_slice(&d[t * per..(t + 1) * per]),
             Frames::Sparse(s) => {
                 out.fill(0.0);
                 for (i, v) in s.entries(t) {
@@ -1353,7 +1364,7 @@ mod tests {
         ) {
             let sparse = Recording::new(4, 5, 7, data, mask).unwrap();
             let mut whole = sparse.clone();
-            whole.frames = Frames::Dense(sparse.data().into_owned());
+            whole.frames = Frames::dense(sparse.data().into_owned(), 35);
             let (a, b) = (sparse.measures(threshold), whole.measures(threshold));
             proptest::prop_assert_eq!(format!("{a:?}"), format!("{b:?}"));
             let (a, b) = (sparse.peak_image(), whole.peak_image());
@@ -1382,7 +1393,7 @@ mod tests {
         assert!(rec.stored_values(3).is_none());
         // Held whole, a frame of zeros is still told apart (and a loaded one is not listed).
         let mut whole = rec.clone();
-        whole.frames = Frames::Dense(rec.data().into_owned());
+        whole.frames = Frames::dense(rec.data().into_owned(), rows * cols);
         assert!(whole.stored_values(2).unwrap().is_empty());
         assert!(whole.stored_values(1).is_none());
     }
