@@ -707,11 +707,9 @@ pub fn contours(frame: &Grid, opts: &ContourOptions) -> Result<Vec<Contour>> {
 /// Whether [`contours_of_window`] gives a frame's contours with these options: marching
 /// squares at a positive level, without smoothing or upsampling (which reach past a window).
 pub fn window_gives_contours(opts: &ContourOptions) -> bool {
-    let plain = |f: Option<f64>| f.is_none_or(|v| v == 0.0);
     matches!(opts.method, ContourMethod::MarchingSquares { .. })
         && opts.level.is_none_or(|l| l > 0.0)
-        && plain(opts.preprocess.sigma)
-        && opts.preprocess.upsample.is_none_or(|(f, _)| f == 1)
+        && opts.preprocess.is_per_sensel()
 }
 
 /// The [`contours`] of a frame that is 0 outside `window`, whose first row and column are

@@ -25,6 +25,13 @@ pub struct Preprocess {
 }
 
 impl Preprocess {
+    /// Whether each value of the result depends on its own sensel only (no smoothing, no
+    /// upsampling; a threshold is per sensel): then the chain on a window of a frame that is 0
+    /// outside it gives that part of the chain on the whole frame.
+    pub fn is_per_sensel(&self) -> bool {
+        self.sigma.is_none_or(|s| s == 0.0) && self.upsample.is_none_or(|(f, _)| f == 1)
+    }
+
     /// Applies the chain; returns the processed grid and the upsampling factor (output pixels
     /// per input pixel), needed to map coordinates back to input pixels.
     pub fn apply(&self, grid: &Grid) -> Result<(Grid, usize)> {
@@ -199,4 +206,56 @@ pub fn upsample(grid: &Grid, k: usize, interp: Interpolation) -> Result<Grid> {
         }
     }
     Grid::new(ro, co, out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 6 × 7 frame, 0 outside rows 2..4 and columns 1..4, and that window of it.
+    fn frame_and_window() -> (Grid, Grid) {
+        let mut data = vec![0.0; 42];
+        for (k, (r, c)) in [(2, 1), (2, 2), (2, 3), (3, 1), (3, 2), (3, 3)]
+            .into_iter()
+            .enumerate()
+        {
+            data[r * 7 + c] = 1.0 + k as f64;
+        }
+        let window = (2..4)
+            .flat_map(|r| (1..4).map(move |c| (r, c)))
+            .map(|(r, c)| data[r * 7 + c])
+            .collect();
+        (
+            Grid::new(6, 7, data).unwrap(),
+            Grid::new(2, 3, window).unwrap(),
+        )
+    }
+
+    #[test]
+    fn a_per_sensel_chain_on_a_window_is_the_chain_on_the_frame() {
+        let (frame, window) = frame_and_window();
+        let per_sensel = Preprocess {
+            threshold: Some(2.5),
+            sigma: Some(0.0),
+            upsample: Some((1, Interpolation::Bilinear)),
+        };
+        assert!(per_sensel.is_per_sensel());
+        let (whole, _) = per_sensel.apply(&frame).unwrap();
+        let (part, _) = per_sensel.apply(&window).unwrap();
+        for (r, c) in (0..2).flat_map(|r| (0..3).map(move |c| (r, c))) {
+            assert_eq!(part.get(r, c), whole.get(r + 2, c + 1));
+        }
+        // Smoothing reaches past the window: the frame's result is not 0 outside it.
+        let smoothing = Preprocess {
+            sigma: Some(1.0),
+            ..per_sensel
+        };
+        assert!(!smoothing.is_per_sensel());
+        assert!(smoothing.apply(&frame).unwrap().0.get(1, 2) > 0.0);
+        let upsampling = Preprocess {
+            upsample: Some((2, Interpolation::Bilinear)),
+            ..per_sensel
+        };
+        assert!(!upsampling.is_per_sensel());
+    }
 }

@@ -429,9 +429,7 @@ pub fn surface(frame: &Grid, opts: &SurfaceOptions) -> Result<Surface> {
 /// Whether [`surface_of_window`] gives a frame's surface with these options: a sample level
 /// at or above 0, without smoothing or upsampling (which reach past a window).
 pub fn window_gives_surface(opts: &SurfaceOptions) -> bool {
-    opts.sample_level >= 0.0
-        && opts.preprocess.sigma.is_none_or(|s| s == 0.0)
-        && opts.preprocess.upsample.is_none_or(|(f, _)| f == 1)
+    opts.sample_level >= 0.0 && opts.preprocess.is_per_sensel()
 }
 
 /// The [`surface`] of a frame that is 0 outside `window`, whose first row and column are
