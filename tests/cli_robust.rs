@@ -2,7 +2,10 @@
 //! whole output or none.
 
 mod common;
+#[path = "../crates/pedo-io/tests/common/gzip.rs"]
+mod gzip_stream;
 use common::temp_dir;
+use gzip_stream::gzip;
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -324,23 +327,6 @@ fn refused(file: &Path, says: &str) {
     assert!(!out.exists(), "no output for a refused recording");
 }
 
-fn gzip_of(parts: &[(&[u8], usize)]) -> Vec<u8> {
-    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::new(6));
-    for &(part, times) in parts {
-        // Written a block of repeats at a time: a write per repeat of a one-byte part costs
-        // the encoder a buffer each, minutes for 10⁷ of them.
-        let per_block = (1 << 20) / part.len().max(1) + 1;
-        let block = part.repeat(per_block.min(times));
-        let mut left = times;
-        while left > 0 {
-            let n = left.min(per_block);
-            gz.write_all(&block[..n * part.len()]).unwrap();
-            left -= n;
-        }
-    }
-    gz.finish().unwrap()
-}
-
 /// A PNG of `side` × `side` 8-bit zeros, compressed as it is written.
 fn png_of_zeros(side: u32) -> Vec<u8> {
     let chunk = |out: &mut Vec<u8>, kind: &[u8], data: &[u8]| {
@@ -380,24 +366,24 @@ fn hostile_files_are_one_line_errors_within_memory_and_time() {
         p
     };
     // 11.9 KB: 10⁶ empty frames on a 256 × 256 plate (262 GB as dense frames).
-    let xml = gzip_of(&[(ZEBRIS_HEAD, 1), (b"<quant/>", 1_000_000), (ZEBRIS_TAIL, 1)]);
+    let xml = gzip([(ZEBRIS_HEAD, 1), (b"<quant/>", 1_000_000), (ZEBRIS_TAIL, 1)]);
     let says = "values a recording may hold";
     refused(&write("million.xml.gz", &xml), says);
     // 550 bytes: 32,768 empty frames of 256 × 256, every value a recording may hold (2³¹),
     // and 13 KB: as many frames each loading one sensel. Made frame by frame, their objects
     // and measures took 13.5 s and 20 s of CPU; now they cost what they hold.
-    let empty = gzip_of(&[(ZEBRIS_HEAD, 1), (b"<quant/>", 32_768), (ZEBRIS_TAIL, 1)]);
+    let empty = gzip([(ZEBRIS_HEAD, 1), (b"<quant/>", 32_768), (ZEBRIS_TAIL, 1)]);
     refused(&write("wait.xml.gz", &empty), "no object to match");
     let dot = b"<quant><cell_begin><x>5</x><y>7</y></cell_begin><cell_count><x>1</x><y>1</y>\
         </cell_count><cells>100</cells></quant>";
-    let dots = gzip_of(&[(ZEBRIS_HEAD, 1), (dot, 32_768), (ZEBRIS_TAIL, 1)]);
+    let dots = gzip([(ZEBRIS_HEAD, 1), (dot, 32_768), (ZEBRIS_TAIL, 1)]);
     refused(&write("dots.xml.gz", &dots), "no object to match");
     // Nested 10⁶ deep: minutes of quadratic work before.
-    let deep = gzip_of(&[(ZEBRIS_HEAD, 1), (b"<a>", 1_000_000), (b"</a>", 1_000_000)]);
+    let deep = gzip([(ZEBRIS_HEAD, 1), (b"<a>", 1_000_000), (b"</a>", 1_000_000)]);
     refused(&write("deep.xml.gz", &deep), "nested elements");
     // A 57 KB emed .lst asking 30 GB.
     let page = b"Page 1\nMatrix: 10000x10000\n\t1\tForce\n1\t0\t0\nForce\t0\n\x0c";
-    let lst = gzip_of(&[(page, 75), (b"\n", 60_000_000)]);
+    let lst = gzip([(page as &[u8], 75), (b"\n", 60_000_000)]);
     refused(&write("walk.lst.gz", &lst), "sensors a frame may have");
     // A 261 KB PNG of 16384² zeros, which aborted in marching squares.
     refused(
@@ -413,7 +399,7 @@ fn hostile_files_are_one_line_errors_within_memory_and_time() {
     refused(&csv, "a line longer than");
     // A gzipped JSON of 2 × 10⁷ samples.
     let head = b"{\"cell_count\": {\"x\": 256, \"y\": 256}, \"samples\": [";
-    let json = gzip_of(&[(head, 1), (b"{},", 20_000_000), (b"{}]}", 1)]);
+    let json = gzip([(head as &[u8], 1), (b"{},", 20_000_000), (b"{}]}", 1)]);
     refused(&write("walk.json.gz", &json), says);
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -431,7 +417,7 @@ fn a_small_file_of_many_frames_holding_little_runs_within_memory_and_time() {
     );
     let dot = b"<quant><cell_begin><x>5</x><y>7</y></cell_begin><cell_count><x>1</x><y>1</y>\
         </cell_count><cells>100</cells></quant>";
-    let xml = gzip_of(&[
+    let xml = gzip([
         (ZEBRIS_HEAD, 1),
         (patch.as_bytes(), 4),
         (dot, 32_764),
@@ -466,7 +452,7 @@ fn a_batch_with_a_hostile_file_beside_good_ones_has_one_error_row() {
     let inputs = dir.join("inputs");
     std::fs::create_dir_all(&inputs).unwrap();
     std::fs::copy(data.join("emed-test-1-10.lst"), inputs.join("a.lst")).unwrap();
-    let xml = gzip_of(&[(ZEBRIS_HEAD, 1), (b"<quant/>", 1_000_000), (ZEBRIS_TAIL, 1)]);
+    let xml = gzip([(ZEBRIS_HEAD, 1), (b"<quant/>", 1_000_000), (ZEBRIS_TAIL, 1)]);
     std::fs::write(inputs.join("b.xml.gz"), xml).unwrap();
     std::fs::copy(data.join("emed-test-1-10.lst"), inputs.join("c.lst")).unwrap();
     let study = dir.join("study");

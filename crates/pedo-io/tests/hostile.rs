@@ -5,6 +5,9 @@
 
 use flate2::write::{GzEncoder, ZlibEncoder};
 use flate2::Compression;
+#[path = "common/gzip.rs"]
+mod gzip_stream;
+use gzip_stream::gzip;
 use pedo_io::formats::ReadOptions;
 use pedo_io::{parse_bytes, read_recording, Format, IoError, Recording};
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -113,23 +116,6 @@ fn format_error(e: &IoError) -> bool {
 
 fn parse_error(e: &IoError) -> bool {
     matches!(e, IoError::Parse { .. })
-}
-
-fn gzip(parts: impl IntoIterator<Item = (Vec<u8>, usize)>) -> Vec<u8> {
-    let mut gz = GzEncoder::new(Vec::new(), Compression::new(6));
-    for (part, times) in parts {
-        // Written a block of repeats at a time: a write per repeat of a one-byte part costs
-        // the encoder a buffer each, minutes for 10⁷ of them.
-        let per_block = (1 << 20) / part.len().max(1) + 1;
-        let block = part.repeat(per_block.min(times));
-        let mut left = times;
-        while left > 0 {
-            let n = left.min(per_block);
-            gz.write_all(&block[..n * part.len()]).unwrap();
-            left -= n;
-        }
-    }
-    gz.finish().unwrap()
 }
 
 fn once(s: &str) -> (Vec<u8>, usize) {
