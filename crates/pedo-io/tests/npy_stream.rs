@@ -153,9 +153,10 @@ fn files_read_whole_say_why() {
     assert!(why.contains("gzip"), "{why}");
     let (_, frames) = read_for_streaming(&gz, &ReadOptions::default()).unwrap();
     assert!(frames.is_none());
-    let pedar = why_read_whole(files::data("pedar-example-3.01-4.00.asc")).unwrap();
-    assert!(pedar.contains("the pedar format"), "{pedar}");
+    let xml = why_read_whole(files::data("zebris-FrasP01L-26-55.xml")).unwrap();
+    assert!(xml.contains("the zebris-xml format"), "{xml}");
     assert_eq!(why_read_whole(files::data("emed-test-1-10.lst")), None);
+    assert_eq!(why_read_whole(files::data("pedar-example-3.01-4.00.asc")), None);
     let asf = files::data("FrasP01L.asf");
     assert_eq!(why_read_whole(asf), None);
     assert!(why_read_whole(&dir).unwrap().contains("folder"));

@@ -186,3 +186,69 @@ fn a_streamed_footscan_or_apd_file_is_refused_or_read_as_the_whole_read() {
     assert_eq!(window.data(), held.data());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The pedar sample's 100 frames repeated `k` times (its header's total time made to agree),
+/// one value set below 0 (an offset).
+fn long_pedar(k: usize) -> String {
+    let one = std::fs::read_to_string(files::data("pedar-example-3.01-4.00.asc")).unwrap();
+    let (head, data) = one.split_at(one.find("time[secs]").unwrap());
+    let (columns, rows) = data.split_at(data.find('\n').unwrap() + 1);
+    let head = head.replace(
+        "total time [secs]:   1.000",
+        &format!("total time [secs]:   {k}.000"),
+    );
+    let mut rows = rows.repeat(k);
+    let at = rows.find("  0.000").unwrap();
+    rows.replace_range(at..at + 7, " -1.500");
+    format!("{head}{columns}{rows}")
+}
+
+#[test]
+fn pedar_frames_read_as_they_are_parsed_are_the_whole_reads() {
+    let dir = temp_dir("pedar-stream");
+    let path = dir.join("trial.asc");
+    std::fs::write(&path, long_pedar(3)).unwrap();
+    let held = read_recording(&path).unwrap();
+    assert_eq!(held.n_frames(), 300);
+    assert_eq!(why_read_whole(&path), None);
+    let (header, frames) = read_for_streaming(&path, &ReadOptions::default()).unwrap();
+    let mut frames = frames.expect("a pedar export streams");
+    assert_eq!(header.n_frames(), held.n_frames());
+    assert_eq!(header.sensor_mask(), held.sensor_mask());
+    assert_eq!(header.negative_values(), held.negative_values());
+    // The value below 0 is counted in each cell of the image its sensor covers.
+    assert!(held.negative_values().count >= 1);
+    assert_eq!((&header.feet, held.feet.len()), (&held.feet, 2));
+    assert_eq!(
+        (header.pitch_mm, header.dt_s, &header.units, header.format),
+        (held.pitch_mm, held.dt_s, &held.units, held.format)
+    );
+    assert!(header.frames_bytes() * 5 < held.frames_bytes());
+    let mut back = Vec::new();
+    let n = held.n_frames();
+    for w0 in (0..n).step_by(FRAME_WINDOW) {
+        let w1 = (w0 + FRAME_WINDOW).min(n);
+        back.extend_from_slice(&frames.window(&header, w0, w1).unwrap().data());
+    }
+    assert_eq!(back, held.data().to_vec());
+    // Cut inside its last line and short of the frames its header states: the whole read's
+    // error; rewritten between the readings: refused.
+    let text = long_pedar(3);
+    let cut = dir.join("cut.asc");
+    std::fs::write(&cut, &text[..text.len() - 40]).unwrap();
+    let whole = read_recording(&cut).unwrap_err().to_string();
+    let e = read_for_streaming(&cut, &ReadOptions::default()).err();
+    assert_eq!(e.map(|e| e.to_string()), Some(whole));
+    let (header, frames) = read_for_streaming(&path, &ReadOptions::default()).unwrap();
+    let mut frames = frames.unwrap();
+    let mut changed = text.clone().into_bytes();
+    let at = text.rfind("  0.000").unwrap() + 2;
+    changed[at] = b'1';
+    std::fs::write(&path, &changed).unwrap();
+    let failed = (0..n)
+        .step_by(FRAME_WINDOW)
+        .find_map(|w0| frames.window(&header, w0, (w0 + FRAME_WINDOW).min(n)).err())
+        .expect("a rewritten file is refused");
+    assert!(failed.to_string().contains("changed"), "{failed}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

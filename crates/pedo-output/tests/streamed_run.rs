@@ -315,7 +315,8 @@ fn a_recording_read_for_streaming_holds_no_values_but_its_shape() {
     assert_eq!((shape.pitch_mm, shape.dt_s), (held.pitch_mm, held.dt_s));
     assert_eq!(shape.units, held.units);
     assert!(shape.frames_bytes() * 20 < held.frames_bytes());
-    // A .npy array and an emed .lst are read as the run goes too; a pedar file is read whole.
+    // A .npy array, an emed .lst and a pedar export are read as the run goes too; a Zebris XML
+    // export is read whole.
     let dir = temp_dir("npy");
     let npy = dir.join("walk.npy");
     pedo_io::formats::npy::write_npy(&held, &npy).unwrap();
@@ -327,8 +328,12 @@ fn a_recording_read_for_streaming_holds_no_values_but_its_shape() {
     assert!(frames.is_some());
     assert_eq!(shape.n_frames(), read_recording(&lst).unwrap().n_frames());
     let pedar = files::data("pedar-example-3.01-4.00.asc");
-    let (whole, none) = read_for_streaming(&pedar, &ReadOptions::default()).unwrap();
+    let (shape, frames) = read_for_streaming(&pedar, &ReadOptions::default()).unwrap();
+    assert!(frames.is_some());
+    assert_eq!(shape.feet, read_recording(&pedar).unwrap().feet);
+    let xml = files::data("zebris-FrasP01L-26-55.xml");
+    let (whole, none) = read_for_streaming(&xml, &ReadOptions::default()).unwrap();
     assert!(none.is_none());
-    assert_eq!(whole.data(), read_recording(&pedar).unwrap().data());
+    assert_eq!(whole.data(), read_recording(&xml).unwrap().data());
     let _ = std::fs::remove_dir_all(&dir);
 }

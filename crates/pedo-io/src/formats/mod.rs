@@ -602,10 +602,7 @@ fn parse_text(
             parse_lines(lines(Stretch::Line), name, |l| pedcad::read_pedcad(l, name))
         }
         Format::Pedar => {
-            let layout = match &opts.layout {
-                Some(file) => std::borrow::Cow::Owned(pedar::PedarLayout::from_file(file)?),
-                None => std::borrow::Cow::Borrowed(pedar::PedarLayout::bundled()),
-            };
+            let layout = pedar_layout(opts)?;
             parse_lines(lines(Stretch::Line), name, |l| {
                 pedar::read_pedar(l, name, &layout)
             })
@@ -616,6 +613,14 @@ fn parse_text(
             "{name}: {format} is not a text format"
         ))),
     }
+}
+
+/// The sensor layout a pedar export is read with: the file of `--layout`, else the bundled one.
+fn pedar_layout(opts: &ReadOptions) -> Result<std::sync::Arc<pedar::PedarLayout>> {
+    Ok(std::sync::Arc::new(match &opts.layout {
+        Some(file) => pedar::PedarLayout::from_file(file)?,
+        None => pedar::PedarLayout::bundled().clone(),
+    }))
 }
 
 /// Reads a recording from a file, a folder of images, or a numbered image sequence.
@@ -715,7 +720,14 @@ fn read_for_run_within(path: &Path, opts: &ReadOptions) -> Result<RunInput> {
         format => {
             let size = sniffed.size;
             let (bytes, sha, rest) = sniffed.hashed(&name)?;
-            let text = Text { format, size };
+            let layout = (format == Format::Pedar)
+                .then(|| pedar_layout(opts))
+                .transpose()?;
+            let text = Text {
+                format,
+                size,
+                layout,
+            };
             let shape = text.read(bytes, &name, &mut asf::Keep::Handed(None))?;
             let sha256 =
                 stamp::finish(&sha, Some(rest)).map_err(|e| stream::read_error(&name, e))?;
@@ -765,7 +777,7 @@ pub struct FileFrames {
 
 /// Where a [`FileFrames`] reads its frames.
 enum Source {
-    /// A text file (Tekscan `.asf` or CSV export, emed `.lst`, Zebris `.apd` or footscan export)
+    /// A text file (Tekscan `.asf` or CSV export, emed `.lst`, pedar, Zebris `.apd` or footscan export)
     /// parsed again by a thread of its own, handing its frames one by one and, after the last,
     /// the SHA-256 of the bytes it read.
     Text {
@@ -777,18 +789,20 @@ enum Source {
 }
 
 /// A text format a run reads as it goes, parsed again by a thread of its own ([`Source::Text`]).
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 struct Text {
     format: Format,
     /// The file's length in bytes.
     size: usize,
+    /// The sensor layout of a pedar export (read once: both readings place it alike).
+    layout: Option<std::sync::Arc<pedar::PedarLayout>>,
 }
 
 impl Text {
     /// The recording in `bytes` (the file from its start), each frame kept or handed on as
     /// `keep` says.
     fn read(
-        self,
+        &self,
         bytes: impl std::io::Read,
         name: &str,
         keep: &mut asf::Keep<'_>,
@@ -801,6 +815,15 @@ impl Text {
             }
             Format::Zebris | Format::Footscan => {
                 stream::parse_lines(lines, name, |l| pedcad::read_pedcad_keeping(l, name, keep))
+            }
+            Format::Pedar => {
+                let layout = self
+                    .layout
+                    .as_deref()
+                    .unwrap_or(pedar::PedarLayout::bundled());
+                stream::parse_lines(lines, name, |l| {
+                    pedar::read_pedar_keeping(l, name, layout, keep)
+                })
             }
             format => {
                 let csv = format == Format::TekscanCsv;
@@ -1071,6 +1094,7 @@ impl Sniffed {
             | Format::Lst
             | Format::Zebris
             | Format::Footscan
+            | Format::Pedar
             | Format::Npy => None,
             Format::Npz => npz::why_read_whole(&self.path, &self.path.display().to_string()),
             Format::Csv | Format::Png | Format::Tiff => Some("a single frame is read whole".into()),

@@ -13,11 +13,11 @@
 //! between them, so they always come out as separate objects; [`parse_pedar_insoles`] gives
 //! each insole as a recording of its own. Row 0 is the toe end.
 
-use super::asf::trunc;
+use super::asf::{trunc, Keep};
 use super::{parse_num, read_bytes};
 use crate::error::{IoError, Result};
 use crate::recording::stated_units;
-use crate::recording::{FootColumns, Format, Recording, SparseFrames};
+use crate::recording::{FootColumns, Format, NegativeValues, Recording, SparseFrames};
 use crate::regions::Side;
 use std::path::Path;
 use std::sync::OnceLock;
@@ -310,6 +310,31 @@ impl PedarHeader {
             .filter(|&d| d > 0.0)
     }
 
+    /// An error unless the file held `n_frames` frames, at least one, as many as its header
+    /// states (when it does).
+    fn check_frames(&self, n_frames: usize, name: &str) -> Result<()> {
+        if let Some(e) = self.stated_frames()
+            && n_frames as u64 != e
+        {
+            let what = if (n_frames as u64) < e {
+                "truncated"
+            } else {
+                "too many frames"
+            };
+            return Err(IoError::format(
+                name,
+                format!(
+                    "{what}: the file ends after {n_frames} frames, its header (total time / time \
+                     per frame) states {e}"
+                ),
+            ));
+        }
+        if n_frames == 0 {
+            return Err(IoError::format(name, "no frames"));
+        }
+        Ok(())
+    }
+
     /// The frame count `total time / time per frame` states.
     fn stated_frames(&self) -> Option<u64> {
         match (self.total_s, self.dt_s()) {
@@ -319,14 +344,15 @@ impl PedarHeader {
     }
 }
 
-/// Reads the data lines (a time, then one value per column); a last line cut short is left
-/// out. Returns the values, frame after frame, and the number of frames.
+/// Reads the data lines (a time, then one value per column), handing each frame's values to
+/// `frame` as it is read; a last line cut short is left out. Returns the number of frames.
 fn read_pedar_rows(
     lines: impl Iterator<Item = (usize, String)>,
     n_columns: usize,
     name: &str,
-) -> Result<(Vec<f32>, usize)> {
-    let mut values: Vec<f32> = Vec::new();
+    mut frame: impl FnMut(usize, &[f32]) -> Result<()>,
+) -> Result<usize> {
+    let mut row: Vec<f32> = Vec::with_capacity(n_columns);
     let mut n_frames = 0usize;
     let mut lines = lines.peekable();
     while let Some((ln, line)) = lines.next() {
@@ -334,27 +360,30 @@ fn read_pedar_rows(
         let mut f = line.split_whitespace();
         let Some(time) = f.next() else { continue };
         parse_num(time).ok_or_else(|| err(format!("time {:?} is not a number", trunc(time))))?;
-        let mut k = 0;
+        row.clear();
         for tok in f {
-            if k == n_columns {
+            if row.len() == n_columns {
                 return Err(err(format!("more than {n_columns} sensor values")));
             }
+            let k = row.len();
             let v = parse_num(tok)
                 .ok_or_else(|| err(format!("value {} is not a number: {:?}", k + 1, trunc(tok))))?;
-            values.push(v as f32);
-            k += 1;
+            row.push(v as f32);
         }
-        if k != n_columns {
+        if row.len() != n_columns {
             if lines.peek().is_none() {
-                values.truncate(values.len() - k); // cut inside the last line
-                break;
+                break; // cut inside the last line
             }
-            return Err(err(format!("{k} sensor values, expected {n_columns}")));
+            return Err(err(format!(
+                "{} sensor values, expected {n_columns}",
+                row.len()
+            )));
         }
         crate::limits::frame_count(n_frames + 1, 1).map_err(err)?;
+        frame(ln, &row)?;
         n_frames += 1;
     }
-    Ok((values, n_frames))
+    Ok(n_frames)
 }
 
 /// Parses the export itself (no layout needed).
@@ -370,26 +399,12 @@ fn read_pedar_data(
 ) -> Result<PedarData> {
     let (mut header, (hl, column_header)) = PedarHeader::read(&mut lines, name)?;
     let columns = header.columns(hl, &column_header, name)?;
-    let (values, n_frames) = read_pedar_rows(lines, columns.len(), name)?;
-    if let Some(e) = header.stated_frames()
-        && n_frames as u64 != e
-    {
-        let what = if (n_frames as u64) < e {
-            "truncated"
-        } else {
-            "too many frames"
-        };
-        return Err(IoError::format(
-            name,
-            format!(
-                "{what}: the file ends after {n_frames} frames, its header (total time / time per \
-                 frame) states {e}"
-            ),
-        ));
-    }
-    if n_frames == 0 {
-        return Err(IoError::format(name, "no frames"));
-    }
+    let mut values = Vec::new();
+    let n_frames = read_pedar_rows(lines, columns.len(), name, |_, row| {
+        values.extend_from_slice(row);
+        Ok(())
+    })?;
+    header.check_frames(n_frames, name)?;
     Ok(PedarData {
         columns,
         values,
@@ -561,6 +576,96 @@ fn rasterise(groups: &[Vec<&SensorOutline>], mm: Option<f64>, name: &str) -> Res
     })
 }
 
+/// The columns of an export placed on a layout's raster, one group of insoles side by side:
+/// the image's size and mask, and which column's value each sensor's cells take.
+struct Placement {
+    raster: Raster,
+    /// Per sensor of the raster (in its order): the value column it takes.
+    src: Vec<usize>,
+    mask: Vec<bool>,
+    insoles: Vec<Insole>,
+}
+
+impl Placement {
+    /// The `insoles` of an export of these `columns` on `layout`.
+    fn new(
+        columns: &[(Insole, usize)],
+        layout: &PedarLayout,
+        insoles: &[Insole],
+        name: &str,
+    ) -> Result<Self> {
+        let mut groups: Vec<Vec<&SensorOutline>> = Vec::new();
+        let mut src = Vec::new();
+        for &side in insoles {
+            let mut g = Vec::new();
+            for (k, &(ins, sensor)) in columns.iter().enumerate().filter(|(_, c)| c.0 == side) {
+                let s = layout.find(ins, sensor).ok_or_else(|| {
+                    IoError::format(
+                        name,
+                        format!("sensor {sensor} of the {ins:?} insole is not in the layout"),
+                    )
+                })?;
+                g.push(s);
+                src.push(k);
+            }
+            if g.is_empty() {
+                return Err(IoError::format(
+                    name,
+                    format!("the export has no {side:?} insole sensors"),
+                ));
+            }
+            groups.push(g);
+        }
+        let raster = rasterise(&groups, layout.mm_per_unit, name)?;
+        let mut mask = vec![false; raster.rows * raster.cols];
+        raster.cells.iter().flatten().for_each(|&i| mask[i] = true);
+        Ok(Self {
+            raster,
+            src,
+            mask,
+            insoles: insoles.to_vec(),
+        })
+    }
+
+    /// Values per frame of the image.
+    fn per(&self) -> usize {
+        self.raster.rows * self.raster.cols
+    }
+
+    /// Writes the image of one line of the export's values into `frame` (cells outside every
+    /// sensor stay as they are: 0).
+    fn place(&self, row: &[f32], frame: &mut [f32]) {
+        for (cells, &k) in self.raster.cells.iter().zip(&self.src) {
+            for &i in cells {
+                frame[i] = row[k];
+            }
+        }
+    }
+
+    /// The recording of these `frames` on this image, with the export's time step and units.
+    fn recording(self, frames: SparseFrames, dt_s: Option<f64>, units: &str) -> Result<Recording> {
+        let r = self.raster;
+        let mut rec = Recording::from_sparse(r.rows, r.cols, frames, self.mask)?;
+        rec.pitch_mm = r.pitch;
+        rec.dt_s = dt_s;
+        rec.units = stated_units(units);
+        rec.format = Some(Format::Pedar);
+        // Each insole is one foot; a single insole alone is as any single sensor.
+        if self.insoles.len() > 1 {
+            rec.feet = (self.insoles.iter().zip(&r.group_columns))
+                .map(|(&side, columns)| FootColumns {
+                    side: match side {
+                        Insole::Left => Side::Left,
+                        Insole::Right => Side::Right,
+                    },
+                    columns: columns.clone(),
+                })
+                .collect();
+        }
+        Ok(rec)
+    }
+}
+
 /// Places the export's insoles on a layout: one recording per group of insoles.
 fn to_recording(
     d: &PedarData,
@@ -568,66 +673,17 @@ fn to_recording(
     insoles: &[Insole],
     name: &str,
 ) -> Result<Recording> {
-    let mut groups: Vec<Vec<&SensorOutline>> = Vec::new();
-    let mut sources: Vec<Vec<usize>> = Vec::new(); // per group: column index of each outline
-    for &side in insoles {
-        let mut g = Vec::new();
-        let mut src = Vec::new();
-        for (k, &(ins, sensor)) in d.columns.iter().enumerate().filter(|(_, c)| c.0 == side) {
-            let s = layout.find(ins, sensor).ok_or_else(|| {
-                IoError::format(
-                    name,
-                    format!("sensor {sensor} of the {ins:?} insole is not in the layout"),
-                )
-            })?;
-            g.push(s);
-            src.push(k);
-        }
-        if g.is_empty() {
-            return Err(IoError::format(
-                name,
-                format!("the export has no {side:?} insole sensors"),
-            ));
-        }
-        groups.push(g);
-        sources.push(src);
-    }
-    let r = rasterise(&groups, layout.mm_per_unit, name)?;
-    let per = r.rows * r.cols;
+    let placed = Placement::new(&d.columns, layout, insoles, name)?;
+    let per = placed.per();
     crate::limits::check_frames(name, d.n_frames, per)?;
-    let mut mask = vec![false; per];
-    r.cells.iter().flatten().for_each(|&i| mask[i] = true);
-    let nc = d.columns.len();
-    let src: Vec<usize> = sources.concat();
     // Frame by frame into sparse frames: a frame of the image takes many cells per sensor.
     let mut frames = SparseFrames::new(per);
     let mut frame = vec![0.0f32; per];
-    for row in d.values.chunks_exact(nc).take(d.n_frames) {
-        for (cells, &k) in r.cells.iter().zip(&src) {
-            for &i in cells {
-                frame[i] = row[k];
-            }
-        }
+    for row in d.values.chunks_exact(d.columns.len()).take(d.n_frames) {
+        placed.place(row, &mut frame);
         frames.push(&frame);
     }
-    let mut rec = Recording::from_sparse(r.rows, r.cols, frames, mask)?;
-    rec.pitch_mm = r.pitch;
-    rec.dt_s = d.dt_s;
-    rec.units = stated_units(&d.units);
-    rec.format = Some(Format::Pedar);
-    // Each insole is one foot; a single insole alone is as any single sensor.
-    if insoles.len() > 1 {
-        rec.feet = (insoles.iter().zip(&r.group_columns))
-            .map(|(&side, columns)| FootColumns {
-                side: match side {
-                    Insole::Left => Side::Left,
-                    Insole::Right => Side::Right,
-                },
-                columns: columns.clone(),
-            })
-            .collect();
-    }
-    Ok(rec)
+    placed.recording(frames, d.dt_s, &d.units)
 }
 
 /// Parses a pedar export onto a layout: both insoles in one image (left insole on the left,
@@ -643,12 +699,52 @@ pub(crate) fn read_pedar(
     name: &str,
     layout: &PedarLayout,
 ) -> Result<Recording> {
-    let d = read_pedar_data(lines, name)?;
+    read_pedar_keeping(lines, name, layout, &mut Keep::All)
+}
+
+/// [`read_pedar`], each frame placed on the layout as its line is read and kept or handed on
+/// as `keep` says (handed: its values are not held, so that a run reads the export again
+/// frame by frame, as it reads a Tekscan file).
+pub(crate) fn read_pedar_keeping(
+    mut lines: impl Iterator<Item = (usize, String)>,
+    name: &str,
+    layout: &PedarLayout,
+    keep: &mut Keep<'_>,
+) -> Result<Recording> {
+    let (mut header, (hl, column_header)) = PedarHeader::read(&mut lines, name)?;
+    let columns = header.columns(hl, &column_header, name)?;
     let sides: Vec<Insole> = [Insole::Left, Insole::Right]
         .into_iter()
-        .filter(|s| d.columns.iter().any(|c| c.0 == *s))
+        .filter(|s| columns.iter().any(|c| c.0 == *s))
         .collect();
-    to_recording(&d, layout, &sides, name)
+    let placed = Placement::new(&columns, layout, &sides, name)?;
+    let per = placed.per();
+    let mut frames = SparseFrames::new(per);
+    let mut frame = vec![0.0f32; per];
+    let mut negatives = NegativeValues::default();
+    let n_frames = read_pedar_rows(lines, columns.len(), name, |ln, row| {
+        crate::limits::frame_count(frames.n_frames() + 1, per)
+            .map_err(|m| IoError::parse(name, ln, m))?;
+        placed.place(row, &mut frame);
+        match keep {
+            Keep::All => frames.push(&frame),
+            Keep::Handed(hand) => {
+                frame.iter().for_each(|&v| negatives.add(v));
+                frames.push_empty();
+                if let Some(hand) = hand {
+                    hand(&frame)?;
+                }
+            }
+        }
+        Ok(())
+    })?;
+    header.check_frames(n_frames, name)?;
+    let handed = matches!(keep, Keep::Handed(_));
+    let mut rec = placed.recording(frames, header.dt_s(), &header.units)?;
+    if handed {
+        rec.set_file_negatives(negatives);
+    }
+    Ok(rec)
 }
 
 /// Parses a pedar export into one recording per insole: `(left, right)`.
