@@ -1098,9 +1098,13 @@ impl Sniffed {
             | Format::Npy => None,
             Format::Npz => npz::why_read_whole(&self.path, &self.path.display().to_string()),
             Format::Csv | Format::Png | Format::Tiff => Some("a single frame is read whole".into()),
-            f => Some(format!(
-                "the {} format is read whole (its reader does not yet hand frames on as it parses)",
-                f.name()
+            // Their frames are the windows of loaded sensors the file stores, held as such (a
+            // frame costs its window, not the plate); read again they would be handed on as
+            // whole plates, which a file of many near-empty frames would make costlier.
+            Format::ZebrisXml | Format::ZebrisJson => Some(format!(
+                "the {} format is read whole: its frames are held as the windows of loaded \
+                 sensors the file stores, a few values each",
+                self.format.name()
             )),
         }
     }
