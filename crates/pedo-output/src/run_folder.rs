@@ -400,6 +400,10 @@ fn run_reads_whole(params: &RunParams, outputs: &RunOutputs) -> Option<&'static 
         Some("the figures, the report or the animation are drawn from the whole recording")
     } else if !params.streams() {
         Some("the isocontour model, drift correction, points and regions need the whole run")
+    } else if outputs.any_regions() && params.model == ObjectModel::Contour {
+        // Carried forwards and backwards from each stance's foot-flat frame, which comes
+        // after the stance's first frames.
+        Some("the anatomical regions moving with the foot are carried through the whole run")
     } else if params.units.time_axis == Some(pedo_io::units::TimeAxis::Last) {
         // The frames of a time-last array are spread over all of it.
         Some("an array transposed from time-last is read whole")

@@ -164,3 +164,27 @@ fn a_run_s_regions_are_the_same_streamed_or_held_and_match_the_library() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A contour run asked for regions reads its file whole, even with tables only, so that the
+/// regions move with the foot (carried backwards from each stance's foot-flat frame); without
+/// regions, or for the surface model (whose regions do not move), it streams.
+#[test]
+fn a_contour_run_with_regions_reads_its_file_whole_to_carry_them() {
+    let read = ReadOptions::default();
+    let regions = RunOutputs {
+        regions: Some(RegionRule::Coarse),
+        ..Default::default()
+    };
+    let contour = RunParams::default();
+    let surface = RunParams {
+        model: pedo_track::ObjectModel::Surface,
+        ..Default::default()
+    };
+    let streams = |params: &RunParams, outputs: &RunOutputs| {
+        let input = pedo_output::read_for_run(&walk(), &read, params, outputs).unwrap();
+        input.frames.is_some()
+    };
+    assert!(!streams(&contour, &regions));
+    assert!(streams(&contour, &RunOutputs::default()));
+    assert!(streams(&surface, &regions));
+}
