@@ -12,8 +12,9 @@ use pedo_register::StudyRegistration;
 use serde_json::{json, Value};
 
 /// Values (sensels of the template, mean, SD and the trials' images) the page embeds at most:
-/// about 8 bytes each in its JSON, so the page stays under ~13 MB with plotly.js. A larger stack
-/// shows its first trials (the quality table keeps every trial; `registered.npz` holds all).
+/// about 5.5 bytes each in its JSON, so the page stays near 10 MB with plotly.js (4.6 MB;
+/// `cargo bench --bench register_page`). A larger stack shows its first trials (the quality
+/// table keeps every trial; `registered.npz` holds all).
 pub const MAX_PAGE_VALUES: usize = 1_000_000;
 
 const TEMPLATE: &str = include_str!("html/register.html");
