@@ -124,8 +124,9 @@ impl MeasuresSink {
 pub enum RegionsAsked {
     /// Found from the footprint by a rule ([`pedo_io::regions::automatic_masks`]).
     Rule(RegionRule),
-    /// The user's masks over the peak image ([`pedo_io::user_masks`]).
-    Masks(RegionMasks),
+    /// The user's masks over the peak image ([`pedo_io::user_masks`]), boxed: they hold a
+    /// label per sensel and each foot's frame.
+    Masks(Box<RegionMasks>),
 }
 
 impl RegionsAsked {
@@ -150,7 +151,7 @@ fn regions_of(
 ) -> RegionOutcome {
     let masks = match asked {
         RegionsAsked::Rule(rule) => masks_of_measures(recording, measures, Some(cop), rule)?,
-        RegionsAsked::Masks(m) => m,
+        RegionsAsked::Masks(m) => *m,
     };
     let Some(frames) = kept else {
         let values = pedo_io::regions::region_values(recording, threshold, &masks, measures)?;
@@ -183,7 +184,7 @@ pub fn recording_regions(
         }
         RegionsAsked::Masks(masks) => {
             let values = pedo_io::regions::region_values(recording, threshold, &masks, measures)?;
-            Ok((masks, values))
+            Ok((*masks, values))
         }
     }
 }

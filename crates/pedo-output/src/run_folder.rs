@@ -345,7 +345,7 @@ pub fn regions_asked(
 ) -> Result<Option<crate::RegionsAsked>> {
     Ok(
         match (outputs.regions, user_masks_for(outputs, recording)?) {
-            (_, Some(masks)) => Some(crate::RegionsAsked::Masks(masks)),
+            (_, Some(masks)) => Some(crate::RegionsAsked::Masks(Box::new(masks))),
             (Some(rule), None) => Some(crate::RegionsAsked::Rule(rule)),
             (None, None) => None,
         },

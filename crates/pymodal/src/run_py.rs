@@ -317,7 +317,7 @@ fn run_recording<'py>(
             for (kind, v) in kinds.into_iter().filter_map(|(k, v)| Some((k, v?))) {
                 for q in pedo_output::region_quantities(&m, v) {
                     let foot = q.foot.unwrap_or_default();
-                    let mut row: Vec<pedo_output::Cell> = (rec.feet.iter().next())
+                    let mut row: Vec<pedo_output::Cell> = (rec.feet.first())
                         .map(|_| pedo_output::Cell::Text(foot.into()))
                         .into_iter()
                         .collect();
