@@ -110,6 +110,8 @@ pub enum HeelToeCue {
     /// The footprint's shape: the distal third (forefoot and toes) is wider than the proximal
     /// one (heel).
     Shape,
+    /// The sensor's layout: an insole's toe end is known (a pedar insole's row 0).
+    Layout,
 }
 
 impl HeelToeCue {
@@ -118,6 +120,7 @@ impl HeelToeCue {
         match self {
             HeelToeCue::CopPath => "cop_path",
             HeelToeCue::Shape => "shape",
+            HeelToeCue::Layout => "layout",
         }
     }
 }
@@ -161,14 +164,66 @@ pub struct RegionMasks {
     pub names: Vec<String>,
     /// The rule that made them (`None` for a user's masks).
     pub rule: Option<RegionRule>,
-    /// The foot's frame the automatic rules used.
+    /// The foot's frame the automatic rules used (of a single footprint; see
+    /// [`foot_axes`](Self::foot_axes) for a recording of both feet apart).
     pub axis: Option<FootAxis>,
+    /// For a recording of both feet apart ([`Recording::feet`]), the foot of each region, in
+    /// label order (one per name): each foot has regions of its own. Empty for one footprint.
+    pub sides: Vec<Side>,
+    /// For a recording of both feet apart divided by a rule, each foot's frame.
+    pub foot_axes: Vec<(Side, FootAxis)>,
 }
 
 impl RegionMasks {
     /// The number of sensels of region `k` (1-based label).
     pub fn count(&self, k: u8) -> usize {
         self.labels.iter().filter(|&&l| l == k).count()
+    }
+
+    /// The foot of region `k` (1-based label), `None` for a single footprint's.
+    pub fn side_of(&self, k: u8) -> Option<Side> {
+        self.sides.get(usize::from(k).checked_sub(1)?).copied()
+    }
+
+    /// The masks divided per foot of `feet` (a recording of both feet apart): each region split
+    /// into its part on each foot, the parts holding no sensel left out, the left foot's first.
+    /// Unchanged without feet, or when already divided.
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when the parts number more than 255.
+    pub fn per_foot(self, feet: &[crate::recording::FootColumns]) -> Result<Self> {
+        if feet.is_empty() || !self.sides.is_empty() {
+            return Ok(self);
+        }
+        let mut out = Self {
+            labels: vec![0; self.labels.len()],
+            names: Vec::new(),
+            sides: Vec::new(),
+            foot_axes: Vec::new(),
+            ..self.clone()
+        };
+        let mut feet: Vec<_> = feet.iter().collect();
+        feet.sort_by_key(|f| f.side != Side::Left);
+        for foot in feet {
+            for (k, name) in self.names.iter().enumerate() {
+                let on_foot = |i: usize| {
+                    usize::from(self.labels[i]) == k + 1 && foot.columns.contains(&(i % self.cols))
+                };
+                let cells: Vec<usize> = (0..self.labels.len()).filter(|&i| on_foot(i)).collect();
+                if cells.is_empty() {
+                    continue;
+                }
+                let label = u8::try_from(out.names.len() + 1)
+                    .map_err(|_| IoError::invalid("more than 255 regions over both feet"))?;
+                for i in cells {
+                    out.labels[i] = label;
+                }
+                out.names.push(name.clone());
+                out.sides.push(foot.side);
+            }
+        }
+        Ok(out)
     }
 }
 
@@ -226,6 +281,32 @@ pub fn foot_axis(
     pitch: [f64; 2],
     cop: Option<&[Option<[f64; 2]>]>,
 ) -> Result<FootAxis> {
+    axis_facing(image, rows, cols, pitch, cop, None)
+}
+
+/// A foot whose side is known, and the direction (in the image, mm) its medial side faces:
+/// one insole of a pair, whose medial side faces the other insole.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Facing {
+    /// Which foot.
+    pub side: Side,
+    /// A direction the medial side faces (its component across the foot's axis counts).
+    pub medial: [f64; 2],
+    /// A direction the toes lie in from the heel, when the sensor's layout tells (its
+    /// component along the foot's axis counts).
+    pub toes: Option<[f64; 2]>,
+}
+
+/// [`foot_axis`], the medial side and the foot's name taken from `facing` when given rather
+/// than from the footprint's shape.
+fn axis_facing(
+    image: &[f64],
+    rows: usize,
+    cols: usize,
+    pitch: [f64; 2],
+    cop: Option<&[Option<[f64; 2]>]>,
+    facing: Option<Facing>,
+) -> Result<FootAxis> {
     check_image(image, rows, cols, pitch)?;
     let fp = footprint(image);
     if fp.is_empty() {
@@ -282,7 +363,13 @@ pub fn foot_axis(
             })
             .sum::<f64>()
     });
-    let cue = if forward.abs() > 0.2 * length {
+    let toes = facing.and_then(|f| f.toes);
+    let cue = if let Some(t) = toes {
+        if dot(t, u) < 0.0 {
+            u = [-u[0], -u[1]];
+        }
+        HeelToeCue::Layout
+    } else if forward.abs() > 0.2 * length {
         if forward < 0.0 {
             u = [-u[0], -u[1]];
         }
@@ -368,11 +455,19 @@ pub fn foot_axis(
     }
     // Medial along +n_perp when the score is positive. With (x, y) = (column, row), MUN104's
     // left template (toes towards +y) has its hallux towards +x, i.e. along −n_perp.
-    let (medial, side) = if score >= 0.0 {
+    if let Some(f) = facing {
+        // The side told: its medial direction, not the shape's cue (an insole's midfoot is
+        // loaded across its width, so that cue is weak there).
+        score = dot(f.medial, n_perp);
+    }
+    let (medial, mut side) = if score >= 0.0 {
         (n_perp, Side::Right)
     } else {
         ([-n_perp[0], -n_perp[1]], Side::Left)
     };
+    if let Some(f) = facing {
+        side = f.side;
+    }
     let heel = [c[0] + u[0] * t0, c[1] + u[1] * t0];
     let toe = [heel[0] + u[0] * length, heel[1] + u[1] * length];
     Ok(FootAxis {
@@ -406,7 +501,20 @@ pub fn automatic_masks(
     cop: Option<&[Option<[f64; 2]>]>,
     rule: RegionRule,
 ) -> Result<RegionMasks> {
-    let axis = foot_axis(image, rows, cols, pitch, cop)?;
+    masks_facing(image, rows, cols, pitch, cop, rule, None)
+}
+
+/// [`automatic_masks`] of a foot `facing` a known way (see [`axis_facing`]).
+fn masks_facing(
+    image: &[f64],
+    rows: usize,
+    cols: usize,
+    pitch: [f64; 2],
+    cop: Option<&[Option<[f64; 2]>]>,
+    rule: RegionRule,
+    facing: Option<Facing>,
+) -> Result<RegionMasks> {
+    let axis = axis_facing(image, rows, cols, pitch, cop, facing)?;
     let fp = footprint(image);
     let pos = |i: usize| [(i % cols) as f64 * pitch[0], (i / cols) as f64 * pitch[1]];
     let bands: Vec<usize> = fp
@@ -480,6 +588,8 @@ pub fn automatic_masks(
         names: rule.names().iter().map(|s| s.to_string()).collect(),
         rule: Some(rule),
         axis: Some(axis),
+        sides: Vec::new(),
+        foot_axes: Vec::new(),
     })
 }
 
@@ -508,8 +618,12 @@ pub struct RegionValues {
     pub impulse_share: f64,
     /// Its force and peak pressure over each stance of the recording's [`Measures`] (in their
     /// order), resampled to 0–100 % of contact as the stance's own curves
-    /// ([`crate::stances::resample`]); empty for a region carried by the field.
+    /// ([`crate::stances::resample`]); empty for a region carried by the field. A foot's region
+    /// has those of its foot's stances ([`crate::measures::FootMeasures`]).
     pub curves: Vec<RegionCurves>,
+    /// The foot it lies on, for a recording of both feet apart ([`RegionMasks::sides`]); its
+    /// `impulse_share` is then of that foot's impulse.
+    pub foot: Option<Side>,
 }
 
 /// One region's curves over one stance, at [`CURVE_POINTS`](crate::stances::CURVE_POINTS)
@@ -529,6 +643,8 @@ pub struct RegionCurves {
 pub struct RegionSeries {
     labels: Vec<u8>,
     names: Vec<String>,
+    /// The foot of each region ([`RegionMasks::sides`]).
+    sides: Vec<Side>,
     mask: Vec<bool>,
     threshold: f64,
     force_factor: f64,
@@ -584,6 +700,7 @@ impl RegionSeries {
         Ok(Self {
             labels: masks.labels.clone(),
             names: masks.names.clone(),
+            sides: masks.sides.clone(),
             mask: recording.sensor_mask().to_vec(),
             threshold,
             force_factor: recording.force_factor().unwrap_or(area.unwrap_or(1.0)),
@@ -677,8 +794,25 @@ impl RegionSeries {
                 "no region is loaded in any frame: the regions have no impulse to share",
             ));
         }
+        // A foot's regions share its own impulse.
+        let foot_total = |side: Side| -> f64 {
+            (ftis.iter().zip(&self.sides))
+                .filter(|&(_, &s)| s == side)
+                .map(|(f, _)| f)
+                .sum()
+        };
         let mut out = Vec::with_capacity(self.names.len());
         for (k, name) in self.names.iter().enumerate() {
+            let foot = self.sides.get(k).copied();
+            let (total, own) = match foot {
+                Some(side) => (
+                    foot_total(side),
+                    (measures.feet.iter())
+                        .find(|f| f.side == side)
+                        .map(|f| &f.measures),
+                ),
+                None => (total, Some(measures)),
+            };
             let label = (k + 1) as u8;
             let (mut peak, mut pti, mut sensels) = (0.0f64, 0.0f64, 0usize);
             for (i, &l) in self.labels.iter().enumerate() {
@@ -703,8 +837,13 @@ impl RegionSeries {
                 fti: ftis[k],
                 max_contact_area: self.contact[k] as f64 * self.area,
                 contact_time,
-                impulse_share: 100.0 * ftis[k] / total,
-                curves: self.stance_curves(k, measures),
+                impulse_share: if total > 0.0 {
+                    100.0 * ftis[k] / total
+                } else {
+                    0.0
+                },
+                curves: own.map_or_else(Vec::new, |m| self.stance_curves(k, m)),
+                foot,
             });
         }
         Ok(out)
@@ -880,6 +1019,7 @@ impl MovingRegionSeries {
                 impulse_share: 100.0 * fti / total_fti,
                 // The stance-normalised curves are the fixed regions' (`curves.csv`).
                 curves: Vec::new(),
+                foot: None,
             });
         }
         Ok(out)
@@ -959,11 +1099,77 @@ pub fn masks_of_measures(
     cop: Option<&[Option<[f64; 2]>]>,
     rule: RegionRule,
 ) -> Result<RegionMasks> {
-    let image: Vec<f64> = (measures.peak.iter().zip(&measures.pti))
-        .map(|(&p, &q)| if q > 0.0 { p } else { 0.0 })
-        .collect();
+    if !measures.feet.is_empty() {
+        return feet_masks(recording, measures, rule);
+    }
     let pitch = recording.pitch_mm.unwrap_or([1.0, 1.0]);
+    let image = footprint_image(measures);
     automatic_masks(&image, measures.rows, measures.cols, pitch, cop, rule)
+}
+
+/// The peak image where the PTI is above 0 (the sensels loaded in some frame), 0 elsewhere.
+fn footprint_image(measures: &Measures) -> Vec<f64> {
+    (measures.peak.iter().zip(&measures.pti))
+        .map(|(&p, &q)| if q > 0.0 { p } else { 0.0 })
+        .collect()
+}
+
+/// The masks of each foot of a recording of both apart ([`Measures::feet`]), the left foot's
+/// regions first: each foot's footprint divided alone, its toes towards row 0 (the pedar
+/// reader's layout, the only one with both feet apart), its medial side the one facing the
+/// other foot's insole (both insoles lie side by side as seen from above, so their medial sides
+/// face).
+fn feet_masks(recording: &Recording, measures: &Measures, rule: RegionRule) -> Result<RegionMasks> {
+    let pitch = recording.pitch_mm.unwrap_or([1.0, 1.0]);
+    let (rows, cols) = (measures.rows, measures.cols);
+    let mut out = RegionMasks {
+        rows,
+        cols,
+        labels: vec![0; rows * cols],
+        names: Vec::new(),
+        rule: Some(rule),
+        axis: None,
+        sides: Vec::new(),
+        foot_axes: Vec::new(),
+    };
+    let mut feet: Vec<_> = measures.feet.iter().collect();
+    feet.sort_by_key(|f| f.side != Side::Left);
+    for foot in feet {
+        // Row 0 is an insole's toe end (the pedar reader's layout); the centre of pressure of
+        // a stance the recording cuts need not progress far enough to tell.
+        let facing = Facing {
+            side: foot.side,
+            medial: [medial_dx(recording, &foot.columns, cols), 0.0],
+            toes: Some([0.0, -1.0]),
+        };
+        let image = footprint_image(&foot.measures);
+        let m = masks_facing(&image, rows, cols, pitch, None, rule, Some(facing))
+            .map_err(|e| IoError::invalid(format!("the {} foot: {e}", foot.side.name())))?;
+        let first = out.names.len() as u8;
+        for (o, &l) in out.labels.iter_mut().zip(&m.labels) {
+            if l > 0 {
+                *o = first + l;
+            }
+        }
+        out.sides.extend(m.names.iter().map(|_| foot.side));
+        out.names.extend(m.names);
+        out.foot_axes.extend(m.axis.map(|a| (foot.side, a)));
+    }
+    Ok(out)
+}
+
+/// Which way along the columns (+1 or −1) the medial side of the foot on `columns` faces: that
+/// of the other foot's columns (or the image's middle, without another foot).
+fn medial_dx(recording: &Recording, columns: &std::ops::Range<usize>, cols: usize) -> f64 {
+    let middle = |r: &std::ops::Range<usize>| (r.start + r.end) as f64 / 2.0;
+    let other = (recording.feet.iter())
+        .find(|f| f.columns != *columns)
+        .map_or(cols as f64 / 2.0, |f| middle(&f.columns));
+    if other >= middle(columns) {
+        1.0
+    } else {
+        -1.0
+    }
 }
 
 #[cfg(test)]
@@ -1270,6 +1476,8 @@ mod tests {
             names: vec!["a".into(), "b".into()],
             rule: None,
             axis: None,
+            sides: Vec::new(),
+            foot_axes: Vec::new(),
         };
         let mut series = RegionSeries::new(&rec, 0.0, &masks).unwrap();
         for t in 0..n {
@@ -1296,5 +1504,39 @@ mod tests {
         let mut short = RegionSeries::new(&rec, 0.0, &masks).unwrap();
         short.add_frame(&rec.frame_slice(0).unwrap()).unwrap();
         assert!(short.finish(&m).is_err());
+    }
+
+    #[test]
+    fn a_users_region_is_split_into_its_part_on_each_insole() {
+        use crate::recording::FootColumns;
+        // Region a spans both insoles (columns 0..2 and 3..5), region b the right one only.
+        let masks = RegionMasks {
+            rows: 2,
+            cols: 5,
+            labels: vec![1, 1, 0, 1, 1, 0, 0, 0, 2, 2],
+            names: vec!["a".into(), "b".into()],
+            rule: None,
+            axis: None,
+            sides: Vec::new(),
+            foot_axes: Vec::new(),
+        };
+        let feet = [
+            FootColumns {
+                side: Side::Right,
+                columns: 3..5,
+            },
+            FootColumns {
+                side: Side::Left,
+                columns: 0..2,
+            },
+        ];
+        let split = masks.clone().per_foot(&feet).unwrap();
+        assert_eq!(split.names, ["a", "a", "b"]);
+        assert_eq!(split.sides, [Side::Left, Side::Right, Side::Right]);
+        assert_eq!(split.labels, [1, 1, 0, 2, 2, 0, 0, 0, 3, 3]);
+        assert_eq!(split.side_of(3), Some(Side::Right));
+        // Without feet, or divided already, the masks are unchanged.
+        assert_eq!(masks.clone().per_foot(&[]).unwrap(), masks);
+        assert_eq!(split.clone().per_foot(&feet).unwrap(), split);
     }
 }

@@ -185,6 +185,8 @@ pub fn masks_of_polygons(
         names: polygons.iter().map(|p| p.name.clone()).collect(),
         rule: None,
         axis: None,
+        sides: Vec::new(),
+        foot_axes: Vec::new(),
     })
 }
 
@@ -225,6 +227,8 @@ pub fn masks_of_labels(mask: &LabelMask, rows: usize, cols: usize) -> Result<Reg
         names: found.iter().map(|l| format!("region_{l}")).collect(),
         rule: None,
         axis: None,
+        sides: Vec::new(),
+        foot_axes: Vec::new(),
     })
 }
 

@@ -866,3 +866,78 @@ fn pedar_insoles_are_measured_per_foot_as_their_own_columns_say() {
         .feet
         .is_empty());
 }
+
+#[test]
+fn each_pedar_insole_is_divided_into_regions_of_its_own() {
+    use pedo_io::measures::Measures;
+    use pedo_io::regions::{masks_of_measures, region_values, RegionRule, Side};
+    let rec = read_recording(data("pedar-example-3.01-4.00.asc")).unwrap();
+    let (cols, n) = (rec.cols(), rec.n_frames());
+    let m = Measures::of_recording(&rec, 0.0, 0..n).unwrap();
+    for rule in [RegionRule::Coarse, RegionRule::Fine] {
+        let masks = masks_of_measures(&rec, &m, None, rule).unwrap();
+        let per_foot = rule.names().len();
+        assert_eq!(masks.names.len(), 2 * per_foot);
+        assert_eq!(masks.sides[..per_foot], [Side::Left; 8][..per_foot]);
+        assert_eq!(masks.sides[per_foot..], [Side::Right; 8][..per_foot]);
+        for foot in &rec.feet {
+            // The foot's footprint (its sensels loaded in some frame), and no other sensel,
+            // carries its regions' labels.
+            for i in 0..rec.rows() * cols {
+                let printed = m.pti[i] > 0.0 && foot.columns.contains(&(i % cols));
+                let label = masks.labels[i];
+                let mine = label > 0 && masks.side_of(label) == Some(foot.side);
+                assert_eq!(printed, mine, "{rule:?} {:?} sensel {i}", foot.side);
+            }
+            // Row 0 is the toe end; the medial side faces the other insole.
+            let centre = |name: &str| {
+                let k = (0..masks.names.len())
+                    .find(|&k| masks.names[k] == name && masks.sides[k] == foot.side)
+                    .unwrap();
+                let cells: Vec<usize> = (0..masks.labels.len())
+                    .filter(|&i| usize::from(masks.labels[i]) == k + 1)
+                    .collect();
+                let c = cells.len() as f64;
+                let x = cells.iter().map(|&i| (i % cols) as f64).sum::<f64>() / c;
+                let y = cells.iter().map(|&i| (i / cols) as f64).sum::<f64>() / c;
+                let medial = if foot.side == Side::Left { x } else { -x };
+                (y, medial)
+            };
+            if rule == RegionRule::Coarse {
+                let rows: Vec<f64> = ["hindfoot", "midfoot", "forefoot", "toes"]
+                    .iter()
+                    .map(|r| centre(r).0)
+                    .collect();
+                assert!(
+                    rows.windows(2).all(|w| w[0] > w[1]),
+                    "{:?} {rows:?}",
+                    foot.side
+                );
+            } else {
+                assert!(centre("heel_medial").1 > centre("heel_lateral").1);
+                assert!(centre("mh1").1 > centre("mh2").1);
+                assert!(centre("mh2").1 > centre("mh3_5").1);
+                assert!(centre("hallux").1 > centre("lesser_toes").1);
+                assert!(centre("hallux").0 < centre("mh1").0);
+            }
+        }
+        // Each foot's regions share its own impulse, and their FTIs sum to the foot's.
+        let values = region_values(&rec, 0.0, &masks, &m).unwrap();
+        for foot in &m.feet {
+            let mine: Vec<_> = values
+                .iter()
+                .filter(|v| v.foot == Some(foot.side))
+                .collect();
+            assert_eq!(mine.len(), per_foot);
+            let share: f64 = mine.iter().map(|v| v.impulse_share).sum();
+            assert!((share - 100.0).abs() < 1e-9, "{share}");
+            let fti: f64 = mine.iter().map(|v| v.fti).sum();
+            let want = foot.measures.values.fti;
+            assert!((fti - want).abs() <= 1e-9 * want, "{fti} vs {want}");
+            // Their curves are over the foot's own stances.
+            assert!(mine
+                .iter()
+                .all(|v| v.curves.len() == foot.measures.stances.len()));
+        }
+    }
+}

@@ -122,7 +122,11 @@ impl ReportMeasures<'_> {
                     (n > 0.0).then(|| {
                         let cx = cells.iter().map(|&i| (i % m.cols) as f64).sum::<f64>() / n;
                         let cy = cells.iter().map(|&i| (i / m.cols) as f64).sum::<f64>() / n;
-                        json!({"name": masks.names[k - 1],
+                        let name = match masks.side_of(k as u8) {
+                            Some(side) => format!("{} {}", side.name(), masks.names[k - 1]),
+                            None => masks.names[k - 1].clone(),
+                        };
+                        json!({"name": name,
                                "x": round3(cx * pitch[0]), "y": round3(cy * pitch[1])})
                     })
                 })

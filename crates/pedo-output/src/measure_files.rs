@@ -124,8 +124,9 @@ impl MeasuresSink {
 pub enum RegionsAsked {
     /// Found from the footprint by a rule ([`pedo_io::regions::automatic_masks`]).
     Rule(RegionRule),
-    /// The user's masks over the peak image ([`pedo_io::user_masks`]).
-    Masks(RegionMasks),
+    /// The user's masks over the peak image ([`pedo_io::user_masks`]), boxed: they hold a
+    /// label per sensel and each foot's frame.
+    Masks(Box<RegionMasks>),
 }
 
 impl RegionsAsked {
@@ -150,7 +151,7 @@ fn regions_of(
 ) -> RegionOutcome {
     let masks = match asked {
         RegionsAsked::Rule(rule) => masks_of_measures(recording, measures, Some(cop), rule)?,
-        RegionsAsked::Masks(m) => m,
+        RegionsAsked::Masks(m) => *m,
     };
     let Some(frames) = kept else {
         let values = pedo_io::regions::region_values(recording, threshold, &masks, measures)?;
@@ -183,7 +184,7 @@ pub fn recording_regions(
         }
         RegionsAsked::Masks(masks) => {
             let values = pedo_io::regions::region_values(recording, threshold, &masks, measures)?;
-            Ok((masks, values))
+            Ok((*masks, values))
         }
     }
 }
@@ -247,6 +248,19 @@ pub fn measure_values_json(m: &Measures) -> Value {
     Value::Object(values)
 }
 
+/// Sets `summary.json`'s `measures` ([`measure_values_json`]) and, for a recording of both feet
+/// apart, its `foot_measures`: per foot (`left`, `right`) its own values, as `measures` holds
+/// the whole recording's.
+pub fn set_summary_measures(summary: &mut Value, m: &Measures) {
+    summary["measures"] = measure_values_json(m);
+    if !m.feet.is_empty() {
+        let feet: Map<String, Value> = (m.feet.iter())
+            .map(|f| (f.side.name().to_string(), measure_values_json(&f.measures)))
+            .collect();
+        summary["foot_measures"] = Value::Object(feet);
+    }
+}
+
 /// The table of stance-normalised curves (`curves.csv`): one row per stance and per cent of
 /// contact (0..=100): `stance` (0-based, in frame order), `complete` (1, or 0 for a stance the
 /// recording may cut, on its first or last frame), `percent`, then the frames table's measures
@@ -255,25 +269,45 @@ pub fn measure_values_json(m: &Measures) -> Value {
 /// the user's masks) each region's force and peak pressure ([`region_curve_columns`]). More
 /// measures are more columns. A recording of both feet apart ([`Recording::feet`]) has a
 /// `foot` column first and each foot's stances, numbered per foot, measured on its sensels
-/// alone (the left foot's, then the right's), and no region columns: the regions are of the
-/// whole footprint, not of a foot.
+/// alone (the left foot's, then the right's); its rows hold their own foot's regions' curves,
+/// in the columns of the regions' names (empty where that foot has no such region).
 pub fn curves_table(
     recording: &Recording,
     m: &Measures,
     regions: Option<&[RegionValues]>,
 ) -> Table {
     let mut t = curves_header(recording, regions);
+    let regions = regions.unwrap_or_default();
     if recording.feet.is_empty() {
+        let own: Vec<Option<&RegionValues>> = regions.iter().map(Some).collect();
         for (k, s) in m.stances.iter().enumerate() {
-            stance_rows(&mut t, recording, None, k, s, regions.unwrap_or_default());
+            stance_rows(&mut t, recording, None, k, s, &own);
         }
     }
+    let names = region_names(regions);
     for foot in &m.feet {
+        let own: Vec<Option<&RegionValues>> = (names.iter())
+            .map(|n| {
+                let on_foot = |r: &&RegionValues| r.foot == Some(foot.side) && r.name == *n;
+                regions.iter().find(on_foot)
+            })
+            .collect();
         for (k, s) in foot.measures.stances.iter().enumerate() {
-            stance_rows(&mut t, recording, Some(foot.side.name()), k, s, &[]);
+            stance_rows(&mut t, recording, Some(foot.side.name()), k, s, &own);
         }
     }
     t
+}
+
+/// The regions' names in their order, each once (both feet's regions share their names).
+fn region_names(regions: &[RegionValues]) -> Vec<&str> {
+    let mut names: Vec<&str> = Vec::new();
+    for r in regions {
+        if !names.contains(&r.name.as_str()) {
+            names.push(&r.name);
+        }
+    }
+    names
 }
 
 /// The rows of stance `k`, `s`, of [`curves_table`], with its `foot` when the table has one.
@@ -283,7 +317,7 @@ fn stance_rows(
     foot: Option<&str>,
     k: usize,
     s: &StanceMeasures,
-    regions: &[RegionValues],
+    regions: &[Option<&RegionValues>],
 ) {
     let c = &s.curves;
     for p in 0..CURVE_POINTS {
@@ -309,7 +343,7 @@ fn stance_rows(
             row.push(Cell::opt(xy.map(|v| v[1]), 4));
         }
         for r in regions {
-            let curve = r.curves.get(k);
+            let curve = r.and_then(|r| r.curves.get(k));
             row.push(Cell::opt(curve.map(|c| c.force[p]), 4));
             row.push(Cell::opt(curve.map(|c| c.peak_pressure[p]), 4));
         }
@@ -343,8 +377,8 @@ pub fn curves_header(recording: &Recording, regions: Option<&[RegionValues]>) ->
         t.push_column("cop_x_mm");
         t.push_column("cop_y_mm");
     }
-    for r in regions.filter(|_| !feet).unwrap_or_default() {
-        for c in region_curve_columns(recording, &r.name) {
+    for name in region_names(regions.unwrap_or_default()) {
+        for c in region_curve_columns(recording, name) {
             t.push_column(&c);
         }
     }
@@ -483,51 +517,93 @@ pub fn write_measures(
     Ok(())
 }
 
+/// One value of one region, with its unit ([`region_quantities`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegionQuantity {
+    /// The region's foot (`"left"`, `"right"`), for a recording of both feet apart.
+    pub foot: Option<&'static str>,
+    /// The region's name.
+    pub region: String,
+    /// The measure's name, as [`Measures::quantities`] names it.
+    pub measure: &'static str,
+    /// Its value.
+    pub value: f64,
+    /// Its unit.
+    pub unit: String,
+}
+
+impl RegionQuantity {
+    /// The region's key where regions are named once: its name, after its foot's
+    /// (`left/hindfoot`) for a foot's region.
+    pub fn key(&self) -> String {
+        match self.foot {
+            Some(f) => format!("{f}/{}", self.region),
+            None => self.region.clone(),
+        }
+    }
+}
+
 /// The values of each region with their names and units, in the units of `m` (as
-/// [`Measures::quantities`] names them): `(region, measure, value, unit)`.
-pub fn region_quantities(
-    m: &Measures,
-    values: &[RegionValues],
-) -> Vec<(String, &'static str, f64, String)> {
-    let u = &m.units;
+/// [`Measures::quantities`] names them), region by region.
+pub fn region_quantities(m: &Measures, values: &[RegionValues]) -> Vec<RegionQuantity> {
     let mut out = Vec::new();
     for v in values {
-        let name = || v.name.clone();
-        out.push((name(), "peak_pressure", v.peak_pressure, u.pressure.clone()));
-        out.push((
-            name(),
-            "pti_max",
-            v.pti_max,
-            format!("{}·{}", u.pressure, u.time),
-        ));
-        for l in u.load_quantities(v.peak_force, v.fti) {
-            out.push((name(), l.name, l.value, l.unit));
+        for (measure, value, unit) in region_values_of(m, v) {
+            out.push(RegionQuantity {
+                foot: v.foot.map(|s| s.name()),
+                region: v.name.clone(),
+                measure,
+                value,
+                unit,
+            });
         }
-        out.push((
-            name(),
-            "max_contact_area",
-            v.max_contact_area,
-            u.area.clone(),
-        ));
-        out.push((name(), "contact_time", v.contact_time, u.time.clone()));
-        out.push((name(), "impulse_share", v.impulse_share, "%".to_string()));
     }
+    out
+}
+
+/// The values of region `v`, `(measure, value, unit)`, in the units of `m`.
+fn region_values_of(m: &Measures, v: &RegionValues) -> Vec<(&'static str, f64, String)> {
+    let u = &m.units;
+    let mut out = vec![
+        ("peak_pressure", v.peak_pressure, u.pressure.clone()),
+        ("pti_max", v.pti_max, format!("{}·{}", u.pressure, u.time)),
+    ];
+    for l in u.load_quantities(v.peak_force, v.fti) {
+        out.push((l.name, l.value, l.unit));
+    }
+    out.push(("max_contact_area", v.max_contact_area, u.area.clone()));
+    out.push(("contact_time", v.contact_time, u.time.clone()));
+    out.push(("impulse_share", v.impulse_share, "%".to_string()));
     out
 }
 
 /// `regions.csv`: one row per region and measure, `region,measure,value,unit,kind`: the fixed
 /// regions' rows (`kind` `fixed`, the masks over the peak image), then, when the regions were
 /// carried through the stances, the moving regions' (`kind` `moving`,
-/// [`crate::moving_regions`]).
+/// [`crate::moving_regions`]). A recording of both feet apart has a first column `foot`
+/// (`left`, `right`): each foot's regions.
 pub fn regions_csv(
     m: &Measures,
     values: &[RegionValues],
     moving: Option<&[RegionValues]>,
 ) -> String {
-    let mut csv = String::from("region,measure,value,unit,kind\n");
+    let feet = values.iter().any(|v| v.foot.is_some());
+    let mut csv = String::from(if feet { "foot," } else { "" });
+    csv.push_str("region,measure,value,unit,kind\n");
     let kinds = [("fixed", Some(values)), ("moving", moving)];
     for (kind, values) in kinds.into_iter().filter_map(|(k, v)| Some((k, v?))) {
-        for (region, measure, value, unit) in region_quantities(m, values) {
+        for q in region_quantities(m, values) {
+            if feet {
+                csv.push_str(q.foot.unwrap_or_default());
+                csv.push(',');
+            }
+            let RegionQuantity {
+                region,
+                measure,
+                value,
+                unit,
+                ..
+            } = q;
             csv.push_str(&format!("{region},{measure},{value},{unit},{kind}\n"));
         }
     }
@@ -548,19 +624,29 @@ pub fn regions_json(
         Err(e) => return json!({"rule": rule, "error": e.to_string()}),
     };
     let labels: Map<String, Value> = (masks.names.iter().enumerate())
-        .map(|(k, n)| ((k + 1).to_string(), json!(n)))
+        .map(|(k, n)| {
+            let label = match masks.sides.get(k) {
+                Some(side) => json!({"foot": side.name(), "region": n}),
+                None => json!(n),
+            };
+            ((k + 1).to_string(), label)
+        })
         .collect();
     let mut per: Map<String, Value> = Map::new();
-    for (region, measure, value, unit) in region_quantities(m, values) {
-        let entry = per.entry(region).or_insert_with(|| json!({}));
-        entry[measure] = json!({"value": value, "unit": unit});
+    for q in region_quantities(m, values) {
+        let entry = per.entry(q.key()).or_insert_with(|| json!({}));
+        entry[q.measure] = json!({"value": q.value, "unit": q.unit});
     }
     for v in values {
-        if let Some(e) = per.get_mut(&v.name) {
+        let key = match v.foot {
+            Some(f) => format!("{}/{}", f.name(), v.name),
+            None => v.name.clone(),
+        };
+        if let Some(e) = per.get_mut(&key) {
             e["sensels"] = json!(v.sensels);
         }
     }
-    let axis = masks.axis.as_ref().map(|a| {
+    let axis_json = |a: &pedo_io::regions::FootAxis| {
         json!({
             "side": a.side.name(),
             "heel_toe_cue": a.heel_toe_cue.name(),
@@ -570,7 +656,8 @@ pub fn regions_json(
             "medial": a.medial,
             "length_mm": a.length,
         })
-    });
+    };
+    let axis = masks.axis.as_ref().map(axis_json);
     let mut out = json!({
         "rule": rule,
         "labels": labels,
@@ -583,6 +670,12 @@ pub fn regions_json(
         },
         "regions": per,
     });
+    if !masks.foot_axes.is_empty() {
+        let feet: Vec<Value> = (masks.foot_axes.iter())
+            .map(|(_, a)| axis_json(a))
+            .collect();
+        out["feet"] = Value::Array(feet);
+    }
     if let Some(moving) = moving {
         out["moving"] = crate::moving_regions::moving_json(m, moving);
     }
@@ -721,7 +814,7 @@ mod tests {
             feet_json[0]["values"]["contact_time"]["value"],
             json!(left.contact_time)
         );
-        // Regions are of the whole image: no region columns beside a foot's curves.
+        // No regions, no region columns beside a foot's curves.
         assert_eq!(curves_header(&rec, Some(&[])).header, t.header);
     }
 }

@@ -40,6 +40,11 @@ pub fn follow_anatomy(
     masks: &RegionMasks,
     fixed: &[RegionValues],
 ) -> Result<MovingAnatomy> {
+    if !masks.sides.is_empty() {
+        return Err(IoError::invalid(
+            "the regions of each foot of a two-insole recording are not carried through its stances yet",
+        ));
+    }
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
     let stances: Vec<Stance> = measures.stances.iter().map(|s| s.stance).collect();
     let regions = follow_masks(run, options, recording, masks, &stances, threshold)?;
@@ -130,9 +135,9 @@ pub fn moving_json(m: &Measures, outcome: &MovingOutcome) -> Value {
         }
     }
     let mut per: Map<String, Value> = Map::new();
-    for (region, measure, value, unit) in crate::region_quantities(m, &moving.values) {
-        let entry = per.entry(region).or_insert_with(|| json!({}));
-        entry[measure] = json!({"value": value, "unit": unit});
+    for q in crate::region_quantities(m, &moving.values) {
+        let entry = per.entry(q.key()).or_insert_with(|| json!({}));
+        entry[q.measure] = json!({"value": q.value, "unit": q.unit});
     }
     json!({
         "rule": "each stance's frame of largest contact area is its reference frame; a region there is the mask's sensels in contact, each connected part followed by its outline forwards and backwards through the stance; on a frame the region is the sensels whose centres lie inside its followed outlines",

@@ -310,7 +310,10 @@ impl RunOutputs {
 ///
 /// Those of [`pedo_io::user_masks::read_user_masks`] and
 /// [`pedo_io::user_masks::user_masks_of_rows`]: a file that cannot be read, masks of another
-/// shape than the recording's frames, polygons that overlap or hold no sensel.
+/// shape than the recording's frames, polygons that overlap or hold no sensel. On a recording
+/// of both feet apart each region is divided per foot ([`RegionMasks::per_foot`]).
+///
+/// [`RegionMasks::per_foot`]: pedo_io::regions::RegionMasks::per_foot
 pub fn user_masks_for(
     outputs: &RunOutputs,
     recording: &Recording,
@@ -324,6 +327,9 @@ pub fn user_masks_for(
             PathOrRows::Path(p) => read_user_masks(p, rows, cols, recording.pitch_mm),
             PathOrRows::Rows(values) => user_masks_of_rows(values, rows, cols),
         })
+        .transpose()?
+        // On a recording of both feet apart each region is measured per foot.
+        .map(|m| m.per_foot(&recording.feet))
         .transpose()
 }
 
@@ -339,7 +345,7 @@ pub fn regions_asked(
 ) -> Result<Option<crate::RegionsAsked>> {
     Ok(
         match (outputs.regions, user_masks_for(outputs, recording)?) {
-            (_, Some(masks)) => Some(crate::RegionsAsked::Masks(masks)),
+            (_, Some(masks)) => Some(crate::RegionsAsked::Masks(Box::new(masks))),
             (Some(rule), None) => Some(crate::RegionsAsked::Rule(rule)),
             (None, None) => None,
         },
@@ -671,7 +677,7 @@ pub fn run_into_folder(
             require_objects(counts.objects, recording, options)?;
             let mut summary =
                 crate::run_summary_of(input, recording, params, options, &counts, timings);
-            summary["measures"] = crate::measure_values_json(&measures.finish()?);
+            crate::set_summary_measures(&mut summary, &measures.finish()?);
             summary["input"]["streamed"] = json!(streamed);
             summary["input"]["read_whole"] = read_whole;
             Ok((summary, counts))
@@ -1144,7 +1150,7 @@ fn write_folder(
     let mut summary = crate::run_summary_of(i, rec, run.params, run.options, &counts, &stages);
     summary["input"]["streamed"] = json!(streamed);
     summary["input"]["read_whole"] = read_whole;
-    summary["measures"] = crate::measure_values_json(&measures);
+    crate::set_summary_measures(&mut summary, &measures);
     if let Some(options) = summary["options"].as_object_mut() {
         record_outputs(options, outputs);
     }

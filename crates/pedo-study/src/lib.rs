@@ -1418,13 +1418,57 @@ fn write_study_table(
     write("study.json", Ok(pretty(json).into_bytes()))?;
     write(name, bytes)?;
     let _ = std::fs::remove_file(out.join(other));
-    match study_regions_csv(out, rows) {
-        Some(csv) => write(STUDY_REGIONS, Ok(csv.into_bytes()))?,
-        None => {
-            let _ = std::fs::remove_file(out.join(STUDY_REGIONS));
+    for (name, csv) in [
+        (STUDY_REGIONS, study_regions_csv(out, rows)),
+        (STUDY_FEET, study_feet_csv(out, rows)),
+    ] {
+        match csv {
+            Some(csv) => write(name, Ok(csv.into_bytes()))?,
+            None => {
+                let _ = std::fs::remove_file(out.join(name));
+            }
         }
     }
     Ok(())
+}
+
+/// The table of each two-insole trial's values per foot, beside its study table.
+pub const STUDY_FEET: &str = "study_feet.csv";
+
+/// `study_feet.csv`: per trial of both feet apart (a pedar recording of both insoles) and per
+/// foot, its values from its folder's `summary.json` `foot_measures`, in the study table's
+/// measure columns and units (`trial,foot,peak_pressure_kpa,...`; empty where a value is not in
+/// that unit); `None` when no trial has feet, so a study of plates keeps its files.
+fn study_feet_csv(out: &Path, rows: &[StudyRow]) -> Option<String> {
+    use pedo_output::Cell;
+    let mut header = vec!["trial".to_string(), "foot".to_string()];
+    header.extend(MEASURE_COLUMNS.iter().map(|(c, _, _)| c.to_string()));
+    let mut table = pedo_output::Table {
+        header,
+        rows: Vec::new(),
+    };
+    for row in rows.iter().filter(|r| r.status != RowStatus::Error) {
+        let Some(folder) = &row.output else { continue };
+        let Ok(text) = std::fs::read_to_string(out.join(folder).join("summary.json")) else {
+            continue;
+        };
+        let Ok(summary) = serde_json::from_str::<Value>(&text) else {
+            continue;
+        };
+        let Some(feet) = summary["foot_measures"].as_object() else {
+            continue;
+        };
+        for (foot, values) in feet {
+            let m = StudyMeasures::of_summary(&json!({ "measures": values }));
+            let mut cells = vec![Cell::Text(row.path.clone()), Cell::Text(foot.clone())];
+            cells.extend(
+                m.values()
+                    .map(|v| v.map_or(Cell::Empty, |v| Cell::Float(v, 4))),
+            );
+            table.rows.push(cells);
+        }
+    }
+    (!table.rows.is_empty()).then(|| table.to_csv())
 }
 
 /// The long table of every region measure of a study's trials, beside its study table.
@@ -1432,7 +1476,9 @@ pub const STUDY_REGIONS: &str = "study_regions.csv";
 
 /// `study_regions.csv`: the rows of each trial's `regions.csv` (region, measure, value, unit)
 /// after its path, `trial,region,measure,value,unit`, in the study table's order; `None` when
-/// no trial has regions (a study run without a region rule).
+/// no trial has regions (a study run without a region rule). When a trial's regions are per
+/// foot (a pedar recording of both insoles), a `foot` column follows `trial`, empty for the
+/// trials of one sensor.
 fn study_regions_csv(out: &Path, rows: &[StudyRow]) -> Option<String> {
     use pedo_output::Cell;
     let mut table = pedo_output::Table {
@@ -1441,6 +1487,7 @@ fn study_regions_csv(out: &Path, rows: &[StudyRow]) -> Option<String> {
             .to_vec(),
         rows: Vec::new(),
     };
+    let mut feet = false;
     for row in rows {
         let Some(folder) = &row.output else { continue };
         if row.status == RowStatus::Error {
@@ -1449,8 +1496,15 @@ fn study_regions_csv(out: &Path, rows: &[StudyRow]) -> Option<String> {
         let Ok(text) = std::fs::read_to_string(out.join(folder).join("regions.csv")) else {
             continue;
         };
+        // A trial's regions per foot have a first column `foot`.
+        let per_foot = text.starts_with("foot,");
         for line in text.lines().skip(1) {
-            let f: Vec<&str> = line.split(',').collect();
+            let mut f: Vec<&str> = line.split(',').collect();
+            let foot = if per_foot && !f.is_empty() {
+                f.remove(0)
+            } else {
+                ""
+            };
             // The fixed regions' rows (a `kind` column after the unit since the regions also
             // move with the foot; the moving rows stay in the trial's regions.csv).
             let fixed = matches!(f.get(4), None | Some(&"fixed"));
@@ -1458,14 +1512,24 @@ fn study_regions_csv(out: &Path, rows: &[StudyRow]) -> Option<String> {
                 && fixed
                 && let Ok(v) = value.parse::<f64>()
             {
+                feet |= per_foot;
                 table.rows.push(vec![
                     Cell::Text(row.path.clone()),
+                    Cell::Text(foot.to_string()),
                     Cell::Text(region.to_string()),
                     Cell::Text(measure.to_string()),
                     Cell::Float(v, 6),
                     Cell::Text(unit.to_string()),
                 ]);
             }
+        }
+    }
+    if feet {
+        table.header.insert(1, "foot".to_string());
+    } else {
+        // No trial's regions are per foot: the columns of a study of plates.
+        for r in &mut table.rows {
+            r.remove(1);
         }
     }
     (!table.rows.is_empty()).then(|| table.to_csv())
@@ -2250,5 +2314,61 @@ mod tests {
         read_back["spacing"] = used["spacing"].clone();
         read_back["model"] = json!("surface");
         assert!(!json_close(&used, &read_back));
+    }
+}
+
+#[cfg(test)]
+mod feet_tests {
+    use super::*;
+
+    #[test]
+    fn a_pedar_trial_gives_its_feet_rows_and_foot_column_and_a_plate_trial_none() {
+        let out = std::env::temp_dir().join(format!("pedo-study-feet-{}", std::process::id()));
+        let plate_regions = "region,measure,value,unit,kind\nheel,fti,2,N·s,fixed\n";
+        let pedar_regions = "foot,region,measure,value,unit,kind\n\
+                             left,heel,fti,3,N·s,fixed\nright,heel,fti,4,N·s,fixed\n";
+        let value = |v: f64, u: &str| json!({"value": v, "unit": u});
+        let pedar_summary = json!({"foot_measures": {
+            "left": {"peak_pressure": value(300.0, "kPa"), "contact_time": value(0.57, "s")},
+            "right": {"peak_pressure": value(400.0, "kPa"), "contact_time": value(70.0, "frames")},
+        }});
+        let mut rows = Vec::new();
+        for (name, regions, summary) in [
+            ("plate", plate_regions, json!({"measures": {}})),
+            ("pedar", pedar_regions, pedar_summary),
+        ] {
+            std::fs::create_dir_all(out.join(name)).unwrap();
+            std::fs::write(out.join(name).join("regions.csv"), regions).unwrap();
+            std::fs::write(out.join(name).join("summary.json"), summary.to_string()).unwrap();
+            let row = json!({"path": name, "output": name, "wall_time_s": 0.0, "status": "ok"});
+            rows.push(row_from_json(&row).unwrap());
+        }
+        let regions = study_regions_csv(&out, &rows).unwrap();
+        assert_eq!(
+            regions,
+            "trial,foot,region,measure,value,unit\nplate,,heel,fti,2.000000,N·s\n\
+             pedar,left,heel,fti,3.000000,N·s\npedar,right,heel,fti,4.000000,N·s\n"
+        );
+        // Only the plate: the columns of a study without feet, and no table of feet.
+        let plate = &rows[..1];
+        assert!(study_regions_csv(&out, plate)
+            .unwrap()
+            .starts_with("trial,region,measure,value,unit\nplate,heel,"));
+        assert_eq!(study_feet_csv(&out, plate), None);
+        let feet = study_feet_csv(&out, &rows).unwrap();
+        let lines: Vec<&str> = feet.lines().collect();
+        assert_eq!(
+            lines[0],
+            "trial,foot,peak_pressure_kpa,pti_max_kpa_s,peak_force_n,fti_n_s,contact_time_s,max_contact_area_mm2"
+        );
+        // A value in another unit than its column's is left empty (a time in frames).
+        assert_eq!(
+            lines[1..],
+            [
+                "pedar,left,300.0000,,,,0.5700,",
+                "pedar,right,400.0000,,,,,"
+            ]
+        );
+        std::fs::remove_dir_all(&out).unwrap();
     }
 }

@@ -274,6 +274,18 @@ impl PyRecording {
         Ok(d)
     }
 
+    /// The columns ``(start, end)`` of each foot's sensor when the frames hold both feet apart
+    /// (pedar's two insoles side by side), by foot: ``{"left": (0, 12), "right": (14, 26)}``;
+    /// empty for a single sensor (a plate), whose feet the file does not tell apart.
+    #[getter]
+    fn feet<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for f in &self.inner.feet {
+            d.set_item(f.side.name(), (f.columns.start, f.columns.end))?;
+        }
+        Ok(d)
+    }
+
     /// (H, W) bool, True where a sensor exists.
     #[getter]
     fn sensor_mask<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<bool>>> {
@@ -435,8 +447,11 @@ impl PyRecording {
     /// for ``names[k - 1]``), ``names``, ``values`` (region → measure → value), ``units``
     /// (measure → unit), ``side`` (``"left"``/``"right"``), ``heel_toe_cue``, ``axis``
     /// (``heel_mm``, ``toe_mm``, ``direction``, ``medial``, ``length_mm``). The same as a run
-    /// folder's ``regions.npy`` and ``regions.json``. An ``InputError`` when the footprint is
-    /// too small to divide; ``NoObjectError`` when there is none.
+    /// folder's ``regions.npy`` and ``regions.json``. With both feet apart (``Recording.feet``,
+    /// pedar's insoles) each foot has its own regions: ``sides`` gives each name's foot,
+    /// ``values`` is keyed ``"left/hindfoot"``, each foot's shares are of its own impulse, and
+    /// there is no single ``side`` or ``axis``. An ``InputError`` when the footprint is too
+    /// small to divide; ``NoObjectError`` when there is none.
     #[pyo3(signature = (rule="fine", threshold=0.0, frames=None))]
     fn regions<'py>(
         &self,
@@ -468,15 +483,21 @@ impl PyRecording {
         let d = PyDict::new(py);
         d.set_item("labels", read_only(a.into_pyarray(py).into_any())?)?;
         d.set_item("names", masks.names.clone())?;
+        if !masks.sides.is_empty() {
+            // Both feet apart: each region's foot; values are keyed "left/hindfoot".
+            let sides: Vec<&str> = masks.sides.iter().map(|s| s.name()).collect();
+            d.set_item("sides", sides)?;
+        }
         let (per, units) = (PyDict::new(py), PyDict::new(py));
-        for (region, measure, value, unit) in pedo_output::region_quantities(&m, &values) {
+        for q in pedo_output::region_quantities(&m, &values) {
+            let region = q.key();
             if per.get_item(&region)?.is_none() {
                 per.set_item(&region, PyDict::new(py))?;
             }
             per.get_item(&region)?
                 .ok_or_else(|| internal("region entry"))?
-                .set_item(measure, value)?;
-            units.set_item(measure, unit)?;
+                .set_item(q.measure, q.value)?;
+            units.set_item(q.measure, q.unit)?;
         }
         d.set_item("values", per)?;
         d.set_item("units", units)?;

@@ -280,6 +280,10 @@ fn run_recording<'py>(
             .to_vec(),
         rows: Vec::new(),
     };
+    if !rec.feet.is_empty() {
+        // Each foot's regions, as regions.csv has them.
+        values.header.insert(0, "foot".to_string());
+    }
     let mut fixed_values = None;
     if let Some(asked) = pedo_output::regions_asked(&outputs, &rec).map_err(to_py)? {
         let anatomy = crate::pool::detach_cancellable(py, &cancel, || {
@@ -288,7 +292,9 @@ fn run_recording<'py>(
             else {
                 return Ok(None);
             };
-            let moving = (options.model == pedo_track::ObjectModel::Contour)
+            // A foot's regions are not carried yet (follow_anatomy says so in a run folder).
+            let carried = options.model == pedo_track::ObjectModel::Contour;
+            let moving = (carried && masks.sides.is_empty())
                 .then(|| {
                     pedo_output::moving_regions::follow_anatomy(
                         &rec, &result, &options, &m, &masks, &fixed,
@@ -309,14 +315,20 @@ fn run_recording<'py>(
             let moving = moving.as_ref().map(|a| &a.values);
             let kinds = [("fixed", Some(&fixed)), ("moving", moving)];
             for (kind, v) in kinds.into_iter().filter_map(|(k, v)| Some((k, v?))) {
-                for (region, measure, value, unit) in pedo_output::region_quantities(&m, v) {
-                    values.rows.push(vec![
-                        pedo_output::Cell::Text(region),
-                        pedo_output::Cell::Text(measure.to_string()),
-                        pedo_output::Cell::Float(value, 6),
-                        pedo_output::Cell::Text(unit),
+                for q in pedo_output::region_quantities(&m, v) {
+                    let foot = q.foot.unwrap_or_default();
+                    let mut row: Vec<pedo_output::Cell> = (rec.feet.first())
+                        .map(|_| pedo_output::Cell::Text(foot.into()))
+                        .into_iter()
+                        .collect();
+                    row.extend([
+                        pedo_output::Cell::Text(q.region),
+                        pedo_output::Cell::Text(q.measure.to_string()),
+                        pedo_output::Cell::Float(q.value, 6),
+                        pedo_output::Cell::Text(q.unit),
                         pedo_output::Cell::Text(kind.to_string()),
                     ]);
+                    values.rows.push(row);
                 }
             }
             fixed_values = Some(fixed);

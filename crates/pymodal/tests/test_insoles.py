@@ -92,3 +92,54 @@ def test_a_plate_has_no_feet_and_a_pickled_insole_recording_keeps_them():
     assert {k: v["columns"] for k, v in feet.items()} == {
         k: v["columns"] for k, v in rec.gait_measures(frames=(0, 40))["feet"].items()
     }
+
+
+@pytest.mark.parametrize("rule", ["coarse", "fine"])
+def test_each_insole_has_regions_of_its_own_measured_from_its_columns(rule):
+    rec = pymodal.read_recording(str(ASC))
+    dt, values = export_columns()
+    cells, owner = sensor_cells(rec, values)
+    got = rec.regions(rule=rule)
+    feet = rec.gait_measures()["feet"]
+    assert rec.feet == {side: tuple(feet[side]["columns"]) for side in ("left", "right")}
+    labels = got["labels"].ravel()
+    names, sides = got["names"], got["sides"]
+    assert sides == ["left"] * (len(names) // 2) + ["right"] * (len(names) // 2)
+    width = rec.frames.shape[2]
+    loaded = np.zeros(len(labels), bool)
+    loaded[owner >= 0] = values[:, owner[owner >= 0]].max(axis=0) > 0
+    for foot, sensors in [("left", range(0, 99)), ("right", range(99, 198))]:
+        a, b = rec.feet[foot]
+        # The foot's regions partition its footprint: every cell of its sensors ever loaded.
+        ks = [k + 1 for k, s in enumerate(sides) if s == foot]
+        footprint = loaded & np.isin(owner, sensors)
+        assert np.array_equal(np.isin(labels, ks), footprint)
+        assert np.all((np.flatnonzero(np.isin(labels, ks)) % width >= a))
+        foot_force = values[:, sensors.start : sensors.stop] @ cells[sensors.start : sensors.stop]
+        fti = {}
+        for k in ks:
+            mine = owner[labels == k]
+            p = values[:, mine]  # one column per cell of the region
+            force = p.sum(axis=1)
+            lo, hi = force.min(), force.max()
+            above = np.flatnonzero(force > lo + 0.1 * (hi - lo))
+            want = {
+                "peak_pressure": p.max(),
+                "pti_max": (p * dt).sum(axis=0).max(),
+                "peak_load": hi,
+                "load_time_integral": force.sum() * dt,
+                "contact_time": (above[-1] - above[0] + 1) * dt,
+                "max_contact_area": (p > 0).sum(axis=1).max(),
+            }
+            v = got["values"][f"{foot}/{names[k - 1]}"]
+            assert {m: v[m] for m in want} == pytest.approx(want, rel=1e-9)
+            fti[k] = want["load_time_integral"]
+        # A foot's regions share its own impulse, all of it.
+        assert sum(fti.values()) == pytest.approx(foot_force.sum() * dt, rel=1e-9)
+        for k in ks:
+            share = got["values"][f"{foot}/{names[k - 1]}"]["impulse_share"]
+            assert share == pytest.approx(100 * fti[k] / sum(fti.values()), rel=1e-9)
+
+
+def test_a_plate_has_no_feet_property():
+    assert pymodal.read_recording(str(DATA / "emed-test-1-10.lst")).feet == {}

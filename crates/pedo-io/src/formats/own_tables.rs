@@ -23,7 +23,7 @@ pub struct OwnTable {
 /// Every table pedomatch writes as CSV, with the columns that tell it apart. A header that holds
 /// the columns of several (`pedomatch match`'s `matches.csv` is a part of a run's) is the one
 /// with the most.
-pub const OWN_TABLES: [OwnTable; 15] = [
+pub const OWN_TABLES: [OwnTable; 16] = [
     OwnTable {
         file: "frames.csv",
         what: "the per-frame measures of a run",
@@ -108,6 +108,11 @@ pub const OWN_TABLES: [OwnTable; 15] = [
         file: "study_regions.csv",
         what: "a study's anatomical regions",
         columns: &["trial", "region", "measure", "value", "unit"],
+    },
+    OwnTable {
+        file: "study_feet.csv",
+        what: "a study's values per foot of its two-insole trials",
+        columns: &["trial", "foot", "peak_pressure_kpa", "contact_time_s"],
     },
     OwnTable {
         file: "study.csv",

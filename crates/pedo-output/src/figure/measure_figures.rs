@@ -153,7 +153,17 @@ impl RegionFigure<'_> {
             axes: self.axes,
         }
         .layout()?;
-        let colour = |k: usize| TRACK_PALETTE[k % TRACK_PALETTE.len()];
+        // Each name its colour: both feet's regions of one name alike.
+        let mut names: Vec<&str> = Vec::new();
+        for n in &masks.names {
+            if !names.contains(&n.as_str()) {
+                names.push(n);
+            }
+        }
+        let colour_of = |k: usize| {
+            let j = names.iter().position(|n| *n == masks.names[k]).unwrap_or(k);
+            TRACK_PALETTE[j % TRACK_PALETTE.len()]
+        };
         let (rows, cols) = (m.rows as isize, m.cols as isize);
         let label = |r: isize, c: isize| {
             if r < 0 || c < 0 || r >= rows || c >= cols {
@@ -181,20 +191,21 @@ impl RegionFigure<'_> {
                     if other != l {
                         layers.push(Layer::Line {
                             points: vec![self.axes.to_plot(a), self.axes.to_plot(b)],
-                            color: colour(usize::from(l) - 1),
+                            color: colour_of(usize::from(l) - 1),
                             width: 2,
                         });
                     }
                 }
             }
         }
-        let mut legend: Vec<LegendEntry> = (masks.names.iter().enumerate())
+        let mut legend: Vec<LegendEntry> = (names.iter().enumerate())
             .map(|(k, name)| LegendEntry {
                 text: name.replace('_', " "),
-                glyph: Glyph::Line(colour(k)),
+                glyph: Glyph::Line(TRACK_PALETTE[k % TRACK_PALETTE.len()]),
             })
             .collect();
-        if let Some(axis) = &masks.axis {
+        let feet = masks.foot_axes.iter().map(|(_, a)| a);
+        for axis in masks.axis.iter().chain(feet) {
             // The axis is in mm; the figure's points are in sensels.
             let pitch = self.axes.pitch_mm.unwrap_or([1.0, 1.0]);
             let at = |p: [f64; 2]| self.axes.to_plot([p[0] / pitch[0], p[1] / pitch[1]]);
@@ -209,10 +220,17 @@ impl RegionFigure<'_> {
         }
         let rule = masks.rule.map_or("user", |r| r.name());
         layout.title = format!("Regions ({rule}) over the peak pressure");
-        layout.subtitle = format!(
-            "{} of the footprint",
-            pedo_io::counted(masks.names.len(), "region")
-        );
+        layout.subtitle = if masks.sides.is_empty() {
+            format!(
+                "{} of the footprint",
+                pedo_io::counted(masks.names.len(), "region")
+            )
+        } else {
+            format!(
+                "{} of each foot's footprint",
+                pedo_io::counted(names.len(), "region")
+            )
+        };
         layout.legend = legend;
         layout.layers = layers;
         Ok(layout)
