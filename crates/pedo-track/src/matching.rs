@@ -2,12 +2,12 @@
 //! rayon pool, oblong sensels in their true proportions ([`SenselAspect`]), and a part matched
 //! into the numbering of the whole it split from or merges into.
 
+use crate::consistency::PairConsistency;
 use crate::*;
 use modal_core::{
     match_prepared, match_shapes, prepare, AffinityMatrix, MatchOptions, MatchResult, ModalError,
     Parallelism, PreparedShape, Search, Shape, Side, Topology,
 };
-use crate::consistency::PairConsistency;
 use pedo_io::{IoError, Result};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -64,7 +64,9 @@ pub(crate) fn match_all(
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress(Stage::Matching, n, candidates.len());
             }
-            let outcome = outcomes[first[i]].as_ref().expect("a first pair is matched");
+            let outcome = outcomes[first[i]]
+                .as_ref()
+                .expect("a first pair is matched");
             match pair_match(objects, a, b, outcome.clone(), options) {
                 Ok(p) => pairs.push(p),
                 Err(s) => skipped.push(s),

@@ -697,11 +697,19 @@ fn pairs_of_identical_shapes_take_the_first_ones_outcome_bit_for_bit() {
     for (p, &(a, b)) in pairs.iter().zip(&candidates) {
         // The pair matched on its own, its objects prepared for it alone.
         let (alone, _) = match_all(objects, &[(a, b)], &none, &options, &|_, _, _| {});
-        assert_eq!(format!("{p:?}"), format!("{:?}", alone[0]), "pair {a} → {b}");
+        assert_eq!(
+            format!("{p:?}"),
+            format!("{:?}", alone[0]),
+            "pair {a} → {b}"
+        );
         // And the matcher called on the two shapes, nothing prepared or shared.
         let (sa, sb) = (&objects[a].shape, &objects[b].shape);
         let truth = match_shapes(sa, sb, &options.matching).unwrap();
-        assert_eq!(format!("{:?}", p.result), format!("{truth:?}"), "pair {a} → {b}");
+        assert_eq!(
+            format!("{:?}", p.result),
+            format!("{truth:?}"),
+            "pair {a} → {b}"
+        );
     }
 }
 
@@ -715,7 +723,10 @@ fn a_shape_key_tells_apart_what_equal_values_do_not() {
     assert_eq!(key(&xy, Topology::None), key(&xy, Topology::None));
     let mut negative = xy.clone();
     negative[0] = -0.0;
-    assert_eq!(shape(negative.clone(), Topology::None), shape(xy.clone(), Topology::None));
+    assert_eq!(
+        shape(negative.clone(), Topology::None),
+        shape(xy.clone(), Topology::None)
+    );
     assert_ne!(key(&negative, Topology::None), key(&xy, Topology::None));
     assert_ne!(key(&xy, Topology::ClosedContour), key(&xy, Topology::None));
     let mesh = |t: [usize; 3]| Topology::Mesh { triangles: vec![t] };
