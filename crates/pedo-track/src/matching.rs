@@ -46,12 +46,11 @@ pub(crate) fn match_all(
             .map(|i| {
                 (first[i] == i).then(|| {
                     let (a, b) = window[i];
-                    let r = if pedo_io::cancel::cancelled(options.cancel.as_ref()) {
+                    if pedo_io::cancel::cancelled(options.cancel.as_ref()) {
                         // Not matched: the run fails once the window is done.
-                        Err(PairFailure::Cancelled)
-                    } else {
-                        pair_outcome(objects, &prepared, a, b, parts.get(&(a, b)), options)
-                    };
+                        return Err(PairFailure::Cancelled);
+                    }
+                    let r = pair_outcome(objects, &prepared, a, b, parts.get(&(a, b)), options);
                     let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                     progress(Stage::Matching, n, candidates.len());
                     r
@@ -60,13 +59,15 @@ pub(crate) fn match_all(
             .collect();
         // Only the window's outcomes are held twice while they are sorted out.
         for (i, &(a, b)) in window.iter().enumerate() {
-            if first[i] != i {
-                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-                progress(Stage::Matching, n, candidates.len());
-            }
             let outcome = outcomes[first[i]]
                 .as_ref()
                 .expect("a first pair is matched");
+            // A repeat is matched when its first pair is, not after a cancellation.
+            let cancelled = matches!(outcome, Err(PairFailure::Cancelled));
+            if first[i] != i && !cancelled {
+                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                progress(Stage::Matching, n, candidates.len());
+            }
             match pair_match(objects, a, b, outcome.clone(), options) {
                 Ok(p) => pairs.push(p),
                 Err(s) => skipped.push(s),
