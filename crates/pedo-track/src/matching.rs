@@ -2,6 +2,7 @@
 //! rayon pool, oblong sensels in their true proportions ([`SenselAspect`]), and a part matched
 //! into the numbering of the whole it split from or merges into.
 
+use crate::consistency::PairConsistency;
 use crate::*;
 use modal_core::{
     match_prepared, match_shapes, prepare, AffinityMatrix, MatchOptions, MatchResult, ModalError,
@@ -13,7 +14,9 @@ use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Matches every candidate pair (in parallel). One pair that cannot be matched never sinks the
-/// recording: it is reported with its reason and left out.
+/// recording: it is reported with its reason and left out. Pairs whose two objects have exactly
+/// the shapes of an earlier pair of the window (a 500 Hz recording holds still for frames on
+/// end) take that pair's outcome: the matcher reads nothing else, so it would give the same.
 pub(crate) fn match_all(
     objects: &[SequenceObject],
     candidates: &[(usize, usize)],
@@ -37,32 +40,35 @@ pub(crate) fn match_all(
             &options.matching,
             SenselAspect::of(options),
         );
-        let outcomes: Vec<std::result::Result<PairMatch, SkippedPair>> = window
-            .par_iter()
-            .map(|&(a, b)| {
-                if pedo_io::cancel::cancelled(options.cancel.as_ref()) {
-                    // Not matched: the run fails once the window is done.
-                    return Err(SkippedPair {
-                        a,
-                        b,
-                        reason: "cancelled".into(),
-                    });
-                }
-                let part = parts.get(&(a, b));
-                let r =
-                    match_pair(objects, &prepared, a, b, part, options).map_err(|e| SkippedPair {
-                        a,
-                        b,
-                        reason: e.to_string(),
-                    });
-                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-                progress(Stage::Matching, n, candidates.len());
-                r
+        let first = first_of_same(objects, window, parts);
+        let outcomes: Vec<Option<Outcome>> = (0..window.len())
+            .into_par_iter()
+            .map(|i| {
+                (first[i] == i).then(|| {
+                    let (a, b) = window[i];
+                    if pedo_io::cancel::cancelled(options.cancel.as_ref()) {
+                        // Not matched: the run fails once the window is done.
+                        return Err(PairFailure::Cancelled);
+                    }
+                    let r = pair_outcome(objects, &prepared, a, b, parts.get(&(a, b)), options);
+                    let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                    progress(Stage::Matching, n, candidates.len());
+                    r
+                })
             })
             .collect();
         // Only the window's outcomes are held twice while they are sorted out.
-        for outcome in outcomes {
-            match outcome {
+        for (i, &(a, b)) in window.iter().enumerate() {
+            let outcome = outcomes[first[i]]
+                .as_ref()
+                .expect("a first pair is matched");
+            // A repeat is matched when its first pair is, not after a cancellation.
+            let cancelled = matches!(outcome, Err(PairFailure::Cancelled));
+            if first[i] != i && !cancelled {
+                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                progress(Stage::Matching, n, candidates.len());
+            }
+            match pair_match(objects, a, b, outcome.clone(), options) {
                 Ok(p) => pairs.push(p),
                 Err(s) => skipped.push(s),
             }
@@ -78,9 +84,65 @@ const MATCH_WINDOW: usize = 128;
 /// The objects prepared for matching, by index.
 type Prepared = HashMap<usize, std::result::Result<PreparedShape, ModalError>>;
 
+/// What the matcher makes of a pair, whichever objects hold its two shapes: the result and its
+/// consistency figures, or why it failed.
+type Outcome = std::result::Result<(MatchResult, Option<PairConsistency>), PairFailure>;
+
+/// Why a pair was not matched.
+#[derive(Debug, Clone)]
+pub(crate) enum PairFailure {
+    Cancelled,
+    Modal(ModalError),
+}
+
+/// A shape exactly: its dimension, topology and every coordinate's bits. Equal keys are the same
+/// input to the matcher (a cache that must be exact compares bits, not values: `0.0 == -0.0`).
+#[derive(Debug, PartialEq, Eq, Hash)]
+pub(crate) struct ShapeKey(Vec<u64>);
+
+impl ShapeKey {
+    pub(crate) fn of(shape: &Shape) -> Self {
+        let (tag, triangles): (u64, &[[usize; 3]]) = match shape.topology() {
+            Topology::None => (0, &[]),
+            Topology::ClosedContour => (1, &[]),
+            Topology::Mesh { triangles } => (2, triangles),
+        };
+        let mut key = vec![shape.dim() as u64, tag, triangles.len() as u64];
+        key.extend(triangles.iter().flatten().map(|&t| t as u64));
+        key.extend(shape.coords().iter().map(|c| c.to_bits()));
+        Self(key)
+    }
+}
+
+/// For each pair of `window`, the first pair of the window with exactly its two shapes (itself
+/// when none comes before). A part matched into its whole's numbering also depends on its
+/// siblings: those pairs are always their own.
+pub(crate) fn first_of_same(
+    objects: &[SequenceObject],
+    window: &[(usize, usize)],
+    parts: &HashMap<(usize, usize), PartOfWhole>,
+) -> Vec<usize> {
+    let mut keys: HashMap<usize, std::rc::Rc<ShapeKey>> = HashMap::new();
+    let mut key = |o: usize| {
+        let k = keys.entry(o);
+        k.or_insert_with(|| std::rc::Rc::new(ShapeKey::of(&objects[o].shape)))
+            .clone()
+    };
+    let mut seen = HashMap::new();
+    (window.iter().enumerate())
+        .map(|(i, &(a, b))| {
+            if parts.contains_key(&(a, b)) {
+                return i;
+            }
+            *seen.entry((key(a), key(b))).or_insert(i)
+        })
+        .collect()
+}
+
 /// Every object of the pairs `window` prepared once (in parallel): as the second object of the
-/// pair with its predecessor and the first of the pair with its successor. An object that
-/// cannot be prepared keeps its error for the pairs that need it.
+/// pair with its predecessor and the first of the pair with its successor. Objects of exactly the
+/// same shape share one preparation, and with it the modes it caches. An object that cannot be
+/// prepared keeps its error for the pairs that need it.
 pub(crate) fn prepare_objects(
     objects: &[SequenceObject],
     window: &[(usize, usize)],
@@ -90,12 +152,27 @@ pub(crate) fn prepare_objects(
     let mut ids: Vec<usize> = window.iter().flat_map(|&(a, b)| [a, b]).collect();
     ids.sort_unstable();
     ids.dedup();
-    ids.into_par_iter()
+    let mut first: HashMap<ShapeKey, usize> = HashMap::new();
+    let same: Vec<usize> = (ids.iter())
+        .map(|&o| *first.entry(ShapeKey::of(&objects[o].shape)).or_insert(o))
+        .collect();
+    let mut prepared: Prepared = (ids.iter().zip(&same))
+        .filter(|(o, s)| o == s)
+        .map(|(&o, _)| o)
+        .collect::<Vec<_>>()
+        .into_par_iter()
         .map(|o| {
             let shape = aspect.shape(&objects[o].shape);
             (o, shape.and_then(|s| prepare(&s, options)))
         })
-        .collect()
+        .collect();
+    for (&o, &s) in ids.iter().zip(&same) {
+        if o != s {
+            let p = prepared[&s].clone();
+            prepared.insert(o, p);
+        }
+    }
+    prepared
 }
 
 /// The coordinates pairs are matched in: y scaled by the sensor's row pitch over its column
@@ -173,14 +250,16 @@ impl SenselAspect {
     }
 }
 
-pub(crate) fn match_pair(
+/// The matcher's outcome for the pair of objects `a` and `b` (`part`: a part matched into its
+/// whole's numbering).
+fn pair_outcome(
     objects: &[SequenceObject],
     prepared: &Prepared,
     a: usize,
     b: usize,
     part: Option<&PartOfWhole>,
     options: &SequenceOptions,
-) -> Result<PairMatch> {
+) -> Outcome {
     let (oa, ob) = (&objects[a], &objects[b]);
     let aspect = SenselAspect::of(options);
     // The pairs run in parallel on the pool, so each pair runs on one thread.
@@ -197,12 +276,47 @@ pub(crate) fn match_pair(
             .and_then(|sa| match_shapes(&sa, aspect.shape(&ob.shape)?.as_ref(), &options.matching)),
     }
     .map(|r| aspect.back(r))
-    .map_err(|e| {
-        IoError::invalid(format!(
-            "matching object {} (frame {}) with object {} (frame {}): {e}",
-            oa.id, oa.frame, ob.id, ob.frame
-        ))
+    .map_err(PairFailure::Modal)?;
+    let consistency = PairConsistency::of(&oa.shape, &ob.shape, &result.pairs, aspect);
+    Ok((result, consistency))
+}
+
+/// The pair of objects `a` and `b` with the matcher's `outcome` for their shapes: its row, its
+/// trackable matches, or why it was skipped.
+fn pair_match(
+    objects: &[SequenceObject],
+    a: usize,
+    b: usize,
+    outcome: Outcome,
+    options: &SequenceOptions,
+) -> std::result::Result<PairMatch, SkippedPair> {
+    let skipped = |reason: String| SkippedPair { a, b, reason };
+    let (oa, ob) = (&objects[a], &objects[b]);
+    let (result, consistency) = outcome.map_err(|e| match e {
+        PairFailure::Cancelled => skipped("cancelled".into()),
+        // The error names the two objects, as the one-pair form words it.
+        PairFailure::Modal(e) => skipped(
+            IoError::invalid(format!(
+                "matching object {} (frame {}) with object {} (frame {}): {e}",
+                oa.id, oa.frame, ob.id, ob.frame
+            ))
+            .to_string(),
+        ),
     })?;
+    pair_row(oa, ob, a, b, result, consistency, options).map_err(|e| skipped(e.to_string()))
+}
+
+/// A matched pair with its row of the pairs table.
+fn pair_row(
+    oa: &SequenceObject,
+    ob: &SequenceObject,
+    a: usize,
+    b: usize,
+    result: MatchResult,
+    consistency: Option<PairConsistency>,
+    options: &SequenceOptions,
+) -> Result<PairMatch> {
+    let aspect = SenselAspect::of(options);
     let (n, m) = (oa.shape.len(), ob.shape.len());
     let min = n.min(m).max(1) as f64;
     let one_to_one: Vec<_> = result.pairs.iter().filter(|p| !p.excess).collect();
@@ -235,12 +349,7 @@ pub(crate) fn match_pair(
         trackable_matches: trackable,
         trackable_percent: 100.0 * trackable as f64 / min,
         crossings: result.crossings,
-        consistency: crate::consistency::PairConsistency::of(
-            &oa.shape,
-            &ob.shape,
-            &result.pairs,
-            aspect,
-        ),
+        consistency,
     };
     let mut pair = PairMatch {
         a,

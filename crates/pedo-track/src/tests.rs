@@ -673,3 +673,65 @@ fn every_frame_of_the_range_is_handed_to_a_sink_that_wants_values_strided_or_rep
     assert_eq!(replayed.frames, streamed.frames);
     assert_eq!(replayed.sums, want);
 }
+
+#[test]
+fn pairs_of_identical_shapes_take_the_first_ones_outcome_bit_for_bit() {
+    // A disc that holds still for frames on end, as a 500 Hz recording does between moves.
+    let at = [0.0, 0.0, 0.0, 0.5, 0.5, 0.5, 1.0, 1.0, 0.0, 0.0, 0.0];
+    let rec = recording(at.len(), |f, r, c| disc(10.0 + at[f], 11.0, 6.0)(r, c));
+    let options = SequenceOptions {
+        keep_match_details: true,
+        ..SequenceOptions::default()
+    };
+    let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+    let objects = &run.objects;
+    let candidates: Vec<(usize, usize)> = (1..objects.len()).map(|b| (b - 1, b)).collect();
+    let none = HashMap::new();
+    let first = crate::matching::first_of_same(objects, &candidates, &none);
+    // Frames 0–2 and 8–10 are one shape, 3–5 another: pairs 1, 8 and 9 repeat pair 0, pair 4
+    // repeats pair 3.
+    assert_eq!(first, [0, 0, 2, 3, 3, 5, 6, 7, 0, 0]);
+    let (pairs, skipped) = match_all(objects, &candidates, &none, &options, &|_, _, _| {});
+    assert!(skipped.is_empty());
+    assert_eq!(pairs.len(), candidates.len());
+    for (p, &(a, b)) in pairs.iter().zip(&candidates) {
+        // The pair matched on its own, its objects prepared for it alone.
+        let (alone, _) = match_all(objects, &[(a, b)], &none, &options, &|_, _, _| {});
+        assert_eq!(
+            format!("{p:?}"),
+            format!("{:?}", alone[0]),
+            "pair {a} → {b}"
+        );
+        // And the matcher called on the two shapes, nothing prepared or shared.
+        let (sa, sb) = (&objects[a].shape, &objects[b].shape);
+        let truth = match_shapes(sa, sb, &options.matching).unwrap();
+        assert_eq!(
+            format!("{:?}", p.result),
+            format!("{truth:?}"),
+            "pair {a} → {b}"
+        );
+    }
+}
+
+#[test]
+fn a_shape_key_tells_apart_what_equal_values_do_not() {
+    use crate::matching::ShapeKey;
+    use modal_core::Topology;
+    let shape = |c: Vec<f64>, t: Topology| Shape::new(2, c, t).unwrap();
+    let xy = vec![0.0, 0.0, 2.0, 0.0, 0.0, 2.0];
+    let key = |c: &[f64], t: Topology| ShapeKey::of(&shape(c.to_vec(), t));
+    assert_eq!(key(&xy, Topology::None), key(&xy, Topology::None));
+    let mut negative = xy.clone();
+    negative[0] = -0.0;
+    assert_eq!(
+        shape(negative.clone(), Topology::None),
+        shape(xy.clone(), Topology::None)
+    );
+    assert_ne!(key(&negative, Topology::None), key(&xy, Topology::None));
+    assert_ne!(key(&xy, Topology::ClosedContour), key(&xy, Topology::None));
+    let mesh = |t: [usize; 3]| Topology::Mesh { triangles: vec![t] };
+    assert_ne!(key(&xy, mesh([0, 1, 2])), key(&xy, mesh([0, 2, 1])));
+    let mut moved = xy.clone();
+    moved[5] = f64::from_bits(2.0f64.to_bits() + 1);
+    assert_ne!(key(&moved, Topology::None), key(&xy, Topology::None));
+}
