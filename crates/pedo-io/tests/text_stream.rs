@@ -4,11 +4,22 @@
 //! between the two readings refused.
 
 use pedo_io::formats::{read_for_streaming, why_read_whole, ReadOptions};
-use pedo_io::{read_recording, FrameSource, FRAME_WINDOW};
+use pedo_io::{read_recording, FrameSource, Recording, FRAME_WINDOW};
 
 #[path = "common/files.rs"]
 mod files;
 use files::temp_dir;
+
+/// Frames `from..` of a streamed file, read window by window as a run reads them.
+fn read_back(frames: &mut impl FrameSource, header: &Recording, from: usize) -> Vec<f32> {
+    let mut back = Vec::new();
+    let n = header.n_frames();
+    for w0 in (from..n).step_by(FRAME_WINDOW) {
+        let w1 = (w0 + FRAME_WINDOW).min(n);
+        back.extend_from_slice(&frames.window(header, w0, w1).unwrap().data());
+    }
+    back
+}
 
 /// The synthetic emed walk's pages repeated `k` times (40 pictures each), one value set below
 /// 0 (an offset): more pictures than two windows.
@@ -44,12 +55,7 @@ fn lst_frames_read_as_they_are_parsed_are_the_whole_reads() {
         );
         assert_eq!((&header.units, header.format), (&held.units, held.format));
         assert!(header.frames_bytes() * 5 < held.frames_bytes());
-        let mut back = Vec::new();
-        let n = held.n_frames();
-        for w0 in (from..n).step_by(FRAME_WINDOW) {
-            let w1 = (w0 + FRAME_WINDOW).min(n);
-            back.extend_from_slice(&frames.window(&header, w0, w1).unwrap().data());
-        }
+        let back = read_back(&mut frames, &header, from);
         let per = held.rows() * held.cols();
         assert_eq!(
             back,
@@ -147,13 +153,7 @@ fn footscan_frames_read_as_they_are_parsed_are_the_whole_reads() {
         (header.pitch_mm, header.dt_s, &header.units, header.format),
         (held.pitch_mm, held.dt_s, &held.units, held.format)
     );
-    let mut back = Vec::new();
-    let n = held.n_frames();
-    for w0 in (0..n).step_by(FRAME_WINDOW) {
-        let w1 = (w0 + FRAME_WINDOW).min(n);
-        back.extend_from_slice(&frames.window(&header, w0, w1).unwrap().data());
-    }
-    assert_eq!(back, held.data().to_vec());
+    assert_eq!(read_back(&mut frames, &header, 0), held.data().to_vec());
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -224,13 +224,7 @@ fn pedar_frames_read_as_they_are_parsed_are_the_whole_reads() {
         (held.pitch_mm, held.dt_s, &held.units, held.format)
     );
     assert!(header.frames_bytes() * 5 < held.frames_bytes());
-    let mut back = Vec::new();
-    let n = held.n_frames();
-    for w0 in (0..n).step_by(FRAME_WINDOW) {
-        let w1 = (w0 + FRAME_WINDOW).min(n);
-        back.extend_from_slice(&frames.window(&header, w0, w1).unwrap().data());
-    }
-    assert_eq!(back, held.data().to_vec());
+    assert_eq!(read_back(&mut frames, &header, 0), held.data().to_vec());
     // Cut inside its last line and short of the frames its header states: the whole read's
     // error; rewritten between the readings: refused.
     let text = long_pedar(3);
@@ -245,6 +239,7 @@ fn pedar_frames_read_as_they_are_parsed_are_the_whole_reads() {
     let at = text.rfind("  0.000").unwrap() + 2;
     changed[at] = b'1';
     std::fs::write(&path, &changed).unwrap();
+    let n = header.n_frames();
     let failed = (0..n)
         .step_by(FRAME_WINDOW)
         .find_map(|w0| frames.window(&header, w0, (w0 + FRAME_WINDOW).min(n)).err())

@@ -34,6 +34,24 @@ def sensor_cells(rec, values):
     return np.bincount(owner[owner >= 0], minlength=values.shape[1]), owner
 
 
+def numpy_values(p, area, dt):
+    """The oracle's measures of pressures `p` (frames x sensors), each sensor covering `area`
+    cells: the force per frame, the frames above the contact threshold (a tenth of the force's
+    range above its least) and the values the library reports."""
+    force = p @ area
+    lo, hi = force.min(), force.max()
+    above = np.flatnonzero(force > lo + 0.1 * (hi - lo))
+    want = {
+        "peak_pressure": p.max(),
+        "pti_max": (p * dt).sum(axis=0).max(),
+        "peak_load": hi,
+        "load_time_integral": force.sum() * dt,
+        "contact_time": (above[-1] - above[0] + 1) * dt,
+        "max_contact_area": ((p > 0) @ area).max(),
+    }
+    return force, above, want
+
+
 def test_each_insole_is_measured_from_its_own_columns():
     rec = pymodal.read_recording(str(ASC))
     dt, values = export_columns()
@@ -49,18 +67,7 @@ def test_each_insole_is_measured_from_its_own_columns():
         cols = np.flatnonzero(owner >= 0) % width
         mine = (owner[owner >= 0] >= sensors.start) & (owner[owner >= 0] < sensors.stop)
         assert np.all((cols >= a) & (cols < b) == mine)
-        p = values[:, sensors]
-        force = p @ cells[sensors]
-        lo, hi = force.min(), force.max()
-        above = np.flatnonzero(force > lo + 0.1 * (hi - lo))
-        want = {
-            "peak_pressure": p.max(),
-            "pti_max": (p * dt).sum(axis=0).max(),
-            "peak_load": hi,
-            "load_time_integral": force.sum() * dt,
-            "contact_time": (above[-1] - above[0] + 1) * dt,
-            "max_contact_area": ((p > 0) @ cells[sensors]).max(),
-        }
+        force, above, want = numpy_values(values[:, sensors], cells[sensors], dt)
         assert foot["values"] == pytest.approx(want, rel=1e-9)
         assert foot["contact_frames"] == (above[0], above[-1])
         # Its stances are found from its own force, each with its own values.
@@ -119,18 +126,8 @@ def test_each_insole_has_regions_of_its_own_measured_from_its_columns(rule):
         fti = {}
         for k in ks:
             mine = owner[labels == k]
-            p = values[:, mine]  # one column per cell of the region
-            force = p.sum(axis=1)
-            lo, hi = force.min(), force.max()
-            above = np.flatnonzero(force > lo + 0.1 * (hi - lo))
-            want = {
-                "peak_pressure": p.max(),
-                "pti_max": (p * dt).sum(axis=0).max(),
-                "peak_load": hi,
-                "load_time_integral": force.sum() * dt,
-                "contact_time": (above[-1] - above[0] + 1) * dt,
-                "max_contact_area": (p > 0).sum(axis=1).max(),
-            }
+            # One column per cell of the region, each a cell's area.
+            _, _, want = numpy_values(values[:, mine], np.ones(len(mine)), dt)
             v = got["values"][f"{foot}/{names[k - 1]}"]
             assert {m: v[m] for m in want} == pytest.approx(want, rel=1e-9)
             fti[k] = want["load_time_integral"]
