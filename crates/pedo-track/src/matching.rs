@@ -34,13 +34,10 @@ pub(crate) fn match_all(
         if pedo_io::cancel::cancelled(options.cancel.as_ref()) {
             break;
         }
-        let prepared = prepare_objects(
-            objects,
-            window,
-            &options.matching,
-            SenselAspect::of(options),
-        );
-        let first = first_of_same(objects, window, parts);
+        let same = same_shapes(objects, window);
+        let prepared =
+            prepare_objects(objects, &same, &options.matching, SenselAspect::of(options));
+        let first = first_of_same(window, &same, parts);
         let outcomes: Vec<Option<Outcome>> = (0..window.len())
             .into_par_iter()
             .map(|i| {
@@ -114,63 +111,68 @@ impl ShapeKey {
     }
 }
 
-/// For each pair of `window`, the first pair of the window with exactly its two shapes (itself
-/// when none comes before). A part matched into its whole's numbering also depends on its
-/// siblings: those pairs are always their own.
-pub(crate) fn first_of_same(
+/// Each object of the pairs `window` with the first object of the window (by id) whose shape is
+/// exactly its own ([`ShapeKey`]): objects of one shape are one input to the matcher.
+pub(crate) fn same_shapes(
     objects: &[SequenceObject],
     window: &[(usize, usize)],
+) -> HashMap<usize, usize> {
+    let mut ids: Vec<usize> = window.iter().flat_map(|&(a, b)| [a, b]).collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let mut first: HashMap<ShapeKey, usize> = HashMap::new();
+    (ids.into_iter())
+        .map(|o| {
+            (
+                o,
+                *first.entry(ShapeKey::of(&objects[o].shape)).or_insert(o),
+            )
+        })
+        .collect()
+}
+
+/// For each pair of `window`, the first pair of the window with exactly its two shapes (itself
+/// when none comes before), from the window's [`same_shapes`]. A part matched into its whole's
+/// numbering also depends on its siblings: those pairs are always their own.
+pub(crate) fn first_of_same(
+    window: &[(usize, usize)],
+    same: &HashMap<usize, usize>,
     parts: &HashMap<(usize, usize), PartOfWhole>,
 ) -> Vec<usize> {
-    let mut keys: HashMap<usize, std::rc::Rc<ShapeKey>> = HashMap::new();
-    let mut key = |o: usize| {
-        let k = keys.entry(o);
-        k.or_insert_with(|| std::rc::Rc::new(ShapeKey::of(&objects[o].shape)))
-            .clone()
-    };
     let mut seen = HashMap::new();
     (window.iter().enumerate())
         .map(|(i, &(a, b))| {
             if parts.contains_key(&(a, b)) {
                 return i;
             }
-            *seen.entry((key(a), key(b))).or_insert(i)
+            *seen.entry((same[&a], same[&b])).or_insert(i)
         })
         .collect()
 }
 
-/// Every object of the pairs `window` prepared once (in parallel): as the second object of the
+/// Every object of a window of pairs prepared once (in parallel): as the second object of the
 /// pair with its predecessor and the first of the pair with its successor. Objects of exactly the
-/// same shape share one preparation, and with it the modes it caches. An object that cannot be
-/// prepared keeps its error for the pairs that need it.
+/// same shape (`same`, the window's [`same_shapes`]) share one preparation, and with it the modes
+/// it caches. An object that cannot be prepared keeps its error for the pairs that need it.
 pub(crate) fn prepare_objects(
     objects: &[SequenceObject],
-    window: &[(usize, usize)],
+    same: &HashMap<usize, usize>,
     options: &MatchOptions,
     aspect: SenselAspect,
 ) -> Prepared {
-    let mut ids: Vec<usize> = window.iter().flat_map(|&(a, b)| [a, b]).collect();
-    ids.sort_unstable();
-    ids.dedup();
-    let mut first: HashMap<ShapeKey, usize> = HashMap::new();
-    let same: Vec<usize> = (ids.iter())
-        .map(|&o| *first.entry(ShapeKey::of(&objects[o].shape)).or_insert(o))
-        .collect();
-    let mut prepared: Prepared = (ids.iter().zip(&same))
+    let firsts: Vec<usize> = (same.iter())
         .filter(|(o, s)| o == s)
         .map(|(&o, _)| o)
-        .collect::<Vec<_>>()
-        .into_par_iter()
+        .collect();
+    let mut prepared: Prepared = (firsts.into_par_iter())
         .map(|o| {
             let shape = aspect.shape(&objects[o].shape);
             (o, shape.and_then(|s| prepare(&s, options)))
         })
         .collect();
-    for (&o, &s) in ids.iter().zip(&same) {
-        if o != s {
-            let p = prepared[&s].clone();
-            prepared.insert(o, p);
-        }
+    for (&o, s) in same.iter().filter(|(o, s)| o != s) {
+        let p = prepared[s].clone();
+        prepared.insert(o, p);
     }
     prepared
 }

@@ -687,7 +687,8 @@ fn pairs_of_identical_shapes_take_the_first_ones_outcome_bit_for_bit() {
     let objects = &run.objects;
     let candidates: Vec<(usize, usize)> = (1..objects.len()).map(|b| (b - 1, b)).collect();
     let none = HashMap::new();
-    let first = crate::matching::first_of_same(objects, &candidates, &none);
+    let same = crate::matching::same_shapes(objects, &candidates);
+    let first = crate::matching::first_of_same(&candidates, &same, &none);
     // Frames 0–2 and 8–10 are one shape, 3–5 another: pairs 1, 8 and 9 repeat pair 0, pair 4
     // repeats pair 3.
     assert_eq!(first, [0, 0, 2, 3, 3, 5, 6, 7, 0, 0]);
