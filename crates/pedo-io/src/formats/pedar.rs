@@ -345,12 +345,13 @@ impl PedarHeader {
 }
 
 /// Reads the data lines (a time, then one value per column), handing each frame's values to
-/// `frame` as it is read; a last line cut short is left out. Returns the number of frames.
+/// `frame` with its line and its number (which `frame` holds to the reading's limits) as it is
+/// read; a last line cut short is left out. Returns the number of frames.
 fn read_pedar_rows(
     lines: impl Iterator<Item = (usize, String)>,
     n_columns: usize,
     name: &str,
-    mut frame: impl FnMut(usize, &[f32]) -> Result<()>,
+    mut frame: impl FnMut(usize, usize, &[f32]) -> Result<()>,
 ) -> Result<usize> {
     let mut row: Vec<f32> = Vec::with_capacity(n_columns);
     let mut n_frames = 0usize;
@@ -379,8 +380,7 @@ fn read_pedar_rows(
                 row.len()
             )));
         }
-        crate::limits::frame_count(n_frames + 1, 1).map_err(err)?;
-        frame(ln, &row)?;
+        frame(ln, n_frames, &row)?;
         n_frames += 1;
     }
     Ok(n_frames)
@@ -400,7 +400,8 @@ fn read_pedar_data(
     let (mut header, (hl, column_header)) = PedarHeader::read(&mut lines, name)?;
     let columns = header.columns(hl, &column_header, name)?;
     let mut values = Vec::new();
-    let n_frames = read_pedar_rows(lines, columns.len(), name, |_, row| {
+    let n_frames = read_pedar_rows(lines, columns.len(), name, |ln, k, row| {
+        crate::limits::frame_count(k + 1, 1).map_err(|m| IoError::parse(name, ln, m))?;
         values.extend_from_slice(row);
         Ok(())
     })?;
@@ -722,9 +723,8 @@ pub(crate) fn read_pedar_keeping(
     let mut frames = SparseFrames::new(per);
     let mut frame = vec![0.0f32; per];
     let mut negatives = NegativeValues::default();
-    let n_frames = read_pedar_rows(lines, columns.len(), name, |ln, row| {
-        crate::limits::frame_count(frames.n_frames() + 1, per)
-            .map_err(|m| IoError::parse(name, ln, m))?;
+    let n_frames = read_pedar_rows(lines, columns.len(), name, |ln, k, row| {
+        crate::limits::frame_count(k + 1, per).map_err(|m| IoError::parse(name, ln, m))?;
         placed.place(row, &mut frame);
         match keep {
             Keep::All => frames.push(&frame),
