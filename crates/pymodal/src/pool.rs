@@ -81,7 +81,9 @@ pub fn detach_cancellable<T: Send>(
             });
             rx = back;
             match got {
-                Ok(out) => return raised.map_or(Ok(out), Err),
+                // A signal that came since the last look is raised by this call too, not
+                // left pending for whichever line of the caller runs next.
+                Ok(out) => return raised.map_or_else(|| py.check_signals().map(|()| out), Err),
                 Err(RecvTimeoutError::Timeout) => {
                     if raised.is_none()
                         && let Err(e) = py.check_signals()
