@@ -990,12 +990,37 @@ impl MovingRegionSeries {
     ///
     /// [`IoError::InvalidInput`] when no frame was added or `total_fti` is not above 0.
     pub fn finish(self, total_fti: f64) -> Result<Vec<RegionValues>> {
+        let n = self.names.len();
+        self.finish_each(&vec![total_fti; n], &vec![None; n])
+    }
+
+    /// Each region's values as [`finish`](Self::finish) gives them, the `k`-th region's
+    /// `impulse_share` of `total_fti[k]` and its `foot` `feet[k]`: for a recording of both feet
+    /// apart, each region's foot and the force-time integral of that foot's fixed regions.
+    ///
+    /// # Errors
+    ///
+    /// [`IoError::InvalidInput`] when no frame was added, `total_fti` or `feet` do not hold
+    /// one entry per region, or a total is not above 0.
+    pub fn finish_each(
+        self,
+        total_fti: &[f64],
+        feet: &[Option<Side>],
+    ) -> Result<Vec<RegionValues>> {
         if self.forces.first().is_none_or(Vec::is_empty) {
             return Err(IoError::invalid(
                 "no frame to measure the moving regions on",
             ));
         }
-        if total_fti.is_nan() || total_fti <= 0.0 {
+        if total_fti.len() != self.names.len() || feet.len() != self.names.len() {
+            return Err(IoError::invalid(format!(
+                "{} moving regions, {} totals and {} feet given",
+                self.names.len(),
+                total_fti.len(),
+                feet.len()
+            )));
+        }
+        if total_fti.iter().any(|t| t.is_nan() || *t <= 0.0) {
             return Err(IoError::invalid(
                 "the footprint has no impulse for the moving regions to share",
             ));
@@ -1016,10 +1041,10 @@ impl MovingRegionSeries {
                 fti,
                 max_contact_area: self.contact[r] * self.area,
                 contact_time,
-                impulse_share: 100.0 * fti / total_fti,
+                impulse_share: 100.0 * fti / total_fti[r],
                 // The stance-normalised curves are the fixed regions' (`curves.csv`).
                 curves: Vec::new(),
-                foot: None,
+                foot: feet[r],
             });
         }
         Ok(out)

@@ -5,10 +5,12 @@
 use crate::run_tables::{region_series_row, RegionId};
 use crate::table::Table;
 use pedo_io::measures::Measures;
+use pedo_io::recording::FootColumns;
+use pedo_io::regions::Side;
 use pedo_io::regions::{MovingRegionSeries, RegionMasks, RegionValues};
 use pedo_io::stances::Stance;
 use pedo_io::{IoError, Recording, Result};
-use pedo_track::moving_regions::{follow_masks, MovingRegion};
+use pedo_track::moving_regions::{follow_foot_masks, follow_masks, MovingRegion};
 use pedo_track::{SequenceOptions, SequenceResult};
 use serde_json::{json, Map, Value};
 
@@ -40,14 +42,25 @@ pub fn follow_anatomy(
     masks: &RegionMasks,
     fixed: &[RegionValues],
 ) -> Result<MovingAnatomy> {
-    if !masks.sides.is_empty() {
-        return Err(IoError::invalid(
-            "the regions of each foot of a two-insole recording are not carried through its stances yet",
-        ));
-    }
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
-    let stances: Vec<Stance> = measures.stances.iter().map(|s| s.stance).collect();
-    let regions = follow_masks(run, options, recording, masks, &stances, threshold)?;
+    let regions = if masks.sides.is_empty() {
+        let stances: Vec<Stance> = measures.stances.iter().map(|s| s.stance).collect();
+        follow_masks(run, options, recording, masks, &stances, threshold)?
+    } else {
+        // Each foot's regions through its own stances, on its own insole.
+        let mut all = Vec::new();
+        for foot in &measures.feet {
+            let stances: Vec<Stance> = (foot.measures.stances.iter()).map(|s| s.stance).collect();
+            let columns = FootColumns {
+                side: foot.side,
+                columns: foot.columns.clone(),
+            };
+            all.extend(follow_foot_masks(
+                run, options, recording, masks, &stances, threshold, &columns,
+            )?);
+        }
+        all
+    };
     let (rows, cols) = (recording.rows(), recording.cols());
     let mut series = MovingRegionSeries::new(recording, threshold, &masks.names)?;
     for t in measures.frames.clone() {
@@ -64,8 +77,22 @@ pub fn follow_anatomy(
             .collect();
         series.add_frame(&values, &shares)?;
     }
-    let total: f64 = fixed.iter().map(|v| v.fti).sum();
-    let values = series.finish(total)?;
+    let values = if masks.sides.is_empty() {
+        series.finish(fixed.iter().map(|v| v.fti).sum())?
+    } else {
+        // A foot's moving regions share its fixed regions' impulse.
+        let foot_total = |side: Option<Side>| -> f64 {
+            (fixed.iter())
+                .filter(|v| v.foot == side)
+                .map(|v| v.fti)
+                .sum()
+        };
+        let feet: Vec<Option<Side>> = (1..=masks.names.len())
+            .map(|k| masks.side_of(k as u8))
+            .collect();
+        let totals: Vec<f64> = feet.iter().map(|&f| foot_total(f)).collect();
+        series.finish_each(&totals, &feet)?
+    };
     Ok(MovingAnatomy { regions, values })
 }
 
@@ -98,6 +125,7 @@ pub fn anatomy_rows(
                     kind,
                     name: Some(&r.name),
                     stance: Some(r.stance),
+                    foot: r.foot,
                 };
                 let at = cells.map(|c| (&grid, c));
                 t.rows
@@ -117,14 +145,20 @@ pub fn moving_json(m: &Measures, outcome: &MovingOutcome) -> Value {
         Err(e) => return json!({"error": e.to_string()}),
     };
     let mut stances: Vec<Value> = Vec::new();
+    let mut last: Option<(Option<Side>, usize)> = None;
     for r in &moving.regions {
-        if stances.len() <= r.stance {
-            stances.push(json!({
+        if last != Some((r.foot, r.stance)) {
+            last = Some((r.foot, r.stance));
+            let mut stance = json!({
                 "stance": r.stance,
                 "frames": [r.frames.0, r.frames.1],
                 "reference_frame": r.reference_frame,
                 "regions": {},
-            }));
+            });
+            if let Some(side) = r.foot {
+                stance["foot"] = json!(side.name());
+            }
+            stances.push(stance);
         }
         if let Some(s) = stances.last_mut() {
             s["regions"][&r.name] = json!({
@@ -139,9 +173,13 @@ pub fn moving_json(m: &Measures, outcome: &MovingOutcome) -> Value {
         let entry = per.entry(q.key()).or_insert_with(|| json!({}));
         entry[q.measure] = json!({"value": q.value, "unit": q.unit});
     }
-    json!({
+    let mut out = json!({
         "rule": "each stance's frame of largest contact area is its reference frame; a region there is the mask's sensels in contact, each connected part followed by its outline forwards and backwards through the stance; on a frame the region is the sensels whose centres lie inside its followed outlines",
         "stances": stances,
         "regions": per,
-    })
+    });
+    if moving.regions.iter().any(|r| r.foot.is_some()) {
+        out["feet"] = json!("each foot's regions through its own stances (numbered per foot, as curves.csv's), its reference frame the one of most sensels in contact on its insole, carried by its insole's contour objects only; its regions' impulse shares of its own fixed regions' impulse");
+    }
+    out
 }

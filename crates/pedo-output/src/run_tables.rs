@@ -533,6 +533,7 @@ pub fn regions_table(
                     kind,
                     name: None,
                     stance: None,
+                    foot: None,
                 };
                 t.rows.push(region_series_row(
                     recording,
@@ -557,11 +558,17 @@ pub(crate) struct RegionId<'a> {
     pub(crate) name: Option<&'a str>,
     /// The anatomical region's stance.
     pub(crate) stance: Option<usize>,
+    /// The anatomical region's foot, for a recording of both feet apart.
+    pub(crate) foot: Option<pedo_io::regions::Side>,
 }
 
 /// The columns of `region_series.csv` ([`regions_table`]; no rows).
 pub fn region_series_header(recording: &Recording) -> Table {
     let mut t = Table::new(&["region", "kind", "frame"]);
+    if !recording.feet.is_empty() {
+        // Both feet apart: each anatomical region's foot first, as regions.csv has it.
+        t.header.insert(0, "foot".to_string());
+    }
     if recording.dt_s.is_some() {
         t.push_column("time_s");
     }
@@ -594,11 +601,18 @@ pub(crate) fn region_series_row(
     let u = measure_units(recording);
     let area = recording.sensel_area().unwrap_or(1.0);
     let sensors = recording.sensor_mask();
-    let mut row = vec![
+    let mut row = Vec::new();
+    if !recording.feet.is_empty() {
+        row.push(
+            id.foot
+                .map_or(Cell::Empty, |f| Cell::Text(f.name().to_string())),
+        );
+    }
+    row.extend([
         Cell::int(id.label),
         Cell::Text(id.kind.to_string()),
         Cell::int(frame),
-    ];
+    ]);
     if recording.dt_s.is_some() {
         row.push(Cell::opt(recording.time_s(frame), 6));
     }

@@ -15,17 +15,21 @@
 use crate::follow::{self, FollowParams, Seed, Seeded, REGION_STEP};
 use crate::*;
 use pedo_io::marks::{polygon_coverage, LabelMask};
-use pedo_io::recording::Recording;
-use pedo_io::regions::RegionMasks;
+use pedo_io::recording::{FootColumns, Recording};
+use pedo_io::regions::{RegionMasks, Side};
 use pedo_io::stances::Stance;
 use pedo_io::{IoError, Result};
 use std::collections::BTreeMap;
+use std::ops::Range;
 
 /// One anatomical region of one stance, carried by the field.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MovingRegion {
-    /// The stance (0-based, in frame order).
+    /// The stance (0-based, in frame order; a foot's own stances, numbered per foot, for a
+    /// recording of both feet apart).
     pub stance: usize,
+    /// Its foot, for a recording of both feet apart ([`RegionMasks::sides`]).
+    pub foot: Option<Side>,
     /// The region's label in the masks (1-based).
     pub label: u8,
     /// The region's name.
@@ -65,11 +69,22 @@ impl MovingRegion {
 /// # Errors
 /// A frame the recording does not hold.
 pub fn reference_frame(recording: &Recording, stance: &Stance, threshold: f64) -> Result<usize> {
+    reference_frame_in(recording, stance, threshold, None)
+}
+
+/// [`reference_frame`] counting only the sensels of the columns `columns` (one foot's insole of
+/// a recording of both feet apart; every sensel for `None`).
+fn reference_frame_in(
+    recording: &Recording,
+    stance: &Stance,
+    threshold: f64,
+    columns: Option<&Range<usize>>,
+) -> Result<usize> {
+    let cols = recording.cols();
     let mut best = (stance.first, 0usize);
     for t in stance.first..=stance.last {
-        let n = contact_cells(recording, t, threshold)?
-            .iter()
-            .filter(|&&c| c)
+        let n = (contact_cells(recording, t, threshold)?.iter().enumerate())
+            .filter(|&(i, &c)| c && columns.is_none_or(|r| r.contains(&(i % cols))))
             .count();
         if n > best.1 {
             best = (t, n);
@@ -147,6 +162,50 @@ pub fn follow_masks(
     stances: &[Stance],
     threshold: f64,
 ) -> Result<Vec<MovingRegion>> {
+    follow_in(run, options, recording, masks, stances, threshold, None)
+}
+
+/// The regions of `foot` (a foot of a recording of both feet apart, [`Recording::feet`]; its
+/// regions those of `masks` on its side, [`RegionMasks::sides`]) carried through its own
+/// `stances` as [`follow_masks`] carries a single footprint's, on that foot alone: each
+/// stance's reference frame is its frame of most sensels in contact among the foot's columns,
+/// and only the contour objects of its insole (those whose outline's mean column lies among its
+/// columns) carry its regions, a region's outline ending where the follower would step onto
+/// the other insole. One [`MovingRegion`] per stance and region of the foot, in stance order
+/// (numbered per foot), then label order.
+///
+/// # Errors
+/// Those of [`follow_masks`].
+pub fn follow_foot_masks(
+    run: &SequenceResult,
+    options: &SequenceOptions,
+    recording: &Recording,
+    masks: &RegionMasks,
+    stances: &[Stance],
+    threshold: f64,
+    foot: &FootColumns,
+) -> Result<Vec<MovingRegion>> {
+    follow_in(
+        run,
+        options,
+        recording,
+        masks,
+        stances,
+        threshold,
+        Some(foot),
+    )
+}
+
+/// [`follow_masks`], or with `foot` [`follow_foot_masks`].
+fn follow_in(
+    run: &SequenceResult,
+    options: &SequenceOptions,
+    recording: &Recording,
+    masks: &RegionMasks,
+    stances: &[Stance],
+    threshold: f64,
+    foot: Option<&FootColumns>,
+) -> Result<Vec<MovingRegion>> {
     if options.model != ObjectModel::Contour {
         return Err(IoError::invalid(
             "regions are carried by the field of contour runs only",
@@ -161,25 +220,47 @@ pub fn follow_masks(
     }
     let aspect = SenselAspect::of(options);
     let params = FollowParams::default();
+    let columns = foot.map(|f| &f.columns);
+    let outline_of = |o: usize| -> Vec<[f64; 2]> {
+        let shape = &run.objects[o].shape;
+        (0..shape.len())
+            .map(|i| [shape.point(i)[0], shape.point(i)[1]])
+            .collect()
+    };
+    // Whether object `o` is of the foot's insole: its outline's mean column among the foot's
+    // columns (every object for a single footprint).
+    let on_foot = |o: usize| -> bool {
+        let Some(columns) = columns else {
+            return true;
+        };
+        let outline = outline_of(o);
+        if outline.is_empty() {
+            return false;
+        }
+        let x = outline.iter().map(|p| p[0]).sum::<f64>() / outline.len() as f64;
+        (columns.start as f64 - 0.5..columns.end as f64 - 0.5).contains(&x)
+    };
+    let owned: Vec<bool> = match foot {
+        Some(_) => (0..run.objects.len()).map(on_foot).collect(),
+        None => Vec::new(),
+    };
     let mut out = Vec::new();
     for (s, stance) in stances.iter().enumerate() {
-        let reference = reference_frame(recording, stance, threshold)?;
+        let reference = reference_frame_in(recording, stance, threshold, columns)?;
         let contact = contact_cells(recording, reference, threshold)?;
         let objects: Vec<usize> = (0..run.objects.len())
             .filter(|&o| run.objects[o].frame == reference && run.objects[o].shape.dim() == 2)
+            .filter(|&o| owned.get(o).copied().unwrap_or(true))
             .collect();
-        let outline_of = |o: usize| -> Vec<[f64; 2]> {
-            let shape = &run.objects[o].shape;
-            (0..shape.len())
-                .map(|i| [shape.point(i)[0], shape.point(i)[1]])
-                .collect()
-        };
         let object_outlines: Vec<Vec<[f64; 2]>> = objects.iter().map(|&o| outline_of(o)).collect();
         // Seeds of every part of every region of this stance; `owner[j]` = (region, part).
         let mut seeds = Vec::new();
         let mut owner: Vec<usize> = Vec::new();
         for (k, name) in masks.names.iter().enumerate() {
             let label = (k + 1) as u8;
+            if foot.is_some_and(|f| masks.side_of(label) != Some(f.side)) {
+                continue;
+            }
             let cells: Vec<bool> = (masks.labels.iter().zip(&contact))
                 .map(|(&l, &c)| l == label && c)
                 .collect();
@@ -219,6 +300,7 @@ pub fn follow_masks(
             }
             out.push(MovingRegion {
                 stance: s,
+                foot: masks.side_of(label),
                 label,
                 name: name.clone(),
                 frames: (stance.first, stance.last),
@@ -236,7 +318,20 @@ pub fn follow_masks(
             let Seeded::Region(part) = p.kind else {
                 continue;
             };
-            for &(o, xy) in &p.steps {
+            // A foot's outline point ends, either way from the reference frame, where it
+            // would step onto the other insole.
+            let mine = |s: &(usize, [f64; 2])| owned.get(s.0).copied().unwrap_or(true);
+            let seed = (p.steps.iter())
+                .position(|s| run.objects[s.0].frame == reference)
+                .unwrap_or(0);
+            let lo = p.steps[..seed]
+                .iter()
+                .rposition(|s| !mine(s))
+                .map_or(0, |i| i + 1);
+            let hi = (p.steps[seed..].iter())
+                .position(|s| !mine(s))
+                .map_or(p.steps.len(), |i| seed + i);
+            for &(o, xy) in &p.steps[lo..hi.max(lo)] {
                 by_part[part]
                     .entry(run.objects[o].frame)
                     .or_default()

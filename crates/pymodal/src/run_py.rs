@@ -292,9 +292,9 @@ fn run_recording<'py>(
             else {
                 return Ok(None);
             };
-            // A foot's regions are not carried yet (follow_anatomy says so in a run folder).
+            // Carried through the stances by a contour run (each foot's through its own).
             let carried = options.model == pedo_track::ObjectModel::Contour;
-            let moving = (carried && masks.sides.is_empty())
+            let moving = carried
                 .then(|| {
                     pedo_output::moving_regions::follow_anatomy(
                         &rec, &result, &options, &m, &masks, &fixed,

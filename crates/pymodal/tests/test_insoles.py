@@ -2,6 +2,7 @@
 NumPy on the export's own columns: each insole's peak pressure, PTI, force-time integral,
 contact time and stances, with its force weighed by the image cells each sensor covers."""
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -140,3 +141,48 @@ def test_each_insole_has_regions_of_its_own_measured_from_its_columns(rule):
 
 def test_a_plate_has_no_feet_property():
     assert pymodal.read_recording(str(DATA / "emed-test-1-10.lst")).feet == {}
+
+
+def test_each_insole_s_regions_move_with_it_through_its_own_stances(tmp_path):
+    """A contour run carries each foot's regions through its own stances: the rows returned are
+    the folder's, each moving row has its foot, a moving region's FTI is the sum of its rows'
+    force, its share is of its own foot's fixed impulse, and on each stance's reference frame
+    the foot's moving regions hold that foot's force as NumPy sums it from its insole's columns."""
+    from test_measures_masks import read_csv, same_rows
+
+    rec = pymodal.read_recording(str(ASC))
+    dt, values = export_columns()
+    cells, _ = sensor_cells(rec, values)
+    # 40 frames: a stance of each foot (a run is seconds in a debug wheel).
+    options = dict(report="none", figures="none", region_rule="coarse", frames=(0, 40))
+    out = tmp_path / "run"
+    pymodal.run(rec, out=str(out), **options)
+    res = pymodal.run(rec, **options)
+    same_rows(res["regions"], read_csv(out / "regions.csv"))
+    same_rows(res["region_series"], read_csv(out / "region_series.csv"))
+    moving = [r for r in res["regions"] if r["kind"] == "moving"]
+    fixed = [r for r in res["regions"] if r["kind"] == "fixed"]
+    assert {r["foot"] for r in moving} == {"left", "right"}
+    series = res["region_series"]
+    assert {r["foot"] for r in series} == {"left", "right"}
+    force_column = next(c for c in series[0] if c.startswith("total_"))
+    fti_name = "fti" if any(r["measure"] == "fti" for r in fixed) else "load_time_integral"
+    stances = json.loads((out / "regions.json").read_text())["moving"]["stances"]
+    for foot, sensors in [("left", slice(0, 99)), ("right", slice(99, 198))]:
+        foot_force = values[:, sensors] @ cells[sensors]
+        fixed_fti = sum(r["value"] for r in fixed if r["foot"] == foot and r["measure"] == fti_name)
+        for r in (r for r in moving if r["foot"] == foot and r["measure"] == fti_name):
+            rows = [s for s in series
+                    if s["foot"] == foot and s["kind"] == "moving" and s["name"] == r["region"]]
+            total = sum(s[force_column] or 0.0 for s in rows) * dt
+            assert r["value"] == pytest.approx(total, rel=1e-4, abs=1e-6)
+            share = next(q["value"] for q in moving if q["foot"] == foot
+                         and q["region"] == r["region"] and q["measure"] == "impulse_share")
+            assert share == pytest.approx(100 * r["value"] / fixed_fti, rel=1e-4, abs=1e-6)
+        own = [s for s in stances if s["foot"] == foot]
+        assert own
+        for s in own:
+            t = s["reference_frame"]
+            held = sum(q[force_column] or 0.0 for q in series if q["foot"] == foot
+                       and q["kind"] == "moving" and q["frame"] == t)
+            assert 0.9 * foot_force[t] <= held <= 1.0001 * foot_force[t], (foot, t)
