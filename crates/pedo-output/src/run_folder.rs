@@ -198,7 +198,7 @@ modal_core::option_set! {
         /// The anatomical regions of the footprint.
         region_rule: RegionChoice = RegionChoice::default();
             Word(<RegionChoice as Choice>::NAMES), RegionChoice::default(),
-            "Anatomical regions of the footprint, found from the peak image and the centre of pressure's path, with each region's peak pressure, PTI, FTI, contact area, contact time and share of the impulse (regions.csv, regions.json, regions.npy, regions.png): coarse (hindfoot, midfoot, forefoot, toes), fine (medial and lateral heel, midfoot, first, second and lateral metatarsal heads, hallux, lesser toes) or none. One foot per recording; a streamed run keeps its frames' loaded sensels for them. A contour run also carries each region through every stance with the foot (moving, beside the fixed masks: regions.csv's kind, region_series.csv).";
+            "Anatomical regions of the footprint, found from the peak image and the centre of pressure's path, with each region's peak pressure, PTI, FTI, contact area, contact time and share of the impulse (regions.csv, regions.json, regions.npy, regions.png): coarse (hindfoot, midfoot, forefoot, toes), fine (medial and lateral heel, midfoot, first, second and lateral metatarsal heads, hallux, lesser toes) or none. Each insole of a two-insole pedar recording is divided and carried on its own; a streamed run keeps its frames' loaded sensels for them. A contour run also carries each region through every stance with the foot (moving, beside the fixed masks: regions.csv's kind, region_series.csv).";
         /// The user's region masks over the peak image.
         masks: Option<PathOrRows> = None;
             Value, "none",
