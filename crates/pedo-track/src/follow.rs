@@ -160,13 +160,19 @@ pub fn follow_points(
             kind: Seeded::Point(k),
         })
         .collect();
-    follow_seeded(run, aspect, params, &seeds, seeds.is_empty())
+    follow_seeded(run, aspect, params, &seeds, seeds.is_empty(), false)
 }
 
 /// Follows the `seeds` (each from its object on) through the contour objects of a run and,
-/// with `outline`, the outline nodes of every object that begins a lineage too (the points of
-/// [`follow_points`] without seeds). A seed on an object within a lineage starts a new anchor
-/// there (the lineage's points keep their positions), so that its place is its position.
+/// with `outline_seeds`, the outline nodes of every object that begins a lineage too (the
+/// points of [`follow_points`] without seeds). A seed on an object within a lineage starts a
+/// new anchor there (the lineage's points keep their positions), so that its place is its
+/// position. With `both_ways`, each seed is carried backwards too, from its object to where the
+/// contact that leads into it began ([`Stance`](crate::follow#backwards): the objects its
+/// object continues, back to one that no earlier object continues), by the same anchored
+/// registration on the pairs turned round; its steps are then those of the backward part, in
+/// frame order, then its seed's frame and the forward part. The outline seeds begin where
+/// their lineage begins: they have no backward part.
 ///
 /// # Errors
 /// As [`follow_points`].
@@ -176,25 +182,40 @@ pub fn follow_seeded(
     params: &FollowParams,
     seeds: &[Seed],
     outline_seeds: bool,
+    both_ways: bool,
 ) -> Result<FollowedPoints> {
-    follow_inner(run, aspect, params, seeds, outline_seeds, false)
+    let mode = Mode {
+        outline_seeds,
+        lazy: false,
+        backwards: both_ways,
+    };
+    follow_inner(run, aspect, params, seeds, mode)
 }
 
-/// [`follow_seeded`]; `lazy`: a lineage is started only for an object with seeds or points
-/// handed over, and dropped once it carries no point (nothing is registered for nothing).
+/// How a [`Follower`] follows: with the outline seeds of every object that begins a lineage;
+/// `lazy`, starting a lineage only for an object with seeds or points handed over and dropping
+/// it once it carries no point; `backwards`, carrying each seed back to where its contact began
+/// too ([`backward_steps`]).
+#[derive(Debug, Clone, Copy)]
+struct Mode {
+    outline_seeds: bool,
+    lazy: bool,
+    backwards: bool,
+}
+
+/// [`follow_seeded`] as `mode` says.
 fn follow_inner(
     run: &SequenceResult,
     aspect: SenselAspect,
     params: &FollowParams,
     seeds: &[Seed],
-    outline_seeds: bool,
-    lazy: bool,
+    mode: Mode,
 ) -> Result<FollowedPoints> {
     if run.objects.iter().any(|o| o.shape.dim() != 2) {
         return Err(surfaces_refused());
     }
     let whole = WholeRun::of(run);
-    let mut follower = Follower::new(aspect, *params, outline_seeds, lazy);
+    let mut follower = Follower::new(aspect, *params, mode);
     for seed in seeds {
         let (o, p) = (seed.object, seed.xy);
         if o >= run.objects.len() || !p.iter().all(|v| v.is_finite()) {
@@ -222,6 +243,8 @@ fn surfaces_refused() -> IoError {
 /// continues which (from the pairs matched or skipped). A whole run ([`WholeRun`]) or the
 /// window of a run as it streams ([`sink::FollowSink`]).
 trait RunView {
+    /// The ids of the objects it holds.
+    fn held(&self) -> std::ops::Range<usize>;
     fn object(&self, id: usize) -> &SequenceObject;
     /// The matches of the pair `a → b`, if it was matched.
     fn pair(&self, a: usize, b: usize) -> Option<&MatchResult>;
@@ -251,6 +274,9 @@ impl<'r> WholeRun<'r> {
 }
 
 impl RunView for WholeRun<'_> {
+    fn held(&self) -> std::ops::Range<usize> {
+        0..self.run.objects.len()
+    }
     fn object(&self, id: usize) -> &SequenceObject {
         &self.run.objects[id]
     }
@@ -269,8 +295,7 @@ impl RunView for WholeRun<'_> {
 struct Follower {
     aspect: SenselAspect,
     params: FollowParams,
-    outline_seeds: bool,
-    lazy: bool,
+    mode: Mode,
     seeds_at: HashMap<usize, Vec<Seed>>,
     /// Per object: its anchor state and the points on it (index into `points`).
     live: HashMap<usize, Lineage>,
@@ -294,6 +319,13 @@ impl PointsKept {
         self.held.push_back((p, Vec::new()));
         self.base + self.held.len() - 1
     }
+    /// Steps of point `k` (objects of `run`, in frame order) before those it has.
+    fn before(&mut self, k: usize, steps: Steps, run: &dyn RunView) {
+        let (p, frames) = &mut self.held[k - self.base];
+        let earlier: Vec<usize> = steps.iter().map(|&(o, _)| run.object(o).frame).collect();
+        p.steps.splice(0..0, steps);
+        frames.splice(0..0, earlier);
+    }
     fn step(&mut self, k: usize, object: usize, frame: usize, xy: [f64; 2]) {
         let (p, frames) = &mut self.held[k - self.base];
         p.steps.push((object, xy));
@@ -302,12 +334,11 @@ impl PointsKept {
 }
 
 impl Follower {
-    fn new(aspect: SenselAspect, params: FollowParams, outline_seeds: bool, lazy: bool) -> Self {
+    fn new(aspect: SenselAspect, params: FollowParams, mode: Mode) -> Self {
         Self {
             aspect,
             params,
-            outline_seeds,
-            lazy,
+            mode,
             seeds_at: HashMap::new(),
             live: HashMap::new(),
             points: PointsKept::default(),
@@ -353,7 +384,7 @@ impl Follower {
                 }
             }
         }
-        let wanted = !self.lazy
+        let wanted = !self.mode.lazy
             || self.seeds_at.contains_key(&b)
             || links.preds(b).iter().any(|a| self.live.contains_key(a));
         if lineage.is_none() && wanted {
@@ -370,14 +401,22 @@ impl Follower {
                 self.anchors += 1;
             }
             if l.object == b {
+                let back = match self.mode.backwards {
+                    true => backward_steps(run, b, &ps, aspect, params),
+                    false => Vec::new(),
+                };
+                let first = self.points.base + self.points.held.len();
                 let seeded = ps.into_iter().map(|p| (None, p.xy, p.kind));
                 l.seed(seeded, &mut self.points, b, aspect);
+                for (k, steps) in back.into_iter().enumerate() {
+                    self.points.before(first + k, steps, run);
+                }
             }
         }
         for &(k, p) in &l.points {
             self.points.step(k, b, frame, p);
         }
-        if links.succs(b).is_empty() || (self.lazy && l.points.is_empty()) {
+        if links.succs(b).is_empty() || (self.mode.lazy && l.points.is_empty()) {
             // The lineage ends here: its anchor is dropped, its points end.
             return;
         }
@@ -398,7 +437,7 @@ impl Follower {
         self.anchors += 1;
         let carried = handed_over(run, b, &mut self.live, aspect);
         l.adopt(carried, aspect);
-        if run.links().preds(b).is_empty() && self.outline_seeds {
+        if run.links().preds(b).is_empty() && self.mode.outline_seeds {
             let nodes = outline(run.object(b));
             let seeded = (nodes.iter().enumerate()).map(|(i, &p)| (Some(i), p, Seeded::Outline));
             l.seed(seeded, &mut self.points, b, aspect);
@@ -428,6 +467,152 @@ impl Follower {
         self.live.clear();
         self.ended()
     }
+}
+
+/// The backward parts of `seeds`, all on object `b` of `run` (every pair into `b` known): each
+/// seed carried from `b` back through the objects `b` continues, one frame at a time, to the
+/// first object of that contact (one that no earlier object continues), by anchored
+/// registration on the objects of those frames in reversed order with every pair's matches
+/// turned round (as [`follow_both_ways`]); where objects merged on the way forward, the point
+/// goes back into the part whose outline its image lies nearest, as at a split. Per seed, its
+/// steps before `b`'s frame in frame order (none where it could not be carried, or where `b`
+/// continues no object).
+fn backward_steps(
+    run: &dyn RunView,
+    b: usize,
+    seeds: &[Seed],
+    aspect: SenselAspect,
+    params: &FollowParams,
+) -> Vec<Steps> {
+    let none = || vec![Vec::new(); seeds.len()];
+    let (held, links) = (run.held(), run.links());
+    // The objects `b` continues, back to where their contact began.
+    let mut lowest = b;
+    let mut todo = vec![b];
+    let mut seen = std::collections::HashSet::from([b]);
+    while let Some(o) = todo.pop() {
+        for &a in links.preds(o) {
+            if held.contains(&a) && seen.insert(a) {
+                lowest = lowest.min(a);
+                todo.push(a);
+            }
+        }
+    }
+    if lowest == b {
+        return none();
+    }
+    // Every object from the earliest of them to the last of `b`'s frame.
+    let frame = run.object(b).frame;
+    let mut highest = b;
+    while held.contains(&(highest + 1)) && run.object(highest + 1).frame == frame {
+        highest += 1;
+    }
+    let view = Reversed::of(run, lowest..=highest);
+    let mode = Mode {
+        outline_seeds: false,
+        lazy: true,
+        backwards: false,
+    };
+    let mut follower = Follower::new(aspect, *params, mode);
+    for s in seeds {
+        follower.seed_on(Seed {
+            object: highest - b,
+            ..*s
+        });
+    }
+    for n in 0..view.old.len() {
+        follower.object(&view, n);
+    }
+    // The points are the seeds in order, or none (no anchor could be made on `b`).
+    let points = follower.into_points().points;
+    if points.len() != seeds.len() {
+        return none();
+    }
+    (points.into_iter())
+        .map(|p| {
+            // The seed's own step is the forward part's.
+            let mut steps: Steps = (p.steps.into_iter().skip(1))
+                .map(|(o, xy)| (view.old[o], xy))
+                .collect();
+            steps.reverse();
+            steps
+        })
+        .collect()
+}
+
+/// The objects `ids` of a run read backwards: object `n` is `ids`' `n`-th from the end, every
+/// pair between them turned round (its matches from the later object to the earlier).
+struct Reversed<'v> {
+    run: &'v dyn RunView,
+    /// The run's id of each object, in reversed order.
+    old: Vec<usize>,
+    links: Links,
+    pairs: HashMap<(usize, usize), MatchResult>,
+}
+
+impl<'v> Reversed<'v> {
+    fn of(run: &'v dyn RunView, ids: std::ops::RangeInclusive<usize>) -> Self {
+        let hi = *ids.end();
+        let new = |o: usize| hi - o;
+        let mut links = Links::default();
+        let mut pairs = HashMap::new();
+        for a in ids.clone() {
+            for &b in run.links().succs(a) {
+                if !ids.contains(&b) {
+                    continue;
+                }
+                links.add(new(b), new(a));
+                if let Some(m) = run.pair(a, b)
+                    && let Some(turned) = turned_round(m)
+                {
+                    pairs.insert((new(b), new(a)), turned);
+                }
+            }
+        }
+        Self {
+            run,
+            old: ids.rev().collect(),
+            links,
+            pairs,
+        }
+    }
+}
+
+impl RunView for Reversed<'_> {
+    fn held(&self) -> std::ops::Range<usize> {
+        0..self.old.len()
+    }
+    fn object(&self, id: usize) -> &SequenceObject {
+        self.run.object(self.old[id])
+    }
+    fn pair(&self, a: usize, b: usize) -> Option<&MatchResult> {
+        self.pairs.get(&(a, b))
+    }
+    fn links(&self) -> &Links {
+        &self.links
+    }
+}
+
+/// The matches of a pair `a → b` as those of `b → a` (what the follower reads of a pair: its
+/// matches and unmatched nodes; no details, the transform left as it was).
+fn turned_round(m: &MatchResult) -> Option<MatchResult> {
+    let mut pairs = m.pairs.clone();
+    for p in &mut pairs {
+        std::mem::swap(&mut p.a, &mut p.b);
+    }
+    Some(MatchResult {
+        pairs,
+        affinity: crate::result::no_affinity().ok()?,
+        local_pairs: Vec::new(),
+        unmatched_a: m.unmatched_b.clone(),
+        unmatched_b: m.unmatched_a.clone(),
+        n_modes: m.n_modes,
+        refits: m.refits,
+        solves: m.solves,
+        transform: m.transform,
+        aligned_a: Vec::new(),
+        crossings: m.crossings,
+    })
 }
 
 /// Follows `seeds`, all on objects of one frame `f`, through the objects of frames
@@ -490,7 +675,12 @@ pub fn follow_both_ways(
                 ..*s
             })
             .collect();
-        let followed = follow_inner(&sub, aspect, params, &local, false, true)?;
+        let mode = Mode {
+            outline_seeds: false,
+            lazy: true,
+            backwards: false,
+        };
+        let followed = follow_inner(&sub, aspect, params, &local, mode)?;
         let mut steps = vec![Vec::new(); seeds.len()];
         for p in followed.points {
             if let Seeded::Point(k) = p.kind {
@@ -601,6 +791,7 @@ pub fn run_points(
         SenselAspect::of(options),
         &FollowParams::default(),
         &seeds,
+        true,
         true,
     )
     .map(Some)

@@ -17,7 +17,7 @@ modal_core::option_set! {
         /// The points: a CSV file, or rows `x, y` in sensels (Python's `(n, 2)` array).
         points: Option<PathOrRows> = None;
             Value, "none",
-            "Points to follow through the stance (contour model): a CSV with a header x,y (sensels; x = column, y = row) or x_mm,y_mm (mm), optional name and frame (0-based) columns; Python also takes an (n, 2) array of x, y in sensels. Each is followed from its frame on, written to points.csv with kind user.";
+            "Points to follow through the stance (contour model): a CSV with a header x,y (sensels; x = column, y = row) or x_mm,y_mm (mm), optional name and frame (0-based) columns; Python also takes an (n, 2) array of x, y in sensels. Each is followed from its frame forwards and backwards through its stance (the contact its object belongs to), written to points.csv with kind user.";
         /// The frame the points are given on, unless the file's `frame` column says.
         points_frame: Option<usize> = None;
             Value, "the first frame whose contact region holds the point",

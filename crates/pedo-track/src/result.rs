@@ -189,7 +189,7 @@ impl PairMatch {
 }
 
 /// An empty affinity matrix (0 × 0), what a pair without details holds.
-fn no_affinity() -> Result<modal_core::AffinityMatrix> {
+pub(crate) fn no_affinity() -> Result<modal_core::AffinityMatrix> {
     Ok(modal_core::AffinityMatrix::new(0, 0, Vec::new())?)
 }
 

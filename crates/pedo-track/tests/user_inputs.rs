@@ -5,7 +5,7 @@
 use modal_core::PathOrRows;
 use pedo_io::synthetic::SyntheticWalk;
 use pedo_io::{IoError, Recording};
-use pedo_track::follow::{run_points, FollowedPoints, Seeded};
+use pedo_track::follow::{follow_seeded, run_points, FollowParams, FollowedPoints, Seed, Seeded};
 use pedo_track::{run_sequence, RunInputs, RunParams, SequenceOptions, SequenceResult};
 
 fn run(rec: &Recording, inputs: RunInputs) -> pedo_io::Result<(SequenceOptions, SequenceResult)> {
@@ -88,7 +88,7 @@ fn a_given_interior_point_stays_within_a_sensel_of_its_material_point() {
 }
 
 #[test]
-fn a_point_given_in_mm_on_a_later_frame_starts_there() {
+fn a_point_given_in_mm_on_a_later_frame_is_carried_back_to_the_first_frame_of_its_contact() {
     let walk = SyntheticWalk {
         frames: 40,
         ..Default::default()
@@ -123,13 +123,84 @@ fn a_point_given_in_mm_on_a_later_frame_starts_there() {
         .iter()
         .find(|p| p.kind == Seeded::Point(0))
         .unwrap();
-    assert_eq!(result.objects[p.steps[0].0].frame, 20);
-    assert_eq!(p.steps.len(), 20);
+    // Seeded on frame 20, its steps run from the contact's first frame to its last, in order.
+    assert_eq!(result.objects[p.seed.0].frame, 20);
+    let frames: Vec<usize> = p.steps.iter().map(|s| result.objects[s.0].frame).collect();
+    assert_eq!(frames, (0..40).collect::<Vec<_>>());
+    assert_eq!(
+        p.steps[20].1, q,
+        "its own frame holds it where it was given"
+    );
     for &(o, xy) in &p.steps {
         let truth = walk.true_position(result.objects[o].frame, c);
-        assert!((xy[0] - truth[0]).hypot(xy[1] - truth[1]) < 1.0);
+        let e = (xy[0] - truth[0]).hypot(xy[1] - truth[1]);
+        assert!(
+            e < 1.0,
+            "frame {}: {e:.3} sensels off",
+            result.objects[o].frame
+        );
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn points_carried_forward_to_the_last_frame_and_back_land_near_their_start() {
+    let walk = SyntheticWalk {
+        frames: 30,
+        ..Default::default()
+    };
+    let rec = walk.recording().unwrap();
+    let c = walk.centre();
+    let starts = [
+        [c[0], c[1] - 10.0],
+        [c[0] + 2.0, c[1] + 12.0],
+        [c[0] - 3.0, c[1]],
+    ];
+    let (_, result) = run(&rec, RunInputs::default()).unwrap();
+    let aspect = pedo_track::SenselAspect::SQUARE;
+    let params = FollowParams::default();
+    let seeds_on = |object: usize, xy: &[[f64; 2]]| -> Vec<Seed> {
+        (xy.iter().enumerate())
+            .map(|(k, &xy)| Seed {
+                object,
+                xy,
+                kind: Seeded::Point(k),
+            })
+            .collect()
+    };
+    let last = result.objects.len() - 1;
+    assert_eq!(result.objects[last].frame, 29);
+    // Forwards from frame 0 (nothing before it), then back from where they are on frame 29.
+    let there =
+        follow_seeded(&result, aspect, &params, &seeds_on(0, &starts), false, true).unwrap();
+    let ends: Vec<[f64; 2]> = (there.points.iter())
+        .map(|p| {
+            assert_eq!(p.steps.len(), 30, "frame 0 on, no backward part");
+            p.steps[29].1
+        })
+        .collect();
+    let back = follow_seeded(
+        &result,
+        aspect,
+        &params,
+        &seeds_on(last, &ends),
+        false,
+        true,
+    )
+    .unwrap();
+    for (p, s) in back.points.iter().zip(&starts) {
+        assert_eq!(p.steps.len(), 30, "back to frame 0");
+        let (o, xy) = p.steps[0];
+        assert_eq!(result.objects[o].frame, 0);
+        let d = (xy[0] - s[0]).hypot(xy[1] - s[1]);
+        assert!(d < 0.5, "lands {d:.3} sensels from its start");
+        // And on every frame between, the backward way keeps within a sensel of the truth.
+        for &(o, q) in &p.steps {
+            let truth = walk.true_position(result.objects[o].frame, *s);
+            let e = (q[0] - truth[0]).hypot(q[1] - truth[1]);
+            assert!(e < 1.0, "{s:?} frame {}: {e:.3}", result.objects[o].frame);
+        }
+    }
 }
 
 #[test]

@@ -40,12 +40,17 @@ def test_points_from_a_file_with_names_and_a_frame(tmp_path):
     f.write_text(f"name,x_mm,y_mm,frame\nmid,{q[0] * 5},{q[1] * 5},5\n")
     res = pymodal.run(rec, points=f, out=tmp_path / "run")
     k = res["point_names"].index("mid")
-    assert res["points"][k][0, 0] == 5 and len(res["points"][k]) == 15
+    # Given on frame 5, carried backwards to frame 0 and forwards to frame 19.
+    got = res["points"][k]
+    assert list(got[:, 0]) == list(range(20))
+    assert np.allclose(got[5, 1:], q)
+    truth = np.array([walk.true_positions(int(t), np.array([[cx, cy]]))[0] for t in got[:, 0]])
+    assert np.hypot(*(got[:, 1:] - truth).T).max() < 1.0
     lines = (tmp_path / "run" / "points.csv").read_text().splitlines()
     header = lines[0].split(",")
     assert header[-2:] == ["kind", "name"]
     mine = [ln.split(",") for ln in lines[1:] if ln.endswith(",user,mid")]
-    assert len(mine) == 15
+    assert len(mine) == 20
 
 
 def test_a_region_mask_is_followed_and_its_fixed_rows_are_numpy_sums(tmp_path):

@@ -3,7 +3,9 @@
 //! point over once it has ended, holding only the objects and pairs of the frames it is
 //! between and the points not yet ended.
 
-use super::{surfaces_refused, FollowParams, FollowedPoint, Follower, Links, RunView, SeedPlacer};
+use super::{
+    surfaces_refused, FollowParams, FollowedPoint, Follower, Links, Mode, RunView, SeedPlacer,
+};
 use crate::*;
 use modal_core::MatchResult;
 use pedo_io::Result;
@@ -26,6 +28,9 @@ pub struct FollowSink<'a> {
     window: Window,
     /// The next object to follow.
     next: usize,
+    /// Whether every object and pair is kept: the user's points and regions are carried back
+    /// through the objects before theirs.
+    keep_all: bool,
     out: &'a mut dyn PointsSink,
 }
 
@@ -39,6 +44,9 @@ struct Window {
 }
 
 impl RunView for Window {
+    fn held(&self) -> std::ops::Range<usize> {
+        self.base..self.base + self.objects.len()
+    }
     fn object(&self, id: usize) -> &SequenceObject {
         &self.objects[id - self.base]
     }
@@ -66,11 +74,17 @@ impl<'a> FollowSink<'a> {
     /// and regions), handing them to `out`.
     pub fn new(options: &'a SequenceOptions, out: &'a mut dyn PointsSink) -> Self {
         let aspect = SenselAspect::of(options);
+        let mode = Mode {
+            outline_seeds: true,
+            lazy: false,
+            backwards: true,
+        };
         Self {
-            follower: Follower::new(aspect, FollowParams::default(), true, false),
+            follower: Follower::new(aspect, FollowParams::default(), mode),
             placer: SeedPlacer::new(&options.inputs),
             window: Window::default(),
             next: 0,
+            keep_all: !options.inputs.is_empty(),
             out,
         }
     }
@@ -85,9 +99,12 @@ impl<'a> FollowSink<'a> {
         for (k, p, frames) in self.follower.ended() {
             self.out.point(k, &p, &frames)?;
         }
-        // The follower reads the objects of the last frame followed and those after.
-        let keep = self.follower.frame.map_or(self.next, |(_, first)| first);
-        self.window.drop_below(keep);
+        // The follower reads the objects of the last frame followed and those after (and,
+        // carrying the user's points back, every object).
+        if !self.keep_all {
+            let keep = self.follower.frame.map_or(self.next, |(_, first)| first);
+            self.window.drop_below(keep);
+        }
         Ok(())
     }
 
