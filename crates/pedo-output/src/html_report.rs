@@ -1016,7 +1016,9 @@ impl ReportGather {
                 })
             })
             .collect();
-        let overlays = json!({ "cost_bounds": classes.bounds, "cost_labels": classes.labels, "frames": frames });
+        // The frames' values are moved in, not copied (`json!` copies a `Value` it is given).
+        let mut overlays = json!({ "cost_bounds": classes.bounds, "cost_labels": classes.labels });
+        overlays["frames"] = Value::Array(frames);
 
         let measures = recording.measures(info.contact_threshold);
         let area_known = recording.sensel_area().is_some();
@@ -1055,19 +1057,23 @@ impl ReportGather {
                 shown.len()
             )
         });
-        json!({
+        let mut data = json!({
             "n_frames": n, "rows": rows, "cols": cols, "step": step, "shown": shown,
             "analysed": [start, end], "decimation": decimation,
             "open_frame": self.open_frame(&shown),
             "frame_rate": rate, "dx": pitch[0], "dy": pitch[1], "xy_units": xy_units,
             "pressure_units": punits, "quantum": quantum, "z": z, "peak_image": peak_image,
-            "overlays": overlays, "series": series, "pairs": pairs,
             "max_player_values": MAX_PLAYER_VALUES,
             "surface": self.first_object.is_some_and(|(_, dim)| dim == 3),
             "isocontour": self.isocontour,
             "first_object_frame": self.first_object.map(|(f, _)| f),
             "measures": info.measures,
-        })
+        });
+        // Moved in, not copied: the overlays hold every shown frame's outlines and matches.
+        data["overlays"] = overlays;
+        data["series"] = series;
+        data["pairs"] = pairs;
+        data
     }
 }
 

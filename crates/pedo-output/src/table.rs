@@ -32,14 +32,55 @@ impl Cell {
             Cell::Empty => Value::Null,
         }
     }
-    fn to_csv(&self) -> String {
+    /// Appends the cell as CSV to `s`.
+    fn push_csv(&self, s: &mut String) {
+        use std::fmt::Write;
         match self {
-            Cell::Int(v) => v.to_string(),
-            Cell::Float(v, d) => format!("{v:.d$}"),
-            Cell::Text(s) => csv_text(s),
-            Cell::Empty => String::new(),
+            // Writing to a String cannot fail.
+            Cell::Int(v) => {
+                let _ = write!(s, "{v}");
+            }
+            Cell::Float(v, d) => push_fixed(s, *v, *d),
+            Cell::Text(t) => s.push_str(&csv_text(t)),
+            Cell::Empty => {}
         }
     }
+}
+
+/// Powers of ten exact in `f64`, for [`push_fixed`].
+const POW10: [f64; 16] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+];
+
+/// Appends `v` with `d` decimals, byte for byte as `format!("{v:.d$}")` writes it (the exact
+/// value rounded half to even, a sign on every negative value, `-0.00` included), without the
+/// formatting machinery for the common case: `|v|·10^d` below 2^52, rounded as an integer
+/// wherever its product in `f64` (off by at most `|v|·10^d·ε`) cannot be on the other side of
+/// a half from the exact one. Anything else (a half within that distance, a large or non-finite
+/// value, more than 15 decimals) goes to `format!`.
+fn push_fixed(s: &mut String, v: f64, d: usize) {
+    use std::fmt::Write;
+    if v.is_finite() && d < POW10.len() {
+        let scaled = v.abs() * POW10[d];
+        if scaled < 4.0e15 {
+            let whole = scaled.floor();
+            // Exact: `scaled` is a multiple of its ulp (at most 1), so is `whole`.
+            let frac = scaled - whole;
+            if (frac - 0.5).abs() > 2.0 * f64::EPSILON * scaled {
+                let n = whole as u64 + u64::from(frac > 0.5);
+                if v.is_sign_negative() {
+                    s.push('-');
+                }
+                let unit = 10u64.pow(d as u32);
+                let _ = write!(s, "{}", n / unit);
+                if d > 0 {
+                    let _ = write!(s, ".{:0d$}", n % unit);
+                }
+                return;
+            }
+        }
+    }
+    let _ = write!(s, "{v:.d$}");
 }
 
 /// A text cell as CSV. Text a spreadsheet would run as a formula (its first character `=`, `+`,
@@ -101,7 +142,7 @@ fn push_csv_row(s: &mut String, cells: &[Cell]) {
         if k > 0 {
             s.push(',');
         }
-        s.push_str(&c.to_csv());
+        c.push_csv(s);
     }
     s.push('\n');
 }
@@ -263,5 +304,69 @@ mod csv_tests {
         ]);
         assert_eq!(streamed(&t), whole(&t));
         assert!(streamed(&t).starts_with("[\n  {\n    \"a\": 1,"));
+    }
+
+    fn fixed(v: f64, d: usize) -> String {
+        let mut s = String::new();
+        push_fixed(&mut s, v, d);
+        s
+    }
+
+    #[test]
+    fn fixed_decimals_are_formats_own_at_halves_signs_and_extremes() {
+        let halves = [
+            0.5,
+            1.5,
+            2.5,
+            0.125,
+            0.375,
+            1.005,
+            2.675,
+            1e15 + 0.5,
+            4503599627370495.5,
+        ];
+        let others = [
+            0.0,
+            -0.0,
+            -0.0001,
+            -0.4,
+            1e-310,
+            3.999e15,
+            4.0e15,
+            1e300,
+            f64::MAX,
+        ];
+        let odd = [
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MIN_POSITIVE,
+        ];
+        for v in halves.into_iter().chain(others).chain(odd) {
+            for v in [v, -v] {
+                for d in [0, 1, 2, 3, 6, 15, 16, 20] {
+                    assert_eq!(fixed(v, d), format!("{v:.d$}"), "{v:e} with {d} decimals");
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn fixed_decimals_are_formats_own(bits in proptest::num::u64::ANY, d in 0usize..17) {
+            let v = f64::from_bits(bits);
+            proptest::prop_assert_eq!(fixed(v, d), format!("{v:.d$}"));
+        }
+
+        // Values as tables hold them: a few decimals' worth, ties among them.
+        #[test]
+        fn fixed_decimals_of_table_values_are_formats_own(
+            units in -10_000_000i64..10_000_000,
+            scale in 0usize..8,
+            d in 0usize..7,
+        ) {
+            let v = units as f64 / POW10[scale];
+            proptest::prop_assert_eq!(fixed(v, d), format!("{v:.d$}"));
+        }
     }
 }

@@ -18,8 +18,8 @@
 use crate::inputs::UserInputs;
 use crate::*;
 use modal_core::{
-    match_shapes, CorrespondenceField, FactoredSpline, MatchOptions, MatchResult,
-    SplineCoefficients, ThinPlateBasis,
+    match_prepared, prepare, CorrespondenceField, FactoredSpline, MatchOptions, MatchResult,
+    Parallelism, PreparedShape, SplineCoefficients, ThinPlateBasis,
 };
 use pedo_io::{IoError, Result};
 use std::collections::HashMap;
@@ -1160,6 +1160,9 @@ impl Lineage {
 struct Anchor {
     /// The anchor object's shape in registration coordinates, for modal matching.
     shape: modal_core::Shape,
+    /// That shape prepared for matching ([`prepare`]), once for every match of the anchor onto
+    /// a later object: made at the first.
+    prepared: Option<PreparedShape>,
     /// Where each node is among the anchor's densified outline (the spline's centres, in
     /// outline order: a node, then the points between it and the next).
     node_at: Vec<usize>,
@@ -1187,6 +1190,7 @@ impl Anchor {
         let dense_basis = spline.basis(&dense);
         let mut a = Self {
             shape,
+            prepared: None,
             image: dense,
             node_at,
             spline,
@@ -1234,7 +1238,8 @@ impl Anchor {
             let m = match pair {
                 Some(m) if !self.registered => m,
                 _ => {
-                    own = match_shapes(&self.shape, &shape, &MatchOptions::default())
+                    own = self
+                        .match_onto(&shape)
                         .map_err(|e| IoError::invalid(e.to_string()))?;
                     &own
                 }
@@ -1268,6 +1273,25 @@ impl Anchor {
         self.uncovered = uncovered(&self.image, &target, &dense_target, params.reach);
         self.registered = true;
         Ok(())
+    }
+
+    /// The anchor matched onto `shape` as [`modal_core::match_shapes`] matches them, on this
+    /// thread alone (the same result: one pair at a time, beside the run's own pairs): the anchor
+    /// prepared once for all its matches.
+    fn match_onto(
+        &mut self,
+        shape: &modal_core::Shape,
+    ) -> std::result::Result<MatchResult, modal_core::ModalError> {
+        let opts = MatchOptions::default();
+        let a = match &self.prepared {
+            Some(a) => a.clone(),
+            None => {
+                let a = prepare(&self.shape, &opts)?;
+                self.prepared = Some(a.clone());
+                a
+            }
+        };
+        match_prepared(&a, &prepare(shape, &opts)?, &opts, Parallelism::Serial)
     }
 
     /// One ICP step (returning how far the anchor's image moved, at most): each anchor point's target is the closest point of the frame's outline,
