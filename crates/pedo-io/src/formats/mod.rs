@@ -857,7 +857,8 @@ impl Source {
             };
             match limits.apply(read) {
                 Ok(digest) => drop(send_digest.send(digest)),
-                Err(e) => drop(send.send(Err(e))),
+                // The first reading parsed these bytes whole: any failure now is a change.
+                Err(e) => drop(send.send(Err(stamp::changed_because(&name, &e)))),
             }
         });
         Source::Text { frames, digest }

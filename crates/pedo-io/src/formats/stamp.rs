@@ -84,6 +84,17 @@ pub(crate) fn changed(name: &str) -> IoError {
     }
 }
 
+/// The error of a file whose second reading fails where its first, of the same file, did not:
+/// it changed in between (cut, rewritten in place or removed while the reading went on).
+pub(crate) fn changed_because(name: &str, second: &IoError) -> IoError {
+    IoError::Io {
+        path: name.to_string(),
+        source: std::io::Error::other(format!(
+            "changed while it was being read (its second reading fails where the first did not: {second}); run it again once nothing writes it"
+        )),
+    }
+}
+
 /// The size and modification time of a recording's file (of every file of a folder, in name
 /// order), to tell that it changed while it was read; `None` if they cannot be read.
 #[derive(Debug, Clone, PartialEq)]
