@@ -91,9 +91,14 @@ examples: wheel
 	$(PY) examples/spm_register_speed.py --iterations 200
 
 # The demo's report.html in headless Chromium (Debian's `chromium`): drawn, playable, offline.
+# Under .ci/run, Chromium may still be installing in the background (CHROMIUM_INSTALL): wait for it.
 # The binary as the tests build it (the same features: nothing is rebuilt after `cargo test`).
 test-browser: venv
 	$(CARGO_ENV) cargo test -q --workspace --no-run
+	@if [ -n "$$CHROMIUM_INSTALL" ]; then \
+		until [ -e "$$CHROMIUM_INSTALL.ok" ]; do \
+			if [ -e "$$CHROMIUM_INSTALL.failed" ]; then cat "$$CHROMIUM_INSTALL"; exit 1; fi; sleep 1; \
+		done; fi
 	python3 tests/browser/test_report.py target/debug/pedomatch
 
 bench:

@@ -599,15 +599,17 @@ fn killed_batches_never_lose_a_row_of_the_study_table() {
     };
     let mut listed = study_rows(&study).0;
     assert_eq!(listed.len(), 4);
-    // Twenty runs, each with one more recording and every folder written again, killed at
+    // Ten runs, each with one more recording and every folder written again, killed at
     // moments spread over the run: between any two of its renames, the table keeps every row
-    // it had, in both files, and the next run lists them all.
-    for k in 1..=20 {
+    // it had, in both files, and the next run lists them all. (Every state between two renames
+    // is checked one by one in the next test; these kills are the check on a live process.)
+    const KILLS: usize = 10;
+    for k in 1..=KILLS {
         add(3 + k);
         // A run's time grows with its recordings: the kills are spread from 40 % to 120 % of it.
         let expected = full.mul_f64((4 + k) as f64 / 4.0);
         let mut child = batch_into(&inputs, &study, &["--force"]);
-        std::thread::sleep(expected.mul_f64(0.4 + 0.8 * k as f64 / 20.0));
+        std::thread::sleep(expected.mul_f64(0.4 + 0.8 * k as f64 / KILLS as f64));
         signal(&child, "-KILL");
         child.wait().unwrap();
         let (csv, json) = study_rows(&study);
@@ -626,7 +628,7 @@ fn killed_batches_never_lose_a_row_of_the_study_table() {
     }
     assert!(batch_into(&inputs, &study, &[]).wait().unwrap().success());
     let (csv, json) = study_rows(&study);
-    let all: Vec<String> = (0..24).map(|k| format!("r{k:02}.lst")).collect();
+    let all: Vec<String> = (0..4 + KILLS).map(|k| format!("r{k:02}.lst")).collect();
     assert_eq!((&csv, &json), (&all, &all));
     std::fs::remove_dir_all(&base).unwrap();
 }

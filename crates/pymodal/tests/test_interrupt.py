@@ -19,8 +19,11 @@ DATA = Path(__file__).resolve().parents[2] / "pedo-io" / "tests" / "data"
 LONG = DATA / "FrasP01L.asf"  # 205 frames: a second or more, with a finer spacing longer
 SHORT = DATA / "footscan-FrasP01L-11-20.txt"
 
+# Each child restores Python's own SIGINT handler: a process started in the background by a
+# non-interactive shell inherits SIGINT ignored, and Python then leaves it ignored.
 RUN = r"""
-import sys, time
+import signal, sys, time
+signal.signal(signal.SIGINT, signal.default_int_handler)
 path, short = sys.argv[1], sys.argv[2]
 import pymodal
 print("ready", flush=True)
@@ -35,7 +38,8 @@ print("again", pymodal.run(short)["summary"]["pairs"] > 0, flush=True)
 """
 
 BATCH = r"""
-import sys, time
+import signal, sys, time
+signal.signal(signal.SIGINT, signal.default_int_handler)
 inputs, out, short, out2 = sys.argv[1].split(","), sys.argv[2], sys.argv[3], sys.argv[4]
 import pymodal
 print("ready", flush=True)
