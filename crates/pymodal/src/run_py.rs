@@ -292,15 +292,21 @@ fn run_recording<'py>(
             else {
                 return Ok(None);
             };
-            // Carried through the stances by a contour run (each foot's through its own).
-            let carried = options.model == pedo_track::ObjectModel::Contour;
-            let moving = carried
-                .then(|| {
-                    pedo_output::moving_regions::follow_anatomy(
-                        &rec, &result, &options, &m, &masks, &fixed,
-                    )
-                })
-                .transpose()?;
+            // Carried through the stances by the contour field (each foot's through its own):
+            // this run's, or for a surface or isocontour run the contour run of its frames.
+            let contour = options.model == pedo_track::ObjectModel::Contour;
+            let field = match contour {
+                true => options.clone(),
+                false => {
+                    let mut o = params.contour_options(&rec)?;
+                    o.cancel = options.cancel.clone();
+                    o
+                }
+            };
+            let run = contour.then_some(&result);
+            let moving = Some(pedo_output::moving_regions::follow_anatomy(
+                &rec, run, &field, &m, &masks, &fixed,
+            )?);
             Ok::<_, pedo_io::IoError>(Some((masks, fixed, moving)))
         })?
         .map_err(to_py)?;
