@@ -1489,6 +1489,43 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        /// A recording's header holding the frames a run kept of it, some given as whole
+        /// frames and some as their stored values, frames before the first kept and after the
+        /// last left 0, is the recording over those frames, frame for frame, bit for bit.
+        #[test]
+        fn frames_kept_are_the_recording_s(
+            (data, mask) in mostly_zero_frames(),
+            first in 0usize..4,
+            stored_too in proptest::bool::ANY,
+        ) {
+            let rec = Recording::new(4, 5, 7, data, mask).unwrap();
+            let mut kept = FrameStore::new(&rec);
+            let last = (first + 2).min(4);
+            for t in first..last {
+                let frame = rec.frame_slice(t).unwrap();
+                if stored_too && t % 2 == 1 {
+                    kept.push(t, frame.iter().copied().enumerate().filter(|e| e.1.to_bits() != 0)).unwrap();
+                } else {
+                    kept.push(t, frame.iter().copied().enumerate()).unwrap();
+                }
+            }
+            // Out of order, or past a frame: refused.
+            proptest::prop_assert!(kept.push(first.saturating_sub(1).min(last - 1), std::iter::empty()).is_err());
+            let held = rec.holding(kept).unwrap();
+            proptest::prop_assert_eq!(held.n_frames(), 4);
+            for t in 0..4 {
+                let want: Vec<u32> = if (first..last).contains(&t) {
+                    rec.frame_slice(t).unwrap().iter().map(|v| v.to_bits()).collect()
+                } else {
+                    vec![0; 35]
+                };
+                let got: Vec<u32> = held.frame_slice(t).unwrap().iter().map(|v| v.to_bits()).collect();
+                proptest::prop_assert_eq!(got, want);
+            }
+        }
+    }
+
     #[test]
     fn a_frame_holding_nothing_is_known_without_making_it() {
         let (rows, cols) = (256, 256);

@@ -190,7 +190,7 @@ pub fn follow_masks(
     // single footprint: none listed).
     let owned: Vec<bool> = match foot {
         Some(f) => (run.objects.iter())
-            .map(|o| o.shape.len() > 0 && f.holds(o.centroid()[0]))
+            .map(|o| !o.shape.is_empty() && f.holds(o.centroid()[0]))
             .collect(),
         None => Vec::new(),
     };

@@ -122,7 +122,8 @@ macro_rules! define_run {
         ///   ``mean_pressure_kpa``, named by the units known; ``name`` and ``stance`` of an
         ///   anatomical region, None for the user's); an empty list without;
         /// - ``regions``: with ``region_rule`` or ``masks``, the rows of ``regions.csv`` as dicts (``region``,
-        ///   ``measure``, ``value``, ``unit``, ``kind`` "fixed" or, contour model, "moving"); an
+        ///   ``measure``, ``value``, ``unit``, ``kind`` "fixed" or "moving": carried through the stances, by the contour field for a
+        ///   surface or isocontour run); an
         ///   empty list without, or when the footprint cannot be divided;
         /// - ``frames``: list of dicts of per-frame measures (``frame``, ``time_s``,
         ///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
