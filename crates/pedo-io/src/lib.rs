@@ -48,5 +48,6 @@ pub use formats::{
 };
 pub use grid::{CoordUnits, Grid};
 pub use recording::{
-    FootColumns, Format, FrameMeasures, FrameSource, Recording, StoredValues, FRAME_WINDOW,
+    FootColumns, Format, FrameMeasures, FrameSource, FrameStore, Recording, StoredValues,
+    FRAME_WINDOW,
 };

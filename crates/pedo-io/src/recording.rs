@@ -159,6 +159,14 @@ pub struct FootColumns {
     pub columns: std::ops::Range<usize>,
 }
 
+impl FootColumns {
+    /// Whether `x` (in columns, a sensel's centre at its index) lies on this insole: from the
+    /// left edge of its first column (included) to the right edge of its last (excluded).
+    pub fn holds(&self, x: f64) -> bool {
+        (self.columns.start as f64 - 0.5..self.columns.end as f64 - 0.5).contains(&x)
+    }
+}
+
 /// The values below 0 at existing sensors of a recording, over every frame: a pressure is not
 /// negative, so these are an offset, a baseline subtracted by a device or an export, or noise.
 /// Measures count only values above 0 (and at or above the noise threshold), so they never
@@ -1205,6 +1213,53 @@ impl Frames {
 }
 
 impl Recording {
+    /// This recording (its size, mask, units, feet: the header of a streamed run) holding the
+    /// frames `kept`, every frame past the last kept 0 up to this one's frame count.
+    ///
+    /// # Errors
+    /// [`IoError::InvalidInput`] for frames kept past this recording's frame count.
+    pub fn holding(&self, kept: FrameStore) -> Result<Recording> {
+        let mut frames = kept.frames;
+        if frames.n_frames() > self.n_frames {
+            return Err(IoError::invalid(format!(
+                "{} frames kept of a recording of {}",
+                frames.n_frames(),
+                self.n_frames
+            )));
+        }
+        while frames.n_frames() < self.n_frames {
+            frames.starts.push(frames.values.len());
+        }
+        let per = self.rows * self.cols;
+        let mut r = self.clone_header();
+        r.frames = Frames::from_sparse(frames, per);
+        Ok(r)
+    }
+
+    /// This recording's header (every field but the frames, which hold nothing).
+    fn clone_header(&self) -> Recording {
+        Recording {
+            n_frames: self.n_frames,
+            rows: self.rows,
+            cols: self.cols,
+            frames: Frames::Dense {
+                values: Vec::new(),
+                empty: Vec::new(),
+            },
+            sensor_mask: self.sensor_mask.clone(),
+            pitch_mm: self.pitch_mm,
+            sensel_area_mm2: self.sensel_area_mm2,
+            dt_s: self.dt_s,
+            units: self.units.clone(),
+            noise_threshold: self.noise_threshold,
+            format: self.format,
+            file_negatives: self.file_negatives,
+            negatives_clipped: self.negatives_clipped,
+            time_axis_settled: self.time_axis_settled,
+            feet: self.feet.clone(),
+        }
+    }
+
     /// A recording of `n_frames` frames of this one's size, mask and units (a window of a
     /// recording read frame by frame): `data` holds their values.
     pub(crate) fn like(&self, n_frames: usize, data: Vec<f32>) -> Result<Self> {
@@ -1323,6 +1378,61 @@ pub trait FrameSource {
     }
 }
 
+/// The frames a run kept as the engine handed them (a streamed run, whose recording does not
+/// hold its frames), held as a recording holds them: only the values that are not 0, with their
+/// positions (6 bytes each on a grid of at most 65,536 sensels). [`Recording::holding`] makes
+/// them a recording again, the one the file would have given read whole over those frames.
+#[derive(Debug, Clone)]
+pub struct FrameStore {
+    frames: SparseFrames,
+}
+
+impl FrameStore {
+    /// No frames yet, for frames of `recording`'s size.
+    pub fn new(recording: &Recording) -> Self {
+        Self {
+            frames: SparseFrames::new(recording.rows * recording.cols),
+        }
+    }
+
+    /// Keeps frame `t` from the values it holds at some positions, in increasing order (every
+    /// other value 0); frames before `t` not kept yet are 0. A frame before one already kept is
+    /// refused.
+    ///
+    /// # Errors
+    /// [`IoError::InvalidInput`] for a frame out of order, or a position past the frame.
+    pub fn push(&mut self, t: usize, values: impl Iterator<Item = (usize, f32)>) -> Result<()> {
+        if t < self.frames.n_frames() {
+            return Err(IoError::invalid(format!(
+                "frame {t} is kept after frame {}",
+                self.frames.n_frames() - 1
+            )));
+        }
+        while self.frames.n_frames() < t {
+            self.frames.starts.push(self.frames.values.len());
+        }
+        for (i, v) in values {
+            if i >= self.frames.per {
+                return Err(IoError::invalid(format!(
+                    "position {i} is past a frame of {} values",
+                    self.frames.per
+                )));
+            }
+            if v.to_bits() != 0 {
+                self.frames.push_entry(i, v);
+            }
+        }
+        // Not a reader's store: the reading limits are not told (`SparseFrames::end_frame`).
+        self.frames.starts.push(self.frames.values.len());
+        Ok(())
+    }
+
+    /// Bytes taken by the values kept and their positions.
+    pub fn bytes(&self) -> usize {
+        self.frames.bytes()
+    }
+}
+
 /// Frames a streamed run holds at a time: a [`FrameSource`] reads at most this many ahead.
 pub const FRAME_WINDOW: usize = 64;
 
@@ -1375,6 +1485,43 @@ mod tests {
                     stored.map(|s| s.to_frame()),
                     sparse.is_sparse().then(|| whole.frame_slice(t).unwrap().into_owned())
                 );
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// A recording's header holding the frames a run kept of it, some given as whole
+        /// frames and some as their stored values, frames before the first kept and after the
+        /// last left 0, is the recording over those frames, frame for frame, bit for bit.
+        #[test]
+        fn frames_kept_are_the_recording_s(
+            (data, mask) in mostly_zero_frames(),
+            first in 0usize..4,
+            stored_too in proptest::bool::ANY,
+        ) {
+            let rec = Recording::new(4, 5, 7, data, mask).unwrap();
+            let mut kept = FrameStore::new(&rec);
+            let last = (first + 2).min(4);
+            for t in first..last {
+                let frame = rec.frame_slice(t).unwrap();
+                if stored_too && t % 2 == 1 {
+                    kept.push(t, frame.iter().copied().enumerate().filter(|e| e.1.to_bits() != 0)).unwrap();
+                } else {
+                    kept.push(t, frame.iter().copied().enumerate()).unwrap();
+                }
+            }
+            // Out of order, or past a frame: refused.
+            proptest::prop_assert!(kept.push(first.saturating_sub(1).min(last - 1), std::iter::empty()).is_err());
+            let held = rec.holding(kept).unwrap();
+            proptest::prop_assert_eq!(held.n_frames(), 4);
+            for t in 0..4 {
+                let want: Vec<u32> = if (first..last).contains(&t) {
+                    rec.frame_slice(t).unwrap().iter().map(|v| v.to_bits()).collect()
+                } else {
+                    vec![0; 35]
+                };
+                let got: Vec<u32> = held.frame_slice(t).unwrap().iter().map(|v| v.to_bits()).collect();
+                proptest::prop_assert_eq!(got, want);
             }
         }
     }

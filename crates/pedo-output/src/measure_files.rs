@@ -15,11 +15,11 @@ use crate::TableFormat;
 use pedo_io::formats::npy::image_to_npy;
 use pedo_io::measures::{Measures, RecordingMeasures, StanceMeasures, CONTACT_FORCE_FRACTION};
 use pedo_io::regions::{
-    masks_of_measures, RegionMasks, RegionRule, RegionSeries, RegionValues, HALLUX_BOUND,
-    LENGTH_BOUNDS, METATARSAL_BOUNDS,
+    masks_of_measures, RegionMasks, RegionRule, RegionValues, HALLUX_BOUND, LENGTH_BOUNDS,
+    METATARSAL_BOUNDS,
 };
 use pedo_io::stances::{ASSUMED_RATE_HZ, CURVE_POINTS, MIN_GAP_S, MIN_STANCE_S};
-use pedo_io::{IoError, Recording, Result, StoredValues};
+use pedo_io::{FrameStore, IoError, Recording, Result, StoredValues};
 use pedo_track::{SequenceOptions, SequenceSink};
 use serde_json::{json, Map, Value};
 
@@ -47,9 +47,10 @@ pub struct MeasuresSink {
     cols: usize,
     mask: Vec<bool>,
     cop: Vec<Option<[f64; 2]>>,
-    /// The loaded sensels of every frame (index, value), for the regions of a streamed run,
-    /// whose recording holds no frames to measure the regions on once their masks are known.
-    kept: Option<Vec<Vec<(u32, f32)>>>,
+    /// The frames as handed, for the regions of a streamed run, whose recording holds no frames
+    /// to measure the regions on once their masks are known, nor to carry them through the
+    /// stances.
+    kept: Option<FrameStore>,
 }
 
 /// The regions of a run: their masks and values, or why the footprint could not be divided.
@@ -70,10 +71,11 @@ impl MeasuresSink {
         })
     }
 
-    /// Keeps the loaded sensels of every frame (8 bytes each), for the regions of a run whose
-    /// recording does not hold its frames (a streamed run).
-    pub fn keeping_frames(mut self) -> Self {
-        self.kept = Some(Vec::new());
+    /// Keeps the frames of `recording` as they are handed (their values that are not 0, as a
+    /// recording holds them: [`FrameStore`]), for the regions of a run whose recording does not
+    /// hold its frames (a streamed run).
+    pub fn keeping_frames(mut self, recording: &Recording) -> Self {
+        self.kept = Some(FrameStore::new(recording));
         self
     }
 
@@ -85,7 +87,8 @@ impl MeasuresSink {
     /// The measures of the frames handed and, with regions `asked`, the regions of their
     /// footprint (by a rule: masks from the measures' images and the centre of pressure's path;
     /// or the user's masks) with their values: measured on the frames kept
-    /// ([`keeping_frames`](Self::keeping_frames)), else on those of `recording`.
+    /// ([`keeping_frames`](Self::keeping_frames)), else on those of `recording`. With frames
+    /// kept, also `recording` holding them ([`Recording::holding`]), to carry the regions on.
     ///
     /// # Errors
     ///
@@ -95,7 +98,7 @@ impl MeasuresSink {
         self,
         recording: &Recording,
         asked: Option<RegionsAsked>,
-    ) -> Result<(Measures, Option<RegionOutcome>)> {
+    ) -> Result<(Measures, Option<RegionOutcome>, Option<Recording>)> {
         let Self {
             measures,
             threshold,
@@ -104,18 +107,13 @@ impl MeasuresSink {
             ..
         } = self;
         let measures = measures.finish()?;
+        let held = kept.map(|k| recording.holding(k)).transpose()?;
         let Some(asked) = asked else {
-            return Ok((measures, None));
+            return Ok((measures, None, held));
         };
-        let outcome = regions_of(
-            recording,
-            &measures,
-            threshold,
-            &cop,
-            kept.as_deref(),
-            asked,
-        );
-        Ok((measures, Some(outcome)))
+        let on = held.as_ref().unwrap_or(recording);
+        let outcome = regions_of(on, &measures, threshold, &cop, asked);
+        Ok((measures, Some(outcome), held))
     }
 }
 
@@ -139,34 +137,19 @@ impl RegionsAsked {
     }
 }
 
-/// The regions of `measures` `asked` and their values, measured on the frames `kept` (the
-/// loaded sensels of each) or, without them, on those of `recording`.
+/// The regions of `measures` `asked` and their values, measured on the frames of `recording`.
 fn regions_of(
     recording: &Recording,
     measures: &Measures,
     threshold: f64,
     cop: &[Option<[f64; 2]>],
-    kept: Option<&[Vec<(u32, f32)>]>,
     asked: RegionsAsked,
 ) -> RegionOutcome {
     let masks = match asked {
         RegionsAsked::Rule(rule) => masks_of_measures(recording, measures, Some(cop), rule)?,
         RegionsAsked::Masks(m) => *m,
     };
-    let Some(frames) = kept else {
-        let values = pedo_io::regions::region_values(recording, threshold, &masks, measures)?;
-        return Ok((masks, values));
-    };
-    let mut series = RegionSeries::new(recording, threshold, &masks)?;
-    let mut dense = vec![0.0f32; masks.labels.len()];
-    for frame in frames {
-        dense.fill(0.0);
-        for &(i, v) in frame {
-            dense[i as usize] = v;
-        }
-        series.add_frame(&dense)?;
-    }
-    let values = series.finish(measures)?;
+    let values = pedo_io::regions::region_values(recording, threshold, &masks, measures)?;
     Ok((masks, values))
 }
 
@@ -195,6 +178,9 @@ impl SequenceSink for MeasuresSink {
     }
     fn frame_values(&mut self, frame: usize, values: &[f32]) -> Result<()> {
         self.measures.add_frame(frame, values)?;
+        if let Some(kept) = self.kept.as_mut() {
+            kept.push(frame, values.iter().copied().enumerate())?;
+        }
         self.add_centre(values.iter().copied().enumerate());
         Ok(())
     }
@@ -203,6 +189,9 @@ impl SequenceSink for MeasuresSink {
             return self.frame_values(frame, &stored.to_frame());
         }
         self.measures.add_stored(frame, stored)?;
+        if let Some(kept) = self.kept.as_mut() {
+            kept.push(frame, stored.iter())?;
+        }
         // The zeros a stored frame leaves out add nothing to the sums.
         self.add_centre(stored.iter());
         Ok(())
@@ -210,26 +199,18 @@ impl SequenceSink for MeasuresSink {
 }
 
 impl MeasuresSink {
-    /// A frame's centre of pressure (and its loaded sensels, when kept) from its sensels
-    /// `(position, value)` in order of position.
+    /// A frame's centre of pressure from its sensels `(position, value)` in order of position.
     fn add_centre(&mut self, sensels: impl Iterator<Item = (usize, f32)>) {
         let (mut load, mut mx, mut my) = (0.0f64, 0.0f64, 0.0f64);
-        let mut loaded = Vec::new();
         for (i, v) in sensels {
             let x = f64::from(v);
             if self.mask[i] && x > 0.0 && x >= self.threshold {
                 load += x;
                 mx += x * (i % self.cols) as f64;
                 my += x * (i / self.cols) as f64;
-                if self.kept.is_some() {
-                    loaded.push((i as u32, v));
-                }
             }
         }
         self.cop.push((load > 0.0).then(|| [mx / load, my / load]));
-        if let Some(kept) = self.kept.as_mut() {
-            kept.push(loaded);
-        }
     }
 }
 

@@ -10,8 +10,8 @@ use pedo_io::regions::Side;
 use pedo_io::regions::{MovingRegionSeries, RegionMasks, RegionValues};
 use pedo_io::stances::Stance;
 use pedo_io::{IoError, Recording, Result};
-use pedo_track::moving_regions::{follow_foot_masks, follow_masks, MovingRegion};
-use pedo_track::{SequenceOptions, SequenceResult};
+use pedo_track::moving_regions::{follow_masks, MovingRegion};
+use pedo_track::{ObjectModel, SequenceOptions, SequenceResult};
 use serde_json::{json, Map, Value};
 
 /// The anatomical regions carried through a run's stances and their values over its frames.
@@ -28,24 +28,37 @@ pub struct MovingAnatomy {
 /// could not be divided).
 pub type MovingOutcome = std::result::Result<MovingAnatomy, IoError>;
 
-/// The regions of `masks` carried through each stance of `measures` by the contour run `run`
+/// The regions of `masks` carried through each stance of `measures` by the contour field
 /// ([`follow_masks`]), and their values over the frames of `measures` ([`MovingRegionSeries`]),
-/// the shares of the impulse of the `fixed` regions' values.
+/// the shares of the impulse of the `fixed` regions' values. `options` are those of a contour
+/// run of `recording` ([`pedo_track::RunParams::contour_options`] for a run of another model),
+/// and the field is `run`, that contour run's objects and pairs, or, with `None` (a surface or
+/// isocontour run, or a run whose objects and pairs were not kept), made here
+/// ([`contour_field`]).
 ///
 /// # Errors
-/// Those of [`follow_masks`] and [`MovingRegionSeries`]; a frame the recording does not hold.
+/// Those of [`follow_masks`], [`contour_field`] and [`MovingRegionSeries`]; a frame the
+/// recording does not hold.
 pub fn follow_anatomy(
     recording: &Recording,
-    run: &SequenceResult,
+    run: Option<&SequenceResult>,
     options: &SequenceOptions,
     measures: &Measures,
     masks: &RegionMasks,
     fixed: &[RegionValues],
 ) -> Result<MovingAnatomy> {
+    let made;
+    let run = match run {
+        Some(r) => r,
+        None => {
+            made = contour_field(recording, options)?;
+            &made
+        }
+    };
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
     let regions = if masks.sides.is_empty() {
         let stances: Vec<Stance> = measures.stances.iter().map(|s| s.stance).collect();
-        follow_masks(run, options, recording, masks, &stances, threshold)?
+        follow_masks(run, options, recording, masks, &stances, threshold, None)?
     } else {
         // Each foot's regions through its own stances, on its own insole.
         let mut all = Vec::new();
@@ -55,8 +68,14 @@ pub fn follow_anatomy(
                 side: foot.side,
                 columns: foot.columns.clone(),
             };
-            all.extend(follow_foot_masks(
-                run, options, recording, masks, &stances, threshold, &columns,
+            all.extend(follow_masks(
+                run,
+                options,
+                recording,
+                masks,
+                &stances,
+                threshold,
+                Some(&columns),
             )?);
         }
         all
@@ -94,6 +113,23 @@ pub fn follow_anatomy(
         series.finish_each(&totals, &feet)?
     };
     Ok(MovingAnatomy { regions, values })
+}
+
+/// The contour field of `recording`: the objects and pairs of its contour run with `options`
+/// ([`pedo_track::RunParams::contour_options`]), what carries the anatomical regions of a
+/// surface or isocontour run (made only when regions are asked).
+///
+/// # Errors
+/// [`IoError::InvalidInput`] for options not of the contour model; those of
+/// [`pedo_track::run_sequence`] (a cancelled run among them).
+pub fn contour_field(recording: &Recording, options: &SequenceOptions) -> Result<SequenceResult> {
+    if options.model != ObjectModel::Contour {
+        return Err(IoError::invalid(format!(
+            "the regions are carried by the contour field, not by a {} run",
+            options.model
+        )));
+    }
+    pedo_track::run_sequence(recording, options, &|_, _, _| {})
 }
 
 /// Appends to `t` ([`crate::region_series_header`]) the rows of the moving anatomical regions:

@@ -198,11 +198,11 @@ modal_core::option_set! {
         /// The anatomical regions of the footprint.
         region_rule: RegionChoice = RegionChoice::default();
             Word(<RegionChoice as Choice>::NAMES), RegionChoice::default(),
-            "Anatomical regions of the footprint, found from the peak image and the centre of pressure's path, with each region's peak pressure, PTI, FTI, contact area, contact time and share of the impulse (regions.csv, regions.json, regions.npy, regions.png): coarse (hindfoot, midfoot, forefoot, toes), fine (medial and lateral heel, midfoot, first, second and lateral metatarsal heads, hallux, lesser toes) or none. Each insole of a two-insole pedar recording is divided and carried on its own; a streamed run keeps its frames' loaded sensels for them. A contour run also carries each region through every stance with the foot (moving, beside the fixed masks: regions.csv's kind, region_series.csv).";
+            "Anatomical regions of the footprint, found from the peak image and the centre of pressure's path, with each region's peak pressure, PTI, FTI, contact area, contact time and share of the impulse (regions.csv, regions.json, regions.npy, regions.png): coarse (hindfoot, midfoot, forefoot, toes), fine (medial and lateral heel, midfoot, first, second and lateral metatarsal heads, hallux, lesser toes) or none. Each insole of a two-insole pedar recording is divided and carried on its own; a streamed run keeps its frames for them. Each region is also carried through every stance with the foot (moving, beside the fixed masks: regions.csv's kind, region_series.csv), by the contour field: a surface or isocontour run makes the contour run of its frames for it.";
         /// The user's region masks over the peak image.
         masks: Option<PathOrRows> = None;
             Value, "none",
-            "Region masks drawn over the peak image, measured as the automatic regions (regions.csv, regions.json, regions.npy, regions.png, and each region's curves in curves.csv): a label image of the recording's rows x columns (.npy, a CSV grid or an image; Python also takes a 2-D array; 0 = no region, label k named region_k), or a CSV of polygons region,x_mm,y_mm (or region,x,y in sensels), one vertex a line, named by their region column. Instead of region_rule; a contour run carries them through every stance as it carries the rule's.";
+            "Region masks drawn over the peak image, measured as the automatic regions (regions.csv, regions.json, regions.npy, regions.png, and each region's curves in curves.csv): a label image of the recording's rows x columns (.npy, a CSV grid or an image; Python also takes a 2-D array; 0 = no region, label k named region_k), or a CSV of polygons region,x_mm,y_mm (or region,x,y in sensels), one vertex a line, named by their region column. Instead of region_rule; they are carried through every stance as the rule's are.";
     }
 }
 
@@ -406,10 +406,6 @@ fn run_reads_whole(params: &RunParams, outputs: &RunOutputs) -> Option<&'static 
         Some("the figures, the report or the animation are drawn from the whole recording")
     } else if !params.streams() {
         Some("the isocontour model, drift correction, points and regions need the whole run")
-    } else if outputs.any_regions() && params.model == ObjectModel::Contour {
-        // Carried forwards and backwards from each stance's foot-flat frame, which comes
-        // after the stance's first frames.
-        Some("the anatomical regions moving with the foot are carried through the whole run")
     } else if params.units.time_axis == Some(pedo_io::units::TimeAxis::Last) {
         // The frames of a time-last array are spread over all of it.
         Some("an array transposed from time-last is read whole")
@@ -973,21 +969,17 @@ fn write_folder(
     // The material points of a contour run are followed as the events come (with any output
     // besides the tables; the user's points and regions whatever the outputs). A replayed run
     // is whole already; a run of the engine gathers its objects and pairs only for what needs
-    // them all: the pair figures, the animation and the anatomical regions carried.
+    // them all: the pair figures, the animation and the anatomical regions carried (by a
+    // contour run's own objects and pairs).
     let points = run.options.model == ObjectModel::Contour
         && (!tables_only(outputs) || !run.options.inputs.is_empty());
     let pair_figures = outputs.figures.any() && outputs.pair_figures;
-    // The anatomical regions are carried through the stances of a contour run whose recording
-    // holds its frames (not a streamed one).
-    let frames_streamed = matches!(
-        &feed,
-        Feed::Run {
-            frames: Some(_),
-            ..
-        }
-    );
-    let anatomy = outputs.any_regions() && run.options.model == ObjectModel::Contour;
-    let carried = anatomy && !frames_streamed;
+    // The anatomical regions are carried through the stances by the contour field: a contour
+    // run's own objects and pairs, gathered as they come (streamed or not); for a run of
+    // another model, the contour run of its frames, made once the run is done
+    // (`follow_anatomy`). A streamed run keeps its frames for them (`keeping_frames`).
+    let anatomy = outputs.any_regions();
+    let carried = anatomy && run.options.model == ObjectModel::Contour;
     let gather = matches!(feed, Feed::Run { .. }) && (pair_figures || outputs.animation || carried);
     let progress = match &feed {
         Feed::Run { progress, .. } => *progress,
@@ -1019,7 +1011,7 @@ fn write_folder(
                 }
             );
             if streamed && outputs.any_regions() {
-                m.keeping_frames()
+                m.keeping_frames(run.recording)
             } else {
                 m
             }
@@ -1072,21 +1064,18 @@ fn write_folder(
     }
     let followed = points_table.map(PointsTable::finish).transpose()?;
     let rule_name = asked.as_ref().map(crate::RegionsAsked::name);
-    let (measures, regions) = measures.finish_with_regions(run.recording, asked)?;
-    let moving = match (&regions, whole) {
-        (Some(Ok((masks, values))), Some(r)) if carried => Some(
-            crate::moving_regions::follow_anatomy(
-                run.recording,
-                r,
-                run.options,
-                &measures,
-                masks,
-                values,
-            ),
-        ),
-        (Some(Ok(_)), _) if anatomy => Some(Err(IoError::invalid(
-            "a streamed run does not hold its frames: the regions are not carried through the stances",
-        ))),
+    let (measures, regions, held) = measures.finish_with_regions(run.recording, asked)?;
+    // The frames the regions are carried on: those the run kept, or the recording's own.
+    let frames = held.as_ref().unwrap_or(run.recording);
+    let moving = match &regions {
+        Some(Ok((masks, values))) if anatomy => Some(carry_anatomy(
+            run,
+            frames,
+            whole.filter(|_| carried),
+            &measures,
+            masks,
+            values,
+        )),
         _ => None,
     };
     let region_values = match &regions {
@@ -1121,7 +1110,7 @@ fn write_folder(
         tracks,
     };
     let anatomy = match (&regions, &moving) {
-        (Some(Ok((masks, _))), Some(Ok(a))) => Some((masks, a)),
+        (Some(Ok((masks, _))), Some(Ok(a))) => Some((masks, a, frames)),
         _ => None,
     };
     let user_points = write_figures_and_points(
@@ -1258,6 +1247,31 @@ impl pedo_track::follow::PointsSink for PointsTable<'_> {
     }
 }
 
+/// The regions `masks` (of values `fixed`) of `run` carried through its stances on the frames of
+/// `frames` ([`crate::moving_regions::follow_anatomy`]): by `whole`, the contour run's own objects
+/// and pairs, or for a run of another model by the contour field made with
+/// [`RunParams::contour_options`].
+fn carry_anatomy(
+    run: &RunOf<'_>,
+    frames: &Recording,
+    whole: Option<&SequenceResult>,
+    measures: &pedo_io::measures::Measures,
+    masks: &pedo_io::regions::RegionMasks,
+    fixed: &[pedo_io::regions::RegionValues],
+) -> crate::moving_regions::MovingOutcome {
+    let contour;
+    let options = match whole {
+        Some(_) => run.options,
+        None => {
+            let mut o = run.params.contour_options(run.recording)?;
+            o.cancel = run.options.cancel.clone();
+            contour = o;
+            &contour
+        }
+    };
+    crate::moving_regions::follow_anatomy(frames, whole, options, measures, masks, fixed)
+}
+
 /// The figures asked for; then, from the user's points and regions followed (`followed`), the
 /// `region_series` table with the anatomical regions carried (`anatomy`). Returns the user's
 /// points through the stance (for the report).
@@ -1271,6 +1285,7 @@ fn write_figures_and_points(
     anatomy: Option<(
         &pedo_io::regions::RegionMasks,
         &crate::moving_regions::MovingAnatomy,
+        &Recording,
     )>,
     cancel: Option<&Cancel>,
     steps: &OutputSteps<'_>,
@@ -1314,9 +1329,9 @@ fn write_figures_and_points(
             rec, &frame, &points, inputs, threshold,
         )?);
     }
-    if let Some((masks, anatomy)) = anatomy {
+    if let Some((masks, anatomy, frames)) = anatomy {
         let t = series.get_or_insert_with(|| crate::region_series_header(run.recording));
-        crate::moving_regions::anatomy_rows(t, run.recording, masks, anatomy, threshold)?;
+        crate::moving_regions::anatomy_rows(t, frames, masks, anatomy, threshold)?;
     }
     if let Some(series) = series {
         crate::write_table(dir, outputs.tables, REGION_SERIES, &series)?;

@@ -164,11 +164,7 @@ pub(crate) fn object_cells(recording: &Recording, o: &SequenceObject) -> Vec<Cel
         // a study mixing sensors share one unit.
         Cell::opt(o.level.map(|l| l * u.peak.1), 3),
     ]);
-    let n = o.shape.len().max(1) as f64;
-    let (cx, cy) = (0..o.shape.len()).fold((0.0, 0.0), |(x, y), i| {
-        let p = o.shape.point(i);
-        (x + p[0] / n, y + p[1] / n)
-    });
+    let [cx, cy] = o.centroid();
     push_xy(&mut cells, recording, cx, cy, mm);
     push_measures(&mut cells, recording, &u, o.measures.as_ref());
     cells

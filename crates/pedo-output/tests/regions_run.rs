@@ -1,7 +1,8 @@
-//! A run with a region rule writes `regions.json`, `regions.csv` and `regions.npy`, the same
-//! whether the recording is held whole or streamed (the streamed run keeps its frames' loaded
-//! sensels to measure the regions on), and its regions agree with `pedo_io::regions` on the
-//! recording held whole.
+//! A run with a region rule writes `regions.json`, `regions.csv`, `regions.npy` and the moving
+//! regions' rows of `region_series.csv`, the same whether the recording is held whole or
+//! streamed (the streamed run keeps its frames to measure and carry the regions on) and whatever
+//! the model (a surface or isocontour run carries them by the contour field), and its regions
+//! agree with `pedo_io::regions` on the recording held whole.
 
 use pedo_io::formats::{read_for_streaming, ReadOptions};
 use pedo_io::regions::{recording_regions, RegionRule};
@@ -66,7 +67,7 @@ fn a_run_s_regions_are_the_same_streamed_or_held_and_match_the_library() {
         assert_eq!(summary["options"]["region_rule"], "fine");
         let read = |f: &str| std::fs::read(out.join(f)).unwrap();
         let mut json: serde_json::Value = serde_json::from_slice(&read("regions.json")).unwrap();
-        // The fixed regions' rows and values; the moving ones need the frames held.
+        // The fixed regions' rows and values apart from the moving ones.
         let moving = json.as_object_mut().unwrap().remove("moving").unwrap();
         let csv = String::from_utf8(read("regions.csv")).unwrap();
         let fixed: Vec<String> = csv
@@ -75,12 +76,16 @@ fn a_run_s_regions_are_the_same_streamed_or_held_and_match_the_library() {
             .map(String::from)
             .collect();
         written.push((fixed.join("\n").into_bytes(), read("regions.npy"), json));
-        movings.push((moving, csv));
+        movings.push((moving, csv, read("region_series.csv")));
     }
     assert!(written[0] == written[1], "streamed and held regions differ");
-    // Streamed, the regions are not carried (the run does not hold its frames): said so.
-    assert!(movings[0].0["error"].as_str().unwrap().contains("streamed"));
-    assert!(!movings[0].1.contains(",moving"));
+    // Streamed, the regions are carried as held: the same stances, values and rows.
+    assert!(movings[0].0["error"].is_null(), "{}", movings[0].0);
+    assert!(movings[0].1.contains(",moving"));
+    assert!(
+        movings[0] == movings[1],
+        "streamed and held moving regions differ"
+    );
 
     // The library on the recording held whole, frames 0..120, threshold of the file.
     let threshold = held.noise_threshold.unwrap_or(0.0);
@@ -118,7 +123,7 @@ fn a_run_s_regions_are_the_same_streamed_or_held_and_match_the_library() {
     // regions.csv is the sum of its force over the frames of region_series.csv's moving rows,
     // and on the stance's reference frame the moving regions hold (almost) the frame's contact.
     let held_out = &outs[1];
-    let (moving, csv) = &movings[1];
+    let (moving, csv, _) = &movings[1];
     let series = std::fs::read_to_string(held_out.join("region_series.csv")).unwrap();
     let mut lines = series.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -165,11 +170,10 @@ fn a_run_s_regions_are_the_same_streamed_or_held_and_match_the_library() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A contour run asked for regions reads its file whole, even with tables only, so that the
-/// regions move with the foot (carried backwards from each stance's foot-flat frame); without
-/// regions, or for the surface model (whose regions do not move), it streams.
+/// A run asked for regions streams its file where its model does (contour or surface): it keeps
+/// the frames and carries the regions once the run is done.
 #[test]
-fn a_contour_run_with_regions_reads_its_file_whole_to_carry_them() {
+fn a_run_with_regions_streams_where_its_model_does() {
     let read = ReadOptions::default();
     let regions = RunOutputs {
         regions: Some(RegionRule::Coarse),
@@ -184,7 +188,133 @@ fn a_contour_run_with_regions_reads_its_file_whole_to_carry_them() {
         let input = pedo_output::read_for_run(&walk(), &read, params, outputs).unwrap();
         input.frames.is_some()
     };
-    assert!(!streams(&contour, &regions));
+    assert!(streams(&contour, &regions));
     assert!(streams(&contour, &RunOutputs::default()));
     assert!(streams(&surface, &regions));
+}
+
+/// The moving regions of a surface run (held and streamed) and of an isocontour run are those
+/// of the contour run of the same frames: `regions.csv`'s moving rows, `regions.json`'s
+/// `moving` and the moving regions' rows of `region_series.csv`, byte for byte.
+#[test]
+fn surface_and_isocontour_runs_carry_the_regions_as_the_contour_run() {
+    let dir = temp_dir("regions-models");
+    let outputs = RunOutputs {
+        regions: Some(RegionRule::Coarse),
+        ..Default::default()
+    };
+    let input = InputInfo::of_path(&walk()).unwrap();
+    let held = read_recording(walk()).unwrap();
+    // One whole stance of the walk (frames 29–50).
+    let frames = Some(FrameRange {
+        start: 25,
+        end: Some(55),
+    });
+    let run = |name: &str, model, streamed: bool| {
+        let params = RunParams {
+            frames,
+            model,
+            ..Default::default()
+        };
+        let out = dir.join(name);
+        let (header, mut source) = read_for_streaming(walk(), &ReadOptions::default()).unwrap();
+        let rec = if streamed { &header } else { &held };
+        let options = params.to_options(rec).unwrap();
+        let source = (source.as_mut())
+            .filter(|_| streamed)
+            .map(|f| f as &mut dyn FrameSource);
+        let (summary, _) = run_into_folder(
+            rec,
+            &options,
+            RunPlan {
+                input: &input,
+                params: &params,
+                frames: source,
+                folder: Some(&out),
+                outputs: &outputs,
+                timings: &[],
+                also: None,
+            },
+            &|_, _, _| {},
+        )
+        .unwrap();
+        assert_eq!(summary["input"]["streamed"], streamed, "{name}");
+        let read = |f: &str| std::fs::read_to_string(out.join(f)).unwrap();
+        let json: serde_json::Value = serde_json::from_str(&read("regions.json")).unwrap();
+        let csv = read("regions.csv");
+        let moving_rows: Vec<String> = (csv.lines())
+            .filter(|l| l.ends_with(",moving"))
+            .map(String::from)
+            .collect();
+        // region_series.csv: the anatomical regions' rows (every row, with no user region).
+        (
+            json["moving"].clone(),
+            moving_rows,
+            read("region_series.csv"),
+        )
+    };
+    use pedo_track::ObjectModel::{Contour, Isocontour, Surface};
+    let contour = run("contour", Contour, false);
+    assert!(contour.0["error"].is_null(), "{}", contour.0);
+    assert!(!contour.1.is_empty());
+    for (name, model, streamed) in [
+        ("surface", Surface, false),
+        ("surface-streamed", Surface, true),
+        ("isocontour", Isocontour, false),
+    ] {
+        let other = run(name, model, streamed);
+        assert!(
+            other == contour,
+            "{name}: moving regions differ from the contour run's"
+        );
+    }
+    // Independently, on the streamed surface run's files: each moving FTI is the sum of its
+    // rows' force times dt, and on its stance's reference frame each moving region holds the
+    // force of its mask's sensels (all of it but a part no contour object holds).
+    let out = dir.join("surface-streamed");
+    let csv = std::fs::read_to_string(out.join("regions.csv")).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("regions.json")).unwrap()).unwrap();
+    let series = std::fs::read_to_string(out.join("region_series.csv")).unwrap();
+    let mut lines = series.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let force = |r: &Vec<&str>| r[col("total_force_n")].parse::<f64>().unwrap_or(0.0);
+    let dt = held.dt_s.unwrap();
+    let reference = json["moving"]["stances"][0]["reference_frame"]
+        .as_u64()
+        .unwrap();
+    let (mut moving_total, mut fixed_total) = (0.0, 0.0);
+    for name in ["hindfoot", "midfoot", "forefoot", "toes"] {
+        let of = |kind: &str| -> Vec<&Vec<&str>> {
+            (rows.iter())
+                .filter(|r| r[col("name")] == name && r[col("kind")] == kind)
+                .collect()
+        };
+        let sum: f64 = of("moving").into_iter().map(force).sum();
+        let line = (csv.lines())
+            .find(|l| l.starts_with(&format!("{name},fti,")) && l.ends_with(",moving"))
+            .unwrap();
+        let fti: f64 = line.split(',').nth(2).unwrap().parse().unwrap();
+        assert!(
+            (sum * dt - fti).abs() <= 1e-3 * fti.max(1e-9),
+            "{name}: {sum} vs {fti}"
+        );
+        let at = |kind: &str| -> f64 {
+            (of(kind).into_iter())
+                .filter(|r| r[col("frame")] == reference.to_string())
+                .map(force)
+                .sum()
+        };
+        let (m, f) = (at("moving"), at("fixed"));
+        assert!(m <= f + 1e-3, "{name}: moving {m} above fixed {f}");
+        moving_total += m;
+        fixed_total += f;
+    }
+    assert!(
+        moving_total >= 0.95 * fixed_total,
+        "{moving_total} of {fixed_total}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1453,7 +1453,7 @@ fn closed_contour(nodes: &[[f64; 2]]) -> Result<modal_core::Shape> {
 }
 
 /// The object's outline nodes in sensels.
-fn outline(o: &SequenceObject) -> Vec<[f64; 2]> {
+pub(crate) fn outline(o: &SequenceObject) -> Vec<[f64; 2]> {
     (0..o.shape.len())
         .map(|i| [o.shape.point(i)[0], o.shape.point(i)[1]])
         .collect()

@@ -151,53 +151,18 @@ fn parts_of(cells: &[bool], rows: usize, cols: usize) -> Vec<Vec<bool>> {
 /// region, in stance order, then label order. A region with no sensel in contact on its
 /// stance's reference frame has no part (it is empty on every frame).
 ///
+/// With `foot` (a foot of a recording of both feet apart, [`Recording::feet`]), only its
+/// regions (those of `masks` on its side, [`RegionMasks::sides`]) through its own `stances`, on
+/// that foot alone: each stance's reference frame is its frame of most sensels in contact among
+/// the foot's columns, and only the contour objects of its insole (those whose centroid lies on
+/// its columns, [`SequenceObject::centroid`], [`FootColumns::holds`]) carry its regions, a
+/// region's outline ending where the follower would step onto the other insole; its stances
+/// are numbered per foot.
+///
 /// # Errors
 /// [`IoError::InvalidInput`] for a run that is not of contours, masks that are not of the
 /// recording's shape, or a stance's frame the recording does not hold.
 pub fn follow_masks(
-    run: &SequenceResult,
-    options: &SequenceOptions,
-    recording: &Recording,
-    masks: &RegionMasks,
-    stances: &[Stance],
-    threshold: f64,
-) -> Result<Vec<MovingRegion>> {
-    follow_in(run, options, recording, masks, stances, threshold, None)
-}
-
-/// The regions of `foot` (a foot of a recording of both feet apart, [`Recording::feet`]; its
-/// regions those of `masks` on its side, [`RegionMasks::sides`]) carried through its own
-/// `stances` as [`follow_masks`] carries a single footprint's, on that foot alone: each
-/// stance's reference frame is its frame of most sensels in contact among the foot's columns,
-/// and only the contour objects of its insole (those whose outline's mean column lies among its
-/// columns) carry its regions, a region's outline ending where the follower would step onto
-/// the other insole. One [`MovingRegion`] per stance and region of the foot, in stance order
-/// (numbered per foot), then label order.
-///
-/// # Errors
-/// Those of [`follow_masks`].
-pub fn follow_foot_masks(
-    run: &SequenceResult,
-    options: &SequenceOptions,
-    recording: &Recording,
-    masks: &RegionMasks,
-    stances: &[Stance],
-    threshold: f64,
-    foot: &FootColumns,
-) -> Result<Vec<MovingRegion>> {
-    follow_in(
-        run,
-        options,
-        recording,
-        masks,
-        stances,
-        threshold,
-        Some(foot),
-    )
-}
-
-/// [`follow_masks`], or with `foot` [`follow_foot_masks`].
-fn follow_in(
     run: &SequenceResult,
     options: &SequenceOptions,
     recording: &Recording,
@@ -221,27 +186,12 @@ fn follow_in(
     let aspect = SenselAspect::of(options);
     let params = FollowParams::default();
     let columns = foot.map(|f| &f.columns);
-    let outline_of = |o: usize| -> Vec<[f64; 2]> {
-        let shape = &run.objects[o].shape;
-        (0..shape.len())
-            .map(|i| [shape.point(i)[0], shape.point(i)[1]])
-            .collect()
-    };
-    // Whether object `o` is of the foot's insole: its outline's mean column among the foot's
-    // columns (every object for a single footprint).
-    let on_foot = |o: usize| -> bool {
-        let Some(columns) = columns else {
-            return true;
-        };
-        let outline = outline_of(o);
-        if outline.is_empty() {
-            return false;
-        }
-        let x = outline.iter().map(|p| p[0]).sum::<f64>() / outline.len() as f64;
-        (columns.start as f64 - 0.5..columns.end as f64 - 0.5).contains(&x)
-    };
+    // Whether each object is of the foot's insole, found once per run (every object for a
+    // single footprint: none listed).
     let owned: Vec<bool> = match foot {
-        Some(_) => (0..run.objects.len()).map(on_foot).collect(),
+        Some(f) => (run.objects.iter())
+            .map(|o| !o.shape.is_empty() && f.holds(o.centroid()[0]))
+            .collect(),
         None => Vec::new(),
     };
     let mut out = Vec::new();
@@ -252,7 +202,9 @@ fn follow_in(
             .filter(|&o| run.objects[o].frame == reference && run.objects[o].shape.dim() == 2)
             .filter(|&o| owned.get(o).copied().unwrap_or(true))
             .collect();
-        let object_outlines: Vec<Vec<[f64; 2]>> = objects.iter().map(|&o| outline_of(o)).collect();
+        let object_outlines: Vec<Vec<[f64; 2]>> = (objects.iter())
+            .map(|&o| follow::outline(&run.objects[o]))
+            .collect();
         // Seeds of every part of every region of this stance; `owner[j]` = (region, part).
         let mut seeds = Vec::new();
         let mut owner: Vec<usize> = Vec::new();

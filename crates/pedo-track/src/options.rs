@@ -546,6 +546,19 @@ impl RunParams {
         Ok(o)
     }
 
+    /// The options of the contour run of `recording` with these parameters but the model
+    /// (and without the user's points and regions): the contour field that carries the
+    /// anatomical regions of a run of any model (a surface or isocontour run's made apart, with
+    /// the contour model's matching options).
+    pub fn contour_options(&self, recording: &Recording) -> Result<SequenceOptions> {
+        RunParams {
+            model: ObjectModel::Contour,
+            inputs: Default::default(),
+            ..self.clone()
+        }
+        .to_options(recording)
+    }
+
     /// The noise threshold of a run of `recording`: [`noise`](Self::noise) when given, else the
     /// file's own, else 0 (values at or below it count as no contact).
     pub fn noise_threshold(&self, recording: &Recording) -> f64 {

@@ -31,6 +31,20 @@ pub struct SequenceObject {
     pub measures: Option<FrameMeasures>,
 }
 
+impl SequenceObject {
+    /// The mean of its nodes' `(x, y)` (`objects.csv`'s `centroid_x`, `centroid_y`): for a
+    /// recording of both feet apart, the object is of the insole whose columns hold its x
+    /// ([`pedo_io::recording::FootColumns::holds`]).
+    pub fn centroid(&self) -> [f64; 2] {
+        let n = self.shape.len().max(1) as f64;
+        let (cx, cy) = (0..self.shape.len()).fold((0.0, 0.0), |(x, y), i| {
+            let p = self.shape.point(i);
+            (x + p[0] / n, y + p[1] / n)
+        });
+        [cx, cy]
+    }
+}
+
 /// The two objects of a pair as the pairs table and `summary.json` name them: ids, frames and
 /// node counts (the leading columns of a row, matched or skipped).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

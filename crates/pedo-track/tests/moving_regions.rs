@@ -168,7 +168,7 @@ fn regions_partition_the_contact_of_their_reference_frame_and_follow_the_true_re
     let (rec, options, result) = run(&walk);
     let th = threshold(&options);
     let (masks, stance) = masks_and_stance(&rec, th);
-    let moving = follow_masks(&result, &options, &rec, &masks, &[stance], th).unwrap();
+    let moving = follow_masks(&result, &options, &rec, &masks, &[stance], th, None).unwrap();
     assert_eq!(moving.len(), 4);
     let reference = reference_frame(&rec, &stance, th).unwrap();
     // The frame of largest contact: counted independently.
@@ -244,7 +244,7 @@ fn regions_are_carried_on_contour_runs_of_fitting_masks_only() {
         model: ObjectModel::Surface,
         ..options.clone()
     };
-    let e = follow_masks(&result, &surface, &rec, &masks, &[stance], th).unwrap_err();
+    let e = follow_masks(&result, &surface, &rec, &masks, &[stance], th, None).unwrap_err();
     assert!(matches!(e, IoError::InvalidInput(_)), "{e}");
     let small = RegionMasks {
         rows: 3,
@@ -252,11 +252,11 @@ fn regions_are_carried_on_contour_runs_of_fitting_masks_only() {
         labels: vec![1; 9],
         ..masks.clone()
     };
-    let e = follow_masks(&result, &options, &rec, &small, &[stance], th).unwrap_err();
+    let e = follow_masks(&result, &options, &rec, &small, &[stance], th, None).unwrap_err();
     assert!(e.to_string().contains("do not fit"), "{e}");
     // Every region has its sensels on every frame of its stance (none missing).
     let moved: Vec<MovingRegion> =
-        follow_masks(&result, &options, &rec, &masks, &[stance], th).unwrap();
+        follow_masks(&result, &options, &rec, &masks, &[stance], th, None).unwrap();
     for r in &moved {
         for t in 0..12 {
             assert!(

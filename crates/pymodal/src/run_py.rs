@@ -122,7 +122,8 @@ macro_rules! define_run {
         ///   ``mean_pressure_kpa``, named by the units known; ``name`` and ``stance`` of an
         ///   anatomical region, None for the user's); an empty list without;
         /// - ``regions``: with ``region_rule`` or ``masks``, the rows of ``regions.csv`` as dicts (``region``,
-        ///   ``measure``, ``value``, ``unit``, ``kind`` "fixed" or, contour model, "moving"); an
+        ///   ``measure``, ``value``, ``unit``, ``kind`` "fixed" or "moving": carried through the stances, by the contour field for a
+        ///   surface or isocontour run); an
         ///   empty list without, or when the footprint cannot be divided;
         /// - ``frames``: list of dicts of per-frame measures (``frame``, ``time_s``,
         ///   ``contact_area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x_mm``, ... as the
@@ -292,15 +293,21 @@ fn run_recording<'py>(
             else {
                 return Ok(None);
             };
-            // Carried through the stances by a contour run (each foot's through its own).
-            let carried = options.model == pedo_track::ObjectModel::Contour;
-            let moving = carried
-                .then(|| {
-                    pedo_output::moving_regions::follow_anatomy(
-                        &rec, &result, &options, &m, &masks, &fixed,
-                    )
-                })
-                .transpose()?;
+            // Carried through the stances by the contour field (each foot's through its own):
+            // this run's, or for a surface or isocontour run the contour run of its frames.
+            let contour = options.model == pedo_track::ObjectModel::Contour;
+            let field = match contour {
+                true => options.clone(),
+                false => {
+                    let mut o = params.contour_options(&rec)?;
+                    o.cancel = options.cancel.clone();
+                    o
+                }
+            };
+            let run = contour.then_some(&result);
+            let moving = Some(pedo_output::moving_regions::follow_anatomy(
+                &rec, run, &field, &m, &masks, &fixed,
+            )?);
             Ok::<_, pedo_io::IoError>(Some((masks, fixed, moving)))
         })?
         .map_err(to_py)?;
