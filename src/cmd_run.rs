@@ -231,6 +231,15 @@ fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: Tab
                 float("mean_trackable_percent"),
                 float("mean_local_percent")
             );
+            let tracks = &summary["track_round_trip_sensels"];
+            if tracks["median"].is_f64() {
+                outln!(
+                    "tracks' round trip {:.3} sensels median, {:.3} at the 95th percentile ({:.1} % over 1 sensel)",
+                    tracks["median"].as_f64().unwrap_or(f64::NAN),
+                    tracks["p95"].as_f64().unwrap_or(f64::NAN),
+                    tracks["over_1_percent"].as_f64().unwrap_or(f64::NAN)
+                );
+            }
         } else {
             outln!(
                 "{:.1} % of matches trackable, {:.1} % mutual best, mean cost {:.4}",

@@ -623,7 +623,12 @@ impl SequenceSink for TracksGather {
         Ok(())
     }
 
-    fn track(&mut self, _: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
+    fn track(
+        &mut self,
+        _: usize,
+        steps: &[(&SequenceObject, usize)],
+        _: Option<f64>,
+    ) -> Result<()> {
         if steps.len() < self.min_steps {
             return Ok(());
         }
@@ -1800,6 +1805,7 @@ mod tests {
             reference_pairs: Vec::new(),
             tracks,
             packed_tracks: None,
+            track_round_trips: Vec::new(),
             splits: Vec::new(),
             merges: Vec::new(),
             skipped_frames: Vec::new(),

@@ -706,6 +706,18 @@ fn header_html(recording: &Recording, counts: &RunCounts, info: &ReportInfo) -> 
             ),
         ));
     }
+    if let Some(t) = counts.track_round_trips() {
+        rows.push((
+            "track consistency".into(),
+            format!(
+                "round trip {:.3} sensels median, {:.3} at the 95th percentile, {:.1} % over 1                  sensel (of {}: the largest of each track's steps)",
+                t.median,
+                t.p95,
+                t.over_1_percent,
+                counted(t.tracks, "track")
+            ),
+        ));
+    }
     if !info.timings.is_empty() {
         rows.push(("timings".into(), timings_text(&info.timings)));
     }
@@ -1156,7 +1168,12 @@ impl SequenceSink for ReportGather {
         Ok(())
     }
 
-    fn track(&mut self, _: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
+    fn track(
+        &mut self,
+        _: usize,
+        steps: &[(&SequenceObject, usize)],
+        _: Option<f64>,
+    ) -> Result<()> {
         let pitch = self.pitch;
         let mm = |p: &[f64]| -> [f64; 2] { [round3(p[0] * pitch[0]), round3(p[1] * pitch[1])] };
         for (s, (o, _)) in steps.iter().enumerate() {

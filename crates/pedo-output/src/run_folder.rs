@@ -569,11 +569,16 @@ impl SequenceSink for TablesSink<'_> {
         })
     }
 
-    fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
+    fn track(
+        &mut self,
+        index: usize,
+        steps: &[(&SequenceObject, usize)],
+        round_trip: Option<f64>,
+    ) -> Result<()> {
         let dim = self.dim.unwrap_or(2);
         let (dir, recording) = (self.dir, self.recording);
         let tracks = self.tracks_writer()?;
-        crate::track_rows(recording, index, steps, dim, &mut |cells| {
+        crate::track_rows(recording, index, steps, dim, round_trip, &mut |cells| {
             tracks.push(dir, &cells)
         })
     }
@@ -720,8 +725,13 @@ impl SequenceSink for WithMeasures<'_> {
     fn settled(&mut self, object: usize) -> Result<()> {
         self.also.settled(object)
     }
-    fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
-        self.also.track(index, steps)
+    fn track(
+        &mut self,
+        index: usize,
+        steps: &[(&SequenceObject, usize)],
+        round_trip: Option<f64>,
+    ) -> Result<()> {
+        self.also.track(index, steps, round_trip)
     }
     fn reference_pair(
         &mut self,
@@ -916,15 +926,21 @@ impl SequenceSink for FolderSink<'_, '_> {
         }
         self.also().map_or(Ok(()), |s| s.settled(object))
     }
-    fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
-        self.tables.track(index, steps)?;
+    fn track(
+        &mut self,
+        index: usize,
+        steps: &[(&SequenceObject, usize)],
+        round_trip: Option<f64>,
+    ) -> Result<()> {
+        self.tables.track(index, steps, round_trip)?;
         if let Some(t) = self.tracks.as_mut() {
-            t.track(index, steps)?;
+            t.track(index, steps, round_trip)?;
         }
         if let Some(r) = self.report.as_mut() {
-            r.track(index, steps)?;
+            r.track(index, steps, round_trip)?;
         }
-        self.also().map_or(Ok(()), |s| s.track(index, steps))
+        self.also()
+            .map_or(Ok(()), |s| s.track(index, steps, round_trip))
     }
     fn reference_pair(
         &mut self,

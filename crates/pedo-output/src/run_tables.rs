@@ -293,7 +293,9 @@ fn flagged_match_rows<E>(
 }
 
 /// The node tracks, one row per step: track, step, frame, time, object id, node, `x, y[, z]`
-/// (pixels; `z` the pressure of a surface node) and `x_mm, y_mm` when the pitch is known.
+/// (pixels; `z` the pressure of a surface node), `x_mm, y_mm` when the pitch is known and, for
+/// outlines (contours, isocontours), the track's `round_trip_sensels` on each of its rows
+/// ([`pedo_track::chain_tracks_checked`]; empty when it has none).
 pub fn tracks_table(recording: &Recording, r: &SequenceResult) -> Table {
     let mut t = tracks_header(recording, r);
     let Ok(()) = tracks_rows::<std::convert::Infallible>(recording, r, &mut |cells| {
@@ -314,6 +316,8 @@ pub(crate) fn tracks_header_of(recording: &Recording, dim: usize) -> Table {
     let mut t = steps_header(recording, "track", "node");
     if dim == 3 {
         t.push_column("z");
+    } else {
+        t.push_column("round_trip_sensels");
     }
     t
 }
@@ -346,18 +350,19 @@ pub(crate) fn tracks_rows<E>(
     for (k, tr) in r.all_tracks().enumerate() {
         let steps: Vec<(&SequenceObject, usize)> =
             tr.steps.iter().map(|&(o, n)| (&r.objects[o], n)).collect();
-        track_rows(recording, k, &steps, dim, emit)?;
+        track_rows(recording, k, &steps, dim, r.track_round_trip(k), emit)?;
     }
     Ok(())
 }
 
 /// The rows of [`tracks_table`] of track `k` (its steps as object and node; `dim` that of
-/// [`tracks_header_of`]), one by one to `emit`.
+/// [`tracks_header_of`]; `round_trip` its round trip), one by one to `emit`.
 pub(crate) fn track_rows<E>(
     recording: &Recording,
     k: usize,
     steps: &[(&SequenceObject, usize)],
     dim: usize,
+    round_trip: Option<f64>,
     emit: &mut dyn FnMut(Vec<Cell>) -> std::result::Result<(), E>,
 ) -> std::result::Result<(), E> {
     let (timed, mm) = (recording.dt_s.is_some(), recording.pitch_mm.is_some());
@@ -371,6 +376,8 @@ pub(crate) fn track_rows<E>(
         push_xy(&mut cells, recording, p[0], p[1], mm);
         if dim == 3 {
             cells.push(Cell::Float(p[2], 4));
+        } else {
+            cells.push(Cell::opt(round_trip, 4));
         }
         emit(cells)?;
     }

@@ -303,6 +303,10 @@ pub fn run_summary_of(
         "mean_trackable_percent": c.mean_trackable_percent(),
         "mean_round_trip_sensels": c.mean_round_trip(),
         "mean_field_residual_sensels": c.mean_field_residual(),
+        "track_round_trip_sensels": c.track_round_trips().map(|t| json!({
+            "tracks": t.tracks, "median": t.median, "p95": t.p95, "max": t.max,
+            "over_1_percent": t.over_1_percent,
+        })),
         "timings_s": stages,
     })
 }

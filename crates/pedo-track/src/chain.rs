@@ -11,8 +11,8 @@ use std::collections::HashMap;
 pub(crate) struct Chainer {
     /// The number of the front pending track.
     first: usize,
-    /// The tracks not handed over yet, each with whether it has ended.
-    pending: std::collections::VecDeque<(Track, bool)>,
+    /// The tracks not handed over yet.
+    pending: std::collections::VecDeque<Open>,
     /// The track of each node of the objects a pair may still leave (`NO_TRACK`: none).
     rows: std::collections::BTreeMap<usize, Vec<u32>>,
     /// The last object a known pair leaves each object of `rows` for.
@@ -21,15 +21,26 @@ pub(crate) struct Chainer {
 
 const NO_TRACK: u32 = u32::MAX;
 
-/// Where [`Chainer`] hands each track: its number and the track.
-pub(crate) type EmitTrack<'a> = dyn FnMut(usize, Track) -> Result<()> + 'a;
+/// A track not handed over yet.
+struct Open {
+    track: Track,
+    /// Whether it can grow no more.
+    ended: bool,
+    /// The largest round trip of its steps so far ([`PairMatch::step_round_trips`]); `None`
+    /// once a step has none (a pair without a field: surfaces).
+    worst: Option<f64>,
+}
+
+/// Where [`Chainer`] hands each track: its number, the track and its round trip (sensels, the
+/// largest of its steps'; `None` when a step has none, and for a track of one step).
+pub(crate) type EmitTrack<'a> = dyn FnMut(usize, Track, Option<f64>) -> Result<()> + 'a;
 
 impl Chainer {
     /// The first object of the front open track (all objects before it are done with).
     pub(crate) fn first_object(&self) -> Option<usize> {
         self.pending
             .front()
-            .and_then(|(t, _)| t.steps.first())
+            .and_then(|o| o.track.steps.first())
             .map(|s| s.0)
     }
 
@@ -38,10 +49,10 @@ impl Chainer {
         for &t in row {
             let t = t as usize;
             if t >= self.first
-                && let Some((track, ended)) = self.pending.get_mut(t - self.first)
-                && track.steps.last().map(|s| s.0) == Some(x)
+                && let Some(open) = self.pending.get_mut(t - self.first)
+                && open.track.steps.last().map(|s| s.0) == Some(x)
             {
-                *ended = true;
+                open.ended = true;
             }
         }
     }
@@ -131,10 +142,15 @@ impl Chainer {
                 // A track can pass through one node per object only: a split keeps the first
                 // continuation. (A track already handed over has ended elsewhere.)
                 if t >= self.first
-                    && let Some((track, _)) = self.pending.get_mut(t - self.first)
-                    && track.steps.last().map(|s| s.0) == Some(p.a)
+                    && let Some(open) = self.pending.get_mut(t - self.first)
+                    && open.track.steps.last().map(|s| s.0) == Some(p.a)
                 {
-                    track.steps.push((o, mp.b));
+                    open.track.steps.push((o, mp.b));
+                    let trip = p.step_round_trips.get(k).map(|&d| f64::from(d));
+                    open.worst = match (open.worst, trip) {
+                        (Some(w), Some(d)) if d.is_finite() => Some(w.max(d)),
+                        _ => None,
+                    };
                     row[mp.b] = id(t);
                 }
             }
@@ -142,12 +158,13 @@ impl Chainer {
         for (node, slot) in row.iter_mut().enumerate() {
             if *slot == NO_TRACK {
                 *slot = id(self.first + self.pending.len());
-                self.pending.push_back((
-                    Track {
+                self.pending.push_back(Open {
+                    track: Track {
                         steps: vec![(o, node)],
                     },
-                    false,
-                ));
+                    ended: false,
+                    worst: Some(0.0),
+                });
             }
         }
         Ok(row)
@@ -155,11 +172,15 @@ impl Chainer {
 
     /// Hands over the front tracks that have ended.
     fn emit_ended(&mut self, emit: &mut EmitTrack<'_>) -> Result<()> {
-        while self.pending.front().is_some_and(|(_, ended)| *ended) {
-            if let Some((mut track, _)) = self.pending.pop_front() {
+        while self.pending.front().is_some_and(|o| o.ended) {
+            if let Some(Open {
+                mut track, worst, ..
+            }) = self.pending.pop_front()
+            {
                 track.steps.shrink_to_fit();
                 self.first += 1;
-                emit(self.first - 1, track)?;
+                let trip = worst.filter(|_| track.steps.len() > 1);
+                emit(self.first - 1, track, trip)?;
             }
         }
         Ok(())
@@ -167,8 +188,8 @@ impl Chainer {
 
     /// Hands over every track left.
     pub(crate) fn finish(&mut self, emit: &mut EmitTrack<'_>) -> Result<()> {
-        for (_, ended) in &mut self.pending {
-            *ended = true;
+        for open in &mut self.pending {
+            open.ended = true;
         }
         self.rows.clear();
         self.last_use.clear();
@@ -198,8 +219,36 @@ pub fn chain_tracks_with(
     pairs: &[PairMatch],
     emit: &mut dyn FnMut(Track) -> Result<()>,
 ) -> Result<()> {
+    chain_tracks_checked_with(objects, pairs, &mut |track, _| emit(track))
+}
+
+/// [`chain_tracks`], with each track's **round trip** (sensels): the largest of its steps'
+/// round trips ([`PairMatch::step_round_trips`]), how far the backward field of a pair it steps
+/// through carries its node from where the track came. A track every step of which agrees with
+/// the smooth map its pair's matches define has a small one; a track that takes a match
+/// crossing or swapping with its neighbours has a large one. `None` for a track of one step
+/// and for one that steps through a pair without a field (surfaces).
+pub fn chain_tracks_checked(
+    objects: &[SequenceObject],
+    pairs: &[PairMatch],
+) -> Result<Vec<(Track, Option<f64>)>> {
+    let mut tracks = Vec::new();
+    chain_tracks_checked_with(objects, pairs, &mut |t, trip| {
+        tracks.push((t, trip));
+        Ok(())
+    })?;
+    Ok(tracks)
+}
+
+/// [`chain_tracks_checked`], handing the tracks to `emit` one by one as
+/// [`chain_tracks_with`] does.
+pub fn chain_tracks_checked_with(
+    objects: &[SequenceObject],
+    pairs: &[PairMatch],
+    emit: &mut dyn FnMut(Track, Option<f64>) -> Result<()>,
+) -> Result<()> {
     let mut chain = Chainer::default();
-    let mut emit = |_, track| emit(track);
+    let mut emit = |_, track, trip| emit(track, trip);
     chain.chain(objects, 0..objects.len(), pairs, objects.len(), &mut emit)?;
     chain.finish(&mut emit)
 }

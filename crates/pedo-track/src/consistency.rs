@@ -44,6 +44,23 @@ impl PairConsistency {
     /// sensels), or `None` when no field can be fitted to them: surfaces (3-D points), fewer
     /// than three one-to-one matches, or matched nodes on a line.
     pub fn of(a: &Shape, b: &Shape, pairs: &[MatchPair], aspect: SenselAspect) -> Option<Self> {
+        Self::with_steps(a, b, pairs, aspect).map(|(c, _)| c)
+    }
+
+    /// [`PairConsistency::of`], with each match's **step round trip** (sensels, one per match
+    /// of `pairs`, in order; NaN for an excess match): how far the backward field carries the
+    /// match's node of `b` from its node of `a`. A node track that takes the match steps from
+    /// `a`'s node to `b`'s; the backward field, fitted to all the pair's matches, brings it back
+    /// to where the matches as a whole say it came from. A match that agrees with its
+    /// neighbours comes back to its start; one that jumps, crosses or swaps with a neighbour
+    /// does not. A track's figure is the largest of its steps' ([`crate::chain_tracks_checked`],
+    /// `tracks.csv`'s `round_trip_sensels`).
+    pub fn with_steps(
+        a: &Shape,
+        b: &Shape,
+        pairs: &[MatchPair],
+        aspect: SenselAspect,
+    ) -> Option<(Self, Vec<f32>)> {
         if a.dim() != 2 || b.dim() != 2 {
             return None;
         }
@@ -53,30 +70,38 @@ impl PairConsistency {
         let used: Vec<MatchPair> = one_to_one.into_iter().step_by(step).collect();
         let forward = CorrespondenceField::fit(&a, &b, &used, FIELD_SMOOTHING).ok()?;
         let backward = forward.inverse().ok()?;
-        let nodes: Vec<[f64; 2]> = (0..a.len())
-            .map(|i| [a.point(i)[0], a.point(i)[1]])
-            .collect();
+        let xy = |s: &Shape, i: usize| [s.point(i)[0], s.point(i)[1]];
+        let nodes: Vec<[f64; 2]> = (0..a.len()).map(|i| xy(&a, i)).collect();
         let back = backward.apply(&forward.apply(&nodes));
-        let mut trip: Vec<f64> = nodes
-            .iter()
-            .zip(&back)
-            .map(|(x, y)| (x[0] - y[0]).hypot(x[1] - y[1]))
-            .collect();
+        let dist = |x: &[f64; 2], y: &[f64; 2]| (x[0] - y[0]).hypot(x[1] - y[1]);
+        let mut trip: Vec<f64> = nodes.iter().zip(&back).map(|(x, y)| dist(x, y)).collect();
         let mut residuals = forward.residuals();
         if !trip.iter().chain(&residuals).all(|d| d.is_finite()) {
             return None;
         }
-        Some(Self {
+        // Every match's node of `b` taken back by the backward field, beside its node of `a`.
+        let in_range = |p: &&MatchPair| !p.excess && p.a < a.len() && p.b < b.len();
+        let ends: Vec<[f64; 2]> = pairs.iter().filter(in_range).map(|p| xy(&b, p.b)).collect();
+        let mut home = backward.apply(&ends).into_iter();
+        let steps = pairs
+            .iter()
+            .map(|p| match in_range(&p).then(|| home.next()).flatten() {
+                Some(h) => dist(&h, &xy(&a, p.a)) as f32,
+                None => f32::NAN,
+            })
+            .collect();
+        let figures = Self {
             field_residual: quantile(&mut residuals, 0.5),
             round_trip: quantile(&mut trip, 0.5),
             round_trip_p95: quantile(&mut trip, 0.95),
-        })
+        };
+        Some((figures, steps))
     }
 }
 
 /// The `q` quantile of non-empty, finite `v` (linear between order statistics, numpy's
 /// default).
-fn quantile(v: &mut [f64], q: f64) -> f64 {
+pub(crate) fn quantile(v: &mut [f64], q: f64) -> f64 {
     v.sort_by(f64::total_cmp);
     let h = q * (v.len() - 1) as f64;
     let (lo, hi) = (h.floor() as usize, h.ceil() as usize);

@@ -303,6 +303,9 @@ struct Follower {
     anchors: usize,
     /// The frame of the last object followed and the first object of that frame.
     frame: Option<(usize, usize)>,
+    /// The objects of the last seed frame's contacts read backwards, shared by the backward
+    /// passes of every object of that frame given seeds ([`backward_steps`]).
+    back_view: Option<ReversedParts>,
 }
 
 /// The points followed, numbered from 0 in the order they were seeded: those from `base` on
@@ -344,6 +347,7 @@ impl Follower {
             points: PointsKept::default(),
             anchors: 0,
             frame: None,
+            back_view: None,
         }
     }
 
@@ -402,7 +406,7 @@ impl Follower {
             }
             if l.object == b {
                 let back = match self.mode.backwards {
-                    true => backward_steps(run, b, &ps, aspect, params),
+                    true => self.backward_steps(run, b, &ps),
                     false => Vec::new(),
                 };
                 let first = self.points.base + self.points.held.len();
@@ -427,6 +431,33 @@ impl Follower {
             self.anchors += 1;
         }
         self.live.insert(b, l);
+    }
+
+    /// The backward parts of `seeds` on object `b` ([`backward_steps`]), on the reversed view
+    /// of `b`'s frame: made at the frame's first seeded object, back to the earliest contact
+    /// start of any of its seeded objects, and kept for the others.
+    fn backward_steps(&mut self, run: &dyn RunView, b: usize, seeds: &[Seed]) -> Vec<Steps> {
+        let lowest = contact_start(run, b);
+        if lowest == b {
+            return vec![Vec::new(); seeds.len()];
+        }
+        let highest = frame_end(run, b);
+        let fits = |v: &ReversedParts| v.old.first() == Some(&highest) && v.lowest() <= lowest;
+        if !self.back_view.as_ref().is_some_and(fits) {
+            // The seeds still to come on this frame's objects reach back as far as theirs.
+            let earliest = (b + 1..=highest)
+                .filter(|o| self.seeds_at.contains_key(o))
+                .map(|o| contact_start(run, o))
+                .fold(lowest, usize::min);
+            self.back_view = Some(ReversedParts::of(run, earliest..=highest));
+        }
+        match &self.back_view {
+            Some(parts) => {
+                let view = Reversed { run, parts };
+                backward_steps(&view, highest - b, seeds, self.aspect, &self.params)
+            }
+            None => vec![Vec::new(); seeds.len()],
+        }
     }
 
     /// A new lineage on `b`: with the points its predecessors hand over and, for an object
@@ -469,24 +500,10 @@ impl Follower {
     }
 }
 
-/// The backward parts of `seeds`, all on object `b` of `run` (every pair into `b` known): each
-/// seed carried from `b` back through the objects `b` continues, one frame at a time, to the
-/// first object of that contact (one that no earlier object continues), by anchored
-/// registration on the objects of those frames in reversed order with every pair's matches
-/// turned round (as [`follow_both_ways`]); where objects merged on the way forward, the point
-/// goes back into the part whose outline its image lies nearest, as at a split. Per seed, its
-/// steps before `b`'s frame in frame order (none where it could not be carried, or where `b`
-/// continues no object).
-fn backward_steps(
-    run: &dyn RunView,
-    b: usize,
-    seeds: &[Seed],
-    aspect: SenselAspect,
-    params: &FollowParams,
-) -> Vec<Steps> {
-    let none = || vec![Vec::new(); seeds.len()];
+/// The first object of `b`'s contact: the earliest of the held objects `b` continues, directly
+/// or not (`b` itself when it continues none).
+fn contact_start(run: &dyn RunView, b: usize) -> usize {
     let (held, links) = (run.held(), run.links());
-    // The objects `b` continues, back to where their contact began.
     let mut lowest = b;
     let mut todo = vec![b];
     let mut seen = std::collections::HashSet::from([b]);
@@ -498,16 +515,35 @@ fn backward_steps(
             }
         }
     }
-    if lowest == b {
-        return none();
-    }
-    // Every object from the earliest of them to the last of `b`'s frame.
-    let frame = run.object(b).frame;
+    lowest
+}
+
+/// The last held object of `b`'s frame.
+fn frame_end(run: &dyn RunView, b: usize) -> usize {
+    let (held, frame) = (run.held(), run.object(b).frame);
     let mut highest = b;
     while held.contains(&(highest + 1)) && run.object(highest + 1).frame == frame {
         highest += 1;
     }
-    let view = Reversed::of(run, lowest..=highest);
+    highest
+}
+
+/// The backward parts of `seeds`, all on object `b` of the reversed `view` (object `b` of the
+/// view; every pair into it known in the run): each seed carried from `b` back through the
+/// objects `b` continues, one frame at a time, to the first object of that contact (one that
+/// no earlier object continues), by anchored registration on the objects of those frames in
+/// reversed order with every pair's matches turned round (as [`follow_both_ways`]); where
+/// objects merged on the way forward, the point goes back into the part whose outline its image
+/// lies nearest, as at a split. Per seed, its steps before `b`'s frame in frame order, as the
+/// run's objects (none where it could not be carried).
+fn backward_steps(
+    view: &Reversed<'_>,
+    b: usize,
+    seeds: &[Seed],
+    aspect: SenselAspect,
+    params: &FollowParams,
+) -> Vec<Steps> {
+    let none = || vec![Vec::new(); seeds.len()];
     let mode = Mode {
         outline_seeds: false,
         lazy: true,
@@ -515,13 +551,11 @@ fn backward_steps(
     };
     let mut follower = Follower::new(aspect, *params, mode);
     for s in seeds {
-        follower.seed_on(Seed {
-            object: highest - b,
-            ..*s
-        });
+        follower.seed_on(Seed { object: b, ..*s });
     }
-    for n in 0..view.old.len() {
-        follower.object(&view, n);
+    let old = &view.parts.old;
+    for n in 0..old.len() {
+        follower.object(view, n);
     }
     // The points are the seeds in order, or none (no anchor could be made on `b`).
     let points = follower.into_points().points;
@@ -532,7 +566,7 @@ fn backward_steps(
         .map(|p| {
             // The seed's own step is the forward part's.
             let mut steps: Steps = (p.steps.into_iter().skip(1))
-                .map(|(o, xy)| (view.old[o], xy))
+                .map(|(o, xy)| (old[o], xy))
                 .collect();
             steps.reverse();
             steps
@@ -540,18 +574,18 @@ fn backward_steps(
         .collect()
 }
 
-/// The objects `ids` of a run read backwards: object `n` is `ids`' `n`-th from the end, every
-/// pair between them turned round (its matches from the later object to the earlier).
-struct Reversed<'v> {
-    run: &'v dyn RunView,
+/// Objects of a run read backwards ([`Reversed`]): object `n` is the `n`-th from the end of a
+/// range of the run's objects, every pair between them turned round (its matches from the
+/// later object to the earlier).
+struct ReversedParts {
     /// The run's id of each object, in reversed order.
     old: Vec<usize>,
     links: Links,
     pairs: HashMap<(usize, usize), MatchResult>,
 }
 
-impl<'v> Reversed<'v> {
-    fn of(run: &'v dyn RunView, ids: std::ops::RangeInclusive<usize>) -> Self {
+impl ReversedParts {
+    fn of(run: &dyn RunView, ids: std::ops::RangeInclusive<usize>) -> Self {
         let hi = *ids.end();
         let new = |o: usize| hi - o;
         let mut links = Links::default();
@@ -570,26 +604,36 @@ impl<'v> Reversed<'v> {
             }
         }
         Self {
-            run,
             old: ids.rev().collect(),
             links,
             pairs,
         }
     }
+
+    /// The run's id of the earliest object.
+    fn lowest(&self) -> usize {
+        self.old.last().copied().unwrap_or(usize::MAX)
+    }
+}
+
+/// The objects of [`ReversedParts`] as a run to follow.
+struct Reversed<'v> {
+    run: &'v dyn RunView,
+    parts: &'v ReversedParts,
 }
 
 impl RunView for Reversed<'_> {
     fn held(&self) -> std::ops::Range<usize> {
-        0..self.old.len()
+        0..self.parts.old.len()
     }
     fn object(&self, id: usize) -> &SequenceObject {
-        self.run.object(self.old[id])
+        self.run.object(self.parts.old[id])
     }
     fn pair(&self, a: usize, b: usize) -> Option<&MatchResult> {
-        self.pairs.get(&(a, b))
+        self.parts.pairs.get(&(a, b))
     }
     fn links(&self) -> &Links {
-        &self.links
+        &self.parts.links
     }
 }
 
@@ -748,6 +792,7 @@ fn sub_run(
                 result,
                 row: p.row.clone(),
                 trackable: p.trackable.clone(),
+                step_round_trips: Vec::new(),
             })
         })
         .collect();

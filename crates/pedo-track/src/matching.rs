@@ -83,7 +83,7 @@ type Prepared = HashMap<usize, std::result::Result<PreparedShape, ModalError>>;
 
 /// What the matcher makes of a pair, whichever objects hold its two shapes: the result and its
 /// consistency figures, or why it failed.
-type Outcome = std::result::Result<(MatchResult, Option<PairConsistency>), PairFailure>;
+type Outcome = std::result::Result<(MatchResult, Option<(PairConsistency, Vec<f32>)>), PairFailure>;
 
 /// Why a pair was not matched.
 #[derive(Debug, Clone)]
@@ -279,7 +279,7 @@ fn pair_outcome(
     }
     .map(|r| aspect.back(r))
     .map_err(PairFailure::Modal)?;
-    let consistency = PairConsistency::of(&oa.shape, &ob.shape, &result.pairs, aspect);
+    let consistency = PairConsistency::with_steps(&oa.shape, &ob.shape, &result.pairs, aspect);
     Ok((result, consistency))
 }
 
@@ -315,9 +315,10 @@ fn pair_row(
     a: usize,
     b: usize,
     result: MatchResult,
-    consistency: Option<PairConsistency>,
+    consistency: Option<(PairConsistency, Vec<f32>)>,
     options: &SequenceOptions,
 ) -> Result<PairMatch> {
+    let (consistency, step_round_trips) = consistency.unzip();
     let aspect = SenselAspect::of(options);
     let (n, m) = (oa.shape.len(), ob.shape.len());
     let min = n.min(m).max(1) as f64;
@@ -359,6 +360,7 @@ fn pair_row(
         result,
         row,
         trackable: flags,
+        step_round_trips: step_round_trips.unwrap_or_default(),
     };
     if !options.keep_match_details {
         pair.strip_details()?;

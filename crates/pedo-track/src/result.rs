@@ -135,6 +135,12 @@ pub struct PairMatch {
     /// [`StepBound`](crate::pairing::StepBound), judged once when the pair is matched. Every
     /// chaining of tracks reads it.
     pub trackable: Vec<bool>,
+    /// Per match of [`MatchResult::pairs`], in order: the step's round trip in sensels, how far
+    /// the pair's backward field carries the match's node of `b` from its node of `a` (NaN for
+    /// an excess match; [`PairConsistency::with_steps`](crate::consistency::PairConsistency::with_steps)).
+    /// Empty when the pair has no consistency figures ([`PairRow::consistency`] `None`). A
+    /// track's round trip is the largest of its steps'.
+    pub step_round_trips: Vec<f32>,
 }
 
 impl PairMatch {
@@ -162,6 +168,7 @@ impl PairMatch {
             result,
             row: self.row.clone(),
             trackable: self.trackable.clone(),
+            step_round_trips: self.step_round_trips.clone(),
             ..*self
         })
     }
@@ -332,6 +339,12 @@ pub struct SequenceResult {
     /// Runs without match details ([`SequenceOptions::keep_match_details`](crate::SequenceOptions::keep_match_details) off) hold their
     /// tracks here, packed, and leave [`tracks`](Self::tracks) empty.
     pub packed_tracks: Option<PackedTracks>,
+    /// Each track's round trip in sensels, in track order ([`crate::chain_tracks_checked`]):
+    /// the largest of its steps' ([`PairMatch::step_round_trips`]); `None` for a track of one
+    /// step, one through a pair without a field (surfaces), and every track anchored by drift
+    /// correction. Empty for a result made without them (read it with
+    /// [`track_round_trip`](Self::track_round_trip)).
+    pub track_round_trips: Vec<Option<f64>>,
     /// Contour model: object `i` continues as several objects of the next frame (object
     /// indices).
     pub splits: Vec<(usize, Vec<usize>)>,
@@ -392,6 +405,11 @@ impl SequenceResult {
             Some(p) => Box::new(p.iter().map(std::borrow::Cow::Owned)),
             None => Box::new(self.tracks.iter().map(std::borrow::Cow::Borrowed)),
         }
+    }
+
+    /// The round trip of track `k` ([`track_round_trips`](Self::track_round_trips)).
+    pub fn track_round_trip(&self, k: usize) -> Option<f64> {
+        self.track_round_trips.get(k).copied().flatten()
     }
 
     /// Number of tracks (held or packed).
@@ -521,6 +539,9 @@ pub struct RunCounts {
     pub tracks: usize,
     /// Tracks of 3 steps or more.
     pub tracks_3_or_more: usize,
+    /// The round trip (sensels) of every track that has one, in order
+    /// ([`SequenceResult::track_round_trips`]).
+    pub track_round_trips: Vec<f32>,
     /// As [`SequenceResult::splits`].
     pub splits: Vec<(usize, Vec<usize>)>,
     /// As [`SequenceResult::merges`].
@@ -550,6 +571,7 @@ impl Default for RunCounts {
             field_residual_sum: zero(),
             tracks: 0,
             tracks_3_or_more: 0,
+            track_round_trips: Vec::new(),
             splits: Vec::new(),
             merges: Vec::new(),
             skipped_frames: Vec::new(),
@@ -578,8 +600,8 @@ impl RunCounts {
         for p in &r.pairs {
             c.add_pair(&p.row);
         }
-        for n in r.track_lengths() {
-            c.add_track(n);
+        for (k, n) in r.track_lengths().enumerate() {
+            c.add_track(n, r.track_round_trip(k));
         }
         c
     }
@@ -597,8 +619,11 @@ impl RunCounts {
         }
     }
 
-    pub(crate) fn add_track(&mut self, steps: usize) {
+    pub(crate) fn add_track(&mut self, steps: usize, round_trip: Option<f64>) {
         self.tracks += 1;
+        if let Some(d) = round_trip {
+            self.track_round_trips.push(d as f32);
+        }
         if steps >= 3 {
             self.tracks_3_or_more += 1;
         }
@@ -636,4 +661,39 @@ impl RunCounts {
         let n = self.consistent_pairs;
         (n > 0).then(|| self.field_residual_sum / n as f64)
     }
+    /// The tracks' round trips summarised (`None` when no track has one).
+    pub fn track_round_trips(&self) -> Option<TrackRoundTrips> {
+        let mut v: Vec<f64> = self
+            .track_round_trips
+            .iter()
+            .map(|&d| f64::from(d))
+            .collect();
+        if v.is_empty() {
+            return None;
+        }
+        let over_1 = v.iter().filter(|&&d| d > 1.0).count();
+        let q = |v: &mut [f64], q| crate::consistency::quantile(v, q);
+        Some(TrackRoundTrips {
+            tracks: v.len(),
+            median: q(&mut v, 0.5),
+            p95: q(&mut v, 0.95),
+            max: q(&mut v, 1.0),
+            over_1_percent: 100.0 * over_1 as f64 / v.len() as f64,
+        })
+    }
+}
+
+/// The round trips of a run's tracks ([`SequenceResult::track_round_trips`]), in sensels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrackRoundTrips {
+    /// Tracks with a round trip (those of two steps or more through pairs with a field).
+    pub tracks: usize,
+    /// Their median round trip.
+    pub median: f64,
+    /// The 95th percentile.
+    pub p95: f64,
+    /// The largest.
+    pub max: f64,
+    /// The share of them, in %, whose round trip exceeds one sensel.
+    pub over_1_percent: f64,
 }

@@ -71,9 +71,16 @@ pub trait SequenceSink {
         let _ = object;
         Ok(())
     }
-    /// Track number `index` (in order from 0), once it has ended: its steps as object and node.
-    fn track(&mut self, index: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
-        let _ = (index, steps);
+    /// Track number `index` (in order from 0), once it has ended: its steps as object and node,
+    /// and its round trip in sensels ([`crate::chain_tracks_checked`]; `None` for a track of
+    /// one step, through a pair without a field, or anchored by drift correction).
+    fn track(
+        &mut self,
+        index: usize,
+        steps: &[(&SequenceObject, usize)],
+        round_trip: Option<f64>,
+    ) -> Result<()> {
+        let _ = (index, steps, round_trip);
         Ok(())
     }
     /// A reference pair of drift correction with its two objects, in the order of
@@ -135,7 +142,7 @@ fn replay_matches(r: &SequenceResult, sink: &mut dyn SequenceSink) -> Result<()>
     for (k, t) in r.all_tracks().enumerate() {
         let steps: Vec<(&SequenceObject, usize)> =
             t.steps.iter().map(|&(o, n)| (&r.objects[o], n)).collect();
-        sink.track(k, &steps)?;
+        sink.track(k, &steps, r.track_round_trip(k))?;
     }
     for (p, tracked) in r.reference_pairs.iter().zip(r.reference_tracked()) {
         sink.reference_pair(p, &r.objects[p.a], &r.objects[p.b], &tracked)?;
@@ -226,10 +233,16 @@ impl SequenceSink for Collect {
         self.result.pairs.push(kept);
         Ok(())
     }
-    fn track(&mut self, _: usize, steps: &[(&SequenceObject, usize)]) -> Result<()> {
+    fn track(
+        &mut self,
+        _: usize,
+        steps: &[(&SequenceObject, usize)],
+        round_trip: Option<f64>,
+    ) -> Result<()> {
         let track = Track {
             steps: steps.iter().map(|&(o, n)| (o.id, n)).collect(),
         };
+        self.result.track_round_trips.push(round_trip);
         match self.result.packed_tracks.as_mut() {
             Some(packed) => packed.push(&track),
             None => self.result.tracks.push(track),

@@ -451,11 +451,16 @@ impl<'o> Engine<'o> {
             return Ok(());
         }
         let (held, counts) = (&self.held, &mut self.counts);
-        self.chain
-            .chain(held, first..held.end(), &pairs, settled, &mut |k, track| {
-                counts.add_track(track.steps.len());
-                sink.track(k, &held_steps(held, &track)?)
-            })?;
+        self.chain.chain(
+            held,
+            first..held.end(),
+            &pairs,
+            settled,
+            &mut |k, track, trip| {
+                counts.add_track(track.steps.len(), trip);
+                sink.track(k, &held_steps(held, &track)?, trip)
+            },
+        )?;
         drop(pairs);
         // The objects before both the first open track and the last frame are done.
         let open = self.chain.first_object().unwrap_or(usize::MAX);
@@ -471,9 +476,9 @@ impl<'o> Engine<'o> {
             Some(kept) => self.anchor(&kept.candidates, &kept.pairs, sink)?,
             None => {
                 let (held, counts) = (&self.held, &mut self.counts);
-                self.chain.finish(&mut |k, track| {
-                    counts.add_track(track.steps.len());
-                    sink.track(k, &held_steps(held, &track)?)
+                self.chain.finish(&mut |k, track, trip| {
+                    counts.add_track(track.steps.len(), trip);
+                    sink.track(k, &held_steps(held, &track)?, trip)
                 })?;
             }
         }
@@ -500,10 +505,10 @@ impl<'o> Engine<'o> {
         let refs = reference_matches(objects, candidates, self.frames.start, self.options);
         let tracks = crate::drift::anchored_tracks(objects, pairs, &refs)?;
         for (k, t) in tracks.iter().enumerate() {
-            self.counts.add_track(t.steps.len());
+            self.counts.add_track(t.steps.len(), None);
             let steps: Vec<(&SequenceObject, usize)> =
                 t.steps.iter().map(|&(o, n)| (&objects[o], n)).collect();
-            sink.track(k, &steps)?;
+            sink.track(k, &steps, None)?;
         }
         let tracked = reference_tracked(objects, tracks.iter(), &refs);
         for (p, tracked) in refs.iter().zip(tracked) {

@@ -428,7 +428,12 @@ impl SequenceSink for EventOrder {
             .push((b.frame, self.frames.last().copied()));
         Ok(())
     }
-    fn track(&mut self, index: usize, _: &[(&SequenceObject, usize)]) -> pedo_io::Result<()> {
+    fn track(
+        &mut self,
+        index: usize,
+        _: &[(&SequenceObject, usize)],
+        _: Option<f64>,
+    ) -> pedo_io::Result<()> {
         self.tracks.push(index);
         Ok(())
     }

@@ -111,6 +111,11 @@ macro_rules! define_run {
         ///   ``tracks`` (row for row): the object each step is on (an index into ``objects``, which
         ///   gives its frame and, for an isocontour run, its level) and the node within it, as
         ///   ``tracks.csv``'s ``object_id`` and ``node``;
+        /// - ``track_round_trips``: (number of tracks,) float array, aligned with ``tracks``: each
+        ///   track's round trip in sensels, the largest over its steps of how far the backward field
+        ///   of the pair it steps through carries its node from where it came (``tracks.csv``'s
+        ///   ``round_trip_sensels``); NaN for a track of one step, for surfaces and with drift
+        ///   correction;
         /// - ``points``: the material points of a contour run (``points.csv``): per point a
         ///   (k, 3) float array of ``(frame, x, y)`` rows (sensels); ``point_steps`` per point a
         ///   (k, 2) int array of ``(object_id, seed_node)`` rows (node -1 for a point given by
@@ -253,6 +258,10 @@ fn run_recording<'py>(
     }
     dict.set_item("tracks", tracks)?;
     dict.set_item("track_steps", track_steps)?;
+    let trips: Vec<f64> = (0..result.tracks.len())
+        .map(|k| result.track_round_trip(k).unwrap_or(f64::NAN))
+        .collect();
+    dict.set_item("track_round_trips", PyArray1::from_vec(py, trips))?;
     set_points(py, &dict, &result, points.as_ref(), &options.inputs)?;
     let (start, end) = options.frames.unwrap_or((0, rec.n_frames()));
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);

@@ -174,6 +174,37 @@ def test_track_steps_name_the_object_and_node_of_every_track_step():
         assert nodes == [(o["id"], n) for o in objects for n in range(len(o["points"]))]
 
 
+def test_track_round_trips_are_those_of_tracks_csv_and_summarised_in_the_summary(tmp_path):
+    import csv
+
+    res = pymodal.run(BUNDLED, frames=(30, 60), out=tmp_path, figures="none", report="none")
+    trips = res["track_round_trips"]
+    assert trips.shape == (len(res["tracks"]),) and trips.dtype == np.float64
+    # A track of one step has none; every longer contour track has one, 0 or more.
+    lengths = np.array([len(t) for t in res["tracks"]])
+    np.testing.assert_array_equal(np.isnan(trips), lengths < 2)
+    assert (trips[lengths >= 2] >= 0).all() and np.ptp(trips[lengths >= 2]) > 0.5
+    # tracks.csv gives each track's on every one of its rows (4 decimals).
+    with open(tmp_path / "tracks.csv", newline="") as f:
+        for r in csv.DictReader(f):
+            want = trips[int(r["track"])]
+            if np.isnan(want):
+                assert r["round_trip_sensels"] == ""
+            else:
+                assert abs(float(r["round_trip_sensels"]) - want) <= 5e-5
+    # summary.json: numpy's quantiles of the known ones.
+    known = trips[~np.isnan(trips)]
+    s = res["summary"]["track_round_trip_sensels"]
+    assert s["tracks"] == len(known)
+    for key, q in (("median", 0.5), ("p95", 0.95), ("max", 1.0)):
+        assert s[key] == pytest.approx(np.quantile(known, q), rel=1e-9)
+    assert s["over_1_percent"] == pytest.approx(100 * np.mean(known > 1.0))
+    # Surfaces have no field: no figure.
+    surf = pymodal.run(moving_blob(frames=4), model="surface", surface_nodes=30)
+    assert np.isnan(surf["track_round_trips"]).all()
+    assert surf["summary"]["track_round_trip_sensels"] is None
+
+
 def test_reference_matches_explain_the_track_steps_drift_correction_makes():
     res = pymodal.run(str(BUNDLED), frames=(0, 40), drift_reference=10)
     objects, refs = res["objects"], res["reference_matches"]

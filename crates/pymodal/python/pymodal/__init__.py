@@ -40,7 +40,7 @@ def _same(a: _Any, b: _Any) -> bool:
 
 class RunResult(dict[str, _Any]):
     """What :func:`run` returns: a dict (``table``, ``matches``, ``reference_matches``,
-    ``objects``, ``tracks``, ``track_steps``, ``points``, ``point_steps``, ``point_names``,
+    ``objects``, ``tracks``, ``track_steps``, ``track_round_trips``, ``points``, ``point_steps``, ``point_names``,
     ``region_series``, ``regions``, ``frames``, ``curves``, ``summary``, ``timings``) that Jupyter shows as a table of its
     summary. ``points`` are the material points of a contour run, followed by anchored
     registration (one array of rows ``frame, x, y`` per point; ``point_steps`` gives each step's

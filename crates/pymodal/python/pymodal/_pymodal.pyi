@@ -346,6 +346,7 @@ def surface(
     z_scale: Literal["xy", "keep"] = "xy",
 ) -> Surface: ...
 # run's result (RunResult, a dict) holds, besides table, matches, objects, tracks, track_steps,
+# track_round_trips (a FloatArray, one round trip in sensels per track, NaN where none),
 # frames, curves (the rows of curves.csv as dicts: stance, complete, percent and the frames
 # table's measures at 0..100 % of each stance's contact, and each region's with region_rule
 # or masks), summary and timings,
