@@ -14,13 +14,13 @@ CARGO_ENV = PATH=$(abspath $(VENV))/bin:$$PATH $(CARGO_LINT)
 CARGO_LINT :=
 
 
-.PHONY: doc-check fmt-check test test-rust test-python test-browser wheel-check examples venv wheel bench bench-python lint demo
+.PHONY: doc-check fmt-check test test-rust test-rust-doc test-python test-browser wheel-check examples venv wheel bench bench-python lint demo
 
 # Every test: the formatting check first, then Rust (unit, integration, doc), Python (against the installed wheel), the wheel
 # installed on its own in a fresh venv without Rust, every example, and the report in a browser.
 test: WHEEL_PROFILE = dev
 test: CARGO_LINT = RUSTC_WORKSPACE_WRAPPER=$(CLIPPY_DRIVER) CLIPPY_ARGS=-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__
-test: fmt-check test-rust doc-check test-python wheel-check examples test-browser
+test: fmt-check test-rust-doc test-python wheel-check examples test-browser
 CLIPPY_DRIVER = $(shell command -v clippy-driver || echo clippy-driver-not-installed)
 
 # One cargo invocation for every crate (pymodal's tests need the venv's Python with numpy); the
@@ -30,8 +30,24 @@ test-rust: venv
 	$(CARGO_ENV) cargo test -q --workspace --benches --no-run
 
 # The API documentation with warnings as errors (broken or private links, bad code blocks).
+DOC_ENV = PATH=$(abspath $(VENV))/bin:$$PATH RUSTDOCFLAGS="-D warnings"
 doc-check: venv
-	$(CARGO_ENV) RUSTDOCFLAGS="-D warnings" cargo doc -q --workspace --no-deps
+	$(DOC_ENV) cargo doc -q --workspace --no-deps
+
+# `make test`'s Rust stage: the build, then the tests with the documentation checked beside them.
+# rustdoc needs a check build of every dependency, which the test build cannot lend it, so it
+# runs in a target folder of its own while the tests run (they leave a core idle much of the
+# time); its output is shown, and its failure fails the stage, once the tests are done.
+DOC_DIR := target/doc-check
+test-rust-doc: venv
+	$(CARGO_ENV) cargo test --workspace --no-run
+	mkdir -p $(DOC_DIR); \
+	( $(DOC_ENV) CARGO_TARGET_DIR=$(DOC_DIR) cargo doc -q --workspace --no-deps ) >$(DOC_DIR)/log 2>&1 & doc=$$!; \
+	status=0; \
+	$(CARGO_ENV) cargo test --workspace || status=$$?; \
+	$(CARGO_ENV) cargo test -q --workspace --benches --no-run || status=$$?; \
+	if wait $$doc; then cat $(DOC_DIR)/log; else cat $(DOC_DIR)/log; echo "make: the API documentation failed" >&2; status=1; fi; \
+	exit $$status
 
 venv: $(VENV)/.ready
 
