@@ -1265,8 +1265,8 @@ impl pedo_track::follow::PointsSink for PointsTable<'_> {
 
 /// The regions `masks` (of values `fixed`) of `run` carried through its stances on the frames of
 /// `frames` ([`crate::moving_regions::follow_anatomy`]): by `whole`, the contour run's own objects
-/// and pairs, or for a run of another model by the contour field made with
-/// [`RunParams::contour_options`].
+/// and pairs, or for a run of another model by the contour field
+/// ([`crate::moving_regions::carrying_options`]).
 fn carry_anatomy(
     run: &RunOf<'_>,
     frames: &Recording,
@@ -1275,17 +1275,8 @@ fn carry_anatomy(
     masks: &pedo_io::regions::RegionMasks,
     fixed: &[pedo_io::regions::RegionValues],
 ) -> crate::moving_regions::MovingOutcome {
-    let contour;
-    let options = match whole {
-        Some(_) => run.options,
-        None => {
-            let mut o = run.params.contour_options(run.recording)?;
-            o.cancel = run.options.cancel.clone();
-            contour = o;
-            &contour
-        }
-    };
-    crate::moving_regions::follow_anatomy(frames, whole, options, measures, masks, fixed)
+    let options = crate::moving_regions::carrying_options(run.params, run.recording, run.options)?;
+    crate::moving_regions::follow_anatomy(frames, whole, &options, measures, masks, fixed)
 }
 
 /// The figures asked for; then, from the user's points and regions followed (`followed`), the

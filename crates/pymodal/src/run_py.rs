@@ -304,16 +304,8 @@ fn run_recording<'py>(
             };
             // Carried through the stances by the contour field (each foot's through its own):
             // this run's, or for a surface or isocontour run the contour run of its frames.
-            let contour = options.model == pedo_track::ObjectModel::Contour;
-            let field = match contour {
-                true => options.clone(),
-                false => {
-                    let mut o = params.contour_options(&rec)?;
-                    o.cancel = options.cancel.clone();
-                    o
-                }
-            };
-            let run = contour.then_some(&result);
+            let field = pedo_output::moving_regions::carrying_options(&params, &rec, &options)?;
+            let run = (options.model == pedo_track::ObjectModel::Contour).then_some(&result);
             let moving = Some(pedo_output::moving_regions::follow_anatomy(
                 &rec, run, &field, &m, &masks, &fixed,
             )?);
