@@ -21,6 +21,11 @@ import pymodal
 
 DATA = pathlib.Path(__file__).resolve().parents[2] / "pedo-io" / "tests" / "data"
 
+# The corpus is made once per process (about 60 MB of gzip and two sparse gigabytes): with
+# pytest-xdist, this module's tests stay on one worker (`--dist loadgroup`) instead of every
+# worker making its own.
+pytestmark = pytest.mark.xdist_group("hostile")
+
 # A child may map this much: far more than the 512 MB it may use, far less than what the
 # files claim (262 GB, 30 GB, 4.3 GB), so an allocation sized by a claim fails in it.
 ADDRESS_SPACE = 4 << 30
