@@ -1078,7 +1078,10 @@ fn write_folder(
         follow.finish()?;
         steps.step();
     }
-    let followed = points_table.map(PointsTable::finish).transpose()?;
+    let (followed, point_trips) = match points_table.map(PointsTable::finish).transpose()? {
+        Some((kept, trips)) => (Some(kept), Some(trips)),
+        None => (None, None),
+    };
     let rule_name = asked.as_ref().map(crate::RegionsAsked::name);
     let (measures, regions, held) = measures.finish_with_regions(run.recording, asked)?;
     // The frames the regions are carried on: those the run kept, or the recording's own.
@@ -1153,6 +1156,9 @@ fn write_folder(
     ));
     let (i, rec) = (run.input, run.recording);
     let mut summary = crate::run_summary_of(i, rec, run.params, run.options, &counts, &stages);
+    if let Some(trips) = point_trips {
+        summary["point_round_trip_sensels"] = crate::point_round_trips_json(trips);
+    }
     summary["input"]["streamed"] = json!(streamed);
     summary["input"]["read_whole"] = read_whole;
     crate::set_summary_measures(&mut summary, &measures);
@@ -1239,10 +1245,10 @@ impl<'a> PointsTable<'a> {
         })
     }
 
-    /// Ends the table; returns the points kept.
-    fn finish(self) -> Result<Vec<PointFrames>> {
+    /// Ends the table; returns the points kept and the rows' round trips.
+    fn finish(self) -> Result<(Vec<PointFrames>, Vec<f32>)> {
         self.writer.finish(self.dir)?;
-        Ok(self.kept)
+        Ok((self.kept, self.rows.round_trips))
     }
 }
 
