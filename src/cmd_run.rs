@@ -231,14 +231,20 @@ fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: Tab
                 float("mean_trackable_percent"),
                 float("mean_local_percent")
             );
-            let tracks = &summary["track_round_trip_sensels"];
-            if tracks["median"].is_f64() {
-                outln!(
-                    "tracks' round trip {:.3} sensels median, {:.3} at the 95th percentile ({:.1} % over 1 sensel)",
-                    tracks["median"].as_f64().unwrap_or(f64::NAN),
-                    tracks["p95"].as_f64().unwrap_or(f64::NAN),
-                    tracks["over_1_percent"].as_f64().unwrap_or(f64::NAN)
-                );
+            for (who, key) in [
+                ("tracks'", "track_round_trip_sensels"),
+                ("material points'", "point_round_trip_sensels"),
+            ] {
+                let trips = &summary[key];
+                if trips["median"].is_f64() {
+                    let f = |k: &str| trips[k].as_f64().unwrap_or(f64::NAN);
+                    outln!(
+                        "{who} round trip {:.3} sensels median, {:.3} at the 95th percentile ({:.1} % over 1 sensel)",
+                        f("median"),
+                        f("p95"),
+                        f("over_1_percent")
+                    );
+                }
             }
         } else {
             outln!(

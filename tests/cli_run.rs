@@ -862,6 +862,16 @@ fn a_run_with_tables_only_writes_the_tables_of_a_run_with_figures() {
         // no point round trips to summarise.
         assert!(a["point_round_trip_sensels"].is_null());
         assert!(b["point_round_trip_sensels"]["steps"].as_u64().unwrap() > 100);
+        // The summary line states them as summary.json records them, and only where they are.
+        let p = |k: &str| b["point_round_trip_sensels"][k].as_f64().unwrap();
+        let line = format!(
+            "material points' round trip {:.3} sensels median, {:.3} at the 95th percentile ({:.1} % over 1 sensel)",
+            p("median"),
+            p("p95"),
+            p("over_1_percent")
+        );
+        assert!(full_said.contains(&line), "{full_said}");
+        assert!(!lean_said.contains("material points'"), "{lean_said}");
         for s in [&mut a, &mut b] {
             let input = s["input"].as_object_mut().unwrap();
             input.remove("streamed");

@@ -24,19 +24,15 @@ the share of rows over one sensel from the truth among each. Needs numpy (Spearm
 """
 
 import argparse
-import csv
 import os
-import subprocess
 import sys
 import tempfile
 
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from stance import Stance  # noqa: E402
+from stance import GROUPS, Stance, run_with_points  # noqa: E402
 
-GROUPS = {"tuning (laws 0-1, seeds 0-1)": [(0, 0), (0, 1), (1, 0), (1, 1)],
-          "held-out (laws 2-3, seeds 2-3)": [(2, 2), (2, 3), (3, 2), (3, 3)]}
 
 
 def ranks(v):
@@ -54,25 +50,13 @@ def spearman(x, y):
 
 
 def run_case(binary, st, tmp):
-    rec = os.path.join(tmp, "stance.npy")
-    np.save(rec, st.frames)
     xy = st.pixel_centres()
     pts = xy[st.signed_distance(xy) > 1.5]  # frame 0 is the material frame
-    with open(os.path.join(tmp, "points.csv"), "w") as fh:
-        fh.write("name,x,y,frame\n")
-        for k, (x, y) in enumerate(pts):
-            fh.write(f"q{k},{x},{y},0\n")
-    out = os.path.join(tmp, "out")
-    subprocess.run([binary, "run", rec, "--out", out, "--points", os.path.join(tmp, "points.csv"),
-                    "--pitch-mm", str(st.pitch_mm), "--frame-rate", str(st.frame_rate),
-                    "--units", "kPa", "--figures", "none", "--report", "none"],
-                   check=True, stdout=subprocess.DEVNULL)
     tracks = {}
-    with open(os.path.join(out, "points.csv")) as fh:
-        for row in csv.DictReader(fh):
-            trip = float(row["round_trip_sensels"]) if row["round_trip_sensels"] else np.nan
-            tracks.setdefault(row["point"], []).append(
-                (int(row["frame"]), float(row["x"]), float(row["y"]), trip))
+    for row in run_with_points(binary, st, pts, 0, tmp):
+        trip = float(row["round_trip_sensels"]) if row["round_trip_sensels"] else np.nan
+        tracks.setdefault(row["point"], []).append(
+            (int(row["frame"]), float(row["x"]), float(row["y"]), trip))
     rows = []  # per row: true error, step error, round trip, running max, frame
     for steps in tracks.values():
         steps = np.array(steps)

@@ -15,20 +15,16 @@ Needs numpy; the binary is any ``pedomatch`` (e.g. ``target/release/pedomatch``)
 """
 
 import argparse
-import csv
 import os
-import subprocess
 import sys
 import tempfile
 
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from stance import Stance  # noqa: E402
+from stance import GROUPS, Stance, run_with_points  # noqa: E402
 
 HORIZONS = (25, 50, 100)
-GROUPS = {"tuning (laws 0-1, seeds 0-1)": [(0, 0), (0, 1), (1, 0), (1, 1)],
-          "held-out (laws 2-3, seeds 2-3)": [(2, 2), (2, 3), (3, 2), (3, 3)]}
 
 
 def seed_points(st, f):
@@ -39,26 +35,12 @@ def seed_points(st, f):
 
 
 def run_case(binary, st, f, tmp):
-    frames = st.frames
-    rec = os.path.join(tmp, "stance.npy")
-    np.save(rec, frames)
     pts = seed_points(st, f)
-    with open(os.path.join(tmp, "points.csv"), "w") as fh:
-        fh.write("name,x,y,frame\n")
-        for k, (x, y) in enumerate(pts):
-            fh.write(f"q{k},{x},{y},{f}\n")
-    out = os.path.join(tmp, "out")
-    subprocess.run([binary, "run", rec, "--out", out, "--points", os.path.join(tmp, "points.csv"),
-                    "--pitch-mm", str(st.pitch_mm), "--frame-rate", str(st.frame_rate),
-                    "--units", "kPa", "--figures", "none", "--report", "none"],
-                   check=True, stdout=subprocess.DEVNULL)
     pos = np.full((st.n_frames, len(pts), 2), np.nan)
-    with open(os.path.join(out, "points.csv")) as fh:
-        for row in csv.DictReader(fh):
-            if row["kind"] != "user":
-                continue
-            k = int(row["name"][1:])
-            pos[int(row["frame"]), k] = float(row["x"]), float(row["y"])
+    for row in run_with_points(binary, st, pts, f, tmp):
+        if row["kind"] != "user":
+            continue
+        pos[int(row["frame"]), int(row["name"][1:])] = float(row["x"]), float(row["y"])
     material = st.reference_positions(f, pts)
     shares = {}
     for h in HORIZONS:

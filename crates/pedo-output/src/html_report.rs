@@ -68,6 +68,9 @@ pub struct ReportInfo {
     pub frames: Option<(usize, usize)>,
     /// The measures section's data ([`ReportMeasures::to_json`]); `Null`: no such section.
     pub measures: Value,
+    /// The material points' round trips (`summary.json`'s `point_round_trip_sensels`), when the
+    /// run followed points.
+    pub point_round_trips: Option<pedo_track::consistency::RoundTrips>,
 }
 
 /// What the report's measures section draws: the peak-pressure image with the regions'
@@ -226,6 +229,7 @@ impl ReportInfo {
             timings: entries("timings_s")
                 .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(0.0)))
                 .collect(),
+            point_round_trips: crate::point_round_trips_of_summary(summary),
             ..Default::default()
         }
     }
@@ -643,6 +647,18 @@ fn ordinal(n: usize) -> String {
     format!("{n}{suffix}")
 }
 
+/// Round trips as the header states them: `noun` counts them, `what` says what each is.
+fn round_trips_text(t: &pedo_track::consistency::RoundTrips, noun: &str, what: &str) -> String {
+    format!(
+        "round trip {:.3} sensels median, {:.3} at the 95th percentile, {:.1} % over 1 sensel \
+         (of {}{what})",
+        t.median,
+        t.p95,
+        t.over_1_percent,
+        counted(t.count, noun)
+    )
+}
+
 fn header_html(recording: &Recording, counts: &RunCounts, info: &ReportInfo) -> String {
     let (_, punits) = pressure_scale(recording);
     let n = recording.n_frames();
@@ -706,17 +722,16 @@ fn header_html(recording: &Recording, counts: &RunCounts, info: &ReportInfo) -> 
             ),
         ));
     }
-    if let Some(t) = counts.track_round_trips() {
-        rows.push((
-            "track consistency".into(),
-            format!(
-                "round trip {:.3} sensels median, {:.3} at the 95th percentile, {:.1} % over 1                  sensel (of {}: the largest of each track's steps)",
-                t.median,
-                t.p95,
-                t.over_1_percent,
-                counted(t.tracks, "track")
-            ),
-        ));
+    // Where the run's round trips stand (each the largest of a track's steps; each a step of a
+    // material point), in place of the share of nodes matched.
+    let tracks = counts
+        .track_round_trips()
+        .map(|t| (t, "track", ": the largest of each track's steps"));
+    let points = (info.point_round_trips).map(|t| (t, "step", " of the material points"));
+    for (name, trips) in [("track consistency", tracks), ("point consistency", points)] {
+        if let Some((t, noun, what)) = trips {
+            rows.push((name.into(), round_trips_text(&t, noun, what)));
+        }
     }
     if !info.timings.is_empty() {
         rows.push(("timings".into(), timings_text(&info.timings)));
@@ -1372,7 +1387,37 @@ mod tests {
             contact_threshold: 0.0,
             frames: None,
             measures: Value::Null,
+            point_round_trips: None,
         }
+    }
+
+    #[test]
+    fn the_header_states_the_points_round_trips_that_summary_json_records() {
+        let rec = flat(2, "kPa", Some([2.0, 2.0]));
+        // Five steps, one NaN (a seed frame's row): four round trips, one over a sensel.
+        let trips = [0.2, 0.4, f32::NAN, 0.6, 1.5];
+        let summary = json!({ "point_round_trip_sensels": crate::point_round_trips_json(trips) });
+        let info = ReportInfo::of_summary("walk".into(), &summary);
+        let t = info.point_round_trips.expect("the summary's round trips");
+        assert_eq!(t.count, 4);
+        // numpy.percentile([0.2, 0.4, 0.6, 1.5], [50, 95]) = 0.5, 1.365.
+        assert!(
+            (t.median - 0.5).abs() < 1e-6 && (t.p95 - 1.365).abs() < 1e-6,
+            "{t:?}"
+        );
+        let header = header_html(&rec, &RunCounts::default(), &info);
+        assert!(
+            header.contains(
+                "round trip 0.500 sensels median, 1.365 at the 95th percentile, 25.0 % over 1 \
+                 sensel (of 4 steps of the material points)"
+            ),
+            "{header}"
+        );
+        // No points followed: no row.
+        let none =
+            ReportInfo::of_summary("walk".into(), &json!({ "point_round_trip_sensels": null }));
+        assert!(none.point_round_trips.is_none());
+        assert!(!header_html(&rec, &RunCounts::default(), &none).contains("point consistency"));
     }
 
     /// A recording of `frames` frames of 4 × 5 sensels, every value 10, with `units` and an

@@ -7,6 +7,7 @@ use modal_core::OptionValue;
 use pedo_io::formats::ReadOptions;
 use pedo_io::recording::{Format, Recording};
 use pedo_io::{IoError, Result};
+use pedo_track::consistency::RoundTrips;
 use pedo_track::{RunCounts, RunParams, SequenceOptions, SequenceResult};
 use serde_json::{json, Map, Value};
 use sha2::{Digest, Sha256};
@@ -242,13 +243,37 @@ pub fn run_summary(
 /// `steps` with one, their `median`, `p95`, `max` and `over_1_percent` (the share over one
 /// sensel); `null` without any (no points followed, or none stepped through a matched pair).
 pub fn point_round_trips_json(trips: impl IntoIterator<Item = f32>) -> Value {
-    match pedo_track::consistency::RoundTrips::of(trips) {
+    round_trips_json(RoundTrips::of(trips), POINT_STEPS)
+}
+
+/// The key of the count in `summary.json`'s `point_round_trip_sensels` and
+/// `track_round_trip_sensels`.
+const POINT_STEPS: &str = "steps";
+const TRACKS: &str = "tracks";
+
+/// Round trips as `summary.json` records them, their count under `count` (`null`: none).
+fn round_trips_json(trips: Option<RoundTrips>, count: &str) -> Value {
+    match trips {
         Some(t) => json!({
-            "steps": t.count, "median": t.median, "p95": t.p95, "max": t.max,
+            count: t.count, "median": t.median, "p95": t.p95, "max": t.max,
             "over_1_percent": t.over_1_percent,
         }),
         None => Value::Null,
     }
+}
+
+/// The points' round trips of a `summary.json` ([`point_round_trips_json`]; `None` without any,
+/// or in a summary written before they were recorded).
+pub fn point_round_trips_of_summary(summary: &Value) -> Option<RoundTrips> {
+    let t = &summary["point_round_trip_sensels"];
+    let f = |k: &str| t[k].as_f64();
+    Some(RoundTrips {
+        count: usize::try_from(t[POINT_STEPS].as_u64()?).ok()?,
+        median: f("median")?,
+        p95: f("p95")?,
+        max: f("max")?,
+        over_1_percent: f("over_1_percent")?,
+    })
 }
 
 /// The round trips of the points of `points.csv` (not the user's regions' outline points),
@@ -328,10 +353,7 @@ pub fn run_summary_of(
         "mean_trackable_percent": c.mean_trackable_percent(),
         "mean_round_trip_sensels": c.mean_round_trip(),
         "mean_field_residual_sensels": c.mean_field_residual(),
-        "track_round_trip_sensels": c.track_round_trips().map(|t| json!({
-            "tracks": t.tracks, "median": t.median, "p95": t.p95, "max": t.max,
-            "over_1_percent": t.over_1_percent,
-        })),
+        "track_round_trip_sensels": round_trips_json(c.track_round_trips(), TRACKS),
         // Set where the points are followed (`point_round_trips_json`).
         "point_round_trip_sensels": Value::Null,
         "timings_s": stages,

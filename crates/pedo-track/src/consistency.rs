@@ -152,12 +152,13 @@ impl StepField {
     }
 }
 
-/// Round trips summarised (sensels): the points' of a run
-/// ([`crate::follow::FollowedPoint::round_trips`]), as `summary.json`'s
-/// `point_round_trip_sensels` gives them.
+/// Round trips summarised (sensels): a run's tracks', one per track
+/// ([`RunCounts::track_round_trips`](crate::RunCounts::track_round_trips)), or its
+/// points', one per step ([`crate::follow::FollowedPoint::round_trips`]), as `summary.json`'s
+/// `track_round_trip_sensels` and `point_round_trip_sensels` give them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RoundTrips {
-    /// How many round trips (a point's steps with one).
+    /// How many round trips (tracks, or points' steps, with one).
     pub count: usize,
     /// Their median.
     pub median: f64,

@@ -1,6 +1,7 @@
 //! What a run produces: the objects of every frame, the matched pairs with the paper's columns,
 //! the tracks, what was skipped and why, and the counts a summary reports.
 
+use crate::consistency::RoundTrips;
 use modal_core::{MatchResult, Shape};
 use pedo_io::recording::FrameMeasures;
 use pedo_io::{IoError, Result};
@@ -661,39 +662,8 @@ impl RunCounts {
         let n = self.consistent_pairs;
         (n > 0).then(|| self.field_residual_sum / n as f64)
     }
-    /// The tracks' round trips summarised (`None` when no track has one).
-    pub fn track_round_trips(&self) -> Option<TrackRoundTrips> {
-        let mut v: Vec<f64> = self
-            .track_round_trips
-            .iter()
-            .map(|&d| f64::from(d))
-            .collect();
-        if v.is_empty() {
-            return None;
-        }
-        let over_1 = v.iter().filter(|&&d| d > 1.0).count();
-        let q = |v: &mut [f64], q| crate::consistency::quantile(v, q);
-        Some(TrackRoundTrips {
-            tracks: v.len(),
-            median: q(&mut v, 0.5),
-            p95: q(&mut v, 0.95),
-            max: q(&mut v, 1.0),
-            over_1_percent: 100.0 * over_1 as f64 / v.len() as f64,
-        })
+    /// The tracks' round trips summarised, one per track (`None` when no track has one).
+    pub fn track_round_trips(&self) -> Option<RoundTrips> {
+        RoundTrips::of(self.track_round_trips.iter().copied())
     }
-}
-
-/// The round trips of a run's tracks ([`SequenceResult::track_round_trips`]), in sensels.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TrackRoundTrips {
-    /// Tracks with a round trip (those of two steps or more through pairs with a field).
-    pub tracks: usize,
-    /// Their median round trip.
-    pub median: f64,
-    /// The 95th percentile.
-    pub p95: f64,
-    /// The largest.
-    pub max: f64,
-    /// The share of them, in %, whose round trip exceeds one sensel.
-    pub over_1_percent: f64,
 }
