@@ -163,31 +163,34 @@ fn the_default_stride_brings_a_fast_recording_to_the_matching_rate_and_no_slower
 fn a_500_hz_recording_runs_every_second_frame_by_default_and_every_frame_on_request() {
     let mut rec = recording(9, |f, r, c| disc(10.0 + 0.2 * f as f64, 12.0, 6.0)(r, c));
     rec.dt_s = Some(0.002);
-    let run = |every| {
+    let run = |rec: &Recording, every| {
         let params = RunParams {
             every,
             ..RunParams::default()
         };
-        let options = params.to_options(&rec).unwrap();
-        let used = params.used(&options, &rec);
+        let options = params.to_options(rec).unwrap();
+        let used = params.used(&options, rec);
         let every = used.iter().find(|(k, _)| *k == "every").unwrap().1.clone();
-        let run = run_sequence(&rec, &options, &|_, _, _| {}).unwrap();
+        let run = run_sequence(rec, &options, &|_, _, _| {}).unwrap();
         let frames: Vec<usize> = run.objects.iter().map(|o| o.frame).collect();
         (frames, every)
     };
-    let (auto, recorded) = run(FrameStride::Auto);
+    let (auto, recorded) = run(&rec, FrameStride::Auto);
     assert_eq!(auto, [0, 2, 4, 6, 8]);
     assert_eq!(
         recorded,
         OptionValue::Int(2),
         "summary.json records the stride used"
     );
-    assert_eq!(run(FrameStride::Every(2)).0, auto);
-    assert_eq!(run(FrameStride::Every(1)).0, (0..9).collect::<Vec<_>>());
+    assert_eq!(run(&rec, FrameStride::Every(2)).0, auto);
+    assert_eq!(
+        run(&rec, FrameStride::Every(1)).0,
+        (0..9).collect::<Vec<_>>()
+    );
     // At 100 Hz the default is every frame; a study lists it as given.
     rec.dt_s = Some(0.01);
     assert_eq!(
-        run(FrameStride::Auto),
+        run(&rec, FrameStride::Auto),
         ((0..9).collect(), OptionValue::Int(1))
     );
     let given = RunParams::default().given().unwrap();
