@@ -1,7 +1,7 @@
 # Developer entry points. `make test` is what CI runs (through .ci/run).
 VENV ?= .venv
 PY := $(VENV)/bin/python
-PIP_PACKAGES := maturin numpy scipy pytest mypy scikit-image matplotlib pandas pyarrow dask[distributed]
+PIP_PACKAGES := maturin numpy scipy pytest pytest-xdist mypy scikit-image matplotlib pandas pyarrow dask[distributed]
 # The wheel's cargo profile: release for `make wheel`; `make test` builds it with the dev profile
 # (assign and modal-core fully optimised, dependencies at opt-level 3 already compiled for
 # `cargo test`), so that CI compiles the dependency tree once instead of twice.
@@ -14,17 +14,18 @@ CARGO_ENV = PATH=$(abspath $(VENV))/bin:$$PATH $(CARGO_LINT)
 CARGO_LINT :=
 
 
-.PHONY: doc-check fmt-check test test-rust test-rust-doc test-python test-browser wheel-check examples venv wheel bench bench-python lint demo
+.PHONY: doc-check fmt-check test test-rust test-rust-python test-python test-browser wheel-check examples venv wheel bench bench-python lint demo
 
-# Every test: the formatting check first, then Rust (unit, integration, doc), Python (against the installed wheel), the wheel
-# installed on its own in a fresh venv without Rust, every example, and the report in a browser.
+# Every test: the formatting check first, then Rust (unit, integration, doc), Python (against the
+# installed wheel) and the API documentation side by side, the wheel installed on its own in a
+# fresh venv without Rust, every example, and the report in a browser.
 test: WHEEL_PROFILE = dev
 test: CARGO_LINT = RUSTC_WORKSPACE_WRAPPER=$(CLIPPY_DRIVER) CLIPPY_ARGS=-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__
-test: fmt-check test-rust-doc test-python wheel-check examples test-browser
+test: fmt-check test-rust-python wheel-check examples test-browser
 CLIPPY_DRIVER = $(shell command -v clippy-driver || echo clippy-driver-not-installed)
 
-# One cargo invocation for every crate (pymodal's tests need the venv's Python with numpy); the
-# benchmarks are compiled too (with the test profile), so that clippy sees every target.
+# One cargo invocation for every crate (pyo3 reads the venv's interpreter); the benchmarks are
+# compiled too (with the test profile). The bindings are tested from Python (`make test-python`).
 test-rust: venv
 	$(CARGO_ENV) cargo test --workspace
 	$(CARGO_ENV) cargo test -q --workspace --benches --no-run
@@ -34,18 +35,26 @@ DOC_ENV = PATH=$(abspath $(VENV))/bin:$$PATH RUSTDOCFLAGS="-D warnings"
 doc-check: venv
 	$(DOC_ENV) cargo doc -q --workspace --no-deps
 
-# `make test`'s Rust stage: the build, then the tests with the documentation checked beside them.
-# rustdoc needs a check build of every dependency, which the test build cannot lend it, so it
-# runs in a target folder of its own while the tests run (they leave a core idle much of the
-# time); its output is shown, and its failure fails the stage, once the tests are done. The
-# benchmarks are left to `make lint` and `make test-rust` here (CI's time limit).
+# `make test`'s test stage: the Rust test build, then the Rust tests, the Python tests (against
+# the wheel, built first) and the API documentation side by side, so that both cores stay busy:
+# the Rust test binaries run one after another and often leave a core idle. rustdoc needs a check
+# build of every dependency, which the test build cannot lend it, so it runs in a target folder
+# of its own. The Python tests' and the documentation's output is shown, and their failure fails
+# the stage, once the Rust tests are done. The benchmarks are left to `make lint` and
+# `make test-rust` here (CI's time limit).
 DOC_DIR := target/doc-check
-test-rust-doc: venv
+PYTEST_LOG := target/pytest.log
+test-rust-python: wheel
 	$(CARGO_ENV) cargo test --workspace --no-run
+	cd $(VENV) && ./bin/python -c 'import pymodal, sys; \
+		sys.exit(0 if "site-packages" in pymodal.__file__ else "pymodal not imported from the wheel: " + pymodal.__file__)'
 	mkdir -p $(DOC_DIR); \
 	( $(DOC_ENV) CARGO_TARGET_DIR=$(DOC_DIR) cargo doc -q --workspace --no-deps ) >$(DOC_DIR)/log 2>&1 & doc=$$!; \
+	( cd $(VENV) && ./bin/python -m pytest -q -p no:cacheprovider -n $(PYTEST_WORKERS) --dist loadgroup \
+		$(abspath crates/pymodal/tests) ) >$(PYTEST_LOG) 2>&1 & py=$$!; \
 	status=0; \
-	$(CARGO_ENV) cargo test --workspace || status=$$?; \
+	$(CARGO_ENV) cargo test --workspace --no-fail-fast || status=$$?; \
+	if wait $$py; then cat $(PYTEST_LOG); else cat $(PYTEST_LOG); echo "make: the Python tests failed" >&2; status=1; fi; \
 	if wait $$doc; then cat $(DOC_DIR)/log; else cat $(DOC_DIR)/log; echo "make: the API documentation failed" >&2; status=1; fi; \
 	exit $$status
 
@@ -67,11 +76,14 @@ wheel: venv
 	$(PY) -m pip install -q --force-reinstall --no-deps dist/pedomatch-*.whl
 
 # The Python tests run against the installed wheel: from outside the source tree, so that
-# `import pymodal` cannot resolve to crates/pymodal/python.
+# `import pymodal` cannot resolve to crates/pymodal/python. On every core (pytest-xdist: one
+# worker per core, tests handed out as workers free up, a module marked with an xdist_group kept
+# on one worker); PYTEST_WORKERS=0 runs them in one process.
+PYTEST_WORKERS ?= auto
 test-python: wheel
 	cd $(VENV) && ./bin/python -c 'import pymodal, sys; \
 		sys.exit(0 if "site-packages" in pymodal.__file__ else "pymodal not imported from the wheel: " + pymodal.__file__)'
-	cd $(VENV) && ./bin/python -m pytest -q -p no:cacheprovider $(abspath crates/pymodal/tests)
+	cd $(VENV) && ./bin/python -m pytest -q -p no:cacheprovider -n $(PYTEST_WORKERS) --dist loadgroup $(abspath crates/pymodal/tests)
 
 # The wheel on its own: a throw-away venv, pip (numpy from PyPI as a binary wheel), its metadata
 # (distribution `pedomatch`, not the index's unrelated `pymodal`) and a small real match, with

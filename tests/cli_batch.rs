@@ -137,7 +137,7 @@ fn a_corrupt_recording_fails_alone_and_a_second_run_resumes() {
     let header = csv.lines().next().unwrap();
     assert_eq!(
         header,
-        "path,output,format,frames,frame_rate_hz,pitch_x_mm,pitch_y_mm,pressure_units,pairs,mean_local_percent,mean_optimisation_percent,mean_trackable_percent,mean_round_trip_sensels,tracks,peak_pressure_kpa,pti_max_kpa_s,peak_force_n,fti_n_s,contact_time_s,max_contact_area_mm2,wall_time_s,status,message"
+        "path,output,format,frames,frame_rate_hz,pitch_x_mm,pitch_y_mm,pressure_units,pairs,mean_local_percent,mean_optimisation_percent,mean_trackable_percent,mean_round_trip_sensels,tracks,track_round_trip_median_sensels,track_round_trip_p95_sensels,point_round_trip_median_sensels,point_round_trip_p95_sensels,peak_pressure_kpa,pti_max_kpa_s,peak_force_n,fti_n_s,contact_time_s,max_contact_area_mm2,wall_time_s,status,message"
     );
     assert_eq!(csv.lines().count(), 5);
     let bad_line = csv.lines().find(|l| l.contains("corrupt.asf,")).unwrap();

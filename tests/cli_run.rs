@@ -858,10 +858,17 @@ fn a_run_with_tables_only_writes_the_tables_of_a_run_with_figures() {
             .as_str()
             .unwrap()
             .contains("figures"));
+        // And the material points are followed only where figures are drawn: the lean run has
+        // no point round trips to summarise.
+        assert!(a["point_round_trip_sensels"].is_null());
+        assert!(b["point_round_trip_sensels"]["steps"].as_u64().unwrap() > 100);
         for s in [&mut a, &mut b] {
             let input = s["input"].as_object_mut().unwrap();
             input.remove("streamed");
             input.remove("read_whole");
+            s.as_object_mut()
+                .unwrap()
+                .remove("point_round_trip_sensels");
         }
         assert_eq!(a, b);
         assert!(a["tracks"].as_u64().unwrap() > 100);

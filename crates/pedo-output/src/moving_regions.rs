@@ -11,8 +11,13 @@ use pedo_io::regions::{MovingRegionSeries, RegionMasks, RegionValues};
 use pedo_io::stances::Stance;
 use pedo_io::{IoError, Recording, Result};
 use pedo_track::moving_regions::{follow_masks, MovingRegion};
-use pedo_track::{ObjectModel, SequenceOptions, SequenceResult};
+use pedo_track::result::SkippedPair;
+use pedo_track::{
+    ObjectModel, PairMatch, RunParams, SequenceObject, SequenceOptions, SequenceResult,
+    SequenceSink,
+};
 use serde_json::{json, Map, Value};
+use std::borrow::Cow;
 
 /// The anatomical regions carried through a run's stances and their values over its frames.
 #[derive(Debug, Clone)]
@@ -115,13 +120,37 @@ pub fn follow_anatomy(
     Ok(MovingAnatomy { regions, values })
 }
 
+/// The options of the contour field that carries the anatomical regions of a run of
+/// `recording` with `options` (made from `params`): a contour run's own (its objects and pairs
+/// are the field); for a surface or isocontour run those of the contour run of its frames
+/// ([`RunParams::contour_options`]), with the run's cancel token, keeping each pair's matches
+/// only (what [`follow_masks`] reads).
+///
+/// # Errors
+/// Those of [`RunParams::contour_options`].
+pub fn carrying_options<'a>(
+    params: &RunParams,
+    recording: &Recording,
+    options: &'a SequenceOptions,
+) -> Result<Cow<'a, SequenceOptions>> {
+    if options.model == ObjectModel::Contour {
+        return Ok(Cow::Borrowed(options));
+    }
+    let mut o = params.contour_options(recording)?;
+    o.cancel = options.cancel.clone();
+    o.keep_match_details = false;
+    Ok(Cow::Owned(o))
+}
+
 /// The contour field of `recording`: the objects and pairs of its contour run with `options`
-/// ([`pedo_track::RunParams::contour_options`]), what carries the anatomical regions of a
-/// surface or isocontour run (made only when regions are asked).
+/// ([`carrying_options`]), what carries the anatomical regions of a surface or isocontour run
+/// (made only when regions are asked). Only what [`follow_masks`] reads is kept: the objects,
+/// each pair's matches and the pairs skipped; the tracks and the pairs' match details are
+/// dropped as the run hands them over.
 ///
 /// # Errors
 /// [`IoError::InvalidInput`] for options not of the contour model; those of
-/// [`pedo_track::run_sequence`] (a cancelled run among them).
+/// [`pedo_track::stream_sequence`] (a cancelled run among them).
 pub fn contour_field(recording: &Recording, options: &SequenceOptions) -> Result<SequenceResult> {
     if options.model != ObjectModel::Contour {
         return Err(IoError::invalid(format!(
@@ -129,7 +158,32 @@ pub fn contour_field(recording: &Recording, options: &SequenceOptions) -> Result
             options.model
         )));
     }
-    pedo_track::run_sequence(recording, options, &|_, _, _| {})
+    let mut field = Field::default();
+    let counts = pedo_track::stream_sequence(recording, None, options, &|_, _, _| {}, &mut field)?;
+    field.0.skipped_pairs = (counts.skipped_pairs.into_iter())
+        .map(|s| SkippedPair {
+            a: s.objects.id_a,
+            b: s.objects.id_b,
+            reason: s.reason,
+        })
+        .collect();
+    Ok(field.0)
+}
+
+/// Gathers a contour run's field ([`contour_field`]) as the engine hands it over: its objects
+/// and its pairs without their match details (the pairs skipped come with the run's counts).
+#[derive(Default)]
+struct Field(SequenceResult);
+
+impl SequenceSink for Field {
+    fn frame_objects(&mut self, _: usize, objects: &[SequenceObject]) -> Result<()> {
+        self.0.objects.extend_from_slice(objects);
+        Ok(())
+    }
+    fn pair(&mut self, pair: &PairMatch, _: &SequenceObject, _: &SequenceObject) -> Result<()> {
+        self.0.pairs.push(pair.without_details()?);
+        Ok(())
+    }
 }
 
 /// Appends to `t` ([`crate::region_series_header`]) the rows of the moving anatomical regions:

@@ -1078,7 +1078,10 @@ fn write_folder(
         follow.finish()?;
         steps.step();
     }
-    let followed = points_table.map(PointsTable::finish).transpose()?;
+    let (followed, point_trips) = match points_table.map(PointsTable::finish).transpose()? {
+        Some((kept, trips)) => (Some(kept), Some(trips)),
+        None => (None, None),
+    };
     let rule_name = asked.as_ref().map(crate::RegionsAsked::name);
     let (measures, regions, held) = measures.finish_with_regions(run.recording, asked)?;
     // The frames the regions are carried on: those the run kept, or the recording's own.
@@ -1153,6 +1156,9 @@ fn write_folder(
     ));
     let (i, rec) = (run.input, run.recording);
     let mut summary = crate::run_summary_of(i, rec, run.params, run.options, &counts, &stages);
+    if let Some(trips) = point_trips {
+        summary["point_round_trip_sensels"] = crate::point_round_trips_json(trips);
+    }
     summary["input"]["streamed"] = json!(streamed);
     summary["input"]["read_whole"] = read_whole;
     crate::set_summary_measures(&mut summary, &measures);
@@ -1239,10 +1245,10 @@ impl<'a> PointsTable<'a> {
         })
     }
 
-    /// Ends the table; returns the points kept.
-    fn finish(self) -> Result<Vec<PointFrames>> {
+    /// Ends the table; returns the points kept and the rows' round trips.
+    fn finish(self) -> Result<(Vec<PointFrames>, Vec<f32>)> {
         self.writer.finish(self.dir)?;
-        Ok(self.kept)
+        Ok((self.kept, self.rows.round_trips))
     }
 }
 
@@ -1265,8 +1271,8 @@ impl pedo_track::follow::PointsSink for PointsTable<'_> {
 
 /// The regions `masks` (of values `fixed`) of `run` carried through its stances on the frames of
 /// `frames` ([`crate::moving_regions::follow_anatomy`]): by `whole`, the contour run's own objects
-/// and pairs, or for a run of another model by the contour field made with
-/// [`RunParams::contour_options`].
+/// and pairs, or for a run of another model by the contour field
+/// ([`crate::moving_regions::carrying_options`]).
 fn carry_anatomy(
     run: &RunOf<'_>,
     frames: &Recording,
@@ -1275,17 +1281,8 @@ fn carry_anatomy(
     masks: &pedo_io::regions::RegionMasks,
     fixed: &[pedo_io::regions::RegionValues],
 ) -> crate::moving_regions::MovingOutcome {
-    let contour;
-    let options = match whole {
-        Some(_) => run.options,
-        None => {
-            let mut o = run.params.contour_options(run.recording)?;
-            o.cancel = run.options.cancel.clone();
-            contour = o;
-            &contour
-        }
-    };
-    crate::moving_regions::follow_anatomy(frames, whole, options, measures, masks, fixed)
+    let options = crate::moving_regions::carrying_options(run.params, run.recording, run.options)?;
+    crate::moving_regions::follow_anatomy(frames, whole, &options, measures, masks, fixed)
 }
 
 /// The figures asked for; then, from the user's points and regions followed (`followed`), the

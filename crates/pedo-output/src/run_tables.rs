@@ -390,8 +390,9 @@ pub(crate) fn track_rows<E>(
 /// known, the pressure under the point (bilinear between sensel centres; `pressure_kpa`
 /// when the units are known, else `pressure` in the file's units), its `kind` (`outline`: a
 /// default point seeded on an outline node; `user`: a point the user gave) and `name` (a user
-/// point's, from `inputs`; empty for the outline's). The points of the user's regions are not
-/// rows ([`regions_table`]); `point` numbers the rows' points from 0.
+/// point's, from `inputs`; empty for the outline's) and its `round_trip_sensels` on that frame
+/// ([`pedo_track::follow::FollowedPoint::round_trips`]; empty on its seed frame). The points of
+/// the user's regions are not rows ([`regions_table`]); `point` numbers the rows' points from 0.
 ///
 /// # Errors
 /// A frame of a step that the recording cannot give (never for the run's own points).
@@ -422,6 +423,7 @@ pub fn points_header(recording: &Recording) -> Table {
     });
     t.push_column("kind");
     t.push_column("name");
+    t.push_column("round_trip_sensels");
     t
 }
 
@@ -433,6 +435,9 @@ pub(crate) struct PointRows<'a> {
     inputs: &'a pedo_track::UserInputs,
     /// The points given rows so far.
     rows: usize,
+    /// The round trips of the rows so far (their summary is `summary.json`'s
+    /// `point_round_trip_sensels`).
+    pub(crate) round_trips: Vec<f32>,
     grids: std::collections::BTreeMap<usize, pedo_io::Grid>,
 }
 
@@ -442,6 +447,7 @@ impl<'a> PointRows<'a> {
             recording,
             inputs,
             rows: 0,
+            round_trips: Vec::new(),
             grids: Default::default(),
         }
     }
@@ -481,6 +487,9 @@ impl<'a> PointRows<'a> {
             cells.push(Cell::Float(bilinear(grid, xy) * per_unit, 4));
             cells.push(Cell::Text(kind.to_string()));
             cells.push(name.map_or(Cell::Empty, |n| Cell::Text(n.to_string())));
+            let trip = p.round_trips.get(s).copied().flatten();
+            self.round_trips.extend(trip);
+            cells.push(trip.map_or(Cell::Empty, |d| Cell::Float(f64::from(d), 4)));
             emit(cells)?;
         }
         self.rows += 1;

@@ -237,6 +237,31 @@ pub fn run_summary(
     )
 }
 
+/// `summary.json`'s `point_round_trip_sensels`: the round trips of the rows of `points.csv`
+/// (its `round_trip_sensels`, [`pedo_track::follow::FollowedPoint::round_trips`]) summarised:
+/// `steps` with one, their `median`, `p95`, `max` and `over_1_percent` (the share over one
+/// sensel); `null` without any (no points followed, or none stepped through a matched pair).
+pub fn point_round_trips_json(trips: impl IntoIterator<Item = f32>) -> Value {
+    match pedo_track::consistency::RoundTrips::of(trips) {
+        Some(t) => json!({
+            "steps": t.count, "median": t.median, "p95": t.p95, "max": t.max,
+            "over_1_percent": t.over_1_percent,
+        }),
+        None => Value::Null,
+    }
+}
+
+/// The round trips of the points of `points.csv` (not the user's regions' outline points),
+/// step by step ([`point_round_trips_json`]).
+pub fn point_round_trips(
+    points: &pedo_track::follow::FollowedPoints,
+) -> impl Iterator<Item = f32> + '_ {
+    use pedo_track::follow::Seeded;
+    (points.points.iter())
+        .filter(|p| !matches!(p.kind, Seeded::Region(_)))
+        .flat_map(|p| p.round_trips.iter().flatten().copied())
+}
+
 /// [`run_summary`] from the counts of a run ([`RunCounts`]: what a streamed run keeps).
 pub fn run_summary_of(
     input: &InputInfo,
@@ -307,6 +332,8 @@ pub fn run_summary_of(
             "tracks": t.tracks, "median": t.median, "p95": t.p95, "max": t.max,
             "over_1_percent": t.over_1_percent,
         })),
+        // Set where the points are followed (`point_round_trips_json`).
+        "point_round_trip_sensels": Value::Null,
         "timings_s": stages,
     })
 }

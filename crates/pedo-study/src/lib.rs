@@ -102,6 +102,17 @@ pub struct StudyRow {
     pub mean_round_trip_sensels: Option<f64>,
     /// Number of tracks; `None` on error.
     pub tracks: Option<usize>,
+    /// The median and 95th percentile of the run's track round trips, in sensels
+    /// (`summary.json`'s `track_round_trip_sensels`: `tracks.csv`'s `round_trip_sensels`);
+    /// `None` when no track has one (surfaces, drift correction), on error, and on a row of a
+    /// study written before they were columns.
+    pub track_round_trip_sensels: Quantiles,
+    /// The median and 95th percentile of the round trips of the run's material points, in
+    /// sensels (`summary.json`'s `point_round_trip_sensels`: `points.csv`'s
+    /// `round_trip_sensels`); `None` where the run followed no points (surfaces and
+    /// isocontours; a run of tables only without points or regions of the user's), on error,
+    /// and on a row of a study written before they were columns.
+    pub point_round_trip_sensels: Quantiles,
     /// The measures of the recording ([`pedo_io::measures`]) in the study's units; `None` on
     /// error and where the recording cannot give that unit.
     pub measures: StudyMeasures,
@@ -112,6 +123,26 @@ pub struct StudyRow {
     pub status: RowStatus,
     /// One line: why it failed, why it was skipped, or what the run left out.
     pub message: String,
+}
+
+/// The median and 95th percentile of a run's round trips (sensels), as `summary.json` gives
+/// them.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Quantiles {
+    /// The median.
+    pub median: Option<f64>,
+    /// The 95th percentile.
+    pub p95: Option<f64>,
+}
+
+impl Quantiles {
+    /// Those of `summary.json`'s object `v` (`median`, `p95`; `None` for `null`).
+    fn of_summary(v: &Value) -> Self {
+        Self {
+            median: v["median"].as_f64(),
+            p95: v["p95"].as_f64(),
+        }
+    }
 }
 
 /// The units a study row gives of its recording, so that the rows of a study mixing sensors
@@ -226,7 +257,7 @@ impl StudyMeasures {
 }
 
 /// The columns of the study table, units in the names.
-pub const STUDY_COLUMNS: [&str; 23] = [
+pub const STUDY_COLUMNS: [&str; 27] = [
     "path",
     "output",
     "format",
@@ -241,6 +272,10 @@ pub const STUDY_COLUMNS: [&str; 23] = [
     "mean_trackable_percent",
     "mean_round_trip_sensels",
     "tracks",
+    "track_round_trip_median_sensels",
+    "track_round_trip_p95_sensels",
+    "point_round_trip_median_sensels",
+    "point_round_trip_p95_sensels",
     "peak_pressure_kpa",
     "pti_max_kpa_s",
     "peak_force_n",
@@ -277,6 +312,10 @@ pub fn study_table(rows: &[StudyRow]) -> Table {
                     float(r.mean_trackable_percent, 1),
                     float(r.mean_round_trip_sensels, 4),
                     int(r.tracks),
+                    float(r.track_round_trip_sensels.median, 4),
+                    float(r.track_round_trip_sensels.p95, 4),
+                    float(r.point_round_trip_sensels.median, 4),
+                    float(r.point_round_trip_sensels.p95, 4),
                 ];
                 cells.extend(r.measures.values().map(|v| float(v, 4)));
                 cells.extend([
@@ -314,6 +353,14 @@ fn row_from_json(v: &Value) -> Option<StudyRow> {
         mean_trackable_percent: float("mean_trackable_percent"),
         mean_round_trip_sensels: float("mean_round_trip_sensels"),
         tracks: int("tracks"),
+        track_round_trip_sensels: Quantiles {
+            median: float("track_round_trip_median_sensels"),
+            p95: float("track_round_trip_p95_sensels"),
+        },
+        point_round_trip_sensels: Quantiles {
+            median: float("point_round_trip_median_sensels"),
+            p95: float("point_round_trip_p95_sensels"),
+        },
         measures: StudyMeasures::of_values(MEASURE_COLUMNS.map(|(c, _, _)| float(c))),
         wall_time_s: float("wall_time_s")?,
         status: match text("status")?.as_str() {
@@ -1634,6 +1681,8 @@ fn run_recording_as(
         mean_trackable_percent: None,
         mean_round_trip_sensels: None,
         tracks: None,
+        track_round_trip_sensels: Quantiles::default(),
+        point_round_trip_sensels: Quantiles::default(),
         measures: StudyMeasures::default(),
         wall_time_s: started.elapsed().as_secs_f64(),
         status: RowStatus::Error,
@@ -1844,6 +1893,8 @@ fn row_of_summary(
         mean_trackable_percent: summary["mean_trackable_percent"].as_f64(),
         mean_round_trip_sensels: summary["mean_round_trip_sensels"].as_f64(),
         tracks: int(&summary["tracks"]),
+        track_round_trip_sensels: Quantiles::of_summary(&summary["track_round_trip_sensels"]),
+        point_round_trip_sensels: Quantiles::of_summary(&summary["point_round_trip_sensels"]),
         measures: StudyMeasures::of_summary(summary),
         wall_time_s: started.elapsed().as_secs_f64(),
         status: RowStatus::Ok,
@@ -1937,6 +1988,14 @@ mod tests {
             mean_trackable_percent: Some(88.5),
             mean_round_trip_sensels: Some(0.125),
             tracks: Some(900),
+            track_round_trip_sensels: Quantiles {
+                median: Some(0.25),
+                p95: Some(0.75),
+            },
+            point_round_trip_sensels: Quantiles {
+                median: Some(0.0625),
+                p95: None,
+            },
             measures: StudyMeasures {
                 peak_pressure_kpa: Some(812.5),
                 pti_max_kpa_s: Some(190.25),
@@ -1949,6 +2008,31 @@ mod tests {
             status,
             message: String::new(),
         }
+    }
+
+    #[test]
+    fn a_row_takes_the_round_trip_quantiles_of_its_summary() {
+        let summary = json!({
+            "track_round_trip_sensels": {"tracks": 9, "median": 0.5, "p95": 1.25, "max": 2.0},
+            "point_round_trip_sensels": null,
+        });
+        let r = row_of_summary(Path::new("x.lst"), None, &summary, Instant::now());
+        assert_eq!(
+            r.track_round_trip_sensels,
+            Quantiles {
+                median: Some(0.5),
+                p95: Some(1.25)
+            }
+        );
+        assert_eq!(r.point_round_trip_sensels, Quantiles::default());
+        let table = study_table(&[r]);
+        let col = |c: &str| STUDY_COLUMNS.iter().position(|&k| k == c).unwrap();
+        let cells = &table.rows[0];
+        assert_eq!(
+            cells[col("track_round_trip_p95_sensels")],
+            Cell::Float(1.25, 4)
+        );
+        assert_eq!(cells[col("point_round_trip_median_sensels")], Cell::Empty);
     }
 
     #[test]

@@ -65,10 +65,7 @@ impl PairConsistency {
             return None;
         }
         let (a, b) = (aspect.shape(a).ok()?, aspect.shape(b).ok()?);
-        let one_to_one: Vec<MatchPair> = pairs.iter().filter(|p| !p.excess).cloned().collect();
-        let step = one_to_one.len().div_ceil(MOST_MATCHES).max(1);
-        let used: Vec<MatchPair> = one_to_one.into_iter().step_by(step).collect();
-        let forward = CorrespondenceField::fit(&a, &b, &used, FIELD_SMOOTHING).ok()?;
+        let forward = CorrespondenceField::fit(&a, &b, &used(pairs), FIELD_SMOOTHING).ok()?;
         let backward = forward.inverse().ok()?;
         let xy = |s: &Shape, i: usize| [s.point(i)[0], s.point(i)[1]];
         let nodes: Vec<[f64; 2]> = (0..a.len()).map(|i| xy(&a, i)).collect();
@@ -96,6 +93,100 @@ impl PairConsistency {
             round_trip_p95: quantile(&mut trip, 0.95),
         };
         Some((figures, steps))
+    }
+}
+
+/// The one-to-one matches of `pairs` a pair's fields are fitted to: at most [`MOST_MATCHES`],
+/// evenly spaced along them.
+fn used(pairs: &[MatchPair]) -> Vec<MatchPair> {
+    let one_to_one: Vec<MatchPair> = pairs.iter().filter(|p| !p.excess).cloned().collect();
+    let step = one_to_one.len().div_ceil(MOST_MATCHES).max(1);
+    one_to_one.into_iter().step_by(step).collect()
+}
+
+/// The backward field of a pair of objects `a → b` and its `pairs` (the field
+/// [`PairConsistency::with_steps`] takes the matches' nodes of `b` back by), in sensels of
+/// sensor coordinates: what a **point round trip** is measured with ([`StepField::round_trip`]).
+pub(crate) struct StepField {
+    backward: CorrespondenceField,
+    aspect: f64,
+}
+
+impl StepField {
+    /// The backward field of the pair, or `None` when none can be fitted (as
+    /// [`PairConsistency::of`]).
+    pub(crate) fn of(
+        a: &Shape,
+        b: &Shape,
+        pairs: &[MatchPair],
+        aspect: SenselAspect,
+    ) -> Option<Self> {
+        if a.dim() != 2 || b.dim() != 2 {
+            return None;
+        }
+        let (a, b) = (aspect.shape(a).ok()?, aspect.shape(b).ok()?);
+        let turned: Vec<MatchPair> = (used(pairs).into_iter())
+            .map(|p| MatchPair {
+                a: p.b,
+                b: p.a,
+                ..p
+            })
+            .collect();
+        let backward = CorrespondenceField::fit(&b, &a, &turned, FIELD_SMOOTHING).ok()?;
+        Some(Self {
+            backward,
+            aspect: aspect.0,
+        })
+    }
+
+    /// How far (sensels, the x pitch) the backward field carries a point at `on_b` on object
+    /// `b` from `on_a`, where it was on object `a`: a point that moved from `on_a` to `on_b`
+    /// as the pair's matches as a whole say comes back to its start; one whose step disagrees
+    /// with them does not. NaN when the field gives no finite image.
+    pub(crate) fn round_trip(&self, on_a: [f64; 2], on_b: [f64; 2]) -> f32 {
+        let k = self.aspect;
+        let [home] = self.backward.apply(&[[on_b[0], on_b[1] * k]])[..] else {
+            return f32::NAN;
+        };
+        (home[0] - on_a[0]).hypot(home[1] - on_a[1] * k) as f32
+    }
+}
+
+/// Round trips summarised (sensels): the points' of a run
+/// ([`crate::follow::FollowedPoint::round_trips`]), as `summary.json`'s
+/// `point_round_trip_sensels` gives them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RoundTrips {
+    /// How many round trips (a point's steps with one).
+    pub count: usize,
+    /// Their median.
+    pub median: f64,
+    /// The 95th percentile.
+    pub p95: f64,
+    /// The largest.
+    pub max: f64,
+    /// The share of them, in %, over one sensel.
+    pub over_1_percent: f64,
+}
+
+impl RoundTrips {
+    /// The summary of the finite `trips` (`None` when there are none).
+    pub fn of(trips: impl IntoIterator<Item = f32>) -> Option<Self> {
+        let mut v: Vec<f64> = (trips.into_iter())
+            .filter(|d| d.is_finite())
+            .map(f64::from)
+            .collect();
+        if v.is_empty() {
+            return None;
+        }
+        let over_1 = v.iter().filter(|&&d| d > 1.0).count();
+        Some(Self {
+            count: v.len(),
+            median: quantile(&mut v, 0.5),
+            p95: quantile(&mut v, 0.95),
+            max: quantile(&mut v, 1.0),
+            over_1_percent: 100.0 * over_1 as f64 / v.len() as f64,
+        })
     }
 }
 

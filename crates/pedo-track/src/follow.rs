@@ -15,6 +15,7 @@
 //! shrank: heel strike, toe-off); where an object splits or objects merge, the points are carried
 //! across by the pair's [`CorrespondenceField`] and a new anchor starts.
 
+use crate::consistency::StepField;
 use crate::inputs::UserInputs;
 use crate::*;
 use modal_core::{
@@ -126,6 +127,13 @@ pub struct FollowedPoint {
     pub kind: Seeded,
     /// `(object, [x, y])` of each frame it was followed through, in sequence order (sensels).
     pub steps: Vec<(usize, [f64; 2])>,
+    /// Per step, its **round trip** (sensels, the x pitch): how far the backward field of the
+    /// matched pair the point stepped through onto this step's object (fitted to the pair's
+    /// matches, as [`crate::consistency`]'s) carries the point from where it is here to where
+    /// it was on the object it came from. `None` for the step it was seeded on and where the
+    /// pair gives no field. The steps of a point carried backwards ([`follow_seeded`] both
+    /// ways) came from the later object: theirs is measured on the pair turned round.
+    pub round_trips: Vec<Option<f32>>,
 }
 
 /// Every point followed by [`follow_points`], with how often lineages were re-anchored.
@@ -322,17 +330,24 @@ impl PointsKept {
         self.held.push_back((p, Vec::new()));
         self.base + self.held.len() - 1
     }
-    /// Steps of point `k` (objects of `run`, in frame order) before those it has.
-    fn before(&mut self, k: usize, steps: Steps, run: &dyn RunView) {
+    /// Steps of point `k` (objects of `run`, in frame order, with their round trips) before
+    /// those it has.
+    fn before(&mut self, k: usize, (steps, trips): Part, run: &dyn RunView) {
         let (p, frames) = &mut self.held[k - self.base];
         let earlier: Vec<usize> = steps.iter().map(|&(o, _)| run.object(o).frame).collect();
         p.steps.splice(0..0, steps);
+        p.round_trips.splice(0..0, trips);
         frames.splice(0..0, earlier);
     }
-    fn step(&mut self, k: usize, object: usize, frame: usize, xy: [f64; 2]) {
+    fn step(&mut self, k: usize, object: usize, frame: usize, xy: [f64; 2], trip: Option<f32>) {
         let (p, frames) = &mut self.held[k - self.base];
         p.steps.push((object, xy));
+        p.round_trips.push(trip);
         frames.push(frame);
+    }
+    /// The last step of point `k`, if it has one.
+    fn last(&self, k: usize) -> Option<(usize, [f64; 2])> {
+        self.held[k - self.base].0.steps.last().copied()
     }
 }
 
@@ -395,6 +410,7 @@ impl Follower {
             lineage = self.start(run, b);
         }
         let Some(mut l) = lineage else { return };
+        let mut back = Vec::new();
         if let Some(ps) = self.seeds_at.remove(&b) {
             // A place on the anchor is a position on the anchor's object: a seed on a later
             // object of the lineage starts a new anchor there.
@@ -405,20 +421,36 @@ impl Follower {
                 self.anchors += 1;
             }
             if l.object == b {
-                let back = match self.mode.backwards {
+                let parts = match self.mode.backwards {
                     true => self.backward_steps(run, b, &ps),
                     false => Vec::new(),
                 };
                 let first = self.points.base + self.points.held.len();
+                back = (parts.into_iter().enumerate())
+                    .map(|(k, part)| (first + k, part))
+                    .collect();
                 let seeded = ps.into_iter().map(|p| (None, p.xy, p.kind));
                 l.seed(seeded, &mut self.points, b, aspect);
-                for (k, steps) in back.into_iter().enumerate() {
-                    self.points.before(first + k, steps, run);
-                }
             }
         }
+        // Each point's round trip from the object it came from (the backward field of that
+        // pair fitted once for all its points); none for a point seeded here.
+        let mut fields: HashMap<usize, Option<StepField>> = HashMap::new();
         for &(k, p) in &l.points {
-            self.points.step(k, b, frame, p);
+            let trip = self.points.last(k).and_then(|(a, was)| {
+                let field = fields.entry(a).or_insert_with(|| {
+                    let pair = run.pair(a, b)?;
+                    let (oa, ob) = (&run.object(a).shape, &run.object(b).shape);
+                    StepField::of(oa, ob, &pair.pairs, aspect)
+                });
+                let d = field.as_ref()?.round_trip(was, p);
+                d.is_finite().then_some(d)
+            });
+            self.points.step(k, b, frame, p, trip);
+        }
+        // The seeds' backward parts go before their seed's step.
+        for (k, part) in back {
+            self.points.before(k, part, run);
         }
         if links.succs(b).is_empty() || (self.mode.lazy && l.points.is_empty()) {
             // The lineage ends here: its anchor is dropped, its points end.
@@ -436,10 +468,10 @@ impl Follower {
     /// The backward parts of `seeds` on object `b` ([`backward_steps`]), on the reversed view
     /// of `b`'s frame: made at the frame's first seeded object, back to the earliest contact
     /// start of any of its seeded objects, and kept for the others.
-    fn backward_steps(&mut self, run: &dyn RunView, b: usize, seeds: &[Seed]) -> Vec<Steps> {
+    fn backward_steps(&mut self, run: &dyn RunView, b: usize, seeds: &[Seed]) -> Vec<Part> {
         let lowest = contact_start(run, b);
         if lowest == b {
-            return vec![Vec::new(); seeds.len()];
+            return vec![Part::default(); seeds.len()];
         }
         let highest = frame_end(run, b);
         let fits = |v: &ReversedParts| v.old.first() == Some(&highest) && v.lowest() <= lowest;
@@ -456,7 +488,7 @@ impl Follower {
                 let view = Reversed { run, parts };
                 backward_steps(&view, highest - b, seeds, self.aspect, &self.params)
             }
-            None => vec![Vec::new(); seeds.len()],
+            None => vec![Part::default(); seeds.len()],
         }
     }
 
@@ -535,15 +567,16 @@ fn frame_end(run: &dyn RunView, b: usize) -> usize {
 /// reversed order with every pair's matches turned round (as [`follow_both_ways`]); where
 /// objects merged on the way forward, the point goes back into the part whose outline its image
 /// lies nearest, as at a split. Per seed, its steps before `b`'s frame in frame order, as the
-/// run's objects (none where it could not be carried).
+/// run's objects, with their round trips (each measured from the later object, on the pair
+/// turned round; none where it could not be carried).
 fn backward_steps(
     view: &Reversed<'_>,
     b: usize,
     seeds: &[Seed],
     aspect: SenselAspect,
     params: &FollowParams,
-) -> Vec<Steps> {
-    let none = || vec![Vec::new(); seeds.len()];
+) -> Vec<Part> {
+    let none = || vec![Part::default(); seeds.len()];
     let mode = Mode {
         outline_seeds: false,
         lazy: true,
@@ -568,8 +601,10 @@ fn backward_steps(
             let mut steps: Steps = (p.steps.into_iter().skip(1))
                 .map(|(o, xy)| (old[o], xy))
                 .collect();
+            let mut trips: Vec<Option<f32>> = p.round_trips.into_iter().skip(1).collect();
             steps.reverse();
-            steps
+            trips.reverse();
+            (steps, trips)
         })
         .collect()
 }
@@ -706,7 +741,7 @@ pub fn follow_both_ways(
             ..*s
         })
         .collect();
-    let pass = |reversed: bool| -> Result<Vec<Steps>> {
+    let pass = |reversed: bool| -> Result<Vec<Part>> {
         let (lo, hi) = if reversed { (first, f) } else { (f, last) };
         let (sub, old) = sub_run(run, lo..=hi, reversed);
         let mut new_of = vec![usize::MAX; run.objects.len()];
@@ -725,10 +760,11 @@ pub fn follow_both_ways(
             backwards: false,
         };
         let followed = follow_inner(&sub, aspect, params, &local, mode)?;
-        let mut steps = vec![Vec::new(); seeds.len()];
+        let mut steps = vec![Part::default(); seeds.len()];
         for p in followed.points {
             if let Seeded::Point(k) = p.kind {
-                steps[k] = p.steps.into_iter().map(|(o, xy)| (old[o], xy)).collect();
+                let moved = p.steps.into_iter().map(|(o, xy)| (old[o], xy)).collect();
+                steps[k] = (moved, p.round_trips);
             }
         }
         Ok(steps)
@@ -737,20 +773,45 @@ pub fn follow_both_ways(
     let backward = pass(true)?;
     for ((seed, fwd), bwd) in seeds.iter().zip(forward).zip(backward) {
         // The backward steps from the seed's frame down: the seed's own step is the forward's.
-        let mut steps: Vec<(usize, [f64; 2])> = bwd.into_iter().skip(1).collect();
+        let mut steps: Vec<(usize, [f64; 2])> = bwd.0.into_iter().skip(1).collect();
+        let mut round_trips: Vec<Option<f32>> = bwd.1.into_iter().skip(1).collect();
         steps.reverse();
-        steps.extend(fwd);
+        round_trips.reverse();
+        steps.extend(fwd.0);
+        round_trips.extend(fwd.1);
         out.points.push(FollowedPoint {
             seed: (seed.object, None),
             kind: seed.kind,
             steps,
+            round_trips,
         });
     }
     Ok(out)
 }
 
+/// The round trips ([`FollowedPoint::round_trips`]) of points that step from the first
+/// position of each of `moves` on object `a` of `run` to the second on object `b` (sensels):
+/// how far the backward field of the pair `a → b` carries each from its second position to its
+/// first; `None` when the run has no such pair or no field can be fitted to its matches (NaN
+/// for a point the field gives no finite image).
+pub fn step_round_trips(
+    run: &SequenceResult,
+    a: usize,
+    b: usize,
+    aspect: SenselAspect,
+    moves: &[([f64; 2], [f64; 2])],
+) -> Option<Vec<f32>> {
+    let pair = run.pairs.iter().find(|p| p.a == a && p.b == b)?;
+    let (oa, ob) = (&run.objects.get(a)?.shape, &run.objects.get(b)?.shape);
+    let field = StepField::of(oa, ob, &pair.result.pairs, aspect)?;
+    Some(moves.iter().map(|&(x, y)| field.round_trip(x, y)).collect())
+}
+
 /// `(object, [x, y])` of each frame a point was followed through.
 type Steps = Vec<(usize, [f64; 2])>;
+
+/// A point's steps with their round trips ([`FollowedPoint::round_trips`]).
+type Part = (Steps, Vec<Option<f32>>);
 
 /// The objects of `run` on frames `frames` as a run of their own, in sequence order or, when
 /// `reversed`, in reversed order with every pair between them turned round (its matches from
@@ -1161,6 +1222,7 @@ impl Lineage {
                     seed: (object, node),
                     kind,
                     steps: Vec::new(),
+                    round_trips: Vec::new(),
                 });
                 let ends_off = !matches!(kind, Seeded::Region(_));
                 (k, p, ends_off)

@@ -105,7 +105,11 @@ macro_rules! define_batch {
         /// one per recording in order, with the columns of ``study.csv``: ``path``, ``output`` (its
         /// folder under ``out``, or None), ``format``, ``frames``, ``frame_rate_hz``, ``pitch_x_mm``,
         /// ``pitch_y_mm``, ``pressure_units`` (None when unknown), ``pairs``, ``mean_local_percent``,
-        /// ``mean_optimisation_percent``, ``mean_trackable_percent``, ``mean_round_trip_sensels``, ``tracks``, the measures
+        /// ``mean_optimisation_percent``, ``mean_trackable_percent``, ``mean_round_trip_sensels``, ``tracks``,
+        /// ``track_round_trip_median_sensels``, ``track_round_trip_p95_sensels``,
+        /// ``point_round_trip_median_sensels``, ``point_round_trip_p95_sensels`` (None where the run
+        /// has none: see ``summary.json``'s ``track_round_trip_sensels`` and
+        /// ``point_round_trip_sensels``), the measures
         /// ``peak_pressure_kpa``, ``pti_max_kpa_s``, ``peak_force_n``, ``fti_n_s``, ``contact_time_s``,
         /// ``max_contact_area_mm2`` (None when the recording cannot give the unit), ``wall_time_s``,
         /// ``status`` (``"ok"``, ``"skipped"`` or ``"error"``) and ``message`` (one line: why it failed or

@@ -120,7 +120,11 @@ macro_rules! define_run {
         ///   (k, 3) float array of ``(frame, x, y)`` rows (sensels); ``point_steps`` per point a
         ///   (k, 2) int array of ``(object_id, seed_node)`` rows (node -1 for a point given by
         ///   position); ``point_names`` per point the name of a point given with ``points``
-        ///   (None for the outline's default points); empty lists for the other models;
+        ///   (None for the outline's default points); ``point_round_trips`` per point a (k,)
+        ///   float array of its round trip on each step in sensels (``points.csv``'s
+        ///   ``round_trip_sensels``: how far the backward field of the pair it stepped through
+        ///   carries it from where it was on the frame it came from; NaN on its seed frame);
+        ///   empty lists for the other models;
         /// - ``region_series``: with ``regions``, ``region_rule`` or ``masks``, the rows of ``region_series.csv``
         ///   as dicts (``region``, ``kind`` "moving" or "fixed", ``frame``, ``time_s``, ``sensels``,
         ///   ``area_mm2``, ``total_force_n``, ``peak_pressure_kpa``, ``cop_x``, ``cop_y``, ...,
@@ -304,16 +308,8 @@ fn run_recording<'py>(
             };
             // Carried through the stances by the contour field (each foot's through its own):
             // this run's, or for a surface or isocontour run the contour run of its frames.
-            let contour = options.model == pedo_track::ObjectModel::Contour;
-            let field = match contour {
-                true => options.clone(),
-                false => {
-                    let mut o = params.contour_options(&rec)?;
-                    o.cancel = options.cancel.clone();
-                    o
-                }
-            };
-            let run = contour.then_some(&result);
+            let field = pedo_output::moving_regions::carrying_options(&params, &rec, &options)?;
+            let run = (options.model == pedo_track::ObjectModel::Contour).then_some(&result);
             let moving = Some(pedo_output::moving_regions::follow_anatomy(
                 &rec, run, &field, &m, &masks, &fixed,
             )?);
@@ -366,6 +362,10 @@ fn run_recording<'py>(
                 &result,
                 &[("read", read_time)],
             );
+            if let Some(p) = &points {
+                let trips = pedo_output::point_round_trips(p);
+                summary["point_round_trip_sensels"] = pedo_output::point_round_trips_json(trips);
+            }
             // The measures a folder's summary.json holds (a folder computes them as it runs).
             summary["measures"] = pedo_output::measure_values_json(&m);
             summary
@@ -395,6 +395,7 @@ fn set_points<'py>(
 ) -> PyResult<()> {
     use pedo_track::follow::Seeded;
     let (xy, steps, names) = (PyList::empty(py), PyList::empty(py), PyList::empty(py));
+    let trips = PyList::empty(py);
     let all = points.map_or(&[][..], |p| p.points.as_slice());
     for p in all.iter().filter(|p| !matches!(p.kind, Seeded::Region(_))) {
         let name = match p.kind {
@@ -416,9 +417,14 @@ fn set_points<'py>(
             .flat_map(|&(o, _)| [o as i64, node])
             .collect();
         steps.append(PyArray1::from_vec(py, ids).reshape([n, 2])?)?;
+        let d: Vec<f64> = (p.round_trips.iter())
+            .map(|d| d.map_or(f64::NAN, f64::from))
+            .collect();
+        trips.append(PyArray1::from_vec(py, d))?;
     }
     out.set_item("points", xy)?;
     out.set_item("point_names", names)?;
+    out.set_item("point_round_trips", trips)?;
     out.set_item("point_steps", steps)
 }
 

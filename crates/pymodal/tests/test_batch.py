@@ -28,6 +28,10 @@ COLUMNS = [
     "mean_trackable_percent",
     "mean_round_trip_sensels",
     "tracks",
+    "track_round_trip_median_sensels",
+    "track_round_trip_p95_sensels",
+    "point_round_trip_median_sensels",
+    "point_round_trip_p95_sensels",
     "peak_pressure_kpa",
     "pti_max_kpa_s",
     "peak_force_n",
@@ -133,6 +137,11 @@ def test_batch_rows_agree_with_run_and_name_the_failure(study):
         assert row["mean_optimisation_percent"] == pytest.approx(summary["mean_optimisation_percent"])
         assert row["mean_trackable_percent"] == pytest.approx(summary["mean_trackable_percent"])
         assert row["mean_round_trip_sensels"] == pytest.approx(summary["mean_round_trip_sensels"], abs=1e-4)
+        s = summary["track_round_trip_sensels"]
+        for q in ("median", "p95"):
+            assert row[f"track_round_trip_{q}_sensels"] == pytest.approx(s[q], abs=1e-4)
+            # A study of tables only follows no material points (docs/outputs.md, points.csv).
+            assert row[f"point_round_trip_{q}_sensels"] is None
     assert pickle.loads(pickle.dumps(rows)) == rows
 
 

@@ -27,12 +27,11 @@ signal.signal(signal.SIGINT, signal.default_int_handler)
 path, short = sys.argv[1], sys.argv[2]
 import pymodal
 print("ready", flush=True)
-t = time.monotonic()
 try:
     pymodal.run(path, spacing=0.5)
     print("finished", flush=True)
 except BaseException as e:  # PanicException derives from BaseException
-    print(type(e).__name__, round(time.monotonic() - t, 3), flush=True)
+    print(type(e).__name__, time.monotonic(), flush=True)
 # The process goes on: pymodal works as before.
 print("again", pymodal.run(short)["summary"]["pairs"] > 0, flush=True)
 """
@@ -47,7 +46,7 @@ try:
     pymodal.batch(inputs, out, jobs=1, force=True, figures="pairs", spacing=0.5)
     print("finished", flush=True)
 except BaseException as e:
-    print(type(e).__name__, flush=True)
+    print(type(e).__name__, time.monotonic(), flush=True)
 rows = pymodal.batch([short], out2, figures="none")
 print("again", [r["status"] for r in rows], flush=True)
 """
@@ -66,7 +65,7 @@ def start(tmp_path, script, *args):
     return p
 
 
-def finish(p, timeout=120):
+def finish(p, timeout=600):
     try:
         out, err = p.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -83,14 +82,15 @@ def test_ctrl_c_during_the_first_run_raises_keyboard_interrupt(tmp_path):
     # and the pending KeyboardInterrupt made that fail with a PanicException.
     p = start(tmp_path, RUN, LONG, SHORT)
     time.sleep(0.5)
-    p.send_signal(signal.SIGINT)
     sent = time.monotonic()
+    p.send_signal(signal.SIGINT)
     lines = finish(p)
-    stopped = time.monotonic() - sent
     assert lines[0].split()[0] == "KeyboardInterrupt", lines
+    stopped = float(lines[0].split()[1]) - sent  # CLOCK_MONOTONIC: one clock for every process
     assert "again True" in lines
     # Cancelled at the run's next progress step, not after the whole recording (several
-    # seconds at this spacing). Generous for a loaded machine.
+    # seconds at this spacing): from the signal to the child's `except`, not counting the run
+    # that follows it. Generous for a loaded machine.
     assert stopped < 3.0, stopped
 
 
@@ -112,16 +112,16 @@ def test_ctrl_c_during_batch_keeps_finished_folders_and_the_study_table(tmp_path
     before = a_summary.stat().st_mtime_ns
 
     p = start(tmp_path, BATCH, ",".join(map(str, inputs)), out, SHORT, tmp_path / "study2")
-    deadline = time.monotonic() + 120
+    deadline = time.monotonic() + 600  # a hang guard: a finishes in seconds on a quiet machine
     while not (a_summary.exists() and a_summary.stat().st_mtime_ns != before):
         assert p.poll() is None and time.monotonic() < deadline, "a was not run again"
         time.sleep(0.02)
     time.sleep(0.3)  # b under way
-    p.send_signal(signal.SIGINT)
     sent = time.monotonic()
+    p.send_signal(signal.SIGINT)
     lines = finish(p)
-    stopped = time.monotonic() - sent
-    assert lines[0] == "KeyboardInterrupt", lines
+    assert lines[0].split()[0] == "KeyboardInterrupt", lines
+    stopped = float(lines[0].split()[1]) - sent
     assert "again ['ok']" in lines
     # a, finished, keeps its new folder; b (in progress) and c (not started) have none, nor any
     # staging folder; the study table is as it was.

@@ -103,3 +103,56 @@ def test_regions_refuse_a_bad_rule_and_an_empty_footprint():
     walk = pymodal.read_recording(str(WALK))
     with pytest.raises(ValueError):
         walk.regions("medium")
+
+
+def test_a_surface_run_carries_the_regions_as_the_contour_run():
+    """A surface run's moving regions are carried by the contour field of its frames: the
+    contour run's moving regions on the same frames, row for row; each moving FTI is the sum of
+    its region_series rows' force times dt, each fixed row's force NumPy's sum over its mask, and
+    on the frame of largest contact the moving regions hold most of the foot's force."""
+    rec = pymodal.read_recording(str(WALK))
+    # One whole stance of the walk (frames 29–50).
+    options = dict(region_rule="coarse", frames=(25, 55))
+    surface = pymodal.run(rec, model="surface", **options)
+    contour = pymodal.run(rec, model="contour", **options)
+
+    def moving(res):
+        return [r for r in res["regions"] if r["kind"] == "moving"]
+
+    names = ["hindfoot", "midfoot", "forefoot", "toes"]
+    assert {r["region"] for r in moving(surface)} == set(names)
+    assert moving(surface) == moving(contour)
+    series = surface["region_series"]
+    assert series and series == contour["region_series"]
+    assert {s["kind"] for s in series} == {"fixed", "moving"}
+
+    labels = rec.regions("coarse", frames=options["frames"])["labels"]
+    f = np.nan_to_num(np.asarray(rec.frames, dtype=np.float64), nan=0.0)
+    area = rec.sensel_area_mm2 or float(np.prod(rec.pitch_mm))
+    frame_force = f.sum(axis=(1, 2)) * area * 1e-3
+
+    def force(rows):
+        return np.array([s["total_force_n"] or 0.0 for s in rows])
+
+    held = {}
+    for k, name in enumerate(names, start=1):
+        rows = {kind: [s for s in series if s["name"] == name and s["kind"] == kind]
+                for kind in ("fixed", "moving")}
+        frames = [s["frame"] for s in rows["moving"]]
+        assert frames == [s["frame"] for s in rows["fixed"]] and frames
+        fti = next(r["value"] for r in moving(surface)
+                   if r["region"] == name and r["measure"] == "fti")
+        assert fti > 0
+        assert fti == pytest.approx(force(rows["moving"]).sum() * rec.dt_s, rel=1e-6)
+        mask = np.where(labels == k, f[frames], 0.0).sum(axis=(1, 2)) * area * 1e-3
+        assert np.allclose(force(rows["fixed"]), mask, rtol=1e-6, atol=1e-9)
+        held[name] = dict(zip(frames, force(rows["moving"])))
+    stance = sorted(held["hindfoot"])
+    # The moving regions never hold more than the frame's force; on the frame of largest
+    # contact (where they are drawn from the masks) nearly all of it.
+    for t in stance:
+        total = sum(h.get(t, 0.0) for h in held.values())
+        assert total <= frame_force[t] * (1 + 1e-6) + 1e-9, t
+    widest = max(stance, key=lambda t: int((f[t] > 0).sum()))
+    total = sum(h.get(widest, 0.0) for h in held.values())
+    assert total >= 0.95 * frame_force[widest], (widest, total, frame_force[widest])

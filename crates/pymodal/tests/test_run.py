@@ -579,7 +579,7 @@ def test_points_csv_holds_the_points_of_the_result(tmp_path):
     rows = (tmp_path / "run" / "points.csv").read_text().splitlines()
     header = rows[0].split(",")
     assert header == ["point", "step", "frame", "time_s", "object_id", "seed_node", "x", "y",
-                      "x_mm", "y_mm", "pressure_kpa", "kind", "name"]
+                      "x_mm", "y_mm", "pressure_kpa", "kind", "name", "round_trip_sensels"]
     assert len(rows) - 1 == sum(len(p) for p in res["points"])
     rec = pymodal.read_recording(str(BUNDLED))
     frames = np.asarray(rec.frames)
@@ -592,3 +592,43 @@ def test_points_csv_holds_the_points_of_the_result(tmp_path):
         r0, c0 = int(np.floor(y)), int(np.floor(x))
         block = frames[frame, r0:r0 + 2, c0:c0 + 2]
         assert block.min() - 1e-3 <= p <= block.max() + 1e-3
+
+
+def test_point_round_trips_are_those_of_points_csv_and_summarised_in_the_summary(tmp_path):
+    import csv
+
+    res = pymodal.run(BUNDLED, frames=(30, 60), out=tmp_path, figures="none", report="none",
+                      points=[[9.0, 51.0]])
+    trips = res["point_round_trips"]
+    assert len(trips) == len(res["points"]) > 1
+    for p, t in zip(res["points"], trips):
+        assert t.shape == (len(p),) and t.dtype == np.float64
+        # None on the frame a point was seeded on; 0 or more where it has one.
+        assert (t[~np.isnan(t)] >= 0).all()
+    # An outline point is seeded on its first step: NaN there, a figure on its next step.
+    outline = [t for t, n in zip(trips, res["point_names"]) if n is None and len(t) > 1]
+    assert outline and all(np.isnan(t[0]) and not np.isnan(t[1]) for t in outline)
+    known = np.concatenate([t[~np.isnan(t)] for t in trips])
+    assert np.ptp(known) > 0.2
+    # points.csv gives each point's on its rows (4 decimals), empty where NaN.
+    with open(tmp_path / "points.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == sum(len(t) for t in trips)
+    for r in rows:
+        want = trips[int(r["point"])][int(r["step"])]
+        if np.isnan(want):
+            assert r["round_trip_sensels"] == ""
+        else:
+            assert abs(float(r["round_trip_sensels"]) - want) <= 5e-5
+    # summary.json (the folder's, the result's) and the summary without a folder: numpy's
+    # quantiles of every point's and frame's.
+    whole = pymodal.run(BUNDLED, frames=(30, 60), points=[[9.0, 51.0]])
+    for summary in (res["summary"], whole["summary"]):
+        s = summary["point_round_trip_sensels"]
+        assert s["steps"] == len(known)
+        for key, q in (("median", 0.5), ("p95", 0.95), ("max", 1.0)):
+            assert s[key] == pytest.approx(np.quantile(known, q), rel=1e-6)
+        assert s["over_1_percent"] == pytest.approx(100 * np.mean(known > 1.0))
+    # Surfaces follow no points: no figure.
+    surf = pymodal.run(moving_blob(frames=4), model="surface", surface_nodes=30)
+    assert surf["point_round_trips"] == [] and surf["summary"]["point_round_trip_sensels"] is None

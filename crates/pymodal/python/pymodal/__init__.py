@@ -40,12 +40,13 @@ def _same(a: _Any, b: _Any) -> bool:
 
 class RunResult(dict[str, _Any]):
     """What :func:`run` returns: a dict (``table``, ``matches``, ``reference_matches``,
-    ``objects``, ``tracks``, ``track_steps``, ``track_round_trips``, ``points``, ``point_steps``, ``point_names``,
+    ``objects``, ``tracks``, ``track_steps``, ``track_round_trips``, ``points``, ``point_steps``, ``point_names``, ``point_round_trips``,
     ``region_series``, ``regions``, ``frames``, ``curves``, ``summary``, ``timings``) that Jupyter shows as a table of its
     summary. ``points`` are the material points of a contour run, followed by anchored
     registration (one array of rows ``frame, x, y`` per point; ``point_steps`` gives each step's
     object id and the node the point was seeded on, ``point_names`` the name of a point given
-    with ``points=``, None for the outline's); ``region_series`` the rows of ``region_series.csv`` for the
+    with ``points=``, None for the outline's, ``point_round_trips`` each step's round trip in sensels,
+    NaN on its seed frame); ``region_series`` the rows of ``region_series.csv`` for the
     regions given with ``regions=`` and, with ``region_rule=``, the anatomical regions fixed and
     carried through each stance; ``regions`` the rows of ``regions.csv`` (``kind`` fixed or moving).
 

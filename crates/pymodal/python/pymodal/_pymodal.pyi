@@ -353,8 +353,9 @@ def surface(
 # "reference_matches": with drift correction, one ReferenceMatch
 # per reference pair (an empty list without); and for the contour model "points" (per material
 # point followed by anchored registration, a FloatArray of rows frame, x, y in pixels) with
-# "point_steps" (an IntArray of rows object id, seed node; -1 for no node), empty lists for the
-# other models.
+# "point_steps" (an IntArray of rows object id, seed node; -1 for no node) and
+# "point_round_trips" (a FloatArray, each step's round trip in sensels, NaN on its seed frame),
+# empty lists for the other models.
 # A reference pair of drift correction: id_a, id_b and frame_a, frame_b (int), match (Match) and
 # tracked (BoolArray aligned with match.pairs: True where a track took the match).
 ReferenceMatch = dict[str, Any]
@@ -428,7 +429,9 @@ def run(
 
 # A row of a study table (batch, batch_row): path, output, format, frames, frame_rate_hz,
 # pitch_x_mm, pitch_y_mm, pressure_units, pairs, mean_local_percent, mean_optimisation_percent,
-# mean_trackable_percent, mean_round_trip_sensels, tracks, peak_pressure_kpa, pti_max_kpa_s, peak_force_n, fti_n_s,
+# mean_trackable_percent, mean_round_trip_sensels, tracks, track_round_trip_median_sensels,
+# track_round_trip_p95_sensels, point_round_trip_median_sensels, point_round_trip_p95_sensels,
+# peak_pressure_kpa, pti_max_kpa_s, peak_force_n, fti_n_s,
 # contact_time_s, max_contact_area_mm2, wall_time_s, status ("ok", "skipped", "error") and message,
 # the columns of study.csv (or study.parquet).
 StudyRow = dict[str, Any]
