@@ -253,7 +253,7 @@ fn run_pair(args: &MatchArgs) -> Result<RunPair, CliError> {
         matching: args.modal.params(),
         units: args.units.params(),
         frames: Some(pedo_track::FrameRange::new(fa, fb + 1)),
-        every: fb - fa,
+        every: pedo_track::FrameStride::Every(fb - fa),
         ..Default::default()
     };
     args.units

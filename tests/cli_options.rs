@@ -442,6 +442,54 @@ fn read_text_csv(path: &Path) -> Vec<HashMap<String, String>> {
 }
 
 #[test]
+fn a_500_hz_recording_is_matched_at_250_hz_by_default_and_at_every_frame_with_every_1() {
+    let trial = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/benches/data/footscan-pressuRe-barefoot.txt"
+    );
+    let dir = temp_dir("every-auto");
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let mut args = vec![
+            "run",
+            trial,
+            "--frames",
+            "100..121",
+            "--figures",
+            "none",
+            "--report",
+            "none",
+        ];
+        args.extend_from_slice(extra);
+        args.extend(["--out", out.to_str().unwrap()]);
+        let o = pedomatch(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        out
+    };
+    let (auto, all) = (run("auto", &[]), run("all", &["--every", "1"]));
+    let steps = |out: &Path| -> BTreeSet<i64> {
+        read_csv(&out.join("pairs.csv"))
+            .iter()
+            .map(|p| (p["frame_b"] - p["frame_a"]) as i64)
+            .collect()
+    };
+    assert_eq!(steps(&auto), BTreeSet::from([2]));
+    assert_eq!(steps(&all), BTreeSet::from([1]));
+    let every = |out: &Path| read_json(&out.join("summary.json"))["options"]["every"].clone();
+    assert_eq!((every(&auto), every(&all)), (2.into(), 1.into()));
+    // frames.csv keeps every frame of the range either way.
+    assert_eq!(read_csv(&auto.join("frames.csv")).len(), 21);
+    assert_eq!(read_csv(&all.join("frames.csv")).len(), 21);
+    // The same run as --every 2.
+    let two = run("two", &["--every", "2"]);
+    for table in ["pairs.csv", "objects.csv", "tracks.csv"] {
+        let read = |out: &Path| std::fs::read(out.join(table)).unwrap();
+        assert_eq!(read(&auto), read(&two), "{table}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn every_second_frame_is_matched_with_the_recordings_own_frame_numbers() {
     let dir = temp_dir("every");
     let run = |name: &str, extra: &[&str]| {

@@ -3,6 +3,7 @@ through a whole stance, against ground truth, beside chained nearest neighbour, 
 chained dense optical flow.
 
     python benches/python/bench_field.py [--frames 150] [--quick] [--markdown]
+    python benches/python/bench_field.py --rate 500 --every 1,auto [--markdown]
 
 **Sequences.** Synthetic stances from ``stance.py`` (beside this file): a foot-like pressure
 field (heel, lateral midfoot, metatarsal heads, hallux, lesser toes) moved by a smooth non-rigid
@@ -70,6 +71,14 @@ Tables give, per method and horizon, the mean share over the cases, then the 5th
 minutes on 2 cores; ``--quick`` runs one tuning and one held-out case with the default rows only
 (no control, CPD, drift_reference or diagnostic), well under a minute. Needs numpy, scipy,
 scikit-image and pycpd (opencv-python-headless optional).
+
+**Frame rate and stride** (``--rate HZ --every 1,auto``): the same 0.75 s stances rendered at
+``HZ`` (round(0.75 HZ) frames past frame 0 unless ``--frames`` is given), run by
+``pymodal.run(frames, pitch_mm=5, frame_rate=HZ, units="kPa", every=N)`` once per stride given
+(a stride ``auto`` is the run's default, left out of the call), pedomatch's rows only (its node
+tracks and material points) on the tuning and held-out cases. Horizons are the 200 Hz run's
+times (0.125, 0.25, 0.5, 0.75 s), each at the last frame at or before it that every stride
+compared keeps. A table per case follows the summary tables, with each run's CPU time.
 """
 
 import os
@@ -101,6 +110,10 @@ except ImportError:  # optional
 
 HORIZONS = (25, 50, 100, 150)
 PITCH_MM, FRAME_RATE = 5.0, 200.0
+# The horizons' times (s) and the stance's length: HORIZONS at FRAME_RATE.
+HORIZON_S = tuple(h / FRAME_RATE for h in HORIZONS)
+STANCE_S = 0.75
+MATCH_RATE_HZ = 250.0  # pedomatch's every="auto": the smallest N with rate / N <= this
 GROUPS = {
     "tuning": [dict(law=law, seed=seed) for law in (0, 1) for seed in (0, 1)],
     "held out": [dict(law=law, seed=seed) for law in (2, 3) for seed in (2, 3)],
@@ -494,6 +507,139 @@ def run_case(spec, n_frames, grid, cpd, extra, tps_smoothing, log):
     return rec
 
 
+# ---- frame rate and stride ---------------------------------------------------------------------
+
+def auto_stride(rate):
+    """The stride ``every="auto"`` resolves to at ``rate`` (pedo_track::FrameStride::resolve)."""
+    return max(1, int(np.ceil(rate / MATCH_RATE_HZ - 1e-9)))
+
+
+def stride_horizons(rate, strides, n_frames):
+    """The horizons' frames at ``rate``: each HORIZON_S time, at the last frame at or before it
+    that every stride in ``strides`` keeps (frames 0, N, 2N...)."""
+    step = int(np.lcm.reduce([auto_stride(rate) if s == "auto" else int(s) for s in strides]))
+    hs = [int(np.floor(t * rate + 1e-9)) // step * step for t in HORIZON_S]
+    return tuple(h for h in hs if 0 < h < n_frames)
+
+
+WINDOW_S = 0.025  # the window before each horizon over which the share is averaged
+
+
+def within_window(pos, truth, tol, step, rate):
+    """Per horizon, the share within tol averaged over the frames of the WINDOW_S before it
+    that every stride keeps (multiples of step), the horizon's frame included; and over every
+    such frame of the stance past frame 0 ("all")."""
+    def share(t):
+        err = np.linalg.norm(pos[t] - truth[t], axis=1)
+        return float(np.mean(np.nan_to_num(err, nan=np.inf) <= tol))
+    width = int(round(WINDOW_S * rate))
+    out = {h: float(np.mean([share(t) for t in range(h, max(0, h - width - 1), -step) if t > 0]))
+           for h in HORIZONS}
+    out["all"] = float(np.mean([share(t) for t in range(step, len(pos), step)]))
+    return out
+
+
+def run_strides(spec, n_frames, rate, strides, log):
+    """pedomatch's node tracks and material points at each stride, against the truth."""
+    st = Stance(frames=n_frames, frame_rate=rate, **spec)
+    frames = st.frames
+    T = len(frames)
+    rec = dict(describe=st.describe(), outline={}, window={}, seconds={}, cpu={})
+    step = int(np.lcm.reduce([auto_stride(rate) if s == "auto" else int(s) for s in strides]))
+    nodes0 = truth_nodes = None
+    for every in strides:
+        kw = {} if every == "auto" else dict(every=int(every))
+        label = f"every={every}" + (f" ({auto_stride(rate)})" if every == "auto" else "")
+        t0, c0 = time.perf_counter(), time.process_time()
+        result = pymodal.run(frames, pitch_mm=PITCH_MM, frame_rate=rate, units="kPa", **kw)
+        rec["seconds"][label] = time.perf_counter() - t0
+        rec["cpu"][label] = time.process_time() - c0
+        obj0 = outline_objects(result)[0]
+        if nodes0 is None:
+            nodes0 = np.asarray(obj0["points"])[:, :2]
+            truth_nodes = np.array([st.true_positions(t, nodes0) for t in range(T)])
+            spacing = float(result["summary"]["options"]["spacing"])
+        else:  # every stride runs frame 0 alike
+            assert np.array_equal(nodes0, np.asarray(obj0["points"])[:, :2])
+        tracks = pedomatch_outline_positions(result, obj0, T)
+        rec["outline"][f"pedomatch tracks, {label}"] = within(tracks, truth_nodes, spacing)
+        points = pedomatch_point_positions(result, obj0, T)
+        rec["outline"][f"pedomatch points, {label}"] = within(points, truth_nodes, spacing)
+        rec["window"][f"pedomatch tracks, {label}"] = within_window(tracks, truth_nodes, spacing, step, rate)
+        rec["window"][f"pedomatch points, {label}"] = within_window(points, truth_nodes, spacing, step, rate)
+    rec["n"] = dict(nodes=len(nodes0))
+    log(f"  {rec['describe']}: {len(nodes0)} outline nodes; "
+        + ", ".join(f"{k} {v:.1f} s CPU" for k, v in rec["cpu"].items()))
+    return rec
+
+
+def strides_main(a, log):
+    """``--every``: pedomatch's rows at each stride on the tuning and held-out cases."""
+    global HORIZONS
+    strides = [s.strip() for s in a.every.split(",")]
+    for s in strides:
+        if s != "auto" and not (s.isdigit() and int(s) >= 1):
+            raise SystemExit(f"--every: auto or an integer >= 1, got {s!r}")
+    frames = a.frames if a.frames is not None else int(round(STANCE_S * a.rate))
+    n_frames = frames + 1
+    HORIZONS = stride_horizons(a.rate, strides, n_frames)
+    groups = {k: GROUPS[k] for k in ("tuning", "held out")}
+    if a.quick:
+        groups = {k: v[:1] for k, v in groups.items()}
+    t_all = time.perf_counter()
+    results = {}
+    for name, specs in groups.items():
+        log(f"{name}:")
+        results[name] = [run_strides(s, n_frames, a.rate, strides, log) for s in specs]
+    total = time.perf_counter() - t_all
+    hz = ", ".join(f"{h} ({h / a.rate:.3f} s)" for h in HORIZONS)
+    print(f"Synthetic stances (stance.py): {frames} frames past frame 0 at {a.rate:g} Hz, "
+          f"{PITCH_MM:g} mm sensels; pedomatch {getattr(pymodal, '__version__', '?')}, default "
+          f"options but the stride: every = {', '.join(strides)}. Horizons (frames): {hz}.")
+    print("Outline nodes of frame 0 within one node spacing (1 sensel) of their material point, %; "
+          "cells: mean over the cases / 5th percentile / worst case.\n")
+    for name, recs in results.items():
+        print(f"### {name}: {len(recs)} case{'s' if len(recs) > 1 else ''}\n")
+        share_table(recs, "outline", a.markdown)
+    width = int(round(WINDOW_S * a.rate))
+    print(f"The same, each horizon's share averaged over the frames of the {1000 * WINDOW_S:g} ms before it "
+          f"(the horizon's frame and those of the {width} frames before it that every stride keeps), and over every "
+          "such frame of the stance (\"all\"): the share at one frame swings by tens of % from one "
+          "frame to the next, for every stride.\n")
+    for name, recs in results.items():
+        print(f"### {name}: {len(recs)} case{'s' if len(recs) > 1 else ''}, windows\n")
+        methods = list(dict.fromkeys(m for r in recs for m in r["window"]))
+        cols = list(HORIZONS) + ["all"]
+        rows = [[m] + [stat_cell([r["window"][m][h] for r in recs]) for h in cols] for m in methods]
+        print_table(["method"] + [f"before {h}" for h in HORIZONS] + ["all frames"], rows, a.markdown)
+    print("Per case (one number per horizon, %; CPU time of the run):\n")
+    rows = []
+    for name, recs in results.items():
+        for r in recs:
+            for m, v in r["outline"].items():
+                lbl = m.split(", ", 1)[1]
+                rows.append([f"{name}: {r['describe'].split(':')[0]}", m.split(",")[0].replace("pedomatch ", ""),
+                             lbl] + [f"{100 * v[h]:.1f}" for h in HORIZONS]
+                            + [f"{r['cpu'][lbl]:.1f}"])
+    print_table(["case", "rows", "stride"] + [f"after {h}" for h in HORIZONS] + ["CPU s"], rows, a.markdown)
+    print("Per case, the windows (%):\n")
+    rows = []
+    for name, recs in results.items():
+        for r in recs:
+            for m, v in r["window"].items():
+                rows.append([f"{name}: {r['describe'].split(':')[0]}", m.split(",")[0].replace("pedomatch ", ""),
+                             m.split(", ", 1)[1]] + [f"{100 * v[h]:.1f}" for h in list(HORIZONS) + ["all"]])
+    print_table(["case", "rows", "stride"] + [f"before {h}" for h in HORIZONS] + ["all frames"], rows,
+                a.markdown)
+    cpu = {}
+    for recs in results.values():
+        for r in recs:
+            for k, v in r["cpu"].items():
+                cpu.setdefault(k, []).append(v)
+    print("CPU time of the runs, all cases: " + ", ".join(f"{k} {np.sum(v):.1f} s" for k, v in cpu.items()))
+    print(f"Total time {total:.0f} s.")
+
+
 # ---- tables -------------------------------------------------------------------------------------
 
 def print_table(head, rows, markdown):
@@ -571,7 +717,13 @@ def frame_error_table(recs, markdown):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--frames", type=int, default=150, help="frames past frame 0 (default 150)")
+    ap.add_argument("--frames", type=int, default=None,
+                    help="frames past frame 0 (default 150: round(0.75 s x the rate))")
+    ap.add_argument("--rate", type=float, default=FRAME_RATE,
+                    help="frame rate (Hz) of the frames rendered over the 0.75 s stance (default 200)")
+    ap.add_argument("--every", default=None, metavar="N,...",
+                    help="compare pedomatch at these strides (e.g. 1,auto): its rows only, tuning and "
+                         "held-out cases, horizons at the 200 Hz run's times")
     ap.add_argument("--quick", action="store_true",
                     help="one tuning and one held-out case, no control, no CPD (< 2 minutes)")
     ap.add_argument("--markdown", action="store_true")
@@ -581,6 +733,13 @@ def main():
     ap.add_argument("--tps-smoothing", type=float, default=300.0,
                     help="smoothing of the stand-in's thin-plate spline (chosen on the tuning cases)")
     a = ap.parse_args()
+    log = lambda s: print(s, file=sys.stderr, flush=True)  # noqa: E731
+    if a.every is not None:
+        return strides_main(a, log)
+    if a.rate != FRAME_RATE:
+        raise SystemExit("--rate: the full comparison runs at 200 Hz; give --every to compare strides")
+    if a.frames is None:
+        a.frames = HORIZONS[-1]
     groups = dict(GROUPS)
     if a.quick:
         groups = {"tuning": groups["tuning"][:1], "held out": groups["held out"][:1]}
@@ -589,7 +748,6 @@ def main():
     cpd = not (a.quick or a.no_cpd)
     extra = not a.quick
     n_frames = a.frames + 1
-    log = lambda s: print(s, file=sys.stderr, flush=True)  # noqa: E731
 
     t_all = time.perf_counter()
     results = {}

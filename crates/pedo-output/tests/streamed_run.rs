@@ -178,7 +178,7 @@ fn a_streamed_run_writes_the_folder_of_the_whole_run() {
                 end: Some(end),
             }),
             drift_reference,
-            every,
+            every: pedo_track::FrameStride::Every(every),
             ..Default::default()
         };
         let whole = dir.join("whole");

@@ -145,6 +145,121 @@ modal_core::choice!(ObjectModel, "model", [
     "isocontour" => ObjectModel::Isocontour,
 ]);
 
+/// The highest rate (frames per second) at which a run's pairs are matched by default: a
+/// recording sampled faster is run at every N-th frame, N the smallest stride that brings it to
+/// this rate or below ([`FrameStride::Auto`]). At 500 Hz a point of a foot moves about 0.03
+/// sensel from one frame to the next and a quarter of consecutive outlines are identical.
+pub const MATCH_RATE_HZ: f64 = 250.0;
+
+/// The frame stride of a run ([`RunParams::every`]): every N-th frame, or `auto`, N chosen from
+/// the recording's frame rate ([`FrameStride::resolve`]). Written `auto` or a number `N`.
+///
+/// ```
+/// use pedo_track::FrameStride;
+/// assert_eq!("auto".parse::<FrameStride>().unwrap(), FrameStride::Auto);
+/// assert_eq!("3".parse::<FrameStride>().unwrap().to_string(), "3");
+/// assert_eq!(FrameStride::Auto.resolve(Some(500.0), 300, 0), 2);
+/// assert_eq!(FrameStride::Auto.resolve(Some(100.0), 300, 0), 1);
+/// assert_eq!(FrameStride::Auto.resolve(None, 300, 0), 1);
+/// assert_eq!(FrameStride::Every(3).resolve(Some(100.0), 300, 0), 3);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FrameStride {
+    /// Every frame at rates up to [`MATCH_RATE_HZ`], else the smallest stride that brings the
+    /// recording to that rate or below.
+    #[default]
+    Auto,
+    /// Every N-th frame (1: every frame).
+    Every(usize),
+}
+
+impl FrameStride {
+    /// The stride of a run of `frames` frames of a recording at `frame_rate` (frames per second,
+    /// `None`: unknown) with drift correction every `drift_reference` frames (0: off). A stride
+    /// given is kept as given; `auto` is 1 at an unknown rate or one up to [`MATCH_RATE_HZ`],
+    /// else the smallest N with `frame_rate / N <= MATCH_RATE_HZ`, lowered to a divisor of
+    /// `drift_reference` (reference frames must be frames run) and so that a run of two or more
+    /// frames keeps at least two.
+    pub fn resolve(&self, frame_rate: Option<f64>, frames: usize, drift_reference: usize) -> usize {
+        let n = match *self {
+            FrameStride::Every(n) => return n,
+            FrameStride::Auto => match frame_rate {
+                // A rate read as 1 / dt may be off in its last bits: 500 Hz is 500, not 3 × 166.7.
+                Some(r) if r.is_finite() && r > MATCH_RATE_HZ * (1.0 + 1e-9) => {
+                    (r / MATCH_RATE_HZ * (1.0 - 1e-9)).ceil() as usize
+                }
+                _ => 1,
+            },
+        };
+        let mut n = n.min(frames.saturating_sub(1)).max(1);
+        if drift_reference >= 2 {
+            while !drift_reference.is_multiple_of(n) {
+                n -= 1;
+            }
+        }
+        n
+    }
+}
+
+impl std::fmt::Display for FrameStride {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FrameStride::Auto => f.write_str("auto"),
+            FrameStride::Every(n) => write!(f, "{n}"),
+        }
+    }
+}
+
+impl std::str::FromStr for FrameStride {
+    type Err = OptionError;
+    fn from_str(s: &str) -> std::result::Result<Self, OptionError> {
+        let s = s.trim();
+        if s == "auto" {
+            return Ok(FrameStride::Auto);
+        }
+        s.parse()
+            .map(FrameStride::Every)
+            .map_err(|_| OptionError::new("every", s, "auto or an integer >= 1 (1: every frame)"))
+    }
+}
+
+impl modal_core::options::OptionField for FrameStride {
+    fn python_type() -> String {
+        "Union[int, Literal[\"auto\"]]".into()
+    }
+    fn value_name() -> Option<&'static str> {
+        Some("N|auto")
+    }
+    fn read<I: modal_core::options::OptionInput + ?Sized>(
+        input: &I,
+        option: &'static str,
+    ) -> std::result::Result<Self, I::Error> {
+        if let Some(text) = input.written() {
+            return Ok(text.parse()?);
+        }
+        // Python: an int, else the word `auto` (a number in a str is no int).
+        match input.count(option) {
+            Ok(n) => Ok(FrameStride::Every(n)),
+            Err(e) => match input.text(option) {
+                Ok(text) if text.trim() == "auto" => Ok(FrameStride::Auto),
+                Ok(text) => {
+                    Err(
+                        OptionError::new(option, text, "auto or an integer >= 1 (1: every frame)")
+                            .into(),
+                    )
+                }
+                Err(_) => Err(e),
+            },
+        }
+    }
+    fn value(&self) -> OptionValue {
+        match self {
+            FrameStride::Auto => OptionValue::Word("auto".into()),
+            FrameStride::Every(n) => OptionValue::Int(*n),
+        }
+    }
+}
+
 /// Frames `start..end` of a recording: 0-based and half-open like a Python slice (`10..60` is
 /// frames 10 to 59); an open end runs to the last frame, and a negative index counts back from
 /// the end of the recording, as in Python (`-50..` is the last 50 frames, `0..-1` every frame
@@ -315,10 +430,11 @@ modal_core::option_set! {
             Value, "all",
             "Frames START..END, 0-based with END excluded as in a Python slice (START.. and ..END allowed; a negative index counts back from the end: -50.. is the last 50 frames, 0..-1 all but the last); the range must lie within the recording.";
         /// Frame stride: every this many-th frame of [`frames`](Self::frames), from its first
-        /// ([`SequenceOptions::every`]).
-        every: usize = d.every;
-            Value, d.every,
-            "Keep every N-th frame of the frames run, from the first (1: every frame); pairs join consecutive kept frames, and the tables give the recording's own frame numbers and times (frames.csv keeps every frame of the range).";
+        /// ([`SequenceOptions::every`]), or `auto` from the recording's frame rate
+        /// ([`FrameStride::resolve`]).
+        every: FrameStride = FrameStride::Auto;
+            Value, FrameStride::Auto,
+            "Keep every N-th frame of the frames run, from the first (1: every frame); auto: every frame up to 250 Hz, else the smallest N that brings the recording to 250 Hz or below (2 at 500 Hz). Pairs join consecutive kept frames, and the tables give the recording's own frame numbers and times (frames.csv keeps every frame of the range).";
         /// Noise threshold in the recording's units (`None`: the file's own, else 0).
         noise: Option<f64> = None;
             Value, "the file's noise threshold, else 0",
@@ -446,19 +562,25 @@ impl RunParams {
                  of closed contours)",
             ));
         }
-        if self.every == 0 {
-            return Err(OptionError::new("every", self.every, "an integer >= 1"));
-        }
-        // Reference frames must be frames the run keeps, or no object would reach one.
-        if self.drift_reference >= 2 && !self.drift_reference.is_multiple_of(self.every) {
-            return Err(OptionError::new(
-                "drift_reference",
-                self.drift_reference,
-                format!(
-                    "0 (off) or a multiple of every ({}), so that reference frames are frames run",
-                    self.every
-                ),
-            ));
+        if let FrameStride::Every(every) = self.every {
+            if every == 0 {
+                return Err(OptionError::new(
+                    "every",
+                    every,
+                    "auto or an integer >= 1 (1: every frame)",
+                ));
+            }
+            // Reference frames must be frames the run keeps, or no object would reach one.
+            if self.drift_reference >= 2 && !self.drift_reference.is_multiple_of(every) {
+                return Err(OptionError::new(
+                    "drift_reference",
+                    self.drift_reference,
+                    format!(
+                        "0 (off) or a multiple of every ({every}), so that reference frames are \
+                         frames run"
+                    ),
+                ));
+            }
         }
         if self.surface_nodes < 8 {
             return Err(OptionError::new(
@@ -519,11 +641,19 @@ impl RunParams {
         };
         let noise = self.noise_threshold(recording);
         let sigma = (self.smooth > 0.0).then_some(self.smooth);
+        let (start, end) = frames.unwrap_or((0, n));
+        let rate = recording.dt_s.filter(|dt| *dt > 0.0).map(|dt| 1.0 / dt);
+        // The isocontour model matches the levels of one frame: a stride would only change
+        // which frame is the most loaded, so `auto` keeps every frame there.
+        let every = match (self.model, self.every) {
+            (ObjectModel::Isocontour, FrameStride::Auto) => 1,
+            (_, every) => every.resolve(rate, end - start, self.drift_reference),
+        };
         let mut o = SequenceOptions {
             model: self.model,
             matching,
             frames,
-            every: self.every,
+            every,
             iso_frame,
             iso_count: self.iso_levels,
             drift_reference: self.drift_reference,
@@ -581,7 +711,8 @@ impl RunParams {
             // As given: how the file's values were read.
             ..self.units.clone()
         };
-        self.listed(options, FrameRange::new(start, end), file)
+        let every = FrameStride::Every(options.every);
+        self.listed(options, FrameRange::new(start, end), every, file)
     }
 
     /// Every option as given to each recording of a study (`study.json`), listed as
@@ -594,7 +725,6 @@ impl RunParams {
         let mut options = SequenceOptions {
             model: self.model,
             matching: self.match_options()?,
-            every: self.every,
             iso_frame: self.iso_frame,
             drift_reference: self.drift_reference,
             ..Default::default()
@@ -605,7 +735,7 @@ impl RunParams {
             units: (self.units.units.as_deref()).map(pedo_io::recording::stated_units),
             ..self.units.clone()
         };
-        Ok(self.listed(&options, self.frames.unwrap_or_default(), file))
+        Ok(self.listed(&options, self.frames.unwrap_or_default(), self.every, file))
     }
 
     /// The list of [`RunParams::used`] and [`RunParams::given`]: one list of the options for
@@ -617,6 +747,7 @@ impl RunParams {
         &self,
         options: &SequenceOptions,
         frames: FrameRange,
+        every: FrameStride,
         file: pedo_io::units::UnitOverrides,
     ) -> Vec<(&'static str, OptionValue)> {
         let resolved = RunParams {
@@ -624,7 +755,7 @@ impl RunParams {
             units: file,
             model: options.model,
             frames: Some(frames),
-            every: options.every,
+            every,
             noise: options.contour.preprocess.threshold,
             smooth: self.smooth,
             spacing: self.spacing,

@@ -127,6 +127,84 @@ fn a_study_lists_the_options_a_run_uses_with_each_recordings_own_left_open() {
     assert_eq!(value(&given, "units"), OptionValue::Word("N/cm²".into()));
 }
 
+#[test]
+fn the_default_stride_brings_a_fast_recording_to_the_matching_rate_and_no_slower_one() {
+    let auto = |rate: f64, frames: usize, drift: usize| {
+        FrameStride::Auto.resolve(Some(rate), frames, drift)
+    };
+    // Brute force: the smallest N with rate / N <= MATCH_RATE_HZ, each rate as 1 / dt reads it.
+    for hz in [
+        25.0, 31.25, 50.0, 100.0, 200.0, 250.0, 251.0, 300.0, 500.0, 750.0, 1000.0,
+    ] {
+        let rate = 1.0 / (1.0 / hz);
+        let want = (1..).find(|n| hz / *n as f64 <= MATCH_RATE_HZ).unwrap();
+        assert_eq!(auto(rate, 1000, 0), want, "{hz} Hz");
+    }
+    assert_eq!(auto(500.0, 300, 0), 2);
+    assert_eq!(auto(1000.0, 300, 0), 4);
+    assert_eq!(FrameStride::Auto.resolve(None, 300, 0), 1, "unknown rate");
+    assert_eq!(FrameStride::Auto.resolve(Some(f64::NAN), 300, 0), 1);
+    // Reference frames of drift correction stay frames run; a short run keeps two frames.
+    assert_eq!(auto(500.0, 300, 25), 1);
+    assert_eq!(auto(500.0, 300, 50), 2);
+    assert_eq!(auto(1000.0, 300, 30), 3);
+    assert_eq!(auto(1000.0, 3, 0), 2);
+    assert_eq!(auto(500.0, 2, 0), 1);
+    assert_eq!(auto(500.0, 1, 0), 1);
+    // A stride given is kept as given.
+    assert_eq!(FrameStride::Every(1).resolve(Some(500.0), 300, 0), 1);
+    assert_eq!(FrameStride::Every(5).resolve(Some(100.0), 3, 0), 5);
+    assert_eq!("auto".parse::<FrameStride>(), Ok(FrameStride::Auto));
+    assert_eq!(" 4 ".parse::<FrameStride>(), Ok(FrameStride::Every(4)));
+    assert!("fast".parse::<FrameStride>().is_err() && "-1".parse::<FrameStride>().is_err());
+}
+
+#[test]
+fn a_500_hz_recording_runs_every_second_frame_by_default_and_every_frame_on_request() {
+    let mut rec = recording(9, |f, r, c| disc(10.0 + 0.2 * f as f64, 12.0, 6.0)(r, c));
+    rec.dt_s = Some(0.002);
+    let run = |rec: &Recording, every| {
+        let params = RunParams {
+            every,
+            ..RunParams::default()
+        };
+        let options = params.to_options(rec).unwrap();
+        let used = params.used(&options, rec);
+        let every = used.iter().find(|(k, _)| *k == "every").unwrap().1.clone();
+        let run = run_sequence(rec, &options, &|_, _, _| {}).unwrap();
+        let frames: Vec<usize> = run.objects.iter().map(|o| o.frame).collect();
+        (frames, every)
+    };
+    let (auto, recorded) = run(&rec, FrameStride::Auto);
+    assert_eq!(auto, [0, 2, 4, 6, 8]);
+    assert_eq!(
+        recorded,
+        OptionValue::Int(2),
+        "summary.json records the stride used"
+    );
+    assert_eq!(run(&rec, FrameStride::Every(2)).0, auto);
+    assert_eq!(
+        run(&rec, FrameStride::Every(1)).0,
+        (0..9).collect::<Vec<_>>()
+    );
+    // At 100 Hz the default is every frame; a study lists it as given.
+    rec.dt_s = Some(0.01);
+    assert_eq!(
+        run(&rec, FrameStride::Auto),
+        ((0..9).collect(), OptionValue::Int(1))
+    );
+    let given = RunParams::default().given().unwrap();
+    let every = given.iter().find(|(k, _)| *k == "every").unwrap();
+    assert_eq!(every.1, OptionValue::Word("auto".into()));
+    // The isocontour model matches one frame's levels: auto keeps every frame for its choice.
+    rec.dt_s = Some(0.002);
+    let iso = RunParams {
+        model: ObjectModel::Isocontour,
+        ..RunParams::default()
+    };
+    assert_eq!(iso.to_options(&rec).unwrap().every, 1);
+}
+
 /// A recording of `frames`, each drawn by `draw(frame, row, col) -> loaded`.
 fn recording(frames: usize, draw: impl Fn(usize, usize, usize) -> bool) -> Recording {
     let (rows, cols) = (24, 24);

@@ -260,6 +260,8 @@ WRONG = {  # annotation -> (a value of another type, what the message says is ex
     "Optional[int]": (2.5, "an integer"),
     "Optional[bool]": ("yes", "True or False"),
     "Optional[str]": (3, "a string"),
+    # A number or the word auto (every=): a float is neither.
+    "Optional[Union[int, Literal['auto']]]": (2.5, "an integer"),
 }
 for _alias in ("Element", "Solver", "Search", "Prealign", "ThresholdMode",
                "Literal['contour', 'surface', 'isocontour']"):

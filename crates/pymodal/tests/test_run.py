@@ -535,12 +535,16 @@ def test_every_second_frame_keeps_the_recordings_frame_numbers_and_times():
     even = [(o["frame"], len(o["points"])) for o in full["objects"] if o["frame"] % 2 == 0]
     assert [(o["frame"], len(o["points"])) for o in res["objects"]] == even
     assert full["summary"]["options"]["every"] == 1
+    # auto (the default) is every frame at the walk's 31.25 Hz, as given.
+    assert pymodal.run(rec, every="auto", frames=(0, 60))["table"] == full["table"]
 
 
 def test_every_is_checked():
     with pytest.raises(pymodal.OptionError, match="every"):
         pymodal.run(BUNDLED, every=0)
     with pytest.raises(TypeError, match="every"):
+        pymodal.run(BUNDLED, every=2.5)
+    with pytest.raises(pymodal.OptionError, match="auto"):
         pymodal.run(BUNDLED, every="2")
     with pytest.raises(pymodal.OptionError, match="multiple of every"):
         pymodal.run(BUNDLED, every=2, drift_reference=25)

@@ -390,7 +390,7 @@ def run(
     max_nodes: Optional[int] = None,
     model: Optional[Literal["contour", "surface", "isocontour"]] = None,
     frames: Optional[Tuple[Optional[int], Optional[int]]] = None,
-    every: Optional[int] = None,
+    every: Optional[Union[int, Literal["auto"]]] = None,
     noise: Optional[float] = None,
     smooth: Optional[float] = None,
     spacing: Optional[float] = None,
