@@ -95,9 +95,10 @@ def test_ctrl_c_during_the_first_run_raises_keyboard_interrupt(tmp_path):
 
 
 def test_ctrl_c_during_batch_keeps_finished_folders_and_the_study_table(tmp_path):
+    # a is short (10 frames: it finishes at once, with its figures), b and c long.
     inputs = []
-    for name in ("a.asf", "b.asf", "c.asf"):
-        shutil.copy(LONG, tmp_path / name)
+    for name, source in (("a.txt", SHORT), ("b.asf", LONG), ("c.asf", LONG)):
+        shutil.copy(source, tmp_path / name)
         inputs.append(tmp_path / name)
     out = tmp_path / "study"
     import pymodal
@@ -107,12 +108,12 @@ def test_ctrl_c_during_batch_keeps_finished_folders_and_the_study_table(tmp_path
     pymodal.batch([inputs[0]], out, figures="none")
     table = (out / "study.csv").read_bytes()
     table_json = (out / "study.json").read_bytes()
-    (a_folder,) = [d for d in out.iterdir() if d.name.startswith("a.asf")]
+    (a_folder,) = [d for d in out.iterdir() if d.name.startswith("a.txt")]
     a_summary = a_folder / "summary.json"
     before = a_summary.stat().st_mtime_ns
 
     p = start(tmp_path, BATCH, ",".join(map(str, inputs)), out, SHORT, tmp_path / "study2")
-    deadline = time.monotonic() + 600  # a hang guard: a finishes in seconds on a quiet machine
+    deadline = time.monotonic() + 600  # a hang guard: a finishes in a second on a quiet machine
     while not (a_summary.exists() and a_summary.stat().st_mtime_ns != before):
         assert p.poll() is None and time.monotonic() < deadline, "a was not run again"
         time.sleep(0.02)

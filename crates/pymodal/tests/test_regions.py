@@ -76,10 +76,11 @@ def test_regions_are_numpys_sums_on_real_recordings(path, rule):
     assert r["heel_toe_cue"] == "cop_path"
 
 
-def test_a_run_folder_s_regions_are_the_recording_s(tmp_path):
-    rec = pymodal.read_recording(str(BENCH / "emed-pressuRe-step.lst"))
-    out = tmp_path / "run"
-    pymodal.run(rec, out=str(out), report="none", figures="none", region_rule="fine")
+@pytest.mark.xdist_group("fine-step")
+def test_a_run_folder_s_regions_are_the_recording_s(fine_run_of_the_step):
+    # The run of emed-pressuRe-step.lst with the fine regions (conftest.py), which
+    # test_measures_masks.py's region curves read too.
+    rec, out = fine_run_of_the_step
     labels = np.load(out / "regions.npy")
     meta = json.loads((out / "regions.json").read_text())
     names = [meta["labels"][str(k)] for k in range(1, len(meta["labels"]) + 1)]

@@ -1,8 +1,7 @@
 //! The command line against the library's option tables, units and provenance of a run on the
 //! bundled recording, `--json`, `inspect` and the exit codes.
 
-mod common;
-use common::{pedomatch, read_json, stdout_json, temp_dir};
+use crate::common::{pedomatch, read_json, stdout_json, temp_dir};
 use std::collections::{BTreeSet, HashMap};
 use std::path::Path;
 

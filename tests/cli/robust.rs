@@ -1,11 +1,8 @@
 //! Runs that survive what goes wrong: bad pairs are skipped, interrupted and killed runs leave a
 //! whole output or none.
 
-mod common;
-#[path = "../crates/pedo-io/tests/common/gzip.rs"]
-mod gzip_stream;
-use common::temp_dir;
-use gzip_stream::gzip;
+use crate::common::temp_dir;
+use crate::gzip_stream::gzip;
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};

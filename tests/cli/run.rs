@@ -1,7 +1,6 @@
 //! End-to-end tests of `pedomatch run`, `demo` and `match`.
 
-mod common;
-use common::{pedomatch, read_csv, read_json, temp_dir};
+use crate::common::{pedomatch, read_csv, read_json, temp_dir};
 use std::path::{Path, PathBuf};
 
 fn num(row: &std::collections::HashMap<String, String>, k: &str) -> f64 {

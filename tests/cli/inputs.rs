@@ -2,8 +2,7 @@
 //! own tables given as recordings, negative values, unknown units, and `match` on two frames of
 //! one recording against the run's pair.
 
-mod common;
-use common::{pedomatch, read_json, stdout_json, temp_dir};
+use crate::common::{pedomatch, read_json, stdout_json, temp_dir};
 use std::path::{Path, PathBuf};
 
 /// The bundled walk (Tekscan F-Scan, 205 frames of 60 × 21, kPa, 5.08 mm, 31.25 Hz).

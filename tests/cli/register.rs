@@ -1,8 +1,7 @@
 //! End-to-end tests of `pedomatch register`: the folder it writes, read back independently, and
 //! its errors' exit codes.
 
-mod common;
-use common::{pedomatch, read_csv, temp_dir};
+use crate::common::{pedomatch, read_csv, temp_dir};
 use std::path::Path;
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/crates/pedo-io/tests/data");

@@ -1,5 +1,6 @@
 //! What the command-line tests share: running the built `pedomatch`, scratch folders, JSON.
-//! Each test file includes it (`mod common;`); not every file uses every helper.
+//! Every module of the `cli` test binary uses it (`use crate::common;`); not every module uses
+//! every helper.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -13,10 +14,17 @@ pub fn pedomatch(args: &[&str]) -> Output {
         .expect("run pedomatch")
 }
 
-/// An empty scratch folder `name` of this test process (emptied if a run before left it).
+/// An empty scratch folder `name` of this test process and of the calling module's file (the
+/// modules of the one test binary may pick the same name; emptied if a run before left it).
 #[allow(dead_code)]
+#[track_caller]
 pub fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("pedomatch-test-{}-{name}", std::process::id()));
+    let caller = Path::new(std::panic::Location::caller().file());
+    let module = caller.file_stem().and_then(|s| s.to_str()).unwrap_or("cli");
+    let dir = std::env::temp_dir().join(format!(
+        "pedomatch-test-{}-{module}-{name}",
+        std::process::id()
+    ));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir

@@ -1,8 +1,7 @@
 //! End-to-end tests of `pedomatch batch`: a folder of recordings with a corrupt one, resuming,
 //! `--force`, glob and folder inputs, and the same table whatever the number of jobs.
 
-mod common;
-use common::{pedomatch, read_json, temp_dir};
+use crate::common::{pedomatch, read_json, temp_dir};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,8 +1,7 @@
 //! End-to-end tests of `pedomatch run --points FILE --regions FILE`: the user's points and
 //! regions followed through a synthetic walk, written to points.csv and region_series.csv.
 
-mod common;
-use common::{pedomatch, read_csv, temp_dir};
+use crate::common::{pedomatch, read_csv, temp_dir};
 use std::collections::HashMap;
 use std::path::Path;
 

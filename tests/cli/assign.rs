@@ -1,7 +1,6 @@
 //! End-to-end tests of `pedomatch assign`.
 
-mod common;
-use common::pedomatch;
+use crate::common::pedomatch;
 
 fn write_temp(name: &str, contents: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("pedomatch-cli-{}", std::process::id()));
