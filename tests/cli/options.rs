@@ -1,7 +1,7 @@
 //! The command line against the library's option tables, units and provenance of a run on the
 //! bundled recording, `--json`, `inspect` and the exit codes.
 
-use crate::common::{pedomatch, read_json, stdout_json, temp_dir};
+use crate::common::{pedomatch, read_csv as read_text_csv, read_json, stdout_json, temp_dir};
 use std::collections::{BTreeSet, HashMap};
 use std::path::Path;
 
@@ -424,22 +424,6 @@ fn inspect_reads_a_pedar_export_with_a_given_layout() {
     assert!(String::from_utf8_lossy(&missing.stderr).contains("nonexistent.csv"));
 }
 
-/// Reads a CSV's rows as (column name → field text).
-fn read_text_csv(path: &Path) -> Vec<HashMap<String, String>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
-    lines
-        .map(|l| {
-            header
-                .iter()
-                .cloned()
-                .zip(l.split(',').map(String::from))
-                .collect()
-        })
-        .collect()
-}
-
 #[test]
 fn a_500_hz_recording_is_matched_at_250_hz_by_default_and_at_every_frame_with_every_1() {
     let trial = concat!(
@@ -531,7 +515,7 @@ fn every_second_frame_is_matched_with_the_recordings_own_frame_numbers() {
         .collect();
     assert!(!kept.is_empty());
     assert_eq!(kept, even);
-    assert_eq!(read_csv(&strided.join("frames.csv")).len(), 205);
+    assert_eq!(read_text_csv(&strided.join("frames.csv")).len(), 205);
     // Recorded with the other options; 1 (every frame) by default.
     let every = |out: &Path| read_json(&out.join("summary.json"))["options"]["every"].clone();
     assert_eq!((every(&strided), every(&all)), (2.into(), 1.into()));
