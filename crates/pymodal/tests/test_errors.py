@@ -178,7 +178,9 @@ def test_argument_errors_are_input_errors_naming_the_argument(call, name, text):
 
 # Integer keywords (counts, sizes, frame indices): a negative value is an OptionError naming the
 # keyword and the value, not pyo3's unnamed OverflowError. The keywords come from the stubs (every
-# parameter typed int or Optional[int]), so a keyword added later is covered too.
+# parameter typed int or Optional[int], or a stride: an int or the word auto), so a keyword added
+# later is covered too.
+INT_ANNOTATIONS = ("int", "Optional[int]", "Optional[Union[int, Literal['auto']]]")
 FRAMES = np.zeros((3, 8, 8))
 INT_KEYWORD_CALLS = {
     "match": lambda **kw: pymodal.match(SQUARE, SQUARE, **kw),
@@ -208,7 +210,7 @@ def int_keywords():
         if not isinstance(fn, ast.FunctionDef):
             continue
         for arg in fn.args.args + fn.args.kwonlyargs:
-            if ast.unparse(arg.annotation or ast.Constant(None)) in ("int", "Optional[int]"):
+            if ast.unparse(arg.annotation or ast.Constant(None)) in INT_ANNOTATIONS:
                 found.append((node.name, arg.arg))
     return found
 
@@ -225,7 +227,7 @@ def test_every_integer_keyword_of_the_audit_is_covered():
     found = set(int_keywords())
     for keyword in ("refits", "band", "deform_modes", "center_stride"):
         assert ("match", keyword) in found and ("run", keyword) in found, keyword
-    for keyword in ("iso_frame", "iso_levels", "surface_nodes", "drift_reference"):
+    for keyword in ("iso_frame", "iso_levels", "surface_nodes", "drift_reference", "every"):
         assert ("run", keyword) in found, keyword
 
 
