@@ -231,18 +231,17 @@ fn print_summary(name: &str, out: &std::path::Path, summary: &Value, tables: Tab
                 float("mean_trackable_percent"),
                 float("mean_local_percent")
             );
-            for (who, key) in [
-                ("tracks'", "track_round_trip_sensels"),
-                ("material points'", "point_round_trip_sensels"),
-            ] {
-                let trips = &summary[key];
-                if trips["median"].is_f64() {
-                    let f = |k: &str| trips[k].as_f64().unwrap_or(f64::NAN);
+            for kind in pedo_output::RoundTripSummary::ALL {
+                if let Some(t) = kind.of_summary(summary) {
+                    let who = match kind {
+                        pedo_output::RoundTripSummary::Tracks => "tracks'",
+                        pedo_output::RoundTripSummary::Points => "material points'",
+                    };
                     outln!(
                         "{who} round trip {:.3} sensels median, {:.3} at the 95th percentile ({:.1} % over 1 sensel)",
-                        f("median"),
-                        f("p95"),
-                        f("over_1_percent")
+                        t.median,
+                        t.p95,
+                        t.over_1_percent
                     );
                 }
             }

@@ -229,7 +229,7 @@ impl ReportInfo {
             timings: entries("timings_s")
                 .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(0.0)))
                 .collect(),
-            point_round_trips: crate::point_round_trips_of_summary(summary),
+            point_round_trips: crate::RoundTripSummary::Points.of_summary(summary),
             ..Default::default()
         }
     }
@@ -1396,7 +1396,8 @@ mod tests {
         let rec = flat(2, "kPa", Some([2.0, 2.0]));
         // Five steps, one NaN (a seed frame's row): four round trips, one over a sensel.
         let trips = [0.2, 0.4, f32::NAN, 0.6, 1.5];
-        let summary = json!({ "point_round_trip_sensels": crate::point_round_trips_json(trips) });
+        let mut summary = json!({});
+        crate::set_point_round_trips(&mut summary, trips);
         let info = ReportInfo::of_summary("walk".into(), &summary);
         let t = info.point_round_trips.expect("the summary's round trips");
         assert_eq!(t.count, 4);

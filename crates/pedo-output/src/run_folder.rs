@@ -1157,7 +1157,7 @@ fn write_folder(
     let (i, rec) = (run.input, run.recording);
     let mut summary = crate::run_summary_of(i, rec, run.params, run.options, &counts, &stages);
     if let Some(trips) = point_trips {
-        summary["point_round_trip_sensels"] = crate::point_round_trips_json(trips);
+        crate::set_point_round_trips(&mut summary, trips);
     }
     summary["input"]["streamed"] = json!(streamed);
     summary["input"]["read_whole"] = read_whole;

@@ -238,46 +238,75 @@ pub fn run_summary(
     )
 }
 
-/// `summary.json`'s `point_round_trip_sensels`: the round trips of the rows of `points.csv`
-/// (its `round_trip_sensels`, [`pedo_track::follow::FollowedPoint::round_trips`]) summarised:
-/// `steps` with one, their `median`, `p95`, `max` and `over_1_percent` (the share over one
-/// sensel); `null` without any (no points followed, or none stepped through a matched pair).
-pub fn point_round_trips_json(trips: impl IntoIterator<Item = f32>) -> Value {
-    round_trips_json(RoundTrips::of(trips), POINT_STEPS)
+/// The two summaries of round trips `summary.json` records, each an object with its count,
+/// `median`, `p95`, `max` and `over_1_percent` (the share over one sensel), or `null` without
+/// any. Written and read here only, so that every reader agrees with the writer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RoundTripSummary {
+    /// `track_round_trip_sensels`: one round trip per track (`tracks.csv`'s
+    /// `round_trip_sensels`), counted as `tracks`.
+    Tracks,
+    /// `point_round_trip_sensels`: one per step of a material point (`points.csv`'s
+    /// `round_trip_sensels`, [`pedo_track::follow::FollowedPoint::round_trips`]), counted as
+    /// `steps`; `null` where no points were followed, or none stepped through a matched pair.
+    Points,
 }
 
-/// The key of the count in `summary.json`'s `point_round_trip_sensels` and
-/// `track_round_trip_sensels`.
-const POINT_STEPS: &str = "steps";
-const TRACKS: &str = "tracks";
+impl RoundTripSummary {
+    /// Both, in the order the summary line states them.
+    pub const ALL: [Self; 2] = [Self::Tracks, Self::Points];
 
-/// Round trips as `summary.json` records them, their count under `count` (`null`: none).
-fn round_trips_json(trips: Option<RoundTrips>, count: &str) -> Value {
-    match trips {
-        Some(t) => json!({
-            count: t.count, "median": t.median, "p95": t.p95, "max": t.max,
-            "over_1_percent": t.over_1_percent,
-        }),
-        None => Value::Null,
+    /// The summary's key.
+    pub const fn key(self) -> &'static str {
+        match self {
+            Self::Tracks => "track_round_trip_sensels",
+            Self::Points => "point_round_trip_sensels",
+        }
+    }
+
+    /// The key of the count in the object.
+    const fn count_key(self) -> &'static str {
+        match self {
+            Self::Tracks => "tracks",
+            Self::Points => "steps",
+        }
+    }
+
+    /// The object recording `trips` (`null` for `None`).
+    pub fn json(self, trips: Option<RoundTrips>) -> Value {
+        match trips {
+            Some(t) => json!({
+                (self.count_key()): t.count, "median": t.median, "p95": t.p95, "max": t.max,
+                "over_1_percent": t.over_1_percent,
+            }),
+            None => Value::Null,
+        }
+    }
+
+    /// The round trips `summary` records (`None` without any, or in a summary written before
+    /// they were recorded).
+    pub fn of_summary(self, summary: &Value) -> Option<RoundTrips> {
+        let t = &summary[self.key()];
+        let f = |k: &str| t[k].as_f64();
+        Some(RoundTrips {
+            count: usize::try_from(t[self.count_key()].as_u64()?).ok()?,
+            median: f("median")?,
+            p95: f("p95")?,
+            max: f("max")?,
+            over_1_percent: f("over_1_percent")?,
+        })
     }
 }
 
-/// The points' round trips of a `summary.json` ([`point_round_trips_json`]; `None` without any,
-/// or in a summary written before they were recorded).
-pub fn point_round_trips_of_summary(summary: &Value) -> Option<RoundTrips> {
-    let t = &summary["point_round_trip_sensels"];
-    let f = |k: &str| t[k].as_f64();
-    Some(RoundTrips {
-        count: usize::try_from(t[POINT_STEPS].as_u64()?).ok()?,
-        median: f("median")?,
-        p95: f("p95")?,
-        max: f("max")?,
-        over_1_percent: f("over_1_percent")?,
-    })
+/// Records in `summary` the round trips of the rows of `points.csv` ([`point_round_trips`]) as
+/// [`RoundTripSummary::Points`].
+pub fn set_point_round_trips(summary: &mut Value, trips: impl IntoIterator<Item = f32>) {
+    let points = RoundTripSummary::Points;
+    summary[points.key()] = points.json(RoundTrips::of(trips));
 }
 
 /// The round trips of the points of `points.csv` (not the user's regions' outline points),
-/// step by step ([`point_round_trips_json`]).
+/// step by step ([`set_point_round_trips`]).
 pub fn point_round_trips(
     points: &pedo_track::follow::FollowedPoints,
 ) -> impl Iterator<Item = f32> + '_ {
@@ -353,9 +382,34 @@ pub fn run_summary_of(
         "mean_trackable_percent": c.mean_trackable_percent(),
         "mean_round_trip_sensels": c.mean_round_trip(),
         "mean_field_residual_sensels": c.mean_field_residual(),
-        "track_round_trip_sensels": round_trips_json(c.track_round_trips(), TRACKS),
-        // Set where the points are followed (`point_round_trips_json`).
-        "point_round_trip_sensels": Value::Null,
+        (RoundTripSummary::Tracks.key()): RoundTripSummary::Tracks.json(c.track_round_trips()),
+        // Set where the points are followed (`set_point_round_trips`).
+        (RoundTripSummary::Points.key()): Value::Null,
         "timings_s": stages,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trips_read_back_as_written_under_their_own_keys() {
+        let trips = RoundTrips::of([0.25, 0.5, f32::NAN, 2.0]).expect("three finite trips");
+        let mut summary = json!({});
+        for kind in RoundTripSummary::ALL {
+            summary[kind.key()] = kind.json(Some(trips));
+        }
+        assert_eq!(summary["track_round_trip_sensels"]["tracks"], 3);
+        assert_eq!(summary["point_round_trip_sensels"]["steps"], 3);
+        for kind in RoundTripSummary::ALL {
+            assert_eq!(kind.of_summary(&summary), Some(trips), "{kind:?}");
+        }
+        // `null`, an absent key or a summary without the count: none.
+        set_point_round_trips(&mut summary, []);
+        assert_eq!(RoundTripSummary::Points.of_summary(&summary), None);
+        assert_eq!(RoundTripSummary::Tracks.of_summary(&json!({})), None);
+        let old = json!({ "track_round_trip_sensels": { "median": 0.5, "p95": 1.0 } });
+        assert_eq!(RoundTripSummary::Tracks.of_summary(&old), None);
+    }
 }

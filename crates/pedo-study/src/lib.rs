@@ -29,7 +29,7 @@ use pedo_io::{IoError, Result};
 use pedo_output::outdir::{self};
 use pedo_output::{
     pretty, read_for_run, record_outputs, run_into_folder, run_table_files, Cell, InputInfo,
-    RunOutputs, RunPlan, Table, TableFormat, SUMMARY_FIGURES,
+    RoundTripSummary, RunOutputs, RunPlan, Table, TableFormat, SUMMARY_FIGURES,
 };
 use pedo_track::{run_options, ObjectModel, RunCounts, RunParams, SequenceOptions, Stage};
 use serde_json::{json, Map, Value};
@@ -136,11 +136,12 @@ pub struct Quantiles {
 }
 
 impl Quantiles {
-    /// Those of `summary.json`'s object `v` (`median`, `p95`; `None` for `null`).
-    fn of_summary(v: &Value) -> Self {
+    /// Those of the round trips `summary.json` records as `kind` (`None` for `null`).
+    fn of_summary(summary: &Value, kind: RoundTripSummary) -> Self {
+        let trips = kind.of_summary(summary);
         Self {
-            median: v["median"].as_f64(),
-            p95: v["p95"].as_f64(),
+            median: trips.map(|t| t.median),
+            p95: trips.map(|t| t.p95),
         }
     }
 }
@@ -1893,8 +1894,8 @@ fn row_of_summary(
         mean_trackable_percent: summary["mean_trackable_percent"].as_f64(),
         mean_round_trip_sensels: summary["mean_round_trip_sensels"].as_f64(),
         tracks: int(&summary["tracks"]),
-        track_round_trip_sensels: Quantiles::of_summary(&summary["track_round_trip_sensels"]),
-        point_round_trip_sensels: Quantiles::of_summary(&summary["point_round_trip_sensels"]),
+        track_round_trip_sensels: Quantiles::of_summary(summary, RoundTripSummary::Tracks),
+        point_round_trip_sensels: Quantiles::of_summary(summary, RoundTripSummary::Points),
         measures: StudyMeasures::of_summary(summary),
         wall_time_s: started.elapsed().as_secs_f64(),
         status: RowStatus::Ok,
@@ -2012,10 +2013,18 @@ mod tests {
 
     #[test]
     fn a_row_takes_the_round_trip_quantiles_of_its_summary() {
-        let summary = json!({
-            "track_round_trip_sensels": {"tracks": 9, "median": 0.5, "p95": 1.25, "max": 2.0},
-            "point_round_trip_sensels": null,
-        });
+        // As the run writes them: the tracks' round trips, no points followed.
+        let trips = pedo_track::consistency::RoundTrips {
+            count: 9,
+            median: 0.5,
+            p95: 1.25,
+            max: 2.0,
+            over_1_percent: 22.2,
+        };
+        let mut summary =
+            json!({ "track_round_trip_sensels": RoundTripSummary::Tracks.json(Some(trips)) });
+        pedo_output::set_point_round_trips(&mut summary, []);
+        assert!(summary["point_round_trip_sensels"].is_null());
         let r = row_of_summary(Path::new("x.lst"), None, &summary, Instant::now());
         assert_eq!(
             r.track_round_trip_sensels,

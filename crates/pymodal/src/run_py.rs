@@ -363,8 +363,7 @@ fn run_recording<'py>(
                 &[("read", read_time)],
             );
             if let Some(p) = &points {
-                let trips = pedo_output::point_round_trips(p);
-                summary["point_round_trip_sensels"] = pedo_output::point_round_trips_json(trips);
+                pedo_output::set_point_round_trips(&mut summary, pedo_output::point_round_trips(p));
             }
             // The measures a folder's summary.json holds (a folder computes them as it runs).
             summary["measures"] = pedo_output::measure_values_json(&m);
