@@ -71,12 +71,13 @@ pub struct FollowParams {
     /// after the first: its image on the frame before moved on by its recent velocity (a
     /// constant-velocity prior). The frame's outline jumps as sensels cross the contour level,
     /// and a new modal match moves the image at once; the prior spreads both over a few frames.
-    /// Off (0) by default: 0.2 lowers the flicker of the points and the worst force error of a
-    /// followed region on the synthetic stances, but not their worst cases after 50 frames
+    /// 0 (the default) turns it off: at 0.2 the points flicker less and keep closer to the truth
+    /// on the synthetic stances, but two ground-truth tests of the coarse synthetic walk fail
     /// (BENCHMARKS.md, "Tracks that follow the foot").
     pub inertia: f64,
     /// How much (0–1) of each frame's motion of an anchor point enters its velocity (an
-    /// exponential average over frames).
+    /// exponential average over frames). The frames of a modal match do not enter it: the
+    /// match's correction is no motion of the foot.
     pub velocity_smoothing: f64,
 }
 
@@ -1298,7 +1299,8 @@ struct Anchor {
     /// Registrations since the last modal match.
     motion_since_match: f64,
     /// Per point of the densified outline: its image's motion per frame, averaged over the
-    /// frames since the anchor's first registration ([`FollowParams::inertia`]).
+    /// frames since the anchor's first registration that took no modal match
+    /// ([`FollowParams::inertia`]).
     velocity: Vec<[f64; 2]>,
 }
 
@@ -1401,7 +1403,7 @@ impl Anchor {
         if params.inertia > 0.0 && self.velocity.len() != before.len() {
             self.velocity = vec![[0.0; 2]; before.len()];
         }
-        if params.inertia > 0.0 && self.registered {
+        if params.inertia > 0.0 && self.registered && !matched {
             let eta = params.velocity_smoothing;
             for ((v, p), q) in self.velocity.iter_mut().zip(&self.image).zip(&before) {
                 v[0] = (1.0 - eta) * v[0] + eta * (p[0] - q[0]);
