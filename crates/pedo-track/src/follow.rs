@@ -72,8 +72,8 @@ pub struct FollowParams {
     /// constant-velocity prior). The frame's outline jumps as sensels cross the contour level,
     /// and a new modal match moves the image at once; the prior spreads both over a few frames.
     /// 0 (the default) turns it off: at 0.2 the points flicker less and keep closer to the truth
-    /// on the synthetic stances, but two ground-truth tests of the coarse synthetic walk fail
-    /// (BENCHMARKS.md, "Tracks that follow the foot").
+    /// on the synthetic stances, but two ground-truth tests on the test suite's synthetic walks
+    /// fail (BENCHMARKS.md, "Tracks that follow the foot").
     pub inertia: f64,
     /// How much (0–1) of each frame's motion of an anchor point enters its velocity (an
     /// exponential average over frames). The frames of a modal match do not enter it: the
