@@ -119,3 +119,44 @@ fn a_seed_on_a_missing_object_is_an_error_naming_it() {
     .unwrap_err();
     assert!(e.to_string().contains("object 9"), "{e}");
 }
+
+/// Mean over points and frames of how far a point's step differs from its step before (the
+/// second difference of its path, sensels).
+fn mean_jerk(followed: &FollowedPoints) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for p in &followed.points {
+        for w in p.steps.windows(3) {
+            let [a, b, c] = [w[0].1, w[1].1, w[2].1];
+            sum += (c[0] - 2.0 * b[0] + a[0]).hypot(c[1] - 2.0 * b[1] + a[1]);
+            n += 1;
+        }
+    }
+    sum / n.max(1) as f64
+}
+
+#[test]
+fn the_constant_velocity_prior_smooths_the_paths_and_keeps_the_points_on_the_truth() {
+    let walk = SyntheticWalk {
+        frames: 60,
+        ..Default::default()
+    };
+    let result = run(&walk);
+    let without = FollowParams::default();
+    assert_eq!(without.inertia, 0.0);
+    let with = FollowParams {
+        inertia: 0.2,
+        ..without
+    };
+    let smooth = follow_points(&result, SenselAspect::SQUARE, &with, &[]).unwrap();
+    let plain = follow_points(&result, SenselAspect::SQUARE, &without, &[]).unwrap();
+    let (j_smooth, j_plain) = (mean_jerk(&smooth), mean_jerk(&plain));
+    assert!(
+        j_smooth < j_plain,
+        "with the prior {j_smooth:.4}, without {j_plain:.4} sensels"
+    );
+    let spacing = RunParams::default().spacing;
+    for k in [20, 40, 59] {
+        let share = share_within(&errors_at(&walk, &result, &smooth, k), spacing);
+        assert!(share >= 0.95, "after {k} frames: {share:.3}");
+    }
+}
