@@ -268,6 +268,7 @@ def held_out(outs, sevs, args):
     methods = {
         "pymodal.match (defaults)": modal(),
         "pymodal.match max_rotation=30 (run's default)": modal(max_rotation=30.0),
+        "pymodal.match refine='coherent'": modal(refine="coherent"),
         "pycpd rigid, affine, then deformable + argmax P": cpd("rigid", "affine"),
         "pycpd rigid, then deformable + argmax P": cpd("rigid"),
     }
@@ -309,6 +310,7 @@ def main():
             "pymodal.match refits=2, refit_tolerance=0 (every re-fit)": modal(refits=2, refit_tolerance=0.0),
             "pymodal.match center_stride=2 (reduced basis)": modal(center_stride=2),
             "pymodal.match paper=True (normalize, no re-fit)": modal(paper=True),
+            "pymodal.match refine='coherent' (coherent drift, ordered)": modal(refine="coherent"),
             "same pipeline, positions only (no modes)": modal(position_weight=1.0),
             "pycpd deformable + argmax P": cpd(),
             "pycpd deformable + nearest of moved A": cpd_nn,

@@ -85,7 +85,11 @@ choice!(Prealign, "prealign", [
     "normalize" => Prealign::Normalize,
     "sensor" => Prealign::Sensor,
 ]);
-choice!(Refine, "refine", ["affine" => Refine::Affine, "modal" => Refine::Modal]);
+choice!(Refine, "refine", [
+    "affine" => Refine::Affine,
+    "modal" => Refine::Modal,
+    "coherent" => Refine::Coherent,
+]);
 choice!(ThresholdMode, "threshold_mode", [
     "after" => ThresholdMode::AfterAssignment,
     "during" => ThresholdMode::InOptimizer,
@@ -620,10 +624,11 @@ option_set! {
         refit_tolerance: Option<f64> = None;
             Value, by_input(|o| o.refit_tolerance),
             "No further re-fit once every one-to-one pair lies within this fraction of the second object's node spacing of its partner under one affine map; 0 always re-fits.";
-        /// What follows the affine re-fits: nothing (`affine`) or the modal non-rigid warp (`modal`).
+        /// What follows the affine re-fits: nothing (`affine`), the modal non-rigid warp (`modal`)
+        /// or the coherent drift (`coherent`).
         refine: Refine = d.refine;
             Word(Refine::NAMES), d.refine,
-            "After the affine re-fits: nothing more (affine) or a non-rigid warp of the first object by its own low-order modes, fitted to soft correspondences with the modes' strain energy as regulariser, then one more search (modal; slower, for strongly non-affine deformations).";
+            "After the affine re-fits: nothing more (affine); a non-rigid warp of the first object by its own low-order modes, fitted to soft correspondences with the modes' strain energy as regulariser, then one more search (modal; slower, for strongly non-affine deformations); or the first object drifted onto the second by a smooth Gaussian-kernel field fitted to soft correspondences (coherent point drift), then assigned on the moved positions, in contour order for two outlines (coherent; for specimens whose proportions differ).";
         /// Modes of the non-rigid warp, rigid ones included (`refine = modal` only).
         deform_modes: usize = d.deform_modes;
             Value, d.deform_modes,

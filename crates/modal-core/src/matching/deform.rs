@@ -107,7 +107,7 @@ fn warp(pair: &Pair<'_>, x: &[f64]) -> Result<Option<Vec<f64>>, ModalError> {
                 lhs[(q, p)] = lhs[(p, q)];
             }
         }
-        let Some(q) = solve_spd(lhs, &rhs) else {
+        let Some(q) = solve_spd(lhs, &rhs, 1) else {
             return Ok(None);
         };
         for i in 0..n {
@@ -290,11 +290,17 @@ fn responsibilities(moved: &[f64], y: &[f64], d: usize, var: f64) -> Option<Resp
     })
 }
 
-/// Solves the symmetric positive definite system `lhs · q = rhs`; `None` when it is not.
-fn solve_spd(lhs: Mat<f64>, rhs: &[f64]) -> Option<Vec<f64>> {
+/// Solves the symmetric positive definite system `lhs · Q = R` for `cols` right-hand sides, each
+/// stored after the other in `rhs` (and so in the result); `None` when it is not definite.
+pub(super) fn solve_spd(lhs: Mat<f64>, rhs: &[f64], cols: usize) -> Option<Vec<f64>> {
+    let k = lhs.nrows();
+    debug_assert_eq!(rhs.len(), k * cols);
     let llt = lhs.llt(faer::Side::Lower).ok()?;
-    let b = Mat::from_fn(rhs.len(), 1, |r, _| rhs[r]);
+    let b = Mat::from_fn(k, cols, |r, c| rhs[c * k + r]);
     let q = llt.solve(&b);
-    let q: Vec<f64> = (0..rhs.len()).map(|r| q[(r, 0)]).collect();
+    let q: Vec<f64> = (0..cols)
+        .flat_map(|c| (0..k).map(move |r| (r, c)))
+        .map(|(r, c)| q[(r, c)])
+        .collect();
     q.iter().all(|v| v.is_finite()).then_some(q)
 }

@@ -10,11 +10,13 @@
 //! 5. [`excess`] — the nodes the one-to-one search leaves over;
 //! 6. `refine` — the modal affine re-fits, which repeat stages 3–5 and keep the best pass;
 //! 7. `deform` — optionally ([`Refine::Modal`]), a non-rigid warp of A by its low-order modes,
-//!    then stages 3–5 once more.
+//!    then stages 3–5 once more; or `coherent` ([`Refine::Coherent`]), A drifted onto B by a
+//!    smooth Gaussian-kernel field and assigned to B on the moved positions.
 //!
 //! [`match_shapes`] composes them for one pair; [`match_prepared`] does the same from prepared
 //! objects, on one thread or two as the caller chooses ([`Parallelism`]).
 
+mod coherent;
 mod deform;
 pub mod excess;
 pub mod features;

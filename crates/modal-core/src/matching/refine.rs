@@ -25,6 +25,10 @@ pub enum Refine {
     /// A's aligned nodes warped onto B by A's low-order modes, amplitudes fitted with the modes'
     /// strain energy as regulariser, then matched once more.
     Modal,
+    /// A's aligned nodes drifted onto B by a smooth Gaussian-kernel displacement field fitted to
+    /// soft correspondences (coherent point drift), then assigned to B's nodes on the moved
+    /// positions (the ordered solver for two closed contours).
+    Coherent,
 }
 
 /// Where the passes start: A after the pre-alignment, with the modes solved for it.
@@ -130,6 +134,7 @@ pub(crate) fn refine(pair: &Pair<'_>, start: Start) -> Result<Refined, ModalErro
     let kept = match opts.refine {
         Refine::Affine => kept,
         Refine::Modal => super::deform::deform(pair, kept)?,
+        Refine::Coherent => super::coherent::coherent(pair, kept)?,
     };
     Ok(Refined {
         kept,
@@ -182,14 +187,18 @@ fn pass_pairs(
     z: &AffinityMatrix,
     cur: &[f64],
 ) -> Result<Vec<MatchPair>, ModalError> {
+    pass_pairs_with(pair, z, cur, pair.opts.method)
+}
+
+/// [`pass_pairs`] with the global search's solver `method`.
+pub(super) fn pass_pairs_with(
+    pair: &Pair<'_>,
+    z: &AffinityMatrix,
+    cur: &[f64],
+    method: assign::Method,
+) -> Result<Vec<MatchPair>, ModalError> {
     let opts = pair.opts;
-    let one = primary_matches(
-        z,
-        opts.search,
-        opts.method,
-        pair.threshold,
-        opts.threshold_mode,
-    )?;
+    let one = primary_matches(z, opts.search, method, pair.threshold, opts.threshold_mode)?;
     let as_pair = |excess: bool| {
         move |(i, j): (usize, usize)| MatchPair {
             a: i,
@@ -221,7 +230,11 @@ fn pass_pairs(
 /// the passes; the largest of the one-to-one pairs decides whether another re-fit is worth a
 /// solve. Excess pairs are left out of that: they are many-to-one by construction, so their
 /// offsets along the contour measure the sampling, not the fit. Returns both and the map.
-fn explained(pair: &Pair<'_>, cur: &[f64], pairs: &[MatchPair]) -> (f64, f64, Option<Affine>) {
+pub(super) fn explained(
+    pair: &Pair<'_>,
+    cur: &[f64],
+    pairs: &[MatchPair],
+) -> (f64, f64, Option<Affine>) {
     let (d, b) = (pair.dim, &pair.b.get().pts);
     let idx: Vec<(usize, usize)> = pairs.iter().map(|p| (p.a, p.b)).collect();
     let fit = fit_affine(cur, b, d, &idx);
