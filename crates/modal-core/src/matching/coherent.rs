@@ -21,8 +21,8 @@
 
 use faer::Mat;
 
-use super::deform::solve_spd;
-use super::features::AffinityMatrix;
+use super::deform::{initial_variance, solve_spd};
+use super::features::position_costs;
 use super::prepare::Pair;
 use super::refine::{explained, pass_pairs_with, Iteration};
 use crate::error::ModalError;
@@ -53,7 +53,7 @@ pub(crate) fn coherent(pair: &Pair<'_>, kept: Iteration) -> Result<Iteration, Mo
     let Some(moved) = drift(&kept.aligned, y, d) else {
         return Ok(kept);
     };
-    let z = distances(&moved, y, d)?;
+    let z = position_costs(&moved, y, d)?;
     let method = if pair.ordered {
         assign::Method::Ordered
     } else {
@@ -68,18 +68,6 @@ pub(crate) fn coherent(pair: &Pair<'_>, kept: Iteration) -> Result<Iteration, Mo
         aligned: moved,
         to_aligned: kept.to_aligned,
     })
-}
-
-/// Max-normalised squared distances of the moved A's nodes to B's.
-fn distances(a: &[f64], b: &[f64], d: usize) -> Result<AffinityMatrix, ModalError> {
-    let (n, m) = (a.len() / d, b.len() / d);
-    let mut data = vec![0.0; n * m];
-    for (row, p) in data.chunks_exact_mut(m.max(1)).zip(a.chunks_exact(d)) {
-        for (z, q) in row.iter_mut().zip(b.chunks_exact(d)) {
-            *z = (0..d).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>();
-        }
-    }
-    Ok(AffinityMatrix::new(n, m, data)?.normalized())
 }
 
 /// The nodes `x` (row-major, `n × d`) moved onto `y` by the coherent field, or `None` when no
@@ -230,21 +218,6 @@ fn kernel_basis(x: &[f64], d: usize) -> Option<(Vec<f64>, Vec<f64>)> {
     }
     let values = keep.iter().map(|&a| -pairs.values[a]).collect();
     Some((basis, values))
-}
-
-/// The mixture's first variance: the mean squared distance of all pairs, as in coherent point
-/// drift.
-fn initial_variance(x: &[f64], y: &[f64], d: usize) -> f64 {
-    let (n, m) = (x.len() / d, y.len() / d);
-    let mut sum = 0.0;
-    for i in 0..n {
-        for j in 0..m {
-            sum += (0..d)
-                .map(|c| (x[i * d + c] - y[j * d + c]).powi(2))
-                .sum::<f64>();
-        }
-    }
-    sum / (d * n * m) as f64
 }
 
 #[cfg(test)]

@@ -199,7 +199,7 @@ fn warp_basis(pair: &Pair<'_>, x: &[f64]) -> Result<Option<WarpBasis>, ModalErro
 
 /// The mixture's first variance: the mean squared distance of all pairs, as in coherent point
 /// drift (wide enough that every node of B first pulls on all of A).
-fn initial_variance(x: &[f64], y: &[f64], d: usize) -> f64 {
+pub(super) fn initial_variance(x: &[f64], y: &[f64], d: usize) -> f64 {
     let (n, m) = (x.len() / d, y.len() / d);
     let mut sum = 0.0;
     for i in 0..n {

@@ -529,7 +529,7 @@ impl PositionTermAhead {
 }
 
 /// Max-normalised squared distances between aligned coordinates.
-fn position_costs(a: &[f64], b: &[f64], d: usize) -> Result<AffinityMatrix, ModalError> {
+pub(super) fn position_costs(a: &[f64], b: &[f64], d: usize) -> Result<AffinityMatrix, ModalError> {
     let (n, m) = (a.len() / d, b.len() / d);
     let mut data = vec![0.0; n * m];
     for (row, p) in data.chunks_exact_mut(m.max(1)).zip(a.chunks_exact(d)) {
