@@ -1,6 +1,6 @@
 //! End-to-end tests of `pedomatch assign`.
 
-use crate::common::pedomatch;
+use crate::common::{pedomatch, pedomatch_ok};
 
 fn write_temp(name: &str, contents: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("pedomatch-cli-{}", std::process::id()));
@@ -14,12 +14,7 @@ fn write_temp(name: &str, contents: &str) -> std::path::PathBuf {
 fn bundled_example_has_known_optimum_for_every_method() {
     let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/cost.csv");
     for method in ["jv", "hungarian", "simplex"] {
-        let out = pedomatch(&["assign", example, "--solver", method, "--json"]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let out = pedomatch_ok(&["assign", example, "--solver", method, "--json"]);
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         assert_eq!(v["total_cost"].as_f64().unwrap(), 6.0, "method {method}");
         let pairs: Vec<(usize, usize)> = serde_json::from_value(v["pairs"].clone()).unwrap();
@@ -30,8 +25,7 @@ fn bundled_example_has_known_optimum_for_every_method() {
 #[test]
 fn maximize_and_table_output() {
     let path = write_temp("max.csv", "1,2\n3,4\n");
-    let out = pedomatch(&["assign", path.to_str().unwrap(), "--maximize"]);
-    assert!(out.status.success());
+    let out = pedomatch_ok(&["assign", path.to_str().unwrap(), "--maximize"]);
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("total cost: 5 (2 pairs)"), "{text}");
 }

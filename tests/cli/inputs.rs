@@ -2,7 +2,7 @@
 //! own tables given as recordings, negative values, unknown units, and `match` on two frames of
 //! one recording against the run's pair.
 
-use crate::common::{pedomatch, read_json, stdout_json, temp_dir};
+use crate::common::{pedomatch, pedomatch_ok, read_json, stdout_json, temp_dir};
 use std::path::{Path, PathBuf};
 
 /// The bundled walk (Tekscan F-Scan, 205 frames of 60 × 21, kPa, 5.08 mm, 31.25 Hz).
@@ -125,7 +125,7 @@ fn an_array_stored_time_last_is_refused_naming_both_shapes_and_read_on_request()
 fn pedomatchs_own_tables_are_refused_as_recordings_naming_them() {
     let dir = temp_dir("own-tables");
     let out = dir.join("walk");
-    let o = pedomatch(&[
+    pedomatch_ok(&[
         "run",
         walk().to_str().unwrap(),
         "--frames",
@@ -137,7 +137,6 @@ fn pedomatchs_own_tables_are_refused_as_recordings_naming_them() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", stderr(&o));
     let mut seen = 0;
     for entry in std::fs::read_dir(&out).unwrap() {
         let path = entry.unwrap().path();
@@ -174,7 +173,7 @@ fn pedomatchs_own_tables_are_refused_as_recordings_naming_them() {
     let m = dir.join("pair");
     let w = walk();
     let w = w.to_str().unwrap();
-    let o = pedomatch(&[
+    pedomatch_ok(&[
         "match",
         w,
         w,
@@ -187,7 +186,6 @@ fn pedomatchs_own_tables_are_refused_as_recordings_naming_them() {
         "--figures",
         "none",
     ]);
-    assert!(o.status.success(), "{}", stderr(&o));
     let o = pedomatch(&["inspect", m.join("matches.csv").to_str().unwrap()]);
     assert!(stderr(&o).contains("own matches.csv"), "{}", stderr(&o));
 }
@@ -268,8 +266,7 @@ fn negative_values_are_counted_by_inspect_and_summary_and_clipped_on_request() {
         if clip {
             args.push("--clip-negative");
         }
-        let o = pedomatch(&args);
-        assert!(o.status.success(), "{}", stderr(&o));
+        pedomatch_ok(&args);
         let s = read_json(&out.join("summary.json"));
         let n = &s["recording"]["negative_values"];
         assert_eq!(n["count"].as_u64(), Some(count as u64), "{s}");
@@ -303,7 +300,7 @@ fn measures_of_a_recording_without_units_are_named_by_what_they_are() {
     let file = dir.join("plain.npy");
     std::fs::write(&file, npy(&[t, r, c], &values)).unwrap();
     let out = dir.join("run");
-    let o = pedomatch(&[
+    pedomatch_ok(&[
         "run",
         file.to_str().unwrap(),
         "--out",
@@ -311,7 +308,6 @@ fn measures_of_a_recording_without_units_are_named_by_what_they_are() {
         "--report",
         "none",
     ]);
-    assert!(o.status.success(), "{}", stderr(&o));
     let mut texts = Vec::new();
     for name in ["frames.csv", "objects.csv", "summary.json", "measures.json"] {
         texts.push((name, std::fs::read_to_string(out.join(name)).unwrap()));
@@ -335,7 +331,7 @@ fn measures_of_a_recording_without_units_are_named_by_what_they_are() {
     );
     // With units and pitch given, the same columns are a force in N and pressures in kPa.
     let out = dir.join("run-kpa");
-    let o = pedomatch(&[
+    pedomatch_ok(&[
         "run",
         file.to_str().unwrap(),
         "--units",
@@ -349,7 +345,6 @@ fn measures_of_a_recording_without_units_are_named_by_what_they_are() {
         "--report",
         "none",
     ]);
-    assert!(o.status.success(), "{}", stderr(&o));
     let header = std::fs::read_to_string(out.join("frames.csv")).unwrap();
     let header = header.lines().next().unwrap();
     assert!(
@@ -371,7 +366,7 @@ fn match_of_two_frames_of_one_recording_is_the_runs_pair() {
     let w = walk();
     let w = w.to_str().unwrap();
     let out = dir.join("run");
-    let o = pedomatch(&[
+    pedomatch_ok(&[
         "run",
         w,
         "--out",
@@ -381,7 +376,6 @@ fn match_of_two_frames_of_one_recording_is_the_runs_pair() {
         "--report",
         "none",
     ]);
-    assert!(o.status.success(), "{}", stderr(&o));
     let pairs = std::fs::read_to_string(out.join("pairs.csv")).unwrap();
     let mut lines = pairs.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();

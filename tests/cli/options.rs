@@ -1,7 +1,9 @@
 //! The command line against the library's option tables, units and provenance of a run on the
 //! bundled recording, `--json`, `inspect` and the exit codes.
 
-use crate::common::{pedomatch, read_csv as read_text_csv, read_json, stdout_json, temp_dir};
+use crate::common::{
+    pedomatch, pedomatch_ok, read_csv as read_text_csv, read_json, stdout_json, temp_dir,
+};
 use std::collections::{BTreeSet, HashMap};
 use std::path::Path;
 
@@ -28,8 +30,7 @@ fn read_csv(path: &Path) -> Vec<HashMap<String, f64>> {
 
 /// The long flags a subcommand's `--help` lists.
 fn long_flags(subcommand: &str) -> BTreeSet<String> {
-    let o = pedomatch(&[subcommand, "--help"]);
-    assert!(o.status.success());
+    let o = pedomatch_ok(&[subcommand, "--help"]);
     String::from_utf8(o.stdout)
         .unwrap()
         .lines()
@@ -287,8 +288,7 @@ fn inspect_describes_the_bundled_recording() {
     assert!(d["measures"]["total_force_n"]["max"].as_f64().unwrap() > 100.0);
     assert!(d["measures"]["peak_pressure_kpa"]["max"].as_f64().unwrap() > 100.0);
 
-    let o = pedomatch(&["inspect", BUNDLED]);
-    assert!(o.status.success());
+    let o = pedomatch_ok(&["inspect", BUNDLED]);
     let text = String::from_utf8(o.stdout).unwrap();
     for part in [
         "asf",
@@ -445,8 +445,7 @@ fn a_500_hz_recording_is_matched_at_250_hz_by_default_and_at_every_frame_with_ev
         ];
         args.extend_from_slice(extra);
         args.extend(["--out", out.to_str().unwrap()]);
-        let o = pedomatch(&args);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        pedomatch_ok(&args);
         out
     };
     let (auto, all) = (run("auto", &[]), run("all", &["--every", "1"]));
@@ -480,8 +479,7 @@ fn every_second_frame_is_matched_with_the_recordings_own_frame_numbers() {
         let mut args = vec!["run", BUNDLED, "--figures", "none", "--report", "none"];
         args.extend_from_slice(extra);
         args.extend(["--out", out.to_str().unwrap()]);
-        let o = pedomatch(&args);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        pedomatch_ok(&args);
         out
     };
     let (all, strided) = (run("all", &[]), run("every2", &["--every", "2"]));

@@ -1,7 +1,7 @@
 //! End-to-end tests of `pedomatch run --points FILE --regions FILE`: the user's points and
 //! regions followed through a synthetic walk, written to points.csv and region_series.csv.
 
-use crate::common::{pedomatch, read_csv, temp_dir};
+use crate::common::{pedomatch, pedomatch_ok, read_csv, temp_dir};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -42,7 +42,7 @@ fn run_follows_given_points_and_regions_into_their_tables() {
     let out = dir.join("out");
     let arg = |p: &Path| p.to_str().unwrap().to_string();
     // Tables only: the user's points and regions are followed all the same.
-    let o = pedomatch(&[
+    pedomatch_ok(&[
         "run",
         &arg(&npy),
         "--noise",
@@ -58,7 +58,6 @@ fn run_follows_given_points_and_regions_into_their_tables() {
         "--out",
         &arg(&out),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let rows = read_csv(&out.join("points.csv"));
     let user: Vec<_> = rows.iter().filter(|r| r["kind"] == "user").collect();
     assert_eq!(user.len(), 20, "one row a frame");

@@ -1,6 +1,6 @@
 //! End-to-end tests of `pedomatch run`, `demo` and `match`.
 
-use crate::common::{pedomatch, read_csv, read_json, temp_dir};
+use crate::common::{pedomatch, pedomatch_ok, read_csv, read_json, temp_dir};
 use std::path::{Path, PathBuf};
 
 fn num(row: &std::collections::HashMap<String, String>, k: &str) -> f64 {
@@ -52,8 +52,7 @@ fn run_synthetic(name: &str, extra: &[&str]) -> PathBuf {
     let out = dir.join("out");
     let mut args = vec!["run", rec.to_str().unwrap(), "--out", out.to_str().unwrap()];
     args.extend_from_slice(extra);
-    let o = pedomatch(&args);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    pedomatch_ok(&args);
     out
 }
 
@@ -154,7 +153,7 @@ fn run_with_a_reduced_gaussian_basis_still_tracks_the_motion() {
 fn demo_on_bundled_recording() {
     let dir = temp_dir("demo");
     let out = dir.join("out");
-    let o = pedomatch(&[
+    let o = pedomatch_ok(&[
         "demo",
         "--out",
         out.to_str().unwrap(),
@@ -162,7 +161,6 @@ fn demo_on_bundled_recording() {
         "0..70",
         "--timings",
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stderr).contains("timings:"));
     let rows = read_csv(&out.join("pairs.csv"));
     assert!(
@@ -263,8 +261,7 @@ fn demo_figures_have_mm_axes_times_and_a_pressure_scale() {
         "--figure-format",
         "svg",
     ];
-    let o = pedomatch(&args);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    pedomatch_ok(&args);
     let pairs = read_csv(&out.join("pairs.csv"));
     let first = &pairs[0];
     let id = |k: &str| first[k].parse::<usize>().unwrap();
@@ -312,7 +309,7 @@ fn skipped_levels_point_to_where_their_reasons_are() {
     let dir = temp_dir("iso-skipped");
     let walk = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/data/FrasP01L.asf");
     let out = dir.join("iso");
-    let o = pedomatch(&[
+    let o = pedomatch_ok(&[
         "run",
         walk.to_str().unwrap(),
         "--model",
@@ -324,7 +321,6 @@ fn skipped_levels_point_to_where_their_reasons_are() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stdout = String::from_utf8_lossy(&o.stdout);
     let line = stdout
         .lines()
@@ -341,7 +337,7 @@ fn isocontour_and_surface_models_run() {
     let dir = temp_dir("models");
     let rec = synthetic_recording(&dir);
     let out = dir.join("iso");
-    let o = pedomatch(&[
+    pedomatch_ok(&[
         "run",
         rec.to_str().unwrap(),
         "--model",
@@ -351,7 +347,6 @@ fn isocontour_and_surface_models_run() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let rows = read_csv(&out.join("pairs.csv"));
     assert_eq!(rows.len(), 4, "5 nested levels give 4 consecutive pairs");
     for w in rows.windows(2) {
@@ -361,7 +356,7 @@ fn isocontour_and_surface_models_run() {
         );
     }
     let out = dir.join("surface");
-    let o = pedomatch(&[
+    pedomatch_ok(&[
         "run",
         rec.to_str().unwrap(),
         "--model",
@@ -373,7 +368,6 @@ fn isocontour_and_surface_models_run() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let rows = read_csv(&out.join("pairs.csv"));
     assert_eq!(rows.len(), 3);
     for row in &rows {
@@ -449,7 +443,7 @@ fn match_two_point_files() {
     std::fs::write(dir.join("a.csv"), ring(1.0, 0)).unwrap();
     std::fs::write(dir.join("b.csv"), ring(1.1, 5)).unwrap();
     let out = dir.join("out");
-    let o = pedomatch(&[
+    pedomatch_ok(&[
         "match",
         dir.join("a.csv").to_str().unwrap(),
         dir.join("b.csv").to_str().unwrap(),
@@ -457,7 +451,6 @@ fn match_two_point_files() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // b's node k is a's node k + 5: the true match of a's node i is b's node (i - 5) mod n.
     let rows = read_csv(&out.join("matches.csv"));
     assert_eq!(rows.len(), n);
@@ -530,7 +523,7 @@ fn match_two_point_files() {
     );
 
     let none = dir.join("none");
-    let o = pedomatch(&[
+    pedomatch_ok(&[
         "match",
         dir.join("a.csv").to_str().unwrap(),
         dir.join("b.csv").to_str().unwrap(),
@@ -539,7 +532,6 @@ fn match_two_point_files() {
         "--report",
         "none",
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(none.join("matches.csv").exists() && !none.join("report.html").exists());
 }
 
@@ -547,7 +539,7 @@ fn match_two_point_files() {
 fn match_report_of_two_frames_draws_their_pressure_under_the_outlines() {
     let walk = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
     let out = temp_dir("match-frames").join("out");
-    let o = pedomatch(&[
+    let o = pedomatch_ok(&[
         "match",
         walk,
         walk,
@@ -560,7 +552,6 @@ fn match_report_of_two_frames_draws_their_pressure_under_the_outlines() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stdout = String::from_utf8(o.stdout).unwrap();
     // With --out (no --json): the counts and where the files are, not the JSON.
     assert!(!stdout.contains('{'), "{stdout}");
@@ -710,7 +701,7 @@ fn match_search_best_pairs_every_surface_node_with_its_cheapest() {
     let tol = modal_core::shape::nearest_neighbour_stats_of(&b.concat(), 3).0;
     let hits = |search: &str| -> (Vec<usize>, f64) {
         let out = dir.join(search);
-        let o = pedomatch(&[
+        pedomatch_ok(&[
             "match",
             dir.join("a.xyz").to_str().unwrap(),
             dir.join("b.xyz").to_str().unwrap(),
@@ -719,7 +710,6 @@ fn match_search_best_pairs_every_surface_node_with_its_cheapest() {
             "--out",
             out.to_str().unwrap(),
         ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let rows: Vec<_> = read_csv(&out.join("matches.csv"))
             .into_iter()
             .filter(|r| r["excess"] == "0")
@@ -796,8 +786,7 @@ fn a_run_with_tables_only_writes_the_tables_of_a_run_with_figures() {
             "5..140",
         ];
         args.extend_from_slice(extra);
-        let o = pedomatch(&args);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let o = pedomatch_ok(&args);
         (out, String::from_utf8_lossy(&o.stdout).into_owned())
     };
     for tables in ["csv", "parquet"] {
@@ -888,8 +877,7 @@ fn a_run_with_tables_only_writes_the_tables_of_a_run_with_figures() {
 fn match_warns_of_an_object_matched_with_itself() {
     let walk = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
     // The same frame twice: every node onto itself, and a warning that says how to ask for two.
-    let o = pedomatch(&["match", walk, walk, "--frame", "40"]);
-    assert!(o.status.success());
+    let o = pedomatch_ok(&["match", walk, walk, "--frame", "40"]);
     let err = String::from_utf8(o.stderr).unwrap();
     assert!(
         err.contains("warning") && err.contains("the same object") && err.contains("--frame-b"),
@@ -915,8 +903,7 @@ fn match_warns_that_a_frame_does_not_apply_to_a_point_file() {
     std::fs::write(&a, circle(10.0)).unwrap();
     std::fs::write(&b, circle(11.0)).unwrap();
     let (a, b) = (a.to_str().unwrap(), b.to_str().unwrap());
-    let o = pedomatch(&["match", a, b, "--frame", "3"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = pedomatch_ok(&["match", a, b, "--frame", "3"]);
     let err = String::from_utf8(o.stderr).unwrap();
     assert!(
         err.contains("--frame 3 does not apply to") && err.contains("a.xy") && err.contains("b.xy"),
@@ -953,7 +940,7 @@ fn a_run_whose_frames_hold_no_object_fails_and_writes_nothing() {
 fn an_isobaric_level_without_an_object_is_reported_not_dropped() {
     let walk = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
     let out = temp_dir("iso-levels").join("out");
-    let o = pedomatch(&[
+    pedomatch_ok(&[
         "run",
         walk,
         "--model",
@@ -967,7 +954,6 @@ fn an_isobaric_level_without_an_object_is_reported_not_dropped() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary = read_json(&out.join("summary.json"));
     let skipped = summary["skipped"]["frames"].as_array().unwrap();
     // Every level is an object or a skipped entry naming it.
@@ -1006,7 +992,7 @@ fn isobaric_levels_of_a_file_in_n_per_cm2_are_stated_in_kpa() {
         "/crates/pedo-io/tests/data/footscan-FrasP01L-11-20.txt"
     );
     let out = temp_dir("iso-kpa").join("out");
-    let o = pedomatch(&[
+    pedomatch_ok(&[
         "run",
         txt,
         "--model",
@@ -1018,7 +1004,6 @@ fn isobaric_levels_of_a_file_in_n_per_cm2_are_stated_in_kpa() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // The file is in N/cm² (10 kPa each): the first of the evenly spaced levels is a tenth of
     // the frame's peak less a step, in kPa like the peak of frames.csv.
     let levels: Vec<f64> = read_csv(&out.join("objects.csv"))
@@ -1072,7 +1057,7 @@ fn match_reads_a_footscan_text_export_as_a_recording() {
         env!("CARGO_MANIFEST_DIR"),
         "/crates/pedo-io/tests/data/footscan-FrasP01L-11-20.txt"
     );
-    let o = pedomatch(&[
+    let o = pedomatch_ok(&[
         "match",
         txt,
         txt,
@@ -1082,7 +1067,6 @@ fn match_reads_a_footscan_text_export_as_a_recording() {
         "1",
         "--json",
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(v["optimisation_matches"].as_u64().unwrap() >= 8, "{v}");
     // A .txt of points is still a point file.
@@ -1095,8 +1079,7 @@ fn match_reads_a_footscan_text_export_as_a_recording() {
         .collect();
     std::fs::write(dir.join("a.txt"), &ring).unwrap();
     let a = dir.join("a.txt");
-    let o = pedomatch(&["match", a.to_str().unwrap(), a.to_str().unwrap(), "--json"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = pedomatch_ok(&["match", a.to_str().unwrap(), a.to_str().unwrap(), "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["optimisation_matches"], 30, "{v}");
 }
@@ -1106,7 +1089,7 @@ fn the_run_report_opens_in_the_analysed_frames_and_breaks_the_cop_path_at_swings
     // Frames 55..100 of the walk start in a swing (no contact until frame 64).
     let walk = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/FrasP01L.asf");
     let out = temp_dir("report-frames").join("out");
-    let o = pedomatch(&[
+    pedomatch_ok(&[
         "run",
         walk,
         "--frames",
@@ -1116,7 +1099,6 @@ fn the_run_report_opens_in_the_analysed_frames_and_breaks_the_cop_path_at_swings
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(
         html.contains("<th>frames</th><td>55–99 of 205 analysed, 60 × 21 sensels</td>"),
@@ -1220,7 +1202,7 @@ fn two_frames_of_oblong_sensels_are_matched_in_their_true_proportions() {
     }
     let matches = |args: &[&str], out: &str| {
         let out = dir.join(out);
-        let o = pedomatch(
+        pedomatch_ok(
             &[
                 args,
                 &[
@@ -1234,7 +1216,6 @@ fn two_frames_of_oblong_sensels_are_matched_in_their_true_proportions() {
             ]
             .concat(),
         );
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let csv = std::fs::read_to_string(out.join("matches.csv")).unwrap();
         // node_a, node_b and excess (the costs are normalised alike, but written rounded).
         csv.lines()
@@ -1318,8 +1299,7 @@ fn the_measures_of_the_walk_agree_with_its_frames_table() {
     // measures.json against the frames table's own per-frame force, peak and area.
     let dir = temp_dir("measures");
     let out = dir.join("walk");
-    let o = pedomatch(&["demo", "--out", out.to_str().unwrap(), "--report", "none"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    pedomatch_ok(&["demo", "--out", out.to_str().unwrap(), "--report", "none"]);
     let m = read_json(&out.join("measures.json"));
     let frames = read_csv(&out.join("frames.csv"));
     let col = |k: &str| frames.iter().map(|r| num(r, k)).collect::<Vec<f64>>();

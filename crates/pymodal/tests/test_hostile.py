@@ -3,9 +3,12 @@ PedomatchError (or a correct result) within 512 MB of memory and 20 s of CPU, me
 interpreter bounded by an address-space limit, so that an abort (a failed allocation ends the
 process), a panic (PanicException is a BaseException) or a hang shows as what it is.
 
+Each path through the bindings (reading, a run, a batch, a match) meets a hostile file of each
+kind of claim (frames, sensors, an image's size, a bad line, a line or a file of gigabytes); every
+reader's own bounds (nesting, decompression, dense frames, each vendor's claims) are tested
+in Rust, in crates/pedo-io/tests/hostile.rs, where they cost a fraction of the time.
 The files are made at test time; none is committed."""
 
-import gzip
 import os
 import pathlib
 import resource
@@ -21,7 +24,7 @@ import pymodal
 
 DATA = pathlib.Path(__file__).resolve().parents[2] / "pedo-io" / "tests" / "data"
 
-# The corpus is made once per process (about 60 MB of gzip and two sparse gigabytes): with
+# The corpus is made once per process (a few MB of gzip and two sparse gigabytes): with
 # pytest-xdist, this module's tests stay on one worker (`--dist loadgroup`) instead of every
 # worker making its own.
 pytestmark = pytest.mark.xdist_group("hostile")
@@ -30,8 +33,8 @@ pytestmark = pytest.mark.xdist_group("hostile")
 # files claim (262 GB, 30 GB, 4.3 GB), so an allocation sized by a claim fails in it.
 ADDRESS_SPACE = 4 << 30
 PEAK_RSS_KB = 512 << 10
-# A guard against a hang or quadratic work, not a speed target: the 1 GiB decompression alone
-# takes 5–10 s of CPU, more on a machine whose two cores are both busy (10.4 s measured).
+# A guard against a hang or quadratic work, not a speed target: reading the sparse gigabyte
+# takes seconds of CPU, more on a machine whose two cores are both busy.
 CPU_S = 20.0
 
 CHILD = r"""
@@ -104,8 +107,6 @@ ZEBRIS_HEAD = (b"<measurement><cell_count><x>256</x><y>256</y></cell_count><move
                b"<clips><clip><cell_size><x>8.467</x><y>8.467</y></cell_size><frequency>100</frequency>"
                b"<data>")
 ZEBRIS_TAIL = b"</data></clip></clips></movement></movements></measurement>"
-ZEBRIS_ONES = (b"<quant><cell_begin><x>0</x><y>0</y></cell_begin><cell_count><x>256</x><y>256</y>"
-               b"</cell_count><cells>" + b"1 " * 65536 + b"</cells></quant>")
 
 
 def png_of_zeros(side):
@@ -135,25 +136,14 @@ def corpus(tmp_path_factory):
     files = {
         # 10⁶ empty frames on a 256 × 256 plate: 262 GB as dense frames.
         "million.xml.gz": (gzip_of((ZEBRIS_HEAD, 1), (b"<quant/>", 1_000_000), (ZEBRIS_TAIL, 1)), says),
-        # Nested 10⁶ deep: quadratic work once.
-        "deep.xml.gz": (gzip_of((ZEBRIS_HEAD, 1), (b"<a>", 1_000_000), (b"</a>", 1_000_000)), "nested elements"),
         # An emed page claiming a 10000 × 10000 matrix: 30 GB.
         "walk.lst.gz": (gzip_of((b"Page 1\nMatrix: 10000x10000\n\t1\tForce\n1\t0\t0\nForce\t0\n\x0c", 75),
                                 (b"\n", 60_000_000)), "sensors a frame may have"),
         # 16384² zeros in 261 KB: 4.3 GB in marching squares before.
         "zeros.png": (png_of_zeros(16384), "an image of 16384 x 16384"),
-        # 2 × 10⁷ empty samples of a Zebris JSON.
-        "walk.json.gz": (gzip_of((b'{"cell_count": {"x": 256, "y": 256}, "samples": [', 1), (b"{},", 20_000_000),
-                                 (b"{}]}", 1)), says),
         # A grid whose line 46 is bad, then 100 MB more: the error at once.
         "grid.csv.gz": (gzip_of((b"0,0,0,0,0\n", 45), (b"0,0,x,0,0\n", 1), (b"0,0,0,0,0\n", 10_000_000)),
                         "grid.csv.gz:46"),
-        # 8174 frames of a 256 x 256 plate, every sensel 1, in 1.5 MB: 3.2 GB held before.
-        "ones.xml.gz": (gzip_of((ZEBRIS_HEAD, 1), (ZEBRIS_ONES, 8174), (ZEBRIS_TAIL, 1)),
-                        "a file of"),
-        # More than a compressed recording may expand to.
-        "blank.lst.gz": (gzip_of((b"Page 1\n", 1), (b"\n" + b" " * 4095, (1 << 30) // 4096 + 1)),
-                         "decompresses to more than"),
     }
     cases = {}
     for name, (data, message) in files.items():
@@ -168,8 +158,7 @@ def corpus(tmp_path_factory):
     return cases
 
 
-CASES = ["million.xml.gz", "ones.xml.gz", "deep.xml.gz", "walk.lst.gz", "zeros.png", "walk.json.gz", "grid.csv.gz",
-         "blank.lst.gz", "line.csv", "nul.csv"]
+CASES = ["million.xml.gz", "walk.lst.gz", "zeros.png", "grid.csv.gz", "line.csv", "nul.csv"]
 
 
 @pytest.mark.parametrize("name", CASES)

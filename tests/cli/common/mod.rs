@@ -14,6 +14,15 @@ pub fn pedomatch(args: &[&str]) -> Output {
         .expect("run pedomatch")
 }
 
+/// Runs the built `pedomatch` with `args` and asserts it succeeded (its error line shown if not).
+#[allow(dead_code)]
+#[track_caller]
+pub fn pedomatch_ok(args: &[&str]) -> Output {
+    let o = pedomatch(args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
 /// An empty scratch folder `name` of this test process and of the calling module's file (the
 /// modules of the one test binary may pick the same name; emptied if a run before left it).
 #[allow(dead_code)]
