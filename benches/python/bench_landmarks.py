@@ -18,8 +18,9 @@ the first half is the tuning set, the second the held-out set, and pairs are dra
 only (at most --pairs per class and half, each pair ordered at random).
 
 Carrying a landmark: each method gives every node of A an image on B's outline (pymodal: its
-partner node, excess matches included; point-set registrations: the moved node projected onto B's
-outline; shape context: its assigned node); a landmark between nodes i and i+1 of A at fraction t
+partner node, excess matches included; point-set registrations, and pymodal's rows "moved nodes
+projected" (--projected): the moved node projected onto B's outline; shape context: its assigned
+node); a landmark between nodes i and i+1 of A at fraction t
 goes to the point of B's outline at t of the way (along the outline, the shorter way round)
 between the images of i and i+1. Nodes of A without a partner take the interpolation between their
 nearest neighbours that have one. Error: the distance from the carried point to B's landmark in B's
@@ -35,6 +36,8 @@ writing and reading of its text files and the process start.
 Run:  python benches/python/bench_landmarks.py --data DIR [--pairs 12] [--markdown]
       python benches/python/bench_landmarks.py --data DIR --halves tuning --only pedomatch \
           --by-class --variant prealign=normalize,solver=ordered  (settings tried on tuning)
+      python benches/python/bench_landmarks.py --data DIR --halves tuning --projected \
+          --variant prealign=normalize,position_weight=1,refine=coherent  (moved nodes read too)
       python benches/python/bench_landmarks.py --data DIR --turns --variant max_rotation=30
 """
 import argparse
@@ -211,11 +214,16 @@ def normalise(p, ref=None):
 # ---------------------------------------------------------------- methods
 
 
-def pedomatch(**kw):
+def pedomatch(projected=False, **kw):
+    """pymodal.match's pairs, or with `projected` its moved nodes (Match.aligned_a: after
+    refine="coherent", A drifted onto B) projected onto B's outline, as the CPD rows are read."""
+
     def run(a, b):
         import pymodal
 
         m = pymodal.match(a.pts, b.pts, **kw)
+        if projected:
+            return carry(a, b, b.project(np.asarray(m.aligned_a)))
         return from_pairs(a, b, np.asarray(m.pairs))
 
     return run
@@ -341,6 +349,8 @@ def main():
     ap.add_argument("--only", default="", help="comma-separated method names to run (substring)")
     ap.add_argument("--variant", action="append", default=[],
                     help="extra pymodal.match row, e.g. 'position_weight=0.5,refine=modal' (repeatable)")
+    ap.add_argument("--projected", action="store_true",
+                    help="each --variant also read by its moved nodes (Match.aligned_a) projected onto B's outline")
     ap.add_argument("--by-class", action="store_true", help="also the share within 2 spacings per class")
     ap.add_argument("--turns", action="store_true",
                     help="only count, per class, the pairs whose pre-alignment turns A by over 30 / 90 degrees")
@@ -365,6 +375,8 @@ def main():
     }
     for v in args.variant:
         methods[f"pedomatch {v}"] = pedomatch(**variant_kw(v))
+        if args.projected:
+            methods[f"pedomatch {v}, moved nodes projected"] = pedomatch(projected=True, **variant_kw(v))
     binary = os.environ.get("BCPD_BIN")
     notes = []
     if binary and Path(binary).is_file():

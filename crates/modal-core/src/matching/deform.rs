@@ -107,7 +107,7 @@ fn warp(pair: &Pair<'_>, x: &[f64]) -> Result<Option<Vec<f64>>, ModalError> {
                 lhs[(q, p)] = lhs[(p, q)];
             }
         }
-        let Some(q) = solve_spd(lhs, &rhs, 1) else {
+        let Some(q) = solve_spd(&lhs, &rhs, 1) else {
             return Ok(None);
         };
         for i in 0..n {
@@ -292,7 +292,7 @@ fn responsibilities(moved: &[f64], y: &[f64], d: usize, var: f64) -> Option<Resp
 
 /// Solves the symmetric positive definite system `lhs · Q = R` for `cols` right-hand sides, each
 /// stored after the other in `rhs` (and so in the result); `None` when it is not definite.
-pub(super) fn solve_spd(lhs: Mat<f64>, rhs: &[f64], cols: usize) -> Option<Vec<f64>> {
+pub(super) fn solve_spd(lhs: &Mat<f64>, rhs: &[f64], cols: usize) -> Option<Vec<f64>> {
     let k = lhs.nrows();
     debug_assert_eq!(rhs.len(), k * cols);
     let llt = lhs.llt(faer::Side::Lower).ok()?;
