@@ -19,6 +19,12 @@ fn demo(out: &Path, extra: &[&str]) -> Child {
         .expect("start pedomatch")
 }
 
+/// The demo on a third of the walk (frames 40 to 99): reading, matching and writing every
+/// output as the whole walk does, at a third of the cost, for tests that run it many times.
+fn part_demo(out: &Path, extra: &[&str]) -> Child {
+    demo(out, &[&["--frames", "40..100"], extra].concat())
+}
+
 fn signal(child: &Child, sig: &str) {
     let ok = Command::new("kill")
         .args([sig, &child.id().to_string()])
@@ -60,7 +66,7 @@ fn a_killed_run_leaves_the_previous_complete_output_or_none() {
     let base = temp_dir("kill");
     let out = base.join("out");
     let reference = {
-        let status = demo(&out, &[]).wait().unwrap();
+        let status = part_demo(&out, &[]).wait().unwrap();
         assert!(status.success());
         listing(&out)
     };
@@ -68,18 +74,18 @@ fn a_killed_run_leaves_the_previous_complete_output_or_none() {
     // Kill runs into the same folder at moments spread over reading, matching and writing.
     let full = {
         let t = Instant::now();
-        demo(&base.join("timing"), &[]).wait().unwrap();
+        part_demo(&base.join("timing"), &[]).wait().unwrap();
         t.elapsed()
     };
     for k in 1..=6 {
-        let mut child = demo(&out, &[]);
+        let mut child = part_demo(&out, &[]);
         std::thread::sleep(full.mul_f64(k as f64 / 7.0));
         signal(&child, "-KILL");
         child.wait().unwrap();
         assert_eq!(listing(&out), reference, "after a kill at {k}/7 of a run");
     }
     // The next run sweeps what the killed ones staged.
-    assert!(demo(&out, &[]).wait().unwrap().success());
+    assert!(part_demo(&out, &[]).wait().unwrap().success());
     assert_eq!(staging_folders(&base), Vec::<String>::new());
     assert_eq!(listing(&out), reference);
     std::fs::remove_dir_all(&base).unwrap();
@@ -91,11 +97,11 @@ fn ctrl_c_stops_at_once_with_130_and_leaves_no_staging_folder() {
     let out = base.join("out");
     let full = {
         let t = Instant::now();
-        demo(&base.join("timing"), &[]).wait().unwrap();
+        part_demo(&base.join("timing"), &[]).wait().unwrap();
         t.elapsed()
     };
     for k in 1..=3 {
-        let mut child = demo(&out, &[]);
+        let mut child = part_demo(&out, &[]);
         std::thread::sleep(full.mul_f64(k as f64 / 4.0));
         signal(&child, "-INT");
         let sent = Instant::now();
@@ -143,18 +149,18 @@ fn two_runs_into_one_folder_never_interleave_their_files() {
     // Two different outputs: with figures and without. The folder must end up exactly one of them.
     let with_figures = {
         let o = base.join("with");
-        assert!(demo(&o, &[]).wait().unwrap().success());
+        assert!(part_demo(&o, &[]).wait().unwrap().success());
         listing(&o)
     };
     let without = {
         let o = base.join("without");
-        assert!(demo(&o, &["--figures", "none"]).wait().unwrap().success());
+        assert!(part_demo(&o, &["--figures", "none"]).wait().unwrap().success());
         listing(&o)
     };
     assert_ne!(with_figures, without);
     for _ in 0..3 {
-        let mut a = demo(&out, &[]);
-        let mut b = demo(&out, &["--figures", "none"]);
+        let mut a = part_demo(&out, &[]);
+        let mut b = part_demo(&out, &["--figures", "none"]);
         assert!(a.wait().unwrap().success() && b.wait().unwrap().success());
         let got = listing(&out);
         assert!(

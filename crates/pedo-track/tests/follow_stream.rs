@@ -73,8 +73,9 @@ fn points_followed_as_the_walk_streams_are_the_whole_runs() {
 
 #[test]
 fn the_users_points_and_regions_streamed_are_the_whole_runs() {
+    // Two windows of frames (64 and 36), so that points and the region cross a window's end.
     let walk = SyntheticWalk {
-        frames: 150,
+        frames: 100,
         ..Default::default()
     };
     let rec = walk.recording().unwrap();
