@@ -71,10 +71,27 @@ pub struct FollowParams {
     /// after the first: its image on the frame before moved on by its recent velocity (a
     /// constant-velocity prior). The frame's outline jumps as sensels cross the contour level,
     /// and a new modal match moves the image at once; the prior spreads both over a few frames.
-    /// 0 (the default) turns it off: at 0.2 the points flicker less and keep closer to the truth
-    /// on the synthetic stances, but two ground-truth tests on the test suite's synthetic walks
-    /// fail (BENCHMARKS.md, "Tracks that follow the foot").
+    /// 0 (the default) turns it off: across the outline the frame's outline says where a point
+    /// lies; the prior along it ([`inertia_along`](Self::inertia_along)) is the default
+    /// (BENCHMARKS.md, "Tracks that follow the foot"). Scaled down as
+    /// [`prior_full`](Self::prior_full) says.
     pub inertia: f64,
+    /// The weight (0–1) of the predicted position's part *along* the outline (the image's
+    /// tangent) in an anchor point's target: the closest points say where the outline lies
+    /// across it, not where a point slides along it (a near-circular heel shows no turn), so the
+    /// prediction pins the slide and nothing else. Scaled down as
+    /// [`prior_full`](Self::prior_full) says; 0 turns it off.
+    pub inertia_along: f64,
+    /// Both priors are at full strength while the anchor's image moved at most this far on the
+    /// frame before (the median over its points, sensels), off from
+    /// [`prior_none`](Self::prior_none) on, and in between in proportion: at 200–500 Hz a
+    /// point of the foot moves a tenth of a sensel a frame and its motion is nearly constant
+    /// from frame to frame; on frames far apart (a degree of turn a frame) it is not, and the
+    /// prediction carries the points off.
+    pub prior_full: f64,
+    /// The median motion of the anchor's image on the frame before (sensels) from which the
+    /// priors are off (see [`prior_full`](Self::prior_full)).
+    pub prior_none: f64,
     /// How much (0–1) of each frame's motion of an anchor point enters its velocity (an
     /// exponential average over frames). The frames of a modal match do not enter it: the
     /// match's correction is no motion of the foot.
@@ -95,6 +112,9 @@ impl Default for FollowParams {
             match_motion: 0.5,
             reach: 2.0,
             inertia: 0.0,
+            inertia_along: 0.5,
+            prior_full: 0.08,
+            prior_none: 0.16,
             velocity_smoothing: 0.3,
         }
     }
@@ -1302,6 +1322,9 @@ struct Anchor {
     /// frames since the anchor's first registration that took no modal match
     /// ([`FollowParams::inertia`]).
     velocity: Vec<[f64; 2]>,
+    /// The median distance the image's points moved on the latest registration (sensels;
+    /// infinite before the first): how far apart the frames are, for the prior's strength.
+    last_step: f64,
 }
 
 impl Anchor {
@@ -1325,6 +1348,7 @@ impl Anchor {
             registered: false,
             motion_since_match: 0.0,
             velocity: Vec::new(),
+            last_step: f64::INFINITY,
         };
         let identity = a.image.clone();
         a.coefficients = Some(a.fit(&identity)?);
@@ -1383,7 +1407,12 @@ impl Anchor {
         }
         let before = self.image.clone();
         // Where each point would be at constant velocity: none on the first registration.
-        let predicted: Option<Vec<[f64; 2]>> = (params.inertia > 0.0
+        // The prior's strength: full while the anchor's image moved little on the frame before,
+        // none once it moves a sizeable part of a sensel a frame (frames far apart).
+        let gate = ((params.prior_none - self.last_step) / (params.prior_none - params.prior_full))
+            .clamp(0.0, 1.0);
+        let (inertia, along) = (params.inertia * gate, params.inertia_along * gate);
+        let predicted: Option<Vec<[f64; 2]>> = ((inertia > 0.0 || along > 0.0)
             && self.registered
             && self.velocity.len() == before.len())
         .then(|| {
@@ -1394,16 +1423,26 @@ impl Anchor {
         let (dense_target, _) = densify(&target, params.target_step);
         let dense_target = Grid::new(dense_target, params.reach);
         for k in 0.. {
-            let moved =
-                self.icp_step(&target, &dense_target, &pairs, params, predicted.as_deref())?;
+            let moved = self.icp_step(
+                &target,
+                &dense_target,
+                &pairs,
+                params,
+                predicted.as_deref().map(|p| (p, inertia, along)),
+            )?;
             if k + 1 >= steps.max(params.max_steps) || (k + 1 >= steps && moved < params.settled) {
                 break;
             }
         }
-        if params.inertia > 0.0 && self.velocity.len() != before.len() {
+        let on = params.inertia > 0.0 || params.inertia_along > 0.0;
+        if on && self.velocity.len() != before.len() {
             self.velocity = vec![[0.0; 2]; before.len()];
         }
-        if params.inertia > 0.0 && self.registered && !matched {
+        self.last_step = match self.registered {
+            true => median_distance(&self.image, &before),
+            false => f64::INFINITY,
+        };
+        if on && self.registered && !matched {
             let eta = params.velocity_smoothing;
             for ((v, p), q) in self.velocity.iter_mut().zip(&self.image).zip(&before) {
                 v[0] = (1.0 - eta) * v[0] + eta * (p[0] - q[0]);
@@ -1451,7 +1490,7 @@ impl Anchor {
         dense_target: &Grid,
         pairs: &[(usize, [f64; 2])],
         params: &FollowParams,
-        predicted: Option<&[[f64; 2]]>,
+        predicted: Option<(&[[f64; 2]], f64, f64)>,
     ) -> Result<f64> {
         // An anchor point with no target within reach keeps its image (its own weight).
         let mut sum: Vec<[f64; 2]> = self
@@ -1476,8 +1515,24 @@ impl Anchor {
             .zip(&count)
             .map(|(s, c)| [s[0] / c, s[1] / c])
             .collect();
-        if let Some(predicted) = predicted {
-            let g = params.inertia;
+        if let Some((predicted, g, along)) = predicted {
+            if along > 0.0 {
+                // Along the outline only: the target's part along the image's tangent drawn
+                // towards the prediction's (the outline tells where it lies across, not along).
+                let n = self.image.len();
+                for (i, (d, p)) in targets.iter_mut().zip(predicted).enumerate() {
+                    let a = self.image[(i + n - 1) % n];
+                    let b = self.image[(i + 1) % n];
+                    let (tx, ty) = (b[0] - a[0], b[1] - a[1]);
+                    let l = tx.hypot(ty);
+                    if l > 0.0 {
+                        let (tx, ty) = (tx / l, ty / l);
+                        let s = (p[0] - d[0]) * tx + (p[1] - d[1]) * ty;
+                        d[0] += along * s * tx;
+                        d[1] += along * s * ty;
+                    }
+                }
+            }
             for (d, p) in targets.iter_mut().zip(predicted) {
                 d[0] = (1.0 - g) * d[0] + g * p[0];
                 d[1] = (1.0 - g) * d[1] + g * p[1];
@@ -1505,6 +1560,15 @@ impl Anchor {
         self.coefficients = Some(c);
         Ok(moved)
     }
+}
+
+/// The median distance between the points of `a` and those of `b`, one to one.
+fn median_distance(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+    let mut d: Vec<f64> = (a.iter().zip(b))
+        .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
+        .collect();
+    d.sort_by(f64::total_cmp);
+    d.get(d.len() / 2).copied().unwrap_or(f64::INFINITY)
 }
 
 /// The share of either outline (the registered anchor's points, the frame's nodes) that lies over

@@ -238,3 +238,20 @@ fn points_slid_off_their_material_point_on_one_step_have_large_round_trips() {
     );
     assert!(m(&trip_slid) > 3.0 * m(&clean));
 }
+
+#[test]
+fn the_prior_along_the_outline_is_off_on_frames_far_apart() {
+    // The walk's frames are far apart (the foot turns about a degree a frame): its points move
+    // more than `prior_none` a frame, so the default points are those without the prior.
+    let (_, run) = walk_run();
+    let aspect = SenselAspect::SQUARE;
+    let defaults = FollowParams::default();
+    assert!(defaults.inertia_along > 0.0);
+    let without = FollowParams {
+        inertia_along: 0.0,
+        ..defaults
+    };
+    let with = follow_points(run, aspect, &defaults, &[]).unwrap();
+    let plain = follow_points(run, aspect, &without, &[]).unwrap();
+    assert_eq!(with, plain);
+}
