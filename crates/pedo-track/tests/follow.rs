@@ -5,11 +5,26 @@
 use pedo_io::synthetic::SyntheticWalk;
 use pedo_track::follow::{follow_points, FollowParams, FollowedPoints};
 use pedo_track::{run_sequence, RunParams, SenselAspect, SequenceResult};
+use std::sync::OnceLock;
 
 fn run(walk: &SyntheticWalk) -> SequenceResult {
     let rec = walk.recording().unwrap();
     let options = RunParams::default().to_options(&rec).unwrap();
     run_sequence(&rec, &options, &|_, _, _| {}).unwrap()
+}
+
+/// The walk's first 60 frames and their run with the defaults, made once for the tests that
+/// follow points through them.
+fn walk_60() -> &'static (SyntheticWalk, SequenceResult) {
+    static RUN: OnceLock<(SyntheticWalk, SequenceResult)> = OnceLock::new();
+    RUN.get_or_init(|| {
+        let walk = SyntheticWalk {
+            frames: 60,
+            ..Default::default()
+        };
+        let result = run(&walk);
+        (walk, result)
+    })
 }
 
 /// Distance (sensels) from each point's position in frame `k` to the truth (None once it ended).
@@ -78,11 +93,7 @@ fn followed_outline_points_stay_on_their_material_points_through_the_whole_walk(
 
 #[test]
 fn a_seeded_interior_point_is_carried_by_the_field() {
-    let walk = SyntheticWalk {
-        frames: 60,
-        ..Default::default()
-    };
-    let result = run(&walk);
+    let (walk, result) = walk_60();
     let c = walk.centre();
     let seeds = [
         (0, c),
@@ -90,14 +101,14 @@ fn a_seeded_interior_point_is_carried_by_the_field() {
         (0, [c[0] + 2.0, c[1] + 12.0]),
     ];
     let followed = follow_points(
-        &result,
+        result,
         SenselAspect::SQUARE,
         &FollowParams::default(),
         &seeds,
     )
     .unwrap();
     assert_eq!(followed.points.len(), 3);
-    for e in errors_at(&walk, &result, &followed, 59) {
+    for e in errors_at(walk, result, &followed, 59) {
         let e = e.expect("followed through the walk");
         assert!(e < 0.5, "{e:.3} sensels off");
     }
@@ -136,19 +147,15 @@ fn mean_jerk(followed: &FollowedPoints) -> f64 {
 
 #[test]
 fn the_constant_velocity_prior_smooths_the_paths_and_keeps_the_points_on_the_truth() {
-    let walk = SyntheticWalk {
-        frames: 60,
-        ..Default::default()
-    };
-    let result = run(&walk);
+    let (walk, result) = walk_60();
     let without = FollowParams::default();
     assert_eq!(without.inertia, 0.0);
     let with = FollowParams {
         inertia: 0.2,
         ..without
     };
-    let smooth = follow_points(&result, SenselAspect::SQUARE, &with, &[]).unwrap();
-    let plain = follow_points(&result, SenselAspect::SQUARE, &without, &[]).unwrap();
+    let smooth = follow_points(result, SenselAspect::SQUARE, &with, &[]).unwrap();
+    let plain = follow_points(result, SenselAspect::SQUARE, &without, &[]).unwrap();
     let (j_smooth, j_plain) = (mean_jerk(&smooth), mean_jerk(&plain));
     assert!(
         j_smooth < j_plain,
@@ -156,7 +163,7 @@ fn the_constant_velocity_prior_smooths_the_paths_and_keeps_the_points_on_the_tru
     );
     let spacing = RunParams::default().spacing;
     for k in [20, 40, 59] {
-        let share = share_within(&errors_at(&walk, &result, &smooth, k), spacing);
+        let share = share_within(&errors_at(walk, result, &smooth, k), spacing);
         assert!(share >= 0.95, "after {k} frames: {share:.3}");
     }
 }
