@@ -154,7 +154,10 @@ fn two_runs_into_one_folder_never_interleave_their_files() {
     };
     let without = {
         let o = base.join("without");
-        assert!(part_demo(&o, &["--figures", "none"]).wait().unwrap().success());
+        assert!(part_demo(&o, &["--figures", "none"])
+            .wait()
+            .unwrap()
+            .success());
         listing(&o)
     };
     assert_ne!(with_figures, without);
