@@ -26,21 +26,28 @@ import shutil
 import subprocess
 import sys
 import tempfile
+from concurrent.futures import ThreadPoolExecutor
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
 
 def chromium(url, *extra):
     """Runs headless Chromium on `url` until the page is rendered; returns (stdout, stderr)."""
+    # A profile of its own: the scenarios run two at a time.
+    profile = tempfile.mkdtemp(prefix="pedomatch-chromium-")
     cmd = [
         CHROMIUM, "--headless", "--disable-gpu", "--no-sandbox", "--hide-scrollbars",
+        f"--user-data-dir={profile}",
         # Nothing may be fetched: every host name resolves to nothing.
         "--host-resolver-rules=MAP * ~NOTFOUND",
         "--enable-logging=stderr", "--v=0",
         # Virtual time runs the page's timers and rendering before the DOM is dumped.
         "--virtual-time-budget=10000", *extra, url,
     ]
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    finally:
+        shutil.rmtree(profile, ignore_errors=True)
     return p.stdout, p.stderr
 
 
@@ -280,6 +287,33 @@ def check_register_page(binary, tmp, failures):
            "the trial's name is not shown as written")
 
 
+def check_surface_view(binary, tmp, failures):
+    """Surfaces: the 3-D view of the pair leaving the frame shown is drawn (WebGL scene)."""
+    surf = os.path.join(tmp, "surface")
+    subprocess.run([binary, "demo", "--out", surf, "--figures", "none", "--model", "surface",
+                    "--frames", "60..80"], check=True, stdout=subprocess.DEVNULL)
+    dom = check_frame(os.path.join(surf, "report.html"), 72, failures)
+    if '<div id="surface-view">' not in dom or 'class="gl-container"' not in dom:
+        failures.append("surface run: the 3-D view is not shown")
+    if not re.search(r'class="legendtext"[^>]*>frame 73<', dom):
+        failures.append("surface run: the 3-D view does not show the pair 72 -> 73")
+
+
+def check_no_report(binary, tmp, failures):
+    """`--report none` writes no report.html (on a few frames: the option, not the run, is tested)."""
+    none = os.path.join(tmp, "none")
+    subprocess.run([binary, "demo", "--out", none, "--figures", "none", "--report", "none",
+                    "--frames", "60..70"], check=True, stdout=subprocess.DEVNULL)
+    if os.path.exists(os.path.join(none, "report.html")):
+        failures.append("--report none wrote report.html")
+
+
+def check_clamped_frame(report, failures):
+    """A frame not on the slider's range is clamped to the last frame."""
+    if 'data-frame="204"' not in chromium(f"file://{report}#frame=999", "--dump-dom")[0]:
+        failures.append("frame 999 did not clamp to the last frame, 204")
+
+
 def main():
     if len(sys.argv) < 2:
         sys.exit(__doc__)
@@ -287,46 +321,31 @@ def main():
     screenshot = os.path.abspath(sys.argv[2]) if len(sys.argv) > 2 else None
     if CHROMIUM is None:
         sys.exit("chromium is required for the browser test (apt-get install chromium)")
-    failures = []
-    with tempfile.TemporaryDirectory() as tmp:
+    failures = []  # list.append is atomic: the scenarios' threads share it
+    # The scenarios two at a time (a core each: pedomatch, then Chromium, in each); the demo's
+    # own checks start once the demo is written.
+    with tempfile.TemporaryDirectory() as tmp, ThreadPoolExecutor(max_workers=2) as pool:
         out = os.path.join(tmp, "demo")
-        subprocess.run([binary, "demo", "--out", out, "--figures", "none"], check=True,
-                       stdout=subprocess.DEVNULL)
+        demo = pool.submit(subprocess.run, [binary, "demo", "--out", out, "--figures", "none"],
+                           check=True, stdout=subprocess.DEVNULL)
+        scenarios = [pool.submit(check, binary, tmp, failures) for check in (
+            check_surface_view, check_isocontours, check_analysed_frames, check_match_reports,
+            check_markup_in_file_names, check_register_page, check_no_report)]
+        demo.result()
         report = os.path.join(out, "report.html")
         size = os.path.getsize(report)
         if size > 25 * 2**20:
             failures.append(f"report.html is {size} bytes, over 25 MB")
-        for k in (0, 75, 204):
-            check_frame(report, k, failures)
-        # A frame not on the slider's range is clamped to the last frame.
-        check_frame_clamped = chromium(f"file://{report}#frame=999", "--dump-dom")[0]
-        if 'data-frame="204"' not in check_frame_clamped:
-            failures.append("frame 999 did not clamp to the last frame, 204")
+        scenarios += [pool.submit(check_frame, report, k, failures) for k in (0, 75, 204)]
+        scenarios.append(pool.submit(check_clamped_frame, report, failures))
+        scenarios.append(pool.submit(check_measures, binary, tmp, report, failures))
         if screenshot:
             chromium(f"file://{report}#frame=75", f"--screenshot={screenshot}",
                      "--window-size=1400,1300")
             if not os.path.exists(screenshot):
                 failures.append("no screenshot written")
-        # Surfaces: the 3-D view of the pair leaving the frame shown is drawn (WebGL scene).
-        surf = os.path.join(tmp, "surface")
-        subprocess.run([binary, "demo", "--out", surf, "--figures", "none", "--model", "surface",
-                        "--frames", "60..80"], check=True, stdout=subprocess.DEVNULL)
-        dom = check_frame(os.path.join(surf, "report.html"), 72, failures)
-        if '<div id="surface-view">' not in dom or 'class="gl-container"' not in dom:
-            failures.append("surface run: the 3-D view is not shown")
-        if not re.search(r'class="legendtext"[^>]*>frame 73<', dom):
-            failures.append("surface run: the 3-D view does not show the pair 72 -> 73")
-        check_measures(binary, tmp, report, failures)
-        check_isocontours(binary, tmp, failures)
-        check_analysed_frames(binary, tmp, failures)
-        check_match_reports(binary, tmp, failures)
-        check_markup_in_file_names(binary, tmp, failures)
-        check_register_page(binary, tmp, failures)
-        none = os.path.join(tmp, "none")
-        subprocess.run([binary, "demo", "--out", none, "--figures", "none", "--report", "none"],
-                       check=True, stdout=subprocess.DEVNULL)
-        if os.path.exists(os.path.join(none, "report.html")):
-            failures.append("--report none wrote report.html")
+        for scenario in scenarios:
+            scenario.result()  # a scenario's own error (a failed run) ends the test here
     for f in failures:
         print("FAIL:", f)
     print(f"report.html of the demo is {size / 2**20:.1f} MB")
