@@ -1438,10 +1438,6 @@ impl Anchor {
         if on && self.velocity.len() != before.len() {
             self.velocity = vec![[0.0; 2]; before.len()];
         }
-        self.last_step = match self.registered {
-            true => median_distance(&self.image, &before),
-            false => f64::INFINITY,
-        };
         if on && self.registered && !matched {
             let eta = params.velocity_smoothing;
             for ((v, p), q) in self.velocity.iter_mut().zip(&self.image).zip(&before) {
@@ -1449,12 +1445,16 @@ impl Anchor {
                 v[1] = (1.0 - eta) * v[1] + eta * (p[1] - q[1]);
             }
         }
-        self.motion_since_match += self
-            .image
-            .iter()
-            .zip(&before)
+        // How far each point moved: the farthest adds to the motion since the last modal match,
+        // the median says how far apart the frames are (the priors' strength on the next one).
+        let mut distances: Vec<f64> = (self.image.iter().zip(&before))
             .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
-            .fold(0.0, f64::max);
+            .collect();
+        self.motion_since_match += distances.iter().copied().fold(0.0, f64::max);
+        self.last_step = match self.registered {
+            true => median(&mut distances),
+            false => f64::INFINITY,
+        };
         self.uncovered = uncovered(&self.image, &target, &dense_target, params.reach);
         self.registered = true;
         Ok(())
@@ -1562,13 +1562,13 @@ impl Anchor {
     }
 }
 
-/// The median distance between the points of `a` and those of `b`, one to one.
-fn median_distance(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
-    let mut d: Vec<f64> = (a.iter().zip(b))
-        .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
-        .collect();
-    d.sort_by(f64::total_cmp);
-    d.get(d.len() / 2).copied().unwrap_or(f64::INFINITY)
+/// The median of `values` (the upper one of an even count; infinite when there is none).
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values
+        .get(values.len() / 2)
+        .copied()
+        .unwrap_or(f64::INFINITY)
 }
 
 /// The share of either outline (the registered anchor's points, the frame's nodes) that lies over
