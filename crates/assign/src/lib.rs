@@ -48,7 +48,7 @@ pub enum Method {
     /// The rows and the columns are two closed sequences (the nodes of two closed contours, in
     /// the same direction) and the matches keep their cyclic order: no two cross. Exact, by
     /// dynamic programming over the `m` possible partners of row 0 (matches may wrap past the
-    /// last column), in `O(n · m · (m − n + 1))` for `n ≤ m` (`O(n · m²)` with
+    /// last column), in `O(n · m · (m − n + 1))` for `n ≤ m` (`O(n · m · log m)` with
     /// [`solve_with_threshold`]). Its optimum is never below the other solvers', and equal to
     /// theirs when their optimum happens to keep the order. No duals.
     Ordered,
@@ -329,7 +329,7 @@ pub fn solve(
 /// private dummy partner each, `min(n, m) × (n + m)` entries in total.
 ///
 /// With [`Method::Ordered`] the kept pairs also keep the cyclic order of rows and columns (the
-/// cyclic alignment of the two sequences, `O(n · m²)`).
+/// cyclic alignment of the two sequences, `O(n · m · log m)`).
 ///
 /// # Errors
 /// As [`solve`], plus [`AssignError::InvalidThreshold`] if `tau` is not finite. The problem is

@@ -61,6 +61,84 @@ pub(crate) fn contour_excess(
     out
 }
 
+/// docs/method.md §6.3 after an order-preserving search that may leave nodes of *both* contours
+/// out (the ordered solver's gaps): `pairs` are one-to-one and keep the cyclic order. Between two
+/// consecutive pairs `(u, p)` and `(v, q)` (in A's order) lie the unmatched A nodes `u+1 … v−1`
+/// and B nodes `p+1 … q−1`; the cheapest monotone path from `(u, p)` to `(v, q)` that steps one
+/// node along A, along B or both (dynamic time warping) gives every one of them a partner, in
+/// order, so no two matches cross. Returns the path's pairs with `Z ≤ threshold`.
+pub(crate) fn cell_excess(
+    z: &AffinityMatrix,
+    pairs: &[(usize, usize)],
+    threshold: f64,
+) -> Vec<(usize, usize)> {
+    let (na, nb) = (z.rows(), z.cols());
+    let mut anchors = pairs.to_vec();
+    anchors.sort_unstable();
+    let mut out = Vec::new();
+    for (idx, &(u, p)) in anchors.iter().enumerate() {
+        let (v, q) = anchors[(idx + 1) % anchors.len()];
+        // The cell's inner nodes; with a single pair, the whole rest of both contours.
+        let (la, lb) = if anchors.len() == 1 {
+            (na - 1, nb - 1)
+        } else {
+            ((v + na - u - 1) % na, (q + nb - p - 1) % nb)
+        };
+        if la + lb == 0 {
+            continue;
+        }
+        let (ra, rb) = (la + 2, lb + 2);
+        // Grid index (i, j): A node u + i, B node p + j; the corners are the two pairs.
+        let cost = |i: usize, j: usize| {
+            let corner = (i == 0 && j == 0) || (i == ra - 1 && j == rb - 1);
+            if corner {
+                0.0
+            } else {
+                z.get((u + i) % na, (p + j) % nb)
+            }
+        };
+        // `d`: the cheapest path to each cell; `step`: where it came from (0 diagonal, 1 along
+        // A, 2 along B), the diagonal first on ties so that the path has the fewest pairs.
+        let mut d = vec![f64::INFINITY; ra * rb];
+        let mut step = vec![0u8; ra * rb];
+        d[0] = 0.0;
+        for i in 0..ra {
+            for j in 0..rb {
+                let from = [
+                    (i > 0 && j > 0).then(|| d[(i - 1) * rb + j - 1]),
+                    (i > 0).then(|| d[(i - 1) * rb + j]),
+                    (j > 0).then(|| d[i * rb + j - 1]),
+                ];
+                // The first reachable neighbour, then only a strictly cheaper one.
+                let mut best: Option<(f64, u8)> = None;
+                for (k, v) in from.iter().enumerate() {
+                    if let Some(v) = *v
+                        && best.is_none_or(|b| v < b.0)
+                    {
+                        best = Some((v, k as u8));
+                    }
+                }
+                if let Some((v, k)) = best {
+                    d[i * rb + j] = v + cost(i, j);
+                    step[i * rb + j] = k;
+                }
+            }
+        }
+        let (mut i, mut j) = (ra - 1, rb - 1);
+        while i + j > 0 {
+            (i, j) = match step[i * rb + j] {
+                0 => (i - 1, j - 1),
+                1 => (i - 1, j),
+                _ => (i, j - 1),
+            };
+            if i + j > 0 && cost(i, j) <= threshold {
+                out.push(((u + i) % na, (p + j) % nb));
+            }
+        }
+    }
+    out
+}
+
 /// The cheapest non-decreasing assignment of `r` run nodes to `nc` candidates in order
 /// (`cost(t, c)`), by dynamic programming: `d[t][c]` is the best cost of the first `t + 1` nodes
 /// with node `t` on candidate `c` and all earlier ones on candidates `≤ c`, and `best[t][c]` the
@@ -450,18 +528,23 @@ pub(crate) fn contour_crossings(pairs: &[(usize, usize)], na: usize, nb: usize) 
 /// Stage 5: the excess pairs for the one-to-one pairs `one` on `z`: along the contours when
 /// `ordered`, else by the neighbourhoods of the point sets (`positions`: A's aligned coordinates
 /// and B's, `dim` per node; `neighbours`: their neighbour lists, asked for only here). The
-/// smaller object is always the one whose nodes are shared.
+/// smaller object is always the one whose nodes are shared, unless `gaps`: the pairs come from the
+/// order-preserving search, which may have left nodes of both contours out ([`cell_excess`]).
 pub(crate) fn excess_pairs<'n>(
     z: &AffinityMatrix,
     one: &[(usize, usize)],
     threshold: f64,
     ordered: bool,
+    gaps: bool,
     (dim, pa, pb): (usize, &[f64], &[f64]),
     neighbours: impl FnOnce() -> (&'n [Vec<usize>], &'n [Vec<usize>]),
 ) -> Vec<(usize, usize)> {
     let (n, m) = (z.rows(), z.cols());
     let swapped = || one.iter().map(|&(i, j)| (j, i)).collect::<Vec<_>>();
     let back = |v: Vec<(usize, usize)>| v.into_iter().map(|(j, i)| (i, j)).collect();
+    if gaps {
+        return cell_excess(z, one, threshold);
+    }
     if ordered {
         return if n <= m {
             contour_excess(z, one, threshold)
@@ -589,5 +672,74 @@ mod tests {
         }
         let got: f64 = (0..3).map(|t| costs[t][picks[t]]).sum();
         assert!((got - best).abs() < 1e-12);
+    }
+
+    /// The cheapest monotone lattice path from `(0, 0)` to `(ra − 1, rb − 1)`, by enumeration,
+    /// its corners free.
+    fn cheapest_path(ra: usize, rb: usize, cost: &dyn Fn(usize, usize) -> f64) -> f64 {
+        fn walk(i: usize, j: usize, ra: usize, rb: usize, c: &dyn Fn(usize, usize) -> f64) -> f64 {
+            if (i, j) == (ra - 1, rb - 1) {
+                return 0.0;
+            }
+            let here = if i + j == 0 { 0.0 } else { c(i, j) };
+            let mut best = f64::INFINITY;
+            for (di, dj) in [(1, 1), (1, 0), (0, 1)] {
+                if i + di < ra && j + dj < rb {
+                    best = best.min(walk(i + di, j + dj, ra, rb, c));
+                }
+            }
+            here + best
+        }
+        walk(0, 0, ra, rb, cost)
+    }
+
+    proptest::proptest! {
+        /// After an order-preserving search with gaps, every node of both contours has a partner,
+        /// no two matches cross, and each cell's path is the cheapest (enumeration).
+        #[test]
+        fn cell_excess_covers_both_contours_in_order_at_least_cost(
+            (na, nb) in (2usize..7, 2usize..7),
+            costs in proptest::collection::vec(0.0f64..1.0, 36),
+            pick_a in proptest::collection::vec(proptest::bool::ANY, 6),
+            pick_b in proptest::collection::vec(proptest::bool::ANY, 6),
+            shift in 0usize..6,
+        ) {
+            let z = AffinityMatrix::new(na, nb, costs[..na * nb].to_vec()).unwrap();
+            // k anchors: the first k picked rows onto the first k picked columns, shifted.
+            let rows: Vec<usize> = (0..na).filter(|&i| pick_a[i]).collect();
+            let cols: Vec<usize> = (0..nb).filter(|&j| pick_b[j]).collect();
+            let k = rows.len().min(cols.len()).max(1);
+            let rows: Vec<usize> = if rows.is_empty() { vec![0] } else { rows };
+            let cols: Vec<usize> = if cols.is_empty() { vec![0] } else { cols };
+            let one: Vec<(usize, usize)> =
+                (0..k).map(|t| (rows[t], (cols[t] + shift) % nb)).collect();
+            let ex = cell_excess(&z, &one, 1.0);
+            let all: Vec<(usize, usize)> = one.iter().chain(&ex).copied().collect();
+            for a in 0..na {
+                proptest::prop_assert!(all.iter().any(|p| p.0 == a), "row {} uncovered", a);
+            }
+            for b in 0..nb {
+                proptest::prop_assert!(all.iter().any(|p| p.1 == b), "column {} uncovered", b);
+            }
+            proptest::prop_assert_eq!(assign::cyclic_crossings(&all), 0);
+            // Cost: each cell's cheapest path, by enumeration.
+            let mut sorted = one.clone();
+            sorted.sort_unstable();
+            let mut want = 0.0;
+            for (idx, &(u, p)) in sorted.iter().enumerate() {
+                let (v, q) = sorted[(idx + 1) % sorted.len()];
+                let (la, lb) = if sorted.len() == 1 {
+                    (na - 1, nb - 1)
+                } else {
+                    ((v + na - u - 1) % na, (q + nb - p - 1) % nb)
+                };
+                if la + lb > 0 {
+                    let c = |i: usize, j: usize| z.get((u + i) % na, (p + j) % nb);
+                    want += cheapest_path(la + 2, lb + 2, &c);
+                }
+            }
+            let got: f64 = ex.iter().map(|&(a, b)| z.get(a, b)).sum();
+            proptest::prop_assert!((got - want).abs() < 1e-9, "{} against {}", got, want);
+        }
     }
 }

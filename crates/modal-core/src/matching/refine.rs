@@ -187,18 +187,21 @@ fn pass_pairs(
     z: &AffinityMatrix,
     cur: &[f64],
 ) -> Result<Vec<MatchPair>, ModalError> {
-    pass_pairs_with(pair, z, cur, pair.opts.method)
+    pass_pairs_with(pair, z, cur, pair.opts.method, pair.excess())
 }
 
-/// [`pass_pairs`] with the global search's solver `method`.
+/// [`pass_pairs`] with the global search's solver `method`; `gaps`: the order-preserving search
+/// may leave nodes out for the excess step (`search::ORDERED_GAP`).
 pub(super) fn pass_pairs_with(
     pair: &Pair<'_>,
     z: &AffinityMatrix,
     cur: &[f64],
     method: assign::Method,
+    gaps: bool,
 ) -> Result<Vec<MatchPair>, ModalError> {
     let opts = pair.opts;
-    let one = primary_matches(z, opts.search, method, pair.threshold, opts.threshold_mode)?;
+    let mode = opts.threshold_mode;
+    let one = primary_matches(z, opts.search, method, pair.threshold, mode, gaps)?;
     let as_pair = |excess: bool| {
         move |(i, j): (usize, usize)| MatchPair {
             a: i,
@@ -215,6 +218,7 @@ pub(super) fn pass_pairs_with(
                 &one,
                 pair.threshold,
                 pair.ordered,
+                gaps && method == assign::Method::Ordered,
                 (pair.dim, cur, &pair.b.get().pts),
                 || (pair.a.get().neighbours(), pair.b.get().neighbours()),
             )

@@ -87,14 +87,26 @@ pub(crate) fn best_matches(z: &AffinityMatrix, threshold: f64) -> Vec<(usize, us
         .collect()
 }
 
+/// The price of leaving a node out of the order-preserving search when an excess step follows
+/// (a share of the largest cost, as the threshold): `τ/2` for each node of a pair costlier than
+/// `τ`. Between two closed contours of (nearly) equal node counts, a saturating order-preserving
+/// match is (nearly) a rotation of the numbering, so where a warp stretches one stretch of the
+/// outline and shrinks another a whole run of nodes lands a spacing off; with this price the
+/// search leaves a node out there instead and the excess step gives it its partner, in order.
+/// 0.4 was chosen on the tuning halves of the synthetic and landmark benchmarks (BENCHMARKS.md,
+/// "The order-preserving solver"); 0.2–0.3 and 0.5–1.0 were measured beside it.
+pub(crate) const ORDERED_GAP: f64 = 0.4;
+
 /// Global search (docs/method.md §6.2): the minimum-cost one-to-one matching that saturates the
 /// smaller object (equivalent to padding with constant-cost dummy nodes), then the threshold.
-/// Sorted by `i`.
+/// With the order-preserving solver and `gaps` (an excess step follows), the search may leave
+/// nodes out at [`ORDERED_GAP`] unless the threshold already prices them. Sorted by `i`.
 pub(crate) fn global_matches(
     z: &AffinityMatrix,
     method: assign::Method,
     threshold: f64,
     mode: ThresholdMode,
+    gaps: bool,
 ) -> Result<Vec<(usize, usize)>, ModalError> {
     let (n, m) = (z.rows(), z.cols());
     if n == 0 || m == 0 {
@@ -104,7 +116,11 @@ pub(crate) fn global_matches(
         method,
         ..Default::default()
     };
+    let priced = mode == ThresholdMode::InOptimizer && threshold.is_finite();
     let sol = match mode {
+        _ if gaps && method == assign::Method::Ordered && !priced => {
+            assign::solve_with_threshold(z.as_slice(), n, m, ORDERED_GAP, &opts)?
+        }
         ThresholdMode::AfterAssignment => assign::solve(z.as_slice(), n, m, &opts)?,
         // The (n+m)² padding with dummy cost τ of docs/method.md §6.2, solved without building it.
         ThresholdMode::InOptimizer if threshold.is_finite() => {
@@ -121,16 +137,17 @@ pub(crate) fn global_matches(
 }
 
 /// Stage 4: the primary matches of `z` by the options' search (local, global or best) under
-/// `threshold`, sorted by row.
+/// `threshold`, sorted by row; `gaps` as in [`global_matches`].
 pub(crate) fn primary_matches(
     z: &AffinityMatrix,
     search: Search,
     method: assign::Method,
     threshold: f64,
     mode: ThresholdMode,
+    gaps: bool,
 ) -> Result<Vec<(usize, usize)>, ModalError> {
     Ok(match search {
-        Search::Global => global_matches(z, method, threshold, mode)?,
+        Search::Global => global_matches(z, method, threshold, mode, gaps)?,
         Search::Local => local_matches(z, threshold),
         Search::Best => best_matches(z, threshold),
     })
@@ -177,7 +194,7 @@ mod tests {
             assign::Method::Hungarian,
             assign::Method::NetworkSimplex,
         ] {
-            let g = global_matches(&z, method, 1.0, ThresholdMode::AfterAssignment).unwrap();
+            let g = global_matches(&z, method, 1.0, ThresholdMode::AfterAssignment, false).unwrap();
             assert_eq!(g, vec![(0, 1), (1, 0)]);
         }
         // 3 × 2 and its transpose: one row stays unmatched.
@@ -187,6 +204,7 @@ mod tests {
             assign::Method::default(),
             1.0,
             ThresholdMode::AfterAssignment,
+            false,
         )
         .unwrap();
         assert_eq!(g, vec![(0, 0), (2, 1)]);
@@ -195,6 +213,7 @@ mod tests {
             assign::Method::default(),
             1.0,
             ThresholdMode::AfterAssignment,
+            false,
         )
         .unwrap();
         assert_eq!(gt, vec![(0, 0), (1, 2)]);
@@ -209,6 +228,7 @@ mod tests {
             assign::Method::default(),
             0.5,
             ThresholdMode::AfterAssignment,
+            false,
         )
         .unwrap();
         assert_eq!(after, vec![(1, 0)]);
@@ -219,6 +239,7 @@ mod tests {
             assign::Method::default(),
             0.5,
             ThresholdMode::InOptimizer,
+            false,
         )
         .unwrap();
         assert_eq!(inside, vec![(0, 0)]);
