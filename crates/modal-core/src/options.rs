@@ -576,9 +576,11 @@ option_set! {
             Word(Search::NAMES), d.search,
             "Search: the optimal one-to-one assignment (global), mutual best matches (local), or every node of the first object to its cheapest node of the second (best: many-to-one, no excess step).";
         /// Assignment solver of the global search and of the mode alignment (`ordered`: of the
-        /// global search only, on closed contours).
-        solver: assign::Method = d.method;
-            Word(<assign::Method as Choice>::NAMES), d.method,
+        /// global search only, on closed contours; `None`: the recipe's, JV, and for a
+        /// recording's isocontours [`RUN_ISOCONTOUR_SOLVER`]).
+        solver: Option<assign::Method> = None;
+            Word(<assign::Method as Choice>::NAMES),
+            format!("{} ({RUN_ISOCONTOUR_SOLVER} for a recording's isocontours)", d.method),
             "Assignment solver: Jonker-Volgenant, Kuhn-Munkres or network simplex (same optimum), or ordered: the best assignment whose matches keep the contours' cyclic order (no crossings; closed contours only).";
         /// Reject pairs whose max-normalised cost exceeds this (in [0, 1]); `None` keeps all.
         threshold: Option<f64> = d.threshold;
@@ -814,7 +816,7 @@ impl MatchParams {
         }
         o.mode_fraction = self.modes.unwrap_or(o.mode_fraction);
         o.search = self.search;
-        o.method = self.solver;
+        o.method = self.solver.unwrap_or(o.method);
         o.threshold = self.threshold;
         o.threshold_mode = self.threshold_mode;
         o.excess = self.excess;
@@ -859,7 +861,7 @@ impl MatchParams {
             element: used.model.element,
             modes: Some(used.mode_fraction),
             search: used.search,
-            solver: used.method,
+            solver: Some(used.method),
             threshold: used.threshold,
             threshold_mode: used.threshold_mode,
             excess: used.excess,
@@ -899,6 +901,12 @@ pub const RUN_MAX_ROTATION: f64 = 30.0;
 /// the sensor's coordinates, so their placement is the prior (docs/method.md, "Consecutive
 /// frames"). Unless `paper` asks for the paper's normalisation.
 pub const RUN_PREALIGN: Prealign = Prealign::Sensor;
+
+/// The default [`MatchParams::solver`] of a recording run's isocontours: the level lines of one
+/// frame are nested closed contours, so matches between neighbouring levels keep their cyclic
+/// order (docs/method.md §6.2, "Order-preserving assignment"; BENCHMARKS.md, "Surfaces and
+/// isocontours").
+pub const RUN_ISOCONTOUR_SOLVER: assign::Method = assign::Method::Ordered;
 
 /// The value of an option in a provenance record.
 #[derive(Debug, Clone, PartialEq)]

@@ -475,7 +475,9 @@ impl RunParams {
     /// Consecutive frames hardly turn: the rotation search is bounded by
     /// [`modal_core::options::RUN_MAX_ROTATION`] unless `max_rotation` is given. Consecutive
     /// contours share the sensor's coordinates: they are pre-aligned by
-    /// [`modal_core::options::RUN_PREALIGN`] unless `prealign` or `paper` is given. Frames keep
+    /// [`modal_core::options::RUN_PREALIGN`] unless `prealign` or `paper` is given; isocontours
+    /// keep the order of the level lines ([`modal_core::options::RUN_ISOCONTOUR_SOLVER`]) unless
+    /// `solver` or `paper` is given. Frames keep
     /// node-to-node ICP, not the outline fit of a pair, and start from the default recipe
     /// ([`MatchOptions::default`]), not from the pair recipe of two outlines
     /// ([`MatchOptions::for_outlines`]).
@@ -499,6 +501,12 @@ impl RunParams {
             && !self.matching.paper
         {
             o.prealign = modal_core::options::RUN_PREALIGN;
+        }
+        if self.model == ObjectModel::Isocontour
+            && self.matching.solver.is_none()
+            && !self.matching.paper
+        {
+            o.method = modal_core::options::RUN_ISOCONTOUR_SOLVER;
         }
         Ok(for_frames(o))
     }
@@ -554,7 +562,9 @@ impl RunParams {
         }
         // The order-preserving solver needs closed contours: refused here rather than every
         // pair of a run skipped for it.
-        if self.matching.solver == assign::Method::Ordered && self.model == ObjectModel::Surface {
+        if self.matching.solver == Some(assign::Method::Ordered)
+            && self.model == ObjectModel::Surface
+        {
             return Err(OptionError::new(
                 "solver",
                 "ordered",

@@ -33,3 +33,30 @@ fn iso_frame_outside_the_frames_range_is_an_option_error_naming_both() {
         assert_eq!(o.iso_frame, Some(inside));
     }
 }
+
+#[test]
+fn isocontours_keep_the_level_lines_order_unless_a_solver_is_given() {
+    let solver = |model, solver| {
+        let mut p = RunParams {
+            model,
+            ..Default::default()
+        };
+        p.matching.solver = solver;
+        p.match_options().unwrap().method
+    };
+    use assign::Method::{JonkerVolgenant, Ordered};
+    assert_eq!(solver(ObjectModel::Isocontour, None), Ordered);
+    assert_eq!(
+        solver(ObjectModel::Isocontour, Some(JonkerVolgenant)),
+        JonkerVolgenant
+    );
+    assert_eq!(solver(ObjectModel::Contour, None), JonkerVolgenant);
+    assert_eq!(solver(ObjectModel::Surface, None), JonkerVolgenant);
+    // The paper's literal setting keeps its own solver.
+    let mut paper = RunParams {
+        model: ObjectModel::Isocontour,
+        ..Default::default()
+    };
+    paper.matching.paper = true;
+    assert_eq!(paper.match_options().unwrap().method, JonkerVolgenant);
+}
