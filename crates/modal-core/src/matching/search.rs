@@ -220,6 +220,25 @@ mod tests {
     }
 
     #[test]
+    fn the_ordered_search_leaves_a_costly_node_to_the_excess_step() {
+        // Equal counts: the only saturating order-preserving matches are rotations, and the
+        // cheapest (the identity) must pair row 1 with column 1 at 0.9. With gaps, row 1 and
+        // column 1 are left out (0.9 > ORDERED_GAP), the rest kept.
+        let z = zm(3, 3, &[0.0, 1.0, 1.0, 1.0, 0.9, 0.1, 1.0, 1.0, 0.0]);
+        let ordered = assign::Method::Ordered;
+        let after = ThresholdMode::AfterAssignment;
+        let saturating = global_matches(&z, ordered, 1.0, after, false).unwrap();
+        assert_eq!(saturating, vec![(0, 0), (1, 1), (2, 2)]);
+        let gapped = global_matches(&z, ordered, 1.0, after, true).unwrap();
+        assert_eq!(gapped, vec![(0, 0), (2, 2)]);
+        // Gaps are the ordered solver's only; a threshold in the optimiser sets its own price.
+        let jv = global_matches(&z, assign::Method::default(), 1.0, after, true).unwrap();
+        assert_eq!(jv.len(), 3);
+        let during = global_matches(&z, ordered, 0.95, ThresholdMode::InOptimizer, true).unwrap();
+        assert_eq!(during, vec![(0, 0), (1, 1), (2, 2)]);
+    }
+
+    #[test]
     fn thresholds_after_and_inside_the_optimizer() {
         let z = zm(2, 2, &[0.1, 0.6, 0.3, 0.95]);
         // Optimum: (0,1)+(1,0) = 0.9 < 0.1+0.95. After-threshold 0.5 drops (0,1).
