@@ -40,13 +40,16 @@ pub enum Parallelism {
     Pair,
 }
 
+/// A gate on A's start in B's frame: `true` stops the first phase (see [`first_phase`]).
+pub(crate) type Gate<'g> = &'g dyn Fn(&[f64]) -> bool;
+
 /// Stage 2 and the first solves: A in B's frame, B's modes and A's modes there. `None`, before
 /// any modal solve, when `stop` is given and says so of A's start in B's frame (the gate of
 /// [`super::Refine::Auto`]); behind a gate both solves wait for its word, then run side by side.
 pub(crate) fn first_phase(
     pair: &Pair<'_>,
     parallelism: Parallelism,
-    stop: Option<&dyn Fn(&[f64]) -> bool>,
+    stop: Option<Gate<'_>>,
 ) -> Result<Option<Start>, ModalError> {
     let stops = |cur: &[f64]| stop.is_some_and(|f| f(cur));
     let (a, b) = (pair.a.get(), pair.b.get());
