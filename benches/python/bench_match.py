@@ -267,6 +267,7 @@ def held_out(outs, sevs, args):
     heels = outlines("heel_strike.txt")
     methods = {
         "pymodal.match (defaults)": modal(),
+        "pymodal.match refine='affine' (no gated drift)": modal(refine="affine"),
         "pymodal.match max_rotation=30 (run's default)": modal(max_rotation=30.0),
         "pymodal.match refine='coherent'": modal(refine="coherent"),
         "pycpd rigid, affine, then deformable + argmax P": cpd("rigid", "affine"),
@@ -302,6 +303,7 @@ def main():
     if not args.skip_contours:
         methods = {
             "pymodal.match (defaults: global, recipe)": modal(),
+            "pymodal.match refine='affine' (no gated drift)": modal(refine="affine"),
             "pymodal.match search='local'": modal(search="local"),
             "pymodal.match search='best' (many-to-one)": modal(search="best"),
             "pymodal.match excess=False": modal(excess=False),

@@ -89,6 +89,7 @@ choice!(Refine, "refine", [
     "affine" => Refine::Affine,
     "modal" => Refine::Modal,
     "coherent" => Refine::Coherent,
+    "auto" => Refine::Auto,
 ]);
 choice!(ThresholdMode, "threshold_mode", [
     "after" => ThresholdMode::AfterAssignment,
@@ -626,11 +627,18 @@ option_set! {
         refit_tolerance: Option<f64> = None;
             Value, by_input(|o| o.refit_tolerance),
             "No further re-fit once every one-to-one pair lies within this fraction of the second object's node spacing of its partner under one affine map; 0 always re-fits.";
-        /// What follows the affine re-fits: nothing (`affine`), the modal non-rigid warp (`modal`)
-        /// or the coherent drift (`coherent`).
-        refine: Refine = d.refine;
-            Word(Refine::NAMES), d.refine,
-            "After the affine re-fits: nothing more (affine); a non-rigid warp of the first object by its own low-order modes, fitted to soft correspondences with the modes' strain energy as regulariser, then one more search (modal; slower, for strongly non-affine deformations); or the first object drifted onto the second by a smooth Gaussian-kernel field fitted to soft correspondences (coherent point drift), then assigned on the moved positions, in contour order for two outlines (coherent; for specimens whose proportions differ).";
+        /// What follows the affine re-fits: nothing (`affine`), the modal non-rigid warp
+        /// (`modal`), the coherent drift (`coherent`), or for two closed outlines the drift only
+        /// when the outline fit leaves them apart (`auto`; `None`: the recipe's, `auto` for two
+        /// closed outlines, `affine` otherwise).
+        refine: Option<Refine> = None;
+            Word(Refine::NAMES),
+            format!(
+                "{} for two closed outlines (match); {} for points and a recording's frames",
+                MatchOptions::for_outlines().refine,
+                MatchOptions::default().refine
+            ),
+            "After the affine re-fits: nothing more (affine); a non-rigid warp of the first object by its own low-order modes, fitted to soft correspondences with the modes' strain energy as regulariser, then one more search (modal; slower, for strongly non-affine deformations); the first object drifted onto the second by a smooth Gaussian-kernel field fitted to soft correspondences (coherent point drift), then assigned on the moved positions, in contour order for two outlines (coherent; for specimens whose proportions differ); or, for two closed outlines pre-aligned by the rotation search, coherent from the centroid-and-scale start when the fitted outlines lie apart (two specimens of a shape) and affine when they lie on each other (one outline deformed) (auto).";
         /// Modes of the non-rigid warp, rigid ones included (`refine = modal` only).
         deform_modes: usize = d.deform_modes;
             Value, d.deform_modes,
@@ -829,7 +837,7 @@ impl MatchParams {
             .or(o.rotation_search.max_rotation);
         o.refits = self.refits.unwrap_or(o.refits);
         o.refit_tolerance = self.refit_tolerance.unwrap_or(o.refit_tolerance);
-        o.refine = self.refine;
+        o.refine = self.refine.unwrap_or(o.refine);
         o.deform_modes = self.deform_modes;
         o.deform_stiffness = self.deform_stiffness;
         o.max_nodes = self.max_nodes;
@@ -870,7 +878,7 @@ impl MatchParams {
             max_rotation: Some(used.rotation_search.max_rotation.unwrap_or(180.0)),
             refits: Some(used.refits),
             refit_tolerance: Some(used.refit_tolerance),
-            refine: used.refine,
+            refine: Some(used.refine),
             deform_modes: used.deform_modes,
             deform_stiffness: used.deform_stiffness,
             kappa: Some(used.model.kappa),

@@ -19,7 +19,7 @@ pub mod warp;
 
 use footprint::{bilinear, distance_to_polygon, hull_of_mask, loaded_mask};
 use modal_core::matching::prealign::rotation_angle;
-use modal_core::{Affine, CorrespondenceField, MatchOptions, MatchPair, Shape, Topology};
+use modal_core::{Affine, CorrespondenceField, MatchOptions, MatchPair, Refine, Shape, Topology};
 use pedo_io::measures::Measures;
 use pedo_io::{IoError, Result};
 use rayon::prelude::*;
@@ -613,6 +613,9 @@ fn outline_start(
     let b = Shape::from_points_2d(trial, Topology::ClosedContour)?;
     let mut opts = MatchOptions::for_outlines();
     opts.rotation_search.max_rotation = Some(params.max_turn);
+    // The turn is bounded by the prior, which the drift's centroid-and-scale start does not
+    // search: the affine outline match, as measured for registration (BENCHMARKS.md).
+    opts.refine = Refine::Affine;
     let Ok(m) = modal_core::match_shapes(&a, &b, &opts) else {
         return Ok(None);
     };

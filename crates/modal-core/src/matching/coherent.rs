@@ -23,6 +23,7 @@ use faer::Mat;
 
 use super::deform::{initial_variance, solve_spd};
 use super::features::position_costs;
+use super::outline_fit::outline_distance;
 use super::prepare::Pair;
 use super::refine::{explained, pass_pairs_with, Iteration};
 use crate::error::ModalError;
@@ -49,6 +50,21 @@ const VARIANCE_TOLERANCE: f64 = 1e-2;
 /// Responsibilities below `e^-NEGLIGIBLE` of their column's largest are left at 0 (no
 /// exponential is taken): 36 is below the round-off of the column's sum.
 const NEGLIGIBLE: f64 = 36.0;
+
+/// The gate of [`Refine::Auto`](super::Refine::Auto): two outlines whose root-mean-square
+/// distance after the rotation search's outline fit (each node of either outline to the other
+/// outline, both ways) exceeds this many of B's node spacings are taken for two specimens of a
+/// shape, and drifted. Measured on the tuning halves (BENCHMARKS.md, "Landmarks on real outlines
+/// annotated by others"): 0.19–3.2 spacings on the landmark benchmark's real specimens (5th
+/// percentile 0.37), at most 0.085 / 0.24 / 0.50 on bench_match.py's synthetic warps of one
+/// outline (mild / moderate / severe, 630 pairs; 95th percentile at severe 0.32).
+pub(crate) const APART: f64 = 0.6;
+
+/// Whether A's nodes `cur` (after the outline fit, in B's normalised frame) and B's outline `b`
+/// lie more than [`APART`] of B's node spacings `spacing` apart.
+pub(crate) fn outlines_apart(cur: &[f64], b: &[f64], spacing: f64) -> bool {
+    outline_distance(cur, b).sqrt() > APART * spacing
+}
 
 /// The refined pass: A drifted onto B, then assigned to B on the moved positions. `kept` is
 /// returned unchanged when the field cannot be fitted.
@@ -320,6 +336,57 @@ mod tests {
             drifted < 0.5 * affine && worst < affine_worst,
             "drift {drifted:.2} / {worst:.2} against affine {affine:.2} / {affine_worst:.2}"
         );
+    }
+
+    #[test]
+    fn auto_drifts_two_specimens_and_leaves_one_outline_turned_to_the_affine_match() {
+        // A: 90 nodes of the curve. Specimen: B is the tapered curve (proportions changed), which
+        // no affine map lays on A; deformed: B is A's curve turned by 40° and stretched (an
+        // affine map, which the rotation search undoes and the centroid-and-scale start cannot).
+        let (n, m) = (90, 100);
+        let at =
+            |i: usize, k: usize, start: f64| (start + i as f64 / k as f64) * std::f64::consts::TAU;
+        let turn = |[x, y]: [f64; 2]| {
+            let (s, c) = 40f64.to_radians().sin_cos();
+            [1.2 * (c * x - s * y), 0.9 * (s * x + c * y)]
+        };
+        let a: Vec<f64> = (0..n).flat_map(|i| curve(at(i, n, 0.0))).collect();
+        let sa = Shape::new(2, a, Topology::ClosedContour).unwrap();
+        let outline = |f: &dyn Fn([f64; 2]) -> [f64; 2]| {
+            let b = (0..m).flat_map(|i| f(curve(at(i, m, 0.41 / m as f64))));
+            Shape::new(2, b.collect(), Topology::ClosedContour).unwrap()
+        };
+        let (specimen, deformed) = (outline(&taper), outline(&turn));
+        let auto = MatchOptions::for_outlines();
+        assert_eq!(auto.refine, Refine::Auto);
+        let affine = MatchOptions {
+            refine: Refine::Affine,
+            ..auto.clone()
+        };
+        let drifted = MatchOptions {
+            prealign: crate::matching::Prealign::Normalize,
+            position_weight: 1.0,
+            refits: MatchOptions::default().refits,
+            refine: Refine::Coherent,
+            ..auto.clone()
+        };
+        let pairs = |b: &Shape, o: &MatchOptions| match_shapes(&sa, b, o).unwrap().pairs;
+        assert_eq!(pairs(&specimen, &auto), pairs(&specimen, &drifted));
+        assert_ne!(pairs(&specimen, &auto), pairs(&specimen, &affine));
+        let kept = pairs(&deformed, &auto);
+        assert_eq!(kept, pairs(&deformed, &affine));
+        // The affine match is right there (each node of A to the node of B nearest its image:
+        // B's nodes lie 0.41 / 100 of a turn after A's at the same angles, so node i of A
+        // belongs next to node round(i · m / n − 0.41) of B), the drift from the unturned start is not.
+        let right = |p: &[crate::matching::MatchPair]| {
+            p.iter()
+                .filter(|p| {
+                    let j = (p.a as f64 * m as f64 / n as f64 - 0.41).round() as usize % m;
+                    !p.excess && ((p.b + m - j) % m <= 1 || (j + m - p.b) % m <= 1)
+                })
+                .count()
+        };
+        assert!(right(&kept) >= n - 2, "{} of {n}", right(&kept));
     }
 
     #[test]

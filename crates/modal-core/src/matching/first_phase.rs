@@ -40,8 +40,18 @@ pub enum Parallelism {
     Pair,
 }
 
-/// Stage 2 and the first solves: A in B's frame, B's modes and A's modes there.
-pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<Start, ModalError> {
+/// A gate on A's start in B's frame: `true` stops the first phase (see [`first_phase`]).
+pub(crate) type Gate<'g> = &'g dyn Fn(&[f64]) -> bool;
+
+/// Stage 2 and the first solves: A in B's frame, B's modes and A's modes there. `None`, before
+/// any modal solve, when `stop` is given and says so of A's start in B's frame (the gate of
+/// [`super::Refine::Auto`]); behind a gate both solves wait for its word, then run side by side.
+pub(crate) fn first_phase(
+    pair: &Pair<'_>,
+    parallelism: Parallelism,
+    stop: Option<Gate<'_>>,
+) -> Result<Option<Start>, ModalError> {
+    let stops = |cur: &[f64]| stop.is_some_and(|f| f(cur));
     let (a, b) = (pair.a.get(), pair.b.get());
     let (d, ordered) = (pair.dim, pair.ordered);
     let robust = pair.opts.prealign == Prealign::Robust;
@@ -55,15 +65,18 @@ pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<S
                 .then(|| prealign::robust_prealign_serial(&a.pts, &b.pts, d, &search, ordered))
                 .or(sensor);
             let (cur, to_cur) = prealign::start_in_b_frame(&a.pts, t, d, renormalize)?;
+            if stops(&cur) {
+                return Ok(None);
+            }
             let modes_b = modal.then(|| pair.modes_b()).transpose()?;
             let modes_a = modal.then(|| pair.modes_a(&cur)).transpose()?;
-            Ok(Start {
+            Ok(Some(Start {
                 cur,
                 to_cur,
                 modes_b,
                 modes_a,
                 positions: None,
-            })
+            }))
         }
         Parallelism::Pair => {
             let phase = FirstPhase::start(
@@ -74,7 +87,9 @@ pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<S
                     search,
                     keep_orientation: ordered,
                 }),
-                modal.then(|| SolveB {
+                // Behind a gate B's solve waits for the gate's word: a helper that began it for a
+                // pair the gate then stops would take a core from the rest of the pair.
+                (modal && stop.is_none()).then(|| SolveB {
                     b: pair.b.clone().into_owned(),
                     model: pair.model.clone(),
                     skip: pair.skip,
@@ -91,16 +106,26 @@ pub(crate) fn first_phase(pair: &Pair<'_>, parallelism: Parallelism) -> Result<S
             );
             let t = phase.prealign().or(sensor);
             let (cur, to_cur) = prealign::start_in_b_frame(&a.pts, t, d, renormalize)?;
+            if stops(&cur) {
+                return Ok(None);
+            }
             let positions = phase.publish_start(&cur);
-            let modes_a = modal.then(|| pair.modes_a(&cur)).transpose()?;
-            let modes_b = phase.b_modes()?;
-            Ok(Start {
+            let (modes_a, modes_b) = if modal && stop.is_some() {
+                let (ma, mb) = rayon::join(|| pair.modes_a(&cur), || pair.modes_b());
+                (Some(ma?), Some(mb?))
+            } else {
+                (
+                    modal.then(|| pair.modes_a(&cur)).transpose()?,
+                    phase.b_modes()?,
+                )
+            };
+            Ok(Some(Start {
                 cur,
                 to_cur,
                 modes_b,
                 modes_a,
                 positions,
-            })
+            }))
         }
     }
 }

@@ -80,7 +80,10 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
 }
 
 /// Matches two prepared objects: the pre-alignment, the first modal solves, then the passes of
-/// features, search and excess nodes with the affine re-fits between them. Each object may take
+/// features, search and excess nodes with the affine re-fits between them. With
+/// [`Refine::Auto`], two closed planar outlines that the rotation search's outline fit leaves
+/// apart are matched instead as with `prealign` [`Prealign::Normalize`], `position_weight` 1,
+/// the default re-fits and [`Refine::Coherent`] (docs/method.md §7.5). Each object may take
 /// part in any number of pairs; what it can share between them was done by [`prepare`](fn@prepare) (see
 /// docs/method.md, "The pipeline in the code").
 ///
@@ -93,7 +96,27 @@ pub fn match_prepared(
     parallelism: Parallelism,
 ) -> Result<MatchResult, ModalError> {
     let pair = Pair::new(a, b, opts)?;
-    let start = first_phase::first_phase(&pair, parallelism)?;
+    let gated = opts.refine == Refine::Auto
+        && pair.ordered
+        && pair.dim == 2
+        && opts.prealign == Prealign::Robust;
+    let apart =
+        |cur: &[f64]| coherent::outlines_apart(cur, &pair.b.get().pts, pair.b.get().spacing());
+    if let Some(start) = first_phase::first_phase(&pair, parallelism, gated.then_some(&apart))? {
+        let refined = refine::refine(&pair, start)?;
+        return Ok(in_callers_terms(&pair, refined));
+    }
+    // Two specimens of a shape: the drift from the centroid-and-scale start, its affine re-fits
+    // on positions (docs/method.md §7.5).
+    let drift = MatchOptions {
+        prealign: Prealign::Normalize,
+        position_weight: 1.0,
+        refits: MatchOptions::default().refits,
+        refine: Refine::Coherent,
+        ..opts.clone()
+    };
+    let pair = Pair::new(a, b, &drift)?;
+    let start = first_phase::first_phase(&pair, parallelism, None)?.expect("no gate, so a start");
     let refined = refine::refine(&pair, start)?;
     Ok(in_callers_terms(&pair, refined))
 }

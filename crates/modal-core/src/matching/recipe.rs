@@ -65,8 +65,10 @@ pub struct MatchOptions {
     /// Use one Gaussian width for both objects, `kappa ×` the mean of their mean nearest-neighbour
     /// distances, instead of one per object (for independently sampled point sets).
     pub common_sigma: bool,
-    /// What follows the affine re-fits: nothing more ([`Refine::Affine`], the default) or the
-    /// modal non-rigid warp of docs/method.md §7.4 ([`Refine::Modal`]).
+    /// What follows the affine re-fits: nothing more ([`Refine::Affine`], the default), the
+    /// modal non-rigid warp of docs/method.md §7.4 ([`Refine::Modal`]), the coherent drift of
+    /// §7.5 ([`Refine::Coherent`]) or, for two closed outlines, the drift only for outlines the
+    /// rotation search's fit leaves apart ([`Refine::Auto`], [`MatchOptions::for_outlines`]).
     pub refine: Refine,
     /// Most nodes of one object ([`MAX_NODES`] by default): more is refused before a model is
     /// built, as its dense matrices grow with the square of the nodes.
@@ -181,10 +183,17 @@ impl MatchOptions {
     /// 1010-1015) the worst mild pair rose from 0.939 to 1.000 and the moderate mean from
     /// 0.9984 to 0.9990, and the severe mean held (0.9756 and 0.9755); BENCHMARKS.md has the
     /// sets checked afterwards.
+    ///
+    /// What follows ([`MatchOptions::refine`]): [`Refine::Auto`], the coherent drift from the
+    /// centroid-and-scale start for two outlines that the rotation search's outline fit leaves
+    /// apart (two specimens of a shape, whose proportions differ), nothing more for two it lays
+    /// on each other (one outline deformed). See docs/method.md §7.5 and BENCHMARKS.md,
+    /// "Landmarks on real outlines annotated by others".
     pub fn for_outlines() -> Self {
         Self {
             refits: 0,
             common_sigma: true,
+            refine: Refine::Auto,
             ..Self::default()
         }
     }

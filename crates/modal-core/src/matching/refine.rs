@@ -29,6 +29,12 @@ pub enum Refine {
     /// soft correspondences (coherent point drift), then assigned to B's nodes on the moved
     /// positions (the ordered solver for two closed contours).
     Coherent,
+    /// Two closed planar outlines pre-aligned by the rotation search: [`Refine::Coherent`] from
+    /// the centroid-and-scale start (with affine re-fits on positions) when the outline fit
+    /// leaves the outlines apart (two specimens of a shape), nothing more ([`Refine::Affine`])
+    /// when it lays them on each other (one outline deformed). [`Refine::Affine`] for any
+    /// other input or pre-alignment (docs/method.md §7.5).
+    Auto,
 }
 
 /// Where the passes start: A after the pre-alignment, with the modes solved for it.
@@ -132,7 +138,7 @@ pub(crate) fn refine(pair: &Pair<'_>, start: Start) -> Result<Refined, ModalErro
     }
     let kept = best.expect("at least one iteration ran");
     let kept = match opts.refine {
-        Refine::Affine => kept,
+        Refine::Affine | Refine::Auto => kept,
         Refine::Modal => super::deform::deform(pair, kept)?,
         Refine::Coherent => super::coherent::coherent(pair, kept)?,
     };
