@@ -96,6 +96,24 @@ pub struct FollowParams {
     /// exponential average over frames). The frames of a modal match do not enter it: the
     /// match's correction is no motion of the foot.
     pub velocity_smoothing: f64,
+    /// The weight (0–1) of a point's *locally rigid* position in the part of its target along
+    /// the outline, on every frame: where the anchor's points around it (Gaussian weights of
+    /// scale [`rigid_reach`](Self::rigid_reach) on the anchor, across the foot as well as along
+    /// its outline) lie now, fitted by a turn and a shift, put it. Along a near-circular heel or
+    /// a straight edge the frame's outline says nothing; the stretches nearby that it pins (the
+    /// arch's concavity, the other side of the foot) do, and the heel moves as one piece with
+    /// them instead of sliding after the forefoot's turn. 0 turns it off.
+    pub rigid_along: f64,
+    /// The scale (sensels, on the anchor) of the neighbourhood whose turn and shift give a
+    /// point's locally rigid position (see [`rigid_along`](Self::rigid_along)); points farther
+    /// than three times this do not count.
+    pub rigid_reach: f64,
+    /// The modal pull ([`pull`](Self::pull)) is full on anchor nodes where the anchor's outline
+    /// turns at least this much per sensel (radians), less in proportion where it is straighter:
+    /// a modal partner is placed along the outline by the match's alignment of the whole shape,
+    /// and on a heel or a straight edge, which show no turn of their own, that alignment's error
+    /// (the forefoot's bend taken for a turn) is all it says. 0 pulls every node fully.
+    pub pull_curvature: f64,
 }
 
 impl Default for FollowParams {
@@ -116,6 +134,9 @@ impl Default for FollowParams {
             prior_full: 0.08,
             prior_none: 0.16,
             velocity_smoothing: 0.3,
+            rigid_along: 0.7,
+            rigid_reach: 10.0,
+            pull_curvature: 0.3,
         }
     }
 }
@@ -1325,6 +1346,56 @@ struct Anchor {
     /// The median distance the image's points moved on the latest registration (sensels;
     /// infinite before the first): how far apart the frames are, for the prior's strength.
     last_step: f64,
+    /// The densified anchor outline (registration coordinates) and, per point, the points of
+    /// its neighbourhood with their weights ([`FollowParams::rigid_along`]; empty when off).
+    dense: Vec<[f64; 2]>,
+    neighbours: Vec<Vec<(usize, f64)>>,
+    /// Per point of the densified outline: how much the outline turns there, radians per
+    /// sensel ([`FollowParams::pull_curvature`]).
+    curvature: Vec<f64>,
+}
+
+/// Each point's neighbours (itself included) within three `sigma`, with Gaussian weights of
+/// scale `sigma`.
+fn neighbours_of(dense: &[[f64; 2]], sigma: f64) -> Vec<Vec<(usize, f64)>> {
+    let r2 = (3.0 * sigma).powi(2);
+    dense
+        .iter()
+        .map(|p| {
+            dense
+                .iter()
+                .enumerate()
+                .filter_map(|(j, q)| {
+                    let d2 = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+                    (d2 <= r2).then(|| (j, (-d2 / (2.0 * sigma * sigma)).exp()))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// How much a closed outline turns at each point, radians per unit length: the angle between
+/// the chords to the fourth point before and after it, over their mean length.
+fn curvature_of(dense: &[[f64; 2]]) -> Vec<f64> {
+    let n = dense.len();
+    (0..n)
+        .map(|i| {
+            let k = 4.min(n / 3).max(1);
+            let a = dense[(i + n - k) % n];
+            let b = dense[i];
+            let c = dense[(i + k) % n];
+            let (u, v) = ([b[0] - a[0], b[1] - a[1]], [c[0] - b[0], c[1] - b[1]]);
+            let turn = (u[0] * v[1] - u[1] * v[0])
+                .atan2(u[0] * v[0] + u[1] * v[1])
+                .abs();
+            let len = 0.5 * (u[0].hypot(u[1]) + v[0].hypot(v[1]));
+            if len > 0.0 {
+                turn / len
+            } else {
+                0.0
+            }
+        })
+        .collect()
 }
 
 impl Anchor {
@@ -1336,7 +1407,16 @@ impl Anchor {
         let spline = FactoredSpline::new(&dense, params.smoothing)
             .map_err(|e| IoError::invalid(e.to_string()))?;
         let dense_basis = spline.basis(&dense);
+        let curvature = curvature_of(&dense);
+        let neighbours = if params.rigid_along > 0.0 {
+            neighbours_of(&dense, params.rigid_reach)
+        } else {
+            Vec::new()
+        };
         let mut a = Self {
+            dense: dense.clone(),
+            neighbours,
+            curvature,
             shape,
             prepared: None,
             image: dense,
@@ -1538,6 +1618,27 @@ impl Anchor {
                 d[1] = (1.0 - g) * d[1] + g * p[1];
             }
         }
+        let rigid = params.rigid_along;
+        if rigid > 0.0 && self.neighbours.len() == self.image.len() {
+            // Along the outline only, as the prior: the part of each target along the image's
+            // tangent drawn towards where its neighbourhood, moved rigidly, puts it.
+            let n = self.image.len();
+            let rigidly: Vec<[f64; 2]> = (0..n)
+                .map(|i| rigidly_moved(&self.dense, &self.image, &self.neighbours[i], i))
+                .collect();
+            for (i, (d, p)) in targets.iter_mut().zip(&rigidly).enumerate() {
+                let a = self.image[(i + n - 1) % n];
+                let b = self.image[(i + 1) % n];
+                let (tx, ty) = (b[0] - a[0], b[1] - a[1]);
+                let l = tx.hypot(ty);
+                if l > 0.0 {
+                    let (tx, ty) = (tx / l, ty / l);
+                    let s = (p[0] - d[0]) * tx + (p[1] - d[1]) * ty;
+                    d[0] += rigid * s * tx;
+                    d[1] += rigid * s * ty;
+                }
+            }
+        }
         for &(i, t) in pairs {
             // A partner out of reach is a wrong match (a turned or mirrored pre-alignment of a
             // small contact): the anchor's image is within a frame's motion of the outline.
@@ -1545,9 +1646,14 @@ impl Anchor {
             if (q[0] - t[0]).hypot(q[1] - t[1]) > params.reach {
                 continue;
             }
+            let pull = if params.pull_curvature > 0.0 {
+                params.pull * (self.curvature[i] / params.pull_curvature).min(1.0)
+            } else {
+                params.pull
+            };
             let d = &mut targets[i];
-            d[0] = (1.0 - params.pull) * d[0] + params.pull * t[0];
-            d[1] = (1.0 - params.pull) * d[1] + params.pull * t[1];
+            d[0] = (1.0 - pull) * d[0] + pull * t[0];
+            d[1] = (1.0 - pull) * d[1] + pull * t[1];
         }
         let c = self.fit(&targets)?;
         let image = self.dense_basis.apply(&c);
@@ -1560,6 +1666,44 @@ impl Anchor {
         self.coefficients = Some(c);
         Ok(moved)
     }
+}
+
+/// Where point `i` of the anchor's densified outline `dense` lies when its neighbourhood `nb`
+/// (weighted points of the anchor) is moved by the turn and shift that carry it best, in the
+/// weighted least-squares sense, onto its `image`.
+fn rigidly_moved(
+    dense: &[[f64; 2]],
+    image: &[[f64; 2]],
+    nb: &[(usize, f64)],
+    i: usize,
+) -> [f64; 2] {
+    // The weighted means and cross moments in one pass: the turn is that of the cross
+    // covariance (2-D Procrustes), the shift takes the means onto each other.
+    let (mut w, mut x, mut y) = (0.0, [0.0; 2], [0.0; 2]);
+    let (mut dot, mut cross) = (0.0, 0.0);
+    for &(j, wj) in nb {
+        let (p, q) = (dense[j], image[j]);
+        w += wj;
+        x[0] += wj * p[0];
+        x[1] += wj * p[1];
+        y[0] += wj * q[0];
+        y[1] += wj * q[1];
+        dot += wj * (p[0] * q[0] + p[1] * q[1]);
+        cross += wj * (p[0] * q[1] - p[1] * q[0]);
+    }
+    if w <= 0.0 {
+        return image[i];
+    }
+    let (x, y) = ([x[0] / w, x[1] / w], [y[0] / w, y[1] / w]);
+    let c = dot - w * (x[0] * y[0] + x[1] * y[1]);
+    let s = cross - w * (x[0] * y[1] - x[1] * y[0]);
+    let r = c.hypot(s);
+    if r <= 0.0 {
+        return image[i];
+    }
+    let (c, s) = (c / r, s / r);
+    let d = [dense[i][0] - x[0], dense[i][1] - x[1]];
+    [y[0] + c * d[0] - s * d[1], y[1] + s * d[0] + c * d[1]]
 }
 
 /// The median of `values` (the upper one of an even count; infinite when there is none).
@@ -1791,5 +1935,116 @@ mod grid_tests {
                 prop_assert_eq!(grid.nearest_within(q, reach), cell_by_cell(&points, cell, q, reach));
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod rigid_tests {
+    use super::*;
+
+    /// A foot-sized closed outline: an ellipse with a dent, every sensel or so.
+    fn outline() -> Vec<[f64; 2]> {
+        (0..120)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / 120.0;
+                let r = 1.0 - 0.15 * (3.0 * t).cos();
+                [20.0 + 8.0 * r * t.cos(), 40.0 + 20.0 * r * t.sin()]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_neighbourhood_moved_rigidly_puts_each_point_where_the_motion_does() {
+        let dense = outline();
+        let (c, s) = (0.3f64.cos(), 0.3f64.sin());
+        let image: Vec<[f64; 2]> = dense
+            .iter()
+            .map(|p| [c * p[0] - s * p[1] + 4.0, s * p[0] + c * p[1] - 7.0])
+            .collect();
+        let nb = neighbours_of(&dense, 10.0);
+        for i in (0..dense.len()).step_by(7) {
+            let p = rigidly_moved(&dense, &image, &nb[i], i);
+            assert!(
+                (p[0] - image[i][0]).hypot(p[1] - image[i][1]) < 1e-9,
+                "point {i}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_non_rigid_neighbourhood_gives_the_least_squares_turn_and_shift() {
+        // The image spreads the outline sideways and slides part of it: the turn of the
+        // weighted least-squares fit, found by brute force over angles (the best shift for a
+        // turn takes the weighted means onto each other), gives the same position.
+        let dense = outline();
+        let image: Vec<[f64; 2]> = dense
+            .iter()
+            .map(|p| {
+                [
+                    20.0 + 1.2 * (p[0] - 20.0) + 0.02 * p[1],
+                    p[1] + 0.5 * (p[0] * 0.3).sin(),
+                ]
+            })
+            .collect();
+        let nb = neighbours_of(&dense, 6.0);
+        for i in (0..dense.len()).step_by(11) {
+            let w: f64 = nb[i].iter().map(|&(_, w)| w).sum();
+            let mean = |ps: &[[f64; 2]]| {
+                let m = nb[i].iter().fold([0.0; 2], |m, &(j, wj)| {
+                    [m[0] + wj * ps[j][0], m[1] + wj * ps[j][1]]
+                });
+                [m[0] / w, m[1] / w]
+            };
+            let (x, y) = (mean(&dense), mean(&image));
+            let moved = |a: f64, p: [f64; 2]| {
+                let d = [p[0] - x[0], p[1] - x[1]];
+                [
+                    y[0] + a.cos() * d[0] - a.sin() * d[1],
+                    y[1] + a.sin() * d[0] + a.cos() * d[1],
+                ]
+            };
+            let cost = |a: f64| -> f64 {
+                nb[i]
+                    .iter()
+                    .map(|&(j, wj)| {
+                        let q = moved(a, dense[j]);
+                        wj * ((q[0] - image[j][0]).powi(2) + (q[1] - image[j][1]).powi(2))
+                    })
+                    .sum()
+            };
+            // A coarse search over ±0.2 rad, then a fine one about its best.
+            let search = |from: f64, step: f64| {
+                (-200..=200)
+                    .map(|k| from + f64::from(k) * step)
+                    .map(|a| (cost(a), a))
+                    .min_by(|p, q| p.0.total_cmp(&q.0))
+                    .map_or(0.0, |(_, a)| a)
+            };
+            let best = search(search(0.0, 1e-3), 1e-5);
+            let p = rigidly_moved(&dense, &image, &nb[i], i);
+            let q = moved(best, dense[i]);
+            assert!(
+                (p[0] - q[0]).hypot(p[1] - q[1]) < 2e-3,
+                "point {i}: {p:?} against {q:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_circle_turns_by_one_over_its_radius() {
+        let r = 7.0;
+        let circle: Vec<[f64; 2]> = (0..44)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / 44.0;
+                [r * t.cos(), r * t.sin()]
+            })
+            .collect();
+        for k in curvature_of(&circle) {
+            // Chords over four points either side: 1.4 % above 1 / r at this spacing.
+            assert!((k - 1.0 / r).abs() < 0.02 / r, "{k}");
+        }
+        let line: Vec<[f64; 2]> = (0..40).map(|k| [k as f64, 0.0]).collect();
+        // A straight stretch (away from the closing jump) does not turn.
+        assert!(curvature_of(&line)[5..35].iter().all(|&k| k.abs() < 1e-12));
     }
 }
