@@ -107,12 +107,14 @@ pub fn match_prepared(
         return Ok(in_callers_terms(&pair, refined));
     }
     // Two specimens of a shape: the drift from the centroid-and-scale start, its affine re-fits
-    // on positions (docs/method.md §7.5).
+    // on positions (docs/method.md §7.5). The re-fits only place the start, by the default
+    // solver; the drift's own assignment keeps the contours' order whatever the solver.
     let drift = MatchOptions {
         prealign: Prealign::Normalize,
         position_weight: 1.0,
         refits: MatchOptions::default().refits,
         refine: Refine::Coherent,
+        method: MatchOptions::default().method,
         ..opts.clone()
     };
     let pair = Pair::new(a, b, &drift)?;
