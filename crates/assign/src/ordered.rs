@@ -126,13 +126,7 @@ pub(crate) fn solve_with_threshold(c: &[f64], n: usize, m: usize, t: f64) -> Vec
     // A pair pays `c − t` against leaving both its nodes out; only savings (< 0) are worth taking.
     let saving: Vec<f64> = c.iter().map(|&x| (x - t).min(0.0)).collect();
     let mut grid = Corridor::new(n, m);
-    let whole = CutPath {
-        lo: vec![0; n + 1],
-        hi: vec![2 * m; n + 1],
-        total: 0.0,
-        r: 0,
-        pairs: Vec::new(),
-    };
+    let whole = CutPath::whole(n, m);
     let first = grid.align(&saving, 0, &whole, &whole);
     let last = first.moved(m);
     let mut best = (first.total, 0, first.pairs.clone());
@@ -171,6 +165,17 @@ struct CutPath {
 }
 
 impl CutPath {
+    /// No path: the bounds of the whole doubled grid, for a cut aligned without a corridor.
+    fn whole(n: usize, m: usize) -> CutPath {
+        CutPath {
+            lo: vec![0; n + 1],
+            hi: vec![2 * m; n + 1],
+            total: 0.0,
+            r: 0,
+            pairs: Vec::new(),
+        }
+    }
+
     /// The same alignment read from the cut `r + shift` (`shift` a multiple of `m`).
     fn moved(&self, shift: usize) -> CutPath {
         CutPath {
@@ -296,13 +301,7 @@ fn solve_with_threshold_every_cut(
 ) -> (f64, Vec<Option<usize>>) {
     let saving: Vec<f64> = c.iter().map(|&x| (x - t).min(0.0)).collect();
     let mut grid = Corridor::new(n, m);
-    let whole = CutPath {
-        lo: vec![0; n + 1],
-        hi: vec![2 * m; n + 1],
-        total: 0.0,
-        r: 0,
-        pairs: Vec::new(),
-    };
+    let whole = CutPath::whole(n, m);
     let mut best = (f64::INFINITY, Vec::new());
     for r in 0..m {
         let p = grid.align(&saving, r, &whole, &whole);

@@ -1599,19 +1599,7 @@ impl Anchor {
             if along > 0.0 {
                 // Along the outline only: the target's part along the image's tangent drawn
                 // towards the prediction's (the outline tells where it lies across, not along).
-                let n = self.image.len();
-                for (i, (d, p)) in targets.iter_mut().zip(predicted).enumerate() {
-                    let a = self.image[(i + n - 1) % n];
-                    let b = self.image[(i + 1) % n];
-                    let (tx, ty) = (b[0] - a[0], b[1] - a[1]);
-                    let l = tx.hypot(ty);
-                    if l > 0.0 {
-                        let (tx, ty) = (tx / l, ty / l);
-                        let s = (p[0] - d[0]) * tx + (p[1] - d[1]) * ty;
-                        d[0] += along * s * tx;
-                        d[1] += along * s * ty;
-                    }
-                }
+                pull_along_outline(&self.image, &mut targets, predicted, along);
             }
             for (d, p) in targets.iter_mut().zip(predicted) {
                 d[0] = (1.0 - g) * d[0] + g * p[0];
@@ -1626,18 +1614,7 @@ impl Anchor {
             let rigidly: Vec<[f64; 2]> = (0..n)
                 .map(|i| rigidly_moved(&self.dense, &self.image, &self.neighbours[i], i))
                 .collect();
-            for (i, (d, p)) in targets.iter_mut().zip(&rigidly).enumerate() {
-                let a = self.image[(i + n - 1) % n];
-                let b = self.image[(i + 1) % n];
-                let (tx, ty) = (b[0] - a[0], b[1] - a[1]);
-                let l = tx.hypot(ty);
-                if l > 0.0 {
-                    let (tx, ty) = (tx / l, ty / l);
-                    let s = (p[0] - d[0]) * tx + (p[1] - d[1]) * ty;
-                    d[0] += rigid * s * tx;
-                    d[1] += rigid * s * ty;
-                }
-            }
+            pull_along_outline(&self.image, &mut targets, &rigidly, rigid);
         }
         for &(i, t) in pairs {
             // A partner out of reach is a wrong match (a turned or mirrored pre-alignment of a
@@ -1665,6 +1642,24 @@ impl Anchor {
         self.image = image;
         self.coefficients = Some(c);
         Ok(moved)
+    }
+}
+
+/// Each target's part along the closed outline `image` (its tangent at the target's node, from
+/// the node before to the node after) drawn the share `w` of the way towards `towards`'s; across
+/// the outline the target stays.
+fn pull_along_outline(image: &[[f64; 2]], targets: &mut [[f64; 2]], towards: &[[f64; 2]], w: f64) {
+    let n = image.len();
+    for (i, (d, p)) in targets.iter_mut().zip(towards).enumerate() {
+        let (a, b) = (image[(i + n - 1) % n], image[(i + 1) % n]);
+        let (tx, ty) = (b[0] - a[0], b[1] - a[1]);
+        let l = tx.hypot(ty);
+        if l > 0.0 {
+            let (tx, ty) = (tx / l, ty / l);
+            let s = (p[0] - d[0]) * tx + (p[1] - d[1]) * ty;
+            d[0] += w * s * tx;
+            d[1] += w * s * ty;
+        }
     }
 }
 
