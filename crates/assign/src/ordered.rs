@@ -195,6 +195,7 @@ struct Corridor {
     m: usize,
     from: Vec<usize>,
     to: Vec<usize>,
+    row_start: Vec<usize>,
     d: Vec<f64>,
     step: Vec<u8>,
 }
@@ -211,6 +212,7 @@ impl Corridor {
             m,
             from: vec![0; n + 1],
             to: vec![0; n + 1],
+            row_start: vec![0; n + 1],
             d: vec![0.0; cells],
             step: vec![0; cells],
         }
@@ -227,15 +229,14 @@ impl Corridor {
         // Each row's cells start where the previous row's end: at most `m + 1` per row.
         let at =
             |row_start: &[usize], i: usize, j: usize, from: &[usize]| row_start[i] + j - from[i];
-        let mut row_start = vec![0; n + 1];
         for i in 1..=n {
-            row_start[i] = row_start[i - 1] + self.to[i - 1] + 1 - self.from[i - 1];
+            self.row_start[i] = self.row_start[i - 1] + self.to[i - 1] + 1 - self.from[i - 1];
         }
-        let (from, to) = (&self.from, &self.to);
+        let (from, to, row_start) = (&self.from, &self.to, &self.row_start);
         for j in from[0]..=to[0] {
             // Row 0: columns skipped before the first pair, free.
-            self.d[at(&row_start, 0, j, from)] = 0.0;
-            self.step[at(&row_start, 0, j, from)] = SKIP_COLUMN;
+            self.d[at(row_start, 0, j, from)] = 0.0;
+            self.step[at(row_start, 0, j, from)] = SKIP_COLUMN;
         }
         for i in 1..=n {
             let row = &s[(i - 1) * m..i * m];
@@ -244,27 +245,27 @@ impl Corridor {
                 // Skips first on ties, so that a pair saving nothing is left out.
                 let mut best = (f64::INFINITY, SKIP_ROW);
                 if inside(i - 1, j) {
-                    best = (self.d[at(&row_start, i - 1, j, from)], SKIP_ROW);
+                    best = (self.d[at(row_start, i - 1, j, from)], SKIP_ROW);
                 }
                 if j > from[i] {
-                    let left = self.d[at(&row_start, i, j - 1, from)];
+                    let left = self.d[at(row_start, i, j - 1, from)];
                     if left < best.0 {
                         best = (left, SKIP_COLUMN);
                     }
                 }
                 if j > 0 && inside(i - 1, j - 1) {
-                    let diag = self.d[at(&row_start, i - 1, j - 1, from)] + row[(j - 1) % m];
+                    let diag = self.d[at(row_start, i - 1, j - 1, from)] + row[(j - 1) % m];
                     if diag < best.0 {
                         best = (diag, DIAGONAL);
                     }
                 }
-                self.d[at(&row_start, i, j, from)] = best.0;
-                self.step[at(&row_start, i, j, from)] = best.1;
+                self.d[at(row_start, i, j, from)] = best.0;
+                self.step[at(row_start, i, j, from)] = best.1;
             }
         }
         // Back from (n, r + m): the rows' column spans and the pairs.
         let (mut i, mut j) = (n, r + m);
-        let total = self.d[at(&row_start, n, j, from)];
+        let total = self.d[at(row_start, n, j, from)];
         let mut path = CutPath {
             lo: vec![j; n + 1],
             hi: vec![j; n + 1],
@@ -273,7 +274,7 @@ impl Corridor {
             pairs: vec![None; n],
         };
         while i > 0 || j > r {
-            match self.step[at(&row_start, i, j, from)] {
+            match self.step[at(row_start, i, j, from)] {
                 DIAGONAL => {
                     path.pairs[i - 1] = Some((j - 1) % m);
                     (i, j) = (i - 1, j - 1);

@@ -76,17 +76,7 @@ pub(crate) fn cell_excess(
     let mut anchors = pairs.to_vec();
     anchors.sort_unstable();
     let mut out = Vec::new();
-    for (idx, &(u, p)) in anchors.iter().enumerate() {
-        let (v, q) = anchors[(idx + 1) % anchors.len()];
-        // The cell's inner nodes; with a single pair, the whole rest of both contours.
-        let (la, lb) = if anchors.len() == 1 {
-            (na - 1, nb - 1)
-        } else {
-            ((v + na - u - 1) % na, (q + nb - p - 1) % nb)
-        };
-        if la + lb == 0 {
-            continue;
-        }
+    for (u, p, la, lb) in cells(&anchors, na, nb) {
         let (ra, rb) = (la + 2, lb + 2);
         // Grid index (i, j): A node u + i, B node p + j; the corners are the two pairs.
         let cost = |i: usize, j: usize| {
@@ -137,6 +127,26 @@ pub(crate) fn cell_excess(
         }
     }
     out
+}
+
+/// The cells of an order-keeping match whose `pairs` are sorted by A's node: from each pair
+/// `(u, p)`, the `la` A nodes and `lb` B nodes before the next pair (cyclically; with a single
+/// pair, the whole rest of both contours), as `(u, p, la, lb)`. Cells with no inner node are
+/// left out.
+fn cells(
+    pairs: &[(usize, usize)],
+    na: usize,
+    nb: usize,
+) -> impl Iterator<Item = (usize, usize, usize, usize)> + '_ {
+    pairs.iter().enumerate().filter_map(move |(idx, &(u, p))| {
+        let (v, q) = pairs[(idx + 1) % pairs.len()];
+        let (la, lb) = if pairs.len() == 1 {
+            (na - 1, nb - 1)
+        } else {
+            ((v + na - u - 1) % na, (q + nb - p - 1) % nb)
+        };
+        (la + lb > 0).then_some((u, p, la, lb))
+    })
 }
 
 /// The cheapest non-decreasing assignment of `r` run nodes to `nc` candidates in order
@@ -726,17 +736,9 @@ mod tests {
             let mut sorted = one.clone();
             sorted.sort_unstable();
             let mut want = 0.0;
-            for (idx, &(u, p)) in sorted.iter().enumerate() {
-                let (v, q) = sorted[(idx + 1) % sorted.len()];
-                let (la, lb) = if sorted.len() == 1 {
-                    (na - 1, nb - 1)
-                } else {
-                    ((v + na - u - 1) % na, (q + nb - p - 1) % nb)
-                };
-                if la + lb > 0 {
-                    let c = |i: usize, j: usize| z.get((u + i) % na, (p + j) % nb);
-                    want += cheapest_path(la + 2, lb + 2, &c);
-                }
+            for (u, p, la, lb) in cells(&sorted, na, nb) {
+                let c = |i: usize, j: usize| z.get((u + i) % na, (p + j) % nb);
+                want += cheapest_path(la + 2, lb + 2, &c);
             }
             let got: f64 = ex.iter().map(|&(a, b)| z.get(a, b)).sum();
             proptest::prop_assert!((got - want).abs() < 1e-9, "{} against {}", got, want);

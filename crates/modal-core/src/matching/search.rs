@@ -117,16 +117,13 @@ pub(crate) fn global_matches(
         ..Default::default()
     };
     let priced = mode == ThresholdMode::InOptimizer && threshold.is_finite();
-    let sol = match mode {
-        _ if gaps && method == assign::Method::Ordered && !priced => {
-            assign::solve_with_threshold(z.as_slice(), n, m, ORDERED_GAP, &opts)?
-        }
-        ThresholdMode::AfterAssignment => assign::solve(z.as_slice(), n, m, &opts)?,
+    let sol = if gaps && method == assign::Method::Ordered && !priced {
+        assign::solve_with_threshold(z.as_slice(), n, m, ORDERED_GAP, &opts)?
+    } else if priced {
         // The (n+m)² padding with dummy cost τ of docs/method.md §6.2, solved without building it.
-        ThresholdMode::InOptimizer if threshold.is_finite() => {
-            assign::solve_with_threshold(z.as_slice(), n, m, threshold, &opts)?
-        }
-        ThresholdMode::InOptimizer => assign::solve(z.as_slice(), n, m, &opts)?,
+        assign::solve_with_threshold(z.as_slice(), n, m, threshold, &opts)?
+    } else {
+        assign::solve(z.as_slice(), n, m, &opts)?
     };
     let out = sol
         .pairs()
