@@ -850,7 +850,36 @@ impl SequenceSink for FrameCurves {
     }
 }
 
-impl FolderSink<'_, '_> {
+impl<'a> FolderSink<'a, '_> {
+    /// The sinks `outputs` asks for in `dir`, for a run of `run`: the tables always; the whole
+    /// run when `gather`; what the figures and the report draw; the measures, which keep the
+    /// frames when the run is `streamed` and regions are carried. No material points and no
+    /// caller's sink yet (the fields `points` and `also`).
+    fn for_folder(
+        dir: &'a OutDir,
+        run: &RunOf<'a>,
+        outputs: &RunOutputs,
+        gather: bool,
+        streamed: bool,
+    ) -> Result<Self> {
+        let figures = outputs.figures.any();
+        let measures = crate::MeasuresSink::new(run.recording, run.options)?;
+        Ok(FolderSink {
+            tables: TablesSink::create(dir, run.recording, run.options, outputs.tables)?,
+            whole: gather.then(|| Collect::new(false)),
+            points: None,
+            also: None,
+            curves: figures.then(FrameCurves::default),
+            tracks: figures.then(|| TracksGather::new(TRACKS_MIN_STEPS, TRACKS_SHOWN)),
+            report: (outputs.report).then(|| ReportGather::new(run.recording, run.options.frames)),
+            measures: if streamed && outputs.any_regions() {
+                measures.keeping_frames(run.recording)
+            } else {
+                measures
+            },
+        })
+    }
+
     /// The caller's own sink, if any ([`RunPlan::also`]).
     fn also(&mut self) -> Option<&mut dyn SequenceSink> {
         self.also
@@ -1004,35 +1033,8 @@ fn write_folder(
     let mut points_table = points
         .then(|| PointsTable::create(&dir, run.recording, run.options, outputs.tables))
         .transpose()?;
-    let mut sink = FolderSink {
-        tables: TablesSink::create(&dir, run.recording, run.options, outputs.tables)?,
-        whole: gather.then(|| Collect::new(false)),
-        points: (points_table.as_mut()).map(|t| FollowSink::new(run.options, t)),
-        also: None,
-        curves: outputs.figures.any().then(FrameCurves::default),
-        tracks: outputs
-            .figures
-            .any()
-            .then(|| TracksGather::new(TRACKS_MIN_STEPS, TRACKS_SHOWN)),
-        report: outputs
-            .report
-            .then(|| ReportGather::new(run.recording, run.options.frames)),
-        measures: {
-            let m = crate::MeasuresSink::new(run.recording, run.options)?;
-            let streamed = matches!(
-                &feed,
-                Feed::Run {
-                    frames: Some(_),
-                    ..
-                }
-            );
-            if streamed && outputs.any_regions() {
-                m.keeping_frames(run.recording)
-            } else {
-                m
-            }
-        },
-    };
+    let mut sink = FolderSink::for_folder(&dir, run, outputs, gather, streamed)?;
+    sink.points = (points_table.as_mut()).map(|t| FollowSink::new(run.options, t));
     let (counts, ran, replayed) = match feed {
         Feed::Run {
             frames,
@@ -1167,42 +1169,57 @@ fn write_folder(
     }
     dir.write("summary.json", pretty(&summary).as_bytes())?;
     if let Some(report) = &report {
-        let mut info = report_info(run, &summary);
-        let user_regions = (run.options.inputs.regions.iter())
-            .map(|r| (format!("region {}", r.label), r.cells.clone()))
-            .collect();
         let shown = crate::html_report::ReportMeasures {
             measures: &measures,
             regions: match (rule_name, &regions) {
                 (Some(rule), Some(Ok((masks, _)))) => Some((rule, masks)),
                 _ => None,
             },
-            user_regions,
+            user_regions: (run.options.inputs.regions.iter())
+                .map(|r| (format!("region {}", r.label), r.cells.clone()))
+                .collect(),
             points: user_points,
         };
-        info.measures = shown.to_json(run.recording.pitch_mm.unwrap_or([1.0, 1.0]));
-        dir.write(
-            "report.html",
-            report.page(run.recording, &counts, &info)?.as_bytes(),
-        )?;
+        write_report(&dir, run, report, &summary, &counts, &shown)?;
         steps.step();
     }
     if outputs.animation {
-        let r = whole.ok_or_else(|| IoError::invalid("the animation needs the whole run"))?;
-        let axes = crate::figure::FigureAxes::of_recording(run.recording);
-        let animation = crate::figure::Animation {
-            recording: run.recording,
-            result: r,
-            axes: &axes,
-            frames: run.options.frames.unwrap_or((0, run.recording.n_frames())),
-        };
-        dir.write("animation.gif", &animation.to_gif()?)?;
+        write_animation(&dir, run, whole)?;
         steps.step();
     }
     // A cancelled run leaves the previous folder (or none), as if it had not run.
     pedo_io::cancel::check(cancel)?;
     dir.commit()?;
     Ok((summary, counts))
+}
+
+/// `report.html` of a run: the gathered player and series, the `summary`'s figures and the
+/// measures, regions and points `shown`.
+fn write_report(
+    dir: &OutDir,
+    run: &RunOf<'_>,
+    report: &ReportGather,
+    summary: &Value,
+    counts: &RunCounts,
+    shown: &crate::html_report::ReportMeasures<'_>,
+) -> Result<()> {
+    let mut info = report_info(run, summary);
+    info.measures = shown.to_json(run.recording.pitch_mm.unwrap_or([1.0, 1.0]));
+    let page = report.page(run.recording, counts, &info)?;
+    dir.write("report.html", page.as_bytes())
+}
+
+/// `animation.gif` of the whole run `whole` (gathered or replayed), over the run's frames.
+fn write_animation(dir: &OutDir, run: &RunOf<'_>, whole: Option<&SequenceResult>) -> Result<()> {
+    let r = whole.ok_or_else(|| IoError::invalid("the animation needs the whole run"))?;
+    let axes = crate::figure::FigureAxes::of_recording(run.recording);
+    let animation = crate::figure::Animation {
+        recording: run.recording,
+        result: r,
+        axes: &axes,
+        frames: run.options.frames.unwrap_or((0, run.recording.n_frames())),
+    };
+    dir.write("animation.gif", &animation.to_gif()?)
 }
 
 /// What the figures of a run folder are drawn from: the run's objects and pairs when gathered
