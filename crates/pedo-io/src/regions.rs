@@ -320,154 +320,62 @@ fn axis_facing(
             crate::counted(fp.len(), "sensel")
         )));
     }
-    let pos = |i: usize| [(i % cols) as f64 * pitch[0], (i / cols) as f64 * pitch[1]];
-    let n = fp.len() as f64;
-    let mut c = [0.0; 2];
-    for &i in &fp {
-        let p = pos(i);
-        c[0] += p[0] / n;
-        c[1] += p[1] / n;
-    }
-    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
-    for &i in &fp {
-        let p = pos(i);
-        let (dx, dy) = (p[0] - c[0], p[1] - c[1]);
-        sxx += dx * dx;
-        sxy += dx * dy;
-        syy += dy * dy;
-    }
-    // The principal axis of a symmetric 2 × 2 matrix: angle ½ atan2(2 sxy, sxx − syy).
-    let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
-    let mut u = [angle.cos(), angle.sin()];
-    let along: Vec<f64> = fp.iter().map(|&i| dot(sub(pos(i), c), u)).collect();
-    let (lo, hi) = along
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
-            (lo.min(t), hi.max(t))
-        });
-    let length = hi - lo;
+    let sensels = FootprintSensels {
+        pos: (fp.iter())
+            .map(|&i| [(i % cols) as f64 * pitch[0], (i / cols) as f64 * pitch[1]])
+            .collect(),
+        value: fp.iter().map(|&i| image[i]).collect(),
+    };
+    let (c, axis) = sensels.principal_axis();
+    let (lo, length) = sensels.extent(c, axis);
     if length.is_nan() || length <= 0.0 {
         return Err(IoError::invalid(
             "the footprint has no length to divide into regions",
         ));
     }
-    // Heel → toe: the centre of pressure's path, else the shape.
+    // Heel → toe: the sensor's layout, else the centre of pressure's path, else the shape.
     let forward = cop.map_or(0.0, |path| {
         path.windows(2)
             .filter_map(|w| match (w[0], w[1]) {
                 (Some(a), Some(b)) => {
                     let d = [(b[0] - a[0]) * pitch[0], (b[1] - a[1]) * pitch[1]];
-                    Some(dot(d, u))
+                    Some(dot(d, axis))
                 }
                 _ => None,
             })
             .sum::<f64>()
     });
-    let toes = facing.and_then(|f| f.toes);
-    let cue = if let Some(t) = toes {
-        if dot(t, u) < 0.0 {
-            u = [-u[0], -u[1]];
-        }
-        HeelToeCue::Layout
+    let (toward_toes, cue) = if let Some(t) = facing.and_then(|f| f.toes) {
+        (dot(t, axis) >= 0.0, HeelToeCue::Layout)
     } else if forward.abs() > 0.2 * length {
-        if forward < 0.0 {
-            u = [-u[0], -u[1]];
-        }
-        HeelToeCue::CopPath
+        (forward >= 0.0, HeelToeCue::CopPath)
     } else {
-        // The widest slice (one pitch thick) of each end third, across the axis.
-        let w = [-u[1], u[0]];
         let step = pitch[0].min(pitch[1]);
-        let slices = ((length / 3.0) / step).ceil().max(1.0) as usize;
-        let mut widths = [
-            vec![(f64::INFINITY, f64::NEG_INFINITY); slices],
-            vec![(f64::INFINITY, f64::NEG_INFINITY); slices],
-        ];
-        for (k, &i) in fp.iter().enumerate() {
-            let f = along[k] - lo;
-            let end = if f <= length / 3.0 {
-                0
-            } else if f >= 2.0 * length / 3.0 {
-                1
-            } else {
-                continue;
-            };
-            let from_end = if end == 0 { f } else { length - f };
-            let s = ((from_end / step) as usize).min(slices - 1);
-            let v = dot(sub(pos(i), c), w);
-            let (a, b) = widths[end][s];
-            widths[end][s] = (a.min(v), b.max(v));
-        }
-        let widest = |ws: &[(f64, f64)]| {
-            ws.iter()
-                .filter(|(a, b)| a <= b)
-                .map(|(a, b)| b - a)
-                .fold(0.0, f64::max)
-        };
-        if widest(&widths[0]) > widest(&widths[1]) {
-            u = [-u[0], -u[1]];
-        }
-        HeelToeCue::Shape
+        (
+            !sensels.wider_start(c, axis, lo, length, step),
+            HeelToeCue::Shape,
+        )
     };
-    let t: Vec<f64> = fp.iter().map(|&i| dot(sub(pos(i), c), u)).collect();
-    let t0 = t.iter().copied().fold(f64::INFINITY, f64::min);
+    let u = if toward_toes {
+        axis
+    } else {
+        [-axis[0], -axis[1]]
+    };
+    let t0 = sensels.extent(c, u).0;
     let n_perp = [-u[1], u[0]];
-    // Bands of the length: their extent across the axis and centroids.
-    let band = |f: f64| -> usize {
-        LENGTH_BOUNDS
-            .iter()
-            .position(|&b| f < b)
-            .unwrap_or(LENGTH_BOUNDS.len())
-    };
-    let mut ext = [(f64::INFINITY, f64::NEG_INFINITY); 4];
-    let (mut mid_sum, mut mid_n) = (0.0, 0.0);
-    let (mut toe_sum, mut toe_w) = (0.0, 0.0);
-    for (k, &i) in fp.iter().enumerate() {
-        let b = band((t[k] - t0) / length);
-        let v = dot(sub(pos(i), c), n_perp);
-        ext[b] = (ext[b].0.min(v), ext[b].1.max(v));
-        if b == 1 {
-            mid_sum += v;
-            mid_n += 1.0;
-        } else if b == 3 {
-            toe_sum += v * image[i];
-            toe_w += image[i];
-        }
-    }
-    let centre_of = |e: (f64, f64)| {
-        if e.0 <= e.1 {
-            Some(0.5 * (e.0 + e.1))
-        } else {
-            None
-        }
-    };
-    let reference = match (centre_of(ext[0]), centre_of(ext[2])) {
-        (Some(a), Some(b)) => 0.5 * (a + b),
-        (Some(a), None) | (None, Some(a)) => a,
-        (None, None) => 0.0,
-    };
-    let mut score = 0.0;
-    if toe_w > 0.0 {
-        score += toe_sum / toe_w - reference;
-    }
-    if mid_n > 0.0 {
-        score -= mid_sum / mid_n - reference;
-    }
     // Medial along +n_perp when the score is positive. With (x, y) = (column, row), MUN104's
-    // left template (toes towards +y) has its hallux towards +x, i.e. along −n_perp.
-    if let Some(f) = facing {
-        // The side told: its medial direction, not the shape's cue (an insole's midfoot is
-        // loaded across its width, so that cue is weak there).
-        score = dot(f.medial, n_perp);
-    }
-    let (medial, mut side) = if score >= 0.0 {
+    // left template (toes towards +y) has its hallux towards +x, i.e. along −n_perp. The side
+    // told overrides the shape's cue (an insole's midfoot is loaded across its width, so that
+    // cue is weak there).
+    let score = match facing {
+        Some(f) => dot(f.medial, n_perp),
+        None => sensels.medial_score(c, u, t0, length),
+    };
+    let (medial, side) = if score >= 0.0 {
         (n_perp, Side::Right)
     } else {
         ([-n_perp[0], -n_perp[1]], Side::Left)
     };
-    if let Some(f) = facing {
-        side = f.side;
-    }
     let heel = [c[0] + u[0] * t0, c[1] + u[1] * t0];
     let toe = [heel[0] + u[0] * length, heel[1] + u[1] * length];
     Ok(FootAxis {
@@ -477,9 +385,123 @@ fn axis_facing(
         heel,
         toe,
         length,
-        side,
+        side: facing.map_or(side, |f| f.side),
         heel_toe_cue: cue,
     })
+}
+
+/// A footprint's sensels: their centres (in the pitch's units) and values.
+struct FootprintSensels {
+    pos: Vec<[f64; 2]>,
+    value: Vec<f64>,
+}
+
+impl FootprintSensels {
+    /// The centroid and the unit principal axis (either sign) of the sensels' centres.
+    fn principal_axis(&self) -> ([f64; 2], [f64; 2]) {
+        let n = self.pos.len() as f64;
+        let mut c = [0.0; 2];
+        for p in &self.pos {
+            c[0] += p[0] / n;
+            c[1] += p[1] / n;
+        }
+        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+        for p in &self.pos {
+            let (dx, dy) = (p[0] - c[0], p[1] - c[1]);
+            sxx += dx * dx;
+            sxy += dx * dy;
+            syy += dy * dy;
+        }
+        // The principal axis of a symmetric 2 × 2 matrix: angle ½ atan2(2 sxy, sxx − syy).
+        let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+        (c, [angle.cos(), angle.sin()])
+    }
+
+    /// The sensels' lowest position along `u` from `c`, and their extent along it.
+    fn extent(&self, c: [f64; 2], u: [f64; 2]) -> (f64, f64) {
+        let (lo, hi) = (self.pos.iter())
+            .map(|&p| dot(sub(p, c), u))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), t| {
+                (lo.min(t), hi.max(t))
+            });
+        (lo, hi - lo)
+    }
+
+    /// Whether the widest slice (`step` thick) of the start third along `u` (from `lo`, over
+    /// `length`) is wider across the axis than the end third's: the start is then the forefoot.
+    fn wider_start(&self, c: [f64; 2], u: [f64; 2], lo: f64, length: f64, step: f64) -> bool {
+        let w = [-u[1], u[0]];
+        let slices = ((length / 3.0) / step).ceil().max(1.0) as usize;
+        let mut widths = [
+            vec![(f64::INFINITY, f64::NEG_INFINITY); slices],
+            vec![(f64::INFINITY, f64::NEG_INFINITY); slices],
+        ];
+        for &p in &self.pos {
+            let f = dot(sub(p, c), u) - lo;
+            let end = if f <= length / 3.0 {
+                0
+            } else if f >= 2.0 * length / 3.0 {
+                1
+            } else {
+                continue;
+            };
+            let from_end = if end == 0 { f } else { length - f };
+            let s = ((from_end / step) as usize).min(slices - 1);
+            let v = dot(sub(p, c), w);
+            let (a, b) = widths[end][s];
+            widths[end][s] = (a.min(v), b.max(v));
+        }
+        let widest = |ws: &[(f64, f64)]| {
+            ws.iter()
+                .filter(|(a, b)| a <= b)
+                .map(|(a, b)| b - a)
+                .fold(0.0, f64::max)
+        };
+        widest(&widths[0]) > widest(&widths[1])
+    }
+
+    /// The shape's cue for the medial side along `[-u[1], u[0]]` (positive: that way), the
+    /// heel at `t0` along `u` from `c`: the toes' pressure-weighted offset across the axis, less
+    /// the midfoot's, each from the middle of the heel's and the forefoot's widths (the
+    /// [`LENGTH_BOUNDS`] bands).
+    fn medial_score(&self, c: [f64; 2], u: [f64; 2], t0: f64, length: f64) -> f64 {
+        let n_perp = [-u[1], u[0]];
+        let band = |f: f64| -> usize {
+            LENGTH_BOUNDS
+                .iter()
+                .position(|&b| f < b)
+                .unwrap_or(LENGTH_BOUNDS.len())
+        };
+        let mut ext = [(f64::INFINITY, f64::NEG_INFINITY); 4];
+        let (mut mid_sum, mut mid_n) = (0.0, 0.0);
+        let (mut toe_sum, mut toe_w) = (0.0, 0.0);
+        for (&p, &value) in self.pos.iter().zip(&self.value) {
+            let b = band((dot(sub(p, c), u) - t0) / length);
+            let v = dot(sub(p, c), n_perp);
+            ext[b] = (ext[b].0.min(v), ext[b].1.max(v));
+            if b == 1 {
+                mid_sum += v;
+                mid_n += 1.0;
+            } else if b == 3 {
+                toe_sum += v * value;
+                toe_w += value;
+            }
+        }
+        let centre_of = |e: (f64, f64)| (e.0 <= e.1).then_some(0.5 * (e.0 + e.1));
+        let reference = match (centre_of(ext[0]), centre_of(ext[2])) {
+            (Some(a), Some(b)) => 0.5 * (a + b),
+            (Some(a), None) | (None, Some(a)) => a,
+            (None, None) => 0.0,
+        };
+        let mut score = 0.0;
+        if toe_w > 0.0 {
+            score += toe_sum / toe_w - reference;
+        }
+        if mid_n > 0.0 {
+            score -= mid_sum / mid_n - reference;
+        }
+        score
+    }
 }
 
 fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
