@@ -146,6 +146,70 @@ fn parts_of(cells: &[bool], rows: usize, cols: usize) -> Vec<Vec<bool>> {
     parts
 }
 
+/// The contour objects of a stance's reference frame that may carry its regions, with their
+/// outlines (sensels).
+struct Holders {
+    objects: Vec<usize>,
+    outlines: Vec<Vec<[f64; 2]>>,
+}
+
+impl Holders {
+    /// The object whose outline holds most of the sensel centres of `part` (row-major cells,
+    /// `cols` wide; the first on ties), or `None` when none holds any.
+    fn holder(&self, part: &[bool], cols: usize) -> Option<usize> {
+        let centres: Vec<[f64; 2]> = (part.iter().enumerate())
+            .filter(|(_, c)| **c)
+            .map(|(i, _)| [(i % cols) as f64, (i / cols) as f64])
+            .collect();
+        let held = (self.outlines.iter().enumerate())
+            .map(|(j, o)| {
+                let n = (centres.iter())
+                    .filter(|&&c| pedo_io::contour::point_in_polygon(c, o))
+                    .count();
+                (j, n)
+            })
+            .max_by_key(|&(j, n)| (n, std::cmp::Reverse(j)));
+        held.filter(|&(_, n)| n > 0).map(|(j, _)| self.objects[j])
+    }
+}
+
+/// Each of `parts` region parts' outline per frame (its points in outline order, where
+/// followed) from the followed `points` seeded on them. On a foot (`owned` lists whether each
+/// object is of its insole; empty: every object is), a point ends, either way from the
+/// `reference` frame, where it would step onto the other insole.
+fn part_outlines(
+    run: &SequenceResult,
+    points: &[follow::FollowedPoint],
+    parts: usize,
+    owned: &[bool],
+    reference: usize,
+) -> Vec<BTreeMap<usize, Vec<[f64; 2]>>> {
+    let mut by_part: Vec<BTreeMap<usize, Vec<[f64; 2]>>> = vec![BTreeMap::new(); parts];
+    let mine = |s: &(usize, [f64; 2])| owned.get(s.0).copied().unwrap_or(true);
+    for p in points {
+        let Seeded::Region(part) = p.kind else {
+            continue;
+        };
+        let seed = (p.steps.iter())
+            .position(|s| run.objects[s.0].frame == reference)
+            .unwrap_or(0);
+        let lo = p.steps[..seed]
+            .iter()
+            .rposition(|s| !mine(s))
+            .map_or(0, |i| i + 1);
+        let hi = (p.steps[seed..].iter())
+            .position(|s| !mine(s))
+            .map_or(p.steps.len(), |i| seed + i);
+        for &(o, xy) in &p.steps[lo..hi.max(lo)] {
+            by_part[part]
+                .entry(run.objects[o].frame)
+                .or_default()
+                .push(xy);
+        }
+    }
+    by_part
+}
+
 /// The regions of `masks` carried through every stance of `stances` by the objects and pairs
 /// of the contour run `run` (see the [module](self)): one [`MovingRegion`] per stance and
 /// region, in stance order, then label order. A region with no sensel in contact on its
@@ -202,9 +266,12 @@ pub fn follow_masks(
             .filter(|&o| run.objects[o].frame == reference && run.objects[o].shape.dim() == 2)
             .filter(|&o| owned.get(o).copied().unwrap_or(true))
             .collect();
-        let object_outlines: Vec<Vec<[f64; 2]>> = (objects.iter())
-            .map(|&o| follow::outline(&run.objects[o]))
-            .collect();
+        let holders = Holders {
+            outlines: (objects.iter())
+                .map(|&o| follow::outline(&run.objects[o]))
+                .collect(),
+            objects,
+        };
         // Seeds of every part of every region of this stance; `owner[j]` = (region, part).
         let mut seeds = Vec::new();
         let mut owner: Vec<usize> = Vec::new();
@@ -219,19 +286,7 @@ pub fn follow_masks(
             let parts = parts_of(&cells, rows, cols);
             let mut followed = 0;
             for part in &parts {
-                let centres: Vec<[f64; 2]> = (part.iter().enumerate())
-                    .filter(|(_, c)| **c)
-                    .map(|(i, _)| [(i % cols) as f64, (i / cols) as f64])
-                    .collect();
-                let held = (object_outlines.iter().enumerate())
-                    .map(|(j, o)| {
-                        let n = (centres.iter())
-                            .filter(|&&c| pedo_io::contour::point_in_polygon(c, o))
-                            .count();
-                        (j, n)
-                    })
-                    .max_by_key(|&(j, n)| (n, std::cmp::Reverse(j)));
-                let Some((j, _)) = held.filter(|&(_, n)| n > 0) else {
+                let Some(object) = holders.holder(part, cols) else {
                     continue;
                 };
                 let labels: Vec<u32> = part.iter().map(|&c| u32::from(c)).collect();
@@ -243,7 +298,7 @@ pub fn follow_masks(
                         .0
                         .into_iter()
                         .map(|xy| Seed {
-                            object: objects[j],
+                            object,
                             xy,
                             kind: Seeded::Region(index),
                         }),
@@ -264,32 +319,7 @@ pub fn follow_masks(
         }
         let followed =
             follow::follow_both_ways(run, aspect, &params, &seeds, stance.first, stance.last)?;
-        // Each part's outline per frame: its points in outline order, where followed.
-        let mut by_part: Vec<BTreeMap<usize, Vec<[f64; 2]>>> = vec![BTreeMap::new(); owner.len()];
-        for p in &followed.points {
-            let Seeded::Region(part) = p.kind else {
-                continue;
-            };
-            // A foot's outline point ends, either way from the reference frame, where it
-            // would step onto the other insole.
-            let mine = |s: &(usize, [f64; 2])| owned.get(s.0).copied().unwrap_or(true);
-            let seed = (p.steps.iter())
-                .position(|s| run.objects[s.0].frame == reference)
-                .unwrap_or(0);
-            let lo = p.steps[..seed]
-                .iter()
-                .rposition(|s| !mine(s))
-                .map_or(0, |i| i + 1);
-            let hi = (p.steps[seed..].iter())
-                .position(|s| !mine(s))
-                .map_or(p.steps.len(), |i| seed + i);
-            for &(o, xy) in &p.steps[lo..hi.max(lo)] {
-                by_part[part]
-                    .entry(run.objects[o].frame)
-                    .or_default()
-                    .push(xy);
-            }
-        }
+        let by_part = part_outlines(run, &followed.points, owner.len(), &owned, reference);
         for (part, frames) in by_part.into_iter().enumerate() {
             let region = &mut out[owner[part]];
             for (frame, outline) in frames {
