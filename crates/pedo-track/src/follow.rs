@@ -99,7 +99,8 @@ pub struct FollowParams {
     /// The weight (0–1) of a point's *locally rigid* position in the part of its target along
     /// the outline, on every frame: where the anchor's points around it (Gaussian weights of
     /// scale [`rigid_reach`](Self::rigid_reach) on the anchor, across the foot as well as along
-    /// its outline) lie now, fitted by a turn and a shift, put it. Along a near-circular heel or
+    /// its outline), moved by the turn and shift that put them best on the frame's outline
+    /// ([`rigid_shape`](Self::rigid_shape)), put it. Along a near-circular heel or
     /// a straight edge the frame's outline says nothing; the stretches nearby that it pins (the
     /// arch's concavity, the other side of the foot) do, and the heel moves as one piece with
     /// them instead of sliding after the forefoot's turn. 0 turns it off.
@@ -108,6 +109,16 @@ pub struct FollowParams {
     /// point's locally rigid position (see [`rigid_along`](Self::rigid_along)); points farther
     /// than three times this do not count.
     pub rigid_reach: f64,
+    /// How much (0–1) the frame's outline, rather than the anchor's current image, sets the turn
+    /// and shift of a point's neighbourhood (see [`rigid_along`](Self::rigid_along)): the fit
+    /// puts the neighbourhood's points on the frame's outline *across* the image (point to line,
+    /// onto their closest points) with weight 1 and on their images *along* it with weight
+    /// `1 − rigid_shape`. The image's places along a near-circular heel are the slide itself;
+    /// where the stretches nearby have a shape (the arch, the other side of the foot), the
+    /// outline sets the turn. At 0 the image along the outline weighs as much as the outline
+    /// across it (the fit onto the image alone, 2-D Procrustes, where the image lies on the
+    /// outline).
+    pub rigid_shape: f64,
     /// The modal pull ([`pull`](Self::pull)) is full on anchor nodes where the anchor's outline
     /// turns at least this much per sensel (radians), less in proportion where it is straighter:
     /// a modal partner is placed along the outline by the match's alignment of the whole shape,
@@ -135,7 +146,8 @@ impl Default for FollowParams {
             prior_none: 0.16,
             velocity_smoothing: 0.3,
             rigid_along: 0.7,
-            rigid_reach: 10.0,
+            rigid_reach: 8.0,
+            rigid_shape: 0.5,
             pull_curvature: 0.3,
         }
     }
@@ -1595,6 +1607,8 @@ impl Anchor {
             .zip(&count)
             .map(|(s, c)| [s[0] / c, s[1] / c])
             .collect();
+        // The frame's outline where each point's image meets it, before the priors and pulls.
+        let data = targets.clone();
         if let Some((predicted, g, along)) = predicted {
             if along > 0.0 {
                 // Along the outline only: the target's part along the image's tangent drawn
@@ -1610,9 +1624,16 @@ impl Anchor {
         if rigid > 0.0 && self.neighbours.len() == self.image.len() {
             // Along the outline only, as the prior: the part of each target along the image's
             // tangent drawn towards where its neighbourhood, moved rigidly, puts it.
-            let n = self.image.len();
-            let rigidly: Vec<[f64; 2]> = (0..n)
-                .map(|i| rigidly_moved(&self.dense, &self.image, &self.neighbours[i], i))
+            let normals = outline_normals(&self.image);
+            let fit = RigidFit {
+                dense: &self.dense,
+                image: &self.image,
+                outline: &data,
+                normals: &normals,
+                shape: params.rigid_shape,
+            };
+            let rigidly: Vec<[f64; 2]> = (self.neighbours.iter().enumerate())
+                .map(|(i, nb)| fit.moved(nb, i))
                 .collect();
             pull_along_outline(&self.image, &mut targets, &rigidly, rigid);
         }
@@ -1663,42 +1684,142 @@ fn pull_along_outline(image: &[[f64; 2]], targets: &mut [[f64; 2]], towards: &[[
     }
 }
 
-/// Where point `i` of the anchor's densified outline `dense` lies when its neighbourhood `nb`
-/// (weighted points of the anchor) is moved by the turn and shift that carry it best, in the
-/// weighted least-squares sense, onto its `image`.
-fn rigidly_moved(
-    dense: &[[f64; 2]],
-    image: &[[f64; 2]],
-    nb: &[(usize, f64)],
-    i: usize,
-) -> [f64; 2] {
-    // The weighted means and cross moments in one pass: the turn is that of the cross
-    // covariance (2-D Procrustes), the shift takes the means onto each other.
-    let (mut w, mut x, mut y) = (0.0, [0.0; 2], [0.0; 2]);
-    let (mut dot, mut cross) = (0.0, 0.0);
-    for &(j, wj) in nb {
-        let (p, q) = (dense[j], image[j]);
-        w += wj;
-        x[0] += wj * p[0];
-        x[1] += wj * p[1];
-        y[0] += wj * q[0];
-        y[1] += wj * q[1];
-        dot += wj * (p[0] * q[0] + p[1] * q[1]);
-        cross += wj * (p[0] * q[1] - p[1] * q[0]);
+/// The unit normal of a closed outline at each point (across the chord from the point before
+/// to the point after).
+fn outline_normals(image: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let n = image.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (image[(i + n - 1) % n], image[(i + 1) % n]);
+            let (tx, ty) = (b[0] - a[0], b[1] - a[1]);
+            let l = tx.hypot(ty);
+            match l > 0.0 {
+                true => [-ty / l, tx / l],
+                false => [0.0, 0.0],
+            }
+        })
+        .collect()
+}
+
+/// The locally rigid positions of an anchor's points ([`FollowParams::rigid_along`]): each
+/// point's neighbourhood on the anchor (`dense`) moved by the turn and shift that put it best
+/// on the frame's `outline` across the image (point to line: each image point's closest point
+/// of the outline, with the image's `normals` there) and, with weight `1 − shape`, on its
+/// `image` along it.
+struct RigidFit<'a> {
+    dense: &'a [[f64; 2]],
+    image: &'a [[f64; 2]],
+    outline: &'a [[f64; 2]],
+    normals: &'a [[f64; 2]],
+    shape: f64,
+}
+
+impl RigidFit<'_> {
+    /// Where point `i` lies when its neighbourhood `nb` (weighted points of the anchor) is moved
+    /// by the best turn and shift: the weighted least-squares fit onto the image (2-D
+    /// Procrustes), then one Gauss–Newton step of the fit across and along the outline from it
+    /// (a turn about the neighbourhood's centre and a shift, small: the image lies within a
+    /// fraction of a sensel of the outline).
+    fn moved(&self, nb: &[(usize, f64)], i: usize) -> [f64; 2] {
+        let (dense, image) = (self.dense, self.image);
+        // The weighted means and moments in one pass: the turn is that of the cross
+        // covariance, the shift takes the means onto each other.
+        let (mut w, mut x, mut y) = (0.0, [0.0; 2], [0.0; 2]);
+        let (mut dot, mut cross, mut xx) = (0.0, 0.0, 0.0);
+        for &(j, wj) in nb {
+            let (p, q) = (dense[j], image[j]);
+            w += wj;
+            x[0] += wj * p[0];
+            x[1] += wj * p[1];
+            y[0] += wj * q[0];
+            y[1] += wj * q[1];
+            dot += wj * (p[0] * q[0] + p[1] * q[1]);
+            cross += wj * (p[0] * q[1] - p[1] * q[0]);
+            xx += wj * (p[0] * p[0] + p[1] * p[1]);
+        }
+        if w <= 0.0 {
+            return image[i];
+        }
+        let (x, y) = ([x[0] / w, x[1] / w], [y[0] / w, y[1] / w]);
+        let c = dot - w * (x[0] * y[0] + x[1] * y[1]);
+        let s = cross - w * (x[0] * y[1] - x[1] * y[0]);
+        let r = c.hypot(s);
+        if r <= 0.0 {
+            return image[i];
+        }
+        let (c, s) = (c / r, s / r);
+        // A neighbour's offset from the centre, turned: where the fit puts it is y + that.
+        let turned = |p: [f64; 2]| {
+            let d = [p[0] - x[0], p[1] - x[1]];
+            [c * d[0] - s * d[1], s * d[0] + c * d[1]]
+        };
+        let here = turned(dense[i]);
+        let e = self.shape.clamp(0.0, 1.0);
+        // The Gauss–Newton step (d turn, d shift) for residuals across the outline (weight 1,
+        // onto the outline) and along it (weight 1 − e, onto the image). With the normal n and
+        // tangent t orthonormal, w_n n nᵀ + w_t t tᵀ = w_t I + (w_n − w_t) n nᵀ: the image's
+        // share is the Procrustes fit's own normal equations, whose gradient is zero at its
+        // optimum and whose matrix is diagonal about the centre (the offsets' weighted sum is
+        // zero); only the outline's share remains to be summed point by point.
+        let spread = xx - w * (x[0] * x[0] + x[1] * x[1]);
+        let mut a = [
+            [(1.0 - e) * spread, 0.0, 0.0],
+            [0.0, (1.0 - e) * w, 0.0],
+            [0.0, 0.0, (1.0 - e) * w],
+        ];
+        let mut b = [0.0; 3];
+        for &(j, wj) in nb {
+            let d = turned(dense[j]);
+            let p = [y[0] + d[0], y[1] + d[1]];
+            let n = self.normals[j];
+            let (o, q) = (self.outline[j], image[j]);
+            // The turn's motion of the point across the outline, and the residual across it
+            // onto the outline less the image's share of it onto the image.
+            let vn = -d[1] * n[0] + d[0] * n[1];
+            let across = (p[0] - o[0]) * n[0] + (p[1] - o[1]) * n[1];
+            let image_across = (p[0] - q[0]) * n[0] + (p[1] - q[1]) * n[1];
+            let res = wj * (across - (1.0 - e) * image_across);
+            let jac = [vn, n[0], n[1]];
+            let we = wj * e;
+            for r in 0..3 {
+                b[r] += res * jac[r];
+                for k in r..3 {
+                    a[r][k] += we * jac[r] * jac[k];
+                }
+            }
+        }
+        (a[1][0], a[2][0], a[2][1]) = (a[0][1], a[0][2], a[1][2]);
+        let Some(step) = solve3(a, [-b[0], -b[1], -b[2]]) else {
+            return [y[0] + here[0], y[1] + here[1]];
+        };
+        [
+            y[0] + here[0] - step[0] * here[1] + step[1],
+            y[1] + here[1] + step[0] * here[0] + step[2],
+        ]
     }
-    if w <= 0.0 {
-        return image[i];
+}
+
+/// The solution of the 3 × 3 system `a x = b` (Cramer's rule), if `a` is not singular.
+fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
+    let det = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det(a);
+    let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    if !d.is_finite() || d.abs() <= 1e-12 * scale.powi(3) {
+        return None;
     }
-    let (x, y) = ([x[0] / w, x[1] / w], [y[0] / w, y[1] / w]);
-    let c = dot - w * (x[0] * y[0] + x[1] * y[1]);
-    let s = cross - w * (x[0] * y[1] - x[1] * y[0]);
-    let r = c.hypot(s);
-    if r <= 0.0 {
-        return image[i];
+    let mut out = [0.0; 3];
+    for (k, o) in out.iter_mut().enumerate() {
+        let mut m = a;
+        for (row, &v) in m.iter_mut().zip(&b) {
+            row[k] = v;
+        }
+        *o = det(m) / d;
     }
-    let (c, s) = (c / r, s / r);
-    let d = [dense[i][0] - x[0], dense[i][1] - x[1]];
-    [y[0] + c * d[0] - s * d[1], y[1] + s * d[0] + c * d[1]]
+    Some(out)
 }
 
 /// The median of `values` (the upper one of an even count; infinite when there is none).
@@ -1948,6 +2069,24 @@ mod rigid_tests {
             .collect()
     }
 
+    /// Point `i`'s locally rigid position by the fit onto the image alone (2-D Procrustes).
+    fn rigidly_moved(
+        dense: &[[f64; 2]],
+        image: &[[f64; 2]],
+        nb: &[(usize, f64)],
+        i: usize,
+    ) -> [f64; 2] {
+        let normals = outline_normals(image);
+        let fit = RigidFit {
+            dense,
+            image,
+            outline: image,
+            normals: &normals,
+            shape: 0.0,
+        };
+        fit.moved(nb, i)
+    }
+
     #[test]
     fn a_neighbourhood_moved_rigidly_puts_each_point_where_the_motion_does() {
         let dense = outline();
@@ -2023,6 +2162,51 @@ mod rigid_tests {
                 "point {i}: {p:?} against {q:?}"
             );
         }
+    }
+
+    #[test]
+    fn the_frame_outline_undoes_a_slide_the_image_shows() {
+        // The frame's outline is the anchor's, turned and shifted; the image lies on it but has
+        // slid along it (a point's place moved by up to 1.5 sensels of outline, smoothly). Fitted
+        // onto the outline across it (one Gauss-Newton step), the neighbourhood's turn and shift
+        // put every point within a fifth of a sensel of where the true motion does; fitted onto
+        // the image alone, some point is left more than 0.8 sensel off.
+        let fine: Vec<[f64; 2]> = (0..1200)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / 1200.0;
+                let r = 1.0 - 0.15 * (3.0 * t).cos();
+                [20.0 + 8.0 * r * t.cos(), 40.0 + 20.0 * r * t.sin()]
+            })
+            .collect();
+        let (c, s) = (0.2f64.cos(), 0.2f64.sin());
+        let motion = |p: [f64; 2]| [c * p[0] - s * p[1] + 3.0, s * p[0] + c * p[1] - 5.0];
+        let dense: Vec<[f64; 2]> = fine.iter().step_by(10).copied().collect();
+        let truth: Vec<[f64; 2]> = dense.iter().map(|&p| motion(p)).collect();
+        // Slid along the true outline by up to 15 of its 1200 points (~1.5 sensels).
+        let image: Vec<[f64; 2]> = (0..dense.len())
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / dense.len() as f64;
+                let slide = (15.0 * (t.sin() + 0.5 * (2.0 * t).cos())).round() as i64;
+                motion(fine[(10 * k as i64 + slide).rem_euclid(1200) as usize])
+            })
+            .collect();
+        let normals = outline_normals(&image);
+        let nb = neighbours_of(&dense, 8.0);
+        let (mut on_outline, mut on_image) = (0.0f64, 0.0f64);
+        for i in 0..dense.len() {
+            let fit = |shape| RigidFit {
+                dense: &dense,
+                image: &image,
+                outline: &image,
+                normals: &normals,
+                shape,
+            };
+            let off = |p: [f64; 2]| (p[0] - truth[i][0]).hypot(p[1] - truth[i][1]);
+            on_outline = on_outline.max(off(fit(1.0).moved(&nb[i], i)));
+            on_image = on_image.max(off(fit(0.0).moved(&nb[i], i)));
+        }
+        assert!(on_outline < 0.2, "{on_outline}");
+        assert!(on_image > 0.8, "{on_image}");
     }
 
     #[test]
