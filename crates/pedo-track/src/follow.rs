@@ -1693,9 +1693,10 @@ fn outline_normals(image: &[[f64; 2]]) -> Vec<[f64; 2]> {
             let (a, b) = (image[(i + n - 1) % n], image[(i + 1) % n]);
             let (tx, ty) = (b[0] - a[0], b[1] - a[1]);
             let l = tx.hypot(ty);
-            match l > 0.0 {
-                true => [-ty / l, tx / l],
-                false => [0.0, 0.0],
+            if l > 0.0 {
+                [-ty / l, tx / l]
+            } else {
+                [0.0, 0.0]
             }
         })
         .collect()
