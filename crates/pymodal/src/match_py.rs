@@ -294,7 +294,9 @@ impl PyMatch {
     /// The correspondence field of this match: a :class:`Field` fitted to its one-to-one pairs
     /// between ``a`` and ``b`` (the coordinates the match was made from), with ``smoothing`` λ.
     /// The excess pairs are left out: they match one node to several, and a map sends each
-    /// point to one place. Raises as :class:`Field` does.
+    /// point to one place. After the coherent drift (``drifted``) the field is fitted instead to
+    /// the drift's displacement of a's nodes: each node of ``a`` to its moved position
+    /// (``aligned_a``), so its ``pairs`` are ``(i, i)``. Raises as :class:`Field` does.
     #[pyo3(signature = (a, b, *, smoothing = 0.0))]
     fn field(
         &self,
@@ -303,6 +305,22 @@ impl PyMatch {
         b: &Bound<'_, PyAny>,
         smoothing: f64,
     ) -> PyResult<PyField> {
+        if self.inner.drifted {
+            let d = self.inner.transform.dim;
+            let n = self.inner.aligned_a.len() / d;
+            let moved = PyArray1::from_slice(py, &self.inner.aligned_a)
+                .reshape([n, d])
+                .expect("n × d reshape");
+            let pairs = (0..n)
+                .map(|i| MatchPair {
+                    a: i,
+                    b: i,
+                    cost: 0.0,
+                    excess: false,
+                })
+                .collect();
+            return crate::field_py::fit(py, a, moved.as_any(), pairs, smoothing);
+        }
         crate::field_py::fit(py, a, b, self.inner.pairs.clone(), smoothing)
     }
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {

@@ -111,3 +111,15 @@ def test_outline_images_on_b_after_the_drift_and_the_partners_otherwise(contours
     assert drifted.drifted and not plain.drifted
     assert pickle.loads(pickle.dumps(drifted)).drifted
     assert pymodal.match(a, b, ordered=False).outline_images is None
+
+
+def test_the_field_of_a_drifted_match_carries_a_to_its_moved_nodes(contours):
+    a, b = contours
+    drifted = pymodal.match(a, b, refine="coherent")
+    field = drifted.field(a, b)
+    np.testing.assert_allclose(field.apply(a), drifted.aligned_a, atol=1e-9 * np.abs(b).max())
+    assert np.array_equal(field.pairs, np.column_stack([np.arange(len(a))] * 2))
+    # Without the drift: the pairs' field, as before.
+    plain = pymodal.match(a, b, refine="affine")
+    one = plain.pairs[~plain.excess]
+    np.testing.assert_allclose(plain.field(a, b).apply(a[one[:, 0]]), b[one[:, 1]], atol=1e-9 * np.abs(b).max())
