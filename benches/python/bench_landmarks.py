@@ -25,7 +25,10 @@ goes to the point of B's outline at t of the way (along the outline, the shorter
 between the images of i and i+1. Nodes of A without a partner take the interpolation between their
 nearest neighbours that have one. Error: the distance from the carried point to B's landmark in B's
 mean point spacing. `pedomatch defaults, field` instead maps the landmark by the pair's
-thin-plate-spline field (Match.field) and projects the image onto B's outline.
+thin-plate-spline field (Match.field) and projects the image onto B's outline; `pedomatch
+defaults, outline images` reads each node's image from Match.outline_images (after the coherent
+drift the point of B's outline nearest the moved node, otherwise the partner node), with no
+post-processing of the benchmark's own.
 
 Peers: pycpd rigid then deformable, pycpd rigid alone (defaults, each shape centred and scaled to
 unit RMS radius first); shape context (5 log-radius x 12 angle bins, chi-square cost) with the
@@ -229,6 +232,22 @@ def pedomatch(projected=False, **kw):
     return run
 
 
+def pedomatch_images(**kw):
+    """pymodal.match's own images of A's nodes on B's outline (Match.outline_images: positions
+    j + t along B's numbering), as arc-length positions."""
+
+    def run(a, b):
+        import pymodal
+
+        m = pymodal.match(a.pts, b.pts, **kw)
+        at = np.asarray(m.outline_images)
+        j = np.floor(np.nan_to_num(at)).astype(int) % len(b.pts)
+        s = b.cum[j] + (at - np.floor(at)) * np.diff(b.cum)[j]  # NaN stays NaN
+        return carry(a, b, s)
+
+    return run
+
+
 def pedomatch_field(a, b):
     import pymodal
 
@@ -366,6 +385,7 @@ def main():
     methods = {
         "pedomatch defaults": pedomatch(),
         "pedomatch defaults, field": pedomatch_field,
+        "pedomatch defaults, outline images": pedomatch_images(),
         "pedomatch solver=hungarian": pedomatch(solver="hungarian"),
         "pedomatch solver=simplex": pedomatch(solver="simplex"),
         "pedomatch solver=ordered": pedomatch(solver="ordered"),

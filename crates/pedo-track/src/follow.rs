@@ -758,6 +758,8 @@ fn turned_round(m: &MatchResult) -> Option<MatchResult> {
         transform: m.transform,
         aligned_a: Vec::new(),
         crossings: m.crossings,
+        outline_images: None,
+        drifted: m.drifted,
     })
 }
 

@@ -529,6 +529,7 @@ fn in_whole_numbering(
         affinity: AffinityMatrix::new(rows, cols, data)?,
         pairs,
         aligned_a,
+        outline_images: None,
         ..r
     })
 }

@@ -163,6 +163,8 @@ impl PairMatch {
             transform: r.transform,
             aligned_a: Vec::new(),
             crossings: r.crossings,
+            outline_images: None,
+            drifted: r.drifted,
         };
         strip(&mut result);
         Ok(PairMatch {
@@ -179,6 +181,7 @@ impl PairMatch {
         self.result.affinity = no_affinity()?;
         self.result.aligned_a = Vec::new();
         self.result.local_pairs = Vec::new();
+        self.result.outline_images = None;
         strip(&mut self.result);
         Ok(())
     }

@@ -37,6 +37,15 @@ use crate::pickling::{Reader, Writer};
 ///     ``aligned_a`` (pre-alignment, then re-fits), homogeneous: ``aligned = (transform @
 ///     [x, y, 1])[:d]``, i.e. ``a @ transform[:d, :d].T + transform[:d, d]``.
 /// aligned_a : (n, d) float64 — a's nodes in b's frame as the search used them.
+/// outline_images : (n,) float64 or None — for two closed contours, where each node of a lands
+///     on b's outline, as a position along b's numbering: ``j + t`` is the point ``t`` of the way
+///     from node ``j`` to node ``j + 1`` (cyclically). After the coherent drift
+///     (``refine="coherent"``, and the default ``refine="auto"`` where it drifts) the point of
+///     b's outline nearest the node's moved position (``aligned_a``), finer than b's nodes;
+///     otherwise the node of its first pair (NaN: in no pair). None for other objects.
+/// drifted : bool — whether the coherent drift moved a's nodes (``refine="coherent"``, or
+///     ``refine="auto"`` on two outlines it takes for two specimens); ``aligned_a`` then holds
+///     the moved nodes.
 ///
 /// The arrays are read-only copies made at each access (``.copy()`` to change one). Matches
 /// pickle (``pickle``, ``multiprocessing``, Dask) and round-trip exactly: ``==`` compares
@@ -94,6 +103,9 @@ impl PyMatch {
         w.f64s(&r.aligned_a);
         w.bool(r.crossings.is_some())
             .usize(r.crossings.unwrap_or(0));
+        w.bool(r.outline_images.is_some())
+            .f64s(r.outline_images.as_deref().unwrap_or(&[]))
+            .bool(r.drifted);
         w
     }
 
@@ -125,6 +137,9 @@ impl PyMatch {
         let aligned_a = r.f64s()?;
         let counted = r.bool()?;
         let crossings = Some(r.usize()?).filter(|_| counted);
+        let imaged = r.bool()?;
+        let outline_images = Some(r.f64s()?).filter(|_| imaged);
+        let drifted = r.bool()?;
         r.finish()?;
         Ok(Self::from_result(MatchResult {
             pairs,
@@ -138,6 +153,8 @@ impl PyMatch {
             transform,
             aligned_a,
             crossings,
+            outline_images,
+            drifted,
         }))
     }
 }
@@ -217,6 +234,25 @@ impl PyMatch {
     fn crossings(&self) -> Option<usize> {
         self.inner.crossings
     }
+    /// (n,) float64 positions along b's numbering where a's nodes land on b's outline (``j + t``:
+    /// ``t`` of the way from node ``j`` to ``j + 1``): after the coherent drift the point nearest
+    /// each moved node, otherwise its first pair's node (NaN: in no pair); None unless both
+    /// objects are closed contours.
+    #[getter]
+    fn outline_images<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray1<f64>>>> {
+        self.inner
+            .outline_images
+            .as_deref()
+            .map(|v| read_only(PyArray1::from_slice(py, v)))
+            .transpose()
+    }
+    /// Whether the coherent drift moved a's nodes (``refine="coherent"``, or the default
+    /// ``refine="auto"`` on two outlines it takes for two specimens): ``aligned_a`` then holds
+    /// the moved nodes, which ``transform`` does not map to.
+    #[getter]
+    fn drifted(&self) -> bool {
+        self.inner.drifted
+    }
     /// Modes per object in the features.
     #[getter]
     fn n_modes(&self) -> usize {
@@ -258,7 +294,9 @@ impl PyMatch {
     /// The correspondence field of this match: a :class:`Field` fitted to its one-to-one pairs
     /// between ``a`` and ``b`` (the coordinates the match was made from), with ``smoothing`` λ.
     /// The excess pairs are left out: they match one node to several, and a map sends each
-    /// point to one place. Raises as :class:`Field` does.
+    /// point to one place. After the coherent drift (``drifted``) the field is fitted instead to
+    /// the drift's displacement of a's nodes: each node of ``a`` to its moved position
+    /// (``aligned_a``), so its ``pairs`` are ``(i, i)``. Raises as :class:`Field` does.
     #[pyo3(signature = (a, b, *, smoothing = 0.0))]
     fn field(
         &self,
@@ -267,6 +305,22 @@ impl PyMatch {
         b: &Bound<'_, PyAny>,
         smoothing: f64,
     ) -> PyResult<PyField> {
+        if self.inner.drifted {
+            let d = self.inner.transform.dim;
+            let n = self.inner.aligned_a.len() / d;
+            let moved = PyArray1::from_slice(py, &self.inner.aligned_a)
+                .reshape([n, d])
+                .expect("n × d reshape");
+            let pairs = (0..n)
+                .map(|i| MatchPair {
+                    a: i,
+                    b: i,
+                    cost: 0.0,
+                    excess: false,
+                })
+                .collect();
+            return crate::field_py::fit(py, a, moved.as_any(), pairs, smoothing);
+        }
         crate::field_py::fit(py, a, b, self.inner.pairs.clone(), smoothing)
     }
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {

@@ -81,3 +81,45 @@ def test_run_table_has_crossings():
     assert all(m.crossings == 0 for m in res["matches"])
     with pytest.raises(ValueError, match="closed contours"):
         pymodal.run(str(BUNDLED), frames=(40, 42), model="surface", solver="ordered")
+
+
+def test_outline_images_on_b_after_the_drift_and_the_partners_otherwise(contours):
+    a, b = contours
+    m = len(b)
+
+    def on_b(s):
+        j = np.floor(s).astype(int) % m
+        t = (s - np.floor(s))[:, None]
+        return b[j] + t * (b[(j + 1) % m] - b[j])
+
+    drifted = pymodal.match(a, b, refine="coherent")
+    img = drifted.outline_images
+    assert img.shape == (len(a),) and ((img >= 0) & (img < m)).all()
+    # Each image is the point of b's outline nearest the node's moved position (brute force).
+    dense = on_b(np.arange(m * 50) / 50.0)
+    nearest = np.sqrt(((drifted.aligned_a[:, None] - dense[None]) ** 2).sum(2)).min(1)
+    gap = np.linalg.norm(on_b(img) - drifted.aligned_a, axis=1)
+    assert (gap <= nearest + 1e-9).all()
+    assert np.array_equal(pickle.loads(pickle.dumps(drifted)).outline_images, img)
+    # Without the drift: the node of each one's first pair.
+    plain = pymodal.match(a, b, refine="affine")
+    first = {}
+    for i, j in plain.pairs[::-1]:
+        first[i] = j
+    assert all(plain.outline_images[i] == j for i, j in first.items())
+    # Only for two closed contours.
+    assert drifted.drifted and not plain.drifted
+    assert pickle.loads(pickle.dumps(drifted)).drifted
+    assert pymodal.match(a, b, ordered=False).outline_images is None
+
+
+def test_the_field_of_a_drifted_match_carries_a_to_its_moved_nodes(contours):
+    a, b = contours
+    drifted = pymodal.match(a, b, refine="coherent")
+    field = drifted.field(a, b)
+    np.testing.assert_allclose(field.apply(a), drifted.aligned_a, atol=1e-9 * np.abs(b).max())
+    assert np.array_equal(field.pairs, np.column_stack([np.arange(len(a))] * 2))
+    # Without the drift: the pairs' field, as before.
+    plain = pymodal.match(a, b, refine="affine")
+    one = plain.pairs[~plain.excess]
+    np.testing.assert_allclose(plain.field(a, b).apply(a[one[:, 0]]), b[one[:, 1]], atol=1e-9 * np.abs(b).max())

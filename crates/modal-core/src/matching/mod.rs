@@ -131,6 +131,7 @@ fn in_callers_terms(pair: &Pair<'_>, refined: Refined) -> MatchResult {
         kept,
         refits,
         solves,
+        drifted,
     } = refined;
     let affinity = kept.z.reindexed(&inverse(&sa.perm), &inverse(&sb.perm));
     let mut out: Vec<MatchPair> = kept
@@ -164,7 +165,21 @@ fn in_callers_terms(pair: &Pair<'_>, refined: Refined) -> MatchResult {
         aligned_a[sa.perm[t] * d..(sa.perm[t] + 1) * d].copy_from_slice(p);
     }
     let crossings = contour_crossings(pair.a.shape(), pair.b.shape(), &out);
+    let outline_images = crossings.map(|_| {
+        let b = pair.b.shape().coords();
+        if drifted {
+            outline_positions(&aligned_a, b, d)
+        } else {
+            let mut at = vec![f64::NAN; n];
+            for p in out.iter().rev() {
+                at[p.a] = p.b as f64;
+            }
+            at
+        }
+    });
     MatchResult {
+        outline_images,
+        drifted,
         crossings,
         pairs: out,
         affinity,
@@ -179,6 +194,41 @@ fn in_callers_terms(pair: &Pair<'_>, refined: Refined) -> MatchResult {
             .compose(&sa.to_normalized),
         aligned_a,
     }
+}
+
+/// The point of the closed outline `b` (row-major, `m × d`) nearest each of `q`, as a position
+/// `j + t` along `b`'s numbering (see [`MatchResult::outline_images`]).
+fn outline_positions(q: &[f64], b: &[f64], d: usize) -> Vec<f64> {
+    let m = b.len() / d;
+    q.chunks_exact(d)
+        .map(|p| {
+            let mut best = (f64::INFINITY, 0.0);
+            for j in 0..m {
+                let (s, e) = (
+                    &b[j * d..(j + 1) * d],
+                    &b[(j + 1) % m * d..((j + 1) % m + 1) * d],
+                );
+                let (mut dd, mut dp) = (0.0, 0.0);
+                for c in 0..d {
+                    dd += (e[c] - s[c]) * (e[c] - s[c]);
+                    dp += (p[c] - s[c]) * (e[c] - s[c]);
+                }
+                let t = if dd > 0.0 {
+                    (dp / dd).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                let d2: f64 = (0..d)
+                    .map(|c| (s[c] + t * (e[c] - s[c]) - p[c]).powi(2))
+                    .sum();
+                if d2 < best.0 {
+                    best = (d2, j as f64 + t);
+                }
+            }
+            // t = 1 is the next node itself.
+            best.1 % m as f64
+        })
+        .collect()
 }
 
 /// The crossed pairs of `pairs` (callers' numbering) when both objects are closed contours, each

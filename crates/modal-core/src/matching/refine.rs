@@ -69,6 +69,8 @@ pub(crate) struct Refined {
     pub kept: Iteration,
     pub refits: usize,
     pub solves: usize,
+    /// Whether the coherent drift moved A's nodes (its field was fitted).
+    pub drifted: bool,
 }
 
 /// Runs the passes from `start` until the pairs stop changing, one affine map explains them, or
@@ -137,15 +139,16 @@ pub(crate) fn refine(pair: &Pair<'_>, start: Start) -> Result<Refined, ModalErro
         refits += 1;
     }
     let kept = best.expect("at least one iteration ran");
-    let kept = match opts.refine {
-        Refine::Affine | Refine::Auto => kept,
-        Refine::Modal => super::deform::deform(pair, kept)?,
+    let (kept, drifted) = match opts.refine {
+        Refine::Affine | Refine::Auto => (kept, false),
+        Refine::Modal => (super::deform::deform(pair, kept)?, false),
         Refine::Coherent => super::coherent::coherent(pair, kept)?,
     };
     Ok(Refined {
         kept,
         refits,
         solves,
+        drifted,
     })
 }
 

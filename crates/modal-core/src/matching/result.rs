@@ -42,7 +42,8 @@ pub struct MatchResult {
     /// The affine map `x ↦ M x + t` from the first object's coordinates to the second's that
     /// produced the aligned coordinates of the kept iteration (pre-alignment, then re-fits), in
     /// the callers' units: `transform.apply(a.coords())` equals [`Self::aligned_a`] up to
-    /// rounding.
+    /// rounding, unless a non-rigid refinement moved the nodes on ([`Self::drifted`],
+    /// [`Refine::Modal`](super::Refine::Modal)).
     pub transform: Affine,
     /// The first object's nodes in the second's frame as the search used them (row-major,
     /// `n × dim`, the callers' node order and units).
@@ -52,6 +53,21 @@ pub struct MatchResult {
     /// count smallest ([`assign::cyclic_crossings`]); 0 exactly when the matches keep the
     /// contours' cyclic order, as the `ordered` solver's always do. `None` for other objects.
     pub crossings: Option<usize>,
+    /// When both objects are closed contours: where each node of the first object lands on the
+    /// second's outline, as a position along the second's node numbering: `j + t` (`j` a node,
+    /// `0 ≤ t < 1`) is the point `t` of the way from node `j` to node `j + 1` (node `m − 1` to
+    /// node 0 for `j = m − 1`). After the coherent drift ([`Refine::Coherent`](super::Refine::Coherent),
+    /// and [`Refine::Auto`](super::Refine::Auto) where it drifts) the point of the outline
+    /// nearest the node's moved position in [`Self::aligned_a`], a correspondence finer than the
+    /// nodes (docs/method.md §7.5); otherwise the node of its first pair (`t = 0`), NaN for a
+    /// node in no pair. `None` for other objects, and where a caller renumbers or drops the
+    /// details.
+    pub outline_images: Option<Vec<f64>>,
+    /// Whether the coherent drift moved the first object's nodes ([`Refine::Coherent`](super::Refine::Coherent),
+    /// and [`Refine::Auto`](super::Refine::Auto) for two outlines its gate takes for two
+    /// specimens): [`Self::aligned_a`] then holds the moved nodes, which [`Self::transform`]
+    /// does not map to.
+    pub drifted: bool,
 }
 
 impl MatchResult {
