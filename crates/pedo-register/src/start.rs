@@ -89,14 +89,7 @@ pub(crate) fn affine_start(template: &Template, map: Affine, smoothing: f64) -> 
         })
         .collect();
     let b = Shape::from_points_2d(&mapped, Topology::ClosedContour)?;
-    let pairs: Vec<MatchPair> = (0..mapped.len())
-        .map(|i| MatchPair {
-            a: i,
-            b: i,
-            cost: 0.0,
-            excess: false,
-        })
-        .collect();
+    let pairs = MatchPair::each_to_itself(mapped.len());
     Ok(Start {
         field: CorrespondenceField::fit(&a, &b, &pairs, smoothing)?,
         map,

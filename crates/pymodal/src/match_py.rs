@@ -311,14 +311,7 @@ impl PyMatch {
             let moved = PyArray1::from_slice(py, &self.inner.aligned_a)
                 .reshape([n, d])
                 .expect("n × d reshape");
-            let pairs = (0..n)
-                .map(|i| MatchPair {
-                    a: i,
-                    b: i,
-                    cost: 0.0,
-                    excess: false,
-                })
-                .collect();
+            let pairs = MatchPair::each_to_itself(n);
             return crate::field_py::fit(py, a, moved.as_any(), pairs, smoothing);
         }
         crate::field_py::fit(py, a, b, self.inner.pairs.clone(), smoothing)

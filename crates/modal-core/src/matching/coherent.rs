@@ -285,6 +285,19 @@ mod tests {
         [x + 0.1 * x * x, y * (1.0 + 0.1 * x)]
     }
 
+    /// A: `n` nodes of the curve; B: `m` nodes of the tapered curve from another start (0.37 of
+    /// a spacing on); and where the taper takes each node of A (the truth).
+    fn tapered_pair(n: usize, m: usize) -> (Vec<f64>, Vec<f64>, Vec<[f64; 2]>) {
+        let at =
+            |i: usize, k: usize, start: f64| (start + i as f64 / k as f64) * std::f64::consts::TAU;
+        let a = (0..n).flat_map(|i| curve(at(i, n, 0.0))).collect();
+        let b = (0..m)
+            .flat_map(|i| taper(curve(at(i, m, 0.37 / m as f64))))
+            .collect();
+        let truth = (0..n).map(|i| taper(curve(at(i, n, 0.0)))).collect();
+        (a, b, truth)
+    }
+
     #[test]
     fn drift_undoes_a_change_of_proportions_the_affine_match_slides_along() {
         // A: 96 nodes of the curve; B: 110 nodes of the tapered curve from another start. Each
@@ -294,13 +307,7 @@ mod tests {
         // (measured: mean 2.0, worst 21.5); the drift brings them to the floor of one node
         // spacing's sampling (mean 0.64, worst 1.86).
         let (n, m) = (96, 110);
-        let at =
-            |i: usize, k: usize, start: f64| (start + i as f64 / k as f64) * std::f64::consts::TAU;
-        let a: Vec<f64> = (0..n).flat_map(|i| curve(at(i, n, 0.0))).collect();
-        let b: Vec<f64> = (0..m)
-            .flat_map(|i| taper(curve(at(i, m, 0.37 / m as f64))))
-            .collect();
-        let truth: Vec<[f64; 2]> = (0..n).map(|i| taper(curve(at(i, n, 0.0)))).collect();
+        let (a, b, truth) = tapered_pair(n, m);
         let spacing = (0..m)
             .map(|j| {
                 let k = (j + 1) % m;
@@ -348,13 +355,7 @@ mod tests {
         // images lie nearer the true positions than the pairs' nodes (B's nodes sit 0.37 of a
         // spacing off them); without the drift each image is its pair's node.
         let (n, m) = (96, 110);
-        let at =
-            |i: usize, k: usize, start: f64| (start + i as f64 / k as f64) * std::f64::consts::TAU;
-        let a: Vec<f64> = (0..n).flat_map(|i| curve(at(i, n, 0.0))).collect();
-        let b: Vec<f64> = (0..m)
-            .flat_map(|i| taper(curve(at(i, m, 0.37 / m as f64))))
-            .collect();
-        let truth: Vec<[f64; 2]> = (0..n).map(|i| taper(curve(at(i, n, 0.0)))).collect();
+        let (a, b, truth) = tapered_pair(n, m);
         let on_b = |s: f64| {
             let (j, t) = (s.floor() as usize, s - s.floor());
             let k = (j + 1) % m;

@@ -18,6 +18,21 @@ pub struct MatchPair {
     pub excess: bool,
 }
 
+impl MatchPair {
+    /// Node `i` of the first object to node `i` of the second, for every `i < n`: the pairs of
+    /// points and their images (a field through a displacement rather than through matches).
+    pub fn each_to_itself(n: usize) -> Vec<MatchPair> {
+        (0..n)
+            .map(|i| MatchPair {
+                a: i,
+                b: i,
+                cost: 0.0,
+                excess: false,
+            })
+            .collect()
+    }
+}
+
 /// Outcome of [`match_shapes`](super::match_shapes).
 #[derive(Debug, Clone)]
 pub struct MatchResult {
