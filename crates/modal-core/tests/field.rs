@@ -5,18 +5,6 @@
 use modal_core::{CorrespondenceField, ErrorKind, MatchPair, ModalError, Shape, Side, Topology};
 use proptest::prelude::*;
 
-/// One-to-one pairs `i ↔ i` of `n` nodes.
-fn pairs(n: usize) -> Vec<MatchPair> {
-    (0..n)
-        .map(|i| MatchPair {
-            a: i,
-            b: i,
-            cost: 0.0,
-            excess: false,
-        })
-        .collect()
-}
-
 fn shape(p: &[[f64; 2]]) -> Shape {
     Shape::from_points_2d(p, Topology::None).unwrap()
 }
@@ -73,7 +61,13 @@ fn dist(p: [f64; 2], q: [f64; 2]) -> f64 {
 fn fitted(map: impl Fn([f64; 2]) -> [f64; 2], smoothing: f64) -> CorrespondenceField {
     let a = foot(150, 1.0);
     let b: Vec<[f64; 2]> = a.iter().map(|&p| map(p)).collect();
-    CorrespondenceField::fit(&shape(&a), &shape(&b), &pairs(150), smoothing).unwrap()
+    CorrespondenceField::fit(
+        &shape(&a),
+        &shape(&b),
+        &MatchPair::each_to_itself(150),
+        smoothing,
+    )
+    .unwrap()
 }
 
 /// Largest and RMS distance between `got` and `want`.
@@ -185,7 +179,7 @@ fn the_inverse_brings_points_back() {
 fn excess_pairs_are_left_out() {
     let a = foot(40, 1.0);
     let b: Vec<[f64; 2]> = a.iter().map(|&p| bend(STRONG)(p)).collect();
-    let mut with_excess = pairs(40);
+    let mut with_excess = MatchPair::each_to_itself(40);
     // An excess pair sending node 0 somewhere else entirely: ignored.
     with_excess.push(MatchPair {
         a: 0,
@@ -197,7 +191,7 @@ fn excess_pairs_are_left_out() {
     let field = CorrespondenceField::fit(&sa, &sb, &with_excess, 0.0).unwrap();
     assert_eq!(
         field,
-        CorrespondenceField::fit(&sa, &sb, &pairs(40), 0.0).unwrap()
+        CorrespondenceField::fit(&sa, &sb, &MatchPair::each_to_itself(40), 0.0).unwrap()
     );
     assert_eq!(field.pairs().len(), 40);
 }
@@ -252,9 +246,9 @@ fn degenerate_inputs_are_rejected_with_reasons() {
     let a = foot(20, 1.0);
     let b: Vec<[f64; 2]> = a.iter().map(|&p| bend(STRONG)(p)).collect();
     // Too few matches, excess pairs not counted.
-    let mut two = pairs(2);
+    let mut two = MatchPair::each_to_itself(2);
     two.extend(
-        pairs(10)
+        MatchPair::each_to_itself(10)
             .into_iter()
             .skip(2)
             .map(|p| MatchPair { excess: true, ..p }),
@@ -272,7 +266,7 @@ fn degenerate_inputs_are_rejected_with_reasons() {
     );
     // Collinear matched nodes, in A then in B.
     let line: Vec<[f64; 2]> = (0..20).map(|i| [i as f64, 2.0 * i as f64 + 1.0]).collect();
-    let e = fit_err(&line, &b, &pairs(20), 0.0);
+    let e = fit_err(&line, &b, &MatchPair::each_to_itself(20), 0.0);
     assert_eq!(e, ModalError::CollinearMatches { side: Side::A });
     assert!(
         e.to_string()
@@ -280,11 +274,11 @@ fn degenerate_inputs_are_rejected_with_reasons() {
         "{e}"
     );
     assert_eq!(
-        fit_err(&a, &line, &pairs(20), 1.0),
+        fit_err(&a, &line, &MatchPair::each_to_itself(20), 1.0),
         ModalError::CollinearMatches { side: Side::B }
     );
     // A node in two matches (many-to-one), and two nodes at one place.
-    let mut twice = pairs(20);
+    let mut twice = MatchPair::each_to_itself(20);
     twice[5].b = 4;
     let e = fit_err(&a, &b, &twice, 0.0);
     assert_eq!(
@@ -301,7 +295,7 @@ fn degenerate_inputs_are_rejected_with_reasons() {
     );
     let mut dup = a.clone();
     dup[9] = dup[3];
-    let e = fit_err(&dup, &b, &pairs(20), 0.0);
+    let e = fit_err(&dup, &b, &MatchPair::each_to_itself(20), 0.0);
     assert_eq!(
         e,
         ModalError::CoincidentMatches {
@@ -315,13 +309,13 @@ fn degenerate_inputs_are_rejected_with_reasons() {
         "{e}"
     );
     // All matched nodes at one place.
-    let e = fit_err(&[[1.0, 1.0]; 20], &b, &pairs(20), 0.0);
+    let e = fit_err(&[[1.0, 1.0]; 20], &b, &MatchPair::each_to_itself(20), 0.0);
     assert!(
         matches!(e, ModalError::CoincidentMatches { side: Side::A, .. }),
         "{e}"
     );
     // A node that does not exist.
-    let mut out = pairs(20);
+    let mut out = MatchPair::each_to_itself(20);
     out[6].a = 20;
     let e = fit_err(&a, &b, &out, 0.0);
     assert_eq!(
@@ -340,7 +334,7 @@ fn degenerate_inputs_are_rejected_with_reasons() {
     assert_eq!(e.kind(), ErrorKind::Input);
     // The smoothing weight.
     for bad in [-1.0, f64::NAN, f64::INFINITY] {
-        match fit_err(&a, &b, &pairs(20), bad) {
+        match fit_err(&a, &b, &MatchPair::each_to_itself(20), bad) {
             ModalError::Option(o) => assert_eq!(o.option, "smoothing"),
             other => panic!("expected an option error, got {other}"),
         }
@@ -353,7 +347,8 @@ fn degenerate_inputs_are_rejected_with_reasons() {
         )
         .unwrap()
     };
-    let e = CorrespondenceField::fit(&lift(&a), &lift(&b), &pairs(20), 0.0).unwrap_err();
+    let e = CorrespondenceField::fit(&lift(&a), &lift(&b), &MatchPair::each_to_itself(20), 0.0)
+        .unwrap_err();
     assert_eq!(e, ModalError::FieldDimension { dim: 3 });
     assert!(
         e.to_string().contains("maps the plane: got 3-D objects"),
@@ -398,13 +393,13 @@ proptest! {
                                                t in prop::array::uniform2(-50.0..50.0f64),
                                                smoothing in prop_oneof![Just(0.0), 0.0..100.0f64]) {
         let n = a.len();
-        let field = CorrespondenceField::fit(&shape(&a), &shape(&b), &pairs(n), 0.0).unwrap();
+        let field = CorrespondenceField::fit(&shape(&a), &shape(&b), &MatchPair::each_to_itself(n), 0.0).unwrap();
         prop_assert!(field.residuals().iter().all(|&r| r < 1e-9), "{:?}", field.residuals());
         // A well-conditioned linear part: the identity plus a perturbation of norm < 0.8.
         let lin = [[1.0 + 0.4 * m[0], 0.4 * m[1]], [0.4 * m[2], 1.0 + 0.4 * m[3]]];
         let map = |p: &[f64; 2]| [0, 1].map(|r| lin[r][0] * p[0] + lin[r][1] * p[1] + t[r]);
         let mapped: Vec<[f64; 2]> = a.iter().map(map).collect();
-        let field = CorrespondenceField::fit(&shape(&a), &shape(&mapped), &pairs(n), smoothing).unwrap();
+        let field = CorrespondenceField::fit(&shape(&a), &shape(&mapped), &MatchPair::each_to_itself(n), smoothing).unwrap();
         // Anywhere, not only at the nodes: the grid's box and beyond.
         let probe: Vec<[f64; 2]> = (0..50).map(|k| [k as f64 * 0.17 - 1.0, (k * 7 % 50) as f64 * 0.15 - 1.0]).collect();
         for (got, p) in field.apply(&probe).iter().zip(&probe) {
@@ -426,8 +421,13 @@ fn a_factored_spline_gives_the_fitted_field_for_every_set_of_values() {
         let spline = modal_core::FactoredSpline::new(&a, smoothing).unwrap();
         let basis = spline.basis(&inside);
         let b: Vec<[f64; 2]> = a.iter().map(|&p| map(p)).collect();
-        let field =
-            CorrespondenceField::fit(&shape(&a), &shape(&b), &pairs(a.len()), smoothing).unwrap();
+        let field = CorrespondenceField::fit(
+            &shape(&a),
+            &shape(&b),
+            &MatchPair::each_to_itself(a.len()),
+            smoothing,
+        )
+        .unwrap();
         let got = basis.apply(&spline.fit(&b).unwrap());
         let (worst, _) = errors(&got, &field.apply(&inside));
         assert!(worst < 1e-9, "λ {smoothing}: {worst:e} mm apart");
