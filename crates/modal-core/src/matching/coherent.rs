@@ -133,14 +133,8 @@ pub(crate) fn drift(x: &[f64], y: &[f64], d: usize) -> Option<Vec<f64>> {
                     rhs[c * k + a] += row[a] * target;
                 }
             }
-            if p1 > 0.0 {
-                for a in 0..k {
-                    for b in 0..=a {
-                        lhs[(a, b)] += p1 * row[a] * row[b];
-                    }
-                }
-            }
         }
+        super::drift_kernel::normal_matrix(&basis, k, row_sums, &mut lhs);
         for a in 0..k {
             lhs[(a, a)] += SMOOTHNESS * var / values[a];
             for b in 0..a {

@@ -113,6 +113,30 @@ impl Posterior {
     }
 }
 
+/// The maximisation step's matrix `Qᵀ diag(P1) Q` into the lower triangle of `lhs` (`k × k`, the
+/// rest left as it is), `basis` the kernel's leading eigenvectors (row-major `n × k`) and
+/// `row_sums` the posterior's `P1`; rows with `P1 = 0` add nothing. The same products and sums in
+/// the same order as an update of `lhs` entry by entry, in a plain buffer (faer's indexing
+/// computed each entry's address with a multiplication and a bounds check).
+pub(crate) fn normal_matrix(basis: &[f64], k: usize, row_sums: &[f64], lhs: &mut faer::Mat<f64>) {
+    let mut acc = vec![0.0; k * k];
+    for (row, &p1) in basis.chunks_exact(k).zip(row_sums) {
+        if p1 > 0.0 {
+            for (a, line) in acc.chunks_exact_mut(k).enumerate() {
+                let w = p1 * row[a];
+                for (v, &rb) in line[..=a].iter_mut().zip(row) {
+                    *v += w * rb;
+                }
+            }
+        }
+    }
+    for (a, line) in acc.chunks_exact(k).enumerate() {
+        for (b, &v) in line[..=a].iter().enumerate() {
+            lhs[(a, b)] = v;
+        }
+    }
+}
+
 /// One E-step of [`Posterior::update`] for `D`-dimensional nodes, run by [`dispatch`]: AVX-512
 /// in vector registers, every other unit by the plain loops of [`step_any`].
 struct Step<'a, const D: usize> {
@@ -247,6 +271,11 @@ fn step_avx512<const D: usize>(
             let at = b * LANES;
             let t = f._mm512_sub_pd(load(&post.p, i * mp + at), load(&post.col_near, at));
             let kept = f._mm512_cmp_pd_mask::<_CMP_LT_OQ>(t, negligible);
+            if kept == 0 {
+                // Late in the loop most blocks are negligible whole: no exponential, no sum.
+                store(&mut post.p, i * mp + at, f._mm512_setzero_pd());
+                continue;
+            }
             let e = f._mm512_maskz_mov_pd(kept, exp_neg_avx512(simd, t));
             store(&mut post.p, i * mp + at, e);
             let sums = f._mm512_add_pd(load(&post.col_inv, at), e);
@@ -432,6 +461,39 @@ mod tests {
             .map(|(t, g)| ((g - (-t).exp()) / (-t).exp()).abs())
             .fold(0.0, f64::max);
         assert!(worst < 4.0 * f64::EPSILON, "relative error {worst:e}");
+    }
+
+    #[test]
+    fn normal_matrix_is_the_entry_by_entry_update_bit_for_bit() {
+        let (n, k) = (37, 15);
+        let basis: Vec<f64> = (0..n * k).map(|v| (v as f64 * 0.731).sin()).collect();
+        let row_sums: Vec<f64> = (0..n)
+            .map(|i| {
+                if i % 5 == 0 {
+                    0.0
+                } else {
+                    1.0 + (i as f64).cos()
+                }
+            })
+            .collect();
+        let mut want = faer::Mat::<f64>::zeros(k, k);
+        for i in 0..n {
+            let (row, p1) = (&basis[i * k..(i + 1) * k], row_sums[i]);
+            if p1 > 0.0 {
+                for a in 0..k {
+                    for b in 0..=a {
+                        want[(a, b)] += p1 * row[a] * row[b];
+                    }
+                }
+            }
+        }
+        let mut got = faer::Mat::<f64>::zeros(k, k);
+        normal_matrix(&basis, k, &row_sums, &mut got);
+        for a in 0..k {
+            for b in 0..k {
+                assert_eq!(got[(a, b)].to_bits(), want[(a, b)].to_bits(), "({a}, {b})");
+            }
+        }
     }
 
     #[test]
