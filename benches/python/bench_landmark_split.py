@@ -12,7 +12,13 @@ Rows (median ms per pair over all pairs, over the pairs the gate drifts and over
   normalize start, drift          the start and the drift, with its ordered assignment
 So a drifted pair costs about "rotation search" + "normalize start, drift".
 
+With --ordered, also the order-preserving solver alone (pymodal.linear_sum_assignment,
+solver="ordered"), which assigns a drifted pair's moved nodes: on each pair's squared distances
+between the two outlines, each centred and scaled to unit RMS radius (the pairs' own unequal
+counts, 100-185 nodes), median ms per solve.
+
 Run:  python benches/python/bench_landmark_split.py --data DIR [--halves tuning] [--rounds 3]
+          [--ordered]
 """
 import argparse
 import os
@@ -41,6 +47,7 @@ def main():
     ap.add_argument("--halves", default="tuning")
     ap.add_argument("--pairs", type=int, default=12)
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--ordered", action="store_true", help="also time the ordered solver alone")
     args = ap.parse_args()
     if not args.data:
         print("bench_landmark_split skipped: give --data DIR (or set LANDMARK_DATA)")
@@ -68,6 +75,20 @@ def main():
                 for sel in (slice(None), drifted, ~drifted)
             ]
             print(f"| {name} | " + " | ".join(cells) + " |")
+        if args.ordered:
+            costs = []
+            for a, b in pairs:
+                na, nb = bl.normalise(a.pts)[0], bl.normalise(b.pts)[0]
+                costs.append(((na[:, None] - nb[None]) ** 2).sum(2))
+            runs = []
+            for _ in range(args.rounds):
+                t = []
+                for c in costs:
+                    t0 = time.perf_counter()
+                    pymodal.linear_sum_assignment(c, solver="ordered")
+                    t.append(time.perf_counter() - t0)
+                runs.append(np.median(t) * 1e3)
+            print("\nordered solver alone, median ms per solve: " + " / ".join(f"{r:.2f}" for r in runs))
 
 
 if __name__ == "__main__":
