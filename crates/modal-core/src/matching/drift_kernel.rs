@@ -1,7 +1,8 @@
 //! The coherent drift's expectation step (docs/method.md §7.5) in vector lanes: the `n × m`
 //! Gaussian responsibilities of A's moved nodes for B's nodes, normalised per column, and the
-//! sums the maximisation step reads. It is most of a drifted pair's time: about 30 steps of
-//! `n · m` exponentials (100–185 nodes a side on the landmark benchmark).
+//! sums the maximisation step reads, and that step's matrix. Done one entry at a time, the step
+//! was most of a drifted pair's time: about 30 steps of `n · m` exponentials (100–185 nodes a
+//! side on the landmark benchmark; BENCHMARKS.md, "A landmark pair's time").
 //!
 //! The plain loop takes the exponentials one at a time from the C library; on a CPU with AVX-512
 //! eight columns at a time go through one polynomial exponential (`exp_neg_avx512`, within a few
