@@ -5,7 +5,7 @@ use crate::output::{self, OutDir};
 use crate::CliError;
 use clap::Args;
 use modal_core::shape::looks_like_closed_contour;
-use modal_core::{Search, Shape, Topology};
+use modal_core::{MatchParams, Search, Shape, Topology};
 use pedo_output::figure::{FigureAxes, MatchFigure, ObjectLabel};
 use pedo_output::{FigureKinds, ReportFormat};
 use pedo_track::SenselAspect;
@@ -308,6 +308,87 @@ fn run_pair(args: &MatchArgs) -> Result<RunPair, CliError> {
     })
 }
 
+/// The result of a run of two frames: its match, every option as the run used it, and its search.
+type RunMatch = (
+    modal_core::MatchResult,
+    Vec<(&'static str, modal_core::OptionValue)>,
+    Search,
+);
+
+/// The two objects of a `match`, read (or taken from a run of two frames) and made shapes.
+struct LoadedPair {
+    oa: Object,
+    ob: Object,
+    a: Shape,
+    b: Shape,
+    ordered: bool,
+    /// The run's match of the pair, when the two frames were matched as a run matches them.
+    from_run: Option<RunMatch>,
+}
+
+impl LoadedPair {
+    fn load(args: &MatchArgs, settings: Settings) -> Result<Self, CliError> {
+        let (oa, ob, from_run) = if settings == Settings::Run {
+            let p = run_pair(args)?;
+            (p.oa, p.ob, Some((p.result, p.used, p.search)))
+        } else {
+            let oa = load_object(&args.a, args.frame, args)?;
+            let ob = load_object(&args.b, args.frame_b.unwrap_or(args.frame), args)?;
+            (oa, ob, None)
+        };
+        warn_if_no_frames(&oa, &args.a, args.frame, "--frame");
+        let flag_b = if args.frame_b.is_some() {
+            "--frame-b"
+        } else {
+            "--frame"
+        };
+        warn_if_no_frames(&ob, &args.b, args.frame_b.unwrap_or(args.frame), flag_b);
+        let ordered = tri_state(args.ordered, args.no_ordered);
+        let (a, b, ordered) = with_topology(oa.points.clone(), ob.points.clone(), ordered)?;
+        warn_if_same(&a, &b, args);
+        if a.dim() != b.dim() {
+            return Err(CliError::Runtime(format!(
+                "{} has {}-D points but {} has {}-D points",
+                args.a.display(),
+                a.dim(),
+                args.b.display(),
+                b.dim()
+            )));
+        }
+        Ok(Self {
+            oa,
+            ob,
+            a,
+            b,
+            ordered,
+            from_run,
+        })
+    }
+
+    /// The pair's match: the run's, or the defaults of two objects (the setting
+    /// `pymodal.match` picks for them).
+    fn matched(&mut self, params: &MatchParams) -> Result<RunMatch, CliError> {
+        if let Some(matched) = self.from_run.take() {
+            return Ok(matched);
+        }
+        let mut o = params.to_match_options(self.a.dim(), self.ordered)?;
+        o.ordered = Some(self.ordered);
+        // Two frames of one sensor are matched in its true proportions, as `run` matches them.
+        let aspect = match (self.oa.frame(), self.ob.frame()) {
+            (Some(_), Some(_)) if self.oa.pitch_mm == self.ob.pitch_mm => {
+                SenselAspect::of_pitch(self.oa.pitch_mm)
+            }
+            _ => SenselAspect::SQUARE,
+        };
+        let r = aspect.back(modal_core::match_shapes(
+            aspect.shape(&self.a)?.as_ref(),
+            aspect.shape(&self.b)?.as_ref(),
+            &o,
+        )?);
+        Ok((r, params.used(&o), o.search))
+    }
+}
+
 pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let started = Instant::now();
     let params = args.modal.params();
@@ -321,78 +402,80 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
                 .into(),
         ));
     }
-    let oa;
-    let ob;
-    let mut from_run = None;
-    if settings == Settings::Run {
-        let p = run_pair(&args)?;
-        (oa, ob) = (p.oa, p.ob);
-        from_run = Some((p.result, p.used, p.search));
-    } else {
-        oa = load_object(&args.a, args.frame, &args)?;
-        ob = load_object(&args.b, args.frame_b.unwrap_or(args.frame), &args)?;
-    }
-    warn_if_no_frames(&oa, &args.a, args.frame, "--frame");
-    let flag_b = if args.frame_b.is_some() {
-        "--frame-b"
-    } else {
-        "--frame"
-    };
-    warn_if_no_frames(&ob, &args.b, args.frame_b.unwrap_or(args.frame), flag_b);
+    let mut pair = LoadedPair::load(&args, settings)?;
     let read_time = started.elapsed().as_secs_f64();
-    let ordered = tri_state(args.ordered, args.no_ordered);
-    let (a, b, ordered) = with_topology(oa.points.clone(), ob.points.clone(), ordered)?;
-    warn_if_same(&a, &b, &args);
-    if a.dim() != b.dim() {
-        return Err(CliError::Runtime(format!(
-            "{} has {}-D points but {} has {}-D points",
-            args.a.display(),
-            a.dim(),
-            args.b.display(),
-            b.dim()
-        )));
-    }
     let t_match = Instant::now();
-    let (r, used, search) = match from_run {
-        Some(matched) => matched,
-        None => {
-            // The same setting `pymodal.match` picks for these objects (unordered 3-D points:
-            // surfaces).
-            let mut o = params.to_match_options(a.dim(), ordered)?;
-            o.ordered = Some(ordered);
-            // Two frames of one sensor are matched in its true proportions, as `run` matches
-            // them.
-            let aspect = match (oa.frame(), ob.frame()) {
-                (Some(_), Some(_)) if oa.pitch_mm == ob.pitch_mm => {
-                    SenselAspect::of_pitch(oa.pitch_mm)
-                }
-                _ => SenselAspect::SQUARE,
-            };
-            let r = aspect.back(modal_core::match_shapes(
-                aspect.shape(&a)?.as_ref(),
-                aspect.shape(&b)?.as_ref(),
-                &o,
-            )?);
-            (r, params.used(&o), o.search)
-        }
-    };
+    let (r, used, search) = pair.matched(&params)?;
     // The run's matching is timed with its objects (read time included).
     let match_time = t_match.elapsed().as_secs_f64();
-    let rows = r.pairs.iter().map(|p| {
-        vec![
-            p.a.to_string(),
-            p.b.to_string(),
-            format!("{:.6}", p.cost),
-            (p.excess as u8).to_string(),
-        ]
-    });
-    let table = output::csv_table(&["node_a", "node_b", "cost", "excess"], rows);
+    let mut summary = match_summary(&args, settings, &pair, (&r, &used, search));
+    summary["timings_s"] = serde_json::json!({ "read": read_time, "matching": match_time });
+    let table = output::csv_table(
+        &["node_a", "node_b", "cost", "excess"],
+        r.pairs.iter().map(|p| {
+            vec![
+                p.a.to_string(),
+                p.b.to_string(),
+                format!("{:.6}", p.cost),
+                (p.excess as u8).to_string(),
+            ]
+        }),
+    );
+    if let Some(dir) = &args.out {
+        write_match_folder(dir, &args, &pair, &r, (&table, &summary))?;
+    }
+    let counts = format!(
+        "{} × {} nodes: {} local, {} {}, {} excess matches ({} settings: {})",
+        pair.a.len(),
+        pair.b.len(),
+        r.local_count(),
+        r.one_to_one_count(),
+        if search == Search::Best {
+            "best (many-to-one)"
+        } else {
+            "one-to-one"
+        },
+        r.excess_count(),
+        settings.name(),
+        settings.reason()
+    );
+    if args.json {
+        let mut s = summary;
+        s["pairs"] = r
+            .pairs
+            .iter()
+            .map(|p| serde_json::json!({"node_a": p.a, "node_b": p.b, "cost": p.cost, "excess": p.excess}))
+            .collect();
+        out!("{}", output::pretty(&s)?);
+    } else if let Some(out) = &args.out {
+        outln!("{counts}");
+        outln!("results in {}", output::folder_text(out));
+    } else {
+        out!("{table}");
+        eprintln!("{counts}");
+    }
+    Ok(())
+}
+
+/// `match.json` (without timings): the inputs, the settings and every option as used, and the
+/// match's counts.
+fn match_summary(
+    args: &MatchArgs,
+    settings: Settings,
+    pair: &LoadedPair,
+    (r, used, search): (
+        &modal_core::MatchResult,
+        &[(&str, modal_core::OptionValue)],
+        Search,
+    ),
+) -> serde_json::Value {
+    let (oa, ob) = (&pair.oa, &pair.ob);
     let used: serde_json::Map<String, serde_json::Value> = used
         .iter()
         .map(|(k, v)| (k.to_string(), pedo_output::option_json(v)))
-        .chain([("ordered".to_string(), serde_json::json!(ordered))])
+        .chain([("ordered".to_string(), serde_json::json!(pair.ordered))])
         .collect();
-    let summary = serde_json::json!({
+    serde_json::json!({
         "pedomatch_version": env!("CARGO_PKG_VERSION"),
         "a": args.a.display().to_string(), "b": args.b.display().to_string(),
         "frame_a": oa.frame(), "frame_b": ob.frame(),
@@ -403,67 +486,41 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         "options": used,
         "search": search.to_string(),
         "matches": r.pairs.len(),
-        "nodes_a": a.len(), "nodes_b": b.len(),
+        "nodes_a": pair.a.len(), "nodes_b": pair.b.len(),
         "local_matches": r.local_count(), "optimisation_matches": r.one_to_one_count(),
         "excess_matches": r.excess_count(), "crossings": r.crossings,
         "n_modes": r.n_modes, "refits": r.refits,
         "unmatched_a": r.unmatched_a, "unmatched_b": r.unmatched_b,
-        "timings_s": { "read": read_time, "matching": match_time },
-    });
-    let with_pairs = || {
-        let mut s = summary.clone();
-        s["pairs"] = r
-            .pairs
-            .iter()
-            .map(|p| serde_json::json!({"node_a": p.a, "node_b": p.b, "cost": p.cost, "excess": p.excess}))
-            .collect();
-        s
+    })
+}
+
+/// `--out DIR`: matches.csv, match.json, the figure and the report, committed whole or not at all.
+fn write_match_folder(
+    dir: &Path,
+    args: &MatchArgs,
+    pair: &LoadedPair,
+    r: &modal_core::MatchResult,
+    (table, summary): (&str, &serde_json::Value),
+) -> Result<(), CliError> {
+    let outputs = args.outputs.params();
+    let dir = OutDir::create(dir)?;
+    dir.write("matches.csv", table.as_bytes())?;
+    dir.write("match.json", output::pretty(summary)?.as_bytes())?;
+    let figure = MatchFigureInput {
+        args,
+        shapes: (&pair.a, &pair.b),
+        objects: (&pair.oa, &pair.ob),
     };
-    if let Some(dir) = &args.out {
-        let outputs = args.outputs.params();
-        let dir = OutDir::create(dir)?;
-        dir.write("matches.csv", table.as_bytes())?;
-        dir.write("match.json", output::pretty(&summary)?.as_bytes())?;
-        let figure = MatchFigureInput {
-            args: &args,
-            shapes: (&a, &b),
-            objects: (&oa, &ob),
-        };
-        write_match_figure(
-            &dir,
-            &figure,
-            &r.pairs,
-            FigureKinds::of(outputs.figures, outputs.figure_format),
-        )?;
-        if outputs.report == ReportFormat::Html {
-            write_match_report(&dir, &figure, &r, &summary)?;
-        }
-        dir.commit()?;
+    write_match_figure(
+        &dir,
+        &figure,
+        &r.pairs,
+        FigureKinds::of(outputs.figures, outputs.figure_format),
+    )?;
+    if outputs.report == ReportFormat::Html {
+        write_match_report(&dir, &figure, r, summary)?;
     }
-    let primary = if search == Search::Best {
-        "best (many-to-one)"
-    } else {
-        "one-to-one"
-    };
-    let counts = format!(
-        "{} × {} nodes: {} local, {} {primary}, {} excess matches ({} settings: {})",
-        a.len(),
-        b.len(),
-        r.local_count(),
-        r.one_to_one_count(),
-        r.excess_count(),
-        settings.name(),
-        settings.reason()
-    );
-    if args.json {
-        out!("{}", output::pretty(&with_pairs())?);
-    } else if let Some(out) = &args.out {
-        outln!("{counts}");
-        outln!("results in {}", output::folder_text(out));
-    } else {
-        out!("{table}");
-        eprintln!("{counts}");
-    }
+    dir.commit()?;
     Ok(())
 }
 

@@ -591,6 +591,42 @@ pub fn regions_csv(
     csv
 }
 
+/// `regions.csv` as a [`Table`] (its columns; values to 6 decimals), what a run returns without
+/// a folder: the fixed regions' rows, then the moving regions' when they were carried. `feet`
+/// (a recording of both feet apart) adds the first column `foot`, with or without rows.
+pub fn region_values_table(
+    m: &Measures,
+    values: &[RegionValues],
+    moving: Option<&[RegionValues]>,
+    feet: bool,
+) -> Table {
+    let mut header: Vec<String> = ["region", "measure", "value", "unit", "kind"]
+        .map(String::from)
+        .to_vec();
+    if feet {
+        header.insert(0, "foot".to_string());
+    }
+    let mut rows = Vec::new();
+    let kinds = [("fixed", Some(values)), ("moving", moving)];
+    for (kind, values) in kinds.into_iter().filter_map(|(k, v)| Some((k, v?))) {
+        for q in region_quantities(m, values) {
+            let mut row = Vec::with_capacity(header.len());
+            if feet {
+                row.push(Cell::Text(q.foot.unwrap_or_default().into()));
+            }
+            row.extend([
+                Cell::Text(q.region),
+                Cell::Text(q.measure.to_string()),
+                Cell::Float(q.value, 6),
+                Cell::Text(q.unit),
+                Cell::Text(kind.to_string()),
+            ]);
+            rows.push(row);
+        }
+    }
+    Table { header, rows }
+}
+
 /// `regions.json`: the rule (or `"masks"` for the user's), the label of each region in `regions.npy`, the foot's axis and
 /// side, the bounds used and each region's values; or, when the footprint could not be
 /// divided, why.

@@ -241,31 +241,7 @@ fn run_recording<'py>(
     dict.set_item("matches", matches)?;
     dict.set_item("reference_matches", reference_matches(py, &result)?)?;
     dict.set_item("objects", objects(py, &rec, &result)?)?;
-    let tracks = PyList::empty(py);
-    // Each track's steps as (object id, node): the object (an index into `objects`) says which
-    // frame, object and isobaric level a step is on, as tracks.csv's object_id and node.
-    let track_steps = PyList::empty(py);
-    for t in &result.tracks {
-        let ids: Vec<i64> = t
-            .steps
-            .iter()
-            .flat_map(|&(o, n)| [o as i64, n as i64])
-            .collect();
-        track_steps.append(PyArray1::from_vec(py, ids).reshape([t.steps.len(), 2])?)?;
-        let pts = result.track_points(t);
-        let width = 1 + pts.first().map_or(2, |(_, p)| p.len());
-        let flat: Vec<f64> = pts
-            .iter()
-            .flat_map(|(f, p)| std::iter::once(*f as f64).chain(p.iter().copied()))
-            .collect();
-        tracks.append(PyArray1::from_vec(py, flat).reshape([pts.len(), width])?)?;
-    }
-    dict.set_item("tracks", tracks)?;
-    dict.set_item("track_steps", track_steps)?;
-    let trips: Vec<f64> = (0..result.tracks.len())
-        .map(|k| result.track_round_trip(k).unwrap_or(f64::NAN))
-        .collect();
-    dict.set_item("track_round_trips", PyArray1::from_vec(py, trips))?;
+    set_tracks(py, &dict, &result)?;
     set_points(py, &dict, &result, points.as_ref(), &options.inputs)?;
     let (start, end) = options.frames.unwrap_or((0, rec.n_frames()));
     let threshold = options.contour.preprocess.threshold.unwrap_or(0.0);
@@ -275,77 +251,19 @@ fn run_recording<'py>(
         pedo_io::measures::Measures::of_recording(&rec, threshold, start..end)
     })
     .map_err(to_py)?;
-    let mut regions = match &points {
-        Some(p) if !options.inputs.regions.is_empty() => pedo_output::regions_table(
-            &rec,
-            &|o| result.objects[o].frame,
-            p,
-            &options.inputs,
-            threshold,
-        )
-        .map_err(to_py)?,
-        _ => pedo_output::Table::default(),
-    };
-    // The regions of region_rule or masks: fixed and carried through the stances (contour
-    // model), their rows after the user's regions, their values as regions.csv's rows.
-    let mut values = pedo_output::Table {
-        header: ["region", "measure", "value", "unit", "kind"]
-            .map(String::from)
-            .to_vec(),
-        rows: Vec::new(),
-    };
-    if !rec.feet.is_empty() {
-        // Each foot's regions, as regions.csv has them.
-        values.header.insert(0, "foot".to_string());
-    }
-    let mut fixed_values = None;
-    if let Some(asked) = pedo_output::regions_asked(&outputs, &rec).map_err(to_py)? {
-        let anatomy = crate::pool::detach_cancellable(py, &cancel, || {
-            // A footprint that cannot be divided has no regions (regions.json says why).
-            let Ok((masks, fixed)) = pedo_output::recording_regions(&rec, &m, threshold, asked)
-            else {
-                return Ok(None);
-            };
-            // Carried through the stances by the contour field (each foot's through its own):
-            // this run's, or for a surface or isocontour run the contour run of its frames.
-            let field = pedo_output::moving_regions::carrying_options(&params, &rec, &options)?;
-            let run = (options.model == pedo_track::ObjectModel::Contour).then_some(&result);
-            let moving = Some(pedo_output::moving_regions::follow_anatomy(
-                &rec, run, &field, &m, &masks, &fixed,
-            )?);
-            Ok::<_, pedo_io::IoError>(Some((masks, fixed, moving)))
-        })?
-        .map_err(to_py)?;
-        if let Some((masks, fixed, moving)) = anatomy {
-            if let Some(a) = &moving {
-                if regions.header.is_empty() {
-                    regions = pedo_output::region_series_header(&rec);
-                }
-                pedo_output::moving_regions::anatomy_rows(&mut regions, &rec, &masks, a, threshold)
-                    .map_err(to_py)?;
-            }
-            let moving = moving.as_ref().map(|a| &a.values);
-            let kinds = [("fixed", Some(&fixed)), ("moving", moving)];
-            for (kind, v) in kinds.into_iter().filter_map(|(k, v)| Some((k, v?))) {
-                for q in pedo_output::region_quantities(&m, v) {
-                    let foot = q.foot.unwrap_or_default();
-                    let mut row: Vec<pedo_output::Cell> = (rec.feet.first())
-                        .map(|_| pedo_output::Cell::Text(foot.into()))
-                        .into_iter()
-                        .collect();
-                    row.extend([
-                        pedo_output::Cell::Text(q.region),
-                        pedo_output::Cell::Text(q.measure.to_string()),
-                        pedo_output::Cell::Float(q.value, 6),
-                        pedo_output::Cell::Text(q.unit),
-                        pedo_output::Cell::Text(kind.to_string()),
-                    ]);
-                    values.rows.push(row);
-                }
-            }
-            fixed_values = Some(fixed);
-        }
-    }
+    let (regions, values, fixed_values) = region_tables(
+        py,
+        &cancel,
+        RunHeld {
+            rec: &rec,
+            params: &params,
+            options: &options,
+            result: &result,
+        },
+        (&m, threshold),
+        points.as_ref(),
+        &outputs,
+    )?;
     // The stance-normalised curves, with each fixed region's as curves.csv has them.
     let curves = pedo_output::curves_table(&rec, &m, fixed_values.as_deref());
     dict.set_item("curves", table_rows(py, &curves)?)?;
@@ -378,6 +296,119 @@ fn run_recording<'py>(
     timings.set_item("tracks", result.timings.tracks.as_secs_f64())?;
     dict.set_item("timings", timings)?;
     Ok(dict)
+}
+
+/// `tracks` (per track, its rows `frame, x, y[, z]`), `track_steps` (per track, its steps as
+/// rows `object id, node`: the object, an index into `objects`, says which frame, object and
+/// isobaric level a step is on, as tracks.csv's `object_id` and `node`) and `track_round_trips`.
+fn set_tracks(
+    py: Python<'_>,
+    dict: &Bound<'_, PyDict>,
+    result: &pedo_track::SequenceResult,
+) -> PyResult<()> {
+    let tracks = PyList::empty(py);
+    let track_steps = PyList::empty(py);
+    for t in &result.tracks {
+        let ids: Vec<i64> = t
+            .steps
+            .iter()
+            .flat_map(|&(o, n)| [o as i64, n as i64])
+            .collect();
+        track_steps.append(PyArray1::from_vec(py, ids).reshape([t.steps.len(), 2])?)?;
+        let pts = result.track_points(t);
+        let width = 1 + pts.first().map_or(2, |(_, p)| p.len());
+        let flat: Vec<f64> = pts
+            .iter()
+            .flat_map(|(f, p)| std::iter::once(*f as f64).chain(p.iter().copied()))
+            .collect();
+        tracks.append(PyArray1::from_vec(py, flat).reshape([pts.len(), width])?)?;
+    }
+    dict.set_item("tracks", tracks)?;
+    dict.set_item("track_steps", track_steps)?;
+    let trips: Vec<f64> = (0..result.tracks.len())
+        .map(|k| result.track_round_trip(k).unwrap_or(f64::NAN))
+        .collect();
+    dict.set_item("track_round_trips", PyArray1::from_vec(py, trips))?;
+    Ok(())
+}
+
+/// A run held whole: its recording, its parameters and options, and its result.
+struct RunHeld<'a> {
+    rec: &'a pedo_io::Recording,
+    params: &'a pedo_track::RunParams,
+    options: &'a pedo_track::SequenceOptions,
+    result: &'a pedo_track::SequenceResult,
+}
+
+/// `region_series` (the user's regions followed, then the anatomical regions carried through
+/// the stances), `regions` (regions.csv's rows: fixed, then moving) and the fixed regions'
+/// values (for `curves`), as a run's folder has them. The anatomical regions are those of
+/// `region_rule` or `masks`, carried by the contour field (each foot's through its own): this
+/// run's, or for a surface or isocontour run the contour run of its frames. A footprint that
+/// cannot be divided has no regions (a folder's regions.json says why).
+#[allow(clippy::type_complexity)]
+fn region_tables(
+    py: Python<'_>,
+    cancel: &Cancel,
+    run: RunHeld<'_>,
+    (m, threshold): (&pedo_io::measures::Measures, f64),
+    points: Option<&pedo_track::follow::FollowedPoints>,
+    outputs: &pedo_output::RunOutputs,
+) -> PyResult<(
+    pedo_output::Table,
+    pedo_output::Table,
+    Option<Vec<pedo_io::regions::RegionValues>>,
+)> {
+    let RunHeld {
+        rec,
+        params,
+        options,
+        result,
+    } = run;
+    let mut series = match points {
+        Some(p) if !options.inputs.regions.is_empty() => pedo_output::regions_table(
+            rec,
+            &|o| result.objects[o].frame,
+            p,
+            &options.inputs,
+            threshold,
+        )
+        .map_err(to_py)?,
+        _ => pedo_output::Table::default(),
+    };
+    let feet = !rec.feet.is_empty();
+    let Some(asked) = pedo_output::regions_asked(outputs, rec).map_err(to_py)? else {
+        return Ok((
+            series,
+            pedo_output::region_values_table(m, &[], None, feet),
+            None,
+        ));
+    };
+    let anatomy = crate::pool::detach_cancellable(py, cancel, || {
+        let Ok((masks, fixed)) = pedo_output::recording_regions(rec, m, threshold, asked) else {
+            return Ok(None);
+        };
+        let field = pedo_output::moving_regions::carrying_options(params, rec, options)?;
+        let run = (options.model == pedo_track::ObjectModel::Contour).then_some(result);
+        let moving =
+            pedo_output::moving_regions::follow_anatomy(rec, run, &field, m, &masks, &fixed)?;
+        Ok::<_, pedo_io::IoError>(Some((masks, fixed, moving)))
+    })?
+    .map_err(to_py)?;
+    let Some((masks, fixed, moving)) = anatomy else {
+        return Ok((
+            series,
+            pedo_output::region_values_table(m, &[], None, feet),
+            None,
+        ));
+    };
+    if series.header.is_empty() {
+        series = pedo_output::region_series_header(rec);
+    }
+    pedo_output::moving_regions::anatomy_rows(&mut series, rec, &masks, &moving, threshold)
+        .map_err(to_py)?;
+    let values = pedo_output::region_values_table(m, &fixed, Some(&moving.values), feet);
+    Ok((series, values, Some(fixed)))
 }
 
 /// The material points of a contour run ([`pedo_track::follow`]) as `points` (per point, its
