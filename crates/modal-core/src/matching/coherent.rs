@@ -47,9 +47,6 @@ const MAX_STEPS: usize = 100;
 /// `prealign = normalize`); 10⁻² takes 29 and carried the landmarks as well (0.445 / 0.701 / 0.929
 /// against 0.439 / 0.701 / 0.925 within 1 / 2 / 5 spacings).
 const VARIANCE_TOLERANCE: f64 = 1e-2;
-/// Responsibilities below `e^-NEGLIGIBLE` of their column's largest are left at 0 (no
-/// exponential is taken): 36 is below the round-off of the column's sum.
-const NEGLIGIBLE: f64 = 36.0;
 
 /// The gate of [`Refine::Auto`](super::Refine::Auto): two outlines whose root-mean-square
 /// distance after the rotation search's outline fit (each node of either outline to the other
@@ -112,69 +109,15 @@ pub(crate) fn drift(x: &[f64], y: &[f64], d: usize) -> Option<Vec<f64>> {
     if !(var.is_finite() && var > 0.0) {
         return None;
     }
-    let mut p = vec![0.0; n * m];
-    let mut row_sums = vec![0.0; n];
-    let mut col_sums = vec![0.0; m];
-    let mut col_near = vec![0.0; m];
-    let mut col_mass = vec![0.0; m];
-    let mut pulled = vec![0.0; n * d];
+    let mut post = super::drift_kernel::Posterior::new(y, d, n, None);
     let mut lhs = Mat::<f64>::zeros(k, k);
     let mut rhs = vec![0.0; k * d];
-    let y_sq: Vec<f64> = y
-        .chunks_exact(d)
-        .map(|q| q.iter().map(|v| v * v).sum())
-        .collect();
     for _ in 0..MAX_STEPS {
-        // E-step: the posterior of each node of A having produced each node of B. Each column is
-        // normalised, so its exponents are taken relative to its nearest node of A (no column
-        // underflows), and those below e^-NEGLIGIBLE of it are left at 0 (no exponential taken).
-        col_near.fill(f64::INFINITY);
-        for i in 0..n {
-            let a = &moved[i * d..(i + 1) * d];
-            for j in 0..m {
-                let d2: f64 = (0..d).map(|c| (a[c] - y[j * d + c]).powi(2)).sum();
-                p[i * m + j] = d2;
-                col_near[j] = col_near[j].min(d2);
-            }
-        }
-        let scale = 1.0 / (2.0 * var);
-        col_sums.fill(0.0);
-        for i in 0..n {
-            for j in 0..m {
-                let t = (p[i * m + j] - col_near[j]) * scale;
-                let e = if t < NEGLIGIBLE { (-t).exp() } else { 0.0 };
-                p[i * m + j] = e;
-                col_sums[j] += e;
-            }
-        }
-        for v in &mut col_sums {
-            *v = if *v > 0.0 { 1.0 / *v } else { 0.0 };
-        }
-        let mut total = 0.0;
-        let mut y_term = 0.0;
-        col_mass.fill(0.0);
-        for i in 0..n {
-            let mut s = 0.0;
-            let pull = &mut pulled[i * d..(i + 1) * d];
-            pull.fill(0.0);
-            for j in 0..m {
-                let e = p[i * m + j];
-                if e == 0.0 {
-                    continue;
-                }
-                let pij = e * col_sums[j];
-                s += pij;
-                col_mass[j] += pij;
-                for c in 0..d {
-                    pull[c] += pij * y[j * d + c];
-                }
-            }
-            row_sums[i] = s;
-            total += s;
-        }
-        for j in 0..m {
-            y_term += col_mass[j] * y_sq[j];
-        }
+        // E-step: the posterior of each node of A having produced each node of B (see
+        // drift_kernel.rs: each column normalised, its negligible entries left at 0).
+        post.update(&moved, var);
+        let (row_sums, pulled) = (&post.row_sums, &post.pulled);
+        let (total, y_term) = (post.total, post.y_term);
         if !(total.is_finite() && total > 1e-12) {
             return None;
         }
@@ -190,14 +133,8 @@ pub(crate) fn drift(x: &[f64], y: &[f64], d: usize) -> Option<Vec<f64>> {
                     rhs[c * k + a] += row[a] * target;
                 }
             }
-            if p1 > 0.0 {
-                for a in 0..k {
-                    for b in 0..=a {
-                        lhs[(a, b)] += p1 * row[a] * row[b];
-                    }
-                }
-            }
         }
+        super::drift_kernel::normal_matrix(&basis, k, row_sums, &mut lhs);
         for a in 0..k {
             lhs[(a, a)] += SMOOTHNESS * var / values[a];
             for b in 0..a {

@@ -18,6 +18,7 @@
 
 mod coherent;
 mod deform;
+mod drift_kernel;
 pub mod excess;
 pub mod features;
 mod first_phase;
