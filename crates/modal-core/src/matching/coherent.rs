@@ -109,7 +109,7 @@ pub(crate) fn drift(x: &[f64], y: &[f64], d: usize) -> Option<Vec<f64>> {
     if !(var.is_finite() && var > 0.0) {
         return None;
     }
-    let mut post = super::drift_kernel::Posterior::new(y, d, n, None);
+    let mut post = super::drift_kernel::Posterior::new(y, d, n);
     let mut lhs = Mat::<f64>::zeros(k, k);
     let mut rhs = vec![0.0; k * d];
     for _ in 0..MAX_STEPS {

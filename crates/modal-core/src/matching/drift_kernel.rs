@@ -34,8 +34,6 @@ pub(crate) struct Posterior {
     ys: Vec<f64>,
     /// `|y_j|²` (0 for the padding).
     y_sq: Vec<f64>,
-    /// The exponents added to each responsibility's, `n × mp` (0 for the padding), if any.
-    prior: Option<Vec<f64>>,
     /// Exponents, then responsibilities before the column weights, `n × mp`.
     p: Vec<f64>,
     col_near: Vec<f64>,
@@ -52,9 +50,8 @@ pub(crate) struct Posterior {
 }
 
 impl Posterior {
-    /// Buffers for `n` nodes of A against the nodes `y` (row-major, `m × d`); `prior`, when
-    /// given (row-major `n × m`), is added to each responsibility's exponent.
-    pub(crate) fn new(y: &[f64], d: usize, n: usize, prior: Option<&[f64]>) -> Self {
+    /// Buffers for `n` nodes of A against the nodes `y` (row-major, `m × d`).
+    pub(crate) fn new(y: &[f64], d: usize, n: usize) -> Self {
         let m = y.len() / d;
         let mp = m.div_ceil(LANES) * LANES;
         let mut ys = vec![FAR; d * mp];
@@ -65,13 +62,6 @@ impl Posterior {
             }
             y_sq[j] = q.iter().map(|v| v * v).sum();
         }
-        let prior = prior.map(|pr| {
-            let mut padded = vec![0.0; n * mp];
-            for i in 0..n {
-                padded[i * mp..i * mp + m].copy_from_slice(&pr[i * m..(i + 1) * m]);
-            }
-            padded
-        });
         Self {
             d,
             n,
@@ -79,7 +69,6 @@ impl Posterior {
             mp,
             ys,
             y_sq,
-            prior,
             p: vec![0.0; n * mp],
             col_near: vec![0.0; mp],
             col_inv: vec![0.0; mp],
@@ -173,7 +162,7 @@ fn step_any(post: &mut Posterior, moved: &[f64], scale: f64) {
             let d2: f64 = (0..d)
                 .map(|c| (moved[i * d + c] - post.ys[c * mp + j]).powi(2))
                 .sum();
-            let t = d2 * scale + post.prior.as_ref().map_or(0.0, |pr| pr[i * mp + j]);
+            let t = d2 * scale;
             post.p[i * mp + j] = t;
             post.col_near[j] = post.col_near[j].min(t);
         }
@@ -256,10 +245,7 @@ fn step_avx512<const D: usize>(
                 let v = f._mm512_sub_pd(*a, load(&post.ys, c * mp + at));
                 d2 = f._mm512_add_pd(d2, f._mm512_mul_pd(v, v));
             }
-            let mut t = f._mm512_mul_pd(d2, scale_v);
-            if let Some(pr) = &post.prior {
-                t = f._mm512_add_pd(t, load(pr, i * mp + at));
-            }
+            let t = f._mm512_mul_pd(d2, scale_v);
             store(&mut post.p, i * mp + at, t);
             let near = f._mm512_min_pd(t, load(&post.col_near, at));
             store(&mut post.col_near, at, near);
@@ -369,13 +355,7 @@ mod tests {
     use super::*;
 
     /// The plain E-step (the loop of coherent.rs before the lanes), as the oracle.
-    fn plain(
-        moved: &[f64],
-        y: &[f64],
-        d: usize,
-        var: f64,
-        prior: Option<&[f64]>,
-    ) -> (Vec<f64>, Vec<f64>, f64, f64) {
+    fn plain(moved: &[f64], y: &[f64], d: usize, var: f64) -> (Vec<f64>, Vec<f64>, f64, f64) {
         let (n, m) = (moved.len() / d, y.len() / d);
         let scale = 1.0 / (2.0 * var);
         let mut p = vec![0.0; n * m];
@@ -385,7 +365,7 @@ mod tests {
                 let d2: f64 = (0..d)
                     .map(|c| (moved[i * d + c] - y[j * d + c]).powi(2))
                     .sum();
-                let t = d2 * scale + prior.map_or(0.0, |p| p[i * m + j]);
+                let t = d2 * scale;
                 p[i * m + j] = t;
                 near[j] = near[j].min(t);
             }
@@ -499,39 +479,33 @@ mod tests {
 
     #[test]
     fn every_unit_gives_the_plain_steps_sums() {
-        // Counts on and off whole lanes, 2-D, 3-D and 4-D, with and without a prior, and a
+        // Counts on and off whole lanes, 2-D, 3-D and 4-D, and a
         // variance small enough that most responsibilities are skipped; the dispatched kernel
         // (AVX-512 where the CPU has it) and the loops every other unit runs.
         for (d, n, m) in [(2, 97, 110), (2, 8, 16), (2, 5, 3), (3, 40, 33), (4, 12, 9)] {
             for var in [1.0, 0.02, 1e-4] {
-                for with_prior in [false, true] {
-                    let x = nodes(n, d, 0.0);
-                    let y = nodes(m, d, 0.21);
-                    let prior: Vec<f64> = (0..n * m).map(|k| (k % 7) as f64 * 0.3).collect();
-                    let prior = with_prior.then_some(prior.as_slice());
-                    let (rows, pulled, total, y_term) = plain(&x, &y, d, var, prior);
-                    for dispatched in [true, false] {
-                        let mut post = Posterior::new(&y, d, n, prior);
-                        if dispatched {
-                            post.update(&x, var);
-                        } else {
-                            step_any(&mut post, &x, 1.0 / (2.0 * var));
-                        }
-                        let close = |a: f64, b: f64| (a - b).abs() <= 1e-13 * (1.0 + b.abs());
-                        let at = format!(
-                            "d {d}, n {n}, m {m}, var {var}, prior {with_prior}, {dispatched}"
-                        );
-                        assert!(close(post.total, total), "{at}: {} {total}", post.total);
-                        assert!(close(post.y_term, y_term), "{at}: {} {y_term}", post.y_term);
-                        for (a, b) in post.row_sums.iter().zip(&rows) {
-                            assert!(close(*a, *b), "{at}: row {a} {b}");
-                        }
-                        for (a, b) in post.pulled.iter().zip(&pulled) {
-                            assert!(close(*a, *b), "{at}: pulled {a} {b}");
-                        }
-                        // Every column holds a mass of one.
-                        assert!((total - m as f64).abs() < 1e-9, "{at}: {total}");
+                let x = nodes(n, d, 0.0);
+                let y = nodes(m, d, 0.21);
+                let (rows, pulled, total, y_term) = plain(&x, &y, d, var);
+                for dispatched in [true, false] {
+                    let mut post = Posterior::new(&y, d, n);
+                    if dispatched {
+                        post.update(&x, var);
+                    } else {
+                        step_any(&mut post, &x, 1.0 / (2.0 * var));
                     }
+                    let close = |a: f64, b: f64| (a - b).abs() <= 1e-13 * (1.0 + b.abs());
+                    let at = format!("d {d}, n {n}, m {m}, var {var}, {dispatched}");
+                    assert!(close(post.total, total), "{at}: {} {total}", post.total);
+                    assert!(close(post.y_term, y_term), "{at}: {} {y_term}", post.y_term);
+                    for (a, b) in post.row_sums.iter().zip(&rows) {
+                        assert!(close(*a, *b), "{at}: row {a} {b}");
+                    }
+                    for (a, b) in post.pulled.iter().zip(&pulled) {
+                        assert!(close(*a, *b), "{at}: pulled {a} {b}");
+                    }
+                    // Every column holds a mass of one.
+                    assert!((total - m as f64).abs() < 1e-9, "{at}: {total}");
                 }
             }
         }
