@@ -7,10 +7,12 @@
 //! The plain loop takes the exponentials one at a time from the C library; on a CPU with AVX-512
 //! eight columns at a time go through one polynomial exponential (`exp_neg_avx512`, within a few
 //! units in the last place of the library's), B's coordinates stored coordinate by coordinate
-//! (structure of arrays, padded to a multiple of eight nodes). The sums are taken in lanes, so
-//! they differ from the plain loop's in the last bits only; `tests` compare the two. Other CPUs
-//! run the plain loop on the same buffers. (Lane arrays left to the auto-vectoriser, one body for
-//! every unit, stayed scalar and took longer than the plain loop.)
+//! (structure of arrays, padded to a multiple of eight nodes); on a CPU with AVX2 (and FMA) but
+//! not AVX-512, four columns at a time through the same polynomial (`exp_neg_avx2`), each block
+//! of eight as two halves. The sums are taken in lanes, so they differ from the plain loop's in
+//! the last bits only; `tests` compare each unit the CPU has with the plain loop. CPUs without
+//! AVX2 run the plain loop on the same buffers. (Lane arrays left to the auto-vectoriser, one
+//! body for every unit, stayed scalar and took longer than the plain loop.)
 
 use crate::simd::{dispatch, Kernel};
 
@@ -128,7 +130,7 @@ pub(crate) fn normal_matrix(basis: &[f64], k: usize, row_sums: &[f64], lhs: &mut
 }
 
 /// One E-step of [`Posterior::update`] for `D`-dimensional nodes, run by [`dispatch`]: AVX-512
-/// in vector registers, every other unit by the plain loops of [`step_any`].
+/// and AVX2 in vector registers, the baseline by the plain loops of [`step_any`].
 struct Step<'a, const D: usize> {
     post: &'a mut Posterior,
     moved: &'a [f64],
@@ -144,8 +146,8 @@ impl<const D: usize> Kernel for Step<'_, D> {
     }
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn avx2(self, _: pulp::x86::V3) {
-        step_any(self.post, self.moved, self.scale)
+    fn avx2(self, simd: pulp::x86::V3) {
+        step_avx2::<D>(simd, self.post, self.moved, self.scale)
     }
     #[inline(always)]
     fn baseline(self) {
@@ -203,7 +205,7 @@ fn step_any(post: &mut Posterior, moved: &[f64], scale: f64) {
 }
 
 #[cfg(target_arch = "x86_64")]
-use std::arch::x86_64::{__m512d, _CMP_LT_OQ};
+use std::arch::x86_64::{__m256d, __m512d, _CMP_LT_OQ};
 
 /// The `LANES` entries of `s` from `at` in a register.
 #[cfg(target_arch = "x86_64")]
@@ -331,6 +333,136 @@ fn exp_neg_avx512(simd: pulp::x86::V4, t: __m512d) -> __m512d {
     f._mm512_mul_pd(p, two_k)
 }
 
+/// Columns in one AVX2 register: each block of [`LANES`] is taken as two of these halves.
+#[cfg(target_arch = "x86_64")]
+const HALF: usize = 4;
+
+/// The `HALF` entries of `s` from `at` in a register.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn load4(s: &[f64], at: usize) -> __m256d {
+    let v: [f64; HALF] = s[at..at + HALF].try_into().expect("whole lanes");
+    pulp::cast(v)
+}
+
+/// Stores `v` into the `HALF` entries of `s` from `at`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn store4(s: &mut [f64], at: usize, v: __m256d) {
+    let v: [f64; HALF] = pulp::cast(v);
+    s[at..at + HALF].copy_from_slice(&v);
+}
+
+/// The sum of the four lanes of `v`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn sum4(v: __m256d) -> f64 {
+    let v: [f64; HALF] = pulp::cast(v);
+    (v[0] + v[1]) + (v[2] + v[3])
+}
+
+/// [`step_avx512`] in four-lane AVX2 registers (each block of eight columns as two halves): the
+/// exponentials by [`exp_neg_avx2`], the sums in lanes.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn step_avx2<const D: usize>(simd: pulp::x86::V3, post: &mut Posterior, moved: &[f64], scale: f64) {
+    let a = simd.avx;
+    let (n, m, mp) = (post.n, post.m, post.mp);
+    let halves = mp / HALF;
+    let scale_v = a._mm256_set1_pd(scale);
+    post.col_near.fill(f64::INFINITY);
+    for i in 0..n {
+        let x: [__m256d; D] = std::array::from_fn(|c| a._mm256_set1_pd(moved[i * D + c]));
+        for h in 0..halves {
+            let at = h * HALF;
+            let mut d2 = a._mm256_setzero_pd();
+            for (c, x) in x.iter().enumerate() {
+                let v = a._mm256_sub_pd(*x, load4(&post.ys, c * mp + at));
+                d2 = a._mm256_add_pd(d2, a._mm256_mul_pd(v, v));
+            }
+            let t = a._mm256_mul_pd(d2, scale_v);
+            store4(&mut post.p, i * mp + at, t);
+            let near = a._mm256_min_pd(t, load4(&post.col_near, at));
+            store4(&mut post.col_near, at, near);
+        }
+    }
+    let negligible = a._mm256_set1_pd(NEGLIGIBLE);
+    post.col_inv.fill(0.0);
+    for i in 0..n {
+        for h in 0..halves {
+            let at = h * HALF;
+            let t = a._mm256_sub_pd(load4(&post.p, i * mp + at), load4(&post.col_near, at));
+            let kept = a._mm256_cmp_pd::<_CMP_LT_OQ>(t, negligible);
+            if a._mm256_movemask_pd(kept) == 0 {
+                // Late in the loop most halves are negligible whole: no exponential, no sum.
+                store4(&mut post.p, i * mp + at, a._mm256_setzero_pd());
+                continue;
+            }
+            let e = a._mm256_and_pd(kept, exp_neg_avx2(simd, t));
+            store4(&mut post.p, i * mp + at, e);
+            let sums = a._mm256_add_pd(load4(&post.col_inv, at), e);
+            store4(&mut post.col_inv, at, sums);
+        }
+    }
+    for (j, s) in post.col_inv.iter_mut().enumerate() {
+        *s = if j < m && *s > 0.0 { 1.0 / *s } else { 0.0 };
+    }
+    let mut total = 0.0;
+    let mut y_term = a._mm256_setzero_pd();
+    for i in 0..n {
+        let mut s = a._mm256_setzero_pd();
+        let mut pull = [a._mm256_setzero_pd(); D];
+        for h in 0..halves {
+            let at = h * HALF;
+            let pij = a._mm256_mul_pd(load4(&post.p, i * mp + at), load4(&post.col_inv, at));
+            s = a._mm256_add_pd(s, pij);
+            y_term = a._mm256_add_pd(y_term, a._mm256_mul_pd(pij, load4(&post.y_sq, at)));
+            for (c, pull) in pull.iter_mut().enumerate() {
+                *pull = a._mm256_add_pd(*pull, a._mm256_mul_pd(pij, load4(&post.ys, c * mp + at)));
+            }
+        }
+        let s = sum4(s);
+        post.row_sums[i] = s;
+        total += s;
+        for (c, pull) in pull.iter().enumerate() {
+            post.pulled[i * D + c] = sum4(*pull);
+        }
+    }
+    post.total = total;
+    post.y_term = sum4(y_term);
+}
+
+/// [`exp_neg_avx512`] in four AVX2 lanes: the same reduction, polynomial, clamp and `2^k`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn exp_neg_avx2(simd: pulp::x86::V3, t: __m256d) -> __m256d {
+    const LN2_HI: f64 = 6.931_471_803_691_238e-1;
+    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
+    // 1.5 · 2^52: adding it rounds to an integer held in the low bits of the mantissa.
+    const SHIFT: f64 = 6_755_399_441_055_744.0;
+    let (a, f, i) = (simd.avx, simd.fma, simd.avx2);
+    // Clamped so that 2^k stays a normal number (k ≥ −1010); such lanes are not read.
+    let x = a._mm256_sub_pd(
+        a._mm256_setzero_pd(),
+        a._mm256_min_pd(t, a._mm256_set1_pd(700.0)),
+    );
+    let shift = a._mm256_set1_pd(SHIFT);
+    let shifted = f._mm256_fmadd_pd(x, a._mm256_set1_pd(std::f64::consts::LOG2_E), shift);
+    let k = a._mm256_sub_pd(shifted, shift);
+    let r = f._mm256_fnmadd_pd(k, a._mm256_set1_pd(LN2_HI), x);
+    let r = f._mm256_fnmadd_pd(k, a._mm256_set1_pd(LN2_LO), r);
+    let mut p = a._mm256_set1_pd(TAYLOR[13]);
+    for c in TAYLOR[..13].iter().rev() {
+        p = f._mm256_fmadd_pd(p, r, a._mm256_set1_pd(*c));
+    }
+    // k's two's complement sits in the low mantissa bits of `shifted`.
+    let ki = i._mm256_sub_epi64(a._mm256_castpd_si256(shifted), a._mm256_castpd_si256(shift));
+    let two_k = a._mm256_castsi256_pd(
+        i._mm256_slli_epi64::<52>(i._mm256_add_epi64(ki, a._mm256_set1_epi64x(1023))),
+    );
+    a._mm256_mul_pd(p, two_k)
+}
+
 /// `1 / i!` for `i = 0 … 13`.
 #[cfg(target_arch = "x86_64")]
 const TAYLOR: [f64; 14] = [
@@ -411,9 +543,7 @@ mod tests {
     #[test]
     #[cfg(target_arch = "x86_64")]
     fn exp_neg_is_the_library_exp_within_a_few_ulps() {
-        let Some(simd) = pulp::x86::V4::try_new() else {
-            return;
-        };
+        // Each lane width this CPU has, called explicitly (dispatch takes the widest only).
         struct Exp(Vec<f64>);
         impl crate::simd::Kernel for Exp {
             type Output = Vec<f64>;
@@ -427,21 +557,40 @@ mod tests {
                     })
                     .collect()
             }
-            fn avx2(self, _: pulp::x86::V3) -> Vec<f64> {
-                unreachable!()
+            #[inline(always)]
+            fn avx2(self, simd: pulp::x86::V3) -> Vec<f64> {
+                self.0
+                    .chunks_exact(HALF)
+                    .flat_map(|c| {
+                        let v: [f64; HALF] = pulp::cast(exp_neg_avx2(simd, load4(c, 0)));
+                        v
+                    })
+                    .collect()
             }
             fn baseline(self) -> Vec<f64> {
                 unreachable!()
             }
         }
         let t: Vec<f64> = (0..36 * 8000).map(|k| k as f64 / 8000.0).collect();
-        let got = crate::simd::on_avx512(simd, Exp(t.clone()));
-        let worst = t
-            .iter()
-            .zip(&got)
-            .map(|(t, g)| ((g - (-t).exp()) / (-t).exp()).abs())
-            .fold(0.0, f64::max);
-        assert!(worst < 4.0 * f64::EPSILON, "relative error {worst:e}");
+        let mut runs = Vec::new();
+        if let Some(simd) = pulp::x86::V4::try_new() {
+            runs.push(("avx512", crate::simd::on_avx512(simd, Exp(t.clone()))));
+        }
+        if let Some(simd) = pulp::x86::V3::try_new() {
+            runs.push(("avx2", crate::simd::on_avx2(simd, Exp(t.clone()))));
+        }
+        for (unit, got) in runs {
+            assert_eq!(got.len(), t.len(), "{unit}");
+            let worst = t
+                .iter()
+                .zip(&got)
+                .map(|(t, g)| ((g - (-t).exp()) / (-t).exp()).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                worst < 4.0 * f64::EPSILON,
+                "{unit}: relative error {worst:e}"
+            );
+        }
     }
 
     #[test]
@@ -481,21 +630,27 @@ mod tests {
     fn every_unit_gives_the_plain_steps_sums() {
         // Counts on and off whole lanes, 2-D, 3-D and 4-D, and a
         // variance small enough that most responsibilities are skipped; the dispatched kernel
-        // (AVX-512 where the CPU has it) and the loops every other unit runs.
+        // (AVX-512 where the CPU has it), the AVX2 kernel called explicitly where the CPU has
+        // AVX2 (dispatch would not pick it on an AVX-512 CPU), and the loops of the baseline.
         for (d, n, m) in [(2, 97, 110), (2, 8, 16), (2, 5, 3), (3, 40, 33), (4, 12, 9)] {
             for var in [1.0, 0.02, 1e-4] {
                 let x = nodes(n, d, 0.0);
                 let y = nodes(m, d, 0.21);
                 let (rows, pulled, total, y_term) = plain(&x, &y, d, var);
-                for dispatched in [true, false] {
+                for unit in ["dispatched", "avx2", "plain"] {
                     let mut post = Posterior::new(&y, d, n);
-                    if dispatched {
-                        post.update(&x, var);
-                    } else {
-                        step_any(&mut post, &x, 1.0 / (2.0 * var));
+                    let scale = 1.0 / (2.0 * var);
+                    match unit {
+                        "dispatched" => post.update(&x, var),
+                        "avx2" => {
+                            if !step_on_avx2(&mut post, &x, scale) {
+                                continue;
+                            }
+                        }
+                        _ => step_any(&mut post, &x, scale),
                     }
                     let close = |a: f64, b: f64| (a - b).abs() <= 1e-13 * (1.0 + b.abs());
-                    let at = format!("d {d}, n {n}, m {m}, var {var}, {dispatched}");
+                    let at = format!("d {d}, n {n}, m {m}, var {var}, {unit}");
                     assert!(close(post.total, total), "{at}: {} {total}", post.total);
                     assert!(close(post.y_term, y_term), "{at}: {} {y_term}", post.y_term);
                     for (a, b) in post.row_sums.iter().zip(&rows) {
@@ -509,5 +664,21 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// One E-step by the AVX2 kernel (the plain loops for dimensions other than 2 and 3, as
+    /// [`Posterior::update`] does); false where the CPU has no AVX2.
+    fn step_on_avx2(post: &mut Posterior, moved: &[f64], scale: f64) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(simd) = pulp::x86::V3::try_new() {
+            match post.d {
+                2 => crate::simd::on_avx2(simd, Step::<2> { post, moved, scale }),
+                3 => crate::simd::on_avx2(simd, Step::<3> { post, moved, scale }),
+                _ => step_any(post, moved, scale),
+            }
+            return true;
+        }
+        let _ = (post, moved, scale);
+        false
     }
 }
