@@ -122,7 +122,7 @@ pub(crate) fn drift(x: &[f64], y: &[f64], d: usize) -> Option<Vec<f64>> {
             return None;
         }
         // M-step: (Qᵀ diag(P1) Q + λσ² Λ⁻¹) C = Qᵀ (P Y − diag(P1) X), moved = X + Q C.
-        lhs.fill(0.0);
+        // `lhs` is rewritten whole: its lower triangle by `normal_matrix`, its upper mirrored below.
         rhs.fill(0.0);
         for i in 0..n {
             let row = &basis[i * k..(i + 1) * k];

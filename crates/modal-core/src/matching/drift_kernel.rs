@@ -142,12 +142,12 @@ impl<const D: usize> Kernel for Step<'_, D> {
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     fn avx512(self, simd: pulp::x86::V4) {
-        step_avx512::<D>(simd, self.post, self.moved, self.scale)
+        step_lanes::<_, D>(simd, self.post, self.moved, self.scale)
     }
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     fn avx2(self, simd: pulp::x86::V3) {
-        step_avx2::<D>(simd, self.post, self.moved, self.scale)
+        step_lanes::<_, D>(simd, self.post, self.moved, self.scale)
     }
     #[inline(always)]
     fn baseline(self) {
@@ -207,96 +207,190 @@ fn step_any(post: &mut Posterior, moved: &[f64], scale: f64) {
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::{__m256d, __m512d, _CMP_LT_OQ};
 
-/// The `LANES` entries of `s` from `at` in a register.
+/// The operations of the E-step on one register of the unit `Self` (a pulp token): eight lanes
+/// on AVX-512, four on AVX2 (each block of [`LANES`] columns as two registers). Both units run
+/// [`step_lanes`], the same operations in the same order lane by lane.
 #[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn load(s: &[f64], at: usize) -> __m512d {
-    let v: [f64; LANES] = s[at..at + LANES].try_into().expect("whole lanes");
-    pulp::cast(v)
+trait Lanes: Copy {
+    /// Lanes in one register (a divisor of [`LANES`]).
+    const WIDTH: usize;
+    type V: Copy;
+    fn splat(self, v: f64) -> Self::V;
+    /// The `WIDTH` entries of `s` from `at`.
+    fn load(self, s: &[f64], at: usize) -> Self::V;
+    /// Stores `v` into the `WIDTH` entries of `s` from `at`.
+    fn store(self, s: &mut [f64], at: usize, v: Self::V);
+    fn add(self, a: Self::V, b: Self::V) -> Self::V;
+    fn sub(self, a: Self::V, b: Self::V) -> Self::V;
+    fn mul(self, a: Self::V, b: Self::V) -> Self::V;
+    fn min(self, a: Self::V, b: Self::V) -> Self::V;
+    /// `exp(−t)` in the lanes where `t < limit`, 0 in the others; `None` when no lane is.
+    fn exp_neg_below(self, t: Self::V, limit: Self::V) -> Option<Self::V>;
+    /// The sum of the lanes.
+    fn sum(self, v: Self::V) -> f64;
 }
 
-/// Stores `v` into the `LANES` entries of `s` from `at`.
+/// [`step_any`] in the registers of `unit`: the exponentials by its polynomial (see
+/// [`exp_neg_avx512`]), the sums in lanes.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn store(s: &mut [f64], at: usize, v: __m512d) {
-    let v: [f64; LANES] = pulp::cast(v);
-    s[at..at + LANES].copy_from_slice(&v);
-}
-
-/// [`step_any`] in eight-lane AVX-512 registers: the exponentials by [`exp_neg_avx512`], the
-/// sums in lanes.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn step_avx512<const D: usize>(
-    simd: pulp::x86::V4,
-    post: &mut Posterior,
-    moved: &[f64],
-    scale: f64,
-) {
-    let f = simd.avx512f;
-    let (n, m, mp) = (post.n, post.m, post.mp);
-    let blocks = mp / LANES;
-    let scale_v = f._mm512_set1_pd(scale);
+fn step_lanes<L: Lanes, const D: usize>(unit: L, post: &mut Posterior, moved: &[f64], scale: f64) {
+    let (n, m, mp, w) = (post.n, post.m, post.mp, L::WIDTH);
+    let scale_v = unit.splat(scale);
     post.col_near.fill(f64::INFINITY);
     for i in 0..n {
-        let a: [__m512d; D] = std::array::from_fn(|c| f._mm512_set1_pd(moved[i * D + c]));
-        for b in 0..blocks {
-            let at = b * LANES;
-            let mut d2 = f._mm512_setzero_pd();
+        let a: [L::V; D] = std::array::from_fn(|c| unit.splat(moved[i * D + c]));
+        for at in (0..mp).step_by(w) {
+            let mut d2 = unit.splat(0.0);
             for (c, a) in a.iter().enumerate() {
-                let v = f._mm512_sub_pd(*a, load(&post.ys, c * mp + at));
-                d2 = f._mm512_add_pd(d2, f._mm512_mul_pd(v, v));
+                let v = unit.sub(*a, unit.load(&post.ys, c * mp + at));
+                d2 = unit.add(d2, unit.mul(v, v));
             }
-            let t = f._mm512_mul_pd(d2, scale_v);
-            store(&mut post.p, i * mp + at, t);
-            let near = f._mm512_min_pd(t, load(&post.col_near, at));
-            store(&mut post.col_near, at, near);
+            let t = unit.mul(d2, scale_v);
+            unit.store(&mut post.p, i * mp + at, t);
+            let near = unit.min(t, unit.load(&post.col_near, at));
+            unit.store(&mut post.col_near, at, near);
         }
     }
-    let negligible = f._mm512_set1_pd(NEGLIGIBLE);
+    let negligible = unit.splat(NEGLIGIBLE);
     post.col_inv.fill(0.0);
     for i in 0..n {
-        for b in 0..blocks {
-            let at = b * LANES;
-            let t = f._mm512_sub_pd(load(&post.p, i * mp + at), load(&post.col_near, at));
-            let kept = f._mm512_cmp_pd_mask::<_CMP_LT_OQ>(t, negligible);
-            if kept == 0 {
-                // Late in the loop most blocks are negligible whole: no exponential, no sum.
-                store(&mut post.p, i * mp + at, f._mm512_setzero_pd());
+        for at in (0..mp).step_by(w) {
+            let t = unit.sub(
+                unit.load(&post.p, i * mp + at),
+                unit.load(&post.col_near, at),
+            );
+            let Some(e) = unit.exp_neg_below(t, negligible) else {
+                // Late in the loop most registers are negligible whole: no exponential, no sum.
+                unit.store(&mut post.p, i * mp + at, unit.splat(0.0));
                 continue;
-            }
-            let e = f._mm512_maskz_mov_pd(kept, exp_neg_avx512(simd, t));
-            store(&mut post.p, i * mp + at, e);
-            let sums = f._mm512_add_pd(load(&post.col_inv, at), e);
-            store(&mut post.col_inv, at, sums);
+            };
+            unit.store(&mut post.p, i * mp + at, e);
+            let sums = unit.add(unit.load(&post.col_inv, at), e);
+            unit.store(&mut post.col_inv, at, sums);
         }
     }
     for (j, s) in post.col_inv.iter_mut().enumerate() {
         *s = if j < m && *s > 0.0 { 1.0 / *s } else { 0.0 };
     }
     let mut total = 0.0;
-    let mut y_term = f._mm512_setzero_pd();
+    let mut y_term = unit.splat(0.0);
     for i in 0..n {
-        let mut s = f._mm512_setzero_pd();
-        let mut pull = [f._mm512_setzero_pd(); D];
-        for b in 0..blocks {
-            let at = b * LANES;
-            let pij = f._mm512_mul_pd(load(&post.p, i * mp + at), load(&post.col_inv, at));
-            s = f._mm512_add_pd(s, pij);
-            y_term = f._mm512_add_pd(y_term, f._mm512_mul_pd(pij, load(&post.y_sq, at)));
+        let mut s = unit.splat(0.0);
+        let mut pull = [unit.splat(0.0); D];
+        for at in (0..mp).step_by(w) {
+            let pij = unit.mul(
+                unit.load(&post.p, i * mp + at),
+                unit.load(&post.col_inv, at),
+            );
+            s = unit.add(s, pij);
+            y_term = unit.add(y_term, unit.mul(pij, unit.load(&post.y_sq, at)));
             for (c, pull) in pull.iter_mut().enumerate() {
-                *pull = f._mm512_add_pd(*pull, f._mm512_mul_pd(pij, load(&post.ys, c * mp + at)));
+                *pull = unit.add(*pull, unit.mul(pij, unit.load(&post.ys, c * mp + at)));
             }
         }
-        let s = f._mm512_reduce_add_pd(s);
+        let s = unit.sum(s);
         post.row_sums[i] = s;
         total += s;
         for (c, pull) in pull.iter().enumerate() {
-            post.pulled[i * D + c] = f._mm512_reduce_add_pd(*pull);
+            post.pulled[i * D + c] = unit.sum(*pull);
         }
     }
     post.total = total;
-    post.y_term = f._mm512_reduce_add_pd(y_term);
+    post.y_term = unit.sum(y_term);
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Lanes for pulp::x86::V4 {
+    const WIDTH: usize = 8;
+    type V = __m512d;
+    #[inline(always)]
+    fn splat(self, v: f64) -> __m512d {
+        self.avx512f._mm512_set1_pd(v)
+    }
+    #[inline(always)]
+    fn load(self, s: &[f64], at: usize) -> __m512d {
+        let v: [f64; 8] = s[at..at + 8].try_into().expect("whole lanes");
+        pulp::cast(v)
+    }
+    #[inline(always)]
+    fn store(self, s: &mut [f64], at: usize, v: __m512d) {
+        let v: [f64; 8] = pulp::cast(v);
+        s[at..at + 8].copy_from_slice(&v);
+    }
+    #[inline(always)]
+    fn add(self, a: __m512d, b: __m512d) -> __m512d {
+        self.avx512f._mm512_add_pd(a, b)
+    }
+    #[inline(always)]
+    fn sub(self, a: __m512d, b: __m512d) -> __m512d {
+        self.avx512f._mm512_sub_pd(a, b)
+    }
+    #[inline(always)]
+    fn mul(self, a: __m512d, b: __m512d) -> __m512d {
+        self.avx512f._mm512_mul_pd(a, b)
+    }
+    #[inline(always)]
+    fn min(self, a: __m512d, b: __m512d) -> __m512d {
+        self.avx512f._mm512_min_pd(a, b)
+    }
+    #[inline(always)]
+    fn exp_neg_below(self, t: __m512d, limit: __m512d) -> Option<__m512d> {
+        let f = self.avx512f;
+        let kept = f._mm512_cmp_pd_mask::<_CMP_LT_OQ>(t, limit);
+        (kept != 0).then(|| f._mm512_maskz_mov_pd(kept, exp_neg_avx512(self, t)))
+    }
+    #[inline(always)]
+    fn sum(self, v: __m512d) -> f64 {
+        self.avx512f._mm512_reduce_add_pd(v)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Lanes for pulp::x86::V3 {
+    const WIDTH: usize = 4;
+    type V = __m256d;
+    #[inline(always)]
+    fn splat(self, v: f64) -> __m256d {
+        self.avx._mm256_set1_pd(v)
+    }
+    #[inline(always)]
+    fn load(self, s: &[f64], at: usize) -> __m256d {
+        let v: [f64; 4] = s[at..at + 4].try_into().expect("whole lanes");
+        pulp::cast(v)
+    }
+    #[inline(always)]
+    fn store(self, s: &mut [f64], at: usize, v: __m256d) {
+        let v: [f64; 4] = pulp::cast(v);
+        s[at..at + 4].copy_from_slice(&v);
+    }
+    #[inline(always)]
+    fn add(self, a: __m256d, b: __m256d) -> __m256d {
+        self.avx._mm256_add_pd(a, b)
+    }
+    #[inline(always)]
+    fn sub(self, a: __m256d, b: __m256d) -> __m256d {
+        self.avx._mm256_sub_pd(a, b)
+    }
+    #[inline(always)]
+    fn mul(self, a: __m256d, b: __m256d) -> __m256d {
+        self.avx._mm256_mul_pd(a, b)
+    }
+    #[inline(always)]
+    fn min(self, a: __m256d, b: __m256d) -> __m256d {
+        self.avx._mm256_min_pd(a, b)
+    }
+    #[inline(always)]
+    fn exp_neg_below(self, t: __m256d, limit: __m256d) -> Option<__m256d> {
+        let a = self.avx;
+        let kept = a._mm256_cmp_pd::<_CMP_LT_OQ>(t, limit);
+        (a._mm256_movemask_pd(kept) != 0).then(|| a._mm256_and_pd(kept, exp_neg_avx2(self, t)))
+    }
+    #[inline(always)]
+    fn sum(self, v: __m256d) -> f64 {
+        let v: [f64; 4] = pulp::cast(v);
+        (v[0] + v[1]) + (v[2] + v[3])
+    }
 }
 
 /// `exp(−t)` in eight lanes, for `t ≥ 0` (lanes from [`NEGLIGIBLE`] on are not read):
@@ -331,105 +425,6 @@ fn exp_neg_avx512(simd: pulp::x86::V4, t: __m512d) -> __m512d {
         f._mm512_slli_epi64::<52>(f._mm512_add_epi64(ki, f._mm512_set1_epi64(1023))),
     );
     f._mm512_mul_pd(p, two_k)
-}
-
-/// Columns in one AVX2 register: each block of [`LANES`] is taken as two of these halves.
-#[cfg(target_arch = "x86_64")]
-const HALF: usize = 4;
-
-/// The `HALF` entries of `s` from `at` in a register.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn load4(s: &[f64], at: usize) -> __m256d {
-    let v: [f64; HALF] = s[at..at + HALF].try_into().expect("whole lanes");
-    pulp::cast(v)
-}
-
-/// Stores `v` into the `HALF` entries of `s` from `at`.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn store4(s: &mut [f64], at: usize, v: __m256d) {
-    let v: [f64; HALF] = pulp::cast(v);
-    s[at..at + HALF].copy_from_slice(&v);
-}
-
-/// The sum of the four lanes of `v`.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn sum4(v: __m256d) -> f64 {
-    let v: [f64; HALF] = pulp::cast(v);
-    (v[0] + v[1]) + (v[2] + v[3])
-}
-
-/// [`step_avx512`] in four-lane AVX2 registers (each block of eight columns as two halves): the
-/// exponentials by [`exp_neg_avx2`], the sums in lanes.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn step_avx2<const D: usize>(simd: pulp::x86::V3, post: &mut Posterior, moved: &[f64], scale: f64) {
-    let a = simd.avx;
-    let (n, m, mp) = (post.n, post.m, post.mp);
-    let halves = mp / HALF;
-    let scale_v = a._mm256_set1_pd(scale);
-    post.col_near.fill(f64::INFINITY);
-    for i in 0..n {
-        let x: [__m256d; D] = std::array::from_fn(|c| a._mm256_set1_pd(moved[i * D + c]));
-        for h in 0..halves {
-            let at = h * HALF;
-            let mut d2 = a._mm256_setzero_pd();
-            for (c, x) in x.iter().enumerate() {
-                let v = a._mm256_sub_pd(*x, load4(&post.ys, c * mp + at));
-                d2 = a._mm256_add_pd(d2, a._mm256_mul_pd(v, v));
-            }
-            let t = a._mm256_mul_pd(d2, scale_v);
-            store4(&mut post.p, i * mp + at, t);
-            let near = a._mm256_min_pd(t, load4(&post.col_near, at));
-            store4(&mut post.col_near, at, near);
-        }
-    }
-    let negligible = a._mm256_set1_pd(NEGLIGIBLE);
-    post.col_inv.fill(0.0);
-    for i in 0..n {
-        for h in 0..halves {
-            let at = h * HALF;
-            let t = a._mm256_sub_pd(load4(&post.p, i * mp + at), load4(&post.col_near, at));
-            let kept = a._mm256_cmp_pd::<_CMP_LT_OQ>(t, negligible);
-            if a._mm256_movemask_pd(kept) == 0 {
-                // Late in the loop most halves are negligible whole: no exponential, no sum.
-                store4(&mut post.p, i * mp + at, a._mm256_setzero_pd());
-                continue;
-            }
-            let e = a._mm256_and_pd(kept, exp_neg_avx2(simd, t));
-            store4(&mut post.p, i * mp + at, e);
-            let sums = a._mm256_add_pd(load4(&post.col_inv, at), e);
-            store4(&mut post.col_inv, at, sums);
-        }
-    }
-    for (j, s) in post.col_inv.iter_mut().enumerate() {
-        *s = if j < m && *s > 0.0 { 1.0 / *s } else { 0.0 };
-    }
-    let mut total = 0.0;
-    let mut y_term = a._mm256_setzero_pd();
-    for i in 0..n {
-        let mut s = a._mm256_setzero_pd();
-        let mut pull = [a._mm256_setzero_pd(); D];
-        for h in 0..halves {
-            let at = h * HALF;
-            let pij = a._mm256_mul_pd(load4(&post.p, i * mp + at), load4(&post.col_inv, at));
-            s = a._mm256_add_pd(s, pij);
-            y_term = a._mm256_add_pd(y_term, a._mm256_mul_pd(pij, load4(&post.y_sq, at)));
-            for (c, pull) in pull.iter_mut().enumerate() {
-                *pull = a._mm256_add_pd(*pull, a._mm256_mul_pd(pij, load4(&post.ys, c * mp + at)));
-            }
-        }
-        let s = sum4(s);
-        post.row_sums[i] = s;
-        total += s;
-        for (c, pull) in pull.iter().enumerate() {
-            post.pulled[i * D + c] = sum4(*pull);
-        }
-    }
-    post.total = total;
-    post.y_term = sum4(y_term);
 }
 
 /// [`exp_neg_avx512`] in four AVX2 lanes: the same reduction, polynomial, clamp and `2^k`.
@@ -552,7 +547,7 @@ mod tests {
                 self.0
                     .chunks_exact(LANES)
                     .flat_map(|c| {
-                        let v: [f64; LANES] = pulp::cast(exp_neg_avx512(simd, load(c, 0)));
+                        let v: [f64; 8] = pulp::cast(exp_neg_avx512(simd, simd.load(c, 0)));
                         v
                     })
                     .collect()
@@ -560,9 +555,9 @@ mod tests {
             #[inline(always)]
             fn avx2(self, simd: pulp::x86::V3) -> Vec<f64> {
                 self.0
-                    .chunks_exact(HALF)
+                    .chunks_exact(4)
                     .flat_map(|c| {
-                        let v: [f64; HALF] = pulp::cast(exp_neg_avx2(simd, load4(c, 0)));
+                        let v: [f64; 4] = pulp::cast(exp_neg_avx2(simd, simd.load(c, 0)));
                         v
                     })
                     .collect()
