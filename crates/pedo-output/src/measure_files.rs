@@ -571,24 +571,34 @@ pub fn regions_csv(
     let feet = values.iter().any(|v| v.foot.is_some());
     let mut csv = String::from(if feet { "foot," } else { "" });
     csv.push_str("region,measure,value,unit,kind\n");
-    let kinds = [("fixed", Some(values)), ("moving", moving)];
-    for (kind, values) in kinds.into_iter().filter_map(|(k, v)| Some((k, v?))) {
-        for q in region_quantities(m, values) {
-            if feet {
-                csv.push_str(q.foot.unwrap_or_default());
-                csv.push(',');
-            }
-            let RegionQuantity {
-                region,
-                measure,
-                value,
-                unit,
-                ..
-            } = q;
-            csv.push_str(&format!("{region},{measure},{value},{unit},{kind}\n"));
+    for (kind, q) in region_rows(m, values, moving) {
+        if feet {
+            csv.push_str(q.foot.unwrap_or_default());
+            csv.push(',');
         }
+        let RegionQuantity {
+            region,
+            measure,
+            value,
+            unit,
+            ..
+        } = q;
+        csv.push_str(&format!("{region},{measure},{value},{unit},{kind}\n"));
     }
     csv
+}
+
+/// The rows of `regions.csv`, each with its `kind`: the fixed regions' (`values`), then the
+/// moving regions' when they were carried.
+fn region_rows<'a>(
+    m: &'a Measures,
+    values: &'a [RegionValues],
+    moving: Option<&'a [RegionValues]>,
+) -> impl Iterator<Item = (&'static str, RegionQuantity)> + 'a {
+    [("fixed", Some(values)), ("moving", moving)]
+        .into_iter()
+        .filter_map(|(kind, v)| Some((kind, v?)))
+        .flat_map(move |(kind, v)| region_quantities(m, v).into_iter().map(move |q| (kind, q)))
 }
 
 /// `regions.csv` as a [`Table`] (its columns; values to 6 decimals), what a run returns without
@@ -606,10 +616,8 @@ pub fn region_values_table(
     if feet {
         header.insert(0, "foot".to_string());
     }
-    let mut rows = Vec::new();
-    let kinds = [("fixed", Some(values)), ("moving", moving)];
-    for (kind, values) in kinds.into_iter().filter_map(|(k, v)| Some((k, v?))) {
-        for q in region_quantities(m, values) {
+    let rows = region_rows(m, values, moving)
+        .map(|(kind, q)| {
             let mut row = Vec::with_capacity(header.len());
             if feet {
                 row.push(Cell::Text(q.foot.unwrap_or_default().into()));
@@ -621,9 +629,9 @@ pub fn region_values_table(
                 Cell::Text(q.unit),
                 Cell::Text(kind.to_string()),
             ]);
-            rows.push(row);
-        }
-    }
+            row
+        })
+        .collect();
     Table { header, rows }
 }
 
