@@ -81,11 +81,9 @@ pub(crate) fn first_phase(
         Parallelism::Pair => {
             let phase = FirstPhase::start(
                 d,
-                robust.then(|| Screening {
-                    a: pair.a.clone().into_owned(),
-                    b: pair.b.clone().into_owned(),
-                    search,
-                    keep_orientation: ordered,
+                robust.then(|| {
+                    let (a, b) = (pair.a.clone().into_owned(), pair.b.clone().into_owned());
+                    Screening::new(a, b, search, ordered)
                 }),
                 // Behind a gate B's solve waits for the gate's word: a helper that began it for a
                 // pair the gate then stops would take a core from the rest of the pair.
@@ -145,6 +143,8 @@ type Features = Result<Option<Arc<ModalFeatures>>, ModalError>;
 struct Screening {
     a: PreparedShape,
     b: PreparedShape,
+    /// The nodes of A and B the screening runs on ([`prealign::screen_nodes`]).
+    screen: [Vec<f64>; 2],
     search: RotationSearch,
     keep_orientation: bool,
 }
@@ -158,10 +158,27 @@ struct Survivors {
 }
 
 impl Screening {
+    fn new(a: PreparedShape, b: PreparedShape, search: RotationSearch, ordered: bool) -> Self {
+        let outlines = prealign::fits_outlines(a.get().dim(), &search, ordered);
+        let nodes = |s: &PreparedShape| {
+            let s = s.get();
+            prealign::screen_nodes(&s.pts, s.dim(), &search, outlines).into_owned()
+        };
+        Self {
+            screen: [nodes(&a), nodes(&b)],
+            a,
+            b,
+            search,
+            keep_orientation: ordered,
+        }
+    }
+
     fn pair(&self, dim: usize) -> SearchPair<'_> {
         SearchPair {
             a: &self.a.get().pts,
             b: &self.b.get().pts,
+            a_screen: &self.screen[0],
+            b_screen: &self.screen[1],
             dim,
             search: &self.search,
             keep_orientation: self.keep_orientation,

@@ -183,9 +183,19 @@ pub struct ContourCase {
 }
 
 pub fn contour_case(outline: &[[f64; 2]], sev: Severity, seed: u64) -> ContourCase {
+    contour_case_of(outline, sev, seed, 48..=72)
+}
+
+/// [`contour_case`] with A's node count drawn from `counts` (B's within 6 of it).
+pub fn contour_case_of(
+    outline: &[[f64; 2]],
+    sev: Severity,
+    seed: u64,
+    counts: std::ops::RangeInclusive<usize>,
+) -> ContourCase {
     let mut rng = StdRng::seed_from_u64(seed);
     let w = Warp::random(&mut rng, sev, outline);
-    let na = rng.random_range(48..=72usize);
+    let na = rng.random_range(counts);
     let nb = (na as i64 + rng.random_range(-6..=6i64)) as usize;
     let a = resample(outline, na, rng.random_range(0.0..1.0));
     let warped: Vec<[f64; 2]> = outline.iter().map(|&p| w.apply(p)).collect();
