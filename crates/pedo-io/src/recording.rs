@@ -261,11 +261,29 @@ impl Recording {
                 }
             }
         }
-        Ok(Self {
+        Ok(Self::of_frames(
             n_frames,
             rows,
             cols,
-            frames: Frames::compact(data, per),
+            Frames::compact(data, per),
+            sensor_mask,
+        ))
+    }
+
+    /// A recording of checked frames with nothing known yet beyond them (no pitch, time step,
+    /// units or feet): what [`Recording::new`] and [`Recording::from_sparse`] return.
+    fn of_frames(
+        n_frames: usize,
+        rows: usize,
+        cols: usize,
+        frames: Frames,
+        sensor_mask: Vec<bool>,
+    ) -> Self {
+        Self {
+            n_frames,
+            rows,
+            cols,
+            frames,
             sensor_mask,
             pitch_mm: None,
             sensel_area_mm2: None,
@@ -277,7 +295,7 @@ impl Recording {
             negatives_clipped: false,
             time_axis_settled: false,
             feet: Vec::new(),
-        })
+        }
     }
 
     /// Builds a recording from frames where NaN marks "no sensor". A sensor is missing when it is
@@ -1316,23 +1334,13 @@ impl Recording {
             }
             frames = kept;
         }
-        Ok(Self {
+        Ok(Self::of_frames(
             n_frames,
             rows,
             cols,
-            frames: Frames::from_sparse(frames, per),
+            Frames::from_sparse(frames, per),
             sensor_mask,
-            pitch_mm: None,
-            sensel_area_mm2: None,
-            dt_s: None,
-            units: String::new(),
-            noise_threshold: None,
-            format: None,
-            file_negatives: None,
-            negatives_clipped: false,
-            time_axis_settled: false,
-            feet: Vec::new(),
-        })
+        ))
     }
 }
 

@@ -223,26 +223,15 @@ fn removal_cost(tri: &Dt, h: FixedVertexHandle, keep_hull: bool) -> Option<f64> 
     Some((z0 - c0).abs())
 }
 
+/// The solution of the 3 × 3 normal equations `a x = r` (nalgebra's LU), unless `a` is singular
+/// relative to `a[0][0]`, the neighbours' count.
 fn solve3(a: [[f64; 3]; 3], r: [f64; 3]) -> Option<[f64; 3]> {
-    let det = |m: [[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det(a);
-    let scale = a[0][0].abs().max(1.0).powi(3);
-    if d.abs() <= 1e-12 * scale {
+    let a = nalgebra::Matrix3::from_fn(|i, j| a[i][j]);
+    if a.determinant().abs() <= 1e-12 * a[(0, 0)].abs().max(1.0).powi(3) {
         return None;
     }
-    let mut out = [0.0; 3];
-    for (k, o) in out.iter_mut().enumerate() {
-        let mut m = a;
-        for i in 0..3 {
-            m[i][k] = r[i];
-        }
-        *o = det(m) / d;
-    }
-    Some(out)
+    let x = a.lu().solve(&nalgebra::Vector3::from(r))?;
+    Some([x[0], x[1], x[2]])
 }
 
 /// Greedy vertex-removal decimation of a Delaunay triangulation down to `target` vertices (or,

@@ -1802,27 +1802,17 @@ impl RigidFit<'_> {
     }
 }
 
-/// The solution of the 3 × 3 system `a x = b` (Cramer's rule), if `a` is not singular.
+/// The solution of the 3 × 3 system `a x = b` (nalgebra's LU), unless `a` is singular relative
+/// to its largest entry or not finite.
 fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
-    let det = |m: [[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det(a);
-    let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    if !d.is_finite() || d.abs() <= 1e-12 * scale.powi(3) {
+    let a = nalgebra::Matrix3::from_fn(|r, c| a[r][c]);
+    let scale = a.amax();
+    let det = a.determinant();
+    if !det.is_finite() || det.abs() <= 1e-12 * scale.powi(3) {
         return None;
     }
-    let mut out = [0.0; 3];
-    for (k, o) in out.iter_mut().enumerate() {
-        let mut m = a;
-        for (row, &v) in m.iter_mut().zip(&b) {
-            row[k] = v;
-        }
-        *o = det(m) / d;
-    }
-    Some(out)
+    let x = a.lu().solve(&nalgebra::Vector3::from(b))?;
+    Some([x[0], x[1], x[2]])
 }
 
 /// The median of `values` (the upper one of an even count; infinite when there is none).
@@ -2060,6 +2050,28 @@ mod grid_tests {
 #[cfg(test)]
 mod rigid_tests {
     use super::*;
+
+    #[test]
+    fn solve3_solves_a_gauss_newton_system_and_refuses_a_singular_one() {
+        // A symmetric positive definite system of the fit's kind (turn, shift x, shift y), its
+        // entries of mixed scale; the residual of the solution is at rounding level.
+        let a = [[250.0, -3.0, 12.0], [-3.0, 9.0, 0.5], [12.0, 0.5, 7.0]];
+        let x = [0.02, -1.5, 3.25];
+        let b: [f64; 3] = std::array::from_fn(|r| (0..3).map(|c| a[r][c] * x[c]).sum());
+        let got = solve3(a, b).unwrap();
+        for (g, w) in got.iter().zip(&x) {
+            assert!((g - w).abs() < 1e-12, "{got:?} against {x:?}");
+        }
+        // A row that is the sum of the others, at any scale, and a non-finite entry.
+        for scale in [1e-6, 1.0, 1e6] {
+            let row = [a[0][0] + a[1][0], a[0][1] + a[1][1], a[0][2] + a[1][2]];
+            let singular = [a[0], a[1], row].map(|r| r.map(|v| v * scale));
+            assert_eq!(solve3(singular, b), None, "scale {scale}");
+        }
+        let mut infinite = a;
+        infinite[1][1] = f64::INFINITY;
+        assert_eq!(solve3(infinite, b), None);
+    }
 
     /// A foot-sized closed outline: an ellipse with a dent, every sensel or so.
     fn outline() -> Vec<[f64; 2]> {
