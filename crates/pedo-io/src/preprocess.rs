@@ -88,15 +88,28 @@ fn kernel(sigma: f64) -> Vec<f64> {
 /// Outside the grid the image is taken as 0 — no pressure beyond the sensor — so the total is
 /// preserved up to what spills over the border.
 pub fn gaussian(grid: &Grid, sigma: f64) -> Result<Grid> {
+    let (rows, cols) = (grid.rows(), grid.cols());
+    Grid::new(rows, cols, gaussian_blur(grid.data(), rows, cols, sigma)?)
+}
+
+/// [`gaussian`] on a row-major `rows × cols` image of plain values (the footprint
+/// registration's image fits use it too): an error unless `sigma` is in (0, 1000] and the image
+/// holds `rows × cols` values.
+pub fn gaussian_blur(values: &[f64], rows: usize, cols: usize, sigma: f64) -> Result<Vec<f64>> {
     if !(sigma.is_finite() && sigma > 0.0 && sigma <= 1000.0) {
         return Err(IoError::invalid(format!(
             "sigma must be in (0, 1000], got {sigma}"
         )));
     }
+    if rows.checked_mul(cols) != Some(values.len()) {
+        return Err(IoError::invalid(format!(
+            "an image of {rows} x {cols} values holds {}",
+            values.len()
+        )));
+    }
     let k = kernel(sigma);
     let r = (k.len() / 2) as isize;
-    let (rows, cols) = (grid.rows(), grid.cols());
-    let src = grid.data();
+    let src = values;
     let mut tmp = vec![0.0; rows * cols];
     for y in 0..rows {
         for x in 0..cols {
@@ -123,7 +136,7 @@ pub fn gaussian(grid: &Grid, sigma: f64) -> Result<Grid> {
             out[y * cols + x] = s;
         }
     }
-    Grid::new(rows, cols, out)
+    Ok(out)
 }
 
 fn cubic(t: f64) -> [f64; 4] {
@@ -211,6 +224,29 @@ pub fn upsample(grid: &Grid, k: usize, interp: Interpolation) -> Result<Grid> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_blur_keeps_a_central_mass_and_refuses_bad_widths_and_sizes() {
+        // A unit impulse in the middle of a 15 × 15 image: the blur sums to 1 (nothing spills
+        // over the border at σ = 1), is symmetric, and peaks where the impulse was.
+        let mut values = vec![0.0; 225];
+        values[7 * 15 + 7] = 1.0;
+        let out = gaussian_blur(&values, 15, 15, 1.0).unwrap();
+        assert!((out.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        assert_eq!(out[7 * 15 + 6], out[7 * 15 + 8]);
+        assert_eq!(out[6 * 15 + 7], out[7 * 15 + 6]);
+        let peak = out.iter().copied().fold(f64::MIN, f64::max);
+        assert_eq!(out[7 * 15 + 7], peak);
+        for sigma in [0.0, -1.0, f64::NAN, f64::INFINITY, 1000.5] {
+            let err = gaussian_blur(&values, 15, 15, sigma).unwrap_err();
+            assert!(
+                err.to_string().contains("sigma must be in (0, 1000]"),
+                "{err}"
+            );
+        }
+        let err = gaussian_blur(&values, 15, 14, 1.0).unwrap_err();
+        assert!(err.to_string().contains("15 x 14"), "{err}");
+    }
 
     /// A 6 × 7 frame, 0 outside rows 2..4 and columns 1..4, and that window of it.
     fn frame_and_window() -> (Grid, Grid) {

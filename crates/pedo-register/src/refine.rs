@@ -76,51 +76,16 @@ pub struct GridImage<'a> {
     pub values: &'a [f64],
 }
 
-/// `values` blurred by a Gaussian of `sigma` sensels (separable, truncated at 3σ, zero beyond
-/// the grid); NaN read as 0.
+/// `values` blurred by a Gaussian of `sigma` sensels (`pedo_io::preprocess::gaussian_blur`:
+/// separable, truncated at 3σ, zero beyond the grid); NaN read as 0. A `sigma` outside
+/// (0, 1000] leaves the values as they are.
 pub fn blurred(img: GridImage<'_>, sigma: f64) -> Vec<f64> {
-    let (rows, cols) = (img.rows, img.cols);
     let clean: Vec<f64> = img
         .values
         .iter()
         .map(|&v| if v.is_nan() { 0.0 } else { v })
         .collect();
-    if sigma <= 0.0 {
-        return clean;
-    }
-    let r = (3.0 * sigma).ceil() as isize;
-    let k: Vec<f64> = (-r..=r)
-        .map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp())
-        .collect();
-    let sum: f64 = k.iter().sum();
-    let k: Vec<f64> = k.iter().map(|v| v / sum).collect();
-    let mut tmp = vec![0.0; rows * cols];
-    for y in 0..rows {
-        for x in 0..cols {
-            let mut acc = 0.0;
-            for (j, w) in k.iter().enumerate() {
-                let xx = x as isize + j as isize - r;
-                if xx >= 0 && (xx as usize) < cols {
-                    acc += w * clean[y * cols + xx as usize];
-                }
-            }
-            tmp[y * cols + x] = acc;
-        }
-    }
-    let mut out = vec![0.0; rows * cols];
-    for y in 0..rows {
-        for x in 0..cols {
-            let mut acc = 0.0;
-            for (j, w) in k.iter().enumerate() {
-                let yy = y as isize + j as isize - r;
-                if yy >= 0 && (yy as usize) < rows {
-                    acc += w * tmp[yy as usize * cols + x];
-                }
-            }
-            out[y * cols + x] = acc;
-        }
-    }
-    out
+    pedo_io::preprocess::gaussian_blur(&clean, img.rows, img.cols, sigma).unwrap_or(clean)
 }
 
 /// The value and gradient `(v, ∂v/∂x, ∂v/∂y)` of the bilinear interpolation at `(x, y)`.
