@@ -528,36 +528,25 @@ impl PositionTermAhead {
     }
 }
 
-/// Max-normalised squared distances between aligned coordinates.
+/// Max-normalised squared distances between aligned coordinates (2-D or 3-D, as every
+/// [`Shape`](crate::Shape) is).
 pub(super) fn position_costs(a: &[f64], b: &[f64], d: usize) -> Result<AffinityMatrix, ModalError> {
-    let (n, m) = (a.len() / d, b.len() / d);
+    let (n, m) = (a.len() / d.max(1), b.len() / d.max(1));
     let data = match d {
         2 => squared_distances::<2>(a, b, m),
         3 => squared_distances::<3>(a, b, m),
-        _ => squared_distances_of(a, b, d, m),
+        dim => return Err(ModalError::UnsupportedDimension { dim }),
     };
     Ok(AffinityMatrix::new(n, m, data)?.normalized())
 }
 
-/// The `n × m` squared distances between the points of `a` and `b` (`D` coordinates each): with
-/// the dimension known to the compiler the inner loop is unrolled and vectorised; the sums are
-/// the same, term by term, as [`squared_distances_of`]'s.
+/// The `n × m` squared distances between the points of `a` and `b` (`D` coordinates each), with
+/// the dimension known to the compiler so that the inner loop is unrolled and vectorised.
 fn squared_distances<const D: usize>(a: &[f64], b: &[f64], m: usize) -> Vec<f64> {
     let mut data = vec![0.0; a.len() / D * m];
     for (row, p) in data.chunks_exact_mut(m.max(1)).zip(a.chunks_exact(D)) {
         for (z, q) in row.iter_mut().zip(b.chunks_exact(D)) {
             *z = (0..D).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>();
-        }
-    }
-    data
-}
-
-/// [`squared_distances`] for a dimension known only at run time.
-fn squared_distances_of(a: &[f64], b: &[f64], d: usize, m: usize) -> Vec<f64> {
-    let mut data = vec![0.0; a.len() / d * m];
-    for (row, p) in data.chunks_exact_mut(m.max(1)).zip(a.chunks_exact(d)) {
-        for (z, q) in row.iter_mut().zip(b.chunks_exact(d)) {
-            *z = (0..d).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>();
         }
     }
     data
