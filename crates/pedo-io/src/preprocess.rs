@@ -109,7 +109,6 @@ pub fn gaussian_blur(values: &[f64], rows: usize, cols: usize, sigma: f64) -> Re
     }
     let k = kernel(sigma);
     let r = (k.len() / 2) as isize;
-    let src = values;
     let mut tmp = vec![0.0; rows * cols];
     for y in 0..rows {
         for x in 0..cols {
@@ -117,7 +116,7 @@ pub fn gaussian_blur(values: &[f64], rows: usize, cols: usize, sigma: f64) -> Re
             for (j, w) in k.iter().enumerate() {
                 let xx = x as isize + j as isize - r;
                 if xx >= 0 && (xx as usize) < cols {
-                    s += w * src[y * cols + xx as usize];
+                    s += w * values[y * cols + xx as usize];
                 }
             }
             tmp[y * cols + x] = s;
