@@ -419,44 +419,60 @@ def main():
         if args.turns:
             turns(half, pairs, [{}] + [variant_kw(v) for v in args.variant])
             continue
-        a0, b0 = pairs[0]
-        for f in methods.values():  # warm-up (imports, first-call costs)
-            f(a0, b0)
-        rows, per_class = {}, {}
-        for name, f in methods.items():
-            errs, times = [], []
-            for a, b in pairs:
-                t0 = time.perf_counter()
-                carried = f(a, b)
-                times.append(time.perf_counter() - t0)
-                errs.append(errors(b, carried))
-            rows[name] = summarise(errs, times)
-            for (a, _), e in zip(pairs, errs):
-                per_class.setdefault(a.cls, {}).setdefault(name, []).append(e)
-        nl = rows[next(iter(rows))]["n"]
-        title = f"{half}: {len(pairs)} pairs, {nl} landmarks, error in B's point spacings"
-        cpd_ms = rows.get("CPD rigid + deformable (pycpd)", {}).get("ms")
-        if args.markdown:
-            print(f"\n**{title}**\n")
-            print("| method | within 1 | within 2 | within 5 | median | 90th pct | ms / pair | CPD time / time |")
-            print("|---|---|---|---|---|---|---|---|")
-            for name, r in rows.items():
-                ratio = f"{cpd_ms / r['ms']:.1f}" if cpd_ms else ""
-                print(f"| {name} | {r['w1']:.3f} | {r['w2']:.3f} | {r['w5']:.3f} | {r['med']:.2f} | "
-                      f"{r['p90']:.2f} | {r['ms']:.1f} | {ratio} |")
-        else:
-            print(f"\n{title}")
-            for name, r in rows.items():
-                ratio = f"{cpd_ms / r['ms']:6.1f}x" if cpd_ms else ""
-                print(f"  {name:34s} {r['w1']:.3f} {r['w2']:.3f} {r['w5']:.3f}  med {r['med']:.2f}"
-                      f"  p90 {r['p90']:.2f}  {r['ms']:7.1f} ms {ratio}")
+        rows, per_class = measure(methods, pairs)
+        print_rows(f"{half}: {len(pairs)} pairs", rows, args.markdown)
         if args.by_class:
-            print(f"\n{half}, share within 2 spacings by class (pairs)\n")
-            print("| class | pairs | " + " | ".join(rows) + " |")
-            print("|---|---|" + "---|" * len(rows))
-            for cls in sorted(per_class):
-                cells = [f"{(np.concatenate(per_class[cls][n]) <= 2).mean():.2f}" for n in rows]
-                print(f"| {cls} | {len(per_class[cls][next(iter(rows))])} | " + " | ".join(cells) + " |")
+            print_by_class(f"{half}, share within 2 spacings by class (pairs)", rows, per_class,
+                           sorted(per_class))
+
+
+def measure(methods, pairs):
+    """Every method on every pair, after one warm-up call each: the summary per method, and the
+    errors per class (A's) and method."""
+    for f in methods.values():  # warm-up (imports, first-call costs)
+        f(*pairs[0])
+    rows, per_class = {}, {}
+    for name, f in methods.items():
+        errs, times = [], []
+        for a, b in pairs:
+            t0 = time.perf_counter()
+            carried = f(a, b)
+            times.append(time.perf_counter() - t0)
+            errs.append(errors(b, carried))
+        rows[name] = summarise(errs, times)
+        for (a, _), e in zip(pairs, errs):
+            per_class.setdefault(a.cls, {}).setdefault(name, []).append(e)
+    return rows, per_class
+
+
+def print_rows(title, rows, markdown):
+    """The shares, quantiles and times of `rows`, with each one's speed against CPD's."""
+    nl = rows[next(iter(rows))]["n"]
+    title = f"{title}, {nl} landmarks, error in B's point spacings"
+    cpd_ms = rows.get("CPD rigid + deformable (pycpd)", {}).get("ms")
+    if markdown:
+        print(f"\n**{title}**\n")
+        print("| method | within 1 | within 2 | within 5 | median | 90th pct | ms / pair | CPD time / time |")
+        print("|---|---|---|---|---|---|---|---|")
+        for name, r in rows.items():
+            ratio = f"{cpd_ms / r['ms']:.1f}" if cpd_ms else ""
+            print(f"| {name} | {r['w1']:.3f} | {r['w2']:.3f} | {r['w5']:.3f} | {r['med']:.2f} | "
+                  f"{r['p90']:.2f} | {r['ms']:.1f} | {ratio} |")
+    else:
+        print(f"\n{title}")
+        for name, r in rows.items():
+            ratio = f"{cpd_ms / r['ms']:6.1f}x" if cpd_ms else ""
+            print(f"  {name:34s} {r['w1']:.3f} {r['w2']:.3f} {r['w5']:.3f}  med {r['med']:.2f}"
+                  f"  p90 {r['p90']:.2f}  {r['ms']:7.1f} ms {ratio}")
+
+
+def print_by_class(title, rows, per_class, classes):
+    print(f"\n{title}\n")
+    print("| class | pairs | " + " | ".join(rows) + " |")
+    print("|---|---|" + "---|" * len(rows))
+    for cls in classes:
+        cells = [f"{(np.concatenate(per_class[cls][n]) <= 2).mean():.2f}" for n in rows]
+        print(f"| {cls} | {len(per_class[cls][next(iter(rows))])} | " + " | ".join(cells) + " |")
 
 
 if __name__ == "__main__":

@@ -83,8 +83,9 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
 /// Matches two prepared objects: the pre-alignment, the first modal solves, then the passes of
 /// features, search and excess nodes with the affine re-fits between them. With
 /// [`Refine::Auto`], two closed planar outlines that the rotation search's outline fit leaves
-/// apart are matched instead as with `prealign` [`Prealign::Normalize`], `position_weight` 1,
-/// the default re-fits and [`Refine::Coherent`] (docs/method.md §7.5). Each object may take
+/// apart, or whose modal match then pairs nodes at a median cost over 0.15, are matched instead
+/// as with `prealign` [`Prealign::Normalize`], `position_weight` 1, the default re-fits and
+/// [`Refine::Coherent`] (docs/method.md §7.5). Each object may take
 /// part in any number of pairs; what it can share between them was done by [`prepare`](fn@prepare) (see
 /// docs/method.md, "The pipeline in the code").
 ///
@@ -105,23 +106,32 @@ pub fn match_prepared(
         |cur: &[f64]| coherent::outlines_apart(cur, &pair.b.get().pts, pair.b.get().spacing());
     if let Some(start) = first_phase::first_phase(&pair, parallelism, gated.then_some(&apart))? {
         let refined = refine::refine(&pair, start)?;
-        return Ok(in_callers_terms(&pair, refined));
+        if !(gated && coherent::modes_apart(&refined.kept.pairs, pair.opts)) {
+            return Ok(in_callers_terms(&pair, refined));
+        }
     }
-    // Two specimens of a shape: the drift from the centroid-and-scale start, its affine re-fits
-    // on positions (docs/method.md §7.5). The re-fits only place the start, by the default
-    // solver; the drift's own assignment keeps the contours' order whatever the solver.
-    let drift = MatchOptions {
+    // Two specimens of a shape, told by either gate (the outlines after the rotation search's
+    // fit, or the modes after the modal match): the drift from the centroid-and-scale start, its
+    // affine re-fits on positions (docs/method.md §7.5). The re-fits only place the start, by the
+    // default solver; the drift's own assignment keeps the contours' order whatever the solver.
+    let drift = drift_options(opts);
+    let pair = Pair::new(a, b, &drift)?;
+    let start = first_phase::first_phase(&pair, parallelism, None)?.expect("no gate, so a start");
+    let refined = refine::refine(&pair, start)?;
+    Ok(in_callers_terms(&pair, refined))
+}
+
+/// What the gates of [`Refine::Auto`] match two specimens with: `opts` from the
+/// centroid-and-scale start, its default affine re-fits on positions, then the coherent drift.
+fn drift_options(opts: &MatchOptions) -> MatchOptions {
+    MatchOptions {
         prealign: Prealign::Normalize,
         position_weight: 1.0,
         refits: MatchOptions::default().refits,
         refine: Refine::Coherent,
         method: MatchOptions::default().method,
         ..opts.clone()
-    };
-    let pair = Pair::new(a, b, &drift)?;
-    let start = first_phase::first_phase(&pair, parallelism, None)?.expect("no gate, so a start");
-    let refined = refine::refine(&pair, start)?;
-    Ok(in_callers_terms(&pair, refined))
+    }
 }
 
 /// The kept pass in the callers' node numbering and coordinates.

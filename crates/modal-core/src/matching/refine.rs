@@ -31,9 +31,10 @@ pub enum Refine {
     Coherent,
     /// Two closed planar outlines pre-aligned by the rotation search: [`Refine::Coherent`] from
     /// the centroid-and-scale start (with affine re-fits on positions) when the outline fit
-    /// leaves the outlines apart (two specimens of a shape), nothing more ([`Refine::Affine`])
-    /// when it lays them on each other (one outline deformed). [`Refine::Affine`] for any
-    /// other input or pre-alignment (docs/method.md §7.5).
+    /// leaves the outlines apart, or the modal match that follows pairs nodes whose modes
+    /// disagree (two specimens of a shape); nothing more ([`Refine::Affine`]) when neither
+    /// (one outline deformed). [`Refine::Affine`] for any other input or pre-alignment
+    /// (docs/method.md §7.5).
     Auto,
 }
 
