@@ -41,8 +41,10 @@ use crate::pickling::{Reader, Writer};
 ///     on b's outline, as a position along b's numbering: ``j + t`` is the point ``t`` of the way
 ///     from node ``j`` to node ``j + 1`` (cyclically). After the coherent drift
 ///     (``refine="coherent"``, and the default ``refine="auto"`` where it drifts) the point of
-///     b's outline nearest the node's moved position (``aligned_a``), finer than b's nodes;
-///     otherwise the node of its first pair (NaN: in no pair). None for other objects.
+///     b's outline nearest the node's moved position (``aligned_a``), finer than b's nodes —
+///     with ``refine="auto"`` averaged along b's outline with the node's image under b's drift
+///     onto a, read backwards; otherwise the node of its first pair (NaN: in no pair). None for
+///     other objects.
 /// drifted : bool — whether the coherent drift moved a's nodes (``refine="coherent"``, or
 ///     ``refine="auto"`` on two outlines it takes for two specimens); ``aligned_a`` then holds
 ///     the moved nodes.

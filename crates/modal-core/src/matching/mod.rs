@@ -23,6 +23,7 @@ pub mod excess;
 pub mod features;
 mod first_phase;
 mod outline_fit;
+pub(crate) mod outline_images;
 pub mod prealign;
 pub mod prepare;
 mod recipe;
@@ -85,7 +86,8 @@ pub fn match_shapes(a: &Shape, b: &Shape, opts: &MatchOptions) -> Result<MatchRe
 /// [`Refine::Auto`], two closed planar outlines that the rotation search's outline fit leaves
 /// apart, or whose modal match then pairs nodes at a median cost over 0.15, are matched instead
 /// as with `prealign` [`Prealign::Normalize`], `position_weight` 1, the default re-fits and
-/// [`Refine::Coherent`] (docs/method.md §7.5). Each object may take
+/// [`Refine::Coherent`], with the outline images taken both ways (docs/method.md §7.5). Each
+/// object may take
 /// part in any number of pairs; what it can share between them was done by [`prepare`](fn@prepare) (see
 /// docs/method.md, "The pipeline in the code").
 ///
@@ -110,20 +112,50 @@ pub fn match_prepared(
             return Ok(in_callers_terms(&pair, refined));
         }
     }
-    // Two specimens of a shape, told by either gate (the outlines after the rotation search's
-    // fit, or the modes after the modal match): the drift from the centroid-and-scale start, its
-    // affine re-fits on positions (docs/method.md §7.5). The re-fits only place the start, by the
-    // default solver; the drift's own assignment keeps the contours' order whatever the solver.
+    two_specimens(a, b, opts, parallelism)
+}
+
+/// Two specimens of a shape, told by either gate (the outlines after the rotation search's fit,
+/// or the modes after the modal match): the drift from the centroid-and-scale start, its affine
+/// re-fits on positions (docs/method.md §7.5). The re-fits only place the start, by the default
+/// solver; the drift's own assignment keeps the contours' order whatever the solver. B is
+/// drifted onto A too, beside it, and its images read backwards are averaged with A's
+/// (`outline_images`); the rest of the result is A's drift.
+fn two_specimens(
+    a: &PreparedShape,
+    b: &PreparedShape,
+    opts: &MatchOptions,
+    parallelism: Parallelism,
+) -> Result<MatchResult, ModalError> {
     let drift = drift_options(opts);
-    let pair = Pair::new(a, b, &drift)?;
-    let start = first_phase::first_phase(&pair, parallelism, None)?.expect("no gate, so a start");
-    let refined = refine::refine(&pair, start)?;
-    Ok(in_callers_terms(&pair, refined))
+    let one_way = |x: &PreparedShape, y: &PreparedShape| -> Result<MatchResult, ModalError> {
+        let pair = Pair::new(x, y, &drift)?;
+        let start =
+            first_phase::first_phase(&pair, parallelism, None)?.expect("no gate, so a start");
+        Ok(in_callers_terms(&pair, refine::refine(&pair, start)?))
+    };
+    let (forward, backward) = match parallelism {
+        Parallelism::Pair => rayon::join(|| one_way(a, b), || one_way(b, a)),
+        Parallelism::Serial => (one_way(a, b), one_way(b, a)),
+    };
+    let mut result = forward?;
+    // B's images on A, when B was drifted too (a failed or undrifted backward pass leaves A's).
+    let back = match backward {
+        Ok(backward) if backward.drifted => backward.outline_images,
+        _ => None,
+    };
+    let (sa, sb) = (a.shape().coords(), b.shape().coords());
+    if let (true, Some(back), Some(images)) = (result.drifted, back, result.outline_images.as_mut())
+        && let Some(both) = outline_images::both_ways(images, &back, sa, sb, 2)
+    {
+        *images = both;
+    }
+    Ok(result)
 }
 
 /// What the gates of [`Refine::Auto`] match two specimens with: `opts` from the
 /// centroid-and-scale start, its default affine re-fits on positions, then the coherent drift.
-fn drift_options(opts: &MatchOptions) -> MatchOptions {
+pub(crate) fn drift_options(opts: &MatchOptions) -> MatchOptions {
     MatchOptions {
         prealign: Prealign::Normalize,
         position_weight: 1.0,
@@ -179,7 +211,7 @@ fn in_callers_terms(pair: &Pair<'_>, refined: Refined) -> MatchResult {
     let outline_images = crossings.map(|_| {
         let b = pair.b.shape().coords();
         if drifted {
-            outline_positions(&aligned_a, b, d)
+            outline_images::outline_positions(&aligned_a, b, d)
         } else {
             let mut at = vec![f64::NAN; n];
             for p in out.iter().rev() {
@@ -205,41 +237,6 @@ fn in_callers_terms(pair: &Pair<'_>, refined: Refined) -> MatchResult {
             .compose(&sa.to_normalized),
         aligned_a,
     }
-}
-
-/// The point of the closed outline `b` (row-major, `m × d`) nearest each of `q`, as a position
-/// `j + t` along `b`'s numbering (see [`MatchResult::outline_images`]).
-fn outline_positions(q: &[f64], b: &[f64], d: usize) -> Vec<f64> {
-    let m = b.len() / d;
-    q.chunks_exact(d)
-        .map(|p| {
-            let mut best = (f64::INFINITY, 0.0);
-            for j in 0..m {
-                let (s, e) = (
-                    &b[j * d..(j + 1) * d],
-                    &b[(j + 1) % m * d..((j + 1) % m + 1) * d],
-                );
-                let (mut dd, mut dp) = (0.0, 0.0);
-                for c in 0..d {
-                    dd += (e[c] - s[c]) * (e[c] - s[c]);
-                    dp += (p[c] - s[c]) * (e[c] - s[c]);
-                }
-                let t = if dd > 0.0 {
-                    (dp / dd).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
-                let d2: f64 = (0..d)
-                    .map(|c| (s[c] + t * (e[c] - s[c]) - p[c]).powi(2))
-                    .sum();
-                if d2 < best.0 {
-                    best = (d2, j as f64 + t);
-                }
-            }
-            // t = 1 is the next node itself.
-            best.1 % m as f64
-        })
-        .collect()
 }
 
 /// The crossed pairs of `pairs` (callers' numbering) when both objects are closed contours, each

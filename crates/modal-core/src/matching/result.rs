@@ -74,7 +74,9 @@ pub struct MatchResult {
     /// node 0 for `j = m − 1`). After the coherent drift ([`Refine::Coherent`](super::Refine::Coherent),
     /// and [`Refine::Auto`](super::Refine::Auto) where it drifts) the point of the outline
     /// nearest the node's moved position in [`Self::aligned_a`], a correspondence finer than the
-    /// nodes (docs/method.md §7.5); otherwise the node of its first pair (`t = 0`), NaN for a
+    /// nodes; where [`Refine::Auto`](super::Refine::Auto) drifts, that point averaged along the
+    /// outline with the node's image under the second object's drift onto the first, read
+    /// backwards (docs/method.md §7.5); otherwise the node of its first pair (`t = 0`), NaN for a
     /// node in no pair. `None` for other objects, and where a caller renumbers or drops the
     /// details.
     pub outline_images: Option<Vec<f64>>,

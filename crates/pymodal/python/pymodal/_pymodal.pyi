@@ -111,7 +111,8 @@ class Match:
     @property
     def outline_images(self) -> Optional[FloatArray]:
         """Where a's nodes land on b's outline, as positions j + t along b's numbering (two
-        closed contours; after the coherent drift finer than b's nodes)."""
+        closed contours; after the coherent drift finer than b's nodes, and with refine="auto"
+        taken both ways: a's drift onto b averaged with b's onto a read backwards)."""
         ...
     @property
     def drifted(self) -> bool:
