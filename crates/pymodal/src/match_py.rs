@@ -297,8 +297,10 @@ impl PyMatch {
     /// between ``a`` and ``b`` (the coordinates the match was made from), with ``smoothing`` λ.
     /// The excess pairs are left out: they match one node to several, and a map sends each
     /// point to one place. After the coherent drift (``drifted``) the field is fitted instead to
-    /// the drift's displacement of a's nodes: each node of ``a`` to its moved position
-    /// (``aligned_a``), so its ``pairs`` are ``(i, i)``. Raises as :class:`Field` does.
+    /// each node of ``a`` and its image: for two closed contours the point of ``b``'s outline at
+    /// ``outline_images``, otherwise its moved position (``aligned_a``); its ``pairs`` are then
+    /// ``(i, i)``. Raises as :class:`Field` does, and with an ``InputError`` when ``b`` has
+    /// fewer nodes than the images name (not the ``b`` of the match).
     #[pyo3(signature = (a, b, *, smoothing = 0.0))]
     fn field(
         &self,
@@ -310,11 +312,23 @@ impl PyMatch {
         if self.inner.drifted {
             let d = self.inner.transform.dim;
             let n = self.inner.aligned_a.len() / d;
-            let moved = PyArray1::from_slice(py, &self.inner.aligned_a)
+            let images = match &self.inner.outline_images {
+                Some(_) => {
+                    let (_, cb) = points(py, b, "b")?;
+                    self.inner.outline_image_points(&cb).ok_or_else(|| {
+                        input_error(
+                            "b has fewer nodes than the match's outline images name: give the b \
+                             the match was made from",
+                        )
+                    })?
+                }
+                None => self.inner.aligned_a.clone(),
+            };
+            let images = PyArray1::from_slice(py, &images)
                 .reshape([n, d])
                 .expect("n × d reshape");
             let pairs = MatchPair::each_to_itself(n);
-            return crate::field_py::fit(py, a, moved.as_any(), pairs, smoothing);
+            return crate::field_py::fit(py, a, images.as_any(), pairs, smoothing);
         }
         crate::field_py::fit(py, a, b, self.inner.pairs.clone(), smoothing)
     }

@@ -113,12 +113,27 @@ def test_outline_images_on_b_after_the_drift_and_the_partners_otherwise(contours
     assert pymodal.match(a, b, ordered=False).outline_images is None
 
 
-def test_the_field_of_a_drifted_match_carries_a_to_its_moved_nodes(contours):
+def test_the_field_of_a_drifted_match_carries_a_to_its_outline_images(contours):
     a, b = contours
-    drifted = pymodal.match(a, b, refine="coherent")
-    field = drifted.field(a, b)
-    np.testing.assert_allclose(field.apply(a), drifted.aligned_a, atol=1e-9 * np.abs(b).max())
-    assert np.array_equal(field.pairs, np.column_stack([np.arange(len(a))] * 2))
+    m = len(b)
+
+    def on_b(s):
+        j = np.floor(s).astype(int) % m
+        t = (s - np.floor(s))[:, None]
+        return b[j] + t * (b[(j + 1) % m] - b[j])
+
+    for drifted in (pymodal.match(a, b, refine="coherent"),
+                    pymodal.match(a, b, prealign="normalize", position_weight=1.0, refine="coherent")):
+        field = drifted.field(a, b)
+        np.testing.assert_allclose(field.apply(a), on_b(drifted.outline_images), atol=1e-9 * np.abs(b).max())
+        assert np.array_equal(field.pairs, np.column_stack([np.arange(len(a))] * 2))
+    # A b that is not the match's (fewer nodes than the images name) is refused.
+    with pytest.raises(pymodal.InputError, match="fewer nodes"):
+        drifted.field(a, b[: int(np.floor(drifted.outline_images.max()))])
+    # Unordered point sets have no outline images: the field carries a to the moved nodes.
+    points = pymodal.match(a, b, ordered=False, refine="coherent")
+    assert points.drifted and points.outline_images is None
+    np.testing.assert_allclose(points.field(a, b).apply(a), points.aligned_a, atol=1e-9 * np.abs(b).max())
     # Without the drift: the pairs' field, as before.
     plain = pymodal.match(a, b, refine="affine")
     one = plain.pairs[~plain.excess]

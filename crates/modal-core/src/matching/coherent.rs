@@ -408,6 +408,18 @@ mod tests {
         );
         let both = both_ways(&f, &back, &a, &b, 2).unwrap();
         assert_eq!(got.outline_images.as_deref(), Some(&both[..]));
+        // The images as points of B's outline: `t` of the way from node `j` to node `j + 1`.
+        let points = got.outline_image_points(&b).unwrap();
+        for (i, &s) in both.iter().enumerate() {
+            let (j, t) = (s.floor() as usize, s - s.floor());
+            let k = (j + 1) % m;
+            for c in 0..2 {
+                let want = b[2 * j + c] + t * (b[2 * k + c] - b[2 * j + c]);
+                assert!((points[2 * i + c] - want).abs() < 1e-12);
+            }
+        }
+        // A shorter b than the match's is not read past its end.
+        assert!(got.outline_image_points(&b[..m]).is_none());
         let spacing = mean_spacing(&b);
         let errors = |images: &[f64]| -> (f64, f64) {
             let e: Vec<f64> = images

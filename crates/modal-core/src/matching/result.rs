@@ -102,4 +102,23 @@ impl MatchResult {
     pub fn excess_count(&self) -> usize {
         self.pairs.iter().filter(|p| p.excess).count()
     }
+    /// The points of the second object's outline `b` (row-major, `m × dim`: the coordinates the
+    /// match was made from) at [`Self::outline_images`]: where each node of the first object
+    /// lands, in the callers' node order. `None` without images, where a node has none (NaN),
+    /// or when `b` has fewer nodes than an image names.
+    pub fn outline_image_points(&self, b: &[f64]) -> Option<Vec<f64>> {
+        let d = self.transform.dim;
+        let m = b.len() / d;
+        let images = self.outline_images.as_ref()?;
+        let mut out = Vec::with_capacity(images.len() * d);
+        for &s in images {
+            if !(s >= 0.0 && s < m as f64) {
+                return None;
+            }
+            let (j, t) = (s.floor() as usize, s - s.floor());
+            let k = (j + 1) % m;
+            out.extend((0..d).map(|c| b[j * d + c] + t * (b[k * d + c] - b[j * d + c])));
+        }
+        Some(out)
+    }
 }
