@@ -106,7 +106,7 @@ fn wrap(s: f64, total: f64) -> f64 {
 
 /// The images of A's nodes on B's outline, taken both ways: `forward` (each node of A on B, as
 /// positions along B's numbering) averaged along B's outline with `backward` (each node of B on
-/// A, along A's numbering) read backwards ([`read_backwards`]). `a` and `b` are the two closed
+/// A, along A's numbering) read backwards ([`backward_arcs`]). `a` and `b` are the two closed
 /// outlines (row-major, `d` columns). `None` when the backward images cannot be read backwards
 /// or a forward image is not finite.
 pub(crate) fn both_ways(
@@ -119,30 +119,38 @@ pub(crate) fn both_ways(
     if forward.len() != a.len() / d || !forward.iter().all(|v| v.is_finite()) {
         return None;
     }
-    let back = read_backwards(backward, a, b, d)?;
-    let arc_b = ArcLength::of(b, d);
+    let (arc_a, arc_b) = (ArcLength::of(a, d), ArcLength::of(b, d));
+    let back = backward_arcs(backward, &arc_a, &arc_b)?;
     let total_b = arc_b.perimeter();
     Some(
         forward
             .iter()
             .zip(back)
             .map(|(&f, back)| {
-                let (s, back) = (arc_b.at(f), arc_b.at(back));
+                let s = arc_b.at(f);
                 arc_b.position(s + 0.5 * wrap(back - s, total_b))
             })
             .collect(),
     )
 }
 
-/// The images on B's outline of A's nodes, as positions along B's numbering, from the images on
-/// A's outline of B's nodes (`backward`, along A's numbering): the map from B to A unwrapped
-/// round the outlines, made monotone (matches that cross are flattened, so that each place on A
-/// has one place on B) and inverted by linear interpolation in arc length. `None` when a value
-/// is not finite, the counts do not fit, or the map does not go once round A.
+/// [`backward_arcs`] as positions along B's numbering, for outlines `a` and `b` (row-major, `d`
+/// columns).
+#[cfg(test)]
 pub(crate) fn read_backwards(backward: &[f64], a: &[f64], b: &[f64], d: usize) -> Option<Vec<f64>> {
     let (arc_a, arc_b) = (ArcLength::of(a, d), ArcLength::of(b, d));
+    let arcs = backward_arcs(backward, &arc_a, &arc_b)?;
+    Some(arcs.into_iter().map(|s| arc_b.position(s)).collect())
+}
+
+/// The arc lengths on B's outline of A's nodes' images, from the images on A's outline of B's
+/// nodes (`backward`, positions along A's numbering): the map from B to A unwrapped round the
+/// outlines, made monotone (matches that cross are flattened, so that each place on A has one
+/// place on B) and inverted by linear interpolation in arc length. `None` when a value is not
+/// finite, the counts do not fit, or the map does not go once round A.
+fn backward_arcs(backward: &[f64], arc_a: &ArcLength, arc_b: &ArcLength) -> Option<Vec<f64>> {
     let total_a = arc_a.perimeter();
-    let m = b.len() / d;
+    let (n, m) = (arc_a.cum.len() - 1, arc_b.cum.len() - 1);
     if m == 0
         || backward.len() != m
         || !(total_a > 0.0 && arc_b.perimeter() > 0.0)
@@ -189,12 +197,7 @@ pub(crate) fn read_backwards(backward: &[f64], a: &[f64], b: &[f64], d: usize) -
         };
         x[k] + t * (x[k + 1] - x[k])
     };
-    Some(
-        arc_a.cum[..a.len() / d]
-            .iter()
-            .map(|&p| arc_b.position(inverse(p)))
-            .collect(),
-    )
+    Some(arc_a.cum[..n].iter().map(|&p| inverse(p)).collect())
 }
 
 #[cfg(test)]
