@@ -1396,14 +1396,20 @@ pub(crate) fn start_in_b_frame(
 mod tests {
     use super::*;
 
-    fn ellipse(n: usize, rot: f64) -> Vec<f64> {
+    /// `n` points of the closed curve `at(t)`, `t` from 0 round a turn, turned by `rot`.
+    fn turned_curve(n: usize, rot: f64, at: impl Fn(f64) -> (f64, f64)) -> Vec<f64> {
         (0..n)
             .flat_map(|i| {
-                let t = i as f64 / n as f64 * std::f64::consts::TAU;
-                let (x, y) = (2.0 * t.cos() + 0.3 * (2.0 * t).cos(), 0.8 * t.sin());
+                let (x, y) = at(i as f64 / n as f64 * std::f64::consts::TAU);
                 [rot.cos() * x - rot.sin() * y, rot.sin() * x + rot.cos() * y]
             })
             .collect()
+    }
+
+    fn ellipse(n: usize, rot: f64) -> Vec<f64> {
+        turned_curve(n, rot, |t| {
+            (2.0 * t.cos() + 0.3 * (2.0 * t).cos(), 0.8 * t.sin())
+        })
     }
 
     /// Both-way and one-way results of every nearest-neighbour kernel this CPU can run.
@@ -1639,13 +1645,7 @@ mod tests {
         // An ellipse fits itself turned by 180°: a winner turned by 190° is taken back to the
         // true 10°, which fits as well and turns less.
         let oval = |n: usize, rot: f64| -> Vec<f64> {
-            let pts: Vec<f64> = (0..n)
-                .flat_map(|i| {
-                    let t = i as f64 / n as f64 * std::f64::consts::TAU;
-                    let (x, y) = (2.0 * t.cos(), 0.8 * t.sin());
-                    [rot.cos() * x - rot.sin() * y, rot.sin() * x + rot.cos() * y]
-                })
-                .collect();
+            let pts = turned_curve(n, rot, |t| (2.0 * t.cos(), 0.8 * t.sin()));
             normalize(&pts, 2).unwrap().0
         };
         let (a, b) = (oval(60, 0.0), oval(53, 10f64.to_radians()));
@@ -1723,14 +1723,10 @@ mod tests {
         // A three-lobed outline, whose fits at the wrong turns are local minima, with 170 and
         // 150 nodes (screened on 57 and 75).
         let lobes = |n: usize, rot: f64| -> Vec<f64> {
-            let pts: Vec<f64> = (0..n)
-                .flat_map(|i| {
-                    let t = i as f64 / n as f64 * std::f64::consts::TAU;
-                    let r = 1.0 + 0.25 * (3.0 * t).cos() + 0.1 * t.sin();
-                    let (x, y) = (1.3 * r * t.cos(), r * t.sin());
-                    [rot.cos() * x - rot.sin() * y, rot.sin() * x + rot.cos() * y]
-                })
-                .collect();
+            let pts = turned_curve(n, rot, |t| {
+                let r = 1.0 + 0.25 * (3.0 * t).cos() + 0.1 * t.sin();
+                (1.3 * r * t.cos(), r * t.sin())
+            });
             normalize(&pts, 2).unwrap().0
         };
         let a = lobes(170, 0.0);
