@@ -47,11 +47,9 @@ import bench_landmarks as bl  # noqa: E402
 SECOND_GATE = 0.15  # the crate's threshold on the modal match's median pair cost
 
 
-def images(m, b):
-    """Arc positions on B of Match.outline_images (NaN where a node has none)."""
-    at = np.asarray(m.outline_images)
-    j = np.floor(np.nan_to_num(at)).astype(int) % len(b.pts)
-    return b.cum[j] + (at - np.floor(at)) * np.diff(b.cum)[j]
+def image_errors(a, b, m):
+    """The landmark errors of the match `m` of A onto B, carried by its outline images."""
+    return bl.errors(b, bl.carry(a, b, bl.image_arcs(m, b)))
 
 
 def closest_similarity(a_pts, aligned):
@@ -96,9 +94,9 @@ def main():
         modal = pymodal.match(a.pts, b.pts, refine="affine")
         gated = first or np.median(np.asarray(modal.costs)) > SECOND_GATE
         given = drift_from_the_given_pose(a.pts, b.pts)
-        e_given = bl.errors(b, bl.carry(a, b, images(given, b)))
-        e_modal = bl.errors(b, bl.carry(a, b, images(modal, b)))
-        e = bl.errors(b, bl.carry(a, b, images(m, b)))
+        e_given = image_errors(a, b, given)
+        e_modal = image_errors(a, b, modal)
+        e = image_errors(a, b, m)
         every.setdefault("the first gate alone, one way (A's drift or the modal match)", []).append(
             e_given if first else e_modal)
         every.setdefault("both gates, one way", []).append(e_given if gated else e_modal)
@@ -120,7 +118,7 @@ def main():
         for name, kw in (("the modal match's turn and scale, matched again", {}),
                          ("the modal match's turn and scale, drifted (one way)", {"refine": "coherent"})):
             again = pymodal.match(a_turned, b.pts, prealign="sensor", **kw)
-            under.setdefault(name, []).append(bl.errors(b, bl.carry(a, b, images(again, b))))
+            under.setdefault(name, []).append(image_errors(a, b, again))
 
     table(f"{args.half}: all {len(pairs)} pairs", every)
     table(f"{args.half}: the {len(next(iter(under.values())))} pairs the first gate does not drift", under)
@@ -150,7 +148,7 @@ def thresholds(pairs, ts, half):
     rows = {"the defaults (as built: images both ways)": []}
     drifted = dict.fromkeys([None] + ts, 0)
     for a, b in pairs:
-        rows["the defaults (as built: images both ways)"].append(bl.errors(b, bl.carry(a, b, images(pymodal.match(a.pts, b.pts), b))))
+        rows["the defaults (as built: images both ways)"].append(image_errors(a, b, pymodal.match(a.pts, b.pts)))
         first = pymodal.match(a.pts, b.pts, cost_power=0.999).drifted
         modal = pymodal.match(a.pts, b.pts, refine="affine")
         cost = np.median(np.asarray(modal.costs))
@@ -159,11 +157,11 @@ def thresholds(pairs, ts, half):
             name = "first gate alone, one way" if t is None else f"second gate at {t}, one way"
             if first or (t is not None and cost > t):
                 if drift is None:
-                    drift = bl.errors(b, bl.carry(a, b, images(drift_from_the_given_pose(a.pts, b.pts), b)))
+                    drift = image_errors(a, b, drift_from_the_given_pose(a.pts, b.pts))
                 rows.setdefault(name, []).append(drift)
                 drifted[t] += 1
             else:
-                rows.setdefault(name, []).append(bl.errors(b, bl.carry(a, b, images(modal, b))))
+                rows.setdefault(name, []).append(image_errors(a, b, modal))
     table(f"{half}: {len(pairs)} pairs, the second gate's threshold", rows)
     print("\npairs drifted: " + ", ".join(
         f"{'first gate alone' if t is None else t}: {k}" for t, k in drifted.items()))

@@ -232,18 +232,21 @@ def pedomatch(projected=False, **kw):
     return run
 
 
+def image_arcs(m, b):
+    """Arc-length positions on B of a match's images of A's nodes (Match.outline_images:
+    positions j + t along B's numbering; NaN, for a node in no pair, stays NaN)."""
+    at = np.asarray(m.outline_images)
+    j = np.floor(np.nan_to_num(at)).astype(int) % len(b.pts)
+    return b.cum[j] + (at - np.floor(at)) * np.diff(b.cum)[j]
+
+
 def pedomatch_images(**kw):
-    """pymodal.match's own images of A's nodes on B's outline (Match.outline_images: positions
-    j + t along B's numbering), as arc-length positions."""
+    """pymodal.match's own images of A's nodes on B's outline, carried as arc-length positions."""
 
     def run(a, b):
         import pymodal
 
-        m = pymodal.match(a.pts, b.pts, **kw)
-        at = np.asarray(m.outline_images)
-        j = np.floor(np.nan_to_num(at)).astype(int) % len(b.pts)
-        s = b.cum[j] + (at - np.floor(at)) * np.diff(b.cum)[j]  # NaN stays NaN
-        return carry(a, b, s)
+        return carry(a, b, image_arcs(pymodal.match(a.pts, b.pts, **kw), b))
 
     return run
 
