@@ -128,22 +128,27 @@ fn two_specimens(
     parallelism: Parallelism,
 ) -> Result<MatchResult, ModalError> {
     let drift = drift_options(opts);
-    let one_way = |x: &PreparedShape, y: &PreparedShape| -> Result<MatchResult, ModalError> {
-        let pair = Pair::new(x, y, &drift)?;
-        let start =
-            first_phase::first_phase(&pair, parallelism, None)?.expect("no gate, so a start");
-        Ok(in_callers_terms(&pair, refine::refine(&pair, start)?))
+    let forward = || -> Result<MatchResult, ModalError> {
+        let (pair, refined) = drift_pass(a, b, &drift, parallelism)?;
+        Ok(in_callers_terms(&pair, refined))
     };
-    let (forward, backward) = match parallelism {
-        Parallelism::Pair => rayon::join(|| one_way(a, b), || one_way(b, a)),
-        Parallelism::Serial => (one_way(a, b), one_way(b, a)),
+    // Only B's images on A are wanted from B's drift (none when it was not drifted).
+    let backward = || -> Option<Vec<f64>> {
+        let (pair, refined) = drift_pass(b, a, &drift, parallelism).ok()?;
+        if !refined.drifted {
+            return None;
+        }
+        let (_, aligned_b) = aligned_in_callers_terms(&pair, &refined.kept.aligned);
+        let a_coords = pair.b.shape().coords();
+        Some(outline_images::outline_positions(
+            &aligned_b, a_coords, pair.dim,
+        ))
+    };
+    let (forward, back) = match parallelism {
+        Parallelism::Pair => rayon::join(forward, backward),
+        Parallelism::Serial => (forward(), backward()),
     };
     let mut result = forward?;
-    // B's images on A, when B was drifted too (a failed or undrifted backward pass leaves A's).
-    let back = match backward {
-        Ok(backward) if backward.drifted => backward.outline_images,
-        _ => None,
-    };
     let (sa, sb) = (a.shape().coords(), b.shape().coords());
     if let (true, Some(back), Some(images)) = (result.drifted, back, result.outline_images.as_mut())
         && let Some(both) = outline_images::both_ways(images, &back, sa, sb, 2)
@@ -151,6 +156,19 @@ fn two_specimens(
         *images = both;
     }
     Ok(result)
+}
+
+/// `x` matched to `y` as [`drift_options`] say: the centroid-and-scale start, then the passes.
+fn drift_pass<'p>(
+    x: &'p PreparedShape,
+    y: &'p PreparedShape,
+    drift: &'p MatchOptions,
+    parallelism: Parallelism,
+) -> Result<(Pair<'p>, Refined), ModalError> {
+    let pair = Pair::new(x, y, drift)?;
+    let start = first_phase::first_phase(&pair, parallelism, None)?.expect("no gate, so a start");
+    let refined = refine::refine(&pair, start)?;
+    Ok((pair, refined))
 }
 
 /// What the gates of [`Refine::Auto`] match two specimens with: `opts` from the
@@ -197,16 +215,7 @@ fn in_callers_terms(pair: &Pair<'_>, refined: Refined) -> MatchResult {
         used_a[p.a] = true;
         used_b[p.b] = true;
     }
-    // From B's normalised frame back to B's coordinates, in the callers' node order.
-    let from_b_frame = inverse_normalizing_map(&sb.to_normalized);
-    let mut aligned_a = vec![0.0; n * d];
-    for (t, p) in from_b_frame
-        .apply(&kept.aligned)
-        .chunks_exact(d)
-        .enumerate()
-    {
-        aligned_a[sa.perm[t] * d..(sa.perm[t] + 1) * d].copy_from_slice(p);
-    }
+    let (from_b_frame, aligned_a) = aligned_in_callers_terms(pair, &kept.aligned);
     let crossings = contour_crossings(pair.a.shape(), pair.b.shape(), &out);
     let outline_images = crossings.map(|_| {
         let b = pair.b.shape().coords();
@@ -237,6 +246,18 @@ fn in_callers_terms(pair: &Pair<'_>, refined: Refined) -> MatchResult {
             .compose(&sa.to_normalized),
         aligned_a,
     }
+}
+
+/// A's nodes `aligned` (in B's normalised frame, prepared order) in B's coordinates and the
+/// callers' node order, with the map from B's normalised frame back to B's coordinates.
+fn aligned_in_callers_terms(pair: &Pair<'_>, aligned: &[f64]) -> (Affine, Vec<f64>) {
+    let (sa, sb, d) = (pair.a.get(), pair.b.get(), pair.dim);
+    let from_b_frame = inverse_normalizing_map(&sb.to_normalized);
+    let mut out = vec![0.0; aligned.len()];
+    for (t, p) in from_b_frame.apply(aligned).chunks_exact(d).enumerate() {
+        out[sa.perm[t] * d..(sa.perm[t] + 1) * d].copy_from_slice(p);
+    }
+    (from_b_frame, out)
 }
 
 /// The crossed pairs of `pairs` (callers' numbering) when both objects are closed contours, each
